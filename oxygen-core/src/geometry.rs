@@ -1,0 +1,276 @@
+//! Geometry assets: vertices, indices, submeshes and a local bound.
+//!
+//! A [`Geometry`] is validated when built, so that later stages (upload, the
+//! GPU) never see an index past the end of the vertex array or a NaN position.
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Vec2, Vec3};
+use thiserror::Error;
+
+use crate::math::Aabb;
+
+/// One vertex as it is stored in the bindless vertex domain (32 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Vertex {
+    /// Object-space position.
+    pub position: [f32; 3],
+    /// Object-space normal (unit length).
+    pub normal: [f32; 3],
+    /// Texture coordinate, glTF convention (origin top-left).
+    pub uv: [f32; 2],
+}
+
+const _: () = assert!(std::mem::size_of::<Vertex>() == 32);
+
+impl Vertex {
+    /// A vertex from glam vectors.
+    pub fn new(position: Vec3, normal: Vec3, uv: Vec2) -> Self {
+        Vertex {
+            position: position.to_array(),
+            normal: normal.to_array(),
+            uv: uv.to_array(),
+        }
+    }
+}
+
+/// A range of the index array drawn with one material.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Submesh {
+    /// First index, relative to the geometry's index array.
+    pub first_index: u32,
+    /// Number of indices (a multiple of 3).
+    pub index_count: u32,
+}
+
+/// What was wrong with geometry handed to [`Geometry::new`].
+#[derive(Debug, Error, PartialEq)]
+pub enum GeometryError {
+    /// A vertex has a NaN or infinite position.
+    #[error("geometry '{name}': vertex {vertex} has a non-finite position")]
+    NonFinitePosition {
+        /// Geometry name.
+        name: String,
+        /// Offending vertex.
+        vertex: usize,
+    },
+    /// An index refers past the vertex array.
+    #[error("geometry '{name}': index {position} is {value}, but there are only {vertex_count} vertices")]
+    IndexOutOfRange {
+        /// Geometry name.
+        name: String,
+        /// Position in the index array.
+        position: usize,
+        /// The index value.
+        value: u32,
+        /// Number of vertices.
+        vertex_count: usize,
+    },
+    /// A submesh reaches past the index array or is not a triangle list.
+    #[error("geometry '{name}': submesh {submesh} ({first}..+{count}) is not a triangle range inside {index_count} indices")]
+    BadSubmesh {
+        /// Geometry name.
+        name: String,
+        /// Submesh number.
+        submesh: usize,
+        /// Its first index.
+        first: u32,
+        /// Its index count.
+        count: u32,
+        /// Length of the index array.
+        index_count: usize,
+    },
+    /// There is nothing to draw.
+    #[error("geometry '{name}' has no vertices, indices or submeshes")]
+    Empty {
+        /// Geometry name.
+        name: String,
+    },
+    /// More vertices or indices than a `u32` can address.
+    #[error("geometry '{name}' is too large for 32-bit indices")]
+    TooLarge {
+        /// Geometry name.
+        name: String,
+    },
+}
+
+/// An indexed triangle mesh with one or more submeshes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Geometry {
+    name: String,
+    vertices: Vec<Vertex>,
+    indices: Vec<u32>,
+    submeshes: Vec<Submesh>,
+    local_aabb: Aabb,
+}
+
+impl Geometry {
+    /// Validates and builds a geometry. Non-finite normals are replaced by +Z
+    /// (they only darken a pixel), non-finite positions are an error (they
+    /// would poison bounds and culling).
+    pub fn new(
+        name: impl Into<String>,
+        mut vertices: Vec<Vertex>,
+        indices: Vec<u32>,
+        submeshes: Vec<Submesh>,
+    ) -> Result<Self, GeometryError> {
+        let name = name.into();
+        if vertices.is_empty() || indices.is_empty() || submeshes.is_empty() {
+            return Err(GeometryError::Empty { name });
+        }
+        if u32::try_from(vertices.len()).is_err() || u32::try_from(indices.len()).is_err() {
+            return Err(GeometryError::TooLarge { name });
+        }
+        for (i, v) in vertices.iter_mut().enumerate() {
+            if !Vec3::from(v.position).is_finite() {
+                return Err(GeometryError::NonFinitePosition { name, vertex: i });
+            }
+            let n = Vec3::from(v.normal);
+            v.normal = n.try_normalize().unwrap_or(Vec3::Z).to_array();
+            if !Vec2::from(v.uv).is_finite() {
+                v.uv = [0.0, 0.0];
+            }
+        }
+        if let Some((position, &value)) = indices
+            .iter()
+            .enumerate()
+            .find(|(_, i)| **i as usize >= vertices.len())
+        {
+            return Err(GeometryError::IndexOutOfRange {
+                name,
+                position,
+                value,
+                vertex_count: vertices.len(),
+            });
+        }
+        for (i, s) in submeshes.iter().enumerate() {
+            let end = s.first_index as u64 + s.index_count as u64;
+            if s.index_count == 0 || s.index_count % 3 != 0 || end > indices.len() as u64 {
+                return Err(GeometryError::BadSubmesh {
+                    name,
+                    submesh: i,
+                    first: s.first_index,
+                    count: s.index_count,
+                    index_count: indices.len(),
+                });
+            }
+        }
+        let local_aabb = Aabb::from_points(vertices.iter().map(|v| Vec3::from(v.position)));
+        Ok(Geometry {
+            name,
+            vertices,
+            indices,
+            submeshes,
+            local_aabb,
+        })
+    }
+
+    /// Name for logs and dumps.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+    /// Vertex array.
+    pub fn vertices(&self) -> &[Vertex] {
+        &self.vertices
+    }
+    /// Index array (triangle list).
+    pub fn indices(&self) -> &[u32] {
+        &self.indices
+    }
+    /// Submeshes; a renderable gives one material per submesh.
+    pub fn submeshes(&self) -> &[Submesh] {
+        &self.submeshes
+    }
+    /// Object-space bound of every vertex.
+    pub fn local_aabb(&self) -> Aabb {
+        self.local_aabb
+    }
+
+    /// An axis-aligned cube of edge `size` centred at the origin, with flat
+    /// normals (24 vertices, one submesh).
+    pub fn cube(size: f32) -> Self {
+        let h = size * 0.5;
+        // (normal, tangent u, tangent v) for the six faces.
+        let faces = [
+            (Vec3::X, Vec3::NEG_Z, Vec3::Y),
+            (Vec3::NEG_X, Vec3::Z, Vec3::Y),
+            (Vec3::Y, Vec3::X, Vec3::NEG_Z),
+            (Vec3::NEG_Y, Vec3::X, Vec3::Z),
+            (Vec3::Z, Vec3::X, Vec3::Y),
+            (Vec3::NEG_Z, Vec3::NEG_X, Vec3::Y),
+        ];
+        let mut vertices = Vec::with_capacity(24);
+        let mut indices = Vec::with_capacity(36);
+        for (n, u, v) in faces {
+            let base = vertices.len() as u32;
+            for (su, sv) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+                let p = (n + u * su + v * sv) * h;
+                vertices.push(Vertex::new(p, n, Vec2::new((su + 1.0) * 0.5, (1.0 - sv) * 0.5)));
+            }
+            indices.extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
+        }
+        Self::single_submesh("cube", vertices, indices)
+    }
+
+    /// A square of edge `size` in the XZ plane facing +Y, centred at the origin.
+    pub fn plane(size: f32) -> Self {
+        let h = size * 0.5;
+        let vertices = [(-h, h), (h, h), (h, -h), (-h, -h)]
+            .into_iter()
+            .map(|(x, z)| Vertex::new(Vec3::new(x, 0.0, z), Vec3::Y, Vec2::new(x / size + 0.5, z / size + 0.5)))
+            .collect();
+        Self::single_submesh("plane", vertices, vec![0, 1, 2, 0, 2, 3])
+    }
+
+    /// A square of edge `size` in the XY plane facing +Z, centred at the origin.
+    pub fn quad(size: f32) -> Self {
+        let h = size * 0.5;
+        let vertices = [(-h, -h), (h, -h), (h, h), (-h, h)]
+            .into_iter()
+            .map(|(x, y)| Vertex::new(Vec3::new(x, y, 0.0), Vec3::Z, Vec2::new(x / size + 0.5, 0.5 - y / size)))
+            .collect();
+        Self::single_submesh("quad", vertices, vec![0, 1, 2, 0, 2, 3])
+    }
+
+    fn single_submesh(name: &str, vertices: Vec<Vertex>, indices: Vec<u32>) -> Self {
+        let submesh = Submesh {
+            first_index: 0,
+            index_count: indices.len() as u32,
+        };
+        // Built from constants above; a failure here is a bug in this file.
+        Geometry::new(name, vertices, indices, vec![submesh]).expect("procedural geometry is valid")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cube_faces_wind_counter_clockwise_seen_from_outside() {
+        let cube = Geometry::cube(2.0);
+        for tri in cube.indices().chunks(3) {
+            let p = |i: u32| Vec3::from(cube.vertices()[i as usize].position);
+            let n = Vec3::from(cube.vertices()[tri[0] as usize].normal);
+            let face_normal = (p(tri[1]) - p(tri[0])).cross(p(tri[2]) - p(tri[0]));
+            assert!(face_normal.dot(n) > 0.0);
+        }
+        assert_eq!(cube.local_aabb(), Aabb::new(Vec3::splat(-1.0), Vec3::splat(1.0)));
+    }
+
+    #[test]
+    fn out_of_range_index_is_an_error_naming_the_geometry() {
+        let v = vec![Vertex::default(); 3];
+        let err = Geometry::new("bad", v, vec![0, 1, 7], vec![Submesh { first_index: 0, index_count: 3 }]);
+        assert!(matches!(err, Err(GeometryError::IndexOutOfRange { value: 7, .. })));
+        assert!(err.unwrap_err().to_string().contains("'bad'"));
+    }
+
+    #[test]
+    fn non_finite_position_is_rejected() {
+        let mut v = vec![Vertex::default(); 3];
+        v[1].position[2] = f32::NAN;
+        let err = Geometry::new("nan", v, vec![0, 1, 2], vec![Submesh { first_index: 0, index_count: 3 }]);
+        assert!(matches!(err, Err(GeometryError::NonFinitePosition { vertex: 1, .. })));
+    }
+}

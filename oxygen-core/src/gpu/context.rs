@@ -1,0 +1,155 @@
+//! Adapter and device selection for headless rendering.
+//!
+//! The context honours `WGPU_BACKEND` (e.g. `vulkan`, `gl`) and
+//! `OXYGEN_ADAPTER` (a case-insensitive substring of the adapter name) so a
+//! test run can be pointed at lavapipe, llvmpipe or a real GPU. Without them
+//! it prefers a discrete GPU, then integrated, then a CPU rasterizer, and
+//! Vulkan over GL among equals.
+
+use thiserror::Error;
+use tracing::{info, info_span};
+
+/// Why no device could be created.
+#[derive(Debug, Error)]
+pub enum GpuError {
+    /// No adapter was found, or none had the required features.
+    #[error(
+        "no usable GPU adapter (tried: {tried}).\n\
+         On a machine without a GPU, install Mesa's lavapipe Vulkan driver (Mesa >= 25): \
+         run `scripts/ensure-gpu.sh` as root, or see README.md"
+    )]
+    NoAdapter {
+        /// Adapters seen and why each was rejected.
+        tried: String,
+    },
+    /// The adapter refused to create a device.
+    #[error("adapter '{adapter}' could not create a device: {source}")]
+    RequestDevice {
+        /// Adapter name.
+        adapter: String,
+        /// wgpu's reason.
+        source: wgpu::RequestDeviceError,
+    },
+    /// Waiting for the GPU failed (device lost, timeout).
+    #[error("waiting for the GPU failed: {0}")]
+    Poll(#[from] wgpu::PollError),
+    /// Mapping a readback buffer failed.
+    #[error("mapping a readback buffer failed: {0}")]
+    Map(#[from] wgpu::BufferAsyncError),
+    /// A mapped buffer range could not be accessed.
+    #[error("accessing a mapped readback buffer failed: {0}")]
+    MapRange(#[from] wgpu::MapRangeError),
+    /// A texture cannot be read back by this path.
+    #[error("cannot read back texture of format {0:?} (only 4-byte RGBA8 formats)")]
+    UnsupportedReadbackFormat(wgpu::TextureFormat),
+}
+
+/// What the application needs from the device.
+#[derive(Clone, Debug, Default)]
+pub struct GpuOptions {
+    /// Features the device must have; adapters without them are skipped.
+    pub required_features: wgpu::Features,
+    /// Features enabled when present, reported in [`GpuContext::features`].
+    pub optional_features: wgpu::Features,
+}
+
+/// A wgpu instance, adapter, device and queue, created without a window.
+pub struct GpuContext {
+    /// The instance.
+    pub instance: wgpu::Instance,
+    /// The chosen adapter.
+    pub adapter: wgpu::Adapter,
+    /// The logical device.
+    pub device: wgpu::Device,
+    /// Its queue.
+    pub queue: wgpu::Queue,
+    /// Name, backend and driver of the adapter.
+    pub adapter_info: wgpu::AdapterInfo,
+    /// The features actually enabled on `device`.
+    pub features: wgpu::Features,
+}
+
+fn rank(info: &wgpu::AdapterInfo) -> u32 {
+    let device = match info.device_type {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Cpu => 3,
+        wgpu::DeviceType::Other => 4,
+    };
+    let backend = match info.backend {
+        wgpu::Backend::Vulkan | wgpu::Backend::Metal | wgpu::Backend::Dx12 => 0,
+        _ => 1,
+    };
+    device * 2 + backend
+}
+
+impl GpuContext {
+    /// Picks an adapter and creates a device; blocks until done.
+    pub fn new_headless(options: &GpuOptions) -> Result<Self, GpuError> {
+        futures::executor::block_on(Self::new_headless_async(options))
+    }
+
+    /// Async form of [`Self::new_headless`].
+    pub async fn new_headless_async(options: &GpuOptions) -> Result<Self, GpuError> {
+        let _span = info_span!("gpu_context").entered();
+        let descriptor = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+        let backends = descriptor.backends;
+        let instance = wgpu::Instance::new(descriptor);
+        let wanted_name = std::env::var("OXYGEN_ADAPTER").ok().map(|s| s.to_lowercase());
+
+        let mut tried = Vec::new();
+        let mut candidates = Vec::new();
+        for adapter in instance.enumerate_adapters(backends).await {
+            let info = adapter.get_info();
+            let label = format!("{} ({:?})", info.name, info.backend);
+            if let Some(wanted) = &wanted_name {
+                if !info.name.to_lowercase().contains(wanted) {
+                    tried.push(format!("{label}: not matching OXYGEN_ADAPTER"));
+                    continue;
+                }
+            }
+            let missing = options.required_features - adapter.features();
+            if !missing.is_empty() {
+                tried.push(format!("{label}: lacks {missing:?}"));
+                continue;
+            }
+            candidates.push((rank(&info), adapter, info));
+        }
+        candidates.sort_by_key(|(r, _, _)| *r);
+        let Some((_, adapter, adapter_info)) = candidates.into_iter().next() else {
+            let tried = if tried.is_empty() { "no adapters at all".to_owned() } else { tried.join("; ") };
+            return Err(GpuError::NoAdapter { tried });
+        };
+
+        let features = options.required_features | (options.optional_features & adapter.features());
+        let (device, queue) = adapter
+            .request_device(&wgpu::DeviceDescriptor {
+                label: Some("oxygen device"),
+                required_features: features,
+                required_limits: adapter.limits(),
+                ..Default::default()
+            })
+            .await
+            .map_err(|source| GpuError::RequestDevice { adapter: adapter_info.name.clone(), source })?;
+        info!(
+            adapter = %adapter_info.name,
+            backend = ?adapter_info.backend,
+            driver = %adapter_info.driver_info,
+            "GPU adapter selected"
+        );
+        Ok(GpuContext { instance, adapter, device, queue, adapter_info, features })
+    }
+
+    /// One line naming the adapter, backend and driver, for logs and test output.
+    pub fn describe(&self) -> String {
+        format!(
+            "{} ({:?}, {:?}, driver {} {})",
+            self.adapter_info.name,
+            self.adapter_info.backend,
+            self.adapter_info.device_type,
+            self.adapter_info.driver,
+            self.adapter_info.driver_info
+        )
+    }
+}

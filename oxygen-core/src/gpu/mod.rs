@@ -1,0 +1,9 @@
+//! The headless GPU: adapter and device selection, offscreen targets and
+//! readback into images.
+
+mod context;
+mod readback;
+mod target;
+
+pub use context::{GpuContext, GpuError, GpuOptions};
+pub use target::ViewTargets;

@@ -1,0 +1,40 @@
+//! # oxygen-core
+//!
+//! The foundation every other Oxygen crate stands on. It owns:
+//!
+//! * [`math`]: bounding volumes ([`Aabb`], [`Sphere`]), the view [`Frustum`]
+//!   and reverse-Z projections;
+//! * [`scene`]: the node table (hierarchy, local TRS, flags) with its
+//!   renderables, lights and cameras, and the world-transform resolution that
+//!   ScenePrep runs once per frame;
+//! * [`geometry`] and [`material`]: the assets a renderable points at;
+//! * [`view`]: [`ViewId`], [`ViewContext`], [`ResolvedView`] and the
+//!   [`ViewResolver`] contract;
+//! * [`gpu`]: a headless wgpu device, offscreen targets and readback.
+//!
+//! It knows nothing about ScenePrep or passes: data flows out of this crate,
+//! never back in.
+
+pub mod camera;
+pub mod geometry;
+pub mod gpu;
+pub mod light;
+pub mod material;
+pub mod math;
+pub mod scene;
+pub mod view;
+
+pub use camera::{Camera, CameraError, Projection};
+pub use geometry::{Geometry, GeometryError, Submesh, Vertex};
+pub use gpu::{GpuContext, GpuError, GpuOptions, ViewTargets};
+pub use light::{Light, LightKind, Mobility};
+pub use material::{AlphaMode, Material};
+pub use math::{Aabb, Frustum, Plane, Sphere};
+pub use scene::{
+    GeometryHandle, MaterialHandle, Node, NodeFlags, NodeKey, Renderable, Scene, SceneError,
+    Transform, WorldTransforms,
+};
+pub use view::{LookAtResolver, ResolvedView, ViewContext, ViewError, ViewId, ViewResolver};
+
+/// Re-exported so that users name the same `glam` types Oxygen uses.
+pub use glam;

@@ -1,0 +1,86 @@
+//! Punctual lights attached to scene nodes.
+//!
+//! A light takes its position and direction from its node's world transform:
+//! it shines down the node's local −Z axis (the glTF convention).
+
+use glam::Vec3;
+
+/// The shape of a light.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightKind {
+    /// Parallel rays along the node's −Z; intensity in lux.
+    Directional,
+    /// Omnidirectional from the node's position; intensity in candela.
+    Point {
+        /// Distance at which the light is cut off (`None`: unbounded).
+        range: Option<f32>,
+    },
+    /// A cone along the node's −Z; intensity in candela.
+    Spot {
+        /// Cut-off distance (`None`: unbounded).
+        range: Option<f32>,
+        /// Angle (radians) from the axis where falloff starts.
+        inner_cone: f32,
+        /// Angle (radians) from the axis where the light ends.
+        outer_cone: f32,
+    },
+}
+
+/// Whether a light may change at run time; baked lights are already in
+/// lightmaps and are not collected for real-time shading.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mobility {
+    /// Fully dynamic.
+    Realtime,
+    /// Static with dynamic contribution (still collected).
+    Mixed,
+    /// Static and baked: excluded from real-time light lists.
+    Baked,
+}
+
+/// A light source.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Light {
+    /// Shape and shape parameters.
+    pub kind: LightKind,
+    /// Linear RGB colour.
+    pub color: Vec3,
+    /// Intensity (lux for directional, candela otherwise).
+    pub intensity: f32,
+    /// The light wants shadows (its node must also cast shadows).
+    pub casts_shadows: bool,
+    /// The light contributes to the lit world at all.
+    pub affects_world: bool,
+    /// Real-time, mixed or baked.
+    pub mobility: Mobility,
+}
+
+impl Light {
+    /// A white real-time directional light that casts shadows.
+    pub fn directional(intensity: f32) -> Self {
+        Light {
+            kind: LightKind::Directional,
+            color: Vec3::ONE,
+            intensity,
+            casts_shadows: true,
+            affects_world: true,
+            mobility: Mobility::Realtime,
+        }
+    }
+
+    /// A white real-time point light.
+    pub fn point(intensity: f32, range: Option<f32>) -> Self {
+        Light {
+            kind: LightKind::Point { range },
+            ..Light::directional(intensity)
+        }
+    }
+
+    /// A white real-time spot light.
+    pub fn spot(intensity: f32, range: Option<f32>, inner_cone: f32, outer_cone: f32) -> Self {
+        Light {
+            kind: LightKind::Spot { range, inner_cone, outer_cone },
+            ..Light::directional(intensity)
+        }
+    }
+}

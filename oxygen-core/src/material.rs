@@ -1,0 +1,66 @@
+//! Materials: the metallic-roughness parameters a renderable's submesh uses.
+
+use glam::Vec4;
+
+/// How a material's alpha is interpreted; decides the pass class of a draw.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum AlphaMode {
+    /// Alpha ignored; drawn in the opaque partitions.
+    Opaque,
+    /// Alpha-tested: fragments with alpha below `cutoff` are discarded.
+    Mask {
+        /// Alpha threshold in `[0, 1]`.
+        cutoff: f32,
+    },
+    /// Alpha-blended; drawn back-to-front by the transparent pass.
+    Blend,
+}
+
+/// A metallic-roughness material.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    /// Name for logs and dumps.
+    pub name: String,
+    /// Linear RGBA base colour factor.
+    pub base_color: Vec4,
+    /// Metallic factor in `[0, 1]`.
+    pub metallic: f32,
+    /// Perceptual roughness in `[0, 1]`.
+    pub roughness: f32,
+    /// Alpha handling.
+    pub alpha_mode: AlphaMode,
+    /// Draw both faces (no back-face culling, normals flipped for back faces).
+    pub double_sided: bool,
+}
+
+impl Material {
+    /// An opaque, single-sided dielectric of the given linear colour.
+    pub fn opaque(name: impl Into<String>, base_color: Vec4) -> Self {
+        Material {
+            name: name.into(),
+            base_color,
+            metallic: 0.0,
+            roughness: 0.6,
+            alpha_mode: AlphaMode::Opaque,
+            double_sided: false,
+        }
+    }
+
+    /// Values clamped to their valid ranges and NaN replaced, so that what is
+    /// uploaded to the GPU is always meaningful.
+    pub fn sanitized(&self) -> Material {
+        let fix = |v: f32, default: f32| if v.is_finite() { v.clamp(0.0, 1.0) } else { default };
+        let base = self.base_color;
+        Material {
+            name: self.name.clone(),
+            base_color: Vec4::new(fix(base.x, 1.0), fix(base.y, 1.0), fix(base.z, 1.0), fix(base.w, 1.0)),
+            metallic: fix(self.metallic, 0.0),
+            roughness: fix(self.roughness, 1.0),
+            alpha_mode: match self.alpha_mode {
+                AlphaMode::Mask { cutoff } => AlphaMode::Mask { cutoff: fix(cutoff, 0.5) },
+                other => other,
+            },
+            double_sided: self.double_sided,
+        }
+    }
+}

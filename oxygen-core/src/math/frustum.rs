@@ -1,0 +1,163 @@
+//! View frustum planes, extracted from a view-projection matrix.
+//!
+//! Planes follow Gribb and Hartmann: each is a sum or difference of rows of
+//! the clip matrix, normalized so that `dot(n, p) + d` is a signed distance in
+//! world units, positive inside. wgpu clips to `0 <= z <= w`, so the two depth
+//! planes are `row2` and `row3 - row2`; with reverse-Z these are the far and
+//! near planes respectively. An infinite far plane yields a degenerate
+//! `row2` (zero normal); it is replaced by a plane that keeps everything.
+
+use glam::{Mat4, Vec3, Vec4};
+
+use super::{Aabb, Sphere};
+
+/// A plane `dot(normal, p) + d = 0`; points with a positive distance are inside.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Plane {
+    /// Unit normal pointing into the kept half-space.
+    pub normal: Vec3,
+    /// Offset: the signed distance of the origin.
+    pub d: f32,
+}
+
+impl Plane {
+    /// A plane that every point is inside (used for an infinite far plane).
+    pub const KEEP_ALL: Plane = Plane {
+        normal: Vec3::ZERO,
+        d: f32::INFINITY,
+    };
+
+    /// Normalizes `(a, b, c, d)`; a plane with a (near) zero normal keeps all.
+    fn from_row(v: Vec4) -> Plane {
+        let len = v.truncate().length();
+        if !(len > 1e-12) || !len.is_finite() {
+            return Plane::KEEP_ALL;
+        }
+        Plane {
+            normal: v.truncate() / len,
+            d: v.w / len,
+        }
+    }
+
+    /// Signed distance from the plane, positive inside.
+    pub fn distance(&self, p: Vec3) -> f32 {
+        self.normal.dot(p) + self.d
+    }
+}
+
+/// Six planes bounding what a view can see, in the order
+/// left, right, bottom, top, near, far.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Frustum {
+    /// Left, right, bottom, top, near, far.
+    pub planes: [Plane; 6],
+}
+
+impl Frustum {
+    /// Extracts normalized planes from a reverse-Z (or standard) wgpu
+    /// view-projection matrix.
+    pub fn from_view_projection(view_projection: &Mat4) -> Self {
+        let m = view_projection.transpose(); // rows of the original as columns
+        let (r0, r1, r2, r3) = (m.x_axis, m.y_axis, m.z_axis, m.w_axis);
+        let z_ge_0 = Plane::from_row(r2);
+        let z_le_w = Plane::from_row(r3 - r2);
+        // Reverse-Z maps the near plane to z = w, the far plane to z = 0; which
+        // is which only matters for naming, since both are tested.
+        Frustum {
+            planes: [
+                Plane::from_row(r3 + r0),
+                Plane::from_row(r3 - r0),
+                Plane::from_row(r3 + r1),
+                Plane::from_row(r3 - r1),
+                z_le_w,
+                z_ge_0,
+            ],
+        }
+    }
+
+    /// Conservative box test by the p-vertex method: for each plane, the box
+    /// corner furthest along the plane normal is tested; if even that corner is
+    /// outside, the whole box is. May keep a box that is outside near a
+    /// frustum corner; never drops one that intersects the frustum.
+    pub fn intersects_aabb(&self, aabb: &Aabb) -> bool {
+        self.planes.iter().all(|plane| {
+            let p = Vec3::select(plane.normal.cmpge(Vec3::ZERO), aabb.max, aabb.min);
+            plane.distance(p) >= 0.0
+        })
+    }
+
+    /// Conservative sphere test: cheaper and looser than [`Self::intersects_aabb`].
+    pub fn intersects_sphere(&self, sphere: &Sphere) -> bool {
+        self.planes
+            .iter()
+            .all(|plane| plane.distance(sphere.center) >= -sphere.radius)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::projection::reverse_z_perspective;
+
+    fn test_frustum(far: Option<f32>) -> Frustum {
+        let view = Mat4::look_at_rh(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y);
+        let proj = reverse_z_perspective(90f32.to_radians(), 1.0, 0.1, far);
+        Frustum::from_view_projection(&(proj * view))
+    }
+
+    #[test]
+    fn planes_are_normalized_signed_distances() {
+        let f = test_frustum(Some(100.0));
+        // A point 5 units in front of the camera: 4.9 from the near plane.
+        let near = f.planes[4];
+        assert!((near.distance(Vec3::new(0.0, 0.0, -5.0)) - 4.9).abs() < 1e-4);
+        let far = f.planes[5];
+        assert!((far.distance(Vec3::new(0.0, 0.0, -5.0)) - 95.0).abs() < 1e-3);
+    }
+
+    #[test]
+    fn infinite_far_plane_keeps_distant_objects() {
+        let f = test_frustum(None);
+        let far_box = Aabb::from_center_half_extents(Vec3::new(0.0, 0.0, -1e7), Vec3::ONE);
+        assert!(f.intersects_aabb(&far_box));
+        let behind = Aabb::from_center_half_extents(Vec3::new(0.0, 0.0, 10.0), Vec3::ONE);
+        assert!(!f.intersects_aabb(&behind));
+    }
+
+    #[test]
+    fn culling_drops_objects_fully_outside_each_plane() {
+        let f = test_frustum(Some(100.0));
+        // With a 90° frustum looking down -Z, at depth 10 the sides are at ±10.
+        let outside = [
+            Vec3::new(-30.0, 0.0, -10.0), // left
+            Vec3::new(30.0, 0.0, -10.0),  // right
+            Vec3::new(0.0, -30.0, -10.0), // bottom
+            Vec3::new(0.0, 30.0, -10.0),  // top
+            Vec3::new(0.0, 0.0, 5.0),     // behind the near plane
+            Vec3::new(0.0, 0.0, -200.0),  // beyond the far plane
+        ];
+        for (plane, c) in outside.iter().enumerate() {
+            let b = Aabb::from_center_half_extents(*c, Vec3::ONE);
+            assert!(!f.intersects_aabb(&b), "box outside plane {plane} was kept");
+            assert!(!f.intersects_sphere(&Sphere::from_aabb(&b)), "sphere outside plane {plane} was kept");
+        }
+    }
+
+    #[test]
+    fn culling_keeps_objects_straddling_a_plane() {
+        let f = test_frustum(Some(100.0));
+        let straddling = [
+            Vec3::new(-10.0, 0.0, -10.0), // on the left plane
+            Vec3::new(10.0, 0.0, -10.0),
+            Vec3::new(0.0, -10.0, -10.0),
+            Vec3::new(0.0, 10.0, -10.0),
+            Vec3::new(0.0, 0.0, -0.1),   // on the near plane
+            Vec3::new(0.0, 0.0, -100.0), // on the far plane
+        ];
+        for (plane, c) in straddling.iter().enumerate() {
+            let b = Aabb::from_center_half_extents(*c, Vec3::splat(0.5));
+            assert!(f.intersects_aabb(&b), "box straddling plane {plane} was dropped");
+            assert!(f.intersects_sphere(&Sphere::from_aabb(&b)));
+        }
+    }
+}

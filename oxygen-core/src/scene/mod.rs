@@ -1,0 +1,255 @@
+//! The scene: a node table with hierarchy, flags and attachments.
+//!
+//! Nodes live in a [`slotmap`], so a [`NodeKey`] stays valid (and stale keys
+//! are detected) while other nodes come and go. A node carries a local
+//! [`Transform`]; world matrices are resolved from the hierarchy once per
+//! frame into a [`WorldTransforms`] table by ScenePrep's frame phase — the
+//! scene itself is never mutated by rendering, so `render_frame(&scene)`
+//! borrows it immutably.
+//!
+//! Geometry and materials are shared assets referenced by handle from any
+//! number of renderable nodes.
+
+mod node;
+mod world;
+
+pub use node::{Node, NodeFlags, Renderable, Transform};
+pub use world::WorldTransforms;
+
+use std::sync::Arc;
+
+use slotmap::{Key, SlotMap, new_key_type};
+use thiserror::Error;
+
+use crate::{Camera, Geometry, Light, Material};
+
+new_key_type! {
+    /// A node in the [`Scene`]; carries a generation, so a key of a removed
+    /// node is detected rather than aliasing a new one.
+    pub struct NodeKey;
+    /// A geometry asset in the [`Scene`].
+    pub struct GeometryHandle;
+    /// A material asset in the [`Scene`].
+    pub struct MaterialHandle;
+}
+
+/// The stable numeric id of a node (its slot index), used for deterministic
+/// tie-breaks and in dumps.
+pub fn node_index(key: NodeKey) -> u32 {
+    (key.data().as_ffi() & 0xffff_ffff) as u32
+}
+
+/// The stable numeric id of a material (its slot index).
+pub fn material_index(handle: MaterialHandle) -> u32 {
+    (handle.data().as_ffi() & 0xffff_ffff) as u32
+}
+
+/// The stable numeric id of a geometry (its slot index).
+pub fn geometry_index(handle: GeometryHandle) -> u32 {
+    (handle.data().as_ffi() & 0xffff_ffff) as u32
+}
+
+/// A scene edit that refers to something that is not there or does not fit.
+#[derive(Debug, Error, PartialEq)]
+pub enum SceneError {
+    /// The node key is stale or from another scene.
+    #[error("node {0:?} does not exist in this scene")]
+    NoSuchNode(NodeKey),
+    /// The geometry handle is stale or from another scene.
+    #[error("geometry {0:?} does not exist in this scene")]
+    NoSuchGeometry(GeometryHandle),
+    /// The material handle is stale or from another scene.
+    #[error("material {0:?} does not exist in this scene")]
+    NoSuchMaterial(MaterialHandle),
+    /// A renderable must name one material per submesh.
+    #[error("renderable on node '{node}' gives {given} materials for {submeshes} submeshes of geometry '{geometry}'")]
+    MaterialCountMismatch {
+        /// Node name.
+        node: String,
+        /// Geometry name.
+        geometry: String,
+        /// Materials given.
+        given: usize,
+        /// Submeshes in the geometry.
+        submeshes: usize,
+    },
+    /// Re-parenting would make a node its own ancestor.
+    #[error("making {child:?} a child of {parent:?} would create a cycle")]
+    Cycle {
+        /// The node being moved.
+        child: NodeKey,
+        /// The requested parent.
+        parent: NodeKey,
+    },
+}
+
+/// The scene node table and its assets.
+#[derive(Default)]
+pub struct Scene {
+    nodes: SlotMap<NodeKey, Node>,
+    roots: Vec<NodeKey>,
+    geometries: SlotMap<GeometryHandle, Arc<Geometry>>,
+    materials: SlotMap<MaterialHandle, Material>,
+}
+
+impl Scene {
+    /// An empty scene.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Adds a geometry asset.
+    pub fn add_geometry(&mut self, geometry: Geometry) -> GeometryHandle {
+        self.geometries.insert(Arc::new(geometry))
+    }
+
+    /// Adds a material asset (sanitized: NaN and out-of-range values fixed).
+    pub fn add_material(&mut self, material: Material) -> MaterialHandle {
+        self.materials.insert(material.sanitized())
+    }
+
+    /// A geometry by handle.
+    pub fn geometry(&self, handle: GeometryHandle) -> Option<&Arc<Geometry>> {
+        self.geometries.get(handle)
+    }
+
+    /// A material by handle.
+    pub fn material(&self, handle: MaterialHandle) -> Option<&Material> {
+        self.materials.get(handle)
+    }
+
+    /// Adds a root node with a local transform; visible and shadow-casting.
+    pub fn add_node(&mut self, name: impl Into<String>, local: Transform) -> NodeKey {
+        let key = self.nodes.insert(Node::new(name.into(), None, local));
+        self.roots.push(key);
+        key
+    }
+
+    /// Adds a node under `parent`.
+    pub fn add_child(&mut self, parent: NodeKey, name: impl Into<String>, local: Transform) -> Result<NodeKey, SceneError> {
+        if !self.nodes.contains_key(parent) {
+            return Err(SceneError::NoSuchNode(parent));
+        }
+        let key = self.nodes.insert(Node::new(name.into(), Some(parent), local));
+        self.nodes[parent].children.push(key);
+        Ok(key)
+    }
+
+    /// Removes a node and its whole subtree.
+    pub fn remove_node(&mut self, key: NodeKey) -> Result<(), SceneError> {
+        let node = self.nodes.get(key).ok_or(SceneError::NoSuchNode(key))?;
+        match node.parent {
+            Some(p) => self.nodes[p].children.retain(|c| *c != key),
+            None => self.roots.retain(|r| *r != key),
+        }
+        let mut stack = vec![key];
+        while let Some(k) = stack.pop() {
+            if let Some(n) = self.nodes.remove(k) {
+                stack.extend(n.children);
+            }
+        }
+        Ok(())
+    }
+
+    /// Moves `child` under `parent` (or to the roots with `None`).
+    pub fn set_parent(&mut self, child: NodeKey, parent: Option<NodeKey>) -> Result<(), SceneError> {
+        let old = self.nodes.get(child).ok_or(SceneError::NoSuchNode(child))?.parent;
+        if let Some(p) = parent {
+            let mut cursor = Some(p);
+            while let Some(c) = cursor {
+                if c == child {
+                    return Err(SceneError::Cycle { child, parent: p });
+                }
+                cursor = self.nodes.get(c).ok_or(SceneError::NoSuchNode(c))?.parent;
+            }
+        }
+        match old {
+            Some(o) => self.nodes[o].children.retain(|c| *c != child),
+            None => self.roots.retain(|r| *r != child),
+        }
+        match parent {
+            Some(p) => self.nodes[p].children.push(child),
+            None => self.roots.push(child),
+        }
+        self.nodes[child].parent = parent;
+        Ok(())
+    }
+
+    /// A node by key.
+    pub fn node(&self, key: NodeKey) -> Option<&Node> {
+        self.nodes.get(key)
+    }
+
+    fn node_mut(&mut self, key: NodeKey) -> Result<&mut Node, SceneError> {
+        self.nodes.get_mut(key).ok_or(SceneError::NoSuchNode(key))
+    }
+
+    /// Every node with its key, in stable slot order.
+    pub fn nodes(&self) -> impl Iterator<Item = (NodeKey, &Node)> {
+        self.nodes.iter()
+    }
+
+    /// Number of nodes.
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// Root nodes in insertion order.
+    pub fn roots(&self) -> &[NodeKey] {
+        &self.roots
+    }
+
+    /// Replaces a node's local transform.
+    pub fn set_local_transform(&mut self, key: NodeKey, local: Transform) -> Result<(), SceneError> {
+        self.node_mut(key)?.local = local;
+        Ok(())
+    }
+
+    /// Replaces a node's flags.
+    pub fn set_flags(&mut self, key: NodeKey, flags: NodeFlags) -> Result<(), SceneError> {
+        self.node_mut(key)?.flags = flags;
+        Ok(())
+    }
+
+    /// Attaches a renderable; checks the handles and the material count.
+    pub fn set_renderable(&mut self, key: NodeKey, renderable: Renderable) -> Result<(), SceneError> {
+        let geometry = self
+            .geometries
+            .get(renderable.geometry)
+            .ok_or(SceneError::NoSuchGeometry(renderable.geometry))?;
+        if let Some(m) = renderable.materials.iter().find(|m| !self.materials.contains_key(**m)) {
+            return Err(SceneError::NoSuchMaterial(*m));
+        }
+        let node = self.nodes.get(key).ok_or(SceneError::NoSuchNode(key))?;
+        if renderable.materials.len() != geometry.submeshes().len() {
+            return Err(SceneError::MaterialCountMismatch {
+                node: node.name.clone(),
+                geometry: geometry.name().to_owned(),
+                given: renderable.materials.len(),
+                submeshes: geometry.submeshes().len(),
+            });
+        }
+        self.node_mut(key)?.renderable = Some(renderable);
+        Ok(())
+    }
+
+    /// Attaches (or with `None` removes) a light.
+    pub fn set_light(&mut self, key: NodeKey, light: Option<Light>) -> Result<(), SceneError> {
+        self.node_mut(key)?.light = light;
+        Ok(())
+    }
+
+    /// Attaches (or removes) a camera.
+    pub fn set_camera(&mut self, key: NodeKey, camera: Option<Camera>) -> Result<(), SceneError> {
+        self.node_mut(key)?.camera = camera;
+        Ok(())
+    }
+
+    /// Resolves every node's world matrix from the hierarchy into `out`
+    /// (cleared first, capacity kept). Composition is done in `f64`, so
+    /// deep hierarchies and large offsets lose no precision before the final
+    /// rounding to `f32`.
+    pub fn resolve_world_transforms(&self, out: &mut WorldTransforms) {
+        out.resolve(self);
+    }
+}

@@ -1,0 +1,129 @@
+//! Nodes: a local transform, flags, and optional attachments.
+
+use bitflags::bitflags;
+use glam::{DMat4, DQuat, Mat4, Quat, Vec3};
+
+use super::{GeometryHandle, MaterialHandle, NodeKey};
+use crate::{Camera, Light};
+
+bitflags! {
+    /// Per-node switches read by ScenePrep.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+    pub struct NodeFlags: u32 {
+        /// The node (and what it carries) takes part in rendering.
+        const VISIBLE = 1 << 0;
+        /// The node's renderable is drawn into shadow views, and its light
+        /// may cast shadows.
+        const CASTS_SHADOWS = 1 << 1;
+    }
+}
+
+/// Translation, rotation, scale; composed as `T * R * S`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Transform {
+    /// Translation.
+    pub translation: Vec3,
+    /// Rotation (unit quaternion).
+    pub rotation: Quat,
+    /// Non-uniform scale; a negative component mirrors.
+    pub scale: Vec3,
+}
+
+impl Default for Transform {
+    fn default() -> Self {
+        Transform::IDENTITY
+    }
+}
+
+impl Transform {
+    /// No translation, rotation or scale.
+    pub const IDENTITY: Transform = Transform {
+        translation: Vec3::ZERO,
+        rotation: Quat::IDENTITY,
+        scale: Vec3::ONE,
+    };
+
+    /// A pure translation.
+    pub fn from_translation(translation: Vec3) -> Self {
+        Transform { translation, ..Self::IDENTITY }
+    }
+
+    /// This transform with another scale.
+    pub fn with_scale(self, scale: Vec3) -> Self {
+        Transform { scale, ..self }
+    }
+
+    /// This transform with another rotation.
+    pub fn with_rotation(self, rotation: Quat) -> Self {
+        Transform { rotation, ..self }
+    }
+
+    /// The `f32` matrix.
+    pub fn to_mat4(&self) -> Mat4 {
+        Mat4::from_scale_rotation_translation(self.scale, self.rotation, self.translation)
+    }
+
+    /// The `f64` matrix used for hierarchy composition.
+    pub fn to_dmat4(&self) -> DMat4 {
+        DMat4::from_scale_rotation_translation(
+            self.scale.as_dvec3(),
+            DQuat::from_xyzw(
+                self.rotation.x as f64,
+                self.rotation.y as f64,
+                self.rotation.z as f64,
+                self.rotation.w as f64,
+            ),
+            self.translation.as_dvec3(),
+        )
+    }
+}
+
+/// Geometry drawn with one material per submesh.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Renderable {
+    /// The mesh.
+    pub geometry: GeometryHandle,
+    /// One material per submesh of `geometry`, in submesh order.
+    pub materials: Vec<MaterialHandle>,
+}
+
+/// One entry of the scene's node table.
+#[derive(Clone, Debug)]
+pub struct Node {
+    /// Name for logs, warnings and dumps.
+    pub name: String,
+    /// Parent, `None` for a root.
+    pub parent: Option<NodeKey>,
+    /// Children in insertion order.
+    pub children: Vec<NodeKey>,
+    /// Transform relative to the parent.
+    pub local: Transform,
+    /// Visibility and shadow flags.
+    pub flags: NodeFlags,
+    /// What the node draws, if anything.
+    pub renderable: Option<Renderable>,
+    /// The light it carries, if any.
+    pub light: Option<Light>,
+    /// The camera it carries, if any.
+    pub camera: Option<Camera>,
+}
+
+impl Node {
+    pub(super) fn new(name: String, parent: Option<NodeKey>, local: Transform) -> Self {
+        Node {
+            name,
+            parent,
+            children: Vec::new(),
+            local,
+            flags: NodeFlags::VISIBLE | NodeFlags::CASTS_SHADOWS,
+            renderable: None,
+            light: None,
+            camera: None,
+        }
+    }
+
+    /// True when the node's own VISIBLE flag is set.
+    pub fn is_visible(&self) -> bool {
+        self.flags.contains(NodeFlags::VISIBLE)
+    }
+}
