@@ -1,1 +1,30 @@
+//! # oxygen-bindless
+//!
+//! The bindless heap. Shaders never receive per-draw bindings: they receive
+//! *slots*, indices into a few large typed GPU buffers called *domains*
+//! (draw metadata, world and normal matrices, materials, lights, vertices,
+//! indices). This crate owns:
+//!
+//! * [`DomainKind`]: the domains, their record sizes and WGSL bindings;
+//! * [`SlotAllocator`]: CPU-side range allocation with generation-checked
+//!   [`Allocation`] handles, usable without a GPU (ScenePrep snapshot tests);
+//! * [`BindlessHeap`]: the GPU buffers behind the allocators, grown (with the
+//!   live data copied) when the allocators outgrow them, and the bind group
+//!   every pass sets once;
+//! * [`SceneConstants`]: the per-view uniform block, declared once in Rust
+//!   and once in WGSL ([`SCENE_CONSTANTS_WGSL`]) with the same layout.
+//!
+//! It knows nothing of scenes or passes. `u32::MAX` ([`INVALID_SLOT`]) is the
+//! absent slot, and shaders treat it so.
 
+mod domain;
+mod heap;
+mod scene_constants;
+mod slot;
+
+pub use domain::DomainKind;
+pub use heap::{BindlessError, BindlessHeap};
+pub use scene_constants::{
+    CameraConstants, RendererConstants, SCENE_CONSTANTS_WGSL, SceneConstants, SceneConstantsBuffer,
+};
+pub use slot::{Allocation, INVALID_SLOT, SlotAllocator, SlotAllocators, SlotError};

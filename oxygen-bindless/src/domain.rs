@@ -1,0 +1,118 @@
+//! The typed domains of the heap and how shaders see them.
+
+/// A typed GPU buffer of fixed-size records that shaders index by slot.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum DomainKind {
+    /// `DrawMetadata` records (64 B), one range per view per frame.
+    DrawMetadata,
+    /// World matrices (`mat4x4<f32>`, 64 B), one range per frame shared by views.
+    WorldTransforms,
+    /// Normal matrices (`mat3x3<f32>`, 48 B), parallel to the world matrices.
+    NormalTransforms,
+    /// `MaterialRecord`s (48 B), persistent per material.
+    Materials,
+    /// `DirectionalLightRecord`s (48 B), one range per frame.
+    DirectionalLights,
+    /// `PositionalLightRecord`s (64 B), one range per frame.
+    PositionalLights,
+    /// `VertexRecord`s (32 B), persistent per geometry.
+    Vertices,
+    /// `u32` indices, persistent per geometry; bound as the index buffer.
+    Indices,
+}
+
+impl DomainKind {
+    /// Every domain, in binding order.
+    pub const ALL: [DomainKind; 8] = [
+        DomainKind::DrawMetadata,
+        DomainKind::WorldTransforms,
+        DomainKind::NormalTransforms,
+        DomainKind::Materials,
+        DomainKind::DirectionalLights,
+        DomainKind::PositionalLights,
+        DomainKind::Vertices,
+        DomainKind::Indices,
+    ];
+
+    /// Number of domains.
+    pub const COUNT: usize = Self::ALL.len();
+
+    /// Position in [`Self::ALL`].
+    pub const fn index(self) -> usize {
+        self as usize
+    }
+
+    /// Size of one record in bytes. The record types (defined where they are
+    /// produced, e.g. `DrawMetadata` in ScenePrep) assert their size against
+    /// this at compile time.
+    pub const fn record_size(self) -> u64 {
+        match self {
+            DomainKind::DrawMetadata => 64,
+            DomainKind::WorldTransforms => 64,
+            DomainKind::NormalTransforms => 48,
+            DomainKind::Materials => 48,
+            DomainKind::DirectionalLights => 48,
+            DomainKind::PositionalLights => 64,
+            DomainKind::Vertices => 32,
+            DomainKind::Indices => 4,
+        }
+    }
+
+    /// The storage binding in bind group 0, or `None` when the domain is not
+    /// read by shaders through a binding (indices feed the index buffer).
+    pub const fn binding(self) -> Option<u32> {
+        match self {
+            DomainKind::Indices => None,
+            other => Some(other as u32),
+        }
+    }
+
+    /// Variable name and element type in WGSL.
+    pub const fn wgsl(self) -> (&'static str, &'static str) {
+        match self {
+            DomainKind::DrawMetadata => ("draw_metadata_domain", "DrawMetadata"),
+            DomainKind::WorldTransforms => ("world_transform_domain", "mat4x4<f32>"),
+            DomainKind::NormalTransforms => ("normal_transform_domain", "mat3x3<f32>"),
+            DomainKind::Materials => ("material_domain", "MaterialRecord"),
+            DomainKind::DirectionalLights => ("directional_light_domain", "DirectionalLightRecord"),
+            DomainKind::PositionalLights => ("positional_light_domain", "PositionalLightRecord"),
+            DomainKind::Vertices => ("vertex_domain", "VertexRecord"),
+            DomainKind::Indices => ("index_domain", "u32"),
+        }
+    }
+
+    /// Buffer usages beyond copy source/destination.
+    pub(crate) fn usages(self) -> wgpu::BufferUsages {
+        match self {
+            DomainKind::Indices => wgpu::BufferUsages::INDEX,
+            _ => wgpu::BufferUsages::STORAGE,
+        }
+    }
+
+    /// Lower-case name for errors and logs.
+    pub const fn name(self) -> &'static str {
+        match self {
+            DomainKind::DrawMetadata => "draw-metadata",
+            DomainKind::WorldTransforms => "world-transforms",
+            DomainKind::NormalTransforms => "normal-transforms",
+            DomainKind::Materials => "materials",
+            DomainKind::DirectionalLights => "directional-lights",
+            DomainKind::PositionalLights => "positional-lights",
+            DomainKind::Vertices => "vertices",
+            DomainKind::Indices => "indices",
+        }
+    }
+
+    /// WGSL declarations of every bound domain in bind group 0; the record
+    /// structs they name must be declared by the including shader.
+    pub fn wgsl_bindings() -> String {
+        let mut out = String::new();
+        for kind in Self::ALL {
+            if let Some(binding) = kind.binding() {
+                let (name, ty) = kind.wgsl();
+                out.push_str(&format!("@group(0) @binding({binding}) var<storage, read> {name}: array<{ty}>;\n"));
+            }
+        }
+        out
+    }
+}

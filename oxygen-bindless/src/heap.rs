@@ -1,0 +1,227 @@
+//! The GPU side of the heap: one buffer per domain, grown on demand, and the
+//! bind group every pass sets once.
+//!
+//! Allocation is CPU-only ([`SlotAllocators`]), so ScenePrep can assign slots
+//! without a device. Before writing, the renderer calls
+//! [`BindlessHeap::ensure_capacity`], which grows each buffer that its
+//! allocator has outgrown: a new buffer (at least double, at most the
+//! adapter's `max_storage_buffer_binding_size`), a GPU copy of the old
+//! contents, and a new bind group. The bind-group *layout* never changes, so
+//! cached pipelines stay valid across growth.
+
+use bytemuck::Pod;
+use thiserror::Error;
+use tracing::{debug, info_span};
+
+use crate::{Allocation, DomainKind, SlotAllocators, SlotError};
+
+/// Smallest buffer, in records: a binding must never be empty.
+const MIN_RECORDS: u64 = 64;
+
+/// A heap operation that cannot be done.
+#[derive(Debug, Error, PartialEq)]
+pub enum BindlessError {
+    /// A slot handle was stale, or a domain is full.
+    #[error(transparent)]
+    Slot(#[from] SlotError),
+    /// Records of the wrong size were written to a domain.
+    #[error("{domain} records are {expected} bytes, got {got}-byte records")]
+    RecordSize {
+        /// Domain name.
+        domain: &'static str,
+        /// Expected bytes per record.
+        expected: u64,
+        /// Given bytes per record.
+        got: u64,
+    },
+    /// A write reached past the GPU buffer: `ensure_capacity` was not called.
+    #[error("{domain} write reaches slot {end}, buffer holds {capacity}: call ensure_capacity after allocating")]
+    BeyondCapacity {
+        /// Domain name.
+        domain: &'static str,
+        /// One past the last slot written.
+        end: u64,
+        /// Records the buffer holds.
+        capacity: u64,
+    },
+}
+
+/// The bindless heap: slot allocators plus the GPU buffers behind them.
+pub struct BindlessHeap {
+    /// CPU-side allocators, one per domain.
+    pub slots: SlotAllocators,
+    buffers: Vec<wgpu::Buffer>,
+    capacities: Vec<u64>,
+    domain_layout: wgpu::BindGroupLayout,
+    scene_constants_layout: wgpu::BindGroupLayout,
+    bind_group: wgpu::BindGroup,
+    max_binding_bytes: u64,
+    growths: u64,
+}
+
+impl BindlessHeap {
+    /// Creates every domain at its minimum size on `device`.
+    pub fn new(device: &wgpu::Device) -> Self {
+        let max_binding_bytes = device.limits().max_storage_buffer_binding_size as u64;
+        let storage_entry = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: true },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let entries: Vec<_> = DomainKind::ALL.iter().filter_map(|k| k.binding()).map(storage_entry).collect();
+        let domain_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("bindless domains"),
+            entries: &entries,
+        });
+        let scene_constants_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("scene constants"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<crate::SceneConstants>() as u64),
+                },
+                count: None,
+            }],
+        });
+        let capacities: Vec<u64> = DomainKind::ALL.iter().map(|_| MIN_RECORDS).collect();
+        let buffers: Vec<_> = DomainKind::ALL
+            .iter()
+            .zip(&capacities)
+            .map(|(k, c)| create_domain_buffer(device, *k, *c))
+            .collect();
+        let bind_group = create_bind_group(device, &domain_layout, &buffers);
+        BindlessHeap {
+            slots: SlotAllocators::new(max_binding_bytes),
+            buffers,
+            capacities,
+            domain_layout,
+            scene_constants_layout,
+            bind_group,
+            max_binding_bytes,
+            growths: 0,
+        }
+    }
+
+    /// Grows every buffer whose allocator's high-water mark exceeds it,
+    /// copying live contents. Returns whether anything grew. Submits its own
+    /// copy commands right away, so that later `queue.write_buffer` calls land
+    /// after the copy.
+    pub fn ensure_capacity(&mut self, device: &wgpu::Device, queue: &wgpu::Queue) -> bool {
+        let _span = info_span!("bindless_ensure_capacity").entered();
+        let mut encoder: Option<wgpu::CommandEncoder> = None;
+        for kind in DomainKind::ALL {
+            let i = kind.index();
+            let needed = self.slots.get(kind).high_water() as u64;
+            if needed <= self.capacities[i] {
+                continue;
+            }
+            // Allocators never exceed the binding limit, so this fits.
+            let max_records = self.max_binding_bytes / kind.record_size();
+            let new_capacity = needed.max(self.capacities[i] * 2).min(max_records);
+            let new_buffer = create_domain_buffer(device, kind, new_capacity);
+            let encoder = encoder.get_or_insert_with(|| device.create_command_encoder(&Default::default()));
+            encoder.copy_buffer_to_buffer(&self.buffers[i], 0, &new_buffer, 0, self.capacities[i] * kind.record_size());
+            debug!(domain = kind.name(), from = self.capacities[i], to = new_capacity, "bindless domain grown");
+            self.buffers[i] = new_buffer;
+            self.capacities[i] = new_capacity;
+            self.growths += 1;
+        }
+        match encoder {
+            Some(encoder) => {
+                queue.submit([encoder.finish()]);
+                self.bind_group = create_bind_group(device, &self.domain_layout, &self.buffers);
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Writes `records` starting `offset` records into `allocation`.
+    pub fn write<T: Pod>(&self, queue: &wgpu::Queue, allocation: &Allocation, offset: u32, records: &[T]) -> Result<(), BindlessError> {
+        let kind = allocation.domain();
+        self.slots.get(kind).validate(allocation)?;
+        let record_size = std::mem::size_of::<T>() as u64;
+        if record_size != kind.record_size() {
+            return Err(BindlessError::RecordSize { domain: kind.name(), expected: kind.record_size(), got: record_size });
+        }
+        if records.is_empty() {
+            return Ok(());
+        }
+        if offset as u64 + records.len() as u64 > allocation.count as u64 {
+            return Err(SlotError::WriteTooLarge { domain: kind.name(), records: records.len() + offset as usize, count: allocation.count }.into());
+        }
+        let first = allocation.start as u64 + offset as u64;
+        let end = first + records.len() as u64;
+        if end > self.capacities[kind.index()] {
+            return Err(BindlessError::BeyondCapacity { domain: kind.name(), end, capacity: self.capacities[kind.index()] });
+        }
+        queue.write_buffer(&self.buffers[kind.index()], first * record_size, bytemuck::cast_slice(records));
+        Ok(())
+    }
+
+    /// The bind group of all domains (group 0).
+    pub fn bind_group(&self) -> &wgpu::BindGroup {
+        &self.bind_group
+    }
+
+    /// Layout of group 0 (domains); stable for the heap's lifetime.
+    pub fn domain_layout(&self) -> &wgpu::BindGroupLayout {
+        &self.domain_layout
+    }
+
+    /// Layout of group 1 (a view's `SceneConstants`).
+    pub fn scene_constants_layout(&self) -> &wgpu::BindGroupLayout {
+        &self.scene_constants_layout
+    }
+
+    /// The shared index buffer (the `Indices` domain).
+    pub fn index_buffer(&self) -> &wgpu::Buffer {
+        &self.buffers[DomainKind::Indices.index()]
+    }
+
+    /// The GPU buffer of a domain.
+    pub fn buffer(&self, kind: DomainKind) -> &wgpu::Buffer {
+        &self.buffers[kind.index()]
+    }
+
+    /// Records the GPU buffer of `kind` can hold.
+    pub fn capacity(&self, kind: DomainKind) -> u64 {
+        self.capacities[kind.index()]
+    }
+
+    /// Total bytes of all domain buffers.
+    pub fn gpu_bytes(&self) -> u64 {
+        DomainKind::ALL.iter().map(|k| self.capacities[k.index()] * k.record_size()).sum()
+    }
+
+    /// How many times a domain buffer has been grown.
+    pub fn growth_count(&self) -> u64 {
+        self.growths
+    }
+}
+
+fn create_domain_buffer(device: &wgpu::Device, kind: DomainKind, records: u64) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(kind.name()),
+        size: records * kind.record_size(),
+        usage: kind.usages() | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    })
+}
+
+fn create_bind_group(device: &wgpu::Device, layout: &wgpu::BindGroupLayout, buffers: &[wgpu::Buffer]) -> wgpu::BindGroup {
+    let entries: Vec<_> = DomainKind::ALL
+        .iter()
+        .filter_map(|k| k.binding().map(|b| (b, &buffers[k.index()])))
+        .map(|(binding, buffer)| wgpu::BindGroupEntry { binding, resource: buffer.as_entire_binding() })
+        .collect();
+    device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("bindless domains"), layout, entries: &entries })
+}

@@ -1,0 +1,174 @@
+//! `SceneConstants`: the per-view uniform block, declared here in Rust and
+//! in [`SCENE_CONSTANTS_WGSL`] for shaders, with the same layout (asserted at
+//! compile time here and by a naga reflection test).
+//!
+//! The block has two owners. [`CameraConstants`] belong to the application's
+//! view (matrices, eye); [`RendererConstants`] belong to the renderer (frame
+//! number, slots). [`SceneConstantsBuffer`] writes each half with its own
+//! call and its own byte range, so neither side can overwrite the other.
+
+use std::mem::{offset_of, size_of};
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3};
+
+use crate::INVALID_SLOT;
+
+/// The view-owned half: matrices and eye position.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct CameraConstants {
+    /// World → view.
+    pub view: [[f32; 4]; 4],
+    /// View → clip (reverse-Z).
+    pub projection: [[f32; 4]; 4],
+    /// World → clip.
+    pub view_projection: [[f32; 4]; 4],
+    /// Clip → world.
+    pub inverse_view_projection: [[f32; 4]; 4],
+    /// Eye position; `w` is 1.
+    pub camera_position: [f32; 4],
+}
+
+impl CameraConstants {
+    /// From glam values.
+    pub fn new(view: Mat4, projection: Mat4, view_projection: Mat4, inverse_view_projection: Mat4, eye: Vec3) -> Self {
+        CameraConstants {
+            view: view.to_cols_array_2d(),
+            projection: projection.to_cols_array_2d(),
+            view_projection: view_projection.to_cols_array_2d(),
+            inverse_view_projection: inverse_view_projection.to_cols_array_2d(),
+            camera_position: eye.extend(1.0).to_array(),
+        }
+    }
+}
+
+/// The renderer-owned half: frame counters and every slot a shader needs.
+/// A slot of [`INVALID_SLOT`] means "absent".
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Pod, Zeroable)]
+pub struct RendererConstants {
+    /// Frame sequence number.
+    pub frame_sequence: u32,
+    /// Application time in seconds, as `f32` bits (kept `u32` so the struct is `Eq`).
+    pub time_seconds_bits: u32,
+    /// First `DrawMetadata` of this view.
+    pub draw_metadata_slot: u32,
+    /// Number of draws of this view.
+    pub draw_count: u32,
+    /// First world matrix of this frame.
+    pub world_transforms_slot: u32,
+    /// First normal matrix of this frame.
+    pub normal_transforms_slot: u32,
+    /// Base of the material domain (material handles index from here).
+    pub materials_slot: u32,
+    /// First directional light of this frame.
+    pub directional_lights_slot: u32,
+    /// Number of directional lights.
+    pub directional_light_count: u32,
+    /// First positional (point/spot) light of this frame.
+    pub positional_lights_slot: u32,
+    /// Number of positional lights.
+    pub positional_light_count: u32,
+    /// Shadow data (not yet produced: always [`INVALID_SLOT`]).
+    pub shadows_slot: u32,
+}
+
+impl Default for RendererConstants {
+    fn default() -> Self {
+        RendererConstants {
+            frame_sequence: 0,
+            time_seconds_bits: 0,
+            draw_metadata_slot: INVALID_SLOT,
+            draw_count: 0,
+            world_transforms_slot: INVALID_SLOT,
+            normal_transforms_slot: INVALID_SLOT,
+            materials_slot: INVALID_SLOT,
+            directional_lights_slot: INVALID_SLOT,
+            directional_light_count: 0,
+            positional_lights_slot: INVALID_SLOT,
+            positional_light_count: 0,
+            shadows_slot: INVALID_SLOT,
+        }
+    }
+}
+
+/// The whole uniform block (320 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct SceneConstants {
+    /// View-owned half.
+    pub camera: CameraConstants,
+    /// Renderer-owned half.
+    pub renderer: RendererConstants,
+}
+
+const _: () = {
+    assert!(size_of::<CameraConstants>() == 272);
+    assert!(size_of::<RendererConstants>() == 48);
+    assert!(size_of::<SceneConstants>() == 320);
+    assert!(offset_of!(SceneConstants, renderer) == 272);
+    assert!(offset_of!(CameraConstants, camera_position) == 256);
+    assert!(offset_of!(RendererConstants, draw_metadata_slot) == 8);
+    assert!(offset_of!(RendererConstants, shadows_slot) == 44);
+};
+
+/// The WGSL twin of [`SceneConstants`] and its binding (group 1, binding 0).
+pub const SCENE_CONSTANTS_WGSL: &str = include_str!("scene_constants.wgsl");
+
+/// A view's uniform buffer holding [`SceneConstants`], with its bind group.
+pub struct SceneConstantsBuffer {
+    buffer: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+    current: SceneConstants,
+}
+
+impl SceneConstantsBuffer {
+    /// Creates the buffer and its bind group for `layout` (from
+    /// [`crate::BindlessHeap::scene_constants_layout`]).
+    pub fn new(device: &wgpu::Device, layout: &wgpu::BindGroupLayout, label: &str) -> Self {
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: size_of::<SceneConstants>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(label),
+            layout,
+            entries: &[wgpu::BindGroupEntry { binding: 0, resource: buffer.as_entire_binding() }],
+        });
+        let current = SceneConstants { camera: CameraConstants::zeroed(), renderer: RendererConstants::default() };
+        // wgpu zero-initialises new buffers, so the GPU copy starts as zeroes
+        // until both halves are written.
+        SceneConstantsBuffer { buffer, bind_group, current }
+    }
+
+    /// Writes the view-owned half only.
+    pub fn set_camera(&mut self, queue: &wgpu::Queue, camera: &CameraConstants) {
+        self.current.camera = *camera;
+        queue.write_buffer(&self.buffer, offset_of!(SceneConstants, camera) as u64, bytemuck::bytes_of(camera));
+    }
+
+    /// Writes the renderer-owned half only.
+    pub fn set_renderer(&mut self, queue: &wgpu::Queue, renderer: &RendererConstants) {
+        self.current.renderer = *renderer;
+        queue.write_buffer(&self.buffer, offset_of!(SceneConstants, renderer) as u64, bytemuck::bytes_of(renderer));
+    }
+
+    /// What the buffer holds after the last writes.
+    pub fn constants(&self) -> &SceneConstants {
+        &self.current
+    }
+
+    /// The bind group for group 1.
+    pub fn bind_group(&self) -> &wgpu::BindGroup {
+        &self.bind_group
+    }
+
+    /// The uniform buffer.
+    pub fn buffer(&self) -> &wgpu::Buffer {
+        &self.buffer
+    }
+}
+

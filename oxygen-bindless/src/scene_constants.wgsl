@@ -1,0 +1,34 @@
+// SceneConstants: twin of oxygen_bindless::SceneConstants (same layout;
+// asserted by the naga reflection test in oxygen-bindless).
+
+const INVALID_SLOT: u32 = 0xffffffffu;
+
+struct CameraConstants {
+    view: mat4x4<f32>,
+    projection: mat4x4<f32>,
+    view_projection: mat4x4<f32>,
+    inverse_view_projection: mat4x4<f32>,
+    camera_position: vec4<f32>,
+}
+
+struct RendererConstants {
+    frame_sequence: u32,
+    time_seconds_bits: u32,
+    draw_metadata_slot: u32,
+    draw_count: u32,
+    world_transforms_slot: u32,
+    normal_transforms_slot: u32,
+    materials_slot: u32,
+    directional_lights_slot: u32,
+    directional_light_count: u32,
+    positional_lights_slot: u32,
+    positional_light_count: u32,
+    shadows_slot: u32,
+}
+
+struct SceneConstants {
+    camera: CameraConstants,
+    renderer: RendererConstants,
+}
+
+@group(1) @binding(0) var<uniform> scene: SceneConstants;
