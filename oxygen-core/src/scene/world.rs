@@ -87,15 +87,21 @@ mod tests {
         assert!(!world.is_effectively_visible(child));
     }
 
+    /// A chain of 1000 small offsets under a root 1e6 units away: composed in
+    /// f32, each step would round to the 0.0625 spacing of f32 at 1e6 and the
+    /// error would reach metres; composed in f64 it is one final rounding.
     #[test]
-    fn large_offsets_compose_without_f32_loss() {
+    fn deep_chains_far_from_the_origin_compose_without_f32_drift() {
         let mut scene = Scene::new();
-        let far = scene.add_node("far", Transform::from_translation(Vec3::new(1e7, 0.0, 0.0)));
-        let back = scene
-            .add_child(far, "back", Transform::from_translation(Vec3::new(-1e7 + 0.25, 0.0, 0.0)))
-            .unwrap();
+        let mut node = scene.add_node("far", Transform::from_translation(Vec3::new(1e6, 0.0, 0.0)));
+        for i in 0..1000 {
+            node = scene
+                .add_child(node, format!("step{i}"), Transform::from_translation(Vec3::new(0.1, 0.0, 0.0)))
+                .unwrap();
+        }
         let mut world = super::WorldTransforms::new();
         scene.resolve_world_transforms(&mut world);
-        assert_eq!(world.get(back).unwrap().w_axis.x, 0.25);
+        let x = world.get(node).unwrap().w_axis.x;
+        assert!((x as f64 - 1_000_100.0).abs() <= 0.0625, "x = {x}");
     }
 }
