@@ -16,6 +16,7 @@
 //! never back in.
 
 pub mod camera;
+pub mod demo;
 pub mod geometry;
 pub mod gpu;
 pub mod light;

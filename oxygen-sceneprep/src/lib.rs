@@ -1,1 +1,33 @@
+//! # oxygen-sceneprep
+//!
+//! ScenePrep turns a [`Scene`](oxygen_core::Scene) and a set of resolved
+//! views into one immutable [`PreparedSceneFrame`] per view:
+//!
+//! ```text
+//! Scene ─frame phase─► FrameCollection (world + normal matrices, lights, renderables
+//!   │                   with world AABB and sphere) — once per frame, shared by views
+//!   └─ per view ─view phase─► pre-filter → visibility cull → RenderItem[]
+//!                 ─finalize─► DrawMetadata emit → sort (64-bit key) → partitions
+//!                            ▼
+//!                   PreparedSceneFrame (immutable, dumpable, snapshot-testable)
+//! ```
+//!
+//! Slots are assigned on the CPU ([`oxygen_bindless::SlotAllocators`]), so
+//! everything up to the prepared frame runs and is tested without a GPU;
+//! [`ScenePrep::upload`] then writes the frame's data into the bindless heap.
+//! This crate knows nothing of passes.
 
+pub mod collect;
+mod draw_metadata;
+pub mod finalize;
+mod gpu_records;
+mod pass_mask;
+mod prepared_frame;
+mod scene_prep;
+
+pub use collect::{CullBound, FrameCollection, RenderItem, RenderableEntry, ViewFilter, ViewPrepOptions};
+pub use draw_metadata::DrawMetadata;
+pub use gpu_records::{DirectionalLightRecord, GPU_RECORDS_WGSL, MaterialRecord, NormalMatrix, PositionalLightRecord};
+pub use pass_mask::PassMask;
+pub use prepared_frame::{Partition, PreparedSceneFrame, PreparedSlots};
+pub use scene_prep::{PrepError, PrepStats, ScenePrep, ViewRequest};

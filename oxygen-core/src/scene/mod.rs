@@ -118,6 +118,11 @@ impl Scene {
         self.materials.get(handle)
     }
 
+    /// Every material with its handle, in stable slot order.
+    pub fn materials(&self) -> impl Iterator<Item = (MaterialHandle, &Material)> {
+        self.materials.iter()
+    }
+
     /// Adds a root node with a local transform; visible and shadow-casting.
     pub fn add_node(&mut self, name: impl Into<String>, local: Transform) -> NodeKey {
         let key = self.nodes.insert(Node::new(name.into(), None, local));

@@ -1,0 +1,98 @@
+//! Procedural scenes shared by examples, tests and benchmarks, so that each of
+//! them builds "the multi-view scene" in one line and they all agree on it.
+
+use glam::{Quat, UVec2, Vec3, Vec4};
+
+use crate::{AlphaMode, Camera, Geometry, Light, LookAtResolver, Material, NodeKey, Renderable, Scene, Transform};
+
+/// The scene of the `multi_view` example and the walking-skeleton tests.
+pub struct DemoScene {
+    /// The scene.
+    pub scene: Scene,
+    /// The ground plane (20 × 20, at y = 0).
+    pub ground: NodeKey,
+    /// The 3 × 3 grid of unit cubes, row-major from (−3, −3) to (3, 3) in XZ.
+    pub cubes: Vec<NodeKey>,
+    /// The masked, double-sided quad standing at z = 4.5.
+    pub masked_quad: NodeKey,
+    /// The directional light.
+    pub sun: NodeKey,
+}
+
+/// Direction the demo sun shines along (towards −Y, from +X +Z).
+pub const SUN_DIRECTION: Vec3 = Vec3::new(-0.4, -0.8, -0.45);
+
+/// A ground plane, a 3 × 3 grid of coloured cubes, one masked double-sided
+/// quad, and one directional light.
+pub fn multi_view_scene() -> DemoScene {
+    let mut scene = Scene::new();
+    let plane = scene.add_geometry(Geometry::plane(20.0));
+    let cube = scene.add_geometry(Geometry::cube(1.0));
+    let quad = scene.add_geometry(Geometry::quad(2.0));
+
+    let ground_material = scene.add_material(Material::opaque("ground", Vec4::new(0.45, 0.45, 0.42, 1.0)));
+    let cube_colors = [Vec4::new(0.8, 0.1, 0.1, 1.0), Vec4::new(0.1, 0.7, 0.15, 1.0), Vec4::new(0.1, 0.2, 0.85, 1.0)];
+    let cube_materials: Vec<_> = cube_colors
+        .iter()
+        .enumerate()
+        .map(|(i, c)| scene.add_material(Material::opaque(format!("cube{i}"), *c)))
+        .collect();
+    let quad_material = scene.add_material(Material {
+        name: "masked quad".into(),
+        base_color: Vec4::new(0.95, 0.8, 0.1, 1.0),
+        metallic: 0.0,
+        roughness: 0.5,
+        alpha_mode: AlphaMode::Mask { cutoff: 0.5 },
+        double_sided: true,
+    });
+
+    // Construction cannot fail: every handle was just created above.
+    let attach = |scene: &mut Scene, node, geometry, material| {
+        scene
+            .set_renderable(node, Renderable { geometry, materials: vec![material] })
+            .expect("demo handles are valid")
+    };
+    let ground = scene.add_node("ground", Transform::IDENTITY);
+    attach(&mut scene, ground, plane, ground_material);
+    let mut cubes = Vec::new();
+    for row in 0..3 {
+        for col in 0..3 {
+            let position = Vec3::new((col as f32 - 1.0) * 3.0, 0.5, (row as f32 - 1.0) * 3.0);
+            let node = scene.add_node(format!("cube {row},{col}"), Transform::from_translation(position));
+            attach(&mut scene, node, cube, cube_materials[(row + col) % 3]);
+            cubes.push(node);
+        }
+    }
+    let masked_quad = scene.add_node("masked quad", Transform::from_translation(Vec3::new(0.0, 1.0, 4.5)));
+    attach(&mut scene, masked_quad, quad, quad_material);
+
+    let sun_rotation = Quat::from_rotation_arc(Vec3::NEG_Z, SUN_DIRECTION.normalize());
+    let sun = scene.add_node("sun", Transform::IDENTITY.with_rotation(sun_rotation));
+    scene
+        .set_light(sun, Some(Light::directional(3.0)))
+        .expect("the sun node was just created");
+    DemoScene { scene, ground, cubes, masked_quad, sun }
+}
+
+/// The demo's main camera: high, in front, looking at the grid.
+pub fn main_camera(viewport: UVec2) -> LookAtResolver {
+    LookAtResolver {
+        camera: Camera::perspective(50f32.to_radians(), 0.1, None),
+        eye: Vec3::new(6.0, 7.0, 12.0),
+        target: Vec3::new(0.0, 0.5, 0.0),
+        up: Vec3::Y,
+        viewport,
+    }
+}
+
+/// The demo's second camera: a low close-up from the left with a narrow
+/// field of view and a finite far plane, so it culls part of the grid.
+pub fn side_camera(viewport: UVec2) -> LookAtResolver {
+    LookAtResolver {
+        camera: Camera::perspective(40f32.to_radians(), 0.05, Some(60.0)),
+        eye: Vec3::new(-7.0, 2.0, 6.0),
+        target: Vec3::new(-2.0, 0.5, 0.0),
+        up: Vec3::Y,
+        viewport,
+    }
+}

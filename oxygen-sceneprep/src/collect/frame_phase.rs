@@ -1,0 +1,180 @@
+//! The frame phase: everything that is the same for every view.
+//!
+//! Inputs: the [`Scene`]. Outputs ([`FrameCollection`]): per renderable node a
+//! transform index, world AABB and bounding sphere; world and normal matrices
+//! indexed by that transform index; directional and positional light records.
+//!
+//! Gating rules for lights: the node is (effectively) visible, the light
+//! affects the world, the light is not baked. A light casts shadows only
+//! when both the light and its node say so.
+//!
+//! A node whose world matrix is non-finite or singular is skipped with a
+//! warning naming it; nothing derived from it reaches the GPU.
+
+use glam::{Mat3, Mat4, Vec3};
+use oxygen_core::scene::node_index;
+use oxygen_core::{Aabb, GeometryHandle, LightKind, Mobility, NodeFlags, NodeKey, Scene, Sphere, WorldTransforms};
+use oxygen_bindless::INVALID_SLOT;
+use tracing::{info_span, warn};
+
+use crate::{DirectionalLightRecord, NormalMatrix, PositionalLightRecord};
+
+/// A renderable node that survived the frame phase.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderableEntry {
+    /// The node.
+    pub node: NodeKey,
+    /// Stable node id (slot index).
+    pub node_id: u32,
+    /// Index into [`FrameCollection::world_matrices`].
+    pub transform_index: u32,
+    /// Its geometry.
+    pub geometry: GeometryHandle,
+    /// World-space box.
+    pub world_aabb: Aabb,
+    /// World-space sphere around `world_aabb`.
+    pub world_sphere: Sphere,
+    /// Node flags (shadow casting).
+    pub flags: NodeFlags,
+}
+
+/// The frame phase's output, shared read-only by every view.
+#[derive(Default)]
+pub struct FrameCollection {
+    /// World matrices of every node (resolved once).
+    pub world: WorldTransforms,
+    /// Renderables in stable node order.
+    pub renderables: Vec<RenderableEntry>,
+    /// World matrices indexed by `transform_index`.
+    pub world_matrices: Vec<Mat4>,
+    /// Normal matrices indexed by `transform_index`.
+    pub normal_matrices: Vec<NormalMatrix>,
+    /// Gated directional lights.
+    pub directional_lights: Vec<DirectionalLightRecord>,
+    /// Gated point and spot lights.
+    pub positional_lights: Vec<PositionalLightRecord>,
+    /// Nodes skipped this frame because of a degenerate transform.
+    pub skipped_nodes: u32,
+}
+
+/// The normal matrix `transpose(inverse(upper3x3(world)))`, or `None` when
+/// the matrix is non-finite or singular.
+pub fn normal_matrix(world: &Mat4) -> Option<Mat3> {
+    if !world.is_finite() {
+        return None;
+    }
+    let m = Mat3::from_mat4(*world);
+    let det = m.determinant();
+    // Relative test: a scale of 1e-4 per axis (det 1e-12) is legitimate,
+    // an exactly flat or NaN-producing matrix is not.
+    if det == 0.0 || !det.is_finite() {
+        return None;
+    }
+    let n = m.inverse().transpose();
+    n.is_finite().then_some(n)
+}
+
+impl FrameCollection {
+    /// Runs the frame phase over `scene`, reusing this collection's buffers.
+    pub fn collect(&mut self, scene: &Scene) {
+        let _span = info_span!("frame_phase", nodes = scene.node_count()).entered();
+        {
+            let _span = info_span!("world_transforms").entered();
+            scene.resolve_world_transforms(&mut self.world);
+        }
+        self.renderables.clear();
+        self.world_matrices.clear();
+        self.normal_matrices.clear();
+        self.directional_lights.clear();
+        self.positional_lights.clear();
+        self.skipped_nodes = 0;
+
+        let _span = info_span!("collect_renderables_and_lights").entered();
+        for (key, node) in scene.nodes() {
+            if node.renderable.is_none() && node.light.is_none() {
+                continue;
+            }
+            if !self.world.is_effectively_visible(key) {
+                continue;
+            }
+            let Some(world) = self.world.get(key) else { continue };
+            let Some(normal) = normal_matrix(&world) else {
+                warn!(node = %node.name, "skipping node with a non-finite or singular world transform");
+                self.skipped_nodes += 1;
+                continue;
+            };
+            if let Some(light) = &node.light {
+                self.collect_light(&node.name, light, node.flags, &world);
+            }
+            let Some(renderable) = &node.renderable else { continue };
+            let Some(geometry) = scene.geometry(renderable.geometry) else {
+                warn!(node = %node.name, "skipping renderable whose geometry was removed");
+                continue;
+            };
+            let world_aabb = geometry.local_aabb().transformed(&world);
+            if !world_aabb.is_finite() {
+                warn!(node = %node.name, "skipping renderable with non-finite world bounds");
+                self.skipped_nodes += 1;
+                continue;
+            }
+            let transform_index = self.world_matrices.len() as u32;
+            self.world_matrices.push(world);
+            self.normal_matrices.push(normal.into());
+            self.renderables.push(RenderableEntry {
+                node: key,
+                node_id: node_index(key),
+                transform_index,
+                geometry: renderable.geometry,
+                world_aabb,
+                world_sphere: Sphere::from_aabb(&world_aabb),
+                flags: node.flags,
+            });
+        }
+    }
+
+    fn collect_light(&mut self, name: &str, light: &oxygen_core::Light, flags: NodeFlags, world: &Mat4) {
+        if !light.affects_world || light.mobility == Mobility::Baked {
+            return;
+        }
+        let Some(direction) = world.transform_vector3(Vec3::NEG_Z).try_normalize() else {
+            warn!(node = %name, "skipping light whose node transform has no direction");
+            return;
+        };
+        let casts = light.casts_shadows && flags.contains(NodeFlags::CASTS_SHADOWS);
+        let shadow_flags = u32::from(casts);
+        let color = light.color.to_array();
+        let intensity = if light.intensity.is_finite() { light.intensity.max(0.0) } else { 0.0 };
+        match light.kind {
+            LightKind::Directional => self.directional_lights.push(DirectionalLightRecord {
+                direction: direction.to_array(),
+                intensity,
+                color,
+                flags: shadow_flags,
+                shadow_slot: INVALID_SLOT,
+                reserved: [0; 3],
+            }),
+            LightKind::Point { range } | LightKind::Spot { range, .. } => {
+                let (kind, cos_inner, cos_outer) = match light.kind {
+                    LightKind::Spot { inner_cone, outer_cone, .. } => {
+                        let outer = outer_cone.clamp(1e-4, std::f32::consts::FRAC_PI_2);
+                        let inner = inner_cone.clamp(0.0, outer - 1e-4);
+                        (PositionalLightRecord::SPOT, inner.cos(), outer.cos())
+                    }
+                    _ => (PositionalLightRecord::POINT, 1.0, -1.0),
+                };
+                self.positional_lights.push(PositionalLightRecord {
+                    position: world.w_axis.truncate().to_array(),
+                    range: range.filter(|r| r.is_finite() && *r > 0.0).unwrap_or(0.0),
+                    direction: direction.to_array(),
+                    intensity,
+                    color,
+                    kind,
+                    cos_inner,
+                    cos_outer,
+                    flags: shadow_flags,
+                    shadow_slot: INVALID_SLOT,
+                });
+            }
+        }
+    }
+}

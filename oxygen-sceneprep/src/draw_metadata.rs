@@ -1,0 +1,75 @@
+//! `DrawMetadata`: the 64-byte per-draw record shaders read by slot.
+
+use std::mem::{offset_of, size_of};
+
+use bytemuck::{Pod, Zeroable};
+use oxygen_bindless::DomainKind;
+
+/// One draw, as stored in the draw-metadata domain and read by the vertex
+/// shader through `draw_metadata_domain[scene.renderer.draw_metadata_slot + instance_index]`.
+///
+/// Exactly 64 bytes (asserted at compile time, and against its WGSL twin in
+/// `gpu_records.wgsl` by a naga test).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct DrawMetadata {
+    /// First vertex of the geometry in the vertex domain.
+    pub vertex_slot: u32,
+    /// First index of the geometry in the index domain.
+    pub index_slot: u32,
+    /// First index of the submesh, relative to `index_slot`.
+    pub first_index: u32,
+    /// Number of indices drawn.
+    pub index_count: u32,
+    /// Added to every index value, relative to `vertex_slot`.
+    pub base_vertex: i32,
+    /// Instances drawn (1 until instancing lands).
+    pub instance_count: u32,
+    /// World/normal matrix, relative to the frame's transform slots.
+    pub transform_index: u32,
+    /// Material, relative to the material domain base.
+    pub material_handle: u32,
+    /// [`crate::PassMask`] bits.
+    pub pass_mask: u32,
+    /// Stable node id (slot index), for debugging and picking.
+    pub node_id: u32,
+    /// Submesh number within the geometry.
+    pub submesh: u32,
+    /// Zero; room for growth without changing the stride.
+    pub reserved: [u32; 5],
+}
+
+const _: () = {
+    assert!(size_of::<DrawMetadata>() == 64);
+    assert!(size_of::<DrawMetadata>() as u64 == DomainKind::DrawMetadata.record_size());
+    assert!(offset_of!(DrawMetadata, vertex_slot) == 0);
+    assert!(offset_of!(DrawMetadata, index_slot) == 4);
+    assert!(offset_of!(DrawMetadata, first_index) == 8);
+    assert!(offset_of!(DrawMetadata, index_count) == 12);
+    assert!(offset_of!(DrawMetadata, base_vertex) == 16);
+    assert!(offset_of!(DrawMetadata, instance_count) == 20);
+    assert!(offset_of!(DrawMetadata, transform_index) == 24);
+    assert!(offset_of!(DrawMetadata, material_handle) == 28);
+    assert!(offset_of!(DrawMetadata, pass_mask) == 32);
+    assert!(offset_of!(DrawMetadata, node_id) == 36);
+    assert!(offset_of!(DrawMetadata, submesh) == 40);
+    assert!(offset_of!(DrawMetadata, reserved) == 44);
+};
+
+impl DrawMetadata {
+    /// The [`crate::PassMask`] of this draw.
+    pub fn mask(&self) -> crate::PassMask {
+        crate::PassMask::from_bits_truncate(self.pass_mask)
+    }
+
+    /// Absolute index range in the shared index buffer.
+    pub fn index_range(&self) -> std::ops::Range<u32> {
+        let first = self.index_slot + self.first_index;
+        first..first + self.index_count
+    }
+
+    /// Absolute base vertex for `draw_indexed`.
+    pub fn absolute_base_vertex(&self) -> i32 {
+        self.vertex_slot as i32 + self.base_vertex
+    }
+}

@@ -1,0 +1,87 @@
+//! The material table: one record per material id, uploaded only on change.
+//!
+//! Material ids are the scene's stable material slot indices, so a draw's
+//! `material_handle` indexes this table directly.
+
+use oxygen_bindless::{Allocation, DomainKind, SlotAllocators, SlotError};
+use oxygen_core::Scene;
+use oxygen_core::scene::material_index;
+
+use crate::MaterialRecord;
+
+/// The CPU copy of the material domain range and whether the GPU is behind.
+pub struct MaterialTable {
+    records: Vec<MaterialRecord>,
+    scratch: Vec<MaterialRecord>,
+    allocation: Allocation,
+    dirty: bool,
+    uploads: u64,
+}
+
+impl Default for MaterialTable {
+    fn default() -> Self {
+        MaterialTable {
+            records: Vec::new(),
+            scratch: Vec::new(),
+            allocation: Allocation::empty(DomainKind::Materials),
+            dirty: false,
+            uploads: 0,
+        }
+    }
+}
+
+fn placeholder() -> MaterialRecord {
+    MaterialRecord::from_material(&oxygen_core::Material::opaque("", glam::Vec4::ONE))
+}
+
+impl MaterialTable {
+    /// Rebuilds the records from the scene; marks the table dirty only when
+    /// something differs, and re-allocates only when it grew or shrank.
+    pub fn sync(&mut self, scene: &Scene, slots: &mut SlotAllocators) -> Result<(), SlotError> {
+        self.scratch.clear();
+        for (handle, material) in scene.materials() {
+            let i = material_index(handle) as usize;
+            if self.scratch.len() <= i {
+                self.scratch.resize(i + 1, placeholder());
+            }
+            self.scratch[i] = MaterialRecord::from_material(material);
+        }
+        if self.scratch != self.records {
+            std::mem::swap(&mut self.scratch, &mut self.records);
+            self.dirty = true;
+        }
+        if self.allocation.count as usize != self.records.len() {
+            slots.free(self.allocation)?;
+            self.allocation = Allocation::empty(DomainKind::Materials);
+            self.allocation = slots.allocate(DomainKind::Materials, self.records.len() as u32)?;
+            self.dirty = true;
+        }
+        Ok(())
+    }
+
+    /// The records, indexed by material id.
+    pub fn records(&self) -> &[MaterialRecord] {
+        &self.records
+    }
+
+    /// Where the table lives.
+    pub fn allocation(&self) -> Allocation {
+        self.allocation
+    }
+
+    /// True when the GPU copy is out of date.
+    pub fn is_dirty(&self) -> bool {
+        self.dirty
+    }
+
+    /// Marks the GPU copy current.
+    pub fn mark_uploaded(&mut self) {
+        self.dirty = false;
+        self.uploads += 1;
+    }
+
+    /// How many times the table was uploaded (a counter for tests).
+    pub fn upload_count(&self) -> u64 {
+        self.uploads
+    }
+}

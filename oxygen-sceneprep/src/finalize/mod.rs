@@ -1,0 +1,11 @@
+//! Finalization: from render items to sorted, partitioned draws.
+//!
+//! * [`sort_key`]: the 64-bit key (pass class, variant, material, depth);
+//! * [`partition`]: contiguous `[begin, end)` ranges with one [`PassMask`](crate::PassMask);
+//! * [`geometry_cache`]: lazy, cached geometry slots (only meshes some view draws);
+//! * [`materials`]: the material table, re-uploaded only when it changed.
+
+pub mod geometry_cache;
+pub mod materials;
+pub mod partition;
+pub mod sort_key;

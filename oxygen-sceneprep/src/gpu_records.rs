@@ -1,0 +1,148 @@
+//! GPU records of the material, light and transform domains, with their WGSL
+//! twins in `gpu_records.wgsl` (checked by a naga reflection test).
+
+use std::mem::{offset_of, size_of};
+
+use bytemuck::{Pod, Zeroable};
+use glam::Mat3;
+use oxygen_bindless::{DomainKind, INVALID_SLOT};
+use oxygen_core::{AlphaMode, Material, Vertex};
+
+/// WGSL declarations of `DrawMetadata`, `MaterialRecord`, the light records
+/// and `VertexRecord`.
+pub const GPU_RECORDS_WGSL: &str = include_str!("gpu_records.wgsl");
+
+/// A normal matrix as WGSL `mat3x3<f32>` stores it: three columns padded to 16 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct NormalMatrix {
+    /// Columns; `w` is padding.
+    pub columns: [[f32; 4]; 3],
+}
+
+impl From<Mat3> for NormalMatrix {
+    fn from(m: Mat3) -> Self {
+        NormalMatrix { columns: [m.x_axis.extend(0.0).to_array(), m.y_axis.extend(0.0).to_array(), m.z_axis.extend(0.0).to_array()] }
+    }
+}
+
+/// Material flags bits in [`MaterialRecord::flags`].
+pub mod material_flags {
+    /// Alpha-tested.
+    pub const MASKED: u32 = 1 << 0;
+    /// Alpha-blended.
+    pub const BLEND: u32 = 1 << 1;
+    /// Double-sided.
+    pub const DOUBLE_SIDED: u32 = 1 << 2;
+}
+
+/// A material as shaders read it (48 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct MaterialRecord {
+    /// Linear RGBA base colour factor.
+    pub base_color: [f32; 4],
+    /// Metallic factor.
+    pub metallic: f32,
+    /// Roughness factor.
+    pub roughness: f32,
+    /// Alpha cutoff (only read when masked).
+    pub alpha_cutoff: f32,
+    /// [`material_flags`] bits.
+    pub flags: u32,
+    /// Base-colour texture slot, [`INVALID_SLOT`] when absent.
+    pub base_color_texture: u32,
+    /// Zero.
+    pub reserved: [u32; 3],
+}
+
+impl MaterialRecord {
+    /// The record for a (sanitized) material.
+    pub fn from_material(m: &Material) -> Self {
+        let (alpha_cutoff, mut flags) = match m.alpha_mode {
+            AlphaMode::Opaque => (0.0, 0),
+            AlphaMode::Mask { cutoff } => (cutoff, material_flags::MASKED),
+            AlphaMode::Blend => (0.0, material_flags::BLEND),
+        };
+        if m.double_sided {
+            flags |= material_flags::DOUBLE_SIDED;
+        }
+        MaterialRecord {
+            base_color: m.base_color.to_array(),
+            metallic: m.metallic,
+            roughness: m.roughness,
+            alpha_cutoff,
+            flags,
+            base_color_texture: INVALID_SLOT,
+            reserved: [0; 3],
+        }
+    }
+}
+
+/// A directional light as shaders read it (48 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct DirectionalLightRecord {
+    /// Unit direction the light travels (world space).
+    pub direction: [f32; 3],
+    /// Illuminance in lux.
+    pub intensity: f32,
+    /// Linear RGB colour.
+    pub color: [f32; 3],
+    /// Bit 0: casts shadows.
+    pub flags: u32,
+    /// Shadow data slot, [`INVALID_SLOT`] when none.
+    pub shadow_slot: u32,
+    /// Zero.
+    pub reserved: [u32; 3],
+}
+
+/// A point or spot light as shaders read it (64 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct PositionalLightRecord {
+    /// World position.
+    pub position: [f32; 3],
+    /// Cut-off range; 0 means unbounded.
+    pub range: f32,
+    /// Unit direction of a spot's axis (world space).
+    pub direction: [f32; 3],
+    /// Luminous intensity in candela.
+    pub intensity: f32,
+    /// Linear RGB colour.
+    pub color: [f32; 3],
+    /// 0 point, 1 spot.
+    pub kind: u32,
+    /// Cosine of the inner cone angle (spot).
+    pub cos_inner: f32,
+    /// Cosine of the outer cone angle (spot).
+    pub cos_outer: f32,
+    /// Bit 0: casts shadows.
+    pub flags: u32,
+    /// Shadow data slot, [`INVALID_SLOT`] when none.
+    pub shadow_slot: u32,
+}
+
+impl PositionalLightRecord {
+    /// `kind` of a point light.
+    pub const POINT: u32 = 0;
+    /// `kind` of a spot light.
+    pub const SPOT: u32 = 1;
+}
+
+
+const _: () = {
+    assert!(size_of::<NormalMatrix>() as u64 == DomainKind::NormalTransforms.record_size());
+    assert!(size_of::<MaterialRecord>() as u64 == DomainKind::Materials.record_size());
+    assert!(size_of::<DirectionalLightRecord>() as u64 == DomainKind::DirectionalLights.record_size());
+    assert!(size_of::<PositionalLightRecord>() as u64 == DomainKind::PositionalLights.record_size());
+    assert!(size_of::<Vertex>() as u64 == DomainKind::Vertices.record_size());
+    assert!(offset_of!(MaterialRecord, metallic) == 16);
+    assert!(offset_of!(MaterialRecord, base_color_texture) == 32);
+    assert!(offset_of!(DirectionalLightRecord, color) == 16);
+    assert!(offset_of!(DirectionalLightRecord, shadow_slot) == 32);
+    assert!(offset_of!(PositionalLightRecord, direction) == 16);
+    assert!(offset_of!(PositionalLightRecord, color) == 32);
+    assert!(offset_of!(PositionalLightRecord, cos_inner) == 48);
+    assert!(offset_of!(PositionalLightRecord, shadow_slot) == 60);
+};

@@ -1,0 +1,71 @@
+// GPU records read through bindless slots. Twins of the Rust structs in
+// oxygen-sceneprep (DrawMetadata, MaterialRecord, light records) and
+// oxygen-core (Vertex); layouts asserted by the naga reflection test.
+
+struct DrawMetadata {
+    vertex_slot: u32,
+    index_slot: u32,
+    first_index: u32,
+    index_count: u32,
+    base_vertex: i32,
+    instance_count: u32,
+    transform_index: u32,
+    material_handle: u32,
+    pass_mask: u32,
+    node_id: u32,
+    submesh: u32,
+    reserved0: u32,
+    reserved1: u32,
+    reserved2: u32,
+    reserved3: u32,
+    reserved4: u32,
+}
+
+const PASS_OPAQUE: u32 = 1u;
+const PASS_MASKED: u32 = 2u;
+const PASS_TRANSPARENT: u32 = 4u;
+const PASS_DOUBLE_SIDED: u32 = 8u;
+const PASS_CASTS_SHADOWS: u32 = 16u;
+
+struct MaterialRecord {
+    base_color: vec4<f32>,
+    metallic: f32,
+    roughness: f32,
+    alpha_cutoff: f32,
+    flags: u32,
+    base_color_texture: u32,
+    reserved0: u32,
+    reserved1: u32,
+    reserved2: u32,
+}
+
+struct DirectionalLightRecord {
+    direction: vec3<f32>,
+    intensity: f32,
+    color: vec3<f32>,
+    flags: u32,
+    shadow_slot: u32,
+    reserved0: u32,
+    reserved1: u32,
+    reserved2: u32,
+}
+
+struct PositionalLightRecord {
+    position: vec3<f32>,
+    range: f32,
+    direction: vec3<f32>,
+    intensity: f32,
+    color: vec3<f32>,
+    kind: u32,
+    cos_inner: f32,
+    cos_outer: f32,
+    flags: u32,
+    shadow_slot: u32,
+}
+
+// Scalars only: a vec3 member would be 16-byte aligned and break the 32-byte stride.
+struct VertexRecord {
+    px: f32, py: f32, pz: f32,
+    nx: f32, ny: f32, nz: f32,
+    u: f32, v: f32,
+}

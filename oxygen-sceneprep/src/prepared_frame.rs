@@ -1,0 +1,156 @@
+//! `PreparedSceneFrame`: the immutable result of ScenePrep for one view.
+//!
+//! Passes read it and never change it. It holds the sorted draws, their
+//! partitions, the frame's shared transforms, and the slots where each of
+//! these lives on the GPU. [`PreparedSceneFrame::dump`] is a stable,
+//! human-readable text used by snapshot tests.
+
+use std::fmt::Write;
+use std::sync::Arc;
+
+use glam::Mat4;
+use oxygen_bindless::{Allocation, INVALID_SLOT, RendererConstants};
+use oxygen_core::ViewId;
+
+pub use crate::finalize::partition::Partition;
+use crate::{DrawMetadata, NormalMatrix, PassMask};
+
+/// Where a prepared frame's data lives in the bindless heap.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PreparedSlots {
+    /// This view's draws (per view, per frame).
+    pub draw_metadata: Allocation,
+    /// World matrices (frame-global).
+    pub world_transforms: Allocation,
+    /// Normal matrices (frame-global).
+    pub normal_transforms: Allocation,
+    /// Material table (persistent).
+    pub materials: Allocation,
+    /// Directional lights (frame-global).
+    pub directional_lights: Allocation,
+    /// Positional lights (frame-global).
+    pub positional_lights: Allocation,
+}
+
+/// The frame's transforms, shared by every view's prepared frame.
+#[derive(Debug, Default, PartialEq)]
+pub struct FrameTransforms {
+    /// World matrices by transform index.
+    pub world: Vec<Mat4>,
+    /// Normal matrices by transform index.
+    pub normal: Vec<NormalMatrix>,
+}
+
+/// ScenePrep's immutable output for one view.
+#[derive(Debug)]
+pub struct PreparedSceneFrame {
+    pub(crate) view_id: ViewId,
+    pub(crate) frame_index: u64,
+    pub(crate) draws: Vec<DrawMetadata>,
+    pub(crate) sort_keys: Vec<u64>,
+    pub(crate) partitions: Vec<Partition>,
+    pub(crate) transforms: Arc<FrameTransforms>,
+    pub(crate) slots: PreparedSlots,
+}
+
+fn slot(a: &Allocation) -> String {
+    if a.start == INVALID_SLOT { "none".to_owned() } else { format!("{}+{}", a.start, a.count) }
+}
+
+impl PreparedSceneFrame {
+    /// The view it was prepared for.
+    pub fn view_id(&self) -> ViewId {
+        self.view_id
+    }
+    /// The frame sequence number.
+    pub fn frame_index(&self) -> u64 {
+        self.frame_index
+    }
+    /// Sorted draws.
+    pub fn draws(&self) -> &[DrawMetadata] {
+        &self.draws
+    }
+    /// The sort key of each draw (same order as [`Self::draws`]).
+    pub fn sort_keys(&self) -> &[u64] {
+        &self.sort_keys
+    }
+    /// Partitions in draw order.
+    pub fn partitions(&self) -> &[Partition] {
+        &self.partitions
+    }
+    /// Partitions whose mask has any bit of `required` and none of `excluded`.
+    pub fn partitions_matching(&self, required: PassMask, excluded: PassMask) -> impl Iterator<Item = &Partition> {
+        self.partitions
+            .iter()
+            .filter(move |p| p.mask.intersects(required) && !p.mask.intersects(excluded))
+    }
+    /// The frame's world and normal matrices (shared by all views).
+    pub fn transforms(&self) -> &Arc<FrameTransforms> {
+        &self.transforms
+    }
+    /// Heap slots.
+    pub fn slots(&self) -> &PreparedSlots {
+        &self.slots
+    }
+
+    /// The renderer-owned half of `SceneConstants` for this view.
+    pub fn renderer_constants(&self, time_seconds: f32) -> RendererConstants {
+        let s = &self.slots;
+        RendererConstants {
+            frame_sequence: self.frame_index as u32,
+            time_seconds_bits: time_seconds.to_bits(),
+            draw_metadata_slot: s.draw_metadata.start,
+            draw_count: self.draws.len() as u32,
+            world_transforms_slot: s.world_transforms.start,
+            normal_transforms_slot: s.normal_transforms.start,
+            materials_slot: s.materials.start,
+            directional_lights_slot: s.directional_lights.start,
+            directional_light_count: s.directional_lights.count,
+            positional_lights_slot: s.positional_lights.start,
+            positional_light_count: s.positional_lights.count,
+            shadows_slot: INVALID_SLOT,
+        }
+    }
+
+    /// A stable, human-readable dump for snapshot tests: slots, partitions and
+    /// every draw with its key. Node and material ids are slot indices, so the
+    /// text depends only on the scene's construction order.
+    pub fn dump(&self) -> String {
+        let mut out = String::new();
+        let s = &self.slots;
+        // Writing to a String cannot fail.
+        let _ = writeln!(out, "PreparedSceneFrame {} frame {}", self.view_id, self.frame_index);
+        let _ = writeln!(
+            out,
+            "slots: draws={} worlds={} normals={} materials={} directional_lights={} positional_lights={}",
+            slot(&s.draw_metadata),
+            slot(&s.world_transforms),
+            slot(&s.normal_transforms),
+            slot(&s.materials),
+            slot(&s.directional_lights),
+            slot(&s.positional_lights)
+        );
+        let _ = writeln!(out, "partitions ({}):", self.partitions.len());
+        for p in &self.partitions {
+            let _ = writeln!(out, "  [{}, {}) {}", p.begin, p.end, p.mask.names());
+        }
+        let _ = writeln!(out, "draws ({}):", self.draws.len());
+        for (i, (d, key)) in self.draws.iter().zip(&self.sort_keys).enumerate() {
+            let _ = writeln!(
+                out,
+                "  #{i:<3} node={:<3} submesh={} vertices@{} indices@{}+{}..{} transform={} material={} key={:016x} {}",
+                d.node_id,
+                d.submesh,
+                d.vertex_slot,
+                d.index_slot,
+                d.first_index,
+                d.first_index + d.index_count,
+                d.transform_index,
+                d.material_handle,
+                key,
+                d.mask().names()
+            );
+        }
+        out
+    }
+}

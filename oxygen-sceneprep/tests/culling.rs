@@ -1,0 +1,85 @@
+//! Culling through the whole view phase: objects fully outside any one
+//! frustum plane are dropped; objects straddling a plane are kept.
+
+use glam::{UVec2, Vec3, Vec4};
+use oxygen_bindless::SlotAllocators;
+use oxygen_core::scene::node_index;
+use oxygen_core::{Camera, Geometry, LookAtResolver, Material, Renderable, Scene, Transform, ViewContext, ViewId, ViewResolver};
+use oxygen_sceneprep::{CullBound, ScenePrep, ViewPrepOptions, ViewRequest};
+
+/// A 90° camera at the origin looking down −Z with near 1 and far 50: at
+/// depth d the side planes are at ±d.
+fn camera() -> LookAtResolver {
+    LookAtResolver {
+        camera: Camera::perspective(90f32.to_radians(), 1.0, Some(50.0)),
+        eye: Vec3::ZERO,
+        target: Vec3::NEG_Z,
+        up: Vec3::Y,
+        viewport: UVec2::new(64, 64),
+    }
+}
+
+/// Unit cubes at the given centres; returns the scene and the node ids.
+fn cubes_at(centres: &[Vec3]) -> (Scene, Vec<u32>) {
+    let mut scene = Scene::new();
+    let cube = scene.add_geometry(Geometry::cube(1.0));
+    let material = scene.add_material(Material::opaque("m", Vec4::ONE));
+    let ids = centres
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let node = scene.add_node(format!("cube{i}"), Transform::from_translation(*c));
+            scene.set_renderable(node, Renderable { geometry: cube, materials: vec![material] }).unwrap();
+            node_index(node)
+        })
+        .collect();
+    (scene, ids)
+}
+
+fn visible_nodes(scene: &Scene, cull: CullBound) -> Vec<u32> {
+    let view = camera()
+        .resolve(&ViewContext { view_id: ViewId(0), frame_index: 1, time_seconds: 0.0 }, scene)
+        .unwrap();
+    let mut prep = ScenePrep::new();
+    let frames = prep
+        .prepare(scene, &[ViewRequest { view: &view, options: ViewPrepOptions { cull, ..Default::default() } }], &mut SlotAllocators::default())
+        .unwrap();
+    let mut ids: Vec<u32> = frames[0].draws().iter().map(|d| d.node_id).collect();
+    ids.sort();
+    ids
+}
+
+#[test]
+fn culling_drops_objects_fully_outside_each_plane() {
+    let outside = [
+        Vec3::new(-12.0, 0.0, -10.0), // left
+        Vec3::new(12.0, 0.0, -10.0),  // right
+        Vec3::new(0.0, -12.0, -10.0), // bottom
+        Vec3::new(0.0, 12.0, -10.0),  // top
+        Vec3::new(0.0, 0.0, 0.0),     // between the eye and the near plane (z in -0.5..0.5)
+        Vec3::new(0.0, 0.0, -52.0),   // beyond the far plane
+    ];
+    let (scene, _) = cubes_at(&outside);
+    for cull in [CullBound::Aabb, CullBound::Sphere] {
+        // The sphere is looser: it may keep a cube near a frustum corner, but
+        // these are far enough outside for both.
+        assert_eq!(visible_nodes(&scene, cull), Vec::<u32>::new(), "{cull:?}");
+    }
+}
+
+#[test]
+fn culling_keeps_objects_straddling_a_plane() {
+    let straddling = [
+        Vec3::new(-10.0, 0.0, -10.0), // centred on the left plane
+        Vec3::new(10.0, 0.0, -10.0),
+        Vec3::new(0.0, -10.0, -10.0),
+        Vec3::new(0.0, 10.0, -10.0),
+        Vec3::new(0.0, 0.0, -1.0),  // on the near plane
+        Vec3::new(0.0, 0.0, -50.0), // on the far plane
+        Vec3::new(0.0, 0.0, -20.0), // fully inside
+    ];
+    let (scene, ids) = cubes_at(&straddling);
+    for cull in [CullBound::Aabb, CullBound::Sphere] {
+        assert_eq!(visible_nodes(&scene, cull), ids, "{cull:?}");
+    }
+}
