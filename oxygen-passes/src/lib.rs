@@ -1,1 +1,28 @@
+//! # oxygen-passes
+//!
+//! The passes of a view's render graph and what they share:
+//!
+//! * [`RenderContext`]: everything a pass may read for one view this frame
+//!   (resolved view, prepared frame, scene constants, bindless heap, targets,
+//!   pipeline cache); passes never mutate prepared data;
+//! * [`CommandRecorder`]: the command encoder a view's passes record into;
+//! * [`RenderPass`]: the async lifecycle, `prepare_resources` then `execute`;
+//! * [`PipelineCache`] (`pso`): pipelines created lazily the first time a
+//!   partition needs a variant, then cached for the renderer's lifetime;
+//! * [`DepthPrePass`] and [`ShaderPass`], each with its WGSL beside it.
+//!
+//! Shaders read every per-draw datum through bindless slots: the draw's
+//! `DrawMetadata` (found by `instance_index`), its world and normal matrix,
+//! its material and its vertices. No per-draw bind group exists.
 
+mod depth_pre_pass;
+mod pso;
+mod render_context;
+mod render_pass;
+mod shader_pass;
+
+pub use depth_pre_pass::DepthPrePass;
+pub use pso::{AlphaClass, PassKind, PipelineCache, PipelineKey, PipelineVariant, shader_source};
+pub use render_context::{CommandRecorder, PassError, RecordStats, RenderContext};
+pub use render_pass::RenderPass;
+pub use shader_pass::{ShaderPass, ShaderPassConfig};

@@ -1,0 +1,86 @@
+//! `DepthPrePass`: lays down reverse-Z depth for the opaque and masked
+//! partitions, so that shading runs once per visible pixel.
+//!
+//! Reads: the prepared frame's opaque and masked partitions. Writes: the
+//! view's depth target (cleared to 0, the far value in reverse-Z).
+
+use oxygen_core::ViewTargets;
+use oxygen_sceneprep::PassMask;
+use tracing::info_span;
+
+use crate::render_context::{bind_view_resources, draw_partition};
+use crate::{CommandRecorder, PassError, PassKind, PipelineKey, PipelineVariant, RenderContext, RenderPass};
+
+/// The depth pre-pass.
+#[derive(Default)]
+pub struct DepthPrePass {
+    /// One pipeline per partition, chosen in `prepare_resources`.
+    pipelines: Option<Vec<wgpu::RenderPipeline>>,
+}
+
+impl DepthPrePass {
+    /// A new pass (cheap: pipelines come from the shared cache).
+    pub fn new() -> Self {
+        Self::default()
+    }
+}
+
+/// Partitions this pass draws: opaque and masked, never transparent.
+fn partitions<'a>(ctx: &'a RenderContext<'_>) -> impl Iterator<Item = &'a oxygen_sceneprep::Partition> {
+    ctx.prepared
+        .partitions_matching(PassMask::OPAQUE | PassMask::MASKED, PassMask::TRANSPARENT)
+}
+
+impl RenderPass for DepthPrePass {
+    fn name(&self) -> &'static str {
+        "DepthPrePass"
+    }
+
+    async fn prepare_resources(&mut self, ctx: &RenderContext<'_>, _rec: &mut CommandRecorder) -> Result<(), PassError> {
+        let _span = info_span!("depth_pre_pass_prepare", view = %ctx.view.view_id).entered();
+        let pipelines = partitions(ctx)
+            .map(|p| {
+                ctx.pipelines.get(
+                    &ctx.gpu.device,
+                    PipelineKey {
+                        pass: PassKind::DepthPrePass,
+                        variant: PipelineVariant::from_mask(p.mask),
+                        color_format: None,
+                        depth_format: ViewTargets::DEPTH_FORMAT,
+                    },
+                )
+            })
+            .collect();
+        self.pipelines = Some(pipelines);
+        Ok(())
+    }
+
+    async fn execute(&mut self, ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError> {
+        let _span = info_span!("depth_pre_pass_execute", view = %ctx.view.view_id).entered();
+        let pipelines = self.pipelines.as_ref().ok_or(PassError::NotPrepared { pass: self.name() })?;
+        let mut stats = rec.stats;
+        {
+            let mut pass = rec.encoder().begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("depth pre-pass"),
+                color_attachments: &[],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &ctx.targets.depth_view,
+                    depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(0.0), store: wgpu::StoreOp::Store }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            stats.render_passes += 1;
+            bind_view_resources(&mut pass, ctx);
+            for (partition, pipeline) in partitions(ctx).zip(pipelines) {
+                pass.set_pipeline(pipeline);
+                stats.pipeline_binds += 1;
+                draw_partition(&mut pass, ctx, partition, &mut stats);
+            }
+        }
+        rec.stats = stats;
+        Ok(())
+    }
+}

@@ -1,0 +1,34 @@
+// The vertex stage shared by every mesh pass. Everything per draw arrives
+// through slots: the draw's DrawMetadata is found by instance_index (the
+// renderer passes the draw's position in the view's array as first_instance),
+// and vertex_index already includes the geometry's base vertex.
+
+struct MeshVarying {
+    // Invariant so that the shading pass reproduces the pre-pass depth bit
+    // for bit and its GreaterEqual test passes exactly on the visible surface.
+    @builtin(position) @invariant clip_position: vec4<f32>,
+    @location(0) world_position: vec3<f32>,
+    @location(1) world_normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+    @location(3) @interpolate(flat) material: u32,
+}
+
+@vertex
+fn vs_main(@builtin(vertex_index) vertex_index: u32, @builtin(instance_index) draw_index: u32) -> MeshVarying {
+    let draw = draw_metadata_domain[scene.renderer.draw_metadata_slot + draw_index];
+    let v = vertex_domain[vertex_index];
+    let world = world_transform_domain[scene.renderer.world_transforms_slot + draw.transform_index];
+    let normal_matrix = normal_transform_domain[scene.renderer.normal_transforms_slot + draw.transform_index];
+    let world_position = world * vec4<f32>(v.px, v.py, v.pz, 1.0);
+    var out: MeshVarying;
+    out.clip_position = scene.camera.view_projection * world_position;
+    out.world_position = world_position.xyz;
+    out.world_normal = normal_matrix * vec3<f32>(v.nx, v.ny, v.nz);
+    out.uv = vec2<f32>(v.u, v.v);
+    out.material = draw.material_handle;
+    return out;
+}
+
+fn material_of(mesh: MeshVarying) -> MaterialRecord {
+    return material_domain[scene.renderer.materials_slot + mesh.material];
+}

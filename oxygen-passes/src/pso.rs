@@ -1,0 +1,197 @@
+//! Pipeline state objects: variants, keys and the lazy cache.
+//!
+//! A pass picks one of four variants per partition, opaque/masked ×
+//! back-face/double-sided (blend × back-face/double-sided for transparency).
+//! Pipelines are created the first time a partition needs one and cached by
+//! [`PipelineKey`] for the renderer's lifetime; the bind-group layouts they
+//! use never change (heap growth only replaces the bind group), so nothing is
+//! ever rebuilt per frame. [`PipelineCache::pipelines_created`] proves it.
+
+use std::collections::HashMap;
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use oxygen_bindless::{BindlessHeap, DomainKind, SCENE_CONSTANTS_WGSL};
+use oxygen_sceneprep::{GPU_RECORDS_WGSL, PassMask};
+use tracing::debug;
+
+/// Which pass a pipeline belongs to (decides shaders and depth state).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum PassKind {
+    /// Depth only; writes depth with `Greater`.
+    DepthPrePass,
+    /// Shading after a depth pre-pass: `GreaterEqual`, no depth writes.
+    ShadingAfterPrePass,
+    /// Shading that writes its own depth (no pre-pass): `Greater`, writes.
+    Shading,
+}
+
+/// How alpha is treated by a variant.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum AlphaClass {
+    /// Alpha ignored.
+    Opaque,
+    /// Alpha-tested against the material cutoff.
+    Masked,
+    /// Alpha-blended.
+    Blend,
+}
+
+/// One of the pipeline variants a partition selects.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct PipelineVariant {
+    /// Alpha treatment.
+    pub alpha: AlphaClass,
+    /// No back-face culling.
+    pub double_sided: bool,
+}
+
+impl PipelineVariant {
+    /// The variant a partition mask selects.
+    pub fn from_mask(mask: PassMask) -> Self {
+        let alpha = if mask.contains(PassMask::TRANSPARENT) {
+            AlphaClass::Blend
+        } else if mask.contains(PassMask::MASKED) {
+            AlphaClass::Masked
+        } else {
+            AlphaClass::Opaque
+        };
+        PipelineVariant { alpha, double_sided: mask.contains(PassMask::DOUBLE_SIDED) }
+    }
+}
+
+/// Everything that makes two pipelines different.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct PipelineKey {
+    /// Pass.
+    pub pass: PassKind,
+    /// Variant.
+    pub variant: PipelineVariant,
+    /// Colour target format (`None` for depth-only).
+    pub color_format: Option<wgpu::TextureFormat>,
+    /// Depth target format.
+    pub depth_format: wgpu::TextureFormat,
+}
+
+const MESH_VERTEX_WGSL: &str = include_str!("mesh_vertex.wgsl");
+const DEPTH_PRE_PASS_WGSL: &str = include_str!("depth_pre_pass.wgsl");
+const SHADER_PASS_WGSL: &str = include_str!("shader_pass.wgsl");
+
+/// The full WGSL of a pass: shared declarations, then the pass's own code.
+pub fn shader_source(pass: PassKind) -> String {
+    let body = match pass {
+        PassKind::DepthPrePass => DEPTH_PRE_PASS_WGSL,
+        PassKind::Shading | PassKind::ShadingAfterPrePass => SHADER_PASS_WGSL,
+    };
+    format!("{SCENE_CONSTANTS_WGSL}\n{GPU_RECORDS_WGSL}\n{}\n{MESH_VERTEX_WGSL}\n{body}", DomainKind::wgsl_bindings())
+}
+
+/// Lazily created, cached pipelines shared by every view.
+pub struct PipelineCache {
+    layout: wgpu::PipelineLayout,
+    modules: Mutex<HashMap<PassKind, wgpu::ShaderModule>>,
+    pipelines: Mutex<HashMap<PipelineKey, wgpu::RenderPipeline>>,
+    created: AtomicU64,
+}
+
+impl PipelineCache {
+    /// A cache for pipelines using the heap's bind-group layouts.
+    pub fn new(device: &wgpu::Device, heap: &BindlessHeap) -> Self {
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("oxygen bindless pipeline layout"),
+            bind_group_layouts: &[Some(heap.domain_layout()), Some(heap.scene_constants_layout())],
+            immediate_size: 0,
+        });
+        PipelineCache {
+            layout,
+            modules: Mutex::new(HashMap::new()),
+            pipelines: Mutex::new(HashMap::new()),
+            created: AtomicU64::new(0),
+        }
+    }
+
+    /// Pipelines created since the cache was made.
+    pub fn pipelines_created(&self) -> u64 {
+        self.created.load(Ordering::Relaxed)
+    }
+
+    /// The pipeline for `key`, created on first request.
+    pub fn get(&self, device: &wgpu::Device, key: PipelineKey) -> wgpu::RenderPipeline {
+        // A poisoned lock only means another thread panicked mid-insert; the
+        // map itself is still consistent (insert is atomic), so keep going.
+        let mut pipelines = self.pipelines.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(p) = pipelines.get(&key) {
+            return p.clone();
+        }
+        let module = self.module(device, key.pass);
+        let pipeline = self.create(device, &module, key);
+        self.created.fetch_add(1, Ordering::Relaxed);
+        debug!(?key, "pipeline created");
+        pipelines.insert(key, pipeline.clone());
+        pipeline
+    }
+
+    fn module(&self, device: &wgpu::Device, pass: PassKind) -> wgpu::ShaderModule {
+        let mut modules = self.modules.lock().unwrap_or_else(|e| e.into_inner());
+        modules
+            .entry(pass)
+            .or_insert_with(|| {
+                device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                    label: Some(&format!("{pass:?}")),
+                    source: wgpu::ShaderSource::Wgsl(shader_source(pass).into()),
+                })
+            })
+            .clone()
+    }
+
+    fn create(&self, device: &wgpu::Device, module: &wgpu::ShaderModule, key: PipelineKey) -> wgpu::RenderPipeline {
+        let masked = key.variant.alpha == AlphaClass::Masked;
+        let (fragment_entry, depth_write, depth_compare) = match key.pass {
+            PassKind::DepthPrePass => (masked.then_some("fs_alpha_test"), true, wgpu::CompareFunction::Greater),
+            PassKind::ShadingAfterPrePass => (
+                Some(if masked { "fs_masked" } else { "fs_opaque" }),
+                false,
+                wgpu::CompareFunction::GreaterEqual,
+            ),
+            PassKind::Shading => (Some(if masked { "fs_masked" } else { "fs_opaque" }), true, wgpu::CompareFunction::Greater),
+        };
+        let targets = [key.color_format.map(|format| wgpu::ColorTargetState {
+            format,
+            blend: None,
+            write_mask: wgpu::ColorWrites::ALL,
+        })];
+        let fragment = fragment_entry.map(|entry| wgpu::FragmentState {
+            module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            targets: if key.color_format.is_some() { &targets } else { &[] },
+        });
+        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(&format!("{:?} {:?}", key.pass, key.variant)),
+            layout: Some(&self.layout),
+            vertex: wgpu::VertexState {
+                module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::TriangleList,
+                front_face: wgpu::FrontFace::Ccw,
+                cull_mode: if key.variant.double_sided { None } else { Some(wgpu::Face::Back) },
+                ..Default::default()
+            },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: key.depth_format,
+                depth_write_enabled: Some(depth_write),
+                depth_compare: Some(depth_compare),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment,
+            multiview_mask: None,
+            cache: None,
+        })
+    }
+}

@@ -1,0 +1,106 @@
+//! `RenderContext` and `CommandRecorder`: what a pass reads and where it records.
+
+use oxygen_bindless::{BindlessHeap, SceneConstantsBuffer};
+use oxygen_core::{GpuContext, ResolvedView, ViewTargets};
+use oxygen_sceneprep::{PreparedSceneFrame, Partition};
+use thiserror::Error;
+
+use crate::PipelineCache;
+
+/// A pass that cannot record.
+#[derive(Debug, Error)]
+pub enum PassError {
+    /// `execute` ran before `prepare_resources`.
+    #[error("{pass}: execute called before prepare_resources")]
+    NotPrepared {
+        /// The pass.
+        pass: &'static str,
+    },
+    /// A partition has a mask this pass cannot draw.
+    #[error("{pass}: no pipeline variant for partition mask {mask}")]
+    UnsupportedPartition {
+        /// The pass.
+        pass: &'static str,
+        /// The partition's mask names.
+        mask: String,
+    },
+    /// An application-defined failure inside a render graph.
+    #[error("render graph: {0}")]
+    Graph(String),
+}
+
+/// Everything a pass may read for one view in one frame. Immutable: passes
+/// communicate through the textures they write, never by changing this.
+pub struct RenderContext<'a> {
+    /// Device and queue.
+    pub gpu: &'a GpuContext,
+    /// The resolved view.
+    pub view: &'a ResolvedView,
+    /// ScenePrep's result for this view.
+    pub prepared: &'a PreparedSceneFrame,
+    /// This view's uniform block (bind group 1).
+    pub scene_constants: &'a SceneConstantsBuffer,
+    /// The bindless heap (bind group 0, shared index buffer).
+    pub heap: &'a BindlessHeap,
+    /// Colour and depth targets of the view.
+    pub targets: &'a ViewTargets,
+    /// Shared pipeline cache.
+    pub pipelines: &'a PipelineCache,
+}
+
+/// Counts of what a view's passes recorded.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RecordStats {
+    /// wgpu render passes begun.
+    pub render_passes: u32,
+    /// Pipelines set (one per partition drawn).
+    pub pipeline_binds: u32,
+    /// Draw calls.
+    pub draw_calls: u32,
+}
+
+/// The command encoder of one view plus counters.
+pub struct CommandRecorder {
+    encoder: wgpu::CommandEncoder,
+    /// What was recorded so far.
+    pub stats: RecordStats,
+}
+
+impl CommandRecorder {
+    /// A recorder with a fresh encoder.
+    pub fn new(device: &wgpu::Device, label: &str) -> Self {
+        CommandRecorder {
+            encoder: device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) }),
+            stats: RecordStats::default(),
+        }
+    }
+
+    /// The encoder.
+    pub fn encoder(&mut self) -> &mut wgpu::CommandEncoder {
+        &mut self.encoder
+    }
+
+    /// Finishes recording.
+    pub fn finish(self) -> (wgpu::CommandBuffer, RecordStats) {
+        (self.encoder.finish(), self.stats)
+    }
+}
+
+/// Sets the bindless and scene-constant bind groups and the shared index buffer.
+pub(crate) fn bind_view_resources(pass: &mut wgpu::RenderPass<'_>, ctx: &RenderContext<'_>) {
+    pass.set_bind_group(0, ctx.heap.bind_group(), &[]);
+    pass.set_bind_group(1, ctx.scene_constants.bind_group(), &[]);
+    pass.set_index_buffer(ctx.heap.index_buffer().slice(..), wgpu::IndexFormat::Uint32);
+}
+
+/// Draws every draw of `partition`, one direct indexed draw each; the draw's
+/// position in the view's array is passed as `first_instance`, which is how
+/// the vertex shader finds its `DrawMetadata`.
+pub(crate) fn draw_partition(pass: &mut wgpu::RenderPass<'_>, ctx: &RenderContext<'_>, partition: &Partition, stats: &mut RecordStats) {
+    let draws = &ctx.prepared.draws()[partition.range()];
+    for (offset, draw) in draws.iter().enumerate() {
+        let draw_index = partition.begin + offset as u32;
+        pass.draw_indexed(draw.index_range(), draw.absolute_base_vertex(), draw_index..draw_index + draw.instance_count);
+        stats.draw_calls += 1;
+    }
+}
