@@ -1,0 +1,304 @@
+//! The `Renderer` facade: view registration and the two-phase frame.
+//!
+//! Ownership: the renderer owns the GPU context, the bindless heap, ScenePrep
+//! and the pipeline cache; each registered view owns its resolver, its
+//! factory, its targets and its `SceneConstants` buffer. A frame borrows the
+//! scene immutably. Prepared frames of the last frame are kept for inspection
+//! until the next frame replaces them.
+
+use std::collections::BTreeMap;
+use std::future::Future;
+use std::pin::Pin;
+use std::time::Instant;
+
+use oxygen_bindless::{BindlessHeap, CameraConstants, SceneConstantsBuffer};
+use oxygen_core::{GpuContext, GpuError, GpuOptions, ResolvedView, Scene, ViewContext, ViewError, ViewId, ViewResolver, ViewTargets};
+use oxygen_passes::{CommandRecorder, DepthPrePass, PassError, PipelineCache, RecordStats, RenderContext, RenderPass, ShaderPass, ShaderPassConfig};
+use oxygen_sceneprep::{PrepError, PreparedSceneFrame, ScenePrep, ViewPrepOptions, ViewRequest};
+use thiserror::Error;
+use tracing::{info, info_span};
+
+/// The future a render-graph factory returns: it awaits the view's passes.
+pub type RenderGraphFuture<'a> = Pin<Box<dyn Future<Output = Result<(), PassError>> + 'a>>;
+
+type Factory = Box<dyn for<'a> Fn(ViewId, &'a RenderContext<'a>, &'a mut CommandRecorder) -> RenderGraphFuture<'a>>;
+
+/// Why a frame (or a renderer) failed.
+#[derive(Debug, Error)]
+pub enum RenderError {
+    /// No usable GPU.
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+    /// A view's resolver failed.
+    #[error("resolving a view: {0}")]
+    View(#[from] ViewError),
+    /// ScenePrep failed.
+    #[error(transparent)]
+    Prep(#[from] PrepError),
+    /// A pass failed while recording.
+    #[error("{view}: {source}")]
+    Pass {
+        /// The view whose graph failed.
+        view: ViewId,
+        /// The pass error.
+        source: PassError,
+    },
+    /// The view id is not (or no longer) registered.
+    #[error("{0} is not registered")]
+    NoSuchView(ViewId),
+    /// The view has not been rendered yet, so it has no image.
+    #[error("{0} has not been rendered yet")]
+    NotRendered(ViewId),
+    /// A resolved viewport exceeds the device's texture size limit.
+    #[error("{view}: viewport {width}x{height} exceeds the device limit of {limit}")]
+    ViewportTooLarge {
+        /// The view.
+        view: ViewId,
+        /// Width.
+        width: u32,
+        /// Height.
+        height: u32,
+        /// `max_texture_dimension_2d`.
+        limit: u32,
+    },
+}
+
+/// What one view did in a frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ViewReport {
+    /// The view.
+    pub view: ViewId,
+    /// Draws after culling.
+    pub draws: usize,
+    /// Partitions.
+    pub partitions: usize,
+    /// What its passes recorded.
+    pub recorded: RecordStats,
+}
+
+/// What a frame did.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameReport {
+    /// Frame sequence number.
+    pub frame_index: u64,
+    /// Per view, in submission order.
+    pub views: Vec<ViewReport>,
+    /// Seconds spent in PreRender (resolve + ScenePrep + upload).
+    pub prepare_seconds: f64,
+    /// Seconds spent driving the views' render graphs.
+    pub record_seconds: f64,
+}
+
+struct RegisteredView {
+    resolver: Box<dyn ViewResolver>,
+    factory: Factory,
+    options: ViewPrepOptions,
+    targets: Option<ViewTargets>,
+    constants: SceneConstantsBuffer,
+}
+
+/// The renderer: views in, images out.
+pub struct Renderer {
+    gpu: GpuContext,
+    heap: BindlessHeap,
+    prep: ScenePrep,
+    pipelines: PipelineCache,
+    views: BTreeMap<ViewId, RegisteredView>,
+    next_view: u32,
+    frame_index: u64,
+    started: Instant,
+    last_frames: BTreeMap<ViewId, PreparedSceneFrame>,
+}
+
+/// The default render graph: depth pre-pass, then lit shading.
+pub fn standard_render_graph<'a>(_view: ViewId, ctx: &'a RenderContext<'a>, rec: &'a mut CommandRecorder) -> RenderGraphFuture<'a> {
+    Box::pin(async move {
+        let mut depth = DepthPrePass::new();
+        depth.prepare_resources(ctx, rec).await?;
+        depth.execute(ctx, rec).await?;
+        let mut shading = ShaderPass::new(ShaderPassConfig::default());
+        shading.prepare_resources(ctx, rec).await?;
+        shading.execute(ctx, rec).await?;
+        Ok(())
+    })
+}
+
+impl Renderer {
+    /// A renderer on a headless device chosen by [`GpuContext::new_headless`].
+    pub fn new_headless() -> Result<Self, RenderError> {
+        Ok(Self::new(GpuContext::new_headless(&GpuOptions::default())?))
+    }
+
+    /// A renderer on an existing GPU context.
+    pub fn new(gpu: GpuContext) -> Self {
+        let heap = BindlessHeap::new(&gpu.device);
+        let pipelines = PipelineCache::new(&gpu.device, &heap);
+        Renderer {
+            gpu,
+            heap,
+            prep: ScenePrep::new(),
+            pipelines,
+            views: BTreeMap::new(),
+            next_view: 0,
+            frame_index: 0,
+            started: Instant::now(),
+            last_frames: BTreeMap::new(),
+        }
+    }
+
+    /// Registers a view with default ScenePrep options. Views are prepared
+    /// and submitted in registration order.
+    ///
+    /// The factory is called once per frame with the view's context and
+    /// recorder and returns a future that awaits the view's passes;
+    /// [`standard_render_graph`] is the default.
+    pub fn register_view<R, F>(&mut self, resolver: R, factory: F) -> ViewId
+    where
+        R: ViewResolver + 'static,
+        F: for<'a> Fn(ViewId, &'a RenderContext<'a>, &'a mut CommandRecorder) -> RenderGraphFuture<'a> + 'static,
+    {
+        self.register_view_with_options(resolver, ViewPrepOptions::default(), factory)
+    }
+
+    /// Registers a view with explicit ScenePrep options (filter, cull bound).
+    pub fn register_view_with_options<R, F>(&mut self, resolver: R, options: ViewPrepOptions, factory: F) -> ViewId
+    where
+        R: ViewResolver + 'static,
+        F: for<'a> Fn(ViewId, &'a RenderContext<'a>, &'a mut CommandRecorder) -> RenderGraphFuture<'a> + 'static,
+    {
+        let id = ViewId(self.next_view);
+        self.next_view += 1;
+        let constants = SceneConstantsBuffer::new(&self.gpu.device, self.heap.scene_constants_layout(), &format!("{id} scene constants"));
+        self.views.insert(
+            id,
+            RegisteredView { resolver: Box::new(resolver), factory: Box::new(factory), options, targets: None, constants },
+        );
+        info!(view = %id, "view registered");
+        id
+    }
+
+    /// Removes a view and frees its slots.
+    pub fn unregister_view(&mut self, id: ViewId) -> Result<(), RenderError> {
+        self.views.remove(&id).ok_or(RenderError::NoSuchView(id))?;
+        self.last_frames.remove(&id);
+        self.prep.forget_view(id, &mut self.heap.slots)?;
+        Ok(())
+    }
+
+    /// Registered views in submission order.
+    pub fn views(&self) -> impl Iterator<Item = ViewId> + '_ {
+        self.views.keys().copied()
+    }
+
+    /// Renders one frame of `scene` through every registered view.
+    pub fn render_frame(&mut self, scene: &Scene) -> Result<FrameReport, RenderError> {
+        self.frame_index += 1;
+        let frame_index = self.frame_index;
+        let time_seconds = self.started.elapsed().as_secs_f32();
+        let _span = info_span!("render_frame", frame = frame_index, views = self.views.len()).entered();
+
+        // PreRender: resolve, prepare, upload.
+        let prepare_start = Instant::now();
+        let resolved = self.resolve_views(scene, frame_index, time_seconds)?;
+        let requests: Vec<ViewRequest<'_>> = resolved
+            .iter()
+            .map(|view| ViewRequest { view, options: self.views[&view.view_id].options })
+            .collect();
+        let frames = self.prep.prepare(scene, &requests, &mut self.heap.slots)?;
+        self.prep.upload(&frames, &mut self.heap, &self.gpu.device, &self.gpu.queue)?;
+        let prepare_seconds = prepare_start.elapsed().as_secs_f64();
+
+        // Render: each view's graph, submitted in view order.
+        let record_start = Instant::now();
+        let mut command_buffers = Vec::with_capacity(frames.len());
+        let mut reports = Vec::with_capacity(frames.len());
+        for (view, frame) in resolved.iter().zip(&frames) {
+            let registered = self.views.get_mut(&view.view_id).ok_or(RenderError::NoSuchView(view.view_id))?;
+            let targets_fit = registered
+                .targets
+                .as_ref()
+                .is_some_and(|t| t.width == view.viewport.x && t.height == view.viewport.y);
+            if !targets_fit {
+                registered.targets = Some(ViewTargets::new(&self.gpu.device, view.viewport.x, view.viewport.y, &view.view_id.to_string()));
+            }
+            registered.constants.set_camera(
+                &self.gpu.queue,
+                &CameraConstants::new(view.view, view.projection, view.view_projection, view.inverse_view_projection, view.camera_position),
+            );
+            registered.constants.set_renderer(&self.gpu.queue, &frame.renderer_constants(time_seconds));
+            let registered = &self.views[&view.view_id];
+            let Some(targets) = registered.targets.as_ref() else { continue };
+            let ctx = RenderContext {
+                gpu: &self.gpu,
+                view,
+                prepared: frame,
+                scene_constants: &registered.constants,
+                heap: &self.heap,
+                targets,
+                pipelines: &self.pipelines,
+            };
+            let mut recorder = CommandRecorder::new(&self.gpu.device, &view.view_id.to_string());
+            let _view_span = info_span!("render_graph", view = %view.view_id).entered();
+            futures::executor::block_on((registered.factory)(view.view_id, &ctx, &mut recorder))
+                .map_err(|source| RenderError::Pass { view: view.view_id, source })?;
+            let (buffer, recorded) = recorder.finish();
+            command_buffers.push(buffer);
+            reports.push(ViewReport { view: view.view_id, draws: frame.draws().len(), partitions: frame.partitions().len(), recorded });
+        }
+        self.gpu.queue.submit(command_buffers);
+        let record_seconds = record_start.elapsed().as_secs_f64();
+
+        self.last_frames = frames.into_iter().map(|f| (f.view_id(), f)).collect();
+        Ok(FrameReport { frame_index, views: reports, prepare_seconds, record_seconds })
+    }
+
+    fn resolve_views(&self, scene: &Scene, frame_index: u64, time_seconds: f32) -> Result<Vec<ResolvedView>, RenderError> {
+        let _span = info_span!("resolve_views").entered();
+        let limit = self.gpu.device.limits().max_texture_dimension_2d;
+        self.views
+            .iter()
+            .map(|(id, registered)| {
+                let ctx = ViewContext { view_id: *id, frame_index, time_seconds };
+                let mut view = registered.resolver.resolve(&ctx, scene)?;
+                // The id is the renderer's, whatever the resolver wrote.
+                view.view_id = *id;
+                if view.viewport.x > limit || view.viewport.y > limit {
+                    return Err(RenderError::ViewportTooLarge { view: *id, width: view.viewport.x, height: view.viewport.y, limit });
+                }
+                Ok(view)
+            })
+            .collect()
+    }
+
+    /// The view's colour target as an image (waits for the GPU).
+    pub fn read_color(&self, id: ViewId) -> Result<image::RgbaImage, RenderError> {
+        let view = self.views.get(&id).ok_or(RenderError::NoSuchView(id))?;
+        let targets = view.targets.as_ref().ok_or(RenderError::NotRendered(id))?;
+        Ok(self.gpu.read_rgba8(&targets.color)?)
+    }
+
+    /// The view's prepared frame from the last `render_frame`.
+    pub fn prepared_frame(&self, id: ViewId) -> Option<&PreparedSceneFrame> {
+        self.last_frames.get(&id)
+    }
+
+    /// The GPU context.
+    pub fn gpu(&self) -> &GpuContext {
+        &self.gpu
+    }
+
+    /// The pipeline cache (e.g. to check how many pipelines exist).
+    pub fn pipelines(&self) -> &PipelineCache {
+        &self.pipelines
+    }
+
+    /// ScenePrep (counters, the last frame collection).
+    pub fn scene_prep(&self) -> &ScenePrep {
+        &self.prep
+    }
+
+    /// The bindless heap.
+    pub fn heap(&self) -> &BindlessHeap {
+        &self.heap
+    }
+}
