@@ -1,0 +1,161 @@
+//! Renders on a real device (lavapipe in CI) and checks the pictures with
+//! tolerances: per-pixel colour error and a cap on the number of pixels that
+//! may differ, never exact bytes.
+
+mod support;
+
+use oxygen::prelude::*;
+use support::{Rgb, assert_region, gpu_renderer, linear_to_srgb8, pixel_of, region_mean};
+
+/// A distinctive clear colour, so "background" cannot be confused with shading.
+const CLEAR: wgpu::Color = wgpu::Color { r: 0.5, g: 0.0, b: 0.5, a: 1.0 };
+
+fn graph_with_clear<'a>(_id: ViewId, ctx: &'a RenderContext<'a>, rec: &'a mut CommandRecorder) -> RenderGraphFuture<'a> {
+    Box::pin(async move {
+        let mut depth = DepthPrePass::new();
+        depth.prepare_resources(ctx, rec).await?;
+        depth.execute(ctx, rec).await?;
+        let mut shading = ShaderPass::new(ShaderPassConfig { clear_color: CLEAR, depth_from_pre_pass: true });
+        shading.prepare_resources(ctx, rec).await?;
+        shading.execute(ctx, rec).await?;
+        Ok(())
+    })
+}
+
+fn add_cube(scene: &mut Scene, name: &str, at: Vec3, size: f32, material: oxygen::core::MaterialHandle) -> oxygen::core::NodeKey {
+    let geometry = scene.add_geometry(Geometry::cube(size));
+    let node = scene.add_node(name, Transform::from_translation(at));
+    scene.set_renderable(node, Renderable { geometry, materials: vec![material] }).unwrap();
+    node
+}
+
+fn add_sun(scene: &mut Scene, travelling: Vec3, intensity: f32) {
+    let sun = scene.add_node("sun", Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, travelling.normalize())));
+    scene.set_light(sun, Some(Light::directional(intensity))).unwrap();
+}
+
+fn camera(eye: Vec3, target: Vec3, size: u32) -> LookAtResolver {
+    LookAtResolver { camera: Camera::perspective(60f32.to_radians(), 0.1, None), eye, target, up: Vec3::Y, viewport: UVec2::splat(size) }
+}
+
+#[test]
+fn near_object_occludes_far_one_and_background_keeps_the_clear_colour() {
+    let mut scene = Scene::new();
+    // The near cube's material is created first, so its partition is drawn
+    // first: only a working reverse-Z depth test keeps the far cube from
+    // painting over it.
+    let green = scene.add_material(Material::opaque("near green", Vec4::new(0.0, 1.0, 0.0, 1.0)));
+    let red = scene.add_material(Material::opaque("far red", Vec4::new(1.0, 0.0, 0.0, 1.0)));
+    add_cube(&mut scene, "near", Vec3::new(0.0, 0.0, -3.0), 0.5, green);
+    add_cube(&mut scene, "far", Vec3::new(0.0, 0.0, -10.0), 4.0, red);
+    add_sun(&mut scene, Vec3::new(0.0, 0.0, -1.0), 3.0);
+
+    let mut renderer = gpu_renderer();
+    let cam = camera(Vec3::ZERO, Vec3::NEG_Z, 96);
+    let view = renderer.register_view(cam, graph_with_clear);
+    renderer.render_frame(&scene).unwrap();
+    let image = renderer.read_color(view).unwrap();
+    let resolved = cam.resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
+
+    // Hue tests, not exact values: a head-on highlight whitens the faces.
+    let is_green = |p: Rgb| p.g > 150 && p.g as i32 > p.r as i32 + 60 && p.g as i32 > p.b as i32 + 60;
+    let is_red = |p: Rgb| p.r > 150 && p.r as i32 > p.g as i32 + 60 && p.r as i32 > p.b as i32 + 60;
+    // Centre: the near cube (face towards the camera, lit head-on).
+    assert_region(&image, pixel_of(&resolved, Vec3::new(0.0, 0.0, -2.75)), 3, is_green, 0, "near cube at the centre");
+    // Beside the near cube but inside the far one: the far cube.
+    assert_region(&image, pixel_of(&resolved, Vec3::new(1.2, 0.0, -8.0)), 3, is_red, 0, "far cube around the near one");
+    // A corner: nothing there, so the clear colour within 2 levels per channel.
+    let clear = Rgb::new(linear_to_srgb8(CLEAR.r), linear_to_srgb8(CLEAR.g), linear_to_srgb8(CLEAR.b));
+    assert_region(&image, (4, 4), 3, |p| p.max_channel_error(clear) <= 2, 0, "background corner");
+}
+
+#[test]
+fn the_lit_side_of_a_cube_is_brighter_than_the_unlit_side() {
+    let mut scene = Scene::new();
+    let white = scene.add_material(Material::opaque("white", Vec4::new(0.8, 0.8, 0.8, 1.0)));
+    add_cube(&mut scene, "cube", Vec3::ZERO, 1.0, white);
+    // Light travels towards −X: it hits the +X face head-on and grazes +Z.
+    add_sun(&mut scene, Vec3::NEG_X, 3.0);
+
+    let mut renderer = gpu_renderer();
+    let cam = camera(Vec3::new(2.5, 1.5, 2.5), Vec3::ZERO, 128);
+    let view = renderer.register_view(cam, graph_with_clear);
+    renderer.render_frame(&scene).unwrap();
+    let image = renderer.read_color(view).unwrap();
+    let resolved = cam.resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
+
+    let lit = region_mean(&image, pixel_of(&resolved, Vec3::new(0.5, 0.0, 0.0)), 4);
+    let unlit = region_mean(&image, pixel_of(&resolved, Vec3::new(0.0, 0.0, 0.5)), 4);
+    assert!(lit > 2.0 * unlit && lit > 120.0, "lit face {lit:.1} should be much brighter than unlit face {unlit:.1}");
+    assert!(unlit > 5.0, "the unlit face still gets ambient light ({unlit:.1})");
+}
+
+#[test]
+fn masked_quad_is_kept_above_its_cutoff_dropped_below_and_visible_from_behind() {
+    let mut scene = Scene::new();
+    let quad = scene.add_geometry(Geometry::quad(2.0));
+    let masked = |scene: &mut Scene, name: &str, alpha: f32| {
+        scene.add_material(Material {
+            name: name.into(),
+            base_color: Vec4::new(1.0, 1.0, 0.0, alpha),
+            metallic: 0.0,
+            roughness: 1.0,
+            alpha_mode: AlphaMode::Mask { cutoff: 0.5 },
+            double_sided: true,
+        })
+    };
+    let kept = masked(&mut scene, "kept", 0.9);
+    let dropped = masked(&mut scene, "dropped", 0.2);
+    for (name, x, material) in [("kept", -1.2, kept), ("dropped", 1.2, dropped)] {
+        let node = scene.add_node(name, Transform::from_translation(Vec3::new(x, 0.0, 0.0)));
+        scene.set_renderable(node, Renderable { geometry: quad, materials: vec![material] }).unwrap();
+    }
+    add_sun(&mut scene, Vec3::new(0.0, 0.0, -1.0), 3.0);
+    add_sun(&mut scene, Vec3::new(0.0, 0.0, 1.0), 3.0);
+
+    let clear = Rgb::new(linear_to_srgb8(CLEAR.r), linear_to_srgb8(CLEAR.g), linear_to_srgb8(CLEAR.b));
+    let is_yellow = |p: Rgb| p.r > 150 && p.g > 150 && p.b < 40;
+    // Front (+Z) and back (−Z): the quad is double-sided, so both show it.
+    for eye in [Vec3::new(0.0, 0.0, 4.0), Vec3::new(0.0, 0.0, -4.0)] {
+        let mut renderer = gpu_renderer();
+        let cam = camera(eye, Vec3::ZERO, 96);
+        let view = renderer.register_view(cam, graph_with_clear);
+        renderer.render_frame(&scene).unwrap();
+        let image = renderer.read_color(view).unwrap();
+        let resolved = cam.resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
+        assert_region(&image, pixel_of(&resolved, Vec3::new(-1.2, 0.0, 0.0)), 4, is_yellow, 0, "quad above cutoff");
+        assert_region(&image, pixel_of(&resolved, Vec3::new(1.2, 0.0, 0.0)), 4, |p| p.max_channel_error(clear) <= 2, 0, "quad below cutoff");
+    }
+}
+
+#[test]
+fn pipelines_are_created_once_and_reused_across_frames() {
+    let demo = oxygen::core::demo::multi_view_scene();
+    let mut renderer = gpu_renderer();
+    renderer.register_view(oxygen::core::demo::main_camera(UVec2::new(64, 48)), standard_render_graph);
+    renderer.register_view(oxygen::core::demo::side_camera(UVec2::new(48, 48)), standard_render_graph);
+    renderer.render_frame(&demo.scene).unwrap();
+    let after_first = renderer.pipelines().pipelines_created();
+    // Opaque + masked-double-sided partitions × (depth pre-pass, shading).
+    assert_eq!(after_first, 4);
+    for _ in 0..3 {
+        renderer.render_frame(&demo.scene).unwrap();
+    }
+    assert_eq!(renderer.pipelines().pipelines_created(), after_first);
+}
+
+#[test]
+fn views_render_in_registration_order_and_can_be_unregistered() {
+    let demo = oxygen::core::demo::multi_view_scene();
+    let mut renderer = gpu_renderer();
+    let a = renderer.register_view(oxygen::core::demo::main_camera(UVec2::new(32, 32)), standard_render_graph);
+    let b = renderer.register_view(oxygen::core::demo::side_camera(UVec2::new(32, 32)), standard_render_graph);
+    let report = renderer.render_frame(&demo.scene).unwrap();
+    assert_eq!(report.views.iter().map(|v| v.view).collect::<Vec<_>>(), vec![a, b]);
+    assert!(report.views.iter().all(|v| v.recorded.draw_calls > 0));
+    renderer.unregister_view(a).unwrap();
+    let report = renderer.render_frame(&demo.scene).unwrap();
+    assert_eq!(report.views.len(), 1);
+    assert!(matches!(renderer.read_color(a), Err(oxygen::RenderError::NoSuchView(_))));
+    assert!(renderer.unregister_view(a).is_err());
+}

@@ -1,0 +1,95 @@
+//! Shared helpers for GPU tests: a renderer on the test adapter, projection
+//! of world points to pixels, and tolerant region checks.
+
+#![allow(dead_code)] // Each test binary uses a different subset.
+
+use std::sync::Once;
+
+use image::RgbaImage;
+use oxygen::prelude::*;
+
+/// A pixel's colour.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Rgb {
+    pub r: u8,
+    pub g: u8,
+    pub b: u8,
+}
+
+impl Rgb {
+    pub fn new(r: u8, g: u8, b: u8) -> Self {
+        Rgb { r, g, b }
+    }
+
+    /// Largest absolute difference over the three channels.
+    pub fn max_channel_error(self, other: Rgb) -> u8 {
+        [self.r.abs_diff(other.r), self.g.abs_diff(other.g), self.b.abs_diff(other.b)].into_iter().max().unwrap_or(0)
+    }
+
+    /// Rec. 709 luma of the stored (sRGB-encoded) values.
+    pub fn luma(self) -> f32 {
+        0.2126 * self.r as f32 + 0.7152 * self.g as f32 + 0.0722 * self.b as f32
+    }
+}
+
+/// The sRGB encoding of a linear channel, as an 8-bit value.
+pub fn linear_to_srgb8(linear: f64) -> u8 {
+    let c = linear.clamp(0.0, 1.0);
+    let s = if c <= 0.0031308 { c * 12.92 } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 };
+    (s * 255.0).round() as u8
+}
+
+/// A renderer on the test adapter; logs the adapter once per test binary.
+/// Fails (never skips) when there is no adapter: CI must not pass silently.
+pub fn gpu_renderer() -> Renderer {
+    static LOG: Once = Once::new();
+    match Renderer::new_headless() {
+        Ok(renderer) => {
+            LOG.call_once(|| eprintln!("GPU tests run on: {}", renderer.gpu().describe()));
+            renderer
+        }
+        Err(e) => panic!("GPU tests need an adapter: {e}"),
+    }
+}
+
+/// The pixel a world point lands on.
+pub fn pixel_of(view: &ResolvedView, world: Vec3) -> (u32, u32) {
+    let clip = view.view_projection * world.extend(1.0);
+    let ndc = clip.truncate() / clip.w;
+    let x = (ndc.x * 0.5 + 0.5) * view.viewport.x as f32;
+    let y = (0.5 - ndc.y * 0.5) * view.viewport.y as f32;
+    (x.clamp(0.0, view.viewport.x as f32 - 1.0) as u32, y.clamp(0.0, view.viewport.y as f32 - 1.0) as u32)
+}
+
+fn region(image: &RgbaImage, center: (u32, u32), radius: u32) -> impl Iterator<Item = ((u32, u32), Rgb)> + '_ {
+    let (cx, cy) = center;
+    let xs = cx.saturating_sub(radius)..=(cx + radius).min(image.width() - 1);
+    let ys = cy.saturating_sub(radius)..=(cy + radius).min(image.height() - 1);
+    ys.flat_map(move |y| xs.clone().map(move |x| (x, y)))
+        .map(|(x, y)| {
+            let p = image.get_pixel(x, y).0;
+            ((x, y), Rgb::new(p[0], p[1], p[2]))
+        })
+}
+
+/// Mean luma of the square of `radius` around `center`.
+pub fn region_mean(image: &RgbaImage, center: (u32, u32), radius: u32) -> f32 {
+    let (sum, n) = region(image, center, radius).fold((0.0, 0), |(s, n), (_, p)| (s + p.luma(), n + 1));
+    sum / n as f32
+}
+
+/// Asserts that at most `max_bad` pixels of the square around `center` fail
+/// `accept`; on failure names the first offenders and saves the image.
+pub fn assert_region(image: &RgbaImage, center: (u32, u32), radius: u32, accept: impl Fn(Rgb) -> bool, max_bad: usize, what: &str) {
+    let bad: Vec<_> = region(image, center, radius).filter(|(_, p)| !accept(*p)).collect();
+    if bad.len() > max_bad {
+        let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"));
+        let path = dir.join(format!("{}.actual.png", what.replace(' ', "_")));
+        let saved = image.save(&path).map(|_| path.display().to_string()).unwrap_or_else(|e| format!("(not saved: {e})"));
+        panic!(
+            "{what}: {} of the pixels around {center:?} are wrong (allowed {max_bad}); first: {:?}; image: {saved}",
+            bad.len(),
+            &bad[..bad.len().min(4)]
+        );
+    }
+}
