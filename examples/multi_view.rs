@@ -40,7 +40,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let path = out_dir.join(format!("multi_view_{name}.png"));
         renderer.read_color(id)?.save(&path)?;
         let frame = renderer.prepared_frame(id).ok_or("view was not prepared")?;
-        let partitions: Vec<String> = frame.partitions().iter().map(|p| format!("{}×{}", p.mask.names(), p.len())).collect();
+        let partitions: Vec<String> =
+            frame.partitions().iter().map(|p| format!("{}×{}", p.mask.names(), p.len())).collect();
         println!("{id} '{name}': {} draws in [{}] -> {}", frame.draws().len(), partitions.join(", "), path.display());
     }
     Ok(())

@@ -32,10 +32,10 @@ mod renderer;
 
 pub use renderer::{FrameReport, RenderError, RenderGraphFuture, Renderer, ViewReport, standard_render_graph};
 
-/// The core crate: math, scene, assets, views, GPU context.
-pub use oxygen_core as core;
 /// The bindless heap.
 pub use oxygen_bindless as bindless;
+/// The core crate: math, scene, assets, views, GPU context.
+pub use oxygen_core as core;
 /// The render passes.
 pub use oxygen_passes as passes;
 /// ScenePrep.
@@ -49,6 +49,8 @@ pub mod prelude {
         AlphaMode, Camera, Geometry, Light, LookAtResolver, Material, NodeFlags, Renderable, ResolvedView, Scene,
         Transform, ViewContext, ViewId, ViewResolver,
     };
-    pub use oxygen_passes::{CommandRecorder, DepthPrePass, PassError, RenderContext, RenderPass, ShaderPass, ShaderPassConfig};
+    pub use oxygen_passes::{
+        CommandRecorder, DepthPrePass, PassError, RenderContext, RenderPass, ShaderPass, ShaderPassConfig,
+    };
     pub use oxygen_sceneprep::{PassMask, PreparedSceneFrame, ViewPrepOptions};
 }

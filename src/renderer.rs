@@ -12,8 +12,13 @@ use std::pin::Pin;
 use std::time::Instant;
 
 use oxygen_bindless::{BindlessHeap, CameraConstants, SceneConstantsBuffer};
-use oxygen_core::{GpuContext, GpuError, GpuOptions, ResolvedView, Scene, ViewContext, ViewError, ViewId, ViewResolver, ViewTargets};
-use oxygen_passes::{CommandRecorder, DepthPrePass, PassError, PipelineCache, RecordStats, RenderContext, RenderPass, ShaderPass, ShaderPassConfig};
+use oxygen_core::{
+    GpuContext, GpuError, GpuOptions, ResolvedView, Scene, ViewContext, ViewError, ViewId, ViewResolver, ViewTargets,
+};
+use oxygen_passes::{
+    CommandRecorder, DepthPrePass, PassError, PipelineCache, RecordStats, RenderContext, RenderPass, ShaderPass,
+    ShaderPassConfig,
+};
 use oxygen_sceneprep::{PrepError, PreparedSceneFrame, ScenePrep, ViewPrepOptions, ViewRequest};
 use thiserror::Error;
 use tracing::{info, info_span};
@@ -111,7 +116,11 @@ pub struct Renderer {
 }
 
 /// The default render graph: depth pre-pass, then lit shading.
-pub fn standard_render_graph<'a>(_view: ViewId, ctx: &'a RenderContext<'a>, rec: &'a mut CommandRecorder) -> RenderGraphFuture<'a> {
+pub fn standard_render_graph<'a>(
+    _view: ViewId,
+    ctx: &'a RenderContext<'a>,
+    rec: &'a mut CommandRecorder,
+) -> RenderGraphFuture<'a> {
     Box::pin(async move {
         let mut depth = DepthPrePass::new();
         depth.prepare_resources(ctx, rec).await?;
@@ -168,10 +177,20 @@ impl Renderer {
     {
         let id = ViewId(self.next_view);
         self.next_view += 1;
-        let constants = SceneConstantsBuffer::new(&self.gpu.device, self.heap.scene_constants_layout(), &format!("{id} scene constants"));
+        let constants = SceneConstantsBuffer::new(
+            &self.gpu.device,
+            self.heap.scene_constants_layout(),
+            &format!("{id} scene constants"),
+        );
         self.views.insert(
             id,
-            RegisteredView { resolver: Box::new(resolver), factory: Box::new(factory), options, targets: None, constants },
+            RegisteredView {
+                resolver: Box::new(resolver),
+                factory: Box::new(factory),
+                options,
+                targets: None,
+                constants,
+            },
         );
         info!(view = %id, "view registered");
         id
@@ -200,10 +219,8 @@ impl Renderer {
         // PreRender: resolve, prepare, upload.
         let prepare_start = Instant::now();
         let resolved = self.resolve_views(scene, frame_index, time_seconds)?;
-        let requests: Vec<ViewRequest<'_>> = resolved
-            .iter()
-            .map(|view| ViewRequest { view, options: self.views[&view.view_id].options })
-            .collect();
+        let requests: Vec<ViewRequest<'_>> =
+            resolved.iter().map(|view| ViewRequest { view, options: self.views[&view.view_id].options }).collect();
         let frames = self.prep.prepare(scene, &requests, &mut self.heap.slots)?;
         self.prep.upload(&frames, &mut self.heap, &self.gpu.device, &self.gpu.queue)?;
         let prepare_seconds = prepare_start.elapsed().as_secs_f64();
@@ -214,16 +231,25 @@ impl Renderer {
         let mut reports = Vec::with_capacity(frames.len());
         for (view, frame) in resolved.iter().zip(&frames) {
             let registered = self.views.get_mut(&view.view_id).ok_or(RenderError::NoSuchView(view.view_id))?;
-            let targets_fit = registered
-                .targets
-                .as_ref()
-                .is_some_and(|t| t.width == view.viewport.x && t.height == view.viewport.y);
+            let targets_fit =
+                registered.targets.as_ref().is_some_and(|t| t.width == view.viewport.x && t.height == view.viewport.y);
             if !targets_fit {
-                registered.targets = Some(ViewTargets::new(&self.gpu.device, view.viewport.x, view.viewport.y, &view.view_id.to_string()));
+                registered.targets = Some(ViewTargets::new(
+                    &self.gpu.device,
+                    view.viewport.x,
+                    view.viewport.y,
+                    &view.view_id.to_string(),
+                ));
             }
             registered.constants.set_camera(
                 &self.gpu.queue,
-                &CameraConstants::new(view.view, view.projection, view.view_projection, view.inverse_view_projection, view.camera_position),
+                &CameraConstants::new(
+                    view.view,
+                    view.projection,
+                    view.view_projection,
+                    view.inverse_view_projection,
+                    view.camera_position,
+                ),
             );
             registered.constants.set_renderer(&self.gpu.queue, &frame.renderer_constants(time_seconds));
             let registered = &self.views[&view.view_id];
@@ -243,7 +269,12 @@ impl Renderer {
                 .map_err(|source| RenderError::Pass { view: view.view_id, source })?;
             let (buffer, recorded) = recorder.finish();
             command_buffers.push(buffer);
-            reports.push(ViewReport { view: view.view_id, draws: frame.draws().len(), partitions: frame.partitions().len(), recorded });
+            reports.push(ViewReport {
+                view: view.view_id,
+                draws: frame.draws().len(),
+                partitions: frame.partitions().len(),
+                recorded,
+            });
         }
         self.gpu.queue.submit(command_buffers);
         let record_seconds = record_start.elapsed().as_secs_f64();
@@ -252,7 +283,12 @@ impl Renderer {
         Ok(FrameReport { frame_index, views: reports, prepare_seconds, record_seconds })
     }
 
-    fn resolve_views(&self, scene: &Scene, frame_index: u64, time_seconds: f32) -> Result<Vec<ResolvedView>, RenderError> {
+    fn resolve_views(
+        &self,
+        scene: &Scene,
+        frame_index: u64,
+        time_seconds: f32,
+    ) -> Result<Vec<ResolvedView>, RenderError> {
         let _span = info_span!("resolve_views").entered();
         let limit = self.gpu.device.limits().max_texture_dimension_2d;
         self.views
@@ -263,7 +299,12 @@ impl Renderer {
                 // The id is the renderer's, whatever the resolver wrote.
                 view.view_id = *id;
                 if view.viewport.x > limit || view.viewport.y > limit {
-                    return Err(RenderError::ViewportTooLarge { view: *id, width: view.viewport.x, height: view.viewport.y, limit });
+                    return Err(RenderError::ViewportTooLarge {
+                        view: *id,
+                        width: view.viewport.x,
+                        height: view.viewport.y,
+                        limit,
+                    });
                 }
                 Ok(view)
             })

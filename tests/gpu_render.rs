@@ -10,7 +10,11 @@ use support::{Rgb, assert_region, gpu_renderer, linear_to_srgb8, pixel_of, regio
 /// A distinctive clear colour, so "background" cannot be confused with shading.
 const CLEAR: wgpu::Color = wgpu::Color { r: 0.5, g: 0.0, b: 0.5, a: 1.0 };
 
-fn graph_with_clear<'a>(_id: ViewId, ctx: &'a RenderContext<'a>, rec: &'a mut CommandRecorder) -> RenderGraphFuture<'a> {
+fn graph_with_clear<'a>(
+    _id: ViewId,
+    ctx: &'a RenderContext<'a>,
+    rec: &'a mut CommandRecorder,
+) -> RenderGraphFuture<'a> {
     Box::pin(async move {
         let mut depth = DepthPrePass::new();
         depth.prepare_resources(ctx, rec).await?;
@@ -22,7 +26,13 @@ fn graph_with_clear<'a>(_id: ViewId, ctx: &'a RenderContext<'a>, rec: &'a mut Co
     })
 }
 
-fn add_cube(scene: &mut Scene, name: &str, at: Vec3, size: f32, material: oxygen::core::MaterialHandle) -> oxygen::core::NodeKey {
+fn add_cube(
+    scene: &mut Scene,
+    name: &str,
+    at: Vec3,
+    size: f32,
+    material: oxygen::core::MaterialHandle,
+) -> oxygen::core::NodeKey {
     let geometry = scene.add_geometry(Geometry::cube(size));
     let node = scene.add_node(name, Transform::from_translation(at));
     scene.set_renderable(node, Renderable { geometry, materials: vec![material] }).unwrap();
@@ -30,12 +40,21 @@ fn add_cube(scene: &mut Scene, name: &str, at: Vec3, size: f32, material: oxygen
 }
 
 fn add_sun(scene: &mut Scene, travelling: Vec3, intensity: f32) {
-    let sun = scene.add_node("sun", Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, travelling.normalize())));
+    let sun = scene.add_node(
+        "sun",
+        Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, travelling.normalize())),
+    );
     scene.set_light(sun, Some(Light::directional(intensity))).unwrap();
 }
 
 fn camera(eye: Vec3, target: Vec3, size: u32) -> LookAtResolver {
-    LookAtResolver { camera: Camera::perspective(60f32.to_radians(), 0.1, None), eye, target, up: Vec3::Y, viewport: UVec2::splat(size) }
+    LookAtResolver {
+        camera: Camera::perspective(60f32.to_radians(), 0.1, None),
+        eye,
+        target,
+        up: Vec3::Y,
+        viewport: UVec2::splat(size),
+    }
 }
 
 #[test]
@@ -124,7 +143,14 @@ fn masked_quad_is_kept_above_its_cutoff_dropped_below_and_visible_from_behind() 
         let image = renderer.read_color(view).unwrap();
         let resolved = cam.resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
         assert_region(&image, pixel_of(&resolved, Vec3::new(-1.2, 0.0, 0.0)), 4, is_yellow, 0, "quad above cutoff");
-        assert_region(&image, pixel_of(&resolved, Vec3::new(1.2, 0.0, 0.0)), 4, |p| p.max_channel_error(clear) <= 2, 0, "quad below cutoff");
+        assert_region(
+            &image,
+            pixel_of(&resolved, Vec3::new(1.2, 0.0, 0.0)),
+            4,
+            |p| p.max_channel_error(clear) <= 2,
+            0,
+            "quad below cutoff",
+        );
     }
 }
 
@@ -158,4 +184,37 @@ fn views_render_in_registration_order_and_can_be_unregistered() {
     assert_eq!(report.views.len(), 1);
     assert!(matches!(renderer.read_color(a), Err(oxygen::RenderError::NoSuchView(_))));
     assert!(renderer.unregister_view(a).is_err());
+}
+
+#[test]
+fn a_closure_factory_can_render_without_a_depth_pre_pass() {
+    let mut scene = Scene::new();
+    let green = scene.add_material(Material::opaque("near green", Vec4::new(0.0, 1.0, 0.0, 1.0)));
+    let red = scene.add_material(Material::opaque("far red", Vec4::new(1.0, 0.0, 0.0, 1.0)));
+    add_cube(&mut scene, "near", Vec3::new(0.0, 0.0, -3.0), 0.5, green);
+    add_cube(&mut scene, "far", Vec3::new(0.0, 0.0, -10.0), 4.0, red);
+    add_sun(&mut scene, Vec3::new(0.0, 0.0, -1.0), 3.0);
+
+    let mut renderer = gpu_renderer();
+    let cam = camera(Vec3::ZERO, Vec3::NEG_Z, 64);
+    let view = renderer.register_view(cam, |_id, ctx, rec| {
+        Box::pin(async move {
+            let mut shading = ShaderPass::new(ShaderPassConfig { clear_color: CLEAR, depth_from_pre_pass: false });
+            shading.prepare_resources(ctx, rec).await?;
+            shading.execute(ctx, rec).await
+        })
+    });
+    let report = renderer.render_frame(&scene).unwrap();
+    assert_eq!(report.views[0].recorded.render_passes, 1);
+    let image = renderer.read_color(view).unwrap();
+    let resolved = cam.resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
+    let is_green = |p: Rgb| p.g > 150 && p.g as i32 > p.r as i32 + 60;
+    assert_region(
+        &image,
+        pixel_of(&resolved, Vec3::new(0.0, 0.0, -2.75)),
+        2,
+        is_green,
+        0,
+        "near cube without pre-pass",
+    );
 }

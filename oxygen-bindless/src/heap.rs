@@ -92,11 +92,8 @@ impl BindlessHeap {
             }],
         });
         let capacities: Vec<u64> = DomainKind::ALL.iter().map(|_| MIN_RECORDS).collect();
-        let buffers: Vec<_> = DomainKind::ALL
-            .iter()
-            .zip(&capacities)
-            .map(|(k, c)| create_domain_buffer(device, *k, *c))
-            .collect();
+        let buffers: Vec<_> =
+            DomainKind::ALL.iter().zip(&capacities).map(|(k, c)| create_domain_buffer(device, *k, *c)).collect();
         let bind_group = create_bind_group(device, &domain_layout, &buffers);
         BindlessHeap {
             slots: SlotAllocators::new(max_binding_bytes),
@@ -145,23 +142,42 @@ impl BindlessHeap {
     }
 
     /// Writes `records` starting `offset` records into `allocation`.
-    pub fn write<T: Pod>(&self, queue: &wgpu::Queue, allocation: &Allocation, offset: u32, records: &[T]) -> Result<(), BindlessError> {
+    pub fn write<T: Pod>(
+        &self,
+        queue: &wgpu::Queue,
+        allocation: &Allocation,
+        offset: u32,
+        records: &[T],
+    ) -> Result<(), BindlessError> {
         let kind = allocation.domain();
         self.slots.get(kind).validate(allocation)?;
         let record_size = std::mem::size_of::<T>() as u64;
         if record_size != kind.record_size() {
-            return Err(BindlessError::RecordSize { domain: kind.name(), expected: kind.record_size(), got: record_size });
+            return Err(BindlessError::RecordSize {
+                domain: kind.name(),
+                expected: kind.record_size(),
+                got: record_size,
+            });
         }
         if records.is_empty() {
             return Ok(());
         }
         if offset as u64 + records.len() as u64 > allocation.count as u64 {
-            return Err(SlotError::WriteTooLarge { domain: kind.name(), records: records.len() + offset as usize, count: allocation.count }.into());
+            return Err(SlotError::WriteTooLarge {
+                domain: kind.name(),
+                records: records.len() + offset as usize,
+                count: allocation.count,
+            }
+            .into());
         }
         let first = allocation.start as u64 + offset as u64;
         let end = first + records.len() as u64;
         if end > self.capacities[kind.index()] {
-            return Err(BindlessError::BeyondCapacity { domain: kind.name(), end, capacity: self.capacities[kind.index()] });
+            return Err(BindlessError::BeyondCapacity {
+                domain: kind.name(),
+                end,
+                capacity: self.capacities[kind.index()],
+            });
         }
         queue.write_buffer(&self.buffers[kind.index()], first * record_size, bytemuck::cast_slice(records));
         Ok(())
@@ -217,7 +233,11 @@ fn create_domain_buffer(device: &wgpu::Device, kind: DomainKind, records: u64) -
     })
 }
 
-fn create_bind_group(device: &wgpu::Device, layout: &wgpu::BindGroupLayout, buffers: &[wgpu::Buffer]) -> wgpu::BindGroup {
+fn create_bind_group(
+    device: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    buffers: &[wgpu::Buffer],
+) -> wgpu::BindGroup {
     let entries: Vec<_> = DomainKind::ALL
         .iter()
         .filter_map(|k| k.binding().map(|b| (b, &buffers[k.index()])))

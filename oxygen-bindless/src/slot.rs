@@ -63,7 +63,9 @@ pub enum SlotError {
         count: u32,
     },
     /// The domain would exceed its maximum size.
-    #[error("{domain} domain cannot hold {requested} more records ({live} live, limit {limit} records = {limit_bytes} bytes, the adapter's max_storage_buffer_binding_size)")]
+    #[error(
+        "{domain} domain cannot hold {requested} more records ({live} live, limit {limit} records = {limit_bytes} bytes, the adapter's max_storage_buffer_binding_size)"
+    )]
     DomainFull {
         /// Domain name.
         domain: &'static str,
@@ -141,7 +143,12 @@ impl SlotAllocator {
     pub fn validate(&self, allocation: &Allocation) -> Result<(), SlotError> {
         match allocation.key {
             None if allocation.count == 0 => Ok(()),
-            Some(key) if allocation.domain == self.domain && self.live.get(key) == Some(&(allocation.start, allocation.count)) => Ok(()),
+            Some(key)
+                if allocation.domain == self.domain
+                    && self.live.get(key) == Some(&(allocation.start, allocation.count)) =>
+            {
+                Ok(())
+            }
             _ => Err(self.stale(allocation)),
         }
     }

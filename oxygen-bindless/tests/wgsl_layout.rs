@@ -13,10 +13,9 @@ fn members(module: &naga::Module, name: &str) -> (Vec<(String, u32)>, u32) {
         .unwrap_or_else(|| panic!("struct {name} not in WGSL"))
         .1;
     match &ty.inner {
-        naga::TypeInner::Struct { members, span } => (
-            members.iter().map(|m| (m.name.clone().unwrap_or_default(), m.offset)).collect(),
-            *span,
-        ),
+        naga::TypeInner::Struct { members, span } => {
+            (members.iter().map(|m| (m.name.clone().unwrap_or_default(), m.offset)).collect(), *span)
+        }
         other => panic!("{name} is not a struct: {other:?}"),
     }
 }

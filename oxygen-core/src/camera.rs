@@ -58,16 +58,12 @@ pub struct Camera {
 impl Camera {
     /// A perspective camera.
     pub fn perspective(fov_y: f32, near: f32, far: Option<f32>) -> Self {
-        Camera {
-            projection: Projection::Perspective { fov_y, near, far },
-        }
+        Camera { projection: Projection::Perspective { fov_y, near, far } }
     }
 
     /// An orthographic camera.
     pub fn orthographic(half_height: f32, near: f32, far: f32) -> Self {
-        Camera {
-            projection: Projection::Orthographic { half_height, near, far },
-        }
+        Camera { projection: Projection::Orthographic { half_height, near, far } }
     }
 
     /// Near and far distances (`far` is `f32::INFINITY` for an infinite perspective).

@@ -48,9 +48,7 @@ pub fn multi_view_scene() -> DemoScene {
 
     // Construction cannot fail: every handle was just created above.
     let attach = |scene: &mut Scene, node, geometry, material| {
-        scene
-            .set_renderable(node, Renderable { geometry, materials: vec![material] })
-            .expect("demo handles are valid")
+        scene.set_renderable(node, Renderable { geometry, materials: vec![material] }).expect("demo handles are valid")
     };
     let ground = scene.add_node("ground", Transform::IDENTITY);
     attach(&mut scene, ground, plane, ground_material);
@@ -68,9 +66,7 @@ pub fn multi_view_scene() -> DemoScene {
 
     let sun_rotation = Quat::from_rotation_arc(Vec3::NEG_Z, SUN_DIRECTION.normalize());
     let sun = scene.add_node("sun", Transform::IDENTITY.with_rotation(sun_rotation));
-    scene
-        .set_light(sun, Some(Light::directional(3.0)))
-        .expect("the sun node was just created");
+    scene.set_light(sun, Some(Light::directional(3.0))).expect("the sun node was just created");
     DemoScene { scene, ground, cubes, masked_quad, sun }
 }
 

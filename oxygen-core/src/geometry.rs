@@ -26,11 +26,7 @@ const _: () = assert!(std::mem::size_of::<Vertex>() == 32);
 impl Vertex {
     /// A vertex from glam vectors.
     pub fn new(position: Vec3, normal: Vec3, uv: Vec2) -> Self {
-        Vertex {
-            position: position.to_array(),
-            normal: normal.to_array(),
-            uv: uv.to_array(),
-        }
+        Vertex { position: position.to_array(), normal: normal.to_array(), uv: uv.to_array() }
     }
 }
 
@@ -67,7 +63,9 @@ pub enum GeometryError {
         vertex_count: usize,
     },
     /// A submesh reaches past the index array or is not a triangle list.
-    #[error("geometry '{name}': submesh {submesh} ({first}..+{count}) is not a triangle range inside {index_count} indices")]
+    #[error(
+        "geometry '{name}': submesh {submesh} ({first}..+{count}) is not a triangle range inside {index_count} indices"
+    )]
     BadSubmesh {
         /// Geometry name.
         name: String,
@@ -131,17 +129,8 @@ impl Geometry {
                 v.uv = [0.0, 0.0];
             }
         }
-        if let Some((position, &value)) = indices
-            .iter()
-            .enumerate()
-            .find(|(_, i)| **i as usize >= vertices.len())
-        {
-            return Err(GeometryError::IndexOutOfRange {
-                name,
-                position,
-                value,
-                vertex_count: vertices.len(),
-            });
+        if let Some((position, &value)) = indices.iter().enumerate().find(|(_, i)| **i as usize >= vertices.len()) {
+            return Err(GeometryError::IndexOutOfRange { name, position, value, vertex_count: vertices.len() });
         }
         for (i, s) in submeshes.iter().enumerate() {
             let end = s.first_index as u64 + s.index_count as u64;
@@ -156,13 +145,7 @@ impl Geometry {
             }
         }
         let local_aabb = Aabb::from_points(vertices.iter().map(|v| Vec3::from(v.position)));
-        Ok(Geometry {
-            name,
-            vertices,
-            indices,
-            submeshes,
-            local_aabb,
-        })
+        Ok(Geometry { name, vertices, indices, submeshes, local_aabb })
     }
 
     /// Name for logs and dumps.
@@ -233,10 +216,7 @@ impl Geometry {
     }
 
     fn single_submesh(name: &str, vertices: Vec<Vertex>, indices: Vec<u32>) -> Self {
-        let submesh = Submesh {
-            first_index: 0,
-            index_count: indices.len() as u32,
-        };
+        let submesh = Submesh { first_index: 0, index_count: indices.len() as u32 };
         // Built from constants above; a failure here is a bug in this file.
         Geometry::new(name, vertices, indices, vec![submesh]).expect("procedural geometry is valid")
     }

@@ -70,17 +70,11 @@ impl Light {
 
     /// A white real-time point light.
     pub fn point(intensity: f32, range: Option<f32>) -> Self {
-        Light {
-            kind: LightKind::Point { range },
-            ..Light::directional(intensity)
-        }
+        Light { kind: LightKind::Point { range }, ..Light::directional(intensity) }
     }
 
     /// A white real-time spot light.
     pub fn spot(intensity: f32, range: Option<f32>, inner_cone: f32, outer_cone: f32) -> Self {
-        Light {
-            kind: LightKind::Spot { range, inner_cone, outer_cone },
-            ..Light::directional(intensity)
-        }
+        Light { kind: LightKind::Spot { range, inner_cone, outer_cone }, ..Light::directional(intensity) }
     }
 }

@@ -119,7 +119,14 @@ pub struct ResolvedView {
 
 impl ResolvedView {
     /// Builds and validates a resolved view from its matrices.
-    pub fn new(view_id: ViewId, view: Mat4, projection: Mat4, viewport: UVec2, near: f32, far: f32) -> Result<Self, ViewError> {
+    pub fn new(
+        view_id: ViewId,
+        view: Mat4,
+        projection: Mat4,
+        viewport: UVec2,
+        near: f32,
+        far: f32,
+    ) -> Result<Self, ViewError> {
         if viewport.x == 0 || viewport.y == 0 {
             return Err(ViewError::EmptyViewport { view: view_id, width: viewport.x, height: viewport.y });
         }
@@ -195,17 +202,18 @@ impl ViewResolver for LookAtResolver {
     fn resolve(&self, ctx: &ViewContext, _scene: &Scene) -> Result<ResolvedView, ViewError> {
         let view_id = ctx.view_id;
         let forward = self.target - self.eye;
-        if !(forward.length_squared() > 0.0) || !(forward.cross(self.up).length_squared() > 1e-12) || !self.eye.is_finite() {
+        if !(forward.length_squared() > 0.0)
+            || !(forward.cross(self.up).length_squared() > 1e-12)
+            || !self.eye.is_finite()
+        {
             return Err(ViewError::DegenerateLookAt { view: view_id, eye: self.eye, target: self.target, up: self.up });
         }
         if self.viewport.x == 0 || self.viewport.y == 0 {
             return Err(ViewError::EmptyViewport { view: view_id, width: self.viewport.x, height: self.viewport.y });
         }
         let aspect = self.viewport.x as f32 / self.viewport.y as f32;
-        let projection = self
-            .camera
-            .projection_matrix(aspect)
-            .map_err(|source| ViewError::Camera { view: view_id, source })?;
+        let projection =
+            self.camera.projection_matrix(aspect).map_err(|source| ViewError::Camera { view: view_id, source })?;
         let view = Mat4::look_at_rh(self.eye, self.target, self.up);
         let (near, far) = self.camera.depth_range();
         ResolvedView::new(view_id, view, projection, self.viewport, near, far)

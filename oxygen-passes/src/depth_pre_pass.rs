@@ -27,8 +27,7 @@ impl DepthPrePass {
 
 /// Partitions this pass draws: opaque and masked, never transparent.
 fn partitions<'a>(ctx: &'a RenderContext<'_>) -> impl Iterator<Item = &'a oxygen_sceneprep::Partition> {
-    ctx.prepared
-        .partitions_matching(PassMask::OPAQUE | PassMask::MASKED, PassMask::TRANSPARENT)
+    ctx.prepared.partitions_matching(PassMask::OPAQUE | PassMask::MASKED, PassMask::TRANSPARENT)
 }
 
 impl RenderPass for DepthPrePass {
@@ -36,7 +35,11 @@ impl RenderPass for DepthPrePass {
         "DepthPrePass"
     }
 
-    async fn prepare_resources(&mut self, ctx: &RenderContext<'_>, _rec: &mut CommandRecorder) -> Result<(), PassError> {
+    async fn prepare_resources(
+        &mut self,
+        ctx: &RenderContext<'_>,
+        _rec: &mut CommandRecorder,
+    ) -> Result<(), PassError> {
         let _span = info_span!("depth_pre_pass_prepare", view = %ctx.view.view_id).entered();
         let pipelines = partitions(ctx)
             .map(|p| {

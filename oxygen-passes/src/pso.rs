@@ -148,12 +148,12 @@ impl PipelineCache {
         let masked = key.variant.alpha == AlphaClass::Masked;
         let (fragment_entry, depth_write, depth_compare) = match key.pass {
             PassKind::DepthPrePass => (masked.then_some("fs_alpha_test"), true, wgpu::CompareFunction::Greater),
-            PassKind::ShadingAfterPrePass => (
-                Some(if masked { "fs_masked" } else { "fs_opaque" }),
-                false,
-                wgpu::CompareFunction::GreaterEqual,
-            ),
-            PassKind::Shading => (Some(if masked { "fs_masked" } else { "fs_opaque" }), true, wgpu::CompareFunction::Greater),
+            PassKind::ShadingAfterPrePass => {
+                (Some(if masked { "fs_masked" } else { "fs_opaque" }), false, wgpu::CompareFunction::GreaterEqual)
+            }
+            PassKind::Shading => {
+                (Some(if masked { "fs_masked" } else { "fs_opaque" }), true, wgpu::CompareFunction::Greater)
+            }
         };
         let targets = [key.color_format.map(|format| wgpu::ColorTargetState {
             format,

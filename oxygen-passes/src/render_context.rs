@@ -2,7 +2,7 @@
 
 use oxygen_bindless::{BindlessHeap, SceneConstantsBuffer};
 use oxygen_core::{GpuContext, ResolvedView, ViewTargets};
-use oxygen_sceneprep::{PreparedSceneFrame, Partition};
+use oxygen_sceneprep::{Partition, PreparedSceneFrame};
 use thiserror::Error;
 
 use crate::PipelineCache;
@@ -96,11 +96,20 @@ pub(crate) fn bind_view_resources(pass: &mut wgpu::RenderPass<'_>, ctx: &RenderC
 /// Draws every draw of `partition`, one direct indexed draw each; the draw's
 /// position in the view's array is passed as `first_instance`, which is how
 /// the vertex shader finds its `DrawMetadata`.
-pub(crate) fn draw_partition(pass: &mut wgpu::RenderPass<'_>, ctx: &RenderContext<'_>, partition: &Partition, stats: &mut RecordStats) {
+pub(crate) fn draw_partition(
+    pass: &mut wgpu::RenderPass<'_>,
+    ctx: &RenderContext<'_>,
+    partition: &Partition,
+    stats: &mut RecordStats,
+) {
     let draws = &ctx.prepared.draws()[partition.range()];
     for (offset, draw) in draws.iter().enumerate() {
         let draw_index = partition.begin + offset as u32;
-        pass.draw_indexed(draw.index_range(), draw.absolute_base_vertex(), draw_index..draw_index + draw.instance_count);
+        pass.draw_indexed(
+            draw.index_range(),
+            draw.absolute_base_vertex(),
+            draw_index..draw_index + draw.instance_count,
+        );
         stats.draw_calls += 1;
     }
 }

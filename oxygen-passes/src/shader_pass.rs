@@ -43,8 +43,7 @@ impl ShaderPass {
 }
 
 fn partitions<'a>(ctx: &'a RenderContext<'_>) -> impl Iterator<Item = &'a oxygen_sceneprep::Partition> {
-    ctx.prepared
-        .partitions_matching(PassMask::OPAQUE | PassMask::MASKED, PassMask::TRANSPARENT)
+    ctx.prepared.partitions_matching(PassMask::OPAQUE | PassMask::MASKED, PassMask::TRANSPARENT)
 }
 
 impl RenderPass for ShaderPass {
@@ -52,7 +51,11 @@ impl RenderPass for ShaderPass {
         "ShaderPass"
     }
 
-    async fn prepare_resources(&mut self, ctx: &RenderContext<'_>, _rec: &mut CommandRecorder) -> Result<(), PassError> {
+    async fn prepare_resources(
+        &mut self,
+        ctx: &RenderContext<'_>,
+        _rec: &mut CommandRecorder,
+    ) -> Result<(), PassError> {
         let _span = info_span!("shader_pass_prepare", view = %ctx.view.view_id).entered();
         let pass = if self.config.depth_from_pre_pass { PassKind::ShadingAfterPrePass } else { PassKind::Shading };
         let pipelines = partitions(ctx)
@@ -84,7 +87,10 @@ impl RenderPass for ShaderPass {
                     view: &ctx.targets.color_view,
                     depth_slice: None,
                     resolve_target: None,
-                    ops: wgpu::Operations { load: wgpu::LoadOp::Clear(self.config.clear_color), store: wgpu::StoreOp::Store },
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(self.config.clear_color),
+                        store: wgpu::StoreOp::Store,
+                    },
                 })],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                     view: &ctx.targets.depth_view,

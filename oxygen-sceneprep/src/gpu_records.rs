@@ -22,7 +22,13 @@ pub struct NormalMatrix {
 
 impl From<Mat3> for NormalMatrix {
     fn from(m: Mat3) -> Self {
-        NormalMatrix { columns: [m.x_axis.extend(0.0).to_array(), m.y_axis.extend(0.0).to_array(), m.z_axis.extend(0.0).to_array()] }
+        NormalMatrix {
+            columns: [
+                m.x_axis.extend(0.0).to_array(),
+                m.y_axis.extend(0.0).to_array(),
+                m.z_axis.extend(0.0).to_array(),
+            ],
+        }
     }
 }
 
@@ -129,7 +135,6 @@ impl PositionalLightRecord {
     /// `kind` of a spot light.
     pub const SPOT: u32 = 1;
 }
-
 
 const _: () = {
     assert!(size_of::<NormalMatrix>() as u64 == DomainKind::NormalTransforms.record_size());

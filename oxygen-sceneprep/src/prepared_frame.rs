@@ -80,9 +80,7 @@ impl PreparedSceneFrame {
     }
     /// Partitions whose mask has any bit of `required` and none of `excluded`.
     pub fn partitions_matching(&self, required: PassMask, excluded: PassMask) -> impl Iterator<Item = &Partition> {
-        self.partitions
-            .iter()
-            .filter(move |p| p.mask.intersects(required) && !p.mask.intersects(excluded))
+        self.partitions.iter().filter(move |p| p.mask.intersects(required) && !p.mask.intersects(excluded))
     }
     /// The frame's world and normal matrices (shared by all views).
     pub fn transforms(&self) -> &Arc<FrameTransforms> {

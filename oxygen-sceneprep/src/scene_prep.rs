@@ -93,7 +93,12 @@ impl ScenePrep {
 
     /// Runs the frame phase once, then the view phase and finalization for
     /// each view, in order. CPU only: slots come from `slots`.
-    pub fn prepare(&mut self, scene: &Scene, views: &[ViewRequest<'_>], slots: &mut SlotAllocators) -> Result<Vec<PreparedSceneFrame>, PrepError> {
+    pub fn prepare(
+        &mut self,
+        scene: &Scene,
+        views: &[ViewRequest<'_>],
+        slots: &mut SlotAllocators,
+    ) -> Result<Vec<PreparedSceneFrame>, PrepError> {
         let _span = info_span!("scene_prep", views = views.len()).entered();
         for (i, v) in views.iter().enumerate() {
             if views[..i].iter().any(|o| o.view.view_id == v.view.view_id) {
@@ -134,7 +139,12 @@ impl ScenePrep {
             self.keyed.clear();
             for (i, item) in self.items.iter().enumerate() {
                 let node_id = self.frame.renderables[item.renderable as usize].node_id;
-                self.keyed.push((sort_key(item.pass_mask, item.material, item.view_depth), node_id, item.submesh, i as u32));
+                self.keyed.push((
+                    sort_key(item.pass_mask, item.material, item.view_depth),
+                    node_id,
+                    item.submesh,
+                    i as u32,
+                ));
             }
             // The tuple gives the stable tie-break on node id, then submesh.
             self.keyed.sort_unstable();
@@ -205,12 +215,23 @@ impl ScenePrep {
     /// Writes what `frames` need into the heap: grows domains first, then
     /// transforms and lights (once for all views), materials if they changed,
     /// geometry not yet uploaded, and each view's draws.
-    pub fn upload(&mut self, frames: &[PreparedSceneFrame], heap: &mut BindlessHeap, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<(), PrepError> {
+    pub fn upload(
+        &mut self,
+        frames: &[PreparedSceneFrame],
+        heap: &mut BindlessHeap,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<(), PrepError> {
         let _span = info_span!("upload", views = frames.len()).entered();
         heap.ensure_capacity(device, queue);
         if let Some(first) = frames.first() {
             let s = first.slots;
-            heap.write(queue, &s.world_transforms, 0, &first.transforms.world.iter().map(|m| m.to_cols_array_2d()).collect::<Vec<_>>())?;
+            heap.write(
+                queue,
+                &s.world_transforms,
+                0,
+                &first.transforms.world.iter().map(|m| m.to_cols_array_2d()).collect::<Vec<_>>(),
+            )?;
             heap.write(queue, &s.normal_transforms, 0, &first.transforms.normal)?;
             heap.write(queue, &s.directional_lights, 0, &self.frame.directional_lights)?;
             heap.write(queue, &s.positional_lights, 0, &self.frame.positional_lights)?;

@@ -4,7 +4,9 @@
 use glam::{UVec2, Vec3, Vec4};
 use oxygen_bindless::SlotAllocators;
 use oxygen_core::scene::node_index;
-use oxygen_core::{Camera, Geometry, LookAtResolver, Material, Renderable, Scene, Transform, ViewContext, ViewId, ViewResolver};
+use oxygen_core::{
+    Camera, Geometry, LookAtResolver, Material, Renderable, Scene, Transform, ViewContext, ViewId, ViewResolver,
+};
 use oxygen_sceneprep::{CullBound, ScenePrep, ViewPrepOptions, ViewRequest};
 
 /// A 90° camera at the origin looking down −Z with near 1 and far 50: at
@@ -37,12 +39,14 @@ fn cubes_at(centres: &[Vec3]) -> (Scene, Vec<u32>) {
 }
 
 fn visible_nodes(scene: &Scene, cull: CullBound) -> Vec<u32> {
-    let view = camera()
-        .resolve(&ViewContext { view_id: ViewId(0), frame_index: 1, time_seconds: 0.0 }, scene)
-        .unwrap();
+    let view = camera().resolve(&ViewContext { view_id: ViewId(0), frame_index: 1, time_seconds: 0.0 }, scene).unwrap();
     let mut prep = ScenePrep::new();
     let frames = prep
-        .prepare(scene, &[ViewRequest { view: &view, options: ViewPrepOptions { cull, ..Default::default() } }], &mut SlotAllocators::default())
+        .prepare(
+            scene,
+            &[ViewRequest { view: &view, options: ViewPrepOptions { cull, ..Default::default() } }],
+            &mut SlotAllocators::default(),
+        )
         .unwrap();
     let mut ids: Vec<u32> = frames[0].draws().iter().map(|d| d.node_id).collect();
     ids.sort();

@@ -35,12 +35,39 @@ macro_rules! check {
 #[test]
 fn gpu_records_wgsl_matches_rust_layouts() {
     let module = naga::front::wgsl::parse_str(GPU_RECORDS_WGSL).expect("GPU_RECORDS_WGSL parses");
-    check!(module, DrawMetadata, "DrawMetadata", [vertex_slot, index_slot, first_index, index_count, base_vertex, instance_count, transform_index, material_handle, pass_mask, node_id, submesh]);
+    check!(
+        module,
+        DrawMetadata,
+        "DrawMetadata",
+        [
+            vertex_slot,
+            index_slot,
+            first_index,
+            index_count,
+            base_vertex,
+            instance_count,
+            transform_index,
+            material_handle,
+            pass_mask,
+            node_id,
+            submesh
+        ]
+    );
     let (members, _) = layout(&module, "DrawMetadata");
     assert_eq!(offset(&members, "reserved0") as usize, offset_of!(DrawMetadata, reserved));
-    check!(module, MaterialRecord, "MaterialRecord", [base_color, metallic, roughness, alpha_cutoff, flags, base_color_texture]);
+    check!(
+        module,
+        MaterialRecord,
+        "MaterialRecord",
+        [base_color, metallic, roughness, alpha_cutoff, flags, base_color_texture]
+    );
     check!(module, DirectionalLightRecord, "DirectionalLightRecord", [direction, intensity, color, flags, shadow_slot]);
-    check!(module, PositionalLightRecord, "PositionalLightRecord", [position, range, direction, intensity, color, kind, cos_inner, cos_outer, flags, shadow_slot]);
+    check!(
+        module,
+        PositionalLightRecord,
+        "PositionalLightRecord",
+        [position, range, direction, intensity, color, kind, cos_inner, cos_outer, flags, shadow_slot]
+    );
     let (members, span) = layout(&module, "VertexRecord");
     assert_eq!(span as usize, size_of::<Vertex>());
     assert_eq!(offset(&members, "nx") as usize, offset_of!(Vertex, normal));

@@ -65,11 +65,10 @@ fn region(image: &RgbaImage, center: (u32, u32), radius: u32) -> impl Iterator<I
     let (cx, cy) = center;
     let xs = cx.saturating_sub(radius)..=(cx + radius).min(image.width() - 1);
     let ys = cy.saturating_sub(radius)..=(cy + radius).min(image.height() - 1);
-    ys.flat_map(move |y| xs.clone().map(move |x| (x, y)))
-        .map(|(x, y)| {
-            let p = image.get_pixel(x, y).0;
-            ((x, y), Rgb::new(p[0], p[1], p[2]))
-        })
+    ys.flat_map(move |y| xs.clone().map(move |x| (x, y))).map(|(x, y)| {
+        let p = image.get_pixel(x, y).0;
+        ((x, y), Rgb::new(p[0], p[1], p[2]))
+    })
 }
 
 /// Mean luma of the square of `radius` around `center`.
@@ -80,12 +79,20 @@ pub fn region_mean(image: &RgbaImage, center: (u32, u32), radius: u32) -> f32 {
 
 /// Asserts that at most `max_bad` pixels of the square around `center` fail
 /// `accept`; on failure names the first offenders and saves the image.
-pub fn assert_region(image: &RgbaImage, center: (u32, u32), radius: u32, accept: impl Fn(Rgb) -> bool, max_bad: usize, what: &str) {
+pub fn assert_region(
+    image: &RgbaImage,
+    center: (u32, u32),
+    radius: u32,
+    accept: impl Fn(Rgb) -> bool,
+    max_bad: usize,
+    what: &str,
+) {
     let bad: Vec<_> = region(image, center, radius).filter(|(_, p)| !accept(*p)).collect();
     if bad.len() > max_bad {
         let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"));
         let path = dir.join(format!("{}.actual.png", what.replace(' ', "_")));
-        let saved = image.save(&path).map(|_| path.display().to_string()).unwrap_or_else(|e| format!("(not saved: {e})"));
+        let saved =
+            image.save(&path).map(|_| path.display().to_string()).unwrap_or_else(|e| format!("(not saved: {e})"));
         panic!(
             "{what}: {} of the pixels around {center:?} are wrong (allowed {max_bad}); first: {:?}; image: {saved}",
             bad.len(),

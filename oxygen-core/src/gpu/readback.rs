@@ -26,7 +26,11 @@ impl GpuContext {
             texture.as_image_copy(),
             wgpu::TexelCopyBufferInfo {
                 buffer: &buffer,
-                layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(padded), rows_per_image: Some(height) },
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(padded),
+                    rows_per_image: Some(height),
+                },
             },
             texture.size(),
         );
@@ -37,9 +41,7 @@ impl GpuContext {
             let _ = sender.send(r);
         });
         self.device.poll(wgpu::PollType::wait_indefinitely())?;
-        receiver
-            .recv()
-            .unwrap_or(Err(wgpu::BufferAsyncError))?;
+        receiver.recv().unwrap_or(Err(wgpu::BufferAsyncError))?;
         let mapped = buffer.slice(..).get_mapped_range()?;
         let mut pixels = Vec::with_capacity((unpadded * height) as usize);
         for row in mapped.chunks(padded as usize) {

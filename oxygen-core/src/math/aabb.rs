@@ -13,17 +13,11 @@ pub struct Aabb {
 
 impl Aabb {
     /// The empty box: growing it by any point gives that point's box.
-    pub const EMPTY: Aabb = Aabb {
-        min: Vec3::splat(f32::INFINITY),
-        max: Vec3::splat(f32::NEG_INFINITY),
-    };
+    pub const EMPTY: Aabb = Aabb { min: Vec3::splat(f32::INFINITY), max: Vec3::splat(f32::NEG_INFINITY) };
 
     /// A box from two corners, in any order.
     pub fn new(a: Vec3, b: Vec3) -> Self {
-        Aabb {
-            min: a.min(b),
-            max: a.max(b),
-        }
+        Aabb { min: a.min(b), max: a.max(b) }
     }
 
     /// A box centred at `center` with half-size `half_extents`.
@@ -38,10 +32,7 @@ impl Aabb {
 
     /// This box grown to include `p`.
     pub fn including(self, p: Vec3) -> Self {
-        Aabb {
-            min: self.min.min(p),
-            max: self.max.max(p),
-        }
+        Aabb { min: self.min.min(p), max: self.max.max(p) }
     }
 
     /// True when the box holds no point (a never-grown [`Aabb::EMPTY`]).

@@ -22,10 +22,7 @@ pub struct Plane {
 
 impl Plane {
     /// A plane that every point is inside (used for an infinite far plane).
-    pub const KEEP_ALL: Plane = Plane {
-        normal: Vec3::ZERO,
-        d: f32::INFINITY,
-    };
+    pub const KEEP_ALL: Plane = Plane { normal: Vec3::ZERO, d: f32::INFINITY };
 
     /// Normalizes `(a, b, c, d)`; a plane with a (near) zero normal keeps all.
     fn from_row(v: Vec4) -> Plane {
@@ -33,10 +30,7 @@ impl Plane {
         if !(len > 1e-12) || !len.is_finite() {
             return Plane::KEEP_ALL;
         }
-        Plane {
-            normal: v.truncate() / len,
-            d: v.w / len,
-        }
+        Plane { normal: v.truncate() / len, d: v.w / len }
     }
 
     /// Signed distance from the plane, positive inside.
@@ -88,9 +82,7 @@ impl Frustum {
 
     /// Conservative sphere test: cheaper and looser than [`Self::intersects_aabb`].
     pub fn intersects_sphere(&self, sphere: &Sphere) -> bool {
-        self.planes
-            .iter()
-            .all(|plane| plane.distance(sphere.center) >= -sphere.radius)
+        self.planes.iter().all(|plane| plane.distance(sphere.center) >= -sphere.radius)
     }
 }
 

@@ -16,9 +16,6 @@ pub struct Sphere {
 impl Sphere {
     /// The sphere through the corners of `aabb` (it holds the whole box).
     pub fn from_aabb(aabb: &Aabb) -> Self {
-        Sphere {
-            center: aabb.center(),
-            radius: aabb.half_extents().length(),
-        }
+        Sphere { center: aabb.center(), radius: aabb.half_extents().length() }
     }
 }

@@ -131,7 +131,12 @@ impl Scene {
     }
 
     /// Adds a node under `parent`.
-    pub fn add_child(&mut self, parent: NodeKey, name: impl Into<String>, local: Transform) -> Result<NodeKey, SceneError> {
+    pub fn add_child(
+        &mut self,
+        parent: NodeKey,
+        name: impl Into<String>,
+        local: Transform,
+    ) -> Result<NodeKey, SceneError> {
         if !self.nodes.contains_key(parent) {
             return Err(SceneError::NoSuchNode(parent));
         }
@@ -218,10 +223,8 @@ impl Scene {
 
     /// Attaches a renderable; checks the handles and the material count.
     pub fn set_renderable(&mut self, key: NodeKey, renderable: Renderable) -> Result<(), SceneError> {
-        let geometry = self
-            .geometries
-            .get(renderable.geometry)
-            .ok_or(SceneError::NoSuchGeometry(renderable.geometry))?;
+        let geometry =
+            self.geometries.get(renderable.geometry).ok_or(SceneError::NoSuchGeometry(renderable.geometry))?;
         if let Some(m) = renderable.materials.iter().find(|m| !self.materials.contains_key(**m)) {
             return Err(SceneError::NoSuchMaterial(*m));
         }

@@ -65,11 +65,10 @@ mod tests {
         let mut scene = Scene::new();
         let parent = scene.add_node(
             "parent",
-            Transform::from_translation(Vec3::new(10.0, 0.0, 0.0)).with_rotation(Quat::from_rotation_y(90f32.to_radians())),
+            Transform::from_translation(Vec3::new(10.0, 0.0, 0.0))
+                .with_rotation(Quat::from_rotation_y(90f32.to_radians())),
         );
-        let child = scene
-            .add_child(parent, "child", Transform::from_translation(Vec3::new(0.0, 0.0, -1.0)))
-            .unwrap();
+        let child = scene.add_child(parent, "child", Transform::from_translation(Vec3::new(0.0, 0.0, -1.0))).unwrap();
         let mut world = super::WorldTransforms::new();
         scene.resolve_world_transforms(&mut world);
         let p = world.get(child).unwrap().transform_point3(Vec3::ZERO);

@@ -12,9 +12,9 @@
 //! warning naming it; nothing derived from it reaches the GPU.
 
 use glam::{Mat3, Mat4, Vec3};
+use oxygen_bindless::INVALID_SLOT;
 use oxygen_core::scene::node_index;
 use oxygen_core::{Aabb, GeometryHandle, LightKind, Mobility, NodeFlags, NodeKey, Scene, Sphere, WorldTransforms};
-use oxygen_bindless::INVALID_SLOT;
 use tracing::{info_span, warn};
 
 use crate::{DirectionalLightRecord, NormalMatrix, PositionalLightRecord};

@@ -60,7 +60,13 @@ pub struct RenderItem {
 }
 
 /// Runs the view phase for one view, appending to `items` (cleared first).
-pub fn collect_view(scene: &Scene, frame: &FrameCollection, view: &ResolvedView, options: &ViewPrepOptions, items: &mut Vec<RenderItem>) {
+pub fn collect_view(
+    scene: &Scene,
+    frame: &FrameCollection,
+    view: &ResolvedView,
+    options: &ViewPrepOptions,
+    items: &mut Vec<RenderItem>,
+) {
     let _span = info_span!("view_phase", view = %view.view_id).entered();
     items.clear();
     // View-space depth of a world point is -(row 2 of the view matrix) · p.

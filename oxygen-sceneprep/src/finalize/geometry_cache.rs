@@ -27,7 +27,12 @@ pub struct GeometryCache {
 
 impl GeometryCache {
     /// Slots for `handle`, allocating (and queueing an upload) on first use.
-    pub fn resolve(&mut self, handle: GeometryHandle, geometry: &Arc<Geometry>, slots: &mut SlotAllocators) -> Result<GeometrySlots, SlotError> {
+    pub fn resolve(
+        &mut self,
+        handle: GeometryHandle,
+        geometry: &Arc<Geometry>,
+        slots: &mut SlotAllocators,
+    ) -> Result<GeometrySlots, SlotError> {
         if let Some(s) = self.entries.get(&handle) {
             return Ok(*s);
         }
