@@ -1,0 +1,187 @@
+//! Property tests with a seeded generator (SplitMix64): random scenes and
+//! cameras, checked against the contracts of culling, sorting and
+//! partitioning. A failure prints the seed that reproduces it.
+
+use glam::{Quat, UVec2, Vec3, Vec4};
+use oxygen_bindless::SlotAllocators;
+use oxygen_core::scene::node_index;
+use oxygen_core::{
+    AlphaMode, Camera, Geometry, LookAtResolver, Material, Renderable, ResolvedView, Scene, Transform, ViewContext,
+    ViewId, ViewResolver,
+};
+use oxygen_sceneprep::finalize::sort_key::sort_key;
+use oxygen_sceneprep::{CullBound, PassMask, PreparedSceneFrame, ScenePrep, ViewPrepOptions, ViewRequest};
+
+struct Rng(u64);
+
+impl Rng {
+    fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+    fn unit(&mut self) -> f32 {
+        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
+    }
+    fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.unit()
+    }
+    fn below(&mut self, n: u64) -> u64 {
+        self.next_u64() % n
+    }
+    fn vec3(&mut self, extent: f32) -> Vec3 {
+        Vec3::new(self.range(-extent, extent), self.range(-extent, extent), self.range(-extent, extent))
+    }
+}
+
+/// A scene of `n` boxes with random positions, rotations, scales and one of
+/// six materials covering every alpha class and sidedness.
+fn random_scene(rng: &mut Rng, n: usize) -> Scene {
+    let mut scene = Scene::new();
+    let cube = scene.add_geometry(Geometry::cube(1.0));
+    let modes = [AlphaMode::Opaque, AlphaMode::Mask { cutoff: 0.5 }, AlphaMode::Blend];
+    let materials: Vec<_> = (0..6)
+        .map(|i| {
+            scene.add_material(Material {
+                alpha_mode: modes[i % 3],
+                double_sided: i >= 3,
+                ..Material::opaque(format!("m{i}"), Vec4::ONE)
+            })
+        })
+        .collect();
+    for i in 0..n {
+        let rotation = Quat::from_euler(glam::EulerRot::XYZ, rng.range(0.0, 6.3), rng.range(0.0, 6.3), rng.range(0.0, 6.3));
+        let scale = Vec3::new(rng.range(0.1, 4.0), rng.range(0.1, 4.0), rng.range(0.1, 4.0));
+        let t = Transform { translation: rng.vec3(60.0), rotation, scale };
+        let node = scene.add_node(format!("n{i}"), t);
+        let material = materials[rng.below(6) as usize];
+        scene.set_renderable(node, Renderable { geometry: cube, materials: vec![material] }).unwrap();
+    }
+    scene
+}
+
+fn random_view(rng: &mut Rng, scene: &Scene, id: u32) -> ResolvedView {
+    loop {
+        let eye = rng.vec3(50.0);
+        let target = rng.vec3(50.0);
+        let far = if rng.below(2) == 0 { None } else { Some(rng.range(20.0, 200.0)) };
+        let camera = if rng.below(4) == 0 {
+            Camera::orthographic(rng.range(2.0, 40.0), rng.range(-10.0, 1.0), rng.range(20.0, 200.0))
+        } else {
+            Camera::perspective(rng.range(0.2, 2.5), rng.range(0.01, 1.0), far)
+        };
+        let viewport = UVec2::new(1 + rng.below(1920) as u32, 1 + rng.below(1080) as u32);
+        let resolver = LookAtResolver { camera, eye, target, up: Vec3::Y, viewport };
+        let ctx = ViewContext { view_id: ViewId(id), frame_index: 1, time_seconds: 0.0 };
+        if let Ok(v) = resolver.resolve(&ctx, scene) {
+            return v;
+        }
+    }
+}
+
+fn prepare(scene: &Scene, views: &[ResolvedView], cull: CullBound) -> Vec<PreparedSceneFrame> {
+    let options = ViewPrepOptions { cull, ..Default::default() };
+    let requests: Vec<_> = views.iter().map(|view| ViewRequest { view, options }).collect();
+    ScenePrep::new().prepare(scene, &requests, &mut SlotAllocators::default()).unwrap()
+}
+
+/// True when some corner of the node's world box projects inside the clip volume.
+fn has_corner_inside(view: &ResolvedView, scene: &Scene, node: oxygen_core::NodeKey) -> bool {
+    let n = scene.node(node).unwrap();
+    let world = n.local.to_mat4();
+    let local = scene.geometry(n.renderable.as_ref().unwrap().geometry).unwrap().local_aabb();
+    local.corners().iter().any(|c| {
+        let clip = view.view_projection * world.transform_point3(*c).extend(1.0);
+        clip.w > 0.0
+            && clip.x.abs() <= clip.w
+            && clip.y.abs() <= clip.w
+            && clip.z >= 0.0
+            && clip.z <= clip.w
+    })
+}
+
+#[test]
+fn culling_never_drops_an_object_with_a_corner_inside_the_frustum() {
+    for seed in 0..40 {
+        let mut rng = Rng(seed);
+        let scene = random_scene(&mut rng, 300);
+        let view = random_view(&mut rng, &scene, 0);
+        for cull in [CullBound::Aabb, CullBound::Sphere] {
+            let frame = &prepare(&scene, std::slice::from_ref(&view), cull)[0];
+            let drawn: std::collections::HashSet<u32> = frame.draws().iter().map(|d| d.node_id).collect();
+            for (key, _) in scene.nodes() {
+                if has_corner_inside(&view, &scene, key) {
+                    assert!(drawn.contains(&node_index(key)), "seed {seed}, {cull:?}: visible node {key:?} was culled");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn partitions_cover_every_draw_once_in_order_with_one_mask() {
+    for seed in 0..40 {
+        let mut rng = Rng(1000 + seed);
+        let scene = random_scene(&mut rng, 200);
+        let view = random_view(&mut rng, &scene, 0);
+        let frame = &prepare(&scene, &[view], CullBound::Aabb)[0];
+        let mut next = 0;
+        for p in frame.partitions() {
+            assert_eq!(p.begin, next, "seed {seed}: gap or overlap before {p:?}");
+            assert!(p.end > p.begin, "seed {seed}: empty partition");
+            for d in &frame.draws()[p.range()] {
+                assert_eq!(d.mask() & PassMask::PARTITION_BITS, p.mask, "seed {seed}: draw in wrong partition");
+            }
+            next = p.end;
+        }
+        assert_eq!(next as usize, frame.draws().len(), "seed {seed}: draws past the last partition");
+        // Maximal runs: neighbours always differ.
+        for w in frame.partitions().windows(2) {
+            assert_ne!(w[0].mask, w[1].mask, "seed {seed}: adjacent partitions share a mask");
+        }
+    }
+}
+
+#[test]
+fn draws_are_ordered_by_key_then_node_then_submesh_and_keys_match_their_definition() {
+    for seed in 0..40 {
+        let mut rng = Rng(2000 + seed);
+        let scene = random_scene(&mut rng, 200);
+        let view = random_view(&mut rng, &scene, 0);
+        let frame = &prepare(&scene, &[view], CullBound::Aabb)[0];
+        let view_row_z = view.view.row(2);
+        for (d, key) in frame.draws().iter().zip(frame.sort_keys()) {
+            // Recompute the key from the definition: mask, material, depth of the bound's centre.
+            let node = scene.nodes().find(|(k, _)| node_index(*k) == d.node_id).unwrap().1;
+            let local = scene.geometry(node.renderable.as_ref().unwrap().geometry).unwrap().local_aabb();
+            let center = local.transformed(&node.local.to_mat4()).center();
+            let depth = -(view_row_z.truncate().dot(center) + view_row_z.w);
+            let mask = d.mask() & !PassMask::CASTS_SHADOWS;
+            assert_eq!(*key, sort_key(mask, d.material_handle, depth), "seed {seed}");
+        }
+        let order: Vec<_> =
+            frame.draws().iter().zip(frame.sort_keys()).map(|(d, k)| (*k, d.node_id, d.submesh)).collect();
+        assert!(order.windows(2).all(|w| w[0] < w[1]), "seed {seed}: draws not strictly ordered");
+    }
+}
+
+#[test]
+fn the_same_scene_and_views_give_byte_identical_draws_twice_in_a_row() {
+    for seed in 0..10 {
+        let mut rng = Rng(3000 + seed);
+        let scene = random_scene(&mut rng, 300);
+        let views: Vec<_> = (0..3).map(|i| random_view(&mut rng, &scene, i)).collect();
+        let requests: Vec<_> = views.iter().map(|view| ViewRequest { view, options: Default::default() }).collect();
+        let mut prep = ScenePrep::new();
+        let mut slots = SlotAllocators::default();
+        let first = prep.prepare(&scene, &requests, &mut slots).unwrap();
+        let second = prep.prepare(&scene, &requests, &mut slots).unwrap();
+        for (a, b) in first.iter().zip(&second) {
+            assert_eq!(bytemuck::cast_slice::<_, u8>(a.draws()), bytemuck::cast_slice::<_, u8>(b.draws()), "seed {seed}");
+            assert_eq!(a.partitions(), b.partitions());
+            assert_eq!(a.slots().draw_metadata.start, b.slots().draw_metadata.start, "steady state reuses slots");
+        }
+    }
+}
