@@ -19,6 +19,7 @@ use crate::collect::view_phase::collect_view;
 use crate::finalize::geometry_cache::GeometryCache;
 use crate::finalize::materials::MaterialTable;
 use crate::finalize::partition::build_partitions;
+use crate::finalize::radix_sort::radix_sort_by_key;
 use crate::finalize::sort_key::sort_key;
 use crate::prepared_frame::FrameTransforms;
 use crate::{DrawMetadata, FrameCollection, PreparedSceneFrame, PreparedSlots, RenderItem, ViewPrepOptions};
@@ -70,7 +71,8 @@ pub struct ScenePrep {
     frame_allocations: Vec<Allocation>,
     view_allocations: HashMap<ViewId, Allocation>,
     items: Vec<RenderItem>,
-    keyed: Vec<(u64, u32, u32, u32)>,
+    keyed: Vec<(u64, u32)>,
+    sort_scratch: Vec<(u64, u32)>,
     frame_index: u64,
     stats: PrepStats,
 }
@@ -138,22 +140,18 @@ impl ScenePrep {
 
             self.keyed.clear();
             for (i, item) in self.items.iter().enumerate() {
-                let node_id = self.frame.renderables[item.renderable as usize].node_id;
-                self.keyed.push((
-                    sort_key(item.pass_mask, item.material, item.view_depth),
-                    node_id,
-                    item.submesh,
-                    i as u32,
-                ));
+                self.keyed.push((sort_key(item.pass_mask, item.material, item.view_depth), i as u32));
             }
-            // The tuple gives the stable tie-break on node id, then submesh.
-            self.keyed.sort_unstable();
+            // Items are in (node id, submesh) order, so a stable sort by key
+            // alone gives the deterministic tie-break.
+            radix_sort_by_key(&mut self.keyed, &mut self.sort_scratch);
 
             let mut draws = Vec::with_capacity(self.keyed.len());
             let mut sort_keys = Vec::with_capacity(self.keyed.len());
-            for &(key, node_id, submesh, item_index) in &self.keyed {
+            for &(key, item_index) in &self.keyed {
                 let item = self.items[item_index as usize];
                 let entry = &self.frame.renderables[item.renderable as usize];
+                let (node_id, submesh) = (entry.node_id, item.submesh);
                 let Some(geometry) = scene.geometry(entry.geometry) else { continue };
                 let g = self.geometry.resolve(entry.geometry, geometry, slots)?;
                 let sub = geometry.submeshes()[submesh as usize];

@@ -52,7 +52,8 @@ fn random_scene(rng: &mut Rng, n: usize) -> Scene {
         })
         .collect();
     for i in 0..n {
-        let rotation = Quat::from_euler(glam::EulerRot::XYZ, rng.range(0.0, 6.3), rng.range(0.0, 6.3), rng.range(0.0, 6.3));
+        let rotation =
+            Quat::from_euler(glam::EulerRot::XYZ, rng.range(0.0, 6.3), rng.range(0.0, 6.3), rng.range(0.0, 6.3));
         let scale = Vec3::new(rng.range(0.1, 4.0), rng.range(0.1, 4.0), rng.range(0.1, 4.0));
         let t = Transform { translation: rng.vec3(60.0), rotation, scale };
         let node = scene.add_node(format!("n{i}"), t);
@@ -94,11 +95,7 @@ fn has_corner_inside(view: &ResolvedView, scene: &Scene, node: oxygen_core::Node
     let local = scene.geometry(n.renderable.as_ref().unwrap().geometry).unwrap().local_aabb();
     local.corners().iter().any(|c| {
         let clip = view.view_projection * world.transform_point3(*c).extend(1.0);
-        clip.w > 0.0
-            && clip.x.abs() <= clip.w
-            && clip.y.abs() <= clip.w
-            && clip.z >= 0.0
-            && clip.z <= clip.w
+        clip.w > 0.0 && clip.x.abs() <= clip.w && clip.y.abs() <= clip.w && clip.z >= 0.0 && clip.z <= clip.w
     })
 }
 
@@ -179,7 +176,11 @@ fn the_same_scene_and_views_give_byte_identical_draws_twice_in_a_row() {
         let first = prep.prepare(&scene, &requests, &mut slots).unwrap();
         let second = prep.prepare(&scene, &requests, &mut slots).unwrap();
         for (a, b) in first.iter().zip(&second) {
-            assert_eq!(bytemuck::cast_slice::<_, u8>(a.draws()), bytemuck::cast_slice::<_, u8>(b.draws()), "seed {seed}");
+            assert_eq!(
+                bytemuck::cast_slice::<_, u8>(a.draws()),
+                bytemuck::cast_slice::<_, u8>(b.draws()),
+                "seed {seed}"
+            );
             assert_eq!(a.partitions(), b.partitions());
             assert_eq!(a.slots().draw_metadata.start, b.slots().draw_metadata.start, "steady state reuses slots");
         }

@@ -1,6 +1,7 @@
 //! Finalization: from render items to sorted, partitioned draws.
 //!
 //! * [`sort_key`]: the 64-bit key (pass class, variant, material, depth);
+//! * [`radix_sort`]: the stable sort of draws by key;
 //! * [`partition`]: contiguous `[begin, end)` ranges with one [`PassMask`](crate::PassMask);
 //! * [`geometry_cache`]: lazy, cached geometry slots (only meshes some view draws);
 //! * [`materials`]: the material table, re-uploaded only when it changed.
@@ -8,4 +9,5 @@
 pub mod geometry_cache;
 pub mod materials;
 pub mod partition;
+pub mod radix_sort;
 pub mod sort_key;
