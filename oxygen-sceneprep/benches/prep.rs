@@ -52,8 +52,10 @@ fn city(n: usize) -> (Scene, f32) {
         let height = 2.0 + (state % 40) as f32;
         let t = Transform::from_translation(Vec3::new(x, height * 0.5, z)).with_scale(Vec3::new(6.0, height, 6.0));
         let node = scene.add_node(format!("b{i}"), t);
-        let renderable =
-            Renderable { geometry: meshes[(state >> 8) as usize % 4], materials: vec![materials[(state >> 16) as usize % 8]] };
+        let renderable = Renderable {
+            geometry: meshes[(state >> 8) as usize % 4],
+            materials: vec![materials[(state >> 16) as usize % 8]],
+        };
         // Handles were created above; this cannot fail.
         scene.set_renderable(node, renderable).expect("valid city handles");
     }
@@ -98,7 +100,9 @@ fn main() {
     let view_counts = [1usize, 6, 24];
     let budget = Duration::from_millis(if quick { 300 } else { 1500 });
 
-    println!("| N | V | draws/frame | prep ms | ns / renderable / view | memcpy floor ms | prep / floor | V-view cost / 1-view |");
+    println!(
+        "| N | V | draws/frame | prep ms | ns / renderable / view | memcpy floor ms | prep / floor | V-view cost / 1-view |"
+    );
     println!("|---:|---:|---:|---:|---:|---:|---:|---:|");
     for &n in sizes {
         eprintln!("building a city of {n} renderables…");
@@ -106,7 +110,8 @@ fn main() {
         let mut one_view_seconds = 0.0;
         for &v in &view_counts {
             let resolved = views(&scene, extent, v);
-            let requests: Vec<_> = resolved.iter().map(|view| ViewRequest { view, options: Default::default() }).collect();
+            let requests: Vec<_> =
+                resolved.iter().map(|view| ViewRequest { view, options: Default::default() }).collect();
             let mut prep = ScenePrep::new();
             let mut slots = SlotAllocators::new(u64::MAX / 2);
             let mut draws = 0;
@@ -147,7 +152,10 @@ fn main() {
             state ^= state << 13;
             state ^= state >> 7;
             state ^= state << 17;
-            let key = (state % 3) << 62 | (state >> 20 & 1) << 61 | (state >> 24 & 63) << 40 | (state >> 30 & 0xff_ffff) << 16;
+            let key = (state % 3) << 62
+                | (state >> 20 & 1) << 61
+                | (state >> 24 & 63) << 40
+                | (state >> 30 & 0xff_ffff) << 16;
             (key, i)
         })
         .collect();

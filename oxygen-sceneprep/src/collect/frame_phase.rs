@@ -132,6 +132,40 @@ impl FrameCollection {
         }
     }
 
+    /// A stable text listing of the gated lights, for snapshot tests.
+    pub fn dump_lights(&self) -> String {
+        use std::fmt::Write;
+        let mut out = String::new();
+        let v = |a: [f32; 3]| format!("({:.3}, {:.3}, {:.3})", a[0], a[1], a[2]);
+        let _ = writeln!(out, "directional lights ({}):", self.directional_lights.len());
+        for l in &self.directional_lights {
+            let _ = writeln!(
+                out,
+                "  direction={} intensity={} color={} casts_shadows={}",
+                v(l.direction),
+                l.intensity,
+                v(l.color),
+                l.flags & 1 == 1
+            );
+        }
+        let _ = writeln!(out, "positional lights ({}):", self.positional_lights.len());
+        for l in &self.positional_lights {
+            let kind = if l.kind == PositionalLightRecord::SPOT { "spot " } else { "point" };
+            let _ = writeln!(
+                out,
+                "  {kind} position={} direction={} range={} intensity={} cos_inner={:.3} cos_outer={:.3} casts_shadows={}",
+                v(l.position),
+                v(l.direction),
+                l.range,
+                l.intensity,
+                l.cos_inner,
+                l.cos_outer,
+                l.flags & 1 == 1
+            );
+        }
+        out
+    }
+
     fn collect_light(&mut self, name: &str, light: &oxygen_core::Light, flags: NodeFlags, world: &Mat4) {
         if !light.affects_world || light.mobility == Mobility::Baked {
             return;
