@@ -112,7 +112,6 @@ pub struct Renderer {
     next_view: u32,
     frame_index: u64,
     started: Instant,
-    last_frames: BTreeMap<ViewId, PreparedSceneFrame>,
 }
 
 /// The default render graph: depth pre-pass, then lit shading.
@@ -151,7 +150,6 @@ impl Renderer {
             next_view: 0,
             frame_index: 0,
             started: Instant::now(),
-            last_frames: BTreeMap::new(),
         }
     }
 
@@ -199,7 +197,6 @@ impl Renderer {
     /// Removes a view and frees its slots.
     pub fn unregister_view(&mut self, id: ViewId) -> Result<(), RenderError> {
         self.views.remove(&id).ok_or(RenderError::NoSuchView(id))?;
-        self.last_frames.remove(&id);
         self.prep.forget_view(id, &mut self.heap.slots)?;
         Ok(())
     }
@@ -221,15 +218,16 @@ impl Renderer {
         let resolved = self.resolve_views(scene, frame_index, time_seconds)?;
         let requests: Vec<ViewRequest<'_>> =
             resolved.iter().map(|view| ViewRequest { view, options: self.views[&view.view_id].options }).collect();
-        let frames = self.prep.prepare(scene, &requests, &mut self.heap.slots)?;
-        self.prep.upload(&frames, &mut self.heap, &self.gpu.device, &self.gpu.queue)?;
+        self.prep.prepare(scene, &requests, &mut self.heap.slots)?;
+        self.prep.upload(&mut self.heap, &self.gpu.device, &self.gpu.queue)?;
+        let frames = self.prep.frames();
         let prepare_seconds = prepare_start.elapsed().as_secs_f64();
 
         // Render: each view's graph, submitted in view order.
         let record_start = Instant::now();
         let mut command_buffers = Vec::with_capacity(frames.len());
         let mut reports = Vec::with_capacity(frames.len());
-        for (view, frame) in resolved.iter().zip(&frames) {
+        for (view, frame) in resolved.iter().zip(frames) {
             let registered = self.views.get_mut(&view.view_id).ok_or(RenderError::NoSuchView(view.view_id))?;
             let targets_fit =
                 registered.targets.as_ref().is_some_and(|t| t.width == view.viewport.x && t.height == view.viewport.y);
@@ -279,7 +277,6 @@ impl Renderer {
         self.gpu.queue.submit(command_buffers);
         let record_seconds = record_start.elapsed().as_secs_f64();
 
-        self.last_frames = frames.into_iter().map(|f| (f.view_id(), f)).collect();
         Ok(FrameReport { frame_index, views: reports, prepare_seconds, record_seconds })
     }
 
@@ -320,7 +317,10 @@ impl Renderer {
 
     /// The view's prepared frame from the last `render_frame`.
     pub fn prepared_frame(&self, id: ViewId) -> Option<&PreparedSceneFrame> {
-        self.last_frames.get(&id)
+        if !self.views.contains_key(&id) {
+            return None;
+        }
+        self.prep.frames().iter().find(|f| f.view_id() == id)
     }
 
     /// The GPU context.

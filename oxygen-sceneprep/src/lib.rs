@@ -24,6 +24,7 @@ mod gpu_records;
 mod pass_mask;
 mod prepared_frame;
 mod scene_prep;
+pub mod worker_pool;
 
 pub use collect::{CullBound, FrameCollection, RenderItem, RenderableEntry, ViewFilter, ViewPrepOptions};
 pub use draw_metadata::DrawMetadata;

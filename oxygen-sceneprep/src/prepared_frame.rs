@@ -9,7 +9,7 @@ use std::fmt::Write;
 use std::sync::Arc;
 
 use glam::Mat4;
-use oxygen_bindless::{Allocation, INVALID_SLOT, RendererConstants};
+use oxygen_bindless::{Allocation, DomainKind, INVALID_SLOT, RendererConstants};
 use oxygen_core::ViewId;
 
 pub use crate::finalize::partition::Partition;
@@ -33,7 +33,7 @@ pub struct PreparedSlots {
 }
 
 /// The frame's transforms, shared by every view's prepared frame.
-#[derive(Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct FrameTransforms {
     /// World matrices by transform index.
     pub world: Vec<Mat4>,
@@ -58,6 +58,26 @@ fn slot(a: &Allocation) -> String {
 }
 
 impl PreparedSceneFrame {
+    /// An empty frame whose buffers ScenePrep fills and reuses.
+    pub(crate) fn empty(transforms: Arc<FrameTransforms>) -> Self {
+        PreparedSceneFrame {
+            view_id: ViewId(u32::MAX),
+            frame_index: 0,
+            draws: Vec::new(),
+            sort_keys: Vec::new(),
+            partitions: Vec::new(),
+            transforms,
+            slots: PreparedSlots {
+                draw_metadata: Allocation::empty(DomainKind::DrawMetadata),
+                world_transforms: Allocation::empty(DomainKind::WorldTransforms),
+                normal_transforms: Allocation::empty(DomainKind::NormalTransforms),
+                materials: Allocation::empty(DomainKind::Materials),
+                directional_lights: Allocation::empty(DomainKind::DirectionalLights),
+                positional_lights: Allocation::empty(DomainKind::PositionalLights),
+            },
+        }
+    }
+
     /// The view it was prepared for.
     pub fn view_id(&self) -> ViewId {
         self.view_id

@@ -1,6 +1,17 @@
 //! `ScenePrep`: the orchestrator. One call per frame prepares every view;
 //! a second call uploads what they need.
 //!
+//! ```text
+//! frame phase (serial, once) ─► phase 1 (parallel per view): cull, items, keys, radix sort
+//!   ─► serial: new geometry slots, per-view draw slots
+//!   ─► phase 2 (parallel per view): DrawMetadata emit, partitions
+//! ```
+//!
+//! Views run on a persistent [`WorkerPool`] (see its module for why not
+//! scoped threads or rayon). Every buffer — items, keys, draws, partitions,
+//! the prepared frames themselves — is kept and reused, so a steady-state
+//! frame allocates nothing (a counting-allocator test proves it).
+//!
 //! Ownership and lifetime of slots:
 //! * per frame, shared: world/normal matrices and light arrays — freed and
 //!   re-allocated each frame (same sizes get the same slots back);
@@ -8,20 +19,21 @@
 //! * persistent: geometry (allocated on first draw) and the material table.
 
 use std::collections::HashMap;
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 use oxygen_bindless::{Allocation, BindlessError, BindlessHeap, DomainKind, SlotAllocators, SlotError};
-use oxygen_core::{ResolvedView, Scene, ViewId};
+use oxygen_core::{Geometry, GeometryHandle, ResolvedView, Scene, ViewId};
 use thiserror::Error;
 use tracing::info_span;
 
 use crate::collect::view_phase::collect_view;
-use crate::finalize::geometry_cache::GeometryCache;
+use crate::finalize::geometry_cache::{GeometryCache, GeometrySlots};
 use crate::finalize::materials::MaterialTable;
 use crate::finalize::partition::build_partitions;
 use crate::finalize::radix_sort::radix_sort_by_key;
 use crate::finalize::sort_key::sort_key;
 use crate::prepared_frame::FrameTransforms;
+use crate::worker_pool::WorkerPool;
 use crate::{DrawMetadata, FrameCollection, PreparedSceneFrame, PreparedSlots, RenderItem, ViewPrepOptions};
 
 /// Why a frame could not be prepared or uploaded.
@@ -60,27 +72,94 @@ pub struct PrepStats {
     pub renderables_last_frame: u64,
     /// Meshes uploaded so far.
     pub geometry_uploads: u64,
+    /// Material table uploads so far.
+    pub material_uploads: u64,
+}
+
+/// Per-view scratch state, reused frame to frame.
+struct ViewWork {
+    items: Vec<RenderItem>,
+    keyed: Vec<(u64, u32)>,
+    scratch: Vec<(u64, u32)>,
+    /// Geometries this view draws that had no slots when it looked.
+    missing_geometry: Vec<GeometryHandle>,
+    draw_allocation: Allocation,
+    frame: PreparedSceneFrame,
+}
+
+impl ViewWork {
+    fn new(transforms: Arc<FrameTransforms>) -> Self {
+        ViewWork {
+            items: Vec::new(),
+            keyed: Vec::new(),
+            scratch: Vec::new(),
+            missing_geometry: Vec::new(),
+            draw_allocation: Allocation::empty(DomainKind::DrawMetadata),
+            frame: PreparedSceneFrame::empty(transforms),
+        }
+    }
 }
 
 /// The ScenePrep pipeline with its caches.
-#[derive(Default)]
 pub struct ScenePrep {
     frame: FrameCollection,
     geometry: GeometryCache,
     materials: MaterialTable,
     frame_allocations: Vec<Allocation>,
     view_allocations: HashMap<ViewId, Allocation>,
-    items: Vec<RenderItem>,
-    keyed: Vec<(u64, u32)>,
-    sort_scratch: Vec<(u64, u32)>,
+    /// Placeholder the pooled frames point at between frames, so the frame
+    /// phase can update the shared matrices in place.
+    released_transforms: Arc<FrameTransforms>,
+    work: Vec<Mutex<ViewWork>>,
+    frames: Vec<PreparedSceneFrame>,
+    active_frames: usize,
+    pending_geometry: Vec<(GeometrySlots, Arc<Geometry>)>,
+    pool: WorkerPool,
     frame_index: u64,
     stats: PrepStats,
 }
 
+impl Default for ScenePrep {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Locks a view's scratch; a poisoned lock (a panic in an earlier frame) is
+/// recovered because every buffer is cleared before use.
+fn lock(work: &Mutex<ViewWork>) -> std::sync::MutexGuard<'_, ViewWork> {
+    work.lock().unwrap_or_else(|e| e.into_inner())
+}
+
 impl ScenePrep {
-    /// An empty pipeline.
+    /// A pipeline preparing views on all available cores.
     pub fn new() -> Self {
-        Self::default()
+        Self::with_threads(std::thread::available_parallelism().map_or(1, |n| n.get()))
+    }
+
+    /// A pipeline preparing views on `threads` threads (the caller's
+    /// included; 1 means everything runs on the caller's thread).
+    pub fn with_threads(threads: usize) -> Self {
+        ScenePrep {
+            frame: FrameCollection::default(),
+            geometry: GeometryCache::default(),
+            materials: MaterialTable::default(),
+            frame_allocations: Vec::new(),
+            view_allocations: HashMap::new(),
+            released_transforms: Arc::new(FrameTransforms::default()),
+            work: Vec::new(),
+            frames: Vec::new(),
+            active_frames: 0,
+            pending_geometry: Vec::new(),
+            pool: WorkerPool::new(threads),
+            frame_index: 0,
+            stats: PrepStats::default(),
+        }
+    }
+
+    /// Threads views are prepared on.
+    pub fn threads(&self) -> usize {
+        self.pool.threads()
     }
 
     /// The last frame phase's output.
@@ -93,14 +172,25 @@ impl ScenePrep {
         self.stats
     }
 
+    /// The prepared frames of the last `prepare`, in request order.
+    pub fn frames(&self) -> &[PreparedSceneFrame] {
+        &self.frames[..self.active_frames]
+    }
+
+    /// Meshes that have slots (drawn by some view at least once).
+    pub fn resident_geometry(&self) -> usize {
+        self.geometry.resident()
+    }
+
     /// Runs the frame phase once, then the view phase and finalization for
-    /// each view, in order. CPU only: slots come from `slots`.
+    /// every view (in parallel), and returns one prepared frame per request,
+    /// in request order. CPU only: slots come from `slots`.
     pub fn prepare(
         &mut self,
         scene: &Scene,
         views: &[ViewRequest<'_>],
         slots: &mut SlotAllocators,
-    ) -> Result<Vec<PreparedSceneFrame>, PrepError> {
+    ) -> Result<&[PreparedSceneFrame], PrepError> {
         let _span = info_span!("scene_prep", views = views.len()).entered();
         for (i, v) in views.iter().enumerate() {
             if views[..i].iter().any(|o| o.view.view_id == v.view.view_id) {
@@ -108,98 +198,141 @@ impl ScenePrep {
             }
         }
         self.frame_index += 1;
+        self.active_frames = 0;
+
+        // Release last frame's hold on the shared matrices so the frame phase
+        // can rewrite them in place.
+        for f in &mut self.frames {
+            f.transforms = Arc::clone(&self.released_transforms);
+        }
+        for w in &mut self.work {
+            let w = w.get_mut().unwrap_or_else(|e| e.into_inner());
+            w.frame.transforms = Arc::clone(&self.released_transforms);
+        }
         self.frame.collect(scene);
         self.stats.frame_phase_runs += 1;
         self.stats.renderables_last_frame = self.frame.renderables.len() as u64;
         self.materials.sync(scene, slots)?;
+        let frame_slots = self.allocate_frame_slots(slots)?;
 
-        // Frame-global ranges: free last frame's, allocate this frame's.
-        for a in self.frame_allocations.drain(..) {
-            slots.free(a)?;
+        while self.work.len() < views.len() {
+            self.work.push(Mutex::new(ViewWork::new(Arc::clone(&self.released_transforms))));
+            self.frames.push(PreparedSceneFrame::empty(Arc::clone(&self.released_transforms)));
         }
-        let n = self.frame.world_matrices.len() as u32;
-        let world = slots.allocate(DomainKind::WorldTransforms, n)?;
-        self.frame_allocations.push(world);
-        let normal = slots.allocate(DomainKind::NormalTransforms, n)?;
-        self.frame_allocations.push(normal);
-        let directional = slots.allocate(DomainKind::DirectionalLights, self.frame.directional_lights.len() as u32)?;
-        self.frame_allocations.push(directional);
-        let positional = slots.allocate(DomainKind::PositionalLights, self.frame.positional_lights.len() as u32)?;
-        self.frame_allocations.push(positional);
-        let transforms = Arc::new(FrameTransforms {
-            world: self.frame.world_matrices.clone(),
-            normal: self.frame.normal_matrices.clone(),
-        });
 
-        let mut frames = Vec::with_capacity(views.len());
+        // Phase 1: cull, produce items, key and sort them.
+        {
+            let _span = info_span!("view_phases").entered();
+            let (frame, geometry, work) = (&self.frame, &self.geometry, &self.work);
+            self.pool.run(views.len(), &|i| {
+                let mut w = lock(&work[i]);
+                let w = &mut *w;
+                collect_view(scene, frame, views[i].view, &views[i].options, &mut w.items);
+                w.keyed.clear();
+                w.missing_geometry.clear();
+                for (index, item) in w.items.iter().enumerate() {
+                    w.keyed.push((sort_key(item.pass_mask, item.material, item.view_depth), index as u32));
+                    let handle = frame.renderables[item.renderable as usize].geometry;
+                    if geometry.get(handle).is_none() && !w.missing_geometry.contains(&handle) {
+                        w.missing_geometry.push(handle);
+                    }
+                }
+                // Items are in (node id, submesh) order, so a stable sort by
+                // key alone gives the deterministic tie-break.
+                radix_sort_by_key(&mut w.keyed, &mut w.scratch);
+            });
+        }
+        self.stats.views_prepared += views.len() as u64;
+
+        // Serial: slots for newly drawn geometry and for each view's draws.
         let mut total_draws = 0;
-        for request in views {
-            collect_view(scene, &self.frame, request.view, &request.options, &mut self.items);
-            self.stats.views_prepared += 1;
-            let _span = info_span!("finalize", view = %request.view.view_id, items = self.items.len()).entered();
-
-            self.keyed.clear();
-            for (i, item) in self.items.iter().enumerate() {
-                self.keyed.push((sort_key(item.pass_mask, item.material, item.view_depth), i as u32));
+        for (request, work) in views.iter().zip(&mut self.work) {
+            let w = work.get_mut().unwrap_or_else(|e| e.into_inner());
+            for handle in &w.missing_geometry {
+                if let Some(geometry) = scene.geometry(*handle) {
+                    self.geometry.resolve(*handle, geometry, slots)?;
+                }
             }
-            // Items are in (node id, submesh) order, so a stable sort by key
-            // alone gives the deterministic tie-break.
-            radix_sort_by_key(&mut self.keyed, &mut self.sort_scratch);
-
-            let mut draws = Vec::with_capacity(self.keyed.len());
-            let mut sort_keys = Vec::with_capacity(self.keyed.len());
-            for &(key, item_index) in &self.keyed {
-                let item = self.items[item_index as usize];
-                let entry = &self.frame.renderables[item.renderable as usize];
-                let (node_id, submesh) = (entry.node_id, item.submesh);
-                let Some(geometry) = scene.geometry(entry.geometry) else { continue };
-                let g = self.geometry.resolve(entry.geometry, geometry, slots)?;
-                let sub = geometry.submeshes()[submesh as usize];
-                draws.push(DrawMetadata {
-                    vertex_slot: g.vertices.start,
-                    index_slot: g.indices.start,
-                    first_index: sub.first_index,
-                    index_count: sub.index_count,
-                    base_vertex: 0,
-                    instance_count: 1,
-                    transform_index: entry.transform_index,
-                    material_handle: item.material,
-                    pass_mask: item.pass_mask.bits(),
-                    node_id,
-                    submesh,
-                    reserved: [0; 5],
-                });
-                sort_keys.push(key);
-            }
-            let mut partitions = Vec::new();
-            build_partitions(&draws, &mut partitions);
-
             let view_id = request.view.view_id;
             if let Some(old) = self.view_allocations.remove(&view_id) {
                 slots.free(old)?;
             }
-            let draw_allocation = slots.allocate(DomainKind::DrawMetadata, draws.len() as u32)?;
-            self.view_allocations.insert(view_id, draw_allocation);
-            total_draws += draws.len() as u64;
-            frames.push(PreparedSceneFrame {
-                view_id,
-                frame_index: self.frame_index,
-                draws,
-                sort_keys,
-                partitions,
-                transforms: Arc::clone(&transforms),
-                slots: PreparedSlots {
-                    draw_metadata: draw_allocation,
-                    world_transforms: world,
-                    normal_transforms: normal,
-                    materials: self.materials.allocation(),
-                    directional_lights: directional,
-                    positional_lights: positional,
-                },
-            });
+            w.draw_allocation = slots.allocate(DomainKind::DrawMetadata, w.keyed.len() as u32)?;
+            self.view_allocations.insert(view_id, w.draw_allocation);
+            total_draws += w.keyed.len() as u64;
         }
         self.stats.draws_last_frame = total_draws;
-        Ok(frames)
+
+        // Phase 2: emit DrawMetadata and partitions.
+        {
+            let _span = info_span!("finalize").entered();
+            let (frame, geometry, work) = (&self.frame, &self.geometry, &self.work);
+            let (frame_index, materials) = (self.frame_index, self.materials.allocation());
+            self.pool.run(views.len(), &|i| {
+                let mut w = lock(&work[i]);
+                let w = &mut *w;
+                let out = &mut w.frame;
+                out.draws.clear();
+                out.sort_keys.clear();
+                for &(key, item_index) in &w.keyed {
+                    let item = w.items[item_index as usize];
+                    let entry = &frame.renderables[item.renderable as usize];
+                    // Resolved in the serial step; a mesh missing from the
+                    // scene was never turned into an item.
+                    let Some(g) = geometry.get(entry.geometry) else { continue };
+                    let Some(sub) = scene.geometry(entry.geometry).map(|m| m.submeshes()[item.submesh as usize]) else {
+                        continue;
+                    };
+                    out.draws.push(DrawMetadata {
+                        vertex_slot: g.vertices.start,
+                        index_slot: g.indices.start,
+                        first_index: sub.first_index,
+                        index_count: sub.index_count,
+                        base_vertex: 0,
+                        instance_count: 1,
+                        transform_index: entry.transform_index,
+                        material_handle: item.material,
+                        pass_mask: item.pass_mask.bits(),
+                        node_id: entry.node_id,
+                        submesh: item.submesh,
+                        reserved: [0; 5],
+                    });
+                    out.sort_keys.push(key);
+                }
+                build_partitions(&out.draws, &mut out.partitions);
+                out.view_id = views[i].view.view_id;
+                out.frame_index = frame_index;
+                out.transforms = Arc::clone(&frame.transforms);
+                out.slots = PreparedSlots { draw_metadata: w.draw_allocation, materials, ..frame_slots };
+            });
+        }
+
+        for (frame, work) in self.frames.iter_mut().zip(&mut self.work).take(views.len()) {
+            std::mem::swap(frame, &mut work.get_mut().unwrap_or_else(|e| e.into_inner()).frame);
+        }
+        self.active_frames = views.len();
+        Ok(&self.frames[..views.len()])
+    }
+
+    /// Frees last frame's frame-global ranges and allocates this frame's.
+    fn allocate_frame_slots(&mut self, slots: &mut SlotAllocators) -> Result<PreparedSlots, PrepError> {
+        for a in self.frame_allocations.drain(..) {
+            slots.free(a)?;
+        }
+        let n = self.frame.transforms.world.len() as u32;
+        let mut allocate = |kind, count: usize| -> Result<Allocation, PrepError> {
+            let a = slots.allocate(kind, count as u32)?;
+            self.frame_allocations.push(a);
+            Ok(a)
+        };
+        Ok(PreparedSlots {
+            draw_metadata: Allocation::empty(DomainKind::DrawMetadata),
+            world_transforms: allocate(DomainKind::WorldTransforms, n as usize)?,
+            normal_transforms: allocate(DomainKind::NormalTransforms, n as usize)?,
+            materials: Allocation::empty(DomainKind::Materials),
+            directional_lights: allocate(DomainKind::DirectionalLights, self.frame.directional_lights.len())?,
+            positional_lights: allocate(DomainKind::PositionalLights, self.frame.positional_lights.len())?,
+        })
     }
 
     /// Frees the per-view slots of a view that is gone.
@@ -210,35 +343,33 @@ impl ScenePrep {
         Ok(())
     }
 
-    /// Writes what `frames` need into the heap: grows domains first, then
-    /// transforms and lights (once for all views), materials if they changed,
-    /// geometry not yet uploaded, and each view's draws.
+    /// Writes what the last prepared frames need into the heap: grows
+    /// domains first, then transforms and lights (once for all views),
+    /// materials if they changed, geometry not yet uploaded, and each view's
+    /// draws.
     pub fn upload(
         &mut self,
-        frames: &[PreparedSceneFrame],
         heap: &mut BindlessHeap,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
     ) -> Result<(), PrepError> {
-        let _span = info_span!("upload", views = frames.len()).entered();
+        let _span = info_span!("upload", views = self.active_frames).entered();
         heap.ensure_capacity(device, queue);
+        let frames = &self.frames[..self.active_frames];
         if let Some(first) = frames.first() {
             let s = first.slots;
-            heap.write(
-                queue,
-                &s.world_transforms,
-                0,
-                &first.transforms.world.iter().map(|m| m.to_cols_array_2d()).collect::<Vec<_>>(),
-            )?;
-            heap.write(queue, &s.normal_transforms, 0, &first.transforms.normal)?;
+            heap.write(queue, &s.world_transforms, 0, &self.frame.transforms.world)?;
+            heap.write(queue, &s.normal_transforms, 0, &self.frame.transforms.normal)?;
             heap.write(queue, &s.directional_lights, 0, &self.frame.directional_lights)?;
             heap.write(queue, &s.positional_lights, 0, &self.frame.positional_lights)?;
         }
         if self.materials.is_dirty() {
             heap.write(queue, &self.materials.allocation(), 0, self.materials.records())?;
             self.materials.mark_uploaded();
+            self.stats.material_uploads += 1;
         }
-        for (slots, geometry) in self.geometry.take_pending() {
+        self.geometry.take_pending(&mut self.pending_geometry);
+        for (slots, geometry) in self.pending_geometry.drain(..) {
             heap.write(queue, &slots.vertices, 0, geometry.vertices())?;
             heap.write(queue, &slots.indices, 0, geometry.indices())?;
             self.stats.geometry_uploads += 1;

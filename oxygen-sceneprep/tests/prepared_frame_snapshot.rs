@@ -33,10 +33,14 @@ fn two_views_share_the_frame_phase_and_cull_differently() {
     let mut prep = ScenePrep::new();
     let mut slots = SlotAllocators::default();
     let options = ViewPrepOptions::default();
-    let frames = prep
-        .prepare(&demo.scene, &[ViewRequest { view: &main, options }, ViewRequest { view: &side, options }], &mut slots)
-        .unwrap();
+    prep.prepare(
+        &demo.scene,
+        &[ViewRequest { view: &main, options }, ViewRequest { view: &side, options }],
+        &mut slots,
+    )
+    .unwrap();
     assert_eq!(prep.stats().frame_phase_runs, 1);
+    let frames = prep.frames();
     assert!(std::sync::Arc::ptr_eq(frames[0].transforms(), frames[1].transforms()));
     assert!(frames[1].draws().len() < frames[0].draws().len(), "the close-up side view culls part of the grid");
     insta::assert_snapshot!(format!("{}\n{}", frames[0].dump(), frames[1].dump()));

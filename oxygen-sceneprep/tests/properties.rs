@@ -82,10 +82,13 @@ fn random_view(rng: &mut Rng, scene: &Scene, id: u32) -> ResolvedView {
     }
 }
 
-fn prepare(scene: &Scene, views: &[ResolvedView], cull: CullBound) -> Vec<PreparedSceneFrame> {
+/// A ScenePrep that has prepared `views`; read them with `.frames()`.
+fn prepare(scene: &Scene, views: &[ResolvedView], cull: CullBound) -> ScenePrep {
     let options = ViewPrepOptions { cull, ..Default::default() };
     let requests: Vec<_> = views.iter().map(|view| ViewRequest { view, options }).collect();
-    ScenePrep::new().prepare(scene, &requests, &mut SlotAllocators::default()).unwrap()
+    let mut prep = ScenePrep::new();
+    prep.prepare(scene, &requests, &mut SlotAllocators::default()).unwrap();
+    prep
 }
 
 /// True when some corner of the node's world box projects inside the clip volume.
@@ -106,7 +109,8 @@ fn culling_never_drops_an_object_with_a_corner_inside_the_frustum() {
         let scene = random_scene(&mut rng, 300);
         let view = random_view(&mut rng, &scene, 0);
         for cull in [CullBound::Aabb, CullBound::Sphere] {
-            let frame = &prepare(&scene, std::slice::from_ref(&view), cull)[0];
+            let prep = prepare(&scene, std::slice::from_ref(&view), cull);
+            let frame = &prep.frames()[0];
             let drawn: std::collections::HashSet<u32> = frame.draws().iter().map(|d| d.node_id).collect();
             for (key, _) in scene.nodes() {
                 if has_corner_inside(&view, &scene, key) {
@@ -123,7 +127,8 @@ fn partitions_cover_every_draw_once_in_order_with_one_mask() {
         let mut rng = Rng(1000 + seed);
         let scene = random_scene(&mut rng, 200);
         let view = random_view(&mut rng, &scene, 0);
-        let frame = &prepare(&scene, &[view], CullBound::Aabb)[0];
+        let prep = prepare(&scene, &[view], CullBound::Aabb);
+        let frame = &prep.frames()[0];
         let mut next = 0;
         for p in frame.partitions() {
             assert_eq!(p.begin, next, "seed {seed}: gap or overlap before {p:?}");
@@ -147,7 +152,8 @@ fn draws_are_ordered_by_key_then_node_then_submesh_and_keys_match_their_definiti
         let mut rng = Rng(2000 + seed);
         let scene = random_scene(&mut rng, 200);
         let view = random_view(&mut rng, &scene, 0);
-        let frame = &prepare(&scene, &[view], CullBound::Aabb)[0];
+        let prep = prepare(&scene, &[view], CullBound::Aabb);
+        let frame = &prep.frames()[0];
         let view_row_z = view.view.row(2);
         for (d, key) in frame.draws().iter().zip(frame.sort_keys()) {
             // Recompute the key from the definition: mask, material, depth of the bound's centre.
@@ -164,25 +170,34 @@ fn draws_are_ordered_by_key_then_node_then_submesh_and_keys_match_their_definiti
     }
 }
 
+/// Draw bytes, partitions and draw slots of every view, for comparisons.
+fn fingerprint(frames: &[PreparedSceneFrame]) -> Vec<(Vec<u8>, Vec<oxygen_sceneprep::Partition>, u32)> {
+    frames
+        .iter()
+        .map(|f| {
+            (bytemuck::cast_slice::<_, u8>(f.draws()).to_vec(), f.partitions().to_vec(), f.slots().draw_metadata.start)
+        })
+        .collect()
+}
+
 #[test]
-fn the_same_scene_and_views_give_byte_identical_draws_twice_in_a_row() {
+fn the_same_scene_and_views_give_byte_identical_draws_twice_in_a_row_and_across_thread_counts() {
     for seed in 0..10 {
         let mut rng = Rng(3000 + seed);
         let scene = random_scene(&mut rng, 300);
-        let views: Vec<_> = (0..3).map(|i| random_view(&mut rng, &scene, i)).collect();
+        let views: Vec<_> = (0..5).map(|i| random_view(&mut rng, &scene, i)).collect();
         let requests: Vec<_> = views.iter().map(|view| ViewRequest { view, options: Default::default() }).collect();
-        let mut prep = ScenePrep::new();
-        let mut slots = SlotAllocators::default();
-        let first = prep.prepare(&scene, &requests, &mut slots).unwrap();
-        let second = prep.prepare(&scene, &requests, &mut slots).unwrap();
-        for (a, b) in first.iter().zip(&second) {
-            assert_eq!(
-                bytemuck::cast_slice::<_, u8>(a.draws()),
-                bytemuck::cast_slice::<_, u8>(b.draws()),
-                "seed {seed}"
-            );
-            assert_eq!(a.partitions(), b.partitions());
-            assert_eq!(a.slots().draw_metadata.start, b.slots().draw_metadata.start, "steady state reuses slots");
+        let mut reference = None;
+        for threads in [1, 2, 3, 8] {
+            let mut prep = ScenePrep::with_threads(threads);
+            let mut slots = SlotAllocators::default();
+            let first = fingerprint(prep.prepare(&scene, &requests, &mut slots).unwrap());
+            let second = fingerprint(prep.prepare(&scene, &requests, &mut slots).unwrap());
+            assert_eq!(first, second, "seed {seed}, {threads} threads: second frame differs");
+            match &reference {
+                None => reference = Some(first),
+                Some(r) => assert_eq!(r, &first, "seed {seed}: {threads} threads differ from 1 thread"),
+            }
         }
     }
 }

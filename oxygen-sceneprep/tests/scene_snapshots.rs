@@ -46,7 +46,8 @@ fn every_alpha_class_and_sidedness_gets_its_own_partition_in_pass_order() {
         }
     }
     let view = view_of(&scene);
-    let frames = ScenePrep::new()
+    let mut prep = ScenePrep::new();
+    let frames = prep
         .prepare(&scene, &[ViewRequest { view: &view, options: Default::default() }], &mut SlotAllocators::default())
         .unwrap();
     insta::assert_snapshot!(frames[0].dump());
@@ -84,9 +85,9 @@ fn every_light_type_and_gating_rule() {
 
     let view = view_of(&scene);
     let mut prep = ScenePrep::new();
-    let frames = prep
-        .prepare(&scene, &[ViewRequest { view: &view, options: Default::default() }], &mut SlotAllocators::default())
+    prep.prepare(&scene, &[ViewRequest { view: &view, options: Default::default() }], &mut SlotAllocators::default())
         .unwrap();
     let lights = prep.frame_collection().dump_lights();
+    let frames = prep.frames();
     insta::assert_snapshot!(format!("{lights}\n{}", frames[0].dump()));
 }

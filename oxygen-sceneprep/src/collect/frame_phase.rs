@@ -13,11 +13,14 @@
 
 use glam::{Mat3, Mat4, Vec3};
 use oxygen_bindless::INVALID_SLOT;
-use oxygen_core::scene::node_index;
+use std::sync::Arc;
+
+use oxygen_core::scene::{geometry_index, node_index};
 use oxygen_core::{Aabb, GeometryHandle, LightKind, Mobility, NodeFlags, NodeKey, Scene, Sphere, WorldTransforms};
 use tracing::{info_span, warn};
 
-use crate::{DirectionalLightRecord, NormalMatrix, PositionalLightRecord};
+use crate::prepared_frame::FrameTransforms;
+use crate::{DirectionalLightRecord, PositionalLightRecord};
 
 /// A renderable node that survived the frame phase.
 #[derive(Clone, Debug, PartialEq)]
@@ -26,10 +29,12 @@ pub struct RenderableEntry {
     pub node: NodeKey,
     /// Stable node id (slot index).
     pub node_id: u32,
-    /// Index into [`FrameCollection::world_matrices`].
+    /// Index into the frame's [`FrameTransforms`].
     pub transform_index: u32,
     /// Its geometry.
     pub geometry: GeometryHandle,
+    /// Stable geometry id (slot index), for dense per-geometry tables.
+    pub geometry_id: u32,
     /// World-space box.
     pub world_aabb: Aabb,
     /// World-space sphere around `world_aabb`.
@@ -45,10 +50,9 @@ pub struct FrameCollection {
     pub world: WorldTransforms,
     /// Renderables in stable node order.
     pub renderables: Vec<RenderableEntry>,
-    /// World matrices indexed by `transform_index`.
-    pub world_matrices: Vec<Mat4>,
-    /// Normal matrices indexed by `transform_index`.
-    pub normal_matrices: Vec<NormalMatrix>,
+    /// World and normal matrices indexed by `transform_index`, shared (not
+    /// copied) with every view's prepared frame.
+    pub transforms: Arc<FrameTransforms>,
     /// Gated directional lights.
     pub directional_lights: Vec<DirectionalLightRecord>,
     /// Gated point and spot lights.
@@ -83,8 +87,11 @@ impl FrameCollection {
             scene.resolve_world_transforms(&mut self.world);
         }
         self.renderables.clear();
-        self.world_matrices.clear();
-        self.normal_matrices.clear();
+        // In place when no prepared frame still holds the previous frame's
+        // matrices (ScenePrep releases them first); a copy otherwise.
+        let transforms = Arc::make_mut(&mut self.transforms);
+        transforms.world.clear();
+        transforms.normal.clear();
         self.directional_lights.clear();
         self.positional_lights.clear();
         self.skipped_nodes = 0;
@@ -117,14 +124,16 @@ impl FrameCollection {
                 self.skipped_nodes += 1;
                 continue;
             }
-            let transform_index = self.world_matrices.len() as u32;
-            self.world_matrices.push(world);
-            self.normal_matrices.push(normal.into());
+            let transforms = Arc::make_mut(&mut self.transforms);
+            let transform_index = transforms.world.len() as u32;
+            transforms.world.push(world);
+            transforms.normal.push(normal.into());
             self.renderables.push(RenderableEntry {
                 node: key,
                 node_id: node_index(key),
                 transform_index,
                 geometry: renderable.geometry,
+                geometry_id: geometry_index(renderable.geometry),
                 world_aabb,
                 world_sphere: Sphere::from_aabb(&world_aabb),
                 flags: node.flags,

@@ -2,11 +2,13 @@
 //!
 //! A mesh no view sees costs nothing: no slots, no upload. Once allocated, a
 //! mesh keeps its slots (and its GPU copy) until [`GeometryCache::evict`].
+//! The table is dense, indexed by the geometry's stable id, so the parallel
+//! emission phase reads it with one bounds-checked load per draw.
 
-use std::collections::HashMap;
 use std::sync::Arc;
 
 use oxygen_bindless::{Allocation, DomainKind, SlotAllocators, SlotError};
+use oxygen_core::scene::geometry_index;
 use oxygen_core::{Geometry, GeometryHandle};
 
 /// Where a mesh lives in the vertex and index domains.
@@ -21,11 +23,20 @@ pub struct GeometrySlots {
 /// Lazily allocated geometry slots plus the uploads still owed.
 #[derive(Default)]
 pub struct GeometryCache {
-    entries: HashMap<GeometryHandle, GeometrySlots>,
+    entries: Vec<Option<(GeometryHandle, GeometrySlots)>>,
     pending: Vec<(GeometrySlots, Arc<Geometry>)>,
+    resident: usize,
 }
 
 impl GeometryCache {
+    /// Slots of a resident mesh by geometry id (checking the handle's generation).
+    pub fn get(&self, handle: GeometryHandle) -> Option<GeometrySlots> {
+        match self.entries.get(geometry_index(handle) as usize) {
+            Some(Some((h, s))) if *h == handle => Some(*s),
+            _ => None,
+        }
+    }
+
     /// Slots for `handle`, allocating (and queueing an upload) on first use.
     pub fn resolve(
         &mut self,
@@ -33,8 +44,13 @@ impl GeometryCache {
         geometry: &Arc<Geometry>,
         slots: &mut SlotAllocators,
     ) -> Result<GeometrySlots, SlotError> {
-        if let Some(s) = self.entries.get(&handle) {
-            return Ok(*s);
+        if let Some(s) = self.get(handle) {
+            return Ok(s);
+        }
+        let index = geometry_index(handle) as usize;
+        // A different generation in the same slot: the old asset is gone.
+        if let Some(Some((_, old))) = self.entries.get(index).copied() {
+            self.free_slots(old, slots)?;
         }
         let vertices = slots.allocate(DomainKind::Vertices, geometry.vertices().len() as u32)?;
         let indices = match slots.allocate(DomainKind::Indices, geometry.indices().len() as u32) {
@@ -45,27 +61,38 @@ impl GeometryCache {
             }
         };
         let s = GeometrySlots { vertices, indices };
-        self.entries.insert(handle, s);
+        if self.entries.len() <= index {
+            self.entries.resize(index + 1, None);
+        }
+        self.entries[index] = Some((handle, s));
+        self.resident += 1;
         self.pending.push((s, Arc::clone(geometry)));
         Ok(s)
     }
 
-    /// Takes the uploads owed since the last call.
-    pub fn take_pending(&mut self) -> Vec<(GeometrySlots, Arc<Geometry>)> {
-        std::mem::take(&mut self.pending)
+    /// Takes the uploads owed since the last call (into `out`, cleared first).
+    pub fn take_pending(&mut self, out: &mut Vec<(GeometrySlots, Arc<Geometry>)>) {
+        out.clear();
+        out.append(&mut self.pending);
     }
 
     /// Number of meshes resident.
     pub fn resident(&self) -> usize {
-        self.entries.len()
+        self.resident
+    }
+
+    fn free_slots(&mut self, s: GeometrySlots, slots: &mut SlotAllocators) -> Result<(), SlotError> {
+        self.pending.retain(|(p, _)| *p != s);
+        self.resident -= 1;
+        slots.free(s.vertices)?;
+        slots.free(s.indices)
     }
 
     /// Frees a mesh's slots (e.g. when the asset is removed).
     pub fn evict(&mut self, handle: GeometryHandle, slots: &mut SlotAllocators) -> Result<(), SlotError> {
-        if let Some(s) = self.entries.remove(&handle) {
-            self.pending.retain(|(p, _)| *p != s);
-            slots.free(s.vertices)?;
-            slots.free(s.indices)?;
+        if let Some(s) = self.get(handle) {
+            self.entries[geometry_index(handle) as usize] = None;
+            self.free_slots(s, slots)?;
         }
         Ok(())
     }
