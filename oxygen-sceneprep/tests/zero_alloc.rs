@@ -1,0 +1,75 @@
+//! A steady-state frame allocates nothing: after warm-up, `prepare` of the
+//! same scene through several views (on several threads) makes no heap
+//! allocation. Counted by a global allocator wrapper; this file holds a
+//! single test so no other test allocates while it counts.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+
+use glam::UVec2;
+use oxygen_bindless::SlotAllocators;
+use oxygen_core::demo::{main_camera, multi_view_scene, side_camera};
+use oxygen_core::{LookAtResolver, ViewContext, ViewId, ViewResolver};
+use oxygen_sceneprep::{CullBound, ScenePrep, ViewFilter, ViewPrepOptions, ViewRequest};
+
+struct CountingAllocator;
+
+static COUNTING: AtomicBool = AtomicBool::new(false);
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+// SAFETY: every call is forwarded unchanged to the system allocator; the
+// wrapper only bumps an atomic counter, which neither allocates nor unwinds.
+unsafe impl GlobalAlloc for CountingAllocator {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        if COUNTING.load(Ordering::Relaxed) {
+            ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        }
+        // SAFETY: same contract as our caller's.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: `ptr` came from `System.alloc` with this layout.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        if COUNTING.load(Ordering::Relaxed) {
+            ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        }
+        // SAFETY: same contract as our caller's.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: CountingAllocator = CountingAllocator;
+
+#[test]
+fn steady_state_prepare_makes_no_heap_allocation() {
+    let demo = multi_view_scene();
+    let ctx = |id| ViewContext { view_id: ViewId(id), frame_index: 1, time_seconds: 0.0 };
+    let cameras: [LookAtResolver; 3] =
+        [main_camera(UVec2::new(640, 480)), side_camera(UVec2::new(320, 240)), side_camera(UVec2::new(100, 300))];
+    let views: Vec<_> = cameras.iter().enumerate().map(|(i, c)| c.resolve(&ctx(i as u32), &demo.scene).unwrap()).collect();
+    let options = [
+        ViewPrepOptions::default(),
+        ViewPrepOptions { cull: CullBound::Sphere, ..Default::default() },
+        ViewPrepOptions { filter: ViewFilter::ShadowCastersOnly, ..Default::default() },
+    ];
+    let requests: Vec<_> = views.iter().zip(options).map(|(view, options)| ViewRequest { view, options }).collect();
+    let mut prep = ScenePrep::with_threads(3);
+    let mut slots = SlotAllocators::default();
+    for _ in 0..3 {
+        prep.prepare(&demo.scene, &requests, &mut slots).unwrap();
+    }
+
+    COUNTING.store(true, Ordering::SeqCst);
+    let mut draws = 0;
+    for _ in 0..20 {
+        let frames = prep.prepare(&demo.scene, &requests, &mut slots).unwrap();
+        draws += frames.iter().map(|f| f.draws().len()).sum::<usize>();
+    }
+    COUNTING.store(false, Ordering::SeqCst);
+
+    assert!(draws > 0);
+    assert_eq!(ALLOCATIONS.load(Ordering::SeqCst), 0, "steady-state frames allocated");
+}
