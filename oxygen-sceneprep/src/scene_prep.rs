@@ -64,6 +64,8 @@ pub struct ViewRequest<'a> {
 pub struct PrepStats {
     /// Frame phases run (one per `prepare`).
     pub frame_phase_runs: u64,
+    /// Frame phases that found the scene unchanged and reused last frame's collection.
+    pub frame_phase_reuses: u64,
     /// View phases run.
     pub views_prepared: u64,
     /// Draws emitted in the last frame, all views.
@@ -211,6 +213,7 @@ impl ScenePrep {
         }
         self.frame.collect(scene);
         self.stats.frame_phase_runs += 1;
+        self.stats.frame_phase_reuses += u64::from(self.frame.reused_last());
         self.stats.renderables_last_frame = self.frame.renderables.len() as u64;
         self.materials.sync(scene, slots)?;
         let frame_slots = self.allocate_frame_slots(slots)?;

@@ -6,10 +6,10 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
-use glam::UVec2;
+use glam::{UVec2, Vec3};
 use oxygen_bindless::SlotAllocators;
 use oxygen_core::demo::{main_camera, multi_view_scene, side_camera};
-use oxygen_core::{LookAtResolver, ViewContext, ViewId, ViewResolver};
+use oxygen_core::{LookAtResolver, Transform, ViewContext, ViewId, ViewResolver};
 use oxygen_sceneprep::{CullBound, ScenePrep, ViewFilter, ViewPrepOptions, ViewRequest};
 
 struct CountingAllocator;
@@ -45,11 +45,12 @@ static GLOBAL: CountingAllocator = CountingAllocator;
 
 #[test]
 fn steady_state_prepare_makes_no_heap_allocation() {
-    let demo = multi_view_scene();
+    let mut demo = multi_view_scene();
     let ctx = |id| ViewContext { view_id: ViewId(id), frame_index: 1, time_seconds: 0.0 };
     let cameras: [LookAtResolver; 3] =
         [main_camera(UVec2::new(640, 480)), side_camera(UVec2::new(320, 240)), side_camera(UVec2::new(100, 300))];
-    let views: Vec<_> = cameras.iter().enumerate().map(|(i, c)| c.resolve(&ctx(i as u32), &demo.scene).unwrap()).collect();
+    let views: Vec<_> =
+        cameras.iter().enumerate().map(|(i, c)| c.resolve(&ctx(i as u32), &demo.scene).unwrap()).collect();
     let options = [
         ViewPrepOptions::default(),
         ViewPrepOptions { cull: CullBound::Sphere, ..Default::default() },
@@ -64,12 +65,18 @@ fn steady_state_prepare_makes_no_heap_allocation() {
 
     COUNTING.store(true, Ordering::SeqCst);
     let mut draws = 0;
-    for _ in 0..20 {
+    for frame in 0..20 {
+        // Half the frames move a cube, so the frame phase really re-collects.
+        if frame % 2 == 0 {
+            let moved = Transform::from_translation(Vec3::new(0.0, 0.5 + frame as f32 * 0.01, 0.0));
+            demo.scene.set_local_transform(demo.cubes[4], moved).unwrap();
+        }
         let frames = prep.prepare(&demo.scene, &requests, &mut slots).unwrap();
         draws += frames.iter().map(|f| f.draws().len()).sum::<usize>();
     }
     COUNTING.store(false, Ordering::SeqCst);
 
     assert!(draws > 0);
+    assert_eq!(prep.stats().frame_phase_reuses, 2 + 10, "warm-up reuses 2, then every other frame");
     assert_eq!(ALLOCATIONS.load(Ordering::SeqCst), 0, "steady-state frames allocated");
 }

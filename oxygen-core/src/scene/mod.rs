@@ -17,6 +17,7 @@ pub use node::{Node, NodeFlags, Renderable, Transform};
 pub use world::WorldTransforms;
 
 use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use slotmap::{Key, SlotMap, new_key_type};
 use thiserror::Error;
@@ -84,12 +85,33 @@ pub enum SceneError {
 }
 
 /// The scene node table and its assets.
-#[derive(Default)]
+///
+/// Every edit bumps a revision counter; a node records the revision of its
+/// last own edit and the newest revision anywhere in its subtree. This is the
+/// dirty-flag scheme that lets world-transform resolution skip unchanged
+/// subtrees without visiting them, and ScenePrep skip the whole frame phase
+/// when nothing changed, while rendering still borrows the scene immutably.
 pub struct Scene {
+    id: u64,
+    revision: u64,
     nodes: SlotMap<NodeKey, Node>,
     roots: Vec<NodeKey>,
     geometries: SlotMap<GeometryHandle, Arc<Geometry>>,
     materials: SlotMap<MaterialHandle, Material>,
+}
+
+impl Default for Scene {
+    fn default() -> Self {
+        static NEXT_SCENE_ID: AtomicU64 = AtomicU64::new(1);
+        Scene {
+            id: NEXT_SCENE_ID.fetch_add(1, Ordering::Relaxed),
+            revision: 1,
+            nodes: SlotMap::with_key(),
+            roots: Vec::new(),
+            geometries: SlotMap::with_key(),
+            materials: SlotMap::with_key(),
+        }
+    }
 }
 
 impl Scene {
@@ -98,13 +120,41 @@ impl Scene {
         Self::default()
     }
 
+    /// A process-unique id, so caches keyed on a scene notice another scene.
+    pub fn id(&self) -> u64 {
+        self.id
+    }
+
+    /// The revision of the newest edit (any method taking `&mut self`).
+    pub fn revision(&self) -> u64 {
+        self.revision
+    }
+
+    /// Records an edit of `key` (its transform, flags, parent or
+    /// attachments): the node and every ancestor learn that their subtree changed.
+    fn touch(&mut self, key: NodeKey) {
+        self.revision += 1;
+        let revision = self.revision;
+        if let Some(node) = self.nodes.get_mut(key) {
+            node.revision = revision;
+        }
+        let mut cursor = Some(key);
+        while let Some(k) = cursor {
+            let Some(node) = self.nodes.get_mut(k) else { break };
+            node.subtree_revision = revision;
+            cursor = node.parent;
+        }
+    }
+
     /// Adds a geometry asset.
     pub fn add_geometry(&mut self, geometry: Geometry) -> GeometryHandle {
+        self.revision += 1;
         self.geometries.insert(Arc::new(geometry))
     }
 
     /// Adds a material asset (sanitized: NaN and out-of-range values fixed).
     pub fn add_material(&mut self, material: Material) -> MaterialHandle {
+        self.revision += 1;
         self.materials.insert(material.sanitized())
     }
 
@@ -127,6 +177,7 @@ impl Scene {
     pub fn add_node(&mut self, name: impl Into<String>, local: Transform) -> NodeKey {
         let key = self.nodes.insert(Node::new(name.into(), None, local));
         self.roots.push(key);
+        self.touch(key);
         key
     }
 
@@ -142,15 +193,21 @@ impl Scene {
         }
         let key = self.nodes.insert(Node::new(name.into(), Some(parent), local));
         self.nodes[parent].children.push(key);
+        self.touch(key);
         Ok(key)
     }
 
     /// Removes a node and its whole subtree.
     pub fn remove_node(&mut self, key: NodeKey) -> Result<(), SceneError> {
         let node = self.nodes.get(key).ok_or(SceneError::NoSuchNode(key))?;
-        match node.parent {
+        let parent = node.parent;
+        match parent {
             Some(p) => self.nodes[p].children.retain(|c| *c != key),
             None => self.roots.retain(|r| *r != key),
+        }
+        match parent {
+            Some(p) => self.touch(p),
+            None => self.revision += 1,
         }
         let mut stack = vec![key];
         while let Some(k) = stack.pop() {
@@ -182,6 +239,7 @@ impl Scene {
             None => self.roots.push(child),
         }
         self.nodes[child].parent = parent;
+        self.touch(child);
         Ok(())
     }
 
@@ -212,12 +270,14 @@ impl Scene {
     /// Replaces a node's local transform.
     pub fn set_local_transform(&mut self, key: NodeKey, local: Transform) -> Result<(), SceneError> {
         self.node_mut(key)?.local = local;
+        self.touch(key);
         Ok(())
     }
 
     /// Replaces a node's flags.
     pub fn set_flags(&mut self, key: NodeKey, flags: NodeFlags) -> Result<(), SceneError> {
         self.node_mut(key)?.flags = flags;
+        self.touch(key);
         Ok(())
     }
 
@@ -238,25 +298,28 @@ impl Scene {
             });
         }
         self.node_mut(key)?.renderable = Some(renderable);
+        self.touch(key);
         Ok(())
     }
 
     /// Attaches (or with `None` removes) a light.
     pub fn set_light(&mut self, key: NodeKey, light: Option<Light>) -> Result<(), SceneError> {
         self.node_mut(key)?.light = light;
+        self.touch(key);
         Ok(())
     }
 
     /// Attaches (or removes) a camera.
     pub fn set_camera(&mut self, key: NodeKey, camera: Option<Camera>) -> Result<(), SceneError> {
         self.node_mut(key)?.camera = camera;
+        self.touch(key);
         Ok(())
     }
 
-    /// Resolves every node's world matrix from the hierarchy into `out`
-    /// (cleared first, capacity kept). Composition is done in `f64`, so
-    /// deep hierarchies and large offsets lose no precision before the final
-    /// rounding to `f32`.
+    /// Brings `out` up to date with every node's world matrix. Subtrees
+    /// untouched since `out` was last resolved against this scene are not
+    /// visited at all. Composition is done in `f64`, so deep hierarchies and
+    /// large offsets lose no precision before the final rounding to `f32`.
     pub fn resolve_world_transforms(&self, out: &mut WorldTransforms) {
         out.resolve(self);
     }

@@ -102,6 +102,10 @@ pub struct Node {
     pub light: Option<Light>,
     /// The camera it carries, if any.
     pub camera: Option<Camera>,
+    /// Scene revision of this node's last own edit.
+    pub(crate) revision: u64,
+    /// Newest revision of any edit in this node's subtree.
+    pub(crate) subtree_revision: u64,
 }
 
 impl Node {
@@ -115,6 +119,8 @@ impl Node {
             renderable: None,
             light: None,
             camera: None,
+            revision: 0,
+            subtree_revision: 0,
         }
     }
 

@@ -5,14 +5,21 @@ use slotmap::SecondaryMap;
 
 use super::{NodeKey, Scene};
 
-/// Every node's world matrix and its effective visibility for one frame.
+/// Every node's world matrix and its effective visibility, kept up to date
+/// across frames.
 ///
 /// A node is effectively visible when it and all its ancestors are visible:
-/// hiding a parent hides its subtree.
+/// hiding a parent hides its subtree. Resolution is incremental: a subtree
+/// whose newest edit is older than the last resolution is skipped without
+/// being visited, and within a visited subtree only nodes whose own or an
+/// ancestor's transform changed are recomputed.
 #[derive(Default)]
 pub struct WorldTransforms {
     world: SecondaryMap<NodeKey, (DMat4, bool)>,
-    stack: Vec<(NodeKey, DMat4, bool)>,
+    stack: Vec<(NodeKey, DMat4, bool, bool)>,
+    scene_id: u64,
+    resolved_revision: u64,
+    recomputed_last: usize,
 }
 
 impl WorldTransforms {
@@ -22,20 +29,50 @@ impl WorldTransforms {
     }
 
     pub(super) fn resolve(&mut self, scene: &Scene) {
-        self.world.clear();
+        self.recomputed_last = 0;
+        if self.scene_id != scene.id() {
+            self.world.clear();
+            self.scene_id = scene.id();
+            self.resolved_revision = 0;
+        }
+        if self.resolved_revision == scene.revision() {
+            return;
+        }
         self.stack.clear();
         for root in scene.roots().iter().rev() {
-            self.stack.push((*root, DMat4::IDENTITY, true));
+            self.stack.push((*root, DMat4::IDENTITY, true, false));
         }
-        while let Some((key, parent_world, parent_visible)) = self.stack.pop() {
+        while let Some((key, parent_world, parent_visible, parent_changed)) = self.stack.pop() {
             let Some(node) = scene.node(key) else { continue };
-            let world = parent_world * node.local.to_dmat4();
-            let visible = parent_visible && node.is_visible();
-            self.world.insert(key, (world, visible));
+            if !parent_changed && node.subtree_revision <= self.resolved_revision {
+                continue; // nothing below here changed: the cached values stand
+            }
+            let cached = self.world.get(key).copied();
+            let changed = parent_changed || node.revision > self.resolved_revision || cached.is_none();
+            let (world, visible) = match cached {
+                Some(values) if !changed => values,
+                _ => {
+                    self.recomputed_last += 1;
+                    let values = (parent_world * node.local.to_dmat4(), parent_visible && node.is_visible());
+                    self.world.insert(key, values);
+                    values
+                }
+            };
             for child in node.children.iter().rev() {
-                self.stack.push((*child, world, visible));
+                self.stack.push((*child, world, visible, changed));
             }
         }
+        self.resolved_revision = scene.revision();
+    }
+
+    /// Nodes whose world matrix was recomputed by the last resolution.
+    pub fn recomputed_last(&self) -> usize {
+        self.recomputed_last
+    }
+
+    /// The scene revision this table reflects.
+    pub fn resolved_revision(&self) -> u64 {
+        self.resolved_revision
     }
 
     /// The world matrix rounded to `f32`.
@@ -73,6 +110,58 @@ mod tests {
         scene.resolve_world_transforms(&mut world);
         let p = world.get(child).unwrap().transform_point3(Vec3::ZERO);
         assert!((p - Vec3::new(9.0, 0.0, 0.0)).length() < 1e-5, "{p}");
+    }
+
+    #[test]
+    fn unchanged_subtrees_cost_nothing_and_edits_recompute_only_what_they_move() {
+        let mut scene = Scene::new();
+        let a = scene.add_node("a", Transform::IDENTITY);
+        let a1 = scene.add_child(a, "a1", Transform::from_translation(Vec3::X)).unwrap();
+        let a2 = scene.add_child(a1, "a2", Transform::from_translation(Vec3::X)).unwrap();
+        let b = scene.add_node("b", Transform::IDENTITY);
+        let b1 = scene.add_child(b, "b1", Transform::IDENTITY).unwrap();
+        let mut world = super::WorldTransforms::new();
+        scene.resolve_world_transforms(&mut world);
+        assert_eq!(world.recomputed_last(), 5);
+
+        scene.resolve_world_transforms(&mut world);
+        assert_eq!(world.recomputed_last(), 0, "nothing changed");
+
+        // Moving a1 recomputes a1 and its child a2, not a, b or b1.
+        scene.set_local_transform(a1, Transform::from_translation(Vec3::Y)).unwrap();
+        scene.resolve_world_transforms(&mut world);
+        assert_eq!(world.recomputed_last(), 2);
+        assert_eq!(world.get(a2).unwrap().w_axis.truncate(), Vec3::new(1.0, 1.0, 0.0));
+
+        // A leaf edit recomputes the leaf only.
+        scene.set_local_transform(b1, Transform::from_translation(Vec3::Z)).unwrap();
+        scene.resolve_world_transforms(&mut world);
+        assert_eq!(world.recomputed_last(), 1);
+        assert_eq!(world.get(b1).unwrap().w_axis.truncate(), Vec3::Z);
+
+        // Hiding b hides b1 through the incremental path too.
+        scene.set_flags(b, NodeFlags::empty()).unwrap();
+        scene.resolve_world_transforms(&mut world);
+        assert!(!world.is_effectively_visible(b1));
+
+        // Re-parenting a2 under b moves it with its new parent.
+        scene.set_parent(a2, Some(b)).unwrap();
+        scene.resolve_world_transforms(&mut world);
+        assert_eq!(world.get(a2).unwrap().w_axis.truncate(), Vec3::X);
+    }
+
+    #[test]
+    fn a_table_used_with_another_scene_starts_over() {
+        let mut first = Scene::new();
+        let key = first.add_node("n", Transform::from_translation(Vec3::X));
+        let mut world = super::WorldTransforms::new();
+        first.resolve_world_transforms(&mut world);
+        let mut second = Scene::new();
+        let other = second.add_node("m", Transform::from_translation(Vec3::Y));
+        second.resolve_world_transforms(&mut world);
+        assert_eq!(world.get(other).unwrap().w_axis.truncate(), Vec3::Y);
+        assert_eq!(world.recomputed_last(), 1);
+        let _ = key;
     }
 
     #[test]

@@ -59,6 +59,10 @@ pub struct FrameCollection {
     pub positional_lights: Vec<PositionalLightRecord>,
     /// Nodes skipped this frame because of a degenerate transform.
     pub skipped_nodes: u32,
+    /// (scene id, scene revision) the collection reflects.
+    collected: Option<(u64, u64)>,
+    /// The last `collect` found the scene unchanged and did nothing.
+    reused_last: bool,
 }
 
 /// The normal matrix `transpose(inverse(upper3x3(world)))`, or `None` when
@@ -82,6 +86,12 @@ impl FrameCollection {
     /// Runs the frame phase over `scene`, reusing this collection's buffers.
     pub fn collect(&mut self, scene: &Scene) {
         let _span = info_span!("frame_phase", nodes = scene.node_count()).entered();
+        // An unchanged scene has unchanged transforms, bounds and lights.
+        self.reused_last = self.collected == Some((scene.id(), scene.revision()));
+        if self.reused_last {
+            return;
+        }
+        self.collected = Some((scene.id(), scene.revision()));
         {
             let _span = info_span!("world_transforms").entered();
             scene.resolve_world_transforms(&mut self.world);
@@ -139,6 +149,12 @@ impl FrameCollection {
                 flags: node.flags,
             });
         }
+    }
+
+    /// True when the last `collect` reused the previous frame's results
+    /// because the scene had not changed.
+    pub fn reused_last(&self) -> bool {
+        self.reused_last
     }
 
     /// A stable text listing of the gated lights, for snapshot tests.

@@ -1,0 +1,106 @@
+//! Frame-phase rules: work done once and reused, degenerate transforms
+//! skipped, geometry only for what some view draws, view filters.
+
+use glam::{UVec2, Vec3, Vec4};
+use oxygen_bindless::SlotAllocators;
+use oxygen_core::scene::node_index;
+use oxygen_core::{
+    Camera, Geometry, LookAtResolver, Material, NodeFlags, NodeKey, Renderable, ResolvedView, Scene, Transform,
+    ViewContext, ViewId, ViewResolver,
+};
+use oxygen_sceneprep::{ScenePrep, ViewFilter, ViewPrepOptions, ViewRequest};
+
+fn view(scene: &Scene) -> ResolvedView {
+    let camera = LookAtResolver {
+        camera: Camera::perspective(1.2, 0.1, Some(100.0)),
+        eye: Vec3::new(0.0, 0.0, 10.0),
+        target: Vec3::ZERO,
+        up: Vec3::Y,
+        viewport: UVec2::new(64, 64),
+    };
+    camera.resolve(&ViewContext { view_id: ViewId(0), frame_index: 1, time_seconds: 0.0 }, scene).unwrap()
+}
+
+fn cube_node(scene: &mut Scene, name: &str, t: Transform) -> NodeKey {
+    let geometry = scene.add_geometry(Geometry::cube(1.0));
+    let material = scene.add_material(Material::opaque(name, Vec4::ONE));
+    let node = scene.add_node(name, t);
+    scene.set_renderable(node, Renderable { geometry, materials: vec![material] }).unwrap();
+    node
+}
+
+fn drawn(prep: &ScenePrep) -> Vec<u32> {
+    prep.frames()[0].draws().iter().map(|d| d.node_id).collect()
+}
+
+#[test]
+fn an_unchanged_scene_reuses_the_frame_phase_and_an_edit_redoes_it() {
+    let mut scene = Scene::new();
+    let node = cube_node(&mut scene, "cube", Transform::IDENTITY);
+    let mut prep = ScenePrep::new();
+    let mut slots = SlotAllocators::default();
+    let v = view(&scene);
+    let request = [ViewRequest { view: &v, options: Default::default() }];
+    prep.prepare(&scene, &request, &mut slots).unwrap();
+    prep.prepare(&scene, &request, &mut slots).unwrap();
+    assert_eq!(prep.stats().frame_phase_reuses, 1);
+
+    scene.set_local_transform(node, Transform::from_translation(Vec3::X)).unwrap();
+    prep.prepare(&scene, &request, &mut slots).unwrap();
+    assert_eq!(prep.stats().frame_phase_reuses, 1, "an edit must be collected");
+    assert_eq!(prep.frames()[0].transforms().world[0].w_axis.truncate(), Vec3::X);
+}
+
+#[test]
+fn singular_and_non_finite_transforms_are_skipped_and_never_drawn() {
+    let mut scene = Scene::new();
+    let good = cube_node(&mut scene, "good", Transform::IDENTITY);
+    cube_node(&mut scene, "flat", Transform::IDENTITY.with_scale(Vec3::new(1.0, 0.0, 1.0)));
+    cube_node(&mut scene, "nan", Transform::from_translation(Vec3::new(f32::NAN, 0.0, 0.0)));
+    cube_node(&mut scene, "infinite", Transform::IDENTITY.with_scale(Vec3::splat(f32::INFINITY)));
+    let mut prep = ScenePrep::new();
+    let v = view(&scene);
+    prep.prepare(&scene, &[ViewRequest { view: &v, options: Default::default() }], &mut SlotAllocators::default())
+        .unwrap();
+    assert_eq!(drawn(&prep), vec![node_index(good)]);
+    assert_eq!(prep.frame_collection().skipped_nodes, 3);
+    let transforms = prep.frames()[0].transforms();
+    assert!(transforms.world.iter().all(|m| m.is_finite()));
+    assert!(transforms.normal.iter().all(|n| n.columns.iter().flatten().all(|x| x.is_finite())));
+}
+
+#[test]
+fn tiny_but_valid_scales_are_kept() {
+    let mut scene = Scene::new();
+    let tiny = cube_node(&mut scene, "tiny", Transform::IDENTITY.with_scale(Vec3::splat(1e-4)));
+    let mut prep = ScenePrep::new();
+    let v = view(&scene);
+    prep.prepare(&scene, &[ViewRequest { view: &v, options: Default::default() }], &mut SlotAllocators::default())
+        .unwrap();
+    assert_eq!(drawn(&prep), vec![node_index(tiny)]);
+}
+
+#[test]
+fn a_mesh_no_view_draws_gets_no_slots() {
+    let mut scene = Scene::new();
+    cube_node(&mut scene, "seen", Transform::IDENTITY);
+    cube_node(&mut scene, "behind the camera", Transform::from_translation(Vec3::new(0.0, 0.0, 50.0)));
+    let mut prep = ScenePrep::new();
+    let v = view(&scene);
+    prep.prepare(&scene, &[ViewRequest { view: &v, options: Default::default() }], &mut SlotAllocators::default())
+        .unwrap();
+    assert_eq!(prep.resident_geometry(), 1);
+}
+
+#[test]
+fn a_shadow_view_takes_shadow_casters_only() {
+    let mut scene = Scene::new();
+    let caster = cube_node(&mut scene, "caster", Transform::IDENTITY);
+    let receiver = cube_node(&mut scene, "receiver only", Transform::from_translation(Vec3::X * 2.0));
+    scene.set_flags(receiver, NodeFlags::VISIBLE).unwrap();
+    let mut prep = ScenePrep::new();
+    let v = view(&scene);
+    let options = ViewPrepOptions { filter: ViewFilter::ShadowCastersOnly, ..Default::default() };
+    prep.prepare(&scene, &[ViewRequest { view: &v, options }], &mut SlotAllocators::default()).unwrap();
+    assert_eq!(drawn(&prep), vec![node_index(caster)]);
+}
