@@ -32,7 +32,8 @@ pub use light::{Light, LightKind, Mobility};
 pub use material::{AlphaMode, Material};
 pub use math::{Aabb, Frustum, Plane, Sphere};
 pub use scene::{
-    GeometryHandle, MaterialHandle, Node, NodeFlags, NodeKey, Renderable, Scene, SceneError, Transform, WorldTransforms,
+    GeometryHandle, LodLevel, MaterialHandle, Node, NodeFlags, NodeKey, Renderable, Scene, SceneError, Transform,
+    WorldTransforms,
 };
 pub use view::{LookAtResolver, ResolvedView, ViewContext, ViewError, ViewId, ViewResolver};
 

@@ -233,9 +233,11 @@ impl ScenePrep {
                 collect_view(scene, frame, views[i].view, &views[i].options, &mut w.items);
                 w.keyed.clear();
                 w.missing_geometry.clear();
+                let depth_only = views[i].options.depth_only;
                 for (index, item) in w.items.iter().enumerate() {
-                    w.keyed.push((sort_key(item.pass_mask, item.material, item.view_depth), index as u32));
-                    let handle = frame.renderables[item.renderable as usize].geometry;
+                    let material_key = if depth_only { 0 } else { item.material };
+                    w.keyed.push((sort_key(item.pass_mask, material_key, item.view_depth), index as u32));
+                    let handle = item.geometry;
                     if geometry.get(handle).is_none() && !w.missing_geometry.contains(&handle) {
                         w.missing_geometry.push(handle);
                     }
@@ -282,8 +284,8 @@ impl ScenePrep {
                     let entry = &frame.renderables[item.renderable as usize];
                     // Resolved in the serial step; a mesh missing from the
                     // scene was never turned into an item.
-                    let Some(g) = geometry.get(entry.geometry) else { continue };
-                    let Some(sub) = scene.geometry(entry.geometry).map(|m| m.submeshes()[item.submesh as usize]) else {
+                    let Some(g) = geometry.get(item.geometry) else { continue };
+                    let Some(sub) = scene.geometry(item.geometry).map(|m| m.submeshes()[item.submesh as usize]) else {
                         continue;
                     };
                     out.draws.push(DrawMetadata {

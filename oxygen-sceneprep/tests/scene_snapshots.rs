@@ -57,7 +57,7 @@ fn every_alpha_class_and_sidedness_gets_its_own_partition_in_pass_order() {
 fn every_light_type_and_gating_rule() {
     let mut scene = Scene::new();
     let aim = |dir: Vec3| Quat::from_rotation_arc(Vec3::NEG_Z, dir.normalize());
-    let mut add = |scene: &mut Scene, name: &str, at: Vec3, dir: Vec3, light: Light, flags: NodeFlags| {
+    let add = |scene: &mut Scene, name: &str, at: Vec3, dir: Vec3, light: Light, flags: NodeFlags| {
         let node = scene.add_node(name, Transform::from_translation(at).with_rotation(aim(dir)));
         scene.set_light(node, Some(light)).unwrap();
         scene.set_flags(node, flags).unwrap();

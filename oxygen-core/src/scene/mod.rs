@@ -13,7 +13,7 @@
 mod node;
 mod world;
 
-pub use node::{Node, NodeFlags, Renderable, Transform};
+pub use node::{LodLevel, Node, NodeFlags, Renderable, Transform};
 pub use world::WorldTransforms;
 
 use std::sync::Arc;
@@ -73,6 +73,14 @@ pub enum SceneError {
         given: usize,
         /// Submeshes in the geometry.
         submeshes: usize,
+    },
+    /// A level of detail that does not fit its node.
+    #[error("LOD of node '{node}': {reason}")]
+    BadLod {
+        /// Node name.
+        node: String,
+        /// What is wrong.
+        reason: String,
     },
     /// Re-parenting would make a node its own ancestor.
     #[error("making {child:?} a child of {parent:?} would create a cycle")]
@@ -298,6 +306,40 @@ impl Scene {
             });
         }
         self.node_mut(key)?.renderable = Some(renderable);
+        self.touch(key);
+        Ok(())
+    }
+
+    /// Gives a renderable node coarser meshes for when it is small on screen
+    /// (sorted by decreasing `below_screen_fraction`; empty removes them).
+    pub fn set_lods(&mut self, key: NodeKey, mut lods: Vec<LodLevel>) -> Result<(), SceneError> {
+        let node = self.nodes.get(key).ok_or(SceneError::NoSuchNode(key))?;
+        let base = node.renderable.as_ref().ok_or_else(|| SceneError::BadLod {
+            node: node.name.clone(),
+            reason: "the node has no renderable".into(),
+        })?;
+        let submeshes = self.geometries.get(base.geometry).map_or(0, |g| g.submeshes().len());
+        for lod in &lods {
+            let geometry = self.geometries.get(lod.geometry).ok_or(SceneError::NoSuchGeometry(lod.geometry))?;
+            if geometry.submeshes().len() != submeshes {
+                return Err(SceneError::BadLod {
+                    node: node.name.clone(),
+                    reason: format!(
+                        "LOD '{}' has {} submeshes, the base mesh {submeshes}",
+                        geometry.name(),
+                        geometry.submeshes().len()
+                    ),
+                });
+            }
+            if !(lod.below_screen_fraction > 0.0 && lod.below_screen_fraction.is_finite()) {
+                return Err(SceneError::BadLod {
+                    node: node.name.clone(),
+                    reason: format!("screen fraction {} is not a positive finite number", lod.below_screen_fraction),
+                });
+            }
+        }
+        lods.sort_by(|a, b| b.below_screen_fraction.total_cmp(&a.below_screen_fraction));
+        self.node_mut(key)?.lods = lods;
         self.touch(key);
         Ok(())
     }

@@ -83,6 +83,16 @@ pub struct Renderable {
     pub materials: Vec<MaterialHandle>,
 }
 
+/// A coarser mesh a renderable switches to when it covers little of the screen.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LodLevel {
+    /// The coarser mesh; same submesh count as the renderable's geometry.
+    pub geometry: GeometryHandle,
+    /// Used when the bounding sphere's projected diameter is below this
+    /// fraction of the viewport height.
+    pub below_screen_fraction: f32,
+}
+
 /// One entry of the scene's node table.
 #[derive(Clone, Debug)]
 pub struct Node {
@@ -102,6 +112,8 @@ pub struct Node {
     pub light: Option<Light>,
     /// The camera it carries, if any.
     pub camera: Option<Camera>,
+    /// Coarser meshes of its renderable, by decreasing screen fraction.
+    pub lods: Vec<LodLevel>,
     /// Scene revision of this node's last own edit.
     pub(crate) revision: u64,
     /// Newest revision of any edit in this node's subtree.
@@ -119,6 +131,7 @@ impl Node {
             renderable: None,
             light: None,
             camera: None,
+            lods: Vec::new(),
             revision: 0,
             subtree_revision: 0,
         }

@@ -16,7 +16,9 @@ use oxygen_bindless::INVALID_SLOT;
 use std::sync::Arc;
 
 use oxygen_core::scene::{geometry_index, node_index};
-use oxygen_core::{Aabb, GeometryHandle, LightKind, Mobility, NodeFlags, NodeKey, Scene, Sphere, WorldTransforms};
+use oxygen_core::{
+    Aabb, GeometryHandle, LightKind, LodLevel, Mobility, NodeFlags, NodeKey, Scene, Sphere, WorldTransforms,
+};
 use tracing::{info_span, warn};
 
 use crate::prepared_frame::FrameTransforms;
@@ -41,6 +43,8 @@ pub struct RenderableEntry {
     pub world_sphere: Sphere,
     /// Node flags (shadow casting).
     pub flags: NodeFlags,
+    /// Its LOD levels: `FrameCollection::lod_levels[start..start + count]`.
+    pub lods: (u32, u32),
 }
 
 /// The frame phase's output, shared read-only by every view.
@@ -53,6 +57,8 @@ pub struct FrameCollection {
     /// World and normal matrices indexed by `transform_index`, shared (not
     /// copied) with every view's prepared frame.
     pub transforms: Arc<FrameTransforms>,
+    /// LOD levels of all renderables, referenced by [`RenderableEntry::lods`].
+    pub lod_levels: Vec<LodLevel>,
     /// Gated directional lights.
     pub directional_lights: Vec<DirectionalLightRecord>,
     /// Gated point and spot lights.
@@ -104,6 +110,7 @@ impl FrameCollection {
         transforms.normal.clear();
         self.directional_lights.clear();
         self.positional_lights.clear();
+        self.lod_levels.clear();
         self.skipped_nodes = 0;
 
         let _span = info_span!("collect_renderables_and_lights").entered();
@@ -134,6 +141,8 @@ impl FrameCollection {
                 self.skipped_nodes += 1;
                 continue;
             }
+            let lods = (self.lod_levels.len() as u32, node.lods.len() as u32);
+            self.lod_levels.extend_from_slice(&node.lods);
             let transforms = Arc::make_mut(&mut self.transforms);
             let transform_index = transforms.world.len() as u32;
             transforms.world.push(world);
@@ -147,6 +156,7 @@ impl FrameCollection {
                 world_aabb,
                 world_sphere: Sphere::from_aabb(&world_aabb),
                 flags: node.flags,
+                lods,
             });
         }
     }

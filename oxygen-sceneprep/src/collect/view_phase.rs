@@ -6,11 +6,14 @@
 //! 2. **visibility** against the view frustum with the view's [`CullBound`]
 //!    (both conservative: they may keep an invisible object, never drop a
 //!    visible one);
-//! 3. **produce** one [`RenderItem`] per submesh, with its material's
-//!    [`PassMask`] and its view depth.
+//! 3. **LOD selection** by the projected size of the bounding sphere, where
+//!    a renderable has LOD levels (culling always uses the base mesh's bounds);
+//! 4. **produce** one [`RenderItem`] per submesh, with its material's
+//!    [`PassMask`] and its view depth. A depth-only view drops transparent
+//!    submeshes and leaves materials out of the sort key.
 
 use oxygen_core::scene::material_index;
-use oxygen_core::{NodeFlags, ResolvedView, Scene};
+use oxygen_core::{GeometryHandle, NodeFlags, ResolvedView, Scene};
 use tracing::info_span;
 
 use crate::{FrameCollection, PassMask};
@@ -36,12 +39,33 @@ pub enum CullBound {
 }
 
 /// Per-view choices for ScenePrep.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ViewPrepOptions {
     /// Pre-filter.
     pub filter: ViewFilter,
     /// Visibility test bound.
     pub cull: CullBound,
+    /// Multiplies the projected size before LOD selection: above 1 keeps
+    /// finer meshes longer (accuracy), below 1 switches earlier (speed).
+    pub lod_bias: f32,
+    /// The view only writes depth (shadow views): transparent submeshes are
+    /// dropped and draws sort by pass class and depth only, not by material.
+    pub depth_only: bool,
+}
+
+impl Default for ViewPrepOptions {
+    fn default() -> Self {
+        ViewPrepOptions { filter: ViewFilter::All, cull: CullBound::Aabb, lod_bias: 1.0, depth_only: false }
+    }
+}
+
+/// The fraction of the viewport height covered by a sphere's projected
+/// diameter (for a perspective view, at the sphere centre's depth).
+pub fn projected_screen_fraction(view: &ResolvedView, radius: f32, view_depth: f32) -> f32 {
+    // projection.y_axis.y is cot(fov_y / 2) for perspective, 1 / half_height
+    // for orthographic; w_axis.w is 0 for perspective, 1 for orthographic.
+    let scale = view.projection.y_axis.y;
+    if view.projection.w_axis.w == 0.0 { radius * scale / view_depth.max(view.near) } else { radius * scale }
 }
 
 /// One submesh of one visible renderable, ready for finalization.
@@ -49,6 +73,8 @@ pub struct ViewPrepOptions {
 pub struct RenderItem {
     /// Index into [`FrameCollection::renderables`].
     pub renderable: u32,
+    /// The mesh drawn: the renderable's geometry or one of its LODs.
+    pub geometry: GeometryHandle,
     /// Submesh number.
     pub submesh: u32,
     /// Stable material id.
@@ -86,14 +112,29 @@ pub fn collect_view(
         let view_depth = -(view_row_z.truncate().dot(center) + view_row_z.w);
         // The node was checked in the frame phase; a renderable always exists.
         let Some(renderable) = scene.node(entry.node).and_then(|n| n.renderable.as_ref()) else { continue };
+        let mut geometry = entry.geometry;
+        let (lod_start, lod_count) = entry.lods;
+        if lod_count > 0 {
+            let fraction =
+                2.0 * projected_screen_fraction(view, entry.world_sphere.radius, view_depth) * options.lod_bias;
+            for lod in &frame.lod_levels[lod_start as usize..(lod_start + lod_count) as usize] {
+                if fraction < lod.below_screen_fraction {
+                    geometry = lod.geometry;
+                }
+            }
+        }
         for (submesh, material_handle) in renderable.materials.iter().enumerate() {
             let Some(material) = scene.material(*material_handle) else { continue };
             let mut pass_mask = PassMask::for_material(material.alpha_mode, material.double_sided);
+            if options.depth_only && pass_mask.contains(PassMask::TRANSPARENT) {
+                continue;
+            }
             if entry.flags.contains(NodeFlags::CASTS_SHADOWS) {
                 pass_mask |= PassMask::CASTS_SHADOWS;
             }
             items.push(RenderItem {
                 renderable: i as u32,
+                geometry,
                 submesh: submesh as u32,
                 material: material_index(*material_handle),
                 pass_mask,
