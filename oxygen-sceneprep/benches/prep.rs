@@ -23,7 +23,9 @@ use oxygen_bindless::SlotAllocators;
 use oxygen_core::{AlphaMode, Camera, Geometry, LookAtResolver, Material, Renderable, ResolvedView, Scene, Transform};
 use oxygen_core::{ViewContext, ViewId, ViewResolver};
 use oxygen_sceneprep::finalize::radix_sort::radix_sort_by_key;
-use oxygen_sceneprep::{DrawMetadata, NormalMatrix, RenderableEntry, ScenePrep, ViewRequest};
+use oxygen_sceneprep::{
+    CullBound, DrawMetadata, NormalMatrix, RenderableEntry, ScenePrep, ViewPrepOptions, ViewRequest,
+};
 
 const SPACING: f32 = 12.0;
 
@@ -142,6 +144,45 @@ fn main() {
                 1.0 + 0.3 * (v as f64 - 1.0),
             );
         }
+    }
+
+    // The cull-bound knob: the sphere test is cheaper per object but keeps
+    // more draws (the `sphere_culling_keeps_a_superset` test reports how many).
+    let n = 100_000;
+    let (scene, extent) = city(n);
+    let resolved = views(&scene, extent, 6);
+    println!();
+    println!("| cull bound (N = {n}, V = 6) | prep ms | draws/frame |");
+    println!("|---|---:|---:|");
+    for cull in [CullBound::Aabb, CullBound::Sphere] {
+        let options = ViewPrepOptions { cull, ..Default::default() };
+        let requests: Vec<_> = resolved.iter().map(|view| ViewRequest { view, options }).collect();
+        let mut prep = ScenePrep::new();
+        let mut slots = SlotAllocators::new(u64::MAX / 2);
+        let mut draws = 0;
+        let seconds = time_it(budget, || {
+            let frames = prep.prepare(&scene, &requests, &mut slots).expect("prepare");
+            draws = frames.iter().map(|f| f.draws().len()).sum::<usize>();
+        });
+        println!("| {cull:?} | {:.2} | {draws} |", seconds * 1e3);
+    }
+
+    // Threads: the same frame on 1 thread and on all of them.
+    let requests: Vec<_> = resolved.iter().map(|view| ViewRequest { view, options: Default::default() }).collect();
+    let mut per_threads = Vec::new();
+    for threads in [1, std::thread::available_parallelism().map_or(1, |t| t.get())] {
+        let mut prep = ScenePrep::with_threads(threads);
+        let mut slots = SlotAllocators::new(u64::MAX / 2);
+        per_threads.push((
+            threads,
+            time_it(budget, || {
+                black_box(prep.prepare(&scene, &requests, &mut slots).map(|f| f.len())).map(|_| ()).expect("prepare")
+            }),
+        ));
+    }
+    println!();
+    for (threads, seconds) in &per_threads {
+        println!("N = {n}, V = 6 on {threads} thread(s): {:.2} ms", seconds * 1e3);
     }
 
     // Sort: radix against the standard unstable comparison sort, 100k keys

@@ -201,3 +201,27 @@ fn the_same_scene_and_views_give_byte_identical_draws_twice_in_a_row_and_across_
         }
     }
 }
+
+/// The cost of the cheaper sphere bound: it keeps every draw the AABB test
+/// keeps (the sphere contains the box) plus some invisible ones. Reports the
+/// extra fraction over the random scenes.
+#[test]
+fn sphere_culling_keeps_a_superset_of_aabb_culling_and_reports_its_extra_draws() {
+    let (mut aabb_total, mut sphere_total) = (0usize, 0usize);
+    for seed in 0..40 {
+        let mut rng = Rng(4000 + seed);
+        let scene = random_scene(&mut rng, 300);
+        let view = random_view(&mut rng, &scene, 0);
+        let aabb = prepare(&scene, std::slice::from_ref(&view), CullBound::Aabb);
+        let sphere = prepare(&scene, std::slice::from_ref(&view), CullBound::Sphere);
+        let kept =
+            |p: &ScenePrep| p.frames()[0].draws().iter().map(|d| d.node_id).collect::<std::collections::HashSet<_>>();
+        let (a, s) = (kept(&aabb), kept(&sphere));
+        assert!(a.is_subset(&s), "seed {seed}: the sphere dropped a draw the box kept");
+        aabb_total += a.len();
+        sphere_total += s.len();
+    }
+    let extra = (sphere_total - aabb_total) as f64 / aabb_total.max(1) as f64;
+    eprintln!("sphere culling kept {sphere_total} draws vs {aabb_total} for AABB: {:.1} % extra", extra * 100.0);
+    assert!(sphere_total >= aabb_total);
+}
