@@ -10,7 +10,8 @@
 //! per view, and the ratio to a `memcpy` of the bytes prep must read and
 //! write, timed in the same run:
 //!
-//! * read: each view scans the renderable list (`RenderableEntry` per renderable);
+//! * read: each view scans the renderable list (a `RenderableEntry` and a
+//!   `SubmeshEntry` per renderable);
 //! * write: world + normal matrices once per frame, one `DrawMetadata` per draw.
 //!
 //! It also times the draw sort: radix sort against `sort_unstable` on the same keys.
@@ -125,7 +126,7 @@ fn main() {
             if v == 1 {
                 one_view_seconds = seconds;
             }
-            let floor_bytes = v * n * size_of::<RenderableEntry>()
+            let floor_bytes = v * n * (size_of::<RenderableEntry>() + size_of::<SubmeshEntry>())
                 + n * (size_of::<[[f32; 4]; 4]>() + size_of::<NormalMatrix>())
                 + draws * size_of::<DrawMetadata>();
             let source = vec![1u8; floor_bytes];

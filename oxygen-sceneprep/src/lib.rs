@@ -26,7 +26,7 @@ mod prepared_frame;
 mod scene_prep;
 pub mod worker_pool;
 
-pub use collect::{CullBound, FrameCollection, RenderItem, RenderableEntry, ViewFilter, ViewPrepOptions};
+pub use collect::{CullBound, FrameCollection, RenderItem, RenderableEntry, SubmeshEntry, ViewFilter, ViewPrepOptions};
 pub use draw_metadata::DrawMetadata;
 pub use gpu_records::{DirectionalLightRecord, GPU_RECORDS_WGSL, MaterialRecord, NormalMatrix, PositionalLightRecord};
 pub use pass_mask::PassMask;

@@ -285,14 +285,11 @@ impl ScenePrep {
                     // Resolved in the serial step; a mesh missing from the
                     // scene was never turned into an item.
                     let Some(g) = geometry.get(item.geometry) else { continue };
-                    let Some(sub) = scene.geometry(item.geometry).map(|m| m.submeshes()[item.submesh as usize]) else {
-                        continue;
-                    };
                     out.draws.push(DrawMetadata {
                         vertex_slot: g.vertices.start,
                         index_slot: g.indices.start,
-                        first_index: sub.first_index,
-                        index_count: sub.index_count,
+                        first_index: item.first_index,
+                        index_count: item.index_count,
                         base_vertex: 0,
                         instance_count: 1,
                         transform_index: entry.transform_index,

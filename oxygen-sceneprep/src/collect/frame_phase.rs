@@ -15,14 +15,14 @@ use glam::{Mat3, Mat4, Vec3};
 use oxygen_bindless::INVALID_SLOT;
 use std::sync::Arc;
 
-use oxygen_core::scene::{geometry_index, node_index};
+use oxygen_core::scene::{geometry_index, material_index, node_index};
 use oxygen_core::{
     Aabb, GeometryHandle, LightKind, LodLevel, Mobility, NodeFlags, NodeKey, Scene, Sphere, WorldTransforms,
 };
 use tracing::{info_span, warn};
 
 use crate::prepared_frame::FrameTransforms;
-use crate::{DirectionalLightRecord, PositionalLightRecord};
+use crate::{DirectionalLightRecord, PassMask, PositionalLightRecord};
 
 /// A renderable node that survived the frame phase.
 #[derive(Clone, Debug, PartialEq)]
@@ -45,6 +45,21 @@ pub struct RenderableEntry {
     pub flags: NodeFlags,
     /// Its LOD levels: `FrameCollection::lod_levels[start..start + count]`.
     pub lods: (u32, u32),
+    /// Its submeshes: `FrameCollection::submeshes[start..start + count]`.
+    pub submeshes: (u32, u32),
+}
+
+/// One submesh of a renderable with its material resolved once per frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SubmeshEntry {
+    /// Stable material id.
+    pub material: u32,
+    /// Pass class, variant and shadow bit.
+    pub pass_mask: PassMask,
+    /// First index in the base geometry.
+    pub first_index: u32,
+    /// Index count in the base geometry.
+    pub index_count: u32,
 }
 
 /// The frame phase's output, shared read-only by every view.
@@ -57,6 +72,8 @@ pub struct FrameCollection {
     /// World and normal matrices indexed by `transform_index`, shared (not
     /// copied) with every view's prepared frame.
     pub transforms: Arc<FrameTransforms>,
+    /// Submeshes of all renderables, referenced by [`RenderableEntry::submeshes`].
+    pub submeshes: Vec<SubmeshEntry>,
     /// LOD levels of all renderables, referenced by [`RenderableEntry::lods`].
     pub lod_levels: Vec<LodLevel>,
     /// Gated directional lights.
@@ -111,6 +128,7 @@ impl FrameCollection {
         self.directional_lights.clear();
         self.positional_lights.clear();
         self.lod_levels.clear();
+        self.submeshes.clear();
         self.skipped_nodes = 0;
 
         let _span = info_span!("collect_renderables_and_lights").entered();
@@ -141,6 +159,19 @@ impl FrameCollection {
                 self.skipped_nodes += 1;
                 continue;
             }
+            let submesh_start = self.submeshes.len() as u32;
+            let shadow =
+                if node.flags.contains(NodeFlags::CASTS_SHADOWS) { PassMask::CASTS_SHADOWS } else { PassMask::empty() };
+            for (range, handle) in geometry.submeshes().iter().zip(&renderable.materials) {
+                let Some(material) = scene.material(*handle) else { continue };
+                self.submeshes.push(SubmeshEntry {
+                    material: material_index(*handle),
+                    pass_mask: PassMask::for_material(material.alpha_mode, material.double_sided) | shadow,
+                    first_index: range.first_index,
+                    index_count: range.index_count,
+                });
+            }
+            let submeshes = (submesh_start, self.submeshes.len() as u32 - submesh_start);
             let lods = (self.lod_levels.len() as u32, node.lods.len() as u32);
             self.lod_levels.extend_from_slice(&node.lods);
             let transforms = Arc::make_mut(&mut self.transforms);
@@ -157,6 +188,7 @@ impl FrameCollection {
                 world_sphere: Sphere::from_aabb(&world_aabb),
                 flags: node.flags,
                 lods,
+                submeshes,
             });
         }
     }

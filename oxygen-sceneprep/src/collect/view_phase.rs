@@ -12,7 +12,6 @@
 //!    [`PassMask`] and its view depth. A depth-only view drops transparent
 //!    submeshes and leaves materials out of the sort key.
 
-use oxygen_core::scene::material_index;
 use oxygen_core::{GeometryHandle, NodeFlags, ResolvedView, Scene};
 use tracing::info_span;
 
@@ -83,6 +82,10 @@ pub struct RenderItem {
     pub pass_mask: PassMask,
     /// Distance of the bound's centre along the view direction.
     pub view_depth: f32,
+    /// First index of the submesh in `geometry`.
+    pub first_index: u32,
+    /// Index count of the submesh in `geometry`.
+    pub index_count: u32,
 }
 
 /// Runs the view phase for one view, appending to `items` (cleared first).
@@ -110,35 +113,42 @@ pub fn collect_view(
         }
         let center = entry.world_sphere.center;
         let view_depth = -(view_row_z.truncate().dot(center) + view_row_z.w);
-        // The node was checked in the frame phase; a renderable always exists.
-        let Some(renderable) = scene.node(entry.node).and_then(|n| n.renderable.as_ref()) else { continue };
-        let mut geometry = entry.geometry;
+        let mut lod_geometry = None;
         let (lod_start, lod_count) = entry.lods;
         if lod_count > 0 {
             let fraction =
                 2.0 * projected_screen_fraction(view, entry.world_sphere.radius, view_depth) * options.lod_bias;
             for lod in &frame.lod_levels[lod_start as usize..(lod_start + lod_count) as usize] {
                 if fraction < lod.below_screen_fraction {
-                    geometry = lod.geometry;
+                    lod_geometry = Some(lod.geometry);
                 }
             }
         }
-        for (submesh, material_handle) in renderable.materials.iter().enumerate() {
-            let Some(material) = scene.material(*material_handle) else { continue };
-            let mut pass_mask = PassMask::for_material(material.alpha_mode, material.double_sided);
-            if options.depth_only && pass_mask.contains(PassMask::TRANSPARENT) {
+        // Submesh data was cached by the frame phase, so the view phase reads
+        // only the frame's contiguous arrays, never the scene; a LOD only
+        // swaps the index ranges.
+        let lod_mesh = lod_geometry.and_then(|g| scene.geometry(g).map(|m| (g, m)));
+        let (start, count) = entry.submeshes;
+        for (submesh, cached) in frame.submeshes[start as usize..(start + count) as usize].iter().enumerate() {
+            if options.depth_only && cached.pass_mask.contains(PassMask::TRANSPARENT) {
                 continue;
             }
-            if entry.flags.contains(NodeFlags::CASTS_SHADOWS) {
-                pass_mask |= PassMask::CASTS_SHADOWS;
-            }
+            let (geometry, first_index, index_count) = match &lod_mesh {
+                Some((handle, mesh)) => {
+                    let range = mesh.submeshes()[submesh];
+                    (*handle, range.first_index, range.index_count)
+                }
+                None => (entry.geometry, cached.first_index, cached.index_count),
+            };
             items.push(RenderItem {
                 renderable: i as u32,
                 geometry,
                 submesh: submesh as u32,
-                material: material_index(*material_handle),
-                pass_mask,
+                material: cached.material,
+                pass_mask: cached.pass_mask,
                 view_depth,
+                first_index,
+                index_count,
             });
         }
     }
