@@ -30,7 +30,9 @@
 
 mod renderer;
 
-pub use renderer::{FrameReport, RenderError, RenderGraphFuture, Renderer, ViewReport, standard_render_graph};
+pub use renderer::{
+    FrameReport, RenderError, RenderGraphFuture, Renderer, RendererOptions, ViewReport, standard_render_graph,
+};
 
 /// The bindless heap.
 pub use oxygen_bindless as bindless;
@@ -43,14 +45,14 @@ pub use oxygen_sceneprep as sceneprep;
 
 /// The names most applications use.
 pub mod prelude {
-    pub use crate::{FrameReport, RenderError, RenderGraphFuture, Renderer, standard_render_graph};
+    pub use crate::{FrameReport, RenderError, RenderGraphFuture, Renderer, RendererOptions, standard_render_graph};
     pub use oxygen_core::glam::{Mat4, Quat, UVec2, Vec3, Vec4};
     pub use oxygen_core::{
         AlphaMode, Camera, Geometry, Light, LookAtResolver, Material, NodeFlags, Renderable, ResolvedView, Scene,
         Transform, ViewContext, ViewId, ViewResolver,
     };
     pub use oxygen_passes::{
-        CommandRecorder, DepthPrePass, PassError, RenderContext, RenderPass, ShaderPass, ShaderPassConfig,
+        CommandRecorder, DepthPrePass, DrawPath, PassError, RenderContext, RenderPass, ShaderPass, ShaderPassConfig,
     };
     pub use oxygen_sceneprep::{PassMask, PreparedSceneFrame, ViewPrepOptions};
 }

@@ -16,8 +16,8 @@ use oxygen_core::{
     GpuContext, GpuError, GpuOptions, ResolvedView, Scene, ViewContext, ViewError, ViewId, ViewResolver, ViewTargets,
 };
 use oxygen_passes::{
-    CommandRecorder, DepthPrePass, PassError, PipelineCache, RecordStats, RenderContext, RenderPass, ShaderPass,
-    ShaderPassConfig,
+    CommandRecorder, DepthPrePass, DrawPath, PassError, PipelineCache, RecordStats, RenderContext, RenderPass,
+    ShaderPass, ShaderPassConfig,
 };
 use oxygen_sceneprep::{PrepError, PreparedSceneFrame, ScenePrep, ViewPrepOptions, ViewRequest};
 use thiserror::Error;
@@ -48,6 +48,9 @@ pub enum RenderError {
         /// The pass error.
         source: PassError,
     },
+    /// An option the device cannot honour.
+    #[error("not supported: {0}")]
+    Unsupported(String),
     /// The view id is not (or no longer) registered.
     #[error("{0} is not registered")]
     NoSuchView(ViewId),
@@ -94,6 +97,15 @@ pub struct FrameReport {
     pub record_seconds: f64,
 }
 
+/// Choices made when the renderer is created.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RendererOptions {
+    /// Force a draw path; `None` picks the fastest the device supports.
+    pub draw_path: Option<DrawPath>,
+    /// Threads for ScenePrep's per-view phases; `None` uses every core.
+    pub prep_threads: Option<usize>,
+}
+
 struct RegisteredView {
     resolver: Box<dyn ViewResolver>,
     factory: Factory,
@@ -109,6 +121,7 @@ pub struct Renderer {
     prep: ScenePrep,
     pipelines: PipelineCache,
     views: BTreeMap<ViewId, RegisteredView>,
+    draw_path: DrawPath,
     next_view: u32,
     frame_index: u64,
     started: Instant,
@@ -132,25 +145,60 @@ pub fn standard_render_graph<'a>(
 }
 
 impl Renderer {
+    /// The device features Oxygen uses when the adapter has them.
+    pub const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::INDIRECT_FIRST_INSTANCE;
+
     /// A renderer on a headless device chosen by [`GpuContext::new_headless`].
     pub fn new_headless() -> Result<Self, RenderError> {
-        Ok(Self::new(GpuContext::new_headless(&GpuOptions::default())?))
+        Self::new_headless_with(RendererOptions::default())
+    }
+
+    /// A headless renderer with explicit options.
+    pub fn new_headless_with(options: RendererOptions) -> Result<Self, RenderError> {
+        let gpu_options = GpuOptions { optional_features: Self::OPTIONAL_FEATURES, ..Default::default() };
+        Self::with_options(GpuContext::new_headless(&gpu_options)?, options)
     }
 
     /// A renderer on an existing GPU context.
     pub fn new(gpu: GpuContext) -> Self {
+        // Default options never name an unsupported path, so this cannot fail.
+        Self::with_options(gpu, RendererOptions::default()).expect("default renderer options are always supported")
+    }
+
+    /// A renderer on an existing GPU context with explicit options; fails
+    /// when a forced draw path is not supported by the device.
+    pub fn with_options(gpu: GpuContext, options: RendererOptions) -> Result<Self, RenderError> {
+        let downlevel = gpu.adapter.get_downlevel_capabilities();
+        let draw_path = match options.draw_path {
+            Some(path) if !path.is_supported(gpu.features, &downlevel) => {
+                return Err(RenderError::Unsupported(format!("{path:?} draw path on {}", gpu.describe())));
+            }
+            Some(path) => path,
+            None => DrawPath::best_for(gpu.features, &downlevel),
+        };
+        info!(?draw_path, "draw path chosen");
         let heap = BindlessHeap::new(&gpu.device);
         let pipelines = PipelineCache::new(&gpu.device, &heap);
-        Renderer {
+        let prep = match options.prep_threads {
+            Some(threads) => ScenePrep::with_threads(threads),
+            None => ScenePrep::new(),
+        };
+        Ok(Renderer {
             gpu,
             heap,
-            prep: ScenePrep::new(),
+            prep,
             pipelines,
             views: BTreeMap::new(),
+            draw_path,
             next_view: 0,
             frame_index: 0,
             started: Instant::now(),
-        }
+        })
+    }
+
+    /// How partitions are drawn on this device.
+    pub fn draw_path(&self) -> DrawPath {
+        self.draw_path
     }
 
     /// Registers a view with default ScenePrep options. Views are prepared
@@ -260,6 +308,7 @@ impl Renderer {
                 heap: &self.heap,
                 targets,
                 pipelines: &self.pipelines,
+                draw_path: self.draw_path,
             };
             let mut recorder = CommandRecorder::new(&self.gpu.device, &view.view_id.to_string());
             let _view_span = info_span!("render_graph", view = %view.view_id).entered();

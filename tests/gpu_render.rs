@@ -218,3 +218,30 @@ fn a_closure_factory_can_render_without_a_depth_pre_pass() {
         "near cube without pre-pass",
     );
 }
+
+#[test]
+fn multi_draw_indirect_and_direct_draws_produce_the_same_image() {
+    let demo = oxygen::core::demo::multi_view_scene();
+    let render = |path: DrawPath| {
+        let options = RendererOptions { draw_path: Some(path), ..Default::default() };
+        let mut renderer = match Renderer::new_headless_with(options) {
+            Ok(r) => r,
+            Err(e) => panic!("{path:?} must be available on the test adapter: {e}"),
+        };
+        assert_eq!(renderer.draw_path(), path);
+        let view = renderer.register_view(oxygen::core::demo::main_camera(UVec2::new(160, 120)), standard_render_graph);
+        let report = renderer.render_frame(&demo.scene).unwrap();
+        (renderer.read_color(view).unwrap(), report.views[0].recorded.draw_calls)
+    };
+    let (direct, direct_calls) = render(DrawPath::Direct);
+    let (indirect, indirect_calls) = render(DrawPath::MultiDrawIndirect);
+    // One call per draw against one call per partition (two passes each).
+    assert_eq!(direct_calls, 2 * 11);
+    assert_eq!(indirect_calls, 2 * 2);
+    let differing = direct
+        .pixels()
+        .zip(indirect.pixels())
+        .filter(|(a, b)| a.0.iter().zip(b.0.iter()).any(|(x, y)| x.abs_diff(*y) > 1))
+        .count();
+    assert_eq!(differing, 0, "{differing} pixels differ by more than 1 level");
+}

@@ -19,11 +19,14 @@ pub enum DomainKind {
     Vertices,
     /// `u32` indices, persistent per geometry; bound as the index buffer.
     Indices,
+    /// `DrawIndexedIndirect` arguments (20 B), one range per view per frame,
+    /// parallel to the view's draw metadata; read by `multi_draw_indexed_indirect`.
+    IndirectArgs,
 }
 
 impl DomainKind {
     /// Every domain, in binding order.
-    pub const ALL: [DomainKind; 8] = [
+    pub const ALL: [DomainKind; 9] = [
         DomainKind::DrawMetadata,
         DomainKind::WorldTransforms,
         DomainKind::NormalTransforms,
@@ -32,6 +35,7 @@ impl DomainKind {
         DomainKind::PositionalLights,
         DomainKind::Vertices,
         DomainKind::Indices,
+        DomainKind::IndirectArgs,
     ];
 
     /// Number of domains.
@@ -55,6 +59,7 @@ impl DomainKind {
             DomainKind::PositionalLights => 64,
             DomainKind::Vertices => 32,
             DomainKind::Indices => 4,
+            DomainKind::IndirectArgs => 20,
         }
     }
 
@@ -62,7 +67,7 @@ impl DomainKind {
     /// read by shaders through a binding (indices feed the index buffer).
     pub const fn binding(self) -> Option<u32> {
         match self {
-            DomainKind::Indices => None,
+            DomainKind::Indices | DomainKind::IndirectArgs => None,
             other => Some(other as u32),
         }
     }
@@ -78,6 +83,7 @@ impl DomainKind {
             DomainKind::PositionalLights => ("positional_light_domain", "PositionalLightRecord"),
             DomainKind::Vertices => ("vertex_domain", "VertexRecord"),
             DomainKind::Indices => ("index_domain", "u32"),
+            DomainKind::IndirectArgs => ("indirect_args_domain", "u32"),
         }
     }
 
@@ -85,6 +91,7 @@ impl DomainKind {
     pub(crate) fn usages(self) -> wgpu::BufferUsages {
         match self {
             DomainKind::Indices => wgpu::BufferUsages::INDEX,
+            DomainKind::IndirectArgs => wgpu::BufferUsages::INDIRECT,
             _ => wgpu::BufferUsages::STORAGE,
         }
     }
@@ -100,6 +107,7 @@ impl DomainKind {
             DomainKind::PositionalLights => "positional-lights",
             DomainKind::Vertices => "vertices",
             DomainKind::Indices => "indices",
+            DomainKind::IndirectArgs => "indirect-args",
         }
     }
 

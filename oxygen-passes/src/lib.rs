@@ -23,6 +23,6 @@ mod shader_pass;
 
 pub use depth_pre_pass::DepthPrePass;
 pub use pso::{AlphaClass, PassKind, PipelineCache, PipelineKey, PipelineVariant, shader_source};
-pub use render_context::{CommandRecorder, PassError, RecordStats, RenderContext};
+pub use render_context::{CommandRecorder, DrawPath, PassError, RecordStats, RenderContext};
 pub use render_pass::RenderPass;
 pub use shader_pass::{ShaderPass, ShaderPassConfig};

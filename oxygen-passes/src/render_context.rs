@@ -29,6 +29,39 @@ pub enum PassError {
     Graph(String),
 }
 
+/// How a partition's draws are submitted.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum DrawPath {
+    /// One `draw_indexed` per draw; works on every backend.
+    Direct,
+    /// One `multi_draw_indexed_indirect` per partition over the indirect
+    /// arguments ScenePrep wrote; needs `DownlevelFlags::INDIRECT_EXECUTION`
+    /// and `Features::INDIRECT_FIRST_INSTANCE`.
+    MultiDrawIndirect,
+}
+
+impl DrawPath {
+    /// The fastest path the device supports.
+    pub fn best_for(features: wgpu::Features, downlevel: &wgpu::DownlevelCapabilities) -> Self {
+        if Self::MultiDrawIndirect.is_supported(features, downlevel) {
+            DrawPath::MultiDrawIndirect
+        } else {
+            DrawPath::Direct
+        }
+    }
+
+    /// Whether the device can use this path.
+    pub fn is_supported(self, features: wgpu::Features, downlevel: &wgpu::DownlevelCapabilities) -> bool {
+        match self {
+            DrawPath::Direct => true,
+            DrawPath::MultiDrawIndirect => {
+                features.contains(wgpu::Features::INDIRECT_FIRST_INSTANCE)
+                    && downlevel.flags.contains(wgpu::DownlevelFlags::INDIRECT_EXECUTION)
+            }
+        }
+    }
+}
+
 /// Everything a pass may read for one view in one frame. Immutable: passes
 /// communicate through the textures they write, never by changing this.
 pub struct RenderContext<'a> {
@@ -46,6 +79,8 @@ pub struct RenderContext<'a> {
     pub targets: &'a ViewTargets,
     /// Shared pipeline cache.
     pub pipelines: &'a PipelineCache,
+    /// How partitions are drawn.
+    pub draw_path: DrawPath,
 }
 
 /// Counts of what a view's passes recorded.
@@ -93,15 +128,23 @@ pub(crate) fn bind_view_resources(pass: &mut wgpu::RenderPass<'_>, ctx: &RenderC
     pass.set_index_buffer(ctx.heap.index_buffer().slice(..), wgpu::IndexFormat::Uint32);
 }
 
-/// Draws every draw of `partition`, one direct indexed draw each; the draw's
-/// position in the view's array is passed as `first_instance`, which is how
-/// the vertex shader finds its `DrawMetadata`.
+/// Draws every draw of `partition`. Either way the draw's position in the
+/// view's array reaches the shader as `first_instance`, which is how the
+/// vertex shader finds its `DrawMetadata`.
 pub(crate) fn draw_partition(
     pass: &mut wgpu::RenderPass<'_>,
     ctx: &RenderContext<'_>,
     partition: &Partition,
     stats: &mut RecordStats,
 ) {
+    if ctx.draw_path == DrawPath::MultiDrawIndirect {
+        let stride = std::mem::size_of::<oxygen_sceneprep::DrawIndexedIndirect>() as u64;
+        let first = ctx.prepared.slots().indirect_args.start as u64 + partition.begin as u64;
+        let buffer = ctx.heap.buffer(oxygen_bindless::DomainKind::IndirectArgs);
+        pass.multi_draw_indexed_indirect(buffer, first * stride, partition.len());
+        stats.draw_calls += 1;
+        return;
+    }
     let draws = &ctx.prepared.draws()[partition.range()];
     for (offset, draw) in draws.iter().enumerate() {
         let draw_index = partition.begin + offset as u32;

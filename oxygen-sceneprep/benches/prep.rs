@@ -25,7 +25,7 @@ use oxygen_core::{AlphaMode, Camera, Geometry, LookAtResolver, Material, Rendera
 use oxygen_core::{ViewContext, ViewId, ViewResolver};
 use oxygen_sceneprep::finalize::radix_sort::radix_sort_by_key;
 use oxygen_sceneprep::{
-    CullBound, DrawMetadata, NormalMatrix, RenderableEntry, ScenePrep, ViewPrepOptions, ViewRequest,
+    CullBound, DrawMetadata, NormalMatrix, RenderableEntry, ScenePrep, SubmeshEntry, ViewPrepOptions, ViewRequest,
 };
 
 const SPACING: f32 = 12.0;

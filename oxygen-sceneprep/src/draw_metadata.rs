@@ -73,3 +73,37 @@ impl DrawMetadata {
         self.vertex_slot as i32 + self.base_vertex
     }
 }
+
+/// The arguments of one indexed draw as `multi_draw_indexed_indirect` reads
+/// them (wgpu's `DrawIndexedIndirectArgs` layout), written by the CPU in
+/// finalization, parallel to the view's [`DrawMetadata`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct DrawIndexedIndirect {
+    /// Indices drawn.
+    pub index_count: u32,
+    /// Instances drawn.
+    pub instance_count: u32,
+    /// Absolute first index in the shared index buffer.
+    pub first_index: u32,
+    /// Absolute base vertex.
+    pub base_vertex: i32,
+    /// The draw's position in the view's array: how the shader finds its
+    /// `DrawMetadata` (needs `INDIRECT_FIRST_INSTANCE`).
+    pub first_instance: u32,
+}
+
+const _: () = assert!(size_of::<DrawIndexedIndirect>() as u64 == DomainKind::IndirectArgs.record_size());
+
+impl DrawIndexedIndirect {
+    /// The arguments for `draw`, which sits at `draw_index` in its view's array.
+    pub fn for_draw(draw: &DrawMetadata, draw_index: u32) -> Self {
+        DrawIndexedIndirect {
+            index_count: draw.index_count,
+            instance_count: draw.instance_count,
+            first_index: draw.index_slot + draw.first_index,
+            base_vertex: draw.absolute_base_vertex(),
+            first_instance: draw_index,
+        }
+    }
+}

@@ -27,7 +27,7 @@ mod scene_prep;
 pub mod worker_pool;
 
 pub use collect::{CullBound, FrameCollection, RenderItem, RenderableEntry, SubmeshEntry, ViewFilter, ViewPrepOptions};
-pub use draw_metadata::DrawMetadata;
+pub use draw_metadata::{DrawIndexedIndirect, DrawMetadata};
 pub use gpu_records::{DirectionalLightRecord, GPU_RECORDS_WGSL, MaterialRecord, NormalMatrix, PositionalLightRecord};
 pub use pass_mask::PassMask;
 pub use prepared_frame::{Partition, PreparedSceneFrame, PreparedSlots};

@@ -13,13 +13,15 @@ use oxygen_bindless::{Allocation, DomainKind, INVALID_SLOT, RendererConstants};
 use oxygen_core::ViewId;
 
 pub use crate::finalize::partition::Partition;
-use crate::{DrawMetadata, NormalMatrix, PassMask};
+use crate::{DrawIndexedIndirect, DrawMetadata, NormalMatrix, PassMask};
 
 /// Where a prepared frame's data lives in the bindless heap.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct PreparedSlots {
     /// This view's draws (per view, per frame).
     pub draw_metadata: Allocation,
+    /// This view's indirect draw arguments, parallel to `draw_metadata`.
+    pub indirect_args: Allocation,
     /// World matrices (frame-global).
     pub world_transforms: Allocation,
     /// Normal matrices (frame-global).
@@ -47,6 +49,7 @@ pub struct PreparedSceneFrame {
     pub(crate) view_id: ViewId,
     pub(crate) frame_index: u64,
     pub(crate) draws: Vec<DrawMetadata>,
+    pub(crate) indirect_args: Vec<DrawIndexedIndirect>,
     pub(crate) sort_keys: Vec<u64>,
     pub(crate) partitions: Vec<Partition>,
     pub(crate) transforms: Arc<FrameTransforms>,
@@ -64,11 +67,13 @@ impl PreparedSceneFrame {
             view_id: ViewId(u32::MAX),
             frame_index: 0,
             draws: Vec::new(),
+            indirect_args: Vec::new(),
             sort_keys: Vec::new(),
             partitions: Vec::new(),
             transforms,
             slots: PreparedSlots {
                 draw_metadata: Allocation::empty(DomainKind::DrawMetadata),
+                indirect_args: Allocation::empty(DomainKind::IndirectArgs),
                 world_transforms: Allocation::empty(DomainKind::WorldTransforms),
                 normal_transforms: Allocation::empty(DomainKind::NormalTransforms),
                 materials: Allocation::empty(DomainKind::Materials),
@@ -89,6 +94,10 @@ impl PreparedSceneFrame {
     /// Sorted draws.
     pub fn draws(&self) -> &[DrawMetadata] {
         &self.draws
+    }
+    /// Indirect draw arguments, one per draw, same order.
+    pub fn indirect_args(&self) -> &[DrawIndexedIndirect] {
+        &self.indirect_args
     }
     /// The sort key of each draw (same order as [`Self::draws`]).
     pub fn sort_keys(&self) -> &[u64] {

@@ -34,7 +34,9 @@ use crate::finalize::radix_sort::radix_sort_by_key;
 use crate::finalize::sort_key::sort_key;
 use crate::prepared_frame::FrameTransforms;
 use crate::worker_pool::WorkerPool;
-use crate::{DrawMetadata, FrameCollection, PreparedSceneFrame, PreparedSlots, RenderItem, ViewPrepOptions};
+use crate::{
+    DrawIndexedIndirect, DrawMetadata, FrameCollection, PreparedSceneFrame, PreparedSlots, RenderItem, ViewPrepOptions,
+};
 
 /// Why a frame could not be prepared or uploaded.
 #[derive(Debug, Error, PartialEq)]
@@ -86,6 +88,7 @@ struct ViewWork {
     /// Geometries this view draws that had no slots when it looked.
     missing_geometry: Vec<GeometryHandle>,
     draw_allocation: Allocation,
+    indirect_allocation: Allocation,
     frame: PreparedSceneFrame,
 }
 
@@ -97,6 +100,7 @@ impl ViewWork {
             scratch: Vec::new(),
             missing_geometry: Vec::new(),
             draw_allocation: Allocation::empty(DomainKind::DrawMetadata),
+            indirect_allocation: Allocation::empty(DomainKind::IndirectArgs),
             frame: PreparedSceneFrame::empty(transforms),
         }
     }
@@ -108,7 +112,8 @@ pub struct ScenePrep {
     geometry: GeometryCache,
     materials: MaterialTable,
     frame_allocations: Vec<Allocation>,
-    view_allocations: HashMap<ViewId, Allocation>,
+    /// Each view's draw-metadata and indirect-argument ranges.
+    view_allocations: HashMap<ViewId, [Allocation; 2]>,
     /// Placeholder the pooled frames point at between frames, so the frame
     /// phase can update the shared matrices in place.
     released_transforms: Arc<FrameTransforms>,
@@ -260,10 +265,11 @@ impl ScenePrep {
             }
             let view_id = request.view.view_id;
             if let Some(old) = self.view_allocations.remove(&view_id) {
-                slots.free(old)?;
+                old.into_iter().try_for_each(|a| slots.free(a))?;
             }
             w.draw_allocation = slots.allocate(DomainKind::DrawMetadata, w.keyed.len() as u32)?;
-            self.view_allocations.insert(view_id, w.draw_allocation);
+            w.indirect_allocation = slots.allocate(DomainKind::IndirectArgs, w.keyed.len() as u32)?;
+            self.view_allocations.insert(view_id, [w.draw_allocation, w.indirect_allocation]);
             total_draws += w.keyed.len() as u64;
         }
         self.stats.draws_last_frame = total_draws;
@@ -278,6 +284,7 @@ impl ScenePrep {
                 let w = &mut *w;
                 let out = &mut w.frame;
                 out.draws.clear();
+                out.indirect_args.clear();
                 out.sort_keys.clear();
                 for &(key, item_index) in &w.keyed {
                     let item = w.items[item_index as usize];
@@ -301,11 +308,19 @@ impl ScenePrep {
                     });
                     out.sort_keys.push(key);
                 }
+                for (index, draw) in out.draws.iter().enumerate() {
+                    out.indirect_args.push(DrawIndexedIndirect::for_draw(draw, index as u32));
+                }
                 build_partitions(&out.draws, &mut out.partitions);
                 out.view_id = views[i].view.view_id;
                 out.frame_index = frame_index;
                 out.transforms = Arc::clone(&frame.transforms);
-                out.slots = PreparedSlots { draw_metadata: w.draw_allocation, materials, ..frame_slots };
+                out.slots = PreparedSlots {
+                    draw_metadata: w.draw_allocation,
+                    indirect_args: w.indirect_allocation,
+                    materials,
+                    ..frame_slots
+                };
             });
         }
 
@@ -329,6 +344,7 @@ impl ScenePrep {
         };
         Ok(PreparedSlots {
             draw_metadata: Allocation::empty(DomainKind::DrawMetadata),
+            indirect_args: Allocation::empty(DomainKind::IndirectArgs),
             world_transforms: allocate(DomainKind::WorldTransforms, n as usize)?,
             normal_transforms: allocate(DomainKind::NormalTransforms, n as usize)?,
             materials: Allocation::empty(DomainKind::Materials),
@@ -339,8 +355,8 @@ impl ScenePrep {
 
     /// Frees the per-view slots of a view that is gone.
     pub fn forget_view(&mut self, view_id: ViewId, slots: &mut SlotAllocators) -> Result<(), PrepError> {
-        if let Some(a) = self.view_allocations.remove(&view_id) {
-            slots.free(a)?;
+        if let Some(old) = self.view_allocations.remove(&view_id) {
+            old.into_iter().try_for_each(|a| slots.free(a))?;
         }
         Ok(())
     }
@@ -378,6 +394,7 @@ impl ScenePrep {
         }
         for frame in frames {
             heap.write(queue, &frame.slots.draw_metadata, 0, &frame.draws)?;
+            heap.write(queue, &frame.slots.indirect_args, 0, &frame.indirect_args)?;
         }
         Ok(())
     }
