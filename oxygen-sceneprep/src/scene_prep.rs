@@ -184,6 +184,13 @@ impl ScenePrep {
         &self.frames[..self.active_frames]
     }
 
+    /// Forgets the cached frame phase (world transforms, renderables,
+    /// lights), so the next `prepare` collects the scene from scratch, as
+    /// for a scene where everything moved. For benchmarks and tests.
+    pub fn invalidate_frame_cache(&mut self) {
+        self.frame.invalidate();
+    }
+
     /// Meshes that have slots (drawn by some view at least once).
     pub fn resident_geometry(&self) -> usize {
         self.geometry.resident()
@@ -288,7 +295,6 @@ impl ScenePrep {
                 out.sort_keys.clear();
                 for &(key, item_index) in &w.keyed {
                     let item = w.items[item_index as usize];
-                    let entry = &frame.renderables[item.renderable as usize];
                     // Resolved in the serial step; a mesh missing from the
                     // scene was never turned into an item.
                     let Some(g) = geometry.get(item.geometry) else { continue };
@@ -299,10 +305,10 @@ impl ScenePrep {
                         index_count: item.index_count,
                         base_vertex: 0,
                         instance_count: 1,
-                        transform_index: entry.transform_index,
+                        transform_index: item.transform_index,
                         material_handle: item.material,
                         pass_mask: item.pass_mask.bits(),
-                        node_id: entry.node_id,
+                        node_id: item.node_id,
                         submesh: item.submesh,
                         reserved: [0; 5],
                     });

@@ -65,6 +65,12 @@ impl WorldTransforms {
         self.resolved_revision = scene.revision();
     }
 
+    /// Forgets every cached matrix (keeping the memory), so the next
+    /// resolution recomputes all nodes.
+    pub fn invalidate(&mut self) {
+        self.scene_id = 0;
+    }
+
     /// Nodes whose world matrix was recomputed by the last resolution.
     pub fn recomputed_last(&self) -> usize {
         self.recomputed_last

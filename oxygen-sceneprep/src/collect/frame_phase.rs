@@ -193,6 +193,13 @@ impl FrameCollection {
         }
     }
 
+    /// Forgets what was collected, so the next `collect` redoes everything,
+    /// world transforms included.
+    pub fn invalidate(&mut self) {
+        self.collected = None;
+        self.world.invalidate();
+    }
+
     /// True when the last `collect` reused the previous frame's results
     /// because the scene had not changed.
     pub fn reused_last(&self) -> bool {

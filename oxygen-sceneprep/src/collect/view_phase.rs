@@ -82,6 +82,11 @@ pub struct RenderItem {
     pub pass_mask: PassMask,
     /// Distance of the bound's centre along the view direction.
     pub view_depth: f32,
+    /// The renderable's transform index (copied so finalization never
+    /// revisits the renderable list in sorted, i.e. random, order).
+    pub transform_index: u32,
+    /// The renderable's stable node id.
+    pub node_id: u32,
     /// First index of the submesh in `geometry`.
     pub first_index: u32,
     /// Index count of the submesh in `geometry`.
@@ -147,6 +152,8 @@ pub fn collect_view(
                 material: cached.material,
                 pass_mask: cached.pass_mask,
                 view_depth,
+                transform_index: entry.transform_index,
+                node_id: entry.node_id,
                 first_index,
                 index_count,
             });
