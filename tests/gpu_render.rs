@@ -245,3 +245,26 @@ fn multi_draw_indirect_and_direct_draws_produce_the_same_image() {
         .count();
     assert_eq!(differing, 0, "{differing} pixels differ by more than 1 level");
 }
+
+#[test]
+fn materials_and_geometry_upload_only_when_new_or_changed() {
+    let mut demo = oxygen::core::demo::multi_view_scene();
+    let mut renderer = gpu_renderer();
+    renderer.register_view(oxygen::core::demo::main_camera(UVec2::new(48, 32)), standard_render_graph);
+    for _ in 0..3 {
+        renderer.render_frame(&demo.scene).unwrap();
+    }
+    let stats = renderer.scene_prep().stats();
+    assert_eq!(stats.material_uploads, 1, "static materials are uploaded once");
+    // Plane, cube and quad: three meshes, each uploaded once.
+    assert_eq!(stats.geometry_uploads, 3);
+
+    // A new material (and a mesh nobody draws) changes only the material table.
+    demo.scene.add_material(Material::opaque("new", Vec4::ONE));
+    demo.scene.add_geometry(Geometry::cube(3.0));
+    renderer.render_frame(&demo.scene).unwrap();
+    let stats = renderer.scene_prep().stats();
+    assert_eq!(stats.material_uploads, 2);
+    assert_eq!(stats.geometry_uploads, 3, "an undrawn mesh is never uploaded");
+    assert_eq!(renderer.scene_prep().resident_geometry(), 3);
+}
