@@ -1,0 +1,161 @@
+//! Direct draws against one multi-draw-indirect per partition, on whatever
+//! adapter is found (the numbers in docs/performance.md come from an H100).
+//!
+//! ```text
+//! cargo run --release --example draw_path_bench [DRAWS]   # default 100 000
+//! ```
+//!
+//! The scene is a grid of DRAWS small cubes under an orthographic camera that
+//! sees all of them, with four materials (opaque / masked × single / double
+//! sided), so each pass draws four partitions. For each path it renders 5
+//! warm-up and 30 measured frames and reports the CPU time to record the
+//! view's passes and the GPU time between timestamps written before and
+//! after them (when the adapter supports timestamps inside encoders).
+
+use std::sync::{Arc, Mutex};
+
+use oxygen::core::{AlphaMode, GpuContext, GpuOptions, Projection};
+use oxygen::prelude::*;
+use oxygen::standard_render_graph;
+
+const WARM_UP: usize = 5;
+const MEASURED: usize = 30;
+
+fn city_of_cubes(draws: usize) -> (Scene, f32) {
+    let mut scene = Scene::new();
+    let cube = scene.add_geometry(Geometry::cube(0.8));
+    let materials: Vec<_> = [
+        (AlphaMode::Opaque, false),
+        (AlphaMode::Opaque, true),
+        (AlphaMode::Mask { cutoff: 0.5 }, false),
+        (AlphaMode::Mask { cutoff: 0.5 }, true),
+    ]
+    .into_iter()
+    .enumerate()
+    .map(|(i, (alpha_mode, double_sided))| {
+        let color = Vec4::new(0.3 + 0.2 * i as f32, 0.5, 0.8 - 0.15 * i as f32, 1.0);
+        scene.add_material(Material { alpha_mode, double_sided, ..Material::opaque(format!("m{i}"), color) })
+    })
+    .collect();
+    let side = (draws as f32).sqrt().ceil() as usize;
+    for i in 0..draws {
+        let (x, z) = ((i % side) as f32, (i / side) as f32);
+        let node = scene.add_node("c", Transform::from_translation(Vec3::new(x, 0.0, z)));
+        let renderable = Renderable { geometry: cube, materials: vec![materials[i % 4]] };
+        scene.set_renderable(node, renderable).expect("valid handles");
+    }
+    (scene, side as f32)
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let draws: usize = std::env::args().nth(1).map(|a| a.parse()).transpose()?.unwrap_or(100_000);
+    let (scene, side) = city_of_cubes(draws);
+    let center = Vec3::new(side * 0.5, 0.0, side * 0.5);
+    let camera = LookAtResolver {
+        camera: Camera { projection: Projection::Orthographic { half_height: side * 0.55, near: 1.0, far: 100.0 } },
+        eye: center + Vec3::Y * 50.0,
+        target: center,
+        up: Vec3::NEG_Z,
+        viewport: UVec2::new(1024, 1024),
+    };
+
+    println!(
+        "| path | draws | partitions per pass | draw calls per frame | CPU record ms | GPU ms | frame ms (CPU, prep + record + submit) |"
+    );
+    println!("|---|---:|---:|---:|---:|---:|---:|");
+    let mut adapter_line = String::new();
+    for path in [DrawPath::Direct, DrawPath::MultiDrawIndirect] {
+        let options = GpuOptions {
+            optional_features: Renderer::OPTIONAL_FEATURES
+                | wgpu::Features::TIMESTAMP_QUERY
+                | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS,
+            ..Default::default()
+        };
+        let gpu = GpuContext::new_headless(&options)?;
+        adapter_line = gpu.describe();
+        let timestamps = gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS);
+        let period_ns = gpu.queue.get_timestamp_period() as f64;
+        let query_set = timestamps.then(|| {
+            gpu.device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("bench"),
+                ty: wgpu::QueryType::Timestamp,
+                count: 2,
+            })
+        });
+        let resolve = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("timestamps"),
+            size: 16,
+            usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let readback = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("timestamps readback"),
+            size: 16,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let mut renderer =
+            Renderer::with_options(gpu, RendererOptions { draw_path: Some(path), ..Default::default() })?;
+        let shared = Arc::new(Mutex::new((query_set.clone(), resolve.clone(), readback.clone())));
+        let graph_resources = Arc::clone(&shared);
+        let view = renderer.register_view(camera, move |id, ctx, rec| {
+            let resources = graph_resources.lock().map(|g| g.clone()).ok();
+            Box::pin(async move {
+                if let Some((Some(q), _, _)) = &resources {
+                    rec.encoder().write_timestamp(q, 0);
+                }
+                standard_render_graph(id, ctx, rec).await?;
+                if let Some((Some(q), resolve, readback)) = &resources {
+                    rec.encoder().write_timestamp(q, 1);
+                    rec.encoder().resolve_query_set(q, 0..2, resolve, 0);
+                    rec.encoder().copy_buffer_to_buffer(resolve, 0, readback, 0, 16);
+                }
+                Ok(())
+            })
+        });
+
+        let (mut record, mut gpu_ms, mut frame_ms) = (Vec::new(), Vec::new(), Vec::new());
+        let mut report = None;
+        for frame in 0..WARM_UP + MEASURED {
+            let start = std::time::Instant::now();
+            let r = renderer.render_frame(&scene)?;
+            let cpu = start.elapsed().as_secs_f64() * 1e3;
+            renderer.gpu().device.poll(wgpu::PollType::wait_indefinitely())?;
+            let gpu_time = if timestamps {
+                let slice = readback.slice(..);
+                slice.map_async(wgpu::MapMode::Read, |_| {});
+                renderer.gpu().device.poll(wgpu::PollType::wait_indefinitely())?;
+                let ticks: Vec<u64> = bytemuck::cast_slice(&slice.get_mapped_range()?).to_vec();
+                readback.unmap();
+                Some(ticks[1].saturating_sub(ticks[0]) as f64 * period_ns / 1e6)
+            } else {
+                None
+            };
+            if frame >= WARM_UP {
+                record.push(r.record_seconds * 1e3);
+                frame_ms.push(cpu);
+                if let Some(g) = gpu_time {
+                    gpu_ms.push(g);
+                }
+            }
+            report = Some(r);
+        }
+        let median = |v: &mut Vec<f64>| {
+            v.sort_by(f64::total_cmp);
+            v.get(v.len() / 2).copied()
+        };
+        let report = report.ok_or("no frame rendered")?;
+        let partitions = renderer.prepared_frame(view).map_or(0, |f| f.partitions().len());
+        println!(
+            "| {path:?} | {} | {partitions} | {} | {:.3} | {} | {:.3} |",
+            report.views[0].draws,
+            report.views[0].recorded.draw_calls,
+            median(&mut record).unwrap_or(f64::NAN),
+            median(&mut gpu_ms).map_or("n/a (no timestamps)".to_owned(), |g| format!("{g:.3}")),
+            median(&mut frame_ms).unwrap_or(f64::NAN),
+        );
+    }
+    println!();
+    println!("adapter: {adapter_line}; medians of {MEASURED} frames after {WARM_UP} warm-up frames");
+    Ok(())
+}
