@@ -46,6 +46,7 @@ pub use oxygen_sceneprep as sceneprep;
 /// The names most applications use.
 pub mod prelude {
     pub use crate::{FrameReport, RenderError, RenderGraphFuture, Renderer, RendererOptions, standard_render_graph};
+    pub use oxygen_bindless::TexturePath;
     pub use oxygen_core::glam::{Mat4, Quat, UVec2, Vec3, Vec4};
     pub use oxygen_core::{
         AlphaMode, Camera, Geometry, Light, LookAtResolver, Material, NodeFlags, Renderable, ResolvedView, Scene,

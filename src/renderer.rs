@@ -11,7 +11,7 @@ use std::future::Future;
 use std::pin::Pin;
 use std::time::Instant;
 
-use oxygen_bindless::{BindlessHeap, CameraConstants, SceneConstantsBuffer};
+use oxygen_bindless::{BindlessHeap, CameraConstants, SceneConstantsBuffer, TexturePath};
 use oxygen_core::{
     GpuContext, GpuError, GpuOptions, ResolvedView, Scene, ViewContext, ViewError, ViewId, ViewResolver, ViewTargets,
 };
@@ -104,6 +104,8 @@ pub struct RendererOptions {
     pub draw_path: Option<DrawPath>,
     /// Threads for ScenePrep's per-view phases; `None` uses every core.
     pub prep_threads: Option<usize>,
+    /// Force a texture path; `None` picks the binding array where supported.
+    pub texture_path: Option<TexturePath>,
 }
 
 struct RegisteredView {
@@ -146,7 +148,8 @@ pub fn standard_render_graph<'a>(
 
 impl Renderer {
     /// The device features Oxygen uses when the adapter has them.
-    pub const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::INDIRECT_FIRST_INSTANCE;
+    pub const OPTIONAL_FEATURES: wgpu::Features =
+        wgpu::Features::INDIRECT_FIRST_INSTANCE.union(TexturePath::BINDING_ARRAY_FEATURES);
 
     /// A renderer on a headless device chosen by [`GpuContext::new_headless`].
     pub fn new_headless() -> Result<Self, RenderError> {
@@ -176,8 +179,16 @@ impl Renderer {
             Some(path) => path,
             None => DrawPath::best_for(gpu.features, &downlevel),
         };
-        info!(?draw_path, "draw path chosen");
-        let heap = BindlessHeap::new(&gpu.device);
+        let limits = gpu.device.limits();
+        let texture_path = match options.texture_path {
+            Some(path) if !path.is_supported(gpu.features, &limits) => {
+                return Err(RenderError::Unsupported(format!("{path:?} texture path on {}", gpu.describe())));
+            }
+            Some(path) => path,
+            None => TexturePath::best_for(gpu.features, &limits),
+        };
+        info!(?draw_path, ?texture_path, "draw and texture paths chosen");
+        let heap = BindlessHeap::new(&gpu.device, &gpu.queue, texture_path);
         let pipelines = PipelineCache::new(&gpu.device, &heap);
         let prep = match options.prep_threads {
             Some(threads) => ScenePrep::with_threads(threads),
@@ -194,6 +205,11 @@ impl Renderer {
             frame_index: 0,
             started: Instant::now(),
         })
+    }
+
+    /// How textures are bound on this device.
+    pub fn texture_path(&self) -> TexturePath {
+        self.heap.texture_path()
     }
 
     /// How partitions are drawn on this device.

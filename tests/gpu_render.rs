@@ -117,6 +117,7 @@ fn masked_quad_is_kept_above_its_cutoff_dropped_below_and_visible_from_behind() 
         scene.add_material(Material {
             name: name.into(),
             base_color: Vec4::new(1.0, 1.0, 0.0, alpha),
+            base_color_texture: None,
             metallic: 0.0,
             roughness: 1.0,
             alpha_mode: AlphaMode::Mask { cutoff: 0.5 },

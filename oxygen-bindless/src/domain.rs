@@ -22,11 +22,14 @@ pub enum DomainKind {
     /// `DrawIndexedIndirect` arguments (20 B), one range per view per frame,
     /// parallel to the view's draw metadata; read by `multi_draw_indexed_indirect`.
     IndirectArgs,
+    /// Texture location records (`u32`), one per texture slot, persistent:
+    /// where the texture lives on the chosen [`crate::TexturePath`].
+    TextureLocations,
 }
 
 impl DomainKind {
     /// Every domain, in binding order.
-    pub const ALL: [DomainKind; 9] = [
+    pub const ALL: [DomainKind; 10] = [
         DomainKind::DrawMetadata,
         DomainKind::WorldTransforms,
         DomainKind::NormalTransforms,
@@ -36,6 +39,7 @@ impl DomainKind {
         DomainKind::Vertices,
         DomainKind::Indices,
         DomainKind::IndirectArgs,
+        DomainKind::TextureLocations,
     ];
 
     /// Number of domains.
@@ -60,6 +64,7 @@ impl DomainKind {
             DomainKind::Vertices => 32,
             DomainKind::Indices => 4,
             DomainKind::IndirectArgs => 20,
+            DomainKind::TextureLocations => 4,
         }
     }
 
@@ -84,6 +89,7 @@ impl DomainKind {
             DomainKind::Vertices => ("vertex_domain", "VertexRecord"),
             DomainKind::Indices => ("index_domain", "u32"),
             DomainKind::IndirectArgs => ("indirect_args_domain", "u32"),
+            DomainKind::TextureLocations => ("texture_location_domain", "u32"),
         }
     }
 
@@ -108,6 +114,7 @@ impl DomainKind {
             DomainKind::Vertices => "vertices",
             DomainKind::Indices => "indices",
             DomainKind::IndirectArgs => "indirect-args",
+            DomainKind::TextureLocations => "texture-locations",
         }
     }
 

@@ -13,7 +13,8 @@ use bytemuck::Pod;
 use thiserror::Error;
 use tracing::{debug, info_span};
 
-use crate::{Allocation, DomainKind, SlotAllocators, SlotError};
+use crate::textures::TextureHeap;
+use crate::{Allocation, DomainKind, SlotAllocators, SlotError, TexturePath};
 
 /// Smallest buffer, in records: a binding must never be empty.
 const MIN_RECORDS: u64 = 64;
@@ -33,6 +34,20 @@ pub enum BindlessError {
         expected: u64,
         /// Given bytes per record.
         got: u64,
+    },
+    /// More textures than the chosen texture path can hold.
+    #[error("texture slot {slot} is beyond the texture path's capacity of {limit}")]
+    TooManyTextures {
+        /// The slot asked for.
+        slot: u32,
+        /// How many fit.
+        limit: u32,
+    },
+    /// A texture upload was given a slot of another domain.
+    #[error("texture uploads need a texture-locations slot, got a {domain} slot")]
+    NotATextureSlot {
+        /// The domain the allocation belongs to.
+        domain: &'static str,
     },
     /// A write reached past the GPU buffer: `ensure_capacity` was not called.
     #[error("{domain} write reaches slot {end}, buffer holds {capacity}: call ensure_capacity after allocating")]
@@ -57,11 +72,13 @@ pub struct BindlessHeap {
     bind_group: wgpu::BindGroup,
     max_binding_bytes: u64,
     growths: u64,
+    textures: TextureHeap,
 }
 
 impl BindlessHeap {
-    /// Creates every domain at its minimum size on `device`.
-    pub fn new(device: &wgpu::Device) -> Self {
+    /// Creates every domain at its minimum size on `device`, with textures
+    /// bound the way `texture_path` says.
+    pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, texture_path: TexturePath) -> Self {
         let max_binding_bytes = device.limits().max_storage_buffer_binding_size as u64;
         let storage_entry = |binding| wgpu::BindGroupLayoutEntry {
             binding,
@@ -104,6 +121,7 @@ impl BindlessHeap {
             bind_group,
             max_binding_bytes,
             growths: 0,
+            textures: TextureHeap::new(device, queue, texture_path),
         }
     }
 
@@ -181,6 +199,47 @@ impl BindlessHeap {
         }
         queue.write_buffer(&self.buffers[kind.index()], first * record_size, bytemuck::cast_slice(records));
         Ok(())
+    }
+
+    /// Uploads a texture for a `TextureLocations` slot and records where it
+    /// lives; `size` is (width, height), `pixels` tightly packed RGBA8.
+    pub fn upload_texture(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        slot: &Allocation,
+        size: (u32, u32),
+        srgb: bool,
+        pixels: &[u8],
+    ) -> Result<(), BindlessError> {
+        if slot.domain() != DomainKind::TextureLocations {
+            return Err(BindlessError::NotATextureSlot { domain: slot.domain().name() });
+        }
+        self.slots.get(DomainKind::TextureLocations).validate(slot)?;
+        let location = self.textures.upload(device, queue, slot.start, size, srgb, pixels)?;
+        self.write(queue, slot, 0, &[location])?;
+        self.textures.refresh(device);
+        Ok(())
+    }
+
+    /// How textures are bound.
+    pub fn texture_path(&self) -> TexturePath {
+        self.textures.path()
+    }
+
+    /// Layout of group 2 (textures and sampler).
+    pub fn texture_layout(&self) -> &wgpu::BindGroupLayout {
+        self.textures.layout()
+    }
+
+    /// Bind group 2 (textures and sampler).
+    pub fn texture_bind_group(&self) -> &wgpu::BindGroup {
+        self.textures.bind_group()
+    }
+
+    /// Textures uploaded so far.
+    pub fn texture_uploads(&self) -> u64 {
+        self.textures.uploads()
     }
 
     /// The bind group of all domains (group 0).

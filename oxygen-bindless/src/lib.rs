@@ -11,6 +11,8 @@
 //! * [`BindlessHeap`]: the GPU buffers behind the allocators, grown (with the
 //!   live data copied) when the allocators outgrow them, and the bind group
 //!   every pass sets once;
+//! * [`TexturePath`]: textures addressed by slot through a binding array
+//!   or, where the device has none, through texture arrays grouped by size;
 //! * [`SceneConstants`]: the per-view uniform block, declared once in Rust
 //!   and once in WGSL ([`SCENE_CONSTANTS_WGSL`]) with the same layout.
 //!
@@ -21,6 +23,7 @@ mod domain;
 mod heap;
 mod scene_constants;
 mod slot;
+mod textures;
 
 pub use domain::DomainKind;
 pub use heap::{BindlessError, BindlessHeap};
@@ -28,3 +31,4 @@ pub use scene_constants::{
     CameraConstants, RendererConstants, SCENE_CONSTANTS_WGSL, SceneConstants, SceneConstantsBuffer,
 };
 pub use slot::{Allocation, INVALID_SLOT, SlotAllocator, SlotAllocators, SlotError};
+pub use textures::{MAX_TEXTURES, TexturePath, allocate_texture_slot, resample_rgba8};

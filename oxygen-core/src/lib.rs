@@ -23,6 +23,7 @@ pub mod light;
 pub mod material;
 pub mod math;
 pub mod scene;
+pub mod texture;
 pub mod view;
 
 pub use camera::{Camera, CameraError, Projection};
@@ -32,9 +33,10 @@ pub use light::{Light, LightKind, Mobility};
 pub use material::{AlphaMode, Material};
 pub use math::{Aabb, Frustum, Plane, Sphere};
 pub use scene::{
-    GeometryHandle, LodLevel, MaterialHandle, Node, NodeFlags, NodeKey, Renderable, Scene, SceneError, Transform,
-    WorldTransforms,
+    GeometryHandle, LodLevel, MaterialHandle, Node, NodeFlags, NodeKey, Renderable, Scene, SceneError, TextureHandle,
+    Transform, WorldTransforms,
 };
+pub use texture::{ColorSpace, TextureError, TextureImage};
 pub use view::{LookAtResolver, ResolvedView, ViewContext, ViewError, ViewId, ViewResolver};
 
 /// Re-exported so that users name the same `glam` types Oxygen uses.

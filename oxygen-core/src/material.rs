@@ -2,6 +2,8 @@
 
 use glam::Vec4;
 
+use crate::TextureHandle;
+
 /// How a material's alpha is interpreted; decides the pass class of a draw.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum AlphaMode {
@@ -23,6 +25,8 @@ pub struct Material {
     pub name: String,
     /// Linear RGBA base colour factor.
     pub base_color: Vec4,
+    /// Base-colour texture (sRGB), multiplied with `base_color`.
+    pub base_color_texture: Option<TextureHandle>,
     /// Metallic factor in `[0, 1]`.
     pub metallic: f32,
     /// Perceptual roughness in `[0, 1]`.
@@ -39,6 +43,7 @@ impl Material {
         Material {
             name: name.into(),
             base_color,
+            base_color_texture: None,
             metallic: 0.0,
             roughness: 0.6,
             alpha_mode: AlphaMode::Opaque,
@@ -54,6 +59,7 @@ impl Material {
         Material {
             name: self.name.clone(),
             base_color: Vec4::new(fix(base.x, 1.0), fix(base.y, 1.0), fix(base.z, 1.0), fix(base.w, 1.0)),
+            base_color_texture: self.base_color_texture,
             metallic: fix(self.metallic, 0.0),
             roughness: fix(self.roughness, 1.0),
             alpha_mode: match self.alpha_mode {

@@ -4,7 +4,7 @@
 @fragment
 fn fs_alpha_test(mesh: MeshVarying) {
     let material = material_of(mesh);
-    if material.base_color.a < material.alpha_cutoff {
+    if base_color_of(mesh, material).a < material.alpha_cutoff {
         discard;
     }
 }

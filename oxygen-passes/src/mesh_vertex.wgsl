@@ -32,3 +32,8 @@ fn vs_main(@builtin(vertex_index) vertex_index: u32, @builtin(instance_index) dr
 fn material_of(mesh: MeshVarying) -> MaterialRecord {
     return material_domain[scene.renderer.materials_slot + mesh.material];
 }
+
+// Base colour: the material factor times its texture (white when absent).
+fn base_color_of(mesh: MeshVarying, material: MaterialRecord) -> vec4<f32> {
+    return material.base_color * sample_texture(material.base_color_texture, mesh.uv);
+}

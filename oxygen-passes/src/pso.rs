@@ -11,7 +11,7 @@ use std::collections::HashMap;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use oxygen_bindless::{BindlessHeap, DomainKind, SCENE_CONSTANTS_WGSL};
+use oxygen_bindless::{BindlessHeap, DomainKind, SCENE_CONSTANTS_WGSL, TexturePath};
 use oxygen_sceneprep::{GPU_RECORDS_WGSL, PassMask};
 use tracing::debug;
 
@@ -77,18 +77,30 @@ const MESH_VERTEX_WGSL: &str = include_str!("mesh_vertex.wgsl");
 const DEPTH_PRE_PASS_WGSL: &str = include_str!("depth_pre_pass.wgsl");
 const SHADER_PASS_WGSL: &str = include_str!("shader_pass.wgsl");
 
-/// The full WGSL of a pass: shared declarations, then the pass's own code.
-pub fn shader_source(pass: PassKind) -> String {
+/// The full WGSL of a pass: shared declarations (scene constants, GPU
+/// records, domain bindings, the texture path's bindings), then the shared
+/// vertex stage, then the pass's own code.
+pub fn shader_source(pass: PassKind, textures: TexturePath) -> String {
     let body = match pass {
         PassKind::DepthPrePass => DEPTH_PRE_PASS_WGSL,
         PassKind::Shading | PassKind::ShadingAfterPrePass => SHADER_PASS_WGSL,
     };
-    format!("{SCENE_CONSTANTS_WGSL}\n{GPU_RECORDS_WGSL}\n{}\n{MESH_VERTEX_WGSL}\n{body}", DomainKind::wgsl_bindings())
+    // Enable directives must come before any declaration.
+    let enables = match textures {
+        TexturePath::BindingArray => "enable wgpu_binding_array;\n",
+        TexturePath::GroupedArrays => "",
+    };
+    format!(
+        "{enables}{SCENE_CONSTANTS_WGSL}\n{GPU_RECORDS_WGSL}\n{}\n{}\n{MESH_VERTEX_WGSL}\n{body}",
+        DomainKind::wgsl_bindings(),
+        textures.wgsl()
+    )
 }
 
 /// Lazily created, cached pipelines shared by every view.
 pub struct PipelineCache {
     layout: wgpu::PipelineLayout,
+    texture_path: TexturePath,
     modules: Mutex<HashMap<PassKind, wgpu::ShaderModule>>,
     pipelines: Mutex<HashMap<PipelineKey, wgpu::RenderPipeline>>,
     created: AtomicU64,
@@ -99,11 +111,16 @@ impl PipelineCache {
     pub fn new(device: &wgpu::Device, heap: &BindlessHeap) -> Self {
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("oxygen bindless pipeline layout"),
-            bind_group_layouts: &[Some(heap.domain_layout()), Some(heap.scene_constants_layout())],
+            bind_group_layouts: &[
+                Some(heap.domain_layout()),
+                Some(heap.scene_constants_layout()),
+                Some(heap.texture_layout()),
+            ],
             immediate_size: 0,
         });
         PipelineCache {
             layout,
+            texture_path: heap.texture_path(),
             modules: Mutex::new(HashMap::new()),
             pipelines: Mutex::new(HashMap::new()),
             created: AtomicU64::new(0),
@@ -138,7 +155,7 @@ impl PipelineCache {
             .or_insert_with(|| {
                 device.create_shader_module(wgpu::ShaderModuleDescriptor {
                     label: Some(&format!("{pass:?}")),
-                    source: wgpu::ShaderSource::Wgsl(shader_source(pass).into()),
+                    source: wgpu::ShaderSource::Wgsl(shader_source(pass, self.texture_path).into()),
                 })
             })
             .clone()

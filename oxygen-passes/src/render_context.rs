@@ -125,6 +125,7 @@ impl CommandRecorder {
 pub(crate) fn bind_view_resources(pass: &mut wgpu::RenderPass<'_>, ctx: &RenderContext<'_>) {
     pass.set_bind_group(0, ctx.heap.bind_group(), &[]);
     pass.set_bind_group(1, ctx.scene_constants.bind_group(), &[]);
+    pass.set_bind_group(2, ctx.heap.texture_bind_group(), &[]);
     pass.set_index_buffer(ctx.heap.index_buffer().slice(..), wgpu::IndexFormat::Uint32);
 }
 

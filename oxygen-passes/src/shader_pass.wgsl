@@ -12,7 +12,8 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord) -> vec
         n = -n; // double-sided surfaces are lit on the side we see
     }
     let view_dir = normalize(scene.camera.camera_position.xyz - mesh.world_position);
-    let albedo = material.base_color.rgb;
+    let base = base_color_of(mesh, material);
+    let albedo = base.rgb;
     let shininess = mix(128.0, 4.0, material.roughness);
     let specular_strength = (1.0 - material.roughness) * 0.25;
     var color = albedo * AMBIENT;
@@ -45,7 +46,7 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord) -> vec
         let n_dot_l = max(dot(n, l), 0.0);
         color += albedo / PI * n_dot_l * light.color * light.intensity * attenuation;
     }
-    return vec4<f32>(color, material.base_color.a);
+    return vec4<f32>(color, base.a);
 }
 
 @fragment
@@ -57,9 +58,9 @@ fn fs_opaque(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> @l
 @fragment
 fn fs_masked(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> @location(0) vec4<f32> {
     let material = material_of(mesh);
-    if material.base_color.a < material.alpha_cutoff {
+    let shaded = shade(mesh, front_facing, material);
+    if shaded.a < material.alpha_cutoff {
         discard;
     }
-    let shaded = shade(mesh, front_facing, material);
     return vec4<f32>(shaded.rgb, 1.0);
 }

@@ -22,7 +22,7 @@ use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
 use oxygen_bindless::{Allocation, BindlessError, BindlessHeap, DomainKind, SlotAllocators, SlotError};
-use oxygen_core::{Geometry, GeometryHandle, ResolvedView, Scene, ViewId};
+use oxygen_core::{Geometry, GeometryHandle, ResolvedView, Scene, TextureImage, ViewId};
 use thiserror::Error;
 use tracing::info_span;
 
@@ -32,6 +32,7 @@ use crate::finalize::materials::MaterialTable;
 use crate::finalize::partition::build_partitions;
 use crate::finalize::radix_sort::radix_sort_by_key;
 use crate::finalize::sort_key::sort_key;
+use crate::finalize::texture_cache::TextureCache;
 use crate::prepared_frame::FrameTransforms;
 use crate::worker_pool::WorkerPool;
 use crate::{
@@ -110,6 +111,8 @@ impl ViewWork {
 pub struct ScenePrep {
     frame: FrameCollection,
     geometry: GeometryCache,
+    textures: TextureCache,
+    pending_textures: Vec<(Allocation, Arc<TextureImage>)>,
     materials: MaterialTable,
     frame_allocations: Vec<Allocation>,
     /// Each view's draw-metadata and indirect-argument ranges.
@@ -150,6 +153,8 @@ impl ScenePrep {
         ScenePrep {
             frame: FrameCollection::default(),
             geometry: GeometryCache::default(),
+            textures: TextureCache::default(),
+            pending_textures: Vec::new(),
             materials: MaterialTable::default(),
             frame_allocations: Vec::new(),
             view_allocations: HashMap::new(),
@@ -227,7 +232,7 @@ impl ScenePrep {
         self.stats.frame_phase_runs += 1;
         self.stats.frame_phase_reuses += u64::from(self.frame.reused_last());
         self.stats.renderables_last_frame = self.frame.renderables.len() as u64;
-        self.materials.sync(scene, slots)?;
+        self.materials.sync(scene, slots, &mut self.textures)?;
         let frame_slots = self.allocate_frame_slots(slots)?;
 
         while self.work.len() < views.len() {
@@ -386,6 +391,11 @@ impl ScenePrep {
             heap.write(queue, &s.normal_transforms, 0, &self.frame.transforms.normal)?;
             heap.write(queue, &s.directional_lights, 0, &self.frame.directional_lights)?;
             heap.write(queue, &s.positional_lights, 0, &self.frame.positional_lights)?;
+        }
+        self.textures.take_pending(&mut self.pending_textures);
+        for (slot, image) in self.pending_textures.drain(..) {
+            let srgb = image.color_space() == oxygen_core::ColorSpace::Srgb;
+            heap.upload_texture(device, queue, &slot, (image.width(), image.height()), srgb, image.pixels())?;
         }
         if self.materials.is_dirty() {
             heap.write(queue, &self.materials.allocation(), 0, self.materials.records())?;

@@ -22,7 +22,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use slotmap::{Key, SlotMap, new_key_type};
 use thiserror::Error;
 
-use crate::{Camera, Geometry, Light, Material};
+use crate::{Camera, Geometry, Light, Material, TextureImage};
 
 new_key_type! {
     /// A node in the [`Scene`]; carries a generation, so a key of a removed
@@ -32,6 +32,8 @@ new_key_type! {
     pub struct GeometryHandle;
     /// A material asset in the [`Scene`].
     pub struct MaterialHandle;
+    /// A texture asset in the [`Scene`].
+    pub struct TextureHandle;
 }
 
 /// The stable numeric id of a node (its slot index), used for deterministic
@@ -42,6 +44,11 @@ pub fn node_index(key: NodeKey) -> u32 {
 
 /// The stable numeric id of a material (its slot index).
 pub fn material_index(handle: MaterialHandle) -> u32 {
+    (handle.data().as_ffi() & 0xffff_ffff) as u32
+}
+
+/// The stable numeric id of a texture (its slot index).
+pub fn texture_index(handle: TextureHandle) -> u32 {
     (handle.data().as_ffi() & 0xffff_ffff) as u32
 }
 
@@ -106,6 +113,7 @@ pub struct Scene {
     roots: Vec<NodeKey>,
     geometries: SlotMap<GeometryHandle, Arc<Geometry>>,
     materials: SlotMap<MaterialHandle, Material>,
+    textures: SlotMap<TextureHandle, Arc<TextureImage>>,
 }
 
 impl Default for Scene {
@@ -118,6 +126,7 @@ impl Default for Scene {
             roots: Vec::new(),
             geometries: SlotMap::with_key(),
             materials: SlotMap::with_key(),
+            textures: SlotMap::with_key(),
         }
     }
 }
@@ -164,6 +173,17 @@ impl Scene {
     pub fn add_material(&mut self, material: Material) -> MaterialHandle {
         self.revision += 1;
         self.materials.insert(material.sanitized())
+    }
+
+    /// Adds a texture asset.
+    pub fn add_texture(&mut self, texture: TextureImage) -> TextureHandle {
+        self.revision += 1;
+        self.textures.insert(Arc::new(texture))
+    }
+
+    /// A texture by handle.
+    pub fn texture(&self, handle: TextureHandle) -> Option<&Arc<TextureImage>> {
+        self.textures.get(handle)
     }
 
     /// A geometry by handle.

@@ -8,6 +8,7 @@ use oxygen_core::Scene;
 use oxygen_core::scene::material_index;
 
 use crate::MaterialRecord;
+use crate::finalize::texture_cache::TextureCache;
 
 /// The CPU copy of the material domain range and whether the GPU is behind.
 pub struct MaterialTable {
@@ -37,14 +38,28 @@ fn placeholder() -> MaterialRecord {
 impl MaterialTable {
     /// Rebuilds the records from the scene; marks the table dirty only when
     /// something differs, and re-allocates only when it grew or shrank.
-    pub fn sync(&mut self, scene: &Scene, slots: &mut SlotAllocators) -> Result<(), SlotError> {
+    pub fn sync(
+        &mut self,
+        scene: &Scene,
+        slots: &mut SlotAllocators,
+        textures: &mut TextureCache,
+    ) -> Result<(), SlotError> {
         self.scratch.clear();
         for (handle, material) in scene.materials() {
             let i = material_index(handle) as usize;
             if self.scratch.len() <= i {
                 self.scratch.resize(i + 1, placeholder());
             }
-            self.scratch[i] = MaterialRecord::from_material(material);
+            let mut record = MaterialRecord::from_material(material);
+            if let Some(texture) = material.base_color_texture {
+                match scene.texture(texture) {
+                    Some(image) => record.base_color_texture = textures.resolve(texture, image, slots)?,
+                    None => {
+                        tracing::warn!(material = %material.name, "base-colour texture missing; drawing untextured")
+                    }
+                }
+            }
+            self.scratch[i] = record;
         }
         if self.scratch != self.records {
             std::mem::swap(&mut self.scratch, &mut self.records);

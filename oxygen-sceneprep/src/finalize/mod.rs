@@ -4,10 +4,12 @@
 //! * [`radix_sort`]: the stable sort of draws by key;
 //! * [`partition`]: contiguous `[begin, end)` ranges with one [`PassMask`](crate::PassMask);
 //! * [`geometry_cache`]: lazy, cached geometry slots (only meshes some view draws);
-//! * [`materials`]: the material table, re-uploaded only when it changed.
+//! * [`materials`]: the material table, re-uploaded only when it changed;
+//! * [`texture_cache`]: texture slots for the textures materials use.
 
 pub mod geometry_cache;
 pub mod materials;
 pub mod partition;
 pub mod radix_sort;
 pub mod sort_key;
+pub mod texture_cache;

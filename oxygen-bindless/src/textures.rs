@@ -1,0 +1,387 @@
+//! Textures addressed by slot, on every backend.
+//!
+//! A material names its texture by a slot in the `TextureLocations` domain.
+//! How a shader turns that slot into texels depends on the path chosen at
+//! device creation:
+//!
+//! * [`TexturePath::BindingArray`]: one `binding_array<texture_2d<f32>, N>`
+//!   indexed by the slot (needs texture binding arrays with non-uniform
+//!   indexing: Vulkan with descriptor indexing, Metal, DX12);
+//! * [`TexturePath::GroupedArrays`]: works wherever `texture_2d_array` does
+//!   (GL included). Textures are resampled to one of four square size classes
+//!   (64, 256, 1024, 2048) and stored as layers of one array per size class
+//!   and colour space; the slot's location record says which array and layer.
+//!
+//! Both paths sample with one linear, repeating sampler at mip level 0.
+
+use std::num::NonZeroU32;
+
+use crate::{Allocation, BindlessError, DomainKind, SlotAllocators};
+
+/// Texture slots a binding array holds.
+pub const MAX_TEXTURES: u32 = 256;
+const SIZE_CLASSES: [u32; 4] = [64, 256, 1024, 2048];
+const GROUPS: usize = SIZE_CLASSES.len() * 2;
+
+/// How textures are bound.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum TexturePath {
+    /// One binding array indexed by slot.
+    BindingArray,
+    /// Texture arrays grouped by size class and colour space.
+    GroupedArrays,
+}
+
+impl TexturePath {
+    /// Device features the binding-array path needs.
+    pub const BINDING_ARRAY_FEATURES: wgpu::Features = wgpu::Features::TEXTURE_BINDING_ARRAY
+        .union(wgpu::Features::SAMPLED_TEXTURE_AND_STORAGE_BUFFER_ARRAY_NON_UNIFORM_INDEXING);
+
+    /// Whether a device with these features and limits can use this path.
+    pub fn is_supported(self, features: wgpu::Features, limits: &wgpu::Limits) -> bool {
+        match self {
+            TexturePath::GroupedArrays => true,
+            TexturePath::BindingArray => {
+                features.contains(Self::BINDING_ARRAY_FEATURES)
+                    && limits.max_binding_array_elements_per_shader_stage >= MAX_TEXTURES
+            }
+        }
+    }
+
+    /// The binding array where supported, grouped arrays otherwise.
+    pub fn best_for(features: wgpu::Features, limits: &wgpu::Limits) -> Self {
+        if TexturePath::BindingArray.is_supported(features, limits) {
+            TexturePath::BindingArray
+        } else {
+            TexturePath::GroupedArrays
+        }
+    }
+
+    /// WGSL declarations of group 2 and `sample_texture(slot, uv)`, which
+    /// returns opaque white for [`crate::INVALID_SLOT`].
+    pub fn wgsl(self) -> String {
+        match self {
+            TexturePath::BindingArray => format!(
+                "@group(2) @binding(0) var texture_array: binding_array<texture_2d<f32>, {MAX_TEXTURES}>;\n\
+                 @group(2) @binding(1) var texture_sampler: sampler;\n\
+                 fn sample_texture(slot: u32, uv: vec2<f32>) -> vec4<f32> {{\n\
+                 \x20   if slot >= {MAX_TEXTURES}u {{ return vec4<f32>(1.0); }}\n\
+                 \x20   return textureSampleLevel(texture_array[slot], texture_sampler, uv, 0.0);\n\
+                 }}\n"
+            ),
+            TexturePath::GroupedArrays => {
+                let mut out = String::new();
+                for g in 0..GROUPS {
+                    out.push_str(&format!("@group(2) @binding({g}) var texture_group_{g}: texture_2d_array<f32>;\n"));
+                }
+                out.push_str(&format!("@group(2) @binding({GROUPS}) var texture_sampler: sampler;\n"));
+                out.push_str(
+                    "fn sample_texture(slot: u32, uv: vec2<f32>) -> vec4<f32> {\n\
+                     \x20   if slot == INVALID_SLOT { return vec4<f32>(1.0); }\n\
+                     \x20   let location = texture_location_domain[slot];\n\
+                     \x20   let layer = location & 0xffffffu;\n\
+                     \x20   switch location >> 24u {\n",
+                );
+                for g in 0..GROUPS {
+                    out.push_str(&format!(
+                        "        case {g}u: {{ return textureSampleLevel(texture_group_{g}, texture_sampler, uv, layer, 0.0); }}\n"
+                    ));
+                }
+                out.push_str("        default: { return vec4<f32>(1.0); }\n    }\n}\n");
+                out
+            }
+        }
+    }
+}
+
+struct LayerGroup {
+    texture: wgpu::Texture,
+    view: wgpu::TextureView,
+    used_layers: u32,
+}
+
+/// The GPU side of the texture domain.
+pub(crate) struct TextureHeap {
+    path: TexturePath,
+    layout: wgpu::BindGroupLayout,
+    bind_group: wgpu::BindGroup,
+    sampler: wgpu::Sampler,
+    /// Binding-array path: one view per slot (a white placeholder when empty).
+    views: Vec<wgpu::TextureView>,
+    /// Grouped path: one array per (size class, colour space).
+    groups: Vec<LayerGroup>,
+    stale_bind_group: bool,
+    uploads: u64,
+}
+
+fn format_for(srgb: bool) -> wgpu::TextureFormat {
+    if srgb { wgpu::TextureFormat::Rgba8UnormSrgb } else { wgpu::TextureFormat::Rgba8Unorm }
+}
+
+fn create_texture(device: &wgpu::Device, side: (u32, u32), layers: u32, srgb: bool, label: &str) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d { width: side.0, height: side.1, depth_or_array_layers: layers },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: format_for(srgb),
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    })
+}
+
+fn write_layer(queue: &wgpu::Queue, texture: &wgpu::Texture, layer: u32, width: u32, height: u32, pixels: &[u8]) {
+    queue.write_texture(
+        wgpu::TexelCopyTextureInfo {
+            texture,
+            mip_level: 0,
+            origin: wgpu::Origin3d { x: 0, y: 0, z: layer },
+            aspect: wgpu::TextureAspect::All,
+        },
+        pixels,
+        wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(width * 4), rows_per_image: Some(height) },
+        wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+    );
+}
+
+fn array_view(texture: &wgpu::Texture) -> wgpu::TextureView {
+    texture.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(wgpu::TextureViewDimension::D2Array),
+        ..Default::default()
+    })
+}
+
+/// Bilinear resampling of RGBA8 texels (in their stored encoding), with
+/// texel centres aligned and edges clamped.
+pub fn resample_rgba8(src: &[u8], width: u32, height: u32, new_width: u32, new_height: u32) -> Vec<u8> {
+    if (width, height) == (new_width, new_height) {
+        return src.to_vec();
+    }
+    let texel = |x: u32, y: u32, c: usize| src[(y as usize * width as usize + x as usize) * 4 + c] as f32;
+    let mut out = Vec::with_capacity(new_width as usize * new_height as usize * 4);
+    for y in 0..new_height {
+        let fy = ((y as f32 + 0.5) * height as f32 / new_height as f32 - 0.5).clamp(0.0, (height - 1) as f32);
+        let (y0, ty) = (fy.floor() as u32, fy.fract());
+        let y1 = (y0 + 1).min(height - 1);
+        for x in 0..new_width {
+            let fx = ((x as f32 + 0.5) * width as f32 / new_width as f32 - 0.5).clamp(0.0, (width - 1) as f32);
+            let (x0, tx) = (fx.floor() as u32, fx.fract());
+            let x1 = (x0 + 1).min(width - 1);
+            for c in 0..4 {
+                let top = texel(x0, y0, c) * (1.0 - tx) + texel(x1, y0, c) * tx;
+                let bottom = texel(x0, y1, c) * (1.0 - tx) + texel(x1, y1, c) * tx;
+                out.push((top * (1.0 - ty) + bottom * ty).round() as u8);
+            }
+        }
+    }
+    out
+}
+
+impl TextureHeap {
+    pub(crate) fn new(device: &wgpu::Device, queue: &wgpu::Queue, path: TexturePath) -> Self {
+        let texture_entry = |binding, dimension, count| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                view_dimension: dimension,
+                multisampled: false,
+            },
+            count,
+        };
+        let sampler_entry = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+            count: None,
+        };
+        let entries: Vec<_> = match path {
+            TexturePath::BindingArray => {
+                vec![texture_entry(0, wgpu::TextureViewDimension::D2, NonZeroU32::new(MAX_TEXTURES)), sampler_entry(1)]
+            }
+            TexturePath::GroupedArrays => (0..GROUPS as u32)
+                .map(|g| texture_entry(g, wgpu::TextureViewDimension::D2Array, None))
+                .chain(std::iter::once(sampler_entry(GROUPS as u32)))
+                .collect(),
+        };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("bindless textures"),
+            entries: &entries,
+        });
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("material sampler"),
+            address_mode_u: wgpu::AddressMode::Repeat,
+            address_mode_v: wgpu::AddressMode::Repeat,
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+        let white = [255u8; 4];
+        let (views, groups) = match path {
+            TexturePath::BindingArray => {
+                let placeholder = create_texture(device, (1, 1), 1, true, "texture placeholder");
+                write_layer(queue, &placeholder, 0, 1, 1, &white);
+                let view = placeholder.create_view(&Default::default());
+                (vec![view; MAX_TEXTURES as usize], Vec::new())
+            }
+            TexturePath::GroupedArrays => {
+                let groups = (0..GROUPS)
+                    .map(|g| {
+                        let side = SIZE_CLASSES[g / 2];
+                        // Layer 0 of each array stays white: an unused array still binds.
+                        let texture = create_texture(device, (side, side), 1, g % 2 == 0, "texture group");
+                        let pixels = vec![255u8; side as usize * side as usize * 4];
+                        write_layer(queue, &texture, 0, side, side, &pixels);
+                        LayerGroup { view: array_view(&texture), texture, used_layers: 1 }
+                    })
+                    .collect();
+                (Vec::new(), groups)
+            }
+        };
+        let bind_group = build_bind_group(device, &layout, path, &views, &groups, &sampler);
+        TextureHeap { path, layout, bind_group, sampler, views, groups, stale_bind_group: false, uploads: 0 }
+    }
+
+    pub(crate) fn path(&self) -> TexturePath {
+        self.path
+    }
+
+    pub(crate) fn layout(&self) -> &wgpu::BindGroupLayout {
+        &self.layout
+    }
+
+    pub(crate) fn bind_group(&self) -> &wgpu::BindGroup {
+        &self.bind_group
+    }
+
+    pub(crate) fn uploads(&self) -> u64 {
+        self.uploads
+    }
+
+    /// Stores a texture for `slot` and returns its location record.
+    pub(crate) fn upload(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        slot: u32,
+        (width, height): (u32, u32),
+        srgb: bool,
+        pixels: &[u8],
+    ) -> Result<u32, BindlessError> {
+        self.uploads += 1;
+        self.stale_bind_group = true;
+        match self.path {
+            TexturePath::BindingArray => {
+                if slot >= MAX_TEXTURES {
+                    return Err(BindlessError::TooManyTextures { slot, limit: MAX_TEXTURES });
+                }
+                let texture = create_texture(device, (width, height), 1, srgb, "material texture");
+                write_layer(queue, &texture, 0, width, height, pixels);
+                self.views[slot as usize] = texture.create_view(&Default::default());
+                Ok(slot)
+            }
+            TexturePath::GroupedArrays => {
+                let side = width.max(height);
+                let class = SIZE_CLASSES.iter().position(|c| *c >= side).unwrap_or(SIZE_CLASSES.len() - 1);
+                let g = class * 2 + usize::from(!srgb);
+                let class_side = SIZE_CLASSES[class];
+                let resampled = resample_rgba8(pixels, width, height, class_side, class_side);
+                let group = &mut self.groups[g];
+                if group.used_layers == group.texture.depth_or_array_layers() {
+                    let layers = group.used_layers * 2;
+                    if layers > device.limits().max_texture_array_layers {
+                        return Err(BindlessError::TooManyTextures { slot, limit: group.used_layers });
+                    }
+                    let bigger = create_texture(device, (class_side, class_side), layers, srgb, "texture group");
+                    let mut encoder = device.create_command_encoder(&Default::default());
+                    encoder.copy_texture_to_texture(
+                        group.texture.as_image_copy(),
+                        bigger.as_image_copy(),
+                        wgpu::Extent3d {
+                            width: class_side,
+                            height: class_side,
+                            depth_or_array_layers: group.used_layers,
+                        },
+                    );
+                    // Submitted now so that the copy lands before this frame's writes.
+                    queue.submit([encoder.finish()]);
+                    group.view = array_view(&bigger);
+                    group.texture = bigger;
+                }
+                let layer = group.used_layers;
+                group.used_layers += 1;
+                write_layer(queue, &group.texture, layer, class_side, class_side, &resampled);
+                Ok((g as u32) << 24 | layer)
+            }
+        }
+    }
+
+    /// Rebuilds the bind group after uploads.
+    pub(crate) fn refresh(&mut self, device: &wgpu::Device) {
+        if self.stale_bind_group {
+            self.stale_bind_group = false;
+            self.bind_group =
+                build_bind_group(device, &self.layout, self.path, &self.views, &self.groups, &self.sampler);
+        }
+    }
+}
+
+fn build_bind_group(
+    device: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    path: TexturePath,
+    views: &[wgpu::TextureView],
+    groups: &[LayerGroup],
+    sampler: &wgpu::Sampler,
+) -> wgpu::BindGroup {
+    let view_refs: Vec<&wgpu::TextureView> = views.iter().collect();
+    let entries: Vec<wgpu::BindGroupEntry<'_>> = match path {
+        TexturePath::BindingArray => vec![
+            wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureViewArray(&view_refs) },
+            wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::Sampler(sampler) },
+        ],
+        TexturePath::GroupedArrays => groups
+            .iter()
+            .enumerate()
+            .map(|(g, group)| wgpu::BindGroupEntry {
+                binding: g as u32,
+                resource: wgpu::BindingResource::TextureView(&group.view),
+            })
+            .chain(std::iter::once(wgpu::BindGroupEntry {
+                binding: GROUPS as u32,
+                resource: wgpu::BindingResource::Sampler(sampler),
+            }))
+            .collect(),
+    };
+    device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("bindless textures"), layout, entries: &entries })
+}
+
+/// Allocates one texture slot (a record in the `TextureLocations` domain).
+pub fn allocate_texture_slot(slots: &mut SlotAllocators) -> Result<Allocation, crate::SlotError> {
+    slots.allocate(DomainKind::TextureLocations, 1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn resampling_keeps_flat_colour_and_cell_centres() {
+        let flat = vec![10u8, 20, 30, 255].repeat(9);
+        assert_eq!(resample_rgba8(&flat, 3, 3, 7, 5), vec![10u8, 20, 30, 255].repeat(35));
+        // A 2x2 checker upsampled 32x keeps each cell's colour at its centre.
+        let checker = [255u8, 0, 0, 255, 0, 0, 255, 255, 0, 0, 255, 255, 255, 0, 0, 255];
+        let big = resample_rgba8(&checker, 2, 2, 64, 64);
+        let at = |x: usize, y: usize| &big[(y * 64 + x) * 4..(y * 64 + x) * 4 + 4];
+        assert_eq!(at(8, 8), &[255, 0, 0, 255]);
+        assert_eq!(at(56, 8), &[0, 0, 255, 255]);
+    }
+
+    #[test]
+    fn both_paths_declare_sample_texture() {
+        for path in [TexturePath::BindingArray, TexturePath::GroupedArrays] {
+            assert!(path.wgsl().contains("fn sample_texture(slot: u32, uv: vec2<f32>) -> vec4<f32>"));
+        }
+    }
+}
