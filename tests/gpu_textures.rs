@@ -1,0 +1,89 @@
+//! Textures addressed by slot render on both texture paths, with the same
+//! picture (per-pixel tolerance, a cap on differing pixels).
+
+mod support;
+
+use oxygen::core::TextureImage;
+use oxygen::prelude::*;
+use support::{Rgb, assert_region, pixel_of};
+
+const RED: [u8; 4] = [230, 20, 20, 255];
+const BLUE: [u8; 4] = [20, 40, 230, 255];
+
+/// A 2 × 2 quad facing +Z, textured with a 4 × 4 red/blue checker of `texels` texels.
+fn checker_scene(texels: u32) -> Scene {
+    let mut scene = Scene::new();
+    let texture = scene.add_texture(TextureImage::checker("checker", texels, 4, RED, BLUE));
+    let quad = scene.add_geometry(Geometry::quad(2.0));
+    let material =
+        scene.add_material(Material { base_color_texture: Some(texture), ..Material::opaque("checkered", Vec4::ONE) });
+    let node = scene.add_node("quad", Transform::IDENTITY);
+    scene.set_renderable(node, Renderable { geometry: quad, materials: vec![material] }).unwrap();
+    let sun = scene.add_node("sun", Transform::IDENTITY);
+    scene.set_light(sun, Some(Light::directional(3.0))).unwrap();
+    scene
+}
+
+/// The world point of the quad at texture coordinate (u, v).
+fn at_uv(u: f32, v: f32) -> Vec3 {
+    Vec3::new((u - 0.5) * 2.0, (0.5 - v) * 2.0, 0.0)
+}
+
+fn render(scene: &Scene, path: TexturePath) -> (image::RgbaImage, ResolvedView) {
+    let options = RendererOptions { texture_path: Some(path), ..Default::default() };
+    let mut renderer = Renderer::new_headless_with(options).unwrap_or_else(|e| panic!("{path:?}: {e}"));
+    assert_eq!(renderer.texture_path(), path);
+    let camera = LookAtResolver {
+        camera: Camera::perspective(60f32.to_radians(), 0.1, None),
+        eye: Vec3::new(0.0, 0.0, 2.0),
+        target: Vec3::ZERO,
+        up: Vec3::Y,
+        viewport: UVec2::new(96, 96),
+    };
+    let view = renderer.register_view(camera, standard_render_graph);
+    renderer.render_frame(scene).unwrap();
+    let ctx = ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 };
+    (renderer.read_color(view).unwrap(), camera.resolve(&ctx, scene).unwrap())
+}
+
+fn is_red(p: Rgb) -> bool {
+    p.r > 120 && p.r as i32 > p.b as i32 + 60
+}
+fn is_blue(p: Rgb) -> bool {
+    p.b > 120 && p.b as i32 > p.r as i32 + 60
+}
+
+#[test]
+fn a_checker_texture_shows_its_cells_on_both_paths_and_they_agree() {
+    // 64 texels: a size class of its own, so the grouped path stores it unresampled.
+    let scene = checker_scene(64);
+    let mut images = Vec::new();
+    for path in [TexturePath::BindingArray, TexturePath::GroupedArrays] {
+        let (image, view) = render(&scene, path);
+        // Cell centres: (0,0) red, (1,0) blue, (0,1) blue, (1,1) red.
+        for (u, v, red) in [(0.125, 0.125, true), (0.375, 0.125, false), (0.125, 0.375, false), (0.375, 0.375, true)] {
+            let what = format!("{path:?} cell at uv ({u}, {v})");
+            let check: fn(Rgb) -> bool = if red { is_red } else { is_blue };
+            assert_region(&image, pixel_of(&view, at_uv(u, v)), 2, check, 0, &what);
+        }
+        images.push(image);
+    }
+    let differing = images[0]
+        .pixels()
+        .zip(images[1].pixels())
+        .filter(|(a, b)| a.0.iter().zip(b.0.iter()).any(|(x, y)| x.abs_diff(*y) > 2))
+        .count();
+    assert!(differing == 0, "{differing} pixels differ by more than 2 levels between the paths");
+}
+
+#[test]
+fn a_texture_of_another_size_is_resampled_on_the_grouped_path() {
+    // 48 texels go to the 64 size class: cell centres keep their colour.
+    let scene = checker_scene(48);
+    for path in [TexturePath::BindingArray, TexturePath::GroupedArrays] {
+        let (image, view) = render(&scene, path);
+        assert_region(&image, pixel_of(&view, at_uv(0.125, 0.125)), 2, is_red, 0, &format!("{path:?} red cell"));
+        assert_region(&image, pixel_of(&view, at_uv(0.625, 0.125)), 2, is_red, 0, &format!("{path:?} red cell 2"));
+        assert_region(&image, pixel_of(&view, at_uv(0.375, 0.125)), 2, is_blue, 0, &format!("{path:?} blue cell"));
+    }
+}
