@@ -1,0 +1,61 @@
+//! The bindless heap on a real device: domains grow with their live data
+//! copied, stale and out-of-range writes are errors.
+
+use oxygen::bindless::{BindlessError, BindlessHeap, DomainKind, SlotError, TexturePath};
+use oxygen::core::{GpuContext, GpuOptions};
+
+fn read_buffer(gpu: &GpuContext, buffer: &wgpu::Buffer, bytes: u64) -> Vec<u8> {
+    let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("test readback"),
+        size: bytes,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, bytes);
+    gpu.queue.submit([encoder.finish()]);
+    staging.slice(..).map_async(wgpu::MapMode::Read, |r| r.expect("map"));
+    gpu.device.poll(wgpu::PollType::wait_indefinitely()).expect("poll");
+    let data = staging.slice(..).get_mapped_range().expect("mapped").to_vec();
+    staging.unmap();
+    data
+}
+
+/// A 48-byte material-sized record whose words all equal `value`.
+fn record(value: u32) -> [u32; 12] {
+    [value; 12]
+}
+
+#[test]
+fn a_domain_grows_and_keeps_its_live_records() {
+    let gpu = GpuContext::new_headless(&GpuOptions::default()).expect("test adapter");
+    let mut heap = BindlessHeap::new(&gpu.device, &gpu.queue, TexturePath::GroupedArrays);
+    let first = heap.slots.allocate(DomainKind::Materials, 10).unwrap();
+    assert!(!heap.ensure_capacity(&gpu.device, &gpu.queue), "10 records fit the initial buffer");
+    let first_records: Vec<_> = (0..10).map(|i| record(1000 + i)).collect();
+    heap.write(&gpu.queue, &first, 0, &first_records).unwrap();
+
+    let initial = heap.capacity(DomainKind::Materials);
+    let second = heap.slots.allocate(DomainKind::Materials, 5000).unwrap();
+    // Writing before growing is refused, not silently dropped.
+    assert!(matches!(
+        heap.write(&gpu.queue, &second, 4999, &[record(7)]),
+        Err(BindlessError::BeyondCapacity { .. })
+    ));
+    assert!(heap.ensure_capacity(&gpu.device, &gpu.queue), "5010 records need a bigger buffer");
+    assert!(heap.capacity(DomainKind::Materials) >= 5010 && heap.capacity(DomainKind::Materials) > initial);
+    assert_eq!(heap.growth_count(), 1);
+    let second_records: Vec<_> = (0..5000).map(|i| record(50_000 + i)).collect();
+    heap.write(&gpu.queue, &second, 0, &second_records).unwrap();
+
+    let bytes = read_buffer(&gpu, heap.buffer(DomainKind::Materials), 5010 * 48);
+    let words: &[[u32; 12]] = bytemuck::cast_slice(&bytes);
+    assert_eq!(&words[first.start as usize..first.end() as usize], &first_records[..], "copied across growth");
+    assert_eq!(&words[second.start as usize..second.end() as usize], &second_records[..]);
+
+    // A freed range's handle is stale: writing through it is an error.
+    heap.slots.free(first).unwrap();
+    assert!(matches!(heap.write(&gpu.queue, &first, 0, &[record(1)]), Err(BindlessError::Slot(SlotError::Stale { .. }))));
+    // Records of the wrong size are refused.
+    assert!(matches!(heap.write(&gpu.queue, &second, 0, &[0u32; 4]), Err(BindlessError::RecordSize { .. })));
+}
