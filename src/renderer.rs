@@ -106,6 +106,9 @@ pub struct RendererOptions {
     pub prep_threads: Option<usize>,
     /// Force a texture path; `None` picks the binding array where supported.
     pub texture_path: Option<TexturePath>,
+    /// Debug mode: shaders check each draw's slot generation and paint draws
+    /// read through a stale range magenta.
+    pub debug_generations: bool,
 }
 
 struct RegisteredView {
@@ -190,10 +193,11 @@ impl Renderer {
         info!(?draw_path, ?texture_path, "draw and texture paths chosen");
         let heap = BindlessHeap::new(&gpu.device, &gpu.queue, texture_path);
         let pipelines = PipelineCache::new(&gpu.device, &heap);
-        let prep = match options.prep_threads {
+        let mut prep = match options.prep_threads {
             Some(threads) => ScenePrep::with_threads(threads),
             None => ScenePrep::new(),
         };
+        prep.set_debug_generations(options.debug_generations);
         Ok(Renderer {
             gpu,
             heap,

@@ -38,10 +38,7 @@ fn a_domain_grows_and_keeps_its_live_records() {
     let initial = heap.capacity(DomainKind::Materials);
     let second = heap.slots.allocate(DomainKind::Materials, 5000).unwrap();
     // Writing before growing is refused, not silently dropped.
-    assert!(matches!(
-        heap.write(&gpu.queue, &second, 4999, &[record(7)]),
-        Err(BindlessError::BeyondCapacity { .. })
-    ));
+    assert!(matches!(heap.write(&gpu.queue, &second, 4999, &[record(7)]), Err(BindlessError::BeyondCapacity { .. })));
     assert!(heap.ensure_capacity(&gpu.device, &gpu.queue), "5010 records need a bigger buffer");
     assert!(heap.capacity(DomainKind::Materials) >= 5010 && heap.capacity(DomainKind::Materials) > initial);
     assert_eq!(heap.growth_count(), 1);
@@ -55,7 +52,10 @@ fn a_domain_grows_and_keeps_its_live_records() {
 
     // A freed range's handle is stale: writing through it is an error.
     heap.slots.free(first).unwrap();
-    assert!(matches!(heap.write(&gpu.queue, &first, 0, &[record(1)]), Err(BindlessError::Slot(SlotError::Stale { .. }))));
+    assert!(matches!(
+        heap.write(&gpu.queue, &first, 0, &[record(1)]),
+        Err(BindlessError::Slot(SlotError::Stale { .. }))
+    ));
     // Records of the wrong size are refused.
     assert!(matches!(heap.write(&gpu.queue, &second, 0, &[0u32; 4]), Err(BindlessError::RecordSize { .. })));
 }

@@ -72,6 +72,18 @@ pub struct RendererConstants {
     pub positional_light_count: u32,
     /// Shadow data (not yet produced: always [`INVALID_SLOT`]).
     pub shadows_slot: u32,
+    /// Bit 0: the shader checks `DrawMetadata.reserved[0]` against
+    /// `draw_metadata_generation` and paints mismatching draws magenta.
+    pub debug_flags: u32,
+    /// Generation of this view's draw-metadata range (debug mode).
+    pub draw_metadata_generation: u32,
+    /// Zero.
+    pub reserved: [u32; 2],
+}
+
+impl RendererConstants {
+    /// `debug_flags` bit: check draw-metadata generations in the shader.
+    pub const DEBUG_GENERATIONS: u32 = 1;
 }
 
 impl Default for RendererConstants {
@@ -89,11 +101,14 @@ impl Default for RendererConstants {
             positional_lights_slot: INVALID_SLOT,
             positional_light_count: 0,
             shadows_slot: INVALID_SLOT,
+            debug_flags: 0,
+            draw_metadata_generation: 0,
+            reserved: [0; 2],
         }
     }
 }
 
-/// The whole uniform block (320 bytes).
+/// The whole uniform block (336 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct SceneConstants {
@@ -105,12 +120,13 @@ pub struct SceneConstants {
 
 const _: () = {
     assert!(size_of::<CameraConstants>() == 272);
-    assert!(size_of::<RendererConstants>() == 48);
-    assert!(size_of::<SceneConstants>() == 320);
+    assert!(size_of::<RendererConstants>() == 64);
+    assert!(size_of::<SceneConstants>() == 336);
     assert!(offset_of!(SceneConstants, renderer) == 272);
     assert!(offset_of!(CameraConstants, camera_position) == 256);
     assert!(offset_of!(RendererConstants, draw_metadata_slot) == 8);
     assert!(offset_of!(RendererConstants, shadows_slot) == 44);
+    assert!(offset_of!(RendererConstants, draw_metadata_generation) == 52);
 };
 
 /// The WGSL twin of [`SceneConstants`] and its binding (group 1, binding 0).

@@ -24,6 +24,10 @@ struct RendererConstants {
     positional_lights_slot: u32,
     positional_light_count: u32,
     shadows_slot: u32,
+    debug_flags: u32,
+    draw_metadata_generation: u32,
+    reserved0: u32,
+    reserved1: u32,
 }
 
 struct SceneConstants {

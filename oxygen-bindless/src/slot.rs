@@ -43,6 +43,13 @@ impl Allocation {
         self.domain
     }
 
+    /// The generation of this range's handle (its key version; 0 when empty).
+    /// Debug builds of a view write it into GPU records so shaders can detect
+    /// a read through a stale slot.
+    pub fn generation(&self) -> u32 {
+        self.key.map_or(0, |k| (slotmap::Key::data(&k).as_ffi() >> 32) as u32)
+    }
+
     /// One past the last slot.
     pub fn end(&self) -> u32 {
         if self.count == 0 { self.start } else { self.start + self.count }

@@ -26,10 +26,22 @@ fn vs_main(@builtin(vertex_index) vertex_index: u32, @builtin(instance_index) dr
     out.world_normal = normal_matrix * vec3<f32>(v.nx, v.ny, v.nz);
     out.uv = vec2<f32>(v.u, v.v);
     out.material = draw.material_handle;
+    // Debug mode: a draw read through a stale or foreign range carries
+    // another generation; flag it (the fragment stages paint it magenta).
+    let checking = (scene.renderer.debug_flags & 1u) != 0u;
+    if checking && draw.reserved0 != scene.renderer.draw_metadata_generation {
+        out.material = INVALID_SLOT;
+    }
     return out;
 }
 
+const STALE_DRAW_COLOR: vec4<f32> = vec4<f32>(1.0, 0.0, 1.0, 1.0);
+
 fn material_of(mesh: MeshVarying) -> MaterialRecord {
+    if mesh.material == INVALID_SLOT {
+        // A flagged draw: an opaque, untextured magenta material.
+        return MaterialRecord(STALE_DRAW_COLOR, 0.0, 1.0, 0.0, 0u, INVALID_SLOT, 0u, 0u, 0u);
+    }
     return material_domain[scene.renderer.materials_slot + mesh.material];
 }
 

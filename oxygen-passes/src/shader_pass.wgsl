@@ -51,12 +51,18 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord) -> vec
 
 @fragment
 fn fs_opaque(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> @location(0) vec4<f32> {
+    if mesh.material == INVALID_SLOT {
+        return STALE_DRAW_COLOR;
+    }
     let shaded = shade(mesh, front_facing, material_of(mesh));
     return vec4<f32>(shaded.rgb, 1.0);
 }
 
 @fragment
 fn fs_masked(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> @location(0) vec4<f32> {
+    if mesh.material == INVALID_SLOT {
+        return STALE_DRAW_COLOR;
+    }
     let material = material_of(mesh);
     let shaded = shade(mesh, front_facing, material);
     if shaded.a < material.alpha_cutoff {

@@ -54,6 +54,7 @@ pub struct PreparedSceneFrame {
     pub(crate) partitions: Vec<Partition>,
     pub(crate) transforms: Arc<FrameTransforms>,
     pub(crate) slots: PreparedSlots,
+    pub(crate) debug_generations: bool,
 }
 
 fn slot(a: &Allocation) -> String {
@@ -71,6 +72,7 @@ impl PreparedSceneFrame {
             sort_keys: Vec::new(),
             partitions: Vec::new(),
             transforms,
+            debug_generations: false,
             slots: PreparedSlots {
                 draw_metadata: Allocation::empty(DomainKind::DrawMetadata),
                 indirect_args: Allocation::empty(DomainKind::IndirectArgs),
@@ -136,6 +138,9 @@ impl PreparedSceneFrame {
             positional_lights_slot: s.positional_lights.start,
             positional_light_count: s.positional_lights.count,
             shadows_slot: INVALID_SLOT,
+            debug_flags: if self.debug_generations { RendererConstants::DEBUG_GENERATIONS } else { 0 },
+            draw_metadata_generation: s.draw_metadata.generation(),
+            reserved: [0; 2],
         }
     }
 

@@ -127,6 +127,7 @@ pub struct ScenePrep {
     pool: WorkerPool,
     frame_index: u64,
     stats: PrepStats,
+    debug_generations: bool,
 }
 
 impl Default for ScenePrep {
@@ -166,7 +167,14 @@ impl ScenePrep {
             pool: WorkerPool::new(threads),
             frame_index: 0,
             stats: PrepStats::default(),
+            debug_generations: false,
         }
+    }
+
+    /// Debug mode: every `DrawMetadata` carries its range's generation in
+    /// `reserved[0]`, and the view's constants ask the shader to check it.
+    pub fn set_debug_generations(&mut self, enabled: bool) {
+        self.debug_generations = enabled;
     }
 
     /// Threads views are prepared on.
@@ -291,6 +299,7 @@ impl ScenePrep {
             let _span = info_span!("finalize").entered();
             let (frame, geometry, work) = (&self.frame, &self.geometry, &self.work);
             let (frame_index, materials) = (self.frame_index, self.materials.allocation());
+            let debug_generations = self.debug_generations;
             self.pool.run(views.len(), &|i| {
                 let mut w = lock(&work[i]);
                 let w = &mut *w;
@@ -315,7 +324,7 @@ impl ScenePrep {
                         pass_mask: item.pass_mask.bits(),
                         node_id: item.node_id,
                         submesh: item.submesh,
-                        reserved: [0; 5],
+                        reserved: [if debug_generations { w.draw_allocation.generation() } else { 0 }, 0, 0, 0, 0],
                     });
                     out.sort_keys.push(key);
                 }
@@ -325,6 +334,7 @@ impl ScenePrep {
                 build_partitions(&out.draws, &mut out.partitions);
                 out.view_id = views[i].view.view_id;
                 out.frame_index = frame_index;
+                out.debug_generations = debug_generations;
                 out.transforms = Arc::clone(&frame.transforms);
                 out.slots = PreparedSlots {
                     draw_metadata: w.draw_allocation,

@@ -1,0 +1,90 @@
+//! Debug mode: every draw record carries its range's generation and the
+//! shader paints a draw read through a stale range magenta.
+
+use futures::executor::block_on;
+use oxygen::bindless::{BindlessHeap, CameraConstants, SceneConstantsBuffer, TexturePath};
+use oxygen::core::demo::{main_camera, multi_view_scene};
+use oxygen::core::{GpuContext, GpuOptions, ViewTargets};
+use oxygen::passes::PipelineCache;
+use oxygen::prelude::*;
+use oxygen::sceneprep::{ScenePrep, ViewRequest};
+
+fn magenta_pixels(image: &image::RgbaImage) -> usize {
+    image.pixels().filter(|p| p.0[0] > 220 && p.0[2] > 220 && p.0[1] < 40).count()
+}
+
+#[test]
+fn debug_generations_flag_nothing_when_slots_are_current() {
+    let options = RendererOptions { debug_generations: true, ..Default::default() };
+    let mut renderer = Renderer::new_headless_with(options).unwrap();
+    let demo = multi_view_scene();
+    let view = renderer.register_view(main_camera(UVec2::new(96, 64)), standard_render_graph);
+    for _ in 0..3 {
+        renderer.render_frame(&demo.scene).unwrap();
+    }
+    let frame = renderer.prepared_frame(view).unwrap();
+    assert!(frame.draws().iter().all(|d| d.reserved[0] == frame.slots().draw_metadata.generation()));
+    assert_eq!(magenta_pixels(&renderer.read_color(view).unwrap()), 0);
+}
+
+#[test]
+fn a_stale_draw_range_is_painted_magenta() {
+    let gpu_options = GpuOptions { optional_features: Renderer::OPTIONAL_FEATURES, ..Default::default() };
+    let gpu = GpuContext::new_headless(&gpu_options).unwrap();
+    let texture_path = TexturePath::best_for(gpu.features, &gpu.device.limits());
+    let mut heap = BindlessHeap::new(&gpu.device, &gpu.queue, texture_path);
+    let pipelines = PipelineCache::new(&gpu.device, &heap);
+    let demo = multi_view_scene();
+    let resolver = main_camera(UVec2::new(96, 64));
+    let view =
+        resolver.resolve(&ViewContext { view_id: ViewId(0), frame_index: 1, time_seconds: 0.0 }, &demo.scene).unwrap();
+
+    let mut prep = ScenePrep::new();
+    prep.set_debug_generations(true);
+    prep.prepare(&demo.scene, &[ViewRequest { view: &view, options: Default::default() }], &mut heap.slots).unwrap();
+    prep.upload(&mut heap, &gpu.device, &gpu.queue).unwrap();
+    let frame = &prep.frames()[0];
+
+    // The view's constants name a generation its records do not carry, as if
+    // they pointed at a range that was freed and handed to someone else.
+    let mut constants = SceneConstantsBuffer::new(&gpu.device, heap.scene_constants_layout(), "stale view");
+    constants.set_camera(
+        &gpu.queue,
+        &CameraConstants::new(
+            view.view,
+            view.projection,
+            view.view_projection,
+            view.inverse_view_projection,
+            view.camera_position,
+        ),
+    );
+    let mut renderer_constants = frame.renderer_constants(0.0);
+    renderer_constants.draw_metadata_generation += 1;
+    constants.set_renderer(&gpu.queue, &renderer_constants);
+
+    let targets = ViewTargets::new(&gpu.device, 96, 64, "stale view");
+    let ctx = RenderContext {
+        gpu: &gpu,
+        view: &view,
+        prepared: frame,
+        scene_constants: &constants,
+        heap: &heap,
+        targets: &targets,
+        pipelines: &pipelines,
+        draw_path: DrawPath::Direct,
+    };
+    let mut recorder = CommandRecorder::new(&gpu.device, "stale view");
+    block_on(async {
+        let mut depth = DepthPrePass::new();
+        depth.prepare_resources(&ctx, &mut recorder).await?;
+        depth.execute(&ctx, &mut recorder).await?;
+        let mut shading = ShaderPass::new(ShaderPassConfig::default());
+        shading.prepare_resources(&ctx, &mut recorder).await?;
+        shading.execute(&ctx, &mut recorder).await
+    })
+    .unwrap();
+    gpu.queue.submit([recorder.finish().0]);
+    let image = gpu.read_rgba8(&targets.color).unwrap();
+    let flagged = magenta_pixels(&image);
+    assert!(flagged > 96 * 64 / 4, "only {flagged} pixels flagged");
+}
