@@ -3,7 +3,7 @@
 
 mod support;
 
-use oxygen::core::TextureImage;
+use oxygen::core::{Filter, Sampling, TextureImage, Wrap};
 use oxygen::prelude::*;
 use support::{Rgb, assert_region, pixel_of};
 
@@ -12,8 +12,13 @@ const BLUE: [u8; 4] = [20, 40, 230, 255];
 
 /// A 2 × 2 quad facing +Z, textured with a 4 × 4 red/blue checker of `texels` texels.
 fn checker_scene(texels: u32) -> Scene {
+    sampled_checker_scene(texels, 4, Sampling::default())
+}
+
+/// As [`checker_scene`], with `cells` × `cells` cells and a chosen sampling.
+fn sampled_checker_scene(texels: u32, cells: u32, sampling: Sampling) -> Scene {
     let mut scene = Scene::new();
-    let texture = scene.add_texture(TextureImage::checker("checker", texels, 4, RED, BLUE));
+    let texture = scene.add_texture(TextureImage::checker("checker", texels, cells, RED, BLUE).with_sampling(sampling));
     let quad = scene.add_geometry(Geometry::quad(2.0));
     let material =
         scene.add_material(Material { base_color_texture: Some(texture), ..Material::opaque("checkered", Vec4::ONE) });
@@ -85,5 +90,20 @@ fn a_texture_of_another_size_is_resampled_on_the_grouped_path() {
         assert_region(&image, pixel_of(&view, at_uv(0.125, 0.125)), 2, is_red, 0, &format!("{path:?} red cell"));
         assert_region(&image, pixel_of(&view, at_uv(0.625, 0.125)), 2, is_red, 0, &format!("{path:?} red cell 2"));
         assert_region(&image, pixel_of(&view, at_uv(0.375, 0.125)), 2, is_blue, 0, &format!("{path:?} blue cell"));
+    }
+}
+
+#[test]
+fn the_sampler_table_applies_nearest_and_linear_filtering() {
+    // A 2 × 2 texel checker: at u = 0.4 (a fifth of a texel from the middle)
+    // nearest filtering gives pure red, linear a red-blue mix.
+    let nearest = Sampling { wrap: Wrap::Repeat, filter: Filter::Nearest };
+    let linear = Sampling { wrap: Wrap::ClampToEdge, filter: Filter::Linear };
+    for path in [TexturePath::BindingArray, TexturePath::GroupedArrays] {
+        let (image, view) = render(&sampled_checker_scene(2, 2, nearest), path);
+        assert_region(&image, pixel_of(&view, at_uv(0.4, 0.25)), 0, is_red, 0, &format!("{path:?} nearest"));
+        let (image, view) = render(&sampled_checker_scene(2, 2, linear), path);
+        let mixed = |p: Rgb| p.r > 60 && p.b > 60;
+        assert_region(&image, pixel_of(&view, at_uv(0.4, 0.25)), 0, mixed, 0, &format!("{path:?} linear"));
     }
 }

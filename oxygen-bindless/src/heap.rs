@@ -202,7 +202,8 @@ impl BindlessHeap {
     }
 
     /// Uploads a texture for a `TextureLocations` slot and records where it
-    /// lives; `size` is (width, height), `pixels` tightly packed RGBA8.
+    /// lives and which sampler-table entry samples it; `size` is (width,
+    /// height), `pixels` tightly packed RGBA8.
     pub fn upload_texture(
         &mut self,
         device: &wgpu::Device,
@@ -210,13 +211,14 @@ impl BindlessHeap {
         slot: &Allocation,
         size: (u32, u32),
         srgb: bool,
+        sampler: u32,
         pixels: &[u8],
     ) -> Result<(), BindlessError> {
         if slot.domain() != DomainKind::TextureLocations {
             return Err(BindlessError::NotATextureSlot { domain: slot.domain().name() });
         }
         self.slots.get(DomainKind::TextureLocations).validate(slot)?;
-        let location = self.textures.upload(device, queue, slot.start, size, srgb, pixels)?;
+        let location = self.textures.upload(device, queue, slot.start, size, srgb, sampler, pixels)?;
         self.write(queue, slot, 0, &[location])?;
         self.textures.refresh(device);
         Ok(())

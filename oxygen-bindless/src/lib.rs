@@ -31,4 +31,4 @@ pub use scene_constants::{
     CameraConstants, RendererConstants, SCENE_CONSTANTS_WGSL, SceneConstants, SceneConstantsBuffer,
 };
 pub use slot::{Allocation, INVALID_SLOT, SlotAllocator, SlotAllocators, SlotError};
-pub use textures::{MAX_TEXTURES, TexturePath, allocate_texture_slot, resample_rgba8};
+pub use textures::{MAX_TEXTURES, SAMPLERS, TexturePath, allocate_texture_slot, resample_rgba8};

@@ -12,7 +12,9 @@
 //!   (64, 256, 1024, 2048) and stored as layers of one array per size class
 //!   and colour space; the slot's location record says which array and layer.
 //!
-//! Both paths sample with one linear, repeating sampler at mip level 0.
+//! Both paths sample at mip level 0 through a table of six samplers (wrap
+//! mode repeat / clamp / mirror × filter linear / nearest); the texture's
+//! location record carries its sampler's index in bits 29–31.
 
 use std::num::NonZeroU32;
 
@@ -22,6 +24,9 @@ use crate::{Allocation, BindlessError, DomainKind, SlotAllocators};
 pub const MAX_TEXTURES: u32 = 256;
 const SIZE_CLASSES: [u32; 4] = [64, 256, 1024, 2048];
 const GROUPS: usize = SIZE_CLASSES.len() * 2;
+/// Samplers in the table: wrap (repeat, clamp, mirror) × filter (linear, nearest).
+pub const SAMPLERS: u32 = 6;
+const SAMPLER_SHIFT: u32 = 29;
 
 /// How textures are bound.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -61,30 +66,52 @@ impl TexturePath {
     /// returns opaque white for [`crate::INVALID_SLOT`].
     pub fn wgsl(self) -> String {
         match self {
-            TexturePath::BindingArray => format!(
-                "@group(2) @binding(0) var texture_array: binding_array<texture_2d<f32>, {MAX_TEXTURES}>;\n\
-                 @group(2) @binding(1) var texture_sampler: sampler;\n\
-                 fn sample_texture(slot: u32, uv: vec2<f32>) -> vec4<f32> {{\n\
-                 \x20   if slot >= {MAX_TEXTURES}u {{ return vec4<f32>(1.0); }}\n\
-                 \x20   return textureSampleLevel(texture_array[slot], texture_sampler, uv, 0.0);\n\
-                 }}\n"
-            ),
+            TexturePath::BindingArray => {
+                let mut out = format!(
+                    "@group(2) @binding(0) var texture_array: binding_array<texture_2d<f32>, {MAX_TEXTURES}>;\n"
+                );
+                out.push_str(&sampler_declarations(1));
+                out.push_str(&format!(
+                    "fn sample_texture(slot: u32, uv: vec2<f32>) -> vec4<f32> {{\n\
+                     \x20   if slot >= {MAX_TEXTURES}u {{ return vec4<f32>(1.0); }}\n\
+                     \x20   let location = texture_location_domain[slot];\n\
+                     \x20   switch location >> {SAMPLER_SHIFT}u {{\n"
+                ));
+                for k in 0..SAMPLERS {
+                    out.push_str(&format!(
+                        "        case {k}u: {{ return textureSampleLevel(texture_array[slot], texture_sampler_{k}, uv, 0.0); }}\n"
+                    ));
+                }
+                out.push_str("        default: { return vec4<f32>(1.0); }\n    }\n}\n");
+                out
+            }
             TexturePath::GroupedArrays => {
                 let mut out = String::new();
                 for g in 0..GROUPS {
                     out.push_str(&format!("@group(2) @binding({g}) var texture_group_{g}: texture_2d_array<f32>;\n"));
                 }
-                out.push_str(&format!("@group(2) @binding({GROUPS}) var texture_sampler: sampler;\n"));
+                out.push_str(&sampler_declarations(GROUPS as u32));
+                // One function per group keeps each switch small: group, then sampler.
+                for g in 0..GROUPS {
+                    out.push_str(&format!("fn sample_group_{g}(sampler_index: u32, uv: vec2<f32>, layer: u32) -> vec4<f32> {{\n    switch sampler_index {{\n"));
+                    for k in 0..SAMPLERS {
+                        out.push_str(&format!(
+                            "        case {k}u: {{ return textureSampleLevel(texture_group_{g}, texture_sampler_{k}, uv, layer, 0.0); }}\n"
+                        ));
+                    }
+                    out.push_str("        default: { return vec4<f32>(1.0); }\n    }\n}\n");
+                }
                 out.push_str(
                     "fn sample_texture(slot: u32, uv: vec2<f32>) -> vec4<f32> {\n\
                      \x20   if slot == INVALID_SLOT { return vec4<f32>(1.0); }\n\
                      \x20   let location = texture_location_domain[slot];\n\
                      \x20   let layer = location & 0xffffffu;\n\
-                     \x20   switch location >> 24u {\n",
+                     \x20   let sampler_index = location >> 29u;\n\
+                     \x20   switch (location >> 24u) & 31u {\n",
                 );
                 for g in 0..GROUPS {
                     out.push_str(&format!(
-                        "        case {g}u: {{ return textureSampleLevel(texture_group_{g}, texture_sampler, uv, layer, 0.0); }}\n"
+                        "        case {g}u: {{ return sample_group_{g}(sampler_index, uv, layer); }}\n"
                     ));
                 }
                 out.push_str("        default: { return vec4<f32>(1.0); }\n    }\n}\n");
@@ -92,6 +119,30 @@ impl TexturePath {
             }
         }
     }
+}
+
+fn sampler_declarations(first_binding: u32) -> String {
+    (0..SAMPLERS)
+        .map(|k| format!("@group(2) @binding({}) var texture_sampler_{k}: sampler;\n", first_binding + k))
+        .collect()
+}
+
+/// The sampler of table entry `index` (see [`SAMPLERS`]).
+fn create_sampler(device: &wgpu::Device, index: u32) -> wgpu::Sampler {
+    let wrap = match index / 2 {
+        0 => wgpu::AddressMode::Repeat,
+        1 => wgpu::AddressMode::ClampToEdge,
+        _ => wgpu::AddressMode::MirrorRepeat,
+    };
+    let filter = if index % 2 == 0 { wgpu::FilterMode::Linear } else { wgpu::FilterMode::Nearest };
+    device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some("material sampler"),
+        address_mode_u: wrap,
+        address_mode_v: wrap,
+        mag_filter: filter,
+        min_filter: filter,
+        ..Default::default()
+    })
 }
 
 struct LayerGroup {
@@ -105,7 +156,7 @@ pub(crate) struct TextureHeap {
     path: TexturePath,
     layout: wgpu::BindGroupLayout,
     bind_group: wgpu::BindGroup,
-    sampler: wgpu::Sampler,
+    samplers: Vec<wgpu::Sampler>,
     /// Binding-array path: one view per slot (a white placeholder when empty).
     views: Vec<wgpu::TextureView>,
     /// Grouped path: one array per (size class, colour space).
@@ -152,11 +203,24 @@ fn array_view(texture: &wgpu::Texture) -> wgpu::TextureView {
     })
 }
 
-/// Bilinear resampling of RGBA8 texels (in their stored encoding), with
-/// texel centres aligned and edges clamped.
-pub fn resample_rgba8(src: &[u8], width: u32, height: u32, new_width: u32, new_height: u32) -> Vec<u8> {
+/// Resampling of RGBA8 texels (in their stored encoding), with texel
+/// centres aligned and edges clamped: bilinear, or nearest for textures that
+/// will be sampled with a nearest filter (so hard edges stay hard).
+pub fn resample_rgba8(src: &[u8], width: u32, height: u32, new_width: u32, new_height: u32, nearest: bool) -> Vec<u8> {
     if (width, height) == (new_width, new_height) {
         return src.to_vec();
+    }
+    if nearest {
+        let mut out = Vec::with_capacity(new_width as usize * new_height as usize * 4);
+        for y in 0..new_height {
+            let sy = ((y as u64 * height as u64) / new_height as u64) as usize;
+            for x in 0..new_width {
+                let sx = ((x as u64 * width as u64) / new_width as u64) as usize;
+                let i = (sy * width as usize + sx) * 4;
+                out.extend_from_slice(&src[i..i + 4]);
+            }
+        }
+        return out;
     }
     let texel = |x: u32, y: u32, c: usize| src[(y as usize * width as usize + x as usize) * 4 + c] as f32;
     let mut out = Vec::with_capacity(new_width as usize * new_height as usize * 4);
@@ -198,25 +262,20 @@ impl TextureHeap {
         };
         let entries: Vec<_> = match path {
             TexturePath::BindingArray => {
-                vec![texture_entry(0, wgpu::TextureViewDimension::D2, NonZeroU32::new(MAX_TEXTURES)), sampler_entry(1)]
+                std::iter::once(texture_entry(0, wgpu::TextureViewDimension::D2, NonZeroU32::new(MAX_TEXTURES)))
+                    .chain((0..SAMPLERS).map(|k| sampler_entry(1 + k)))
+                    .collect()
             }
             TexturePath::GroupedArrays => (0..GROUPS as u32)
                 .map(|g| texture_entry(g, wgpu::TextureViewDimension::D2Array, None))
-                .chain(std::iter::once(sampler_entry(GROUPS as u32)))
+                .chain((0..SAMPLERS).map(|k| sampler_entry(GROUPS as u32 + k)))
                 .collect(),
         };
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("bindless textures"),
             entries: &entries,
         });
-        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("material sampler"),
-            address_mode_u: wgpu::AddressMode::Repeat,
-            address_mode_v: wgpu::AddressMode::Repeat,
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
-            ..Default::default()
-        });
+        let samplers: Vec<_> = (0..SAMPLERS).map(|k| create_sampler(device, k)).collect();
         let white = [255u8; 4];
         let (views, groups) = match path {
             TexturePath::BindingArray => {
@@ -239,8 +298,8 @@ impl TextureHeap {
                 (Vec::new(), groups)
             }
         };
-        let bind_group = build_bind_group(device, &layout, path, &views, &groups, &sampler);
-        TextureHeap { path, layout, bind_group, sampler, views, groups, stale_bind_group: false, uploads: 0 }
+        let bind_group = build_bind_group(device, &layout, path, &views, &groups, &samplers);
+        TextureHeap { path, layout, bind_group, samplers, views, groups, stale_bind_group: false, uploads: 0 }
     }
 
     pub(crate) fn path(&self) -> TexturePath {
@@ -267,9 +326,11 @@ impl TextureHeap {
         slot: u32,
         (width, height): (u32, u32),
         srgb: bool,
+        sampler: u32,
         pixels: &[u8],
     ) -> Result<u32, BindlessError> {
         self.uploads += 1;
+        let sampler_bits = sampler.min(SAMPLERS - 1) << SAMPLER_SHIFT;
         self.stale_bind_group = true;
         match self.path {
             TexturePath::BindingArray => {
@@ -279,14 +340,15 @@ impl TextureHeap {
                 let texture = create_texture(device, (width, height), 1, srgb, "material texture");
                 write_layer(queue, &texture, 0, width, height, pixels);
                 self.views[slot as usize] = texture.create_view(&Default::default());
-                Ok(slot)
+                Ok(sampler_bits | slot)
             }
             TexturePath::GroupedArrays => {
                 let side = width.max(height);
                 let class = SIZE_CLASSES.iter().position(|c| *c >= side).unwrap_or(SIZE_CLASSES.len() - 1);
                 let g = class * 2 + usize::from(!srgb);
                 let class_side = SIZE_CLASSES[class];
-                let resampled = resample_rgba8(pixels, width, height, class_side, class_side);
+                let nearest = sampler % 2 == 1;
+                let resampled = resample_rgba8(pixels, width, height, class_side, class_side, nearest);
                 let group = &mut self.groups[g];
                 if group.used_layers == group.texture.depth_or_array_layers() {
                     let layers = group.used_layers * 2;
@@ -312,7 +374,7 @@ impl TextureHeap {
                 let layer = group.used_layers;
                 group.used_layers += 1;
                 write_layer(queue, &group.texture, layer, class_side, class_side, &resampled);
-                Ok((g as u32) << 24 | layer)
+                Ok(sampler_bits | (g as u32) << 24 | layer)
             }
         }
     }
@@ -322,7 +384,7 @@ impl TextureHeap {
         if self.stale_bind_group {
             self.stale_bind_group = false;
             self.bind_group =
-                build_bind_group(device, &self.layout, self.path, &self.views, &self.groups, &self.sampler);
+                build_bind_group(device, &self.layout, self.path, &self.views, &self.groups, &self.samplers);
         }
     }
 }
@@ -333,14 +395,19 @@ fn build_bind_group(
     path: TexturePath,
     views: &[wgpu::TextureView],
     groups: &[LayerGroup],
-    sampler: &wgpu::Sampler,
+    samplers: &[wgpu::Sampler],
 ) -> wgpu::BindGroup {
     let view_refs: Vec<&wgpu::TextureView> = views.iter().collect();
     let entries: Vec<wgpu::BindGroupEntry<'_>> = match path {
-        TexturePath::BindingArray => vec![
-            wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureViewArray(&view_refs) },
-            wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::Sampler(sampler) },
-        ],
+        TexturePath::BindingArray => std::iter::once(wgpu::BindGroupEntry {
+            binding: 0,
+            resource: wgpu::BindingResource::TextureViewArray(&view_refs),
+        })
+        .chain(samplers.iter().enumerate().map(|(k, sampler)| wgpu::BindGroupEntry {
+            binding: 1 + k as u32,
+            resource: wgpu::BindingResource::Sampler(sampler),
+        }))
+        .collect(),
         TexturePath::GroupedArrays => groups
             .iter()
             .enumerate()
@@ -348,8 +415,8 @@ fn build_bind_group(
                 binding: g as u32,
                 resource: wgpu::BindingResource::TextureView(&group.view),
             })
-            .chain(std::iter::once(wgpu::BindGroupEntry {
-                binding: GROUPS as u32,
+            .chain(samplers.iter().enumerate().map(|(k, sampler)| wgpu::BindGroupEntry {
+                binding: GROUPS as u32 + k as u32,
                 resource: wgpu::BindingResource::Sampler(sampler),
             }))
             .collect(),
@@ -369,13 +436,18 @@ mod tests {
     #[test]
     fn resampling_keeps_flat_colour_and_cell_centres() {
         let flat = vec![10u8, 20, 30, 255].repeat(9);
-        assert_eq!(resample_rgba8(&flat, 3, 3, 7, 5), vec![10u8, 20, 30, 255].repeat(35));
+        assert_eq!(resample_rgba8(&flat, 3, 3, 7, 5, false), vec![10u8, 20, 30, 255].repeat(35));
+        assert_eq!(resample_rgba8(&flat, 3, 3, 7, 5, true), vec![10u8, 20, 30, 255].repeat(35));
         // A 2x2 checker upsampled 32x keeps each cell's colour at its centre.
         let checker = [255u8, 0, 0, 255, 0, 0, 255, 255, 0, 0, 255, 255, 255, 0, 0, 255];
-        let big = resample_rgba8(&checker, 2, 2, 64, 64);
+        let big = resample_rgba8(&checker, 2, 2, 64, 64, false);
         let at = |x: usize, y: usize| &big[(y * 64 + x) * 4..(y * 64 + x) * 4 + 4];
         assert_eq!(at(8, 8), &[255, 0, 0, 255]);
         assert_eq!(at(56, 8), &[0, 0, 255, 255]);
+        // Nearest keeps the edge hard: the texel just left of the middle is still red.
+        let hard = resample_rgba8(&checker, 2, 2, 64, 64, true);
+        assert_eq!(&hard[31 * 4..32 * 4], &[255, 0, 0, 255]);
+        assert_eq!(&hard[32 * 4..33 * 4], &[0, 0, 255, 255]);
     }
 
     #[test]

@@ -36,7 +36,7 @@ pub use scene::{
     GeometryHandle, LodLevel, MaterialHandle, Node, NodeFlags, NodeKey, Renderable, Scene, SceneError, TextureHandle,
     Transform, WorldTransforms,
 };
-pub use texture::{ColorSpace, TextureError, TextureImage};
+pub use texture::{ColorSpace, Filter, Sampling, TextureError, TextureImage, Wrap};
 pub use view::{LookAtResolver, ResolvedView, ViewContext, ViewError, ViewId, ViewResolver};
 
 /// Re-exported so that users name the same `glam` types Oxygen uses.

@@ -11,6 +11,49 @@ pub enum ColorSpace {
     Linear,
 }
 
+/// How texture coordinates outside `[0, 1]` are treated.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Wrap {
+    /// Tile.
+    #[default]
+    Repeat,
+    /// Clamp to the edge texel.
+    ClampToEdge,
+    /// Tile, mirroring every other tile.
+    MirroredRepeat,
+}
+
+/// How texels are filtered.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Filter {
+    /// Bilinear.
+    #[default]
+    Linear,
+    /// Nearest texel.
+    Nearest,
+}
+
+/// How a texture is sampled (one wrap mode for both axes).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct Sampling {
+    /// Wrap mode.
+    pub wrap: Wrap,
+    /// Filter.
+    pub filter: Filter,
+}
+
+impl Sampling {
+    /// Index into the renderer's sampler table (wrap × filter, 6 entries).
+    pub fn table_index(self) -> u32 {
+        let wrap = match self.wrap {
+            Wrap::Repeat => 0,
+            Wrap::ClampToEdge => 1,
+            Wrap::MirroredRepeat => 2,
+        };
+        wrap * 2 + u32::from(self.filter == Filter::Nearest)
+    }
+}
+
 /// What was wrong with a texture handed to [`TextureImage::new`].
 #[derive(Debug, Error, PartialEq)]
 pub enum TextureError {
@@ -47,6 +90,7 @@ pub struct TextureImage {
     width: u32,
     height: u32,
     color_space: ColorSpace,
+    sampling: Sampling,
     pixels: Vec<u8>,
 }
 
@@ -70,7 +114,7 @@ impl TextureImage {
         if pixels.len() != need {
             return Err(TextureError::WrongLength { name, width, height, got: pixels.len(), need });
         }
-        Ok(TextureImage { name, width, height, color_space, pixels })
+        Ok(TextureImage { name, width, height, color_space, sampling: Sampling::default(), pixels })
     }
 
     /// A `cells × cells` checkerboard of `size × size` texels in two sRGB colours.
@@ -85,6 +129,16 @@ impl TextureImage {
         }
         // Size and length are consistent by construction.
         TextureImage::new(name, size, size, ColorSpace::Srgb, pixels).expect("checker is well-formed")
+    }
+
+    /// This image sampled another way.
+    pub fn with_sampling(self, sampling: Sampling) -> Self {
+        TextureImage { sampling, ..self }
+    }
+
+    /// How it is sampled.
+    pub fn sampling(&self) -> Sampling {
+        self.sampling
     }
 
     /// Name for logs and errors.

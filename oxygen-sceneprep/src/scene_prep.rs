@@ -405,7 +405,8 @@ impl ScenePrep {
         self.textures.take_pending(&mut self.pending_textures);
         for (slot, image) in self.pending_textures.drain(..) {
             let srgb = image.color_space() == oxygen_core::ColorSpace::Srgb;
-            heap.upload_texture(device, queue, &slot, (image.width(), image.height()), srgb, image.pixels())?;
+            let sampler = image.sampling().table_index();
+            heap.upload_texture(device, queue, &slot, (image.width(), image.height()), srgb, sampler, image.pixels())?;
         }
         if self.materials.is_dirty() {
             heap.write(queue, &self.materials.allocation(), 0, self.materials.records())?;
