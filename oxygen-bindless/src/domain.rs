@@ -25,11 +25,15 @@ pub enum DomainKind {
     /// Texture location records (`u32`), one per texture slot, persistent:
     /// where the texture lives on the chosen [`crate::TexturePath`].
     TextureLocations,
+    /// `ShadowRecord`s (96 B), per frame: one per shadow-casting light's map
+    /// (light view-projection, atlas rectangle, biases). Declared now so the
+    /// layout is fixed; filled once shadow views exist.
+    ShadowData,
 }
 
 impl DomainKind {
     /// Every domain, in binding order.
-    pub const ALL: [DomainKind; 10] = [
+    pub const ALL: [DomainKind; 11] = [
         DomainKind::DrawMetadata,
         DomainKind::WorldTransforms,
         DomainKind::NormalTransforms,
@@ -40,6 +44,7 @@ impl DomainKind {
         DomainKind::Indices,
         DomainKind::IndirectArgs,
         DomainKind::TextureLocations,
+        DomainKind::ShadowData,
     ];
 
     /// Number of domains.
@@ -65,6 +70,7 @@ impl DomainKind {
             DomainKind::Indices => 4,
             DomainKind::IndirectArgs => 20,
             DomainKind::TextureLocations => 4,
+            DomainKind::ShadowData => 96,
         }
     }
 
@@ -90,6 +96,19 @@ impl DomainKind {
             DomainKind::Indices => ("index_domain", "u32"),
             DomainKind::IndirectArgs => ("indirect_args_domain", "u32"),
             DomainKind::TextureLocations => ("texture_location_domain", "u32"),
+            DomainKind::ShadowData => ("shadow_domain", "ShadowRecord"),
+        }
+    }
+
+    /// The shader stages that read the domain. Kept tight so each stage stays
+    /// within `max_storage_buffers_per_shader_stage` (4 vertex, 6 fragment).
+    pub const fn visibility(self) -> wgpu::ShaderStages {
+        match self {
+            DomainKind::DrawMetadata
+            | DomainKind::WorldTransforms
+            | DomainKind::NormalTransforms
+            | DomainKind::Vertices => wgpu::ShaderStages::VERTEX,
+            _ => wgpu::ShaderStages::FRAGMENT,
         }
     }
 
@@ -115,6 +134,7 @@ impl DomainKind {
             DomainKind::Indices => "indices",
             DomainKind::IndirectArgs => "indirect-args",
             DomainKind::TextureLocations => "texture-locations",
+            DomainKind::ShadowData => "shadow-data",
         }
     }
 

@@ -80,9 +80,9 @@ impl BindlessHeap {
     /// bound the way `texture_path` says.
     pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, texture_path: TexturePath) -> Self {
         let max_binding_bytes = device.limits().max_storage_buffer_binding_size as u64;
-        let storage_entry = |binding| wgpu::BindGroupLayoutEntry {
+        let storage_entry = |(binding, visibility)| wgpu::BindGroupLayoutEntry {
             binding,
-            visibility: wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT,
+            visibility,
             ty: wgpu::BindingType::Buffer {
                 ty: wgpu::BufferBindingType::Storage { read_only: true },
                 has_dynamic_offset: false,
@@ -90,7 +90,11 @@ impl BindlessHeap {
             },
             count: None,
         };
-        let entries: Vec<_> = DomainKind::ALL.iter().filter_map(|k| k.binding()).map(storage_entry).collect();
+        let entries: Vec<_> = DomainKind::ALL
+            .iter()
+            .filter_map(|k| k.binding().map(|b| (b, k.visibility())))
+            .map(storage_entry)
+            .collect();
         let domain_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("bindless domains"),
             entries: &entries,

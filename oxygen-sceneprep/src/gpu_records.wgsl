@@ -69,3 +69,12 @@ struct VertexRecord {
     nx: f32, ny: f32, nz: f32,
     u: f32, v: f32,
 }
+
+struct ShadowRecord {
+    light_view_projection: mat4x4<f32>,
+    atlas_rect: vec4<f32>,
+    depth_bias: f32,
+    slope_bias: f32,
+    texel_size: f32,
+    flags: u32,
+}

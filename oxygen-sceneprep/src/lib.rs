@@ -28,7 +28,9 @@ pub mod worker_pool;
 
 pub use collect::{CullBound, FrameCollection, RenderItem, RenderableEntry, SubmeshEntry, ViewFilter, ViewPrepOptions};
 pub use draw_metadata::{DrawIndexedIndirect, DrawMetadata};
-pub use gpu_records::{DirectionalLightRecord, GPU_RECORDS_WGSL, MaterialRecord, NormalMatrix, PositionalLightRecord};
+pub use gpu_records::{
+    DirectionalLightRecord, GPU_RECORDS_WGSL, MaterialRecord, NormalMatrix, PositionalLightRecord, ShadowRecord,
+};
 pub use pass_mask::PassMask;
 pub use prepared_frame::{Partition, PreparedSceneFrame, PreparedSlots};
 pub use scene_prep::{PrepError, PrepStats, ScenePrep, ViewRequest};
