@@ -107,3 +107,39 @@ fn the_sampler_table_applies_nearest_and_linear_filtering() {
         assert_region(&image, pixel_of(&view, at_uv(0.4, 0.25)), 0, mixed, 0, &format!("{path:?} linear"));
     }
 }
+
+#[test]
+fn wrap_modes_repeat_clamp_and_mirror_outside_the_unit_square() {
+    // A quad whose u runs 0..2: beyond u = 1 the wrap mode decides.
+    let vertices = Geometry::quad(2.0)
+        .vertices()
+        .iter()
+        .map(|v| oxygen::core::Vertex { uv: [v.uv[0] * 2.0, v.uv[1]], ..*v })
+        .collect();
+    let wide = Geometry::new(
+        "wide uv quad",
+        vertices,
+        vec![0, 1, 2, 0, 2, 3],
+        vec![oxygen::core::Submesh { first_index: 0, index_count: 6 }],
+    )
+    .unwrap();
+    // The quad's world x for a given u (0..2 across its width of 2).
+    let at = |u: f32, v: f32| Vec3::new(u - 1.0, (0.5 - v) * 2.0, 0.0);
+    let expected =
+        [(Wrap::Repeat, [true, false]), (Wrap::ClampToEdge, [false, false]), (Wrap::MirroredRepeat, [false, true])];
+    for path in [TexturePath::BindingArray, TexturePath::GroupedArrays] {
+        for (wrap, red_at) in expected {
+            let mut scene = sampled_checker_scene(2, 2, Sampling { wrap, filter: Filter::Nearest });
+            let geometry = scene.add_geometry(wide.clone());
+            let (node, renderable) =
+                scene.nodes().find_map(|(k, n)| n.renderable.clone().map(|r| (k, r))).expect("the quad node");
+            scene.set_renderable(node, Renderable { geometry, ..renderable }).unwrap();
+            let (image, view) = render(&scene, path);
+            for (u, red) in [1.25, 1.75].into_iter().zip(red_at) {
+                let check: fn(Rgb) -> bool = if red { is_red } else { is_blue };
+                let what = format!("{path:?} {wrap:?} at u = {u}");
+                assert_region(&image, pixel_of(&view, at(u, 0.25)), 1, check, 0, &what);
+            }
+        }
+    }
+}

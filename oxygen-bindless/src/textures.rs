@@ -8,13 +8,17 @@
 //!   indexed by the slot (needs texture binding arrays with non-uniform
 //!   indexing: Vulkan with descriptor indexing, Metal, DX12);
 //! * [`TexturePath::GroupedArrays`]: works wherever `texture_2d_array` does
-//!   (GL included). Textures are resampled to one of four square size classes
-//!   (64, 256, 1024, 2048) and stored as layers of one array per size class
-//!   and colour space; the slot's location record says which array and layer.
+//!   (GL included). Textures are resampled to one of three square size
+//!   classes (64, 512, 2048) and stored as layers of one array per size
+//!   class, colour space and filter; the slot's location record says which
+//!   array and layer. GL pairs each texture with one sampler, so every array
+//!   has exactly one (repeat, linear or nearest) and the other wrap modes are
+//!   applied to the coordinates in the shader.
 //!
-//! Both paths sample at mip level 0 through a table of six samplers (wrap
-//! mode repeat / clamp / mirror × filter linear / nearest); the texture's
-//! location record carries its sampler's index in bits 29–31.
+//! Both paths sample at mip level 0. The binding-array path binds a table of
+//! six samplers (wrap repeat / clamp / mirror × filter linear / nearest) and
+//! the location record carries the sampler's index in bits 29–31; the
+//! grouped path carries the wrap mode there.
 
 use std::num::NonZeroU32;
 
@@ -22,8 +26,21 @@ use crate::{Allocation, BindlessError, DomainKind, SlotAllocators};
 
 /// Texture slots a binding array holds.
 pub const MAX_TEXTURES: u32 = 256;
-const SIZE_CLASSES: [u32; 4] = [64, 256, 1024, 2048];
-const GROUPS: usize = SIZE_CLASSES.len() * 2;
+const SIZE_CLASSES: [u32; 3] = [64, 512, 2048];
+/// Grouped path: one array per size class × colour space × filter.
+const GROUPS: usize = SIZE_CLASSES.len() * 4;
+/// Grouped path: the repeat-linear and repeat-nearest samplers (table entries 0 and 1).
+const GROUPED_SAMPLERS: u32 = 2;
+
+fn group_of(class: usize, srgb: bool, nearest: bool) -> usize {
+    (class * 2 + usize::from(!srgb)) * 2 + usize::from(nearest)
+}
+fn group_side(g: usize) -> u32 {
+    SIZE_CLASSES[g / 4]
+}
+fn group_is_srgb(g: usize) -> bool {
+    (g / 2) % 2 == 0
+}
 /// Samplers in the table: wrap (repeat, clamp, mirror) × filter (linear, nearest).
 pub const SAMPLERS: u32 = 6;
 const SAMPLER_SHIFT: u32 = 29;
@@ -70,7 +87,7 @@ impl TexturePath {
                 let mut out = format!(
                     "@group(2) @binding(0) var texture_array: binding_array<texture_2d<f32>, {MAX_TEXTURES}>;\n"
                 );
-                out.push_str(&sampler_declarations(1));
+                out.push_str(&sampler_declarations(1, SAMPLERS));
                 out.push_str(&format!(
                     "fn sample_texture(slot: u32, uv: vec2<f32>) -> vec4<f32> {{\n\
                      \x20   if slot >= {MAX_TEXTURES}u {{ return vec4<f32>(1.0); }}\n\
@@ -90,28 +107,27 @@ impl TexturePath {
                 for g in 0..GROUPS {
                     out.push_str(&format!("@group(2) @binding({g}) var texture_group_{g}: texture_2d_array<f32>;\n"));
                 }
-                out.push_str(&sampler_declarations(GROUPS as u32));
-                // One function per group keeps each switch small: group, then sampler.
-                for g in 0..GROUPS {
-                    out.push_str(&format!("fn sample_group_{g}(sampler_index: u32, uv: vec2<f32>, layer: u32) -> vec4<f32> {{\n    switch sampler_index {{\n"));
-                    for k in 0..SAMPLERS {
-                        out.push_str(&format!(
-                            "        case {k}u: {{ return textureSampleLevel(texture_group_{g}, texture_sampler_{k}, uv, layer, 0.0); }}\n"
-                        ));
-                    }
-                    out.push_str("        default: { return vec4<f32>(1.0); }\n    }\n}\n");
-                }
+                out.push_str(&sampler_declarations(GROUPS as u32, GROUPED_SAMPLERS));
                 out.push_str(
-                    "fn sample_texture(slot: u32, uv: vec2<f32>) -> vec4<f32> {\n\
+                    "fn wrap_uv(uv: vec2<f32>, wrap: u32, side: f32) -> vec2<f32> {\n\
+                     \x20   switch wrap {\n\
+                     \x20       case 1u: { let h = 0.5 / side; return clamp(uv, vec2<f32>(h), vec2<f32>(1.0 - h)); }\n\
+                     \x20       case 2u: { return 1.0 - abs(fract(uv * 0.5) * 2.0 - 1.0); }\n\
+                     \x20       default: { return uv; }\n\
+                     \x20   }\n\
+                     }\n\
+                     fn sample_texture(slot: u32, uv: vec2<f32>) -> vec4<f32> {\n\
                      \x20   if slot == INVALID_SLOT { return vec4<f32>(1.0); }\n\
                      \x20   let location = texture_location_domain[slot];\n\
                      \x20   let layer = location & 0xffffffu;\n\
-                     \x20   let sampler_index = location >> 29u;\n\
+                     \x20   let wrap = location >> 29u;\n\
                      \x20   switch (location >> 24u) & 31u {\n",
                 );
                 for g in 0..GROUPS {
                     out.push_str(&format!(
-                        "        case {g}u: {{ return sample_group_{g}(sampler_index, uv, layer); }}\n"
+                        "        case {g}u: {{ return textureSampleLevel(texture_group_{g}, texture_sampler_{}, wrap_uv(uv, wrap, {}.0), layer, 0.0); }}\n",
+                        g % 2,
+                        group_side(g)
                     ));
                 }
                 out.push_str("        default: { return vec4<f32>(1.0); }\n    }\n}\n");
@@ -121,8 +137,8 @@ impl TexturePath {
     }
 }
 
-fn sampler_declarations(first_binding: u32) -> String {
-    (0..SAMPLERS)
+fn sampler_declarations(first_binding: u32, count: u32) -> String {
+    (0..count)
         .map(|k| format!("@group(2) @binding({}) var texture_sampler_{k}: sampler;\n", first_binding + k))
         .collect()
 }
@@ -268,7 +284,7 @@ impl TextureHeap {
             }
             TexturePath::GroupedArrays => (0..GROUPS as u32)
                 .map(|g| texture_entry(g, wgpu::TextureViewDimension::D2Array, None))
-                .chain((0..SAMPLERS).map(|k| sampler_entry(GROUPS as u32 + k)))
+                .chain((0..GROUPED_SAMPLERS).map(|k| sampler_entry(GROUPS as u32 + k)))
                 .collect(),
         };
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -287,9 +303,9 @@ impl TextureHeap {
             TexturePath::GroupedArrays => {
                 let groups = (0..GROUPS)
                     .map(|g| {
-                        let side = SIZE_CLASSES[g / 2];
+                        let side = group_side(g);
                         // Layer 0 of each array stays white: an unused array still binds.
-                        let texture = create_texture(device, (side, side), 1, g % 2 == 0, "texture group");
+                        let texture = create_texture(device, (side, side), 1, group_is_srgb(g), "texture group");
                         let pixels = vec![255u8; side as usize * side as usize * 4];
                         write_layer(queue, &texture, 0, side, side, &pixels);
                         LayerGroup { view: array_view(&texture), texture, used_layers: 1 }
@@ -345,9 +361,9 @@ impl TextureHeap {
             TexturePath::GroupedArrays => {
                 let side = width.max(height);
                 let class = SIZE_CLASSES.iter().position(|c| *c >= side).unwrap_or(SIZE_CLASSES.len() - 1);
-                let g = class * 2 + usize::from(!srgb);
-                let class_side = SIZE_CLASSES[class];
                 let nearest = sampler % 2 == 1;
+                let g = group_of(class, srgb, nearest);
+                let class_side = SIZE_CLASSES[class];
                 let resampled = resample_rgba8(pixels, width, height, class_side, class_side, nearest);
                 let group = &mut self.groups[g];
                 if group.used_layers == group.texture.depth_or_array_layers() {
@@ -374,7 +390,9 @@ impl TextureHeap {
                 let layer = group.used_layers;
                 group.used_layers += 1;
                 write_layer(queue, &group.texture, layer, class_side, class_side, &resampled);
-                Ok(sampler_bits | (g as u32) << 24 | layer)
+                // Here bits 29–31 carry the wrap mode (table index / 2).
+                let wrap_bits = (sampler.min(SAMPLERS - 1) / 2) << SAMPLER_SHIFT;
+                Ok(wrap_bits | (g as u32) << 24 | layer)
             }
         }
     }
@@ -415,9 +433,11 @@ fn build_bind_group(
                 binding: g as u32,
                 resource: wgpu::BindingResource::TextureView(&group.view),
             })
-            .chain(samplers.iter().enumerate().map(|(k, sampler)| wgpu::BindGroupEntry {
-                binding: GROUPS as u32 + k as u32,
-                resource: wgpu::BindingResource::Sampler(sampler),
+            .chain(samplers.iter().take(GROUPED_SAMPLERS as usize).enumerate().map(|(k, sampler)| {
+                wgpu::BindGroupEntry {
+                    binding: GROUPS as u32 + k as u32,
+                    resource: wgpu::BindingResource::Sampler(sampler),
+                }
             }))
             .collect(),
     };
