@@ -59,3 +59,46 @@ fn a_domain_grows_and_keeps_its_live_records() {
     // Records of the wrong size are refused.
     assert!(matches!(heap.write(&gpu.queue, &second, 0, &[0u32; 4]), Err(BindlessError::RecordSize { .. })));
 }
+
+#[test]
+fn a_long_run_of_view_and_node_churn_keeps_gpu_memory_bounded() {
+    use oxygen::prelude::*;
+    let mut renderer = Renderer::new_headless().expect("test adapter");
+    let mut demo = oxygen::core::demo::multi_view_scene();
+    let cube = demo.scene.add_geometry(Geometry::cube(0.5));
+    let material = demo.scene.add_material(Material::opaque("churn", Vec4::ONE));
+    let mut extra = Vec::new();
+    let mut views = Vec::new();
+    let mut bytes_after_warm_up = 0;
+    for frame in 0..600u32 {
+        if frame % 3 == 0 {
+            let node = demo
+                .scene
+                .add_node("churn", Transform::from_translation(Vec3::new((frame % 7) as f32 - 3.0, 2.0, 0.0)));
+            demo.scene.set_renderable(node, Renderable { geometry: cube, materials: vec![material] }).unwrap();
+            extra.push(node);
+        }
+        if extra.len() > 8 {
+            demo.scene.remove_node(extra.remove(0)).unwrap();
+        }
+        if frame % 5 == 0 && views.len() < 4 {
+            views.push(
+                renderer.register_view(oxygen::core::demo::main_camera(UVec2::new(16, 16)), standard_render_graph),
+            );
+        } else if frame % 7 == 0 && views.len() > 1 {
+            renderer.unregister_view(views.remove(0)).unwrap();
+        }
+        renderer.render_frame(&demo.scene).unwrap();
+        if frame == 100 {
+            bytes_after_warm_up = renderer.heap().gpu_bytes();
+        }
+    }
+    assert!(bytes_after_warm_up > 0);
+    assert_eq!(renderer.heap().gpu_bytes(), bytes_after_warm_up, "the heap kept growing under steady churn");
+    for view in views {
+        renderer.unregister_view(view).unwrap();
+    }
+    for kind in [DomainKind::DrawMetadata, DomainKind::IndirectArgs] {
+        assert_eq!(renderer.heap().slots.get(kind).live_allocations(), 0, "{kind:?} leaked");
+    }
+}
