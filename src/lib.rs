@@ -28,8 +28,10 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+pub mod gltf_import;
 mod renderer;
 
+pub use gltf_import::{GltfCamera, GltfError, GltfImport, NodeCameraResolver, SceneChoice, import_gltf};
 pub use renderer::{
     FrameReport, RenderError, RenderGraphFuture, Renderer, RendererOptions, ViewReport, standard_render_graph,
 };
@@ -46,6 +48,7 @@ pub use oxygen_sceneprep as sceneprep;
 /// The names most applications use.
 pub mod prelude {
     pub use crate::{FrameReport, RenderError, RenderGraphFuture, Renderer, RendererOptions, standard_render_graph};
+    pub use crate::{SceneChoice, import_gltf};
     pub use oxygen_bindless::TexturePath;
     pub use oxygen_core::glam::{Mat4, Quat, UVec2, Vec3, Vec4};
     pub use oxygen_core::{

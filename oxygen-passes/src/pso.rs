@@ -44,6 +44,8 @@ pub struct PipelineVariant {
     pub alpha: AlphaClass,
     /// No back-face culling.
     pub double_sided: bool,
+    /// Clockwise front faces (mirroring transforms).
+    pub mirrored: bool,
 }
 
 impl PipelineVariant {
@@ -56,7 +58,11 @@ impl PipelineVariant {
         } else {
             AlphaClass::Opaque
         };
-        PipelineVariant { alpha, double_sided: mask.contains(PassMask::DOUBLE_SIDED) }
+        PipelineVariant {
+            alpha,
+            double_sided: mask.contains(PassMask::DOUBLE_SIDED),
+            mirrored: mask.contains(PassMask::MIRRORED),
+        }
     }
 }
 
@@ -194,7 +200,7 @@ impl PipelineCache {
             },
             primitive: wgpu::PrimitiveState {
                 topology: wgpu::PrimitiveTopology::TriangleList,
-                front_face: wgpu::FrontFace::Ccw,
+                front_face: if key.variant.mirrored { wgpu::FrontFace::Cw } else { wgpu::FrontFace::Ccw },
                 cull_mode: if key.variant.double_sided { None } else { Some(wgpu::Face::Back) },
                 ..Default::default()
             },

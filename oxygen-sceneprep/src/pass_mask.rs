@@ -18,6 +18,9 @@ bitflags! {
         const DOUBLE_SIDED = 1 << 3;
         /// Drawn into shadow views.
         const CASTS_SHADOWS = 1 << 4;
+        /// The world transform mirrors (negative determinant): the winding
+        /// flips, so the pipeline's front face is clockwise.
+        const MIRRORED = 1 << 5;
     }
 }
 

@@ -378,6 +378,18 @@ impl Scene {
         Ok(())
     }
 
+    /// The world matrix of one node, composed (in `f64`) up its parent
+    /// chain; for resolvers that follow a node, without a whole-scene pass.
+    pub fn world_transform(&self, key: NodeKey) -> Option<glam::DMat4> {
+        let mut node = self.nodes.get(key)?;
+        let mut world = node.local.to_dmat4();
+        while let Some(parent) = node.parent {
+            node = self.nodes.get(parent)?;
+            world = node.local.to_dmat4() * world;
+        }
+        Some(world)
+    }
+
     /// Brings `out` up to date with every node's world matrix. Subtrees
     /// untouched since `out` was last resolved against this scene are not
     /// visited at all. Composition is done in `f64`, so deep hierarchies and

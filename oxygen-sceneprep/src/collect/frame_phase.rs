@@ -160,13 +160,17 @@ impl FrameCollection {
                 continue;
             }
             let submesh_start = self.submeshes.len() as u32;
-            let shadow =
+            let mut per_node =
                 if node.flags.contains(NodeFlags::CASTS_SHADOWS) { PassMask::CASTS_SHADOWS } else { PassMask::empty() };
+            // A mirroring world transform flips the triangles' winding.
+            if Mat3::from_mat4(world).determinant() < 0.0 {
+                per_node |= PassMask::MIRRORED;
+            }
             for (range, handle) in geometry.submeshes().iter().zip(&renderable.materials) {
                 let Some(material) = scene.material(*handle) else { continue };
                 self.submeshes.push(SubmeshEntry {
                     material: material_index(*handle),
-                    pass_mask: PassMask::for_material(material.alpha_mode, material.double_sided) | shadow,
+                    pass_mask: PassMask::for_material(material.alpha_mode, material.double_sided) | per_node,
                     first_index: range.first_index,
                     index_count: range.index_count,
                 });

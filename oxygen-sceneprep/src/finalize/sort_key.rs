@@ -1,13 +1,30 @@
 //! The draw sort key.
 //!
+//! Opaque and masked draws:
+//!
 //! ```text
-//! bit 63..62  pass class      0 opaque, 1 masked, 2 transparent
-//! bit 61      variant         1 = double-sided
-//! bit 60..40  material        stable material id (21 bits, saturating)
-//! bit 39..16  depth           24-bit quantized view depth; opaque ascending
-//!                             (front-to-back), transparent inverted (back-to-front)
+//! bit 63..62  pass class      0 opaque, 1 masked
+//! bit 61      variant         double-sided
+//! bit 60      variant         mirrored (clockwise front face)
+//! bit 59..40  material        stable material id (20 bits, saturating)
+//! bit 39..16  depth           24-bit quantized view depth, ascending (front-to-back)
 //! bit 15..0   zero
 //! ```
+//!
+//! Transparent draws put depth first, because blending is only right
+//! back-to-front across the whole class, whatever the material:
+//!
+//! ```text
+//! bit 63..62  pass class      2
+//! bit 61..38  depth           24-bit quantized view depth, inverted (back-to-front)
+//! bit 37      variant         mirrored
+//! bit 36      variant         double-sided
+//! bit 35..16  material        (20 bits)
+//! ```
+//! (The architecture brief orders transparent keys like opaque ones; that
+//! sorts back-to-front only within one material and blends wrongly across
+//! materials, so the measurement — the picture — wins.)
+//!
 //! Ties are broken by (node id, submesh) outside the key, so the same scene
 //! always gives the same order.
 //!
@@ -17,7 +34,7 @@
 
 use crate::PassMask;
 
-const MATERIAL_BITS: u32 = 21;
+const MATERIAL_BITS: u32 = 20;
 const DEPTH_BITS: u32 = 24;
 
 /// Quantizes a view depth to 24 monotonic bits; negative depth (behind the
@@ -33,13 +50,16 @@ pub fn quantize_depth(view_depth: f32) -> u32 {
 /// The key for a draw.
 pub fn sort_key(mask: PassMask, material: u32, view_depth: f32) -> u64 {
     let class = mask.pass_class();
-    let variant = u64::from(mask.contains(PassMask::DOUBLE_SIDED));
+    let double_sided = u64::from(mask.contains(PassMask::DOUBLE_SIDED));
+    let mirrored = u64::from(mask.contains(PassMask::MIRRORED));
     let material = u64::from(material.min((1 << MATERIAL_BITS) - 1));
-    let mut depth = u64::from(quantize_depth(view_depth));
+    let depth = u64::from(quantize_depth(view_depth));
     if class == 2 {
-        depth = ((1 << DEPTH_BITS) - 1) - depth;
+        let back_to_front = ((1 << DEPTH_BITS) - 1) - depth;
+        (class << 62) | (back_to_front << 38) | (mirrored << 37) | (double_sided << 36) | (material << 16)
+    } else {
+        (class << 62) | (double_sided << 61) | (mirrored << 60) | (material << 40) | (depth << 16)
     }
-    (class << 62) | (variant << 61) | (material << 40) | (depth << 16)
 }
 
 #[cfg(test)]
@@ -70,5 +90,9 @@ mod tests {
         assert!(far < near);
         assert!(sort_key(PassMask::OPAQUE, 9, 1e9) < sort_key(PassMask::MASKED, 0, 0.0));
         assert!(sort_key(PassMask::MASKED | PassMask::DOUBLE_SIDED, 0, 0.0) > sort_key(PassMask::MASKED, 5, 1e9));
+        // Transparent: depth decides before material and variant.
+        let far_late_material = sort_key(PassMask::TRANSPARENT, 9, 10.0);
+        let near_early_material = sort_key(PassMask::TRANSPARENT | PassMask::DOUBLE_SIDED, 0, 1.0);
+        assert!(far_late_material < near_early_material);
     }
 }
