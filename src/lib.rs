@@ -57,6 +57,7 @@ pub mod prelude {
     };
     pub use oxygen_passes::{
         CommandRecorder, DepthPrePass, DrawPath, PassError, RenderContext, RenderPass, ShaderPass, ShaderPassConfig,
+        TonemapPass, TransparentPass,
     };
     pub use oxygen_sceneprep::{PassMask, PreparedSceneFrame, ViewPrepOptions};
 }

@@ -17,7 +17,7 @@ use oxygen_core::{
 };
 use oxygen_passes::{
     CommandRecorder, DepthPrePass, DrawPath, PassError, PipelineCache, RecordStats, RenderContext, RenderPass,
-    ShaderPass, ShaderPassConfig,
+    ShaderPass, ShaderPassConfig, TonemapPass, TransparentPass,
 };
 use oxygen_sceneprep::{PrepError, PreparedSceneFrame, ScenePrep, ViewPrepOptions, ViewRequest};
 use thiserror::Error;
@@ -132,7 +132,9 @@ pub struct Renderer {
     started: Instant,
 }
 
-/// The default render graph: depth pre-pass, then lit shading.
+/// The default render graph: depth pre-pass, metallic-roughness shading of
+/// opaque and masked partitions into HDR, blended partitions back-to-front,
+/// then the tone map to the view's sRGB target.
 pub fn standard_render_graph<'a>(
     _view: ViewId,
     ctx: &'a RenderContext<'a>,
@@ -145,6 +147,12 @@ pub fn standard_render_graph<'a>(
         let mut shading = ShaderPass::new(ShaderPassConfig::default());
         shading.prepare_resources(ctx, rec).await?;
         shading.execute(ctx, rec).await?;
+        let mut transparent = TransparentPass::new();
+        transparent.prepare_resources(ctx, rec).await?;
+        transparent.execute(ctx, rec).await?;
+        let mut tonemap = TonemapPass::default();
+        tonemap.prepare_resources(ctx, rec).await?;
+        tonemap.execute(ctx, rec).await?;
         Ok(())
     })
 }
@@ -329,6 +337,7 @@ impl Renderer {
                 targets,
                 pipelines: &self.pipelines,
                 draw_path: self.draw_path,
+                outputs: Default::default(),
             };
             let mut recorder = CommandRecorder::new(&self.gpu.device, &view.view_id.to_string());
             let _view_span = info_span!("render_graph", view = %view.view_id).entered();

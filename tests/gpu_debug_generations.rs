@@ -72,6 +72,7 @@ fn a_stale_draw_range_is_painted_magenta() {
         targets: &targets,
         pipelines: &pipelines,
         draw_path: DrawPath::Direct,
+        outputs: Default::default(),
     };
     let mut recorder = CommandRecorder::new(&gpu.device, "stale view");
     block_on(async {
@@ -80,7 +81,10 @@ fn a_stale_draw_range_is_painted_magenta() {
         depth.execute(&ctx, &mut recorder).await?;
         let mut shading = ShaderPass::new(ShaderPassConfig::default());
         shading.prepare_resources(&ctx, &mut recorder).await?;
-        shading.execute(&ctx, &mut recorder).await
+        shading.execute(&ctx, &mut recorder).await?;
+        let mut tonemap = TonemapPass::default();
+        tonemap.prepare_resources(&ctx, &mut recorder).await?;
+        tonemap.execute(&ctx, &mut recorder).await
     })
     .unwrap();
     gpu.queue.submit([recorder.finish().0]);

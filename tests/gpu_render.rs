@@ -22,6 +22,9 @@ fn graph_with_clear<'a>(
         let mut shading = ShaderPass::new(ShaderPassConfig { clear_color: CLEAR, depth_from_pre_pass: true });
         shading.prepare_resources(ctx, rec).await?;
         shading.execute(ctx, rec).await?;
+        let mut tonemap = TonemapPass::default();
+        tonemap.prepare_resources(ctx, rec).await?;
+        tonemap.execute(ctx, rec).await?;
         Ok(())
     })
 }
@@ -163,8 +166,8 @@ fn pipelines_are_created_once_and_reused_across_frames() {
     renderer.register_view(oxygen::core::demo::side_camera(UVec2::new(48, 48)), standard_render_graph);
     renderer.render_frame(&demo.scene).unwrap();
     let after_first = renderer.pipelines().pipelines_created();
-    // Opaque + masked-double-sided partitions × (depth pre-pass, shading).
-    assert_eq!(after_first, 4);
+    // Opaque + masked-double-sided partitions × (depth pre-pass, shading), plus the tone map.
+    assert_eq!(after_first, 5);
     for _ in 0..3 {
         renderer.render_frame(&demo.scene).unwrap();
     }
@@ -202,11 +205,14 @@ fn a_closure_factory_can_render_without_a_depth_pre_pass() {
         Box::pin(async move {
             let mut shading = ShaderPass::new(ShaderPassConfig { clear_color: CLEAR, depth_from_pre_pass: false });
             shading.prepare_resources(ctx, rec).await?;
-            shading.execute(ctx, rec).await
+            shading.execute(ctx, rec).await?;
+            let mut tonemap = TonemapPass::default();
+            tonemap.prepare_resources(ctx, rec).await?;
+            tonemap.execute(ctx, rec).await
         })
     });
     let report = renderer.render_frame(&scene).unwrap();
-    assert_eq!(report.views[0].recorded.render_passes, 1);
+    assert_eq!(report.views[0].recorded.render_passes, 2, "shading and tone map only");
     let image = renderer.read_color(view).unwrap();
     let resolved = cam.resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
     let is_green = |p: Rgb| p.g > 150 && p.g as i32 > p.r as i32 + 60;
@@ -236,9 +242,10 @@ fn multi_draw_indirect_and_direct_draws_produce_the_same_image() {
     };
     let (direct, direct_calls) = render(DrawPath::Direct);
     let (indirect, indirect_calls) = render(DrawPath::MultiDrawIndirect);
-    // One call per draw against one call per partition (two passes each).
-    assert_eq!(direct_calls, 2 * 11);
-    assert_eq!(indirect_calls, 2 * 2);
+    // One call per draw against one call per partition (two passes each),
+    // plus the tone map's full-screen triangle.
+    assert_eq!(direct_calls, 2 * 11 + 1);
+    assert_eq!(indirect_calls, 2 * 2 + 1);
     let differing = direct
         .pixels()
         .zip(indirect.pixels())

@@ -11,6 +11,15 @@ use tracing::info_span;
 use crate::render_context::{bind_view_resources, draw_partition};
 use crate::{CommandRecorder, PassError, PassKind, PipelineKey, PipelineVariant, RenderContext, RenderPass};
 
+/// What a depth pre-pass leaves for later passes: the view's depth target
+/// holds reverse-Z depth of the opaque and masked partitions. Published on
+/// the [`RenderContext`]'s typed outputs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DepthPrePassOutput {
+    /// Draws written into the depth target.
+    pub draws: u32,
+}
+
 /// The depth pre-pass.
 #[derive(Default)]
 pub struct DepthPrePass {
@@ -83,7 +92,9 @@ impl RenderPass for DepthPrePass {
                 draw_partition(&mut pass, ctx, partition, &mut stats);
             }
         }
+        let draws = partitions(ctx).map(|p| p.len()).sum();
         rec.stats = stats;
+        ctx.outputs.publish(DepthPrePassOutput { draws });
         Ok(())
     }
 }

@@ -9,7 +9,9 @@
 //! * [`RenderPass`]: the async lifecycle, `prepare_resources` then `execute`;
 //! * [`PipelineCache`] (`pso`): pipelines created lazily the first time a
 //!   partition needs a variant, then cached for the renderer's lifetime;
-//! * [`DepthPrePass`] and [`ShaderPass`], each with its WGSL beside it.
+//! * [`DepthPrePass`], [`ShaderPass`] (metallic-roughness), [`TransparentPass`]
+//!   (premultiplied alpha) and [`TonemapPass`] (HDR → sRGB), each with its
+//!   WGSL beside it.
 //!
 //! Shaders read every per-draw datum through bindless slots: the draw's
 //! `DrawMetadata` (found by `instance_index`), its world and normal matrix,
@@ -20,9 +22,13 @@ mod pso;
 mod render_context;
 mod render_pass;
 mod shader_pass;
+mod tonemap_pass;
+mod transparent_pass;
 
-pub use depth_pre_pass::DepthPrePass;
-pub use pso::{AlphaClass, PassKind, PipelineCache, PipelineKey, PipelineVariant, shader_source};
-pub use render_context::{CommandRecorder, DrawPath, PassError, RecordStats, RenderContext};
+pub use depth_pre_pass::{DepthPrePass, DepthPrePassOutput};
+pub use pso::{AlphaClass, PassKind, PipelineCache, PipelineKey, PipelineVariant, TONEMAP_WGSL, shader_source};
+pub use render_context::{CommandRecorder, DrawPath, PassError, PassOutputs, RecordStats, RenderContext};
 pub use render_pass::RenderPass;
 pub use shader_pass::{ShaderPass, ShaderPassConfig};
+pub use tonemap_pass::{TonemapPass, pbr_neutral};
+pub use transparent_pass::TransparentPass;

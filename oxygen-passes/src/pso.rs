@@ -24,6 +24,9 @@ pub enum PassKind {
     ShadingAfterPrePass,
     /// Shading that writes its own depth (no pre-pass): `Greater`, writes.
     Shading,
+    /// Blended surfaces: premultiplied alpha over the HDR target,
+    /// `GreaterEqual` against the opaque depth, no depth writes.
+    Transparent,
 }
 
 /// How alpha is treated by a variant.
@@ -82,6 +85,8 @@ pub struct PipelineKey {
 const MESH_VERTEX_WGSL: &str = include_str!("mesh_vertex.wgsl");
 const DEPTH_PRE_PASS_WGSL: &str = include_str!("depth_pre_pass.wgsl");
 const SHADER_PASS_WGSL: &str = include_str!("shader_pass.wgsl");
+/// The tone-map shader (self-contained: no bindless declarations).
+pub const TONEMAP_WGSL: &str = include_str!("tonemap_pass.wgsl");
 
 /// The full WGSL of a pass: shared declarations (scene constants, GPU
 /// records, domain bindings, the texture path's bindings), then the shared
@@ -89,7 +94,7 @@ const SHADER_PASS_WGSL: &str = include_str!("shader_pass.wgsl");
 pub fn shader_source(pass: PassKind, textures: TexturePath) -> String {
     let body = match pass {
         PassKind::DepthPrePass => DEPTH_PRE_PASS_WGSL,
-        PassKind::Shading | PassKind::ShadingAfterPrePass => SHADER_PASS_WGSL,
+        PassKind::Shading | PassKind::ShadingAfterPrePass | PassKind::Transparent => SHADER_PASS_WGSL,
     };
     // Enable directives must come before any declaration.
     let enables = match textures {
@@ -109,6 +114,7 @@ pub struct PipelineCache {
     texture_path: TexturePath,
     modules: Mutex<HashMap<PassKind, wgpu::ShaderModule>>,
     pipelines: Mutex<HashMap<PipelineKey, wgpu::RenderPipeline>>,
+    tonemap: Mutex<Option<(wgpu::RenderPipeline, wgpu::BindGroupLayout)>>,
     created: AtomicU64,
 }
 
@@ -129,6 +135,7 @@ impl PipelineCache {
             texture_path: heap.texture_path(),
             modules: Mutex::new(HashMap::new()),
             pipelines: Mutex::new(HashMap::new()),
+            tonemap: Mutex::new(None),
             created: AtomicU64::new(0),
         }
     }
@@ -154,6 +161,81 @@ impl PipelineCache {
         pipeline
     }
 
+    /// The tone-map pipeline (HDR texture + exposure uniform → `output`),
+    /// created on first use.
+    pub fn tonemap(
+        &self,
+        device: &wgpu::Device,
+        output: wgpu::TextureFormat,
+    ) -> (wgpu::RenderPipeline, wgpu::BindGroupLayout) {
+        let mut slot = self.tonemap.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(existing) = slot.as_ref() {
+            return existing.clone();
+        }
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("tonemap"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("tonemap"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("tonemap"),
+            source: wgpu::ShaderSource::Wgsl(TONEMAP_WGSL.into()),
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("tonemap"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_fullscreen"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: None,
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_tonemap"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: output,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        self.created.fetch_add(1, Ordering::Relaxed);
+        *slot = Some((pipeline.clone(), layout.clone()));
+        (pipeline, layout)
+    }
+
     fn module(&self, device: &wgpu::Device, pass: PassKind) -> wgpu::ShaderModule {
         let mut modules = self.modules.lock().unwrap_or_else(|e| e.into_inner());
         modules
@@ -177,10 +259,13 @@ impl PipelineCache {
             PassKind::Shading => {
                 (Some(if masked { "fs_masked" } else { "fs_opaque" }), true, wgpu::CompareFunction::Greater)
             }
+            PassKind::Transparent => (Some("fs_blend"), false, wgpu::CompareFunction::GreaterEqual),
         };
+        // Premultiplied alpha: the shader multiplies colour by alpha.
+        let blend = (key.pass == PassKind::Transparent).then_some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING);
         let targets = [key.color_format.map(|format| wgpu::ColorTargetState {
             format,
-            blend: None,
+            blend,
             write_mask: wgpu::ColorWrites::ALL,
         })];
         let fragment = fragment_entry.map(|entry| wgpu::FragmentState {

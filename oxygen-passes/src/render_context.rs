@@ -24,6 +24,14 @@ pub enum PassError {
         /// The partition's mask names.
         mask: String,
     },
+    /// A pass needs what an earlier pass should have produced.
+    #[error("{pass}: needs {input}, which no earlier pass of this view produced")]
+    MissingInput {
+        /// The pass.
+        pass: &'static str,
+        /// The missing output's type.
+        input: &'static str,
+    },
     /// An application-defined failure inside a render graph.
     #[error("render graph: {0}")]
     Graph(String),
@@ -62,6 +70,29 @@ impl DrawPath {
     }
 }
 
+/// Outputs passes publish for later passes of the same view, looked up by
+/// type. Explicit configuration (e.g. `ShaderPassConfig::depth_from_pre_pass`)
+/// is the primary way passes find each other's results; this is the
+/// secondary path, and the one that lets a pass check its inputs exist.
+#[derive(Default)]
+pub struct PassOutputs {
+    values: std::cell::RefCell<Vec<Box<dyn std::any::Any>>>,
+}
+
+impl PassOutputs {
+    /// Publishes (or replaces) the value of type `T`.
+    pub fn publish<T: std::any::Any>(&self, value: T) {
+        let mut values = self.values.borrow_mut();
+        values.retain(|v| !v.is::<T>());
+        values.push(Box::new(value));
+    }
+
+    /// The value of type `T`, if some pass published one.
+    pub fn get<T: std::any::Any + Clone>(&self) -> Option<T> {
+        self.values.borrow().iter().find_map(|v| v.downcast_ref::<T>().cloned())
+    }
+}
+
 /// Everything a pass may read for one view in one frame. Immutable: passes
 /// communicate through the textures they write, never by changing this.
 pub struct RenderContext<'a> {
@@ -81,6 +112,8 @@ pub struct RenderContext<'a> {
     pub pipelines: &'a PipelineCache,
     /// How partitions are drawn.
     pub draw_path: DrawPath,
+    /// What earlier passes of this view published.
+    pub outputs: PassOutputs,
 }
 
 /// Counts of what a view's passes recorded.

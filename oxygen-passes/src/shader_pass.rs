@@ -3,7 +3,7 @@
 //! Reads: the prepared frame's partitions, the frame's light arrays (through
 //! their slots), and — when configured to follow a depth pre-pass — the depth
 //! it left in the view's depth target, tested with `GreaterEqual` and no
-//! writes. Writes: the view's colour target (cleared to `clear_color`).
+//! writes. Writes: the view's HDR target (cleared to `clear_color`, linear).
 //! Transparent partitions belong to the transparent pass and are skipped.
 
 use oxygen_core::ViewTargets;
@@ -65,7 +65,7 @@ impl RenderPass for ShaderPass {
                     PipelineKey {
                         pass,
                         variant: PipelineVariant::from_mask(p.mask),
-                        color_format: Some(ViewTargets::COLOR_FORMAT),
+                        color_format: Some(ViewTargets::HDR_FORMAT),
                         depth_format: ViewTargets::DEPTH_FORMAT,
                     },
                 )
@@ -84,7 +84,7 @@ impl RenderPass for ShaderPass {
             let mut pass = rec.encoder().begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("shader pass"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &ctx.targets.color_view,
+                    view: &ctx.targets.hdr_view,
                     depth_slice: None,
                     resolve_target: None,
                     ops: wgpu::Operations {

@@ -1,31 +1,53 @@
-// Simple lit shading: Lambert diffuse plus a Blinn-Phong highlight whose
-// strength follows roughness, from every directional and positional light of
-// the frame (read through their slots), and a small ambient term. The full
-// metallic-roughness BRDF replaces this later.
+// Metallic-roughness shading: Cook-Torrance specular (GGX distribution,
+// height-correlated Smith visibility, Schlick Fresnel) plus Lambert diffuse,
+// from every directional and positional light of the frame (read through
+// their slots), and a small constant ambient term. Writes linear radiance to
+// the HDR target; the tone-map step makes it displayable.
 
 const PI: f32 = 3.14159265;
-const AMBIENT: f32 = 0.06;
+const AMBIENT: f32 = 0.03;
+
+fn surface_normal(mesh: MeshVarying, front_facing: bool) -> vec3<f32> {
+    let n = normalize(mesh.world_normal);
+    // Double-sided surfaces are lit on the side we see.
+    return select(-n, n, front_facing);
+}
+
+// Radiance reflected towards `v` from light arriving along `l`, per unit
+// incoming irradiance at normal incidence.
+fn brdf_cosine(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, albedo: vec3<f32>, metallic: f32, roughness: f32) -> vec3<f32> {
+    let n_dot_l = max(dot(n, l), 0.0);
+    if n_dot_l <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    let h = normalize(v + l);
+    let n_dot_v = max(dot(n, v), 1e-4);
+    let n_dot_h = max(dot(n, h), 0.0);
+    let v_dot_h = max(dot(v, h), 0.0);
+    let a = max(roughness * roughness, 0.002);
+    let a2 = a * a;
+    let denom = n_dot_h * n_dot_h * (a2 - 1.0) + 1.0;
+    let distribution = a2 / (PI * denom * denom);
+    let visibility = 0.5 / (n_dot_l * sqrt(n_dot_v * n_dot_v * (1.0 - a2) + a2) + n_dot_v * sqrt(n_dot_l * n_dot_l * (1.0 - a2) + a2));
+    let f0 = mix(vec3<f32>(0.04), albedo, metallic);
+    let fresnel = f0 + (vec3<f32>(1.0) - f0) * pow(1.0 - v_dot_h, 5.0);
+    let diffuse = (vec3<f32>(1.0) - fresnel) * (1.0 - metallic) * albedo / PI;
+    return (diffuse + distribution * visibility * fresnel) * n_dot_l;
+}
 
 fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord) -> vec4<f32> {
-    var n = normalize(mesh.world_normal);
-    if !front_facing {
-        n = -n; // double-sided surfaces are lit on the side we see
-    }
-    let view_dir = normalize(scene.camera.camera_position.xyz - mesh.world_position);
+    let n = surface_normal(mesh, front_facing);
+    let v = normalize(scene.camera.camera_position.xyz - mesh.world_position);
     let base = base_color_of(mesh, material);
     let albedo = base.rgb;
-    let shininess = mix(128.0, 4.0, material.roughness);
-    let specular_strength = (1.0 - material.roughness) * 0.25;
-    var color = albedo * AMBIENT;
+    let metallic = clamp(material.metallic, 0.0, 1.0);
+    let roughness = clamp(material.roughness, 0.045, 1.0);
+    var color = albedo * (1.0 - metallic) * AMBIENT + mix(vec3<f32>(0.04), albedo, metallic) * AMBIENT;
 
     let dir_count = scene.renderer.directional_light_count;
     for (var i = 0u; i < dir_count; i++) {
         let light = directional_light_domain[scene.renderer.directional_lights_slot + i];
-        let l = -light.direction;
-        let n_dot_l = max(dot(n, l), 0.0);
-        let h = normalize(l + view_dir);
-        let spec = pow(max(dot(n, h), 0.0), shininess) * specular_strength * step(0.0, n_dot_l);
-        color += (albedo / PI * n_dot_l + vec3<f32>(spec)) * light.color * light.intensity;
+        color += brdf_cosine(n, v, -light.direction, albedo, metallic, roughness) * light.color * light.intensity;
     }
 
     let pos_count = scene.renderer.positional_light_count;
@@ -40,11 +62,9 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord) -> vec
             attenuation *= clamp(1.0 - ratio * ratio * ratio * ratio, 0.0, 1.0);
         }
         if light.kind == 1u {
-            let cos_angle = dot(-l, light.direction);
-            attenuation *= smoothstep(light.cos_outer, light.cos_inner, cos_angle);
+            attenuation *= smoothstep(light.cos_outer, light.cos_inner, dot(-l, light.direction));
         }
-        let n_dot_l = max(dot(n, l), 0.0);
-        color += albedo / PI * n_dot_l * light.color * light.intensity * attenuation;
+        color += brdf_cosine(n, v, l, albedo, metallic, roughness) * light.color * light.intensity * attenuation;
     }
     return vec4<f32>(color, base.a);
 }
@@ -69,4 +89,15 @@ fn fs_masked(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> @l
         discard;
     }
     return vec4<f32>(shaded.rgb, 1.0);
+}
+
+// Transparent surfaces: premultiplied alpha (blend One, OneMinusSrcAlpha).
+@fragment
+fn fs_blend(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> @location(0) vec4<f32> {
+    if mesh.material == INVALID_SLOT {
+        return STALE_DRAW_COLOR;
+    }
+    let shaded = shade(mesh, front_facing, material_of(mesh));
+    let alpha = clamp(shaded.a, 0.0, 1.0);
+    return vec4<f32>(shaded.rgb * alpha, alpha);
 }

@@ -27,3 +27,12 @@ fn every_pass_shader_validates_on_both_texture_paths() {
             .unwrap_or_else(|e| panic!("{pass:?} / {textures:?} WGSL does not validate: {e:?}"));
     }
 }
+
+#[test]
+fn the_tonemap_shader_validates() {
+    let module = naga::front::wgsl::parse_str(oxygen_passes::TONEMAP_WGSL)
+        .unwrap_or_else(|e| panic!("tonemap WGSL does not parse:\n{}", e.emit_to_string(oxygen_passes::TONEMAP_WGSL)));
+    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::default())
+        .validate(&module)
+        .unwrap_or_else(|e| panic!("tonemap WGSL does not validate: {e:?}"));
+}

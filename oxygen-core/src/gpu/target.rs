@@ -1,11 +1,17 @@
 //! Offscreen colour and depth targets for one view.
 
-/// The colour and depth textures a view renders into.
+/// The textures a view renders into.
 ///
-/// Colour is `Rgba8UnormSrgb` (shaders write linear values; the hardware
-/// encodes sRGB). Depth is `Depth32Float`, reverse-Z: cleared to 0, tested
-/// with `Greater`.
+/// Shading writes linear radiance into the HDR target (`Rgba16Float`); the
+/// tone-map step writes the displayable result into the colour target
+/// (`Rgba8UnormSrgb`: shaders write linear values, the hardware encodes
+/// sRGB). Depth is `Depth32Float`, reverse-Z: cleared to 0, tested with
+/// `Greater`.
 pub struct ViewTargets {
+    /// Linear HDR colour (render attachment, sampled by the tone map).
+    pub hdr: wgpu::Texture,
+    /// Default view of `hdr`.
+    pub hdr_view: wgpu::TextureView,
     /// Colour texture (render attachment, copy source, sampled).
     pub color: wgpu::Texture,
     /// Default view of `color`.
@@ -21,7 +27,9 @@ pub struct ViewTargets {
 }
 
 impl ViewTargets {
-    /// Colour format of every view target.
+    /// Format of the HDR target.
+    pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+    /// Colour format of every view's displayable target.
     pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
     /// Depth format of every view target.
     pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
@@ -49,12 +57,19 @@ impl ViewTargets {
                 | wgpu::TextureUsages::TEXTURE_BINDING,
             "colour",
         );
+        let hdr = make(
+            Self::HDR_FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            "hdr",
+        );
         let depth = make(
             Self::DEPTH_FORMAT,
             wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
             "depth",
         );
         ViewTargets {
+            hdr_view: hdr.create_view(&Default::default()),
+            hdr,
             color_view: color.create_view(&Default::default()),
             depth_view: depth.create_view(&Default::default()),
             color,

@@ -1,0 +1,123 @@
+//! `TonemapPass`: the HDR target to the displayable sRGB target.
+//!
+//! Reads: the view's HDR target (linear radiance). Writes: the colour target,
+//! after `exposure` and the Khronos PBR Neutral operator, which leaves colours
+//! below about 0.76 nearly untouched (so a material's base colour under unit
+//! light looks like itself) and rolls highlights off towards white.
+//! [`pbr_neutral`] is the CPU twin of the shader's operator, for tests.
+
+use bytemuck::{Pod, Zeroable};
+use oxygen_core::ViewTargets;
+use tracing::info_span;
+
+use crate::{CommandRecorder, PassError, RenderContext, RenderPass};
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct TonemapParams {
+    exposure: f32,
+    pad: [f32; 3],
+}
+
+/// The tone-map pass.
+pub struct TonemapPass {
+    exposure: f32,
+    pipeline: Option<(wgpu::RenderPipeline, wgpu::BindGroup)>,
+}
+
+impl TonemapPass {
+    /// A pass scaling radiance by `exposure` (non-finite or negative values become 1).
+    pub fn new(exposure: f32) -> Self {
+        let exposure = if exposure.is_finite() && exposure >= 0.0 { exposure } else { 1.0 };
+        TonemapPass { exposure, pipeline: None }
+    }
+}
+
+impl Default for TonemapPass {
+    fn default() -> Self {
+        Self::new(1.0)
+    }
+}
+
+/// Khronos PBR Neutral on linear RGB (the shader's twin).
+pub fn pbr_neutral(rgb: [f32; 3]) -> [f32; 3] {
+    const START: f32 = 0.8 - 0.04;
+    const DESATURATION: f32 = 0.15;
+    let x = rgb[0].min(rgb[1]).min(rgb[2]);
+    let offset = if x < 0.08 { x - 6.25 * x * x } else { 0.04 };
+    let mut c = rgb.map(|v| v - offset);
+    let peak = c[0].max(c[1]).max(c[2]);
+    if peak < START {
+        return c;
+    }
+    let d = 1.0 - START;
+    let new_peak = 1.0 - d * d / (peak + d - START);
+    c = c.map(|v| v * new_peak / peak);
+    let g = 1.0 - 1.0 / (DESATURATION * (peak - new_peak) + 1.0);
+    c.map(|v| v + (new_peak - v) * g)
+}
+
+impl RenderPass for TonemapPass {
+    fn name(&self) -> &'static str {
+        "TonemapPass"
+    }
+
+    async fn prepare_resources(
+        &mut self,
+        ctx: &RenderContext<'_>,
+        _rec: &mut CommandRecorder,
+    ) -> Result<(), PassError> {
+        let device = &ctx.gpu.device;
+        let (pipeline, layout) = ctx.pipelines.tonemap(device, ViewTargets::COLOR_FORMAT);
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("tonemap params"),
+            size: std::mem::size_of::<TonemapParams>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        ctx.gpu.queue.write_buffer(
+            &params,
+            0,
+            bytemuck::bytes_of(&TonemapParams { exposure: self.exposure, pad: [0.0; 3] }),
+        );
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("tonemap"),
+            layout: &layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(&ctx.targets.hdr_view),
+                },
+                wgpu::BindGroupEntry { binding: 1, resource: params.as_entire_binding() },
+            ],
+        });
+        self.pipeline = Some((pipeline, bind_group));
+        Ok(())
+    }
+
+    async fn execute(&mut self, ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError> {
+        let _span = info_span!("tonemap_execute", view = %ctx.view.view_id).entered();
+        let (pipeline, bind_group) = self.pipeline.as_ref().ok_or(PassError::NotPrepared { pass: self.name() })?;
+        let mut pass = rec.encoder().begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("tonemap"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &ctx.targets.color_view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, bind_group, &[]);
+        pass.draw(0..3, 0..1);
+        drop(pass);
+        rec.stats.render_passes += 1;
+        rec.stats.pipeline_binds += 1;
+        rec.stats.draw_calls += 1;
+        Ok(())
+    }
+}

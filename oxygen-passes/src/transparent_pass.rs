@@ -1,0 +1,98 @@
+//! `TransparentPass`: blended partitions, back-to-front.
+//!
+//! Reads: the prepared frame's transparent partitions (already sorted
+//! back-to-front by the sort key, across materials), the depth the opaque
+//! passes left (tested with `GreaterEqual`, never written). Writes: the HDR
+//! target, blending with **premultiplied alpha** (the shader multiplies
+//! colour by alpha; blend `One, OneMinusSrcAlpha`), which composes correctly
+//! and filters without dark fringes.
+
+use oxygen_core::ViewTargets;
+use oxygen_sceneprep::PassMask;
+use tracing::info_span;
+
+use crate::render_context::{bind_view_resources, draw_partition};
+use crate::{CommandRecorder, PassError, PassKind, PipelineKey, PipelineVariant, RenderContext, RenderPass};
+
+/// The transparent pass.
+#[derive(Default)]
+pub struct TransparentPass {
+    pipelines: Option<Vec<wgpu::RenderPipeline>>,
+}
+
+impl TransparentPass {
+    /// A new pass.
+    pub fn new() -> Self {
+        Self::default()
+    }
+}
+
+fn partitions<'a>(ctx: &'a RenderContext<'_>) -> impl Iterator<Item = &'a oxygen_sceneprep::Partition> {
+    ctx.prepared.partitions_matching(PassMask::TRANSPARENT, PassMask::empty())
+}
+
+impl RenderPass for TransparentPass {
+    fn name(&self) -> &'static str {
+        "TransparentPass"
+    }
+
+    async fn prepare_resources(
+        &mut self,
+        ctx: &RenderContext<'_>,
+        _rec: &mut CommandRecorder,
+    ) -> Result<(), PassError> {
+        let _span = info_span!("transparent_pass_prepare", view = %ctx.view.view_id).entered();
+        let pipelines = partitions(ctx)
+            .map(|p| {
+                ctx.pipelines.get(
+                    &ctx.gpu.device,
+                    PipelineKey {
+                        pass: PassKind::Transparent,
+                        variant: PipelineVariant::from_mask(p.mask),
+                        color_format: Some(ViewTargets::HDR_FORMAT),
+                        depth_format: ViewTargets::DEPTH_FORMAT,
+                    },
+                )
+            })
+            .collect();
+        self.pipelines = Some(pipelines);
+        Ok(())
+    }
+
+    async fn execute(&mut self, ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError> {
+        let _span = info_span!("transparent_pass_execute", view = %ctx.view.view_id).entered();
+        let pipelines = self.pipelines.as_ref().ok_or(PassError::NotPrepared { pass: self.name() })?;
+        if pipelines.is_empty() {
+            return Ok(()); // nothing blended in this view: no pass at all
+        }
+        let mut stats = rec.stats;
+        {
+            let mut pass = rec.encoder().begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("transparent pass"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &ctx.targets.hdr_view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &ctx.targets.depth_view,
+                    depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            stats.render_passes += 1;
+            bind_view_resources(&mut pass, ctx);
+            for (partition, pipeline) in partitions(ctx).zip(pipelines) {
+                pass.set_pipeline(pipeline);
+                stats.pipeline_binds += 1;
+                draw_partition(&mut pass, ctx, partition, &mut stats);
+            }
+        }
+        rec.stats = stats;
+        Ok(())
+    }
+}
