@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# The main job: renders the demo scene through two registered views and
-# writes one PNG per view into out/ (or the directory given as $1).
+# The main job: loads a shipped glTF scene (or the file given as $1), renders
+# it through one view per glTF camera plus an orbit camera, and writes one PNG
+# per view into out/ (or the directory given as $2).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -9,6 +10,7 @@ if ! command -v cargo >/dev/null 2>&1; then
   exit 1
 fi
 scripts/ensure-gpu.sh
-out=${1:-out}
-cargo run --locked --release --example multi_view -- "$out"
+file=${1:-assets/Cameras/Cameras.gltf}
+out=${2:-out}
+cargo run --locked --release --example gltf_viewer -- "$file" "$out"
 echo "[oxygen] PNGs written to $(cd "$out" && pwd)/" >&2

@@ -148,8 +148,18 @@ struct Importer<'a> {
 pub fn import_gltf(scene: &mut Scene, path: impl AsRef<Path>, choice: &SceneChoice) -> Result<GltfImport, GltfError> {
     let path = path.as_ref();
     let _span = info_span!("gltf_import", path = %path.display()).entered();
-    let (document, buffers, images) =
-        gltf::import(path).map_err(|source| GltfError::Load { path: path.to_owned(), source })?;
+    // gltf-json 1.4 indexes out of bounds while validating some malformed
+    // files (e.g. an accessor index past the end); turn that panic into the
+    // error it should have been.
+    let loaded = std::panic::catch_unwind(|| gltf::import(path)).map_err(|panic| {
+        let reason = panic
+            .downcast_ref::<String>()
+            .cloned()
+            .or_else(|| panic.downcast_ref::<&str>().map(|s| (*s).to_owned()))
+            .unwrap_or_else(|| "unknown".into());
+        GltfError::Invalid { path: path.to_owned(), what: format!("malformed file (the validator failed: {reason})") }
+    })?;
+    let (document, buffers, images) = loaded.map_err(|source| GltfError::Load { path: path.to_owned(), source })?;
     let chosen = match choice {
         SceneChoice::Default => document.default_scene().or_else(|| document.scenes().next()),
         SceneChoice::Index(i) => document.scenes().nth(*i),
