@@ -276,3 +276,34 @@ fn materials_and_geometry_upload_only_when_new_or_changed() {
     assert_eq!(stats.geometry_uploads, 3, "an undrawn mesh is never uploaded");
     assert_eq!(renderer.scene_prep().resident_geometry(), 3);
 }
+
+#[test]
+fn a_mirrored_cube_is_lit_and_culled_like_its_original() {
+    let mut scene = Scene::new();
+    let white = scene.add_material(Material::opaque("white", Vec4::splat(0.8)));
+    let cube = scene.add_geometry(Geometry::cube(1.0));
+    for (x, sx) in [(-1.0f32, 1.0f32), (1.0, -1.0)] {
+        let node = scene
+            .add_node("cube", Transform::from_translation(Vec3::new(x, 0.0, 0.0)).with_scale(Vec3::new(sx, 1.0, 1.0)));
+        scene.set_renderable(node, Renderable { geometry: cube, materials: vec![white] }).unwrap();
+    }
+    add_sun(&mut scene, Vec3::NEG_Y, 3.0);
+    let mut renderer = gpu_renderer();
+    let cam = camera(Vec3::new(0.0, 3.0, 5.0), Vec3::ZERO, 128);
+    let view = renderer.register_view(cam, graph_with_clear);
+    renderer.render_frame(&scene).unwrap();
+    let frame = renderer.prepared_frame(view).unwrap();
+    assert!(
+        frame.partitions().iter().any(|p| p.mask.contains(PassMask::MIRRORED)),
+        "mirrored draws get their own variant"
+    );
+    let image = renderer.read_color(view).unwrap();
+    let resolved = cam.resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
+    let top = |x: f32| region_mean(&image, pixel_of(&resolved, Vec3::new(x, 0.5, 0.0)), 2);
+    let (original, mirrored) = (top(-1.0), top(1.0));
+    // With the winding wrong, the mirrored cube would show its (dark) inside.
+    assert!(
+        original > 150.0 && (original - mirrored).abs() < 3.0,
+        "top faces: original {original}, mirrored {mirrored}"
+    );
+}

@@ -7,10 +7,12 @@
 const PI: f32 = 3.14159265;
 const AMBIENT: f32 = 0.03;
 
-fn surface_normal(mesh: MeshVarying, front_facing: bool) -> vec3<f32> {
+fn surface_normal(mesh: MeshVarying, front_facing: bool, material: MaterialRecord) -> vec3<f32> {
     let n = normalize(mesh.world_normal);
-    // Double-sided surfaces are lit on the side we see.
-    return select(-n, n, front_facing);
+    // Double-sided surfaces are lit on the side we see; single-sided ones
+    // only show their front (culling), so their normal stands as it is.
+    let double_sided = (material.flags & 4u) != 0u;
+    return select(n, -n, double_sided && !front_facing);
 }
 
 // Radiance reflected towards `v` from light arriving along `l`, per unit
@@ -36,7 +38,7 @@ fn brdf_cosine(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, albedo: vec3<f32>, meta
 }
 
 fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord) -> vec4<f32> {
-    let n = surface_normal(mesh, front_facing);
+    let n = surface_normal(mesh, front_facing, material);
     let v = normalize(scene.camera.camera_position.xyz - mesh.world_position);
     let base = base_color_of(mesh, material);
     let albedo = base.rgb;

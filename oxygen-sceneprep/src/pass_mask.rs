@@ -27,8 +27,11 @@ bitflags! {
 impl PassMask {
     /// The bits that select a pass class and pipeline variant; partitions are
     /// runs of draws equal in these bits.
-    pub const PARTITION_BITS: PassMask =
-        PassMask::OPAQUE.union(PassMask::MASKED).union(PassMask::TRANSPARENT).union(PassMask::DOUBLE_SIDED);
+    pub const PARTITION_BITS: PassMask = PassMask::OPAQUE
+        .union(PassMask::MASKED)
+        .union(PassMask::TRANSPARENT)
+        .union(PassMask::DOUBLE_SIDED)
+        .union(PassMask::MIRRORED);
 
     /// The mask for a material (shadow bit added by the caller).
     pub fn for_material(alpha_mode: AlphaMode, double_sided: bool) -> PassMask {

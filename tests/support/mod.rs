@@ -3,6 +3,8 @@
 
 #![allow(dead_code)] // Each test binary uses a different subset.
 
+pub mod golden;
+
 use std::sync::Once;
 
 use image::RgbaImage;

@@ -1,0 +1,83 @@
+//! Golden images: a rendered picture against a PNG kept in `tests/golden/`.
+//!
+//! Two pixels match when every channel differs by at most `channel_tolerance`
+//! levels; a picture matches when at most `max_differing` fraction of its
+//! pixels do not. On a mismatch the actual image and a difference image
+//! (differing pixels red, matching ones dimmed) are written next to the
+//! golden for a person to look at.
+//!
+//! A missing golden is written (and the test passes, saying so) unless `CI`
+//! is set, where it fails. `OXYGEN_UPDATE_GOLDEN=1` rewrites every golden.
+
+use std::path::PathBuf;
+
+use image::{Rgba, RgbaImage};
+
+/// Tolerances of a golden comparison.
+#[derive(Clone, Copy, Debug)]
+pub struct Tolerance {
+    /// Largest per-channel difference that still counts as equal.
+    pub channel_tolerance: u8,
+    /// Largest fraction of pixels allowed to differ.
+    pub max_differing: f64,
+}
+
+impl Default for Tolerance {
+    fn default() -> Self {
+        Tolerance { channel_tolerance: 10, max_differing: 0.005 }
+    }
+}
+
+fn golden_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests").join("golden")
+}
+
+/// Compares `actual` with `tests/golden/{name}.png`.
+pub fn assert_golden(name: &str, actual: &RgbaImage, tolerance: Tolerance) {
+    let dir = golden_dir();
+    let golden_path = dir.join(format!("{name}.png"));
+    let update = std::env::var("OXYGEN_UPDATE_GOLDEN").is_ok_and(|v| v == "1");
+    if update || !golden_path.exists() {
+        if std::env::var("CI").is_ok_and(|v| !v.is_empty() && v != "0") && !update {
+            panic!(
+                "golden image {} is missing (run the tests locally to create it, then commit it)",
+                golden_path.display()
+            );
+        }
+        std::fs::create_dir_all(&dir).expect("create tests/golden");
+        actual.save(&golden_path).expect("write golden");
+        eprintln!("wrote golden image {}", golden_path.display());
+        return;
+    }
+    let golden = image::open(&golden_path).unwrap_or_else(|e| panic!("{}: {e}", golden_path.display())).to_rgba8();
+    assert_eq!(golden.dimensions(), actual.dimensions(), "{name}: size differs from the golden");
+    let mut diff = RgbaImage::new(actual.width(), actual.height());
+    let mut differing = 0usize;
+    let mut worst = 0u8;
+    for ((a, g), d) in actual.pixels().zip(golden.pixels()).zip(diff.pixels_mut()) {
+        let error = a.0.iter().zip(g.0.iter()).map(|(x, y)| x.abs_diff(*y)).max().unwrap_or(0);
+        worst = worst.max(error);
+        if error > tolerance.channel_tolerance {
+            differing += 1;
+            *d = Rgba([255, 0, 0, 255]);
+        } else {
+            *d = Rgba([g.0[0] / 3, g.0[1] / 3, g.0[2] / 3, 255]);
+        }
+    }
+    let total = (actual.width() * actual.height()) as usize;
+    let allowed = (total as f64 * tolerance.max_differing).floor() as usize;
+    if differing > allowed {
+        let actual_path = dir.join(format!("{name}.actual.png"));
+        let diff_path = dir.join(format!("{name}.diff.png"));
+        let _ = actual.save(&actual_path);
+        let _ = diff.save(&diff_path);
+        panic!(
+            "{name}: {differing} of {total} pixels differ by more than {} levels (allowed {allowed}; worst {worst}).\n\
+             actual: {}\n  diff: {}\ngolden: {}",
+            tolerance.channel_tolerance,
+            actual_path.display(),
+            diff_path.display(),
+            golden_path.display()
+        );
+    }
+}
