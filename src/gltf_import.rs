@@ -2,16 +2,16 @@
 //!
 //! What comes in: the chosen scene's node hierarchy with local TRS; meshes
 //! (every triangle primitive becomes a submesh of one [`Geometry`], with its
-//! own material); metallic-roughness materials with base-colour textures and
-//! their samplers, alpha mode and cutoff, double-sidedness;
+//! own material); metallic-roughness materials with base-colour,
+//! metallic-roughness, normal and emissive textures and their samplers,
+//! alpha mode and cutoff, double-sidedness;
 //! `KHR_lights_punctual` lights; cameras (as [`GltfCamera`]s an application
 //! can register as views). Nodes with a negative scale are imported as they
 //! are: ScenePrep flips the winding of mirrored draws.
 //!
 //! What is left out (with a warning, never a panic): primitives that are not
 //! triangle lists, skins and morph targets, animations, texture coordinate
-//! sets other than 0, and (for now) normal, metallic-roughness, occlusion and
-//! emissive textures. Missing normals are generated (area-weighted smooth
+//! sets other than 0, and (for now) occlusion textures. Missing normals are generated (area-weighted smooth
 //! normals); missing texture coordinates are zero.
 
 use std::collections::HashMap;
@@ -138,7 +138,7 @@ struct Importer<'a> {
     path: &'a Path,
     buffers: &'a [gltf::buffer::Data],
     images: &'a [gltf::image::Data],
-    textures: HashMap<usize, TextureHandle>,
+    textures: HashMap<(usize, bool), TextureHandle>,
     materials: HashMap<Option<usize>, MaterialHandle>,
     meshes: HashMap<usize, Option<(GeometryHandle, Vec<MaterialHandle>)>>,
     out: GltfImport,
@@ -366,20 +366,25 @@ impl Importer<'_> {
                 if info.tex_coord() != 0 {
                     self.out.warnings.push("a base-colour texture uses texcoord set 1; set 0 is used".into());
                 }
-                Some(self.texture(scene, &info.texture())?)
+                Some(self.texture(scene, &info.texture(), ColorSpace::Srgb)?)
             }
             None => None,
         };
         let name = material.name().map_or_else(|| format!("material {:?}", material.index()), str::to_owned);
-        for (present, what) in [
-            (material.normal_texture().is_some(), "normal"),
-            (material.occlusion_texture().is_some(), "occlusion"),
-            (material.emissive_texture().is_some(), "emissive"),
-            (pbr.metallic_roughness_texture().is_some(), "metallic-roughness"),
-        ] {
-            if present {
-                self.out.warnings.push(format!("material '{name}': {what} texture not used yet"));
-            }
+        let metallic_roughness_texture = match pbr.metallic_roughness_texture() {
+            Some(info) => Some(self.texture(scene, &info.texture(), ColorSpace::Linear)?),
+            None => None,
+        };
+        let (normal_texture, normal_scale) = match material.normal_texture() {
+            Some(normal) => (Some(self.texture(scene, &normal.texture(), ColorSpace::Linear)?), normal.scale()),
+            None => (None, 1.0),
+        };
+        let emissive_texture = match material.emissive_texture() {
+            Some(info) => Some(self.texture(scene, &info.texture(), ColorSpace::Srgb)?),
+            None => None,
+        };
+        if material.occlusion_texture().is_some() {
+            self.out.warnings.push(format!("material '{name}': occlusion texture not used yet"));
         }
         let alpha_mode = match material.alpha_mode() {
             gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
@@ -390,6 +395,11 @@ impl Importer<'_> {
             name,
             base_color: Vec4::from(pbr.base_color_factor()),
             base_color_texture,
+            metallic_roughness_texture,
+            normal_texture,
+            normal_scale,
+            emissive: Vec3::from(material.emissive_factor()) * material.emissive_strength().unwrap_or(1.0),
+            emissive_texture,
             metallic: pbr.metallic_factor(),
             roughness: pbr.roughness_factor(),
             alpha_mode,
@@ -399,8 +409,14 @@ impl Importer<'_> {
         Ok(handle)
     }
 
-    fn texture(&mut self, scene: &mut Scene, texture: &gltf::Texture<'_>) -> Result<TextureHandle, GltfError> {
-        if let Some(h) = self.textures.get(&texture.index()) {
+    fn texture(
+        &mut self,
+        scene: &mut Scene,
+        texture: &gltf::Texture<'_>,
+        color_space: ColorSpace,
+    ) -> Result<TextureHandle, GltfError> {
+        let key = (texture.index(), color_space == ColorSpace::Srgb);
+        if let Some(h) = self.textures.get(&key) {
             return Ok(*h);
         }
         let source = texture.source().index();
@@ -422,11 +438,11 @@ impl Importer<'_> {
                 .push(format!("texture {}: different wrap modes per axis; using the s mode", texture.index()));
         }
         let name = texture.name().map_or_else(|| format!("texture {}", texture.index()), str::to_owned);
-        let image = TextureImage::new(name, data.width, data.height, ColorSpace::Srgb, rgba)
+        let image = TextureImage::new(name, data.width, data.height, color_space, rgba)
             .map_err(|e| self.invalid(e.to_string()))?
             .with_sampling(sampling);
         let handle = scene.add_texture(image);
-        self.textures.insert(texture.index(), handle);
+        self.textures.insert(key, handle);
         Ok(handle)
     }
 }

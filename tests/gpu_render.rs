@@ -118,13 +118,10 @@ fn masked_quad_is_kept_above_its_cutoff_dropped_below_and_visible_from_behind() 
     let quad = scene.add_geometry(Geometry::quad(2.0));
     let masked = |scene: &mut Scene, name: &str, alpha: f32| {
         scene.add_material(Material {
-            name: name.into(),
-            base_color: Vec4::new(1.0, 1.0, 0.0, alpha),
-            base_color_texture: None,
-            metallic: 0.0,
             roughness: 1.0,
             alpha_mode: AlphaMode::Mask { cutoff: 0.5 },
             double_sided: true,
+            ..Material::opaque(name, Vec4::new(1.0, 1.0, 0.0, alpha))
         })
     };
     let kept = masked(&mut scene, "kept", 0.9);

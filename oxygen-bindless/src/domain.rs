@@ -9,7 +9,7 @@ pub enum DomainKind {
     WorldTransforms,
     /// Normal matrices (`mat3x3<f32>`, 48 B), parallel to the world matrices.
     NormalTransforms,
-    /// `MaterialRecord`s (48 B), persistent per material.
+    /// `MaterialRecord`s (80 B), persistent per material.
     Materials,
     /// `DirectionalLightRecord`s (48 B), one range per frame.
     DirectionalLights,
@@ -63,7 +63,7 @@ impl DomainKind {
             DomainKind::DrawMetadata => 64,
             DomainKind::WorldTransforms => 64,
             DomainKind::NormalTransforms => 48,
-            DomainKind::Materials => 48,
+            DomainKind::Materials => 80,
             DomainKind::DirectionalLights => 48,
             DomainKind::PositionalLights => 64,
             DomainKind::Vertices => 32,

@@ -38,13 +38,10 @@ pub fn multi_view_scene() -> DemoScene {
         .map(|(i, c)| scene.add_material(Material::opaque(format!("cube{i}"), *c)))
         .collect();
     let quad_material = scene.add_material(Material {
-        name: "masked quad".into(),
-        base_color: Vec4::new(0.95, 0.8, 0.1, 1.0),
-        base_color_texture: None,
-        metallic: 0.0,
         roughness: 0.5,
         alpha_mode: AlphaMode::Mask { cutoff: 0.5 },
         double_sided: true,
+        ..Material::opaque("masked quad", Vec4::new(0.95, 0.8, 0.1, 1.0))
     });
 
     // Construction cannot fail: every handle was just created above.

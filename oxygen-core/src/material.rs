@@ -1,6 +1,6 @@
 //! Materials: the metallic-roughness parameters a renderable's submesh uses.
 
-use glam::Vec4;
+use glam::{Vec3, Vec4};
 
 use crate::TextureHandle;
 
@@ -27,6 +27,17 @@ pub struct Material {
     pub base_color: Vec4,
     /// Base-colour texture (sRGB), multiplied with `base_color`.
     pub base_color_texture: Option<TextureHandle>,
+    /// Metallic-roughness texture (linear; roughness in G, metallic in B),
+    /// multiplied with the factors.
+    pub metallic_roughness_texture: Option<TextureHandle>,
+    /// Tangent-space normal map (linear).
+    pub normal_texture: Option<TextureHandle>,
+    /// Scale of the normal map's X and Y.
+    pub normal_scale: f32,
+    /// Linear emitted radiance factor.
+    pub emissive: Vec3,
+    /// Emissive texture (sRGB), multiplied with `emissive`.
+    pub emissive_texture: Option<TextureHandle>,
     /// Metallic factor in `[0, 1]`.
     pub metallic: f32,
     /// Perceptual roughness in `[0, 1]`.
@@ -44,6 +55,11 @@ impl Material {
             name: name.into(),
             base_color,
             base_color_texture: None,
+            metallic_roughness_texture: None,
+            normal_texture: None,
+            normal_scale: 1.0,
+            emissive: Vec3::ZERO,
+            emissive_texture: None,
             metallic: 0.0,
             roughness: 0.6,
             alpha_mode: AlphaMode::Opaque,
@@ -60,6 +76,11 @@ impl Material {
             name: self.name.clone(),
             base_color: Vec4::new(fix(base.x, 1.0), fix(base.y, 1.0), fix(base.z, 1.0), fix(base.w, 1.0)),
             base_color_texture: self.base_color_texture,
+            metallic_roughness_texture: self.metallic_roughness_texture,
+            normal_texture: self.normal_texture,
+            normal_scale: if self.normal_scale.is_finite() { self.normal_scale } else { 1.0 },
+            emissive: if self.emissive.is_finite() { self.emissive.max(Vec3::ZERO) } else { Vec3::ZERO },
+            emissive_texture: self.emissive_texture,
             metallic: fix(self.metallic, 0.0),
             roughness: fix(self.roughness, 1.0),
             alpha_mode: match self.alpha_mode {

@@ -1,5 +1,6 @@
 // Metallic-roughness shading: Cook-Torrance specular (GGX distribution,
 // height-correlated Smith visibility, Schlick Fresnel) plus Lambert diffuse,
+// with base-colour, metallic-roughness, normal and emissive textures,
 // from every directional and positional light of the frame (read through
 // their slots), and a small constant ambient term. Writes linear radiance to
 // the HDR target; the tone-map step makes it displayable.
@@ -37,13 +38,49 @@ fn brdf_cosine(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, albedo: vec3<f32>, meta
     return (diffuse + distribution * visibility * fresnel) * n_dot_l;
 }
 
-fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord) -> vec4<f32> {
-    let n = surface_normal(mesh, front_facing, material);
+// Screen-space derivatives, taken at the top of each fragment entry point
+// (uniform control flow) for normal mapping without stored tangents.
+struct Derivatives {
+    dp_dx: vec3<f32>,
+    dp_dy: vec3<f32>,
+    duv_dx: vec2<f32>,
+    duv_dy: vec2<f32>,
+}
+
+fn derivatives_of(mesh: MeshVarying) -> Derivatives {
+    return Derivatives(dpdx(mesh.world_position), dpdy(mesh.world_position), dpdx(mesh.uv), dpdy(mesh.uv));
+}
+
+// Tangent frame from position and UV derivatives (a cotangent frame), so a
+// tangent-space normal map needs no per-vertex tangents. glTF's v axis points
+// down the image, hence the bitangent's sign.
+fn perturb_normal(n: vec3<f32>, d: Derivatives, tangent_normal: vec3<f32>) -> vec3<f32> {
+    let dp2_perp = cross(d.dp_dy, n);
+    let dp1_perp = cross(n, d.dp_dx);
+    let t = dp2_perp * d.duv_dx.x + dp1_perp * d.duv_dy.x;
+    let b = -(dp2_perp * d.duv_dx.y + dp1_perp * d.duv_dy.y);
+    let largest = max(dot(t, t), dot(b, b));
+    if !(largest > 1e-20) {
+        return n; // no UV variation here: keep the geometric normal
+    }
+    let scale = inverseSqrt(largest);
+    return normalize(mat3x3<f32>(t * scale, b * scale, n) * tangent_normal);
+}
+
+fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Derivatives) -> vec4<f32> {
+    var n = surface_normal(mesh, front_facing, material);
+    if material.normal_texture != INVALID_SLOT {
+        var tangent_normal = sample_texture(material.normal_texture, mesh.uv).xyz * 2.0 - 1.0;
+        tangent_normal = vec3<f32>(tangent_normal.xy * material.normal_scale, tangent_normal.z);
+        n = perturb_normal(n, d, normalize(tangent_normal));
+    }
     let v = normalize(scene.camera.camera_position.xyz - mesh.world_position);
     let base = base_color_of(mesh, material);
     let albedo = base.rgb;
-    let metallic = clamp(material.metallic, 0.0, 1.0);
-    let roughness = clamp(material.roughness, 0.045, 1.0);
+    // glTF packs roughness in G and metallic in B.
+    let metal_rough = sample_texture(material.metallic_roughness_texture, mesh.uv);
+    let metallic = clamp(material.metallic * metal_rough.b, 0.0, 1.0);
+    let roughness = clamp(material.roughness * metal_rough.g, 0.045, 1.0);
     var color = albedo * (1.0 - metallic) * AMBIENT + mix(vec3<f32>(0.04), albedo, metallic) * AMBIENT;
 
     let dir_count = scene.renderer.directional_light_count;
@@ -68,25 +105,28 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord) -> vec
         }
         color += brdf_cosine(n, v, l, albedo, metallic, roughness) * light.color * light.intensity * attenuation;
     }
+    color += material.emissive * sample_texture(material.emissive_texture, mesh.uv).rgb;
     return vec4<f32>(color, base.a);
 }
 
 @fragment
 fn fs_opaque(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> @location(0) vec4<f32> {
+    let d = derivatives_of(mesh);
     if mesh.material == INVALID_SLOT {
         return STALE_DRAW_COLOR;
     }
-    let shaded = shade(mesh, front_facing, material_of(mesh));
+    let shaded = shade(mesh, front_facing, material_of(mesh), d);
     return vec4<f32>(shaded.rgb, 1.0);
 }
 
 @fragment
 fn fs_masked(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> @location(0) vec4<f32> {
+    let d = derivatives_of(mesh);
     if mesh.material == INVALID_SLOT {
         return STALE_DRAW_COLOR;
     }
     let material = material_of(mesh);
-    let shaded = shade(mesh, front_facing, material);
+    let shaded = shade(mesh, front_facing, material, d);
     if shaded.a < material.alpha_cutoff {
         discard;
     }
@@ -96,10 +136,11 @@ fn fs_masked(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> @l
 // Transparent surfaces: premultiplied alpha (blend One, OneMinusSrcAlpha).
 @fragment
 fn fs_blend(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> @location(0) vec4<f32> {
+    let d = derivatives_of(mesh);
     if mesh.material == INVALID_SLOT {
         return STALE_DRAW_COLOR;
     }
-    let shaded = shade(mesh, front_facing, material_of(mesh));
+    let shaded = shade(mesh, front_facing, material_of(mesh), d);
     let alpha = clamp(shaded.a, 0.0, 1.0);
     return vec4<f32>(shaded.rgb * alpha, alpha);
 }

@@ -42,12 +42,17 @@ pub mod material_flags {
     pub const DOUBLE_SIDED: u32 = 1 << 2;
 }
 
-/// A material as shaders read it (48 bytes).
+/// A material as shaders read it (80 bytes). Texture fields are slots in
+/// the texture-locations domain, [`INVALID_SLOT`] when absent.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct MaterialRecord {
     /// Linear RGBA base colour factor.
     pub base_color: [f32; 4],
+    /// Linear emissive factor.
+    pub emissive: [f32; 3],
+    /// Normal-map XY scale.
+    pub normal_scale: f32,
     /// Metallic factor.
     pub metallic: f32,
     /// Roughness factor.
@@ -56,14 +61,20 @@ pub struct MaterialRecord {
     pub alpha_cutoff: f32,
     /// [`material_flags`] bits.
     pub flags: u32,
-    /// Base-colour texture slot, [`INVALID_SLOT`] when absent.
+    /// Base-colour texture slot.
     pub base_color_texture: u32,
+    /// Metallic-roughness texture slot.
+    pub metallic_roughness_texture: u32,
+    /// Normal-map slot.
+    pub normal_texture: u32,
+    /// Emissive texture slot.
+    pub emissive_texture: u32,
     /// Zero.
-    pub reserved: [u32; 3],
+    pub reserved: [u32; 4],
 }
 
 impl MaterialRecord {
-    /// The record for a (sanitized) material.
+    /// The record for a (sanitized) material, textures not yet resolved.
     pub fn from_material(m: &Material) -> Self {
         let (alpha_cutoff, mut flags) = match m.alpha_mode {
             AlphaMode::Opaque => (0.0, 0),
@@ -75,12 +86,17 @@ impl MaterialRecord {
         }
         MaterialRecord {
             base_color: m.base_color.to_array(),
+            emissive: m.emissive.to_array(),
+            normal_scale: m.normal_scale,
             metallic: m.metallic,
             roughness: m.roughness,
             alpha_cutoff,
             flags,
             base_color_texture: INVALID_SLOT,
-            reserved: [0; 3],
+            metallic_roughness_texture: INVALID_SLOT,
+            normal_texture: INVALID_SLOT,
+            emissive_texture: INVALID_SLOT,
+            reserved: [0; 4],
         }
     }
 }
@@ -163,8 +179,10 @@ const _: () = {
     assert!(size_of::<DirectionalLightRecord>() as u64 == DomainKind::DirectionalLights.record_size());
     assert!(size_of::<PositionalLightRecord>() as u64 == DomainKind::PositionalLights.record_size());
     assert!(size_of::<Vertex>() as u64 == DomainKind::Vertices.record_size());
-    assert!(offset_of!(MaterialRecord, metallic) == 16);
-    assert!(offset_of!(MaterialRecord, base_color_texture) == 32);
+    assert!(offset_of!(MaterialRecord, emissive) == 16);
+    assert!(offset_of!(MaterialRecord, metallic) == 32);
+    assert!(offset_of!(MaterialRecord, base_color_texture) == 48);
+    assert!(offset_of!(MaterialRecord, emissive_texture) == 60);
     assert!(offset_of!(DirectionalLightRecord, color) == 16);
     assert!(offset_of!(DirectionalLightRecord, shadow_slot) == 32);
     assert!(offset_of!(PositionalLightRecord, direction) == 16);

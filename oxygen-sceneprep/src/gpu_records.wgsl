@@ -29,14 +29,20 @@ const PASS_CASTS_SHADOWS: u32 = 16u;
 
 struct MaterialRecord {
     base_color: vec4<f32>,
+    emissive: vec3<f32>,
+    normal_scale: f32,
     metallic: f32,
     roughness: f32,
     alpha_cutoff: f32,
     flags: u32,
     base_color_texture: u32,
+    metallic_roughness_texture: u32,
+    normal_texture: u32,
+    emissive_texture: u32,
     reserved0: u32,
     reserved1: u32,
     reserved2: u32,
+    reserved3: u32,
 }
 
 struct DirectionalLightRecord {

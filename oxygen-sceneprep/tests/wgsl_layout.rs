@@ -61,7 +61,19 @@ fn gpu_records_wgsl_matches_rust_layouts() {
         module,
         MaterialRecord,
         "MaterialRecord",
-        [base_color, metallic, roughness, alpha_cutoff, flags, base_color_texture]
+        [
+            base_color,
+            emissive,
+            normal_scale,
+            metallic,
+            roughness,
+            alpha_cutoff,
+            flags,
+            base_color_texture,
+            metallic_roughness_texture,
+            normal_texture,
+            emissive_texture
+        ]
     );
     check!(module, DirectionalLightRecord, "DirectionalLightRecord", [direction, intensity, color, flags, shadow_slot]);
     check!(

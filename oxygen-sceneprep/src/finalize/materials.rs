@@ -51,14 +51,20 @@ impl MaterialTable {
                 self.scratch.resize(i + 1, placeholder());
             }
             let mut record = MaterialRecord::from_material(material);
-            if let Some(texture) = material.base_color_texture {
+            let mut resolve = |texture: Option<oxygen_core::TextureHandle>, what: &str| -> Result<u32, SlotError> {
+                let Some(texture) = texture else { return Ok(oxygen_bindless::INVALID_SLOT) };
                 match scene.texture(texture) {
-                    Some(image) => record.base_color_texture = textures.resolve(texture, image, slots)?,
+                    Some(image) => textures.resolve(texture, image, slots),
                     None => {
-                        tracing::warn!(material = %material.name, "base-colour texture missing; drawing untextured")
+                        tracing::warn!(material = %material.name, "{what} texture missing; ignored");
+                        Ok(oxygen_bindless::INVALID_SLOT)
                     }
                 }
-            }
+            };
+            record.base_color_texture = resolve(material.base_color_texture, "base-colour")?;
+            record.metallic_roughness_texture = resolve(material.metallic_roughness_texture, "metallic-roughness")?;
+            record.normal_texture = resolve(material.normal_texture, "normal")?;
+            record.emissive_texture = resolve(material.emissive_texture, "emissive")?;
             self.scratch[i] = record;
         }
         if self.scratch != self.records {
