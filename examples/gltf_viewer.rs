@@ -1,6 +1,6 @@
-//! Loads a glTF/GLB file, registers one view per glTF camera plus an orbit
-//! camera framing the whole scene, renders one frame and writes a PNG per
-//! view, printing what it did.
+//! Loads a glTF/GLB file, registers one view per glTF camera plus three
+//! orbit cameras framing the whole scene, renders one frame and writes a PNG
+//! per view, printing what it did.
 //!
 //! ```text
 //! cargo run --release --example gltf_viewer -- [FILE] [OUTPUT_DIR] [--scene N|NAME] [--size WxH]
@@ -100,16 +100,23 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         let id = renderer.register_view(camera.resolver(viewport), standard_render_graph);
         views.push((format!("camera{i}"), camera.name.clone(), id));
     }
+    // Three orbit views around the scene's bounds: front, three-quarter, and from above.
     let center = bounds.center();
     let radius = bounds.half_extents().length().max(1e-3);
-    let orbit = LookAtResolver {
-        camera: Camera::perspective(45f32.to_radians(), radius * 0.01, None),
-        eye: center + Vec3::new(0.45, 0.35, 1.0).normalize() * radius * 2.0,
-        target: center,
-        up: Vec3::Y,
-        viewport: size,
-    };
-    views.push(("orbit".to_owned(), "orbit".to_owned(), renderer.register_view(orbit, standard_render_graph)));
+    for (tag, direction, up) in [
+        ("orbit_front", Vec3::new(0.0, 0.15, 1.0), Vec3::Y),
+        ("orbit_three_quarter", Vec3::new(0.8, 0.45, 0.8), Vec3::Y),
+        ("orbit_top", Vec3::new(0.0, 1.0, 0.25), Vec3::NEG_Z),
+    ] {
+        let orbit = LookAtResolver {
+            camera: Camera::perspective(45f32.to_radians(), radius * 0.01, None),
+            eye: center + direction.normalize() * radius * 2.0,
+            target: center,
+            up,
+            viewport: size,
+        };
+        views.push((tag.to_owned(), tag.to_owned(), renderer.register_view(orbit, standard_render_graph)));
+    }
 
     let report = renderer.render_frame(&scene)?;
     println!(

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The main job: loads a shipped glTF scene (or the file given as $1), renders
-# it through one view per glTF camera plus an orbit camera, and writes one PNG
+# it through one view per glTF camera plus three orbit cameras, and writes one PNG
 # per view into out/ (or the directory given as $2).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -10,7 +10,7 @@ if ! command -v cargo >/dev/null 2>&1; then
   exit 1
 fi
 scripts/ensure-gpu.sh
-file=${1:-assets/Cameras/Cameras.gltf}
+file=${1:-assets/AlphaBlendModeTest/AlphaBlendModeTest.glb}
 out=${2:-out}
 cargo run --locked --release --example gltf_viewer -- "$file" "$out"
 echo "[oxygen] PNGs written to $(cd "$out" && pwd)/" >&2
