@@ -234,20 +234,18 @@ impl Importer<'_> {
         };
         let world = parent_world * local.to_dmat4();
 
-        if let Some(mesh) = node.mesh() {
-            if let Some((geometry, materials)) = self.mesh(scene, &mesh)? {
-                if let Some(g) = scene.geometry(geometry) {
-                    let bounds = g.local_aabb().transformed(&world.as_mat4());
-                    self.out.bounds = Some(match self.out.bounds {
-                        Some(b) => Aabb::new(b.min.min(bounds.min), b.max.max(bounds.max)),
-                        None => bounds,
-                    });
-                }
-                scene
-                    .set_renderable(key, Renderable { geometry, materials })
-                    .map_err(|e| self.invalid(e.to_string()))?;
-                self.out.renderables += 1;
+        if let Some(mesh) = node.mesh()
+            && let Some((geometry, materials)) = self.mesh(scene, &mesh)?
+        {
+            if let Some(g) = scene.geometry(geometry) {
+                let bounds = g.local_aabb().transformed(&world.as_mat4());
+                self.out.bounds = Some(match self.out.bounds {
+                    Some(b) => Aabb::new(b.min.min(bounds.min), b.max.max(bounds.max)),
+                    None => bounds,
+                });
             }
+            scene.set_renderable(key, Renderable { geometry, materials }).map_err(|e| self.invalid(e.to_string()))?;
+            self.out.renderables += 1;
         }
         if let Some(light) = node.light() {
             let color = Vec3::from(light.color());
@@ -322,7 +320,7 @@ impl Importer<'_> {
                 Some(i) => i.into_u32().collect(),
                 None => (0..positions.len() as u32).collect(),
             };
-            if local_indices.len() % 3 != 0 || local_indices.iter().any(|i| *i as usize >= positions.len()) {
+            if !local_indices.len().is_multiple_of(3) || local_indices.iter().any(|i| *i as usize >= positions.len()) {
                 return Err(self.invalid(format!("mesh '{name}': primitive indices are not a valid triangle list")));
             }
             let normals: Vec<Vec3> = match reader.read_normals() {

@@ -13,7 +13,7 @@ use bytemuck::Pod;
 use thiserror::Error;
 use tracing::{debug, info_span};
 
-use crate::textures::TextureHeap;
+use crate::textures::{TextureHeap, TextureUpload};
 use crate::{Allocation, DomainKind, SlotAllocators, SlotError, TexturePath};
 
 /// Smallest buffer, in records: a binding must never be empty.
@@ -79,7 +79,7 @@ impl BindlessHeap {
     /// Creates every domain at its minimum size on `device`, with textures
     /// bound the way `texture_path` says.
     pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, texture_path: TexturePath) -> Self {
-        let max_binding_bytes = device.limits().max_storage_buffer_binding_size as u64;
+        let max_binding_bytes = device.limits().max_storage_buffer_binding_size;
         let storage_entry = |(binding, visibility)| wgpu::BindGroupLayoutEntry {
             binding,
             visibility,
@@ -206,23 +206,19 @@ impl BindlessHeap {
     }
 
     /// Uploads a texture for a `TextureLocations` slot and records where it
-    /// lives and which sampler-table entry samples it; `size` is (width,
-    /// height), `pixels` tightly packed RGBA8.
+    /// lives and which sampler-table entry samples it.
     pub fn upload_texture(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         slot: &Allocation,
-        size: (u32, u32),
-        srgb: bool,
-        sampler: u32,
-        pixels: &[u8],
+        texture: &TextureUpload<'_>,
     ) -> Result<(), BindlessError> {
         if slot.domain() != DomainKind::TextureLocations {
             return Err(BindlessError::NotATextureSlot { domain: slot.domain().name() });
         }
         self.slots.get(DomainKind::TextureLocations).validate(slot)?;
-        let location = self.textures.upload(device, queue, slot.start, size, srgb, sampler, pixels)?;
+        let location = self.textures.upload(device, queue, slot.start, texture)?;
         self.write(queue, slot, 0, &[location])?;
         self.textures.refresh(device);
         Ok(())

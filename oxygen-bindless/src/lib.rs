@@ -19,6 +19,10 @@
 //! It knows nothing of scenes or passes. `u32::MAX` ([`INVALID_SLOT`]) is the
 //! absent slot, and shaders treat it so.
 
+// `!(x > 0.0)` is how this crate rejects NaN along with the out-of-range values;
+// rewriting it with `partial_cmp` would hide that intent.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 mod domain;
 mod heap;
 mod scene_constants;
@@ -31,4 +35,4 @@ pub use scene_constants::{
     CameraConstants, RendererConstants, SCENE_CONSTANTS_WGSL, SceneConstants, SceneConstantsBuffer,
 };
 pub use slot::{Allocation, INVALID_SLOT, SlotAllocator, SlotAllocators, SlotError};
-pub use textures::{MAX_TEXTURES, SAMPLERS, TexturePath, allocate_texture_slot, resample_rgba8};
+pub use textures::{MAX_TEXTURES, SAMPLERS, TexturePath, TextureUpload, allocate_texture_slot, resample_rgba8};

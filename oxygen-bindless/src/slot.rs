@@ -182,11 +182,11 @@ impl SlotAllocator {
             self.free.remove(i);
         }
         // A free range at the top gives its slots back to the high-water mark.
-        if let Some(&(s, len)) = self.free.last() {
-            if s + len == self.high_water {
-                self.high_water = s;
-                self.free.pop();
-            }
+        if let Some(&(s, len)) = self.free.last()
+            && s + len == self.high_water
+        {
+            self.high_water = s;
+            self.free.pop();
         }
         Ok(())
     }

@@ -39,7 +39,7 @@ fn group_side(g: usize) -> u32 {
     SIZE_CLASSES[g / 4]
 }
 fn group_is_srgb(g: usize) -> bool {
-    (g / 2) % 2 == 0
+    (g / 2).is_multiple_of(2)
 }
 /// Samplers in the table: wrap (repeat, clamp, mirror) × filter (linear, nearest).
 pub const SAMPLERS: u32 = 6;
@@ -150,7 +150,7 @@ fn create_sampler(device: &wgpu::Device, index: u32) -> wgpu::Sampler {
         1 => wgpu::AddressMode::ClampToEdge,
         _ => wgpu::AddressMode::MirrorRepeat,
     };
-    let filter = if index % 2 == 0 { wgpu::FilterMode::Linear } else { wgpu::FilterMode::Nearest };
+    let filter = if index.is_multiple_of(2) { wgpu::FilterMode::Linear } else { wgpu::FilterMode::Nearest };
     device.create_sampler(&wgpu::SamplerDescriptor {
         label: Some("material sampler"),
         address_mode_u: wrap,
@@ -159,6 +159,21 @@ fn create_sampler(device: &wgpu::Device, index: u32) -> wgpu::Sampler {
         min_filter: filter,
         ..Default::default()
     })
+}
+
+/// One texture to upload: RGBA8 texels and how to sample them.
+#[derive(Clone, Copy, Debug)]
+pub struct TextureUpload<'a> {
+    /// Width in texels.
+    pub width: u32,
+    /// Height in texels.
+    pub height: u32,
+    /// The texels are sRGB-encoded colour (decoded when sampled).
+    pub srgb: bool,
+    /// Sampler-table index (wrap × 2 + nearest), see [`SAMPLERS`].
+    pub sampler: u32,
+    /// Tightly packed RGBA8 rows.
+    pub pixels: &'a [u8],
 }
 
 struct LayerGroup {
@@ -340,11 +355,9 @@ impl TextureHeap {
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         slot: u32,
-        (width, height): (u32, u32),
-        srgb: bool,
-        sampler: u32,
-        pixels: &[u8],
+        texture: &TextureUpload<'_>,
     ) -> Result<u32, BindlessError> {
+        let TextureUpload { width, height, srgb, sampler, pixels } = *texture;
         self.uploads += 1;
         let sampler_bits = sampler.min(SAMPLERS - 1) << SAMPLER_SHIFT;
         self.stale_bind_group = true;
@@ -455,9 +468,9 @@ mod tests {
 
     #[test]
     fn resampling_keeps_flat_colour_and_cell_centres() {
-        let flat = vec![10u8, 20, 30, 255].repeat(9);
-        assert_eq!(resample_rgba8(&flat, 3, 3, 7, 5, false), vec![10u8, 20, 30, 255].repeat(35));
-        assert_eq!(resample_rgba8(&flat, 3, 3, 7, 5, true), vec![10u8, 20, 30, 255].repeat(35));
+        let flat = [10u8, 20, 30, 255].repeat(9);
+        assert_eq!(resample_rgba8(&flat, 3, 3, 7, 5, false), [10u8, 20, 30, 255].repeat(35));
+        assert_eq!(resample_rgba8(&flat, 3, 3, 7, 5, true), [10u8, 20, 30, 255].repeat(35));
         // A 2x2 checker upsampled 32x keeps each cell's colour at its centre.
         let checker = [255u8, 0, 0, 255, 0, 0, 255, 255, 0, 0, 255, 255, 255, 0, 0, 255];
         let big = resample_rgba8(&checker, 2, 2, 64, 64, false);

@@ -124,7 +124,7 @@ impl TextureImage {
         let mut pixels = Vec::with_capacity(size as usize * size as usize * 4);
         for y in 0..size {
             for x in 0..size {
-                pixels.extend_from_slice(if (x / cell + y / cell) % 2 == 0 { &a } else { &b });
+                pixels.extend_from_slice(if (x / cell + y / cell).is_multiple_of(2) { &a } else { &b });
             }
         }
         // Size and length are consistent by construction.

@@ -21,7 +21,7 @@
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
-use oxygen_bindless::{Allocation, BindlessError, BindlessHeap, DomainKind, SlotAllocators, SlotError};
+use oxygen_bindless::{Allocation, BindlessError, BindlessHeap, DomainKind, SlotAllocators, SlotError, TextureUpload};
 use oxygen_core::{Geometry, GeometryHandle, ResolvedView, Scene, TextureImage, ViewId};
 use thiserror::Error;
 use tracing::info_span;
@@ -406,7 +406,12 @@ impl ScenePrep {
         for (slot, image) in self.pending_textures.drain(..) {
             let srgb = image.color_space() == oxygen_core::ColorSpace::Srgb;
             let sampler = image.sampling().table_index();
-            heap.upload_texture(device, queue, &slot, (image.width(), image.height()), srgb, sampler, image.pixels())?;
+            heap.upload_texture(
+                device,
+                queue,
+                &slot,
+                &TextureUpload { width: image.width(), height: image.height(), srgb, sampler, pixels: image.pixels() },
+            )?;
         }
         if self.materials.is_dirty() {
             heap.write(queue, &self.materials.allocation(), 0, self.materials.records())?;

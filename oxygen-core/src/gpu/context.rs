@@ -103,11 +103,11 @@ impl GpuContext {
         for adapter in instance.enumerate_adapters(backends).await {
             let info = adapter.get_info();
             let label = format!("{} ({:?})", info.name, info.backend);
-            if let Some(wanted) = &wanted_name {
-                if !info.name.to_lowercase().contains(wanted) {
-                    tried.push(format!("{label}: not matching OXYGEN_ADAPTER"));
-                    continue;
-                }
+            if let Some(wanted) = &wanted_name
+                && !info.name.to_lowercase().contains(wanted)
+            {
+                tried.push(format!("{label}: not matching OXYGEN_ADAPTER"));
+                continue;
             }
             let missing = options.required_features - adapter.features();
             if !missing.is_empty() {

@@ -24,10 +24,10 @@ impl TextureCache {
         slots: &mut SlotAllocators,
     ) -> Result<u32, SlotError> {
         let index = texture_index(handle) as usize;
-        if let Some(Some((h, a))) = self.entries.get(index) {
-            if *h == handle {
-                return Ok(a.start);
-            }
+        if let Some(Some((h, a))) = self.entries.get(index)
+            && *h == handle
+        {
+            return Ok(a.start);
         }
         if let Some(Some((_, old))) = self.entries.get(index).copied() {
             self.pending.retain(|(p, _)| *p != old);
