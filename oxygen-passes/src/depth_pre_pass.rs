@@ -4,12 +4,11 @@
 //! Reads: the prepared frame's opaque and masked partitions. Writes: the
 //! view's depth target (cleared to 0, the far value in reverse-Z).
 
-use oxygen_core::ViewTargets;
 use oxygen_sceneprep::PassMask;
 use tracing::info_span;
 
-use crate::render_context::{bind_view_resources, draw_partition};
-use crate::{CommandRecorder, PassError, PassKind, PipelineKey, PipelineVariant, RenderContext, RenderPass};
+use crate::render_context::{draw_partitions, partition_pipelines};
+use crate::{CommandRecorder, PassError, PassKind, RenderContext, RenderPass};
 
 /// What a depth pre-pass leaves for later passes: the view's depth target
 /// holds reverse-Z depth of the opaque and masked partitions. Published on
@@ -50,19 +49,7 @@ impl RenderPass for DepthPrePass {
         _rec: &mut CommandRecorder,
     ) -> Result<(), PassError> {
         let _span = info_span!("depth_pre_pass_prepare", view = %ctx.view.view_id).entered();
-        let pipelines = partitions(ctx)
-            .map(|p| {
-                ctx.pipelines.get(
-                    &ctx.gpu.device,
-                    PipelineKey {
-                        pass: PassKind::DepthPrePass,
-                        variant: PipelineVariant::from_mask(p.mask),
-                        color_format: None,
-                        depth_format: ViewTargets::DEPTH_FORMAT,
-                    },
-                )
-            })
-            .collect();
+        let pipelines = partition_pipelines(ctx, PassKind::DepthPrePass, None, partitions(ctx));
         self.pipelines = Some(pipelines);
         Ok(())
     }
@@ -85,12 +72,7 @@ impl RenderPass for DepthPrePass {
                 multiview_mask: None,
             });
             stats.render_passes += 1;
-            bind_view_resources(&mut pass, ctx);
-            for (partition, pipeline) in partitions(ctx).zip(pipelines) {
-                pass.set_pipeline(pipeline);
-                stats.pipeline_binds += 1;
-                draw_partition(&mut pass, ctx, partition, &mut stats);
-            }
+            draw_partitions(&mut pass, ctx, partitions(ctx), pipelines, &mut stats);
         }
         let draws = partitions(ctx).map(|p| p.len()).sum();
         rec.stats = stats;

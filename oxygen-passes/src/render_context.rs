@@ -155,7 +155,7 @@ impl CommandRecorder {
 }
 
 /// Sets the bindless and scene-constant bind groups and the shared index buffer.
-pub(crate) fn bind_view_resources(pass: &mut wgpu::RenderPass<'_>, ctx: &RenderContext<'_>) {
+fn bind_view_resources(pass: &mut wgpu::RenderPass<'_>, ctx: &RenderContext<'_>) {
     pass.set_bind_group(0, ctx.heap.bind_group(), &[]);
     pass.set_bind_group(1, ctx.scene_constants.bind_group(), &[]);
     pass.set_bind_group(2, ctx.heap.texture_bind_group(), &[]);
@@ -165,7 +165,7 @@ pub(crate) fn bind_view_resources(pass: &mut wgpu::RenderPass<'_>, ctx: &RenderC
 /// Draws every draw of `partition`. Either way the draw's position in the
 /// view's array reaches the shader as `first_instance`, which is how the
 /// vertex shader finds its `DrawMetadata`.
-pub(crate) fn draw_partition(
+fn draw_partition(
     pass: &mut wgpu::RenderPass<'_>,
     ctx: &RenderContext<'_>,
     partition: &Partition,
@@ -188,5 +188,45 @@ pub(crate) fn draw_partition(
             draw_index..draw_index + draw.instance_count,
         );
         stats.draw_calls += 1;
+    }
+}
+
+/// The pipeline of every partition in `partitions` for `pass`, from the
+/// shared cache (created the first time a partition needs its variant).
+pub(crate) fn partition_pipelines<'a>(
+    ctx: &RenderContext<'_>,
+    pass: crate::PassKind,
+    color_format: Option<wgpu::TextureFormat>,
+    partitions: impl Iterator<Item = &'a Partition>,
+) -> Vec<wgpu::RenderPipeline> {
+    partitions
+        .map(|p| {
+            ctx.pipelines.get(
+                &ctx.gpu.device,
+                crate::PipelineKey {
+                    pass,
+                    variant: crate::PipelineVariant::from_mask(p.mask),
+                    color_format,
+                    depth_format: oxygen_core::ViewTargets::DEPTH_FORMAT,
+                },
+            )
+        })
+        .collect()
+}
+
+/// Binds the view's bindless resources, then draws each partition with its
+/// pipeline (one pipeline bind per partition).
+pub(crate) fn draw_partitions<'a>(
+    pass: &mut wgpu::RenderPass<'_>,
+    ctx: &RenderContext<'_>,
+    partitions: impl Iterator<Item = &'a Partition>,
+    pipelines: &[wgpu::RenderPipeline],
+    stats: &mut RecordStats,
+) {
+    bind_view_resources(pass, ctx);
+    for (partition, pipeline) in partitions.zip(pipelines) {
+        pass.set_pipeline(pipeline);
+        stats.pipeline_binds += 1;
+        draw_partition(pass, ctx, partition, stats);
     }
 }

@@ -10,8 +10,8 @@ use oxygen_core::ViewTargets;
 use oxygen_sceneprep::PassMask;
 use tracing::info_span;
 
-use crate::render_context::{bind_view_resources, draw_partition};
-use crate::{CommandRecorder, PassError, PassKind, PipelineKey, PipelineVariant, RenderContext, RenderPass};
+use crate::render_context::{draw_partitions, partition_pipelines};
+use crate::{CommandRecorder, PassError, PassKind, RenderContext, RenderPass};
 
 /// How the shading pass is set up.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -58,19 +58,7 @@ impl RenderPass for ShaderPass {
     ) -> Result<(), PassError> {
         let _span = info_span!("shader_pass_prepare", view = %ctx.view.view_id).entered();
         let pass = if self.config.depth_from_pre_pass { PassKind::ShadingAfterPrePass } else { PassKind::Shading };
-        let pipelines = partitions(ctx)
-            .map(|p| {
-                ctx.pipelines.get(
-                    &ctx.gpu.device,
-                    PipelineKey {
-                        pass,
-                        variant: PipelineVariant::from_mask(p.mask),
-                        color_format: Some(ViewTargets::HDR_FORMAT),
-                        depth_format: ViewTargets::DEPTH_FORMAT,
-                    },
-                )
-            })
-            .collect();
+        let pipelines = partition_pipelines(ctx, pass, Some(ViewTargets::HDR_FORMAT), partitions(ctx));
         self.pipelines = Some(pipelines);
         Ok(())
     }
@@ -102,12 +90,7 @@ impl RenderPass for ShaderPass {
                 multiview_mask: None,
             });
             stats.render_passes += 1;
-            bind_view_resources(&mut pass, ctx);
-            for (partition, pipeline) in partitions(ctx).zip(pipelines) {
-                pass.set_pipeline(pipeline);
-                stats.pipeline_binds += 1;
-                draw_partition(&mut pass, ctx, partition, &mut stats);
-            }
+            draw_partitions(&mut pass, ctx, partitions(ctx), pipelines, &mut stats);
         }
         rec.stats = stats;
         Ok(())

@@ -11,8 +11,8 @@ use oxygen_core::ViewTargets;
 use oxygen_sceneprep::PassMask;
 use tracing::info_span;
 
-use crate::render_context::{bind_view_resources, draw_partition};
-use crate::{CommandRecorder, PassError, PassKind, PipelineKey, PipelineVariant, RenderContext, RenderPass};
+use crate::render_context::{draw_partitions, partition_pipelines};
+use crate::{CommandRecorder, PassError, PassKind, RenderContext, RenderPass};
 
 /// The transparent pass.
 #[derive(Default)]
@@ -42,19 +42,7 @@ impl RenderPass for TransparentPass {
         _rec: &mut CommandRecorder,
     ) -> Result<(), PassError> {
         let _span = info_span!("transparent_pass_prepare", view = %ctx.view.view_id).entered();
-        let pipelines = partitions(ctx)
-            .map(|p| {
-                ctx.pipelines.get(
-                    &ctx.gpu.device,
-                    PipelineKey {
-                        pass: PassKind::Transparent,
-                        variant: PipelineVariant::from_mask(p.mask),
-                        color_format: Some(ViewTargets::HDR_FORMAT),
-                        depth_format: ViewTargets::DEPTH_FORMAT,
-                    },
-                )
-            })
-            .collect();
+        let pipelines = partition_pipelines(ctx, PassKind::Transparent, Some(ViewTargets::HDR_FORMAT), partitions(ctx));
         self.pipelines = Some(pipelines);
         Ok(())
     }
@@ -85,12 +73,7 @@ impl RenderPass for TransparentPass {
                 multiview_mask: None,
             });
             stats.render_passes += 1;
-            bind_view_resources(&mut pass, ctx);
-            for (partition, pipeline) in partitions(ctx).zip(pipelines) {
-                pass.set_pipeline(pipeline);
-                stats.pipeline_binds += 1;
-                draw_partition(&mut pass, ctx, partition, &mut stats);
-            }
+            draw_partitions(&mut pass, ctx, partitions(ctx), pipelines, &mut stats);
         }
         rec.stats = stats;
         Ok(())
