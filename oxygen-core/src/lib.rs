@@ -27,6 +27,7 @@ pub mod light;
 pub mod material;
 pub mod math;
 pub mod scene;
+pub mod shadow;
 pub mod texture;
 pub mod view;
 
@@ -40,6 +41,7 @@ pub use scene::{
     GeometryHandle, LodLevel, MaterialHandle, Node, NodeFlags, NodeKey, Renderable, Scene, SceneError, TextureHandle,
     Transform, WorldTransforms,
 };
+pub use shadow::{Cascade, CascadeResolver, CascadeSettings, cascade_splits, fit_cascade};
 pub use texture::{ColorSpace, Filter, Sampling, TextureError, TextureImage, Wrap};
 pub use view::{LookAtResolver, ResolvedView, ViewContext, ViewError, ViewId, ViewResolver};
 

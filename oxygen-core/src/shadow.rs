@@ -1,0 +1,240 @@
+//! Cascaded shadow maps for a directional light: where the cascades split the
+//! camera's depth range, and the orthographic view that covers each slice.
+//!
+//! * **Splits** follow the practical scheme: a blend, by `lambda`, of the
+//!   logarithmic split (even precision per depth octave) and the uniform one.
+//! * **Fitting**: each slice's eight corners are enclosed in a sphere, and the
+//!   cascade's orthographic box is that sphere's square. A sphere does not
+//!   change size as the camera turns, so the map's texel size stays constant.
+//! * **Texel snapping**: the box's centre is snapped, in light space, to whole
+//!   texels, so the map's texel grid stays fixed in the world while the camera
+//!   moves and shadow edges do not swim.
+//!
+//! [`CascadeResolver`] turns this into a registered view: a shadow view is
+//! just another view, culled by the same ScenePrep (casters only, depth only).
+
+use std::sync::Arc;
+
+use glam::{Mat4, UVec2, Vec3, Vec4Swizzles};
+
+use crate::math::projection::reverse_z_orthographic;
+use crate::{NodeKey, ResolvedView, Scene, ViewContext, ViewError, ViewResolver};
+
+/// How a directional light's cascades are laid out.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CascadeSettings {
+    /// Number of cascades, 1 to 4.
+    pub count: u32,
+    /// 0 = uniform splits, 1 = logarithmic; 0.5–0.8 is the usual compromise.
+    pub lambda: f32,
+    /// Shadow-map side in texels.
+    pub resolution: u32,
+    /// Shadows end here (also caps an infinite far plane).
+    pub max_distance: f32,
+    /// How far behind each slice (towards the light) casters are still caught.
+    pub caster_margin: f32,
+}
+
+impl Default for CascadeSettings {
+    fn default() -> Self {
+        CascadeSettings { count: 4, lambda: 0.7, resolution: 2048, max_distance: 100.0, caster_margin: 50.0 }
+    }
+}
+
+/// One cascade: a depth slice of the camera and the light's view of it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cascade {
+    /// Camera-space distance where the slice starts.
+    pub split_near: f32,
+    /// Camera-space distance where the slice ends.
+    pub split_far: f32,
+    /// World → light view.
+    pub view: Mat4,
+    /// Light view → clip (reverse-Z orthographic).
+    pub projection: Mat4,
+    /// Depth of the orthographic box (its far plane; the near plane is 0).
+    pub depth: f32,
+    /// World size of one shadow-map texel.
+    pub texel_world_size: f32,
+    /// The box centre in light space after snapping (for tests and debugging).
+    pub snapped_center: Vec3,
+}
+
+/// Split distances `[near, d1, …, far]` (`count + 1` values).
+pub fn cascade_splits(near: f32, far: f32, count: u32, lambda: f32) -> Vec<f32> {
+    let count = count.clamp(1, 4);
+    let lambda = lambda.clamp(0.0, 1.0);
+    (0..=count)
+        .map(|i| {
+            let t = i as f32 / count as f32;
+            let logarithmic = near * (far / near).powf(t);
+            let uniform = near + (far - near) * t;
+            lambda * logarithmic + (1.0 - lambda) * uniform
+        })
+        .collect()
+}
+
+/// The eight world-space corners of the camera's slice between `d0` and `d1`.
+fn slice_corners(camera: &ResolvedView, d0: f32, d1: f32) -> [Vec3; 8] {
+    let world_from_view = camera.view.inverse();
+    let p = camera.projection;
+    let perspective = p.w_axis.w == 0.0;
+    let mut corners = [Vec3::ZERO; 8];
+    for (i, corner) in corners.iter_mut().enumerate() {
+        let d = if i < 4 { d0 } else { d1 };
+        let (sx, sy) = (if i & 1 == 0 { -1.0 } else { 1.0 }, if i & 2 == 0 { -1.0 } else { 1.0 });
+        let (half_x, half_y) =
+            if perspective { (d / p.x_axis.x, d / p.y_axis.y) } else { (1.0 / p.x_axis.x, 1.0 / p.y_axis.y) };
+        *corner = world_from_view.transform_point3(Vec3::new(sx * half_x, sy * half_y, -d));
+    }
+    corners
+}
+
+/// Fits cascade `index` of `settings` to `camera`, for a light shining along
+/// `light_direction` (need not be normalized). `None` when the inputs are
+/// degenerate (zero direction, empty depth range).
+pub fn fit_cascade(
+    camera: &ResolvedView,
+    light_direction: Vec3,
+    settings: &CascadeSettings,
+    index: u32,
+) -> Option<Cascade> {
+    let direction = light_direction.try_normalize()?;
+    let far = camera.far.min(settings.max_distance);
+    if !(far > camera.near) || index >= settings.count.clamp(1, 4) {
+        return None;
+    }
+    let splits = cascade_splits(camera.near, far, settings.count, settings.lambda);
+    let (d0, d1) = (splits[index as usize], splits[index as usize + 1]);
+    let corners = slice_corners(camera, d0, d1);
+    let center = corners.iter().copied().sum::<Vec3>() / 8.0;
+    // Round the radius up to a multiple of 1/16 so it does not jitter with float noise.
+    let radius = (corners.iter().map(|c| c.distance(center)).fold(0.0f32, f32::max) * 16.0).ceil() / 16.0;
+    let texel = 2.0 * radius / settings.resolution.max(1) as f32;
+
+    // Light-space rotation (no translation): look along the light.
+    let up = if direction.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y };
+    let rotation = Mat4::look_to_rh(Vec3::ZERO, direction, up);
+    let light_center = rotation.transform_point3(center);
+    let snapped =
+        Vec3::new((light_center.x / texel).round() * texel, (light_center.y / texel).round() * texel, light_center.z);
+    let world_center = rotation.inverse().transform_point3(snapped);
+
+    let eye = world_center - direction * (radius + settings.caster_margin);
+    let view = Mat4::look_to_rh(eye, direction, up);
+    let depth = 2.0 * radius + settings.caster_margin;
+    let projection = reverse_z_orthographic(radius, radius, 0.0, depth);
+    Some(Cascade {
+        split_near: d0,
+        split_far: d1,
+        view,
+        projection,
+        depth,
+        texel_world_size: texel,
+        snapped_center: snapped,
+    })
+}
+
+/// A registered view for one cascade of one directional light: it resolves
+/// the main camera itself (cheap) and fits the cascade to it every frame.
+#[derive(Clone)]
+pub struct CascadeResolver {
+    /// The camera whose frustum the cascades cover.
+    pub main: Arc<dyn ViewResolver>,
+    /// The node carrying the directional light (it shines down its −Z).
+    pub light: NodeKey,
+    /// Layout of the cascades.
+    pub settings: CascadeSettings,
+    /// Which cascade this view renders.
+    pub index: u32,
+}
+
+impl ViewResolver for CascadeResolver {
+    fn resolve(&self, ctx: &ViewContext, scene: &Scene) -> Result<ResolvedView, ViewError> {
+        let view_id = ctx.view_id;
+        let camera = self.main.resolve(ctx, scene)?;
+        let light = scene
+            .world_transform(self.light)
+            .ok_or_else(|| ViewError::Other { view: view_id, message: "the light's node was removed".into() })?;
+        let direction = light.as_mat4().transform_vector3(Vec3::NEG_Z);
+        let cascade = fit_cascade(&camera, direction, &self.settings, self.index).ok_or_else(|| ViewError::Other {
+            view: view_id,
+            message: format!(
+                "cascade {} cannot be fitted (light direction {direction}, depth {}..{})",
+                self.index, camera.near, camera.far
+            ),
+        })?;
+        let side = self.settings.resolution.max(1);
+        ResolvedView::new(view_id, cascade.view, cascade.projection, UVec2::splat(side), 0.0, cascade.depth)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Camera, LookAtResolver, ViewId};
+
+    fn camera_at(eye: Vec3) -> ResolvedView {
+        let resolver = LookAtResolver {
+            camera: Camera::perspective(60f32.to_radians(), 0.1, Some(200.0)),
+            eye,
+            target: eye + Vec3::new(0.0, -0.3, -1.0),
+            up: Vec3::Y,
+            viewport: UVec2::new(1280, 720),
+        };
+        resolver.resolve(&ViewContext { view_id: ViewId(0), frame_index: 1, time_seconds: 0.0 }, &Scene::new()).unwrap()
+    }
+
+    #[test]
+    fn splits_cover_the_depth_range_without_gaps() {
+        for count in 1..=4 {
+            for lambda in [0.0, 0.5, 0.7, 1.0] {
+                let s = cascade_splits(0.1, 100.0, count, lambda);
+                assert_eq!(s.len(), count as usize + 1);
+                assert!((s[0] - 0.1).abs() < 1e-6 && (s[count as usize] - 100.0).abs() < 1e-3, "{s:?}");
+                assert!(s.windows(2).all(|w| w[1] > w[0]), "not increasing: {s:?}");
+            }
+        }
+        // The extremes are the pure schemes.
+        let uniform = cascade_splits(1.0, 9.0, 2, 0.0);
+        assert!((uniform[1] - 5.0).abs() < 1e-5);
+        let logarithmic = cascade_splits(1.0, 9.0, 2, 1.0);
+        assert!((logarithmic[1] - 3.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn every_cascade_box_holds_its_whole_slice_and_consecutive_slices_touch() {
+        let camera = camera_at(Vec3::new(3.0, 10.0, 5.0));
+        let settings = CascadeSettings { max_distance: 80.0, ..Default::default() };
+        let light = Vec3::new(-0.4, -1.0, -0.3);
+        let mut previous_far = camera.near;
+        for i in 0..settings.count {
+            let c = fit_cascade(&camera, light, &settings, i).unwrap();
+            assert!((c.split_near - previous_far).abs() < 1e-4, "gap before cascade {i}");
+            previous_far = c.split_far;
+            let clip_from_world = c.projection * c.view;
+            for corner in slice_corners(&camera, c.split_near, c.split_far) {
+                let clip = clip_from_world * corner.extend(1.0);
+                let ndc = clip.xyz() / clip.w;
+                assert!(ndc.x.abs() <= 1.0 + 1e-4 && ndc.y.abs() <= 1.0 + 1e-4, "cascade {i} misses {corner}: {ndc}");
+                assert!(ndc.z >= -1e-4 && ndc.z <= 1.0 + 1e-4, "cascade {i} depth misses {corner}: {ndc}");
+            }
+        }
+        assert!((previous_far - 80.0).abs() < 1e-3, "the last cascade ends at max_distance");
+    }
+
+    #[test]
+    fn texel_snapping_keeps_the_map_grid_fixed_as_the_camera_translates() {
+        let settings = CascadeSettings::default();
+        let light = Vec3::new(-0.4, -1.0, -0.3);
+        let first = fit_cascade(&camera_at(Vec3::new(0.0, 10.0, 0.0)), light, &settings, 1).unwrap();
+        for step in 1..50 {
+            let eye = Vec3::new(step as f32 * 0.0137, 10.0, step as f32 * -0.021);
+            let c = fit_cascade(&camera_at(eye), light, &settings, 1).unwrap();
+            assert_eq!(c.texel_world_size, first.texel_world_size, "texel size must not change with translation");
+            // The snapped centre moves by whole texels only: the grid origin is fixed within one texel.
+            let offset = (c.snapped_center - first.snapped_center).truncate() / c.texel_world_size;
+            assert!((offset - offset.round()).abs().max_element() < 1e-2, "step {step}: off-grid by {offset}");
+        }
+    }
+}
