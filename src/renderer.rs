@@ -16,8 +16,8 @@ use oxygen_core::{
     GpuContext, GpuError, GpuOptions, ResolvedView, Scene, ViewContext, ViewError, ViewId, ViewResolver, ViewTargets,
 };
 use oxygen_passes::{
-    CommandRecorder, DepthPrePass, DrawPath, PassError, PipelineCache, RecordStats, RenderContext, RenderPass,
-    ShaderPass, ShaderPassConfig, TonemapPass, TransparentPass,
+    CommandRecorder, DepthPrePass, DrawPath, FrameViews, PassError, PipelineCache, RecordStats, RenderContext,
+    RenderPass, ShaderPass, ShaderPassConfig, TonemapPass, TransparentPass,
 };
 use oxygen_sceneprep::{PrepError, PreparedSceneFrame, ScenePrep, ViewPrepOptions, ViewRequest};
 use thiserror::Error;
@@ -303,6 +303,8 @@ impl Renderer {
         let record_start = Instant::now();
         let mut command_buffers = Vec::with_capacity(frames.len());
         let mut reports = Vec::with_capacity(frames.len());
+        // Targets and constants first, for every view, so that a view's graph
+        // can read what earlier views render (shadow maps, probe faces).
         for (view, frame) in resolved.iter().zip(frames) {
             let registered = self.views.get_mut(&view.view_id).ok_or(RenderError::NoSuchView(view.view_id))?;
             let targets_fit =
@@ -326,6 +328,14 @@ impl Renderer {
                 ),
             );
             registered.constants.set_renderer(&self.gpu.queue, &frame.renderer_constants(time_seconds));
+        }
+        let frame_views = FrameViews {
+            entries: resolved
+                .iter()
+                .filter_map(|view| self.views[&view.view_id].targets.as_ref().map(|t| (view.view_id, view, t)))
+                .collect(),
+        };
+        for (view, frame) in resolved.iter().zip(frames) {
             let registered = &self.views[&view.view_id];
             let Some(targets) = registered.targets.as_ref() else { continue };
             let ctx = RenderContext {
@@ -338,6 +348,7 @@ impl Renderer {
                 pipelines: &self.pipelines,
                 draw_path: self.draw_path,
                 outputs: Default::default(),
+                frame_views: &frame_views,
             };
             let mut recorder = CommandRecorder::new(&self.gpu.device, &view.view_id.to_string());
             let _view_span = info_span!("render_graph", view = %view.view_id).entered();

@@ -73,6 +73,7 @@ fn a_stale_draw_range_is_painted_magenta() {
         pipelines: &pipelines,
         draw_path: DrawPath::Direct,
         outputs: Default::default(),
+        frame_views: &oxygen::passes::FrameViews::default(),
     };
     let mut recorder = CommandRecorder::new(&gpu.device, "stale view");
     block_on(async {

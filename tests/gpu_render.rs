@@ -19,7 +19,8 @@ fn graph_with_clear<'a>(
         let mut depth = DepthPrePass::new();
         depth.prepare_resources(ctx, rec).await?;
         depth.execute(ctx, rec).await?;
-        let mut shading = ShaderPass::new(ShaderPassConfig { clear_color: CLEAR, depth_from_pre_pass: true });
+        let mut shading =
+            ShaderPass::new(ShaderPassConfig { clear_color: CLEAR, depth_from_pre_pass: true, ..Default::default() });
         shading.prepare_resources(ctx, rec).await?;
         shading.execute(ctx, rec).await?;
         let mut tonemap = TonemapPass::default();
@@ -200,7 +201,11 @@ fn a_closure_factory_can_render_without_a_depth_pre_pass() {
     let cam = camera(Vec3::ZERO, Vec3::NEG_Z, 64);
     let view = renderer.register_view(cam, |_id, ctx, rec| {
         Box::pin(async move {
-            let mut shading = ShaderPass::new(ShaderPassConfig { clear_color: CLEAR, depth_from_pre_pass: false });
+            let mut shading = ShaderPass::new(ShaderPassConfig {
+                clear_color: CLEAR,
+                depth_from_pre_pass: false,
+                ..Default::default()
+            });
             shading.prepare_resources(ctx, rec).await?;
             shading.execute(ctx, rec).await?;
             let mut tonemap = TonemapPass::default();

@@ -15,7 +15,7 @@
 
 use std::sync::Arc;
 
-use glam::{Mat4, UVec2, Vec3, Vec4Swizzles};
+use glam::{Mat4, UVec2, Vec3};
 
 use crate::math::projection::reverse_z_orthographic;
 use crate::{NodeKey, ResolvedView, Scene, ViewContext, ViewError, ViewResolver};
@@ -173,6 +173,7 @@ impl ViewResolver for CascadeResolver {
 mod tests {
     use super::*;
     use crate::{Camera, LookAtResolver, ViewId};
+    use glam::Vec4Swizzles;
 
     fn camera_at(eye: Vec3) -> ResolvedView {
         let resolver = LookAtResolver {

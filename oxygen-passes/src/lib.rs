@@ -26,13 +26,15 @@ mod pso;
 mod render_context;
 mod render_pass;
 mod shader_pass;
+mod shadows;
 mod tonemap_pass;
 mod transparent_pass;
 
 pub use depth_pre_pass::{DepthPrePass, DepthPrePassOutput};
 pub use pso::{AlphaClass, PassKind, PipelineCache, PipelineKey, PipelineVariant, TONEMAP_WGSL, shader_source};
-pub use render_context::{CommandRecorder, DrawPath, PassError, PassOutputs, RecordStats, RenderContext};
+pub use render_context::{CommandRecorder, DrawPath, FrameViews, PassError, PassOutputs, RecordStats, RenderContext};
 pub use render_pass::RenderPass;
 pub use shader_pass::{ShaderPass, ShaderPassConfig};
+pub use shadows::{MAX_CASCADES, ShadowUniform};
 pub use tonemap_pass::{TonemapPass, pbr_neutral};
 pub use transparent_pass::TransparentPass;

@@ -111,6 +111,7 @@ pub fn shader_source(pass: PassKind, textures: TexturePath) -> String {
 /// Lazily created, cached pipelines shared by every view.
 pub struct PipelineCache {
     layout: wgpu::PipelineLayout,
+    shadows: crate::shadows::ShadowResources,
     texture_path: TexturePath,
     modules: Mutex<HashMap<PassKind, wgpu::ShaderModule>>,
     pipelines: Mutex<HashMap<PipelineKey, wgpu::RenderPipeline>>,
@@ -121,23 +122,42 @@ pub struct PipelineCache {
 impl PipelineCache {
     /// A cache for pipelines using the heap's bind-group layouts.
     pub fn new(device: &wgpu::Device, heap: &BindlessHeap) -> Self {
+        let shadows = crate::shadows::ShadowResources::new(device);
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("oxygen bindless pipeline layout"),
             bind_group_layouts: &[
                 Some(heap.domain_layout()),
                 Some(heap.scene_constants_layout()),
                 Some(heap.texture_layout()),
+                Some(&shadows.layout),
             ],
             immediate_size: 0,
         });
         PipelineCache {
             layout,
+            shadows,
             texture_path: heap.texture_path(),
             modules: Mutex::new(HashMap::new()),
             pipelines: Mutex::new(HashMap::new()),
             tonemap: Mutex::new(None),
             created: AtomicU64::new(0),
         }
+    }
+
+    /// Group 3 for passes that sample no shadows.
+    pub fn no_shadows(&self) -> &wgpu::BindGroup {
+        &self.shadows.no_shadows
+    }
+
+    /// A group 3 with these cascade maps and their uniform block.
+    pub fn shadow_bind_group(
+        &self,
+        device: &wgpu::Device,
+        maps: [&wgpu::TextureView; crate::MAX_CASCADES],
+        uniform: &crate::ShadowUniform,
+    ) -> wgpu::BindGroup {
+        let buffer = crate::shadows::uniform_buffer(device, uniform);
+        crate::shadows::bind_group(device, &self.shadows.layout, &self.shadows.sampler, maps, &buffer)
     }
 
     /// Pipelines created since the cache was made.

@@ -1,7 +1,7 @@
 //! `RenderContext` and `CommandRecorder`: what a pass reads and where it records.
 
 use oxygen_bindless::{BindlessHeap, SceneConstantsBuffer};
-use oxygen_core::{GpuContext, ResolvedView, ViewTargets};
+use oxygen_core::{GpuContext, ResolvedView, ViewId, ViewTargets};
 use oxygen_sceneprep::{Partition, PreparedSceneFrame};
 use thiserror::Error;
 
@@ -114,6 +114,23 @@ pub struct RenderContext<'a> {
     pub draw_path: DrawPath,
     /// What earlier passes of this view published.
     pub outputs: PassOutputs,
+    /// Every view of this frame with its targets; views are submitted in
+    /// order, so a view may sample what an earlier one rendered.
+    pub frame_views: &'a FrameViews<'a>,
+}
+
+/// The views of one frame, in submission order, with their targets.
+#[derive(Default)]
+pub struct FrameViews<'a> {
+    /// (id, resolved view, targets) per view.
+    pub entries: Vec<(ViewId, &'a ResolvedView, &'a ViewTargets)>,
+}
+
+impl<'a> FrameViews<'a> {
+    /// The resolved view and targets of `id`, if it is part of this frame.
+    pub fn get(&self, id: ViewId) -> Option<(&'a ResolvedView, &'a ViewTargets)> {
+        self.entries.iter().find(|(v, _, _)| *v == id).map(|(_, view, targets)| (*view, *targets))
+    }
 }
 
 /// Counts of what a view's passes recorded.
@@ -155,10 +172,11 @@ impl CommandRecorder {
 }
 
 /// Sets the bindless and scene-constant bind groups and the shared index buffer.
-fn bind_view_resources(pass: &mut wgpu::RenderPass<'_>, ctx: &RenderContext<'_>) {
+fn bind_view_resources(pass: &mut wgpu::RenderPass<'_>, ctx: &RenderContext<'_>, shadows: &wgpu::BindGroup) {
     pass.set_bind_group(0, ctx.heap.bind_group(), &[]);
     pass.set_bind_group(1, ctx.scene_constants.bind_group(), &[]);
     pass.set_bind_group(2, ctx.heap.texture_bind_group(), &[]);
+    pass.set_bind_group(3, shadows, &[]);
     pass.set_index_buffer(ctx.heap.index_buffer().slice(..), wgpu::IndexFormat::Uint32);
 }
 
@@ -214,16 +232,18 @@ pub(crate) fn partition_pipelines<'a>(
         .collect()
 }
 
-/// Binds the view's bindless resources, then draws each partition with its
-/// pipeline (one pipeline bind per partition).
+/// Binds the view's bindless resources and `shadows` (group 3; the cache's
+/// empty group for passes that sample none), then draws each partition with
+/// its pipeline (one pipeline bind per partition).
 pub(crate) fn draw_partitions<'a>(
     pass: &mut wgpu::RenderPass<'_>,
     ctx: &RenderContext<'_>,
     partitions: impl Iterator<Item = &'a Partition>,
     pipelines: &[wgpu::RenderPipeline],
+    shadows: &wgpu::BindGroup,
     stats: &mut RecordStats,
 ) {
-    bind_view_resources(pass, ctx);
+    bind_view_resources(pass, ctx, shadows);
     for (partition, pipeline) in partitions.zip(pipelines) {
         pass.set_pipeline(pipeline);
         stats.pipeline_binds += 1;

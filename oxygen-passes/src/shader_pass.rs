@@ -3,7 +3,10 @@
 //! Reads: the prepared frame's partitions, the frame's light arrays (through
 //! their slots), and — when configured to follow a depth pre-pass — the depth
 //! it left in the view's depth target, tested with `GreaterEqual` and no
-//! writes. Writes: the view's HDR target (cleared to `clear_color`, linear).
+//! writes; and, when `shadow_cascades` names earlier shadow views of the
+//! frame, their depth maps (sampled with PCF for the first shadow-casting
+//! directional light). Writes: the view's HDR target (cleared to
+//! `clear_color`, linear).
 //! Transparent partitions belong to the transparent pass and are skipped.
 
 use oxygen_core::ViewTargets;
@@ -11,7 +14,9 @@ use oxygen_sceneprep::PassMask;
 use tracing::info_span;
 
 use crate::render_context::{draw_partitions, partition_pipelines};
-use crate::{CommandRecorder, PassError, PassKind, RenderContext, RenderPass};
+use crate::{CommandRecorder, MAX_CASCADES, PassError, PassKind, RenderContext, RenderPass, ShadowUniform};
+use bytemuck::Zeroable;
+use oxygen_core::ViewId;
 
 /// How the shading pass is set up.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -21,11 +26,23 @@ pub struct ShaderPassConfig {
     /// Test against depth from a preceding [`crate::DepthPrePass`] (load it,
     /// `GreaterEqual`, no writes) rather than clearing and writing depth.
     pub depth_from_pre_pass: bool,
+    /// Shadow views of this frame (nearest cascade first) whose depth maps
+    /// shadow the first shadow-casting directional light; they must be
+    /// registered (hence rendered) before this view.
+    pub shadow_cascades: [Option<ViewId>; MAX_CASCADES],
+    /// PCF kernel radius in texels: `(2r + 1)²` comparison taps. 0 is the
+    /// cheapest (one bilinear comparison), 1 the default, 2 the softest.
+    pub shadow_pcf_radius: u32,
 }
 
 impl Default for ShaderPassConfig {
     fn default() -> Self {
-        ShaderPassConfig { clear_color: wgpu::Color { r: 0.02, g: 0.03, b: 0.05, a: 1.0 }, depth_from_pre_pass: true }
+        ShaderPassConfig {
+            clear_color: wgpu::Color { r: 0.02, g: 0.03, b: 0.05, a: 1.0 },
+            depth_from_pre_pass: true,
+            shadow_cascades: [None; MAX_CASCADES],
+            shadow_pcf_radius: 1,
+        }
     }
 }
 
@@ -33,12 +50,44 @@ impl Default for ShaderPassConfig {
 pub struct ShaderPass {
     config: ShaderPassConfig,
     pipelines: Option<Vec<wgpu::RenderPipeline>>,
+    shadows: Option<wgpu::BindGroup>,
 }
 
 impl ShaderPass {
     /// A pass with `config`.
     pub fn new(config: ShaderPassConfig) -> Self {
-        ShaderPass { config, pipelines: None }
+        ShaderPass { config, pipelines: None, shadows: None }
+    }
+
+    /// Group 3 for this view: the configured cascades' maps, or none.
+    fn shadow_group(&self, ctx: &RenderContext<'_>) -> Result<Option<wgpu::BindGroup>, PassError> {
+        let ids: Vec<ViewId> = self.config.shadow_cascades.iter().flatten().copied().collect();
+        if ids.is_empty() {
+            return Ok(None);
+        }
+        let mut uniform = ShadowUniform::zeroed();
+        let mut maps = Vec::with_capacity(MAX_CASCADES);
+        for (i, id) in ids.iter().enumerate() {
+            let (view, targets) = ctx
+                .frame_views
+                .get(*id)
+                .ok_or(PassError::MissingInput { pass: self.name(), input: "a shadow cascade view" })?;
+            uniform.light_view_projection[i] = view.view_projection.to_cols_array_2d();
+            // Orthographic cascades: projection.x_axis.x is 1 / half-width.
+            let half_width = 1.0 / view.projection.x_axis.x.abs().max(f32::MIN_POSITIVE);
+            uniform.texel_world_size[i] = 2.0 * half_width / targets.width.max(1) as f32;
+            uniform.uv_texel[i] = 1.0 / targets.width.max(1) as f32;
+            maps.push(&targets.depth_view);
+        }
+        uniform.count = ids.len() as u32;
+        uniform.pcf_radius = self.config.shadow_pcf_radius.min(3);
+        uniform.normal_offset = 1.5;
+        uniform.depth_bias = 1e-4;
+        while maps.len() < MAX_CASCADES {
+            maps.push(maps[0]); // unused slots: any valid map, never sampled (count says so)
+        }
+        let maps = [maps[0], maps[1], maps[2], maps[3]];
+        Ok(Some(ctx.pipelines.shadow_bind_group(&ctx.gpu.device, maps, &uniform)))
     }
 }
 
@@ -57,6 +106,7 @@ impl RenderPass for ShaderPass {
         _rec: &mut CommandRecorder,
     ) -> Result<(), PassError> {
         let _span = info_span!("shader_pass_prepare", view = %ctx.view.view_id).entered();
+        self.shadows = self.shadow_group(ctx)?;
         let pass = if self.config.depth_from_pre_pass { PassKind::ShadingAfterPrePass } else { PassKind::Shading };
         let pipelines = partition_pipelines(ctx, pass, Some(ViewTargets::HDR_FORMAT), partitions(ctx));
         self.pipelines = Some(pipelines);
@@ -90,7 +140,8 @@ impl RenderPass for ShaderPass {
                 multiview_mask: None,
             });
             stats.render_passes += 1;
-            draw_partitions(&mut pass, ctx, partitions(ctx), pipelines, &mut stats);
+            let shadows = self.shadows.as_ref().unwrap_or(ctx.pipelines.no_shadows());
+            draw_partitions(&mut pass, ctx, partitions(ctx), pipelines, shadows, &mut stats);
         }
         rec.stats = stats;
         Ok(())

@@ -8,6 +8,56 @@
 const PI: f32 = 3.14159265;
 const AMBIENT: f32 = 0.03;
 
+// Group 3: cascade shadow maps of earlier shadow views (see shadows.rs).
+struct ShadowUniform {
+    light_view_projection: array<mat4x4<f32>, 4>,
+    texel_world_size: vec4<f32>,
+    uv_texel: vec4<f32>,
+    count: u32,
+    pcf_radius: u32,
+    normal_offset: f32,
+    depth_bias: f32,
+}
+@group(3) @binding(0) var shadow_map_0: texture_depth_2d;
+@group(3) @binding(1) var shadow_map_1: texture_depth_2d;
+@group(3) @binding(2) var shadow_map_2: texture_depth_2d;
+@group(3) @binding(3) var shadow_map_3: texture_depth_2d;
+@group(3) @binding(4) var shadow_sampler: sampler_comparison;
+@group(3) @binding(5) var<uniform> shadows: ShadowUniform;
+
+fn compare_cascade(cascade: u32, uv: vec2<f32>, depth: f32) -> f32 {
+    switch cascade {
+        case 0u: { return textureSampleCompareLevel(shadow_map_0, shadow_sampler, uv, depth); }
+        case 1u: { return textureSampleCompareLevel(shadow_map_1, shadow_sampler, uv, depth); }
+        case 2u: { return textureSampleCompareLevel(shadow_map_2, shadow_sampler, uv, depth); }
+        default: { return textureSampleCompareLevel(shadow_map_3, shadow_sampler, uv, depth); }
+    }
+}
+
+// Fraction of the light reaching `world_position`: the first cascade whose
+// box holds the point, a normal offset against acne, (2r + 1)² PCF taps.
+fn shadow_visibility(world_position: vec3<f32>, geometric_normal: vec3<f32>) -> f32 {
+    for (var i = 0u; i < shadows.count; i++) {
+        let offset = geometric_normal * shadows.texel_world_size[i] * shadows.normal_offset;
+        let clip = shadows.light_view_projection[i] * vec4<f32>(world_position + offset, 1.0);
+        let ndc = clip.xyz / clip.w;
+        if all(abs(ndc.xy) < vec2<f32>(0.98)) && ndc.z >= 0.0 && ndc.z <= 1.0 {
+            let uv = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
+            let r = i32(shadows.pcf_radius);
+            var lit = 0.0;
+            for (var y = -r; y <= r; y++) {
+                for (var x = -r; x <= r; x++) {
+                    let tap = uv + vec2<f32>(f32(x), f32(y)) * shadows.uv_texel[i];
+                    lit += compare_cascade(i, tap, ndc.z + shadows.depth_bias);
+                }
+            }
+            let taps = f32((2 * r + 1) * (2 * r + 1));
+            return lit / taps;
+        }
+    }
+    return 1.0;
+}
+
 fn surface_normal(mesh: MeshVarying, front_facing: bool, material: MaterialRecord) -> vec3<f32> {
     let n = normalize(mesh.world_normal);
     // Double-sided surfaces are lit on the side we see; single-sided ones
@@ -69,6 +119,7 @@ fn perturb_normal(n: vec3<f32>, d: Derivatives, tangent_normal: vec3<f32>) -> ve
 
 fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Derivatives) -> vec4<f32> {
     var n = surface_normal(mesh, front_facing, material);
+    let geometric_normal = n;
     if material.normal_texture != INVALID_SLOT {
         var tangent_normal = sample_texture(material.normal_texture, mesh.uv).xyz * 2.0 - 1.0;
         tangent_normal = vec3<f32>(tangent_normal.xy * material.normal_scale, tangent_normal.z);
@@ -84,9 +135,16 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Der
     var color = albedo * (1.0 - metallic) * AMBIENT + mix(vec3<f32>(0.04), albedo, metallic) * AMBIENT;
 
     let dir_count = scene.renderer.directional_light_count;
+    var shadowed_light_done = false;
     for (var i = 0u; i < dir_count; i++) {
         let light = directional_light_domain[scene.renderer.directional_lights_slot + i];
-        color += brdf_cosine(n, v, -light.direction, albedo, metallic, roughness) * light.color * light.intensity;
+        var visibility = 1.0;
+        // The cascades belong to the first shadow-casting directional light.
+        if (light.flags & 1u) != 0u && !shadowed_light_done {
+            shadowed_light_done = true;
+            visibility = shadow_visibility(mesh.world_position, geometric_normal);
+        }
+        color += brdf_cosine(n, v, -light.direction, albedo, metallic, roughness) * light.color * light.intensity * visibility;
     }
 
     let pos_count = scene.renderer.positional_light_count;
