@@ -70,3 +70,65 @@ fn cascade_view_prepared_frame_dump() {
     assert!(frame.draws().iter().all(|d| d.node_id != oxygen::core::scene::node_index(demo.ground)));
     insta::assert_snapshot!(frame.dump());
 }
+
+/// A cube above a ground plane, lit by a sun: with the cascades wired into
+/// the shading pass, the ground under the cube is in shadow.
+#[test]
+fn a_cube_casts_a_shadow_on_the_ground() {
+    use support::{pixel_of, region_mean};
+    let mut scene = Scene::new();
+    let ground_material = scene.add_material(Material::opaque("ground", Vec4::splat(0.7)));
+    let plane = scene.add_geometry(Geometry::plane(20.0));
+    let ground = scene.add_node("ground", Transform::IDENTITY);
+    scene.set_renderable(ground, Renderable { geometry: plane, materials: vec![ground_material] }).unwrap();
+    let cube_material = scene.add_material(Material::opaque("cube", Vec4::new(0.8, 0.2, 0.2, 1.0)));
+    let cube_mesh = scene.add_geometry(Geometry::cube(1.0));
+    let cube = scene.add_node("cube", Transform::from_translation(Vec3::new(0.0, 1.5, 0.0)));
+    scene.set_renderable(cube, Renderable { geometry: cube_mesh, materials: vec![cube_material] }).unwrap();
+    // Down and towards +X at 45°: the shadow of the cube (1 to 2 units up)
+    // falls 1 to 2 units to its right, where the camera sees the ground.
+    let sun = scene.add_node(
+        "sun",
+        Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, Vec3::new(1.0, -1.0, 0.0).normalize())),
+    );
+    scene.set_light(sun, Some(Light::directional(3.0))).unwrap();
+
+    let camera = LookAtResolver {
+        camera: Camera::perspective(50f32.to_radians(), 0.1, Some(60.0)),
+        eye: Vec3::new(0.0, 6.0, 6.0),
+        target: Vec3::ZERO,
+        up: Vec3::Y,
+        viewport: UVec2::new(160, 120),
+    };
+    let main: Arc<dyn ViewResolver> = Arc::new(camera);
+    let settings =
+        CascadeSettings { count: 2, resolution: 512, max_distance: 30.0, caster_margin: 20.0, ..Default::default() };
+    let mut renderer = support::gpu_renderer();
+    let mut cascade_ids = [None; 4];
+    for index in 0..settings.count {
+        let cascade = CascadeResolver { main: Arc::clone(&main), light: sun, settings, index };
+        cascade_ids[index as usize] =
+            Some(renderer.register_view_with_options(cascade, shadow_options(), depth_only_graph));
+    }
+    let view = renderer.register_view(camera, move |_id, ctx, rec| {
+        Box::pin(async move {
+            let mut depth = DepthPrePass::new();
+            depth.prepare_resources(ctx, rec).await?;
+            depth.execute(ctx, rec).await?;
+            let config = ShaderPassConfig { shadow_cascades: cascade_ids, ..Default::default() };
+            let mut shading = ShaderPass::new(config);
+            shading.prepare_resources(ctx, rec).await?;
+            shading.execute(ctx, rec).await?;
+            let mut tonemap = TonemapPass::default();
+            tonemap.prepare_resources(ctx, rec).await?;
+            tonemap.execute(ctx, rec).await
+        })
+    });
+    renderer.render_frame(&scene).unwrap();
+    let image = renderer.read_color(view).unwrap();
+    let resolved = camera.resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
+    let shadowed = region_mean(&image, pixel_of(&resolved, Vec3::new(1.6, 0.0, 0.0)), 1);
+    let lit = region_mean(&image, pixel_of(&resolved, Vec3::new(-3.0, 0.0, 1.5)), 1);
+    assert!(lit > 3.0 * shadowed && lit > 100.0, "lit ground {lit:.1} vs ground under the cube {shadowed:.1}");
+    support::golden::assert_golden("cube_shadow_on_plane", &image, support::golden::Tolerance::default());
+}
