@@ -30,11 +30,13 @@
 
 pub mod gltf_import;
 mod renderer;
+pub mod shadows;
 
 pub use gltf_import::{GltfCamera, GltfError, GltfImport, NodeCameraResolver, SceneChoice, import_gltf};
 pub use renderer::{
     FrameReport, RenderError, RenderGraphFuture, Renderer, RendererOptions, ViewReport, standard_render_graph,
 };
+pub use shadows::{register_sun_cascades, shadowed_render_graph};
 
 /// The bindless heap.
 pub use oxygen_bindless as bindless;

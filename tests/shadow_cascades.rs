@@ -132,3 +132,28 @@ fn a_cube_casts_a_shadow_on_the_ground() {
     assert!(lit > 3.0 * shadowed && lit > 100.0, "lit ground {lit:.1} vs ground under the cube {shadowed:.1}");
     support::golden::assert_golden("cube_shadow_on_plane", &image, support::golden::Tolerance::default());
 }
+
+#[test]
+fn a_scene_without_shadow_casters_gets_no_shadow_views() {
+    let mut demo = multi_view_scene();
+    // The sun still shines but casts no shadows.
+    let sun_light = demo.scene.node(demo.sun).unwrap().light.clone().unwrap();
+    demo.scene.set_light(demo.sun, Some(Light { casts_shadows: false, ..sun_light })).unwrap();
+    let mut renderer = support::gpu_renderer();
+    let main: Arc<dyn ViewResolver> = Arc::new(main_camera(UVec2::new(48, 32)));
+    let cascades =
+        oxygen::register_sun_cascades(&mut renderer, &demo.scene, Arc::clone(&main), CascadeSettings::default());
+    assert_eq!(cascades, [None; 4]);
+    renderer.register_view(main_camera(UVec2::new(48, 32)), oxygen::shadowed_render_graph(cascades));
+    renderer.render_frame(&demo.scene).unwrap();
+    assert_eq!(renderer.views().count(), 1);
+    assert_eq!(renderer.scene_prep().stats().views_prepared, 1, "nothing prepared for shadows");
+
+    // With the caster back, the same call registers the cascades.
+    let mut demo = multi_view_scene();
+    demo.scene.set_flags(demo.ground, NodeFlags::VISIBLE).unwrap();
+    let mut renderer = support::gpu_renderer();
+    let settings = CascadeSettings { count: 3, resolution: 128, ..Default::default() };
+    let cascades = oxygen::register_sun_cascades(&mut renderer, &demo.scene, main, settings);
+    assert_eq!(cascades.iter().flatten().count(), 3);
+}
