@@ -29,10 +29,12 @@
 //! ```
 
 pub mod gltf_import;
+pub mod probes;
 mod renderer;
 pub mod shadows;
 
 pub use gltf_import::{GltfCamera, GltfError, GltfImport, NodeCameraResolver, SceneChoice, import_gltf};
+pub use probes::{ProbeUpdate, ReflectionProbe};
 pub use renderer::{
     FrameReport, RenderError, RenderGraphFuture, Renderer, RendererOptions, ViewReport, standard_render_graph,
 };

@@ -117,6 +117,7 @@ struct RegisteredView {
     options: ViewPrepOptions,
     targets: Option<ViewTargets>,
     constants: SceneConstantsBuffer,
+    active: bool,
 }
 
 /// The renderer: views in, images out.
@@ -264,6 +265,7 @@ impl Renderer {
                 options,
                 targets: None,
                 constants,
+                active: true,
             },
         );
         info!(view = %id, "view registered");
@@ -274,6 +276,14 @@ impl Renderer {
     pub fn unregister_view(&mut self, id: ViewId) -> Result<(), RenderError> {
         self.views.remove(&id).ok_or(RenderError::NoSuchView(id))?;
         self.prep.forget_view(id, &mut self.heap.slots)?;
+        Ok(())
+    }
+
+    /// Pauses (`false`) or resumes a view: a paused view is neither resolved,
+    /// prepared nor rendered, and keeps its last image (e.g. a reflection
+    /// probe updated every N frames).
+    pub fn set_view_active(&mut self, id: ViewId, active: bool) -> Result<(), RenderError> {
+        self.views.get_mut(&id).ok_or(RenderError::NoSuchView(id))?.active = active;
         Ok(())
     }
 
@@ -379,6 +389,7 @@ impl Renderer {
         let limit = self.gpu.device.limits().max_texture_dimension_2d;
         self.views
             .iter()
+            .filter(|(_, registered)| registered.active)
             .map(|(id, registered)| {
                 let ctx = ViewContext { view_id: *id, frame_index, time_seconds };
                 let mut view = registered.resolver.resolve(&ctx, scene)?;

@@ -215,6 +215,33 @@ impl Geometry {
         Self::single_submesh("quad", vertices, vec![0, 1, 2, 0, 2, 3])
     }
 
+    /// A UV sphere of `radius` with `segments` around and `rings` from pole
+    /// to pole (each at least 3), smooth normals.
+    pub fn uv_sphere(radius: f32, segments: u32, rings: u32) -> Self {
+        let (segments, rings) = (segments.max(3), rings.max(3));
+        let mut vertices = Vec::new();
+        for ring in 0..=rings {
+            let v = ring as f32 / rings as f32;
+            let theta = v * std::f32::consts::PI;
+            for segment in 0..=segments {
+                let u = segment as f32 / segments as f32;
+                let phi = u * std::f32::consts::TAU;
+                let n = Vec3::new(theta.sin() * phi.cos(), theta.cos(), -theta.sin() * phi.sin());
+                vertices.push(Vertex::new(n * radius, n, Vec2::new(u, v)));
+            }
+        }
+        let mut indices = Vec::new();
+        let row = segments + 1;
+        for ring in 0..rings {
+            for segment in 0..segments {
+                let a = ring * row + segment;
+                let b = a + row;
+                indices.extend_from_slice(&[a, b, a + 1, a + 1, b, b + 1]);
+            }
+        }
+        Self::single_submesh("uv sphere", vertices, indices)
+    }
+
     fn single_submesh(name: &str, vertices: Vec<Vertex>, indices: Vec<u32>) -> Self {
         let submesh = Submesh { first_index: 0, index_count: indices.len() as u32 };
         // Built from constants above; a failure here is a bug in this file.
@@ -236,6 +263,18 @@ mod tests {
             assert!(face_normal.dot(n) > 0.0);
         }
         assert_eq!(cube.local_aabb(), Aabb::new(Vec3::splat(-1.0), Vec3::splat(1.0)));
+    }
+
+    #[test]
+    fn sphere_triangles_face_outwards() {
+        let sphere = Geometry::uv_sphere(2.0, 12, 8);
+        for tri in sphere.indices().chunks(3) {
+            let p = |i: u32| Vec3::from(sphere.vertices()[i as usize].position);
+            let face_normal = (p(tri[1]) - p(tri[0])).cross(p(tri[2]) - p(tri[0]));
+            let centroid = (p(tri[0]) + p(tri[1]) + p(tri[2])) / 3.0;
+            // Degenerate pole triangles have no area; every other one faces out.
+            assert!(face_normal.length() < 1e-6 || face_normal.dot(centroid) > 0.0);
+        }
     }
 
     #[test]

@@ -72,7 +72,7 @@ impl RenderPass for DepthPrePass {
                 multiview_mask: None,
             });
             stats.render_passes += 1;
-            draw_partitions(&mut pass, ctx, partitions(ctx), pipelines, ctx.pipelines.no_shadows(), &mut stats);
+            draw_partitions(&mut pass, ctx, partitions(ctx), pipelines, ctx.pipelines.no_lighting_inputs(), &mut stats);
         }
         let draws = partitions(ctx).map(|p| p.len()).sum();
         rec.stats = stats;

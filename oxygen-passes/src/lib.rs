@@ -22,19 +22,19 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 mod depth_pre_pass;
+mod lighting_inputs;
 mod pso;
 mod render_context;
 mod render_pass;
 mod shader_pass;
-mod shadows;
 mod tonemap_pass;
 mod transparent_pass;
 
 pub use depth_pre_pass::{DepthPrePass, DepthPrePassOutput};
+pub use lighting_inputs::{LightingInputs, MAX_CASCADES, PROBE_FACE_AXES, PROBE_FACES, probe_view};
 pub use pso::{AlphaClass, PassKind, PipelineCache, PipelineKey, PipelineVariant, TONEMAP_WGSL, shader_source};
 pub use render_context::{CommandRecorder, DrawPath, FrameViews, PassError, PassOutputs, RecordStats, RenderContext};
 pub use render_pass::RenderPass;
-pub use shader_pass::{ShaderPass, ShaderPassConfig};
-pub use shadows::{MAX_CASCADES, ShadowUniform};
+pub use shader_pass::{ProbeInput, ShaderPass, ShaderPassConfig};
 pub use tonemap_pass::{TonemapPass, pbr_neutral};
 pub use transparent_pass::TransparentPass;

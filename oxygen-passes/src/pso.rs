@@ -111,7 +111,7 @@ pub fn shader_source(pass: PassKind, textures: TexturePath) -> String {
 /// Lazily created, cached pipelines shared by every view.
 pub struct PipelineCache {
     layout: wgpu::PipelineLayout,
-    shadows: crate::shadows::ShadowResources,
+    lighting_inputs: crate::lighting_inputs::LightingInputResources,
     texture_path: TexturePath,
     modules: Mutex<HashMap<PassKind, wgpu::ShaderModule>>,
     pipelines: Mutex<HashMap<PipelineKey, wgpu::RenderPipeline>>,
@@ -122,20 +122,20 @@ pub struct PipelineCache {
 impl PipelineCache {
     /// A cache for pipelines using the heap's bind-group layouts.
     pub fn new(device: &wgpu::Device, heap: &BindlessHeap) -> Self {
-        let shadows = crate::shadows::ShadowResources::new(device);
+        let lighting_inputs = crate::lighting_inputs::LightingInputResources::new(device);
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("oxygen bindless pipeline layout"),
             bind_group_layouts: &[
                 Some(heap.domain_layout()),
                 Some(heap.scene_constants_layout()),
                 Some(heap.texture_layout()),
-                Some(&shadows.layout),
+                Some(&lighting_inputs.layout),
             ],
             immediate_size: 0,
         });
         PipelineCache {
             layout,
-            shadows,
+            lighting_inputs,
             texture_path: heap.texture_path(),
             modules: Mutex::new(HashMap::new()),
             pipelines: Mutex::new(HashMap::new()),
@@ -144,20 +144,33 @@ impl PipelineCache {
         }
     }
 
-    /// Group 3 for passes that sample no shadows.
-    pub fn no_shadows(&self) -> &wgpu::BindGroup {
-        &self.shadows.no_shadows
+    /// Group 3 for passes that read no shadow maps and no probe.
+    pub fn no_lighting_inputs(&self) -> &wgpu::BindGroup {
+        &self.lighting_inputs.no_inputs
     }
 
-    /// A group 3 with these cascade maps and their uniform block.
-    pub fn shadow_bind_group(
+    /// A group 3 with these cascade maps (unused slots `None`), this probe
+    /// (a six-layer array view, or `None`) and their uniform block.
+    pub fn lighting_inputs_bind_group(
         &self,
         device: &wgpu::Device,
-        maps: [&wgpu::TextureView; crate::MAX_CASCADES],
-        uniform: &crate::ShadowUniform,
+        maps: [Option<&wgpu::TextureView>; crate::MAX_CASCADES],
+        probe: Option<&wgpu::TextureView>,
+        uniform: &crate::LightingInputs,
     ) -> wgpu::BindGroup {
-        let buffer = crate::shadows::uniform_buffer(device, uniform);
-        crate::shadows::bind_group(device, &self.shadows.layout, &self.shadows.sampler, maps, &buffer)
+        let inputs = &self.lighting_inputs;
+        let buffer = crate::lighting_inputs::uniform_buffer(device, uniform);
+        // Unused slots are never sampled (the uniform's counts say so) but must be bound.
+        let maps = maps.map(|m| m.unwrap_or(&inputs.placeholder_map));
+        let probe = probe.unwrap_or(&inputs.placeholder_probe);
+        crate::lighting_inputs::bind_group(
+            device,
+            &inputs.layout,
+            (&inputs.sampler, &inputs.probe_sampler),
+            maps,
+            probe,
+            &buffer,
+        )
     }
 
     /// Pipelines created since the cache was made.

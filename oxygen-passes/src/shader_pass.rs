@@ -14,12 +14,26 @@ use oxygen_sceneprep::PassMask;
 use tracing::info_span;
 
 use crate::render_context::{draw_partitions, partition_pipelines};
-use crate::{CommandRecorder, MAX_CASCADES, PassError, PassKind, RenderContext, RenderPass, ShadowUniform};
+use crate::{
+    CommandRecorder, LightingInputs, MAX_CASCADES, PROBE_FACES, PassError, PassKind, RenderContext, RenderPass,
+};
 use bytemuck::Zeroable;
 use oxygen_core::ViewId;
 
+/// A reflection probe the shading pass samples for specular reflections.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ProbeInput {
+    /// The six face views (+X, −X, +Y, −Y, +Z, −Z); a face rendered this frame
+    /// is copied into `texture`, a paused one keeps its last image.
+    pub faces: [ViewId; PROBE_FACES],
+    /// Six-layer HDR texture (face size × face size), copy destination and sampled.
+    pub texture: wgpu::Texture,
+    /// The probe's world position.
+    pub position: glam::Vec3,
+}
+
 /// How the shading pass is set up.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct ShaderPassConfig {
     /// Linear colour the target is cleared to.
     pub clear_color: wgpu::Color,
@@ -33,6 +47,8 @@ pub struct ShaderPassConfig {
     /// PCF kernel radius in texels: `(2r + 1)²` comparison taps. 0 is the
     /// cheapest (one bilinear comparison), 1 the default, 2 the softest.
     pub shadow_pcf_radius: u32,
+    /// A reflection probe for specular reflections (metallic surfaces).
+    pub reflection_probe: Option<ProbeInput>,
 }
 
 impl Default for ShaderPassConfig {
@@ -42,6 +58,7 @@ impl Default for ShaderPassConfig {
             depth_from_pre_pass: true,
             shadow_cascades: [None; MAX_CASCADES],
             shadow_pcf_radius: 1,
+            reflection_probe: None,
         }
     }
 }
@@ -50,24 +67,31 @@ impl Default for ShaderPassConfig {
 pub struct ShaderPass {
     config: ShaderPassConfig,
     pipelines: Option<Vec<wgpu::RenderPipeline>>,
-    shadows: Option<wgpu::BindGroup>,
+    lighting_inputs: Option<wgpu::BindGroup>,
 }
 
 impl ShaderPass {
     /// A pass with `config`.
     pub fn new(config: ShaderPassConfig) -> Self {
-        ShaderPass { config, pipelines: None, shadows: None }
+        ShaderPass { config, pipelines: None, lighting_inputs: None }
     }
 
-    /// Group 3 for this view: the configured cascades' maps, or none.
-    fn shadow_group(&self, ctx: &RenderContext<'_>) -> Result<Option<wgpu::BindGroup>, PassError> {
+    /// Group 3 for this view: the configured cascades' maps and probe, or
+    /// `None` when the view uses neither. Copies probe faces rendered this
+    /// frame into the probe texture first.
+    fn lighting_inputs(
+        &self,
+        ctx: &RenderContext<'_>,
+        rec: &mut CommandRecorder,
+    ) -> Result<Option<wgpu::BindGroup>, PassError> {
         let ids: Vec<ViewId> = self.config.shadow_cascades.iter().flatten().copied().collect();
-        if ids.is_empty() {
+        let probe = self.config.reflection_probe.as_ref();
+        if ids.is_empty() && probe.is_none() {
             return Ok(None);
         }
-        let mut uniform = ShadowUniform::zeroed();
-        let mut maps = Vec::with_capacity(MAX_CASCADES);
-        for (i, id) in ids.iter().enumerate() {
+        let mut uniform = LightingInputs::zeroed();
+        let mut maps = [None; MAX_CASCADES];
+        for (i, id) in ids.iter().enumerate().take(MAX_CASCADES) {
             let (view, targets) = ctx
                 .frame_views
                 .get(*id)
@@ -77,17 +101,41 @@ impl ShaderPass {
             let half_width = 1.0 / view.projection.x_axis.x.abs().max(f32::MIN_POSITIVE);
             uniform.texel_world_size[i] = 2.0 * half_width / targets.width.max(1) as f32;
             uniform.uv_texel[i] = 1.0 / targets.width.max(1) as f32;
-            maps.push(&targets.depth_view);
+            maps[i] = Some(&targets.depth_view);
         }
-        uniform.count = ids.len() as u32;
+        uniform.count = ids.len().min(MAX_CASCADES) as u32;
         uniform.pcf_radius = self.config.shadow_pcf_radius.min(3);
         uniform.normal_offset = 1.5;
         uniform.depth_bias = 1e-4;
-        while maps.len() < MAX_CASCADES {
-            maps.push(maps[0]); // unused slots: any valid map, never sampled (count says so)
-        }
-        let maps = [maps[0], maps[1], maps[2], maps[3]];
-        Ok(Some(ctx.pipelines.shadow_bind_group(&ctx.gpu.device, maps, &uniform)))
+        let probe_view = match probe {
+            Some(probe) => {
+                let side = probe.texture.width();
+                for (layer, face) in probe.faces.iter().enumerate() {
+                    // A paused face is absent from this frame: its layer keeps the last image.
+                    let Some((_, targets)) = ctx.frame_views.get(*face) else { continue };
+                    if targets.width != side || targets.height != side {
+                        return Err(PassError::MissingInput {
+                            pass: self.name(),
+                            input: "a probe face of the probe's size",
+                        });
+                    }
+                    rec.encoder().copy_texture_to_texture(
+                        targets.hdr.as_image_copy(),
+                        wgpu::TexelCopyTextureInfo {
+                            texture: &probe.texture,
+                            mip_level: 0,
+                            origin: wgpu::Origin3d { x: 0, y: 0, z: layer as u32 },
+                            aspect: wgpu::TextureAspect::All,
+                        },
+                        wgpu::Extent3d { width: side, height: side, depth_or_array_layers: 1 },
+                    );
+                }
+                uniform.probe_position = probe.position.extend(1.0).to_array();
+                Some(crate::probe_view(&probe.texture))
+            }
+            None => None,
+        };
+        Ok(Some(ctx.pipelines.lighting_inputs_bind_group(&ctx.gpu.device, maps, probe_view.as_ref(), &uniform)))
     }
 }
 
@@ -100,13 +148,9 @@ impl RenderPass for ShaderPass {
         "ShaderPass"
     }
 
-    async fn prepare_resources(
-        &mut self,
-        ctx: &RenderContext<'_>,
-        _rec: &mut CommandRecorder,
-    ) -> Result<(), PassError> {
+    async fn prepare_resources(&mut self, ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError> {
         let _span = info_span!("shader_pass_prepare", view = %ctx.view.view_id).entered();
-        self.shadows = self.shadow_group(ctx)?;
+        self.lighting_inputs = self.lighting_inputs(ctx, rec)?;
         let pass = if self.config.depth_from_pre_pass { PassKind::ShadingAfterPrePass } else { PassKind::Shading };
         let pipelines = partition_pipelines(ctx, pass, Some(ViewTargets::HDR_FORMAT), partitions(ctx));
         self.pipelines = Some(pipelines);
@@ -140,8 +184,8 @@ impl RenderPass for ShaderPass {
                 multiview_mask: None,
             });
             stats.render_passes += 1;
-            let shadows = self.shadows.as_ref().unwrap_or(ctx.pipelines.no_shadows());
-            draw_partitions(&mut pass, ctx, partitions(ctx), pipelines, shadows, &mut stats);
+            let inputs = self.lighting_inputs.as_ref().unwrap_or(ctx.pipelines.no_lighting_inputs());
+            draw_partitions(&mut pass, ctx, partitions(ctx), pipelines, inputs, &mut stats);
         }
         rec.stats = stats;
         Ok(())

@@ -8,8 +8,9 @@
 const PI: f32 = 3.14159265;
 const AMBIENT: f32 = 0.03;
 
-// Group 3: cascade shadow maps of earlier shadow views (see shadows.rs).
-struct ShadowUniform {
+// Group 3: what this view reads from other views (see lighting_inputs.rs):
+// cascade shadow maps and one reflection probe.
+struct LightingInputs {
     light_view_projection: array<mat4x4<f32>, 4>,
     texel_world_size: vec4<f32>,
     uv_texel: vec4<f32>,
@@ -17,13 +18,46 @@ struct ShadowUniform {
     pcf_radius: u32,
     normal_offset: f32,
     depth_bias: f32,
+    probe_position: vec4<f32>,
 }
 @group(3) @binding(0) var shadow_map_0: texture_depth_2d;
 @group(3) @binding(1) var shadow_map_1: texture_depth_2d;
 @group(3) @binding(2) var shadow_map_2: texture_depth_2d;
 @group(3) @binding(3) var shadow_map_3: texture_depth_2d;
 @group(3) @binding(4) var shadow_sampler: sampler_comparison;
-@group(3) @binding(5) var<uniform> shadows: ShadowUniform;
+@group(3) @binding(5) var<uniform> shadows: LightingInputs;
+@group(3) @binding(6) var probe_faces: texture_2d_array<f32>;
+@group(3) @binding(7) var probe_sampler: sampler;
+
+// Radiance the probe saw along `direction`. Faces are rendered by ordinary
+// cameras (forward, up as in PROBE_FACE_AXES), so the lookup projects the
+// direction onto the face's camera instead of using cube-map conventions.
+fn sample_probe(direction: vec3<f32>) -> vec3<f32> {
+    let a = abs(direction);
+    var face = 0u;
+    if a.x >= a.y && a.x >= a.z {
+        face = select(1u, 0u, direction.x > 0.0);
+    } else if a.y >= a.z {
+        face = select(3u, 2u, direction.y > 0.0);
+    } else {
+        face = select(5u, 4u, direction.z > 0.0);
+    }
+    var forwards = array<vec3<f32>, 6>(
+        vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(-1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0),
+        vec3<f32>(0.0, -1.0, 0.0), vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0, 0.0, -1.0),
+    );
+    var ups = array<vec3<f32>, 6>(
+        vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(0.0, 0.0, -1.0),
+        vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(0.0, 1.0, 0.0),
+    );
+    let forward = forwards[face];
+    let up = ups[face];
+    let right = cross(forward, up);
+    let depth = dot(direction, forward);
+    let ndc = vec2<f32>(dot(direction, right), dot(direction, up)) / depth;
+    let uv = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
+    return textureSampleLevel(probe_faces, probe_sampler, uv, face, 0.0).rgb;
+}
 
 fn compare_cascade(cascade: u32, uv: vec2<f32>, depth: f32) -> f32 {
     switch cascade {
@@ -162,6 +196,13 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Der
             attenuation *= smoothstep(light.cos_outer, light.cos_inner, dot(-l, light.direction));
         }
         color += brdf_cosine(n, v, l, albedo, metallic, roughness) * light.color * light.intensity * attenuation;
+    }
+    // Specular reflection of the probe's surroundings, strongest on smooth metals.
+    if shadows.probe_position.w > 0.0 {
+        let reflected = sample_probe(reflect(-v, n));
+        let f0 = mix(vec3<f32>(0.04), albedo, metallic);
+        let smoothness = (1.0 - roughness) * (1.0 - roughness);
+        color += reflected * f0 * smoothness;
     }
     color += material.emissive * sample_texture(material.emissive_texture, mesh.uv).rgb;
     return vec4<f32>(color, base.a);

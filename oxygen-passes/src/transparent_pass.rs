@@ -73,7 +73,7 @@ impl RenderPass for TransparentPass {
                 multiview_mask: None,
             });
             stats.render_passes += 1;
-            draw_partitions(&mut pass, ctx, partitions(ctx), pipelines, ctx.pipelines.no_shadows(), &mut stats);
+            draw_partitions(&mut pass, ctx, partitions(ctx), pipelines, ctx.pipelines.no_lighting_inputs(), &mut stats);
         }
         rec.stats = stats;
         Ok(())

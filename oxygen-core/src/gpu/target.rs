@@ -57,9 +57,12 @@ impl ViewTargets {
                 | wgpu::TextureUsages::TEXTURE_BINDING,
             "colour",
         );
+        // Copy source too: reflection probes copy their faces' HDR images.
         let hdr = make(
             Self::HDR_FORMAT,
-            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
             "hdr",
         );
         let depth = make(

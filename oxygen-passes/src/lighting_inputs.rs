@@ -1,0 +1,214 @@
+//! What the shading pass reads from other views (bind group 3): up to four
+//! cascade depth maps rendered by earlier shadow views of the frame (with a
+//! comparison sampler and the cascades' light view-projections), and one
+//! reflection probe's six faces.
+//!
+//! Every mesh pipeline's layout has group 3, so passes that read none of this
+//! bind [`crate::PipelineCache::no_lighting_inputs`]: 1 × 1 placeholders, a
+//! cascade count of 0 and no probe.
+
+use bytemuck::{Pod, Zeroable};
+
+/// Cascades the shading pass can sample.
+pub const MAX_CASCADES: usize = 4;
+
+/// The uniform block of group 3, twin of `LightingInputs` in `shader_pass.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct LightingInputs {
+    /// World → light clip space, per cascade.
+    pub light_view_projection: [[[f32; 4]; 4]; MAX_CASCADES],
+    /// World size of one map texel, per cascade.
+    pub texel_world_size: [f32; MAX_CASCADES],
+    /// One texel in UV (1 / map side), per cascade.
+    pub uv_texel: [f32; MAX_CASCADES],
+    /// Cascades in use (0 = no shadows).
+    pub count: u32,
+    /// PCF kernel radius in texels: (2r + 1)² comparison taps.
+    pub pcf_radius: u32,
+    /// Normal offset, in texels of the cascade.
+    pub normal_offset: f32,
+    /// Constant depth bias in reverse-Z depth units (towards the light).
+    pub depth_bias: f32,
+    /// World position of the reflection probe; `w` is 1 when there is one.
+    pub probe_position: [f32; 4],
+}
+
+const _: () = assert!(std::mem::size_of::<LightingInputs>() == 320);
+
+/// Layers of a probe texture: +X, −X, +Y, −Y, +Z, −Z.
+pub const PROBE_FACES: usize = 6;
+
+/// (forward, up) of each probe face camera, in layer order; the shader's
+/// `sample_probe` uses the same table.
+pub const PROBE_FACE_AXES: [([f32; 3], [f32; 3]); PROBE_FACES] = [
+    ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
+    ([-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
+    ([0.0, 1.0, 0.0], [0.0, 0.0, -1.0]),
+    ([0.0, -1.0, 0.0], [0.0, 0.0, 1.0]),
+    ([0.0, 0.0, 1.0], [0.0, 1.0, 0.0]),
+    ([0.0, 0.0, -1.0], [0.0, 1.0, 0.0]),
+];
+
+pub(crate) struct LightingInputResources {
+    pub(crate) layout: wgpu::BindGroupLayout,
+    pub(crate) sampler: wgpu::Sampler,
+    pub(crate) probe_sampler: wgpu::Sampler,
+    pub(crate) no_inputs: wgpu::BindGroup,
+    pub(crate) placeholder_map: wgpu::TextureView,
+    pub(crate) placeholder_probe: wgpu::TextureView,
+}
+
+impl LightingInputResources {
+    pub(crate) fn new(device: &wgpu::Device) -> Self {
+        let map_entry = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Depth,
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            count: None,
+        };
+        let mut entries: Vec<_> = (0..MAX_CASCADES as u32).map(map_entry).collect();
+        entries.push(wgpu::BindGroupLayoutEntry {
+            binding: MAX_CASCADES as u32,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
+            count: None,
+        });
+        entries.push(wgpu::BindGroupLayoutEntry {
+            binding: MAX_CASCADES as u32 + 1,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<LightingInputs>() as u64),
+            },
+            count: None,
+        });
+        entries.push(wgpu::BindGroupLayoutEntry {
+            binding: MAX_CASCADES as u32 + 2,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                view_dimension: wgpu::TextureViewDimension::D2Array,
+                multisampled: false,
+            },
+            count: None,
+        });
+        entries.push(wgpu::BindGroupLayoutEntry {
+            binding: MAX_CASCADES as u32 + 3,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+            count: None,
+        });
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("lighting inputs"),
+            entries: &entries,
+        });
+        // Reverse-Z: a fragment is lit when it is at least as close to the
+        // light as the stored depth, i.e. its depth is greater or equal.
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("shadow comparison"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            compare: Some(wgpu::CompareFunction::GreaterEqual),
+            ..Default::default()
+        });
+        let dummy = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("no shadow map"),
+            size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: oxygen_core::ViewTargets::DEPTH_FORMAT,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        let dummy_view = dummy.create_view(&Default::default());
+        let probe_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("probe"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+        let dummy_probe = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("no probe"),
+            size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: PROBE_FACES as u32 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: oxygen_core::ViewTargets::HDR_FORMAT,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        let dummy_probe_view = probe_view(&dummy_probe);
+        let uniform = uniform_buffer(device, &LightingInputs::zeroed());
+        let no_inputs = bind_group(
+            device,
+            &layout,
+            (&sampler, &probe_sampler),
+            [&dummy_view; MAX_CASCADES],
+            &dummy_probe_view,
+            &uniform,
+        );
+        LightingInputResources {
+            layout,
+            sampler,
+            probe_sampler,
+            no_inputs,
+            placeholder_map: dummy_view,
+            placeholder_probe: dummy_probe_view,
+        }
+    }
+}
+
+/// A six-layer array view of a probe texture.
+pub fn probe_view(texture: &wgpu::Texture) -> wgpu::TextureView {
+    texture.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(wgpu::TextureViewDimension::D2Array),
+        ..Default::default()
+    })
+}
+
+pub(crate) fn uniform_buffer(device: &wgpu::Device, uniform: &LightingInputs) -> wgpu::Buffer {
+    let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("lighting inputs"),
+        size: std::mem::size_of::<LightingInputs>() as u64,
+        usage: wgpu::BufferUsages::UNIFORM,
+        mapped_at_creation: true,
+    });
+    // Mapped at creation with exactly this size, so the copy fits.
+    buffer.slice(..).get_mapped_range_mut().expect("mapped at creation").copy_from_slice(bytemuck::bytes_of(uniform));
+    buffer.unmap();
+    buffer
+}
+
+pub(crate) fn bind_group(
+    device: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    (sampler, probe_sampler): (&wgpu::Sampler, &wgpu::Sampler),
+    maps: [&wgpu::TextureView; MAX_CASCADES],
+    probe: &wgpu::TextureView,
+    uniform: &wgpu::Buffer,
+) -> wgpu::BindGroup {
+    let mut entries: Vec<wgpu::BindGroupEntry<'_>> = maps
+        .iter()
+        .enumerate()
+        .map(|(i, view)| wgpu::BindGroupEntry { binding: i as u32, resource: wgpu::BindingResource::TextureView(view) })
+        .collect();
+    entries
+        .push(wgpu::BindGroupEntry { binding: MAX_CASCADES as u32, resource: wgpu::BindingResource::Sampler(sampler) });
+    entries.push(wgpu::BindGroupEntry { binding: MAX_CASCADES as u32 + 1, resource: uniform.as_entire_binding() });
+    entries.push(wgpu::BindGroupEntry {
+        binding: MAX_CASCADES as u32 + 2,
+        resource: wgpu::BindingResource::TextureView(probe),
+    });
+    entries.push(wgpu::BindGroupEntry {
+        binding: MAX_CASCADES as u32 + 3,
+        resource: wgpu::BindingResource::Sampler(probe_sampler),
+    });
+    device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("lighting inputs"), layout, entries: &entries })
+}

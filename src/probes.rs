@@ -1,0 +1,145 @@
+//! Reflection probes as ordinary registered views.
+//!
+//! A probe is a position and a six-layer HDR texture. It registers six face
+//! views (90° perspective, one per axis direction, as in
+//! [`PROBE_FACE_AXES`](oxygen_passes::PROBE_FACE_AXES)) whose graph is a depth
+//! pre-pass and shading, no transparency. A shading pass given the probe's
+//! [`ProbeInput`] copies the faces rendered this frame into the texture and
+//! samples it for specular reflections. Faces are paused between updates
+//! (`Renderer::set_view_active`), so an every-N-frames probe costs nothing on
+//! the other frames and keeps its last image.
+
+use glam::{Mat4, UVec2, Vec3};
+use oxygen_core::{Camera, ResolvedView, Scene, ViewContext, ViewError, ViewId, ViewResolver, ViewTargets};
+use oxygen_passes::{
+    CommandRecorder, DepthPrePass, PROBE_FACE_AXES, PROBE_FACES, ProbeInput, RenderContext, RenderPass, ShaderPass,
+    ShaderPassConfig,
+};
+
+use crate::{RenderError, RenderGraphFuture, Renderer};
+
+/// When a probe re-renders its faces.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ProbeUpdate {
+    /// Every frame.
+    EveryFrame,
+    /// On frames 1, 1 + n, 1 + 2n, … of the probe's life.
+    EveryNthFrame(u32),
+    /// Only after [`ReflectionProbe::request_update`].
+    OnDemand,
+}
+
+/// One face of a probe: a 90° square perspective view from the probe.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ProbeFaceResolver {
+    /// Probe position.
+    pub position: Vec3,
+    /// Face index into `PROBE_FACE_AXES`.
+    pub face: usize,
+    /// Face size in pixels.
+    pub resolution: u32,
+    /// Near plane.
+    pub near: f32,
+    /// Far plane.
+    pub far: f32,
+}
+
+impl ViewResolver for ProbeFaceResolver {
+    fn resolve(&self, ctx: &ViewContext, _scene: &Scene) -> Result<ResolvedView, ViewError> {
+        let (forward, up) = PROBE_FACE_AXES[self.face.min(PROBE_FACES - 1)];
+        let view = Mat4::look_to_rh(self.position, Vec3::from(forward), Vec3::from(up));
+        let camera = Camera::perspective(std::f32::consts::FRAC_PI_2, self.near, Some(self.far));
+        let projection =
+            camera.projection_matrix(1.0).map_err(|source| ViewError::Camera { view: ctx.view_id, source })?;
+        ResolvedView::new(ctx.view_id, view, projection, UVec2::splat(self.resolution), self.near, self.far)
+    }
+}
+
+/// The render graph of a probe face: depth pre-pass and shading into HDR.
+pub fn probe_face_render_graph<'a>(
+    _id: ViewId,
+    ctx: &'a RenderContext<'a>,
+    rec: &'a mut CommandRecorder,
+) -> RenderGraphFuture<'a> {
+    Box::pin(async move {
+        let mut depth = DepthPrePass::new();
+        depth.prepare_resources(ctx, rec).await?;
+        depth.execute(ctx, rec).await?;
+        let mut shading = ShaderPass::new(ShaderPassConfig::default());
+        shading.prepare_resources(ctx, rec).await?;
+        shading.execute(ctx, rec).await
+    })
+}
+
+/// A registered reflection probe.
+pub struct ReflectionProbe {
+    input: ProbeInput,
+    update: ProbeUpdate,
+    frames_seen: u64,
+    update_requested: bool,
+}
+
+impl ReflectionProbe {
+    /// Registers the probe's six face views (before the views that sample
+    /// it, so they render first) and creates its texture.
+    pub fn register(
+        renderer: &mut Renderer,
+        position: Vec3,
+        resolution: u32,
+        depth_range: (f32, f32),
+        update: ProbeUpdate,
+    ) -> Result<Self, RenderError> {
+        let resolution = resolution.clamp(1, renderer.gpu().device.limits().max_texture_dimension_2d);
+        let faces = std::array::from_fn(|face| {
+            let resolver = ProbeFaceResolver { position, face, resolution, near: depth_range.0, far: depth_range.1 };
+            renderer.register_view(resolver, probe_face_render_graph)
+        });
+        let texture = renderer.gpu().device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("reflection probe"),
+            size: wgpu::Extent3d { width: resolution, height: resolution, depth_or_array_layers: PROBE_FACES as u32 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: ViewTargets::HDR_FORMAT,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        });
+        Ok(ReflectionProbe {
+            input: ProbeInput { faces, texture, position },
+            update,
+            frames_seen: 0,
+            update_requested: true,
+        })
+    }
+
+    /// What a shading pass needs to sample the probe.
+    pub fn input(&self) -> ProbeInput {
+        self.input.clone()
+    }
+
+    /// The face views.
+    pub fn faces(&self) -> [ViewId; PROBE_FACES] {
+        self.input.faces
+    }
+
+    /// Asks an on-demand probe to re-render on the next frame.
+    pub fn request_update(&mut self) {
+        self.update_requested = true;
+    }
+
+    /// Call before each `render_frame`: activates the faces on update frames
+    /// and pauses them otherwise. Returns whether they render this frame.
+    pub fn before_frame(&mut self, renderer: &mut Renderer) -> Result<bool, RenderError> {
+        let update = match self.update {
+            ProbeUpdate::EveryFrame => true,
+            ProbeUpdate::EveryNthFrame(n) => self.frames_seen % u64::from(n.max(1)) == 0,
+            ProbeUpdate::OnDemand => self.update_requested,
+        };
+        self.frames_seen += 1;
+        self.update_requested = false;
+        for face in self.input.faces {
+            renderer.set_view_active(face, update)?;
+        }
+        Ok(update)
+    }
+}
