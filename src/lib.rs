@@ -38,7 +38,7 @@ pub use probes::{ProbeUpdate, ReflectionProbe};
 pub use renderer::{
     FrameReport, RenderError, RenderGraphFuture, Renderer, RendererOptions, ViewReport, standard_render_graph,
 };
-pub use shadows::{register_sun_cascades, shadowed_render_graph};
+pub use shadows::{register_spot_shadows, register_sun_cascades, shadowed_render_graph};
 
 /// The bindless heap.
 pub use oxygen_bindless as bindless;

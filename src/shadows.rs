@@ -88,3 +88,79 @@ pub fn shadowed_render_graph(
         })
     }
 }
+
+/// A spot light's shadow view: a perspective view from the light's node down
+/// its −Z, wide enough for the outer cone.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpotShadowResolver {
+    /// The node carrying the spot light.
+    pub light: NodeKey,
+    /// Shadow-map side in texels.
+    pub resolution: u32,
+    /// Near plane.
+    pub near: f32,
+    /// Far plane when the light has no range.
+    pub far: f32,
+}
+
+impl ViewResolver for SpotShadowResolver {
+    fn resolve(
+        &self,
+        ctx: &oxygen_core::ViewContext,
+        scene: &Scene,
+    ) -> Result<oxygen_core::ResolvedView, oxygen_core::ViewError> {
+        let view_id = ctx.view_id;
+        let missing = || oxygen_core::ViewError::Other {
+            view: view_id,
+            message: "the spot light's node or light is gone".into(),
+        };
+        let node = scene.node(self.light).ok_or_else(missing)?;
+        let light = node.light.as_ref().ok_or_else(missing)?;
+        let LightKind::Spot { range, outer_cone, .. } = light.kind else { return Err(missing()) };
+        let world = scene.world_transform(self.light).ok_or_else(missing)?.as_mat4();
+        let (_, rotation, position) = world.to_scale_rotation_translation();
+        let view = glam::Mat4::from_rotation_translation(rotation.normalize(), position).inverse();
+        // A little wider than the cone, so PCF taps at its edge stay inside.
+        let fov = (outer_cone * 2.0 * 1.1).clamp(0.05, 170f32.to_radians());
+        let far = range.filter(|r| r.is_finite() && *r > self.near).unwrap_or(self.far);
+        let camera = oxygen_core::Camera::perspective(fov, self.near, Some(far));
+        let projection =
+            camera.projection_matrix(1.0).map_err(|source| oxygen_core::ViewError::Camera { view: view_id, source })?;
+        oxygen_core::ResolvedView::new(
+            view_id,
+            view,
+            projection,
+            glam::UVec2::splat(self.resolution.max(1)),
+            self.near,
+            far,
+        )
+    }
+}
+
+/// Registers one shadow view per shadow-casting spot light (up to
+/// [`oxygen_passes::MAX_SPOT_SHADOWS`]), in the order the frame phase
+/// numbers their shadow slots (node order, same gating), ready for
+/// [`ShaderPassConfig::spot_shadows`]. Register them before the views that
+/// sample them.
+pub fn register_spot_shadows(
+    renderer: &mut Renderer,
+    scene: &Scene,
+    resolution: u32,
+) -> [Option<ViewId>; oxygen_passes::MAX_SPOT_SHADOWS] {
+    let mut ids = [None; oxygen_passes::MAX_SPOT_SHADOWS];
+    let casting_spots = scene.nodes().filter(|(key, node)| {
+        node.light.as_ref().is_some_and(|light| {
+            matches!(light.kind, LightKind::Spot { .. })
+                && light.casts_shadows
+                && light.affects_world
+                && light.mobility != oxygen_core::Mobility::Baked
+                && node.flags.contains(NodeFlags::CASTS_SHADOWS)
+                && scene.is_effectively_visible(*key)
+        })
+    });
+    for (slot, (key, _)) in casting_spots.take(ids.len()).enumerate() {
+        let resolver = SpotShadowResolver { light: key, resolution, near: 0.05, far: 100.0 };
+        ids[slot] = Some(renderer.register_view_with_options(resolver, shadow_view_options(), shadow_render_graph));
+    }
+    ids
+}

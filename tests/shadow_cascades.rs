@@ -157,3 +157,58 @@ fn a_scene_without_shadow_casters_gets_no_shadow_views() {
     let cascades = oxygen::register_sun_cascades(&mut renderer, &demo.scene, main, settings);
     assert_eq!(cascades.iter().flatten().count(), 3);
 }
+
+/// A spot light above a cube on a ground plane: the ground behind the cube
+/// (seen from the light) is darker than the ground in the cone's open part.
+#[test]
+fn a_spot_light_casts_a_shadow_through_its_shadow_view() {
+    use support::{pixel_of, region_mean};
+    let mut scene = Scene::new();
+    let grey = scene.add_material(Material::opaque("ground", Vec4::splat(0.7)));
+    let plane = scene.add_geometry(Geometry::plane(20.0));
+    let ground = scene.add_node("ground", Transform::IDENTITY);
+    scene.set_renderable(ground, Renderable { geometry: plane, materials: vec![grey] }).unwrap();
+    let cube_mesh = scene.add_geometry(Geometry::cube(1.0));
+    let cube = scene.add_node("cube", Transform::from_translation(Vec3::new(0.0, 0.5, 0.0)));
+    scene.set_renderable(cube, Renderable { geometry: cube_mesh, materials: vec![grey] }).unwrap();
+    // The spot stands up and to the left, aiming past the cube at the ground on its right.
+    let position = Vec3::new(-3.0, 4.0, 0.0);
+    let aim = (Vec3::new(2.0, 0.0, 0.0) - position).normalize();
+    let spot = scene.add_node(
+        "spot",
+        Transform::from_translation(position).with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, aim)),
+    );
+    scene.set_light(spot, Some(Light::spot(400.0, Some(30.0), 0.5, 0.7))).unwrap();
+
+    let mut renderer = support::gpu_renderer();
+    let spots = oxygen::register_spot_shadows(&mut renderer, &scene, 512);
+    assert!(spots[0].is_some() && spots[1].is_none());
+    let camera = LookAtResolver {
+        camera: Camera::perspective(50f32.to_radians(), 0.1, Some(60.0)),
+        eye: Vec3::new(1.0, 7.0, 7.0),
+        target: Vec3::new(1.0, 0.0, 0.0),
+        up: Vec3::Y,
+        viewport: UVec2::new(160, 120),
+    };
+    let view = renderer.register_view(camera, move |_id, ctx, rec| {
+        Box::pin(async move {
+            let mut depth = DepthPrePass::new();
+            depth.prepare_resources(ctx, rec).await?;
+            depth.execute(ctx, rec).await?;
+            let mut shading = ShaderPass::new(ShaderPassConfig { spot_shadows: spots, ..Default::default() });
+            shading.prepare_resources(ctx, rec).await?;
+            shading.execute(ctx, rec).await?;
+            let mut tonemap = TonemapPass::default();
+            tonemap.prepare_resources(ctx, rec).await?;
+            tonemap.execute(ctx, rec).await
+        })
+    });
+    renderer.render_frame(&scene).unwrap();
+    let image = renderer.read_color(view).unwrap();
+    let resolved = camera.resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
+    // The cube's shadow falls on the ground just right of it (away from the light).
+    let shadowed = region_mean(&image, pixel_of(&resolved, Vec3::new(1.2, 0.0, 0.0)), 1);
+    let lit = region_mean(&image, pixel_of(&resolved, Vec3::new(1.5, 0.0, 1.6)), 1);
+    assert!(lit > 2.0 * shadowed && lit > 60.0, "lit ground {lit:.1} vs shadowed ground {shadowed:.1}");
+    support::golden::assert_golden("spot_shadow", &image, support::golden::Tolerance::default());
+}

@@ -32,9 +32,25 @@ pub struct LightingInputs {
     pub depth_bias: f32,
     /// World position of the reflection probe; `w` is 1 when there is one.
     pub probe_position: [f32; 4],
+    /// World → spot-light clip space, per spot shadow slot.
+    pub spot_view_projection: [[[f32; 4]; 4]; MAX_SPOT_SHADOWS],
+    /// `2 tan(fov / 2) / resolution` per spot map: a texel's world size per
+    /// unit of distance from the light (scales the normal offset).
+    pub spot_texel_angle: [f32; MAX_SPOT_SHADOWS],
+    /// Spot shadow maps in use.
+    pub spot_count: u32,
+    /// Zero.
+    pub reserved: [u32; 3],
 }
 
-const _: () = assert!(std::mem::size_of::<LightingInputs>() == 320);
+/// Spot-light shadow maps the shading pass can sample.
+pub const MAX_SPOT_SHADOWS: usize = 4;
+
+const _: () = assert!(std::mem::size_of::<LightingInputs>() == 608);
+const _: () = assert!(MAX_SPOT_SHADOWS as u32 == oxygen_sceneprep::MAX_SPOT_SHADOWS);
+
+/// First binding of the spot shadow maps.
+const SPOT_MAP_BINDING: u32 = MAX_CASCADES as u32 + 4;
 
 /// Layers of a probe texture: +X, −X, +Y, −Y, +Z, −Z.
 pub const PROBE_FACES: usize = 6;
@@ -104,6 +120,9 @@ impl LightingInputResources {
             ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
             count: None,
         });
+        for slot in 0..MAX_SPOT_SHADOWS as u32 {
+            entries.push(map_entry(SPOT_MAP_BINDING + slot));
+        }
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("lighting inputs"),
             entries: &entries,
@@ -150,7 +169,7 @@ impl LightingInputResources {
             device,
             &layout,
             (&sampler, &probe_sampler),
-            [&dummy_view; MAX_CASCADES],
+            ([&dummy_view; MAX_CASCADES], [&dummy_view; MAX_SPOT_SHADOWS]),
             &dummy_probe_view,
             &uniform,
         );
@@ -190,7 +209,7 @@ pub(crate) fn bind_group(
     device: &wgpu::Device,
     layout: &wgpu::BindGroupLayout,
     (sampler, probe_sampler): (&wgpu::Sampler, &wgpu::Sampler),
-    maps: [&wgpu::TextureView; MAX_CASCADES],
+    (maps, spot_maps): ([&wgpu::TextureView; MAX_CASCADES], [&wgpu::TextureView; MAX_SPOT_SHADOWS]),
     probe: &wgpu::TextureView,
     uniform: &wgpu::Buffer,
 ) -> wgpu::BindGroup {
@@ -210,5 +229,11 @@ pub(crate) fn bind_group(
         binding: MAX_CASCADES as u32 + 3,
         resource: wgpu::BindingResource::Sampler(probe_sampler),
     });
+    for (slot, view) in spot_maps.iter().enumerate() {
+        entries.push(wgpu::BindGroupEntry {
+            binding: SPOT_MAP_BINDING + slot as u32,
+            resource: wgpu::BindingResource::TextureView(view),
+        });
+    }
     device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("lighting inputs"), layout, entries: &entries })
 }

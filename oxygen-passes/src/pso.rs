@@ -155,6 +155,7 @@ impl PipelineCache {
         &self,
         device: &wgpu::Device,
         maps: [Option<&wgpu::TextureView>; crate::MAX_CASCADES],
+        spot_maps: [Option<&wgpu::TextureView>; crate::MAX_SPOT_SHADOWS],
         probe: Option<&wgpu::TextureView>,
         uniform: &crate::LightingInputs,
     ) -> wgpu::BindGroup {
@@ -162,15 +163,10 @@ impl PipelineCache {
         let buffer = crate::lighting_inputs::uniform_buffer(device, uniform);
         // Unused slots are never sampled (the uniform's counts say so) but must be bound.
         let maps = maps.map(|m| m.unwrap_or(&inputs.placeholder_map));
+        let spot_maps = spot_maps.map(|m| m.unwrap_or(&inputs.placeholder_map));
         let probe = probe.unwrap_or(&inputs.placeholder_probe);
-        crate::lighting_inputs::bind_group(
-            device,
-            &inputs.layout,
-            (&inputs.sampler, &inputs.probe_sampler),
-            maps,
-            probe,
-            &buffer,
-        )
+        let samplers = (&inputs.sampler, &inputs.probe_sampler);
+        crate::lighting_inputs::bind_group(device, &inputs.layout, samplers, (maps, spot_maps), probe, &buffer)
     }
 
     /// Pipelines created since the cache was made.

@@ -15,7 +15,8 @@ use tracing::info_span;
 
 use crate::render_context::{draw_partitions, partition_pipelines};
 use crate::{
-    CommandRecorder, LightingInputs, MAX_CASCADES, PROBE_FACES, PassError, PassKind, RenderContext, RenderPass,
+    CommandRecorder, LightingInputs, MAX_CASCADES, MAX_SPOT_SHADOWS, PROBE_FACES, PassError, PassKind, RenderContext,
+    RenderPass,
 };
 use bytemuck::Zeroable;
 use oxygen_core::ViewId;
@@ -49,6 +50,10 @@ pub struct ShaderPassConfig {
     pub shadow_pcf_radius: u32,
     /// A reflection probe for specular reflections (metallic surfaces).
     pub reflection_probe: Option<ProbeInput>,
+    /// Spot shadow views by shadow slot (the frame phase numbers
+    /// shadow-casting spots in node order; `register_spot_shadows` registers
+    /// their views in the same order).
+    pub spot_shadows: [Option<ViewId>; MAX_SPOT_SHADOWS],
 }
 
 impl Default for ShaderPassConfig {
@@ -59,6 +64,7 @@ impl Default for ShaderPassConfig {
             shadow_cascades: [None; MAX_CASCADES],
             shadow_pcf_radius: 1,
             reflection_probe: None,
+            spot_shadows: [None; MAX_SPOT_SHADOWS],
         }
     }
 }
@@ -86,7 +92,8 @@ impl ShaderPass {
     ) -> Result<Option<wgpu::BindGroup>, PassError> {
         let ids: Vec<ViewId> = self.config.shadow_cascades.iter().flatten().copied().collect();
         let probe = self.config.reflection_probe.as_ref();
-        if ids.is_empty() && probe.is_none() {
+        let spots = &self.config.spot_shadows;
+        if ids.is_empty() && probe.is_none() && spots.iter().all(Option::is_none) {
             return Ok(None);
         }
         let mut uniform = LightingInputs::zeroed();
@@ -107,6 +114,20 @@ impl ShaderPass {
         uniform.pcf_radius = self.config.shadow_pcf_radius.min(3);
         uniform.normal_offset = 1.5;
         uniform.depth_bias = 1e-4;
+        let mut spot_maps = [None; MAX_SPOT_SHADOWS];
+        for (slot, id) in spots.iter().enumerate() {
+            let Some(id) = id else { continue };
+            let (view, targets) = ctx
+                .frame_views
+                .get(*id)
+                .ok_or(PassError::MissingInput { pass: self.name(), input: "a spot shadow view" })?;
+            uniform.spot_view_projection[slot] = view.view_projection.to_cols_array_2d();
+            // Perspective: projection.y_axis.y is cot(fov / 2).
+            uniform.spot_texel_angle[slot] =
+                2.0 / view.projection.y_axis.y.abs().max(1e-6) / targets.width.max(1) as f32;
+            spot_maps[slot] = Some(&targets.depth_view);
+            uniform.spot_count = uniform.spot_count.max(slot as u32 + 1);
+        }
         let probe_view = match probe {
             Some(probe) => {
                 let side = probe.texture.width();
@@ -135,7 +156,13 @@ impl ShaderPass {
             }
             None => None,
         };
-        Ok(Some(ctx.pipelines.lighting_inputs_bind_group(&ctx.gpu.device, maps, probe_view.as_ref(), &uniform)))
+        Ok(Some(ctx.pipelines.lighting_inputs_bind_group(
+            &ctx.gpu.device,
+            maps,
+            spot_maps,
+            probe_view.as_ref(),
+            &uniform,
+        )))
     }
 }
 

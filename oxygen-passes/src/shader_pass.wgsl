@@ -19,6 +19,12 @@ struct LightingInputs {
     normal_offset: f32,
     depth_bias: f32,
     probe_position: vec4<f32>,
+    spot_view_projection: array<mat4x4<f32>, 4>,
+    spot_texel_angle: vec4<f32>,
+    spot_count: u32,
+    reserved0: u32,
+    reserved1: u32,
+    reserved2: u32,
 }
 @group(3) @binding(0) var shadow_map_0: texture_depth_2d;
 @group(3) @binding(1) var shadow_map_1: texture_depth_2d;
@@ -28,6 +34,46 @@ struct LightingInputs {
 @group(3) @binding(5) var<uniform> shadows: LightingInputs;
 @group(3) @binding(6) var probe_faces: texture_2d_array<f32>;
 @group(3) @binding(7) var probe_sampler: sampler;
+@group(3) @binding(8) var spot_map_0: texture_depth_2d;
+@group(3) @binding(9) var spot_map_1: texture_depth_2d;
+@group(3) @binding(10) var spot_map_2: texture_depth_2d;
+@group(3) @binding(11) var spot_map_3: texture_depth_2d;
+
+fn compare_spot(slot: u32, uv: vec2<f32>, depth: f32) -> f32 {
+    switch slot {
+        case 0u: { return textureSampleCompareLevel(spot_map_0, shadow_sampler, uv, depth); }
+        case 1u: { return textureSampleCompareLevel(spot_map_1, shadow_sampler, uv, depth); }
+        case 2u: { return textureSampleCompareLevel(spot_map_2, shadow_sampler, uv, depth); }
+        default: { return textureSampleCompareLevel(spot_map_3, shadow_sampler, uv, depth); }
+    }
+}
+
+// Fraction of a shadow-casting spot's light reaching `world_position`
+// (3 × 3 PCF; the normal offset grows with the distance from the light).
+fn spot_visibility(slot: u32, light_position: vec3<f32>, world_position: vec3<f32>, geometric_normal: vec3<f32>) -> f32 {
+    if slot >= shadows.spot_count {
+        return 1.0;
+    }
+    let distance = length(light_position - world_position);
+    let offset = geometric_normal * distance * shadows.spot_texel_angle[slot] * 1.5;
+    let clip = shadows.spot_view_projection[slot] * vec4<f32>(world_position + offset, 1.0);
+    if clip.w <= 0.0 {
+        return 1.0;
+    }
+    let ndc = clip.xyz / clip.w;
+    if any(abs(ndc.xy) > vec2<f32>(1.0)) || ndc.z < 0.0 || ndc.z > 1.0 {
+        return 1.0;
+    }
+    let uv = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
+    let texel = 1.0 / vec2<f32>(textureDimensions(spot_map_0));
+    var lit = 0.0;
+    for (var y = -1; y <= 1; y++) {
+        for (var x = -1; x <= 1; x++) {
+            lit += compare_spot(slot, uv + vec2<f32>(f32(x), f32(y)) * texel, ndc.z);
+        }
+    }
+    return lit / 9.0;
+}
 
 // Radiance the probe saw along `direction`. Faces are rendered by ordinary
 // cameras (forward, up as in PROBE_FACE_AXES), so the lookup projects the
@@ -194,6 +240,9 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Der
         }
         if light.kind == 1u {
             attenuation *= smoothstep(light.cos_outer, light.cos_inner, dot(-l, light.direction));
+            if light.shadow_slot != INVALID_SLOT {
+                attenuation *= spot_visibility(light.shadow_slot, light.position, mesh.world_position, geometric_normal);
+            }
         }
         color += brdf_cosine(n, v, l, albedo, metallic, roughness) * light.color * light.intensity * attenuation;
     }

@@ -145,6 +145,9 @@ pub struct PositionalLightRecord {
     pub shadow_slot: u32,
 }
 
+/// Spot lights that can cast shadows at once; later casting spots are lit unshadowed.
+pub const MAX_SPOT_SHADOWS: u32 = 4;
+
 impl PositionalLightRecord {
     /// `kind` of a point light.
     pub const POINT: u32 = 0;

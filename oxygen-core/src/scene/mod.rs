@@ -390,6 +390,18 @@ impl Scene {
         Some(world)
     }
 
+    /// True when the node and all its ancestors are visible.
+    pub fn is_effectively_visible(&self, key: NodeKey) -> bool {
+        let mut cursor = Some(key);
+        while let Some(k) = cursor {
+            match self.nodes.get(k) {
+                Some(node) if node.is_visible() => cursor = node.parent,
+                _ => return false,
+            }
+        }
+        true
+    }
+
     /// Brings `out` up to date with every node's world matrix. Subtrees
     /// untouched since `out` was last resolved against this scene are not
     /// visited at all. Composition is done in `f64`, so deep hierarchies and

@@ -22,7 +22,7 @@ use oxygen_core::{
 use tracing::{info_span, warn};
 
 use crate::prepared_frame::FrameTransforms;
-use crate::{DirectionalLightRecord, PassMask, PositionalLightRecord};
+use crate::{DirectionalLightRecord, MAX_SPOT_SHADOWS, PassMask, PositionalLightRecord};
 
 /// A renderable node that survived the frame phase.
 #[derive(Clone, Debug, PartialEq)]
@@ -274,6 +274,18 @@ impl FrameCollection {
                     }
                     _ => (PositionalLightRecord::POINT, 1.0, -1.0),
                 };
+                // Shadow-casting spots get a shadow slot, in node order, up to
+                // MAX_SPOT_SHADOWS: the order in which spot shadow views are registered.
+                let spot_shadows = self
+                    .positional_lights
+                    .iter()
+                    .filter(|l| l.kind == PositionalLightRecord::SPOT && l.shadow_slot != INVALID_SLOT)
+                    .count() as u32;
+                let shadow_slot = if casts && kind == PositionalLightRecord::SPOT && spot_shadows < MAX_SPOT_SHADOWS {
+                    spot_shadows
+                } else {
+                    INVALID_SLOT
+                };
                 self.positional_lights.push(PositionalLightRecord {
                     position: world.w_axis.truncate().to_array(),
                     range: range.filter(|r| r.is_finite() && *r > 0.0).unwrap_or(0.0),
@@ -284,7 +296,7 @@ impl FrameCollection {
                     cos_inner,
                     cos_outer,
                     flags: shadow_flags,
-                    shadow_slot: INVALID_SLOT,
+                    shadow_slot,
                 });
             }
         }
