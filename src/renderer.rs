@@ -82,6 +82,10 @@ pub struct ViewReport {
     pub partitions: usize,
     /// What its passes recorded.
     pub recorded: RecordStats,
+    /// Seconds of its own ScenePrep work (view phase and finalization).
+    pub prep_seconds: f64,
+    /// Seconds to record its render graph.
+    pub record_seconds: f64,
 }
 
 /// What a frame did.
@@ -360,6 +364,7 @@ impl Renderer {
                 outputs: Default::default(),
                 frame_views: &frame_views,
             };
+            let record_started = Instant::now();
             let mut recorder = CommandRecorder::new(&self.gpu.device, &view.view_id.to_string());
             let _view_span = info_span!("render_graph", view = %view.view_id).entered();
             futures::executor::block_on((registered.factory)(view.view_id, &ctx, &mut recorder))
@@ -371,6 +376,8 @@ impl Renderer {
                 draws: frame.draws().len(),
                 partitions: frame.partitions().len(),
                 recorded,
+                prep_seconds: frame.prep_seconds() as f64,
+                record_seconds: record_started.elapsed().as_secs_f64(),
             });
         }
         self.gpu.queue.submit(command_buffers);

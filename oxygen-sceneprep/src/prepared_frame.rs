@@ -55,6 +55,7 @@ pub struct PreparedSceneFrame {
     pub(crate) transforms: Arc<FrameTransforms>,
     pub(crate) slots: PreparedSlots,
     pub(crate) debug_generations: bool,
+    pub(crate) prep_seconds: f32,
 }
 
 fn slot(a: &Allocation) -> String {
@@ -73,6 +74,7 @@ impl PreparedSceneFrame {
             partitions: Vec::new(),
             transforms,
             debug_generations: false,
+            prep_seconds: 0.0,
             slots: PreparedSlots {
                 draw_metadata: Allocation::empty(DomainKind::DrawMetadata),
                 indirect_args: Allocation::empty(DomainKind::IndirectArgs),
@@ -116,6 +118,11 @@ impl PreparedSceneFrame {
     /// The frame's world and normal matrices (shared by all views).
     pub fn transforms(&self) -> &Arc<FrameTransforms> {
         &self.transforms
+    }
+    /// Wall time this view's view phase and finalization took (the frame
+    /// phase, shared by all views, is not included).
+    pub fn prep_seconds(&self) -> f32 {
+        self.prep_seconds
     }
     /// Heap slots.
     pub fn slots(&self) -> &PreparedSlots {

@@ -88,6 +88,8 @@ struct ViewWork {
     scratch: Vec<(u64, u32)>,
     /// Geometries this view draws that had no slots when it looked.
     missing_geometry: Vec<GeometryHandle>,
+    /// Seconds spent on this view in phases 1 and 2.
+    seconds: f32,
     draw_allocation: Allocation,
     indirect_allocation: Allocation,
     frame: PreparedSceneFrame,
@@ -100,6 +102,7 @@ impl ViewWork {
             keyed: Vec::new(),
             scratch: Vec::new(),
             missing_geometry: Vec::new(),
+            seconds: 0.0,
             draw_allocation: Allocation::empty(DomainKind::DrawMetadata),
             indirect_allocation: Allocation::empty(DomainKind::IndirectArgs),
             frame: PreparedSceneFrame::empty(transforms),
@@ -253,6 +256,7 @@ impl ScenePrep {
             let _span = info_span!("view_phases").entered();
             let (frame, geometry, work) = (&self.frame, &self.geometry, &self.work);
             self.pool.run(views.len(), &|i| {
+                let started = std::time::Instant::now();
                 let mut w = lock(&work[i]);
                 let w = &mut *w;
                 collect_view(scene, frame, views[i].view, &views[i].options, &mut w.items);
@@ -270,6 +274,7 @@ impl ScenePrep {
                 // Items are in (node id, submesh) order, so a stable sort by
                 // key alone gives the deterministic tie-break.
                 radix_sort_by_key(&mut w.keyed, &mut w.scratch);
+                w.seconds = started.elapsed().as_secs_f32();
             });
         }
         self.stats.views_prepared += views.len() as u64;
@@ -301,6 +306,7 @@ impl ScenePrep {
             let (frame_index, materials) = (self.frame_index, self.materials.allocation());
             let debug_generations = self.debug_generations;
             self.pool.run(views.len(), &|i| {
+                let started = std::time::Instant::now();
                 let mut w = lock(&work[i]);
                 let w = &mut *w;
                 let out = &mut w.frame;
@@ -335,6 +341,7 @@ impl ScenePrep {
                 out.view_id = views[i].view.view_id;
                 out.frame_index = frame_index;
                 out.debug_generations = debug_generations;
+                out.prep_seconds = w.seconds + started.elapsed().as_secs_f32();
                 out.transforms = Arc::clone(&frame.transforms);
                 out.slots = PreparedSlots {
                     draw_metadata: w.draw_allocation,
