@@ -12,7 +12,7 @@ use std::sync::Arc;
 
 use oxygen::core::CascadeSettings;
 use oxygen::prelude::*;
-use oxygen::{ProbeUpdate, ReflectionProbe, register_spot_shadows, register_sun_cascades};
+use oxygen::{ProbeUpdate, ReflectionProbe, lit_render_graph, register_spot_shadows, register_sun_cascades};
 
 fn scene() -> Result<Scene, Box<dyn std::error::Error>> {
     let mut scene = Scene::new();
@@ -75,29 +75,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         (0.05, 60.0),
         ProbeUpdate::EveryNthFrame(10),
     )?;
-    let probe_input = probe.input();
-    let main = renderer.register_view(camera, move |_id, ctx, rec| {
-        let config = ShaderPassConfig {
-            shadow_cascades: cascades,
-            spot_shadows: spots,
-            reflection_probe: Some(probe_input.clone()),
-            ..Default::default()
-        };
-        Box::pin(async move {
-            let mut depth = DepthPrePass::new();
-            depth.prepare_resources(ctx, rec).await?;
-            depth.execute(ctx, rec).await?;
-            let mut shading = ShaderPass::new(config);
-            shading.prepare_resources(ctx, rec).await?;
-            shading.execute(ctx, rec).await?;
-            let mut transparent = TransparentPass::new();
-            transparent.prepare_resources(ctx, rec).await?;
-            transparent.execute(ctx, rec).await?;
-            let mut tonemap = TonemapPass::default();
-            tonemap.prepare_resources(ctx, rec).await?;
-            tonemap.execute(ctx, rec).await
-        })
-    });
+    let config = ShaderPassConfig {
+        shadow_cascades: cascades,
+        spot_shadows: spots,
+        reflection_probe: Some(probe.input()),
+        ..Default::default()
+    };
+    let main = renderer.register_view(camera, lit_render_graph(config));
 
     probe.before_frame(&mut renderer)?;
     let report = renderer.render_frame(&scene)?;

@@ -62,12 +62,8 @@ pub fn probe_face_render_graph<'a>(
     rec: &'a mut CommandRecorder,
 ) -> RenderGraphFuture<'a> {
     Box::pin(async move {
-        let mut depth = DepthPrePass::new();
-        depth.prepare_resources(ctx, rec).await?;
-        depth.execute(ctx, rec).await?;
-        let mut shading = ShaderPass::new(ShaderPassConfig::default());
-        shading.prepare_resources(ctx, rec).await?;
-        shading.execute(ctx, rec).await
+        DepthPrePass::new().run(ctx, rec).await?;
+        ShaderPass::new(ShaderPassConfig::default()).run(ctx, rec).await
     })
 }
 

@@ -145,21 +145,26 @@ pub fn standard_render_graph<'a>(
     ctx: &'a RenderContext<'a>,
     rec: &'a mut CommandRecorder,
 ) -> RenderGraphFuture<'a> {
-    Box::pin(async move {
-        let mut depth = DepthPrePass::new();
-        depth.prepare_resources(ctx, rec).await?;
-        depth.execute(ctx, rec).await?;
-        let mut shading = ShaderPass::new(ShaderPassConfig::default());
-        shading.prepare_resources(ctx, rec).await?;
-        shading.execute(ctx, rec).await?;
-        let mut transparent = TransparentPass::new();
-        transparent.prepare_resources(ctx, rec).await?;
-        transparent.execute(ctx, rec).await?;
-        let mut tonemap = TonemapPass::default();
-        tonemap.prepare_resources(ctx, rec).await?;
-        tonemap.execute(ctx, rec).await?;
-        Ok(())
-    })
+    Box::pin(run_lit_graph(ShaderPassConfig::default(), ctx, rec))
+}
+
+/// The standard graph with a chosen shading configuration (clear colour,
+/// shadow views, reflection probe).
+pub fn lit_render_graph(
+    config: ShaderPassConfig,
+) -> impl for<'a> Fn(ViewId, &'a RenderContext<'a>, &'a mut CommandRecorder) -> RenderGraphFuture<'a> + 'static {
+    move |_view, ctx, rec| Box::pin(run_lit_graph(config.clone(), ctx, rec))
+}
+
+async fn run_lit_graph(
+    config: ShaderPassConfig,
+    ctx: &RenderContext<'_>,
+    rec: &mut CommandRecorder,
+) -> Result<(), PassError> {
+    DepthPrePass::new().run(ctx, rec).await?;
+    ShaderPass::new(config).run(ctx, rec).await?;
+    TransparentPass::new().run(ctx, rec).await?;
+    TonemapPass::default().run(ctx, rec).await
 }
 
 impl Renderer {

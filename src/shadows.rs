@@ -8,10 +8,7 @@
 use std::sync::Arc;
 
 use oxygen_core::{CascadeResolver, CascadeSettings, LightKind, NodeFlags, NodeKey, Scene, ViewId, ViewResolver};
-use oxygen_passes::{
-    CommandRecorder, DepthPrePass, MAX_CASCADES, RenderContext, RenderPass, ShaderPass, ShaderPassConfig, TonemapPass,
-    TransparentPass,
-};
+use oxygen_passes::{CommandRecorder, DepthPrePass, MAX_CASCADES, RenderContext, RenderPass, ShaderPassConfig};
 use oxygen_sceneprep::{ViewFilter, ViewPrepOptions};
 
 use crate::{RenderGraphFuture, Renderer};
@@ -27,11 +24,7 @@ pub fn shadow_render_graph<'a>(
     ctx: &'a RenderContext<'a>,
     rec: &'a mut CommandRecorder,
 ) -> RenderGraphFuture<'a> {
-    Box::pin(async move {
-        let mut depth = DepthPrePass::new();
-        depth.prepare_resources(ctx, rec).await?;
-        depth.execute(ctx, rec).await
-    })
+    Box::pin(async move { DepthPrePass::new().run(ctx, rec).await })
 }
 
 /// The first directional light that casts shadows (light flag and node flag).
@@ -66,27 +59,11 @@ pub fn register_sun_cascades(
     ids
 }
 
-/// The standard graph (depth pre-pass, shading, transparency, tone map) with
-/// the shading pass sampling `cascades`.
+/// The standard graph with the shading pass sampling `cascades`.
 pub fn shadowed_render_graph(
     cascades: [Option<ViewId>; MAX_CASCADES],
 ) -> impl for<'a> Fn(ViewId, &'a RenderContext<'a>, &'a mut CommandRecorder) -> RenderGraphFuture<'a> + 'static {
-    move |_id, ctx, rec| {
-        Box::pin(async move {
-            let mut depth = DepthPrePass::new();
-            depth.prepare_resources(ctx, rec).await?;
-            depth.execute(ctx, rec).await?;
-            let mut shading = ShaderPass::new(ShaderPassConfig { shadow_cascades: cascades, ..Default::default() });
-            shading.prepare_resources(ctx, rec).await?;
-            shading.execute(ctx, rec).await?;
-            let mut transparent = TransparentPass::new();
-            transparent.prepare_resources(ctx, rec).await?;
-            transparent.execute(ctx, rec).await?;
-            let mut tonemap = TonemapPass::default();
-            tonemap.prepare_resources(ctx, rec).await?;
-            tonemap.execute(ctx, rec).await
-        })
-    }
+    crate::lit_render_graph(ShaderPassConfig { shadow_cascades: cascades, ..Default::default() })
 }
 
 /// A spot light's shadow view: a perspective view from the light's node down

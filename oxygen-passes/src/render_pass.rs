@@ -21,4 +21,10 @@ pub trait RenderPass {
 
     /// Records the pass.
     async fn execute(&mut self, ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError>;
+
+    /// `prepare_resources`, then `execute`: what a render graph does with each pass.
+    async fn run(&mut self, ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError> {
+        self.prepare_resources(ctx, rec).await?;
+        self.execute(ctx, rec).await
+    }
 }
