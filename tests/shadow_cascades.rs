@@ -212,3 +212,51 @@ fn a_spot_light_casts_a_shadow_through_its_shadow_view() {
     assert!(lit > 2.0 * shadowed && lit > 60.0, "lit ground {lit:.1} vs shadowed ground {shadowed:.1}");
     support::golden::assert_golden("spot_shadow", &image, support::golden::Tolerance::default());
 }
+
+/// Two shadow-casting spots share the atlas (two tiles): each cube's shadow,
+/// cast by its own spot, darkens the ground.
+#[test]
+fn two_spot_shadows_share_the_atlas() {
+    use support::{pixel_of, region_mean};
+    let mut scene = Scene::new();
+    let grey = scene.add_material(Material::opaque("ground", Vec4::splat(0.7)));
+    let plane = scene.add_geometry(Geometry::plane(30.0));
+    let ground = scene.add_node("ground", Transform::IDENTITY);
+    scene.set_renderable(ground, Renderable { geometry: plane, materials: vec![grey] }).unwrap();
+    let cube_mesh = scene.add_geometry(Geometry::cube(1.0));
+    // Narrow cones far apart: each spot lights only its own side.
+    for (x, light_x, aim_x) in [(-8.0f32, -11.0f32, -6.0f32), (8.0, 11.0, 6.0)] {
+        let cube = scene.add_node("cube", Transform::from_translation(Vec3::new(x, 0.5, 0.0)));
+        scene.set_renderable(cube, Renderable { geometry: cube_mesh, materials: vec![grey] }).unwrap();
+        let position = Vec3::new(light_x, 4.0, 0.0);
+        let aim = (Vec3::new(aim_x, 0.0, 0.0) - position).normalize();
+        let spot = scene.add_node(
+            "spot",
+            Transform::from_translation(position).with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, aim)),
+        );
+        scene.set_light(spot, Some(Light::spot(400.0, Some(30.0), 0.25, 0.35))).unwrap();
+    }
+    let mut renderer = support::gpu_renderer();
+    let spots = oxygen::register_spot_shadows(&mut renderer, &scene, 256);
+    assert_eq!(spots.iter().flatten().count(), 2);
+    let camera = LookAtResolver {
+        camera: Camera::perspective(60f32.to_radians(), 0.1, Some(60.0)),
+        eye: Vec3::new(0.0, 14.0, 12.0),
+        target: Vec3::ZERO,
+        up: Vec3::Y,
+        viewport: UVec2::new(240, 140),
+    };
+    let view = renderer.register_view(
+        camera,
+        oxygen::lit_render_graph(ShaderPassConfig { spot_shadows: spots, ..Default::default() }),
+    );
+    renderer.render_frame(&scene).unwrap();
+    let image = renderer.read_color(view).unwrap();
+    let resolved = camera.resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
+    for side in [-1.0f32, 1.0] {
+        // Each cube's shadow falls on the ground just inwards of it, away from its spot.
+        let shadowed = region_mean(&image, pixel_of(&resolved, Vec3::new(side * 6.9, 0.0, 0.0)), 1);
+        let lit = region_mean(&image, pixel_of(&resolved, Vec3::new(side * 6.5, 0.0, 1.8)), 1);
+        assert!(lit > 2.0 * shadowed, "side {side}: lit {lit:.1} vs shadowed {shadowed:.1}");
+    }
+}

@@ -27,6 +27,7 @@ mod pso;
 mod render_context;
 mod render_pass;
 mod shader_pass;
+mod shadow_atlas;
 mod tonemap_pass;
 mod transparent_pass;
 
@@ -36,5 +37,6 @@ pub use pso::{AlphaClass, PassKind, PipelineCache, PipelineKey, PipelineVariant,
 pub use render_context::{CommandRecorder, DrawPath, FrameViews, PassError, PassOutputs, RecordStats, RenderContext};
 pub use render_pass::RenderPass;
 pub use shader_pass::{ProbeInput, ShaderPass, ShaderPassConfig};
+pub use shadow_atlas::SPOT_ATLAS_FORMAT;
 pub use tonemap_pass::{TonemapPass, pbr_neutral};
 pub use transparent_pass::TransparentPass;

@@ -37,6 +37,8 @@ pub struct LightingInputs {
     /// `2 tan(fov / 2) / resolution` per spot map: a texel's world size per
     /// unit of distance from the light (scales the normal offset).
     pub spot_texel_angle: [f32; MAX_SPOT_SHADOWS],
+    /// Each spot map's rectangle in the atlas, in UV: offset xy, scale zw.
+    pub spot_atlas_rect: [[f32; 4]; MAX_SPOT_SHADOWS],
     /// Spot shadow maps in use.
     pub spot_count: u32,
     /// Zero.
@@ -46,11 +48,11 @@ pub struct LightingInputs {
 /// Spot-light shadow maps the shading pass can sample.
 pub const MAX_SPOT_SHADOWS: usize = 4;
 
-const _: () = assert!(std::mem::size_of::<LightingInputs>() == 608);
+const _: () = assert!(std::mem::size_of::<LightingInputs>() == 672);
 const _: () = assert!(MAX_SPOT_SHADOWS as u32 == oxygen_sceneprep::MAX_SPOT_SHADOWS);
 
-/// First binding of the spot shadow maps.
-const SPOT_MAP_BINDING: u32 = MAX_CASCADES as u32 + 4;
+/// Binding of the spot-shadow atlas.
+const SPOT_ATLAS_BINDING: u32 = MAX_CASCADES as u32 + 4;
 
 /// Layers of a probe texture: +X, −X, +Y, −Y, +Z, −Z.
 pub const PROBE_FACES: usize = 6;
@@ -73,6 +75,7 @@ pub(crate) struct LightingInputResources {
     pub(crate) no_inputs: wgpu::BindGroup,
     pub(crate) placeholder_map: wgpu::TextureView,
     pub(crate) placeholder_probe: wgpu::TextureView,
+    pub(crate) placeholder_atlas: wgpu::TextureView,
 }
 
 impl LightingInputResources {
@@ -120,9 +123,16 @@ impl LightingInputResources {
             ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
             count: None,
         });
-        for slot in 0..MAX_SPOT_SHADOWS as u32 {
-            entries.push(map_entry(SPOT_MAP_BINDING + slot));
-        }
+        entries.push(wgpu::BindGroupLayoutEntry {
+            binding: SPOT_ATLAS_BINDING,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            count: None,
+        });
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("lighting inputs"),
             entries: &entries,
@@ -164,12 +174,24 @@ impl LightingInputResources {
             view_formats: &[],
         });
         let dummy_probe_view = probe_view(&dummy_probe);
+        let placeholder_atlas = device
+            .create_texture(&wgpu::TextureDescriptor {
+                label: Some("no spot atlas"),
+                size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: crate::shadow_atlas::SPOT_ATLAS_FORMAT,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            })
+            .create_view(&Default::default());
         let uniform = uniform_buffer(device, &LightingInputs::zeroed());
         let no_inputs = bind_group(
             device,
             &layout,
             (&sampler, &probe_sampler),
-            ([&dummy_view; MAX_CASCADES], [&dummy_view; MAX_SPOT_SHADOWS]),
+            ([&dummy_view; MAX_CASCADES], &placeholder_atlas),
             &dummy_probe_view,
             &uniform,
         );
@@ -180,6 +202,7 @@ impl LightingInputResources {
             no_inputs,
             placeholder_map: dummy_view,
             placeholder_probe: dummy_probe_view,
+            placeholder_atlas,
         }
     }
 }
@@ -209,7 +232,7 @@ pub(crate) fn bind_group(
     device: &wgpu::Device,
     layout: &wgpu::BindGroupLayout,
     (sampler, probe_sampler): (&wgpu::Sampler, &wgpu::Sampler),
-    (maps, spot_maps): ([&wgpu::TextureView; MAX_CASCADES], [&wgpu::TextureView; MAX_SPOT_SHADOWS]),
+    (maps, spot_atlas): ([&wgpu::TextureView; MAX_CASCADES], &wgpu::TextureView),
     probe: &wgpu::TextureView,
     uniform: &wgpu::Buffer,
 ) -> wgpu::BindGroup {
@@ -229,11 +252,9 @@ pub(crate) fn bind_group(
         binding: MAX_CASCADES as u32 + 3,
         resource: wgpu::BindingResource::Sampler(probe_sampler),
     });
-    for (slot, view) in spot_maps.iter().enumerate() {
-        entries.push(wgpu::BindGroupEntry {
-            binding: SPOT_MAP_BINDING + slot as u32,
-            resource: wgpu::BindingResource::TextureView(view),
-        });
-    }
+    entries.push(wgpu::BindGroupEntry {
+        binding: SPOT_ATLAS_BINDING,
+        resource: wgpu::BindingResource::TextureView(spot_atlas),
+    });
     device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("lighting inputs"), layout, entries: &entries })
 }

@@ -112,6 +112,7 @@ pub fn shader_source(pass: PassKind, textures: TexturePath) -> String {
 pub struct PipelineCache {
     layout: wgpu::PipelineLayout,
     lighting_inputs: crate::lighting_inputs::LightingInputResources,
+    spot_atlas: crate::shadow_atlas::SpotAtlasPacker,
     texture_path: TexturePath,
     modules: Mutex<HashMap<PassKind, wgpu::ShaderModule>>,
     pipelines: Mutex<HashMap<PipelineKey, wgpu::RenderPipeline>>,
@@ -135,6 +136,7 @@ impl PipelineCache {
         });
         PipelineCache {
             layout,
+            spot_atlas: crate::shadow_atlas::SpotAtlasPacker::new(device),
             lighting_inputs,
             texture_path: heap.texture_path(),
             modules: Mutex::new(HashMap::new()),
@@ -155,7 +157,7 @@ impl PipelineCache {
         &self,
         device: &wgpu::Device,
         maps: [Option<&wgpu::TextureView>; crate::MAX_CASCADES],
-        spot_maps: [Option<&wgpu::TextureView>; crate::MAX_SPOT_SHADOWS],
+        spot_atlas: Option<&wgpu::TextureView>,
         probe: Option<&wgpu::TextureView>,
         uniform: &crate::LightingInputs,
     ) -> wgpu::BindGroup {
@@ -163,10 +165,22 @@ impl PipelineCache {
         let buffer = crate::lighting_inputs::uniform_buffer(device, uniform);
         // Unused slots are never sampled (the uniform's counts say so) but must be bound.
         let maps = maps.map(|m| m.unwrap_or(&inputs.placeholder_map));
-        let spot_maps = spot_maps.map(|m| m.unwrap_or(&inputs.placeholder_map));
+        let spot_atlas = spot_atlas.unwrap_or(&inputs.placeholder_atlas);
         let probe = probe.unwrap_or(&inputs.placeholder_probe);
         let samplers = (&inputs.sampler, &inputs.probe_sampler);
-        crate::lighting_inputs::bind_group(device, &inputs.layout, samplers, (maps, spot_maps), probe, &buffer)
+        crate::lighting_inputs::bind_group(device, &inputs.layout, samplers, (maps, spot_atlas), probe, &buffer)
+    }
+
+    /// Packs spot shadow maps (depth view and side, by slot) into the atlas;
+    /// returns its view and each slot's UV rectangle.
+    pub fn pack_spot_atlas(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        maps: &[Option<(&wgpu::TextureView, u32)>; crate::MAX_SPOT_SHADOWS],
+    ) -> (wgpu::TextureView, [[f32; 4]; crate::MAX_SPOT_SHADOWS]) {
+        self.spot_atlas.pack(device, queue, encoder, maps)
     }
 
     /// Pipelines created since the cache was made.

@@ -125,9 +125,17 @@ impl ShaderPass {
             // Perspective: projection.y_axis.y is cot(fov / 2).
             uniform.spot_texel_angle[slot] =
                 2.0 / view.projection.y_axis.y.abs().max(1e-6) / targets.width.max(1) as f32;
-            spot_maps[slot] = Some(&targets.depth_view);
+            spot_maps[slot] = Some((&targets.depth_view, targets.width));
             uniform.spot_count = uniform.spot_count.max(slot as u32 + 1);
         }
+        let spot_atlas = if spot_maps.iter().any(Option::is_some) {
+            let (atlas, rects) =
+                ctx.pipelines.pack_spot_atlas(&ctx.gpu.device, &ctx.gpu.queue, rec.encoder(), &spot_maps);
+            uniform.spot_atlas_rect = rects;
+            Some(atlas)
+        } else {
+            None
+        };
         let probe_view = match probe {
             Some(probe) => {
                 let side = probe.texture.width();
@@ -159,7 +167,7 @@ impl ShaderPass {
         Ok(Some(ctx.pipelines.lighting_inputs_bind_group(
             &ctx.gpu.device,
             maps,
-            spot_maps,
+            spot_atlas.as_ref(),
             probe_view.as_ref(),
             &uniform,
         )))

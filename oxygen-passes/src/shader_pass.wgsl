@@ -21,6 +21,7 @@ struct LightingInputs {
     probe_position: vec4<f32>,
     spot_view_projection: array<mat4x4<f32>, 4>,
     spot_texel_angle: vec4<f32>,
+    spot_atlas_rect: array<vec4<f32>, 4>,
     spot_count: u32,
     reserved0: u32,
     reserved1: u32,
@@ -34,19 +35,7 @@ struct LightingInputs {
 @group(3) @binding(5) var<uniform> shadows: LightingInputs;
 @group(3) @binding(6) var probe_faces: texture_2d_array<f32>;
 @group(3) @binding(7) var probe_sampler: sampler;
-@group(3) @binding(8) var spot_map_0: texture_depth_2d;
-@group(3) @binding(9) var spot_map_1: texture_depth_2d;
-@group(3) @binding(10) var spot_map_2: texture_depth_2d;
-@group(3) @binding(11) var spot_map_3: texture_depth_2d;
-
-fn compare_spot(slot: u32, uv: vec2<f32>, depth: f32) -> f32 {
-    switch slot {
-        case 0u: { return textureSampleCompareLevel(spot_map_0, shadow_sampler, uv, depth); }
-        case 1u: { return textureSampleCompareLevel(spot_map_1, shadow_sampler, uv, depth); }
-        case 2u: { return textureSampleCompareLevel(spot_map_2, shadow_sampler, uv, depth); }
-        default: { return textureSampleCompareLevel(spot_map_3, shadow_sampler, uv, depth); }
-    }
-}
+@group(3) @binding(8) var spot_atlas: texture_2d<f32>;
 
 // Fraction of a shadow-casting spot's light reaching `world_position`
 // (3 × 3 PCF; the normal offset grows with the distance from the light).
@@ -64,12 +53,20 @@ fn spot_visibility(slot: u32, light_position: vec3<f32>, world_position: vec3<f3
     if any(abs(ndc.xy) > vec2<f32>(1.0)) || ndc.z < 0.0 || ndc.z > 1.0 {
         return 1.0;
     }
+    // The map's tile in the atlas, in texels; taps stay inside it.
+    let atlas_size = vec2<f32>(textureDimensions(spot_atlas));
+    let rect = shadows.spot_atlas_rect[slot];
+    let tile_min = vec2<i32>(rect.xy * atlas_size + 0.5);
+    let tile_max = tile_min + vec2<i32>(rect.zw * atlas_size + 0.5) - vec2<i32>(1);
     let uv = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
-    let texel = 1.0 / vec2<f32>(textureDimensions(spot_map_0));
+    let center = vec2<i32>(floor((rect.xy + uv * rect.zw) * atlas_size));
+    // The atlas holds plain floats, so the comparison (reverse-Z: lit when at
+    // least as close to the light) is done here rather than by a sampler.
     var lit = 0.0;
     for (var y = -1; y <= 1; y++) {
         for (var x = -1; x <= 1; x++) {
-            lit += compare_spot(slot, uv + vec2<f32>(f32(x), f32(y)) * texel, ndc.z);
+            let texel = clamp(center + vec2<i32>(x, y), tile_min, tile_max);
+            lit += select(0.0, 1.0, ndc.z >= textureLoad(spot_atlas, texel, 0).r);
         }
     }
     return lit / 9.0;
