@@ -78,7 +78,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let config = ShaderPassConfig {
         shadow_cascades: cascades,
         spot_shadows: spots,
-        reflection_probe: Some(probe.input()),
+        reflection_probes: vec![probe.input()],
         ..Default::default()
     };
     let main = renderer.register_view(camera, lit_render_graph(config));

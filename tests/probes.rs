@@ -50,7 +50,8 @@ fn a_mirror_sphere_reflects_the_red_box_through_the_probe() {
             let mut depth = DepthPrePass::new();
             depth.prepare_resources(ctx, rec).await?;
             depth.execute(ctx, rec).await?;
-            let mut shading = ShaderPass::new(ShaderPassConfig { reflection_probe: Some(input), ..Default::default() });
+            let mut shading =
+                ShaderPass::new(ShaderPassConfig { reflection_probes: vec![input], ..Default::default() });
             shading.prepare_resources(ctx, rec).await?;
             shading.execute(ctx, rec).await?;
             let mut tonemap = TonemapPass::default();
@@ -96,4 +97,67 @@ fn a_probe_updated_every_third_frame_renders_its_faces_only_then() {
     assert!(!on_demand.before_frame(&mut renderer).unwrap());
     on_demand.request_update();
     assert!(on_demand.before_frame(&mut renderer).unwrap());
+}
+
+/// Two mirror spheres, each beside its own probe and its own coloured box:
+/// each surface reflects what its nearest probe saw.
+#[test]
+fn each_surface_reflects_its_nearest_probe() {
+    let mut scene = Scene::new();
+    let mirror =
+        scene.add_material(Material { metallic: 1.0, roughness: 0.02, ..Material::opaque("mirror", Vec4::ONE) });
+    let sphere = scene.add_geometry(Geometry::uv_sphere(1.0, 32, 16));
+    let cube = scene.add_geometry(Geometry::cube(2.0));
+    let red = scene.add_material(Material::opaque("red", Vec4::new(0.9, 0.05, 0.05, 1.0)));
+    let blue = scene.add_material(Material::opaque("blue", Vec4::new(0.05, 0.05, 0.9, 1.0)));
+    let mut renderer = support::gpu_renderer();
+    let mut probes = Vec::new();
+    // Left pair: sphere at x = -10 with a red box on its right; right pair:
+    // sphere at x = +10 with a blue box on its right.
+    for (x, material) in [(-10.0f32, red), (10.0, blue)] {
+        let ball = scene.add_node("ball", Transform::from_translation(Vec3::new(x, 0.0, 0.0)));
+        scene.set_renderable(ball, Renderable { geometry: sphere, materials: vec![mirror] }).unwrap();
+        let box_node = scene.add_node("box", Transform::from_translation(Vec3::new(x + 3.5, 0.0, 0.0)));
+        scene.set_renderable(box_node, Renderable { geometry: cube, materials: vec![material] }).unwrap();
+        let probe =
+            ReflectionProbe::register(&mut renderer, Vec3::new(x, 0.0, 0.0), 32, (0.05, 8.0), ProbeUpdate::EveryFrame)
+                .unwrap();
+        probes.push(probe);
+    }
+    let sun = scene.add_node(
+        "sun",
+        Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, Vec3::new(0.3, -0.5, -1.0).normalize())),
+    );
+    scene.set_light(sun, Some(Light::directional(3.0))).unwrap();
+    let inputs: Vec<_> = probes.iter().map(ReflectionProbe::input).collect();
+    let mut views = Vec::new();
+    for x in [-10.0f32, 10.0] {
+        let camera = LookAtResolver {
+            camera: Camera::perspective(40f32.to_radians(), 0.1, None),
+            eye: Vec3::new(x, 0.0, 4.0),
+            target: Vec3::new(x, 0.0, 0.0),
+            up: Vec3::Y,
+            viewport: UVec2::new(96, 96),
+        };
+        let config = ShaderPassConfig { reflection_probes: inputs.clone(), ..Default::default() };
+        views.push((x, camera, renderer.register_view(camera, oxygen::lit_render_graph(config))));
+    }
+    for probe in &mut probes {
+        probe.before_frame(&mut renderer).unwrap();
+    }
+    renderer.render_frame(&scene).unwrap();
+    let s = std::f32::consts::FRAC_1_SQRT_2;
+    for (x, camera, view) in views {
+        let image = renderer.read_color(view).unwrap();
+        let resolved =
+            camera.resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
+        let at = pixel_of(&resolved, Vec3::new(x + s, 0.0, s));
+        let p = image.get_pixel(at.0, at.1).0;
+        let (r, b) = (p[0] as i32, p[2] as i32);
+        if x < 0.0 {
+            assert!(r > b + 40, "left sphere should reflect its red box: {p:?}");
+        } else {
+            assert!(b > r + 40, "right sphere should reflect its blue box, not the other probe: {p:?}");
+        }
+    }
 }

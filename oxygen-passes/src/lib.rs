@@ -32,7 +32,9 @@ mod tonemap_pass;
 mod transparent_pass;
 
 pub use depth_pre_pass::{DepthPrePass, DepthPrePassOutput};
-pub use lighting_inputs::{LightingInputs, MAX_CASCADES, MAX_SPOT_SHADOWS, PROBE_FACE_AXES, PROBE_FACES, probe_view};
+pub use lighting_inputs::{
+    LightingInputs, MAX_CASCADES, MAX_PROBES, MAX_SPOT_SHADOWS, PROBE_FACE_AXES, PROBE_FACES, probe_view,
+};
 pub use pso::{AlphaClass, PassKind, PipelineCache, PipelineKey, PipelineVariant, TONEMAP_WGSL, shader_source};
 pub use render_context::{CommandRecorder, DrawPath, FrameViews, PassError, PassOutputs, RecordStats, RenderContext};
 pub use render_pass::RenderPass;

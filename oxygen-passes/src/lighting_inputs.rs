@@ -30,8 +30,8 @@ pub struct LightingInputs {
     pub normal_offset: f32,
     /// Constant depth bias in reverse-Z depth units (towards the light).
     pub depth_bias: f32,
-    /// World position of the reflection probe; `w` is 1 when there is one.
-    pub probe_position: [f32; 4],
+    /// World positions of the reflection probes (`w` = 1).
+    pub probe_positions: [[f32; 4]; MAX_PROBES],
     /// World → spot-light clip space, per spot shadow slot.
     pub spot_view_projection: [[[f32; 4]; 4]; MAX_SPOT_SHADOWS],
     /// `2 tan(fov / 2) / resolution` per spot map: a texel's world size per
@@ -41,18 +41,27 @@ pub struct LightingInputs {
     pub spot_atlas_rect: [[f32; 4]; MAX_SPOT_SHADOWS],
     /// Spot shadow maps in use.
     pub spot_count: u32,
+    /// Reflection probes in use; each surface samples the nearest.
+    pub probe_count: u32,
     /// Zero.
-    pub reserved: [u32; 3],
+    pub reserved: [u32; 2],
 }
+
+/// Reflection probes the shading pass can choose from.
+pub const MAX_PROBES: usize = 4;
 
 /// Spot-light shadow maps the shading pass can sample.
 pub const MAX_SPOT_SHADOWS: usize = 4;
 
-const _: () = assert!(std::mem::size_of::<LightingInputs>() == 672);
+const _: () = assert!(std::mem::size_of::<LightingInputs>() == 720);
 const _: () = assert!(MAX_SPOT_SHADOWS as u32 == oxygen_sceneprep::MAX_SPOT_SHADOWS);
 
-/// Binding of the spot-shadow atlas.
-const SPOT_ATLAS_BINDING: u32 = MAX_CASCADES as u32 + 4;
+// Bindings of group 3 after the cascade maps (0..MAX_CASCADES).
+const COMPARISON_SAMPLER_BINDING: u32 = MAX_CASCADES as u32;
+const UNIFORM_BINDING: u32 = MAX_CASCADES as u32 + 1;
+const PROBE_SAMPLER_BINDING: u32 = MAX_CASCADES as u32 + 2;
+const SPOT_ATLAS_BINDING: u32 = MAX_CASCADES as u32 + 3;
+const FIRST_PROBE_BINDING: u32 = MAX_CASCADES as u32 + 4;
 
 /// Layers of a probe texture: +X, −X, +Y, −Y, +Z, −Z.
 pub const PROBE_FACES: usize = 6;
@@ -92,13 +101,13 @@ impl LightingInputResources {
         };
         let mut entries: Vec<_> = (0..MAX_CASCADES as u32).map(map_entry).collect();
         entries.push(wgpu::BindGroupLayoutEntry {
-            binding: MAX_CASCADES as u32,
+            binding: COMPARISON_SAMPLER_BINDING,
             visibility: wgpu::ShaderStages::FRAGMENT,
             ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
             count: None,
         });
         entries.push(wgpu::BindGroupLayoutEntry {
-            binding: MAX_CASCADES as u32 + 1,
+            binding: UNIFORM_BINDING,
             visibility: wgpu::ShaderStages::FRAGMENT,
             ty: wgpu::BindingType::Buffer {
                 ty: wgpu::BufferBindingType::Uniform,
@@ -107,18 +116,20 @@ impl LightingInputResources {
             },
             count: None,
         });
+        for probe in 0..MAX_PROBES as u32 {
+            entries.push(wgpu::BindGroupLayoutEntry {
+                binding: FIRST_PROBE_BINDING + probe,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                    view_dimension: wgpu::TextureViewDimension::D2Array,
+                    multisampled: false,
+                },
+                count: None,
+            });
+        }
         entries.push(wgpu::BindGroupLayoutEntry {
-            binding: MAX_CASCADES as u32 + 2,
-            visibility: wgpu::ShaderStages::FRAGMENT,
-            ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                view_dimension: wgpu::TextureViewDimension::D2Array,
-                multisampled: false,
-            },
-            count: None,
-        });
-        entries.push(wgpu::BindGroupLayoutEntry {
-            binding: MAX_CASCADES as u32 + 3,
+            binding: PROBE_SAMPLER_BINDING,
             visibility: wgpu::ShaderStages::FRAGMENT,
             ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
             count: None,
@@ -192,7 +203,7 @@ impl LightingInputResources {
             &layout,
             (&sampler, &probe_sampler),
             ([&dummy_view; MAX_CASCADES], &placeholder_atlas),
-            &dummy_probe_view,
+            [&dummy_probe_view; MAX_PROBES],
             &uniform,
         );
         LightingInputResources {
@@ -233,7 +244,7 @@ pub(crate) fn bind_group(
     layout: &wgpu::BindGroupLayout,
     (sampler, probe_sampler): (&wgpu::Sampler, &wgpu::Sampler),
     (maps, spot_atlas): ([&wgpu::TextureView; MAX_CASCADES], &wgpu::TextureView),
-    probe: &wgpu::TextureView,
+    probes: [&wgpu::TextureView; MAX_PROBES],
     uniform: &wgpu::Buffer,
 ) -> wgpu::BindGroup {
     let mut entries: Vec<wgpu::BindGroupEntry<'_>> = maps
@@ -241,15 +252,19 @@ pub(crate) fn bind_group(
         .enumerate()
         .map(|(i, view)| wgpu::BindGroupEntry { binding: i as u32, resource: wgpu::BindingResource::TextureView(view) })
         .collect();
-    entries
-        .push(wgpu::BindGroupEntry { binding: MAX_CASCADES as u32, resource: wgpu::BindingResource::Sampler(sampler) });
-    entries.push(wgpu::BindGroupEntry { binding: MAX_CASCADES as u32 + 1, resource: uniform.as_entire_binding() });
     entries.push(wgpu::BindGroupEntry {
-        binding: MAX_CASCADES as u32 + 2,
-        resource: wgpu::BindingResource::TextureView(probe),
+        binding: COMPARISON_SAMPLER_BINDING,
+        resource: wgpu::BindingResource::Sampler(sampler),
     });
+    entries.push(wgpu::BindGroupEntry { binding: UNIFORM_BINDING, resource: uniform.as_entire_binding() });
+    for (i, probe) in probes.iter().enumerate() {
+        entries.push(wgpu::BindGroupEntry {
+            binding: FIRST_PROBE_BINDING + i as u32,
+            resource: wgpu::BindingResource::TextureView(probe),
+        });
+    }
     entries.push(wgpu::BindGroupEntry {
-        binding: MAX_CASCADES as u32 + 3,
+        binding: PROBE_SAMPLER_BINDING,
         resource: wgpu::BindingResource::Sampler(probe_sampler),
     });
     entries.push(wgpu::BindGroupEntry {

@@ -158,7 +158,7 @@ impl PipelineCache {
         device: &wgpu::Device,
         maps: [Option<&wgpu::TextureView>; crate::MAX_CASCADES],
         spot_atlas: Option<&wgpu::TextureView>,
-        probe: Option<&wgpu::TextureView>,
+        probes: [Option<&wgpu::TextureView>; crate::MAX_PROBES],
         uniform: &crate::LightingInputs,
     ) -> wgpu::BindGroup {
         let inputs = &self.lighting_inputs;
@@ -166,9 +166,9 @@ impl PipelineCache {
         // Unused slots are never sampled (the uniform's counts say so) but must be bound.
         let maps = maps.map(|m| m.unwrap_or(&inputs.placeholder_map));
         let spot_atlas = spot_atlas.unwrap_or(&inputs.placeholder_atlas);
-        let probe = probe.unwrap_or(&inputs.placeholder_probe);
+        let probes = probes.map(|p| p.unwrap_or(&inputs.placeholder_probe));
         let samplers = (&inputs.sampler, &inputs.probe_sampler);
-        crate::lighting_inputs::bind_group(device, &inputs.layout, samplers, (maps, spot_atlas), probe, &buffer)
+        crate::lighting_inputs::bind_group(device, &inputs.layout, samplers, (maps, spot_atlas), probes, &buffer)
     }
 
     /// Packs spot shadow maps (depth view and side, by slot) into the atlas;

@@ -48,8 +48,9 @@ pub struct ShaderPassConfig {
     /// PCF kernel radius in texels: `(2r + 1)²` comparison taps. 0 is the
     /// cheapest (one bilinear comparison), 1 the default, 2 the softest.
     pub shadow_pcf_radius: u32,
-    /// A reflection probe for specular reflections (metallic surfaces).
-    pub reflection_probe: Option<ProbeInput>,
+    /// Reflection probes (up to `MAX_PROBES`); each surface reflects the
+    /// nearest one (specular reflection on smooth and metallic surfaces).
+    pub reflection_probes: Vec<ProbeInput>,
     /// Spot shadow views by shadow slot (the frame phase numbers
     /// shadow-casting spots in node order; `register_spot_shadows` registers
     /// their views in the same order).
@@ -63,7 +64,7 @@ impl Default for ShaderPassConfig {
             depth_from_pre_pass: true,
             shadow_cascades: [None; MAX_CASCADES],
             shadow_pcf_radius: 1,
-            reflection_probe: None,
+            reflection_probes: Vec::new(),
             spot_shadows: [None; MAX_SPOT_SHADOWS],
         }
     }
@@ -91,9 +92,9 @@ impl ShaderPass {
         rec: &mut CommandRecorder,
     ) -> Result<Option<wgpu::BindGroup>, PassError> {
         let ids: Vec<ViewId> = self.config.shadow_cascades.iter().flatten().copied().collect();
-        let probe = self.config.reflection_probe.as_ref();
+        let probes = &self.config.reflection_probes[..self.config.reflection_probes.len().min(crate::MAX_PROBES)];
         let spots = &self.config.spot_shadows;
-        if ids.is_empty() && probe.is_none() && spots.iter().all(Option::is_none) {
+        if ids.is_empty() && probes.is_empty() && spots.iter().all(Option::is_none) {
             return Ok(None);
         }
         let mut uniform = LightingInputs::zeroed();
@@ -136,39 +137,38 @@ impl ShaderPass {
         } else {
             None
         };
-        let probe_view = match probe {
-            Some(probe) => {
-                let side = probe.texture.width();
-                for (layer, face) in probe.faces.iter().enumerate() {
-                    // A paused face is absent from this frame: its layer keeps the last image.
-                    let Some((_, targets)) = ctx.frame_views.get(*face) else { continue };
-                    if targets.width != side || targets.height != side {
-                        return Err(PassError::MissingInput {
-                            pass: self.name(),
-                            input: "a probe face of the probe's size",
-                        });
-                    }
-                    rec.encoder().copy_texture_to_texture(
-                        targets.hdr.as_image_copy(),
-                        wgpu::TexelCopyTextureInfo {
-                            texture: &probe.texture,
-                            mip_level: 0,
-                            origin: wgpu::Origin3d { x: 0, y: 0, z: layer as u32 },
-                            aspect: wgpu::TextureAspect::All,
-                        },
-                        wgpu::Extent3d { width: side, height: side, depth_or_array_layers: 1 },
-                    );
+        let mut probe_views: [Option<wgpu::TextureView>; crate::MAX_PROBES] = Default::default();
+        for (slot, probe) in probes.iter().enumerate() {
+            let side = probe.texture.width();
+            for (layer, face) in probe.faces.iter().enumerate() {
+                // A paused face is absent from this frame: its layer keeps the last image.
+                let Some((_, targets)) = ctx.frame_views.get(*face) else { continue };
+                if targets.width != side || targets.height != side {
+                    return Err(PassError::MissingInput {
+                        pass: self.name(),
+                        input: "a probe face of the probe's size",
+                    });
                 }
-                uniform.probe_position = probe.position.extend(1.0).to_array();
-                Some(crate::probe_view(&probe.texture))
+                rec.encoder().copy_texture_to_texture(
+                    targets.hdr.as_image_copy(),
+                    wgpu::TexelCopyTextureInfo {
+                        texture: &probe.texture,
+                        mip_level: 0,
+                        origin: wgpu::Origin3d { x: 0, y: 0, z: layer as u32 },
+                        aspect: wgpu::TextureAspect::All,
+                    },
+                    wgpu::Extent3d { width: side, height: side, depth_or_array_layers: 1 },
+                );
             }
-            None => None,
-        };
+            uniform.probe_positions[slot] = probe.position.extend(1.0).to_array();
+            probe_views[slot] = Some(crate::probe_view(&probe.texture));
+        }
+        uniform.probe_count = probes.len() as u32;
         Ok(Some(ctx.pipelines.lighting_inputs_bind_group(
             &ctx.gpu.device,
             maps,
             spot_atlas.as_ref(),
-            probe_view.as_ref(),
+            probe_views.each_ref().map(Option::as_ref),
             &uniform,
         )))
     }

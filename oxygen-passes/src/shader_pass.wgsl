@@ -18,14 +18,14 @@ struct LightingInputs {
     pcf_radius: u32,
     normal_offset: f32,
     depth_bias: f32,
-    probe_position: vec4<f32>,
+    probe_positions: array<vec4<f32>, 4>,
     spot_view_projection: array<mat4x4<f32>, 4>,
     spot_texel_angle: vec4<f32>,
     spot_atlas_rect: array<vec4<f32>, 4>,
     spot_count: u32,
+    probe_count: u32,
     reserved0: u32,
     reserved1: u32,
-    reserved2: u32,
 }
 @group(3) @binding(0) var shadow_map_0: texture_depth_2d;
 @group(3) @binding(1) var shadow_map_1: texture_depth_2d;
@@ -33,9 +33,36 @@ struct LightingInputs {
 @group(3) @binding(3) var shadow_map_3: texture_depth_2d;
 @group(3) @binding(4) var shadow_sampler: sampler_comparison;
 @group(3) @binding(5) var<uniform> shadows: LightingInputs;
-@group(3) @binding(6) var probe_faces: texture_2d_array<f32>;
-@group(3) @binding(7) var probe_sampler: sampler;
-@group(3) @binding(8) var spot_atlas: texture_2d<f32>;
+@group(3) @binding(6) var probe_sampler: sampler;
+@group(3) @binding(8) var probe_faces_0: texture_2d_array<f32>;
+@group(3) @binding(9) var probe_faces_1: texture_2d_array<f32>;
+@group(3) @binding(10) var probe_faces_2: texture_2d_array<f32>;
+@group(3) @binding(11) var probe_faces_3: texture_2d_array<f32>;
+
+// The probe nearest to `position` (the surface reflects what that probe saw).
+fn nearest_probe(position: vec3<f32>) -> u32 {
+    var best = 0u;
+    var best_distance = 3.4e38;
+    for (var i = 0u; i < shadows.probe_count; i++) {
+        let offset = shadows.probe_positions[i].xyz - position;
+        let d = dot(offset, offset);
+        if d < best_distance {
+            best_distance = d;
+            best = i;
+        }
+    }
+    return best;
+}
+
+fn sample_probe_face(probe: u32, uv: vec2<f32>, face: u32) -> vec3<f32> {
+    switch probe {
+        case 0u: { return textureSampleLevel(probe_faces_0, probe_sampler, uv, face, 0.0).rgb; }
+        case 1u: { return textureSampleLevel(probe_faces_1, probe_sampler, uv, face, 0.0).rgb; }
+        case 2u: { return textureSampleLevel(probe_faces_2, probe_sampler, uv, face, 0.0).rgb; }
+        default: { return textureSampleLevel(probe_faces_3, probe_sampler, uv, face, 0.0).rgb; }
+    }
+}
+@group(3) @binding(7) var spot_atlas: texture_2d<f32>;
 
 // Fraction of a shadow-casting spot's light reaching `world_position`
 // (3 × 3 PCF; the normal offset grows with the distance from the light).
@@ -75,7 +102,7 @@ fn spot_visibility(slot: u32, light_position: vec3<f32>, world_position: vec3<f3
 // Radiance the probe saw along `direction`. Faces are rendered by ordinary
 // cameras (forward, up as in PROBE_FACE_AXES), so the lookup projects the
 // direction onto the face's camera instead of using cube-map conventions.
-fn sample_probe(direction: vec3<f32>) -> vec3<f32> {
+fn sample_probe(probe: u32, direction: vec3<f32>) -> vec3<f32> {
     let a = abs(direction);
     var face = 0u;
     if a.x >= a.y && a.x >= a.z {
@@ -99,7 +126,7 @@ fn sample_probe(direction: vec3<f32>) -> vec3<f32> {
     let depth = dot(direction, forward);
     let ndc = vec2<f32>(dot(direction, right), dot(direction, up)) / depth;
     let uv = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
-    return textureSampleLevel(probe_faces, probe_sampler, uv, face, 0.0).rgb;
+    return sample_probe_face(probe, uv, face);
 }
 
 fn compare_cascade(cascade: u32, uv: vec2<f32>, depth: f32) -> f32 {
@@ -244,8 +271,8 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Der
         color += brdf_cosine(n, v, l, albedo, metallic, roughness) * light.color * light.intensity * attenuation;
     }
     // Specular reflection of the probe's surroundings, strongest on smooth metals.
-    if shadows.probe_position.w > 0.0 {
-        let reflected = sample_probe(reflect(-v, n));
+    if shadows.probe_count > 0u {
+        let reflected = sample_probe(nearest_probe(mesh.world_position), reflect(-v, n));
         let f0 = mix(vec3<f32>(0.04), albedo, metallic);
         let smoothness = (1.0 - roughness) * (1.0 - roughness);
         color += reflected * f0 * smoothness;
