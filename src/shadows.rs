@@ -8,7 +8,7 @@
 use std::sync::Arc;
 
 use oxygen_core::{CascadeResolver, CascadeSettings, LightKind, NodeFlags, NodeKey, Scene, ViewId, ViewResolver};
-use oxygen_passes::{CommandRecorder, DepthPrePass, MAX_CASCADES, RenderContext, RenderPass, ShaderPassConfig};
+use oxygen_passes::{CommandRecorder, MAX_CASCADES, RenderContext, RenderPass, ShaderPassConfig, ShadowPass};
 use oxygen_sceneprep::{ViewFilter, ViewPrepOptions};
 
 use crate::{RenderGraphFuture, Renderer};
@@ -24,7 +24,7 @@ pub fn shadow_render_graph<'a>(
     ctx: &'a RenderContext<'a>,
     rec: &'a mut CommandRecorder,
 ) -> RenderGraphFuture<'a> {
-    Box::pin(async move { DepthPrePass::new().run(ctx, rec).await })
+    Box::pin(async move { ShadowPass::new().run(ctx, rec).await })
 }
 
 /// The first directional light that casts shadows (light flag and node flag).

@@ -20,11 +20,7 @@ fn depth_only_graph<'a>(
     ctx: &'a RenderContext<'a>,
     rec: &'a mut CommandRecorder,
 ) -> RenderGraphFuture<'a> {
-    Box::pin(async move {
-        let mut depth = DepthPrePass::new();
-        depth.prepare_resources(ctx, rec).await?;
-        depth.execute(ctx, rec).await
-    })
+    Box::pin(async move { oxygen::passes::ShadowPass::new().run(ctx, rec).await })
 }
 
 #[test]

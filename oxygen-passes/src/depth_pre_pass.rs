@@ -20,16 +20,56 @@ pub struct DepthPrePassOutput {
 }
 
 /// The depth pre-pass.
-#[derive(Default)]
 pub struct DepthPrePass {
     /// One pipeline per partition, chosen in `prepare_resources`.
     pipelines: Option<Vec<wgpu::RenderPipeline>>,
+    /// `DepthPrePass`, or `Shadow` when it renders a shadow map.
+    kind: PassKind,
+}
+
+impl Default for DepthPrePass {
+    fn default() -> Self {
+        DepthPrePass { pipelines: None, kind: PassKind::DepthPrePass }
+    }
 }
 
 impl DepthPrePass {
     /// A new pass (cheap: pipelines come from the shared cache).
     pub fn new() -> Self {
         Self::default()
+    }
+}
+
+/// `ShadowPass`: the depth of a shadow view's casters, with a slope-scaled
+/// depth bias in its pipelines (which the camera's depth pre-pass must not
+/// have). Same partitions and variants as [`DepthPrePass`] — opaque/masked ×
+/// back-face/double-sided — so double-sided casters are drawn unculled.
+pub struct ShadowPass(DepthPrePass);
+
+impl ShadowPass {
+    /// A new pass.
+    pub fn new() -> Self {
+        ShadowPass(DepthPrePass { pipelines: None, kind: PassKind::Shadow })
+    }
+}
+
+impl Default for ShadowPass {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl RenderPass for ShadowPass {
+    fn name(&self) -> &'static str {
+        "ShadowPass"
+    }
+
+    async fn prepare_resources(&mut self, ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError> {
+        self.0.prepare_resources(ctx, rec).await
+    }
+
+    async fn execute(&mut self, ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError> {
+        self.0.execute(ctx, rec).await
     }
 }
 
@@ -49,7 +89,7 @@ impl RenderPass for DepthPrePass {
         _rec: &mut CommandRecorder,
     ) -> Result<(), PassError> {
         let _span = info_span!("depth_pre_pass_prepare", view = %ctx.view.view_id).entered();
-        let pipelines = partition_pipelines(ctx, PassKind::DepthPrePass, None, partitions(ctx));
+        let pipelines = partition_pipelines(ctx, self.kind, None, partitions(ctx));
         self.pipelines = Some(pipelines);
         Ok(())
     }

@@ -31,7 +31,7 @@ mod shadow_atlas;
 mod tonemap_pass;
 mod transparent_pass;
 
-pub use depth_pre_pass::{DepthPrePass, DepthPrePassOutput};
+pub use depth_pre_pass::{DepthPrePass, DepthPrePassOutput, ShadowPass};
 pub use lighting_inputs::{
     LightingInputs, MAX_CASCADES, MAX_PROBES, MAX_SPOT_SHADOWS, PROBE_FACE_AXES, PROBE_FACES, probe_view,
 };

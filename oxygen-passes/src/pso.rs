@@ -20,6 +20,9 @@ use tracing::debug;
 pub enum PassKind {
     /// Depth only; writes depth with `Greater`.
     DepthPrePass,
+    /// A shadow map: as `DepthPrePass`, plus a slope-scaled depth bias
+    /// pushing stored depth away from the light (against shadow acne).
+    Shadow,
     /// Shading after a depth pre-pass: `GreaterEqual`, no depth writes.
     ShadingAfterPrePass,
     /// Shading that writes its own depth (no pre-pass): `Greater`, writes.
@@ -93,7 +96,7 @@ pub const TONEMAP_WGSL: &str = include_str!("tonemap_pass.wgsl");
 /// vertex stage, then the pass's own code.
 pub fn shader_source(pass: PassKind, textures: TexturePath) -> String {
     let body = match pass {
-        PassKind::DepthPrePass => DEPTH_PRE_PASS_WGSL,
+        PassKind::DepthPrePass | PassKind::Shadow => DEPTH_PRE_PASS_WGSL,
         PassKind::Shading | PassKind::ShadingAfterPrePass | PassKind::Transparent => SHADER_PASS_WGSL,
     };
     // Enable directives must come before any declaration.
@@ -295,7 +298,9 @@ impl PipelineCache {
     fn create(&self, device: &wgpu::Device, module: &wgpu::ShaderModule, key: PipelineKey) -> wgpu::RenderPipeline {
         let masked = key.variant.alpha == AlphaClass::Masked;
         let (fragment_entry, depth_write, depth_compare) = match key.pass {
-            PassKind::DepthPrePass => (masked.then_some("fs_alpha_test"), true, wgpu::CompareFunction::Greater),
+            PassKind::DepthPrePass | PassKind::Shadow => {
+                (masked.then_some("fs_alpha_test"), true, wgpu::CompareFunction::Greater)
+            }
             PassKind::ShadingAfterPrePass => {
                 (Some(if masked { "fs_masked" } else { "fs_opaque" }), false, wgpu::CompareFunction::GreaterEqual)
             }
@@ -337,7 +342,13 @@ impl PipelineCache {
                 depth_write_enabled: Some(depth_write),
                 depth_compare: Some(depth_compare),
                 stencil: Default::default(),
-                bias: Default::default(),
+                // Reverse-Z: a negative bias moves depth towards the far plane,
+                // i.e. away from the light, more so on surfaces seen edge-on.
+                bias: if key.pass == PassKind::Shadow {
+                    wgpu::DepthBiasState { constant: -2, slope_scale: -1.5, clamp: 0.0 }
+                } else {
+                    Default::default()
+                },
             }),
             multisample: Default::default(),
             fragment,
