@@ -128,7 +128,7 @@ impl ReflectionProbe {
     pub fn before_frame(&mut self, renderer: &mut Renderer) -> Result<bool, RenderError> {
         let update = match self.update {
             ProbeUpdate::EveryFrame => true,
-            ProbeUpdate::EveryNthFrame(n) => self.frames_seen % u64::from(n.max(1)) == 0,
+            ProbeUpdate::EveryNthFrame(n) => self.frames_seen.is_multiple_of(u64::from(n.max(1))),
             ProbeUpdate::OnDemand => self.update_requested,
         };
         self.frames_seen += 1;
