@@ -17,7 +17,7 @@
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-use glam::{DVec3, Mat4, Quat, UVec2, Vec2, Vec3, Vec4};
+use glam::{DVec3, Quat, UVec2, Vec2, Vec3, Vec4};
 use oxygen_core::{
     Aabb, AlphaMode, Camera, ColorSpace, Filter, Geometry, GeometryHandle, Light, LightKind, Material, MaterialHandle,
     NodeKey, Projection, Renderable, ResolvedView, Sampling, Scene, Submesh, TextureHandle, TextureImage, Transform,
@@ -108,12 +108,12 @@ impl ViewResolver for NodeCameraResolver {
             .world_transform(self.node)
             .ok_or_else(|| ViewError::Other { view: view_id, message: "the camera's node was removed".into() })?;
         let (_, rotation, translation) = world.to_scale_rotation_translation();
-        let pose = Mat4::from_rotation_translation(rotation.as_quat().normalize(), translation.as_vec3());
+        let pose = glam::DMat4::from_rotation_translation(rotation.normalize(), translation);
         let aspect = self.viewport.x as f32 / self.viewport.y.max(1) as f32;
         let projection =
             self.camera.projection_matrix(aspect).map_err(|source| ViewError::Camera { view: view_id, source })?;
         let (near, far) = self.camera.depth_range();
-        ResolvedView::new(view_id, pose.inverse(), projection, self.viewport, near, far)
+        ResolvedView::new_f64(view_id, pose.inverse(), projection, self.viewport, near, far)
     }
 }
 

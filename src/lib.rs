@@ -36,7 +36,7 @@ pub mod shadows;
 pub use gltf_import::{GltfCamera, GltfError, GltfImport, NodeCameraResolver, SceneChoice, import_gltf};
 pub use probes::{ProbeUpdate, ReflectionProbe};
 pub use renderer::{
-    FrameReport, RenderError, RenderGraphFuture, Renderer, RendererOptions, ViewReport, lit_render_graph,
+    FrameReport, RenderError, RenderGraphFuture, RenderOrigin, Renderer, RendererOptions, ViewReport, lit_render_graph,
     standard_render_graph,
 };
 pub use shadows::{register_spot_shadows, register_sun_cascades, shadowed_render_graph};
@@ -53,7 +53,8 @@ pub use oxygen_sceneprep as sceneprep;
 /// The names most applications use.
 pub mod prelude {
     pub use crate::{
-        FrameReport, RenderError, RenderGraphFuture, Renderer, RendererOptions, lit_render_graph, standard_render_graph,
+        FrameReport, RenderError, RenderGraphFuture, RenderOrigin, Renderer, RendererOptions, lit_render_graph,
+        standard_render_graph,
     };
     pub use crate::{SceneChoice, import_gltf};
     pub use oxygen_bindless::TexturePath;

@@ -9,7 +9,7 @@
 //! (`Renderer::set_view_active`), so an every-N-frames probe costs nothing on
 //! the other frames and keeps its last image.
 
-use glam::{Mat4, UVec2, Vec3};
+use glam::{UVec2, Vec3};
 use oxygen_core::{Camera, ResolvedView, Scene, ViewContext, ViewError, ViewId, ViewResolver, ViewTargets};
 use oxygen_passes::{
     CommandRecorder, DepthPrePass, PROBE_FACE_AXES, PROBE_FACES, ProbeInput, RenderContext, RenderPass, ShaderPass,
@@ -47,11 +47,15 @@ pub struct ProbeFaceResolver {
 impl ViewResolver for ProbeFaceResolver {
     fn resolve(&self, ctx: &ViewContext, _scene: &Scene) -> Result<ResolvedView, ViewError> {
         let (forward, up) = PROBE_FACE_AXES[self.face.min(PROBE_FACES - 1)];
-        let view = Mat4::look_to_rh(self.position, Vec3::from(forward), Vec3::from(up));
+        let view = glam::DMat4::look_to_rh(
+            self.position.as_dvec3(),
+            Vec3::from(forward).as_dvec3(),
+            Vec3::from(up).as_dvec3(),
+        );
         let camera = Camera::perspective(std::f32::consts::FRAC_PI_2, self.near, Some(self.far));
         let projection =
             camera.projection_matrix(1.0).map_err(|source| ViewError::Camera { view: ctx.view_id, source })?;
-        ResolvedView::new(ctx.view_id, view, projection, UVec2::splat(self.resolution), self.near, self.far)
+        ResolvedView::new_f64(ctx.view_id, view, projection, UVec2::splat(self.resolution), self.near, self.far)
     }
 }
 

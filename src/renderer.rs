@@ -54,6 +54,9 @@ pub enum RenderError {
     /// The view id is not (or no longer) registered.
     #[error("{0} is not registered")]
     NoSuchView(ViewId),
+    /// The view is depth-only (a shadow view), so it has no image.
+    #[error("{0} is depth-only: it has no colour target to read")]
+    DepthOnly(ViewId),
     /// The view has not been rendered yet, so it has no image.
     #[error("{0} has not been rendered yet")]
     NotRendered(ViewId),
@@ -113,6 +116,63 @@ pub struct RendererOptions {
     /// Debug mode: shaders check each draw's slot generation and paint draws
     /// read through a stale range magenta.
     pub debug_generations: bool,
+    /// Where the GPU's coordinates are centred (camera-relative rendering).
+    pub origin: RenderOrigin,
+}
+
+/// Where the GPU's coordinate system is centred each frame.
+///
+/// `f32` has 24 bits of mantissa: a million units from its origin, positions
+/// are rounded to 1/16 of a unit, enough to make nearby geometry visibly
+/// shake and crack. Oxygen composes transforms in `f64` and, under the
+/// default [`RenderOrigin::FollowFirstView`], moves the origin next to the
+/// camera before anything is rounded to `f32` for the GPU. The precision this
+/// buys is measured by `tests/huge_world.rs`; its cost is a frame-phase
+/// re-collection whenever the origin moves (a camera crossing a grid cell),
+/// no more than a frame in which every node moved.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum RenderOrigin {
+    /// World coordinates go to the GPU as they are: exact near the world
+    /// origin, 1/16-unit steps a million units out.
+    Absolute,
+    /// Centred on the camera of the first active view (lowest id) that
+    /// renders colour (shadow views are passed over when there is another),
+    /// snapped to a grid of `grid` units so that it moves, and the frame's
+    /// matrices are rebuilt, only when that camera crosses a cell.
+    FollowFirstView {
+        /// Cell size in world units (positive and finite; otherwise the
+        /// origin is not snapped).
+        grid: f64,
+    },
+    /// Centred on a fixed world position.
+    Fixed(glam::DVec3),
+}
+
+impl Default for RenderOrigin {
+    fn default() -> Self {
+        RenderOrigin::FollowFirstView { grid: 1024.0 }
+    }
+}
+
+impl RenderOrigin {
+    /// The origin for a frame in which [`RenderOrigin::FollowFirstView`]
+    /// follows `followed` (the renderer passes its first active colour view).
+    pub fn resolve(self, followed: Option<&ResolvedView>) -> glam::DVec3 {
+        match self {
+            RenderOrigin::Absolute => glam::DVec3::ZERO,
+            RenderOrigin::Fixed(origin) if origin.is_finite() => origin,
+            RenderOrigin::Fixed(_) => glam::DVec3::ZERO,
+            RenderOrigin::FollowFirstView { grid } => {
+                let Some(eye) = followed.map(ResolvedView::camera_position_f64) else {
+                    return glam::DVec3::ZERO;
+                };
+                if !eye.is_finite() {
+                    return glam::DVec3::ZERO;
+                }
+                if grid.is_finite() && grid > 0.0 { (eye / grid).round() * grid } else { eye }
+            }
+        }
+    }
 }
 
 struct RegisteredView {
@@ -135,6 +195,7 @@ pub struct Renderer {
     next_view: u32,
     frame_index: u64,
     started: Instant,
+    origin: RenderOrigin,
 }
 
 /// The default render graph: depth pre-pass, metallic-roughness shading of
@@ -217,6 +278,7 @@ impl Renderer {
         };
         prep.set_debug_generations(options.debug_generations);
         Ok(Renderer {
+            origin: options.origin,
             gpu,
             heap,
             prep,
@@ -313,10 +375,17 @@ impl Renderer {
         let resolved = self.resolve_views(scene, frame_index, time_seconds)?;
         let requests: Vec<ViewRequest<'_>> =
             resolved.iter().map(|view| ViewRequest { view, options: self.views[&view.view_id].options }).collect();
+        let followed = resolved.iter().find(|v| !self.views[&v.view_id].options.depth_only).or(resolved.first());
+        let origin = self.origin.resolve(followed);
+        self.prep.set_render_origin(origin);
         self.prep.prepare(scene, &requests, &mut self.heap.slots)?;
         self.prep.upload(&mut self.heap, &self.gpu.device, &self.gpu.queue)?;
         let frames = self.prep.frames();
         let prepare_seconds = prepare_start.elapsed().as_secs_f64();
+
+        // The passes see every view relative to the render origin, as the
+        // world matrices and lights were uploaded.
+        let gpu_views: Vec<ResolvedView> = resolved.iter().map(|view| view.relative_to(origin)).collect();
 
         // Render: each view's graph, submitted in view order.
         let record_start = Instant::now();
@@ -324,17 +393,19 @@ impl Renderer {
         let mut reports = Vec::with_capacity(frames.len());
         // Targets and constants first, for every view, so that a view's graph
         // can read what earlier views render (shadow maps, probe faces).
-        for (view, frame) in resolved.iter().zip(frames) {
+        for (view, frame) in gpu_views.iter().zip(frames) {
             let registered = self.views.get_mut(&view.view_id).ok_or(RenderError::NoSuchView(view.view_id))?;
+            // Depth-only views (shadow maps) get no colour targets.
+            let with_color = !registered.options.depth_only;
             let targets_fit =
-                registered.targets.as_ref().is_some_and(|t| t.width == view.viewport.x && t.height == view.viewport.y);
+                registered.targets.as_ref().is_some_and(|t| t.fits(view.viewport.x, view.viewport.y, with_color));
             if !targets_fit {
-                registered.targets = Some(ViewTargets::new(
-                    &self.gpu.device,
-                    view.viewport.x,
-                    view.viewport.y,
-                    &view.view_id.to_string(),
-                ));
+                let (width, height, label) = (view.viewport.x, view.viewport.y, view.view_id.to_string());
+                registered.targets = Some(if with_color {
+                    ViewTargets::new(&self.gpu.device, width, height, &label)
+                } else {
+                    ViewTargets::depth_only(&self.gpu.device, width, height, &label)
+                });
             }
             registered.constants.set_camera(
                 &self.gpu.queue,
@@ -349,12 +420,12 @@ impl Renderer {
             registered.constants.set_renderer(&self.gpu.queue, &frame.renderer_constants(time_seconds));
         }
         let frame_views = FrameViews {
-            entries: resolved
+            entries: gpu_views
                 .iter()
                 .filter_map(|view| self.views[&view.view_id].targets.as_ref().map(|t| (view.view_id, view, t)))
                 .collect(),
         };
-        for (view, frame) in resolved.iter().zip(frames) {
+        for (view, frame) in gpu_views.iter().zip(frames) {
             let registered = &self.views[&view.view_id];
             let Some(targets) = registered.targets.as_ref() else { continue };
             let ctx = RenderContext {
@@ -368,6 +439,7 @@ impl Renderer {
                 draw_path: self.draw_path,
                 outputs: Default::default(),
                 frame_views: &frame_views,
+                origin,
             };
             let record_started = Instant::now();
             let mut recorder = CommandRecorder::new(&self.gpu.device, &view.view_id.to_string());
@@ -424,7 +496,8 @@ impl Renderer {
     pub fn read_color(&self, id: ViewId) -> Result<image::RgbaImage, RenderError> {
         let view = self.views.get(&id).ok_or(RenderError::NoSuchView(id))?;
         let targets = view.targets.as_ref().ok_or(RenderError::NotRendered(id))?;
-        Ok(self.gpu.read_rgba8(&targets.color)?)
+        let color = targets.color.as_ref().ok_or(RenderError::DepthOnly(id))?;
+        Ok(self.gpu.read_rgba8(&color.color)?)
     }
 
     /// The view's prepared frame from the last `render_frame`.

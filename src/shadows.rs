@@ -94,16 +94,16 @@ impl ViewResolver for SpotShadowResolver {
         let node = scene.node(self.light).ok_or_else(missing)?;
         let light = node.light.as_ref().ok_or_else(missing)?;
         let LightKind::Spot { range, outer_cone, .. } = light.kind else { return Err(missing()) };
-        let world = scene.world_transform(self.light).ok_or_else(missing)?.as_mat4();
+        let world = scene.world_transform(self.light).ok_or_else(missing)?;
         let (_, rotation, position) = world.to_scale_rotation_translation();
-        let view = glam::Mat4::from_rotation_translation(rotation.normalize(), position).inverse();
+        let view = glam::DMat4::from_rotation_translation(rotation.normalize(), position).inverse();
         // A little wider than the cone, so PCF taps at its edge stay inside.
         let fov = (outer_cone * 2.0 * 1.1).clamp(0.05, 170f32.to_radians());
         let far = range.filter(|r| r.is_finite() && *r > self.near).unwrap_or(self.far);
         let camera = oxygen_core::Camera::perspective(fov, self.near, Some(far));
         let projection =
             camera.projection_matrix(1.0).map_err(|source| oxygen_core::ViewError::Camera { view: view_id, source })?;
-        oxygen_core::ResolvedView::new(
+        oxygen_core::ResolvedView::new_f64(
             view_id,
             view,
             projection,

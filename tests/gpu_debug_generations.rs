@@ -74,6 +74,7 @@ fn a_stale_draw_range_is_painted_magenta() {
         draw_path: DrawPath::Direct,
         outputs: Default::default(),
         frame_views: &oxygen::passes::FrameViews::default(),
+        origin: glam::DVec3::ZERO,
     };
     let mut recorder = CommandRecorder::new(&gpu.device, "stale view");
     block_on(async {
@@ -89,7 +90,7 @@ fn a_stale_draw_range_is_painted_magenta() {
     })
     .unwrap();
     gpu.queue.submit([recorder.finish().0]);
-    let image = gpu.read_rgba8(&targets.color).unwrap();
+    let image = gpu.read_rgba8(&targets.color.as_ref().unwrap().color).unwrap();
     let flagged = magenta_pixels(&image);
     assert!(flagged > 96 * 64 / 4, "only {flagged} pixels flagged");
 }

@@ -122,6 +122,12 @@ fn a_cube_casts_a_shadow_on_the_ground() {
     });
     renderer.render_frame(&scene).unwrap();
     let image = renderer.read_color(view).unwrap();
+    // Shadow views render depth only: no colour targets were made for them.
+    let cascade = cascade_ids[0].unwrap();
+    assert!(
+        matches!(renderer.read_color(cascade), Err(oxygen::RenderError::DepthOnly(id)) if id == cascade),
+        "a cascade view has colour targets"
+    );
     let resolved = camera.resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
     let shadowed = region_mean(&image, pixel_of(&resolved, Vec3::new(1.6, 0.0, 0.0)), 1);
     let lit = region_mean(&image, pixel_of(&resolved, Vec3::new(-3.0, 0.0, 1.5)), 1);

@@ -33,7 +33,7 @@ pub mod view;
 
 pub use camera::{Camera, CameraError, Projection};
 pub use geometry::{Geometry, GeometryError, Submesh, Vertex};
-pub use gpu::{GpuContext, GpuError, GpuOptions, ViewTargets};
+pub use gpu::{ColorTargets, GpuContext, GpuError, GpuOptions, ViewTargets};
 pub use light::{Light, LightKind, Mobility};
 pub use material::{AlphaMode, Material};
 pub use math::{Aabb, Frustum, Plane, Sphere};

@@ -8,7 +8,7 @@
 
 use std::fmt;
 
-use glam::{Mat4, UVec2, Vec3};
+use glam::{DMat4, DVec3, Mat4, UVec2, Vec3};
 use thiserror::Error;
 
 use crate::{Camera, CameraError, Frustum, Scene};
@@ -115,10 +115,17 @@ pub struct ResolvedView {
     pub far: f32,
     /// World-space eye position.
     pub camera_position: Vec3,
+    /// World → view in `f64`: the exact pose the `f32` matrices above round.
+    /// [`ResolvedView::relative_to`] builds the GPU's camera-relative
+    /// matrices from it, so a camera a million units from the world origin
+    /// still renders without `f32` jitter.
+    pub world_to_view: DMat4,
 }
 
 impl ResolvedView {
-    /// Builds and validates a resolved view from its matrices.
+    /// Builds and validates a resolved view from its matrices. Prefer
+    /// [`ResolvedView::new_f64`] when the pose is known in `f64` (cameras far
+    /// from the world origin).
     pub fn new(
         view_id: ViewId,
         view: Mat4,
@@ -127,11 +134,28 @@ impl ResolvedView {
         near: f32,
         far: f32,
     ) -> Result<Self, ViewError> {
+        if !view.is_finite() {
+            return Err(ViewError::NonFiniteMatrix { view: view_id, which: "view" });
+        }
+        Self::new_f64(view_id, view.as_dmat4(), projection, viewport, near, far)
+    }
+
+    /// Builds and validates a resolved view from a world → view matrix in
+    /// `f64`; the `f32` matrices used for culling are rounded from it.
+    pub fn new_f64(
+        view_id: ViewId,
+        world_to_view: DMat4,
+        projection: Mat4,
+        viewport: UVec2,
+        near: f32,
+        far: f32,
+    ) -> Result<Self, ViewError> {
         if viewport.x == 0 || viewport.y == 0 {
             return Err(ViewError::EmptyViewport { view: view_id, width: viewport.x, height: viewport.y });
         }
+        let view = world_to_view.as_mat4();
         for (which, m) in [("view", &view), ("projection", &projection)] {
-            if !m.is_finite() {
+            if !m.is_finite() || !world_to_view.is_finite() {
                 return Err(ViewError::NonFiniteMatrix { view: view_id, which });
             }
         }
@@ -141,7 +165,7 @@ impl ResolvedView {
             return Err(ViewError::SingularViewProjection { view: view_id });
         }
         let inverse_view_projection = view_projection.inverse();
-        let camera_position = view.inverse().w_axis.truncate();
+        let camera_position = world_to_view.inverse().w_axis.truncate().as_vec3();
         if !inverse_view_projection.is_finite() || !camera_position.is_finite() {
             return Err(ViewError::SingularViewProjection { view: view_id });
         }
@@ -156,7 +180,36 @@ impl ResolvedView {
             near,
             far,
             camera_position,
+            world_to_view,
         })
+    }
+
+    /// The same view in coordinates centred on `origin` (world position
+    /// `origin` becomes (0, 0, 0)): what the GPU receives under
+    /// camera-relative rendering. Composed in `f64` from
+    /// [`ResolvedView::world_to_view`], so the rounding to `f32` happens on
+    /// small numbers. With `origin` = 0 the matrices are unchanged.
+    pub fn relative_to(&self, origin: DVec3) -> ResolvedView {
+        if origin == DVec3::ZERO {
+            return *self;
+        }
+        let world_to_view = self.world_to_view * DMat4::from_translation(origin);
+        let view_projection64 = self.projection.as_dmat4() * world_to_view;
+        let view_projection = view_projection64.as_mat4();
+        ResolvedView {
+            view: world_to_view.as_mat4(),
+            view_projection,
+            inverse_view_projection: view_projection64.inverse().as_mat4(),
+            frustum: Frustum::from_view_projection(&view_projection),
+            camera_position: world_to_view.inverse().w_axis.truncate().as_vec3(),
+            world_to_view,
+            ..*self
+        }
+    }
+
+    /// The eye position in `f64`.
+    pub fn camera_position_f64(&self) -> DVec3 {
+        self.world_to_view.inverse().w_axis.truncate()
     }
 
     /// Width / height of the viewport.
@@ -214,9 +267,9 @@ impl ViewResolver for LookAtResolver {
         let aspect = self.viewport.x as f32 / self.viewport.y as f32;
         let projection =
             self.camera.projection_matrix(aspect).map_err(|source| ViewError::Camera { view: view_id, source })?;
-        let view = Mat4::look_at_rh(self.eye, self.target, self.up);
+        let view = DMat4::look_at_rh(self.eye.as_dvec3(), self.target.as_dvec3(), self.up.as_dvec3());
         let (near, far) = self.camera.depth_range();
-        ResolvedView::new(view_id, view, projection, self.viewport, near, far)
+        ResolvedView::new_f64(view_id, view, projection, self.viewport, near, far)
     }
 }
 
@@ -265,5 +318,50 @@ mod tests {
         let v = r.resolve(&ctx(), &Scene::new()).unwrap();
         assert!(v.inverse_view_projection.is_finite());
         assert!((v.camera_position - r.eye).length() < 1.0);
+    }
+
+    /// A camera 1e6 units out, looking at a point 0.01 units to the side of
+    /// its target: in absolute `f32` the point lands where the rounding of the
+    /// view matrix puts it (f32 spacing at 1e6 is 0.0625); relative to an
+    /// origin near the camera it lands within a micro-unit of the same scene
+    /// built at the world origin.
+    #[test]
+    fn relative_matrices_keep_precision_a_million_units_out() {
+        let offset = Vec3::new(1e6, 0.0, -1e6);
+        let at = |base: Vec3| LookAtResolver {
+            camera: Camera::perspective(1.0, 1e-3, None),
+            eye: base + Vec3::new(0.25, 1.5, 3.0),
+            target: base,
+            up: Vec3::Y,
+            viewport: UVec2::new(64, 64),
+        };
+        let reference = at(Vec3::ZERO).resolve(&ctx(), &Scene::new()).unwrap();
+        let far = at(offset).resolve(&ctx(), &Scene::new()).unwrap();
+        let point = Vec3::new(0.01, 0.02, -0.03);
+        let ndc = |m: Mat4, p: Vec3| m.project_point3(p);
+        let expected = ndc(reference.view_projection, point);
+
+        let relative = far.relative_to(offset.as_dvec3());
+        let relative_error = (ndc(relative.view_projection, point) - expected).abs().max_element();
+        let absolute_error = (ndc(far.view_projection, point + offset) - expected).abs().max_element();
+        assert!(relative_error < 1e-5, "relative error {relative_error}");
+        assert!(absolute_error > 1e-3, "absolute f32 error {absolute_error} should be visible");
+        assert!((relative.camera_position - Vec3::new(0.25, 1.5, 3.0)).length() < 1e-6);
+        // The relative frustum culls relative positions.
+        assert!(relative.frustum.intersects_aabb(&crate::Aabb::new(point - 0.01, point + 0.01)));
+    }
+
+    #[test]
+    fn relative_to_the_world_origin_changes_nothing() {
+        let v = LookAtResolver {
+            camera: Camera::perspective(1.0, 0.1, Some(100.0)),
+            eye: Vec3::new(1.0, 2.0, 3.0),
+            target: Vec3::ZERO,
+            up: Vec3::Y,
+            viewport: UVec2::new(8, 8),
+        }
+        .resolve(&ctx(), &Scene::new())
+        .unwrap();
+        assert_eq!(v.relative_to(DVec3::ZERO), v);
     }
 }

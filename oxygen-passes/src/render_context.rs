@@ -1,7 +1,7 @@
 //! `RenderContext` and `CommandRecorder`: what a pass reads and where it records.
 
 use oxygen_bindless::{BindlessHeap, SceneConstantsBuffer};
-use oxygen_core::{GpuContext, ResolvedView, ViewId, ViewTargets};
+use oxygen_core::{ColorTargets, GpuContext, ResolvedView, ViewId, ViewTargets};
 use oxygen_sceneprep::{Partition, PreparedSceneFrame};
 use thiserror::Error;
 
@@ -31,6 +31,12 @@ pub enum PassError {
         pass: &'static str,
         /// The missing output's type.
         input: &'static str,
+    },
+    /// A colour pass ran in a depth-only view.
+    #[error("{pass}: the view is depth-only and has no colour target")]
+    NoColorTarget {
+        /// The pass.
+        pass: &'static str,
     },
     /// An application-defined failure inside a render graph.
     #[error("render graph: {0}")]
@@ -98,7 +104,8 @@ impl PassOutputs {
 pub struct RenderContext<'a> {
     /// Device and queue.
     pub gpu: &'a GpuContext,
-    /// The resolved view.
+    /// The resolved view, relative to [`RenderContext::origin`]
+    /// ([`ResolvedView::relative_to`]).
     pub view: &'a ResolvedView,
     /// ScenePrep's result for this view.
     pub prepared: &'a PreparedSceneFrame,
@@ -117,6 +124,18 @@ pub struct RenderContext<'a> {
     /// Every view of this frame with its targets; views are submitted in
     /// order, so a view may sample what an earlier one rendered.
     pub frame_views: &'a FrameViews<'a>,
+    /// The render origin: every matrix and position the GPU sees this frame
+    /// (`view`, `frame_views`, world matrices, lights) is relative to it. A
+    /// pass that uploads a world position of its own subtracts it.
+    pub origin: glam::DVec3,
+}
+
+impl RenderContext<'_> {
+    /// The view's colour targets, or [`PassError::NoColorTarget`] naming
+    /// `pass` when the view is depth-only.
+    pub fn color_targets(&self, pass: &'static str) -> Result<&ColorTargets, PassError> {
+        self.targets.color.as_ref().ok_or(PassError::NoColorTarget { pass })
+    }
 }
 
 /// The views of one frame, in submission order, with their targets.

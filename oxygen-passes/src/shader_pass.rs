@@ -143,6 +143,12 @@ impl ShaderPass {
             for (layer, face) in probe.faces.iter().enumerate() {
                 // A paused face is absent from this frame: its layer keeps the last image.
                 let Some((_, targets)) = ctx.frame_views.get(*face) else { continue };
+                let Some(hdr) = targets.color.as_ref().map(|c| &c.hdr) else {
+                    return Err(PassError::MissingInput {
+                        pass: self.name(),
+                        input: "a probe face with colour targets",
+                    });
+                };
                 if targets.width != side || targets.height != side {
                     return Err(PassError::MissingInput {
                         pass: self.name(),
@@ -150,7 +156,7 @@ impl ShaderPass {
                     });
                 }
                 rec.encoder().copy_texture_to_texture(
-                    targets.hdr.as_image_copy(),
+                    hdr.as_image_copy(),
                     wgpu::TexelCopyTextureInfo {
                         texture: &probe.texture,
                         mip_level: 0,
@@ -160,7 +166,8 @@ impl ShaderPass {
                     wgpu::Extent3d { width: side, height: side, depth_or_array_layers: 1 },
                 );
             }
-            uniform.probe_positions[slot] = probe.position.extend(1.0).to_array();
+            let relative = (probe.position.as_dvec3() - ctx.origin).as_vec3();
+            uniform.probe_positions[slot] = relative.extend(1.0).to_array();
             probe_views[slot] = Some(crate::probe_view(&probe.texture));
         }
         uniform.probe_count = probes.len() as u32;
@@ -195,13 +202,14 @@ impl RenderPass for ShaderPass {
     async fn execute(&mut self, ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError> {
         let _span = info_span!("shader_pass_execute", view = %ctx.view.view_id).entered();
         let pipelines = self.pipelines.as_ref().ok_or(PassError::NotPrepared { pass: self.name() })?;
+        let color = ctx.color_targets(self.name())?;
         let depth_load = if self.config.depth_from_pre_pass { wgpu::LoadOp::Load } else { wgpu::LoadOp::Clear(0.0) };
         let mut stats = rec.stats;
         {
             let mut pass = rec.encoder().begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("shader pass"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &ctx.targets.hdr_view,
+                    view: &color.hdr_view,
                     depth_slice: None,
                     resolve_target: None,
                     ops: wgpu::Operations {

@@ -68,6 +68,7 @@ impl RenderPass for TonemapPass {
         _rec: &mut CommandRecorder,
     ) -> Result<(), PassError> {
         let device = &ctx.gpu.device;
+        let color = ctx.color_targets(self.name())?;
         let (pipeline, layout) = ctx.pipelines.tonemap(device, ViewTargets::COLOR_FORMAT);
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("tonemap params"),
@@ -84,10 +85,7 @@ impl RenderPass for TonemapPass {
             label: Some("tonemap"),
             layout: &layout,
             entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::TextureView(&ctx.targets.hdr_view),
-                },
+                wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&color.hdr_view) },
                 wgpu::BindGroupEntry { binding: 1, resource: params.as_entire_binding() },
             ],
         });
@@ -98,10 +96,11 @@ impl RenderPass for TonemapPass {
     async fn execute(&mut self, ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError> {
         let _span = info_span!("tonemap_execute", view = %ctx.view.view_id).entered();
         let (pipeline, bind_group) = self.pipeline.as_ref().ok_or(PassError::NotPrepared { pass: self.name() })?;
+        let color = ctx.color_targets(self.name())?;
         let mut pass = rec.encoder().begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("tonemap"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &ctx.targets.color_view,
+                view: &color.color_view,
                 depth_slice: None,
                 resolve_target: None,
                 ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },

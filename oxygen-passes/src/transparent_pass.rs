@@ -53,12 +53,13 @@ impl RenderPass for TransparentPass {
         if pipelines.is_empty() {
             return Ok(()); // nothing blended in this view: no pass at all
         }
+        let color = ctx.color_targets(self.name())?;
         let mut stats = rec.stats;
         {
             let mut pass = rec.encoder().begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("transparent pass"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &ctx.targets.hdr_view,
+                    view: &color.hdr_view,
                     depth_slice: None,
                     resolve_target: None,
                     ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },

@@ -21,6 +21,7 @@
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
+use glam::DVec3;
 use oxygen_bindless::{Allocation, BindlessError, BindlessHeap, DomainKind, SlotAllocators, SlotError, TextureUpload};
 use oxygen_core::{Geometry, GeometryHandle, ResolvedView, Scene, TextureImage, ViewId};
 use thiserror::Error;
@@ -131,6 +132,7 @@ pub struct ScenePrep {
     frame_index: u64,
     stats: PrepStats,
     debug_generations: bool,
+    render_origin: DVec3,
 }
 
 impl Default for ScenePrep {
@@ -171,7 +173,23 @@ impl ScenePrep {
             frame_index: 0,
             stats: PrepStats::default(),
             debug_generations: false,
+            render_origin: DVec3::ZERO,
         }
+    }
+
+    /// The world position the GPU's coordinates are centred on (camera-relative
+    /// rendering): world matrices and light positions are uploaded relative
+    /// to it, and views must be given to the passes through
+    /// [`oxygen_core::ResolvedView::relative_to`] with the same origin.
+    /// Culling and sorting stay in world space. Changing it re-runs the
+    /// frame phase, as a moved scene would. Default: the world origin.
+    pub fn set_render_origin(&mut self, origin: DVec3) {
+        self.render_origin = origin;
+    }
+
+    /// The origin set by [`ScenePrep::set_render_origin`].
+    pub fn render_origin(&self) -> DVec3 {
+        self.render_origin
     }
 
     /// Debug mode: every `DrawMetadata` carries its range's generation in
@@ -239,7 +257,7 @@ impl ScenePrep {
             let w = w.get_mut().unwrap_or_else(|e| e.into_inner());
             w.frame.transforms = Arc::clone(&self.released_transforms);
         }
-        self.frame.collect(scene);
+        self.frame.collect(scene, self.render_origin);
         self.stats.frame_phase_runs += 1;
         self.stats.frame_phase_reuses += u64::from(self.frame.reused_last());
         self.stats.renderables_last_frame = self.frame.renderables.len() as u64;

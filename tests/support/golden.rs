@@ -50,21 +50,7 @@ pub fn assert_golden(name: &str, actual: &RgbaImage, tolerance: Tolerance) {
         return;
     }
     let golden = image::open(&golden_path).unwrap_or_else(|e| panic!("{}: {e}", golden_path.display())).to_rgba8();
-    assert_eq!(golden.dimensions(), actual.dimensions(), "{name}: size differs from the golden");
-    let mut diff = RgbaImage::new(actual.width(), actual.height());
-    let mut differing = 0usize;
-    let mut worst = 0u8;
-    for ((a, g), d) in actual.pixels().zip(golden.pixels()).zip(diff.pixels_mut()) {
-        let error = a.0.iter().zip(g.0.iter()).map(|(x, y)| x.abs_diff(*y)).max().unwrap_or(0);
-        worst = worst.max(error);
-        if error > tolerance.channel_tolerance {
-            differing += 1;
-            *d = Rgba([255, 0, 0, 255]);
-        } else {
-            *d = Rgba([g.0[0] / 3, g.0[1] / 3, g.0[2] / 3, 255]);
-        }
-    }
-    let total = (actual.width() * actual.height()) as usize;
+    let Comparison { differing, total, worst, diff } = compare(actual, &golden, tolerance.channel_tolerance);
     let allowed = (total as f64 * tolerance.max_differing).floor() as usize;
     if differing > allowed {
         let actual_path = dir.join(format!("{name}.actual.png"));
@@ -80,4 +66,35 @@ pub fn assert_golden(name: &str, actual: &RgbaImage, tolerance: Tolerance) {
             golden_path.display()
         );
     }
+}
+
+/// How two pictures of one size differ.
+pub struct Comparison {
+    /// Pixels whose largest channel difference exceeds the tolerance.
+    pub differing: usize,
+    /// Pixels compared.
+    pub total: usize,
+    /// The largest channel difference seen.
+    pub worst: u8,
+    /// Differing pixels red, matching ones dimmed.
+    pub diff: RgbaImage,
+}
+
+/// Compares two pictures pixel by pixel (panics when their sizes differ).
+pub fn compare(actual: &RgbaImage, expected: &RgbaImage, channel_tolerance: u8) -> Comparison {
+    assert_eq!(expected.dimensions(), actual.dimensions(), "the pictures' sizes differ");
+    let mut diff = RgbaImage::new(actual.width(), actual.height());
+    let mut differing = 0usize;
+    let mut worst = 0u8;
+    for ((a, g), d) in actual.pixels().zip(expected.pixels()).zip(diff.pixels_mut()) {
+        let error = a.0.iter().zip(g.0.iter()).map(|(x, y)| x.abs_diff(*y)).max().unwrap_or(0);
+        worst = worst.max(error);
+        if error > channel_tolerance {
+            differing += 1;
+            *d = Rgba([255, 0, 0, 255]);
+        } else {
+            *d = Rgba([g.0[0] / 3, g.0[1] / 3, g.0[2] / 3, 255]);
+        }
+    }
+    Comparison { differing, total: (actual.width() * actual.height()) as usize, worst, diff }
 }

@@ -54,6 +54,11 @@ pub fn gpu_renderer() -> Renderer {
     }
 }
 
+/// A renderer on the test adapter with explicit options.
+pub fn gpu_renderer_with(options: RendererOptions) -> Renderer {
+    Renderer::new_headless_with(options).unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"))
+}
+
 /// The pixel a world point lands on.
 pub fn pixel_of(view: &ResolvedView, world: Vec3) -> (u32, u32) {
     let clip = view.view_projection * world.extend(1.0);

@@ -6,4 +6,4 @@ mod readback;
 mod target;
 
 pub use context::{GpuContext, GpuError, GpuOptions};
-pub use target::ViewTargets;
+pub use target::{ColorTargets, ViewTargets};

@@ -10,8 +10,14 @@
 //!
 //! A node whose world matrix is non-finite or singular is skipped with a
 //! warning naming it; nothing derived from it reaches the GPU.
+//!
+//! Camera-relative rendering: what goes to the GPU (world matrices, light
+//! positions) is expressed relative to the frame's render origin, subtracted
+//! in `f64` before the rounding to `f32`, so that a world a million units
+//! across keeps sub-millimetre precision near the camera. Bounds used for
+//! culling stay in absolute world space.
 
-use glam::{Mat3, Mat4, Vec3};
+use glam::{DMat4, DVec3, Mat3, Mat4, Vec3};
 use oxygen_bindless::INVALID_SLOT;
 use std::sync::Arc;
 
@@ -82,8 +88,8 @@ pub struct FrameCollection {
     pub positional_lights: Vec<PositionalLightRecord>,
     /// Nodes skipped this frame because of a degenerate transform.
     pub skipped_nodes: u32,
-    /// (scene id, scene revision) the collection reflects.
-    collected: Option<(u64, u64)>,
+    /// (scene id, scene revision, render origin) the collection reflects.
+    collected: Option<(u64, u64, DVec3)>,
     /// The last `collect` found the scene unchanged and did nothing.
     reused_last: bool,
 }
@@ -105,16 +111,26 @@ pub fn normal_matrix(world: &Mat4) -> Option<Mat3> {
     n.is_finite().then_some(n)
 }
 
+/// `world` moved so that `origin` becomes (0, 0, 0), rounded to `f32`
+/// last: `T(-origin) · world`, exact for projective matrices too.
+pub fn relative_to_origin(world: &DMat4, origin: DVec3) -> Mat4 {
+    let shift = |c: glam::DVec4| c - (origin * c.w).extend(0.0);
+    DMat4::from_cols(shift(world.x_axis), shift(world.y_axis), shift(world.z_axis), shift(world.w_axis)).as_mat4()
+}
+
 impl FrameCollection {
     /// Runs the frame phase over `scene`, reusing this collection's buffers.
-    pub fn collect(&mut self, scene: &Scene) {
+    /// The GPU's matrices and light positions are relative to `origin`.
+    pub fn collect(&mut self, scene: &Scene, origin: DVec3) {
         let _span = info_span!("frame_phase", nodes = scene.node_count()).entered();
-        // An unchanged scene has unchanged transforms, bounds and lights.
-        self.reused_last = self.collected == Some((scene.id(), scene.revision()));
+        // An unchanged scene seen from the same origin has unchanged
+        // transforms, bounds and lights.
+        let key = (scene.id(), scene.revision(), origin);
+        self.reused_last = self.collected == Some(key);
         if self.reused_last {
             return;
         }
-        self.collected = Some((scene.id(), scene.revision()));
+        self.collected = Some(key);
         {
             let _span = info_span!("world_transforms").entered();
             scene.resolve_world_transforms(&mut self.world);
@@ -139,14 +155,16 @@ impl FrameCollection {
             if !self.world.is_effectively_visible(key) {
                 continue;
             }
-            let Some(world) = self.world.get(key) else { continue };
+            let Some(world64) = self.world.get_f64(key) else { continue };
+            let world = world64.as_mat4();
             let Some(normal) = normal_matrix(&world) else {
                 warn!(node = %node.name, "skipping node with a non-finite or singular world transform");
                 self.skipped_nodes += 1;
                 continue;
             };
             if let Some(light) = &node.light {
-                self.collect_light(&node.name, light, node.flags, &world);
+                let position = (world64.w_axis.truncate() - origin).as_vec3();
+                self.collect_light(&node.name, light, node.flags, &world, position);
             }
             let Some(renderable) = &node.renderable else { continue };
             let Some(geometry) = scene.geometry(renderable.geometry) else {
@@ -180,7 +198,7 @@ impl FrameCollection {
             self.lod_levels.extend_from_slice(&node.lods);
             let transforms = Arc::make_mut(&mut self.transforms);
             let transform_index = transforms.world.len() as u32;
-            transforms.world.push(world);
+            transforms.world.push(relative_to_origin(&world64, origin));
             transforms.normal.push(normal.into());
             self.renderables.push(RenderableEntry {
                 node: key,
@@ -244,7 +262,15 @@ impl FrameCollection {
         out
     }
 
-    fn collect_light(&mut self, name: &str, light: &oxygen_core::Light, flags: NodeFlags, world: &Mat4) {
+    /// `position` is the light's position relative to the render origin.
+    fn collect_light(
+        &mut self,
+        name: &str,
+        light: &oxygen_core::Light,
+        flags: NodeFlags,
+        world: &Mat4,
+        position: Vec3,
+    ) {
         if !light.affects_world || light.mobility == Mobility::Baked {
             return;
         }
@@ -287,7 +313,7 @@ impl FrameCollection {
                     INVALID_SLOT
                 };
                 self.positional_lights.push(PositionalLightRecord {
-                    position: world.w_axis.truncate().to_array(),
+                    position: position.to_array(),
                     range: range.filter(|r| r.is_finite() && *r > 0.0).unwrap_or(0.0),
                     direction: direction.to_array(),
                     intensity,
