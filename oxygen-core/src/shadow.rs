@@ -15,7 +15,7 @@
 
 use std::sync::Arc;
 
-use glam::{Mat4, UVec2, Vec3};
+use glam::{DMat4, DVec3, Mat4, UVec2, Vec3};
 
 use crate::math::projection::reverse_z_orthographic;
 use crate::{NodeKey, ResolvedView, Scene, ViewContext, ViewError, ViewResolver};
@@ -48,8 +48,8 @@ pub struct Cascade {
     pub split_near: f32,
     /// Camera-space distance where the slice ends.
     pub split_far: f32,
-    /// World → light view.
-    pub view: Mat4,
+    /// World → light view, in `f64` so the fit holds far from the origin.
+    pub view: DMat4,
     /// Light view → clip (reverse-Z orthographic).
     pub projection: Mat4,
     /// Depth of the orthographic box (its far plane; the near plane is 0).
@@ -57,7 +57,7 @@ pub struct Cascade {
     /// World size of one shadow-map texel.
     pub texel_world_size: f32,
     /// The box centre in light space after snapping (for tests and debugging).
-    pub snapped_center: Vec3,
+    pub snapped_center: DVec3,
 }
 
 /// Split distances `[near, d1, …, far]` (`count + 1` values).
@@ -74,32 +74,36 @@ pub fn cascade_splits(near: f32, far: f32, count: u32, lambda: f32) -> Vec<f32> 
         .collect()
 }
 
-/// The eight world-space corners of the camera's slice between `d0` and `d1`.
-fn slice_corners(camera: &ResolvedView, d0: f32, d1: f32) -> [Vec3; 8] {
-    let world_from_view = camera.view.inverse();
-    let p = camera.projection;
+/// The eight world-space corners of the camera's slice between `d0` and
+/// `d1`, in `f64` (a camera far from the origin keeps its precision).
+fn slice_corners(camera: &ResolvedView, d0: f32, d1: f32) -> [DVec3; 8] {
+    let world_from_view = camera.world_to_view.inverse();
+    let p = camera.projection.as_dmat4();
     let perspective = p.w_axis.w == 0.0;
-    let mut corners = [Vec3::ZERO; 8];
+    let (d0, d1) = (d0 as f64, d1 as f64);
+    let mut corners = [DVec3::ZERO; 8];
     for (i, corner) in corners.iter_mut().enumerate() {
         let d = if i < 4 { d0 } else { d1 };
         let (sx, sy) = (if i & 1 == 0 { -1.0 } else { 1.0 }, if i & 2 == 0 { -1.0 } else { 1.0 });
         let (half_x, half_y) =
             if perspective { (d / p.x_axis.x, d / p.y_axis.y) } else { (1.0 / p.x_axis.x, 1.0 / p.y_axis.y) };
-        *corner = world_from_view.transform_point3(Vec3::new(sx * half_x, sy * half_y, -d));
+        *corner = world_from_view.transform_point3(DVec3::new(sx * half_x, sy * half_y, -d));
     }
     corners
 }
 
 /// Fits cascade `index` of `settings` to `camera`, for a light shining along
 /// `light_direction` (need not be normalized). `None` when the inputs are
-/// degenerate (zero direction, empty depth range).
+/// degenerate (zero direction, empty depth range). Computed in `f64`: the
+/// texel snapping must hold a million units from the origin, where `f32`
+/// positions are 1/16 of a unit apart, coarser than a shadow texel.
 pub fn fit_cascade(
     camera: &ResolvedView,
     light_direction: Vec3,
     settings: &CascadeSettings,
     index: u32,
 ) -> Option<Cascade> {
-    let direction = light_direction.try_normalize()?;
+    let direction = light_direction.try_normalize()?.as_dvec3();
     let far = camera.far.min(settings.max_distance);
     if !(far > camera.near) || index >= settings.count.clamp(1, 4) {
         return None;
@@ -107,30 +111,31 @@ pub fn fit_cascade(
     let splits = cascade_splits(camera.near, far, settings.count, settings.lambda);
     let (d0, d1) = (splits[index as usize], splits[index as usize + 1]);
     let corners = slice_corners(camera, d0, d1);
-    let center = corners.iter().copied().sum::<Vec3>() / 8.0;
+    let center = corners.iter().copied().sum::<DVec3>() / 8.0;
     // Round the radius up to a multiple of 1/16 so it does not jitter with float noise.
-    let radius = (corners.iter().map(|c| c.distance(center)).fold(0.0f32, f32::max) * 16.0).ceil() / 16.0;
-    let texel = 2.0 * radius / settings.resolution.max(1) as f32;
+    let radius = (corners.iter().map(|c| c.distance(center)).fold(0.0f64, f64::max) * 16.0).ceil() / 16.0;
+    let texel = 2.0 * radius / settings.resolution.max(1) as f64;
 
     // Light-space rotation (no translation): look along the light.
-    let up = if direction.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y };
-    let rotation = Mat4::look_to_rh(Vec3::ZERO, direction, up);
+    let up = if direction.y.abs() > 0.99 { DVec3::Z } else { DVec3::Y };
+    let rotation = DMat4::look_to_rh(DVec3::ZERO, direction, up);
     let light_center = rotation.transform_point3(center);
     let snapped =
-        Vec3::new((light_center.x / texel).round() * texel, (light_center.y / texel).round() * texel, light_center.z);
+        DVec3::new((light_center.x / texel).round() * texel, (light_center.y / texel).round() * texel, light_center.z);
     let world_center = rotation.inverse().transform_point3(snapped);
 
-    let eye = world_center - direction * (radius + settings.caster_margin);
-    let view = Mat4::look_to_rh(eye, direction, up);
-    let depth = 2.0 * radius + settings.caster_margin;
-    let projection = reverse_z_orthographic(radius, radius, 0.0, depth);
+    let margin = settings.caster_margin as f64;
+    let eye = world_center - direction * (radius + margin);
+    let view = DMat4::look_to_rh(eye, direction, up);
+    let depth = (2.0 * radius + margin) as f32;
+    let projection = reverse_z_orthographic(radius as f32, radius as f32, 0.0, depth);
     Some(Cascade {
         split_near: d0,
         split_far: d1,
         view,
         projection,
         depth,
-        texel_world_size: texel,
+        texel_world_size: texel as f32,
         snapped_center: snapped,
     })
 }
@@ -165,7 +170,7 @@ impl ViewResolver for CascadeResolver {
             ),
         })?;
         let side = self.settings.resolution.max(1);
-        ResolvedView::new(view_id, cascade.view, cascade.projection, UVec2::splat(side), 0.0, cascade.depth)
+        ResolvedView::new_f64(view_id, cascade.view, cascade.projection, UVec2::splat(side), 0.0, cascade.depth)
     }
 }
 
@@ -213,9 +218,9 @@ mod tests {
             let c = fit_cascade(&camera, light, &settings, i).unwrap();
             assert!((c.split_near - previous_far).abs() < 1e-4, "gap before cascade {i}");
             previous_far = c.split_far;
-            let clip_from_world = c.projection * c.view;
+            let clip_from_world = (c.projection.as_dmat4() * c.view).as_mat4();
             for corner in slice_corners(&camera, c.split_near, c.split_far) {
-                let clip = clip_from_world * corner.extend(1.0);
+                let clip = clip_from_world * corner.as_vec3().extend(1.0);
                 let ndc = clip.xyz() / clip.w;
                 assert!(ndc.x.abs() <= 1.0 + 1e-4 && ndc.y.abs() <= 1.0 + 1e-4, "cascade {i} misses {corner}: {ndc}");
                 assert!(ndc.z >= -1e-4 && ndc.z <= 1.0 + 1e-4, "cascade {i} depth misses {corner}: {ndc}");
@@ -224,18 +229,31 @@ mod tests {
         assert!((previous_far - 80.0).abs() < 1e-3, "the last cascade ends at max_distance");
     }
 
+    /// The snapped centre moves by whole texels only as the camera
+    /// translates: the map's grid origin stays fixed within one texel. Near
+    /// the origin and a million units out, where `f32` positions are 1/16
+    /// apart, several times the 1/64-unit texel of the first cascade.
     #[test]
     fn texel_snapping_keeps_the_map_grid_fixed_as_the_camera_translates() {
         let settings = CascadeSettings::default();
         let light = Vec3::new(-0.4, -1.0, -0.3);
-        let first = fit_cascade(&camera_at(Vec3::new(0.0, 10.0, 0.0)), light, &settings, 1).unwrap();
-        for step in 1..50 {
-            let eye = Vec3::new(step as f32 * 0.0137, 10.0, step as f32 * -0.021);
-            let c = fit_cascade(&camera_at(eye), light, &settings, 1).unwrap();
-            assert_eq!(c.texel_world_size, first.texel_world_size, "texel size must not change with translation");
-            // The snapped centre moves by whole texels only: the grid origin is fixed within one texel.
-            let offset = (c.snapped_center - first.snapped_center).truncate() / c.texel_world_size;
-            assert!((offset - offset.round()).abs().max_element() < 1e-2, "step {step}: off-grid by {offset}");
+        for base in [Vec3::new(0.0, 10.0, 0.0), Vec3::new(1.0e6, 10.0, -1.0e6)] {
+            for cascade in [0, 1] {
+                let first = fit_cascade(&camera_at(base), light, &settings, cascade).unwrap();
+                for step in 1..50 {
+                    let eye = base + Vec3::new(step as f32 * 0.125, 0.0, step as f32 * -0.1875);
+                    let c = fit_cascade(&camera_at(eye), light, &settings, cascade).unwrap();
+                    assert_eq!(
+                        c.texel_world_size, first.texel_world_size,
+                        "texel size must not change with translation"
+                    );
+                    let offset = (c.snapped_center - first.snapped_center).truncate() / c.texel_world_size as f64;
+                    assert!(
+                        (offset - offset.round()).abs().max_element() < 1e-2,
+                        "camera at {base}, cascade {cascade}, step {step}: off-grid by {offset}"
+                    );
+                }
+            }
         }
     }
 }
