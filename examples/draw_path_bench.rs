@@ -7,10 +7,13 @@
 //!
 //! The scene is a grid of DRAWS small cubes under an orthographic camera that
 //! sees all of them, with four materials (opaque / masked × single / double
-//! sided), so each pass draws four partitions. For each path it renders 5
-//! warm-up and 30 measured frames and reports the CPU time to record the
-//! view's passes and the GPU time between timestamps written before and
-//! after them (when the adapter supports timestamps inside encoders).
+//! sided), so each pass draws four partitions. Three ways to submit them:
+//! direct draws, one multi-draw-indirect per partition with wgpu's indirect
+//! validation (its default), and the same without it
+//! (`GpuOptions::trust_indirect_args`). For each it renders 5 warm-up and 30
+//! measured frames and reports the CPU time to record the view's passes and
+//! the GPU time between timestamps written before and after them (when the
+//! adapter supports timestamps inside encoders).
 
 use std::sync::{Arc, Mutex};
 
@@ -60,15 +63,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
 
     println!(
-        "| path | draws | partitions per pass | draw calls per frame | CPU record ms | GPU ms | frame ms (CPU, prep + record + submit) |"
+        "| path | indirect validation | draws | partitions per pass | draw calls per frame | CPU record ms | GPU ms | frame ms (CPU, prep + record + submit) |"
     );
-    println!("|---|---:|---:|---:|---:|---:|---:|");
+    println!("|---|---|---:|---:|---:|---:|---:|---:|");
     let mut adapter_line = String::new();
-    for path in [DrawPath::Direct, DrawPath::MultiDrawIndirect] {
+    let runs = [(DrawPath::Direct, false), (DrawPath::MultiDrawIndirect, false), (DrawPath::MultiDrawIndirect, true)];
+    for (path, trust_indirect_args) in runs {
         let options = GpuOptions {
             optional_features: Renderer::OPTIONAL_FEATURES
                 | wgpu::Features::TIMESTAMP_QUERY
                 | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS,
+            trust_indirect_args,
             ..Default::default()
         };
         let gpu = GpuContext::new_headless(&options)?;
@@ -146,8 +151,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         };
         let report = report.ok_or("no frame rendered")?;
         let partitions = renderer.prepared_frame(view).map_or(0, |f| f.partitions().len());
+        let validation = match path {
+            DrawPath::Direct => "n/a",
+            _ if trust_indirect_args => "off",
+            _ => "on (wgpu default)",
+        };
         println!(
-            "| {path:?} | {} | {partitions} | {} | {:.3} | {} | {:.3} |",
+            "| {path:?} | {validation} | {} | {partitions} | {} | {:.3} | {} | {:.3} |",
             report.views[0].draws,
             report.views[0].recorded.draw_calls,
             median(&mut record).unwrap_or(f64::NAN),

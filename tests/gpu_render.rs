@@ -231,9 +231,15 @@ fn a_closure_factory_can_render_without_a_depth_pre_pass() {
 #[test]
 fn multi_draw_indirect_and_direct_draws_produce_the_same_image() {
     let demo = oxygen::core::demo::multi_view_scene();
-    let render = |path: DrawPath| {
+    let render = |path: DrawPath, trust_indirect_args: bool| {
         let options = RendererOptions { draw_path: Some(path), ..Default::default() };
-        let mut renderer = match Renderer::new_headless_with(options) {
+        let gpu_options = oxygen::core::GpuOptions {
+            optional_features: Renderer::OPTIONAL_FEATURES,
+            trust_indirect_args,
+            ..Default::default()
+        };
+        let gpu = oxygen::core::GpuContext::new_headless(&gpu_options).expect("a test adapter");
+        let mut renderer = match Renderer::with_options(gpu, options) {
             Ok(r) => r,
             Err(e) => panic!("{path:?} must be available on the test adapter: {e}"),
         };
@@ -242,18 +248,22 @@ fn multi_draw_indirect_and_direct_draws_produce_the_same_image() {
         let report = renderer.render_frame(&demo.scene).unwrap();
         (renderer.read_color(view).unwrap(), report.views[0].recorded.draw_calls)
     };
-    let (direct, direct_calls) = render(DrawPath::Direct);
-    let (indirect, indirect_calls) = render(DrawPath::MultiDrawIndirect);
+    let (direct, direct_calls) = render(DrawPath::Direct, false);
+    let (indirect, indirect_calls) = render(DrawPath::MultiDrawIndirect, false);
+    // Without wgpu's indirect validation: the same picture.
+    let (trusted, _) = render(DrawPath::MultiDrawIndirect, true);
     // One call per draw against one call per partition (two passes each),
     // plus the tone map's full-screen triangle.
     assert_eq!(direct_calls, 2 * 11 + 1);
     assert_eq!(indirect_calls, 2 * 2 + 1);
-    let differing = direct
-        .pixels()
-        .zip(indirect.pixels())
-        .filter(|(a, b)| a.0.iter().zip(b.0.iter()).any(|(x, y)| x.abs_diff(*y) > 1))
-        .count();
-    assert_eq!(differing, 0, "{differing} pixels differ by more than 1 level");
+    for (name, image) in [("multi-draw-indirect", &indirect), ("unvalidated multi-draw-indirect", &trusted)] {
+        let differing = direct
+            .pixels()
+            .zip(image.pixels())
+            .filter(|(a, b)| a.0.iter().zip(b.0.iter()).any(|(x, y)| x.abs_diff(*y) > 1))
+            .count();
+        assert_eq!(differing, 0, "{name}: {differing} pixels differ from direct draws by more than 1 level");
+    }
 }
 
 #[test]

@@ -225,3 +225,56 @@ fn sphere_culling_keeps_a_superset_of_aabb_culling_and_reports_its_extra_draws()
     eprintln!("sphere culling kept {sphere_total} draws vs {aabb_total} for AABB: {:.1} % extra", extra * 100.0);
     assert!(sphere_total >= aabb_total);
 }
+
+/// The indirect arguments are safe to hand to `multi_draw_indexed_indirect`
+/// without wgpu's indirect validation (`GpuOptions::trust_indirect_args`):
+/// each one is its draw's, reads the draw's own `DrawMetadata` (first
+/// instance = its position in the view's array, to which the shader adds the
+/// view's draw-metadata slot), and stays inside its geometry's index range, whose
+/// indices stay inside its vertex range. Meshes of different sizes, so a
+/// range that spilled into a neighbour would show.
+#[test]
+fn indirect_arguments_stay_inside_their_geometry() {
+    let mut rng = Rng(0x1d1_4ec7);
+    let mut scene = Scene::new();
+    let meshes = [
+        scene.add_geometry(Geometry::cube(1.0)),
+        scene.add_geometry(Geometry::uv_sphere(0.5, 12, 8)),
+        scene.add_geometry(Geometry::plane(2.0)),
+        scene.add_geometry(Geometry::quad(1.0)),
+    ];
+    let material = scene.add_material(Material::opaque("m", Vec4::ONE));
+    for i in 0..400 {
+        let node = scene.add_node(format!("n{i}"), Transform::from_translation(rng.vec3(40.0)));
+        let geometry = meshes[rng.below(meshes.len() as u64) as usize];
+        scene.set_renderable(node, Renderable { geometry, materials: vec![material] }).unwrap();
+    }
+    let geometry_of: std::collections::HashMap<u32, &std::sync::Arc<Geometry>> = scene
+        .nodes()
+        .filter_map(|(key, node)| Some((node_index(key), scene.geometry(node.renderable.as_ref()?.geometry)?)))
+        .collect();
+    let views: Vec<_> = (0..4).map(|i| random_view(&mut rng, &scene, i)).collect();
+    let prep = prepare(&scene, &views, CullBound::Aabb);
+    let mut checked = 0;
+    for frame in prep.frames() {
+        assert_eq!(frame.indirect_args().len(), frame.draws().len());
+        for (i, (draw, args)) in frame.draws().iter().zip(frame.indirect_args()).enumerate() {
+            let geometry = geometry_of[&draw.node_id];
+            assert_eq!(args.first_instance, i as u32, "draw {i} reads another draw's metadata");
+            assert_eq!(args.instance_count, 1);
+            let indices = draw.index_slot as usize..draw.index_slot as usize + geometry.indices().len();
+            let range = args.first_index as usize..(args.first_index + args.index_count) as usize;
+            assert!(
+                range.start >= indices.start && range.end <= indices.end,
+                "draw {i}: {range:?} outside {indices:?}"
+            );
+            let local = &geometry.indices()[range.start - indices.start..range.end - indices.start];
+            let highest = local.iter().max().copied().unwrap_or(0) as i64 + args.base_vertex as i64;
+            let lowest = local.iter().min().copied().unwrap_or(0) as i64 + args.base_vertex as i64;
+            let vertices = draw.vertex_slot as i64..draw.vertex_slot as i64 + geometry.vertices().len() as i64;
+            assert!(vertices.contains(&lowest) && vertices.contains(&highest), "draw {i} reads outside its vertices");
+            checked += 1;
+        }
+    }
+    assert!(checked > 100, "only {checked} draws checked");
+}

@@ -51,6 +51,18 @@ pub struct GpuOptions {
     pub required_features: wgpu::Features,
     /// Features enabled when present, reported in [`GpuContext::features`].
     pub optional_features: wgpu::Features,
+    /// Skip wgpu's validation of indirect draw arguments.
+    ///
+    /// By default wgpu checks every draw inside a `multi_draw_indexed_indirect`
+    /// on the CPU while recording and again in a compute pass before it runs,
+    /// so that a bad argument becomes a no-op rather than an out-of-bounds
+    /// read. Oxygen writes its indirect arguments itself, from geometry
+    /// ranges it allocated (`indirect_arguments_stay_inside_their_geometry`
+    /// checks they stay in bounds), so it may skip that work: the time saved
+    /// is measured by the `draw_path_bench` example (docs/performance.md).
+    /// Leave it off when the application writes indirect arguments of its own
+    /// into Oxygen's passes.
+    pub trust_indirect_args: bool,
 }
 
 /// A wgpu instance, adapter, device and queue, created without a window.
@@ -93,7 +105,10 @@ impl GpuContext {
     /// Async form of [`Self::new_headless`].
     pub async fn new_headless_async(options: &GpuOptions) -> Result<Self, GpuError> {
         let _span = info_span!("gpu_context").entered();
-        let descriptor = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+        let mut descriptor = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+        if options.trust_indirect_args {
+            descriptor.flags.remove(wgpu::InstanceFlags::VALIDATION_INDIRECT_CALL);
+        }
         let backends = descriptor.backends;
         let instance = wgpu::Instance::new(descriptor);
         let wanted_name = std::env::var("OXYGEN_ADAPTER").ok().map(|s| s.to_lowercase());
