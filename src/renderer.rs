@@ -118,6 +118,11 @@ pub struct RendererOptions {
     pub debug_generations: bool,
     /// Where the GPU's coordinates are centred (camera-relative rendering).
     pub origin: RenderOrigin,
+    /// Skip wgpu's indirect-argument validation on the device the renderer
+    /// creates ([`Renderer::new_headless_with`]); see
+    /// [`GpuOptions::trust_indirect_args`]. A renderer given a context uses
+    /// that context's setting.
+    pub trust_indirect_args: bool,
 }
 
 /// Where the GPU's coordinate system is centred each frame.
@@ -240,7 +245,11 @@ impl Renderer {
 
     /// A headless renderer with explicit options.
     pub fn new_headless_with(options: RendererOptions) -> Result<Self, RenderError> {
-        let gpu_options = GpuOptions { optional_features: Self::OPTIONAL_FEATURES, ..Default::default() };
+        let gpu_options = GpuOptions {
+            optional_features: Self::OPTIONAL_FEATURES,
+            trust_indirect_args: options.trust_indirect_args,
+            ..Default::default()
+        };
         Self::with_options(GpuContext::new_headless(&gpu_options)?, options)
     }
 
