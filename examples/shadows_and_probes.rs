@@ -1,5 +1,6 @@
 //! Shadow views and reflection probes are ordinary registered views: a sun
-//! with cascaded shadows, a spot light with its own shadow view, and a mirror
+//! with cascaded shadows, a spot light with its own shadow view, a point
+//! light with six (one per cube face), and a mirror
 //! sphere reflecting a coloured box through a probe's six face views. One
 //! main camera; writes its PNG and prints a table of every view.
 //!
@@ -12,7 +13,7 @@ use std::sync::Arc;
 
 use oxygen::core::CascadeSettings;
 use oxygen::prelude::*;
-use oxygen::{ProbeUpdate, ReflectionProbe, lit_render_graph, register_spot_shadows, register_sun_cascades};
+use oxygen::{ProbeUpdate, ReflectionProbe, lit_render_graph, register_local_shadows, register_sun_cascades};
 
 fn scene() -> Result<Scene, Box<dyn std::error::Error>> {
     let mut scene = Scene::new();
@@ -47,6 +48,10 @@ fn scene() -> Result<Scene, Box<dyn std::error::Error>> {
         Transform::from_translation(spot_position).with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, aim)),
     );
     scene.set_light(spot, Some(Light::spot(300.0, Some(25.0), 0.3, 0.45)))?;
+    // A warm lantern beside the red box: its shadow falls away from it on
+    // every side, through the point light's six cube-face views.
+    let lantern = scene.add_node("lantern", Transform::from_translation(Vec3::new(3.6, 1.4, 1.2)));
+    scene.set_light(lantern, Some(Light { color: Vec3::new(1.0, 0.7, 0.4), ..Light::point(25.0, Some(12.0)) }))?;
     Ok(scene)
 }
 
@@ -67,7 +72,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // Views that others read are registered first, so they render first.
     let settings = CascadeSettings { count: 3, resolution: 1024, max_distance: 40.0, caster_margin: 20.0, lambda: 0.6 };
     let cascades = register_sun_cascades(&mut renderer, &scene, Arc::new(camera), settings);
-    let spots = register_spot_shadows(&mut renderer, &scene, 1024);
+    let local_shadows = register_local_shadows(&mut renderer, &scene, 1024);
     let mut probe = ReflectionProbe::register(
         &mut renderer,
         Vec3::new(0.0, 1.0, 0.0),
@@ -77,7 +82,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     )?;
     let config = ShaderPassConfig {
         shadow_cascades: cascades,
-        spot_shadows: spots,
+        local_shadows,
         reflection_probes: vec![probe.input()],
         ..Default::default()
     };
@@ -90,8 +95,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "main"
         } else if cascades.contains(&Some(id)) {
             "sun cascade"
-        } else if spots.contains(&Some(id)) {
-            "spot shadow"
+        } else if local_shadows.contains(&Some(id)) {
+            "local-light shadow"
         } else if probe.faces().contains(&id) {
             "probe face"
         } else {

@@ -39,7 +39,9 @@ pub use renderer::{
     FrameReport, RenderError, RenderGraphFuture, RenderOrigin, Renderer, RendererOptions, ViewReport, lit_render_graph,
     standard_render_graph,
 };
-pub use shadows::{register_spot_shadows, register_sun_cascades, shadowed_render_graph};
+pub use shadows::{
+    PointShadowFaceResolver, SpotShadowResolver, register_local_shadows, register_sun_cascades, shadowed_render_graph,
+};
 
 /// The bindless heap.
 pub use oxygen_bindless as bindless;

@@ -114,30 +114,91 @@ impl ViewResolver for SpotShadowResolver {
     }
 }
 
-/// Registers one shadow view per shadow-casting spot light (up to
-/// [`oxygen_passes::MAX_SPOT_SHADOWS`]), in the order the frame phase
-/// numbers their shadow slots (node order, same gating), ready for
-/// [`ShaderPassConfig::spot_shadows`]. Register them before the views that
-/// sample them.
-pub fn register_spot_shadows(
+/// One cube face of a point light's shadow: a perspective view from the
+/// light's position along one of the six axes (`PROBE_FACE_AXES` order),
+/// slightly wider than 90° so that PCF taps at a face's edge stay inside it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointShadowFaceResolver {
+    /// The node carrying the point light.
+    pub light: NodeKey,
+    /// Which face (0..6: +X, −X, +Y, −Y, +Z, −Z).
+    pub face: usize,
+    /// Shadow-map side in texels.
+    pub resolution: u32,
+    /// Near plane.
+    pub near: f32,
+    /// Far plane when the light has no range.
+    pub far: f32,
+}
+
+impl ViewResolver for PointShadowFaceResolver {
+    fn resolve(
+        &self,
+        ctx: &oxygen_core::ViewContext,
+        scene: &Scene,
+    ) -> Result<oxygen_core::ResolvedView, oxygen_core::ViewError> {
+        let view_id = ctx.view_id;
+        let missing = || oxygen_core::ViewError::Other {
+            view: view_id,
+            message: "the point light's node or light is gone".into(),
+        };
+        let node = scene.node(self.light).ok_or_else(missing)?;
+        let light = node.light.as_ref().ok_or_else(missing)?;
+        let LightKind::Point { range } = light.kind else { return Err(missing()) };
+        let position = scene.world_transform(self.light).ok_or_else(missing)?.w_axis.truncate();
+        let (forward, up) = oxygen_passes::PROBE_FACE_AXES[self.face.min(oxygen_passes::PROBE_FACES - 1)];
+        let view =
+            glam::DMat4::look_to_rh(position, glam::Vec3::from(forward).as_dvec3(), glam::Vec3::from(up).as_dvec3());
+        let resolution = self.resolution.max(1);
+        // Two texels of margin on every side beyond the 90° face.
+        let fov = 2.0 * (1.0 + 4.0 / resolution as f32).atan();
+        let far = range.filter(|r| r.is_finite() && *r > self.near).unwrap_or(self.far);
+        let camera = oxygen_core::Camera::perspective(fov, self.near, Some(far));
+        let projection =
+            camera.projection_matrix(1.0).map_err(|source| oxygen_core::ViewError::Camera { view: view_id, source })?;
+        oxygen_core::ResolvedView::new_f64(view_id, view, projection, glam::UVec2::splat(resolution), self.near, far)
+    }
+}
+
+/// Registers the shadow views of every shadow-casting spot light (one view)
+/// and point light (six, one per cube face) while the
+/// [`oxygen_passes::MAX_SHADOW_TILES`] atlas tiles last, in node order with
+/// the frame phase's gating, so that view `i` of the result is atlas tile
+/// `i`, as [`ShaderPassConfig::local_shadows`] expects. Register them before
+/// the views that sample them.
+pub fn register_local_shadows(
     renderer: &mut Renderer,
     scene: &Scene,
     resolution: u32,
-) -> [Option<ViewId>; oxygen_passes::MAX_SPOT_SHADOWS] {
-    let mut ids = [None; oxygen_passes::MAX_SPOT_SHADOWS];
-    let casting_spots = scene.nodes().filter(|(key, node)| {
-        node.light.as_ref().is_some_and(|light| {
-            matches!(light.kind, LightKind::Spot { .. })
-                && light.casts_shadows
-                && light.affects_world
-                && light.mobility != oxygen_core::Mobility::Baked
-                && node.flags.contains(NodeFlags::CASTS_SHADOWS)
-                && scene.is_effectively_visible(*key)
-        })
-    });
-    for (slot, (key, _)) in casting_spots.take(ids.len()).enumerate() {
-        let resolver = SpotShadowResolver { light: key, resolution, near: 0.05, far: 100.0 };
-        ids[slot] = Some(renderer.register_view_with_options(resolver, shadow_view_options(), shadow_render_graph));
+) -> [Option<ViewId>; oxygen_passes::MAX_SHADOW_TILES] {
+    let mut ids = [None; oxygen_passes::MAX_SHADOW_TILES];
+    let mut next_tile = 0;
+    for (key, node) in scene.nodes() {
+        let Some(light) = node.light.as_ref() else { continue };
+        let casts = light.casts_shadows
+            && light.affects_world
+            && light.mobility != oxygen_core::Mobility::Baked
+            && node.flags.contains(NodeFlags::CASTS_SHADOWS)
+            && scene.is_effectively_visible(key);
+        let faces = match light.kind {
+            LightKind::Spot { .. } => 1,
+            LightKind::Point { .. } => oxygen_passes::PROBE_FACES,
+            LightKind::Directional => 0,
+        };
+        if !casts || faces == 0 || next_tile + faces > ids.len() {
+            continue;
+        }
+        for face in 0..faces {
+            let options = shadow_view_options();
+            ids[next_tile + face] = Some(if matches!(light.kind, LightKind::Spot { .. }) {
+                let resolver = SpotShadowResolver { light: key, resolution, near: 0.05, far: 100.0 };
+                renderer.register_view_with_options(resolver, options, shadow_render_graph)
+            } else {
+                let resolver = PointShadowFaceResolver { light: key, face, resolution, near: 0.05, far: 100.0 };
+                renderer.register_view_with_options(resolver, options, shadow_render_graph)
+            });
+        }
+        next_tile += faces;
     }
     ids
 }

@@ -183,7 +183,7 @@ fn a_spot_light_casts_a_shadow_through_its_shadow_view() {
     scene.set_light(spot, Some(Light::spot(400.0, Some(30.0), 0.5, 0.7))).unwrap();
 
     let mut renderer = support::gpu_renderer();
-    let spots = oxygen::register_spot_shadows(&mut renderer, &scene, 512);
+    let spots = oxygen::register_local_shadows(&mut renderer, &scene, 512);
     assert!(spots[0].is_some() && spots[1].is_none());
     let camera = LookAtResolver {
         camera: Camera::perspective(50f32.to_radians(), 0.1, Some(60.0)),
@@ -197,7 +197,7 @@ fn a_spot_light_casts_a_shadow_through_its_shadow_view() {
             let mut depth = DepthPrePass::new();
             depth.prepare_resources(ctx, rec).await?;
             depth.execute(ctx, rec).await?;
-            let mut shading = ShaderPass::new(ShaderPassConfig { spot_shadows: spots, ..Default::default() });
+            let mut shading = ShaderPass::new(ShaderPassConfig { local_shadows: spots, ..Default::default() });
             shading.prepare_resources(ctx, rec).await?;
             shading.execute(ctx, rec).await?;
             let mut tonemap = TonemapPass::default();
@@ -239,7 +239,7 @@ fn two_spot_shadows_share_the_atlas() {
         scene.set_light(spot, Some(Light::spot(400.0, Some(30.0), 0.25, 0.35))).unwrap();
     }
     let mut renderer = support::gpu_renderer();
-    let spots = oxygen::register_spot_shadows(&mut renderer, &scene, 256);
+    let spots = oxygen::register_local_shadows(&mut renderer, &scene, 256);
     assert_eq!(spots.iter().flatten().count(), 2);
     let camera = LookAtResolver {
         camera: Camera::perspective(60f32.to_radians(), 0.1, Some(60.0)),
@@ -250,7 +250,7 @@ fn two_spot_shadows_share_the_atlas() {
     };
     let view = renderer.register_view(
         camera,
-        oxygen::lit_render_graph(ShaderPassConfig { spot_shadows: spots, ..Default::default() }),
+        oxygen::lit_render_graph(ShaderPassConfig { local_shadows: spots, ..Default::default() }),
     );
     renderer.render_frame(&scene).unwrap();
     let image = renderer.read_color(view).unwrap();
@@ -261,4 +261,81 @@ fn two_spot_shadows_share_the_atlas() {
         let lit = region_mean(&image, pixel_of(&resolved, Vec3::new(side * 6.5, 0.0, 1.8)), 1);
         assert!(lit > 2.0 * shadowed, "side {side}: lit {lit:.1} vs shadowed {shadowed:.1}");
     }
+}
+
+/// A shadow-casting point light takes six atlas tiles, one shadow view per
+/// cube face. Two cubes beside the light cast shadows through two different
+/// faces: one down onto the ground (−Y), one sideways onto a wall (+X). A
+/// spot registered after it takes the next tile. Without the shadow views
+/// configured, the same places are lit.
+#[test]
+fn a_point_light_casts_shadows_through_its_cube_faces() {
+    use support::{pixel_of, region_mean};
+    let mut scene = Scene::new();
+    let grey = scene.add_material(Material::opaque("grey", Vec4::splat(0.7)));
+    let plane = scene.add_geometry(Geometry::plane(8.0));
+    let ground = scene.add_node("ground", Transform::IDENTITY);
+    scene.set_renderable(ground, Renderable { geometry: plane, materials: vec![grey] }).unwrap();
+    // The plane faces +Y; turned a quarter about Z it faces −X, towards the light.
+    let wall = scene.add_node(
+        "wall",
+        Transform::from_translation(Vec3::new(4.0, 2.5, 0.0))
+            .with_rotation(Quat::from_rotation_z(std::f32::consts::FRAC_PI_2)),
+    );
+    scene.set_renderable(wall, Renderable { geometry: plane, materials: vec![grey] }).unwrap();
+    let cube_mesh = scene.add_geometry(Geometry::cube(1.0));
+    for (name, at) in [("below", Vec3::new(0.0, 1.0, 0.0)), ("beside", Vec3::new(2.0, 2.5, 0.0))] {
+        let cube = scene.add_node(name, Transform::from_translation(at));
+        scene.set_renderable(cube, Renderable { geometry: cube_mesh, materials: vec![grey] }).unwrap();
+    }
+    let lamp = scene.add_node("lamp", Transform::from_translation(Vec3::new(0.0, 2.5, 0.0)));
+    scene.set_light(lamp, Some(Light::point(30.0, None))).unwrap();
+    // A spot after the point light: its tile follows the point light's six.
+    let spot = scene.add_node("spot", Transform::from_translation(Vec3::new(-3.0, 3.0, -3.0)));
+    scene.set_light(spot, Some(Light::spot(1.0, Some(5.0), 0.2, 0.3))).unwrap();
+
+    let camera = LookAtResolver {
+        camera: Camera::perspective(60f32.to_radians(), 0.1, Some(60.0)),
+        eye: Vec3::new(0.5, 4.0, 7.0),
+        target: Vec3::new(1.5, 1.5, 0.0),
+        up: Vec3::Y,
+        viewport: UVec2::new(200, 150),
+    };
+    let render = |with_shadows: bool| {
+        let mut renderer = support::gpu_renderer();
+        let tiles = oxygen::register_local_shadows(&mut renderer, &scene, 256);
+        assert_eq!(tiles.iter().flatten().count(), 7, "six faces and one spot");
+        assert!(tiles[7].is_none());
+        let local_shadows = if with_shadows { tiles } else { [None; oxygen::passes::MAX_SHADOW_TILES] };
+        let view = renderer
+            .register_view(camera, oxygen::lit_render_graph(ShaderPassConfig { local_shadows, ..Default::default() }));
+        renderer.render_frame(&scene).unwrap();
+        let lights = renderer.scene_prep().frame_collection().positional_lights.clone();
+        assert_eq!(lights.iter().map(|l| l.shadow_slot).collect::<Vec<_>>(), vec![0, 6], "point then spot tiles");
+        renderer.read_color(view).unwrap()
+    };
+    let shadowed_image = render(true);
+    let unshadowed_image = render(false);
+    let resolved =
+        camera.resolve(&ViewContext { view_id: ViewId(0), frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
+    let at = |image: &image::RgbaImage, p: Vec3| region_mean(image, pixel_of(&resolved, p), 1);
+    // Ground in the lower cube's shadow, and wall in the side cube's shadow.
+    for (what, p) in [("ground", Vec3::new(0.0, 0.0, 0.9)), ("wall", Vec3::new(3.99, 2.5, 0.8))] {
+        let shadowed = at(&shadowed_image, p);
+        let unshadowed = at(&unshadowed_image, p);
+        assert!(
+            unshadowed > 3.0 * shadowed && unshadowed > 40.0,
+            "{what} at {p}: {shadowed:.1} with shadows, {unshadowed:.1} without"
+        );
+    }
+    // Ground and wall out of both shadows stay lit.
+    for (what, p) in [("ground", Vec3::new(-2.5, 0.0, 1.5)), ("wall", Vec3::new(3.99, 4.5, 2.5))] {
+        let shadowed = at(&shadowed_image, p);
+        let unshadowed = at(&unshadowed_image, p);
+        assert!(
+            (shadowed - unshadowed).abs() < 0.1 * unshadowed + 2.0,
+            "{what} at {p}: {shadowed:.1} vs {unshadowed:.1}"
+        );
+    }
+    support::golden::assert_golden("point_light_shadow", &shadowed_image, support::golden::Tolerance::default());
 }

@@ -33,12 +33,12 @@ mod transparent_pass;
 
 pub use depth_pre_pass::{DepthPrePass, DepthPrePassOutput, ShadowPass};
 pub use lighting_inputs::{
-    LightingInputs, MAX_CASCADES, MAX_PROBES, MAX_SPOT_SHADOWS, PROBE_FACE_AXES, PROBE_FACES, probe_view,
+    LightingInputs, MAX_CASCADES, MAX_PROBES, MAX_SHADOW_TILES, PROBE_FACE_AXES, PROBE_FACES, probe_view,
 };
 pub use pso::{AlphaClass, PassKind, PipelineCache, PipelineKey, PipelineVariant, TONEMAP_WGSL, shader_source};
 pub use render_context::{CommandRecorder, DrawPath, FrameViews, PassError, PassOutputs, RecordStats, RenderContext};
 pub use render_pass::RenderPass;
 pub use shader_pass::{ProbeInput, ShaderPass, ShaderPassConfig};
-pub use shadow_atlas::SPOT_ATLAS_FORMAT;
+pub use shadow_atlas::SHADOW_ATLAS_FORMAT;
 pub use tonemap_pass::{TonemapPass, pbr_neutral};
 pub use transparent_pass::TransparentPass;

@@ -1,7 +1,8 @@
 //! What the shading pass reads from other views (bind group 3): up to four
 //! cascade depth maps rendered by earlier shadow views of the frame (with a
-//! comparison sampler and the cascades' light view-projections), and one
-//! reflection probe's six faces.
+//! comparison sampler and the cascades' light view-projections), the atlas of
+//! spot and point-light shadow maps, and up to four reflection probes' six
+//! faces each.
 //!
 //! Every mesh pipeline's layout has group 3, so passes that read none of this
 //! bind [`crate::PipelineCache::no_lighting_inputs`]: 1 × 1 placeholders, a
@@ -32,15 +33,16 @@ pub struct LightingInputs {
     pub depth_bias: f32,
     /// World positions of the reflection probes (`w` = 1).
     pub probe_positions: [[f32; 4]; MAX_PROBES],
-    /// World → spot-light clip space, per spot shadow slot.
-    pub spot_view_projection: [[[f32; 4]; 4]; MAX_SPOT_SHADOWS],
-    /// `2 tan(fov / 2) / resolution` per spot map: a texel's world size per
+    /// World → light clip space, per tile of the local-light shadow atlas
+    /// (a spot's map, or one cube face of a point light's).
+    pub tile_view_projection: [[[f32; 4]; 4]; MAX_SHADOW_TILES],
+    /// `2 tan(fov / 2) / resolution` per tile: a texel's world size per
     /// unit of distance from the light (scales the normal offset).
-    pub spot_texel_angle: [f32; MAX_SPOT_SHADOWS],
-    /// Each spot map's rectangle in the atlas, in UV: offset xy, scale zw.
-    pub spot_atlas_rect: [[f32; 4]; MAX_SPOT_SHADOWS],
-    /// Spot shadow maps in use.
-    pub spot_count: u32,
+    pub tile_texel_angle: [f32; MAX_SHADOW_TILES],
+    /// Each tile's rectangle in the atlas, in UV: offset xy, scale zw.
+    pub tile_atlas_rect: [[f32; 4]; MAX_SHADOW_TILES],
+    /// One past the highest tile in use.
+    pub tile_count: u32,
     /// Reflection probes in use; each surface samples the nearest.
     pub probe_count: u32,
     /// Zero.
@@ -50,17 +52,18 @@ pub struct LightingInputs {
 /// Reflection probes the shading pass can choose from.
 pub const MAX_PROBES: usize = 4;
 
-/// Spot-light shadow maps the shading pass can sample.
-pub const MAX_SPOT_SHADOWS: usize = 4;
+/// Tiles of the local-light shadow atlas: one per shadow-casting spot, six
+/// per shadow-casting point light.
+pub const MAX_SHADOW_TILES: usize = 16;
 
-const _: () = assert!(std::mem::size_of::<LightingInputs>() == 720);
-const _: () = assert!(MAX_SPOT_SHADOWS as u32 == oxygen_sceneprep::MAX_SPOT_SHADOWS);
+const _: () = assert!(std::mem::size_of::<LightingInputs>() == 1728);
+const _: () = assert!(MAX_SHADOW_TILES as u32 == oxygen_sceneprep::MAX_SHADOW_TILES);
 
 // Bindings of group 3 after the cascade maps (0..MAX_CASCADES).
 const COMPARISON_SAMPLER_BINDING: u32 = MAX_CASCADES as u32;
 const UNIFORM_BINDING: u32 = MAX_CASCADES as u32 + 1;
 const PROBE_SAMPLER_BINDING: u32 = MAX_CASCADES as u32 + 2;
-const SPOT_ATLAS_BINDING: u32 = MAX_CASCADES as u32 + 3;
+const SHADOW_ATLAS_BINDING: u32 = MAX_CASCADES as u32 + 3;
 const FIRST_PROBE_BINDING: u32 = MAX_CASCADES as u32 + 4;
 
 /// Layers of a probe texture: +X, −X, +Y, −Y, +Z, −Z.
@@ -135,7 +138,7 @@ impl LightingInputResources {
             count: None,
         });
         entries.push(wgpu::BindGroupLayoutEntry {
-            binding: SPOT_ATLAS_BINDING,
+            binding: SHADOW_ATLAS_BINDING,
             visibility: wgpu::ShaderStages::FRAGMENT,
             ty: wgpu::BindingType::Texture {
                 sample_type: wgpu::TextureSampleType::Float { filterable: false },
@@ -187,12 +190,12 @@ impl LightingInputResources {
         let dummy_probe_view = probe_view(&dummy_probe);
         let placeholder_atlas = device
             .create_texture(&wgpu::TextureDescriptor {
-                label: Some("no spot atlas"),
+                label: Some("no shadow atlas"),
                 size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
                 mip_level_count: 1,
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
-                format: crate::shadow_atlas::SPOT_ATLAS_FORMAT,
+                format: crate::shadow_atlas::SHADOW_ATLAS_FORMAT,
                 usage: wgpu::TextureUsages::TEXTURE_BINDING,
                 view_formats: &[],
             })
@@ -243,7 +246,7 @@ pub(crate) fn bind_group(
     device: &wgpu::Device,
     layout: &wgpu::BindGroupLayout,
     (sampler, probe_sampler): (&wgpu::Sampler, &wgpu::Sampler),
-    (maps, spot_atlas): ([&wgpu::TextureView; MAX_CASCADES], &wgpu::TextureView),
+    (maps, shadow_atlas): ([&wgpu::TextureView; MAX_CASCADES], &wgpu::TextureView),
     probes: [&wgpu::TextureView; MAX_PROBES],
     uniform: &wgpu::Buffer,
 ) -> wgpu::BindGroup {
@@ -268,8 +271,8 @@ pub(crate) fn bind_group(
         resource: wgpu::BindingResource::Sampler(probe_sampler),
     });
     entries.push(wgpu::BindGroupEntry {
-        binding: SPOT_ATLAS_BINDING,
-        resource: wgpu::BindingResource::TextureView(spot_atlas),
+        binding: SHADOW_ATLAS_BINDING,
+        resource: wgpu::BindingResource::TextureView(shadow_atlas),
     });
     device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("lighting inputs"), layout, entries: &entries })
 }

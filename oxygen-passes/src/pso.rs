@@ -115,7 +115,7 @@ pub fn shader_source(pass: PassKind, textures: TexturePath) -> String {
 pub struct PipelineCache {
     layout: wgpu::PipelineLayout,
     lighting_inputs: crate::lighting_inputs::LightingInputResources,
-    spot_atlas: crate::shadow_atlas::SpotAtlasPacker,
+    shadow_atlas: crate::shadow_atlas::ShadowAtlasPacker,
     texture_path: TexturePath,
     modules: Mutex<HashMap<PassKind, wgpu::ShaderModule>>,
     pipelines: Mutex<HashMap<PipelineKey, wgpu::RenderPipeline>>,
@@ -139,7 +139,7 @@ impl PipelineCache {
         });
         PipelineCache {
             layout,
-            spot_atlas: crate::shadow_atlas::SpotAtlasPacker::new(device),
+            shadow_atlas: crate::shadow_atlas::ShadowAtlasPacker::new(device),
             lighting_inputs,
             texture_path: heap.texture_path(),
             modules: Mutex::new(HashMap::new()),
@@ -160,7 +160,7 @@ impl PipelineCache {
         &self,
         device: &wgpu::Device,
         maps: [Option<&wgpu::TextureView>; crate::MAX_CASCADES],
-        spot_atlas: Option<&wgpu::TextureView>,
+        shadow_atlas: Option<&wgpu::TextureView>,
         probes: [Option<&wgpu::TextureView>; crate::MAX_PROBES],
         uniform: &crate::LightingInputs,
     ) -> wgpu::BindGroup {
@@ -168,22 +168,22 @@ impl PipelineCache {
         let buffer = crate::lighting_inputs::uniform_buffer(device, uniform);
         // Unused slots are never sampled (the uniform's counts say so) but must be bound.
         let maps = maps.map(|m| m.unwrap_or(&inputs.placeholder_map));
-        let spot_atlas = spot_atlas.unwrap_or(&inputs.placeholder_atlas);
+        let shadow_atlas = shadow_atlas.unwrap_or(&inputs.placeholder_atlas);
         let probes = probes.map(|p| p.unwrap_or(&inputs.placeholder_probe));
         let samplers = (&inputs.sampler, &inputs.probe_sampler);
-        crate::lighting_inputs::bind_group(device, &inputs.layout, samplers, (maps, spot_atlas), probes, &buffer)
+        crate::lighting_inputs::bind_group(device, &inputs.layout, samplers, (maps, shadow_atlas), probes, &buffer)
     }
 
-    /// Packs spot shadow maps (depth view and side, by slot) into the atlas;
+    /// Packs local-light shadow maps (depth view and side, by tile) into the atlas;
     /// returns its view and each slot's UV rectangle.
-    pub fn pack_spot_atlas(
+    pub fn pack_shadow_atlas(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
-        maps: &[Option<(&wgpu::TextureView, u32)>; crate::MAX_SPOT_SHADOWS],
-    ) -> (wgpu::TextureView, [[f32; 4]; crate::MAX_SPOT_SHADOWS]) {
-        self.spot_atlas.pack(device, queue, encoder, maps)
+        maps: &[Option<(&wgpu::TextureView, u32)>; crate::MAX_SHADOW_TILES],
+    ) -> Result<(wgpu::TextureView, [[f32; 4]; crate::MAX_SHADOW_TILES]), String> {
+        self.shadow_atlas.pack(device, queue, encoder, maps)
     }
 
     /// Pipelines created since the cache was made.

@@ -38,6 +38,14 @@ pub enum PassError {
         /// The pass.
         pass: &'static str,
     },
+    /// A resource would exceed a device limit.
+    #[error("{pass}: {what}")]
+    DeviceLimit {
+        /// The pass.
+        pass: &'static str,
+        /// What was asked and the limit.
+        what: String,
+    },
     /// An application-defined failure inside a render graph.
     #[error("render graph: {0}")]
     Graph(String),

@@ -15,7 +15,7 @@ use tracing::info_span;
 
 use crate::render_context::{draw_partitions, partition_pipelines};
 use crate::{
-    CommandRecorder, LightingInputs, MAX_CASCADES, MAX_SPOT_SHADOWS, PROBE_FACES, PassError, PassKind, RenderContext,
+    CommandRecorder, LightingInputs, MAX_CASCADES, MAX_SHADOW_TILES, PROBE_FACES, PassError, PassKind, RenderContext,
     RenderPass,
 };
 use bytemuck::Zeroable;
@@ -51,10 +51,11 @@ pub struct ShaderPassConfig {
     /// Reflection probes (up to `MAX_PROBES`); each surface reflects the
     /// nearest one (specular reflection on smooth and metallic surfaces).
     pub reflection_probes: Vec<ProbeInput>,
-    /// Spot shadow views by shadow slot (the frame phase numbers
-    /// shadow-casting spots in node order; `register_spot_shadows` registers
-    /// their views in the same order).
-    pub spot_shadows: [Option<ViewId>; MAX_SPOT_SHADOWS],
+    /// Local-light shadow views by atlas tile: one per shadow-casting spot,
+    /// six (one per cube face) per shadow-casting point light. The frame
+    /// phase hands out tiles in node order; `register_local_shadows`
+    /// registers the views in the same order.
+    pub local_shadows: [Option<ViewId>; MAX_SHADOW_TILES],
 }
 
 impl Default for ShaderPassConfig {
@@ -65,7 +66,7 @@ impl Default for ShaderPassConfig {
             shadow_cascades: [None; MAX_CASCADES],
             shadow_pcf_radius: 1,
             reflection_probes: Vec::new(),
-            spot_shadows: [None; MAX_SPOT_SHADOWS],
+            local_shadows: [None; MAX_SHADOW_TILES],
         }
     }
 }
@@ -93,8 +94,8 @@ impl ShaderPass {
     ) -> Result<Option<wgpu::BindGroup>, PassError> {
         let ids: Vec<ViewId> = self.config.shadow_cascades.iter().flatten().copied().collect();
         let probes = &self.config.reflection_probes[..self.config.reflection_probes.len().min(crate::MAX_PROBES)];
-        let spots = &self.config.spot_shadows;
-        if ids.is_empty() && probes.is_empty() && spots.iter().all(Option::is_none) {
+        let tiles = &self.config.local_shadows;
+        if ids.is_empty() && probes.is_empty() && tiles.iter().all(Option::is_none) {
             return Ok(None);
         }
         let mut uniform = LightingInputs::zeroed();
@@ -115,24 +116,26 @@ impl ShaderPass {
         uniform.pcf_radius = self.config.shadow_pcf_radius.min(3);
         uniform.normal_offset = 1.5;
         uniform.depth_bias = 1e-4;
-        let mut spot_maps = [None; MAX_SPOT_SHADOWS];
-        for (slot, id) in spots.iter().enumerate() {
+        let mut tile_maps = [None; MAX_SHADOW_TILES];
+        for (slot, id) in tiles.iter().enumerate() {
             let Some(id) = id else { continue };
             let (view, targets) = ctx
                 .frame_views
                 .get(*id)
-                .ok_or(PassError::MissingInput { pass: self.name(), input: "a spot shadow view" })?;
-            uniform.spot_view_projection[slot] = view.view_projection.to_cols_array_2d();
+                .ok_or(PassError::MissingInput { pass: self.name(), input: "a local-light shadow view" })?;
+            uniform.tile_view_projection[slot] = view.view_projection.to_cols_array_2d();
             // Perspective: projection.y_axis.y is cot(fov / 2).
-            uniform.spot_texel_angle[slot] =
+            uniform.tile_texel_angle[slot] =
                 2.0 / view.projection.y_axis.y.abs().max(1e-6) / targets.width.max(1) as f32;
-            spot_maps[slot] = Some((&targets.depth_view, targets.width));
-            uniform.spot_count = uniform.spot_count.max(slot as u32 + 1);
+            tile_maps[slot] = Some((&targets.depth_view, targets.width));
+            uniform.tile_count = uniform.tile_count.max(slot as u32 + 1);
         }
-        let spot_atlas = if spot_maps.iter().any(Option::is_some) {
-            let (atlas, rects) =
-                ctx.pipelines.pack_spot_atlas(&ctx.gpu.device, &ctx.gpu.queue, rec.encoder(), &spot_maps);
-            uniform.spot_atlas_rect = rects;
+        let shadow_atlas = if tile_maps.iter().any(Option::is_some) {
+            let (atlas, rects) = ctx
+                .pipelines
+                .pack_shadow_atlas(&ctx.gpu.device, &ctx.gpu.queue, rec.encoder(), &tile_maps)
+                .map_err(|what| PassError::DeviceLimit { pass: self.name(), what })?;
+            uniform.tile_atlas_rect = rects;
             Some(atlas)
         } else {
             None
@@ -174,7 +177,7 @@ impl ShaderPass {
         Ok(Some(ctx.pipelines.lighting_inputs_bind_group(
             &ctx.gpu.device,
             maps,
-            spot_atlas.as_ref(),
+            shadow_atlas.as_ref(),
             probe_views.each_ref().map(Option::as_ref),
             &uniform,
         )))

@@ -19,10 +19,11 @@ struct LightingInputs {
     normal_offset: f32,
     depth_bias: f32,
     probe_positions: array<vec4<f32>, 4>,
-    spot_view_projection: array<mat4x4<f32>, 4>,
-    spot_texel_angle: vec4<f32>,
-    spot_atlas_rect: array<vec4<f32>, 4>,
-    spot_count: u32,
+    tile_view_projection: array<mat4x4<f32>, 16>,
+    // 16 floats packed four to a vec4 (uniform arrays have a 16-byte stride).
+    tile_texel_angle: array<vec4<f32>, 4>,
+    tile_atlas_rect: array<vec4<f32>, 16>,
+    tile_count: u32,
     probe_count: u32,
     reserved0: u32,
     reserved1: u32,
@@ -62,17 +63,18 @@ fn sample_probe_face(probe: u32, uv: vec2<f32>, face: u32) -> vec3<f32> {
         default: { return textureSampleLevel(probe_faces_3, probe_sampler, uv, face, 0.0).rgb; }
     }
 }
-@group(3) @binding(7) var spot_atlas: texture_2d<f32>;
+@group(3) @binding(7) var shadow_atlas: texture_2d<f32>;
 
-// Fraction of a shadow-casting spot's light reaching `world_position`
-// (3 × 3 PCF; the normal offset grows with the distance from the light).
-fn spot_visibility(slot: u32, light_position: vec3<f32>, world_position: vec3<f32>, geometric_normal: vec3<f32>) -> f32 {
-    if slot >= shadows.spot_count {
+// Fraction of a shadow-casting local light's light reaching `world_position`
+// through atlas tile `slot` (a spot's map, or one cube face of a point
+// light's) (3 × 3 PCF; the normal offset grows with the distance from the light).
+fn tile_visibility(slot: u32, light_position: vec3<f32>, world_position: vec3<f32>, geometric_normal: vec3<f32>) -> f32 {
+    if slot >= shadows.tile_count {
         return 1.0;
     }
     let distance = length(light_position - world_position);
-    let offset = geometric_normal * distance * shadows.spot_texel_angle[slot] * 1.5;
-    let clip = shadows.spot_view_projection[slot] * vec4<f32>(world_position + offset, 1.0);
+    let offset = geometric_normal * distance * shadows.tile_texel_angle[slot / 4u][slot % 4u] * 1.5;
+    let clip = shadows.tile_view_projection[slot] * vec4<f32>(world_position + offset, 1.0);
     if clip.w <= 0.0 {
         return 1.0;
     }
@@ -81,8 +83,8 @@ fn spot_visibility(slot: u32, light_position: vec3<f32>, world_position: vec3<f3
         return 1.0;
     }
     // The map's tile in the atlas, in texels; taps stay inside it.
-    let atlas_size = vec2<f32>(textureDimensions(spot_atlas));
-    let rect = shadows.spot_atlas_rect[slot];
+    let atlas_size = vec2<f32>(textureDimensions(shadow_atlas));
+    let rect = shadows.tile_atlas_rect[slot];
     let tile_min = vec2<i32>(rect.xy * atlas_size + 0.5);
     let tile_max = tile_min + vec2<i32>(rect.zw * atlas_size + 0.5) - vec2<i32>(1);
     let uv = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
@@ -93,25 +95,30 @@ fn spot_visibility(slot: u32, light_position: vec3<f32>, world_position: vec3<f3
     for (var y = -1; y <= 1; y++) {
         for (var x = -1; x <= 1; x++) {
             let texel = clamp(center + vec2<i32>(x, y), tile_min, tile_max);
-            lit += select(0.0, 1.0, ndc.z >= textureLoad(spot_atlas, texel, 0).r);
+            lit += select(0.0, 1.0, ndc.z >= textureLoad(shadow_atlas, texel, 0).r);
         }
     }
     return lit / 9.0;
+}
+
+// The cube face (PROBE_FACE_AXES order: +X, -X, +Y, -Y, +Z, -Z) whose
+// camera looks along the major axis of `direction`.
+fn cube_face(direction: vec3<f32>) -> u32 {
+    let a = abs(direction);
+    if a.x >= a.y && a.x >= a.z {
+        return select(1u, 0u, direction.x >= 0.0);
+    }
+    if a.y >= a.z {
+        return select(3u, 2u, direction.y >= 0.0);
+    }
+    return select(5u, 4u, direction.z >= 0.0);
 }
 
 // Radiance the probe saw along `direction`. Faces are rendered by ordinary
 // cameras (forward, up as in PROBE_FACE_AXES), so the lookup projects the
 // direction onto the face's camera instead of using cube-map conventions.
 fn sample_probe(probe: u32, direction: vec3<f32>) -> vec3<f32> {
-    let a = abs(direction);
-    var face = 0u;
-    if a.x >= a.y && a.x >= a.z {
-        face = select(1u, 0u, direction.x > 0.0);
-    } else if a.y >= a.z {
-        face = select(3u, 2u, direction.y > 0.0);
-    } else {
-        face = select(5u, 4u, direction.z > 0.0);
-    }
+    let face = cube_face(direction);
     var forwards = array<vec3<f32>, 6>(
         vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(-1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0),
         vec3<f32>(0.0, -1.0, 0.0), vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0, 0.0, -1.0),
@@ -265,8 +272,13 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Der
         if light.kind == 1u {
             attenuation *= smoothstep(light.cos_outer, light.cos_inner, dot(-l, light.direction));
             if light.shadow_slot != INVALID_SLOT {
-                attenuation *= spot_visibility(light.shadow_slot, light.position, mesh.world_position, geometric_normal);
+                attenuation *= tile_visibility(light.shadow_slot, light.position, mesh.world_position, geometric_normal);
             }
+        } else if light.shadow_slot != INVALID_SLOT {
+            // A point light's six faces follow its first tile, in
+            // PROBE_FACE_AXES order: the face is the major axis of -l.
+            let tile = light.shadow_slot + cube_face(-l);
+            attenuation *= tile_visibility(tile, light.position, mesh.world_position, geometric_normal);
         }
         color += brdf_cosine(n, v, l, albedo, metallic, roughness) * light.color * light.intensity * attenuation;
     }

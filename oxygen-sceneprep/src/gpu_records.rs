@@ -141,12 +141,20 @@ pub struct PositionalLightRecord {
     pub cos_outer: f32,
     /// Bit 0: casts shadows.
     pub flags: u32,
-    /// Shadow data slot, [`INVALID_SLOT`] when none.
+    /// First tile of the light's shadow maps in the local-light shadow
+    /// atlas (a spot has one tile, a point light six, one per cube face in
+    /// `PROBE_FACE_AXES` order); [`INVALID_SLOT`] when it casts none.
     pub shadow_slot: u32,
 }
 
-/// Spot lights that can cast shadows at once; later casting spots are lit unshadowed.
-pub const MAX_SPOT_SHADOWS: u32 = 4;
+/// Tiles of the local-light shadow atlas: a shadow-casting spot takes one, a
+/// point light six. Lights that no longer fit are lit unshadowed.
+pub const MAX_SHADOW_TILES: u32 = 16;
+
+/// Atlas tiles a positional light of `kind` needs for its shadow.
+pub fn shadow_tiles_for(kind: u32) -> u32 {
+    if kind == PositionalLightRecord::POINT { 6 } else { 1 }
+}
 
 impl PositionalLightRecord {
     /// `kind` of a point light.

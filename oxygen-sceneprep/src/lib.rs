@@ -33,8 +33,8 @@ pub mod worker_pool;
 pub use collect::{CullBound, FrameCollection, RenderItem, RenderableEntry, SubmeshEntry, ViewFilter, ViewPrepOptions};
 pub use draw_metadata::{DrawIndexedIndirect, DrawMetadata};
 pub use gpu_records::{
-    DirectionalLightRecord, GPU_RECORDS_WGSL, MAX_SPOT_SHADOWS, MaterialRecord, NormalMatrix, PositionalLightRecord,
-    ShadowRecord,
+    DirectionalLightRecord, GPU_RECORDS_WGSL, MAX_SHADOW_TILES, MaterialRecord, NormalMatrix, PositionalLightRecord,
+    ShadowRecord, shadow_tiles_for,
 };
 pub use pass_mask::PassMask;
 pub use prepared_frame::{Partition, PreparedSceneFrame, PreparedSlots};

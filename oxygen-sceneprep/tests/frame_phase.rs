@@ -104,3 +104,40 @@ fn a_shadow_view_takes_shadow_casters_only() {
     prep.prepare(&scene, &[ViewRequest { view: &v, options }], &mut SlotAllocators::default()).unwrap();
     assert_eq!(drawn(&prep), vec![node_index(caster)]);
 }
+
+/// Shadow-casting local lights get atlas tiles in node order: one per spot,
+/// six per point light, while the 16 tiles last; a light that no longer fits
+/// is lit unshadowed, and a later, smaller one may still fit.
+#[test]
+fn local_lights_get_shadow_atlas_tiles_in_node_order() {
+    use oxygen_core::Light;
+    let mut scene = Scene::new();
+    let lights = [
+        Light::point(1.0, None),                                            // tiles 0..6
+        Light::spot(1.0, None, 0.2, 0.3),                                   // tile 6
+        Light { casts_shadows: false, ..Light::spot(1.0, None, 0.2, 0.3) }, // none
+        Light::point(1.0, None),                                            // tiles 7..13
+        Light::point(1.0, None),                                            // 13 + 6 > 16: none
+        Light::spot(1.0, None, 0.2, 0.3),                                   // tile 13
+        Light::directional(1.0),                                            // directional lights have no tile
+    ];
+    for (i, light) in lights.into_iter().enumerate() {
+        let node = scene.add_node(format!("light {i}"), Transform::from_translation(Vec3::new(i as f32, 2.0, 0.0)));
+        scene.set_light(node, Some(light)).unwrap();
+    }
+    // A light whose node does not cast shadows gets no tile either.
+    let off = scene.add_node("no shadows", Transform::IDENTITY);
+    scene.set_light(off, Some(Light::spot(1.0, None, 0.2, 0.3))).unwrap();
+    scene.set_flags(off, NodeFlags::VISIBLE).unwrap();
+    let mut prep = ScenePrep::new();
+    let view = view(&scene);
+    prep.prepare(
+        &scene,
+        &[ViewRequest { view: &view, options: ViewPrepOptions::default() }],
+        &mut SlotAllocators::default(),
+    )
+    .unwrap();
+    let none = oxygen_bindless::INVALID_SLOT;
+    let slots: Vec<u32> = prep.frame_collection().positional_lights.iter().map(|l| l.shadow_slot).collect();
+    assert_eq!(slots, vec![0, 6, none, 7, none, 13, none]);
+}

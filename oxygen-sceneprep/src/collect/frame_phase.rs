@@ -28,7 +28,7 @@ use oxygen_core::{
 use tracing::{info_span, warn};
 
 use crate::prepared_frame::FrameTransforms;
-use crate::{DirectionalLightRecord, MAX_SPOT_SHADOWS, PassMask, PositionalLightRecord};
+use crate::{DirectionalLightRecord, MAX_SHADOW_TILES, PassMask, PositionalLightRecord, shadow_tiles_for};
 
 /// A renderable node that survived the frame phase.
 #[derive(Clone, Debug, PartialEq)]
@@ -300,15 +300,18 @@ impl FrameCollection {
                     }
                     _ => (PositionalLightRecord::POINT, 1.0, -1.0),
                 };
-                // Shadow-casting spots get a shadow slot, in node order, up to
-                // MAX_SPOT_SHADOWS: the order in which spot shadow views are registered.
-                let spot_shadows = self
+                // Shadow-casting spot and point lights get atlas tiles in
+                // node order (one per spot, six per point light) while
+                // MAX_SHADOW_TILES lasts: the order in which their shadow
+                // views are registered (`register_local_shadows`).
+                let tiles_used = self
                     .positional_lights
                     .iter()
-                    .filter(|l| l.kind == PositionalLightRecord::SPOT && l.shadow_slot != INVALID_SLOT)
-                    .count() as u32;
-                let shadow_slot = if casts && kind == PositionalLightRecord::SPOT && spot_shadows < MAX_SPOT_SHADOWS {
-                    spot_shadows
+                    .filter(|l| l.shadow_slot != INVALID_SLOT)
+                    .map(|l| shadow_tiles_for(l.kind))
+                    .sum::<u32>();
+                let shadow_slot = if casts && tiles_used + shadow_tiles_for(kind) <= MAX_SHADOW_TILES {
+                    tiles_used
                 } else {
                     INVALID_SLOT
                 };
