@@ -143,3 +143,57 @@ fn wrap_modes_repeat_clamp_and_mirror_outside_the_unit_square() {
         }
     }
 }
+
+/// A finely chequered texture seen ten times minified: with a linear filter
+/// it is sampled from its mip chain, so every pixel shows the cells' average
+/// (an even purple); a nearest-filtered texture keeps one level and aliases
+/// into red and blue speckle. Both texture paths. The printed spread is the
+/// error the nearest filter costs here.
+#[test]
+fn minified_textures_are_filtered_through_their_mip_chain() {
+    let linear = Sampling { wrap: Wrap::Repeat, filter: Filter::Linear };
+    let nearest = Sampling { wrap: Wrap::Repeat, filter: Filter::Nearest };
+    let camera = LookAtResolver {
+        camera: Camera::perspective(60f32.to_radians(), 0.1, None),
+        eye: Vec3::new(0.0, 0.0, 6.9),
+        target: Vec3::ZERO,
+        up: Vec3::Y,
+        viewport: UVec2::new(96, 96),
+    };
+    // The quad covers about 24 × 24 pixels: 256 texels, 64 cells across it.
+    let centre = |image: &image::RgbaImage| -> Vec<Rgb> {
+        let rgb = |x, y| {
+            let [r, g, b, _] = image.get_pixel(x, y).0;
+            Rgb::new(r, g, b)
+        };
+        (42..54).flat_map(|y| (42..54).map(move |x| (x, y))).map(|(x, y)| rgb(x, y)).collect()
+    };
+    for path in [TexturePath::BindingArray, TexturePath::GroupedArrays] {
+        let mut spreads = Vec::new();
+        for sampling in [linear, nearest] {
+            let scene = sampled_checker_scene(256, 64, sampling);
+            let options = RendererOptions { texture_path: Some(path), ..Default::default() };
+            let mut renderer = Renderer::new_headless_with(options).unwrap_or_else(|e| panic!("{path:?}: {e}"));
+            let view = renderer.register_view(camera, standard_render_graph);
+            renderer.render_frame(&scene).unwrap();
+            let pixels = centre(&renderer.read_color(view).unwrap());
+            let red: Vec<f32> = pixels.iter().map(|p| p.r as f32).collect();
+            let mean = red.iter().sum::<f32>() / red.len() as f32;
+            let spread = (red.iter().map(|r| (r - mean).powi(2)).sum::<f32>() / red.len() as f32).sqrt();
+            spreads.push(spread);
+            if sampling == linear {
+                assert!(
+                    pixels.iter().all(|p| !is_red(*p) && !is_blue(*p) && p.r > 40 && p.b > 40),
+                    "{path:?}: mipmapped cells should blend to purple: {:?}",
+                    &pixels[..4]
+                );
+            }
+        }
+        eprintln!(
+            "{path:?}: red-channel spread over 144 minified pixels: linear + mips {:.1}, nearest {:.1}",
+            spreads[0], spreads[1]
+        );
+        assert!(spreads[0] < 6.0, "{path:?}: mipmapped texture still varies by {:.1}", spreads[0]);
+        assert!(spreads[1] > 4.0 * spreads[0].max(1.0), "{path:?}: nearest sampling should alias ({:.1})", spreads[1]);
+    }
+}

@@ -15,7 +15,11 @@
 //!   has exactly one (repeat, linear or nearest) and the other wrap modes are
 //!   applied to the coordinates in the shader.
 //!
-//! Both paths sample at mip level 0. The binding-array path binds a table of
+//! Textures sampled with a linear filter get a full mip chain, built on the
+//! CPU by 2 × 2 box filtering in linear light (sRGB texels are decoded
+//! first), and are sampled trilinearly with the UV derivatives the fragment
+//! shader passes in; nearest-filtered textures keep one level, so that their
+//! hard edges stay hard. The binding-array path binds a table of
 //! six samplers (wrap repeat / clamp / mirror × filter linear / nearest) and
 //! the location record carries the sampler's index in bits 29–31; the
 //! grouped path carries the wrap mode there.
@@ -40,6 +44,13 @@ fn group_side(g: usize) -> u32 {
 }
 fn group_is_srgb(g: usize) -> bool {
     (g / 2).is_multiple_of(2)
+}
+fn group_is_nearest(g: usize) -> bool {
+    g % 2 == 1
+}
+/// Nearest-filtered arrays keep one level; linear ones the full chain.
+fn group_mip_levels(g: usize) -> u32 {
+    if group_is_nearest(g) { 1 } else { mip_level_count(group_side(g), group_side(g)) }
 }
 /// Samplers in the table: wrap (repeat, clamp, mirror) × filter (linear, nearest).
 pub const SAMPLERS: u32 = 6;
@@ -79,8 +90,10 @@ impl TexturePath {
         }
     }
 
-    /// WGSL declarations of group 2 and `sample_texture(slot, uv)`, which
-    /// returns opaque white for [`crate::INVALID_SLOT`].
+    /// WGSL declarations of group 2 and `sample_texture(slot, uv, duv_dx,
+    /// duv_dy)`, which returns opaque white for [`crate::INVALID_SLOT`]. The
+    /// caller passes the UV's screen derivatives (taken in uniform control
+    /// flow), which pick the mip level.
     pub fn wgsl(self) -> String {
         match self {
             TexturePath::BindingArray => {
@@ -89,14 +102,14 @@ impl TexturePath {
                 );
                 out.push_str(&sampler_declarations(1, SAMPLERS));
                 out.push_str(&format!(
-                    "fn sample_texture(slot: u32, uv: vec2<f32>) -> vec4<f32> {{\n\
+                    "fn sample_texture(slot: u32, uv: vec2<f32>, duv_dx: vec2<f32>, duv_dy: vec2<f32>) -> vec4<f32> {{\n\
                      \x20   if slot >= {MAX_TEXTURES}u {{ return vec4<f32>(1.0); }}\n\
                      \x20   let location = texture_location_domain[slot];\n\
                      \x20   switch location >> {SAMPLER_SHIFT}u {{\n"
                 ));
                 for k in 0..SAMPLERS {
                     out.push_str(&format!(
-                        "        case {k}u: {{ return textureSampleLevel(texture_array[slot], texture_sampler_{k}, uv, 0.0); }}\n"
+                        "        case {k}u: {{ return textureSampleGrad(texture_array[slot], texture_sampler_{k}, uv, duv_dx, duv_dy); }}\n"
                     ));
                 }
                 out.push_str("        default: { return vec4<f32>(1.0); }\n    }\n}\n");
@@ -116,7 +129,7 @@ impl TexturePath {
                      \x20       default: { return uv; }\n\
                      \x20   }\n\
                      }\n\
-                     fn sample_texture(slot: u32, uv: vec2<f32>) -> vec4<f32> {\n\
+                     fn sample_texture(slot: u32, uv: vec2<f32>, duv_dx: vec2<f32>, duv_dy: vec2<f32>) -> vec4<f32> {\n\
                      \x20   if slot == INVALID_SLOT { return vec4<f32>(1.0); }\n\
                      \x20   let location = texture_location_domain[slot];\n\
                      \x20   let layer = location & 0xffffffu;\n\
@@ -125,7 +138,7 @@ impl TexturePath {
                 );
                 for g in 0..GROUPS {
                     out.push_str(&format!(
-                        "        case {g}u: {{ return textureSampleLevel(texture_group_{g}, texture_sampler_{}, wrap_uv(uv, wrap, {}.0), layer, 0.0); }}\n",
+                        "        case {g}u: {{ return textureSampleGrad(texture_group_{g}, texture_sampler_{}, wrap_uv(uv, wrap, {}.0), layer, duv_dx, duv_dy); }}\n",
                         g % 2,
                         group_side(g)
                     ));
@@ -157,6 +170,12 @@ fn create_sampler(device: &wgpu::Device, index: u32) -> wgpu::Sampler {
         address_mode_v: wrap,
         mag_filter: filter,
         min_filter: filter,
+        // Nearest-filtered textures have a single level; linear ones blend levels.
+        mipmap_filter: if index.is_multiple_of(2) {
+            wgpu::MipmapFilterMode::Linear
+        } else {
+            wgpu::MipmapFilterMode::Nearest
+        },
         ..Default::default()
     })
 }
@@ -200,11 +219,18 @@ fn format_for(srgb: bool) -> wgpu::TextureFormat {
     if srgb { wgpu::TextureFormat::Rgba8UnormSrgb } else { wgpu::TextureFormat::Rgba8Unorm }
 }
 
-fn create_texture(device: &wgpu::Device, side: (u32, u32), layers: u32, srgb: bool, label: &str) -> wgpu::Texture {
+fn create_texture(
+    device: &wgpu::Device,
+    side: (u32, u32),
+    layers: u32,
+    mip_levels: u32,
+    srgb: bool,
+    label: &str,
+) -> wgpu::Texture {
     device.create_texture(&wgpu::TextureDescriptor {
         label: Some(label),
         size: wgpu::Extent3d { width: side.0, height: side.1, depth_or_array_layers: layers },
-        mip_level_count: 1,
+        mip_level_count: mip_levels,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
         format: format_for(srgb),
@@ -213,11 +239,19 @@ fn create_texture(device: &wgpu::Device, side: (u32, u32), layers: u32, srgb: bo
     })
 }
 
-fn write_layer(queue: &wgpu::Queue, texture: &wgpu::Texture, layer: u32, width: u32, height: u32, pixels: &[u8]) {
+/// Writes one mip level of one layer.
+fn write_level(
+    queue: &wgpu::Queue,
+    texture: &wgpu::Texture,
+    (layer, mip_level): (u32, u32),
+    width: u32,
+    height: u32,
+    pixels: &[u8],
+) {
     queue.write_texture(
         wgpu::TexelCopyTextureInfo {
             texture,
-            mip_level: 0,
+            mip_level,
             origin: wgpu::Origin3d { x: 0, y: 0, z: layer },
             aspect: wgpu::TextureAspect::All,
         },
@@ -232,6 +266,94 @@ fn array_view(texture: &wgpu::Texture) -> wgpu::TextureView {
         dimension: Some(wgpu::TextureViewDimension::D2Array),
         ..Default::default()
     })
+}
+
+/// Writes `levels` (level 0 first, as [`mip_chain`] returns them) into one layer.
+fn write_levels(queue: &wgpu::Queue, texture: &wgpu::Texture, layer: u32, levels: &[MipLevel]) {
+    for (mip, level) in levels.iter().enumerate() {
+        write_level(queue, texture, (layer, mip as u32), level.width, level.height, &level.pixels);
+    }
+}
+
+/// Mip levels of a `width × height` image: down to 1 × 1.
+pub fn mip_level_count(width: u32, height: u32) -> u32 {
+    u32::BITS - width.max(height).max(1).leading_zeros()
+}
+
+/// One level of a mip chain.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MipLevel {
+    /// Width in texels.
+    pub width: u32,
+    /// Height in texels.
+    pub height: u32,
+    /// Tightly packed RGBA8 rows.
+    pub pixels: Vec<u8>,
+}
+
+/// The full mip chain of an RGBA8 image, level 0 (a copy of `pixels`)
+/// first, each level a 2 × 2 box filter of the one above (edges clamped for
+/// odd sizes). Colour channels of sRGB images are averaged in linear light
+/// and encoded again, so a chequerboard fades to its true mean, not a darker
+/// grey; alpha is averaged as stored.
+pub fn mip_chain(pixels: &[u8], width: u32, height: u32, srgb: bool) -> Vec<MipLevel> {
+    let decode: Vec<f32> = (0..256u32)
+        .map(|v| {
+            let c = v as f32 / 255.0;
+            if !srgb {
+                c
+            } else if c <= 0.04045 {
+                c / 12.92
+            } else {
+                ((c + 0.055) / 1.055).powf(2.4)
+            }
+        })
+        .collect();
+    let encode = |linear: f32| -> u8 {
+        let c = linear.clamp(0.0, 1.0);
+        let stored = if !srgb {
+            c
+        } else if c <= 0.0031308 {
+            c * 12.92
+        } else {
+            1.055 * c.powf(1.0 / 2.4) - 0.055
+        };
+        (stored * 255.0).round() as u8
+    };
+    let mut levels = vec![MipLevel { width, height, pixels: pixels.to_vec() }];
+    while let Some(above) = levels.last().filter(|l| l.width > 1 || l.height > 1) {
+        let (w, h) = ((above.width / 2).max(1), (above.height / 2).max(1));
+        let texel = |x: u32, y: u32| {
+            let i = (y.min(above.height - 1) as usize * above.width as usize + x.min(above.width - 1) as usize) * 4;
+            &above.pixels[i..i + 4]
+        };
+        let mut out = Vec::with_capacity(w as usize * h as usize * 4);
+        for y in 0..h {
+            for x in 0..w {
+                let quad = [
+                    texel(2 * x, 2 * y),
+                    texel(2 * x + 1, 2 * y),
+                    texel(2 * x, 2 * y + 1),
+                    texel(2 * x + 1, 2 * y + 1),
+                ];
+                for c in 0..3 {
+                    out.push(encode(quad.iter().map(|t| decode[t[c] as usize]).sum::<f32>() / 4.0));
+                }
+                out.push((quad.iter().map(|t| t[3] as u32).sum::<u32>() as f32 / 4.0).round() as u8);
+            }
+        }
+        levels.push(MipLevel { width: w, height: h, pixels: out });
+    }
+    levels
+}
+
+/// Level 0 only (nearest-filtered textures), or the whole chain.
+fn levels_for(pixels: &[u8], width: u32, height: u32, srgb: bool, nearest: bool) -> Vec<MipLevel> {
+    if nearest {
+        vec![MipLevel { width, height, pixels: pixels.to_vec() }]
+    } else {
+        mip_chain(pixels, width, height, srgb)
+    }
 }
 
 /// Resampling of RGBA8 texels (in their stored encoding), with texel
@@ -310,8 +432,8 @@ impl TextureHeap {
         let white = [255u8; 4];
         let (views, groups) = match path {
             TexturePath::BindingArray => {
-                let placeholder = create_texture(device, (1, 1), 1, true, "texture placeholder");
-                write_layer(queue, &placeholder, 0, 1, 1, &white);
+                let placeholder = create_texture(device, (1, 1), 1, 1, true, "texture placeholder");
+                write_level(queue, &placeholder, (0, 0), 1, 1, &white);
                 let view = placeholder.create_view(&Default::default());
                 (vec![view; MAX_TEXTURES as usize], Vec::new())
             }
@@ -320,9 +442,17 @@ impl TextureHeap {
                     .map(|g| {
                         let side = group_side(g);
                         // Layer 0 of each array stays white: an unused array still binds.
-                        let texture = create_texture(device, (side, side), 1, group_is_srgb(g), "texture group");
+                        let texture = create_texture(
+                            device,
+                            (side, side),
+                            1,
+                            group_mip_levels(g),
+                            group_is_srgb(g),
+                            "texture group",
+                        );
                         let pixels = vec![255u8; side as usize * side as usize * 4];
-                        write_layer(queue, &texture, 0, side, side, &pixels);
+                        let levels = levels_for(&pixels, side, side, group_is_srgb(g), group_is_nearest(g));
+                        write_levels(queue, &texture, 0, &levels);
                         LayerGroup { view: array_view(&texture), texture, used_layers: 1 }
                     })
                     .collect();
@@ -366,8 +496,9 @@ impl TextureHeap {
                 if slot >= MAX_TEXTURES {
                     return Err(BindlessError::TooManyTextures { slot, limit: MAX_TEXTURES });
                 }
-                let texture = create_texture(device, (width, height), 1, srgb, "material texture");
-                write_layer(queue, &texture, 0, width, height, pixels);
+                let levels = levels_for(pixels, width, height, srgb, sampler % 2 == 1);
+                let texture = create_texture(device, (width, height), 1, levels.len() as u32, srgb, "material texture");
+                write_levels(queue, &texture, 0, &levels);
                 self.views[slot as usize] = texture.create_view(&Default::default());
                 Ok(sampler_bits | slot)
             }
@@ -384,17 +515,21 @@ impl TextureHeap {
                     if layers > device.limits().max_texture_array_layers {
                         return Err(BindlessError::TooManyTextures { slot, limit: group.used_layers });
                     }
-                    let bigger = create_texture(device, (class_side, class_side), layers, srgb, "texture group");
+                    let mips = group_mip_levels(g);
+                    let bigger = create_texture(device, (class_side, class_side), layers, mips, srgb, "texture group");
                     let mut encoder = device.create_command_encoder(&Default::default());
-                    encoder.copy_texture_to_texture(
-                        group.texture.as_image_copy(),
-                        bigger.as_image_copy(),
-                        wgpu::Extent3d {
-                            width: class_side,
-                            height: class_side,
-                            depth_or_array_layers: group.used_layers,
-                        },
-                    );
+                    for mip in 0..mips {
+                        let level_side = (class_side >> mip).max(1);
+                        encoder.copy_texture_to_texture(
+                            wgpu::TexelCopyTextureInfo { mip_level: mip, ..group.texture.as_image_copy() },
+                            wgpu::TexelCopyTextureInfo { mip_level: mip, ..bigger.as_image_copy() },
+                            wgpu::Extent3d {
+                                width: level_side,
+                                height: level_side,
+                                depth_or_array_layers: group.used_layers,
+                            },
+                        );
+                    }
                     // Submitted now so that the copy lands before this frame's writes.
                     queue.submit([encoder.finish()]);
                     group.view = array_view(&bigger);
@@ -402,7 +537,12 @@ impl TextureHeap {
                 }
                 let layer = group.used_layers;
                 group.used_layers += 1;
-                write_layer(queue, &group.texture, layer, class_side, class_side, &resampled);
+                write_levels(
+                    queue,
+                    &group.texture,
+                    layer,
+                    &levels_for(&resampled, class_side, class_side, srgb, nearest),
+                );
                 // Here bits 29–31 carry the wrap mode (table index / 2).
                 let wrap_bits = (sampler.min(SAMPLERS - 1) / 2) << SAMPLER_SHIFT;
                 Ok(wrap_bits | (g as u32) << 24 | layer)
@@ -467,6 +607,28 @@ mod tests {
     use super::*;
 
     #[test]
+    fn mip_chains_halve_down_to_one_texel() {
+        assert_eq!(mip_level_count(1, 1), 1);
+        assert_eq!(mip_level_count(256, 256), 9);
+        assert_eq!(mip_level_count(5, 3), 3);
+        let sizes: Vec<_> = mip_chain(&[0; 5 * 3 * 4], 5, 3, true).iter().map(|l| (l.width, l.height)).collect();
+        assert_eq!(sizes, vec![(5, 3), (2, 1), (1, 1)]);
+    }
+
+    /// A black-and-white sRGB chequerboard averages to linear 0.5, which is
+    /// sRGB 188, not the 128 a naive average of stored bytes gives; a linear
+    /// (non-colour) texture averages its stored values.
+    #[test]
+    fn srgb_mips_average_in_linear_light() {
+        let checker: Vec<u8> =
+            [0u8, 255, 255, 0].iter().flat_map(|&v| [v, v, v, if v == 0 { 100 } else { 200 }]).collect();
+        let srgb = mip_chain(&checker, 2, 2, true);
+        assert_eq!(srgb[1].pixels, vec![188, 188, 188, 150]);
+        let linear = mip_chain(&checker, 2, 2, false);
+        assert_eq!(linear[1].pixels, vec![128, 128, 128, 150]);
+    }
+
+    #[test]
     fn resampling_keeps_flat_colour_and_cell_centres() {
         let flat = [10u8, 20, 30, 255].repeat(9);
         assert_eq!(resample_rgba8(&flat, 3, 3, 7, 5, false), [10u8, 20, 30, 255].repeat(35));
@@ -486,7 +648,9 @@ mod tests {
     #[test]
     fn both_paths_declare_sample_texture() {
         for path in [TexturePath::BindingArray, TexturePath::GroupedArrays] {
-            assert!(path.wgsl().contains("fn sample_texture(slot: u32, uv: vec2<f32>) -> vec4<f32>"));
+            assert!(path.wgsl().contains(
+                "fn sample_texture(slot: u32, uv: vec2<f32>, duv_dx: vec2<f32>, duv_dy: vec2<f32>) -> vec4<f32>"
+            ));
         }
     }
 }

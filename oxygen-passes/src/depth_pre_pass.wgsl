@@ -3,8 +3,12 @@
 
 @fragment
 fn fs_alpha_test(mesh: MeshVarying) {
+    // Derivatives first, in uniform control flow, as in the shading pass so
+    // both passes test the same mip level's alpha.
+    let duv_dx = dpdx(mesh.uv);
+    let duv_dy = dpdy(mesh.uv);
     let material = material_of(mesh);
-    if base_color_of(mesh, material).a < material.alpha_cutoff {
+    if base_color_of(mesh, material, duv_dx, duv_dy).a < material.alpha_cutoff {
         discard;
     }
 }

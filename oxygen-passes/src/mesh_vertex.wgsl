@@ -46,6 +46,8 @@ fn material_of(mesh: MeshVarying) -> MaterialRecord {
 }
 
 // Base colour: the material factor times its texture (white when absent).
-fn base_color_of(mesh: MeshVarying, material: MaterialRecord) -> vec4<f32> {
-    return material.base_color * sample_texture(material.base_color_texture, mesh.uv);
+// `duv_dx`, `duv_dy`: screen derivatives of the UV, taken by the caller in
+// uniform control flow, which choose the texture's mip level.
+fn base_color_of(mesh: MeshVarying, material: MaterialRecord, duv_dx: vec2<f32>, duv_dy: vec2<f32>) -> vec4<f32> {
+    return material.base_color * sample_texture(material.base_color_texture, mesh.uv, duv_dx, duv_dy);
 }

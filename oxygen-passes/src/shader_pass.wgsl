@@ -232,15 +232,15 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Der
     var n = surface_normal(mesh, front_facing, material);
     let geometric_normal = n;
     if material.normal_texture != INVALID_SLOT {
-        var tangent_normal = sample_texture(material.normal_texture, mesh.uv).xyz * 2.0 - 1.0;
+        var tangent_normal = sample_texture(material.normal_texture, mesh.uv, d.duv_dx, d.duv_dy).xyz * 2.0 - 1.0;
         tangent_normal = vec3<f32>(tangent_normal.xy * material.normal_scale, tangent_normal.z);
         n = perturb_normal(n, d, normalize(tangent_normal));
     }
     let v = normalize(scene.camera.camera_position.xyz - mesh.world_position);
-    let base = base_color_of(mesh, material);
+    let base = base_color_of(mesh, material, d.duv_dx, d.duv_dy);
     let albedo = base.rgb;
     // glTF packs roughness in G and metallic in B.
-    let metal_rough = sample_texture(material.metallic_roughness_texture, mesh.uv);
+    let metal_rough = sample_texture(material.metallic_roughness_texture, mesh.uv, d.duv_dx, d.duv_dy);
     let metallic = clamp(material.metallic * metal_rough.b, 0.0, 1.0);
     let roughness = clamp(material.roughness * metal_rough.g, 0.045, 1.0);
     var color = albedo * (1.0 - metallic) * AMBIENT + mix(vec3<f32>(0.04), albedo, metallic) * AMBIENT;
@@ -289,7 +289,7 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Der
         let smoothness = (1.0 - roughness) * (1.0 - roughness);
         color += reflected * f0 * smoothness;
     }
-    color += material.emissive * sample_texture(material.emissive_texture, mesh.uv).rgb;
+    color += material.emissive * sample_texture(material.emissive_texture, mesh.uv, d.duv_dx, d.duv_dy).rgb;
     return vec4<f32>(color, base.a);
 }
 
