@@ -141,3 +141,45 @@ fn local_lights_get_shadow_atlas_tiles_in_node_order() {
     let slots: Vec<u32> = prep.frame_collection().positional_lights.iter().map(|l| l.shadow_slot).collect();
     assert_eq!(slots, vec![0, 6, none, 7, none, 13, none]);
 }
+
+/// A light with a NaN colour or cone angle never reaches the GPU (skipped
+/// with a warning); a NaN or negative intensity is clamped to zero and a
+/// negative colour to black, so no light record holds a non-finite number.
+#[test]
+fn lights_with_non_finite_parameters_are_skipped_or_clamped() {
+    use oxygen_core::{Light, LightKind};
+    let mut scene = Scene::new();
+    let lights = [
+        Light { color: Vec3::new(f32::NAN, 1.0, 1.0), ..Light::point(1.0, None) },
+        Light::spot(1.0, None, f32::NAN, 0.3),
+        Light {
+            kind: LightKind::Spot { range: None, inner_cone: 0.1, outer_cone: f32::INFINITY },
+            ..Light::point(1.0, None)
+        },
+        Light::point(f32::NAN, Some(f32::NAN)),
+        Light { color: Vec3::new(-1.0, 0.5, 0.5), ..Light::directional(-3.0) },
+    ];
+    for (i, light) in lights.into_iter().enumerate() {
+        let node = scene.add_node(format!("light {i}"), Transform::IDENTITY);
+        scene.set_light(node, Some(light)).unwrap();
+    }
+    let mut prep = ScenePrep::new();
+    let view = view(&scene);
+    prep.prepare(
+        &scene,
+        &[ViewRequest { view: &view, options: ViewPrepOptions::default() }],
+        &mut SlotAllocators::default(),
+    )
+    .unwrap();
+    let frame = prep.frame_collection();
+    assert_eq!(frame.positional_lights.len(), 1, "only the point light with a NaN intensity and range is kept");
+    assert_eq!(frame.directional_lights.len(), 1);
+    let p = &frame.positional_lights[0];
+    assert_eq!((p.intensity, p.range), (0.0, 0.0));
+    let d = &frame.directional_lights[0];
+    assert_eq!(d.intensity, 0.0);
+    assert_eq!(d.color, [0.0, 0.5, 0.5]);
+    assert!(
+        p.position.iter().chain(&p.direction).chain(&p.color).chain(&[p.cos_inner, p.cos_outer]).all(|v| v.is_finite())
+    );
+}

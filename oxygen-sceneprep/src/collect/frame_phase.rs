@@ -278,9 +278,17 @@ impl FrameCollection {
             warn!(node = %name, "skipping light whose node transform has no direction");
             return;
         };
+        let cones_finite = match light.kind {
+            LightKind::Spot { inner_cone, outer_cone, .. } => inner_cone.is_finite() && outer_cone.is_finite(),
+            _ => true,
+        };
+        if !light.color.is_finite() || !cones_finite || !position.is_finite() {
+            warn!(node = %name, "skipping light with a non-finite colour, cone angle or position");
+            return;
+        }
         let casts = light.casts_shadows && flags.contains(NodeFlags::CASTS_SHADOWS);
         let shadow_flags = u32::from(casts);
-        let color = light.color.to_array();
+        let color = light.color.max(Vec3::ZERO).to_array();
         let intensity = if light.intensity.is_finite() { light.intensity.max(0.0) } else { 0.0 };
         match light.kind {
             LightKind::Directional => self.directional_lights.push(DirectionalLightRecord {
