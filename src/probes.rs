@@ -97,11 +97,14 @@ impl ReflectionProbe {
         let texture = renderer.gpu().device.create_texture(&wgpu::TextureDescriptor {
             label: Some("reflection probe"),
             size: wgpu::Extent3d { width: resolution, height: resolution, depth_or_array_layers: PROBE_FACES as u32 },
-            mip_level_count: 1,
+            // A full chain: rough surfaces reflect blurrier levels.
+            mip_level_count: u32::BITS - resolution.leading_zeros(),
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
             format: ViewTargets::HDR_FORMAT,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_DST
+                | wgpu::TextureUsages::RENDER_ATTACHMENT,
             view_formats: &[],
         });
         Ok(ReflectionProbe {

@@ -9,9 +9,13 @@ use support::{Rgb, pixel_of, region_mean};
 
 /// A mirror sphere at the origin, a red box to its right (+X), a sun.
 fn mirror_scene() -> Scene {
+    metal_sphere_scene(0.02)
+}
+
+/// As [`mirror_scene`], with a sphere of the given roughness.
+fn metal_sphere_scene(roughness: f32) -> Scene {
     let mut scene = Scene::new();
-    let mirror =
-        scene.add_material(Material { metallic: 1.0, roughness: 0.02, ..Material::opaque("mirror", Vec4::ONE) });
+    let mirror = scene.add_material(Material { metallic: 1.0, roughness, ..Material::opaque("mirror", Vec4::ONE) });
     let sphere = scene.add_geometry(Geometry::uv_sphere(1.0, 48, 24));
     let ball = scene.add_node("mirror ball", Transform::IDENTITY);
     scene.set_renderable(ball, Renderable { geometry: sphere, materials: vec![mirror] }).unwrap();
@@ -75,6 +79,51 @@ fn a_mirror_sphere_reflects_the_red_box_through_the_probe() {
     assert!((q[0] as i32) < reflected.r as i32 - 40, "the other side reflects the box too: {q:?}");
     assert!(region_mean(&image, towards_box, 1) > 0.0);
     support::golden::assert_golden("mirror_sphere_probe", &image, support::golden::Tolerance::default());
+}
+
+/// A rough metal sphere reflects the probe from blurrier mip levels: the
+/// red box still shows (the reflection does not fade out with roughness)
+/// but its edge spreads. Measured along the sphere's equator: the steepest
+/// step in the box's red tint between neighbouring pixels, smooth against
+/// rough.
+#[test]
+fn a_rough_metal_reflects_a_blurred_image_of_the_probe() {
+    let render = |roughness: f32| {
+        let scene = metal_sphere_scene(roughness);
+        let mut renderer = support::gpu_renderer();
+        let mut probe =
+            ReflectionProbe::register(&mut renderer, Vec3::ZERO, 64, (0.05, 50.0), ProbeUpdate::EveryFrame).unwrap();
+        let config = ShaderPassConfig { reflection_probes: vec![probe.input()], ..Default::default() };
+        let view = renderer.register_view(camera(), oxygen::lit_render_graph(config));
+        probe.before_frame(&mut renderer).unwrap();
+        renderer.render_frame(&scene).unwrap();
+        let image = renderer.read_color(view).unwrap();
+        let resolved =
+            camera().resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
+        let (left, y) = pixel_of(&resolved, Vec3::new(-0.95, 0.0, 0.3));
+        let (right, _) = pixel_of(&resolved, Vec3::new(0.95, 0.0, 0.3));
+        // Red minus green: the box's tint, blind to the grey sky and to the
+        // sun's white highlight.
+        let tint: Vec<i32> =
+            (left..=right).map(|x| image.get_pixel(x, y).0).map(|p| p[0] as i32 - p[1] as i32).collect();
+        let steepest = tint.windows(2).map(|w| (w[1] - w[0]).abs()).max().unwrap_or(0);
+        let s = std::f32::consts::FRAC_1_SQRT_2;
+        let towards_box = image.get_pixel(pixel_of(&resolved, Vec3::new(s, 0.0, s)).0, y).0;
+        (steepest, towards_box)
+    };
+    let (sharp_step, sharp_box) = render(0.02);
+    let (rough_step, rough_box) = render(0.6);
+    eprintln!(
+        "steepest step of the red tint along the equator: smooth {sharp_step}, rough {rough_step}; box reflection smooth {sharp_box:?}, rough {rough_box:?}"
+    );
+    assert!(
+        rough_box[0] > 50 && rough_box[0] as i32 > rough_box[1] as i32 + 20,
+        "the rough sphere lost the box: {rough_box:?}"
+    );
+    assert!(
+        rough_step * 2 < sharp_step,
+        "rough reflection not blurred: steepest step {rough_step} against {sharp_step}"
+    );
 }
 
 #[test]

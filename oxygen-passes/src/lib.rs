@@ -23,6 +23,7 @@
 
 mod depth_pre_pass;
 mod lighting_inputs;
+mod probe_mips;
 mod pso;
 mod render_context;
 mod render_pass;

@@ -116,6 +116,7 @@ pub struct PipelineCache {
     layout: wgpu::PipelineLayout,
     lighting_inputs: crate::lighting_inputs::LightingInputResources,
     shadow_atlas: crate::shadow_atlas::ShadowAtlasPacker,
+    probe_mips: crate::probe_mips::ProbeMipBuilder,
     texture_path: TexturePath,
     modules: Mutex<HashMap<PassKind, wgpu::ShaderModule>>,
     pipelines: Mutex<HashMap<PipelineKey, wgpu::RenderPipeline>>,
@@ -140,6 +141,7 @@ impl PipelineCache {
         PipelineCache {
             layout,
             shadow_atlas: crate::shadow_atlas::ShadowAtlasPacker::new(device),
+            probe_mips: crate::probe_mips::ProbeMipBuilder::new(device),
             lighting_inputs,
             texture_path: heap.texture_path(),
             modules: Mutex::new(HashMap::new()),
@@ -172,6 +174,18 @@ impl PipelineCache {
         let probes = probes.map(|p| p.unwrap_or(&inputs.placeholder_probe));
         let samplers = (&inputs.sampler, &inputs.probe_sampler);
         crate::lighting_inputs::bind_group(device, &inputs.layout, samplers, (maps, shadow_atlas), probes, &buffer)
+    }
+
+    /// Rebuilds the mip levels of one layer of a probe texture from its
+    /// level 0 (nothing for a one-level texture).
+    pub fn rebuild_probe_mips(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        texture: &wgpu::Texture,
+        layer: u32,
+    ) {
+        self.probe_mips.rebuild(device, encoder, texture, layer);
     }
 
     /// Packs local-light shadow maps (depth view and side, by tile) into the atlas;

@@ -27,7 +27,10 @@ pub struct ProbeInput {
     /// The six face views (+X, −X, +Y, −Y, +Z, −Z); a face rendered this frame
     /// is copied into `texture`, a paused one keeps its last image.
     pub faces: [ViewId; PROBE_FACES],
-    /// Six-layer HDR texture (face size × face size), copy destination and sampled.
+    /// Six-layer HDR texture (face size × face size), copy destination and
+    /// sampled. With several mip levels and `RENDER_ATTACHMENT` usage (as
+    /// `ReflectionProbe` makes it), the levels below a re-rendered face are
+    /// rebuilt and rough surfaces reflect the blurrier ones.
     pub texture: wgpu::Texture,
     /// The probe's world position.
     pub position: glam::Vec3,
@@ -168,6 +171,7 @@ impl ShaderPass {
                     },
                     wgpu::Extent3d { width: side, height: side, depth_or_array_layers: 1 },
                 );
+                ctx.pipelines.rebuild_probe_mips(&ctx.gpu.device, rec.encoder(), &probe.texture, layer as u32);
             }
             let relative = (probe.position.as_dvec3() - ctx.origin).as_vec3();
             uniform.probe_positions[slot] = relative.extend(1.0).to_array();

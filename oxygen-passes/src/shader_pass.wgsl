@@ -55,13 +55,30 @@ fn nearest_probe(position: vec3<f32>) -> u32 {
     return best;
 }
 
-fn sample_probe_face(probe: u32, uv: vec2<f32>, face: u32) -> vec3<f32> {
+// `roughness` picks the mip level: a rough surface reflects a blurrier
+// level (levels are 2 x 2 box-filtered, see probe_mips.rs).
+fn sample_probe_face(probe: u32, uv: vec2<f32>, face: u32, roughness: f32) -> vec3<f32> {
     switch probe {
-        case 0u: { return textureSampleLevel(probe_faces_0, probe_sampler, uv, face, 0.0).rgb; }
-        case 1u: { return textureSampleLevel(probe_faces_1, probe_sampler, uv, face, 0.0).rgb; }
-        case 2u: { return textureSampleLevel(probe_faces_2, probe_sampler, uv, face, 0.0).rgb; }
-        default: { return textureSampleLevel(probe_faces_3, probe_sampler, uv, face, 0.0).rgb; }
+        case 0u: { return textureSampleLevel(probe_faces_0, probe_sampler, uv, face, probe_lod(textureNumLevels(probe_faces_0), roughness)).rgb; }
+        case 1u: { return textureSampleLevel(probe_faces_1, probe_sampler, uv, face, probe_lod(textureNumLevels(probe_faces_1), roughness)).rgb; }
+        case 2u: { return textureSampleLevel(probe_faces_2, probe_sampler, uv, face, probe_lod(textureNumLevels(probe_faces_2), roughness)).rgb; }
+        default: { return textureSampleLevel(probe_faces_3, probe_sampler, uv, face, probe_lod(textureNumLevels(probe_faces_3), roughness)).rgb; }
     }
+}
+// Level for `roughness`: perceptual roughness across the chain, leaving the
+// last few (tiny) levels unused so even a rough reflection keeps some shape.
+fn probe_lod(levels: u32, roughness: f32) -> f32 {
+    let usable = max(f32(levels) - 3.0, 0.0);
+    return clamp(roughness, 0.0, 1.0) * usable;
+}
+// Scale and bias applied to F0 by the split-sum specular integral,
+// approximated analytically (Karis 2014, "Physically Based Shading on
+// Mobile"): what fraction of the prefiltered environment a surface reflects.
+fn environment_brdf(f0: vec3<f32>, roughness: f32, n_dot_v: f32) -> vec3<f32> {
+    let r = roughness * vec4<f32>(-1.0, -0.0275, -0.572, 0.022) + vec4<f32>(1.0, 0.0425, 1.04, -0.04);
+    let a004 = min(r.x * r.x, exp2(-9.28 * n_dot_v)) * r.x + r.y;
+    let ab = vec2<f32>(-1.04, 1.04) * a004 + r.zw;
+    return f0 * ab.x + ab.y;
 }
 @group(3) @binding(7) var shadow_atlas: texture_2d<f32>;
 
@@ -117,7 +134,7 @@ fn cube_face(direction: vec3<f32>) -> u32 {
 // Radiance the probe saw along `direction`. Faces are rendered by ordinary
 // cameras (forward, up as in PROBE_FACE_AXES), so the lookup projects the
 // direction onto the face's camera instead of using cube-map conventions.
-fn sample_probe(probe: u32, direction: vec3<f32>) -> vec3<f32> {
+fn sample_probe(probe: u32, direction: vec3<f32>, roughness: f32) -> vec3<f32> {
     let face = cube_face(direction);
     var forwards = array<vec3<f32>, 6>(
         vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(-1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0),
@@ -133,7 +150,7 @@ fn sample_probe(probe: u32, direction: vec3<f32>) -> vec3<f32> {
     let depth = dot(direction, forward);
     let ndc = vec2<f32>(dot(direction, right), dot(direction, up)) / depth;
     let uv = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
-    return sample_probe_face(probe, uv, face);
+    return sample_probe_face(probe, uv, face, roughness);
 }
 
 fn compare_cascade(cascade: u32, uv: vec2<f32>, depth: f32) -> f32 {
@@ -282,12 +299,14 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Der
         }
         color += brdf_cosine(n, v, l, albedo, metallic, roughness) * light.color * light.intensity * attenuation;
     }
-    // Specular reflection of the probe's surroundings, strongest on smooth metals.
+    // Specular reflection of the probe's surroundings: sharp on smooth
+    // surfaces, from blurrier mip levels on rough ones, weighted by the
+    // environment BRDF (strong on metals, a few percent on dielectrics
+    // except at grazing angles).
     if shadows.probe_count > 0u {
-        let reflected = sample_probe(nearest_probe(mesh.world_position), reflect(-v, n));
+        let reflected = sample_probe(nearest_probe(mesh.world_position), reflect(-v, n), roughness);
         let f0 = mix(vec3<f32>(0.04), albedo, metallic);
-        let smoothness = (1.0 - roughness) * (1.0 - roughness);
-        color += reflected * f0 * smoothness;
+        color += reflected * environment_brdf(f0, roughness, max(dot(n, v), 0.0));
     }
     color += material.emissive * sample_texture(material.emissive_texture, mesh.uv, d.duv_dx, d.duv_dy).rgb;
     return vec4<f32>(color, base.a);

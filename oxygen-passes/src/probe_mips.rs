@@ -1,0 +1,162 @@
+//! Mip chains of reflection-probe faces, for rough reflections.
+//!
+//! A probe face is copied into level 0 of its layer; each further level is a
+//! draw that averages 2 × 2 texels of the level above (one bilinear tap at
+//! their shared corner). The shading pass then reads a rough surface's
+//! reflection from a level chosen by its roughness: a box-filtered stand-in
+//! for a GGX-prefiltered environment, cheap enough to rebuild whenever a face
+//! is re-rendered. Faces are filtered one by one, so texels at a face's edge
+//! do not blend with the neighbouring face.
+
+use oxygen_core::ViewTargets;
+
+const DOWNSAMPLE_WGSL: &str = r#"
+@group(0) @binding(0) var source: texture_2d<f32>;
+@group(0) @binding(1) var source_sampler: sampler;
+struct Varying { @builtin(position) position: vec4<f32>, @location(0) uv: vec2<f32> }
+@vertex
+fn vs(@builtin(vertex_index) index: u32) -> Varying {
+    let uv = vec2<f32>(f32((index << 1u) & 2u), f32(index & 2u));
+    return Varying(vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 0.0, 1.0), uv);
+}
+@fragment
+fn fs(v: Varying) -> @location(0) vec4<f32> {
+    // Level n is exactly half of level n - 1, so this bilinear tap lands on
+    // the corner of four source texels and averages them.
+    return textureSampleLevel(source, source_sampler, v.uv, 0.0);
+}
+"#;
+
+/// The downsampling pipeline, shared by every probe.
+pub(crate) struct ProbeMipBuilder {
+    layout: wgpu::BindGroupLayout,
+    pipeline: wgpu::RenderPipeline,
+    sampler: wgpu::Sampler,
+}
+
+impl ProbeMipBuilder {
+    pub(crate) fn new(device: &wgpu::Device) -> Self {
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("probe mip"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("probe mip"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("probe mip"),
+            source: wgpu::ShaderSource::Wgsl(DOWNSAMPLE_WGSL.into()),
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("probe mip"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: None,
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: ViewTargets::HDR_FORMAT,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("probe mip"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+        ProbeMipBuilder { layout, pipeline, sampler }
+    }
+
+    /// Rebuilds levels 1.. of `layer` from its level 0. Does nothing for a
+    /// texture of one level or one that cannot be rendered to (a probe
+    /// texture made by the application without `RENDER_ATTACHMENT`).
+    pub(crate) fn rebuild(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        texture: &wgpu::Texture,
+        layer: u32,
+    ) {
+        if texture.mip_level_count() < 2
+            || texture.format() != ViewTargets::HDR_FORMAT
+            || !texture.usage().contains(wgpu::TextureUsages::RENDER_ATTACHMENT)
+        {
+            return;
+        }
+        let level_view = |mip| {
+            texture.create_view(&wgpu::TextureViewDescriptor {
+                label: Some("probe mip level"),
+                dimension: Some(wgpu::TextureViewDimension::D2),
+                base_mip_level: mip,
+                mip_level_count: Some(1),
+                base_array_layer: layer,
+                array_layer_count: Some(1),
+                ..Default::default()
+            })
+        };
+        for mip in 1..texture.mip_level_count() {
+            let source = level_view(mip - 1);
+            let target = level_view(mip);
+            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("probe mip"),
+                layout: &self.layout,
+                entries: &[
+                    wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&source) },
+                    wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::Sampler(&self.sampler) },
+                ],
+            });
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("probe mip"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &target,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &bind_group, &[]);
+            pass.draw(0..3, 0..1);
+        }
+    }
+}
