@@ -11,7 +11,7 @@
 //!
 //! What is left out (with a warning, never a panic): primitives that are not
 //! triangle lists, skins and morph targets, animations, texture coordinate
-//! sets other than 0, and (for now) occlusion textures. Missing normals are generated (area-weighted smooth
+//! sets other than 0. Missing normals are generated (area-weighted smooth
 //! normals); missing texture coordinates are zero.
 
 use std::collections::HashMap;
@@ -381,9 +381,12 @@ impl Importer<'_> {
             Some(info) => Some(self.texture(scene, &info.texture(), ColorSpace::Srgb)?),
             None => None,
         };
-        if material.occlusion_texture().is_some() {
-            self.out.warnings.push(format!("material '{name}': occlusion texture not used yet"));
-        }
+        let (occlusion_texture, occlusion_strength) = match material.occlusion_texture() {
+            Some(occlusion) => {
+                (Some(self.texture(scene, &occlusion.texture(), ColorSpace::Linear)?), occlusion.strength())
+            }
+            None => (None, 1.0),
+        };
         let alpha_mode = match material.alpha_mode() {
             gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
             gltf::material::AlphaMode::Mask => AlphaMode::Mask { cutoff: material.alpha_cutoff().unwrap_or(0.5) },
@@ -398,6 +401,8 @@ impl Importer<'_> {
             normal_scale,
             emissive: Vec3::from(material.emissive_factor()) * material.emissive_strength().unwrap_or(1.0),
             emissive_texture,
+            occlusion_texture,
+            occlusion_strength,
             metallic: pbr.metallic_factor(),
             roughness: pbr.roughness_factor(),
             alpha_mode,

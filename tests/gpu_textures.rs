@@ -197,3 +197,60 @@ fn minified_textures_are_filtered_through_their_mip_chain() {
         assert!(spreads[1] > 4.0 * spreads[0].max(1.0), "{path:?}: nearest sampling should alias ({:.1})", spreads[1]);
     }
 }
+
+/// An occlusion texture dims indirect light only: two white quads lit from
+/// behind (so only the ambient term reaches the camera's side), one with a
+/// fully occluding texture at strength 1, one at strength 0.5, one without.
+/// Then the same quads lit from the front: the direct light is unchanged.
+#[test]
+fn occlusion_textures_dim_ambient_light_but_not_direct_light() {
+    use oxygen::core::ColorSpace;
+    let render = |sun_travelling: Vec3| {
+        let mut scene = Scene::new();
+        let occluded = scene.add_texture(
+            TextureImage::new("black occlusion", 4, 4, ColorSpace::Linear, [0u8, 0, 0, 255].repeat(16)).unwrap(),
+        );
+        let quad = scene.add_geometry(Geometry::quad(0.9));
+        for (i, strength) in [Some(1.0), Some(0.5), None].into_iter().enumerate() {
+            let material = scene.add_material(Material {
+                occlusion_texture: strength.map(|_| occluded),
+                occlusion_strength: strength.unwrap_or(1.0),
+                ..Material::opaque(format!("white {i}"), Vec4::ONE)
+            });
+            let node = scene.add_node("quad", Transform::from_translation(Vec3::new(i as f32 - 1.0, 0.0, 0.0)));
+            scene.set_renderable(node, Renderable { geometry: quad, materials: vec![material] }).unwrap();
+        }
+        let sun = scene.add_node(
+            "sun",
+            Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, sun_travelling.normalize())),
+        );
+        scene.set_light(sun, Some(Light::directional(2.0))).unwrap();
+        let mut renderer = support::gpu_renderer();
+        let camera = LookAtResolver {
+            camera: Camera::perspective(60f32.to_radians(), 0.1, None),
+            eye: Vec3::new(0.0, 0.0, 2.5),
+            target: Vec3::ZERO,
+            up: Vec3::Y,
+            viewport: UVec2::new(120, 60),
+        };
+        let view = renderer.register_view(camera, standard_render_graph);
+        renderer.render_frame(&scene).unwrap();
+        let image = renderer.read_color(view).unwrap();
+        let resolved =
+            camera.resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
+        [-1.0f32, 0.0, 1.0].map(|x| support::region_mean(&image, pixel_of(&resolved, Vec3::new(x, 0.0, 0.0)), 2))
+    };
+    // The sun travels away from the camera's side of the quads (+Z): lit
+    // from behind, the visible faces get ambient light only.
+    let [full, half, none] = render(Vec3::Z);
+    eprintln!("ambient only: occluded {full:.1}, half {half:.1}, unoccluded {none:.1}");
+    assert!(none > 10.0, "the ambient term should show: {none:.1}");
+    assert!(full < 0.25 * none, "full occlusion should remove the ambient: {full:.1} against {none:.1}");
+    assert!(
+        half > full + 3.0 && half < none - 3.0,
+        "half strength should lie between: {full:.1} < {half:.1} < {none:.1}"
+    );
+    // Lit from the front: the direct light dominates and occlusion leaves it alone.
+    let [full, _, none] = render(Vec3::NEG_Z);
+    assert!(full > 0.85 * none, "direct light must not be occluded: {full:.1} against {none:.1}");
+}

@@ -38,6 +38,11 @@ pub struct Material {
     pub emissive: Vec3,
     /// Emissive texture (sRGB), multiplied with `emissive`.
     pub emissive_texture: Option<TextureHandle>,
+    /// Ambient-occlusion texture (linear, R channel): how much indirect
+    /// light (the ambient term and probe reflections) reaches each point.
+    pub occlusion_texture: Option<TextureHandle>,
+    /// How strongly `occlusion_texture` applies, in `[0, 1]`.
+    pub occlusion_strength: f32,
     /// Metallic factor in `[0, 1]`.
     pub metallic: f32,
     /// Perceptual roughness in `[0, 1]`.
@@ -60,6 +65,8 @@ impl Material {
             normal_scale: 1.0,
             emissive: Vec3::ZERO,
             emissive_texture: None,
+            occlusion_texture: None,
+            occlusion_strength: 1.0,
             metallic: 0.0,
             roughness: 0.6,
             alpha_mode: AlphaMode::Opaque,
@@ -81,6 +88,8 @@ impl Material {
             normal_scale: if self.normal_scale.is_finite() { self.normal_scale } else { 1.0 },
             emissive: if self.emissive.is_finite() { self.emissive.max(Vec3::ZERO) } else { Vec3::ZERO },
             emissive_texture: self.emissive_texture,
+            occlusion_texture: self.occlusion_texture,
+            occlusion_strength: fix(self.occlusion_strength, 1.0),
             metallic: fix(self.metallic, 0.0),
             roughness: fix(self.roughness, 1.0),
             alpha_mode: match self.alpha_mode {

@@ -40,7 +40,7 @@ const STALE_DRAW_COLOR: vec4<f32> = vec4<f32>(1.0, 0.0, 1.0, 1.0);
 fn material_of(mesh: MeshVarying) -> MaterialRecord {
     if mesh.material == INVALID_SLOT {
         // A flagged draw: an opaque, untextured magenta material.
-        return MaterialRecord(STALE_DRAW_COLOR, vec3<f32>(0.0), 1.0, 0.0, 1.0, 0.0, 0u, INVALID_SLOT, INVALID_SLOT, INVALID_SLOT, INVALID_SLOT, 0u, 0u, 0u, 0u);
+        return MaterialRecord(STALE_DRAW_COLOR, vec3<f32>(0.0), 1.0, 0.0, 1.0, 0.0, 0u, INVALID_SLOT, INVALID_SLOT, INVALID_SLOT, INVALID_SLOT, INVALID_SLOT, 1.0, 0u, 0u);
     }
     return material_domain[scene.renderer.materials_slot + mesh.material];
 }

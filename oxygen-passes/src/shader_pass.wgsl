@@ -260,7 +260,10 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Der
     let metal_rough = sample_texture(material.metallic_roughness_texture, mesh.uv, d.duv_dx, d.duv_dy);
     let metallic = clamp(material.metallic * metal_rough.b, 0.0, 1.0);
     let roughness = clamp(material.roughness * metal_rough.g, 0.045, 1.0);
-    var color = albedo * (1.0 - metallic) * AMBIENT + mix(vec3<f32>(0.04), albedo, metallic) * AMBIENT;
+    // Ambient occlusion dims indirect light only: the ambient term and the
+    // probe reflection, not the lights.
+    let occlusion = mix(1.0, sample_texture(material.occlusion_texture, mesh.uv, d.duv_dx, d.duv_dy).r, material.occlusion_strength);
+    var color = (albedo * (1.0 - metallic) * AMBIENT + mix(vec3<f32>(0.04), albedo, metallic) * AMBIENT) * occlusion;
 
     let dir_count = scene.renderer.directional_light_count;
     var shadowed_light_done = false;
@@ -306,7 +309,7 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Der
     if shadows.probe_count > 0u {
         let reflected = sample_probe(nearest_probe(mesh.world_position), reflect(-v, n), roughness);
         let f0 = mix(vec3<f32>(0.04), albedo, metallic);
-        color += reflected * environment_brdf(f0, roughness, max(dot(n, v), 0.0));
+        color += reflected * environment_brdf(f0, roughness, max(dot(n, v), 0.0)) * occlusion;
     }
     color += material.emissive * sample_texture(material.emissive_texture, mesh.uv, d.duv_dx, d.duv_dy).rgb;
     return vec4<f32>(color, base.a);

@@ -69,8 +69,12 @@ pub struct MaterialRecord {
     pub normal_texture: u32,
     /// Emissive texture slot.
     pub emissive_texture: u32,
+    /// Ambient-occlusion texture slot.
+    pub occlusion_texture: u32,
+    /// Ambient-occlusion strength in `[0, 1]`.
+    pub occlusion_strength: f32,
     /// Zero.
-    pub reserved: [u32; 4],
+    pub reserved: [u32; 2],
 }
 
 impl MaterialRecord {
@@ -96,7 +100,9 @@ impl MaterialRecord {
             metallic_roughness_texture: INVALID_SLOT,
             normal_texture: INVALID_SLOT,
             emissive_texture: INVALID_SLOT,
-            reserved: [0; 4],
+            occlusion_texture: INVALID_SLOT,
+            occlusion_strength: m.occlusion_strength,
+            reserved: [0; 2],
         }
     }
 }
@@ -194,6 +200,8 @@ const _: () = {
     assert!(offset_of!(MaterialRecord, metallic) == 32);
     assert!(offset_of!(MaterialRecord, base_color_texture) == 48);
     assert!(offset_of!(MaterialRecord, emissive_texture) == 60);
+    assert!(offset_of!(MaterialRecord, occlusion_texture) == 64);
+    assert!(offset_of!(MaterialRecord, occlusion_strength) == 68);
     assert!(offset_of!(DirectionalLightRecord, color) == 16);
     assert!(offset_of!(DirectionalLightRecord, shadow_slot) == 32);
     assert!(offset_of!(PositionalLightRecord, direction) == 16);

@@ -39,10 +39,10 @@ struct MaterialRecord {
     metallic_roughness_texture: u32,
     normal_texture: u32,
     emissive_texture: u32,
+    occlusion_texture: u32,
+    occlusion_strength: f32,
     reserved0: u32,
     reserved1: u32,
-    reserved2: u32,
-    reserved3: u32,
 }
 
 struct DirectionalLightRecord {

@@ -72,7 +72,9 @@ fn gpu_records_wgsl_matches_rust_layouts() {
             base_color_texture,
             metallic_roughness_texture,
             normal_texture,
-            emissive_texture
+            emissive_texture,
+            occlusion_texture,
+            occlusion_strength
         ]
     );
     check!(module, DirectionalLightRecord, "DirectionalLightRecord", [direction, intensity, color, flags, shadow_slot]);

@@ -65,6 +65,7 @@ impl MaterialTable {
             record.metallic_roughness_texture = resolve(material.metallic_roughness_texture, "metallic-roughness")?;
             record.normal_texture = resolve(material.normal_texture, "normal")?;
             record.emissive_texture = resolve(material.emissive_texture, "emissive")?;
+            record.occlusion_texture = resolve(material.occlusion_texture, "occlusion")?;
             self.scratch[i] = record;
         }
         if self.scratch != self.records {
