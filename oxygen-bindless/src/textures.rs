@@ -10,19 +10,22 @@
 //! * [`TexturePath::GroupedArrays`]: works wherever `texture_2d_array` does
 //!   (GL included). Textures are resampled to one of three square size
 //!   classes (64, 512, 2048) and stored as layers of one array per size
-//!   class, colour space and filter; the slot's location record says which
-//!   array and layer. GL pairs each texture with one sampler, so every array
-//!   has exactly one (repeat, linear or nearest) and the other wrap modes are
-//!   applied to the coordinates in the shader.
+//!   class and colour space: six arrays, which with the lighting inputs
+//!   stay within GL's 16 sampled textures per shader stage. The slot's
+//!   location record says which array and layer (bits 0–23 layer, 24–26
+//!   array, 27 nearest, 29–31 wrap). GL pairs each texture with one sampler,
+//!   so every array has one (repeat, linear): other wrap modes are applied
+//!   to the coordinates in the shader, and nearest filtering is a
+//!   `textureLoad` of the texel under the coordinate.
 //!
 //! Textures sampled with a linear filter get a full mip chain, built on the
 //! CPU by 2 × 2 box filtering in linear light (sRGB texels are decoded
 //! first), and are sampled trilinearly with the UV derivatives the fragment
-//! shader passes in; nearest-filtered textures keep one level, so that their
-//! hard edges stay hard. The binding-array path binds a table of
-//! six samplers (wrap repeat / clamp / mirror × filter linear / nearest) and
-//! the location record carries the sampler's index in bits 29–31; the
-//! grouped path carries the wrap mode there.
+//! shader passes in; nearest-filtered textures read level 0 only, so that
+//! their hard edges stay hard (on the binding-array path they have no other
+//! level). The binding-array path binds a table of six samplers (wrap
+//! repeat / clamp / mirror × filter linear / nearest) and the location
+//! record carries the sampler's index in bits 29–31.
 
 use std::num::NonZeroU32;
 
@@ -31,26 +34,25 @@ use crate::{Allocation, BindlessError, DomainKind, SlotAllocators};
 /// Texture slots a binding array holds.
 pub const MAX_TEXTURES: u32 = 256;
 const SIZE_CLASSES: [u32; 3] = [64, 512, 2048];
-/// Grouped path: one array per size class × colour space × filter.
-const GROUPS: usize = SIZE_CLASSES.len() * 4;
-/// Grouped path: the repeat-linear and repeat-nearest samplers (table entries 0 and 1).
-const GROUPED_SAMPLERS: u32 = 2;
+/// Grouped path: one array per size class × colour space.
+const GROUPS: usize = SIZE_CLASSES.len() * 2;
+/// Grouped path: the repeat-linear sampler (table entry 0).
+const GROUPED_SAMPLERS: u32 = 1;
+/// Grouped path: location-record bit of nearest-filtered textures.
+const NEAREST_BIT: u32 = 1 << 27;
 
-fn group_of(class: usize, srgb: bool, nearest: bool) -> usize {
-    (class * 2 + usize::from(!srgb)) * 2 + usize::from(nearest)
+fn group_of(class: usize, srgb: bool) -> usize {
+    class * 2 + usize::from(!srgb)
 }
 fn group_side(g: usize) -> u32 {
-    SIZE_CLASSES[g / 4]
+    SIZE_CLASSES[g / 2]
 }
 fn group_is_srgb(g: usize) -> bool {
-    (g / 2).is_multiple_of(2)
+    g.is_multiple_of(2)
 }
-fn group_is_nearest(g: usize) -> bool {
-    g % 2 == 1
-}
-/// Nearest-filtered arrays keep one level; linear ones the full chain.
+/// Every array has its class's full chain (nearest layers use level 0 only).
 fn group_mip_levels(g: usize) -> u32 {
-    if group_is_nearest(g) { 1 } else { mip_level_count(group_side(g), group_side(g)) }
+    mip_level_count(group_side(g), group_side(g))
 }
 /// Samplers in the table: wrap (repeat, clamp, mirror) × filter (linear, nearest).
 pub const SAMPLERS: u32 = 6;
@@ -129,18 +131,27 @@ impl TexturePath {
                      \x20       default: { return uv; }\n\
                      \x20   }\n\
                      }\n\
+                     fn nearest_texel(uv: vec2<f32>, wrap: u32, side: f32) -> vec2<i32> {\n\
+                     \x20   var w = fract(uv);\n\
+                     \x20   if wrap == 1u { w = clamp(uv, vec2<f32>(0.0), vec2<f32>(1.0)); }\n\
+                     \x20   if wrap == 2u { w = 1.0 - abs(fract(uv * 0.5) * 2.0 - 1.0); }\n\
+                     \x20   return clamp(vec2<i32>(floor(w * side)), vec2<i32>(0), vec2<i32>(i32(side) - 1));\n\
+                     }\n\
                      fn sample_texture(slot: u32, uv: vec2<f32>, duv_dx: vec2<f32>, duv_dy: vec2<f32>) -> vec4<f32> {\n\
                      \x20   if slot == INVALID_SLOT { return vec4<f32>(1.0); }\n\
                      \x20   let location = texture_location_domain[slot];\n\
                      \x20   let layer = location & 0xffffffu;\n\
                      \x20   let wrap = location >> 29u;\n\
-                     \x20   switch (location >> 24u) & 31u {\n",
+                     \x20   let nearest = (location & 0x8000000u) != 0u;\n\
+                     \x20   switch (location >> 24u) & 7u {\n",
                 );
                 for g in 0..GROUPS {
+                    let side = group_side(g);
                     out.push_str(&format!(
-                        "        case {g}u: {{ return textureSampleGrad(texture_group_{g}, texture_sampler_{}, wrap_uv(uv, wrap, {}.0), layer, duv_dx, duv_dy); }}\n",
-                        g % 2,
-                        group_side(g)
+                        "        case {g}u: {{\n\
+                         \x20           if nearest {{ return textureLoad(texture_group_{g}, nearest_texel(uv, wrap, {side}.0), layer, 0); }}\n\
+                         \x20           return textureSampleGrad(texture_group_{g}, texture_sampler_0, wrap_uv(uv, wrap, {side}.0), layer, duv_dx, duv_dy);\n\
+                         \x20       }}\n"
                     ));
                 }
                 out.push_str("        default: { return vec4<f32>(1.0); }\n    }\n}\n");
@@ -451,7 +462,7 @@ impl TextureHeap {
                             "texture group",
                         );
                         let pixels = vec![255u8; side as usize * side as usize * 4];
-                        let levels = levels_for(&pixels, side, side, group_is_srgb(g), group_is_nearest(g));
+                        let levels = mip_chain(&pixels, side, side, group_is_srgb(g));
                         write_levels(queue, &texture, 0, &levels);
                         LayerGroup { view: array_view(&texture), texture, used_layers: 1 }
                     })
@@ -506,7 +517,7 @@ impl TextureHeap {
                 let side = width.max(height);
                 let class = SIZE_CLASSES.iter().position(|c| *c >= side).unwrap_or(SIZE_CLASSES.len() - 1);
                 let nearest = sampler % 2 == 1;
-                let g = group_of(class, srgb, nearest);
+                let g = group_of(class, srgb);
                 let class_side = SIZE_CLASSES[class];
                 let resampled = resample_rgba8(pixels, width, height, class_side, class_side, nearest);
                 let group = &mut self.groups[g];
@@ -537,15 +548,12 @@ impl TextureHeap {
                 }
                 let layer = group.used_layers;
                 group.used_layers += 1;
-                write_levels(
-                    queue,
-                    &group.texture,
-                    layer,
-                    &levels_for(&resampled, class_side, class_side, srgb, nearest),
-                );
+                // The whole chain even for nearest textures: the array's layers share a level count.
+                write_levels(queue, &group.texture, layer, &mip_chain(&resampled, class_side, class_side, srgb));
                 // Here bits 29–31 carry the wrap mode (table index / 2).
                 let wrap_bits = (sampler.min(SAMPLERS - 1) / 2) << SAMPLER_SHIFT;
-                Ok(wrap_bits | (g as u32) << 24 | layer)
+                let nearest_bit = if nearest { NEAREST_BIT } else { 0 };
+                Ok(wrap_bits | nearest_bit | (g as u32) << 24 | layer)
             }
         }
     }

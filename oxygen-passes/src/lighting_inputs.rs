@@ -39,8 +39,6 @@ pub struct LightingInputs {
     /// `2 tan(fov / 2) / resolution` per tile: a texel's world size per
     /// unit of distance from the light (scales the normal offset).
     pub tile_texel_angle: [f32; MAX_SHADOW_TILES],
-    /// Each tile's rectangle in the atlas, in UV: offset xy, scale zw.
-    pub tile_atlas_rect: [[f32; 4]; MAX_SHADOW_TILES],
     /// One past the highest tile in use.
     pub tile_count: u32,
     /// Reflection probes in use; each surface samples the nearest.
@@ -56,7 +54,7 @@ pub const MAX_PROBES: usize = 4;
 /// per shadow-casting point light.
 pub const MAX_SHADOW_TILES: usize = 16;
 
-const _: () = assert!(std::mem::size_of::<LightingInputs>() == 1728);
+const _: () = assert!(std::mem::size_of::<LightingInputs>() == 1472);
 const _: () = assert!(MAX_SHADOW_TILES as u32 == oxygen_sceneprep::MAX_SHADOW_TILES);
 
 // Bindings of group 3 after the cascade maps (0..MAX_CASCADES).
@@ -141,8 +139,8 @@ impl LightingInputResources {
             binding: SHADOW_ATLAS_BINDING,
             visibility: wgpu::ShaderStages::FRAGMENT,
             ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                view_dimension: wgpu::TextureViewDimension::D2,
+                sample_type: wgpu::TextureSampleType::Depth,
+                view_dimension: wgpu::TextureViewDimension::D2Array,
                 multisampled: false,
             },
             count: None,
@@ -188,18 +186,17 @@ impl LightingInputResources {
             view_formats: &[],
         });
         let dummy_probe_view = probe_view(&dummy_probe);
-        let placeholder_atlas = device
-            .create_texture(&wgpu::TextureDescriptor {
-                label: Some("no shadow atlas"),
-                size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: crate::shadow_atlas::SHADOW_ATLAS_FORMAT,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            })
-            .create_view(&Default::default());
+        let placeholder_atlas = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("no shadow atlas"),
+            size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: crate::shadow_atlas::SHADOW_ATLAS_FORMAT,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        let placeholder_atlas = crate::shadow_atlas::atlas_view(&placeholder_atlas);
         let uniform = uniform_buffer(device, &LightingInputs::zeroed());
         let no_inputs = bind_group(
             device,

@@ -115,7 +115,7 @@ pub fn shader_source(pass: PassKind, textures: TexturePath) -> String {
 pub struct PipelineCache {
     layout: wgpu::PipelineLayout,
     lighting_inputs: crate::lighting_inputs::LightingInputResources,
-    shadow_atlas: crate::shadow_atlas::ShadowAtlasPacker,
+    shadow_atlas: crate::shadow_atlas::ShadowAtlas,
     probe_mips: crate::probe_mips::ProbeMipBuilder,
     texture_path: TexturePath,
     modules: Mutex<HashMap<PassKind, wgpu::ShaderModule>>,
@@ -140,7 +140,7 @@ impl PipelineCache {
         });
         PipelineCache {
             layout,
-            shadow_atlas: crate::shadow_atlas::ShadowAtlasPacker::new(device),
+            shadow_atlas: Default::default(),
             probe_mips: crate::probe_mips::ProbeMipBuilder::new(device),
             lighting_inputs,
             texture_path: heap.texture_path(),
@@ -188,16 +188,15 @@ impl PipelineCache {
         self.probe_mips.rebuild(device, encoder, texture, layer);
     }
 
-    /// Packs local-light shadow maps (depth view and side, by tile) into the atlas;
-    /// returns its view and each slot's UV rectangle.
-    pub fn pack_shadow_atlas(
+    /// Copies local-light shadow maps (depth texture by tile) into the
+    /// layers of the atlas and returns its array view.
+    pub fn fill_shadow_atlas(
         &self,
         device: &wgpu::Device,
-        queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
-        maps: &[Option<(&wgpu::TextureView, u32)>; crate::MAX_SHADOW_TILES],
-    ) -> Result<(wgpu::TextureView, [[f32; 4]; crate::MAX_SHADOW_TILES]), String> {
-        self.shadow_atlas.pack(device, queue, encoder, maps)
+        maps: &[Option<&wgpu::Texture>; crate::MAX_SHADOW_TILES],
+    ) -> Result<wgpu::TextureView, String> {
+        self.shadow_atlas.fill(device, encoder, maps)
     }
 
     /// Pipelines created since the cache was made.

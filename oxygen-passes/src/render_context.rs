@@ -38,12 +38,13 @@ pub enum PassError {
         /// The pass.
         pass: &'static str,
     },
-    /// A resource would exceed a device limit.
+    /// An input the pass cannot use, e.g. local-light shadow maps of
+    /// different sizes.
     #[error("{pass}: {what}")]
-    DeviceLimit {
+    BadInput {
         /// The pass.
         pass: &'static str,
-        /// What was asked and the limit.
+        /// What is wrong.
         what: String,
     },
     /// An application-defined failure inside a render graph.

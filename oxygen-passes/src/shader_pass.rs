@@ -130,15 +130,14 @@ impl ShaderPass {
             // Perspective: projection.y_axis.y is cot(fov / 2).
             uniform.tile_texel_angle[slot] =
                 2.0 / view.projection.y_axis.y.abs().max(1e-6) / targets.width.max(1) as f32;
-            tile_maps[slot] = Some((&targets.depth_view, targets.width));
+            tile_maps[slot] = Some(&targets.depth);
             uniform.tile_count = uniform.tile_count.max(slot as u32 + 1);
         }
         let shadow_atlas = if tile_maps.iter().any(Option::is_some) {
-            let (atlas, rects) = ctx
+            let atlas = ctx
                 .pipelines
-                .pack_shadow_atlas(&ctx.gpu.device, &ctx.gpu.queue, rec.encoder(), &tile_maps)
-                .map_err(|what| PassError::DeviceLimit { pass: self.name(), what })?;
-            uniform.tile_atlas_rect = rects;
+                .fill_shadow_atlas(&ctx.gpu.device, rec.encoder(), &tile_maps)
+                .map_err(|what| PassError::BadInput { pass: self.name(), what })?;
             Some(atlas)
         } else {
             None

@@ -22,7 +22,6 @@ struct LightingInputs {
     tile_view_projection: array<mat4x4<f32>, 16>,
     // 16 floats packed four to a vec4 (uniform arrays have a 16-byte stride).
     tile_texel_angle: array<vec4<f32>, 4>,
-    tile_atlas_rect: array<vec4<f32>, 16>,
     tile_count: u32,
     probe_count: u32,
     reserved0: u32,
@@ -80,7 +79,7 @@ fn environment_brdf(f0: vec3<f32>, roughness: f32, n_dot_v: f32) -> vec3<f32> {
     let ab = vec2<f32>(-1.04, 1.04) * a004 + r.zw;
     return f0 * ab.x + ab.y;
 }
-@group(3) @binding(7) var shadow_atlas: texture_2d<f32>;
+@group(3) @binding(7) var shadow_atlas: texture_depth_2d_array;
 
 // Fraction of a shadow-casting local light's light reaching `world_position`
 // through atlas tile `slot` (a spot's map, or one cube face of a point
@@ -99,20 +98,16 @@ fn tile_visibility(slot: u32, light_position: vec3<f32>, world_position: vec3<f3
     if any(abs(ndc.xy) > vec2<f32>(1.0)) || ndc.z < 0.0 || ndc.z > 1.0 {
         return 1.0;
     }
-    // The map's tile in the atlas, in texels; taps stay inside it.
-    let atlas_size = vec2<f32>(textureDimensions(shadow_atlas));
-    let rect = shadows.tile_atlas_rect[slot];
-    let tile_min = vec2<i32>(rect.xy * atlas_size + 0.5);
-    let tile_max = tile_min + vec2<i32>(rect.zw * atlas_size + 0.5) - vec2<i32>(1);
+    // The map is layer `slot` of the atlas; 3 x 3 taps one texel apart,
+    // each a bilinear comparison (reverse-Z: lit when at least as close to
+    // the light as the stored depth).
     let uv = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
-    let center = vec2<i32>(floor((rect.xy + uv * rect.zw) * atlas_size));
-    // The atlas holds plain floats, so the comparison (reverse-Z: lit when at
-    // least as close to the light) is done here rather than by a sampler.
+    let texel = 1.0 / vec2<f32>(textureDimensions(shadow_atlas));
     var lit = 0.0;
     for (var y = -1; y <= 1; y++) {
         for (var x = -1; x <= 1; x++) {
-            let texel = clamp(center + vec2<i32>(x, y), tile_min, tile_max);
-            lit += select(0.0, 1.0, ndc.z >= textureLoad(shadow_atlas, texel, 0).r);
+            let tap = uv + vec2<f32>(f32(x), f32(y)) * texel;
+            lit += textureSampleCompareLevel(shadow_atlas, shadow_sampler, tap, slot, ndc.z);
         }
     }
     return lit / 9.0;

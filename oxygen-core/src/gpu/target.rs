@@ -10,7 +10,7 @@
 pub struct ViewTargets {
     /// HDR and display colour; `None` for a depth-only view.
     pub color: Option<ColorTargets>,
-    /// Depth texture (render attachment, sampled).
+    /// Depth texture (render attachment, sampled, copy source).
     pub depth: wgpu::Texture,
     /// Default view of `depth`.
     pub depth_view: wgpu::TextureView,
@@ -99,7 +99,10 @@ impl ViewTargets {
         });
         let depth = make(
             Self::DEPTH_FORMAT,
-            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            // Copy source: local-light shadow maps are copied into the atlas.
+            wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
             "depth",
         );
         ViewTargets { color, depth_view: depth.create_view(&Default::default()), depth, width, height }
