@@ -87,23 +87,43 @@ impl ShaderPass {
         ShaderPass { config, pipelines: None, lighting_inputs: None }
     }
 
-    /// Group 3 for this view: the configured cascades' maps and probe, or
-    /// `None` when the view uses neither. Copies probe faces rendered this
-    /// frame into the probe texture first.
+    /// Group 3 for this view: the configured cascades, local-light shadow
+    /// maps and probes, or `None` when the view uses none of them.
     fn lighting_inputs(
         &self,
         ctx: &RenderContext<'_>,
         rec: &mut CommandRecorder,
     ) -> Result<Option<wgpu::BindGroup>, PassError> {
-        let ids: Vec<ViewId> = self.config.shadow_cascades.iter().flatten().copied().collect();
-        let probes = &self.config.reflection_probes[..self.config.reflection_probes.len().min(crate::MAX_PROBES)];
-        let tiles = &self.config.local_shadows;
-        if ids.is_empty() && probes.is_empty() && tiles.iter().all(Option::is_none) {
+        let config = &self.config;
+        let probes = &config.reflection_probes[..config.reflection_probes.len().min(crate::MAX_PROBES)];
+        if config.shadow_cascades.iter().all(Option::is_none)
+            && config.local_shadows.iter().all(Option::is_none)
+            && probes.is_empty()
+        {
             return Ok(None);
         }
         let mut uniform = LightingInputs::zeroed();
+        let maps = self.cascades(ctx, &mut uniform)?;
+        let shadow_atlas = self.local_shadows(ctx, rec, &mut uniform)?;
+        let probe_views = self.probes(ctx, rec, probes, &mut uniform)?;
+        Ok(Some(ctx.pipelines.lighting_inputs_bind_group(
+            &ctx.gpu.device,
+            maps,
+            shadow_atlas.as_ref(),
+            probe_views.each_ref().map(Option::as_ref),
+            &uniform,
+        )))
+    }
+
+    /// The cascades' depth maps, nearest first, and their uniform fields.
+    fn cascades<'a>(
+        &self,
+        ctx: &RenderContext<'a>,
+        uniform: &mut LightingInputs,
+    ) -> Result<[Option<&'a wgpu::TextureView>; MAX_CASCADES], PassError> {
         let mut maps = [None; MAX_CASCADES];
-        for (i, id) in ids.iter().enumerate().take(MAX_CASCADES) {
+        let ids = self.config.shadow_cascades.iter().flatten();
+        for (i, id) in ids.enumerate().take(MAX_CASCADES) {
             let (view, targets) = ctx
                 .frame_views
                 .get(*id)
@@ -114,13 +134,24 @@ impl ShaderPass {
             uniform.texel_world_size[i] = 2.0 * half_width / targets.width.max(1) as f32;
             uniform.uv_texel[i] = 1.0 / targets.width.max(1) as f32;
             maps[i] = Some(&targets.depth_view);
+            uniform.count = i as u32 + 1;
         }
-        uniform.count = ids.len().min(MAX_CASCADES) as u32;
         uniform.pcf_radius = self.config.shadow_pcf_radius.min(3);
         uniform.normal_offset = 1.5;
         uniform.depth_bias = 1e-4;
+        Ok(maps)
+    }
+
+    /// Copies the local-light shadow maps into the atlas (by tile) and fills
+    /// their uniform fields; `None` when the view samples none.
+    fn local_shadows(
+        &self,
+        ctx: &RenderContext<'_>,
+        rec: &mut CommandRecorder,
+        uniform: &mut LightingInputs,
+    ) -> Result<Option<wgpu::TextureView>, PassError> {
         let mut tile_maps = [None; MAX_SHADOW_TILES];
-        for (slot, id) in tiles.iter().enumerate() {
+        for (slot, id) in self.config.local_shadows.iter().enumerate() {
             let Some(id) = id else { continue };
             let (view, targets) = ctx
                 .frame_views
@@ -131,17 +162,27 @@ impl ShaderPass {
             uniform.tile_texel_angle[slot] =
                 2.0 / view.projection.y_axis.y.abs().max(1e-6) / targets.width.max(1) as f32;
             tile_maps[slot] = Some(&targets.depth);
-            uniform.tile_count = uniform.tile_count.max(slot as u32 + 1);
+            uniform.tile_count = slot as u32 + 1;
         }
-        let shadow_atlas = if tile_maps.iter().any(Option::is_some) {
-            let atlas = ctx
-                .pipelines
-                .fill_shadow_atlas(&ctx.gpu.device, rec.encoder(), &tile_maps)
-                .map_err(|what| PassError::BadInput { pass: self.name(), what })?;
-            Some(atlas)
-        } else {
-            None
-        };
+        if tile_maps.iter().all(Option::is_none) {
+            return Ok(None);
+        }
+        ctx.pipelines
+            .fill_shadow_atlas(&ctx.gpu.device, rec.encoder(), &tile_maps)
+            .map(Some)
+            .map_err(|what| PassError::BadInput { pass: self.name(), what })
+    }
+
+    /// Copies the probe faces rendered this frame into their probes'
+    /// textures (rebuilding those layers' mips), fills the probes' uniform
+    /// fields and returns their array views.
+    fn probes(
+        &self,
+        ctx: &RenderContext<'_>,
+        rec: &mut CommandRecorder,
+        probes: &[ProbeInput],
+        uniform: &mut LightingInputs,
+    ) -> Result<[Option<wgpu::TextureView>; crate::MAX_PROBES], PassError> {
         let mut probe_views: [Option<wgpu::TextureView>; crate::MAX_PROBES] = Default::default();
         for (slot, probe) in probes.iter().enumerate() {
             let side = probe.texture.width();
@@ -177,13 +218,7 @@ impl ShaderPass {
             probe_views[slot] = Some(crate::probe_view(&probe.texture));
         }
         uniform.probe_count = probes.len() as u32;
-        Ok(Some(ctx.pipelines.lighting_inputs_bind_group(
-            &ctx.gpu.device,
-            maps,
-            shadow_atlas.as_ref(),
-            probe_views.each_ref().map(Option::as_ref),
-            &uniform,
-        )))
+        Ok(probe_views)
     }
 }
 
