@@ -210,3 +210,38 @@ fn each_surface_reflects_its_nearest_probe() {
         }
     }
 }
+
+/// Two cameras share one probe: the faces are copied into the probe (and
+/// its mips rebuilt) once per frame, by the first view that samples them,
+/// and the second view, submitted after it, still sees the reflection.
+#[test]
+fn views_sharing_a_probe_copy_its_faces_once_per_frame() {
+    let scene = mirror_scene();
+    let mut renderer = support::gpu_renderer();
+    let mut probe =
+        ReflectionProbe::register(&mut renderer, Vec3::ZERO, 32, (0.05, 50.0), ProbeUpdate::EveryFrame).unwrap();
+    let config = ShaderPassConfig { reflection_probes: vec![probe.input()], ..Default::default() };
+    let views = [renderer.register_view(camera(), oxygen::lit_render_graph(config.clone())), {
+        let other = LookAtResolver { eye: Vec3::new(0.3, 0.2, 4.0), ..camera() };
+        renderer.register_view(other, oxygen::lit_render_graph(config))
+    }];
+    probe.before_frame(&mut renderer).unwrap();
+    let report = renderer.render_frame(&scene).unwrap();
+    let frame = renderer.prepared_frame(views[0]).unwrap().frame_index();
+    // Every face of this frame has been claimed: a third view would skip it.
+    for (layer, face) in probe.faces().iter().enumerate() {
+        assert!(!renderer.pipelines().claim_copy(&probe.input().texture, layer as u32, *face, frame));
+    }
+    // A new frame copies again.
+    assert!(renderer.pipelines().claim_copy(&probe.input().texture, 0, probe.faces()[0], frame + 1));
+    assert_eq!(report.views.len(), 8);
+    for view in views {
+        let image = renderer.read_color(view).unwrap();
+        let resolved =
+            camera().resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
+        let s = std::f32::consts::FRAC_1_SQRT_2;
+        let (x, y) = pixel_of(&resolved, Vec3::new(s, 0.0, s));
+        let p = image.get_pixel(x, y).0;
+        assert!(p[0] > 80 && p[0] as i32 > p[1] as i32 + 40, "{view}: no red reflection: {p:?}");
+    }
+}

@@ -116,6 +116,8 @@ pub struct PipelineCache {
     layout: wgpu::PipelineLayout,
     lighting_inputs: crate::lighting_inputs::LightingInputResources,
     shadow_atlas: crate::shadow_atlas::ShadowAtlas,
+    /// (destination texture, layer) → (source view, frame) of the last copy.
+    copies: Mutex<HashMap<(wgpu::Texture, u32), (oxygen_core::ViewId, u64)>>,
     probe_mips: crate::probe_mips::ProbeMipBuilder,
     texture_path: TexturePath,
     modules: Mutex<HashMap<PassKind, wgpu::ShaderModule>>,
@@ -141,6 +143,7 @@ impl PipelineCache {
         PipelineCache {
             layout,
             shadow_atlas: Default::default(),
+            copies: Mutex::new(HashMap::new()),
             probe_mips: crate::probe_mips::ProbeMipBuilder::new(device),
             lighting_inputs,
             texture_path: heap.texture_path(),
@@ -188,15 +191,32 @@ impl PipelineCache {
         self.probe_mips.rebuild(device, encoder, texture, layer);
     }
 
-    /// Copies local-light shadow maps (depth texture by tile) into the
-    /// layers of the atlas and returns its array view.
+    /// Copies local-light shadow maps (shadow view and depth texture, by
+    /// tile) of frame `frame` into the layers of the atlas, once per frame
+    /// however many views sample them, and returns its array view.
     pub fn fill_shadow_atlas(
         &self,
         device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
-        maps: &[Option<&wgpu::Texture>; crate::MAX_SHADOW_TILES],
+        maps: &[Option<(oxygen_core::ViewId, &wgpu::Texture)>; crate::MAX_SHADOW_TILES],
+        frame: u64,
     ) -> Result<wgpu::TextureView, String> {
-        self.shadow_atlas.fill(device, encoder, maps)
+        self.shadow_atlas.fill(device, encoder, maps, frame)
+    }
+
+    /// True the first time in frame `frame` that layer `layer` of
+    /// `destination` is to receive `source`'s image: views sharing a probe
+    /// copy each face (and rebuild its mips) once per frame.
+    pub fn claim_copy(&self, destination: &wgpu::Texture, layer: u32, source: oxygen_core::ViewId, frame: u64) -> bool {
+        let mut copies = self.copies.lock().unwrap_or_else(|e| e.into_inner());
+        // Older records can only belong to textures no longer updated.
+        copies.retain(|_, (_, copied)| *copied + 1 >= frame);
+        let key = (destination.clone(), layer);
+        if copies.get(&key) == Some(&(source, frame)) {
+            return false;
+        }
+        copies.insert(key, (source, frame));
+        true
     }
 
     /// Pipelines created since the cache was made.

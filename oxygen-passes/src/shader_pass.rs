@@ -161,21 +161,22 @@ impl ShaderPass {
             // Perspective: projection.y_axis.y is cot(fov / 2).
             uniform.tile_texel_angle[slot] =
                 2.0 / view.projection.y_axis.y.abs().max(1e-6) / targets.width.max(1) as f32;
-            tile_maps[slot] = Some(&targets.depth);
+            tile_maps[slot] = Some((*id, &targets.depth));
             uniform.tile_count = slot as u32 + 1;
         }
         if tile_maps.iter().all(Option::is_none) {
             return Ok(None);
         }
         ctx.pipelines
-            .fill_shadow_atlas(&ctx.gpu.device, rec.encoder(), &tile_maps)
+            .fill_shadow_atlas(&ctx.gpu.device, rec.encoder(), &tile_maps, ctx.prepared.frame_index())
             .map(Some)
             .map_err(|what| PassError::BadInput { pass: self.name(), what })
     }
 
     /// Copies the probe faces rendered this frame into their probes'
-    /// textures (rebuilding those layers' mips), fills the probes' uniform
-    /// fields and returns their array views.
+    /// textures (rebuilding those layers' mips; once per frame however many
+    /// views sample a probe), fills the probes' uniform fields and returns
+    /// their array views.
     fn probes(
         &self,
         ctx: &RenderContext<'_>,
@@ -200,6 +201,10 @@ impl ShaderPass {
                         pass: self.name(),
                         input: "a probe face of the probe's size",
                     });
+                }
+                // Another view of this frame may have copied it already.
+                if !ctx.pipelines.claim_copy(&probe.texture, layer as u32, *face, ctx.prepared.frame_index()) {
+                    continue;
                 }
                 rec.encoder().copy_texture_to_texture(
                     hdr.as_image_copy(),

@@ -10,9 +10,12 @@
 //! through the comparison sampler, with the same PCF as the cascades, on
 //! every backend (GL included: `texture_depth_2d_array` with comparison is
 //! `sampler2DArrayShadow` there). All maps of a frame share one resolution
-//! (`register_local_shadows` registers them so).
+//! (`register_local_shadows` registers them so). Several views sampling the
+//! same maps in one frame copy each map once.
 
 use std::sync::Mutex;
+
+use oxygen_core::ViewId;
 
 use crate::MAX_SHADOW_TILES;
 
@@ -23,20 +26,28 @@ pub const SHADOW_ATLAS_FORMAT: wgpu::TextureFormat = oxygen_core::ViewTargets::D
 /// resolution changes.
 #[derive(Default)]
 pub(crate) struct ShadowAtlas {
-    texture: Mutex<Option<wgpu::Texture>>,
+    state: Mutex<Option<AtlasState>>,
+}
+
+struct AtlasState {
+    texture: wgpu::Texture,
+    /// Per layer: the shadow view and frame its depth was copied from.
+    copied: [Option<(ViewId, u64)>; MAX_SHADOW_TILES],
 }
 
 impl ShadowAtlas {
-    /// Copies `maps` (depth texture by tile) into the layers of the atlas
-    /// and returns its array view. Fails, naming the sizes, when the maps
-    /// differ in size.
+    /// Copies `maps` (shadow view and its depth texture, by tile) of frame
+    /// `frame` into the layers of the atlas, skipping layers already copied
+    /// from the same view this frame, and returns its array view. Fails,
+    /// naming the sizes, when the maps differ in size.
     pub(crate) fn fill(
         &self,
         device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
-        maps: &[Option<&wgpu::Texture>; MAX_SHADOW_TILES],
+        maps: &[Option<(ViewId, &wgpu::Texture)>; MAX_SHADOW_TILES],
+        frame: u64,
     ) -> Result<wgpu::TextureView, String> {
-        let mut sizes = maps.iter().flatten().map(|t| (t.width(), t.height()));
+        let mut sizes = maps.iter().flatten().map(|(_, t)| (t.width(), t.height()));
         let (width, height) = sizes.next().unwrap_or((1, 1));
         if let Some(other) = sizes.find(|s| *s != (width, height)) {
             return Err(format!(
@@ -45,12 +56,13 @@ impl ShadowAtlas {
             ));
         }
         let layers = maps.iter().rposition(Option::is_some).map_or(1, |last| last as u32 + 1);
-        let mut slot = self.texture.lock().unwrap_or_else(|e| e.into_inner());
-        let fits = slot
-            .as_ref()
-            .is_some_and(|t| t.width() == width && t.height() == height && t.depth_or_array_layers() >= layers);
+        let mut state = self.state.lock().unwrap_or_else(|e| e.into_inner());
+        let fits = state.as_ref().is_some_and(|s| {
+            let t = &s.texture;
+            t.width() == width && t.height() == height && t.depth_or_array_layers() >= layers
+        });
         if !fits {
-            *slot = Some(device.create_texture(&wgpu::TextureDescriptor {
+            let texture = device.create_texture(&wgpu::TextureDescriptor {
                 label: Some("local shadow atlas"),
                 size: wgpu::Extent3d { width, height, depth_or_array_layers: layers },
                 mip_level_count: 1,
@@ -59,16 +71,21 @@ impl ShadowAtlas {
                 format: SHADOW_ATLAS_FORMAT,
                 usage: wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::TEXTURE_BINDING,
                 view_formats: &[],
-            }));
+            });
+            *state = Some(AtlasState { texture, copied: [None; MAX_SHADOW_TILES] });
         }
         // Just created or reused: either way an atlas of this size exists now.
-        let atlas = slot.as_ref().expect("atlas exists");
+        let state = state.as_mut().expect("atlas exists");
         for (layer, map) in maps.iter().enumerate() {
-            let Some(map) = map else { continue };
+            let Some((view, map)) = map else { continue };
+            if state.copied[layer] == Some((*view, frame)) {
+                continue;
+            }
+            state.copied[layer] = Some((*view, frame));
             encoder.copy_texture_to_texture(
                 map.as_image_copy(),
                 wgpu::TexelCopyTextureInfo {
-                    texture: atlas,
+                    texture: &state.texture,
                     mip_level: 0,
                     origin: wgpu::Origin3d { x: 0, y: 0, z: layer as u32 },
                     aspect: wgpu::TextureAspect::All,
@@ -76,7 +93,7 @@ impl ShadowAtlas {
                 wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
             );
         }
-        Ok(atlas_view(atlas))
+        Ok(atlas_view(&state.texture))
     }
 }
 
