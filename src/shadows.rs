@@ -66,6 +66,18 @@ pub fn shadowed_render_graph(
     crate::lit_render_graph(ShaderPassConfig { shadow_cascades: cascades, ..Default::default() })
 }
 
+/// The kind and world transform of the light on `node`, or an error for
+/// `view` when the node or its light is gone.
+fn light_of(scene: &Scene, node: NodeKey, view: ViewId) -> Result<(LightKind, glam::DMat4), oxygen_core::ViewError> {
+    let gone = || oxygen_core::ViewError::Other { view, message: "the light's node or light is gone".into() };
+    let light = scene.node(node).and_then(|n| n.light.as_ref()).ok_or_else(gone)?;
+    Ok((light.kind, scene.world_transform(node).ok_or_else(gone)?))
+}
+
+fn not_a(view: ViewId, kind: &str) -> oxygen_core::ViewError {
+    oxygen_core::ViewError::Other { view, message: format!("the light is no longer a {kind} light") }
+}
+
 /// A spot light's shadow view: a perspective view from the light's node down
 /// its −Z, wide enough for the outer cone.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -87,14 +99,8 @@ impl ViewResolver for SpotShadowResolver {
         scene: &Scene,
     ) -> Result<oxygen_core::ResolvedView, oxygen_core::ViewError> {
         let view_id = ctx.view_id;
-        let missing = || oxygen_core::ViewError::Other {
-            view: view_id,
-            message: "the spot light's node or light is gone".into(),
-        };
-        let node = scene.node(self.light).ok_or_else(missing)?;
-        let light = node.light.as_ref().ok_or_else(missing)?;
-        let LightKind::Spot { range, outer_cone, .. } = light.kind else { return Err(missing()) };
-        let world = scene.world_transform(self.light).ok_or_else(missing)?;
+        let (kind, world) = light_of(scene, self.light, view_id)?;
+        let LightKind::Spot { range, outer_cone, .. } = kind else { return Err(not_a(view_id, "spot")) };
         let (_, rotation, position) = world.to_scale_rotation_translation();
         let view = glam::DMat4::from_rotation_translation(rotation.normalize(), position).inverse();
         // A little wider than the cone, so PCF taps at its edge stay inside.
@@ -138,14 +144,9 @@ impl ViewResolver for PointShadowFaceResolver {
         scene: &Scene,
     ) -> Result<oxygen_core::ResolvedView, oxygen_core::ViewError> {
         let view_id = ctx.view_id;
-        let missing = || oxygen_core::ViewError::Other {
-            view: view_id,
-            message: "the point light's node or light is gone".into(),
-        };
-        let node = scene.node(self.light).ok_or_else(missing)?;
-        let light = node.light.as_ref().ok_or_else(missing)?;
-        let LightKind::Point { range } = light.kind else { return Err(missing()) };
-        let position = scene.world_transform(self.light).ok_or_else(missing)?.w_axis.truncate();
+        let (kind, world) = light_of(scene, self.light, view_id)?;
+        let LightKind::Point { range } = kind else { return Err(not_a(view_id, "point")) };
+        let position = world.w_axis.truncate();
         let (forward, up) = oxygen_passes::PROBE_FACE_AXES[self.face.min(oxygen_passes::PROBE_FACES - 1)];
         let view =
             glam::DMat4::look_to_rh(position, glam::Vec3::from(forward).as_dvec3(), glam::Vec3::from(up).as_dvec3());

@@ -57,40 +57,14 @@ impl ProbeMipBuilder {
                 },
             ],
         });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("probe mip"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("probe mip"),
-            source: wgpu::ShaderSource::Wgsl(DOWNSAMPLE_WGSL.into()),
-        });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("probe mip"),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: Default::default(),
-            depth_stencil: None,
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: ViewTargets::HDR_FORMAT,
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let pipeline = crate::pso::fullscreen_pipeline(
+            device,
+            "probe mip",
+            &layout,
+            DOWNSAMPLE_WGSL,
+            ("vs", "fs"),
+            ViewTargets::HDR_FORMAT,
+        );
         let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("probe mip"),
             mag_filter: wgpu::FilterMode::Linear,
