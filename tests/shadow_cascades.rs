@@ -7,6 +7,7 @@ use std::sync::Arc;
 
 use oxygen::bindless::SlotAllocators;
 use oxygen::core::demo::{main_camera, multi_view_scene};
+use oxygen::core::glam::Vec2;
 use oxygen::core::{CascadeResolver, CascadeSettings, NodeFlags};
 use oxygen::prelude::*;
 use oxygen::sceneprep::{ScenePrep, ViewFilter, ViewRequest};
@@ -338,4 +339,113 @@ fn a_point_light_casts_shadows_through_its_cube_faces() {
         );
     }
     support::golden::assert_golden("point_light_shadow", &shadowed_image, support::golden::Tolerance::default());
+}
+
+/// Where a ray from `origin` along `direction` first meets the box, if it
+/// does (slab test).
+fn ray_hits_box(origin: Vec3, direction: Vec3, min: Vec3, max: Vec3) -> Option<f32> {
+    let (mut near, mut far) = (0.0f32, f32::INFINITY);
+    for axis in 0..3 {
+        let (o, d) = (origin[axis], direction[axis]);
+        if d.abs() < 1e-9 {
+            if o < min[axis] || o > max[axis] {
+                return None;
+            }
+            continue;
+        }
+        let (a, b) = ((min[axis] - o) / d, (max[axis] - o) / d);
+        near = near.max(a.min(b));
+        far = far.min(a.max(b));
+    }
+    (near <= far).then_some(near)
+}
+
+/// The error side of the shadow-resolution knob: a box's shadow on the
+/// ground, rendered through one cascade of 128 to 1024 texels, against the
+/// shadow computed exactly (for each ground pixel, does the ray towards the
+/// sun hit the box?). A pixel counts as shadowed when it is under 60 % of
+/// the same pixel rendered without shadows; the error is the number of
+/// ground pixels classified differently from the exact answer (they sit
+/// along the shadow's edge). Finer maps must give less error.
+#[test]
+fn shadow_map_resolution_trades_edge_error() {
+    let (min, max) = (Vec3::new(-0.5, 0.0, -1.5), Vec3::new(0.5, 2.0, 1.5));
+    let mut scene = Scene::new();
+    let grey = scene.add_material(Material::opaque("grey", Vec4::splat(0.7)));
+    let plane = scene.add_geometry(Geometry::plane(30.0));
+    let ground = scene.add_node("ground", Transform::IDENTITY);
+    scene.set_renderable(ground, Renderable { geometry: plane, materials: vec![grey] }).unwrap();
+    let slab = scene.add_geometry(Geometry::cube(1.0));
+    let node = scene.add_node("slab", Transform::from_translation((min + max) * 0.5).with_scale(max - min));
+    scene.set_renderable(node, Renderable { geometry: slab, materials: vec![grey] }).unwrap();
+    let travelling = Vec3::new(1.0, -1.2, 0.35).normalize();
+    let sun =
+        scene.add_node("sun", Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, travelling)));
+    scene.set_light(sun, Some(Light::directional(3.0))).unwrap();
+    let camera = LookAtResolver {
+        camera: Camera::perspective(50f32.to_radians(), 0.1, Some(40.0)),
+        eye: Vec3::new(0.5, 9.0, 5.0),
+        target: Vec3::new(1.5, 0.0, 0.0),
+        up: Vec3::Y,
+        viewport: UVec2::new(192, 192),
+    };
+    let render = |resolution: Option<u32>| {
+        let mut renderer = support::gpu_renderer();
+        let mut cascades = [None; 4];
+        if let Some(resolution) = resolution {
+            let settings =
+                CascadeSettings { count: 1, resolution, max_distance: 20.0, caster_margin: 10.0, ..Default::default() };
+            let cascade = CascadeResolver { main: Arc::new(camera), light: sun, settings, index: 0 };
+            cascades[0] = Some(renderer.register_view_with_options(cascade, shadow_options(), depth_only_graph));
+        }
+        let config = ShaderPassConfig { shadow_cascades: cascades, ..Default::default() };
+        let view = renderer.register_view(camera, oxygen::lit_render_graph(config));
+        renderer.render_frame(&scene).unwrap();
+        renderer.read_color(view).unwrap()
+    };
+    let resolved =
+        camera.resolve(&ViewContext { view_id: ViewId(0), frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
+    // The exact answer per pixel: None where the pixel does not show the ground.
+    let (w, h) = (camera.viewport.x, camera.viewport.y);
+    let exact: Vec<Option<bool>> = (0..w * h)
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let ndc = Vec2::new((x as f32 + 0.5) / w as f32 * 2.0 - 1.0, 1.0 - (y as f32 + 0.5) / h as f32 * 2.0);
+            let near = resolved.inverse_view_projection.project_point3(ndc.extend(1.0));
+            let mid = resolved.inverse_view_projection.project_point3(ndc.extend(0.5));
+            let direction = (mid - near).normalize();
+            if direction.y >= 0.0 {
+                return None;
+            }
+            let t = -near.y / direction.y;
+            if ray_hits_box(near, direction, min, max).is_some_and(|b| b < t) {
+                return None; // the box itself
+            }
+            let ground = near + direction * t + Vec3::Y * 1e-3;
+            Some(ray_hits_box(ground, -travelling, min, max).is_some())
+        })
+        .collect();
+    let unshadowed = render(None);
+    let luma = |image: &image::RgbaImage, i: u32| {
+        let p = image.get_pixel(i % w, i / w).0;
+        p[0] as f32 + p[1] as f32 + p[2] as f32
+    };
+    let shadowed_pixels = exact.iter().filter(|e| **e == Some(true)).count();
+    assert!(shadowed_pixels > 500, "the exact shadow covers only {shadowed_pixels} pixels");
+    let mut errors = Vec::new();
+    for resolution in [128, 256, 512, 1024] {
+        let image = render(Some(resolution));
+        let wrong = (0..w * h)
+            .filter(|&i| {
+                exact[i as usize].is_some_and(|in_shadow| (luma(&image, i) < 0.6 * luma(&unshadowed, i)) != in_shadow)
+            })
+            .count();
+        errors.push(wrong);
+    }
+    eprintln!(
+        "shadow edge error (ground pixels misclassified, of {shadowed_pixels} exactly shadowed), by map resolution: 128: {}, 256: {}, 512: {}, 1024: {}",
+        errors[0], errors[1], errors[2], errors[3]
+    );
+    assert!(errors[0] > errors[3], "finer maps must not be worse: {errors:?}");
+    assert!(errors[3] * 10 < shadowed_pixels, "a 1024 map should get the shadow nearly right: {errors:?}");
 }

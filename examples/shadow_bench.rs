@@ -1,0 +1,100 @@
+//! The time side of the shadow knobs: cascade count and map resolution.
+//!
+//! ```text
+//! cargo run --release --example shadow_bench [CUBES]   # default 10 000
+//! ```
+//!
+//! A field of CUBES boxes of varied heights under a low sun, one 960 × 540
+//! camera looking across it. For no shadows and for every cascade count
+//! (1, 2, 4) × map resolution (512, 1024, 2048), it renders 3 warm-up and
+//! 10 measured frames, each waited for on the GPU, and reports the median
+//! frame time and its ratio to the frame without shadows, measured in the
+//! same run. The error side is `shadow_map_resolution_trades_edge_error`
+//! in `tests/shadow_cascades.rs`.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use oxygen::core::CascadeSettings;
+use oxygen::prelude::*;
+use oxygen::{register_sun_cascades, shadowed_render_graph};
+
+const WARM_UP: usize = 3;
+const MEASURED: usize = 10;
+
+fn field_of_boxes(count: usize) -> (Scene, f32) {
+    let mut scene = Scene::new();
+    let side = (count as f32).sqrt().ceil() as usize;
+    let ground_material = scene.add_material(Material::opaque("ground", Vec4::splat(0.6)));
+    let ground_mesh = scene.add_geometry(Geometry::plane(side as f32 * 2.0 + 10.0));
+    let ground = scene.add_node("ground", Transform::from_translation(Vec3::new(side as f32, 0.0, side as f32)));
+    scene.set_renderable(ground, Renderable { geometry: ground_mesh, materials: vec![ground_material] }).ok();
+    let cube = scene.add_geometry(Geometry::cube(1.0));
+    let material = scene.add_material(Material::opaque("box", Vec4::new(0.8, 0.7, 0.6, 1.0)));
+    for i in 0..count {
+        let (x, z) = ((i % side) as f32 * 2.0, (i / side) as f32 * 2.0);
+        let height = 0.5 + ((i * 7919) % 13) as f32 * 0.25;
+        let transform =
+            Transform::from_translation(Vec3::new(x, height * 0.5, z)).with_scale(Vec3::new(0.8, height, 0.8));
+        let node = scene.add_node("box", transform);
+        scene.set_renderable(node, Renderable { geometry: cube, materials: vec![material] }).ok();
+    }
+    let sun = scene.add_node(
+        "sun",
+        Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, Vec3::new(0.6, -0.5, 0.4).normalize())),
+    );
+    scene.set_light(sun, Some(Light::directional(3.0))).ok();
+    (scene, side as f32 * 2.0)
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let count: usize = std::env::args().nth(1).map(|a| a.parse()).transpose()?.unwrap_or(10_000);
+    let (scene, extent) = field_of_boxes(count);
+    let camera = LookAtResolver {
+        camera: Camera::perspective(60f32.to_radians(), 0.1, Some(extent * 1.5)),
+        eye: Vec3::new(-5.0, 12.0, -5.0),
+        target: Vec3::new(extent * 0.4, 0.0, extent * 0.4),
+        up: Vec3::Y,
+        viewport: UVec2::new(960, 540),
+    };
+    let mut configs = vec![None];
+    for cascades in [1, 2, 4] {
+        for resolution in [512, 1024, 2048] {
+            configs.push(Some((cascades, resolution)));
+        }
+    }
+    println!("| cascades | map resolution | frame ms (CPU + GPU, waited) | × no shadows |");
+    println!("|---:|---:|---:|---:|");
+    let mut baseline = None;
+    let mut adapter = String::new();
+    for config in configs {
+        let mut renderer = Renderer::new_headless()?;
+        adapter = renderer.gpu().describe();
+        let cascades = match config {
+            Some((count, resolution)) => {
+                let settings = CascadeSettings { count, resolution, max_distance: 60.0, ..Default::default() };
+                register_sun_cascades(&mut renderer, &scene, Arc::new(camera), settings)
+            }
+            None => [None; 4],
+        };
+        renderer.register_view(camera, shadowed_render_graph(cascades));
+        let mut times = Vec::with_capacity(MEASURED);
+        for frame in 0..WARM_UP + MEASURED {
+            let start = Instant::now();
+            renderer.render_frame(&scene)?;
+            renderer.gpu().device.poll(wgpu::PollType::wait_indefinitely())?;
+            if frame >= WARM_UP {
+                times.push(start.elapsed().as_secs_f64() * 1e3);
+            }
+        }
+        times.sort_by(f64::total_cmp);
+        let median = times[times.len() / 2];
+        let base = *baseline.get_or_insert(median);
+        let (cascades, resolution) =
+            config.map_or(("0".to_owned(), "—".to_owned()), |(c, r)| (c.to_string(), r.to_string()));
+        println!("| {cascades} | {resolution} | {median:.2} | {:.2} |", median / base);
+    }
+    println!();
+    println!("adapter: {adapter}; {count} boxes; medians of {MEASURED} frames after {WARM_UP} warm-up frames");
+    Ok(())
+}
