@@ -74,6 +74,22 @@ fn light_of(scene: &Scene, node: NodeKey, view: ViewId) -> Result<(LightKind, gl
     Ok((light.kind, scene.world_transform(node).ok_or_else(gone)?))
 }
 
+/// A square perspective shadow view from a light: `view` (world → light, in
+/// `f64`), vertical field of view `fov`, `(near, far)` depth range and
+/// `resolution` texels a side.
+fn light_view(
+    view_id: ViewId,
+    view: glam::DMat4,
+    fov: f32,
+    (near, far): (f32, f32),
+    resolution: u32,
+) -> Result<oxygen_core::ResolvedView, oxygen_core::ViewError> {
+    let camera = oxygen_core::Camera::perspective(fov, near, Some(far));
+    let projection =
+        camera.projection_matrix(1.0).map_err(|source| oxygen_core::ViewError::Camera { view: view_id, source })?;
+    oxygen_core::ResolvedView::new_f64(view_id, view, projection, glam::UVec2::splat(resolution.max(1)), near, far)
+}
+
 fn not_a(view: ViewId, kind: &str) -> oxygen_core::ViewError {
     oxygen_core::ViewError::Other { view, message: format!("the light is no longer a {kind} light") }
 }
@@ -105,18 +121,8 @@ impl ViewResolver for SpotShadowResolver {
         let view = glam::DMat4::from_rotation_translation(rotation.normalize(), position).inverse();
         // A little wider than the cone, so PCF taps at its edge stay inside.
         let fov = (outer_cone * 2.0 * 1.1).clamp(0.05, 170f32.to_radians());
-        let far = range.filter(|r| r.is_finite() && *r > self.near).unwrap_or(self.far);
-        let camera = oxygen_core::Camera::perspective(fov, self.near, Some(far));
-        let projection =
-            camera.projection_matrix(1.0).map_err(|source| oxygen_core::ViewError::Camera { view: view_id, source })?;
-        oxygen_core::ResolvedView::new_f64(
-            view_id,
-            view,
-            projection,
-            glam::UVec2::splat(self.resolution.max(1)),
-            self.near,
-            far,
-        )
+        let depth = (self.near, range.filter(|r| r.is_finite() && *r > self.near).unwrap_or(self.far));
+        light_view(view_id, view, fov, depth, self.resolution)
     }
 }
 
@@ -150,14 +156,10 @@ impl ViewResolver for PointShadowFaceResolver {
         let (forward, up) = oxygen_passes::PROBE_FACE_AXES[self.face.min(oxygen_passes::PROBE_FACES - 1)];
         let view =
             glam::DMat4::look_to_rh(position, glam::Vec3::from(forward).as_dvec3(), glam::Vec3::from(up).as_dvec3());
-        let resolution = self.resolution.max(1);
         // Two texels of margin on every side beyond the 90° face.
-        let fov = 2.0 * (1.0 + 4.0 / resolution as f32).atan();
-        let far = range.filter(|r| r.is_finite() && *r > self.near).unwrap_or(self.far);
-        let camera = oxygen_core::Camera::perspective(fov, self.near, Some(far));
-        let projection =
-            camera.projection_matrix(1.0).map_err(|source| oxygen_core::ViewError::Camera { view: view_id, source })?;
-        oxygen_core::ResolvedView::new_f64(view_id, view, projection, glam::UVec2::splat(resolution), self.near, far)
+        let fov = 2.0 * (1.0 + 4.0 / self.resolution.max(1) as f32).atan();
+        let depth = (self.near, range.filter(|r| r.is_finite() && *r > self.near).unwrap_or(self.far));
+        light_view(view_id, view, fov, depth, self.resolution)
     }
 }
 

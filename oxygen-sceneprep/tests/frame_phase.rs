@@ -29,6 +29,15 @@ fn cube_node(scene: &mut Scene, name: &str, t: Transform) -> NodeKey {
     node
 }
 
+/// A ScenePrep that has prepared `scene` through [`view`] once.
+fn prepared_with_one_view(scene: &Scene) -> ScenePrep {
+    let mut prep = ScenePrep::new();
+    let view = view(scene);
+    let request = ViewRequest { view: &view, options: ViewPrepOptions::default() };
+    prep.prepare(scene, &[request], &mut SlotAllocators::default()).unwrap();
+    prep
+}
+
 fn drawn(prep: &ScenePrep) -> Vec<u32> {
     prep.frames()[0].draws().iter().map(|d| d.node_id).collect()
 }
@@ -129,14 +138,7 @@ fn local_lights_get_shadow_atlas_tiles_in_node_order() {
     let off = scene.add_node("no shadows", Transform::IDENTITY);
     scene.set_light(off, Some(Light::spot(1.0, None, 0.2, 0.3))).unwrap();
     scene.set_flags(off, NodeFlags::VISIBLE).unwrap();
-    let mut prep = ScenePrep::new();
-    let view = view(&scene);
-    prep.prepare(
-        &scene,
-        &[ViewRequest { view: &view, options: ViewPrepOptions::default() }],
-        &mut SlotAllocators::default(),
-    )
-    .unwrap();
+    let prep = prepared_with_one_view(&scene);
     let none = oxygen_bindless::INVALID_SLOT;
     let slots: Vec<u32> = prep.frame_collection().positional_lights.iter().map(|l| l.shadow_slot).collect();
     assert_eq!(slots, vec![0, 6, none, 7, none, 13, none]);
@@ -163,14 +165,7 @@ fn lights_with_non_finite_parameters_are_skipped_or_clamped() {
         let node = scene.add_node(format!("light {i}"), Transform::IDENTITY);
         scene.set_light(node, Some(light)).unwrap();
     }
-    let mut prep = ScenePrep::new();
-    let view = view(&scene);
-    prep.prepare(
-        &scene,
-        &[ViewRequest { view: &view, options: ViewPrepOptions::default() }],
-        &mut SlotAllocators::default(),
-    )
-    .unwrap();
+    let prep = prepared_with_one_view(&scene);
     let frame = prep.frame_collection();
     assert_eq!(frame.positional_lights.len(), 1, "only the point light with a NaN intensity and range is kept");
     assert_eq!(frame.directional_lights.len(), 1);
