@@ -33,7 +33,10 @@ pub mod probes;
 mod renderer;
 pub mod shadows;
 
-pub use gltf_import::{GltfCamera, GltfError, GltfImport, NodeCameraResolver, SceneChoice, import_gltf};
+pub use gltf_import::{
+    GltfCamera, GltfError, GltfImport, ImportLimits, ImportOptions, NodeCameraResolver, SceneChoice, import_gltf,
+    import_gltf_slice, import_gltf_with,
+};
 pub use probes::{ProbeUpdate, ReflectionProbe};
 pub use renderer::{
     FrameReport, RenderError, RenderGraphFuture, RenderOrigin, Renderer, RendererOptions, ViewReport, lit_render_graph,

@@ -1,0 +1,394 @@
+//! Accessors, validated before any byte is read.
+//!
+//! [`validate`] checks one accessor against the glTF 2.0 tables for the
+//! semantic it is used as (component type, element type, `normalized`), and
+//! checks that every byte it will read lies inside its buffer view and
+//! buffer, sparse substitution included. What it returns, an
+//! [`AccessorView`], can then be read without any further failure except
+//! for values the file holds (non-finite floats, sparse indices out of
+//! order), which are errors too. Nothing here indexes past a slice or
+//! panics: every offset is computed with checked arithmetic.
+
+use std::borrow::Cow;
+
+use gltf::json;
+use gltf::json::accessor::{ComponentType, Type};
+use gltf::json::validation::Checked;
+
+/// What an accessor is used as; each use allows different types.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Semantic {
+    Position,
+    Normal,
+    Tangent,
+    TexCoord,
+    Color,
+    Joints,
+    Weights,
+    Indices,
+}
+
+impl Semantic {
+    /// The glTF 2.0 table (3.7.2.1 and 3.7.2.2): element types and
+    /// component types allowed, and whether integer components must be
+    /// normalized.
+    fn allows(self, ty: Type, component: ComponentType, normalized: bool) -> bool {
+        use ComponentType::{F32, U8, U16, U32};
+        let float = component == F32 && !normalized;
+        let unorm = matches!(component, U8 | U16) && normalized;
+        match self {
+            Semantic::Position | Semantic::Normal => ty == Type::Vec3 && float,
+            Semantic::Tangent => ty == Type::Vec4 && float,
+            Semantic::TexCoord => ty == Type::Vec2 && (float || unorm),
+            Semantic::Color => matches!(ty, Type::Vec3 | Type::Vec4) && (float || unorm),
+            Semantic::Joints => ty == Type::Vec4 && matches!(component, U8 | U16) && !normalized,
+            Semantic::Weights => ty == Type::Vec4 && (float || unorm),
+            Semantic::Indices => ty == Type::Scalar && matches!(component, U8 | U16 | U32) && !normalized,
+        }
+    }
+}
+
+fn component_size(c: ComponentType) -> u64 {
+    match c {
+        ComponentType::I8 | ComponentType::U8 => 1,
+        ComponentType::I16 | ComponentType::U16 => 2,
+        ComponentType::U32 | ComponentType::F32 => 4,
+    }
+}
+
+fn type_components(t: Type) -> u64 {
+    match t {
+        Type::Scalar => 1,
+        Type::Vec2 => 2,
+        Type::Vec3 => 3,
+        Type::Vec4 | Type::Mat2 => 4,
+        Type::Mat3 => 9,
+        Type::Mat4 => 16,
+    }
+}
+
+/// Bytes one element occupies; matrix columns start on 4-byte boundaries.
+fn element_size(t: Type, c: ComponentType) -> u64 {
+    let size = component_size(c);
+    let (columns, rows) = match t {
+        Type::Mat2 => (2, 2),
+        Type::Mat3 => (3, 3),
+        Type::Mat4 => (4, 4),
+        _ => return type_components(t) * size,
+    };
+    columns * (rows * size).next_multiple_of(4)
+}
+
+/// A strided run of elements inside one buffer.
+#[derive(Clone, Copy, Debug)]
+struct Strided<'a> {
+    bytes: &'a [u8],
+    stride: usize,
+}
+
+/// Sparse substitution: `values[i]` replaces element `indices[i]`.
+#[derive(Clone, Copy, Debug)]
+struct Sparse<'a> {
+    count: usize,
+    indices: &'a [u8],
+    index_component: ComponentType,
+    values: &'a [u8],
+}
+
+/// An accessor whose every byte range has been checked.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct AccessorView<'a> {
+    /// The accessor's index, for messages.
+    pub(crate) index: usize,
+    /// Elements.
+    pub(crate) count: usize,
+    /// Components per element (1 to 4 for the semantics read here).
+    pub(crate) components: usize,
+    component: ComponentType,
+    normalized: bool,
+    element_size: usize,
+    /// `None`: no buffer view, every element is zero before sparse values.
+    base: Option<Strided<'a>>,
+    sparse: Option<Sparse<'a>>,
+}
+
+/// The byte slice `[offset, offset + length)` of `view`, checked against the
+/// view and its buffer.
+fn view_bytes<'a>(
+    root: &json::Root,
+    buffers: &'a [Cow<'_, [u8]>],
+    view: json::Index<json::buffer::View>,
+) -> Result<(&'a [u8], Option<usize>), String> {
+    let vi = view.value();
+    let v = root.buffer_views.get(vi).ok_or_else(|| format!("buffer view {vi} does not exist"))?;
+    let bi = v.buffer.value();
+    let buffer = buffers.get(bi).ok_or_else(|| format!("buffer view {vi}: buffer {bi} does not exist"))?;
+    let start = v.byte_offset.map_or(0, |o| o.0);
+    let end = start.checked_add(v.byte_length.0).filter(|end| *end <= buffer.len() as u64).ok_or_else(|| {
+        format!(
+            "buffer view {vi}: bytes {start}..+{} lie outside buffer {bi} ({} bytes)",
+            v.byte_length.0,
+            buffer.len()
+        )
+    })?;
+    let stride = v.byte_stride.map(|s| s.0);
+    Ok((&buffer[start as usize..end as usize], stride))
+}
+
+/// Validates accessor `index` for use as `semantic`.
+pub(crate) fn validate<'a>(
+    root: &json::Root,
+    buffers: &'a [Cow<'_, [u8]>],
+    index: usize,
+    semantic: Semantic,
+) -> Result<AccessorView<'a>, String> {
+    let a = root.accessors.get(index).ok_or_else(|| format!("accessor {index} does not exist"))?;
+    let Checked::Valid(json::accessor::GenericComponentType(component)) = a.component_type else {
+        return Err(format!("accessor {index}: unknown componentType"));
+    };
+    let Checked::Valid(ty) = a.type_ else {
+        return Err(format!("accessor {index}: unknown type"));
+    };
+    if !semantic.allows(ty, component, a.normalized) {
+        return Err(format!(
+            "accessor {index}: {ty:?} of {component:?}{} is not allowed for {semantic:?}",
+            if a.normalized { " (normalized)" } else { "" }
+        ));
+    }
+    let count = a.count.0;
+    if count == 0 {
+        return Err(format!("accessor {index}: count is 0"));
+    }
+    let element = element_size(ty, component);
+    let base = match a.buffer_view {
+        Some(view) => {
+            let (bytes, stride) = view_bytes(root, buffers, view).map_err(|e| format!("accessor {index}: {e}"))?;
+            let stride = stride.map_or(element, |s| s as u64);
+            if stride < element {
+                return Err(format!(
+                    "accessor {index}: byteStride {stride} is smaller than an element ({element} bytes)"
+                ));
+            }
+            let offset = a.byte_offset.map_or(0, |o| o.0);
+            let end = (count - 1)
+                .checked_mul(stride)
+                .and_then(|last| last.checked_add(offset))
+                .and_then(|last| last.checked_add(element))
+                .filter(|end| *end <= bytes.len() as u64);
+            let Some(end) = end else {
+                return Err(format!(
+                    "accessor {index}: {count} elements of {element} bytes (stride {stride}) from offset {offset} do \
+                         not fit its buffer view ({} bytes)",
+                    bytes.len()
+                ));
+            };
+            Some(Strided { bytes: &bytes[offset as usize..end as usize], stride: stride as usize })
+        }
+        None => None,
+    };
+    let sparse = match &a.sparse {
+        None => None,
+        Some(s) => {
+            let sparse_count = s.count.0;
+            if sparse_count == 0 || sparse_count > count {
+                return Err(format!("accessor {index}: sparse count {sparse_count} is not in 1..={count}"));
+            }
+            let Checked::Valid(json::accessor::IndexComponentType(index_component)) = s.indices.component_type else {
+                return Err(format!("accessor {index}: unknown sparse index componentType"));
+            };
+            if !matches!(index_component, ComponentType::U8 | ComponentType::U16 | ComponentType::U32) {
+                return Err(format!("accessor {index}: sparse indices of {index_component:?}"));
+            }
+            let slice = |view, offset: u64, size: u64, what: &str| -> Result<&'a [u8], String> {
+                let (bytes, _) =
+                    view_bytes(root, buffers, view).map_err(|e| format!("accessor {index}: sparse {what}: {e}"))?;
+                let end = sparse_count.checked_mul(size).and_then(|n| n.checked_add(offset));
+                match end {
+                    Some(end) if end <= bytes.len() as u64 => Ok(&bytes[offset as usize..end as usize]),
+                    _ => Err(format!("accessor {index}: sparse {what} do not fit their buffer view")),
+                }
+            };
+            let indices =
+                slice(s.indices.buffer_view, s.indices.byte_offset.0, component_size(index_component), "indices")?;
+            let values = slice(s.values.buffer_view, s.values.byte_offset.0, element, "values")?;
+            Some(Sparse { count: sparse_count as usize, indices, index_component, values })
+        }
+    };
+    Ok(AccessorView {
+        index,
+        count: count as usize,
+        components: type_components(ty) as usize,
+        component,
+        normalized: a.normalized,
+        element_size: element as usize,
+        base,
+        sparse,
+    })
+}
+
+fn read_component(bytes: &[u8], component: ComponentType, normalized: bool) -> f32 {
+    let le2 = |b: &[u8]| [b[0], b[1]];
+    let le4 = |b: &[u8]| [b[0], b[1], b[2], b[3]];
+    match (component, normalized) {
+        (ComponentType::F32, _) => f32::from_le_bytes(le4(bytes)),
+        (ComponentType::U8, true) => f32::from(bytes[0]) / 255.0,
+        (ComponentType::U8, false) => f32::from(bytes[0]),
+        (ComponentType::I8, true) => (f32::from(bytes[0] as i8) / 127.0).max(-1.0),
+        (ComponentType::I8, false) => f32::from(bytes[0] as i8),
+        (ComponentType::U16, true) => f32::from(u16::from_le_bytes(le2(bytes))) / 65535.0,
+        (ComponentType::U16, false) => f32::from(u16::from_le_bytes(le2(bytes))),
+        (ComponentType::I16, true) => (f32::from(i16::from_le_bytes(le2(bytes))) / 32767.0).max(-1.0),
+        (ComponentType::I16, false) => f32::from(i16::from_le_bytes(le2(bytes))),
+        (ComponentType::U32, _) => u32::from_le_bytes(le4(bytes)) as f32,
+    }
+}
+
+fn read_uint(bytes: &[u8], component: ComponentType) -> u32 {
+    match component {
+        ComponentType::U8 => u32::from(bytes[0]),
+        ComponentType::U16 => u32::from(u16::from_le_bytes([bytes[0], bytes[1]])),
+        _ => u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]),
+    }
+}
+
+impl AccessorView<'_> {
+    /// The bytes of element `i` of the base data (`i < count`, checked by
+    /// [`validate`]); `None` where the accessor has no buffer view.
+    fn base_element(&self, i: usize) -> Option<&[u8]> {
+        self.base.map(|b| &b.bytes[i * b.stride..i * b.stride + self.element_size])
+    }
+
+    /// Applies sparse substitution: calls `write(element, bytes)` per entry.
+    fn for_each_sparse(&self, mut write: impl FnMut(usize, &[u8])) -> Result<(), String> {
+        let Some(s) = self.sparse else { return Ok(()) };
+        let isize = component_size(s.index_component) as usize;
+        let mut previous: Option<u32> = None;
+        for i in 0..s.count {
+            let target = read_uint(&s.indices[i * isize..(i + 1) * isize], s.index_component);
+            if target as usize >= self.count || previous.is_some_and(|p| target <= p) {
+                return Err(format!(
+                    "accessor {}: sparse index {target} is out of range or not increasing",
+                    self.index
+                ));
+            }
+            previous = Some(target);
+            write(target as usize, &s.values[i * self.element_size..(i + 1) * self.element_size]);
+        }
+        Ok(())
+    }
+
+    fn decode_element<const N: usize>(&self, bytes: &[u8]) -> [f32; N] {
+        let size = component_size(self.component) as usize;
+        let mut out = [0.0; N];
+        for (c, slot) in out.iter_mut().enumerate().take(self.components.min(N)) {
+            *slot = read_component(&bytes[c * size..(c + 1) * size], self.component, self.normalized);
+        }
+        out
+    }
+
+    /// Reads every element as `N` floats (missing components are 0); a
+    /// non-finite value is an error naming the accessor and element.
+    pub(crate) fn read_floats<const N: usize>(&self) -> Result<Vec<[f32; N]>, String> {
+        let mut out: Vec<[f32; N]> = (0..self.count)
+            .map(|i| self.base_element(i).map_or([0.0; N], |bytes| self.decode_element(bytes)))
+            .collect();
+        let mut sparse = Vec::new();
+        self.for_each_sparse(|i, bytes| sparse.push((i, self.decode_element::<N>(bytes))))?;
+        for (i, value) in sparse {
+            out[i] = value;
+        }
+        if let Some(bad) = out.iter().position(|v| v.iter().any(|c| !c.is_finite())) {
+            return Err(format!("accessor {}: element {bad} is not finite", self.index));
+        }
+        Ok(out)
+    }
+
+    /// Reads a scalar unsigned-integer accessor (indices).
+    pub(crate) fn read_indices(&self) -> Result<Vec<u32>, String> {
+        let mut out: Vec<u32> =
+            (0..self.count).map(|i| self.base_element(i).map_or(0, |b| read_uint(b, self.component))).collect();
+        let mut sparse = Vec::new();
+        self.for_each_sparse(|i, bytes| sparse.push((i, read_uint(bytes, self.component))))?;
+        for (i, value) in sparse {
+            out[i] = value;
+        }
+        Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn root(json: &str) -> json::Root {
+        json::deserialize::from_str(json).unwrap()
+    }
+
+    const VIEW: &str = r#""buffers":[{"byteLength":24}],"bufferViews":[{"buffer":0,"byteLength":24}]"#;
+
+    #[test]
+    fn the_semantic_tables_refuse_what_gltf_forbids() {
+        use ComponentType::*;
+        assert!(Semantic::Indices.allows(Type::Scalar, U16, false));
+        for c in [I8, I16, F32] {
+            assert!(!Semantic::Indices.allows(Type::Scalar, c, false), "{c:?} indices");
+        }
+        assert!(!Semantic::Indices.allows(Type::Scalar, U16, true));
+        assert!(!Semantic::TexCoord.allows(Type::Vec2, U32, false));
+        assert!(!Semantic::TexCoord.allows(Type::Vec2, U8, false));
+        assert!(Semantic::TexCoord.allows(Type::Vec2, U8, true));
+        assert!(!Semantic::Position.allows(Type::Vec2, F32, false));
+        assert!(!Semantic::Position.allows(Type::Vec3, F32, true));
+        assert!(Semantic::Color.allows(Type::Vec4, U16, true));
+    }
+
+    #[test]
+    fn an_accessor_past_its_buffer_view_is_an_error_naming_it() {
+        let r = root(&format!(
+            r#"{{"asset":{{"version":"2.0"}},{VIEW},"accessors":[{{"bufferView":0,"byteOffset":4,"componentType":5126,"count":2,"type":"VEC3"}}]}}"#
+        ));
+        let buffers = vec![Cow::Owned(vec![0u8; 24])];
+        let err = validate(&r, &buffers, 0, Semantic::Position).unwrap_err();
+        assert!(err.contains("accessor 0") && err.contains("do not fit"), "{err}");
+    }
+
+    #[test]
+    fn a_buffer_view_past_its_buffer_is_an_error() {
+        let r = root(
+            r#"{"asset":{"version":"2.0"},"buffers":[{"byteLength":8}],"bufferViews":[{"buffer":0,"byteLength":24}],
+            "accessors":[{"bufferView":0,"componentType":5126,"count":1,"type":"VEC3"}]}"#,
+        );
+        let err = validate(&r, &[Cow::Owned(vec![0u8; 8])], 0, Semantic::Position).unwrap_err();
+        assert!(err.contains("outside buffer 0"), "{err}");
+    }
+
+    #[test]
+    fn huge_counts_overflow_into_an_error_not_an_allocation() {
+        let r = root(&format!(
+            r#"{{"asset":{{"version":"2.0"}},{VIEW},"accessors":[{{"bufferView":0,"componentType":5126,"count":18446744073709551615,"type":"VEC3"}}]}}"#
+        ));
+        assert!(validate(&r, &[Cow::Owned(vec![0u8; 24])], 0, Semantic::Position).is_err());
+    }
+
+    #[test]
+    fn sparse_values_replace_zeros_and_non_finite_values_are_refused() {
+        let mut bytes = Vec::new();
+        bytes.extend(1u16.to_le_bytes()); // sparse index 1
+        bytes.extend([0u8; 2]);
+        for v in [1.0f32, 2.0, 3.0] {
+            bytes.extend(v.to_le_bytes());
+        }
+        let r = root(
+            r#"{"asset":{"version":"2.0"},"buffers":[{"byteLength":16}],"bufferViews":[{"buffer":0,"byteLength":4},{"buffer":0,"byteOffset":4,"byteLength":12}],
+            "accessors":[{"componentType":5126,"count":2,"type":"VEC3","sparse":{"count":1,"indices":{"bufferView":0,"componentType":5123},"values":{"bufferView":1}}}]}"#,
+        );
+        let buffers = vec![Cow::Owned(bytes)];
+        let values = validate(&r, &buffers, 0, Semantic::Position).unwrap().read_floats::<3>().unwrap();
+        assert_eq!(values, vec![[0.0; 3], [1.0, 2.0, 3.0]]);
+        let mut nan = buffers[0].to_vec();
+        nan[4..8].copy_from_slice(&f32::NAN.to_le_bytes());
+        let buffers = vec![Cow::Owned(nan)];
+        let err = validate(&r, &buffers, 0, Semantic::Position).unwrap().read_floats::<3>().unwrap_err();
+        assert!(err.contains("not finite"), "{err}");
+    }
+}

@@ -1,0 +1,299 @@
+//! Materials, textures and images.
+//!
+//! A material's texture references are checked (texture, image and sampler
+//! indices in range, enums known) before its textures are loaded. An image's
+//! bytes come through [`super::source`] (confined URIs, `data:` URIs, buffer
+//! views); only PNG and JPEG are decoded, after their dimensions are read
+//! from the header and checked against the limits, so a small file that
+//! claims a huge picture is refused before the decoder allocates.
+
+use std::borrow::Cow;
+use std::collections::HashMap;
+use std::io::Cursor;
+
+use glam::{Vec3, Vec4};
+use gltf::json;
+use gltf::json::validation::Checked;
+use oxygen_core::{
+    AlphaMode, ColorSpace, Filter, Material, MaterialHandle, Sampling, Scene, TextureHandle, TextureImage, Wrap,
+};
+
+use super::GltfErrorKind;
+use super::limits::{Budget, check};
+use super::source::AssetRootRef;
+
+/// Materials and textures of one import, each created once.
+pub(crate) struct MaterialImporter<'a> {
+    pub(crate) root: &'a json::Root,
+    pub(crate) buffers: &'a [Cow<'a, [u8]>],
+    pub(crate) folder: AssetRootRef<'a>,
+    textures: HashMap<(usize, bool), TextureHandle>,
+    materials: HashMap<Option<usize>, MaterialHandle>,
+    /// Decoded RGBA8 pixels per image index, shared by its sRGB and linear uses.
+    images: HashMap<usize, (u32, u32, Vec<u8>)>,
+}
+
+impl<'a> MaterialImporter<'a> {
+    pub(crate) fn new(root: &'a json::Root, buffers: &'a [Cow<'a, [u8]>], folder: AssetRootRef<'a>) -> Self {
+        MaterialImporter {
+            root,
+            buffers,
+            folder,
+            textures: HashMap::new(),
+            materials: HashMap::new(),
+            images: HashMap::new(),
+        }
+    }
+
+    /// The scene material for glTF material `index` (`None`: the default).
+    pub(crate) fn material(
+        &mut self,
+        scene: &mut Scene,
+        index: Option<usize>,
+        budget: &mut Budget,
+        warnings: &mut Vec<String>,
+    ) -> Result<MaterialHandle, GltfErrorKind> {
+        if let Some(h) = self.materials.get(&index) {
+            return Ok(*h);
+        }
+        let default = json::Material::default();
+        let m = match index {
+            Some(i) => self
+                .root
+                .materials
+                .get(i)
+                .ok_or_else(|| GltfErrorKind::Invalid(format!("material {i} does not exist")))?,
+            None => &default,
+        };
+        let label = index.map_or_else(|| "the default material".to_owned(), |i| format!("material {i}"));
+        let pbr = &m.pbr_metallic_roughness;
+        let mut texture = |this: &mut Self, info: Option<(json::Index<json::Texture>, u32)>, space, what: &str| {
+            let Some((texture, tex_coord)) = info else { return Ok(None) };
+            if tex_coord != 0 {
+                warnings.push(format!("{label}: the {what} texture uses texcoord set {tex_coord}; set 0 is used"));
+            }
+            this.texture(scene, texture.value(), space, budget, warnings).map(Some)
+        };
+        let base_color_texture = texture(
+            self,
+            pbr.base_color_texture.as_ref().map(|t| (t.index, t.tex_coord)),
+            ColorSpace::Srgb,
+            "base-colour",
+        )?;
+        let metallic_roughness_texture = texture(
+            self,
+            pbr.metallic_roughness_texture.as_ref().map(|t| (t.index, t.tex_coord)),
+            ColorSpace::Linear,
+            "metallic-roughness",
+        )?;
+        let normal_texture =
+            texture(self, m.normal_texture.as_ref().map(|t| (t.index, t.tex_coord)), ColorSpace::Linear, "normal")?;
+        let emissive_texture =
+            texture(self, m.emissive_texture.as_ref().map(|t| (t.index, t.tex_coord)), ColorSpace::Srgb, "emissive")?;
+        let occlusion_texture = texture(
+            self,
+            m.occlusion_texture.as_ref().map(|t| (t.index, t.tex_coord)),
+            ColorSpace::Linear,
+            "occlusion",
+        )?;
+        let alpha_mode = match m.alpha_mode {
+            Checked::Valid(json::material::AlphaMode::Opaque) => AlphaMode::Opaque,
+            Checked::Valid(json::material::AlphaMode::Mask) => {
+                AlphaMode::Mask { cutoff: m.alpha_cutoff.map_or(0.5, |c| c.0) }
+            }
+            Checked::Valid(json::material::AlphaMode::Blend) => AlphaMode::Blend,
+            Checked::Invalid => return Err(GltfErrorKind::Invalid(format!("{label}: unknown alphaMode"))),
+        };
+        let strength =
+            m.extensions.as_ref().and_then(|e| e.emissive_strength.as_ref()).map_or(1.0, |s| s.emissive_strength.0);
+        let material = Material {
+            name: m.name.clone().unwrap_or_else(|| format!("material {index:?}")),
+            base_color: Vec4::from(pbr.base_color_factor.0),
+            base_color_texture,
+            metallic_roughness_texture,
+            normal_texture,
+            normal_scale: m.normal_texture.as_ref().map_or(1.0, |n| n.scale),
+            emissive: Vec3::from(m.emissive_factor.0) * strength,
+            emissive_texture,
+            occlusion_texture,
+            occlusion_strength: m.occlusion_texture.as_ref().map_or(1.0, |o| o.strength.0),
+            metallic: pbr.metallic_factor.0,
+            roughness: pbr.roughness_factor.0,
+            alpha_mode,
+            double_sided: m.double_sided,
+        };
+        let material = sanitize(material, &label, warnings);
+        let handle = scene.add_material(material);
+        self.materials.insert(index, handle);
+        Ok(handle)
+    }
+
+    fn texture(
+        &mut self,
+        scene: &mut Scene,
+        index: usize,
+        color_space: ColorSpace,
+        budget: &mut Budget,
+        warnings: &mut Vec<String>,
+    ) -> Result<TextureHandle, GltfErrorKind> {
+        let key = (index, color_space == ColorSpace::Srgb);
+        if let Some(h) = self.textures.get(&key) {
+            return Ok(*h);
+        }
+        let root = self.root;
+        let t = root
+            .textures
+            .get(index)
+            .ok_or_else(|| GltfErrorKind::Invalid(format!("texture {index} does not exist")))?;
+        let sampling = match t.sampler {
+            None => Sampling::default(),
+            Some(s) => {
+                let s = s.value();
+                let sampler = root
+                    .samplers
+                    .get(s)
+                    .ok_or_else(|| GltfErrorKind::Invalid(format!("texture {index}: sampler {s} does not exist")))?;
+                let wrap = |w: Checked<json::texture::WrappingMode>, axis: &str| match w {
+                    Checked::Valid(json::texture::WrappingMode::ClampToEdge) => Ok(Wrap::ClampToEdge),
+                    Checked::Valid(json::texture::WrappingMode::MirroredRepeat) => Ok(Wrap::MirroredRepeat),
+                    Checked::Valid(json::texture::WrappingMode::Repeat) => Ok(Wrap::Repeat),
+                    Checked::Invalid => Err(GltfErrorKind::Invalid(format!("sampler {s}: unknown {axis}"))),
+                };
+                let (wrap_s, wrap_t) = (wrap(sampler.wrap_s, "wrapS")?, wrap(sampler.wrap_t, "wrapT")?);
+                if wrap_s != wrap_t {
+                    warnings.push(format!("texture {index}: different wrap modes per axis; using the s mode"));
+                }
+                let filter = match sampler.mag_filter {
+                    Some(Checked::Valid(json::texture::MagFilter::Nearest)) => Filter::Nearest,
+                    Some(Checked::Valid(json::texture::MagFilter::Linear)) | None => Filter::Linear,
+                    Some(Checked::Invalid) => {
+                        return Err(GltfErrorKind::Invalid(format!("sampler {s}: unknown magFilter")));
+                    }
+                };
+                Sampling { wrap: wrap_s, filter }
+            }
+        };
+        let source = t.source.value();
+        let (width, height, pixels) = self.image(source, budget)?;
+        let name = t.name.clone().unwrap_or_else(|| format!("texture {index}"));
+        budget
+            .spend_bytes(pixels.len() as u64)
+            .map_err(|e| GltfErrorKind::Limit { context: format!("texture {index}"), source: e })?;
+        let image = TextureImage::new(name, width, height, color_space, pixels)
+            .map_err(|e| GltfErrorKind::Invalid(format!("image {source}: {e}")))?
+            .with_sampling(sampling);
+        let handle = scene.add_texture(image);
+        self.textures.insert(key, handle);
+        Ok(handle)
+    }
+
+    /// The RGBA8 pixels of image `index`, decoded once.
+    fn image(&mut self, index: usize, budget: &mut Budget) -> Result<(u32, u32, Vec<u8>), GltfErrorKind> {
+        if let Some((w, h, pixels)) = self.images.get(&index) {
+            return Ok((*w, *h, pixels.clone()));
+        }
+        let image = self
+            .root
+            .images
+            .get(index)
+            .ok_or_else(|| GltfErrorKind::Invalid(format!("image {index} does not exist")))?;
+        let cap = budget.limits.max_image_file_bytes;
+        let bytes: Cow<'_, [u8]> =
+            match (&image.uri, image.buffer_view) {
+                (Some(uri), _) => Cow::Owned(self.folder.read(uri, None, cap).map_err(|source| {
+                    GltfErrorKind::Uri { what: format!("image {index}"), uri: uri.clone(), source }
+                })?),
+                (None, Some(view)) => {
+                    let vi = view.value();
+                    let v = self.root.buffer_views.get(vi).ok_or_else(|| {
+                        GltfErrorKind::Invalid(format!("image {index}: buffer view {vi} does not exist"))
+                    })?;
+                    let buffer = self.buffers.get(v.buffer.value()).ok_or_else(|| {
+                        GltfErrorKind::Invalid(format!("image {index}: buffer {} does not exist", v.buffer.value()))
+                    })?;
+                    let start = v.byte_offset.map_or(0, |o| o.0);
+                    let slice = start
+                        .checked_add(v.byte_length.0)
+                        .filter(|end| *end <= buffer.len() as u64)
+                        .map(|end| &buffer[start as usize..end as usize])
+                        .ok_or_else(|| {
+                            GltfErrorKind::Invalid(format!("image {index}: buffer view {vi} lies outside its buffer"))
+                        })?;
+                    check("max_image_file_bytes", slice.len() as u64, cap)
+                        .map_err(|e| GltfErrorKind::Limit { context: format!("image {index}"), source: e })?;
+                    Cow::Borrowed(slice)
+                }
+                (None, None) => {
+                    return Err(GltfErrorKind::Invalid(format!("image {index} has neither a uri nor a bufferView")));
+                }
+            };
+        let decoded = decode(&bytes, budget.limits.max_texture_dimension).map_err(|e| match e {
+            DecodeError::Limit(source) => GltfErrorKind::Limit { context: format!("image {index}"), source },
+            DecodeError::Bad(what) => GltfErrorKind::Invalid(format!("image {index}: {what}")),
+        })?;
+        self.images.insert(index, decoded.clone());
+        Ok(decoded)
+    }
+}
+
+enum DecodeError {
+    Limit(super::LimitExceeded),
+    Bad(String),
+}
+
+/// Decodes a PNG or JPEG to RGBA8 after checking its header's dimensions.
+fn decode(bytes: &[u8], max_dimension: u32) -> Result<(u32, u32, Vec<u8>), DecodeError> {
+    let format = image::guess_format(bytes).map_err(|_| DecodeError::Bad("not a PNG or JPEG image".into()))?;
+    if !matches!(format, image::ImageFormat::Png | image::ImageFormat::Jpeg) {
+        return Err(DecodeError::Bad(format!("{format:?} images are not supported (PNG and JPEG are)")));
+    }
+    let reader = || image::ImageReader::with_format(Cursor::new(bytes), format);
+    let (width, height) = reader().into_dimensions().map_err(|e| DecodeError::Bad(e.to_string()))?;
+    check("max_texture_dimension", u64::from(width.max(height)), u64::from(max_dimension))
+        .map_err(DecodeError::Limit)?;
+    let mut limits = image::Limits::default();
+    limits.max_image_width = Some(max_dimension);
+    limits.max_image_height = Some(max_dimension);
+    // The decoder's own buffer (up to 16-bit RGBA) plus our RGBA8 copy.
+    limits.max_alloc = Some(u64::from(width) * u64::from(height) * 12 + (1 << 20));
+    let mut reader = reader();
+    reader.limits(limits);
+    let decoded = reader.decode().map_err(|e| DecodeError::Bad(e.to_string()))?;
+    let rgba = decoded.into_rgba8();
+    Ok((rgba.width(), rgba.height(), rgba.into_raw()))
+}
+
+/// Replaces non-finite factors with glTF's defaults so that no NaN reaches
+/// the material table, saying so.
+fn sanitize(mut m: Material, label: &str, warnings: &mut Vec<String>) -> Material {
+    let mut fixed = Vec::new();
+    if !m.base_color.is_finite() {
+        m.base_color = Vec4::ONE;
+        fixed.push("baseColorFactor");
+    }
+    if !m.emissive.is_finite() {
+        m.emissive = Vec3::ZERO;
+        fixed.push("emissive");
+    }
+    for (value, default, name) in [
+        (&mut m.metallic, 1.0, "metallicFactor"),
+        (&mut m.roughness, 1.0, "roughnessFactor"),
+        (&mut m.normal_scale, 1.0, "normalTexture.scale"),
+        (&mut m.occlusion_strength, 1.0, "occlusionTexture.strength"),
+    ] {
+        if !value.is_finite() {
+            *value = default;
+            fixed.push(name);
+        }
+    }
+    if let AlphaMode::Mask { cutoff } = &mut m.alpha_mode
+        && !cutoff.is_finite()
+    {
+        *cutoff = 0.5;
+        fixed.push("alphaCutoff");
+    }
+    if !fixed.is_empty() {
+        warnings.push(format!("{label}: non-finite {} replaced by the glTF default", fixed.join(", ")));
+    }
+    m
+}

@@ -1,0 +1,198 @@
+//! Meshes: every triangle primitive becomes a submesh of one [`Geometry`].
+//!
+//! Each primitive's accessors are validated ([`super::accessor`]) for the
+//! semantic they are used as, their counts compared, the vertex and index
+//! totals charged to the import's budget, and only then read. Index values
+//! are checked against the vertex count. Failures name the mesh, the
+//! primitive and the accessor.
+
+use std::borrow::Cow;
+
+use glam::{DVec3, Vec2, Vec3};
+use gltf::json;
+use gltf::json::mesh::{Mode, Semantic as JsonSemantic};
+use gltf::json::validation::Checked;
+use oxygen_core::{Geometry, Submesh, Vertex};
+
+use super::accessor::{self, Semantic};
+use super::limits::Budget;
+
+/// A mesh primitive's failure: which mesh, primitive and accessor.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("mesh {mesh} ('{name}'), primitive {primitive}{}: {what}", accessor.map(|a| format!(", accessor {a}")).unwrap_or_default())]
+pub struct MeshError {
+    /// The mesh's index.
+    pub mesh: usize,
+    /// The mesh's name (or "unnamed").
+    pub name: String,
+    /// The primitive's index within the mesh.
+    pub primitive: usize,
+    /// The accessor at fault, when one is.
+    pub accessor: Option<usize>,
+    /// What is wrong.
+    pub what: String,
+}
+
+/// The outcome of one mesh.
+pub(crate) enum MeshResult {
+    /// At least one triangle primitive: the geometry and each submesh's
+    /// material index (`None` for the default material).
+    Geometry(Geometry, Vec<Option<usize>>),
+    /// Nothing drawable (every primitive skipped with a warning).
+    Empty,
+}
+
+/// Builds mesh `index`. `warnings` collects what was skipped.
+pub(crate) fn build(
+    root: &json::Root,
+    buffers: &[Cow<'_, [u8]>],
+    index: usize,
+    budget: &mut Budget,
+    warnings: &mut Vec<String>,
+) -> Result<MeshResult, super::GltfErrorKind> {
+    let Some(mesh) = root.meshes.get(index) else {
+        return Err(super::GltfErrorKind::Invalid(format!("mesh {index} does not exist")));
+    };
+    let name = mesh.name.clone().unwrap_or_else(|| "unnamed".to_owned());
+    let fail = |primitive: usize, accessor: Option<usize>, what: String| {
+        super::GltfErrorKind::Mesh(MeshError { mesh: index, name: name.clone(), primitive, accessor, what })
+    };
+    let mut vertices: Vec<Vertex> = Vec::new();
+    let mut indices: Vec<u32> = Vec::new();
+    let mut submeshes = Vec::new();
+    let mut materials = Vec::new();
+    for (p, primitive) in mesh.primitives.iter().enumerate() {
+        let mode = match primitive.mode {
+            Checked::Valid(mode) => mode,
+            Checked::Invalid => return Err(fail(p, None, "unknown primitive mode".into())),
+        };
+        if let Some(material) = primitive.material
+            && material.value() >= root.materials.len()
+        {
+            return Err(fail(p, None, format!("material {} does not exist", material.value())));
+        }
+        if primitive.targets.as_ref().is_some_and(|t| !t.is_empty()) {
+            warnings.push(format!("mesh '{name}': morph targets are not imported; drawn in its base shape"));
+        }
+        if mode != Mode::Triangles {
+            warnings.push(format!("mesh '{name}': skipped a {mode:?} primitive (only triangles)"));
+            continue;
+        }
+        // Every attribute Oxygen knows is validated, read or not, and all of
+        // them must agree on the vertex count.
+        let mut position = None;
+        let mut normal = None;
+        let mut texcoord0 = None;
+        let mut count: Option<(usize, usize)> = None;
+        for (semantic, accessor_index) in &primitive.attributes {
+            let a = accessor_index.value();
+            let (use_as, keep) = match semantic {
+                Checked::Valid(JsonSemantic::Positions) => (Semantic::Position, Some(&mut position)),
+                Checked::Valid(JsonSemantic::Normals) => (Semantic::Normal, Some(&mut normal)),
+                Checked::Valid(JsonSemantic::TexCoords(0)) => (Semantic::TexCoord, Some(&mut texcoord0)),
+                Checked::Valid(JsonSemantic::TexCoords(_)) => (Semantic::TexCoord, None),
+                Checked::Valid(JsonSemantic::Tangents) => (Semantic::Tangent, None),
+                Checked::Valid(JsonSemantic::Colors(_)) => (Semantic::Color, None),
+                Checked::Valid(JsonSemantic::Joints(_)) => (Semantic::Joints, None),
+                Checked::Valid(JsonSemantic::Weights(_)) => (Semantic::Weights, None),
+                // Application-specific attributes (`_NAME`) are not read.
+                _ => continue,
+            };
+            let view = accessor::validate(root, buffers, a, use_as).map_err(|e| fail(p, Some(a), e))?;
+            match count {
+                Some((n, first)) if n != view.count => {
+                    return Err(fail(
+                        p,
+                        Some(a),
+                        format!("{use_as:?} has {} elements, accessor {first} has {n}", view.count),
+                    ));
+                }
+                None => count = Some((view.count, a)),
+                _ => {}
+            }
+            if let Some(slot) = keep {
+                *slot = Some(view);
+            }
+        }
+        let Some(position) = position else {
+            warnings.push(format!("mesh '{name}': skipped a primitive without positions"));
+            continue;
+        };
+        let index_view = match primitive.indices {
+            Some(i) => Some(
+                accessor::validate(root, buffers, i.value(), Semantic::Indices)
+                    .map_err(|e| fail(p, Some(i.value()), e))?,
+            ),
+            None => None,
+        };
+        let vertex_count = position.count;
+        let index_count = index_view.map_or(vertex_count, |v| v.count);
+        if !index_count.is_multiple_of(3) {
+            let at = index_view.map_or(position.index, |v| v.index);
+            return Err(fail(p, Some(at), format!("{index_count} indices do not make whole triangles")));
+        }
+        let base = u32::try_from(vertices.len())
+            .ok()
+            .filter(|b| b.checked_add(vertex_count as u32).is_some() && vertex_count <= u32::MAX as usize)
+            .ok_or_else(|| fail(p, None, "more than 2^32 vertices in one mesh".into()))?;
+        budget
+            .spend_geometry(vertex_count as u64, index_count as u64, size_of::<Vertex>() as u64)
+            .map_err(|e| super::GltfErrorKind::Limit { context: format!("mesh {index} ('{name}')"), source: e })?;
+
+        let positions: Vec<Vec3> = position
+            .read_floats::<3>()
+            .map_err(|e| fail(p, Some(position.index), e))?
+            .into_iter()
+            .map(Vec3::from)
+            .collect();
+        let local_indices: Vec<u32> = match index_view {
+            Some(view) => {
+                let read = view.read_indices().map_err(|e| fail(p, Some(view.index), e))?;
+                if let Some(bad) = read.iter().find(|i| **i as usize >= vertex_count) {
+                    return Err(fail(p, Some(view.index), format!("index {bad} is past the {vertex_count} vertices")));
+                }
+                read
+            }
+            None => (0..vertex_count as u32).collect(),
+        };
+        let normals: Vec<Vec3> = match normal {
+            Some(view) => {
+                view.read_floats::<3>().map_err(|e| fail(p, Some(view.index), e))?.into_iter().map(Vec3::from).collect()
+            }
+            None => {
+                warnings.push(format!("mesh '{name}': normals generated"));
+                generate_normals(&positions, &local_indices)
+            }
+        };
+        let uvs: Vec<Vec2> = match texcoord0 {
+            Some(view) => {
+                view.read_floats::<2>().map_err(|e| fail(p, Some(view.index), e))?.into_iter().map(Vec2::from).collect()
+            }
+            None => vec![Vec2::ZERO; vertex_count],
+        };
+        vertices.extend(positions.iter().zip(&normals).zip(&uvs).map(|((p, n), uv)| Vertex::new(*p, *n, *uv)));
+        let first_index = u32::try_from(indices.len()).map_err(|_| fail(p, None, "more than 2^32 indices".into()))?;
+        submeshes.push(Submesh { first_index, index_count: index_count as u32 });
+        indices.extend(local_indices.iter().map(|i| i + base));
+        materials.push(primitive.material.map(|m| m.value()));
+    }
+    if submeshes.is_empty() {
+        return Ok(MeshResult::Empty);
+    }
+    let geometry = Geometry::new(name.clone(), vertices, indices, submeshes)
+        .map_err(|e| super::GltfErrorKind::Invalid(format!("mesh {index} ('{name}'): {e}")))?;
+    Ok(MeshResult::Geometry(geometry, materials))
+}
+
+/// Area-weighted smooth normals (unit length; +Z where undefined).
+fn generate_normals(positions: &[Vec3], indices: &[u32]) -> Vec<Vec3> {
+    let mut normals = vec![DVec3::ZERO; positions.len()];
+    for tri in indices.chunks_exact(3) {
+        let [a, b, c] = [tri[0] as usize, tri[1] as usize, tri[2] as usize];
+        let n = (positions[b] - positions[a]).as_dvec3().cross((positions[c] - positions[a]).as_dvec3());
+        for i in [a, b, c] {
+            normals[i] += n;
+        }
+    }
+    normals.into_iter().map(|n| n.as_vec3().try_normalize().unwrap_or(Vec3::Z)).collect()
+}
