@@ -7,54 +7,110 @@
 //! ```
 //! FILE defaults to the shipped `assets/AlphaBlendModeTest/AlphaBlendModeTest.glb`,
 //! OUTPUT_DIR to `out/`. A scene without lights gets a default sun (said so).
+//! The file is imported with Oxygen's default import limits and its external
+//! files confined to its folder (`docs/security.md`); a view that cannot be
+//! rendered (a glTF camera with an unusable projection, say) is reported and
+//! skipped while the others are written.
 
 use std::path::PathBuf;
 use std::time::Instant;
 
 use oxygen::prelude::*;
 
+const USAGE: &str = "\
+usage: gltf_viewer [FILE] [OUTPUT_DIR] [--scene N|NAME] [--size WxH]
+
+  FILE          a .gltf or .glb file (default: the shipped AlphaBlendModeTest.glb)
+  OUTPUT_DIR    where the PNGs go, created if missing (default: out)
+  --scene N     import scene N (an index) or NAME instead of the default scene
+  --size WxH    size of each view in pixels (default: 800x600)
+  -h, --help    print this help";
+
+/// The parsed command line.
+#[derive(Debug)]
+struct Args {
+    file: PathBuf,
+    out_dir: PathBuf,
+    choice: SceneChoice,
+    size: UVec2,
+}
+
 fn main() {
-    if let Err(e) = run() {
+    let args = match parse_args(std::env::args().skip(1)) {
+        Ok(Some(args)) => args,
+        Ok(None) => {
+            println!("{USAGE}");
+            return;
+        }
+        Err(e) => {
+            eprintln!("error: {e}\n\n{USAGE}");
+            std::process::exit(2);
+        }
+    };
+    if let Err(e) = run(args) {
         eprintln!("error: {e}");
         std::process::exit(1);
     }
 }
 
-fn run() -> Result<(), Box<dyn std::error::Error>> {
-    tracing_subscriber::fmt()
-        // Import notes are printed below; tracing repeats them only when asked.
-        .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env()
-                .unwrap_or_else(|_| "warn,oxygen::gltf_import=error".into()),
-        )
-        .with_writer(std::io::stderr)
-        .init();
+/// `Ok(None)` asks for the usage text.
+fn parse_args(args: impl Iterator<Item = String>) -> Result<Option<Args>, String> {
     let mut positional = Vec::new();
     let mut choice = SceneChoice::Default;
     let mut size = UVec2::new(800, 600);
-    let mut args = std::env::args().skip(1);
+    let mut args = args;
     while let Some(arg) = args.next() {
         match arg.as_str() {
+            "-h" | "--help" => return Ok(None),
             "--scene" => {
                 let v = args.next().ok_or("--scene needs an index or a name")?;
                 choice = v.parse().map_or(SceneChoice::Name(v), SceneChoice::Index);
             }
             "--size" => {
                 let v = args.next().ok_or("--size needs WxH")?;
-                let (w, h) = v.split_once('x').ok_or("--size needs WxH, e.g. 800x600")?;
-                size = UVec2::new(w.parse()?, h.parse()?);
-                if size.x == 0 || size.y == 0 {
+                let parsed =
+                    v.split_once('x').and_then(|(w, h)| Some((w.parse::<u32>().ok()?, h.parse::<u32>().ok()?)));
+                let (w, h) = parsed.ok_or_else(|| format!("--size needs WxH, e.g. 800x600 (got '{v}')"))?;
+                if w == 0 || h == 0 {
                     return Err("--size must be at least 1x1".into());
                 }
+                size = UVec2::new(w, h);
             }
+            flag if flag.starts_with('-') && flag.len() > 1 => return Err(format!("unknown option '{flag}'")),
             _ => positional.push(arg),
         }
     }
-    let file = PathBuf::from(positional.first().cloned().unwrap_or_else(|| {
-        concat!(env!("CARGO_MANIFEST_DIR"), "/assets/AlphaBlendModeTest/AlphaBlendModeTest.glb").to_owned()
-    }));
-    let out_dir = PathBuf::from(positional.get(1).cloned().unwrap_or_else(|| "out".to_owned()));
-    std::fs::create_dir_all(&out_dir)?;
+    if positional.len() > 2 {
+        return Err(format!("unexpected argument '{}' (at most FILE and OUTPUT_DIR)", positional[2]));
+    }
+    let mut positional = positional.into_iter();
+    let file = positional.next().map_or_else(
+        || PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/assets/AlphaBlendModeTest/AlphaBlendModeTest.glb")),
+        PathBuf::from,
+    );
+    if file.as_os_str().is_empty() {
+        return Err("FILE is empty".into());
+    }
+    let out_dir = PathBuf::from(positional.next().unwrap_or_else(|| "out".to_owned()));
+    if out_dir.as_os_str().is_empty() {
+        return Err("OUTPUT_DIR is empty (give a folder, e.g. out)".into());
+    }
+    Ok(Some(Args { file, out_dir, choice, size }))
+}
+
+fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
+    tracing_subscriber::fmt()
+        // Import notes and frame warnings are printed below; tracing repeats them only when asked.
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| {
+                "warn,oxygen::gltf_import=error,oxygen::renderer=error,oxygen_sceneprep=error".into()
+            }),
+        )
+        .with_writer(std::io::stderr)
+        .init();
+    let Args { file, out_dir, choice, size } = args;
+    std::fs::create_dir_all(&out_dir)
+        .map_err(|e| format!("cannot create output directory {}: {e}", out_dir.display()))?;
 
     let started = Instant::now();
     let mut scene = Scene::new();
@@ -82,6 +138,9 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     }
 
     let mut renderer = Renderer::new_headless()?;
+    // Three orbit views of `size`: refuse a size whose targets would not fit
+    // before anything is allocated.
+    renderer.check_target_budget(&[(size, false); 3]).map_err(|e| format!("--size {}x{}: {e}", size.x, size.y))?;
     println!(
         "adapter: {}; draw path {:?}, texture path {:?}",
         renderer.gpu().describe(),
@@ -119,6 +178,9 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     }
 
     let report = renderer.render_frame(&scene)?;
+    for warning in &report.warnings {
+        println!("  warning: {warning}");
+    }
     println!(
         "frame {}: prepare {:.2} ms, record {:.2} ms, {} pipelines created",
         report.frame_index,
@@ -126,9 +188,15 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         report.record_seconds * 1e3,
         renderer.pipelines().pipelines_created()
     );
-    for ((tag, name, id), view_report) in views.iter().zip(&report.views) {
+    let mut written = 0;
+    for (tag, name, id) in &views {
+        let Some(view_report) = report.views.iter().find(|r| r.view == *id) else {
+            println!("{id} '{name}': skipped (see the warning above)");
+            continue;
+        };
         let path = out_dir.join(format!("{stem}_{tag}.png"));
-        renderer.read_color(*id)?.save(&path)?;
+        renderer.read_color(*id)?.save(&path).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+        written += 1;
         let frame = renderer.prepared_frame(*id).ok_or("view was not prepared")?;
         let partitions: Vec<String> =
             frame.partitions().iter().map(|p| format!("{}×{}", p.mask.names(), p.len())).collect();
@@ -139,6 +207,9 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             partitions.join(", "),
             path.display()
         );
+    }
+    if written == 0 {
+        return Err("no view could be rendered".into());
     }
     Ok(())
 }

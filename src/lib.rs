@@ -39,8 +39,8 @@ pub use gltf_import::{
 };
 pub use probes::{ProbeUpdate, ReflectionProbe};
 pub use renderer::{
-    FrameReport, RenderError, RenderGraphFuture, RenderOrigin, Renderer, RendererOptions, ViewReport, lit_render_graph,
-    standard_render_graph,
+    FrameReport, FrameWarning, RenderError, RenderGraphFuture, RenderOrigin, Renderer, RendererOptions, ViewReport,
+    lit_render_graph, standard_render_graph,
 };
 pub use shadows::{
     PointShadowFaceResolver, SpotShadowResolver, register_local_shadows, register_sun_cascades, shadowed_render_graph,
@@ -58,10 +58,10 @@ pub use oxygen_sceneprep as sceneprep;
 /// The names most applications use.
 pub mod prelude {
     pub use crate::{
-        FrameReport, RenderError, RenderGraphFuture, RenderOrigin, Renderer, RendererOptions, lit_render_graph,
-        standard_render_graph,
+        FrameReport, FrameWarning, RenderError, RenderGraphFuture, RenderOrigin, Renderer, RendererOptions,
+        lit_render_graph, standard_render_graph,
     };
-    pub use crate::{SceneChoice, import_gltf};
+    pub use crate::{ImportLimits, ImportOptions, SceneChoice, import_gltf, import_gltf_with};
     pub use oxygen_bindless::TexturePath;
     pub use oxygen_core::glam::{Mat4, Quat, UVec2, Vec3, Vec4};
     pub use oxygen_core::{

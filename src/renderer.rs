@@ -21,7 +21,7 @@ use oxygen_passes::{
 };
 use oxygen_sceneprep::{PrepError, PreparedSceneFrame, ScenePrep, ViewPrepOptions, ViewRequest};
 use thiserror::Error;
-use tracing::{info, info_span};
+use tracing::{info, info_span, warn};
 
 /// The future a render-graph factory returns: it awaits the view's passes.
 pub type RenderGraphFuture<'a> = Pin<Box<dyn Future<Output = Result<(), PassError>> + 'a>>;
@@ -60,6 +60,26 @@ pub enum RenderError {
     /// The view has not been rendered yet, so it has no image.
     #[error("{0} has not been rendered yet")]
     NotRendered(ViewId),
+    /// A view's targets would pass the renderer's target memory budget.
+    #[error(
+        "{view}: targets of {width}x{height} would take {} MiB; the target budget is {} MiB, of which {} MiB are taken \
+         (RendererOptions::target_budget_bytes)",
+        bytes >> 20, budget >> 20, taken >> 20
+    )]
+    TargetBudget {
+        /// The view.
+        view: ViewId,
+        /// Width.
+        width: u32,
+        /// Height.
+        height: u32,
+        /// What its targets would take.
+        bytes: u64,
+        /// The budget.
+        budget: u64,
+        /// What other views' targets take already.
+        taken: u64,
+    },
     /// A resolved viewport exceeds the device's texture size limit.
     #[error("{view}: viewport {width}x{height} exceeds the device limit of {limit}")]
     ViewportTooLarge {
@@ -91,6 +111,40 @@ pub struct ViewReport {
     pub record_seconds: f64,
 }
 
+/// Something a frame left out. One bad object or view costs only itself: the
+/// frame goes on without it and says so here (and in a `tracing` warning).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum FrameWarning {
+    /// A view was not rendered this frame (its resolver failed, or its
+    /// targets would pass the device limit or the target budget); it keeps
+    /// its last image, and every other view rendered.
+    ViewSkipped {
+        /// The view.
+        view: ViewId,
+        /// Why, as the error would have said it.
+        reason: String,
+    },
+    /// A node (or its light) was left out by ScenePrep: a non-finite or
+    /// singular transform, non-finite bounds, a light with non-finite values.
+    NodeSkipped {
+        /// The node.
+        node: oxygen_core::NodeKey,
+        /// Its name.
+        name: String,
+        /// Why.
+        reason: &'static str,
+    },
+}
+
+impl std::fmt::Display for FrameWarning {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FrameWarning::ViewSkipped { view, reason } => write!(f, "{view} skipped: {reason}"),
+            FrameWarning::NodeSkipped { name, reason, .. } => write!(f, "node '{name}' skipped: {reason}"),
+        }
+    }
+}
+
 /// What a frame did.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FrameReport {
@@ -102,10 +156,12 @@ pub struct FrameReport {
     pub prepare_seconds: f64,
     /// Seconds spent driving the views' render graphs.
     pub record_seconds: f64,
+    /// What the frame left out (views and nodes), in view then node order.
+    pub warnings: Vec<FrameWarning>,
 }
 
 /// Choices made when the renderer is created.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RendererOptions {
     /// Force a draw path; `None` picks the fastest the device supports.
     pub draw_path: Option<DrawPath>,
@@ -123,6 +179,25 @@ pub struct RendererOptions {
     /// [`GpuOptions::trust_indirect_args`]. A renderer given a context uses
     /// that context's setting.
     pub trust_indirect_args: bool,
+    /// GPU memory all views' targets may take together, bytes
+    /// ([`ViewTargets::bytes_for`] says what one view takes). A view whose
+    /// targets would pass it is skipped with a [`FrameWarning`] instead of
+    /// allocated; default 2 GiB (about 130 views of 1920×1080).
+    pub target_budget_bytes: u64,
+}
+
+impl Default for RendererOptions {
+    fn default() -> Self {
+        RendererOptions {
+            draw_path: None,
+            prep_threads: None,
+            texture_path: None,
+            debug_generations: false,
+            origin: RenderOrigin::default(),
+            trust_indirect_args: false,
+            target_budget_bytes: 2 << 30,
+        }
+    }
 }
 
 /// Where the GPU's coordinate system is centred each frame.
@@ -201,6 +276,7 @@ pub struct Renderer {
     frame_index: u64,
     started: Instant,
     origin: RenderOrigin,
+    target_budget_bytes: u64,
 }
 
 /// The default render graph: depth pre-pass, metallic-roughness shading of
@@ -288,6 +364,7 @@ impl Renderer {
         prep.set_debug_generations(options.debug_generations);
         Ok(Renderer {
             origin: options.origin,
+            target_budget_bytes: options.target_budget_bytes,
             gpu,
             heap,
             prep,
@@ -381,7 +458,7 @@ impl Renderer {
 
         // PreRender: resolve, prepare, upload.
         let prepare_start = Instant::now();
-        let resolved = self.resolve_views(scene, frame_index, time_seconds)?;
+        let (resolved, mut warnings) = self.resolve_views(scene, frame_index, time_seconds);
         let requests: Vec<ViewRequest<'_>> =
             resolved.iter().map(|view| ViewRequest { view, options: self.views[&view.view_id].options }).collect();
         let followed = resolved.iter().find(|v| !self.views[&v.view_id].options.depth_only).or(resolved.first());
@@ -469,36 +546,95 @@ impl Renderer {
         self.gpu.queue.submit(command_buffers);
         let record_seconds = record_start.elapsed().as_secs_f64();
 
-        Ok(FrameReport { frame_index, views: reports, prepare_seconds, record_seconds })
+        warnings.extend(self.prep.frame_collection().skipped.iter().map(|s| FrameWarning::NodeSkipped {
+            node: s.node,
+            name: s.name.clone(),
+            reason: s.reason,
+        }));
+        Ok(FrameReport { frame_index, views: reports, prepare_seconds, record_seconds, warnings })
     }
 
+    /// What the targets of a `viewport`-sized view take, bytes (colour and
+    /// depth, or depth only).
+    pub fn target_bytes(viewport: glam::UVec2, depth_only: bool) -> u64 {
+        ViewTargets::bytes_for(viewport.x, viewport.y, !depth_only)
+    }
+
+    /// Bytes the registered views' targets take now.
+    pub fn target_memory(&self) -> u64 {
+        self.views.values().filter_map(|v| v.targets.as_ref()).map(ViewTargets::bytes).sum()
+    }
+
+    /// The target budget ([`RendererOptions::target_budget_bytes`]).
+    pub fn target_budget(&self) -> u64 {
+        self.target_budget_bytes
+    }
+
+    /// Checks, before anything is allocated, that views of these sizes
+    /// (`(viewport, depth_only)`) fit the target budget together; returns
+    /// their total. `view` numbers the first that does not fit in the error.
+    pub fn check_target_budget(&self, views: &[(glam::UVec2, bool)]) -> Result<u64, RenderError> {
+        let mut taken = 0u64;
+        for (i, (viewport, depth_only)) in views.iter().enumerate() {
+            let bytes = Self::target_bytes(*viewport, *depth_only);
+            if taken.saturating_add(bytes) > self.target_budget_bytes {
+                return Err(RenderError::TargetBudget {
+                    view: ViewId(i as u32),
+                    width: viewport.x,
+                    height: viewport.y,
+                    bytes,
+                    budget: self.target_budget_bytes,
+                    taken,
+                });
+            }
+            taken += bytes;
+        }
+        Ok(taken)
+    }
+
+    /// Resolves every active view. A view that cannot be rendered this frame
+    /// (its resolver fails, its viewport passes the device limit, its
+    /// targets would pass the budget) is left out with a warning; the others
+    /// go on.
     fn resolve_views(
         &self,
         scene: &Scene,
         frame_index: u64,
         time_seconds: f32,
-    ) -> Result<Vec<ResolvedView>, RenderError> {
+    ) -> (Vec<ResolvedView>, Vec<FrameWarning>) {
         let _span = info_span!("resolve_views").entered();
         let limit = self.gpu.device.limits().max_texture_dimension_2d;
-        self.views
-            .iter()
-            .filter(|(_, registered)| registered.active)
-            .map(|(id, registered)| {
-                let ctx = ViewContext { view_id: *id, frame_index, time_seconds };
-                let mut view = registered.resolver.resolve(&ctx, scene)?;
+        // Paused views keep their targets: their memory stays taken.
+        let mut taken: u64 =
+            self.views.values().filter(|v| !v.active).filter_map(|v| v.targets.as_ref()).map(ViewTargets::bytes).sum();
+        let mut resolved = Vec::with_capacity(self.views.len());
+        let mut warnings = Vec::new();
+        for (id, registered) in self.views.iter().filter(|(_, registered)| registered.active) {
+            let ctx = ViewContext { view_id: *id, frame_index, time_seconds };
+            let attempt = registered.resolver.resolve(&ctx, scene).map_err(RenderError::from).and_then(|mut view| {
                 // The id is the renderer's, whatever the resolver wrote.
                 view.view_id = *id;
-                if view.viewport.x > limit || view.viewport.y > limit {
-                    return Err(RenderError::ViewportTooLarge {
-                        view: *id,
-                        width: view.viewport.x,
-                        height: view.viewport.y,
-                        limit,
-                    });
+                let (width, height) = (view.viewport.x, view.viewport.y);
+                if width > limit || height > limit {
+                    return Err(RenderError::ViewportTooLarge { view: *id, width, height, limit });
                 }
+                let bytes = ViewTargets::bytes_for(width, height, !registered.options.depth_only);
+                if taken.saturating_add(bytes) > self.target_budget_bytes {
+                    let budget = self.target_budget_bytes;
+                    return Err(RenderError::TargetBudget { view: *id, width, height, bytes, budget, taken });
+                }
+                taken += bytes;
                 Ok(view)
-            })
-            .collect()
+            });
+            match attempt {
+                Ok(view) => resolved.push(view),
+                Err(e) => {
+                    warn!(view = %id, "view skipped this frame: {e}");
+                    warnings.push(FrameWarning::ViewSkipped { view: *id, reason: e.to_string() });
+                }
+            }
+        }
+        (resolved, warnings)
     }
 
     /// The view's colour target as an image (waits for the GPU).

@@ -30,7 +30,9 @@ mod prepared_frame;
 mod scene_prep;
 pub mod worker_pool;
 
-pub use collect::{CullBound, FrameCollection, RenderItem, RenderableEntry, SubmeshEntry, ViewFilter, ViewPrepOptions};
+pub use collect::{
+    CullBound, FrameCollection, RenderItem, RenderableEntry, SkippedNode, SubmeshEntry, ViewFilter, ViewPrepOptions,
+};
 pub use draw_metadata::{DrawIndexedIndirect, DrawMetadata};
 pub use gpu_records::{
     DirectionalLightRecord, GPU_RECORDS_WGSL, MAX_SHADOW_TILES, MaterialRecord, NormalMatrix, PositionalLightRecord,

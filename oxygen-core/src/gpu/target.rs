@@ -54,6 +54,20 @@ impl ViewTargets {
         Self::create(device, width, height, label, false)
     }
 
+    /// Bytes of GPU memory the targets of a `width × height` view take:
+    /// depth (4 bytes a pixel), plus HDR (8) and display colour (4) unless
+    /// the view is depth-only. Known before anything is allocated, so a
+    /// renderer can refuse an oversized view instead of trying.
+    pub fn bytes_for(width: u32, height: u32, with_color: bool) -> u64 {
+        let per_pixel = if with_color { 4 + 8 + 4 } else { 4 };
+        u64::from(width) * u64::from(height) * per_pixel
+    }
+
+    /// Bytes these targets take ([`ViewTargets::bytes_for`]).
+    pub fn bytes(&self) -> u64 {
+        Self::bytes_for(self.width, self.height, self.color.is_some())
+    }
+
     /// True when the targets are `width × height` and have colour exactly
     /// when `with_color` says so.
     pub fn fits(&self, width: u32, height: u32, with_color: bool) -> bool {

@@ -86,12 +86,26 @@ pub struct FrameCollection {
     pub directional_lights: Vec<DirectionalLightRecord>,
     /// Gated point and spot lights.
     pub positional_lights: Vec<PositionalLightRecord>,
-    /// Nodes skipped this frame because of a degenerate transform.
+    /// Nodes skipped this frame because of a degenerate transform or bounds.
     pub skipped_nodes: u32,
+    /// Every node or light left out this frame, and why, for the frame report.
+    pub skipped: Vec<SkippedNode>,
     /// (scene id, scene revision, render origin) the collection reflects.
     collected: Option<(u64, u64, DVec3)>,
     /// The last `collect` found the scene unchanged and did nothing.
     reused_last: bool,
+}
+
+/// A node (or its light) the frame phase left out, so that one bad object
+/// costs only itself, and the application hears about it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SkippedNode {
+    /// The node.
+    pub node: NodeKey,
+    /// Its name.
+    pub name: String,
+    /// Why it was left out.
+    pub reason: &'static str,
 }
 
 /// The normal matrix `transpose(inverse(upper3x3(world)))`, or `None` when
@@ -146,6 +160,7 @@ impl FrameCollection {
         self.lod_levels.clear();
         self.submeshes.clear();
         self.skipped_nodes = 0;
+        self.skipped.clear();
 
         let _span = info_span!("collect_renderables_and_lights").entered();
         for (key, node) in scene.nodes() {
@@ -159,12 +174,14 @@ impl FrameCollection {
             let world = world64.as_mat4();
             let Some(normal) = normal_matrix(&world) else {
                 warn!(node = %node.name, "skipping node with a non-finite or singular world transform");
-                self.skipped_nodes += 1;
+                self.skip(key, &node.name, "non-finite or singular world transform");
                 continue;
             };
             if let Some(light) = &node.light {
                 let position = (world64.w_axis.truncate() - origin).as_vec3();
-                self.collect_light(&node.name, light, node.flags, &world, position);
+                if let Err(reason) = self.collect_light(&node.name, light, node.flags, &world, position) {
+                    self.skipped.push(SkippedNode { node: key, name: node.name.clone(), reason });
+                }
             }
             let Some(renderable) = &node.renderable else { continue };
             let Some(geometry) = scene.geometry(renderable.geometry) else {
@@ -174,7 +191,7 @@ impl FrameCollection {
             let world_aabb = geometry.local_aabb().transformed(&world);
             if !world_aabb.is_finite() {
                 warn!(node = %node.name, "skipping renderable with non-finite world bounds");
-                self.skipped_nodes += 1;
+                self.skip(key, &node.name, "non-finite world bounds");
                 continue;
             }
             let submesh_start = self.submeshes.len() as u32;
@@ -213,6 +230,11 @@ impl FrameCollection {
                 submeshes,
             });
         }
+    }
+
+    fn skip(&mut self, node: NodeKey, name: &str, reason: &'static str) {
+        self.skipped_nodes += 1;
+        self.skipped.push(SkippedNode { node, name: name.to_owned(), reason });
     }
 
     /// Forgets what was collected, so the next `collect` redoes everything,
@@ -263,6 +285,8 @@ impl FrameCollection {
     }
 
     /// `position` is the light's position relative to the render origin.
+    /// An unusable light is an `Err` with the reason; a light gated out
+    /// (baked, not affecting the world) is simply not collected.
     fn collect_light(
         &mut self,
         name: &str,
@@ -270,13 +294,13 @@ impl FrameCollection {
         flags: NodeFlags,
         world: &Mat4,
         position: Vec3,
-    ) {
+    ) -> Result<(), &'static str> {
         if !light.affects_world || light.mobility == Mobility::Baked {
-            return;
+            return Ok(());
         }
         let Some(direction) = world.transform_vector3(Vec3::NEG_Z).try_normalize() else {
             warn!(node = %name, "skipping light whose node transform has no direction");
-            return;
+            return Err("light whose node transform has no direction");
         };
         let cones_finite = match light.kind {
             LightKind::Spot { inner_cone, outer_cone, .. } => inner_cone.is_finite() && outer_cone.is_finite(),
@@ -284,7 +308,7 @@ impl FrameCollection {
         };
         if !light.color.is_finite() || !cones_finite || !position.is_finite() {
             warn!(node = %name, "skipping light with a non-finite colour, cone angle or position");
-            return;
+            return Err("light with a non-finite colour, cone angle or position");
         }
         let casts = light.casts_shadows && flags.contains(NodeFlags::CASTS_SHADOWS);
         let shadow_flags = u32::from(casts);
@@ -337,5 +361,6 @@ impl FrameCollection {
                 });
             }
         }
+        Ok(())
     }
 }

@@ -9,5 +9,5 @@
 pub mod frame_phase;
 pub mod view_phase;
 
-pub use frame_phase::{FrameCollection, RenderableEntry, SubmeshEntry};
+pub use frame_phase::{FrameCollection, RenderableEntry, SkippedNode, SubmeshEntry};
 pub use view_phase::{CullBound, RenderItem, ViewFilter, ViewPrepOptions};

@@ -1,0 +1,139 @@
+//! One bad object or view costs only itself: a view whose resolver fails or
+//! whose targets would pass the budget, and a node with non-finite bounds,
+//! are left out with a `FrameWarning` while everything else renders.
+
+mod support;
+
+use oxygen::core::{Projection, Scene};
+use oxygen::prelude::*;
+use oxygen::{FrameWarning, NodeCameraResolver};
+use support::{gpu_renderer, gpu_renderer_with};
+
+/// A lit red cube at the origin, and a camera node looking at it.
+fn lit_cube_scene() -> (Scene, oxygen::core::NodeKey) {
+    let mut scene = Scene::new();
+    let red = scene.add_material(Material::opaque("red", Vec4::new(0.8, 0.1, 0.1, 1.0)));
+    let geometry = scene.add_geometry(Geometry::cube(1.0));
+    let cube = scene.add_node("cube", Transform::IDENTITY);
+    scene.set_renderable(cube, Renderable { geometry, materials: vec![red] }).unwrap();
+    let sun = scene.add_node(
+        "sun",
+        Transform::IDENTITY
+            .with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, Vec3::new(-0.3, -1.0, -0.5).normalize())),
+    );
+    scene.set_light(sun, Some(Light::directional(3.0))).unwrap();
+    let eye = scene.add_node("camera", Transform::from_translation(Vec3::new(0.0, 0.0, 4.0)));
+    (scene, eye)
+}
+
+fn front_view(size: u32) -> LookAtResolver {
+    LookAtResolver {
+        camera: Camera::perspective(50f32.to_radians(), 0.1, None),
+        eye: Vec3::new(0.0, 0.0, 4.0),
+        target: Vec3::ZERO,
+        up: Vec3::Y,
+        viewport: UVec2::splat(size),
+    }
+}
+
+fn centre_is_lit_red(renderer: &Renderer, view: ViewId) {
+    let image = renderer.read_color(view).unwrap();
+    let [r, g, b, _] = image.get_pixel(image.width() / 2, image.height() / 2).0;
+    assert!(r > 60 && r > 2 * g && r > 2 * b, "{view}: centre ({r}, {g}, {b}) is not the lit red cube");
+}
+
+#[test]
+fn a_camera_that_cannot_be_resolved_skips_its_view_and_the_others_render() {
+    let (scene, eye) = lit_cube_scene();
+    let mut renderer = gpu_renderer();
+    let good_before = renderer.register_view(front_view(64), standard_render_graph);
+    // A glTF camera with yfov 0, as a crafted file can hold.
+    let broken = Camera { projection: Projection::Perspective { fov_y: 0.0, near: 0.1, far: Some(100.0) } };
+    let bad = renderer.register_view(
+        NodeCameraResolver { node: eye, camera: broken, viewport: UVec2::splat(64) },
+        standard_render_graph,
+    );
+    let good_after = renderer.register_view(front_view(64), standard_render_graph);
+    let report = renderer.render_frame(&scene).expect("a bad view must not fail the frame");
+    let rendered: Vec<ViewId> = report.views.iter().map(|v| v.view).collect();
+    assert_eq!(rendered, vec![good_before, good_after]);
+    assert!(
+        matches!(&report.warnings[..], [FrameWarning::ViewSkipped { view, .. }] if *view == bad),
+        "{:?}",
+        report.warnings
+    );
+    centre_is_lit_red(&renderer, good_before);
+    centre_is_lit_red(&renderer, good_after);
+    assert!(renderer.read_color(bad).is_err(), "the skipped view has no image");
+}
+
+#[test]
+fn a_node_with_non_finite_bounds_is_skipped_with_a_warning_and_the_rest_renders() {
+    let (mut scene, _) = lit_cube_scene();
+    let blue = scene.add_material(Material::opaque("blue", Vec4::new(0.1, 0.1, 0.8, 1.0)));
+    let geometry = scene.add_geometry(Geometry::cube(1.0));
+    let broken = scene.add_node(
+        "broken",
+        Transform::from_translation(Vec3::new(0.5, 0.0, 1.0)).with_scale(Vec3::splat(f32::INFINITY)),
+    );
+    scene.set_renderable(broken, Renderable { geometry, materials: vec![blue] }).unwrap();
+    let mut renderer = gpu_renderer();
+    let view = renderer.register_view(front_view(64), standard_render_graph);
+    let report = renderer.render_frame(&scene).unwrap();
+    assert!(
+        report.warnings.iter().any(|w| matches!(w, FrameWarning::NodeSkipped { name, .. } if name == "broken")),
+        "{:?}",
+        report.warnings
+    );
+    assert_eq!(report.views.len(), 1);
+    centre_is_lit_red(&renderer, view);
+    // The warning is repeated every frame the node stays broken, also when
+    // the frame phase reuses its collection.
+    let again = renderer.render_frame(&scene).unwrap();
+    assert_eq!(again.warnings, report.warnings);
+}
+
+#[test]
+fn an_oversized_target_request_is_refused_before_anything_is_allocated() {
+    let (scene, _) = lit_cube_scene();
+    // 64 KiB of targets is one 64×64 view (16 bytes a pixel), not two.
+    let budget = Renderer::target_bytes(UVec2::splat(64), false);
+    assert_eq!(budget, 64 * 64 * 16);
+    let mut renderer = gpu_renderer_with(RendererOptions { target_budget_bytes: budget, ..Default::default() });
+    let first = renderer.register_view(front_view(64), standard_render_graph);
+    let second = renderer.register_view(front_view(64), standard_render_graph);
+    let err = renderer.check_target_budget(&[(UVec2::splat(64), false), (UVec2::splat(64), false)]).unwrap_err();
+    assert!(err.to_string().contains("target budget"), "{err}");
+    renderer.check_target_budget(&[(UVec2::splat(64), false)]).unwrap();
+
+    let report = renderer.render_frame(&scene).unwrap();
+    assert_eq!(report.views.iter().map(|v| v.view).collect::<Vec<_>>(), vec![first]);
+    match &report.warnings[..] {
+        [FrameWarning::ViewSkipped { view, reason }] => {
+            assert_eq!(*view, second);
+            assert!(reason.contains("64x64") && reason.contains("budget"), "{reason}");
+        }
+        other => panic!("expected one skipped view, got {other:?}"),
+    }
+    assert_eq!(renderer.target_memory(), budget, "only the admitted view's targets exist");
+    centre_is_lit_red(&renderer, first);
+}
+
+#[test]
+fn a_huge_viewport_is_skipped_not_allocated() {
+    let (scene, _) = lit_cube_scene();
+    let mut renderer = gpu_renderer();
+    let huge = renderer
+        .register_view(LookAtResolver { viewport: UVec2::new(16384, 16384), ..front_view(64) }, standard_render_graph);
+    let small = renderer.register_view(front_view(64), standard_render_graph);
+    let report = renderer.render_frame(&scene).unwrap();
+    // 16384² × 16 bytes = 4 GiB: over the default 2 GiB budget (or over the
+    // device's texture limit, whichever is checked first).
+    assert!(
+        matches!(&report.warnings[..], [FrameWarning::ViewSkipped { view, .. }] if *view == huge),
+        "{:?}",
+        report.warnings
+    );
+    assert!(renderer.target_memory() < 1 << 20);
+    centre_is_lit_red(&renderer, small);
+}

@@ -1,0 +1,79 @@
+//! The viewer's command line, run as a user would: usage on `--help`, a clear
+//! refusal of unknown options, extra arguments and an empty output folder,
+//! and the path named in every file error.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+/// The viewer binary `cargo test` built beside this test.
+fn viewer() -> Command {
+    let mut path = std::env::current_exe().unwrap();
+    path.pop(); // deps/
+    if path.ends_with("deps") {
+        path.pop();
+    }
+    let exe = path.join("examples").join(format!("gltf_viewer{}", std::env::consts::EXE_SUFFIX));
+    assert!(exe.exists(), "{} not built (cargo test builds examples)", exe.display());
+    let mut command = Command::new(exe);
+    command.env("OXYGEN_SKIP_GPU_SETUP", "1");
+    command
+}
+
+fn run(args: &[&str]) -> (Output, String) {
+    let output = viewer().args(args).output().unwrap();
+    let text = format!("{}{}", String::from_utf8_lossy(&output.stdout), String::from_utf8_lossy(&output.stderr));
+    (output, text)
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("viewer_cli").join(name);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn help_prints_usage_and_succeeds() {
+    let (output, text) = run(&["--help"]);
+    assert!(output.status.success(), "{text}");
+    assert!(text.contains("usage: gltf_viewer"), "{text}");
+}
+
+#[test]
+fn unknown_options_and_extra_arguments_are_refused_with_usage() {
+    for (args, expected) in [
+        (&["--frobnicate"][..], "unknown option '--frobnicate'"),
+        (&["a.glb", "out", "extra"][..], "unexpected argument 'extra'"),
+        (&["a.glb", ""][..], "OUTPUT_DIR is empty"),
+        (&["--size", "0x5"][..], "at least 1x1"),
+        (&["--size", "big"][..], "'big'"),
+    ] {
+        let (output, text) = run(args);
+        assert_eq!(output.status.code(), Some(2), "{args:?}: {text}");
+        assert!(text.contains(expected) && text.contains("usage:"), "{args:?}: {text}");
+    }
+}
+
+#[test]
+fn a_missing_file_and_an_unwritable_output_folder_are_named() {
+    let (output, text) = run(&["/nonexistent/scene.glb", tmp("missing").to_str().unwrap()]);
+    assert_eq!(output.status.code(), Some(1));
+    assert!(text.contains("/nonexistent/scene.glb"), "{text}");
+
+    let blocker = tmp("blocked").join("a_file");
+    std::fs::write(&blocker, b"not a folder").unwrap();
+    let out = blocker.join("sub");
+    let (output, text) = run(&["/nonexistent/scene.glb", out.to_str().unwrap()]);
+    assert_eq!(output.status.code(), Some(1));
+    assert!(text.contains(out.to_str().unwrap()), "{text}");
+}
+
+#[test]
+fn a_file_reaching_outside_its_folder_is_refused_by_name() {
+    let dir = tmp("escape");
+    let json = r#"{"asset":{"version":"2.0"},"scenes":[{"nodes":[]}],"buffers":[{"byteLength":4,"uri":"../../../../../../etc/hostname"}]}"#;
+    let file = dir.join("escape.gltf");
+    std::fs::write(&file, json).unwrap();
+    let (output, text) = run(&[file.to_str().unwrap(), dir.join("out").to_str().unwrap()]);
+    assert_eq!(output.status.code(), Some(1), "{text}");
+    assert!(text.contains("escape.gltf") && text.contains("etc/hostname") && text.contains("refused"), "{text}");
+}
