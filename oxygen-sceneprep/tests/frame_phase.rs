@@ -178,3 +178,76 @@ fn lights_with_non_finite_parameters_are_skipped_or_clamped() {
         p.position.iter().chain(&p.direction).chain(&p.color).chain(&[p.cos_inner, p.cos_outer]).all(|v| v.is_finite())
     );
 }
+
+/// World-space normal and tangent of a local pair, through the frame's own
+/// world and normal matrices.
+fn transformed_pair(prep: &ScenePrep, transform_index: usize, normal: Vec3, tangent: Vec3) -> (Vec3, Vec3) {
+    let transforms = prep.frames()[0].transforms();
+    let world = transforms.world[transform_index];
+    let n = transforms.normal[transform_index].columns;
+    let normal_matrix = glam::Mat3::from_cols(
+        Vec3::new(n[0][0], n[0][1], n[0][2]),
+        Vec3::new(n[1][0], n[1][1], n[1][2]),
+        Vec3::new(n[2][0], n[2][1], n[2][2]),
+    );
+    ((normal_matrix * normal).normalize(), world.transform_vector3(tangent).normalize())
+}
+
+#[test]
+fn normals_stay_perpendicular_to_tangents_under_a_rotated_non_uniform_scale() {
+    // A parent stretched 3× along X, a child turned 40° about Z and 25° about
+    // Y below it: the stretch is no longer along the child's axes, so the
+    // world matrix's upper 3×3 would tilt normals off their surfaces.
+    let mut scene = Scene::new();
+    let parent = scene.add_node("stretch", Transform::IDENTITY.with_scale(Vec3::new(3.0, 1.0, 1.0)));
+    let geometry = scene.add_geometry(Geometry::cube(1.0));
+    let material = scene.add_material(Material::opaque("m", Vec4::ONE));
+    let rotation = glam::Quat::from_rotation_z(40f32.to_radians()) * glam::Quat::from_rotation_y(25f32.to_radians());
+    let child = scene.add_child(parent, "turned", Transform::IDENTITY.with_rotation(rotation)).unwrap();
+    scene.set_renderable(child, Renderable { geometry, materials: vec![material] }).unwrap();
+    let prep = prepared_with_one_view(&scene);
+    let pairs = [
+        (Vec3::X, Vec3::Y),
+        (Vec3::X, Vec3::Z),
+        (Vec3::Y, Vec3::Z),
+        (Vec3::Y, Vec3::X),
+        (Vec3::Z, Vec3::X),
+        (Vec3::new(1.0, 1.0, 0.0).normalize(), Vec3::new(1.0, -1.0, 0.0).normalize()),
+        (Vec3::new(0.0, 1.0, 1.0).normalize(), Vec3::new(0.0, 1.0, -1.0).normalize()),
+    ];
+    for (normal, tangent) in pairs {
+        let (n, t) = transformed_pair(&prep, 0, normal, tangent);
+        assert!(
+            n.dot(t).abs() < 1e-5,
+            "normal {normal} / tangent {tangent}: world dot {} (n = {n}, t = {t})",
+            n.dot(t)
+        );
+    }
+    // And the test can tell: the plain upper 3×3 breaks perpendicularity here.
+    let world = prep.frames()[0].transforms().world[0];
+    let wrong = world.transform_vector3(Vec3::X).normalize();
+    let tangent = world.transform_vector3(Vec3::Y).normalize();
+    assert!(wrong.dot(tangent).abs() > 0.1, "the scene must be one where the upper 3x3 fails");
+}
+
+#[test]
+fn light_positions_are_rebased_on_the_render_origin_in_f64() {
+    use oxygen_core::Light;
+    let far = glam::DVec3::new(1.0e6 + 3.25, 2.5, -1.0e6 + 0.125);
+    let mut scene = Scene::new();
+    cube_node(&mut scene, "anchor", Transform::IDENTITY);
+    let lamp = scene.add_node("lamp", Transform::from_translation(far.as_vec3()));
+    scene.set_light(lamp, Some(Light::point(10.0, Some(50.0)))).unwrap();
+    let mut prep = ScenePrep::new();
+    prep.set_render_origin(glam::DVec3::new(1.0e6, 0.0, -1.0e6));
+    let v = view(&scene);
+    prep.prepare(&scene, &[ViewRequest { view: &v, options: Default::default() }], &mut SlotAllocators::default())
+        .unwrap();
+    let lights = &prep.frame_collection().positional_lights;
+    assert_eq!(lights.len(), 1);
+    // The f32 translation of the node rounds 1e6 + 3.25 to a multiple of
+    // 1/16; the rebased position must be that value minus the origin, exact.
+    let stored = far.as_vec3().as_dvec3() - glam::DVec3::new(1.0e6, 0.0, -1.0e6);
+    assert_eq!(glam::Vec3::from(lights[0].position), stored.as_vec3());
+    assert!((glam::Vec3::from(lights[0].position) - Vec3::new(3.25, 2.5, 0.125)).length() < 0.07);
+}
