@@ -645,6 +645,15 @@ impl Renderer {
         Ok(self.gpu.read_rgba8(&color.color)?)
     }
 
+    /// Reads back a rendered view's linear HDR target (what shading wrote,
+    /// before the tone map), NaN and infinities included.
+    pub fn read_hdr(&self, id: ViewId) -> Result<oxygen_core::gpu::HdrImage, RenderError> {
+        let view = self.views.get(&id).ok_or(RenderError::NoSuchView(id))?;
+        let targets = view.targets.as_ref().ok_or(RenderError::NotRendered(id))?;
+        let color = targets.color.as_ref().ok_or(RenderError::DepthOnly(id))?;
+        Ok(self.gpu.read_rgba16_float(&color.hdr)?)
+    }
+
     /// The view's prepared frame from the last `render_frame`.
     pub fn prepared_frame(&self, id: ViewId) -> Option<&PreparedSceneFrame> {
         if !self.views.contains_key(&id) {

@@ -45,7 +45,7 @@ fn render(scene: &Scene, resolver: LookAtResolver) -> image::RgbaImage {
     let mut renderer = support::gpu_renderer();
     let view = renderer.register_view(resolver, standard_render_graph);
     renderer.render_frame(scene).unwrap();
-    renderer.read_color(view).unwrap()
+    support::read_lit_color(&renderer, view)
 }
 
 #[test]

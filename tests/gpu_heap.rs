@@ -1,6 +1,8 @@
 //! The bindless heap on a real device: domains grow with their live data
 //! copied, stale and out-of-range writes are errors.
 
+mod support;
+
 use oxygen::bindless::{BindlessError, BindlessHeap, DomainKind, SlotError, TexturePath};
 use oxygen::core::{GpuContext, GpuOptions};
 
@@ -89,6 +91,11 @@ fn a_long_run_of_view_and_node_churn_keeps_gpu_memory_bounded() {
             renderer.unregister_view(views.remove(0)).unwrap();
         }
         renderer.render_frame(&demo.scene).unwrap();
+        if frame % 100 == 0 {
+            for &view in &views {
+                support::assert_hdr_finite(&renderer, view);
+            }
+        }
         if frame == 100 {
             bytes_after_warm_up = renderer.heap().gpu_bytes();
         }

@@ -77,7 +77,7 @@ fn near_object_occludes_far_one_and_background_keeps_the_clear_colour() {
     let cam = camera(Vec3::ZERO, Vec3::NEG_Z, 96);
     let view = renderer.register_view(cam, graph_with_clear);
     renderer.render_frame(&scene).unwrap();
-    let image = renderer.read_color(view).unwrap();
+    let image = support::read_lit_color(&renderer, view);
     let resolved = cam.resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
 
     // Hue tests, not exact values: a head-on highlight whitens the faces.
@@ -104,7 +104,7 @@ fn the_lit_side_of_a_cube_is_brighter_than_the_unlit_side() {
     let cam = camera(Vec3::new(2.5, 1.5, 2.5), Vec3::ZERO, 128);
     let view = renderer.register_view(cam, graph_with_clear);
     renderer.render_frame(&scene).unwrap();
-    let image = renderer.read_color(view).unwrap();
+    let image = support::read_lit_color(&renderer, view);
     let resolved = cam.resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
 
     let lit = region_mean(&image, pixel_of(&resolved, Vec3::new(0.5, 0.0, 0.0)), 4);
@@ -142,7 +142,7 @@ fn masked_quad_is_kept_above_its_cutoff_dropped_below_and_visible_from_behind() 
         let cam = camera(eye, Vec3::ZERO, 96);
         let view = renderer.register_view(cam, graph_with_clear);
         renderer.render_frame(&scene).unwrap();
-        let image = renderer.read_color(view).unwrap();
+        let image = support::read_lit_color(&renderer, view);
         let resolved = cam.resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
         assert_region(&image, pixel_of(&resolved, Vec3::new(-1.2, 0.0, 0.0)), 4, is_yellow, 0, "quad above cutoff");
         assert_region(
@@ -160,9 +160,11 @@ fn masked_quad_is_kept_above_its_cutoff_dropped_below_and_visible_from_behind() 
 fn pipelines_are_created_once_and_reused_across_frames() {
     let demo = oxygen::core::demo::multi_view_scene();
     let mut renderer = gpu_renderer();
-    renderer.register_view(oxygen::core::demo::main_camera(UVec2::new(64, 48)), standard_render_graph);
-    renderer.register_view(oxygen::core::demo::side_camera(UVec2::new(48, 48)), standard_render_graph);
+    let main = renderer.register_view(oxygen::core::demo::main_camera(UVec2::new(64, 48)), standard_render_graph);
+    let side = renderer.register_view(oxygen::core::demo::side_camera(UVec2::new(48, 48)), standard_render_graph);
     renderer.render_frame(&demo.scene).unwrap();
+    support::assert_hdr_finite(&renderer, main);
+    support::assert_hdr_finite(&renderer, side);
     let after_first = renderer.pipelines().pipelines_created();
     // Opaque + masked-double-sided partitions × (depth pre-pass, shading), plus the tone map.
     assert_eq!(after_first, 5);
@@ -184,7 +186,9 @@ fn views_render_in_registration_order_and_can_be_unregistered() {
     renderer.unregister_view(a).unwrap();
     let report = renderer.render_frame(&demo.scene).unwrap();
     assert_eq!(report.views.len(), 1);
+    support::assert_hdr_finite(&renderer, b);
     assert!(matches!(renderer.read_color(a), Err(oxygen::RenderError::NoSuchView(_))));
+    assert!(matches!(renderer.read_hdr(a), Err(oxygen::RenderError::NoSuchView(_))));
     assert!(renderer.unregister_view(a).is_err());
 }
 
@@ -215,7 +219,7 @@ fn a_closure_factory_can_render_without_a_depth_pre_pass() {
     });
     let report = renderer.render_frame(&scene).unwrap();
     assert_eq!(report.views[0].recorded.render_passes, 2, "shading and tone map only");
-    let image = renderer.read_color(view).unwrap();
+    let image = support::read_lit_color(&renderer, view);
     let resolved = cam.resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
     let is_green = |p: Rgb| p.g > 150 && p.g as i32 > p.r as i32 + 60;
     assert_region(
@@ -246,7 +250,7 @@ fn multi_draw_indirect_and_direct_draws_produce_the_same_image() {
         assert_eq!(renderer.draw_path(), path);
         let view = renderer.register_view(oxygen::core::demo::main_camera(UVec2::new(160, 120)), standard_render_graph);
         let report = renderer.render_frame(&demo.scene).unwrap();
-        (renderer.read_color(view).unwrap(), report.views[0].recorded.draw_calls)
+        (support::read_lit_color(&renderer, view), report.views[0].recorded.draw_calls)
     };
     let (direct, direct_calls) = render(DrawPath::Direct, false);
     let (indirect, indirect_calls) = render(DrawPath::MultiDrawIndirect, false);
@@ -270,10 +274,11 @@ fn multi_draw_indirect_and_direct_draws_produce_the_same_image() {
 fn materials_and_geometry_upload_only_when_new_or_changed() {
     let mut demo = oxygen::core::demo::multi_view_scene();
     let mut renderer = gpu_renderer();
-    renderer.register_view(oxygen::core::demo::main_camera(UVec2::new(48, 32)), standard_render_graph);
+    let view = renderer.register_view(oxygen::core::demo::main_camera(UVec2::new(48, 32)), standard_render_graph);
     for _ in 0..3 {
         renderer.render_frame(&demo.scene).unwrap();
     }
+    support::assert_hdr_finite(&renderer, view);
     let stats = renderer.scene_prep().stats();
     assert_eq!(stats.material_uploads, 1, "static materials are uploaded once");
     // Plane, cube and quad: three meshes, each uploaded once.
@@ -309,7 +314,7 @@ fn a_mirrored_cube_is_lit_and_culled_like_its_original() {
         frame.partitions().iter().any(|p| p.mask.contains(PassMask::MIRRORED)),
         "mirrored draws get their own variant"
     );
-    let image = renderer.read_color(view).unwrap();
+    let image = support::read_lit_color(&renderer, view);
     let resolved = cam.resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
     let top = |x: f32| region_mean(&image, pixel_of(&resolved, Vec3::new(x, 0.5, 0.0)), 2);
     let (original, mirrored) = (top(-1.0), top(1.0));

@@ -48,7 +48,7 @@ fn render(scene: &Scene, path: TexturePath) -> (image::RgbaImage, ResolvedView) 
     let view = renderer.register_view(camera, standard_render_graph);
     renderer.render_frame(scene).unwrap();
     let ctx = ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 };
-    (renderer.read_color(view).unwrap(), camera.resolve(&ctx, scene).unwrap())
+    (support::read_lit_color(&renderer, view), camera.resolve(&ctx, scene).unwrap())
 }
 
 fn is_red(p: Rgb) -> bool {
@@ -176,7 +176,7 @@ fn minified_textures_are_filtered_through_their_mip_chain() {
             let mut renderer = Renderer::new_headless_with(options).unwrap_or_else(|e| panic!("{path:?}: {e}"));
             let view = renderer.register_view(camera, standard_render_graph);
             renderer.render_frame(&scene).unwrap();
-            let pixels = centre(&renderer.read_color(view).unwrap());
+            let pixels = centre(&support::read_lit_color(&renderer, view));
             let red: Vec<f32> = pixels.iter().map(|p| p.r as f32).collect();
             let mean = red.iter().sum::<f32>() / red.len() as f32;
             let spread = (red.iter().map(|r| (r - mean).powi(2)).sum::<f32>() / red.len() as f32).sqrt();
@@ -235,7 +235,7 @@ fn occlusion_textures_dim_ambient_light_but_not_direct_light() {
         };
         let view = renderer.register_view(camera, standard_render_graph);
         renderer.render_frame(&scene).unwrap();
-        let image = renderer.read_color(view).unwrap();
+        let image = support::read_lit_color(&renderer, view);
         let resolved =
             camera.resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
         [-1.0f32, 0.0, 1.0].map(|x| support::region_mean(&image, pixel_of(&resolved, Vec3::new(x, 0.0, 0.0)), 2))

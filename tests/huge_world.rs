@@ -66,7 +66,7 @@ fn render(offset: Vec3, origin: RenderOrigin) -> image::RgbaImage {
     let mut renderer = gpu_renderer_with(RendererOptions { origin, ..Default::default() });
     let view = renderer.register_view(camera_at(offset), oxygen::standard_render_graph);
     renderer.render_frame(&scene_at(offset)).unwrap();
-    renderer.read_color(view).unwrap()
+    support::read_lit_color(&renderer, view)
 }
 
 #[test]

@@ -65,7 +65,7 @@ fn a_mirror_sphere_reflects_the_red_box_through_the_probe() {
     });
     probe.before_frame(&mut renderer).unwrap();
     renderer.render_frame(&scene).unwrap();
-    let image = renderer.read_color(view).unwrap();
+    let image = support::read_lit_color(&renderer, view);
     let resolved = camera().resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
     // The sphere point whose normal bisects the view and +X reflects the box;
     // its mirror image on the −X side reflects empty background.
@@ -97,7 +97,7 @@ fn a_rough_metal_reflects_a_blurred_image_of_the_probe() {
         let view = renderer.register_view(camera(), oxygen::lit_render_graph(config));
         probe.before_frame(&mut renderer).unwrap();
         renderer.render_frame(&scene).unwrap();
-        let image = renderer.read_color(view).unwrap();
+        let image = support::read_lit_color(&renderer, view);
         let resolved =
             camera().resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
         let (left, y) = pixel_of(&resolved, Vec3::new(-0.95, 0.0, 0.3));
@@ -132,11 +132,12 @@ fn a_probe_updated_every_third_frame_renders_its_faces_only_then() {
     let mut renderer = support::gpu_renderer();
     let mut probe =
         ReflectionProbe::register(&mut renderer, Vec3::ZERO, 16, (0.05, 50.0), ProbeUpdate::EveryNthFrame(3)).unwrap();
-    renderer.register_view(camera(), standard_render_graph);
+    let view = renderer.register_view(camera(), standard_render_graph);
     let mut views_per_frame = Vec::new();
     for _ in 0..6 {
         probe.before_frame(&mut renderer).unwrap();
         views_per_frame.push(renderer.render_frame(&scene).unwrap().views.len());
+        support::assert_hdr_finite(&renderer, view);
     }
     assert_eq!(views_per_frame, vec![7, 1, 1, 7, 1, 1]);
 
@@ -197,7 +198,7 @@ fn each_surface_reflects_its_nearest_probe() {
     renderer.render_frame(&scene).unwrap();
     let s = std::f32::consts::FRAC_1_SQRT_2;
     for (x, camera, view) in views {
-        let image = renderer.read_color(view).unwrap();
+        let image = support::read_lit_color(&renderer, view);
         let resolved =
             camera.resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
         let at = pixel_of(&resolved, Vec3::new(x + s, 0.0, s));
@@ -236,7 +237,7 @@ fn views_sharing_a_probe_copy_its_faces_once_per_frame() {
     assert!(renderer.pipelines().claim_copy(&probe.input().texture, 0, probe.faces()[0], frame + 1));
     assert_eq!(report.views.len(), 8);
     for view in views {
-        let image = renderer.read_color(view).unwrap();
+        let image = support::read_lit_color(&renderer, view);
         let resolved =
             camera().resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
         let s = std::f32::consts::FRAC_1_SQRT_2;

@@ -34,9 +34,10 @@ fn four_cascade_views_share_the_frame_phase() {
         let cascade = CascadeResolver { main: Arc::clone(&main), light: demo.sun, settings, index };
         renderer.register_view_with_options(cascade, shadow_options(), depth_only_graph);
     }
-    renderer.register_view(main_camera(UVec2::new(64, 48)), standard_render_graph);
+    let view = renderer.register_view(main_camera(UVec2::new(64, 48)), standard_render_graph);
     for _ in 0..3 {
         let report = renderer.render_frame(&demo.scene).unwrap();
+        support::assert_hdr_finite(&renderer, view);
         assert_eq!(report.views.len(), 5);
         // The nearest slices end before the grid starts; the farther ones hold it.
         assert!(report.views[..4].iter().any(|v| v.draws > 0), "some cascade sees the casters");
@@ -122,7 +123,7 @@ fn a_cube_casts_a_shadow_on_the_ground() {
         })
     });
     renderer.render_frame(&scene).unwrap();
-    let image = renderer.read_color(view).unwrap();
+    let image = support::read_lit_color(&renderer, view);
     // Shadow views render depth only: no colour targets were made for them.
     let cascade = cascade_ids[0].unwrap();
     assert!(
@@ -147,8 +148,9 @@ fn a_scene_without_shadow_casters_gets_no_shadow_views() {
     let cascades =
         oxygen::register_sun_cascades(&mut renderer, &demo.scene, Arc::clone(&main), CascadeSettings::default());
     assert_eq!(cascades, [None; 4]);
-    renderer.register_view(main_camera(UVec2::new(48, 32)), oxygen::shadowed_render_graph(cascades));
+    let view = renderer.register_view(main_camera(UVec2::new(48, 32)), oxygen::shadowed_render_graph(cascades));
     renderer.render_frame(&demo.scene).unwrap();
+    support::assert_hdr_finite(&renderer, view);
     assert_eq!(renderer.views().count(), 1);
     assert_eq!(renderer.scene_prep().stats().views_prepared, 1, "nothing prepared for shadows");
 
@@ -207,7 +209,7 @@ fn a_spot_light_casts_a_shadow_through_its_shadow_view() {
         })
     });
     renderer.render_frame(&scene).unwrap();
-    let image = renderer.read_color(view).unwrap();
+    let image = support::read_lit_color(&renderer, view);
     let resolved = camera.resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
     // The cube's shadow falls on the ground just right of it (away from the light).
     let shadowed = region_mean(&image, pixel_of(&resolved, Vec3::new(1.2, 0.0, 0.0)), 1);
@@ -254,7 +256,7 @@ fn two_spot_shadows_share_the_atlas() {
         oxygen::lit_render_graph(ShaderPassConfig { local_shadows: spots, ..Default::default() }),
     );
     renderer.render_frame(&scene).unwrap();
-    let image = renderer.read_color(view).unwrap();
+    let image = support::read_lit_color(&renderer, view);
     let resolved = camera.resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
     for side in [-1.0f32, 1.0] {
         // Each cube's shadow falls on the ground just inwards of it, away from its spot.
@@ -313,7 +315,7 @@ fn a_point_light_casts_shadows_through_its_cube_faces() {
         renderer.render_frame(&scene).unwrap();
         let lights = renderer.scene_prep().frame_collection().positional_lights.clone();
         assert_eq!(lights.iter().map(|l| l.shadow_slot).collect::<Vec<_>>(), vec![0, 6], "point then spot tiles");
-        renderer.read_color(view).unwrap()
+        support::read_lit_color(&renderer, view)
     };
     let shadowed_image = render(true);
     let unshadowed_image = render(false);
@@ -401,7 +403,7 @@ fn shadow_map_resolution_trades_edge_error() {
         let config = ShaderPassConfig { shadow_cascades: cascades, ..Default::default() };
         let view = renderer.register_view(camera, oxygen::lit_render_graph(config));
         renderer.render_frame(&scene).unwrap();
-        renderer.read_color(view).unwrap()
+        support::read_lit_color(&renderer, view)
     };
     let resolved =
         camera.resolve(&ViewContext { view_id: ViewId(0), frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();

@@ -1,5 +1,6 @@
 //! Shared helpers for GPU tests: a renderer on the test adapter, projection
-//! of world points to pixels, and tolerant region checks.
+//! of world points to pixels, tolerant region checks, and the check that a
+//! lit view's HDR target holds only finite radiance.
 
 #![allow(dead_code)] // Each test binary uses a different subset.
 
@@ -8,6 +9,7 @@ pub mod golden;
 use std::sync::Once;
 
 use image::RgbaImage;
+use oxygen::core::gpu::HdrImage;
 use oxygen::prelude::*;
 
 /// A pixel's colour.
@@ -57,6 +59,35 @@ pub fn gpu_renderer() -> Renderer {
 /// A renderer on the test adapter with explicit options.
 pub fn gpu_renderer_with(options: RendererOptions) -> Renderer {
     Renderer::new_headless_with(options).unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"))
+}
+
+/// Fails when the view's HDR target (linear radiance, before the tone map)
+/// holds a NaN or an infinity anywhere, naming the first offenders. The
+/// tone map shows such a pixel as black or white, so the sRGB image alone
+/// can hide it; every test that renders a lit scene calls this.
+pub fn assert_hdr_finite(renderer: &Renderer, view: ViewId) {
+    let hdr = renderer.read_hdr(view).unwrap_or_else(|e| panic!("reading the HDR target of {view:?}: {e}"));
+    assert_hdr_image_finite(&hdr, &format!("{view:?}"));
+}
+
+/// [`assert_hdr_finite`] for an HDR image read back some other way.
+pub fn assert_hdr_image_finite(hdr: &HdrImage, what: &str) {
+    let bad: Vec<_> = hdr.non_finite().collect();
+    assert!(
+        bad.is_empty(),
+        "{what}: {} of the {}×{} HDR pixels are not finite; first: {:?}",
+        bad.len(),
+        hdr.width,
+        hdr.height,
+        &bad[..bad.len().min(4)]
+    );
+}
+
+/// The view's displayable image, after [`assert_hdr_finite`]: what a test
+/// of a lit scene reads instead of `read_color`.
+pub fn read_lit_color(renderer: &Renderer, view: ViewId) -> RgbaImage {
+    assert_hdr_finite(renderer, view);
+    renderer.read_color(view).unwrap_or_else(|e| panic!("reading the colour target of {view:?}: {e}"))
 }
 
 /// The pixel a world point lands on.

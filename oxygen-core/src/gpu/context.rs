@@ -40,7 +40,7 @@ pub enum GpuError {
     #[error("accessing a mapped readback buffer failed: {0}")]
     MapRange(#[from] wgpu::MapRangeError),
     /// A texture cannot be read back by this path.
-    #[error("cannot read back texture of format {0:?} (only 4-byte RGBA8 formats)")]
+    #[error("cannot read back texture of format {0:?} (only RGBA8 unorm or sRGB, and Rgba16Float)")]
     UnsupportedReadbackFormat(wgpu::TextureFormat),
 }
 

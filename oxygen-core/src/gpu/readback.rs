@@ -1,18 +1,95 @@
-//! Copying a colour target back to the CPU as an image.
+//! Copying a colour target back to the CPU: the displayable RGBA8 target as
+//! an image, the linear HDR target (`Rgba16Float`) as `f32` texels.
+//!
+//! Both block until the GPU has finished all submitted work; they are for
+//! tests, tools and screenshots, never for use inside a frame.
 
 use super::{GpuContext, GpuError};
+
+/// A linear HDR picture read back from an `Rgba16Float` texture, each
+/// half-float widened to `f32` exactly (NaN and infinities kept as they are,
+/// so a test can find them).
+#[derive(Clone, Debug, PartialEq)]
+pub struct HdrImage {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// RGBA texels, row by row from the top-left corner.
+    pub pixels: Vec<[f32; 4]>,
+}
+
+impl HdrImage {
+    /// The texel at (`x`, `y`); panics outside the image.
+    pub fn get(&self, x: u32, y: u32) -> [f32; 4] {
+        assert!(x < self.width && y < self.height, "({x}, {y}) is outside {}×{}", self.width, self.height);
+        self.pixels[(y * self.width + x) as usize]
+    }
+
+    /// Every pixel holding a NaN or an infinity in any channel, with its
+    /// coordinates, in row order.
+    pub fn non_finite(&self) -> impl Iterator<Item = ((u32, u32), [f32; 4])> + '_ {
+        let width = self.width;
+        self.pixels.iter().enumerate().filter(|(_, p)| !p.iter().all(|c| c.is_finite())).map(move |(i, p)| {
+            let i = i as u32;
+            ((i % width, i / width), *p)
+        })
+    }
+}
+
+/// Widens an IEEE 754 binary16 value to `f32`, exactly (every half is an
+/// `f32`): subnormals are renormalised, infinities and NaNs kept.
+pub fn f16_to_f32(bits: u16) -> f32 {
+    let sign = ((bits as u32) & 0x8000) << 16;
+    let exponent = ((bits >> 10) & 0x1f) as u32;
+    let mantissa = (bits & 0x3ff) as u32;
+    let magnitude = match (exponent, mantissa) {
+        (0, 0) => 0,
+        // Subnormal: mantissa × 2⁻²⁴, exactly representable as a normal f32.
+        (0, m) => (m as f32 * f32::powi(2.0, -24)).to_bits(),
+        // Infinity (m = 0) or NaN (quiet bit and payload moved up).
+        (0x1f, m) => 0x7f80_0000 | (m << 13),
+        // Normal: rebias the exponent from 15 to 127.
+        (e, m) => ((e + 127 - 15) << 23) | (m << 13),
+    };
+    f32::from_bits(sign | magnitude)
+}
 
 impl GpuContext {
     /// Reads a 2D RGBA8 texture (unorm or sRGB, stored bytes unchanged) into
     /// an image. Blocks until the GPU has finished all submitted work.
     pub fn read_rgba8(&self, texture: &wgpu::Texture) -> Result<image::RgbaImage, GpuError> {
-        let _span = tracing::info_span!("readback").entered();
         let format = texture.format();
         if !matches!(format, wgpu::TextureFormat::Rgba8Unorm | wgpu::TextureFormat::Rgba8UnormSrgb) {
             return Err(GpuError::UnsupportedReadbackFormat(format));
         }
+        let pixels = self.read_texels(texture, 4)?;
+        // Length is exactly width * height * 4 by construction.
+        Ok(image::RgbaImage::from_raw(texture.width(), texture.height(), pixels)
+            .expect("readback size matches the texture"))
+    }
+
+    /// Reads a 2D `Rgba16Float` texture (a view's HDR target) as `f32`
+    /// texels. Blocks until the GPU has finished all submitted work.
+    pub fn read_rgba16_float(&self, texture: &wgpu::Texture) -> Result<HdrImage, GpuError> {
+        let format = texture.format();
+        if format != wgpu::TextureFormat::Rgba16Float {
+            return Err(GpuError::UnsupportedReadbackFormat(format));
+        }
+        let bytes = self.read_texels(texture, 8)?;
+        let pixels = bytes
+            .chunks_exact(8)
+            .map(|texel| std::array::from_fn(|c| f16_to_f32(u16::from_le_bytes([texel[2 * c], texel[2 * c + 1]]))))
+            .collect();
+        Ok(HdrImage { width: texture.width(), height: texture.height(), pixels })
+    }
+
+    /// The bytes of mip level 0 of a 2D texture of `bytes_per_texel`,
+    /// tightly packed row by row.
+    fn read_texels(&self, texture: &wgpu::Texture, bytes_per_texel: u32) -> Result<Vec<u8>, GpuError> {
+        let _span = tracing::info_span!("readback").entered();
         let (width, height) = (texture.width(), texture.height());
-        let unpadded = width * 4;
+        let unpadded = width * bytes_per_texel;
         // Buffer rows must be 256-byte aligned for texture copies.
         let padded = unpadded.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
         let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
@@ -32,7 +109,7 @@ impl GpuContext {
                     rows_per_image: Some(height),
                 },
             },
-            texture.size(),
+            wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
         );
         self.queue.submit([encoder.finish()]);
         let (sender, receiver) = std::sync::mpsc::channel();
@@ -43,13 +120,43 @@ impl GpuContext {
         self.device.poll(wgpu::PollType::wait_indefinitely())?;
         receiver.recv().unwrap_or(Err(wgpu::BufferAsyncError))?;
         let mapped = buffer.slice(..).get_mapped_range()?;
-        let mut pixels = Vec::with_capacity((unpadded * height) as usize);
+        let mut bytes = Vec::with_capacity((unpadded * height) as usize);
         for row in mapped.chunks(padded as usize) {
-            pixels.extend_from_slice(&row[..unpadded as usize]);
+            bytes.extend_from_slice(&row[..unpadded as usize]);
         }
         drop(mapped);
         buffer.unmap();
-        // Length is exactly width * height * 4 by construction.
-        Ok(image::RgbaImage::from_raw(width, height, pixels).expect("readback size matches the texture"))
+        Ok(bytes)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn half_floats_widen_exactly() {
+        assert_eq!(f16_to_f32(0x0000), 0.0);
+        assert!(f16_to_f32(0x8000).is_sign_negative() && f16_to_f32(0x8000) == 0.0);
+        assert_eq!(f16_to_f32(0x3c00), 1.0);
+        assert_eq!(f16_to_f32(0xc000), -2.0);
+        assert_eq!(f16_to_f32(0x3555), 0.333_251_95);
+        assert_eq!(f16_to_f32(0x7bff), 65504.0, "largest finite half");
+        assert_eq!(f16_to_f32(0x0400), f32::powi(2.0, -14), "smallest normal half");
+        assert_eq!(f16_to_f32(0x0001), f32::powi(2.0, -24), "smallest subnormal half");
+        assert_eq!(f16_to_f32(0x03ff), 1023.0 * f32::powi(2.0, -24), "largest subnormal half");
+        assert_eq!(f16_to_f32(0x7c00), f32::INFINITY);
+        assert_eq!(f16_to_f32(0xfc00), f32::NEG_INFINITY);
+        assert!(f16_to_f32(0x7e00).is_nan());
+        assert!(f16_to_f32(0x7c01).is_nan(), "a signalling NaN stays NaN");
+    }
+
+    #[test]
+    fn non_finite_pixels_are_found_with_their_coordinates() {
+        let mut image = HdrImage { width: 3, height: 2, pixels: vec![[0.5; 4]; 6] };
+        image.pixels[4][1] = f32::NAN;
+        image.pixels[5][3] = f32::INFINITY;
+        let found: Vec<_> = image.non_finite().map(|(at, _)| at).collect();
+        assert_eq!(found, [(1, 1), (2, 1)]);
     }
 }
