@@ -4,9 +4,56 @@
 // from every directional and positional light of the frame (read through
 // their slots), and a small constant ambient term. Writes linear radiance to
 // the HDR target; the tone-map step makes it displayable.
+//
+// Finite in, finite out: every division, normalisation and square root of
+// the shading path is guarded (each guard says why its epsilon is safe), so
+// grazing and degenerate inputs — a zero-length normal from the vertex data,
+// the view along the light, roughness 0 — shade to a finite colour.
+// `tests/shading_finite.rs` runs these functions over such inputs.
 
 const PI: f32 = 3.14159265;
 const AMBIENT: f32 = 0.03;
+// The brightest channel shading writes: under the largest finite value of
+// the HDR target's `Rgba16Float` texels (65504), with room for the rounding
+// of `fit_hdr`'s scaling and of blending.
+const HDR_MAX: f32 = 65000.0;
+
+// True when `x` has a direction: its largest component exceeds 1e-30, far
+// above the smallest normal f32 (1.2e-38), so no GPU flushes it to zero as
+// a denormal and `normalize_or` can scale `x` by its reciprocal.
+fn has_direction(x: vec3<f32>) -> bool {
+    return max(abs(x.x), max(abs(x.y), abs(x.z))) > 1e-30;
+}
+
+// `x` at unit length, or `fallback` when `x` has no direction. Finite for
+// every finite `x`: `x` is first divided by its largest component (at least
+// 1e-30, see `has_direction`), which leaves a vector whose squared length
+// lies in [1, 3], so `inverseSqrt` can neither overflow nor meet zero, and
+// squaring cannot overflow even for lengths near f32's maximum.
+fn normalize_or(x: vec3<f32>, fallback: vec3<f32>) -> vec3<f32> {
+    let largest = max(abs(x.x), max(abs(x.y), abs(x.z)));
+    if !(largest > 1e-30) {
+        return fallback;
+    }
+    let scaled = x / largest;
+    return scaled * inverseSqrt(dot(scaled, scaled));
+}
+
+// Scales `color` down, keeping its hue, so that no channel exceeds what the
+// HDR target can hold: a channel above 65504 would be stored as +infinity
+// (a near-mirror lit at grazing incidence reaches millions). Colours in
+// range are unchanged. A sum of lights that overflowed f32 itself (absurd
+// intensities) is first brought back to 3e38, so the scaling never computes
+// infinity × 0. A NaN channel stays NaN (comparisons with it are false, and
+// NaN × x is NaN): the tests must see it.
+fn fit_hdr(color: vec3<f32>) -> vec3<f32> {
+    let finite = select(color, vec3<f32>(3e38), color > vec3<f32>(3e38));
+    let peak = max(finite.r, max(finite.g, finite.b));
+    if peak > HDR_MAX {
+        return finite * (HDR_MAX / peak);
+    }
+    return color;
+}
 
 // Group 3: what this view reads from other views (see lighting_inputs.rs):
 // cascade shadow maps and one reflection probe.
@@ -181,34 +228,108 @@ fn shadow_visibility(world_position: vec3<f32>, geometric_normal: vec3<f32>) -> 
     return 1.0;
 }
 
-fn surface_normal(mesh: MeshVarying, front_facing: bool, material: MaterialRecord) -> vec3<f32> {
-    let n = normalize(mesh.world_normal);
-    // Double-sided surfaces are lit on the side we see; single-sided ones
-    // only show their front (culling), so their normal stands as it is.
+// Unit normal of the triangle being shaded, from the screen derivatives of
+// the position, turned towards the viewer (`to_viewer`: camera minus
+// surface point); the view direction, then +Y, when the derivatives have no
+// direction (a quad whose positions do not change on screen).
+fn facet_normal(d: Derivatives, to_viewer: vec3<f32>) -> vec3<f32> {
+    let facet = cross(d.dp_dx, d.dp_dy);
+    let towards = select(facet, -facet, dot(facet, to_viewer) < 0.0);
+    return normalize_or(towards, normalize_or(to_viewer, vec3<f32>(0.0, 1.0, 0.0)));
+}
+
+// The unit shading normal from the interpolated vertex normal. Double-sided
+// surfaces are lit on the side we see (`flip`: a double-sided back face);
+// single-sided ones only show their front (culling), so their normal stands
+// as it is. A vertex normal without direction (zero in the vertex data, or
+// opposite normals interpolated across a triangle) would normalise to NaN:
+// the triangle's own normal, which faces the viewer, stands in for it.
+fn shading_normal(world_normal: vec3<f32>, flip: bool, d: Derivatives, to_viewer: vec3<f32>) -> vec3<f32> {
+    let oriented = select(world_normal, -world_normal, flip);
+    if has_direction(oriented) {
+        return normalize_or(oriented, oriented);
+    }
+    return facet_normal(d, to_viewer);
+}
+
+fn surface_normal(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Derivatives) -> vec3<f32> {
     let double_sided = (material.flags & 4u) != 0u;
-    return select(n, -n, double_sided && !front_facing);
+    let to_viewer = scene.camera.camera_position.xyz - mesh.world_position;
+    return shading_normal(mesh.world_normal, double_sided && !front_facing, d, to_viewer);
+}
+
+// Unit direction from the surface to the camera; the normal `n` when the
+// camera sits on the surface point itself (no direction to it).
+fn view_direction(to_viewer: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    return normalize_or(to_viewer, n);
+}
+
+// Schlick's Fresnel weight (1 - cos)^5, by multiplication. `cos_theta` is
+// clamped to [0, 1]: a dot product of two unit vectors can exceed 1 by a
+// rounding error (v·h where the view and light directions coincide, the
+// sun's "hot spot" on the ground), and `pow` of the negative base 1 - cos is
+// NaN (lavapipe evaluates pow as exp2(5 log2 x)). That NaN was issue 17's
+// black pixel.
+fn schlick_weight(cos_theta: f32) -> f32 {
+    let m = 1.0 - clamp(cos_theta, 0.0, 1.0);
+    let m2 = m * m;
+    return m2 * m2 * m;
 }
 
 // Radiance reflected towards `v` from light arriving along `l`, per unit
-// incoming irradiance at normal incidence.
+// incoming irradiance at normal incidence. `n`, `v`, `l` are unit vectors;
+// the result is finite for any finite input (each guard below says why).
 fn brdf_cosine(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, albedo: vec3<f32>, metallic: f32, roughness: f32) -> vec3<f32> {
-    let n_dot_l = max(dot(n, l), 0.0);
-    if n_dot_l <= 0.0 {
+    // Written so that a NaN dot product also takes the early return.
+    let n_dot_l_raw = dot(n, l);
+    if !(n_dot_l_raw > 0.0) {
         return vec3<f32>(0.0);
     }
-    let h = normalize(v + l);
-    let n_dot_v = max(dot(n, v), 1e-4);
-    let n_dot_h = max(dot(n, h), 0.0);
-    let v_dot_h = max(dot(v, h), 0.0);
-    let a = max(roughness * roughness, 0.002);
+    let n_dot_l = min(n_dot_l_raw, 1.0);
+    // The half vector has no direction when the view looks straight along
+    // the light (v = -l, only possible with n·v < 0): h = 0 then gives the
+    // specular lobe's grazing minimum (n·h = 0) rather than a NaN.
+    let h = normalize_or(v + l, vec3<f32>(0.0));
+    // Cosines clamped to [0, 1]: rounding can push a unit dot product past 1.
+    // n·v at least 1e-4 keeps the visibility denominator positive below; a
+    // surface seen edge-on (or from behind its shading normal) stays lit
+    // as if seen at 89.99°.
+    let n_dot_v = clamp(dot(n, v), 1e-4, 1.0);
+    let n_dot_h = clamp(dot(n, h), 0.0, 1.0);
+    let v_dot_h = clamp(dot(v, h), 0.0, 1.0);
+    // GGX alpha at least 0.002 (roughness 0.045): roughness 0 would make
+    // alpha² and the distribution's denominator both 0 where n·h = 1 (0/0).
+    // With n·h in [0, 1] the denominator 1 - n·h² (1 - alpha²) is at least
+    // alpha² = 4e-6, over 30 times f32's spacing near 1 (1.2e-7), so its
+    // rounding cannot take it to zero; the peak 1 / (pi alpha²) is 8e4.
+    let a = clamp(roughness * roughness, 0.002, 1.0);
     let a2 = a * a;
-    let denom = n_dot_h * n_dot_h * (a2 - 1.0) + 1.0;
+    let denom = 1.0 - n_dot_h * n_dot_h * (1.0 - a2);
     let distribution = a2 / (PI * denom * denom);
+    // Height-correlated Smith visibility. Both square roots take at least
+    // alpha² > 0 (1 - alpha² >= 0), so the denominator is at least
+    // n·v alpha >= 1e-4 × 0.002, and n·l × visibility <= 0.5 / alpha.
     let visibility = 0.5 / (n_dot_l * sqrt(n_dot_v * n_dot_v * (1.0 - a2) + a2) + n_dot_v * sqrt(n_dot_l * n_dot_l * (1.0 - a2) + a2));
     let f0 = mix(vec3<f32>(0.04), albedo, metallic);
-    let fresnel = f0 + (vec3<f32>(1.0) - f0) * pow(1.0 - v_dot_h, 5.0);
+    let fresnel = f0 + (vec3<f32>(1.0) - f0) * schlick_weight(v_dot_h);
     let diffuse = (vec3<f32>(1.0) - fresnel) * (1.0 - metallic) * albedo / PI;
     return (diffuse + distribution * visibility * fresnel) * n_dot_l;
+}
+
+// How much of a spot light reaches a point at `cos_angle` from its axis: 1
+// inside the inner cone, 0 outside the outer one, a smooth step between.
+// WGSL's smoothstep is undefined when its edges are equal, which happens
+// for a very narrow spot (the CPU keeps the cone angles 1e-4 rad apart, but
+// their cosines both round to 1.0): a width under 1e-6 (about 16 f32 steps
+// of a cosine near 1) becomes a hard edge, and the division by at least
+// 1e-6 of a difference of at most 2 is finite.
+fn spot_cone(cos_outer: f32, cos_inner: f32, cos_angle: f32) -> f32 {
+    let width = cos_inner - cos_outer;
+    if !(width > 1e-6) {
+        return select(0.0, 1.0, cos_angle >= cos_outer);
+    }
+    let t = clamp((cos_angle - cos_outer) / width, 0.0, 1.0);
+    return t * t * (3.0 - 2.0 * t);
 }
 
 // Screen-space derivatives, taken at the top of each fragment entry point
@@ -237,18 +358,27 @@ fn perturb_normal(n: vec3<f32>, d: Derivatives, tangent_normal: vec3<f32>) -> ve
         return n; // no UV variation here: keep the geometric normal
     }
     let scale = inverseSqrt(largest);
-    return normalize(mat3x3<f32>(t * scale, b * scale, n) * tangent_normal);
+    // A tangent-space normal pointing into the surface can cancel out (no
+    // direction): keep the geometric normal then.
+    return normalize_or(mat3x3<f32>(t * scale, b * scale, n) * tangent_normal, n);
+}
+
+// The unit tangent-space normal a normal-map texel encodes, its XY scaled by
+// `normal_scale`. A mid-grey texel (or scale 0 with z = 0) encodes no
+// direction; it reads as the unperturbed normal (0, 0, 1).
+fn tangent_space_normal(texel: vec3<f32>, normal_scale: f32) -> vec3<f32> {
+    let decoded = texel * 2.0 - 1.0;
+    return normalize_or(vec3<f32>(decoded.xy * normal_scale, decoded.z), vec3<f32>(0.0, 0.0, 1.0));
 }
 
 fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Derivatives) -> vec4<f32> {
-    var n = surface_normal(mesh, front_facing, material);
+    var n = surface_normal(mesh, front_facing, material, d);
     let geometric_normal = n;
     if material.normal_texture != INVALID_SLOT {
-        var tangent_normal = sample_texture(material.normal_texture, mesh.uv, d.duv_dx, d.duv_dy).xyz * 2.0 - 1.0;
-        tangent_normal = vec3<f32>(tangent_normal.xy * material.normal_scale, tangent_normal.z);
-        n = perturb_normal(n, d, normalize(tangent_normal));
+        let texel = sample_texture(material.normal_texture, mesh.uv, d.duv_dx, d.duv_dy).xyz;
+        n = perturb_normal(n, d, tangent_space_normal(texel, material.normal_scale));
     }
-    let v = normalize(scene.camera.camera_position.xyz - mesh.world_position);
+    let v = view_direction(scene.camera.camera_position.xyz - mesh.world_position, n);
     let base = base_color_of(mesh, material, d.duv_dx, d.duv_dy);
     let albedo = base.rgb;
     // glTF packs roughness in G and metallic in B.
@@ -285,7 +415,7 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Der
             attenuation *= clamp(1.0 - ratio * ratio * ratio * ratio, 0.0, 1.0);
         }
         if light.kind == 1u {
-            attenuation *= smoothstep(light.cos_outer, light.cos_inner, dot(-l, light.direction));
+            attenuation *= spot_cone(light.cos_outer, light.cos_inner, dot(-l, light.direction));
             if light.shadow_slot != INVALID_SLOT {
                 attenuation *= tile_visibility(light.shadow_slot, light.position, mesh.world_position, geometric_normal);
             }
@@ -317,7 +447,7 @@ fn fs_opaque(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> @l
         return STALE_DRAW_COLOR;
     }
     let shaded = shade(mesh, front_facing, material_of(mesh), d);
-    return vec4<f32>(shaded.rgb, 1.0);
+    return vec4<f32>(fit_hdr(shaded.rgb), 1.0);
 }
 
 @fragment
@@ -331,7 +461,7 @@ fn fs_masked(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> @l
     if shaded.a < material.alpha_cutoff {
         discard;
     }
-    return vec4<f32>(shaded.rgb, 1.0);
+    return vec4<f32>(fit_hdr(shaded.rgb), 1.0);
 }
 
 // Transparent surfaces: premultiplied alpha (blend One, OneMinusSrcAlpha).
@@ -343,5 +473,7 @@ fn fs_blend(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> @lo
     }
     let shaded = shade(mesh, front_facing, material_of(mesh), d);
     let alpha = clamp(shaded.a, 0.0, 1.0);
-    return vec4<f32>(shaded.rgb * alpha, alpha);
+    // Premultiplied and at most HDR_MAX × alpha, so blending over a target
+    // texel of at most HDR_MAX stays at most HDR_MAX.
+    return vec4<f32>(fit_hdr(shaded.rgb) * alpha, alpha);
 }

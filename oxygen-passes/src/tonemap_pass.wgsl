@@ -45,6 +45,10 @@ fn pbr_neutral(input: vec3<f32>) -> vec3<f32> {
 @fragment
 fn fs_tonemap(in: FullscreenVarying) -> @location(0) vec4<f32> {
     let hdr = textureLoad(hdr_texture, vec2<i32>(in.position.xy), 0).rgb;
-    let safe = select(vec3<f32>(0.0), hdr, hdr == hdr); // NaN never reaches the screen
+    // Shading writes finite radiance (tests/shading_finite.rs checks the
+    // HDR target); should a NaN get there anyway it shows black, and an
+    // infinity white (the operator itself would compute infinity × 0).
+    let not_nan = select(vec3<f32>(0.0), hdr, hdr == hdr);
+    let safe = min(not_nan, vec3<f32>(65504.0)); // the largest finite f16
     return vec4<f32>(clamp(pbr_neutral(max(safe * params.exposure, vec3<f32>(0.0))), vec3<f32>(0.0), vec3<f32>(1.0)), 1.0);
 }
