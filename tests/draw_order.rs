@@ -54,7 +54,7 @@ fn overlap_colour(red_first: bool) -> [u8; 3] {
     let resolved =
         front_camera().resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
     let (x, y) = pixel_of(&resolved, Vec3::new(0.0, 0.0, 1.0));
-    let p = renderer.read_color(view).unwrap().get_pixel(x, y).0;
+    let p = support::read_lit_color(&renderer, view).get_pixel(x, y).0;
     [p[0], p[1], p[2]]
 }
 
@@ -87,7 +87,7 @@ fn a_double_sided_draw_next_to_a_single_sided_one_shows_its_back_face() {
     let mut renderer = gpu_renderer();
     let view = renderer.register_view(front_camera(), standard_render_graph);
     renderer.render_frame(&scene).unwrap();
-    let image = renderer.read_color(view).unwrap();
+    let image = support::read_lit_color(&renderer, view);
     let resolved =
         front_camera().resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
     let at = |x: f32| {

@@ -37,7 +37,7 @@ fn front_view(size: u32) -> LookAtResolver {
 }
 
 fn centre_is_lit_red(renderer: &Renderer, view: ViewId) {
-    let image = renderer.read_color(view).unwrap();
+    let image = support::read_lit_color(renderer, view);
     let [r, g, b, _] = image.get_pixel(image.width() / 2, image.height() / 2).0;
     assert!(r > 60 && r > 2 * g && r > 2 * b, "{view}: centre ({r}, {g}, {b}) is not the lit red cube");
 }

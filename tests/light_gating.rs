@@ -33,7 +33,7 @@ fn render(lamp: Option<Light>) -> image::RgbaImage {
     let mut renderer = gpu_renderer();
     let view = renderer.register_view(camera, standard_render_graph);
     renderer.render_frame(&scene).unwrap();
-    renderer.read_color(view).unwrap()
+    support::read_lit_color(&renderer, view)
 }
 
 fn centre_luma(image: &image::RgbaImage) -> u8 {

@@ -75,7 +75,7 @@ fn a_face_under_a_rotated_non_uniform_scale_is_lit_by_its_analytic_normal() {
     let mut renderer = gpu_renderer();
     let view = renderer.register_view(camera, standard_render_graph);
     renderer.render_frame(&scene).unwrap();
-    let image = renderer.read_color(view).unwrap();
+    let image = support::read_lit_color(&renderer, view);
     let resolved = camera.resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
     let sample = |at: Vec3| {
         let (x, y) = pixel_of(&resolved, at);
