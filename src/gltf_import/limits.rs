@@ -126,6 +126,12 @@ impl Budget {
         Ok(())
     }
 
+    /// Checks that `bytes` more could live for a moment (a decoder's scratch
+    /// buffer) without keeping them on the account.
+    pub(crate) fn afford(&self, bytes: u64) -> Result<(), LimitExceeded> {
+        check("max_total_bytes", self.total_bytes.saturating_add(bytes), self.limits.max_total_bytes)
+    }
+
     /// Accounts for a primitive's vertices and indices (and their bytes).
     pub(crate) fn spend_geometry(
         &mut self,

@@ -176,9 +176,11 @@ impl<'a> MaterialImporter<'a> {
         let source = t.source.value();
         let (width, height, pixels) = self.image(source, budget)?;
         let name = t.name.clone().unwrap_or_else(|| format!("texture {index}"));
+        // The texture's own copy of the image's texels, charged before it is made.
         budget
             .spend_bytes(pixels.len() as u64)
             .map_err(|e| GltfErrorKind::Limit { context: format!("texture {index}"), source: e })?;
+        let pixels = pixels.to_vec();
         let image = TextureImage::new(name, width, height, color_space, pixels)
             .map_err(|e| GltfErrorKind::Invalid(format!("image {source}: {e}")))?
             .with_sampling(sampling);
@@ -188,9 +190,10 @@ impl<'a> MaterialImporter<'a> {
     }
 
     /// The RGBA8 pixels of image `index`, decoded once.
-    fn image(&mut self, index: usize, budget: &mut Budget) -> Result<(u32, u32, Vec<u8>), GltfErrorKind> {
-        if let Some((w, h, pixels)) = self.images.get(&index) {
-            return Ok((*w, *h, pixels.clone()));
+    fn image(&mut self, index: usize, budget: &mut Budget) -> Result<(u32, u32, &[u8]), GltfErrorKind> {
+        if self.images.contains_key(&index) {
+            let (w, h, pixels) = &self.images[&index];
+            return Ok((*w, *h, pixels));
         }
         let image = self
             .root
@@ -227,12 +230,12 @@ impl<'a> MaterialImporter<'a> {
                     return Err(GltfErrorKind::Invalid(format!("image {index} has neither a uri nor a bufferView")));
                 }
             };
-        let decoded = decode(&bytes, budget.limits.max_texture_dimension).map_err(|e| match e {
+        let decoded = decode(&bytes, budget).map_err(|e| match e {
             DecodeError::Limit(source) => GltfErrorKind::Limit { context: format!("image {index}"), source },
             DecodeError::Bad(what) => GltfErrorKind::Invalid(format!("image {index}: {what}")),
         })?;
-        self.images.insert(index, decoded.clone());
-        Ok(decoded)
+        let (w, h, pixels) = self.images.entry(index).or_insert(decoded);
+        Ok((*w, *h, pixels))
     }
 }
 
@@ -241,8 +244,11 @@ enum DecodeError {
     Bad(String),
 }
 
-/// Decodes a PNG or JPEG to RGBA8 after checking its header's dimensions.
-fn decode(bytes: &[u8], max_dimension: u32) -> Result<(u32, u32, Vec<u8>), DecodeError> {
+/// Decodes a PNG or JPEG to RGBA8 after checking its header's dimensions
+/// against the limits and charging its texels to the budget, so that a small
+/// file claiming a large picture is refused before the decoder allocates.
+fn decode(bytes: &[u8], budget: &mut Budget) -> Result<(u32, u32, Vec<u8>), DecodeError> {
+    let max_dimension = budget.limits.max_texture_dimension;
     let format = image::guess_format(bytes).map_err(|_| DecodeError::Bad("not a PNG or JPEG image".into()))?;
     if !matches!(format, image::ImageFormat::Png | image::ImageFormat::Jpeg) {
         return Err(DecodeError::Bad(format!("{format:?} images are not supported (PNG and JPEG are)")));
@@ -251,6 +257,12 @@ fn decode(bytes: &[u8], max_dimension: u32) -> Result<(u32, u32, Vec<u8>), Decod
     let (width, height) = reader().into_dimensions().map_err(|e| DecodeError::Bad(e.to_string()))?;
     check("max_texture_dimension", u64::from(width.max(height)), u64::from(max_dimension))
         .map_err(DecodeError::Limit)?;
+    // The RGBA8 texels kept (4 bytes each) are charged; the decoder's own
+    // buffer (up to 16-bit RGBA, 8 bytes a texel) must fit beside them for
+    // as long as it lives.
+    let texels = u64::from(width) * u64::from(height);
+    budget.spend_bytes(texels * 4).map_err(DecodeError::Limit)?;
+    budget.afford(texels * 8).map_err(DecodeError::Limit)?;
     let mut limits = image::Limits::default();
     limits.max_image_width = Some(max_dimension);
     limits.max_image_height = Some(max_dimension);

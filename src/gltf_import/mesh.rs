@@ -1,10 +1,11 @@
 //! Meshes: every triangle primitive becomes a submesh of one [`Geometry`].
 //!
 //! Each primitive's accessors are validated ([`super::accessor`]) for the
-//! semantic they are used as, their counts compared, the vertex and index
-//! totals charged to the import's budget, and only then read. Index values
-//! are checked against the vertex count. Failures name the mesh, the
-//! primitive and the accessor.
+//! semantic they are used as and their counts compared, and the whole mesh's
+//! vertex and index totals are charged to the import's budget; only then are
+//! its arrays allocated (once, at their final size) and the accessors read.
+//! Index values are checked against the vertex count. Failures name the
+//! mesh, the primitive and the accessor.
 
 use std::borrow::Cow;
 
@@ -57,10 +58,11 @@ pub(crate) fn build(
     let fail = |primitive: usize, accessor: Option<usize>, what: String| {
         super::GltfErrorKind::Mesh(MeshError { mesh: index, name: name.clone(), primitive, accessor, what })
     };
-    let mut vertices: Vec<Vertex> = Vec::new();
-    let mut indices: Vec<u32> = Vec::new();
-    let mut submeshes = Vec::new();
-    let mut materials = Vec::new();
+    // Pass 1: every primitive validated and the whole mesh charged to the
+    // budget, before anything is read or allocated for it.
+    let mut plans = Vec::new();
+    let (mut total_vertices, mut total_indices) = (0usize, 0usize);
+    let mut largest_scratch = 0u64;
     for (p, primitive) in mesh.primitives.iter().enumerate() {
         let mode = match primitive.mode {
             Checked::Valid(mode) => mode,
@@ -131,21 +133,61 @@ pub(crate) fn build(
             let at = index_view.map_or(position.index, |v| v.index);
             return Err(fail(p, Some(at), format!("{index_count} indices do not make whole triangles")));
         }
-        let base = u32::try_from(vertices.len())
-            .ok()
-            .filter(|b| b.checked_add(vertex_count as u32).is_some() && vertex_count <= u32::MAX as usize)
+        total_vertices = total_vertices
+            .checked_add(vertex_count)
+            .filter(|t| u32::try_from(*t).is_ok())
             .ok_or_else(|| fail(p, None, "more than 2^32 vertices in one mesh".into()))?;
+        total_indices = total_indices
+            .checked_add(index_count)
+            .filter(|t| u32::try_from(*t).is_ok())
+            .ok_or_else(|| fail(p, None, "more than 2^32 indices in one mesh".into()))?;
         budget
             .spend_geometry(vertex_count as u64, index_count as u64, size_of::<Vertex>() as u64)
             .map_err(|e| super::GltfErrorKind::Limit { context: format!("mesh {index} ('{name}')"), source: e })?;
+        // While a primitive is read, its attributes live in scratch arrays
+        // beside the mesh's: positions, normals (and their f64 sums when
+        // generated), texture coordinates, its own indices.
+        let scratch_per_vertex: u64 = 12 + 12 + 8 + if normal.is_none() { 24 } else { 0 };
+        let scratch = (vertex_count as u64)
+            .saturating_mul(scratch_per_vertex)
+            .saturating_add((index_count as u64).saturating_mul(4));
+        largest_scratch = largest_scratch.max(scratch);
+        plans.push(PrimitivePlan {
+            primitive: p,
+            position,
+            normal,
+            texcoord0,
+            indices: index_view,
+            material: primitive.material.map(|m| m.value()),
+        });
+    }
+    if plans.is_empty() {
+        return Ok(MeshResult::Empty);
+    }
+    budget
+        .afford(largest_scratch)
+        .map_err(|e| super::GltfErrorKind::Limit { context: format!("mesh {index} ('{name}')"), source: e })?;
 
-        let positions: Vec<Vec3> = position
+    // Pass 2: the mesh's arrays, allocated once at their final size, filled
+    // primitive by primitive.
+    let mut vertices: Vec<Vertex> = Vec::with_capacity(total_vertices);
+    let mut indices: Vec<u32> = Vec::with_capacity(total_indices);
+    let mut submeshes = Vec::with_capacity(plans.len());
+    let mut materials = Vec::with_capacity(plans.len());
+    for plan in plans {
+        let p = plan.primitive;
+        let vertex_count = plan.position.count;
+        // Both fit in u32: their totals were checked in pass 1.
+        let base = vertices.len() as u32;
+        let first_index = indices.len() as u32;
+        let positions: Vec<Vec3> = plan
+            .position
             .read_floats::<3>()
-            .map_err(|e| fail(p, Some(position.index), e))?
+            .map_err(|e| fail(p, Some(plan.position.index), e))?
             .into_iter()
             .map(Vec3::from)
             .collect();
-        let local_indices: Vec<u32> = match index_view {
+        let local_indices: Vec<u32> = match plan.indices {
             Some(view) => {
                 let read = view.read_indices().map_err(|e| fail(p, Some(view.index), e))?;
                 if let Some(bad) = read.iter().find(|i| **i as usize >= vertex_count) {
@@ -155,7 +197,7 @@ pub(crate) fn build(
             }
             None => (0..vertex_count as u32).collect(),
         };
-        let normals: Vec<Vec3> = match normal {
+        let normals: Vec<Vec3> = match plan.normal {
             Some(view) => {
                 view.read_floats::<3>().map_err(|e| fail(p, Some(view.index), e))?.into_iter().map(Vec3::from).collect()
             }
@@ -164,24 +206,30 @@ pub(crate) fn build(
                 generate_normals(&positions, &local_indices)
             }
         };
-        let uvs: Vec<Vec2> = match texcoord0 {
+        let uvs: Vec<Vec2> = match plan.texcoord0 {
             Some(view) => {
                 view.read_floats::<2>().map_err(|e| fail(p, Some(view.index), e))?.into_iter().map(Vec2::from).collect()
             }
             None => vec![Vec2::ZERO; vertex_count],
         };
         vertices.extend(positions.iter().zip(&normals).zip(&uvs).map(|((p, n), uv)| Vertex::new(*p, *n, *uv)));
-        let first_index = u32::try_from(indices.len()).map_err(|_| fail(p, None, "more than 2^32 indices".into()))?;
-        submeshes.push(Submesh { first_index, index_count: index_count as u32 });
+        submeshes.push(Submesh { first_index, index_count: local_indices.len() as u32 });
         indices.extend(local_indices.iter().map(|i| i + base));
-        materials.push(primitive.material.map(|m| m.value()));
-    }
-    if submeshes.is_empty() {
-        return Ok(MeshResult::Empty);
+        materials.push(plan.material);
     }
     let geometry = Geometry::new(name.clone(), vertices, indices, submeshes)
         .map_err(|e| super::GltfErrorKind::Invalid(format!("mesh {index} ('{name}'): {e}")))?;
     Ok(MeshResult::Geometry(geometry, materials))
+}
+
+/// One triangle primitive, validated and charged, waiting to be read.
+struct PrimitivePlan<'a> {
+    primitive: usize,
+    position: accessor::AccessorView<'a>,
+    normal: Option<accessor::AccessorView<'a>>,
+    texcoord0: Option<accessor::AccessorView<'a>>,
+    indices: Option<accessor::AccessorView<'a>>,
+    material: Option<usize>,
 }
 
 /// Area-weighted smooth normals (unit length; +Z where undefined).

@@ -276,8 +276,9 @@ pub struct GltfImport {
     /// What was skipped or approximated, one line each.
     pub warnings: Vec<String>,
     /// Bytes the import charged to [`ImportLimits::max_total_bytes`]: the
-    /// file, external buffers, the parsed JSON's estimate, decoded texels,
-    /// vertices and indices.
+    /// file, external buffers, the parsed JSON's estimate, decoded texels
+    /// (once per image and once per texture made from it), vertices and
+    /// indices.
     pub bytes_decoded: u64,
 }
 

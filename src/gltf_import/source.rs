@@ -222,13 +222,15 @@ pub(crate) fn percent_decode(uri: &str) -> Result<String, UriError> {
     String::from_utf8(out).map_err(|_| UriError::Malformed("percent-decoded URI is not UTF-8".into()))
 }
 
+/// A decoded `data:` URI: its media type (if it names one) and its bytes.
+pub(crate) type DataUri = (Option<String>, Vec<u8>);
+
 /// The payload of a `data:` URI, if `uri` is one. Only base64 payloads are
 /// glTF; `cap` bounds the decoded size before anything is allocated.
-pub(crate) fn decode_data_uri(uri: &str, cap: u64) -> Option<Result<(Option<String>, Vec<u8>), UriError>> {
-    let rest = uri.strip_prefix("data:").or_else(|| {
-        // Schemes are case-insensitive.
-        (uri.len() >= 5 && uri[..5].eq_ignore_ascii_case("data:")).then(|| &uri[5..])
-    })?;
+pub(crate) fn decode_data_uri(uri: &str, cap: u64) -> Option<Result<DataUri, UriError>> {
+    // Schemes are case-insensitive. `get` (not `[..5]`): a URI whose fifth
+    // byte is inside a multi-byte character is not a data: URI, not a panic.
+    let rest = uri.get(..5).filter(|scheme| scheme.eq_ignore_ascii_case("data:")).map(|_| &uri[5..])?;
     Some((|| {
         let (header, payload) =
             rest.split_once(',').ok_or_else(|| UriError::Malformed("data: URI without a ','".into()))?;
@@ -299,7 +301,9 @@ pub(crate) fn split_glb(bytes: &[u8]) -> Result<Glb<'_>, String> {
         return Err(format!("GLB header says {total} bytes, the file has {}", bytes.len()));
     }
     let bytes = &bytes[..total];
-    let chunk = |at: usize| -> Result<Option<([u8; 4], &[u8], usize)>, String> {
+    // A chunk: its type, its data and where the next one starts.
+    type Chunk<'a> = ([u8; 4], &'a [u8], usize);
+    let chunk = |at: usize| -> Result<Option<Chunk<'_>>, String> {
         if at >= bytes.len() {
             return Ok(None);
         }
@@ -361,6 +365,14 @@ mod tests {
         assert!(base64_decode("Zm9v!").is_err());
         assert!(base64_decode("Z").is_err());
         assert!(base64_decode("Zg===").is_err());
+    }
+
+    #[test]
+    fn a_uri_with_a_multi_byte_character_at_the_scheme_boundary_is_not_a_data_uri() {
+        for uri in ["dataé.bin", "textü.bin", "data\u{1F600}", "ü"] {
+            assert!(decode_data_uri(uri, 100).is_none(), "{uri}");
+        }
+        assert!(decode_data_uri("DaTa:;base64,AAAA", 100).is_some());
     }
 
     #[test]
