@@ -8,7 +8,7 @@ use oxygen_sceneprep::PassMask;
 use tracing::info_span;
 
 use crate::render_context::{draw_partitions, partition_pipelines};
-use crate::{CommandRecorder, PassError, PassKind, RenderContext, RenderPass};
+use crate::{CommandRecorder, DepthBias, PassError, PassKind, RenderContext, RenderPass};
 
 /// What a depth pre-pass leaves for later passes: the view's depth target
 /// holds reverse-Z depth of the opaque and masked partitions. Published on
@@ -25,11 +25,13 @@ pub struct DepthPrePass {
     pipelines: Option<Vec<wgpu::RenderPipeline>>,
     /// `DepthPrePass`, or `Shadow` when it renders a shadow map.
     kind: PassKind,
+    /// Rasterizer depth bias: none for the camera, the shadow bias for maps.
+    depth_bias: DepthBias,
 }
 
 impl Default for DepthPrePass {
     fn default() -> Self {
-        DepthPrePass { pipelines: None, kind: PassKind::DepthPrePass }
+        DepthPrePass { pipelines: None, kind: PassKind::DepthPrePass, depth_bias: DepthBias::NONE }
     }
 }
 
@@ -47,9 +49,14 @@ impl DepthPrePass {
 pub struct ShadowPass(DepthPrePass);
 
 impl ShadowPass {
-    /// A new pass.
+    /// A new pass with the default bias ([`DepthBias::SHADOW_DEFAULT`]).
     pub fn new() -> Self {
-        ShadowPass(DepthPrePass { pipelines: None, kind: PassKind::Shadow })
+        Self::with_bias(DepthBias::SHADOW_DEFAULT)
+    }
+
+    /// A new pass with an explicit rasterizer depth bias.
+    pub fn with_bias(depth_bias: DepthBias) -> Self {
+        ShadowPass(DepthPrePass { pipelines: None, kind: PassKind::Shadow, depth_bias })
     }
 }
 
@@ -89,7 +96,7 @@ impl RenderPass for DepthPrePass {
         _rec: &mut CommandRecorder,
     ) -> Result<(), PassError> {
         let _span = info_span!("depth_pre_pass_prepare", view = %ctx.view.view_id).entered();
-        let pipelines = partition_pipelines(ctx, self.kind, None, partitions(ctx));
+        let pipelines = partition_pipelines(ctx, self.kind, None, self.depth_bias, partitions(ctx));
         self.pipelines = Some(pipelines);
         Ok(())
     }

@@ -36,7 +36,9 @@ pub use depth_pre_pass::{DepthPrePass, DepthPrePassOutput, ShadowPass};
 pub use lighting_inputs::{
     LightingInputs, MAX_CASCADES, MAX_PROBES, MAX_SHADOW_TILES, PROBE_FACE_AXES, PROBE_FACES, probe_view,
 };
-pub use pso::{AlphaClass, PassKind, PipelineCache, PipelineKey, PipelineVariant, TONEMAP_WGSL, shader_source};
+pub use pso::{
+    AlphaClass, DepthBias, PassKind, PipelineCache, PipelineKey, PipelineVariant, TONEMAP_WGSL, shader_source,
+};
 pub use render_context::{CommandRecorder, DrawPath, FrameViews, PassError, PassOutputs, RecordStats, RenderContext};
 pub use render_pass::RenderPass;
 pub use shader_pass::{ProbeInput, ShaderPass, ShaderPassConfig};

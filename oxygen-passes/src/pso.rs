@@ -32,6 +32,36 @@ pub enum PassKind {
     Transparent,
 }
 
+/// The rasterizer's depth bias of a shadow map: stored depth is pushed away
+/// from the light by `constant` depth units plus `slope_scale` times the
+/// surface's depth slope, against shadow acne. Reverse-Z: negative values
+/// push towards the far plane. A speed/accuracy knob with a measured error:
+/// `tests/shadow_quality.rs` shows acne without it and peter-panning grows
+/// with it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DepthBias {
+    /// Constant bias in depth-buffer units.
+    pub constant: i32,
+    /// Bias per unit of depth slope.
+    pub slope_scale: f32,
+}
+
+impl DepthBias {
+    /// No bias (the camera's own depth passes).
+    pub const NONE: DepthBias = DepthBias { constant: 0, slope_scale: 0.0 };
+    /// The shadow maps' default: 2 units plus 1.5 × slope, towards the far plane.
+    pub const SHADOW_DEFAULT: DepthBias = DepthBias { constant: -2, slope_scale: -1.5 };
+}
+
+impl Eq for DepthBias {}
+
+impl std::hash::Hash for DepthBias {
+    fn hash<H: std::hash::Hasher>(&self, state: &mut H) {
+        self.constant.hash(state);
+        self.slope_scale.to_bits().hash(state);
+    }
+}
+
 /// How alpha is treated by a variant.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum AlphaClass {
@@ -83,6 +113,8 @@ pub struct PipelineKey {
     pub color_format: Option<wgpu::TextureFormat>,
     /// Depth target format.
     pub depth_format: wgpu::TextureFormat,
+    /// Rasterizer depth bias ([`DepthBias::NONE`] except for shadow maps).
+    pub depth_bias: DepthBias,
 }
 
 const MESH_VERTEX_WGSL: &str = include_str!("mesh_vertex.wgsl");
@@ -345,10 +377,10 @@ impl PipelineCache {
                 stencil: Default::default(),
                 // Reverse-Z: a negative bias moves depth towards the far plane,
                 // i.e. away from the light, more so on surfaces seen edge-on.
-                bias: if key.pass == PassKind::Shadow {
-                    wgpu::DepthBiasState { constant: -2, slope_scale: -1.5, clamp: 0.0 }
-                } else {
-                    Default::default()
+                bias: wgpu::DepthBiasState {
+                    constant: key.depth_bias.constant,
+                    slope_scale: key.depth_bias.slope_scale,
+                    clamp: 0.0,
                 },
             }),
             multisample: Default::default(),

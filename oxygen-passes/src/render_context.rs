@@ -243,6 +243,7 @@ pub(crate) fn partition_pipelines<'a>(
     ctx: &RenderContext<'_>,
     pass: crate::PassKind,
     color_format: Option<wgpu::TextureFormat>,
+    depth_bias: crate::DepthBias,
     partitions: impl Iterator<Item = &'a Partition>,
 ) -> Vec<wgpu::RenderPipeline> {
     partitions
@@ -254,6 +255,7 @@ pub(crate) fn partition_pipelines<'a>(
                     variant: crate::PipelineVariant::from_mask(p.mask),
                     color_format,
                     depth_format: oxygen_core::ViewTargets::DEPTH_FORMAT,
+                    depth_bias,
                 },
             )
         })

@@ -51,6 +51,15 @@ pub struct ShaderPassConfig {
     /// PCF kernel radius in texels: `(2r + 1)²` comparison taps. 0 is the
     /// cheapest (one bilinear comparison), 1 the default, 2 the softest.
     pub shadow_pcf_radius: u32,
+    /// Normal offset of shadow lookups, in shadow-map texels: the point
+    /// looked up moves this far along the surface normal (texels of the
+    /// cascade, or of the local light's map at the point's distance), so a
+    /// lit surface does not shadow itself (acne). Larger values detach
+    /// shadows from their casters. Default 1.5.
+    pub shadow_normal_offset: f32,
+    /// Bias added to the cascade comparison depth (NDC depth units, towards
+    /// the light), on top of the shadow map's rasterizer bias. Default 1e-4.
+    pub shadow_depth_bias: f32,
     /// Reflection probes (up to `MAX_PROBES`); each surface reflects the
     /// nearest one (specular reflection on smooth and metallic surfaces).
     pub reflection_probes: Vec<ProbeInput>,
@@ -68,6 +77,8 @@ impl Default for ShaderPassConfig {
             depth_from_pre_pass: true,
             shadow_cascades: [None; MAX_CASCADES],
             shadow_pcf_radius: 1,
+            shadow_normal_offset: 1.5,
+            shadow_depth_bias: 1e-4,
             reflection_probes: Vec::new(),
             local_shadows: [None; MAX_SHADOW_TILES],
         }
@@ -137,8 +148,10 @@ impl ShaderPass {
             uniform.count = i as u32 + 1;
         }
         uniform.pcf_radius = self.config.shadow_pcf_radius.min(3);
-        uniform.normal_offset = 1.5;
-        uniform.depth_bias = 1e-4;
+        // Non-finite knobs fall back to the defaults: no NaN reaches a shader.
+        let finite_or = |v: f32, default: f32| if v.is_finite() { v } else { default };
+        uniform.normal_offset = finite_or(self.config.shadow_normal_offset, 1.5);
+        uniform.depth_bias = finite_or(self.config.shadow_depth_bias, 1e-4);
         Ok(maps)
     }
 
@@ -240,7 +253,8 @@ impl RenderPass for ShaderPass {
         let _span = info_span!("shader_pass_prepare", view = %ctx.view.view_id).entered();
         self.lighting_inputs = self.lighting_inputs(ctx, rec)?;
         let pass = if self.config.depth_from_pre_pass { PassKind::ShadingAfterPrePass } else { PassKind::Shading };
-        let pipelines = partition_pipelines(ctx, pass, Some(ViewTargets::HDR_FORMAT), partitions(ctx));
+        let pipelines =
+            partition_pipelines(ctx, pass, Some(ViewTargets::HDR_FORMAT), crate::DepthBias::NONE, partitions(ctx));
         self.pipelines = Some(pipelines);
         Ok(())
     }

@@ -136,7 +136,7 @@ fn tile_visibility(slot: u32, light_position: vec3<f32>, world_position: vec3<f3
         return 1.0;
     }
     let distance = length(light_position - world_position);
-    let offset = geometric_normal * distance * shadows.tile_texel_angle[slot / 4u][slot % 4u] * 1.5;
+    let offset = geometric_normal * distance * shadows.tile_texel_angle[slot / 4u][slot % 4u] * shadows.normal_offset;
     let clip = shadows.tile_view_projection[slot] * vec4<f32>(world_position + offset, 1.0);
     if clip.w <= 0.0 {
         return 1.0;

@@ -42,7 +42,13 @@ impl RenderPass for TransparentPass {
         _rec: &mut CommandRecorder,
     ) -> Result<(), PassError> {
         let _span = info_span!("transparent_pass_prepare", view = %ctx.view.view_id).entered();
-        let pipelines = partition_pipelines(ctx, PassKind::Transparent, Some(ViewTargets::HDR_FORMAT), partitions(ctx));
+        let pipelines = partition_pipelines(
+            ctx,
+            PassKind::Transparent,
+            Some(ViewTargets::HDR_FORMAT),
+            crate::DepthBias::NONE,
+            partitions(ctx),
+        );
         self.pipelines = Some(pipelines);
         Ok(())
     }
