@@ -18,9 +18,9 @@ use oxygen_core::{
     AlphaMode, ColorSpace, Filter, Material, MaterialHandle, Sampling, Scene, TextureHandle, TextureImage, Wrap,
 };
 
-use super::GltfErrorKind;
+use super::{GltfErrorKind, LimitExceeded};
 use super::limits::{Budget, check};
-use super::source::AssetRootRef;
+use super::source::{AssetRootRef, UriError};
 
 /// Materials and textures of one import, each created once.
 pub(crate) struct MaterialImporter<'a> {
@@ -201,35 +201,40 @@ impl<'a> MaterialImporter<'a> {
             .get(index)
             .ok_or_else(|| GltfErrorKind::Invalid(format!("image {index} does not exist")))?;
         let cap = budget.limits.max_image_file_bytes;
-        let bytes: Cow<'_, [u8]> =
-            match (&image.uri, image.buffer_view) {
-                (Some(uri), _) => Cow::Owned(self.folder.read(uri, None, cap).map_err(|source| {
-                    GltfErrorKind::Uri { what: format!("image {index}"), uri: uri.clone(), source }
-                })?),
-                (None, Some(view)) => {
-                    let vi = view.value();
-                    let v = self.root.buffer_views.get(vi).ok_or_else(|| {
+        let bytes: Cow<'_, [u8]> = match (&image.uri, image.buffer_view) {
+            (Some(uri), _) => Cow::Owned(self.folder.read(uri, None, cap).map_err(|source| match source {
+                // An image too large is a limit, wherever its bytes are.
+                UriError::TooLarge { bytes, max } => GltfErrorKind::Limit {
+                    context: format!("image {index}"),
+                    source: LimitExceeded { limit: "max_image_file_bytes", value: bytes, max },
+                },
+                source => GltfErrorKind::Uri { what: format!("image {index}"), uri: uri.clone(), source },
+            })?),
+            (None, Some(view)) => {
+                let vi = view.value();
+                let v =
+                    self.root.buffer_views.get(vi).ok_or_else(|| {
                         GltfErrorKind::Invalid(format!("image {index}: buffer view {vi} does not exist"))
                     })?;
-                    let buffer = self.buffers.get(v.buffer.value()).ok_or_else(|| {
-                        GltfErrorKind::Invalid(format!("image {index}: buffer {} does not exist", v.buffer.value()))
+                let buffer = self.buffers.get(v.buffer.value()).ok_or_else(|| {
+                    GltfErrorKind::Invalid(format!("image {index}: buffer {} does not exist", v.buffer.value()))
+                })?;
+                let start = v.byte_offset.map_or(0, |o| o.0);
+                let slice = start
+                    .checked_add(v.byte_length.0)
+                    .filter(|end| *end <= buffer.len() as u64)
+                    .map(|end| &buffer[start as usize..end as usize])
+                    .ok_or_else(|| {
+                        GltfErrorKind::Invalid(format!("image {index}: buffer view {vi} lies outside its buffer"))
                     })?;
-                    let start = v.byte_offset.map_or(0, |o| o.0);
-                    let slice = start
-                        .checked_add(v.byte_length.0)
-                        .filter(|end| *end <= buffer.len() as u64)
-                        .map(|end| &buffer[start as usize..end as usize])
-                        .ok_or_else(|| {
-                            GltfErrorKind::Invalid(format!("image {index}: buffer view {vi} lies outside its buffer"))
-                        })?;
-                    check("max_image_file_bytes", slice.len() as u64, cap)
-                        .map_err(|e| GltfErrorKind::Limit { context: format!("image {index}"), source: e })?;
-                    Cow::Borrowed(slice)
-                }
-                (None, None) => {
-                    return Err(GltfErrorKind::Invalid(format!("image {index} has neither a uri nor a bufferView")));
-                }
-            };
+                check("max_image_file_bytes", slice.len() as u64, cap)
+                    .map_err(|e| GltfErrorKind::Limit { context: format!("image {index}"), source: e })?;
+                Cow::Borrowed(slice)
+            }
+            (None, None) => {
+                return Err(GltfErrorKind::Invalid(format!("image {index} has neither a uri nor a bufferView")));
+            }
+        };
         let decoded = decode(&bytes, budget).map_err(|e| match e {
             DecodeError::Limit(source) => GltfErrorKind::Limit { context: format!("image {index}"), source },
             DecodeError::Bad(what) => GltfErrorKind::Invalid(format!("image {index}: {what}")),

@@ -41,6 +41,16 @@ pub enum UriError {
     /// A `data:` URI or percent escape is malformed.
     #[error("malformed: {0}")]
     Malformed(String),
+    /// The bytes behind the URI are more than may be read: a buffer's
+    /// `byteLength` (and padding), or an image's
+    /// [`ImportLimits::max_image_file_bytes`](super::ImportLimits).
+    #[error("holds {bytes} bytes, more than the {max} it may")]
+    TooLarge {
+        /// Bytes present (for a `data:` URI, its decoded size).
+        bytes: u64,
+        /// Bytes allowed.
+        max: u64,
+    },
     /// The referenced file is shorter than the glTF says.
     #[error("the file holds {got} bytes, the glTF says {need}")]
     TooShort {
@@ -150,7 +160,7 @@ impl AssetRootRef<'_> {
 /// Reads exactly `need` bytes from the start of a resolved file (a buffer),
 /// or at most `cap` bytes (an image, `need == None`).
 pub(crate) fn read_file(path: &Path, need: Option<u64>, cap: u64) -> Result<Vec<u8>, UriError> {
-    let file = std::fs::File::open(path).map_err(|e| UriError::Io(e.to_string()))?;
+    let file = open_without_blocking(path).map_err(|e| UriError::Io(e.to_string()))?;
     // The file was a regular file when resolved; check the handle we hold, so
     // that a swap between the check and the open cannot hand us a device.
     let meta = file.metadata().map_err(|e| UriError::Io(e.to_string()))?;
@@ -158,15 +168,37 @@ pub(crate) fn read_file(path: &Path, need: Option<u64>, cap: u64) -> Result<Vec<
         return Err(UriError::Refused("not a regular file"));
     }
     let want = need.unwrap_or(cap);
+    if need.is_none() && meta.len() > cap {
+        return Err(UriError::TooLarge { bytes: meta.len(), max: cap });
+    }
     let mut bytes = Vec::with_capacity(want.min(meta.len()) as usize);
     // One byte past the cap tells an oversized image from one that fits.
     let take = if need.is_some() { want } else { want.saturating_add(1) };
     file.take(take).read_to_end(&mut bytes).map_err(|e| UriError::Io(e.to_string()))?;
     match need {
         Some(need) if (bytes.len() as u64) < need => Err(UriError::TooShort { got: bytes.len() as u64, need }),
-        None if bytes.len() as u64 > cap => Err(UriError::Malformed(format!("image larger than {cap} bytes"))),
+        None if bytes.len() as u64 > cap => Err(UriError::TooLarge { bytes: bytes.len() as u64, max: cap }),
         _ => Ok(bytes),
     }
+}
+
+/// Opens `path` for reading. Where the platform allows, without blocking:
+/// a FIFO swapped in after [`AssetRoot::resolve`] checked the path would
+/// otherwise block `open` until some other process wrote to it.
+fn open_without_blocking(path: &Path) -> std::io::Result<std::fs::File> {
+    let mut options = std::fs::OpenOptions::new();
+    options.read(true);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        // O_NONBLOCK; it changes nothing for the regular files that are read.
+        #[cfg(any(target_os = "linux", target_os = "android"))]
+        const O_NONBLOCK: i32 = 0o4000;
+        #[cfg(not(any(target_os = "linux", target_os = "android")))]
+        const O_NONBLOCK: i32 = 0x0004; // macOS and the BSDs.
+        options.custom_flags(O_NONBLOCK);
+    }
+    options.open(path)
 }
 
 /// Refuses anything but a plain relative path.
@@ -239,9 +271,7 @@ pub(crate) fn decode_data_uri(uri: &str, cap: u64) -> Option<Result<DataUri, Uri
         };
         let decoded_len = (payload.len() as u64 / 4) * 3;
         if decoded_len > cap {
-            return Err(UriError::Malformed(format!(
-                "data: URI decodes to about {decoded_len} bytes, more than {cap}"
-            )));
+            return Err(UriError::TooLarge { bytes: decoded_len, max: cap });
         }
         let mime = (!mime.is_empty()).then(|| mime.to_owned());
         Ok((mime, base64_decode(payload)?))
@@ -396,6 +426,22 @@ mod tests {
                 check_relative(good).unwrap();
             }
         }
+    }
+
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn reading_a_fifo_that_slipped_past_the_path_check_is_refused_without_blocking() {
+        let dir = std::env::temp_dir().join(format!("oxygen-fifo-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let fifo = dir.join("pipe");
+        let _ = std::fs::remove_file(&fifo);
+        assert!(std::process::Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+        let (send, receive) = std::sync::mpsc::channel();
+        let path = fifo.clone();
+        std::thread::spawn(move || send.send(read_file(&path, Some(4), 4)).unwrap());
+        let result = receive.recv_timeout(std::time::Duration::from_secs(2)).expect("read_file blocked on a FIFO");
+        assert_eq!(result, Err(UriError::Refused("not a regular file")));
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
