@@ -968,7 +968,8 @@ fn png_claiming(png: &[u8], width: u32, height: u32) -> Vec<u8> {
     out
 }
 
-/// A PNG with only a header claiming `width` × `height`, RGBA8 or RGBA16.
+/// A PNG with a header claiming `width` × `height` (RGBA8 or RGBA16) and
+/// no texel data.
 fn png_header_only(width: u32, height: u32, depth: u8) -> Vec<u8> {
     let mut out = b"\x89PNG\r\n\x1a\n".to_vec();
     let mut ihdr = Vec::new();
@@ -976,6 +977,8 @@ fn png_header_only(width: u32, height: u32, depth: u8) -> Vec<u8> {
     ihdr.extend(height.to_be_bytes());
     ihdr.extend([depth, 6, 0, 0, 0]);
     png_chunk(&mut out, b"IHDR", &ihdr);
+    // An empty zlib stream: a decoder reads the header, then runs out of data.
+    png_chunk(&mut out, b"IDAT", &[0x78, 0x01, 0x01, 0x00, 0x00, 0xFF, 0xFF, 0x00, 0x00, 0x00, 0x01]);
     png_chunk(&mut out, b"IEND", &[]);
     out
 }
