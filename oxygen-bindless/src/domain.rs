@@ -151,3 +151,17 @@ impl DomainKind {
         out
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn index_and_indirect_domains_get_their_buffer_usages_and_the_rest_are_storage() {
+        assert_eq!(DomainKind::Indices.usages(), wgpu::BufferUsages::INDEX);
+        assert_eq!(DomainKind::IndirectArgs.usages(), wgpu::BufferUsages::INDIRECT);
+        for kind in DomainKind::ALL.iter().filter(|k| k.binding().is_some()) {
+            assert_eq!(kind.usages(), wgpu::BufferUsages::STORAGE, "{kind:?}");
+        }
+    }
+}

@@ -42,3 +42,14 @@ fn a_handle_from_another_domain_is_stale() {
     let _b = second.allocate(2).unwrap();
     assert!(matches!(second.validate(&a), Err(SlotError::Stale { .. })));
 }
+
+#[test]
+fn an_allocation_ends_one_past_its_last_slot_and_an_empty_one_at_its_start() {
+    let mut slots = allocator();
+    let _first = slots.allocate(3).unwrap();
+    let second = slots.allocate(5).unwrap();
+    assert_eq!((second.start, second.end()), (3, 8));
+    let empty = slots.allocate(0).unwrap();
+    assert_eq!(empty.end(), empty.start);
+    assert_eq!(empty.start, oxygen_bindless::INVALID_SLOT);
+}
