@@ -3,7 +3,7 @@
 
 Each mutant below is one deliberate break of a shading behaviour: a textual
 edit that must apply to exactly one place. For each, the script applies the
-edit, runs the root package's tests (the GPU tests render on lavapipe),
+edit, runs the rendering tests (RENDER_TESTS, on lavapipe),
 records whether any test failed ("caught") or all passed ("missed"), and
 restores the file, whatever happens. The table it prints goes into
 docs/testing.md.
@@ -71,12 +71,20 @@ MUTANTS = [
 ]
 
 
+# The test binaries that render (the shaders cannot change anything else).
+RENDER_TESTS = [
+    "gpu_render", "gpu_golden", "gpu_textures", "gpu_debug_generations", "gpu_heap", "probes",
+    "shadow_cascades", "shadow_quality", "shading_finite", "draw_order", "normal_matrix_render",
+    "light_gating", "gltf_negative_scale", "huge_world", "frame_isolation",
+]
+
+
 def run_tests() -> bool:
-    """True when the root package's tests all pass."""
-    result = subprocess.run(
-        ["cargo", "test", "--quiet", "-p", "oxygen", "--tests"],
-        cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, timeout=3600,
-    )
+    """True when every rendering test passes."""
+    command = ["cargo", "test", "--quiet", "-p", "oxygen"]
+    for name in RENDER_TESTS:
+        command += ["--test", name]
+    result = subprocess.run(command, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, timeout=3600)
     return result.returncode == 0
 
 
@@ -85,6 +93,10 @@ def main() -> int:
     chosen = [m for m in MUTANTS if not words or any(w in m[0] for w in words)]
     rows = []
     started_all = time.time()
+    if not run_tests():
+        print("the unmutated shaders fail the rendering tests: fix that first", file=sys.stderr)
+        return 1
+    print(f"baseline passes ({time.time() - started_all:.0f} s)", file=sys.stderr, flush=True)
     for name, file, old, new, what in chosen:
         path = ROOT / file
         source = path.read_text()
