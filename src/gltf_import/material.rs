@@ -18,9 +18,9 @@ use oxygen_core::{
     AlphaMode, ColorSpace, Filter, Material, MaterialHandle, Sampling, Scene, TextureHandle, TextureImage, Wrap,
 };
 
-use super::{GltfErrorKind, LimitExceeded};
 use super::limits::{Budget, check};
 use super::source::{AssetRootRef, UriError};
+use super::{GltfErrorKind, LimitExceeded};
 
 /// Materials and textures of one import, each created once.
 pub(crate) struct MaterialImporter<'a> {
