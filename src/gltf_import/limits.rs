@@ -170,6 +170,15 @@ mod tests {
     }
 
     #[test]
+    fn a_scratch_buffer_must_fit_beside_what_is_kept_but_is_not_kept() {
+        let mut budget = Budget::new(ImportLimits { max_total_bytes: 100, ..ImportLimits::default() });
+        budget.spend_bytes(60).unwrap();
+        budget.afford(40).unwrap();
+        assert_eq!(budget.afford(41).unwrap_err(), LimitExceeded { limit: "max_total_bytes", value: 101, max: 100 });
+        assert_eq!(budget.total_bytes(), 60);
+    }
+
+    #[test]
     fn vertex_and_index_counts_have_their_own_limits() {
         let mut budget = Budget::new(ImportLimits { max_vertices: 10, max_indices: 30, ..ImportLimits::default() });
         budget.spend_geometry(10, 30, 32).unwrap();
