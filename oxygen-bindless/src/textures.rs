@@ -615,6 +615,50 @@ mod tests {
     use super::*;
 
     #[test]
+    fn grouped_arrays_are_one_per_size_class_and_colour_space() {
+        assert_eq!(GROUPS, 6);
+        let mut seen = Vec::new();
+        for (class, side) in SIZE_CLASSES.iter().enumerate() {
+            for srgb in [true, false] {
+                let g = group_of(class, srgb);
+                assert!(g < GROUPS, "group {g} of class {class}");
+                assert_eq!(group_side(g), *side);
+                assert_eq!(group_is_srgb(g), srgb);
+                assert_eq!(group_mip_levels(g), side.ilog2() + 1);
+                seen.push(g);
+            }
+        }
+        seen.sort();
+        assert_eq!(seen, (0..GROUPS).collect::<Vec<_>>());
+    }
+
+    #[test]
+    fn the_grouped_wgsl_reads_the_location_bits_rust_writes() {
+        let wgsl = TexturePath::GroupedArrays.wgsl();
+        assert_eq!(NEAREST_BIT, 1 << 27);
+        assert!(wgsl.contains(&format!("(location & {NEAREST_BIT:#x}u)")), "nearest bit");
+        assert!(wgsl.contains(&format!("location >> {SAMPLER_SHIFT}u")), "wrap bits");
+        for g in 0..GROUPS {
+            assert!(wgsl.contains(&format!("texture_group_{g}")), "group {g} declared");
+        }
+        assert!(!wgsl.contains(&format!("texture_group_{GROUPS}")));
+    }
+
+    #[test]
+    fn the_binding_array_path_needs_its_features_and_enough_elements() {
+        let enough = wgpu::Limits { max_binding_array_elements_per_shader_stage: MAX_TEXTURES, ..Default::default() };
+        let too_few =
+            wgpu::Limits { max_binding_array_elements_per_shader_stage: MAX_TEXTURES - 1, ..Default::default() };
+        let features = TexturePath::BINDING_ARRAY_FEATURES;
+        assert!(TexturePath::BindingArray.is_supported(features, &enough));
+        assert!(!TexturePath::BindingArray.is_supported(features, &too_few));
+        assert!(!TexturePath::BindingArray.is_supported(wgpu::Features::TEXTURE_BINDING_ARRAY, &enough));
+        assert!(TexturePath::GroupedArrays.is_supported(wgpu::Features::empty(), &too_few));
+        assert_eq!(TexturePath::best_for(features, &enough), TexturePath::BindingArray);
+        assert_eq!(TexturePath::best_for(features, &too_few), TexturePath::GroupedArrays);
+    }
+
+    #[test]
     fn mip_chains_halve_down_to_one_texel() {
         assert_eq!(mip_level_count(1, 1), 1);
         assert_eq!(mip_level_count(256, 256), 9);
