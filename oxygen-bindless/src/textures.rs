@@ -680,6 +680,31 @@ mod tests {
         assert_eq!(linear[1].pixels, vec![128, 128, 128, 150]);
     }
 
+    /// Decoding and encoding are inverse: a flat mid-grey keeps its stored
+    /// value down the whole chain in either colour space.
+    #[test]
+    fn flat_textures_keep_their_value_down_the_chain() {
+        let flat = [128u8, 64, 200, 77].repeat(4 * 4);
+        for srgb in [true, false] {
+            for level in mip_chain(&flat, 4, 4, srgb) {
+                assert!(level.pixels.chunks(4).all(|t| t == [128, 64, 200, 77]), "srgb {srgb}: {:?}", level.pixels);
+            }
+        }
+    }
+
+    #[test]
+    fn each_sampler_of_the_table_gets_its_own_binding() {
+        let declared = sampler_declarations(3, 2);
+        assert_eq!(
+            declared,
+            "@group(2) @binding(3) var texture_sampler_0: sampler;\n@group(2) @binding(4) var texture_sampler_1: sampler;\n"
+        );
+        let binding_array = TexturePath::BindingArray.wgsl();
+        for k in 0..SAMPLERS {
+            assert!(binding_array.contains(&format!("@binding({}) var texture_sampler_{k}: sampler;", 1 + k)));
+        }
+    }
+
     #[test]
     fn resampling_keeps_flat_colour_and_cell_centres() {
         let flat = [10u8, 20, 30, 255].repeat(9);
