@@ -9,6 +9,10 @@ use support::gpu_renderer;
 
 /// A grey floor lit dimly by a sun, and a point light just above it.
 fn render(lamp: Option<Light>) -> image::RgbaImage {
+    render_with_camera(lamp, Vec3::new(0.0, 6.0, 0.01))
+}
+
+fn render_with_camera(lamp: Option<Light>, eye: Vec3) -> image::RgbaImage {
     let mut scene = Scene::new();
     let grey = scene.add_material(Material::opaque("floor", Vec4::new(0.6, 0.6, 0.6, 1.0)));
     let floor = scene.add_geometry(Geometry::plane(10.0));
@@ -25,7 +29,7 @@ fn render(lamp: Option<Light>) -> image::RgbaImage {
     }
     let camera = LookAtResolver {
         camera: Camera::perspective(60f32.to_radians(), 0.1, None),
-        eye: Vec3::new(0.0, 6.0, 0.01),
+        eye,
         target: Vec3::ZERO,
         up: Vec3::Y,
         viewport: UVec2::new(64, 64),
@@ -58,5 +62,23 @@ fn a_light_that_does_not_affect_the_world_adds_nothing_and_the_same_light_on_doe
         "the lamp itself must light the floor: {} against {}",
         centre_luma(&on),
         centre_luma(&without)
+    );
+}
+
+#[test]
+fn a_positional_light_ends_at_its_range() {
+    // Seen from straight above: the floor at the centre is 1 from the lamp,
+    // the image's corners are more than 4 away.
+    let eye = Vec3::new(0.0, 5.0, 0.01);
+    let lamp = Light::point(20.0, Some(2.5));
+    let without = render_with_camera(None, eye);
+    let with = render_with_camera(Some(lamp), eye);
+    let corner = |image: &image::RgbaImage| image.get_pixel(1, 1).0[1];
+    assert!(centre_luma(&with) > centre_luma(&without) + 40, "the lamp must light the floor under it");
+    assert!(
+        corner(&with).abs_diff(corner(&without)) <= 1,
+        "past its range the lamp still lights the floor: {} against {}",
+        corner(&with),
+        corner(&without)
     );
 }
