@@ -75,7 +75,7 @@ MUTANTS = [
 RENDER_TESTS = [
     "gpu_render", "gpu_golden", "gpu_textures", "gpu_debug_generations", "gpu_heap", "probes",
     "shadow_cascades", "shadow_quality", "shading_finite", "draw_order", "normal_matrix_render",
-    "light_gating", "gltf_negative_scale", "huge_world", "frame_isolation",
+    "light_gating", "gltf_negative_scale", "huge_world", "frame_isolation", "tonemap_exposure",
 ]
 
 
