@@ -665,6 +665,11 @@ mod tests {
         assert_eq!(mip_level_count(5, 3), 3);
         let sizes: Vec<_> = mip_chain(&[0; 5 * 3 * 4], 5, 3, true).iter().map(|l| (l.width, l.height)).collect();
         assert_eq!(sizes, vec![(5, 3), (2, 1), (1, 1)]);
+        // Thin images halve along their long side until both are 1.
+        let tall: Vec<_> = mip_chain(&[0; 4 * 4], 1, 4, false).iter().map(|l| (l.width, l.height)).collect();
+        assert_eq!(tall, vec![(1, 4), (1, 2), (1, 1)]);
+        let wide: Vec<_> = mip_chain(&[0; 4 * 4], 4, 1, false).iter().map(|l| (l.width, l.height)).collect();
+        assert_eq!(wide, vec![(4, 1), (2, 1), (1, 1)]);
     }
 
     /// A black-and-white sRGB chequerboard averages to linear 0.5, which is
