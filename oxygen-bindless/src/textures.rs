@@ -697,6 +697,26 @@ mod tests {
         }
     }
 
+    /// Each texel of a level is the mean of its own 2 × 2 block above:
+    /// an 8 × 8 image whose texels all differ checks the indexing.
+    #[test]
+    fn each_mip_texel_averages_its_own_block() {
+        let value = |x: u32, y: u32| (x * 20 + y * 3) as u8;
+        let pixels: Vec<u8> = (0..8).flat_map(|y| (0..8).flat_map(move |x| [value(x, y), 0, 0, 255])).collect();
+        let chain = mip_chain(&pixels, 8, 8, false);
+        for y in 0..4u32 {
+            for x in 0..4u32 {
+                let sum: u32 = [(0, 0), (1, 0), (0, 1), (1, 1)]
+                    .iter()
+                    .map(|(dx, dy)| u32::from(value(2 * x + dx, 2 * y + dy)))
+                    .sum();
+                let expected = (sum as f32 / 4.0).round() as u8;
+                let got = chain[1].pixels[((y * 4 + x) * 4) as usize];
+                assert!(got.abs_diff(expected) <= 1, "level 1 ({x}, {y}): {got}, expected {expected}");
+            }
+        }
+    }
+
     #[test]
     fn each_sampler_of_the_table_gets_its_own_binding() {
         let declared = sampler_declarations(3, 2);
