@@ -576,20 +576,27 @@ impl Renderer {
     pub fn check_target_budget(&self, views: &[(glam::UVec2, bool)]) -> Result<u64, RenderError> {
         let mut taken = 0u64;
         for (i, (viewport, depth_only)) in views.iter().enumerate() {
-            let bytes = Self::target_bytes(*viewport, *depth_only);
-            if taken.saturating_add(bytes) > self.target_budget_bytes {
-                return Err(RenderError::TargetBudget {
-                    view: ViewId(i as u32),
-                    width: viewport.x,
-                    height: viewport.y,
-                    bytes,
-                    budget: self.target_budget_bytes,
-                    taken,
-                });
-            }
-            taken += bytes;
+            self.admit_targets(ViewId(i as u32), *viewport, !depth_only, &mut taken)?;
         }
         Ok(taken)
+    }
+
+    /// Adds a `viewport`-sized view's targets to `taken`, or says they would
+    /// pass the target budget (leaving `taken` as it was).
+    fn admit_targets(
+        &self,
+        view: ViewId,
+        viewport: glam::UVec2,
+        with_color: bool,
+        taken: &mut u64,
+    ) -> Result<(), RenderError> {
+        let bytes = ViewTargets::bytes_for(viewport.x, viewport.y, with_color);
+        if taken.saturating_add(bytes) > self.target_budget_bytes {
+            let (width, height, budget) = (viewport.x, viewport.y, self.target_budget_bytes);
+            return Err(RenderError::TargetBudget { view, width, height, bytes, budget, taken: *taken });
+        }
+        *taken += bytes;
+        Ok(())
     }
 
     /// Resolves every active view. A view that cannot be rendered this frame
@@ -618,12 +625,7 @@ impl Renderer {
                 if width > limit || height > limit {
                     return Err(RenderError::ViewportTooLarge { view: *id, width, height, limit });
                 }
-                let bytes = ViewTargets::bytes_for(width, height, !registered.options.depth_only);
-                if taken.saturating_add(bytes) > self.target_budget_bytes {
-                    let budget = self.target_budget_bytes;
-                    return Err(RenderError::TargetBudget { view: *id, width, height, bytes, budget, taken });
-                }
-                taken += bytes;
+                self.admit_targets(*id, view.viewport, !registered.options.depth_only, &mut taken)?;
                 Ok(view)
             });
             match attempt {

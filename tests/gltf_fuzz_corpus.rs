@@ -28,6 +28,8 @@
 //! `OXYGEN_FUZZ_CASES` (corpus size), `OXYGEN_FUZZ_SEED` (another seed),
 //! `OXYGEN_FUZZ_VERBOSE` (one line per import).
 
+mod support;
+
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -39,6 +41,7 @@ use std::time::{Duration, Instant};
 use oxygen::core::Scene;
 use oxygen::{GltfError, ImportLimits, ImportOptions, import_gltf_slice, import_gltf_with};
 use serde_json::{Value, json};
+use support::encode::{base64_encode, data_uri, png_chunk};
 
 /// Mutants in the corpus (at least 2000, as the issue asks).
 const CORPUS_SIZE: usize = 2400;
@@ -232,19 +235,6 @@ fn make_glb(json: &[u8], bin: Option<&[u8]>) -> Vec<u8> {
     out
 }
 
-fn base64_encode(bytes: &[u8]) -> String {
-    const TABLE: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
-    for chunk in bytes.chunks(3) {
-        let b = [chunk[0], *chunk.get(1).unwrap_or(&0), *chunk.get(2).unwrap_or(&0)];
-        let n = (b[0] as u32) << 16 | (b[1] as u32) << 8 | b[2] as u32;
-        for i in 0..4 {
-            out.push(if i <= chunk.len() { TABLE[(n >> (18 - 6 * i) & 63) as usize] as char } else { '=' });
-        }
-    }
-    out
-}
-
 fn base64_decode(text: &str) -> Vec<u8> {
     let value = |c: u8| match c {
         b'A'..=b'Z' => c - b'A',
@@ -265,10 +255,6 @@ fn base64_decode(text: &str) -> Vec<u8> {
         }
     }
     out
-}
-
-fn data_uri(mime: &str, bytes: &[u8]) -> String {
-    format!("data:{mime};base64,{}", base64_encode(bytes))
 }
 
 /// Copies the asset folder to `<work>/<name>/scene`, with an `outside/`
@@ -930,21 +916,6 @@ fn uri_edit(rng: &mut Rng, json: &mut Value) -> (String, Expect) {
         let shown = if uri.len() > 40 { format!("{}… ({} bytes)", &uri[..20], uri.len()) } else { uri.to_owned() };
         (format!("buffer {b} uri {shown:?}"), if data_ok { Expect::Err } else { Expect::UriErr })
     }
-}
-
-/// A chunk with its CRC, as PNG writes it.
-fn png_chunk(out: &mut Vec<u8>, kind: &[u8; 4], data: &[u8]) {
-    out.extend((data.len() as u32).to_be_bytes());
-    out.extend(kind);
-    out.extend(data);
-    let mut crc = 0xFFFF_FFFFu32;
-    for &b in kind.iter().chain(data) {
-        crc ^= u32::from(b);
-        for _ in 0..8 {
-            crc = if crc & 1 != 0 { (crc >> 1) ^ 0xEDB8_8320 } else { crc >> 1 };
-        }
-    }
-    out.extend((!crc).to_be_bytes());
 }
 
 /// A real PNG whose IHDR now claims `width` × `height` (CRC fixed).

@@ -1,6 +1,8 @@
 //! glTF import without a GPU: what comes in, what is refused (clearly), and
 //! the prepared frame of a real file.
 
+mod support;
+
 use std::path::PathBuf;
 
 use oxygen::bindless::SlotAllocators;
@@ -8,6 +10,7 @@ use oxygen::core::{AlphaMode, Scene, ViewContext, ViewId, ViewResolver};
 use oxygen::prelude::*;
 use oxygen::sceneprep::{ScenePrep, ViewRequest};
 use oxygen::{GltfError, import_gltf};
+use support::encode::base64_encode;
 
 fn asset(relative: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets").join(relative)
@@ -122,22 +125,4 @@ fn alpha_blend_mode_test_prepared_frame_dump() {
         .prepare(&scene, &[ViewRequest { view: &view, options: Default::default() }], &mut SlotAllocators::default())
         .unwrap();
     insta::assert_snapshot!(frames[0].dump());
-}
-
-/// Standard base64 (for a data URI in a test file).
-fn base64_encode(bytes: &[u8]) -> String {
-    const TABLE: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for chunk in bytes.chunks(3) {
-        let b = [chunk[0], *chunk.get(1).unwrap_or(&0), *chunk.get(2).unwrap_or(&0)];
-        let n = (b[0] as u32) << 16 | (b[1] as u32) << 8 | b[2] as u32;
-        for i in 0..4 {
-            if i <= chunk.len() {
-                out.push(TABLE[(n >> (18 - 6 * i) & 63) as usize] as char);
-            } else {
-                out.push('=');
-            }
-        }
-    }
-    out
 }

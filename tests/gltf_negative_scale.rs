@@ -7,21 +7,8 @@ mod support;
 use oxygen::core::Scene;
 use oxygen::prelude::*;
 use oxygen::{ImportOptions, import_gltf_slice};
+use support::encode::base64_encode;
 use support::{gpu_renderer, pixel_of};
-
-/// Standard base64, for the test file's data URI.
-fn base64(bytes: &[u8]) -> String {
-    const TABLE: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for chunk in bytes.chunks(3) {
-        let b = [chunk[0], *chunk.get(1).unwrap_or(&0), *chunk.get(2).unwrap_or(&0)];
-        let n = (b[0] as u32) << 16 | (b[1] as u32) << 8 | b[2] as u32;
-        for i in 0..4 {
-            out.push(if i <= chunk.len() { TABLE[(n >> (18 - 6 * i) & 63) as usize] as char } else { '=' });
-        }
-    }
-    out
-}
 
 /// A quad at x ∈ [0.5, 1.5] facing +Z (counter-clockwise from +Z), drawn by
 /// two nodes: one as it is at y = +1, one mirrored by scale (−1, 1, 1) at
@@ -44,7 +31,7 @@ fn mirrored_quad_gltf() -> String {
                      {{"bufferView":0,"byteOffset":48,"componentType":5126,"count":4,"type":"VEC3"}},
                      {{"bufferView":1,"componentType":5123,"count":6,"type":"SCALAR"}}]}}"#,
         len = bytes.len(),
-        data = base64(&bytes)
+        data = base64_encode(&bytes)
     )
 }
 

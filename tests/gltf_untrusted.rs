@@ -6,6 +6,8 @@
 //! triangle document ([`triangle`]) edited in a line or two, imported from
 //! memory ([`import_memory`]) or from a scratch folder ([`Folder`]).
 
+mod support;
+
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -13,6 +15,7 @@ use oxygen::core::Scene;
 use oxygen::gltf_import::{GraphError, LimitExceeded, UriError};
 use oxygen::{GltfError, GltfImport, ImportLimits, ImportOptions, import_gltf_slice, import_gltf_with};
 use serde_json::{Value, json};
+use support::encode::{data_uri, png_chunk};
 
 /// "At once" for work that is refused before it starts: doing it instead
 /// (decoding 10^10 texels, walking 2^40 paths, building 16 Mi vertices in a
@@ -151,19 +154,6 @@ fn within<T: Send + 'static>(limit: Duration, f: impl FnOnce() -> T + Send + 'st
 // ---------------------------------------------------------------------------
 // Small encoders.
 
-fn data_uri(mime: &str, bytes: &[u8]) -> String {
-    const TABLE: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = format!("data:{mime};base64,");
-    for chunk in bytes.chunks(3) {
-        let b = [chunk[0], *chunk.get(1).unwrap_or(&0), *chunk.get(2).unwrap_or(&0)];
-        let n = (b[0] as u32) << 16 | (b[1] as u32) << 8 | b[2] as u32;
-        for i in 0..4 {
-            out.push(if i <= chunk.len() { TABLE[(n >> (18 - 6 * i) & 63) as usize] as char } else { '=' });
-        }
-    }
-    out
-}
-
 /// A real 256 × 256 PNG from the shipped assets.
 fn picture() -> Vec<u8> {
     let assets = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets");
@@ -173,28 +163,15 @@ fn picture() -> Vec<u8> {
 /// A PNG of a signature, an IHDR claiming `width` × `height` RGBA8
 /// texels, an empty IDAT and an IEND: under 80 bytes.
 fn png_header_claiming(width: u32, height: u32) -> Vec<u8> {
-    fn chunk(out: &mut Vec<u8>, kind: &[u8; 4], data: &[u8]) {
-        out.extend((data.len() as u32).to_be_bytes());
-        out.extend(kind);
-        out.extend(data);
-        let mut crc = 0xFFFF_FFFFu32;
-        for &b in kind.iter().chain(data) {
-            crc ^= u32::from(b);
-            for _ in 0..8 {
-                crc = if crc & 1 != 0 { (crc >> 1) ^ 0xEDB8_8320 } else { crc >> 1 };
-            }
-        }
-        out.extend((!crc).to_be_bytes());
-    }
     let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
     let mut ihdr = Vec::new();
     ihdr.extend(width.to_be_bytes());
     ihdr.extend(height.to_be_bytes());
     ihdr.extend([8, 6, 0, 0, 0]);
-    chunk(&mut png, b"IHDR", &ihdr);
+    png_chunk(&mut png, b"IHDR", &ihdr);
     // An empty zlib stream: a decoder reads the header, then runs out of data.
-    chunk(&mut png, b"IDAT", &[0x78, 0x01, 0x01, 0x00, 0x00, 0xFF, 0xFF, 0x00, 0x00, 0x00, 0x01]);
-    chunk(&mut png, b"IEND", &[]);
+    png_chunk(&mut png, b"IDAT", &[0x78, 0x01, 0x01, 0x00, 0x00, 0xFF, 0xFF, 0x00, 0x00, 0x00, 0x01]);
+    png_chunk(&mut png, b"IEND", &[]);
     png
 }
 

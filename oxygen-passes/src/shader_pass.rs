@@ -149,9 +149,10 @@ impl ShaderPass {
         }
         uniform.pcf_radius = self.config.shadow_pcf_radius.min(3);
         // Non-finite knobs fall back to the defaults: no NaN reaches a shader.
+        let defaults = ShaderPassConfig::default();
         let finite_or = |v: f32, default: f32| if v.is_finite() { v } else { default };
-        uniform.normal_offset = finite_or(self.config.shadow_normal_offset, 1.5);
-        uniform.depth_bias = finite_or(self.config.shadow_depth_bias, 1e-4);
+        uniform.normal_offset = finite_or(self.config.shadow_normal_offset, defaults.shadow_normal_offset);
+        uniform.depth_bias = finite_or(self.config.shadow_depth_bias, defaults.shadow_depth_bias);
         Ok(maps)
     }
 

@@ -122,7 +122,7 @@ impl<'a> MaterialImporter<'a> {
             alpha_mode,
             double_sided: m.double_sided,
         };
-        let material = sanitize(material, &label, warnings);
+        warn_non_finite(&material, &label, warnings);
         let handle = scene.add_material(material);
         self.materials.insert(index, handle);
         Ok(handle)
@@ -280,37 +280,25 @@ fn decode(bytes: &[u8], budget: &mut Budget) -> Result<(u32, u32, Vec<u8>), Deco
     Ok((rgba.width(), rgba.height(), rgba.into_raw()))
 }
 
-/// Replaces non-finite factors with glTF's defaults so that no NaN reaches
-/// the material table, saying so.
-fn sanitize(mut m: Material, label: &str, warnings: &mut Vec<String>) -> Material {
-    let mut fixed = Vec::new();
-    if !m.base_color.is_finite() {
-        m.base_color = Vec4::ONE;
-        fixed.push("baseColorFactor");
+/// Names the material's non-finite factors in a warning. The replacement
+/// itself is [`Material::sanitized`], which [`Scene::add_material`] applies
+/// to every material, imported or not.
+fn warn_non_finite(m: &Material, label: &str, warnings: &mut Vec<String>) {
+    let cutoff = match m.alpha_mode {
+        AlphaMode::Mask { cutoff } => cutoff,
+        _ => 0.5,
+    };
+    let fields = [
+        ("baseColorFactor", m.base_color.is_finite()),
+        ("emissive", m.emissive.is_finite()),
+        ("metallicFactor", m.metallic.is_finite()),
+        ("roughnessFactor", m.roughness.is_finite()),
+        ("normalTexture.scale", m.normal_scale.is_finite()),
+        ("occlusionTexture.strength", m.occlusion_strength.is_finite()),
+        ("alphaCutoff", cutoff.is_finite()),
+    ];
+    let bad: Vec<&str> = fields.iter().filter(|(_, finite)| !finite).map(|(name, _)| *name).collect();
+    if !bad.is_empty() {
+        warnings.push(format!("{label}: non-finite {} replaced by defaults", bad.join(", ")));
     }
-    if !m.emissive.is_finite() {
-        m.emissive = Vec3::ZERO;
-        fixed.push("emissive");
-    }
-    for (value, default, name) in [
-        (&mut m.metallic, 1.0, "metallicFactor"),
-        (&mut m.roughness, 1.0, "roughnessFactor"),
-        (&mut m.normal_scale, 1.0, "normalTexture.scale"),
-        (&mut m.occlusion_strength, 1.0, "occlusionTexture.strength"),
-    ] {
-        if !value.is_finite() {
-            *value = default;
-            fixed.push(name);
-        }
-    }
-    if let AlphaMode::Mask { cutoff } = &mut m.alpha_mode
-        && !cutoff.is_finite()
-    {
-        *cutoff = 0.5;
-        fixed.push("alphaCutoff");
-    }
-    if !fixed.is_empty() {
-        warnings.push(format!("{label}: non-finite {} replaced by the glTF default", fixed.join(", ")));
-    }
-    m
 }

@@ -4,6 +4,7 @@
 
 #![allow(dead_code)] // Each test binary uses a different subset.
 
+pub mod encode;
 pub mod golden;
 
 use std::sync::Once;
