@@ -31,7 +31,8 @@ mod scene_prep;
 pub mod worker_pool;
 
 pub use collect::{
-    CullBound, FrameCollection, RenderItem, RenderableEntry, SkippedNode, SubmeshEntry, ViewFilter, ViewPrepOptions,
+    CullBound, FrameCollection, LocalShadowCaster, LocalShadowKind, RenderItem, RenderOrigin, RenderableEntry,
+    SkippedNode, SubmeshEntry, ViewFilter, ViewPrepOptions,
 };
 pub use draw_metadata::{DrawIndexedIndirect, DrawMetadata};
 pub use gpu_records::{

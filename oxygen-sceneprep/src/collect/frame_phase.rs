@@ -8,6 +8,14 @@
 //! affects the world, the light is not baked. A light casts shadows only
 //! when both the light and its node say so.
 //!
+//! Shadows of the frame: shadow-casting spot and point lights get tiles of
+//! the local-light shadow atlas in node order, and
+//! [`FrameCollection::local_shadow_casters`] says which node got which tiles;
+//! [`FrameCollection::shadow_sun`] names the directional light whose
+//! cascades the shading pass samples. Both are rebuilt on every collection,
+//! so a renderer that reads them each frame registers exactly the shadow
+//! views the frame needs.
+//!
 //! A node whose world matrix is non-finite or singular is skipped with a
 //! warning naming it; nothing derived from it reaches the GPU.
 //!
@@ -68,6 +76,57 @@ pub struct SubmeshEntry {
     pub index_count: u32,
 }
 
+/// How a local light's shadow is stored in the atlas, which decides how many
+/// tiles it takes ([`shadow_tiles_for`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum LocalShadowKind {
+    /// A spot light: one perspective map, one tile.
+    Spot,
+    /// A point light: six cube faces, six consecutive tiles in the order
+    /// +X, -X, +Y, -Y, +Z, -Z.
+    Point,
+}
+
+impl LocalShadowKind {
+    /// Atlas tiles a light of this kind takes.
+    pub fn tile_count(self) -> u32 {
+        shadow_tiles_for(self.record_kind())
+    }
+
+    /// The `kind` of its [`PositionalLightRecord`].
+    fn record_kind(self) -> u32 {
+        match self {
+            LocalShadowKind::Spot => PositionalLightRecord::SPOT,
+            LocalShadowKind::Point => PositionalLightRecord::POINT,
+        }
+    }
+}
+
+/// A spot or point light that casts shadows this frame and got atlas tiles:
+/// the renderer registers one shadow view per tile, and the shading pass
+/// finds the tiles through the light's `shadow_slot`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct LocalShadowCaster {
+    /// The light's node.
+    pub node: NodeKey,
+    /// Spot (one tile) or point (six tiles).
+    pub kind: LocalShadowKind,
+    /// Index of the light in [`FrameCollection::positional_lights`].
+    pub light_index: u32,
+    /// Its first atlas tile (the record's `shadow_slot`).
+    pub first_tile: u32,
+    /// Tiles from `first_tile` on that are its: 1 for a spot, 6 for a point
+    /// light.
+    pub tile_count: u32,
+}
+
+impl LocalShadowCaster {
+    /// Its tiles, `first_tile..first_tile + tile_count`.
+    pub fn tiles(&self) -> std::ops::Range<u32> {
+        self.first_tile..self.first_tile + self.tile_count
+    }
+}
+
 /// The frame phase's output, shared read-only by every view.
 #[derive(Default)]
 pub struct FrameCollection {
@@ -86,6 +145,18 @@ pub struct FrameCollection {
     pub directional_lights: Vec<DirectionalLightRecord>,
     /// Gated point and spot lights.
     pub positional_lights: Vec<PositionalLightRecord>,
+    /// Spot and point lights that cast shadows this frame and got atlas
+    /// tiles, in node order (the order their tiles were handed out). A
+    /// shadow-casting light missing here found [`MAX_SHADOW_TILES`] used up
+    /// and is lit unshadowed.
+    pub local_shadow_casters: Vec<LocalShadowCaster>,
+    /// The directional light whose shadow cascades the shading pass uses:
+    /// the first gated directional light, in node order, that casts shadows
+    /// (the light and its node both say so). That is the first record of
+    /// [`Self::directional_lights`] with its shadow flag set, the one
+    /// `shader_pass.wgsl` gives the cascades to; `None` when no directional
+    /// light casts shadows this frame.
+    pub shadow_sun: Option<NodeKey>,
     /// Nodes skipped this frame because of a degenerate transform or bounds.
     pub skipped_nodes: u32,
     /// Every node or light left out this frame, and why, for the frame report.
@@ -157,6 +228,8 @@ impl FrameCollection {
         transforms.normal.clear();
         self.directional_lights.clear();
         self.positional_lights.clear();
+        self.local_shadow_casters.clear();
+        self.shadow_sun = None;
         self.lod_levels.clear();
         self.submeshes.clear();
         self.skipped_nodes = 0;
@@ -179,7 +252,7 @@ impl FrameCollection {
             };
             if let Some(light) = &node.light {
                 let position = (world64.w_axis.truncate() - origin).as_vec3();
-                if let Err(reason) = self.collect_light(&node.name, light, node.flags, &world, position) {
+                if let Err(reason) = self.collect_light(key, &node.name, light, node.flags, &world, position) {
                     self.skipped.push(SkippedNode { node: key, name: node.name.clone(), reason });
                 }
             }
@@ -289,6 +362,7 @@ impl FrameCollection {
     /// (baked, not affecting the world) is simply not collected.
     fn collect_light(
         &mut self,
+        key: NodeKey,
         name: &str,
         light: &oxygen_core::Light,
         flags: NodeFlags,
@@ -315,38 +389,50 @@ impl FrameCollection {
         let color = light.color.max(Vec3::ZERO).to_array();
         let intensity = if light.intensity.is_finite() { light.intensity.max(0.0) } else { 0.0 };
         match light.kind {
-            LightKind::Directional => self.directional_lights.push(DirectionalLightRecord {
-                direction: direction.to_array(),
-                intensity,
-                color,
-                flags: shadow_flags,
-                shadow_slot: INVALID_SLOT,
-                reserved: [0; 3],
-            }),
+            LightKind::Directional => {
+                // The shader gives the cascades to the first record with the
+                // shadow flag; naming that same light keeps the cascade views
+                // the renderer registers and the light they shade in step.
+                if casts && self.shadow_sun.is_none() {
+                    self.shadow_sun = Some(key);
+                }
+                self.directional_lights.push(DirectionalLightRecord {
+                    direction: direction.to_array(),
+                    intensity,
+                    color,
+                    flags: shadow_flags,
+                    shadow_slot: INVALID_SLOT,
+                    reserved: [0; 3],
+                });
+            }
             LightKind::Point { range } | LightKind::Spot { range, .. } => {
-                let (kind, cos_inner, cos_outer) = match light.kind {
+                let (shadow_kind, cos_inner, cos_outer) = match light.kind {
                     LightKind::Spot { inner_cone, outer_cone, .. } => {
                         let outer = outer_cone.clamp(1e-4, std::f32::consts::FRAC_PI_2);
                         let inner = inner_cone.clamp(0.0, outer - 1e-4);
-                        (PositionalLightRecord::SPOT, inner.cos(), outer.cos())
+                        (LocalShadowKind::Spot, inner.cos(), outer.cos())
                     }
-                    _ => (PositionalLightRecord::POINT, 1.0, -1.0),
+                    _ => (LocalShadowKind::Point, 1.0, -1.0),
                 };
                 // Shadow-casting spot and point lights get atlas tiles in
                 // node order (one per spot, six per point light) while
-                // MAX_SHADOW_TILES lasts: the order in which their shadow
-                // views are registered (`register_local_shadows`).
-                let tiles_used = self
-                    .positional_lights
-                    .iter()
-                    .filter(|l| l.shadow_slot != INVALID_SLOT)
-                    .map(|l| shadow_tiles_for(l.kind))
-                    .sum::<u32>();
-                let shadow_slot = if casts && tiles_used + shadow_tiles_for(kind) <= MAX_SHADOW_TILES {
+                // MAX_SHADOW_TILES lasts; a light that does not fit leaves
+                // the tiles to a later, smaller one.
+                let tiles_used = self.local_shadow_casters.last().map_or(0, |c| c.first_tile + c.tile_count);
+                let tile_count = shadow_kind.tile_count();
+                let shadow_slot = if casts && tiles_used + tile_count <= MAX_SHADOW_TILES {
+                    self.local_shadow_casters.push(LocalShadowCaster {
+                        node: key,
+                        kind: shadow_kind,
+                        light_index: self.positional_lights.len() as u32,
+                        first_tile: tiles_used,
+                        tile_count,
+                    });
                     tiles_used
                 } else {
                     INVALID_SLOT
                 };
+                let kind = shadow_kind.record_kind();
                 self.positional_lights.push(PositionalLightRecord {
                     position: position.to_array(),
                     range: range.filter(|r| r.is_finite() && *r > 0.0).unwrap_or(0.0),
