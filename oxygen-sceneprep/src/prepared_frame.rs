@@ -34,6 +34,21 @@ pub struct PreparedSlots {
     pub positional_lights: Allocation,
 }
 
+impl PreparedSlots {
+    /// Every range empty (no slot), as before a frame is prepared.
+    pub fn unallocated() -> Self {
+        PreparedSlots {
+            draw_metadata: Allocation::empty(DomainKind::DrawMetadata),
+            indirect_args: Allocation::empty(DomainKind::IndirectArgs),
+            world_transforms: Allocation::empty(DomainKind::WorldTransforms),
+            normal_transforms: Allocation::empty(DomainKind::NormalTransforms),
+            materials: Allocation::empty(DomainKind::Materials),
+            directional_lights: Allocation::empty(DomainKind::DirectionalLights),
+            positional_lights: Allocation::empty(DomainKind::PositionalLights),
+        }
+    }
+}
+
 /// The frame's transforms, shared by every view's prepared frame.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct FrameTransforms {
@@ -75,15 +90,7 @@ impl PreparedSceneFrame {
             transforms,
             debug_generations: false,
             prep_seconds: 0.0,
-            slots: PreparedSlots {
-                draw_metadata: Allocation::empty(DomainKind::DrawMetadata),
-                indirect_args: Allocation::empty(DomainKind::IndirectArgs),
-                world_transforms: Allocation::empty(DomainKind::WorldTransforms),
-                normal_transforms: Allocation::empty(DomainKind::NormalTransforms),
-                materials: Allocation::empty(DomainKind::Materials),
-                directional_lights: Allocation::empty(DomainKind::DirectionalLights),
-                positional_lights: Allocation::empty(DomainKind::PositionalLights),
-            },
+            slots: PreparedSlots::unallocated(),
         }
     }
 

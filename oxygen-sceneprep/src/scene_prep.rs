@@ -1,10 +1,14 @@
-//! `ScenePrep`: the orchestrator. One call per frame prepares every view;
-//! a second call uploads what they need.
+//! `ScenePrep`: the orchestrator. One call per frame prepares every view
+//! ([`ScenePrep::prepare`]), or two when the views depend on the frame
+//! phase's output ([`ScenePrep::begin_frame`], then
+//! [`ScenePrep::prepare_views`]); a last call uploads what they need.
 //!
 //! ```text
-//! frame phase (serial, once) ─► phase 1 (parallel per view): cull, items, keys, radix sort
-//!   ─► serial: new geometry slots, per-view draw slots
-//!   ─► phase 2 (parallel per view): DrawMetadata emit, partitions
+//! begin_frame:   frame phase (serial, once): collect, materials, frame-global slots
+//!                  ─► FrameCollection (the caller may read it to pick shadow views)
+//! prepare_views: phase 1 (parallel per view): cull, items, keys, radix sort
+//!                  ─► serial: new geometry slots, per-view draw slots
+//!                  ─► phase 2 (parallel per view): emit (finalize/emit.rs)
 //! ```
 //!
 //! Views run on a persistent [`WorkerPool`] (see its module for why not
@@ -28,17 +32,15 @@ use thiserror::Error;
 use tracing::info_span;
 
 use crate::collect::view_phase::collect_view;
+use crate::finalize::emit::{FrameEmit, ViewEmit, emit_view};
 use crate::finalize::geometry_cache::{GeometryCache, GeometrySlots};
 use crate::finalize::materials::MaterialTable;
-use crate::finalize::partition::build_partitions;
 use crate::finalize::radix_sort::radix_sort_by_key;
 use crate::finalize::sort_key::sort_key;
 use crate::finalize::texture_cache::TextureCache;
 use crate::prepared_frame::FrameTransforms;
 use crate::worker_pool::WorkerPool;
-use crate::{
-    DrawIndexedIndirect, DrawMetadata, FrameCollection, PreparedSceneFrame, PreparedSlots, RenderItem, ViewPrepOptions,
-};
+use crate::{FrameCollection, PreparedSceneFrame, PreparedSlots, RenderItem, ViewPrepOptions};
 
 /// Why a frame could not be prepared or uploaded.
 #[derive(Debug, Error, PartialEq)]
@@ -52,6 +54,21 @@ pub enum PrepError {
     /// The same view was requested twice in one frame.
     #[error("{0} was requested twice in one frame")]
     DuplicateView(ViewId),
+    /// [`ScenePrep::prepare_views`] was called with no frame begun: without
+    /// [`ScenePrep::begin_frame`] before it, or a second time for one begun
+    /// frame.
+    #[error("prepare_views needs a frame begun by begin_frame (each begun frame is prepared once)")]
+    FrameNotBegun,
+}
+
+/// Rejects a request list that names one view twice.
+fn check_distinct(views: &[ViewRequest<'_>]) -> Result<(), PrepError> {
+    for (i, v) in views.iter().enumerate() {
+        if views[..i].iter().any(|o| o.view.view_id == v.view.view_id) {
+            return Err(PrepError::DuplicateView(v.view.view_id));
+        }
+    }
+    Ok(())
 }
 
 /// One view to prepare.
@@ -133,6 +150,10 @@ pub struct ScenePrep {
     stats: PrepStats,
     debug_generations: bool,
     render_origin: DVec3,
+    /// Frame-global slots of the frame begun (materials filled in at emit).
+    frame_slots: PreparedSlots,
+    /// A frame was begun and its views are not prepared yet.
+    frame_begun: bool,
 }
 
 impl Default for ScenePrep {
@@ -174,6 +195,8 @@ impl ScenePrep {
             stats: PrepStats::default(),
             debug_generations: false,
             render_origin: DVec3::ZERO,
+            frame_slots: PreparedSlots::unallocated(),
+            frame_begun: false,
         }
     }
 
@@ -233,6 +256,10 @@ impl ScenePrep {
     /// Runs the frame phase once, then the view phase and finalization for
     /// every view (in parallel), and returns one prepared frame per request,
     /// in request order. CPU only: slots come from `slots`.
+    ///
+    /// The one-call form of [`ScenePrep::begin_frame`] followed by
+    /// [`ScenePrep::prepare_views`], for callers that know every view before
+    /// the frame phase runs.
     pub fn prepare(
         &mut self,
         scene: &Scene,
@@ -240,11 +267,26 @@ impl ScenePrep {
         slots: &mut SlotAllocators,
     ) -> Result<&[PreparedSceneFrame], PrepError> {
         let _span = info_span!("scene_prep", views = views.len()).entered();
-        for (i, v) in views.iter().enumerate() {
-            if views[..i].iter().any(|o| o.view.view_id == v.view.view_id) {
-                return Err(PrepError::DuplicateView(v.view.view_id));
-            }
-        }
+        // Rejected before the frame begins, so a bad request changes nothing.
+        check_distinct(views)?;
+        self.begin_frame(scene, slots)?;
+        self.prepare_views(scene, views, slots)
+    }
+
+    /// The frame phase: begins a frame of `scene` and returns its collection
+    /// (renderables, lights, the frame's shadow casters), before any view is
+    /// prepared. Collects the scene (or reuses last frame's collection when
+    /// nothing changed), syncs the material table and allocates the
+    /// frame-global slots (world and normal matrices, light arrays).
+    ///
+    /// Set the render origin ([`ScenePrep::set_render_origin`]) first: the
+    /// collection is rebased on it. A renderer reads the returned collection
+    /// to decide which shadow views this frame needs, resolves them, then
+    /// calls [`ScenePrep::prepare_views`] once with every view. Calling it
+    /// again before `prepare_views` begins the frame over.
+    pub fn begin_frame(&mut self, scene: &Scene, slots: &mut SlotAllocators) -> Result<&FrameCollection, PrepError> {
+        let _span = info_span!("begin_frame").entered();
+        self.frame_begun = false;
         self.frame_index += 1;
         self.active_frames = 0;
 
@@ -262,7 +304,33 @@ impl ScenePrep {
         self.stats.frame_phase_reuses += u64::from(self.frame.reused_last());
         self.stats.renderables_last_frame = self.frame.renderables.len() as u64;
         self.materials.sync(scene, slots, &mut self.textures)?;
-        let frame_slots = self.allocate_frame_slots(slots)?;
+        self.frame_slots = self.allocate_frame_slots(slots)?;
+        self.frame_begun = true;
+        Ok(&self.frame)
+    }
+
+    /// The view phase and finalization of every view of the frame begun by
+    /// [`ScenePrep::begin_frame`]: cull, key and sort each view (in
+    /// parallel), allocate new geometry and per-view draw slots (serial),
+    /// then emit each view's draws and partitions (in parallel). Returns one
+    /// prepared frame per request, in request order.
+    ///
+    /// `scene` must be the scene the frame was begun with. Each begun frame
+    /// is prepared once: a second call, or a call with no frame begun, is
+    /// [`PrepError::FrameNotBegun`]. A [`PrepError::DuplicateView`] leaves
+    /// the frame begun, so the caller may retry with corrected requests.
+    pub fn prepare_views(
+        &mut self,
+        scene: &Scene,
+        views: &[ViewRequest<'_>],
+        slots: &mut SlotAllocators,
+    ) -> Result<&[PreparedSceneFrame], PrepError> {
+        let _span = info_span!("prepare_views", views = views.len()).entered();
+        if !self.frame_begun {
+            return Err(PrepError::FrameNotBegun);
+        }
+        check_distinct(views)?;
+        self.frame_begun = false;
 
         while self.work.len() < views.len() {
             self.work.push(Mutex::new(ViewWork::new(Arc::clone(&self.released_transforms))));
@@ -297,7 +365,52 @@ impl ScenePrep {
         }
         self.stats.views_prepared += views.len() as u64;
 
-        // Serial: slots for newly drawn geometry and for each view's draws.
+        self.allocate_view_slots(scene, views, slots)?;
+
+        // Phase 2: emit DrawMetadata and partitions.
+        {
+            let _span = info_span!("finalize").entered();
+            let frame = FrameEmit {
+                geometry: &self.geometry,
+                transforms: &self.frame.transforms,
+                frame_slots: PreparedSlots { materials: self.materials.allocation(), ..self.frame_slots },
+                frame_index: self.frame_index,
+                debug_generations: self.debug_generations,
+            };
+            let work = &self.work;
+            self.pool.run(views.len(), &|i| {
+                let started = std::time::Instant::now();
+                let mut w = lock(&work[i]);
+                let w = &mut *w;
+                let view = ViewEmit {
+                    view_id: views[i].view.view_id,
+                    items: &w.items,
+                    keyed: &w.keyed,
+                    draw_allocation: w.draw_allocation,
+                    indirect_allocation: w.indirect_allocation,
+                };
+                emit_view(&frame, &view, &mut w.frame);
+                w.frame.prep_seconds = w.seconds + started.elapsed().as_secs_f32();
+            });
+        }
+
+        for (frame, work) in self.frames.iter_mut().zip(&mut self.work).take(views.len()) {
+            std::mem::swap(frame, &mut work.get_mut().unwrap_or_else(|e| e.into_inner()).frame);
+        }
+        self.active_frames = views.len();
+        Ok(&self.frames[..views.len()])
+    }
+
+    /// The serial step between the parallel phases: slots for geometry some
+    /// view draws for the first time, and each view's draw ranges (last
+    /// frame's ranges of the same view freed first).
+    fn allocate_view_slots(
+        &mut self,
+        scene: &Scene,
+        views: &[ViewRequest<'_>],
+        slots: &mut SlotAllocators,
+    ) -> Result<(), PrepError> {
+        let _span = info_span!("allocate_view_slots").entered();
         let mut total_draws = 0;
         for (request, work) in views.iter().zip(&mut self.work) {
             let w = work.get_mut().unwrap_or_else(|e| e.into_inner());
@@ -316,65 +429,7 @@ impl ScenePrep {
             total_draws += w.keyed.len() as u64;
         }
         self.stats.draws_last_frame = total_draws;
-
-        // Phase 2: emit DrawMetadata and partitions.
-        {
-            let _span = info_span!("finalize").entered();
-            let (frame, geometry, work) = (&self.frame, &self.geometry, &self.work);
-            let (frame_index, materials) = (self.frame_index, self.materials.allocation());
-            let debug_generations = self.debug_generations;
-            self.pool.run(views.len(), &|i| {
-                let started = std::time::Instant::now();
-                let mut w = lock(&work[i]);
-                let w = &mut *w;
-                let out = &mut w.frame;
-                out.draws.clear();
-                out.indirect_args.clear();
-                out.sort_keys.clear();
-                for &(key, item_index) in &w.keyed {
-                    let item = w.items[item_index as usize];
-                    // Resolved in the serial step; a mesh missing from the
-                    // scene was never turned into an item.
-                    let Some(g) = geometry.get(item.geometry) else { continue };
-                    out.draws.push(DrawMetadata {
-                        vertex_slot: g.vertices.start,
-                        index_slot: g.indices.start,
-                        first_index: item.first_index,
-                        index_count: item.index_count,
-                        base_vertex: 0,
-                        instance_count: 1,
-                        transform_index: item.transform_index,
-                        material_handle: item.material,
-                        pass_mask: item.pass_mask.bits(),
-                        node_id: item.node_id,
-                        submesh: item.submesh,
-                        reserved: [if debug_generations { w.draw_allocation.generation() } else { 0 }, 0, 0, 0, 0],
-                    });
-                    out.sort_keys.push(key);
-                }
-                for (index, draw) in out.draws.iter().enumerate() {
-                    out.indirect_args.push(DrawIndexedIndirect::for_draw(draw, index as u32));
-                }
-                build_partitions(&out.draws, &mut out.partitions);
-                out.view_id = views[i].view.view_id;
-                out.frame_index = frame_index;
-                out.debug_generations = debug_generations;
-                out.prep_seconds = w.seconds + started.elapsed().as_secs_f32();
-                out.transforms = Arc::clone(&frame.transforms);
-                out.slots = PreparedSlots {
-                    draw_metadata: w.draw_allocation,
-                    indirect_args: w.indirect_allocation,
-                    materials,
-                    ..frame_slots
-                };
-            });
-        }
-
-        for (frame, work) in self.frames.iter_mut().zip(&mut self.work).take(views.len()) {
-            std::mem::swap(frame, &mut work.get_mut().unwrap_or_else(|e| e.into_inner()).frame);
-        }
-        self.active_frames = views.len();
-        Ok(&self.frames[..views.len()])
+        Ok(())
     }
 
     /// Frees last frame's frame-global ranges and allocates this frame's.
@@ -389,13 +444,11 @@ impl ScenePrep {
             Ok(a)
         };
         Ok(PreparedSlots {
-            draw_metadata: Allocation::empty(DomainKind::DrawMetadata),
-            indirect_args: Allocation::empty(DomainKind::IndirectArgs),
             world_transforms: allocate(DomainKind::WorldTransforms, n as usize)?,
             normal_transforms: allocate(DomainKind::NormalTransforms, n as usize)?,
-            materials: Allocation::empty(DomainKind::Materials),
             directional_lights: allocate(DomainKind::DirectionalLights, self.frame.directional_lights.len())?,
             positional_lights: allocate(DomainKind::PositionalLights, self.frame.positional_lights.len())?,
+            ..PreparedSlots::unallocated()
         })
     }
 

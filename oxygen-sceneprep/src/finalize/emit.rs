@@ -1,0 +1,94 @@
+//! The emit step: one view's sorted render items become its draws.
+//!
+//! In: the view's [`RenderItem`]s, their `(sort key, item index)` pairs
+//! already sorted, the geometry slots resolved in the serial step, and the
+//! slots of the frame and of this view. Out: the view's
+//! [`PreparedSceneFrame`], filled in place — [`DrawMetadata`], indirect
+//! arguments, sort keys, partitions and slots.
+//!
+//! It runs in parallel, one view per worker, so it must not allocate slots
+//! or touch anything shared mutably; it reuses the frame's buffers, so a
+//! steady-state frame allocates nothing here. Draws come out in sorted
+//! order, which makes the result a pure function of its inputs.
+
+use std::sync::Arc;
+
+use oxygen_bindless::Allocation;
+use oxygen_core::ViewId;
+
+use crate::finalize::geometry_cache::GeometryCache;
+use crate::finalize::partition::build_partitions;
+use crate::prepared_frame::FrameTransforms;
+use crate::{DrawIndexedIndirect, DrawMetadata, PreparedSceneFrame, PreparedSlots, RenderItem};
+
+/// What every view of a frame emits against: shared, read-only.
+pub(crate) struct FrameEmit<'a> {
+    /// Geometry slots, complete for every item of every view (the serial
+    /// step resolved the missing ones).
+    pub geometry: &'a GeometryCache,
+    /// The frame's matrices, shared by every view's prepared frame.
+    pub transforms: &'a Arc<FrameTransforms>,
+    /// Frame-global and persistent slots; the per-view ones are replaced.
+    pub frame_slots: PreparedSlots,
+    /// The frame sequence number.
+    pub frame_index: u64,
+    /// Tag each draw with its range's generation (debug mode).
+    pub debug_generations: bool,
+}
+
+/// One view's sorted items and the draw ranges allocated for it.
+pub(crate) struct ViewEmit<'a> {
+    /// The view the frame is for.
+    pub view_id: ViewId,
+    /// Render items in (node id, submesh) order.
+    pub items: &'a [RenderItem],
+    /// `(sort key, index into items)`, sorted.
+    pub keyed: &'a [(u64, u32)],
+    /// This view's draw-metadata range.
+    pub draw_allocation: Allocation,
+    /// This view's indirect-argument range, parallel to the draws.
+    pub indirect_allocation: Allocation,
+}
+
+/// Fills `out` with the draws of `view`, reusing its buffers. Leaves
+/// `out.prep_seconds` to the caller, which times the whole view.
+pub(crate) fn emit_view(frame: &FrameEmit<'_>, view: &ViewEmit<'_>, out: &mut PreparedSceneFrame) {
+    out.draws.clear();
+    out.indirect_args.clear();
+    out.sort_keys.clear();
+    let generation_tag = if frame.debug_generations { view.draw_allocation.generation() } else { 0 };
+    for &(key, item_index) in view.keyed {
+        let item = &view.items[item_index as usize];
+        // Resolved in the serial step; a mesh missing from the scene was
+        // never turned into an item.
+        let Some(g) = frame.geometry.get(item.geometry) else { continue };
+        out.draws.push(DrawMetadata {
+            vertex_slot: g.vertices.start,
+            index_slot: g.indices.start,
+            first_index: item.first_index,
+            index_count: item.index_count,
+            base_vertex: 0,
+            instance_count: 1,
+            transform_index: item.transform_index,
+            material_handle: item.material,
+            pass_mask: item.pass_mask.bits(),
+            node_id: item.node_id,
+            submesh: item.submesh,
+            reserved: [generation_tag, 0, 0, 0, 0],
+        });
+        out.sort_keys.push(key);
+    }
+    for (index, draw) in out.draws.iter().enumerate() {
+        out.indirect_args.push(DrawIndexedIndirect::for_draw(draw, index as u32));
+    }
+    build_partitions(&out.draws, &mut out.partitions);
+    out.view_id = view.view_id;
+    out.frame_index = frame.frame_index;
+    out.debug_generations = frame.debug_generations;
+    out.transforms = Arc::clone(frame.transforms);
+    out.slots = PreparedSlots {
+        draw_metadata: view.draw_allocation,
+        indirect_args: view.indirect_allocation,
+        ..frame.frame_slots
+    };
+}
