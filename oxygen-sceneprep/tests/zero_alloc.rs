@@ -1,6 +1,6 @@
-//! A steady-state frame allocates nothing: after warm-up, `prepare` of the
-//! same scene through several views (on several threads) makes no heap
-//! allocation. Counted by a global allocator wrapper; this file holds a
+//! A steady-state frame allocates nothing: after warm-up, `prepare` (or
+//! `begin_frame` and `prepare_views`) of the same scene through several
+//! views (on several threads) makes no heap allocation. Counted by a global allocator wrapper; this file holds a
 //! single test so no other test allocates while it counts.
 
 use std::alloc::{GlobalAlloc, Layout, System};
@@ -71,7 +71,15 @@ fn steady_state_prepare_makes_no_heap_allocation() {
             let moved = Transform::from_translation(Vec3::new(0.0, 0.5 + frame as f32 * 0.01, 0.0));
             demo.scene.set_local_transform(demo.cubes[4], moved).unwrap();
         }
-        let frames = prep.prepare(&demo.scene, &requests, &mut slots).unwrap();
+        // Every other pair of frames takes the two-step path, reading the
+        // frame collection in between as a renderer does.
+        let frames = if frame % 4 < 2 {
+            prep.prepare(&demo.scene, &requests, &mut slots).unwrap()
+        } else {
+            let collection = prep.begin_frame(&demo.scene, &mut slots).unwrap();
+            assert_eq!(collection.shadow_sun, Some(demo.sun));
+            prep.prepare_views(&demo.scene, &requests, &mut slots).unwrap()
+        };
         draws += frames.iter().map(|f| f.draws().len()).sum::<usize>();
     }
     COUNTING.store(false, Ordering::SeqCst);
