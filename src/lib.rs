@@ -29,22 +29,24 @@
 //! ```
 
 pub mod gltf_import;
+mod graph;
 pub mod probes;
 mod renderer;
 pub mod shadows;
+mod views;
 
 pub use gltf_import::{
     GltfCamera, GltfError, GltfImport, ImportLimits, ImportOptions, NodeCameraResolver, SceneChoice, import_gltf,
     import_gltf_slice, import_gltf_with,
 };
+pub use graph::{ProbeFaceGraph, RenderGraph, ShadowGraph, StandardGraph, lit_render_graph, standard_render_graph};
+pub use oxygen_sceneprep::RenderOrigin;
 pub use probes::{ProbeUpdate, ReflectionProbe};
 pub use renderer::{
-    FrameReport, FrameWarning, RenderError, RenderGraphFuture, RenderOrigin, Renderer, RendererOptions, ViewReport,
-    lit_render_graph, standard_render_graph,
+    FrameReport, FrameWarning, RenderError, Renderer, RendererOptions, ViewReport, ViewRole,
 };
-pub use shadows::{
-    PointShadowFaceResolver, SpotShadowResolver, register_local_shadows, register_sun_cascades, shadowed_render_graph,
-};
+pub use shadows::{LocalShadowSettings, PointShadowFaceResolver, SpotShadowResolver};
+pub use views::{ViewDesc, ViewHandle, Views};
 
 /// The bindless heap.
 pub use oxygen_bindless as bindless;
@@ -58,8 +60,8 @@ pub use oxygen_sceneprep as sceneprep;
 /// The names most applications use.
 pub mod prelude {
     pub use crate::{
-        FrameReport, FrameWarning, RenderError, RenderGraphFuture, RenderOrigin, Renderer, RendererOptions,
-        lit_render_graph, standard_render_graph,
+        FrameReport, FrameWarning, LocalShadowSettings, RenderError, RenderGraph, RenderOrigin, Renderer,
+        RendererOptions, StandardGraph, ViewDesc, ViewHandle, Views, lit_render_graph, standard_render_graph,
     };
     pub use crate::{ImportLimits, ImportOptions, SceneChoice, import_gltf, import_gltf_with};
     pub use oxygen_bindless::TexturePath;
@@ -68,9 +70,10 @@ pub mod prelude {
         AlphaMode, Camera, Geometry, Light, LookAtResolver, Material, NodeFlags, Renderable, ResolvedView, Scene,
         Transform, ViewContext, ViewId, ViewResolver,
     };
+    pub use oxygen_core::CascadeSettings;
     pub use oxygen_passes::{
-        CommandRecorder, DepthPrePass, DrawPath, PassError, RenderContext, RenderPass, ShaderPass, ShaderPassConfig,
-        TonemapPass, TransparentPass,
+        CommandRecorder, DrawPath, ForwardLitConfig, MeshPass, Output, PassError, RenderContext, RenderPass,
+        TonemapPass,
     };
     pub use oxygen_sceneprep::{PassMask, PreparedSceneFrame, ViewPrepOptions};
 }

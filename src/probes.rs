@@ -1,22 +1,21 @@
-//! Reflection probes as ordinary registered views.
+//! Reflection probes: a position, a six-layer HDR cube with a mip chain, and
+//! six face views that render straight into its layers.
 //!
-//! A probe is a position and a six-layer HDR texture. It registers six face
-//! views (90° perspective, one per axis direction, as in
-//! [`PROBE_FACE_AXES`](oxygen_passes::PROBE_FACE_AXES)) whose graph is a depth
-//! pre-pass and shading, no transparency. A shading pass given the probe's
-//! [`ProbeInput`] copies the faces rendered this frame into the texture and
-//! samples it for specular reflections. Faces are paused between updates
-//! (`Renderer::set_view_active`), so an every-N-frames probe costs nothing on
-//! the other frames and keeps its last image.
+//! Each face view (90° perspective, one per axis direction, as in
+//! [`PROBE_FACE_AXES`](oxygen_passes::PROBE_FACE_AXES)) runs a depth
+//! pre-pass and forward lit shading into its layer of the cube, then rebuilds
+//! that layer's mip chain ([`ProbeFaceGraph`](crate::ProbeFaceGraph)). A view
+//! linked to the probe's [`ReflectionProbe::cube`] records after the faces
+//! and reflects the probe. Faces are paused between updates
+//! ([`ReflectionProbe::before_frame`]), so an every-N-frames probe costs
+//! nothing on the other frames and keeps its last image.
 
 use glam::{UVec2, Vec3};
 use oxygen_core::{Camera, ResolvedView, Scene, ViewContext, ViewError, ViewId, ViewResolver, ViewTargets};
-use oxygen_passes::{
-    CommandRecorder, DepthPrePass, PROBE_FACE_AXES, PROBE_FACES, ProbeInput, RenderContext, RenderPass, ShaderPass,
-    ShaderPassConfig,
-};
+use oxygen_passes::{Output, OutputSource, PROBE_FACE_AXES, PROBE_FACES, ProbeCube, ProbeId};
 
-use crate::{RenderError, RenderGraphFuture, Renderer};
+use crate::views::{TargetKind, ViewDesc};
+use crate::{ProbeFaceGraph, RenderError, Renderer};
 
 /// When a probe re-renders its faces.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -59,29 +58,19 @@ impl ViewResolver for ProbeFaceResolver {
     }
 }
 
-/// The render graph of a probe face: depth pre-pass and shading into HDR.
-pub fn probe_face_render_graph<'a>(
-    _id: ViewId,
-    ctx: &'a RenderContext<'a>,
-    rec: &'a mut CommandRecorder,
-) -> RenderGraphFuture<'a> {
-    Box::pin(async move {
-        DepthPrePass::new().run(ctx, rec).await?;
-        ShaderPass::new(ShaderPassConfig::default()).run(ctx, rec).await
-    })
-}
-
 /// A registered reflection probe.
 pub struct ReflectionProbe {
-    input: ProbeInput,
+    id: ProbeId,
+    faces: [ViewId; PROBE_FACES],
     update: ProbeUpdate,
     frames_seen: u64,
     update_requested: bool,
 }
 
 impl ReflectionProbe {
-    /// Registers the probe's six face views (before the views that sample
-    /// it, so they render first) and creates its texture.
+    /// Creates the probe's cube (`resolution`² per face, a full mip chain)
+    /// and registers its six face views. Views that reflect it link to
+    /// [`ReflectionProbe::cube`], before or after this call.
     pub fn register(
         renderer: &mut Renderer,
         position: Vec3,
@@ -90,10 +79,6 @@ impl ReflectionProbe {
         update: ProbeUpdate,
     ) -> Result<Self, RenderError> {
         let resolution = resolution.clamp(1, renderer.gpu().device.limits().max_texture_dimension_2d);
-        let faces = std::array::from_fn(|face| {
-            let resolver = ProbeFaceResolver { position, face, resolution, near: depth_range.0, far: depth_range.1 };
-            renderer.register_view(resolver, probe_face_render_graph)
-        });
         let texture = renderer.gpu().device.create_texture(&wgpu::TextureDescriptor {
             label: Some("reflection probe"),
             size: wgpu::Extent3d { width: resolution, height: resolution, depth_or_array_layers: PROBE_FACES as u32 },
@@ -103,26 +88,36 @@ impl ReflectionProbe {
             dimension: wgpu::TextureDimension::D2,
             format: ViewTargets::HDR_FORMAT,
             usage: wgpu::TextureUsages::TEXTURE_BINDING
-                | wgpu::TextureUsages::COPY_DST
+                | wgpu::TextureUsages::COPY_SRC
                 | wgpu::TextureUsages::RENDER_ATTACHMENT,
             view_formats: &[],
         });
-        Ok(ReflectionProbe {
-            input: ProbeInput { faces, texture, position },
-            update,
-            frames_seen: 0,
-            update_requested: true,
-        })
+        let id = renderer.views.allocate_probe();
+        let mut faces = [ViewId(u32::MAX); PROBE_FACES];
+        for (face, slot) in faces.iter_mut().enumerate() {
+            let resolver = ProbeFaceResolver { position, face, resolution, near: depth_range.0, far: depth_range.1 };
+            let mut desc = ViewDesc::new(resolver);
+            desc.target = TargetKind::ProbeFace { probe: id, face: face as u32 };
+            *slot = renderer.register_view(desc, ProbeFaceGraph)?.id();
+        }
+        renderer.add_probe(id, faces, texture, position);
+        Ok(ReflectionProbe { id, faces, update, frames_seen: 0, update_requested: true })
     }
 
-    /// What a shading pass needs to sample the probe.
-    pub fn input(&self) -> ProbeInput {
-        self.input.clone()
+    /// The probe's cube, for [`ViewDesc::reads`](crate::ViewDesc::reads) or
+    /// [`Renderer::link`].
+    pub fn cube(&self) -> Output<ProbeCube> {
+        Output::new(OutputSource::Probe(self.id))
+    }
+
+    /// The probe's id.
+    pub fn id(&self) -> ProbeId {
+        self.id
     }
 
     /// The face views.
     pub fn faces(&self) -> [ViewId; PROBE_FACES] {
-        self.input.faces
+        self.faces
     }
 
     /// Asks an on-demand probe to re-render on the next frame.
@@ -140,7 +135,7 @@ impl ReflectionProbe {
         };
         self.frames_seen += 1;
         self.update_requested = false;
-        for face in self.input.faces {
+        for face in self.faces {
             renderer.set_view_active(face, update)?;
         }
         Ok(update)

@@ -1,75 +1,75 @@
-//! Shadow views are ordinary registered views. This module registers them for
-//! the lights that need them and builds the render graphs that use them.
+//! Shadow views: the sun cascades a view owns, and the frame's local-light
+//! shadow maps. Both are views the renderer creates itself each frame from
+//! the lights that exist that frame, so a light added, removed or made
+//! shadow-casting after registration gets or loses its shadows without the
+//! application doing anything.
 //!
-//! Only shadow-casting directional lights (the light says so *and* its node
-//! does) get cascades; a scene without such a light gets no shadow view at
-//! all, so nothing is prepared or rendered for shadows.
+//! * **Sun cascades.** A view registered with
+//!   [`ViewDesc::with_sun_shadows`](crate::ViewDesc::with_sun_shadows) owns
+//!   `count` orthographic cascade views fitted to its frustum, rendered
+//!   before it, whenever the frame has a shadow sun (the first
+//!   shadow-casting directional light; see
+//!   [`FrameCollection::shadow_sun`](oxygen_sceneprep::FrameCollection::shadow_sun)).
+//!   They are created, resized and removed with it.
+//! * **Local shadows.** With [`Renderer::set_local_shadows`](crate::Renderer::set_local_shadows),
+//!   every spot light that casts shadows gets one perspective view and every
+//!   point light six (one per cube face), as the frame phase hands out atlas
+//!   tiles; each renders straight into its tile's layer of the shared atlas.
+//!   A scene without such lights renders no shadow view at all.
 
-use std::sync::Arc;
+use std::collections::BTreeMap;
 
-use oxygen_core::{CascadeResolver, CascadeSettings, LightKind, NodeFlags, NodeKey, Scene, ViewId, ViewResolver};
-use oxygen_passes::{CommandRecorder, MAX_CASCADES, RenderContext, RenderPass, ShaderPassConfig, ShadowPass};
-use oxygen_sceneprep::{ViewFilter, ViewPrepOptions};
-
-use crate::{RenderGraphFuture, Renderer};
+use oxygen_core::{CascadeSettings, LightKind, NodeKey, ResolvedView, Scene, ViewError, ViewId, ViewResolver, fit_cascade};
+use oxygen_sceneprep::{FrameCollection, LocalShadowKind, ViewFilter, ViewPrepOptions};
 
 /// ScenePrep options of a shadow view: casters only, depth only.
 pub fn shadow_view_options() -> ViewPrepOptions {
     ViewPrepOptions { filter: ViewFilter::ShadowCastersOnly, depth_only: true, ..Default::default() }
 }
 
-/// The render graph of a shadow view: depth of its casters, nothing else.
-pub fn shadow_render_graph<'a>(
-    _id: ViewId,
-    ctx: &'a RenderContext<'a>,
-    rec: &'a mut CommandRecorder,
-) -> RenderGraphFuture<'a> {
-    Box::pin(async move { ShadowPass::new().run(ctx, rec).await })
+/// Local-light shadow maps: their size and depth range.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LocalShadowSettings {
+    /// Texels a side of every tile (spot map or cube face).
+    pub resolution: u32,
+    /// Near plane of the light views.
+    pub near: f32,
+    /// Far plane of lights without a range.
+    pub far: f32,
 }
 
-/// The first directional light that casts shadows (light flag and node flag).
-pub fn shadow_casting_sun(scene: &Scene) -> Option<NodeKey> {
-    scene.nodes().find_map(|(key, node)| {
-        let light = node.light.as_ref()?;
-        let casts = light.casts_shadows
-            && light.affects_world
-            && node.flags.contains(NodeFlags::CASTS_SHADOWS | NodeFlags::VISIBLE);
-        (casts && light.kind == LightKind::Directional).then_some(key)
-    })
-}
-
-/// Registers one cascade view per cascade of the scene's shadow-casting sun
-/// (none when there is no such light) and returns their ids, nearest first,
-/// ready for [`ShaderPassConfig::shadow_cascades`]. Register them before the
-/// main view so they render first.
-pub fn register_sun_cascades(
-    renderer: &mut Renderer,
-    scene: &Scene,
-    main: Arc<dyn ViewResolver>,
-    settings: CascadeSettings,
-) -> [Option<ViewId>; MAX_CASCADES] {
-    let mut ids = [None; MAX_CASCADES];
-    let Some(sun) = shadow_casting_sun(scene) else { return ids };
-    let settings = CascadeSettings { count: settings.count.clamp(1, MAX_CASCADES as u32), ..settings };
-    for index in 0..settings.count {
-        let cascade = CascadeResolver { main: Arc::clone(&main), light: sun, settings, index };
-        ids[index as usize] =
-            Some(renderer.register_view_with_options(cascade, shadow_view_options(), shadow_render_graph));
+impl Default for LocalShadowSettings {
+    fn default() -> Self {
+        LocalShadowSettings { resolution: 1024, near: 0.05, far: 100.0 }
     }
-    ids
 }
 
-/// The standard graph with the shading pass sampling `cascades`.
-pub fn shadowed_render_graph(
-    cascades: [Option<ViewId>; MAX_CASCADES],
-) -> impl for<'a> Fn(ViewId, &'a RenderContext<'a>, &'a mut CommandRecorder) -> RenderGraphFuture<'a> + 'static {
-    crate::lit_render_graph(ShaderPassConfig { shadow_cascades: cascades, ..Default::default() })
+/// One cascade of a view's sun shadows, fitted to the resolved `camera`
+/// (world space) for the directional light whose node transform is
+/// `light_world`.
+pub fn resolve_cascade(
+    view_id: ViewId,
+    camera: &ResolvedView,
+    light_world: glam::DMat4,
+    settings: &CascadeSettings,
+    index: u32,
+) -> Result<ResolvedView, ViewError> {
+    let direction = light_world.as_mat4().transform_vector3(glam::Vec3::NEG_Z);
+    let cascade = fit_cascade(camera, direction, settings, index).ok_or_else(|| ViewError::Other {
+        view: view_id,
+        message: format!(
+            "cascade {index} cannot be fitted (light direction {direction}, depth {}..{})",
+            camera.near, camera.far
+        ),
+    })?;
+    let side = settings.resolution.max(1);
+    ResolvedView::new_f64(view_id, cascade.view, cascade.projection, glam::UVec2::splat(side), 0.0, cascade.depth)
 }
 
 /// The kind and world transform of the light on `node`, or an error for
 /// `view` when the node or its light is gone.
-fn light_of(scene: &Scene, node: NodeKey, view: ViewId) -> Result<(LightKind, glam::DMat4), oxygen_core::ViewError> {
-    let gone = || oxygen_core::ViewError::Other { view, message: "the light's node or light is gone".into() };
+fn light_of(scene: &Scene, node: NodeKey, view: ViewId) -> Result<(LightKind, glam::DMat4), ViewError> {
+    let gone = || ViewError::Other { view, message: "the light's node or light is gone".into() };
     let light = scene.node(node).and_then(|n| n.light.as_ref()).ok_or_else(gone)?;
     Ok((light.kind, scene.world_transform(node).ok_or_else(gone)?))
 }
@@ -83,15 +83,14 @@ fn light_view(
     fov: f32,
     (near, far): (f32, f32),
     resolution: u32,
-) -> Result<oxygen_core::ResolvedView, oxygen_core::ViewError> {
+) -> Result<ResolvedView, ViewError> {
     let camera = oxygen_core::Camera::perspective(fov, near, Some(far));
-    let projection =
-        camera.projection_matrix(1.0).map_err(|source| oxygen_core::ViewError::Camera { view: view_id, source })?;
-    oxygen_core::ResolvedView::new_f64(view_id, view, projection, glam::UVec2::splat(resolution.max(1)), near, far)
+    let projection = camera.projection_matrix(1.0).map_err(|source| ViewError::Camera { view: view_id, source })?;
+    ResolvedView::new_f64(view_id, view, projection, glam::UVec2::splat(resolution.max(1)), near, far)
 }
 
-fn not_a(view: ViewId, kind: &str) -> oxygen_core::ViewError {
-    oxygen_core::ViewError::Other { view, message: format!("the light is no longer a {kind} light") }
+fn not_a(view: ViewId, kind: &str) -> ViewError {
+    ViewError::Other { view, message: format!("the light is no longer a {kind} light") }
 }
 
 /// A spot light's shadow view: a perspective view from the light's node down
@@ -109,11 +108,7 @@ pub struct SpotShadowResolver {
 }
 
 impl ViewResolver for SpotShadowResolver {
-    fn resolve(
-        &self,
-        ctx: &oxygen_core::ViewContext,
-        scene: &Scene,
-    ) -> Result<oxygen_core::ResolvedView, oxygen_core::ViewError> {
+    fn resolve(&self, ctx: &oxygen_core::ViewContext, scene: &Scene) -> Result<ResolvedView, ViewError> {
         let view_id = ctx.view_id;
         let (kind, world) = light_of(scene, self.light, view_id)?;
         let LightKind::Spot { range, outer_cone, .. } = kind else { return Err(not_a(view_id, "spot")) };
@@ -144,11 +139,7 @@ pub struct PointShadowFaceResolver {
 }
 
 impl ViewResolver for PointShadowFaceResolver {
-    fn resolve(
-        &self,
-        ctx: &oxygen_core::ViewContext,
-        scene: &Scene,
-    ) -> Result<oxygen_core::ResolvedView, oxygen_core::ViewError> {
+    fn resolve(&self, ctx: &oxygen_core::ViewContext, scene: &Scene) -> Result<ResolvedView, ViewError> {
         let view_id = ctx.view_id;
         let (kind, world) = light_of(scene, self.light, view_id)?;
         let LightKind::Point { range } = kind else { return Err(not_a(view_id, "point")) };
@@ -163,45 +154,114 @@ impl ViewResolver for PointShadowFaceResolver {
     }
 }
 
-/// Registers the shadow views of every shadow-casting spot light (one view)
-/// and point light (six, one per cube face) while the
-/// [`oxygen_passes::MAX_SHADOW_TILES`] atlas tiles last, in node order with
-/// the frame phase's gating, so that view `i` of the result is atlas tile
-/// `i`, as [`ShaderPassConfig::local_shadows`] expects. Register them before
-/// the views that sample them.
-pub fn register_local_shadows(
-    renderer: &mut Renderer,
-    scene: &Scene,
-    resolution: u32,
-) -> [Option<ViewId>; oxygen_passes::MAX_SHADOW_TILES] {
-    let mut ids = [None; oxygen_passes::MAX_SHADOW_TILES];
-    let mut next_tile = 0;
-    for (key, node) in scene.nodes() {
-        let Some(light) = node.light.as_ref() else { continue };
-        let casts = light.casts_shadows
-            && light.affects_world
-            && light.mobility != oxygen_core::Mobility::Baked
-            && node.flags.contains(NodeFlags::CASTS_SHADOWS)
-            && scene.is_effectively_visible(key);
-        let faces = match light.kind {
-            LightKind::Spot { .. } => 1,
-            LightKind::Point { .. } => oxygen_passes::PROBE_FACES,
-            LightKind::Directional => 0,
-        };
-        if !casts || faces == 0 || next_tile + faces > ids.len() {
-            continue;
+/// What a frame's shadow view is for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum ShadowRole {
+    /// Cascade `index` of `owner`'s sun shadows.
+    Cascade { owner: ViewId, index: u32 },
+    /// Face `face` of the local light on `light`, in atlas tile `tile`.
+    Local { light: NodeKey, face: u32, tile: u32 },
+}
+
+/// A shadow view to render this frame, resolved.
+pub(crate) struct PlannedShadow {
+    pub(crate) id: ViewId,
+    pub(crate) role: ShadowRole,
+    pub(crate) resolved: Result<ResolvedView, ViewError>,
+}
+
+/// The shadow views the renderer owns, by what they are for. Ids are kept
+/// while their owner and light exist, so a view's slots and targets are
+/// reused frame after frame.
+#[derive(Default)]
+pub(crate) struct ShadowViews {
+    cascades: BTreeMap<(ViewId, u32), ViewId>,
+    local: BTreeMap<(NodeKey, u32), ViewId>,
+    pub(crate) local_settings: Option<LocalShadowSettings>,
+}
+
+impl ShadowViews {
+    /// Plans this frame's shadow views: cascades of every resolved view
+    /// that asked for sun shadows (`owners`: id, resolved camera in world
+    /// space, settings) when the frame has a shadow sun, and one view per
+    /// local shadow tile. Ids of views no longer needed are returned in the
+    /// second list, for the renderer to release.
+    pub(crate) fn plan(
+        &mut self,
+        owners: &[(ViewId, ResolvedView, CascadeSettings)],
+        frame: &FrameCollection,
+        scene: &Scene,
+        ctx: oxygen_core::ViewContext,
+        mut allocate: impl FnMut() -> ViewId,
+    ) -> (Vec<PlannedShadow>, Vec<ViewId>) {
+        let mut planned = Vec::new();
+        let mut wanted_cascades = BTreeMap::new();
+        let sun = frame.shadow_sun.and_then(|node| scene.world_transform(node));
+        if let Some(light_world) = sun {
+            for (owner, camera, settings) in owners {
+                let settings = CascadeSettings { count: settings.count.clamp(1, oxygen_passes::MAX_CASCADES as u32), ..*settings };
+                for index in 0..settings.count {
+                    let id = self.cascades.get(&(*owner, index)).copied().unwrap_or_else(&mut allocate);
+                    wanted_cascades.insert((*owner, index), id);
+                    let resolved = resolve_cascade(id, camera, light_world, &settings, index);
+                    planned.push(PlannedShadow { id, role: ShadowRole::Cascade { owner: *owner, index }, resolved });
+                }
+            }
         }
-        for face in 0..faces {
-            let options = shadow_view_options();
-            ids[next_tile + face] = Some(if matches!(light.kind, LightKind::Spot { .. }) {
-                let resolver = SpotShadowResolver { light: key, resolution, near: 0.05, far: 100.0 };
-                renderer.register_view_with_options(resolver, options, shadow_render_graph)
-            } else {
-                let resolver = PointShadowFaceResolver { light: key, face, resolution, near: 0.05, far: 100.0 };
-                renderer.register_view_with_options(resolver, options, shadow_render_graph)
-            });
+        let mut wanted_local = BTreeMap::new();
+        if let Some(settings) = self.local_settings {
+            for caster in &frame.local_shadow_casters {
+                for (face, tile) in caster.tiles().enumerate() {
+                    let key = (caster.node, face as u32);
+                    let id = self.local.get(&key).copied().unwrap_or_else(&mut allocate);
+                    wanted_local.insert(key, id);
+                    let ctx = oxygen_core::ViewContext { view_id: id, ..ctx };
+                    let resolved = match caster.kind {
+                        LocalShadowKind::Spot => SpotShadowResolver {
+                            light: caster.node,
+                            resolution: settings.resolution,
+                            near: settings.near,
+                            far: settings.far,
+                        }
+                        .resolve(&ctx, scene),
+                        LocalShadowKind::Point => PointShadowFaceResolver {
+                            light: caster.node,
+                            face,
+                            resolution: settings.resolution,
+                            near: settings.near,
+                            far: settings.far,
+                        }
+                        .resolve(&ctx, scene),
+                    };
+                    planned.push(PlannedShadow {
+                        id,
+                        role: ShadowRole::Local { light: caster.node, face: face as u32, tile },
+                        resolved,
+                    });
+                }
+            }
         }
-        next_tile += faces;
+        let mut released: Vec<ViewId> =
+            self.cascades.iter().filter(|(k, _)| !wanted_cascades.contains_key(k)).map(|(_, id)| *id).collect();
+        released.extend(self.local.iter().filter(|(k, _)| !wanted_local.contains_key(k)).map(|(_, id)| *id));
+        self.cascades = wanted_cascades;
+        self.local = wanted_local;
+        (planned, released)
     }
-    ids
+
+    /// Forgets the cascades of an unregistered view (their ids are released
+    /// by the caller).
+    pub(crate) fn forget_owner(&mut self, owner: ViewId) {
+        self.cascades.retain(|(o, _), _| *o != owner);
+    }
+
+    /// The cascade views `owner` has now, nearest first.
+    pub(crate) fn cascades_of(&self, owner: ViewId) -> impl Iterator<Item = ViewId> + '_ {
+        self.cascades.range((owner, 0)..=(owner, u32::MAX)).map(|(_, id)| *id)
+    }
+
+    /// Every shadow view the renderer has now.
+    pub(crate) fn all(&self) -> impl Iterator<Item = ViewId> + '_ {
+        self.cascades.values().chain(self.local.values()).copied()
+    }
 }

@@ -6,12 +6,17 @@
 //!   (resolved view, prepared frame, scene constants, bindless heap, targets,
 //!   pipeline cache); passes never mutate prepared data;
 //! * [`CommandRecorder`]: the command encoder a view's passes record into;
-//! * [`RenderPass`]: the async lifecycle, `prepare_resources` then `execute`;
-//! * [`PipelineCache`] (`pso`): pipelines created lazily the first time a
-//!   partition needs a variant, then cached for the renderer's lifetime;
-//! * [`DepthPrePass`], [`ShaderPass`] (metallic-roughness), [`TransparentPass`]
-//!   (premultiplied alpha) and [`TonemapPass`] (HDR → sRGB), each with its
-//!   WGSL beside it.
+//! * [`RenderPass`]: one async `run`, which awaits what the pass does not
+//!   have yet (a pipeline compiling on another thread, another view's output);
+//! * [`Pipelines`]: pipelines created lazily the first time a partition needs
+//!   a variant, compiled by whichever recording thread is idle, then cached
+//!   for the renderer's lifetime; [`LightingResources`]: what the forward
+//!   pass's group 3 binds (shadow atlas, probes, placeholders);
+//! * [`MeshPass`]: the one pass that draws partitions, configured as depth
+//!   pre-pass, shadow map, forward lit (metallic-roughness) or transparent
+//!   (premultiplied alpha); [`TonemapPass`] (HDR → sRGB);
+//! * typed [`Output`]s ([`Depth`], [`HdrColor`], [`ShadowMap`], [`ProbeCube`])
+//!   through which a view reads what the views it is linked to rendered.
 //!
 //! Shaders read every per-draw datum through bindless slots: the draw's
 //! `DrawMetadata` (found by `instance_index`), its world and normal matrix,
@@ -21,27 +26,31 @@
 // rewriting it with `partial_cmp` would hide that intent.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-mod depth_pre_pass;
+mod forward_lighting;
+mod lighting;
 mod lighting_inputs;
+mod mesh_pass;
+mod pipelines;
 mod probe_mips;
-mod pso;
 mod render_context;
 mod render_pass;
-mod shader_pass;
 mod shadow_atlas;
 mod tonemap_pass;
-mod transparent_pass;
 
-pub use depth_pre_pass::{DepthPrePass, DepthPrePassOutput, ShadowPass};
+pub use lighting::LightingResources;
 pub use lighting_inputs::{
     LightingInputs, MAX_CASCADES, MAX_PROBES, MAX_SHADOW_TILES, PROBE_FACE_AXES, PROBE_FACES, probe_view,
 };
-pub use pso::{
-    AlphaClass, DepthBias, PassKind, PipelineCache, PipelineKey, PipelineVariant, TONEMAP_WGSL, shader_source,
+pub use mesh_pass::{ColorOps, ForwardLitConfig, MeshPass};
+pub use pipelines::{
+    AlphaClass, CompilerGuard, DepthBias, PassKind, PipelineFuture, PipelineKey, PipelineVariant, Pipelines,
+    TONEMAP_WGSL, shader_source,
 };
-pub use render_context::{CommandRecorder, DrawPath, FrameViews, PassError, PassOutputs, RecordStats, RenderContext};
+pub use render_context::{
+    CommandRecorder, Depth, DrawPath, FrameProgress, HdrColor, LinkedView, LocalShadowsInput, Output, OutputKind,
+    OutputSource, PassError, ProbeCube, ProbeCubeInput, ProbeId, RecordStats, RenderContext, ShadowMap,
+    ShadowMapInput, ViewInputs,
+};
 pub use render_pass::RenderPass;
-pub use shader_pass::{ProbeInput, ShaderPass, ShaderPassConfig};
 pub use shadow_atlas::SHADOW_ATLAS_FORMAT;
 pub use tonemap_pass::{TonemapPass, pbr_neutral};
-pub use transparent_pass::TransparentPass;

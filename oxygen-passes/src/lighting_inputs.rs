@@ -5,7 +5,7 @@
 //! faces each.
 //!
 //! Every mesh pipeline's layout has group 3, so passes that read none of this
-//! bind [`crate::PipelineCache::no_lighting_inputs`]: 1 × 1 placeholders, a
+//! bind [`crate::LightingResources::no_lighting_inputs`]: 1 × 1 placeholders, a
 //! cascade count of 0 and no probe.
 
 use bytemuck::{Pod, Zeroable};

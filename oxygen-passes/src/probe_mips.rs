@@ -57,7 +57,7 @@ impl ProbeMipBuilder {
                 },
             ],
         });
-        let pipeline = crate::pso::fullscreen_pipeline(
+        let pipeline = crate::pipelines::fullscreen_pipeline(
             device,
             "probe mip",
             &layout,

@@ -2,19 +2,21 @@
 
 use oxygen_bindless::{BindlessHeap, SceneConstantsBuffer};
 use oxygen_core::{ColorTargets, GpuContext, ResolvedView, ViewId, ViewTargets};
-use oxygen_sceneprep::{Partition, PreparedSceneFrame};
+use oxygen_sceneprep::PreparedSceneFrame;
 use thiserror::Error;
 
-use crate::PipelineCache;
+use crate::{LightingResources, Pipelines};
 
 /// A pass that cannot record.
 #[derive(Debug, Error)]
 pub enum PassError {
-    /// `execute` ran before `prepare_resources`.
-    #[error("{pass}: execute called before prepare_resources")]
-    NotPrepared {
-        /// The pass.
-        pass: &'static str,
+    /// A graph read an output its view is not linked to.
+    #[error("reads the {output} of {from}, which the view is not linked to (link it when registering the view)")]
+    UndeclaredInput {
+        /// The kind of output.
+        output: &'static str,
+        /// Whose output.
+        from: String,
     },
     /// A partition has a mask this pass cannot draw.
     #[error("{pass}: no pipeline variant for partition mask {mask}")]
@@ -85,29 +87,6 @@ impl DrawPath {
     }
 }
 
-/// Outputs passes publish for later passes of the same view, looked up by
-/// type. Explicit configuration (e.g. `ShaderPassConfig::depth_from_pre_pass`)
-/// is the primary way passes find each other's results; this is the
-/// secondary path, and the one that lets a pass check its inputs exist.
-#[derive(Default)]
-pub struct PassOutputs {
-    values: std::cell::RefCell<Vec<Box<dyn std::any::Any>>>,
-}
-
-impl PassOutputs {
-    /// Publishes (or replaces) the value of type `T`.
-    pub fn publish<T: std::any::Any>(&self, value: T) {
-        let mut values = self.values.borrow_mut();
-        values.retain(|v| !v.is::<T>());
-        values.push(Box::new(value));
-    }
-
-    /// The value of type `T`, if some pass published one.
-    pub fn get<T: std::any::Any + Clone>(&self) -> Option<T> {
-        self.values.borrow().iter().find_map(|v| v.downcast_ref::<T>().cloned())
-    }
-}
-
 /// Everything a pass may read for one view in one frame. Immutable: passes
 /// communicate through the textures they write, never by changing this.
 pub struct RenderContext<'a> {
@@ -124,40 +103,285 @@ pub struct RenderContext<'a> {
     pub heap: &'a BindlessHeap,
     /// Colour and depth targets of the view.
     pub targets: &'a ViewTargets,
-    /// Shared pipeline cache.
-    pub pipelines: &'a PipelineCache,
+    /// Shared pipelines.
+    pub pipelines: &'a Pipelines,
+    /// Shared lighting resources (group 3 layout, shadow atlas, probe mips).
+    pub lighting: &'a LightingResources,
     /// How partitions are drawn.
     pub draw_path: DrawPath,
-    /// What earlier passes of this view published.
-    pub outputs: PassOutputs,
-    /// Every view of this frame with its targets; views are submitted in
-    /// order, so a view may sample what an earlier one rendered.
-    pub frame_views: &'a FrameViews<'a>,
+    /// What this view may read from other views: its own sun cascades, the
+    /// frame's local shadow maps, and the outputs it is linked to.
+    pub inputs: ViewInputs<'a>,
+    /// Which views of the frame have finished recording; inputs are awaited
+    /// through it.
+    pub progress: &'a FrameProgress,
     /// The render origin: every matrix and position the GPU sees this frame
-    /// (`view`, `frame_views`, world matrices, lights) is relative to it. A
-    /// pass that uploads a world position of its own subtracts it.
+    /// (`view`, `inputs`, world matrices, lights) is relative to it. A pass
+    /// that uploads a world position of its own subtracts it.
     pub origin: glam::DVec3,
 }
 
-impl RenderContext<'_> {
+impl<'a> RenderContext<'a> {
     /// The view's colour targets, or [`PassError::NoColorTarget`] naming
     /// `pass` when the view is depth-only.
-    pub fn color_targets(&self, pass: &'static str) -> Result<&ColorTargets, PassError> {
+    pub fn color_targets(&self, pass: &'static str) -> Result<&'a ColorTargets, PassError> {
         self.targets.color.as_ref().ok_or(PassError::NoColorTarget { pass })
+    }
+
+    /// Another view's output this view is linked to, once the views that
+    /// produce it have recorded their commands (their command buffers are
+    /// submitted before this view's). Fails with
+    /// [`PassError::UndeclaredInput`] for an output the view was not linked
+    /// to at registration: the renderer orders views by their links, so an
+    /// unlinked read could see last frame's image.
+    pub async fn input<K: OutputKind>(&self, output: Output<K>) -> Result<K::Value<'a>, PassError> {
+        let (value, producers) = K::find(&self.inputs, output.source)
+            .ok_or(PassError::UndeclaredInput { output: K::NAME, from: output.source.to_string() })?;
+        self.progress.recorded(&producers).await;
+        Ok(value)
     }
 }
 
-/// The views of one frame, in submission order, with their targets.
-#[derive(Default)]
-pub struct FrameViews<'a> {
-    /// (id, resolved view, targets) per view.
-    pub entries: Vec<(ViewId, &'a ResolvedView, &'a ViewTargets)>,
+/// Identifies a reflection probe registered with a renderer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct ProbeId(pub u32);
+
+impl std::fmt::Display for ProbeId {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "probe#{}", self.0)
+    }
 }
 
-impl<'a> FrameViews<'a> {
-    /// The resolved view and targets of `id`, if it is part of this frame.
-    pub fn get(&self, id: ViewId) -> Option<(&'a ResolvedView, &'a ViewTargets)> {
-        self.entries.iter().find(|(v, _, _)| *v == id).map(|(_, view, targets)| (*view, *targets))
+/// Whose output a link names: one view's, or a probe's (its six faces).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum OutputSource {
+    /// A view's targets.
+    View(ViewId),
+    /// A reflection probe's cube, rendered by its face views.
+    Probe(ProbeId),
+}
+
+impl std::fmt::Display for OutputSource {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            OutputSource::View(v) => v.fmt(f),
+            OutputSource::Probe(p) => p.fmt(f),
+        }
+    }
+}
+
+/// A typed output of a view (or a probe): what a graph names to read it.
+/// `K` says what it is: [`Depth`], [`HdrColor`], [`ShadowMap`] or
+/// [`ProbeCube`].
+pub struct Output<K> {
+    /// Who produces it.
+    pub source: OutputSource,
+    kind: std::marker::PhantomData<fn() -> K>,
+}
+
+impl<K> Clone for Output<K> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<K> Copy for Output<K> {}
+impl<K> std::fmt::Debug for Output<K> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Output<{}>({})", std::any::type_name::<K>().rsplit("::").next().unwrap_or("?"), self.source)
+    }
+}
+impl<K> PartialEq for Output<K> {
+    fn eq(&self, other: &Self) -> bool {
+        self.source == other.source
+    }
+}
+
+impl<K: OutputKind> Output<K> {
+    /// The output of `source`.
+    pub fn new(source: OutputSource) -> Self {
+        Output { source, kind: std::marker::PhantomData }
+    }
+}
+
+/// The depth target of a view (reverse-Z).
+pub enum Depth {}
+/// The linear HDR colour target of a view.
+pub enum HdrColor {}
+/// The shadow map a depth-only view rendered (its depth, where it lives:
+/// its own target or its atlas layer), with the light's view.
+pub enum ShadowMap {}
+/// A reflection probe's six-layer cube with its mip chain.
+pub enum ProbeCube {}
+
+/// What kinds of output exist and how a view's inputs find them.
+pub trait OutputKind: 'static {
+    /// What reading it gives.
+    type Value<'a>;
+    /// Name for errors.
+    const NAME: &'static str;
+    /// The value and the views that must have recorded first.
+    fn find<'a>(inputs: &ViewInputs<'a>, source: OutputSource) -> Option<(Self::Value<'a>, Vec<ViewId>)>;
+}
+
+fn linked_view<'i, 'a>(inputs: &'i ViewInputs<'a>, source: OutputSource) -> Option<&'i LinkedView<'a>> {
+    let OutputSource::View(id) = source else { return None };
+    inputs.views.iter().find(|v| v.id == id)
+}
+
+impl OutputKind for Depth {
+    type Value<'a> = (&'a ResolvedView, &'a wgpu::TextureView);
+    const NAME: &'static str = "depth";
+    fn find<'a>(inputs: &ViewInputs<'a>, source: OutputSource) -> Option<(Self::Value<'a>, Vec<ViewId>)> {
+        let v = linked_view(inputs, source)?;
+        Some(((v.view, &v.targets.depth_view), vec![v.id]))
+    }
+}
+
+impl OutputKind for HdrColor {
+    type Value<'a> = (&'a ResolvedView, &'a wgpu::TextureView);
+    const NAME: &'static str = "HDR colour";
+    fn find<'a>(inputs: &ViewInputs<'a>, source: OutputSource) -> Option<(Self::Value<'a>, Vec<ViewId>)> {
+        let v = linked_view(inputs, source)?;
+        Some(((v.view, &v.targets.color.as_ref()?.hdr_view), vec![v.id]))
+    }
+}
+
+impl OutputKind for ShadowMap {
+    type Value<'a> = ShadowMapInput<'a>;
+    const NAME: &'static str = "shadow map";
+    fn find<'a>(inputs: &ViewInputs<'a>, source: OutputSource) -> Option<(Self::Value<'a>, Vec<ViewId>)> {
+        let OutputSource::View(id) = source else { return None };
+        let own = inputs.cascades.iter().chain(inputs.local_shadows.iter().flat_map(|l| l.tiles.iter().flatten()));
+        if let Some(map) = own.into_iter().find(|m| m.producer == id) {
+            return Some((map.clone(), vec![id]));
+        }
+        let v = linked_view(inputs, source)?;
+        let map = ShadowMapInput { producer: v.id, view: v.view, depth: &v.targets.depth_view, resolution: v.targets.width };
+        Some((map, vec![v.id]))
+    }
+}
+
+impl OutputKind for ProbeCube {
+    type Value<'a> = ProbeCubeInput<'a>;
+    const NAME: &'static str = "probe cube";
+    fn find<'a>(inputs: &ViewInputs<'a>, source: OutputSource) -> Option<(Self::Value<'a>, Vec<ViewId>)> {
+        let OutputSource::Probe(id) = source else { return None };
+        let probe = inputs.probes.iter().find(|p| p.probe == id)?;
+        Some((probe.clone(), probe.faces.to_vec()))
+    }
+}
+
+/// A shadow map another view rendered.
+#[derive(Clone, Debug)]
+pub struct ShadowMapInput<'a> {
+    /// The shadow view that rendered it.
+    pub producer: ViewId,
+    /// The light's view (relative to the render origin).
+    pub view: &'a ResolvedView,
+    /// Its depth (a whole target, or one layer of the local shadow atlas).
+    pub depth: &'a wgpu::TextureView,
+    /// Texels a side.
+    pub resolution: u32,
+}
+
+/// The frame's local-light shadow maps: one atlas, one layer per tile.
+#[derive(Clone, Debug)]
+pub struct LocalShadowsInput<'a> {
+    /// The atlas as a 2D array.
+    pub atlas: &'a wgpu::TextureView,
+    /// Per tile (atlas layer): the shadow view rendering it, if any this frame.
+    pub tiles: Vec<Option<ShadowMapInput<'a>>>,
+}
+
+/// A reflection probe a view is linked to.
+#[derive(Clone, Debug)]
+pub struct ProbeCubeInput<'a> {
+    /// The probe.
+    pub probe: ProbeId,
+    /// Its face views (+X, −X, +Y, −Y, +Z, −Z).
+    pub faces: [ViewId; crate::PROBE_FACES],
+    /// Six-layer HDR texture with its mip chain.
+    pub texture: &'a wgpu::Texture,
+    /// Its world position.
+    pub position: glam::Vec3,
+}
+
+/// A view this view is linked to, with its targets.
+#[derive(Clone, Copy)]
+pub struct LinkedView<'a> {
+    /// The view.
+    pub id: ViewId,
+    /// Its resolved view (relative to the render origin).
+    pub view: &'a ResolvedView,
+    /// Its targets.
+    pub targets: &'a ViewTargets,
+}
+
+/// What one view may read from the others this frame.
+#[derive(Clone, Default)]
+pub struct ViewInputs<'a> {
+    /// The view's own sun-shadow cascades, nearest first (empty when it
+    /// asked for none or no directional light casts shadows this frame).
+    pub cascades: Vec<ShadowMapInput<'a>>,
+    /// The frame's local-light shadow maps, when any light casts them.
+    pub local_shadows: Option<LocalShadowsInput<'a>>,
+    /// The reflection probes the view is linked to, in link order.
+    pub probes: Vec<ProbeCubeInput<'a>>,
+    /// The views the view is linked to.
+    pub views: Vec<LinkedView<'a>>,
+}
+
+/// Which views of a frame have finished recording. Awaiting an input waits
+/// here; the renderer marks each view when its graph returns.
+pub struct FrameProgress {
+    state: std::sync::Mutex<ProgressState>,
+}
+
+struct ProgressState {
+    pending: Vec<ViewId>,
+    wakers: Vec<std::task::Waker>,
+}
+
+impl FrameProgress {
+    /// Progress of a frame in which `recording` will record; any other view
+    /// counts as recorded already (it keeps its last image).
+    pub fn new(recording: impl IntoIterator<Item = ViewId>) -> Self {
+        FrameProgress {
+            state: std::sync::Mutex::new(ProgressState { pending: recording.into_iter().collect(), wakers: Vec::new() }),
+        }
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, ProgressState> {
+        self.state.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Marks `view` recorded and wakes whoever awaits it.
+    pub fn complete(&self, view: ViewId) {
+        let wakers = {
+            let mut state = self.lock();
+            state.pending.retain(|v| *v != view);
+            std::mem::take(&mut state.wakers)
+        };
+        wakers.into_iter().for_each(std::task::Waker::wake);
+    }
+
+    /// Whether `view` still has to record.
+    pub fn is_pending(&self, view: ViewId) -> bool {
+        self.lock().pending.contains(&view)
+    }
+
+    /// Resolves once every view of `views` has recorded.
+    pub fn recorded<'p>(&'p self, views: &'p [ViewId]) -> impl std::future::Future<Output = ()> + 'p {
+        std::future::poll_fn(move |cx| {
+            let mut state = self.lock();
+            if views.iter().any(|v| state.pending.contains(v)) {
+                // Woken on every completion; re-checked then.
+                state.wakers.push(cx.waker().clone());
+                std::task::Poll::Pending
+            } else {
+                std::task::Poll::Ready(())
+            }
+        })
     }
 }
 
@@ -196,87 +420,5 @@ impl CommandRecorder {
     /// Finishes recording.
     pub fn finish(self) -> (wgpu::CommandBuffer, RecordStats) {
         (self.encoder.finish(), self.stats)
-    }
-}
-
-/// Sets the bindless and scene-constant bind groups and the shared index buffer.
-fn bind_view_resources(pass: &mut wgpu::RenderPass<'_>, ctx: &RenderContext<'_>, shadows: &wgpu::BindGroup) {
-    pass.set_bind_group(0, ctx.heap.bind_group(), &[]);
-    pass.set_bind_group(1, ctx.scene_constants.bind_group(), &[]);
-    pass.set_bind_group(2, ctx.heap.texture_bind_group(), &[]);
-    pass.set_bind_group(3, shadows, &[]);
-    pass.set_index_buffer(ctx.heap.index_buffer().slice(..), wgpu::IndexFormat::Uint32);
-}
-
-/// Draws every draw of `partition`. Either way the draw's position in the
-/// view's array reaches the shader as `first_instance`, which is how the
-/// vertex shader finds its `DrawMetadata`.
-fn draw_partition(
-    pass: &mut wgpu::RenderPass<'_>,
-    ctx: &RenderContext<'_>,
-    partition: &Partition,
-    stats: &mut RecordStats,
-) {
-    if ctx.draw_path == DrawPath::MultiDrawIndirect {
-        let stride = std::mem::size_of::<oxygen_sceneprep::DrawIndexedIndirect>() as u64;
-        let first = ctx.prepared.slots().indirect_args.start as u64 + partition.begin as u64;
-        let buffer = ctx.heap.buffer(oxygen_bindless::DomainKind::IndirectArgs);
-        pass.multi_draw_indexed_indirect(buffer, first * stride, partition.len());
-        stats.draw_calls += 1;
-        return;
-    }
-    let draws = &ctx.prepared.draws()[partition.range()];
-    for (offset, draw) in draws.iter().enumerate() {
-        let draw_index = partition.begin + offset as u32;
-        pass.draw_indexed(
-            draw.index_range(),
-            draw.absolute_base_vertex(),
-            draw_index..draw_index + draw.instance_count,
-        );
-        stats.draw_calls += 1;
-    }
-}
-
-/// The pipeline of every partition in `partitions` for `pass`, from the
-/// shared cache (created the first time a partition needs its variant).
-pub(crate) fn partition_pipelines<'a>(
-    ctx: &RenderContext<'_>,
-    pass: crate::PassKind,
-    color_format: Option<wgpu::TextureFormat>,
-    depth_bias: crate::DepthBias,
-    partitions: impl Iterator<Item = &'a Partition>,
-) -> Vec<wgpu::RenderPipeline> {
-    partitions
-        .map(|p| {
-            ctx.pipelines.get(
-                &ctx.gpu.device,
-                crate::PipelineKey {
-                    pass,
-                    variant: crate::PipelineVariant::from_mask(p.mask),
-                    color_format,
-                    depth_format: oxygen_core::ViewTargets::DEPTH_FORMAT,
-                    depth_bias,
-                },
-            )
-        })
-        .collect()
-}
-
-/// Binds the view's bindless resources and `shadows` (group 3; the cache's
-/// empty group for passes that sample none), then draws each partition with
-/// its pipeline (one pipeline bind per partition).
-pub(crate) fn draw_partitions<'a>(
-    pass: &mut wgpu::RenderPass<'_>,
-    ctx: &RenderContext<'_>,
-    partitions: impl Iterator<Item = &'a Partition>,
-    pipelines: &[wgpu::RenderPipeline],
-    shadows: &wgpu::BindGroup,
-    stats: &mut RecordStats,
-) {
-    bind_view_resources(pass, ctx, shadows);
-    for (partition, pipeline) in partitions.zip(pipelines) {
-        pass.set_pipeline(pipeline);
-        stats.pipeline_binds += 1;
-        draw_partition(pass, ctx, partition, stats);
     }
 }

@@ -22,14 +22,13 @@ struct TonemapParams {
 /// The tone-map pass.
 pub struct TonemapPass {
     exposure: f32,
-    pipeline: Option<(wgpu::RenderPipeline, wgpu::BindGroup)>,
 }
 
 impl TonemapPass {
     /// A pass scaling radiance by `exposure` (non-finite or negative values become 1).
     pub fn new(exposure: f32) -> Self {
         let exposure = if exposure.is_finite() && exposure >= 0.0 { exposure } else { 1.0 };
-        TonemapPass { exposure, pipeline: None }
+        TonemapPass { exposure }
     }
 }
 
@@ -62,11 +61,8 @@ impl RenderPass for TonemapPass {
         "TonemapPass"
     }
 
-    async fn prepare_resources(
-        &mut self,
-        ctx: &RenderContext<'_>,
-        _rec: &mut CommandRecorder,
-    ) -> Result<(), PassError> {
+    async fn run(&mut self, ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError> {
+        let _span = info_span!("tonemap", view = %ctx.view.view_id).entered();
         let device = &ctx.gpu.device;
         let color = ctx.color_targets(self.name())?;
         let (pipeline, layout) = ctx.pipelines.tonemap(device, ViewTargets::COLOR_FORMAT);
@@ -89,18 +85,13 @@ impl RenderPass for TonemapPass {
                 wgpu::BindGroupEntry { binding: 1, resource: params.as_entire_binding() },
             ],
         });
-        self.pipeline = Some((pipeline, bind_group));
-        Ok(())
-    }
-
-    async fn execute(&mut self, ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError> {
-        let _span = info_span!("tonemap_execute", view = %ctx.view.view_id).entered();
-        let (pipeline, bind_group) = self.pipeline.as_ref().ok_or(PassError::NotPrepared { pass: self.name() })?;
-        let color = ctx.color_targets(self.name())?;
+        let Some(color_view) = color.color_view.as_ref() else {
+            return Err(PassError::NoColorTarget { pass: self.name() });
+        };
         let mut pass = rec.encoder().begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("tonemap"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &color.color_view,
+                view: color_view,
                 depth_slice: None,
                 resolve_target: None,
                 ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
@@ -110,8 +101,8 @@ impl RenderPass for TonemapPass {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, bind_group, &[]);
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &bind_group, &[]);
         pass.draw(0..3, 0..1);
         drop(pass);
         rec.stats.render_passes += 1;

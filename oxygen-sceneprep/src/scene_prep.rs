@@ -226,6 +226,12 @@ impl ScenePrep {
         self.pool.threads()
     }
 
+    /// The persistent worker threads, for other per-view work of the frame
+    /// (the renderer records the views' graphs on them).
+    pub fn worker_pool(&self) -> &WorkerPool {
+        &self.pool
+    }
+
     /// The last frame phase's output.
     pub fn frame_collection(&self) -> &FrameCollection {
         &self.frame

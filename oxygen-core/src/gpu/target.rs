@@ -10,10 +10,17 @@
 pub struct ViewTargets {
     /// HDR and display colour; `None` for a depth-only view.
     pub color: Option<ColorTargets>,
-    /// Depth texture (render attachment, sampled, copy source).
+    /// Depth texture (render attachment, sampled, copy source); for a
+    /// shadow view rendering into an atlas, the whole atlas.
     pub depth: wgpu::Texture,
-    /// Default view of `depth`.
+    /// The view of `depth` passes render into: the whole texture, or the
+    /// view's layer of the atlas.
     pub depth_view: wgpu::TextureView,
+    /// The layer of `depth` the view renders (0 unless it is an atlas).
+    pub depth_layer: u32,
+    /// Whether `depth` belongs to these targets (false for an atlas layer);
+    /// only owned textures count in [`ViewTargets::bytes`].
+    pub owns_depth: bool,
     /// Width in pixels.
     pub width: u32,
     /// Height in pixels.
@@ -22,15 +29,19 @@ pub struct ViewTargets {
 
 /// The colour half of a view's targets.
 pub struct ColorTargets {
-    /// Linear HDR colour (render attachment, sampled by the tone map, copy
-    /// source for reflection probes).
+    /// Linear HDR colour (render attachment, sampled by the tone map); for
+    /// a reflection-probe face, the probe's whole cube texture.
     pub hdr: wgpu::Texture,
-    /// Default view of `hdr`.
+    /// The view of `hdr` passes render into: the whole texture, or the
+    /// face's layer (mip 0) of the probe cube.
     pub hdr_view: wgpu::TextureView,
-    /// Displayable colour (render attachment, copy source, sampled).
-    pub color: wgpu::Texture,
+    /// The layer of `hdr` the view renders (0 unless it is a probe face).
+    pub hdr_layer: u32,
+    /// Displayable colour (render attachment, copy source, sampled); `None`
+    /// for views that are never tone-mapped (probe faces).
+    pub color: Option<wgpu::Texture>,
     /// Default view of `color`.
-    pub color_view: wgpu::TextureView,
+    pub color_view: Option<wgpu::TextureView>,
 }
 
 impl ViewTargets {
@@ -63,15 +74,54 @@ impl ViewTargets {
         u64::from(width) * u64::from(height) * per_pixel
     }
 
-    /// Bytes these targets take ([`ViewTargets::bytes_for`]).
+    /// Bytes of the textures these targets own: a shadow view's atlas
+    /// layer and a probe face's cube are counted by their owners.
     pub fn bytes(&self) -> u64 {
-        Self::bytes_for(self.width, self.height, self.color.is_some())
+        let pixels = u64::from(self.width) * u64::from(self.height);
+        let depth = if self.owns_depth { 4 } else { 0 };
+        let color = match &self.color {
+            Some(c) if c.color.is_some() => 8 + 4,
+            _ => 0,
+        };
+        pixels * (depth + color)
     }
 
-    /// True when the targets are `width × height` and have colour exactly
-    /// when `with_color` says so.
+    /// True when the targets are `width × height`, own their textures, and
+    /// have colour exactly when `with_color` says so.
     pub fn fits(&self, width: u32, height: u32, with_color: bool) -> bool {
-        self.width == width && self.height == height && self.color.is_some() == with_color
+        self.width == width
+            && self.height == height
+            && self.owns_depth
+            && self.color.as_ref().map_or(!with_color, |c| with_color && c.color.is_some())
+    }
+
+    /// Targets of a shadow view that renders into `layer` of a depth array
+    /// (`atlas`, `Depth32Float`, square): no texture of its own.
+    pub fn atlas_layer(atlas: &wgpu::Texture, layer: u32) -> Self {
+        ViewTargets {
+            color: None,
+            depth_view: single_layer_view(atlas, layer, "atlas layer"),
+            depth: atlas.clone(),
+            depth_layer: layer,
+            owns_depth: false,
+            width: atlas.width(),
+            height: atlas.height(),
+        }
+    }
+
+    /// Targets of a reflection-probe face: its own depth, and level 0 of
+    /// `layer` of the probe's HDR `cube` (a six-layer `Rgba16Float` array)
+    /// as its colour; nothing to tone-map into.
+    pub fn probe_face(device: &wgpu::Device, cube: &wgpu::Texture, layer: u32, label: &str) -> Self {
+        let mut targets = Self::create(device, cube.width(), cube.height(), label, false);
+        targets.color = Some(ColorTargets {
+            hdr: cube.clone(),
+            hdr_view: single_layer_view(cube, layer, "probe face"),
+            hdr_layer: layer,
+            color: None,
+            color_view: None,
+        });
+        targets
     }
 
     fn create(device: &wgpu::Device, width: u32, height: u32, label: &str, with_color: bool) -> Self {
@@ -96,7 +146,6 @@ impl ViewTargets {
                     | wgpu::TextureUsages::TEXTURE_BINDING,
                 "colour",
             );
-            // Copy source too: reflection probes copy their faces' HDR images.
             let hdr = make(
                 Self::HDR_FORMAT,
                 wgpu::TextureUsages::RENDER_ATTACHMENT
@@ -107,18 +156,40 @@ impl ViewTargets {
             ColorTargets {
                 hdr_view: hdr.create_view(&Default::default()),
                 hdr,
-                color_view: color.create_view(&Default::default()),
-                color,
+                hdr_layer: 0,
+                color_view: Some(color.create_view(&Default::default())),
+                color: Some(color),
             }
         });
         let depth = make(
             Self::DEPTH_FORMAT,
-            // Copy source: local-light shadow maps are copied into the atlas.
+            // Copy source: read back by tests and tools.
             wgpu::TextureUsages::RENDER_ATTACHMENT
                 | wgpu::TextureUsages::TEXTURE_BINDING
                 | wgpu::TextureUsages::COPY_SRC,
             "depth",
         );
-        ViewTargets { color, depth_view: depth.create_view(&Default::default()), depth, width, height }
+        ViewTargets {
+            color,
+            depth_view: depth.create_view(&Default::default()),
+            depth,
+            depth_layer: 0,
+            owns_depth: true,
+            width,
+            height,
+        }
     }
+}
+
+/// A 2D view of level 0 of one layer of an array texture.
+fn single_layer_view(texture: &wgpu::Texture, layer: u32, label: &str) -> wgpu::TextureView {
+    texture.create_view(&wgpu::TextureViewDescriptor {
+        label: Some(label),
+        dimension: Some(wgpu::TextureViewDimension::D2),
+        base_mip_level: 0,
+        mip_level_count: Some(1),
+        base_array_layer: layer,
+        array_layer_count: Some(1),
+        ..Default::default()
+    })
 }

@@ -1,15 +1,18 @@
-//! Pipeline state objects: variants, keys and the lazy cache.
+//! Pipelines: variants, keys and the lazy cache whose misses are awaited.
 //!
 //! A pass picks one of four variants per partition, opaque/masked ×
 //! back-face/double-sided (blend × back-face/double-sided for transparency).
 //! Pipelines are created the first time a partition needs one and cached by
 //! [`PipelineKey`] for the renderer's lifetime; the bind-group layouts they
 //! use never change (heap growth only replaces the bind group), so nothing is
-//! ever rebuilt per frame. [`PipelineCache::pipelines_created`] proves it.
+//! ever rebuilt per frame. [`Pipelines::pipelines_created`] proves it.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, VecDeque};
+use std::future::Future;
+use std::pin::Pin;
 use std::sync::Mutex;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::task::{Context, Poll, Waker};
 
 use oxygen_bindless::{BindlessHeap, DomainKind, SCENE_CONSTANTS_WGSL, TexturePath};
 use oxygen_sceneprep::{GPU_RECORDS_WGSL, PassMask};
@@ -143,132 +146,105 @@ pub fn shader_source(pass: PassKind, textures: TexturePath) -> String {
     )
 }
 
-/// Lazily created, cached pipelines shared by every view.
-pub struct PipelineCache {
+/// Lazily created, cached mesh pipelines shared by every view.
+///
+/// A pass asks for a pipeline with [`Pipelines::get`] and awaits it. A
+/// pipeline not yet created is queued, and the future stays pending while a
+/// recording thread with nothing else to do compiles it
+/// ([`Pipelines::compile_next`]); meanwhile that view's thread goes on with
+/// other views. So on a first frame, many views' pipelines compile side by
+/// side instead of one after another inside each view's graph. Without any
+/// recording thread attached (a pass driven by hand under `block_on`), the
+/// future compiles inline, so it can never wait forever.
+pub struct Pipelines {
     layout: wgpu::PipelineLayout,
-    lighting_inputs: crate::lighting_inputs::LightingInputResources,
-    shadow_atlas: crate::shadow_atlas::ShadowAtlas,
-    /// (destination texture, layer) → (source view, frame) of the last copy.
-    copies: Mutex<HashMap<(wgpu::Texture, u32), (oxygen_core::ViewId, u64)>>,
-    probe_mips: crate::probe_mips::ProbeMipBuilder,
     texture_path: TexturePath,
     modules: Mutex<HashMap<PassKind, wgpu::ShaderModule>>,
-    pipelines: Mutex<HashMap<PipelineKey, wgpu::RenderPipeline>>,
+    state: Mutex<CompileState>,
     tonemap: Mutex<Option<(wgpu::RenderPipeline, wgpu::BindGroupLayout)>>,
     created: AtomicU64,
+    compilers: AtomicUsize,
 }
 
-impl PipelineCache {
-    /// A cache for pipelines using the heap's bind-group layouts.
-    pub fn new(device: &wgpu::Device, heap: &BindlessHeap) -> Self {
-        let lighting_inputs = crate::lighting_inputs::LightingInputResources::new(device);
+#[derive(Default)]
+struct CompileState {
+    pipelines: HashMap<PipelineKey, Entry>,
+    queue: VecDeque<PipelineKey>,
+}
+
+enum Entry {
+    Ready(wgpu::RenderPipeline),
+    /// Queued or compiling; woken when ready.
+    Pending(Vec<Waker>),
+}
+
+impl Pipelines {
+    /// Pipelines over the heap's bind-group layouts and the lighting inputs'
+    /// (group 3).
+    pub fn new(device: &wgpu::Device, heap: &BindlessHeap, lighting: &crate::LightingResources) -> Self {
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("oxygen bindless pipeline layout"),
             bind_group_layouts: &[
                 Some(heap.domain_layout()),
                 Some(heap.scene_constants_layout()),
                 Some(heap.texture_layout()),
-                Some(&lighting_inputs.layout),
+                Some(lighting.layout()),
             ],
             immediate_size: 0,
         });
-        PipelineCache {
+        Pipelines {
             layout,
-            shadow_atlas: Default::default(),
-            copies: Mutex::new(HashMap::new()),
-            probe_mips: crate::probe_mips::ProbeMipBuilder::new(device),
-            lighting_inputs,
             texture_path: heap.texture_path(),
             modules: Mutex::new(HashMap::new()),
-            pipelines: Mutex::new(HashMap::new()),
+            state: Mutex::new(CompileState::default()),
             tonemap: Mutex::new(None),
             created: AtomicU64::new(0),
+            compilers: AtomicUsize::new(0),
         }
     }
 
-    /// Group 3 for passes that read no shadow maps and no probe.
-    pub fn no_lighting_inputs(&self) -> &wgpu::BindGroup {
-        &self.lighting_inputs.no_inputs
-    }
-
-    /// A group 3 with these cascade maps (unused slots `None`), this probe
-    /// (a six-layer array view, or `None`) and their uniform block.
-    pub fn lighting_inputs_bind_group(
-        &self,
-        device: &wgpu::Device,
-        maps: [Option<&wgpu::TextureView>; crate::MAX_CASCADES],
-        shadow_atlas: Option<&wgpu::TextureView>,
-        probes: [Option<&wgpu::TextureView>; crate::MAX_PROBES],
-        uniform: &crate::LightingInputs,
-    ) -> wgpu::BindGroup {
-        let inputs = &self.lighting_inputs;
-        let buffer = crate::lighting_inputs::uniform_buffer(device, uniform);
-        // Unused slots are never sampled (the uniform's counts say so) but must be bound.
-        let maps = maps.map(|m| m.unwrap_or(&inputs.placeholder_map));
-        let shadow_atlas = shadow_atlas.unwrap_or(&inputs.placeholder_atlas);
-        let probes = probes.map(|p| p.unwrap_or(&inputs.placeholder_probe));
-        let samplers = (&inputs.sampler, &inputs.probe_sampler);
-        crate::lighting_inputs::bind_group(device, &inputs.layout, samplers, (maps, shadow_atlas), probes, &buffer)
-    }
-
-    /// Rebuilds the mip levels of one layer of a probe texture from its
-    /// level 0 (nothing for a one-level texture).
-    pub fn rebuild_probe_mips(
-        &self,
-        device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
-        texture: &wgpu::Texture,
-        layer: u32,
-    ) {
-        self.probe_mips.rebuild(device, encoder, texture, layer);
-    }
-
-    /// Copies local-light shadow maps (shadow view and depth texture, by
-    /// tile) of frame `frame` into the layers of the atlas, once per frame
-    /// however many views sample them, and returns its array view.
-    pub fn fill_shadow_atlas(
-        &self,
-        device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
-        maps: &[Option<(oxygen_core::ViewId, &wgpu::Texture)>; crate::MAX_SHADOW_TILES],
-        frame: u64,
-    ) -> Result<wgpu::TextureView, String> {
-        self.shadow_atlas.fill(device, encoder, maps, frame)
-    }
-
-    /// True the first time in frame `frame` that layer `layer` of
-    /// `destination` is to receive `source`'s image: views sharing a probe
-    /// copy each face (and rebuild its mips) once per frame.
-    pub fn claim_copy(&self, destination: &wgpu::Texture, layer: u32, source: oxygen_core::ViewId, frame: u64) -> bool {
-        let mut copies = self.copies.lock().unwrap_or_else(|e| e.into_inner());
-        // Older records can only belong to textures no longer updated.
-        copies.retain(|_, (_, copied)| *copied + 1 >= frame);
-        let key = (destination.clone(), layer);
-        if copies.get(&key) == Some(&(source, frame)) {
-            return false;
-        }
-        copies.insert(key, (source, frame));
-        true
-    }
-
-    /// Pipelines created since the cache was made.
+    /// Pipelines created since this cache was made.
     pub fn pipelines_created(&self) -> u64 {
         self.created.load(Ordering::Relaxed)
     }
 
-    /// The pipeline for `key`, created on first request.
-    pub fn get(&self, device: &wgpu::Device, key: PipelineKey) -> wgpu::RenderPipeline {
-        // A poisoned lock only means another thread panicked mid-insert; the
-        // map itself is still consistent (insert is atomic), so keep going.
-        let mut pipelines = self.pipelines.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(p) = pipelines.get(&key) {
-            return p.clone();
-        }
+    /// The pipeline for `key`: ready at once when it exists, otherwise after
+    /// it has been compiled (see the type's docs).
+    pub fn get<'a>(&'a self, device: &'a wgpu::Device, key: PipelineKey) -> PipelineFuture<'a> {
+        PipelineFuture { pipelines: self, device, key }
+    }
+
+    /// Marks the calling thread as one that runs [`Pipelines::compile_next`]
+    /// while its views wait, until the guard is dropped.
+    pub fn attach_compiler(&self) -> CompilerGuard<'_> {
+        self.compilers.fetch_add(1, Ordering::AcqRel);
+        CompilerGuard(self)
+    }
+
+    /// Compiles one queued pipeline, if any, and wakes the passes awaiting
+    /// it. Returns whether there was one.
+    pub fn compile_next(&self, device: &wgpu::Device) -> bool {
+        let Some(key) = self.lock_state().queue.pop_front() else { return false };
+        self.compile(device, key);
+        true
+    }
+
+    fn lock_state(&self) -> std::sync::MutexGuard<'_, CompileState> {
+        // A poisoned lock means a compile panicked; the map is still consistent.
+        self.state.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Compiles `key` (taken off the queue by the caller) and publishes it.
+    fn compile(&self, device: &wgpu::Device, key: PipelineKey) -> wgpu::RenderPipeline {
+        let _span = tracing::info_span!("compile_pipeline", pass = ?key.pass, variant = ?key.variant).entered();
         let module = self.module(device, key.pass);
         let pipeline = self.create(device, &module, key);
         self.created.fetch_add(1, Ordering::Relaxed);
         debug!(?key, "pipeline created");
-        pipelines.insert(key, pipeline.clone());
+        let previous = self.lock_state().pipelines.insert(key, Entry::Ready(pipeline.clone()));
+        if let Some(Entry::Pending(wakers)) = previous {
+            wakers.into_iter().for_each(Waker::wake);
+        }
         pipeline
     }
 
@@ -388,6 +364,59 @@ impl PipelineCache {
             multiview_mask: None,
             cache: None,
         })
+    }
+}
+
+/// Keeps a thread counted as a pipeline compiler ([`Pipelines::attach_compiler`]).
+pub struct CompilerGuard<'a>(&'a Pipelines);
+
+impl Drop for CompilerGuard<'_> {
+    fn drop(&mut self) {
+        self.0.compilers.fetch_sub(1, Ordering::AcqRel);
+    }
+}
+
+/// A pipeline being looked up or compiled ([`Pipelines::get`]).
+pub struct PipelineFuture<'a> {
+    pipelines: &'a Pipelines,
+    device: &'a wgpu::Device,
+    key: PipelineKey,
+}
+
+impl Future for PipelineFuture<'_> {
+    type Output = wgpu::RenderPipeline;
+
+    fn poll(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<wgpu::RenderPipeline> {
+        let this = self.get_mut();
+        let key = this.key;
+        let mut guard = this.pipelines.lock_state();
+        let inline = this.pipelines.compilers.load(Ordering::Acquire) == 0;
+        let queued_at = guard.queue.iter().position(|k| *k == key);
+        let state = &mut *guard;
+        match state.pipelines.get_mut(&key) {
+            Some(Entry::Ready(pipeline)) => return Poll::Ready(pipeline.clone()),
+            // Still queued and nobody to compile it: take it over.
+            Some(Entry::Pending(_)) if inline && queued_at.is_some() => {
+                state.queue.retain(|k| *k != key);
+            }
+            Some(Entry::Pending(wakers)) => {
+                if !wakers.iter().any(|w| w.will_wake(cx.waker())) {
+                    wakers.push(cx.waker().clone());
+                }
+                return Poll::Pending;
+            }
+            None if inline => {
+                state.pipelines.insert(key, Entry::Pending(Vec::new()));
+            }
+            None => {
+                state.pipelines.insert(key, Entry::Pending(vec![cx.waker().clone()]));
+                state.queue.push_back(key);
+                return Poll::Pending;
+            }
+        }
+        // `compile` publishes under the same lock.
+        drop(guard);
+        Poll::Ready(this.pipelines.compile(this.device, key))
     }
 }
 

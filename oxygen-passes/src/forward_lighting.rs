@@ -1,0 +1,75 @@
+//! What the forward lit pass reads from other views, as bind group 3: the
+//! view's own sun cascades, the frame's local-light shadow atlas and the
+//! reflection probes the view is linked to. Every input is awaited: the pass
+//! goes on once the views that render it have recorded.
+
+use bytemuck::Zeroable;
+
+use crate::{ForwardLitConfig, LightingInputs, MAX_CASCADES, MAX_PROBES, PassError, RenderContext};
+
+/// Group 3 for this view, or `None` when it reads no shadow map and no probe
+/// (the shared empty group is bound then).
+pub(crate) async fn bind_group(
+    ctx: &RenderContext<'_>,
+    config: &ForwardLitConfig,
+) -> Result<Option<wgpu::BindGroup>, PassError> {
+    let inputs = &ctx.inputs;
+    let cascades = if config.sun_shadows { &inputs.cascades[..inputs.cascades.len().min(MAX_CASCADES)] } else { &[] };
+    let local = inputs.local_shadows.as_ref().filter(|_| config.local_shadows);
+    let probes = if config.reflections { &inputs.probes[..inputs.probes.len().min(MAX_PROBES)] } else { &[] };
+    if cascades.is_empty() && local.is_none() && probes.is_empty() {
+        return Ok(None);
+    }
+    let producers: Vec<_> = cascades
+        .iter()
+        .map(|c| c.producer)
+        .chain(local.iter().flat_map(|l| l.tiles.iter().flatten().map(|t| t.producer)))
+        .chain(probes.iter().flat_map(|p| p.faces))
+        .collect();
+    ctx.progress.recorded(&producers).await;
+
+    let mut uniform = LightingInputs::zeroed();
+    let mut maps = [None; MAX_CASCADES];
+    for (i, cascade) in cascades.iter().enumerate() {
+        uniform.light_view_projection[i] = cascade.view.view_projection.to_cols_array_2d();
+        // Orthographic cascades: projection.x_axis.x is 1 / half-width.
+        let half_width = 1.0 / cascade.view.projection.x_axis.x.abs().max(f32::MIN_POSITIVE);
+        uniform.texel_world_size[i] = 2.0 * half_width / cascade.resolution.max(1) as f32;
+        uniform.uv_texel[i] = 1.0 / cascade.resolution.max(1) as f32;
+        maps[i] = Some(cascade.depth);
+        uniform.count = i as u32 + 1;
+    }
+    uniform.pcf_radius = config.shadow_pcf_radius.min(3);
+    // Non-finite knobs fall back to the defaults: no NaN reaches a shader.
+    let defaults = ForwardLitConfig::default();
+    let finite_or = |v: f32, default: f32| if v.is_finite() { v } else { default };
+    uniform.normal_offset = finite_or(config.shadow_normal_offset, defaults.shadow_normal_offset);
+    uniform.depth_bias = finite_or(config.shadow_depth_bias, defaults.shadow_depth_bias);
+
+    if let Some(local) = local {
+        for (tile, map) in local.tiles.iter().enumerate() {
+            let Some(map) = map else { continue };
+            uniform.tile_view_projection[tile] = map.view.view_projection.to_cols_array_2d();
+            // Perspective: projection.y_axis.y is cot(fov / 2).
+            uniform.tile_texel_angle[tile] =
+                2.0 / map.view.projection.y_axis.y.abs().max(1e-6) / map.resolution.max(1) as f32;
+            uniform.tile_count = tile as u32 + 1;
+        }
+    }
+
+    let mut probe_views: [Option<wgpu::TextureView>; MAX_PROBES] = Default::default();
+    for (slot, probe) in probes.iter().enumerate() {
+        let relative = (probe.position.as_dvec3() - ctx.origin).as_vec3();
+        uniform.probe_positions[slot] = relative.extend(1.0).to_array();
+        probe_views[slot] = Some(crate::probe_view(probe.texture));
+    }
+    uniform.probe_count = probes.len() as u32;
+
+    Ok(Some(ctx.lighting.bind_group(
+        &ctx.gpu.device,
+        maps,
+        local.map(|l| l.atlas),
+        probe_views.each_ref().map(Option::as_ref),
+        &uniform,
+    )))
+}

@@ -1,0 +1,301 @@
+//! `MeshPass`: the one pass that draws prepared partitions. The depth
+//! pre-pass, shadow maps, forward lit shading and transparency are
+//! configurations of it: which partitions it draws (include / exclude
+//! masks), the pipeline kind (shaders, depth test, blending), and what it
+//! does with the colour and depth targets.
+//!
+//! Every configuration walks the view's partitions the same way: one pipeline
+//! per partition (one of the variants, opaque/masked/blend × back-face/
+//! double-sided × mirrored), chosen from the partition mask and awaited from
+//! the shared [`crate::Pipelines`], then one indirect draw or one direct draw
+//! per draw. Shaders find each draw's `DrawMetadata` through
+//! `first_instance`.
+
+use oxygen_core::ViewTargets;
+use oxygen_sceneprep::{Partition, PassMask};
+use tracing::{Instrument, info_span};
+
+use crate::{CommandRecorder, DepthBias, DrawPath, PassError, PassKind, RecordStats, RenderContext, RenderPass};
+
+/// How the forward lit pass is set up.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ForwardLitConfig {
+    /// Linear colour the HDR target is cleared to.
+    pub clear_color: wgpu::Color,
+    /// Test against depth from a preceding depth pre-pass (load it,
+    /// `GreaterEqual`, no writes) rather than clearing and writing depth.
+    pub depth_from_pre_pass: bool,
+    /// Sample the view's own sun-shadow cascades, when it has them this frame
+    /// (the view asks for them when it is registered).
+    pub sun_shadows: bool,
+    /// Sample the frame's local-light (spot and point) shadow maps, when the
+    /// renderer renders them.
+    pub local_shadows: bool,
+    /// Reflect the reflection probes the view is linked to (each surface
+    /// reflects the nearest).
+    pub reflections: bool,
+    /// PCF kernel radius in texels: `(2r + 1)²` comparison taps. 0 is the
+    /// cheapest (one bilinear comparison), 1 the default, 2 the softest.
+    pub shadow_pcf_radius: u32,
+    /// Normal offset of shadow lookups, in shadow-map texels: the point
+    /// looked up moves this far along the surface normal (texels of the
+    /// cascade, or of the local light's map at the point's distance), so a
+    /// lit surface does not shadow itself (acne). Larger values detach
+    /// shadows from their casters. Default 1.5.
+    pub shadow_normal_offset: f32,
+    /// Bias added to the cascade comparison depth (NDC depth units, towards
+    /// the light), on top of the shadow map's rasterizer bias. Default 1e-4.
+    pub shadow_depth_bias: f32,
+}
+
+impl Default for ForwardLitConfig {
+    fn default() -> Self {
+        ForwardLitConfig {
+            clear_color: wgpu::Color { r: 0.02, g: 0.03, b: 0.05, a: 1.0 },
+            depth_from_pre_pass: true,
+            sun_shadows: true,
+            local_shadows: true,
+            reflections: true,
+            shadow_pcf_radius: 1,
+            shadow_normal_offset: 1.5,
+            shadow_depth_bias: 1e-4,
+        }
+    }
+}
+
+/// What a mesh pass does with the colour target.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ColorOps {
+    /// No colour attachment (depth only).
+    None,
+    /// Clear the HDR target to this linear colour, then draw.
+    Clear(wgpu::Color),
+    /// Draw over what the HDR target holds.
+    Load,
+}
+
+/// The mesh pass: draws the partitions that match its masks.
+#[derive(Clone, Debug)]
+pub struct MeshPass {
+    name: &'static str,
+    include: PassMask,
+    exclude: PassMask,
+    kind: PassKind,
+    color: ColorOps,
+    clear_depth: bool,
+    depth_bias: DepthBias,
+    lighting: Option<ForwardLitConfig>,
+}
+
+impl MeshPass {
+    /// Depth of the opaque and masked partitions into the view's depth
+    /// target (cleared to 0, the far value in reverse-Z), so that shading
+    /// runs once per visible pixel.
+    pub fn depth_pre_pass() -> Self {
+        MeshPass {
+            name: "depth pre-pass",
+            include: PassMask::OPAQUE | PassMask::MASKED,
+            exclude: PassMask::TRANSPARENT,
+            kind: PassKind::DepthPrePass,
+            color: ColorOps::None,
+            clear_depth: true,
+            depth_bias: DepthBias::NONE,
+            lighting: None,
+        }
+    }
+
+    /// A shadow map: the depth of a shadow view's casters with the default
+    /// rasterizer bias ([`DepthBias::SHADOW_DEFAULT`]). Same partitions and
+    /// variants as the depth pre-pass, so double-sided casters are drawn
+    /// unculled.
+    pub fn shadow() -> Self {
+        Self::shadow_with_bias(DepthBias::SHADOW_DEFAULT)
+    }
+
+    /// A shadow map with an explicit rasterizer depth bias.
+    pub fn shadow_with_bias(depth_bias: DepthBias) -> Self {
+        MeshPass { name: "shadow", kind: PassKind::Shadow, depth_bias, ..Self::depth_pre_pass() }
+    }
+
+    /// Metallic-roughness shading of the opaque and masked partitions into
+    /// the view's HDR target, lit by the frame's lights, shadowed by the
+    /// view's cascades and the local shadow maps, reflecting its linked
+    /// probes. Transparent partitions are left to [`MeshPass::transparent`].
+    pub fn forward_lit(config: ForwardLitConfig) -> Self {
+        let (kind, clear_depth) = if config.depth_from_pre_pass {
+            (PassKind::ShadingAfterPrePass, false)
+        } else {
+            (PassKind::Shading, true)
+        };
+        MeshPass {
+            name: "forward lit",
+            include: PassMask::OPAQUE | PassMask::MASKED,
+            exclude: PassMask::TRANSPARENT,
+            kind,
+            color: ColorOps::Clear(config.clear_color),
+            clear_depth,
+            depth_bias: DepthBias::NONE,
+            lighting: Some(config),
+        }
+    }
+
+    /// Blended partitions, back-to-front (ScenePrep's sort key orders them
+    /// across materials), over the HDR target with **premultiplied alpha**
+    /// (the shader multiplies colour by alpha; blend `One,
+    /// OneMinusSrcAlpha`), tested against the opaque depth and never writing
+    /// it. Begins no render pass when the view has nothing blended.
+    pub fn transparent() -> Self {
+        MeshPass {
+            name: "transparent",
+            include: PassMask::TRANSPARENT,
+            exclude: PassMask::empty(),
+            kind: PassKind::Transparent,
+            color: ColorOps::Load,
+            clear_depth: false,
+            depth_bias: DepthBias::NONE,
+            lighting: None,
+        }
+    }
+
+    /// The same pass drawing the partitions whose mask has any bit of
+    /// `include` and none of `exclude` (see
+    /// [`oxygen_sceneprep::PreparedSceneFrame::partitions_matching`]).
+    pub fn with_masks(self, include: PassMask, exclude: PassMask) -> Self {
+        MeshPass { include, exclude, ..self }
+    }
+
+    /// The same pass under another name (logs, errors).
+    pub fn named(self, name: &'static str) -> Self {
+        MeshPass { name, ..self }
+    }
+
+    /// The partitions of this view the pass draws.
+    fn partitions<'a>(&self, ctx: &'a RenderContext<'_>) -> impl Iterator<Item = &'a Partition> + use<'a> {
+        ctx.prepared.partitions_matching(self.include, self.exclude)
+    }
+
+    fn color_format(&self) -> Option<wgpu::TextureFormat> {
+        (self.color != ColorOps::None).then_some(ViewTargets::HDR_FORMAT)
+    }
+}
+
+impl RenderPass for MeshPass {
+    fn name(&self) -> &'static str {
+        self.name
+    }
+
+    async fn run(&mut self, ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError> {
+        self.record(ctx, rec).instrument(info_span!("mesh_pass", pass = self.name, view = %ctx.view.view_id)).await
+    }
+}
+
+impl MeshPass {
+    async fn record(&self, ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError> {        // The transparent pass alone skips an empty frame: the others clear
+        // their targets, which later passes rely on.
+        if self.kind == PassKind::Transparent && self.partitions(ctx).next().is_none() {
+            return Ok(());
+        }
+        let color = match self.color {
+            ColorOps::None => None,
+            ops => Some((&ctx.color_targets(self.name)?.hdr_view, ops)),
+        };
+        let lighting = match &self.lighting {
+            Some(config) => crate::forward_lighting::bind_group(ctx, config).await?,
+            None => None,
+        };
+        let pipelines = partition_pipelines(ctx, self.kind, self.color_format(), self.depth_bias, self.partitions(ctx)).await;
+
+        let mut stats = rec.stats;
+        {
+            let color_attachment = color.map(|(view, ops)| wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: match ops {
+                        ColorOps::Clear(c) => wgpu::LoadOp::Clear(c),
+                        _ => wgpu::LoadOp::Load,
+                    },
+                    store: wgpu::StoreOp::Store,
+                },
+            });
+            let depth_load = if self.clear_depth { wgpu::LoadOp::Clear(0.0) } else { wgpu::LoadOp::Load };
+            let mut pass = rec.encoder().begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some(self.name),
+                color_attachments: &[color_attachment],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &ctx.targets.depth_view,
+                    depth_ops: Some(wgpu::Operations { load: depth_load, store: wgpu::StoreOp::Store }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            stats.render_passes += 1;
+            let group3 = lighting.as_ref().unwrap_or(ctx.lighting.no_lighting_inputs());
+            bind_view_resources(&mut pass, ctx, group3);
+            for (partition, pipeline) in self.partitions(ctx).zip(&pipelines) {
+                pass.set_pipeline(pipeline);
+                stats.pipeline_binds += 1;
+                draw_partition(&mut pass, ctx, partition, &mut stats);
+            }
+        }
+        rec.stats = stats;
+        Ok(())
+    }
+}
+
+/// The pipeline of every partition in `partitions` for `pass`: all requested
+/// at once, so the missing ones compile side by side, then awaited.
+async fn partition_pipelines<'a>(
+    ctx: &RenderContext<'_>,
+    pass: PassKind,
+    color_format: Option<wgpu::TextureFormat>,
+    depth_bias: DepthBias,
+    partitions: impl Iterator<Item = &'a Partition>,
+) -> Vec<wgpu::RenderPipeline> {
+    let requests = partitions.map(|p| {
+        ctx.pipelines.get(
+            &ctx.gpu.device,
+            crate::PipelineKey {
+                pass,
+                variant: crate::PipelineVariant::from_mask(p.mask),
+                color_format,
+                depth_format: ViewTargets::DEPTH_FORMAT,
+                depth_bias,
+            },
+        )
+    });
+    futures::future::join_all(requests).await
+}
+
+/// Sets the bindless and scene-constant bind groups, group 3 and the shared
+/// index buffer.
+fn bind_view_resources(pass: &mut wgpu::RenderPass<'_>, ctx: &RenderContext<'_>, lighting: &wgpu::BindGroup) {
+    pass.set_bind_group(0, ctx.heap.bind_group(), &[]);
+    pass.set_bind_group(1, ctx.scene_constants.bind_group(), &[]);
+    pass.set_bind_group(2, ctx.heap.texture_bind_group(), &[]);
+    pass.set_bind_group(3, lighting, &[]);
+    pass.set_index_buffer(ctx.heap.index_buffer().slice(..), wgpu::IndexFormat::Uint32);
+}
+
+/// Draws every draw of `partition`. Either way the draw's position in the
+/// view's array reaches the shader as `first_instance`, which is how the
+/// vertex shader finds its `DrawMetadata`.
+fn draw_partition(pass: &mut wgpu::RenderPass<'_>, ctx: &RenderContext<'_>, partition: &Partition, stats: &mut RecordStats) {
+    if ctx.draw_path == DrawPath::MultiDrawIndirect {
+        let stride = std::mem::size_of::<oxygen_sceneprep::DrawIndexedIndirect>() as u64;
+        let first = ctx.prepared.slots().indirect_args.start as u64 + partition.begin as u64;
+        let buffer = ctx.heap.buffer(oxygen_bindless::DomainKind::IndirectArgs);
+        pass.multi_draw_indexed_indirect(buffer, first * stride, partition.len());
+        stats.draw_calls += 1;
+        return;
+    }
+    let draws = &ctx.prepared.draws()[partition.range()];
+    for (offset, draw) in draws.iter().enumerate() {
+        let draw_index = partition.begin + offset as u32;
+        pass.draw_indexed(draw.index_range(), draw.absolute_base_vertex(), draw_index..draw_index + draw.instance_count);
+        stats.draw_calls += 1;
+    }
+}

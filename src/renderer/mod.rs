@@ -1,0 +1,606 @@
+//! The `Renderer`: views in, images out.
+//!
+//! Ownership: the renderer owns the GPU context, the bindless heap, ScenePrep,
+//! the pipelines and lighting resources, the registry of views ([`Views`])
+//! and the views it creates itself (shadow cascades, local-light shadows);
+//! per view it keeps the targets and the `SceneConstants` buffer. A frame
+//! borrows the scene immutably; it runs in four steps, one module each:
+//! `resolve` (views and the render origin), `prepare` (ScenePrep, shadow
+//! views planned from the frame's lights, upload), `targets` (allocation and
+//! constants) and `record` (every view's graph, polled together on the
+//! worker threads, submitted in link order). Prepared frames of the last
+//! frame are kept for inspection until the next frame replaces them.
+
+mod prepare;
+mod record;
+mod resolve;
+mod targets;
+
+use std::collections::{BTreeMap, HashMap};
+use std::time::Instant;
+
+use oxygen_bindless::{BindlessHeap, SceneConstantsBuffer, TexturePath};
+use oxygen_core::{GpuContext, GpuError, GpuOptions, NodeKey, ResolvedView, Scene, ViewError, ViewId, ViewTargets};
+use oxygen_passes::{
+    DrawPath, LightingResources, Output, PassError, Pipelines, ProbeId, RecordStats,
+};
+use oxygen_sceneprep::{PrepError, PreparedSceneFrame, RenderOrigin, ScenePrep, ViewPrepOptions};
+use thiserror::Error;
+use tracing::{info, info_span};
+
+use crate::graph::RenderGraph;
+use crate::shadows::{LocalShadowSettings, ShadowViews};
+use crate::views::{ViewDesc, ViewHandle, Views};
+
+/// Why a frame (or a renderer) failed.
+#[derive(Debug, Error)]
+pub enum RenderError {
+    /// No usable GPU.
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+    /// A view's resolver failed.
+    #[error("resolving a view: {0}")]
+    View(#[from] ViewError),
+    /// ScenePrep failed.
+    #[error(transparent)]
+    Prep(#[from] PrepError),
+    /// A pass failed while recording.
+    #[error("{view}: {source}")]
+    Pass {
+        /// The view whose graph failed.
+        view: ViewId,
+        /// The pass error.
+        source: PassError,
+    },
+    /// An option the device cannot honour.
+    #[error("not supported: {0}")]
+    Unsupported(String),
+    /// The view id is not (or no longer) registered.
+    #[error("{0} is not registered")]
+    NoSuchView(ViewId),
+    /// The probe is not registered with this renderer.
+    #[error("{0} is not registered")]
+    NoSuchProbe(ProbeId),
+    /// A link would make a view wait for itself.
+    #[error("linking {view} to the output of {output} would close a cycle: {output} already reads, through its links, what {view} renders")]
+    LinkCycle {
+        /// The view being linked.
+        view: ViewId,
+        /// Whose output it was linked to.
+        output: String,
+    },
+    /// The view has no displayable colour target (a probe face, which
+    /// renders into its probe's cube and is never tone-mapped).
+    #[error("{0} has no display target (it is not tone-mapped)")]
+    NoDisplayTarget(ViewId),
+    /// The view is depth-only (a shadow view), so it has no image.
+    #[error("{0} is depth-only: it has no colour target to read")]
+    DepthOnly(ViewId),
+    /// The view has not been rendered yet, so it has no image.
+    #[error("{0} has not been rendered yet")]
+    NotRendered(ViewId),
+    /// A view's targets would pass the renderer's target memory budget.
+    #[error(
+        "{view}: targets of {width}x{height} would take {} MiB; the target budget is {} MiB, of which {} MiB are taken \
+         (RendererOptions::target_budget_bytes)",
+        bytes >> 20, budget >> 20, taken >> 20
+    )]
+    TargetBudget {
+        /// The view.
+        view: ViewId,
+        /// Width.
+        width: u32,
+        /// Height.
+        height: u32,
+        /// What its targets would take.
+        bytes: u64,
+        /// The budget.
+        budget: u64,
+        /// What other views' targets take already.
+        taken: u64,
+    },
+    /// A resolved viewport exceeds the device's texture size limit.
+    #[error("{view}: viewport {width}x{height} exceeds the device limit of {limit}")]
+    ViewportTooLarge {
+        /// The view.
+        view: ViewId,
+        /// Width.
+        width: u32,
+        /// Height.
+        height: u32,
+        /// `max_texture_dimension_2d`.
+        limit: u32,
+    },
+}
+
+/// What a view of the frame is for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ViewRole {
+    /// A view the application registered.
+    Registered,
+    /// Cascade `index` of the sun shadows `owner` asked for.
+    SunCascade {
+        /// The view that owns the cascade.
+        owner: ViewId,
+        /// Which cascade, nearest first.
+        index: u32,
+    },
+    /// Face `face` of the shadow of the local light on `light`, rendered
+    /// into layer `tile` of the local shadow atlas.
+    LocalShadow {
+        /// The light's node.
+        light: NodeKey,
+        /// 0 for a spot light, 0..6 for a point light's cube faces.
+        face: u32,
+        /// The atlas layer.
+        tile: u32,
+    },
+    /// Face `face` of reflection probe `probe`.
+    ProbeFace {
+        /// The probe.
+        probe: ProbeId,
+        /// Which face (+X, −X, +Y, −Y, +Z, −Z).
+        face: u32,
+    },
+}
+
+/// What one view did in a frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ViewReport {
+    /// The view.
+    pub view: ViewId,
+    /// What it is for.
+    pub role: ViewRole,
+    /// Draws after culling.
+    pub draws: usize,
+    /// Partitions.
+    pub partitions: usize,
+    /// What its passes recorded.
+    pub recorded: RecordStats,
+    /// Seconds of its own ScenePrep work (view phase and finalization).
+    pub prep_seconds: f64,
+    /// Seconds its graph's future spent being polled (recording), not
+    /// counting the time it waited for pipelines or other views.
+    pub record_seconds: f64,
+}
+
+/// Something a frame left out. One bad object or view costs only itself: the
+/// frame goes on without it and says so here (and in a `tracing` warning).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum FrameWarning {
+    /// A view was not rendered this frame (its resolver failed, or its
+    /// targets would pass the device limit or the target budget); it keeps
+    /// its last image, and every other view rendered.
+    ViewSkipped {
+        /// The view.
+        view: ViewId,
+        /// Why, as the error would have said it.
+        reason: String,
+    },
+    /// A node (or its light) was left out by ScenePrep: a non-finite or
+    /// singular transform, non-finite bounds, a light with non-finite values.
+    NodeSkipped {
+        /// The node.
+        node: oxygen_core::NodeKey,
+        /// Its name.
+        name: String,
+        /// Why.
+        reason: &'static str,
+    },
+}
+
+impl std::fmt::Display for FrameWarning {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FrameWarning::ViewSkipped { view, reason } => write!(f, "{view} skipped: {reason}"),
+            FrameWarning::NodeSkipped { name, reason, .. } => write!(f, "node '{name}' skipped: {reason}"),
+        }
+    }
+}
+
+/// What a frame did.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameReport {
+    /// Frame sequence number.
+    pub frame_index: u64,
+    /// Per view, in submission order (producers before the views that read
+    /// them).
+    pub views: Vec<ViewReport>,
+    /// Seconds spent in PreRender (resolve + ScenePrep + upload).
+    pub prepare_seconds: f64,
+    /// Seconds spent recording every view's graph (wall clock, all threads).
+    pub record_seconds: f64,
+    /// Threads the views were recorded on.
+    pub record_threads: usize,
+    /// What the frame left out (views and nodes), in view then node order.
+    pub warnings: Vec<FrameWarning>,
+}
+
+/// Choices made when the renderer is created.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RendererOptions {
+    /// Force a draw path; `None` picks the fastest the device supports.
+    pub draw_path: Option<DrawPath>,
+    /// Threads for ScenePrep's per-view phases and for recording the views'
+    /// graphs; `None` uses every core.
+    pub prep_threads: Option<usize>,
+    /// Force a texture path; `None` picks the binding array where supported.
+    pub texture_path: Option<TexturePath>,
+    /// Debug mode: shaders check each draw's slot generation and paint draws
+    /// read through a stale range magenta.
+    pub debug_generations: bool,
+    /// Where the GPU's coordinates are centred (camera-relative rendering).
+    pub origin: RenderOrigin,
+    /// Skip wgpu's indirect-argument validation on the device the renderer
+    /// creates ([`Renderer::new_headless_with`]); see
+    /// [`GpuOptions::trust_indirect_args`]. A renderer given a context uses
+    /// that context's setting.
+    pub trust_indirect_args: bool,
+    /// GPU memory all views' targets may take together, bytes
+    /// ([`ViewTargets::bytes_for`] says what one view takes). A view whose
+    /// targets would pass it is skipped with a [`FrameWarning`] instead of
+    /// allocated; default 2 GiB (about 130 views of 1920×1080).
+    pub target_budget_bytes: u64,
+    /// Render shadow maps for shadow-casting spot and point lights
+    /// ([`Renderer::set_local_shadows`]); `None` renders none.
+    pub local_shadows: Option<LocalShadowSettings>,
+}
+
+impl Default for RendererOptions {
+    fn default() -> Self {
+        RendererOptions {
+            draw_path: None,
+            prep_threads: None,
+            texture_path: None,
+            debug_generations: false,
+            origin: RenderOrigin::default(),
+            trust_indirect_args: false,
+            target_budget_bytes: 2 << 30,
+            local_shadows: None,
+        }
+    }
+}
+
+
+/// A probe's cube and position, kept by the renderer.
+pub(crate) struct ProbeResources {
+    pub(crate) texture: wgpu::Texture,
+    pub(crate) position: glam::Vec3,
+}
+
+/// What the renderer keeps per view on the GPU.
+pub(crate) struct ViewGpu {
+    pub(crate) targets: Option<ViewTargets>,
+    pub(crate) constants: SceneConstantsBuffer,
+    /// The view as last rendered (relative to that frame's origin), for
+    /// views reading a paused view's output.
+    pub(crate) last_view: Option<ResolvedView>,
+}
+
+/// The renderer: views in, images out.
+pub struct Renderer {
+    gpu: GpuContext,
+    heap: BindlessHeap,
+    prep: ScenePrep,
+    pipelines: Pipelines,
+    lighting: LightingResources,
+    pub(crate) views: Views,
+    shadows: ShadowViews,
+    gpu_views: HashMap<ViewId, ViewGpu>,
+    probes: BTreeMap<ProbeId, ProbeResources>,
+    draw_path: DrawPath,
+    frame_index: u64,
+    started: Instant,
+    origin: RenderOrigin,
+    target_budget_bytes: u64,
+    /// The last frame's views in submission order, with their roles.
+    last_frame: Vec<(ViewId, ViewRole)>,
+}
+
+impl Renderer {
+    /// The device features Oxygen uses when the adapter has them.
+    pub const OPTIONAL_FEATURES: wgpu::Features =
+        wgpu::Features::INDIRECT_FIRST_INSTANCE.union(TexturePath::BINDING_ARRAY_FEATURES);
+
+    /// A renderer on a headless device chosen by [`GpuContext::new_headless`].
+    pub fn new_headless() -> Result<Self, RenderError> {
+        Self::new_headless_with(RendererOptions::default())
+    }
+
+    /// A headless renderer with explicit options.
+    pub fn new_headless_with(options: RendererOptions) -> Result<Self, RenderError> {
+        let gpu_options = GpuOptions {
+            optional_features: Self::OPTIONAL_FEATURES,
+            trust_indirect_args: options.trust_indirect_args,
+            ..Default::default()
+        };
+        Self::with_options(GpuContext::new_headless(&gpu_options)?, options)
+    }
+
+    /// A renderer on an existing GPU context.
+    pub fn new(gpu: GpuContext) -> Self {
+        // Default options never name an unsupported path, so this cannot fail.
+        Self::with_options(gpu, RendererOptions::default()).expect("default renderer options are always supported")
+    }
+
+    /// A renderer on an existing GPU context with explicit options; fails
+    /// when a forced draw path is not supported by the device.
+    pub fn with_options(gpu: GpuContext, options: RendererOptions) -> Result<Self, RenderError> {
+        Self::with_views(gpu, options, Views::new())
+    }
+
+    /// A renderer that renders views registered beforehand without a GPU
+    /// (their ids stay the same).
+    pub fn with_views(gpu: GpuContext, options: RendererOptions, views: Views) -> Result<Self, RenderError> {
+        let downlevel = gpu.adapter.get_downlevel_capabilities();
+        let draw_path = match options.draw_path {
+            Some(path) if !path.is_supported(gpu.features, &downlevel) => {
+                return Err(RenderError::Unsupported(format!("{path:?} draw path on {}", gpu.describe())));
+            }
+            Some(path) => path,
+            None => DrawPath::best_for(gpu.features, &downlevel),
+        };
+        let limits = gpu.device.limits();
+        let texture_path = match options.texture_path {
+            Some(path) if !path.is_supported(gpu.features, &limits) => {
+                return Err(RenderError::Unsupported(format!("{path:?} texture path on {}", gpu.describe())));
+            }
+            Some(path) => path,
+            None => TexturePath::best_for(gpu.features, &limits),
+        };
+        info!(?draw_path, ?texture_path, "draw and texture paths chosen");
+        let heap = BindlessHeap::new(&gpu.device, &gpu.queue, texture_path);
+        let lighting = LightingResources::new(&gpu.device);
+        let pipelines = Pipelines::new(&gpu.device, &heap, &lighting);
+        let mut prep = match options.prep_threads {
+            Some(threads) => ScenePrep::with_threads(threads),
+            None => ScenePrep::new(),
+        };
+        prep.set_debug_generations(options.debug_generations);
+        let mut shadows = ShadowViews::default();
+        shadows.local_settings = options.local_shadows;
+        Ok(Renderer {
+            origin: options.origin,
+            target_budget_bytes: options.target_budget_bytes,
+            gpu,
+            heap,
+            prep,
+            pipelines,
+            lighting,
+            views,
+            shadows,
+            gpu_views: HashMap::new(),
+            probes: BTreeMap::new(),
+            draw_path,
+            frame_index: 0,
+            started: Instant::now(),
+            last_frame: Vec::new(),
+        })
+    }
+
+    /// How textures are bound on this device.
+    pub fn texture_path(&self) -> TexturePath {
+        self.heap.texture_path()
+    }
+
+    /// How partitions are drawn on this device.
+    pub fn draw_path(&self) -> DrawPath {
+        self.draw_path
+    }
+
+    /// Registers a view: a resolver (camera → matrices, each frame) or a
+    /// [`ViewDesc`] (resolver plus ScenePrep options, links to other views'
+    /// outputs, sun shadows), and the [`RenderGraph`] it records each frame
+    /// ([`standard_render_graph`](crate::standard_render_graph) is the
+    /// default). The renderer records views after the views whose outputs
+    /// they read, whatever the registration order.
+    pub fn register_view(&mut self, desc: impl Into<ViewDesc>, graph: impl RenderGraph) -> Result<ViewHandle, RenderError> {
+        self.views.register(desc, graph)
+    }
+
+    /// Registers a view with explicit ScenePrep options (filter, cull bound).
+    pub fn register_view_with_options(
+        &mut self,
+        resolver: impl oxygen_core::ViewResolver + 'static,
+        options: ViewPrepOptions,
+        graph: impl RenderGraph,
+    ) -> Result<ViewHandle, RenderError> {
+        self.views.register(ViewDesc::new(resolver).with_options(options), graph)
+    }
+
+    /// Links `view` to `output` after registration ([`Views::link`]).
+    pub fn link<K>(&mut self, view: impl Into<ViewId>, output: Output<K>) -> Result<(), RenderError> {
+        self.views.link(view, output)
+    }
+
+    /// Removes a view, the shadow cascades it owns, and frees their slots.
+    pub fn unregister_view(&mut self, id: impl Into<ViewId>) -> Result<(), RenderError> {
+        let id = id.into();
+        self.views.unregister(id)?;
+        let owned: Vec<ViewId> = self.shadows.cascades_of(id).collect();
+        self.shadows.forget_owner(id);
+        for view in std::iter::once(id).chain(owned) {
+            self.release_view(view)?;
+        }
+        Ok(())
+    }
+
+    /// Frees a view's slots, targets and constants.
+    pub(crate) fn release_view(&mut self, id: ViewId) -> Result<(), RenderError> {
+        self.gpu_views.remove(&id);
+        self.prep.forget_view(id, &mut self.heap.slots)?;
+        Ok(())
+    }
+
+    /// Pauses (`false`) or resumes a view: a paused view is neither resolved,
+    /// prepared nor rendered, and keeps its last image (e.g. a reflection
+    /// probe updated every N frames).
+    pub fn set_view_active(&mut self, id: impl Into<ViewId>, active: bool) -> Result<(), RenderError> {
+        self.views.set_active(id, active)
+    }
+
+    /// Turns shadow maps of spot and point lights on (`Some`) or off.
+    pub fn set_local_shadows(&mut self, settings: Option<LocalShadowSettings>) {
+        self.shadows.local_settings = settings;
+    }
+
+    /// Registered views, in id order (not the views the renderer creates
+    /// itself for shadows).
+    pub fn views(&self) -> impl Iterator<Item = ViewId> + '_ {
+        self.views.ids()
+    }
+
+    /// The registry of views.
+    pub fn view_registry(&mut self) -> &mut Views {
+        &mut self.views
+    }
+
+    /// The shadow cascades `view` owns now, nearest first.
+    pub fn sun_cascades(&self, view: impl Into<ViewId>) -> Vec<ViewId> {
+        self.shadows.cascades_of(view.into()).collect()
+    }
+
+    /// Every shadow view the renderer created itself (cascades and local).
+    pub fn shadow_views(&self) -> Vec<ViewId> {
+        self.shadows.all().collect()
+    }
+
+    /// What the views of the last frame were for, in submission order.
+    pub fn last_frame_views(&self) -> &[(ViewId, ViewRole)] {
+        &self.last_frame
+    }
+
+    pub(crate) fn add_probe(&mut self, id: ProbeId, faces: [ViewId; oxygen_passes::PROBE_FACES], texture: wgpu::Texture, position: glam::Vec3) {
+        self.views.probes.insert(id, faces);
+        self.probes.insert(id, ProbeResources { texture, position });
+    }
+
+    /// What the targets of a `viewport`-sized view take, bytes (colour and
+    /// depth, or depth only).
+    pub fn target_bytes(viewport: glam::UVec2, depth_only: bool) -> u64 {
+        ViewTargets::bytes_for(viewport.x, viewport.y, !depth_only)
+    }
+
+    /// Bytes the views' targets take now.
+    pub fn target_memory(&self) -> u64 {
+        self.gpu_views.values().filter_map(|v| v.targets.as_ref()).map(ViewTargets::bytes).sum()
+    }
+
+    /// The target budget ([`RendererOptions::target_budget_bytes`]).
+    pub fn target_budget(&self) -> u64 {
+        self.target_budget_bytes
+    }
+
+    /// Checks, before anything is allocated, that views of these sizes
+    /// (`(viewport, depth_only)`) fit the target budget together; returns
+    /// their total. `view` numbers the first that does not fit in the error.
+    pub fn check_target_budget(&self, views: &[(glam::UVec2, bool)]) -> Result<u64, RenderError> {
+        let mut taken = 0u64;
+        for (i, (viewport, depth_only)) in views.iter().enumerate() {
+            self.admit_targets(ViewId(i as u32), *viewport, !depth_only, &mut taken)?;
+        }
+        Ok(taken)
+    }
+
+    /// Adds a `viewport`-sized view's targets to `taken`, or says they would
+    /// pass the target budget (leaving `taken` as it was).
+    fn admit_targets(
+        &self,
+        view: ViewId,
+        viewport: glam::UVec2,
+        with_color: bool,
+        taken: &mut u64,
+    ) -> Result<(), RenderError> {
+        let bytes = ViewTargets::bytes_for(viewport.x, viewport.y, with_color);
+        if taken.saturating_add(bytes) > self.target_budget_bytes {
+            let (width, height, budget) = (viewport.x, viewport.y, self.target_budget_bytes);
+            return Err(RenderError::TargetBudget { view, width, height, bytes, budget, taken: *taken });
+        }
+        *taken += bytes;
+        Ok(())
+    }
+
+    /// Renders one frame of `scene` through every active view: resolve,
+    /// prepare, allocate targets, record every view's graph concurrently,
+    /// submit in link order.
+    pub fn render_frame(&mut self, scene: &Scene) -> Result<FrameReport, RenderError> {
+        self.frame_index += 1;
+        let frame_index = self.frame_index;
+        let time_seconds = self.started.elapsed().as_secs_f32();
+        let _span = info_span!("render_frame", frame = frame_index).entered();
+        let prepare_start = Instant::now();
+        let (mut plan, mut warnings) = self.resolve_views(scene, frame_index, time_seconds);
+        self.prepare(scene, &mut plan, &mut warnings, frame_index, time_seconds)?;
+        let prepare_seconds = prepare_start.elapsed().as_secs_f64();
+        self.allocate_targets(&plan, time_seconds);
+        let record_start = Instant::now();
+        let (reports, record_threads) = self.record(&plan)?;
+        let record_seconds = record_start.elapsed().as_secs_f64();
+        warnings.extend(self.prep.frame_collection().skipped.iter().map(|s| FrameWarning::NodeSkipped {
+            node: s.node,
+            name: s.name.clone(),
+            reason: s.reason,
+        }));
+        self.last_frame = reports.iter().map(|r| (r.view, r.role)).collect();
+        Ok(FrameReport { frame_index, views: reports, prepare_seconds, record_seconds, record_threads, warnings })
+    }
+
+    /// The view's colour target as an image (waits for the GPU).
+    pub fn read_color(&self, id: impl Into<ViewId>) -> Result<image::RgbaImage, RenderError> {
+        let id = id.into();
+        let color = self.color_targets(id)?;
+        let display = color.color.as_ref().ok_or(RenderError::NoDisplayTarget(id))?;
+        Ok(self.gpu.read_rgba8(display)?)
+    }
+
+    /// Reads back a rendered view's linear HDR target (what shading wrote,
+    /// before the tone map), NaN and infinities included.
+    pub fn read_hdr(&self, id: impl Into<ViewId>) -> Result<oxygen_core::gpu::HdrImage, RenderError> {
+        let id = id.into();
+        let color = self.color_targets(id)?;
+        if color.hdr_layer != 0 {
+            return Err(RenderError::NoDisplayTarget(id));
+        }
+        Ok(self.gpu.read_rgba16_float(&color.hdr)?)
+    }
+
+    fn color_targets(&self, id: ViewId) -> Result<&oxygen_core::ColorTargets, RenderError> {
+        let known = self.views.entries.contains_key(&id) || self.shadows.all().any(|v| v == id);
+        if !known {
+            return Err(RenderError::NoSuchView(id));
+        }
+        let targets = self.gpu_views.get(&id).and_then(|v| v.targets.as_ref()).ok_or(RenderError::NotRendered(id))?;
+        targets.color.as_ref().ok_or(RenderError::DepthOnly(id))
+    }
+
+    /// The view's prepared frame from the last `render_frame`.
+    pub fn prepared_frame(&self, id: impl Into<ViewId>) -> Option<&PreparedSceneFrame> {
+        let id = id.into();
+        self.prep.frames().iter().find(|f| f.view_id() == id)
+    }
+
+    /// The GPU context.
+    pub fn gpu(&self) -> &GpuContext {
+        &self.gpu
+    }
+
+    /// The shared pipelines (e.g. to check how many exist).
+    pub fn pipelines(&self) -> &Pipelines {
+        &self.pipelines
+    }
+
+    /// The shared lighting resources.
+    pub fn lighting(&self) -> &LightingResources {
+        &self.lighting
+    }
+
+    /// ScenePrep (counters, the last frame collection).
+    pub fn scene_prep(&self) -> &ScenePrep {
+        &self.prep
+    }
+
+    /// The bindless heap.
+    pub fn heap(&self) -> &BindlessHeap {
+        &self.heap
+    }
+}

@@ -1,0 +1,299 @@
+//! Step 4 of a frame: order the views by their links, then record every
+//! view's graph concurrently and submit the command buffers in that order.
+//!
+//! Each worker thread of ScenePrep's pool runs a small executor: it takes
+//! the next view not yet started, creates its graph's future (with a command
+//! encoder of its own) and polls it; when every future it holds is waiting
+//! — for a pipeline being compiled, for another view's output — it compiles
+//! a queued pipeline, and only when there is nothing else it parks until a
+//! future is woken. A future never leaves the thread that created it, so
+//! graphs need not be `Send`. Submission order is the link order, whatever
+//! order the recording finished in.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::future::Future;
+use std::pin::Pin;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
+use std::task::{Context, Poll, Wake, Waker};
+use std::time::{Duration, Instant};
+
+use oxygen_core::ViewId;
+use oxygen_passes::{
+    CommandRecorder, FrameProgress, LinkedView, LocalShadowsInput, OutputSource, PassError, Pipelines,
+    ProbeCubeInput, RecordStats, RenderContext, ShadowMapInput, ViewInputs,
+};
+use tracing::{Instrument, info_span};
+
+use super::resolve::{FramePlan, FrameView, TargetPlan};
+use super::{RenderError, Renderer, ViewReport};
+
+/// What one view's recording produced.
+struct Recorded {
+    result: Result<(), PassError>,
+    buffer: wgpu::CommandBuffer,
+    stats: RecordStats,
+    busy: Duration,
+}
+
+impl Renderer {
+    /// The frame's views in recording and submission order: every view after
+    /// the views it reads (its links, its sun cascades, and for colour views
+    /// the local shadow views), ties broken by id. Links were checked for
+    /// cycles at registration.
+    fn link_order(&self, plan: &FramePlan) -> Vec<usize> {
+        let index: BTreeMap<ViewId, usize> = plan.views.iter().enumerate().map(|(i, v)| (v.id, i)).collect();
+        let local: Vec<usize> = (0..plan.views.len())
+            .filter(|i| matches!(plan.views[*i].target, TargetPlan::AtlasLayer { .. }))
+            .collect();
+        let dependencies = |view: &FrameView| -> BTreeSet<usize> {
+            let mut deps: BTreeSet<usize> = view
+                .links
+                .iter()
+                .flat_map(|source| self.views.producers(*source))
+                .chain(self.shadows.cascades_of(view.id))
+                .filter_map(|id| index.get(&id).copied())
+                .collect();
+            if !view.options.depth_only {
+                deps.extend(local.iter().copied());
+            }
+            deps
+        };
+        let deps: Vec<BTreeSet<usize>> = plan.views.iter().map(dependencies).collect();
+        // Kahn's algorithm over views ordered by id.
+        let mut by_id: Vec<usize> = (0..plan.views.len()).collect();
+        by_id.sort_by_key(|i| plan.views[*i].id);
+        let mut done = vec![false; plan.views.len()];
+        let mut order = Vec::with_capacity(plan.views.len());
+        while order.len() < plan.views.len() {
+            let next = by_id.iter().copied().find(|i| !done[*i] && deps[*i].iter().all(|d| done[*d]));
+            // Registration rejects cycles; should one slip through, the rest
+            // go in id order rather than never.
+            let next = next.unwrap_or_else(|| by_id.iter().copied().find(|i| !done[*i]).unwrap_or(0));
+            done[next] = true;
+            order.push(next);
+        }
+        order
+    }
+
+    /// What `view` may read this frame.
+    fn inputs<'a>(
+        &'a self,
+        plan: &'a FramePlan,
+        view: &FrameView,
+        atlas: Option<&'a wgpu::TextureView>,
+    ) -> ViewInputs<'a> {
+        let targets = |id: ViewId| self.gpu_views.get(&id).and_then(|g| g.targets.as_ref());
+        let in_frame = |id: ViewId| plan.views.iter().find(|v| v.id == id);
+        let shadow_map = |v: &'a FrameView| -> Option<ShadowMapInput<'a>> {
+            let t = targets(v.id)?;
+            Some(ShadowMapInput { producer: v.id, view: &v.gpu, depth: &t.depth_view, resolution: t.width })
+        };
+        let cascades = self.shadows.cascades_of(view.id).filter_map(in_frame).filter_map(shadow_map).collect();
+        let local_shadows = (!view.options.depth_only).then_some(atlas).flatten().map(|atlas| {
+            let mut tiles = vec![None; Self::atlas_layers(plan) as usize];
+            for v in &plan.views {
+                if let TargetPlan::AtlasLayer { tile } = v.target {
+                    tiles[tile as usize] = shadow_map(v);
+                }
+            }
+            LocalShadowsInput { atlas, tiles }
+        });
+        let mut probes = Vec::new();
+        let mut views = Vec::new();
+        for source in &view.links {
+            match *source {
+                OutputSource::Probe(probe) => {
+                    let (Some(faces), Some(resources)) = (self.views.probes.get(&probe), self.probes.get(&probe)) else {
+                        continue;
+                    };
+                    probes.push(ProbeCubeInput {
+                        probe,
+                        faces: *faces,
+                        texture: &resources.texture,
+                        position: resources.position,
+                    });
+                }
+                OutputSource::View(id) => {
+                    let Some(gpu) = self.gpu_views.get(&id) else { continue };
+                    let resolved = in_frame(id).map(|v| &v.gpu).or(gpu.last_view.as_ref());
+                    if let (Some(resolved), Some(targets)) = (resolved, gpu.targets.as_ref()) {
+                        views.push(LinkedView { id, view: resolved, targets });
+                    }
+                }
+            }
+        }
+        ViewInputs { cascades, local_shadows, probes, views }
+    }
+
+    /// Records every view of `plan` and submits them in link order.
+    pub(super) fn record(&self, plan: &FramePlan) -> Result<(Vec<ViewReport>, usize), RenderError> {
+        let order = self.link_order(plan);
+        let _span = info_span!("record", views = order.len()).entered();
+        let atlas_texture = (Self::atlas_layers(plan) > 0).then(|| {
+            plan.views.iter().find_map(|v| match v.target {
+                TargetPlan::AtlasLayer { .. } => self.gpu_views.get(&v.id)?.targets.as_ref().map(|t| t.depth.clone()),
+                _ => None,
+            })
+        });
+        let atlas = atlas_texture.flatten().map(|t| {
+            t.create_view(&wgpu::TextureViewDescriptor {
+                dimension: Some(wgpu::TextureViewDimension::D2Array),
+                ..Default::default()
+            })
+        });
+        let frames = self.prep.frames();
+        let progress = FrameProgress::new(order.iter().map(|i| plan.views[*i].id));
+        let mut contexts = Vec::with_capacity(order.len());
+        for &i in &order {
+            let view = &plan.views[i];
+            let Some(gpu) = self.gpu_views.get(&view.id) else { continue };
+            let Some(targets) = gpu.targets.as_ref() else {
+                // No target this frame (e.g. a probe face whose probe is gone).
+                progress.complete(view.id);
+                continue;
+            };
+            contexts.push((
+                i,
+                RenderContext {
+                    gpu: &self.gpu,
+                    view: &view.gpu,
+                    prepared: &frames[i],
+                    scene_constants: &gpu.constants,
+                    heap: &self.heap,
+                    targets,
+                    pipelines: &self.pipelines,
+                    lighting: &self.lighting,
+                    draw_path: self.draw_path,
+                    inputs: self.inputs(plan, view, atlas.as_ref()),
+                    progress: &progress,
+                    origin: plan.origin,
+                },
+            ));
+        }
+
+        let threads = self.prep.worker_pool().threads().min(contexts.len()).max(1);
+        let results: Vec<Mutex<Option<Recorded>>> = contexts.iter().map(|_| Mutex::new(None)).collect();
+        let next = AtomicUsize::new(0);
+        let job = |_thread: usize| {
+            let _compiler = self.pipelines.attach_compiler();
+            run_executor(&contexts, plan, &next, &results, &self.pipelines, &self.gpu.device, &progress);
+        };
+        self.prep.worker_pool().run(threads, &job);
+
+        let mut buffers = Vec::with_capacity(contexts.len());
+        let mut reports = Vec::with_capacity(contexts.len());
+        for ((i, _), slot) in contexts.iter().zip(results) {
+            let view = &plan.views[*i];
+            let recorded = slot.into_inner().unwrap_or_else(|e| e.into_inner());
+            // Every context was taken and finished by some thread before `run` returned.
+            let Some(recorded) = recorded else { continue };
+            recorded.result.map_err(|source| RenderError::Pass { view: view.id, source })?;
+            buffers.push(recorded.buffer);
+            reports.push(ViewReport {
+                view: view.id,
+                role: view.role,
+                draws: frames[*i].draws().len(),
+                partitions: frames[*i].partitions().len(),
+                recorded: recorded.stats,
+                prep_seconds: frames[*i].prep_seconds() as f64,
+                record_seconds: recorded.busy.as_secs_f64(),
+            });
+        }
+        self.gpu.queue.submit(buffers);
+        Ok((reports, threads))
+    }
+}
+
+/// Wakes one view's future: marks it and unparks its thread.
+struct TaskWaker {
+    woken: AtomicBool,
+    thread: std::thread::Thread,
+}
+
+impl Wake for TaskWaker {
+    fn wake(self: Arc<Self>) {
+        self.wake_by_ref();
+    }
+
+    fn wake_by_ref(self: &Arc<Self>) {
+        self.woken.store(true, Ordering::Release);
+        self.thread.unpark();
+    }
+}
+
+struct Task<'a> {
+    index: usize,
+    future: Pin<Box<dyn Future<Output = Recorded> + 'a>>,
+    waker: Arc<TaskWaker>,
+    busy: Duration,
+}
+
+/// One thread's executor (see the module docs).
+fn run_executor<'a>(
+    contexts: &'a [(usize, RenderContext<'a>)],
+    plan: &'a FramePlan,
+    next: &AtomicUsize,
+    results: &[Mutex<Option<Recorded>>],
+    pipelines: &Pipelines,
+    device: &wgpu::Device,
+    progress: &FrameProgress,
+) {
+    let mut tasks: Vec<Task<'a>> = Vec::new();
+    loop {
+        let mut progressed = false;
+        let mut t = 0;
+        while t < tasks.len() {
+            if !tasks[t].waker.woken.swap(false, Ordering::AcqRel) {
+                t += 1;
+                continue;
+            }
+            progressed = true;
+            let waker = Waker::from(Arc::clone(&tasks[t].waker));
+            let started = Instant::now();
+            let poll = tasks[t].future.as_mut().poll(&mut Context::from_waker(&waker));
+            tasks[t].busy += started.elapsed();
+            match poll {
+                Poll::Pending => t += 1,
+                Poll::Ready(mut recorded) => {
+                    let task = tasks.swap_remove(t);
+                    recorded.busy = task.busy;
+                    let view = plan.views[contexts[task.index].0].id;
+                    *results[task.index].lock().unwrap_or_else(|e| e.into_inner()) = Some(recorded);
+                    progress.complete(view);
+                }
+            }
+        }
+        if progressed {
+            continue;
+        }
+        // Start another view before compiling, so that its pipeline requests
+        // join the queue and compile side by side with the others'.
+        let index = next.fetch_add(1, Ordering::AcqRel);
+        if let Some((i, ctx)) = contexts.get(index) {
+            let view = &plan.views[*i];
+            let graph = &*view.graph;
+            let future = async move {
+                let mut rec = CommandRecorder::new(&ctx.gpu.device, &view.id.to_string());
+                let result = graph.record_boxed(ctx, &mut rec).await;
+                let (buffer, stats) = rec.finish();
+                Recorded { result, buffer, stats, busy: Duration::ZERO }
+            }
+            // Instrumented rather than entered: the span must not stay
+            // entered while this thread polls other views.
+            .instrument(info_span!("render_graph", view = %view.id));
+            let waker = Arc::new(TaskWaker { woken: AtomicBool::new(true), thread: std::thread::current() });
+            tasks.push(Task { index, future: Box::pin(future), waker, busy: Duration::ZERO });
+            continue;
+        }
+        if pipelines.compile_next(device) {
+            continue;
+        }
+        if tasks.is_empty() {
+            return;
+        }
+        // Unpark tokens persist, so a wake between the checks above and here
+        // is not lost; the timeout only bounds the cost of a missed one.
+        std::thread::park_timeout(Duration::from_millis(20));
+    }
+}

@@ -1,0 +1,82 @@
+//! Step 3 of a frame: every view's targets (its own, reallocated when its
+//! size changes; a layer of the local shadow atlas; a face of its probe's
+//! cube) and its scene constants.
+
+use oxygen_bindless::{CameraConstants, SceneConstantsBuffer};
+use oxygen_core::ViewTargets;
+use tracing::info_span;
+
+use super::resolve::{FramePlan, TargetPlan};
+use super::{Renderer, ViewGpu};
+
+impl Renderer {
+    /// Tiles of the local shadow atlas this frame (one past the highest).
+    pub(super) fn atlas_layers(plan: &FramePlan) -> u32 {
+        plan.views
+            .iter()
+            .filter_map(|v| match v.target {
+                TargetPlan::AtlasLayer { tile } => Some(tile + 1),
+                _ => None,
+            })
+            .max()
+            .unwrap_or(0)
+    }
+
+    pub(super) fn allocate_targets(&mut self, plan: &FramePlan, time_seconds: f32) {
+        let _span = info_span!("targets", views = plan.views.len()).entered();
+        let layers = Self::atlas_layers(plan);
+        let atlas = (layers > 0).then(|| {
+            let resolution = self.shadows.local_settings.map_or(1024, |s| s.resolution).max(1);
+            self.lighting.local_shadow_atlas(&self.gpu.device, resolution, layers)
+        });
+        let frames = self.prep.frames();
+        for (view, frame) in plan.views.iter().zip(frames) {
+            let device = &self.gpu.device;
+            let heap = &self.heap;
+            let entry = self.gpu_views.entry(view.id).or_insert_with(|| ViewGpu {
+                targets: None,
+                constants: SceneConstantsBuffer::new(
+                    device,
+                    heap.scene_constants_layout(),
+                    &format!("{} scene constants", view.id),
+                ),
+                last_view: None,
+            });
+            let (width, height, label) = (view.gpu.viewport.x, view.gpu.viewport.y, view.id.to_string());
+            match view.target {
+                TargetPlan::Own { with_color } => {
+                    if !entry.targets.as_ref().is_some_and(|t| t.fits(width, height, with_color)) {
+                        entry.targets = Some(if with_color {
+                            ViewTargets::new(device, width, height, &label)
+                        } else {
+                            ViewTargets::depth_only(device, width, height, &label)
+                        });
+                    }
+                }
+                TargetPlan::AtlasLayer { tile } => {
+                    // Resolved above whenever a view renders into the atlas.
+                    if let Some(atlas) = &atlas {
+                        entry.targets = Some(ViewTargets::atlas_layer(atlas, tile));
+                    }
+                }
+                TargetPlan::ProbeFace { probe, face } => {
+                    if let Some(cube) = self.probes.get(&probe).map(|p| &p.texture) {
+                        let current = entry.targets.as_ref().and_then(|t| t.color.as_ref()).is_some_and(|c| {
+                            c.hdr == *cube && c.hdr_layer == face && c.hdr.width() == width
+                        });
+                        if !current {
+                            entry.targets = Some(ViewTargets::probe_face(device, cube, face, &label));
+                        }
+                    }
+                }
+            }
+            let v = &view.gpu;
+            entry.constants.set_camera(
+                &self.gpu.queue,
+                &CameraConstants::new(v.view, v.projection, v.view_projection, v.inverse_view_projection, v.camera_position),
+            );
+            entry.constants.set_renderer(&self.gpu.queue, &frame.renderer_constants(time_seconds));
+            entry.last_view = Some(view.gpu);
+        }
+    }
+}

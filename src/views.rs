@@ -1,0 +1,317 @@
+//! The registry of views: who looks at the scene, what each reads from the
+//! others, and in which order they must record. It needs no GPU, so a test
+//! can register views and prepare their [`PreparedSceneFrame`]s without one
+//! ([`Views::prepare`]); a [`crate::Renderer`] owns one and renders it.
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+use oxygen_bindless::SlotAllocators;
+use oxygen_core::{CascadeSettings, Scene, ViewContext, ViewId, ViewResolver};
+use oxygen_passes::{Depth, HdrColor, Output, OutputSource, ProbeId, ShadowMap};
+use oxygen_sceneprep::{PreparedSceneFrame, ScenePrep, ViewPrepOptions, ViewRequest};
+
+use crate::RenderError;
+use crate::graph::{ErasedGraph, RenderGraph};
+
+/// A registered view, as returned by `register_view`: its id, and its
+/// outputs as typed values another view can be linked to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct ViewHandle(ViewId);
+
+impl ViewHandle {
+    /// The view's id.
+    pub fn id(self) -> ViewId {
+        self.0
+    }
+
+    /// Its depth target.
+    pub fn depth(self) -> Output<Depth> {
+        Output::new(OutputSource::View(self.0))
+    }
+
+    /// Its linear HDR colour target.
+    pub fn hdr(self) -> Output<HdrColor> {
+        Output::new(OutputSource::View(self.0))
+    }
+
+    /// Its shadow map (for a depth-only view).
+    pub fn shadow_map(self) -> Output<ShadowMap> {
+        Output::new(OutputSource::View(self.0))
+    }
+}
+
+impl From<ViewHandle> for ViewId {
+    fn from(handle: ViewHandle) -> ViewId {
+        handle.0
+    }
+}
+
+impl PartialEq<ViewId> for ViewHandle {
+    fn eq(&self, other: &ViewId) -> bool {
+        self.0 == *other
+    }
+}
+
+impl PartialEq<ViewHandle> for ViewId {
+    fn eq(&self, other: &ViewHandle) -> bool {
+        *self == other.0
+    }
+}
+
+impl std::fmt::Display for ViewHandle {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        self.0.fmt(f)
+    }
+}
+
+/// How a view is registered: its resolver, its ScenePrep options, the
+/// outputs of other views it reads, and the shadows it owns.
+pub struct ViewDesc {
+    pub(crate) resolver: Box<dyn ViewResolver>,
+    pub(crate) options: ViewPrepOptions,
+    pub(crate) links: Vec<OutputSource>,
+    pub(crate) sun_shadows: Option<CascadeSettings>,
+    pub(crate) target: TargetKind,
+}
+
+/// Where a view renders.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum TargetKind {
+    /// Targets of its own (colour unless depth-only).
+    Own,
+    /// Face `face` of probe `probe`: that layer of the probe's cube.
+    ProbeFace { probe: ProbeId, face: u32 },
+}
+
+impl ViewDesc {
+    /// A view resolved by `resolver`, with default ScenePrep options.
+    pub fn new(resolver: impl ViewResolver + 'static) -> Self {
+        ViewDesc {
+            resolver: Box::new(resolver),
+            options: ViewPrepOptions::default(),
+            links: Vec::new(),
+            sun_shadows: None,
+            target: TargetKind::Own,
+        }
+    }
+
+    /// ScenePrep options (filter, cull bound, depth only).
+    pub fn with_options(mut self, options: ViewPrepOptions) -> Self {
+        self.options = options;
+        self
+    }
+
+    /// Links the view to `output`: the view records after whoever produces
+    /// it, and its graph may read it (`RenderContext::input`). A probe cube
+    /// linked this way is also reflected by the forward lit pass.
+    pub fn reads<K>(mut self, output: Output<K>) -> Self {
+        if !self.links.contains(&output.source) {
+            self.links.push(output.source);
+        }
+        self
+    }
+
+    /// The view owns sun-shadow cascades: each frame in which a directional
+    /// light casts shadows, the renderer renders `settings.count` cascade
+    /// views fitted to this view's frustum before it (created, resized and
+    /// removed with it, following the lights that exist that frame), and its
+    /// forward lit pass samples them.
+    pub fn with_sun_shadows(mut self, settings: CascadeSettings) -> Self {
+        self.sun_shadows = Some(settings);
+        self
+    }
+}
+
+impl<R: ViewResolver + 'static> From<R> for ViewDesc {
+    fn from(resolver: R) -> Self {
+        ViewDesc::new(resolver)
+    }
+}
+
+pub(crate) struct ViewEntry {
+    pub(crate) resolver: Box<dyn ViewResolver>,
+    pub(crate) graph: Arc<dyn ErasedGraph>,
+    pub(crate) options: ViewPrepOptions,
+    pub(crate) links: Vec<OutputSource>,
+    pub(crate) sun_shadows: Option<CascadeSettings>,
+    pub(crate) target: TargetKind,
+    pub(crate) active: bool,
+}
+
+/// The registered views and the links between them; no GPU needed.
+pub struct Views {
+    pub(crate) entries: BTreeMap<ViewId, ViewEntry>,
+    /// Face views of each registered probe.
+    pub(crate) probes: BTreeMap<ProbeId, [ViewId; oxygen_passes::PROBE_FACES]>,
+    next_view: u32,
+    next_probe: u32,
+    cpu: Option<CpuPrep>,
+}
+
+/// ScenePrep for [`Views::prepare`], with slot allocators of its own.
+struct CpuPrep {
+    prep: ScenePrep,
+    slots: SlotAllocators,
+    frame_index: u64,
+}
+
+impl Default for Views {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Views {
+    /// No views.
+    pub fn new() -> Self {
+        Views { entries: BTreeMap::new(), probes: BTreeMap::new(), next_view: 0, next_probe: 0, cpu: None }
+    }
+
+    /// Registers a view (a resolver, or a [`ViewDesc`] with links and
+    /// options) with the graph it records each frame. Fails when a link
+    /// names a view or probe that is not registered.
+    pub fn register(&mut self, desc: impl Into<ViewDesc>, graph: impl RenderGraph) -> Result<ViewHandle, RenderError> {
+        let desc = desc.into();
+        for link in &desc.links {
+            self.check_source(*link)?;
+        }
+        let id = self.allocate_id();
+        self.entries.insert(
+            id,
+            ViewEntry {
+                resolver: desc.resolver,
+                graph: Arc::new(graph),
+                options: desc.options,
+                links: desc.links,
+                sun_shadows: desc.sun_shadows,
+                target: desc.target,
+                active: true,
+            },
+        );
+        tracing::info!(view = %id, "view registered");
+        Ok(ViewHandle(id))
+    }
+
+    /// A fresh view id (also used for the views the renderer creates itself:
+    /// sun cascades, local-light shadows).
+    pub(crate) fn allocate_id(&mut self) -> ViewId {
+        let id = ViewId(self.next_view);
+        self.next_view += 1;
+        id
+    }
+
+    pub(crate) fn allocate_probe(&mut self) -> ProbeId {
+        let id = ProbeId(self.next_probe);
+        self.next_probe += 1;
+        id
+    }
+
+    fn check_source(&self, source: OutputSource) -> Result<(), RenderError> {
+        match source {
+            OutputSource::View(v) if !self.entries.contains_key(&v) => Err(RenderError::NoSuchView(v)),
+            OutputSource::Probe(p) if !self.probes.contains_key(&p) => Err(RenderError::NoSuchProbe(p)),
+            _ => Ok(()),
+        }
+    }
+
+    /// Links `view` to `output` after registration (for a view registered
+    /// before what it reads). Fails when either is not registered, or when
+    /// the link would close a cycle (the view would have to record before
+    /// itself).
+    pub fn link<K>(&mut self, view: impl Into<ViewId>, output: Output<K>) -> Result<(), RenderError> {
+        let view = view.into();
+        self.check_source(output.source)?;
+        if !self.entries.contains_key(&view) {
+            return Err(RenderError::NoSuchView(view));
+        }
+        // A cycle exists when the producer already depends, through links,
+        // on `view`.
+        if self.producers(output.source).iter().any(|p| *p == view || self.depends_on(*p, view)) {
+            return Err(RenderError::LinkCycle { view, output: output.source.to_string() });
+        }
+        let links = &mut self.entries.get_mut(&view).ok_or(RenderError::NoSuchView(view))?.links;
+        if !links.contains(&output.source) {
+            links.push(output.source);
+        }
+        Ok(())
+    }
+
+    /// The views that produce `source`.
+    pub(crate) fn producers(&self, source: OutputSource) -> Vec<ViewId> {
+        match source {
+            OutputSource::View(v) => vec![v],
+            OutputSource::Probe(p) => self.probes.get(&p).map(|faces| faces.to_vec()).unwrap_or_default(),
+        }
+    }
+
+    /// Whether `from` reads, directly or through other links, what `to` produces.
+    fn depends_on(&self, from: ViewId, to: ViewId) -> bool {
+        let mut stack = vec![from];
+        let mut seen = std::collections::BTreeSet::new();
+        while let Some(v) = stack.pop() {
+            if !seen.insert(v) {
+                continue;
+            }
+            let Some(entry) = self.entries.get(&v) else { continue };
+            for source in &entry.links {
+                for p in self.producers(*source) {
+                    if p == to {
+                        return true;
+                    }
+                    stack.push(p);
+                }
+            }
+        }
+        false
+    }
+
+    /// Removes a view; links to it from other views are dropped.
+    pub fn unregister(&mut self, id: impl Into<ViewId>) -> Result<(), RenderError> {
+        let id = id.into();
+        self.entries.remove(&id).ok_or(RenderError::NoSuchView(id))?;
+        for entry in self.entries.values_mut() {
+            entry.links.retain(|l| *l != OutputSource::View(id));
+        }
+        Ok(())
+    }
+
+    /// Pauses (`false`) or resumes a view.
+    pub fn set_active(&mut self, id: impl Into<ViewId>, active: bool) -> Result<(), RenderError> {
+        let id = id.into();
+        self.entries.get_mut(&id).ok_or(RenderError::NoSuchView(id))?.active = active;
+        Ok(())
+    }
+
+    /// Registered views, in id order.
+    pub fn ids(&self) -> impl Iterator<Item = ViewId> + '_ {
+        self.entries.keys().copied()
+    }
+
+    /// Prepares one registered view's [`PreparedSceneFrame`] of `scene`
+    /// without a GPU: its resolver, its ScenePrep options, the default render
+    /// origin (centred on this view's camera, as a renderer with only this
+    /// view would), on one thread. Slots come from allocators of this
+    /// registry's own, so the ranges in the frame are what a fresh renderer
+    /// would use. For snapshot tests of what a view would draw.
+    pub fn prepare(&mut self, scene: &Scene, id: impl Into<ViewId>) -> Result<&PreparedSceneFrame, RenderError> {
+        let id = id.into();
+        let entry = self.entries.get(&id).ok_or(RenderError::NoSuchView(id))?;
+        let cpu = self.cpu.get_or_insert_with(|| CpuPrep {
+            prep: ScenePrep::with_threads(1),
+            // The binding limit of a typical device; only ranges' positions depend on it.
+            slots: SlotAllocators::new(128 << 20),
+            frame_index: 0,
+        });
+        cpu.frame_index += 1;
+        let ctx = ViewContext { view_id: id, frame_index: cpu.frame_index, time_seconds: 0.0 };
+        let mut resolved = entry.resolver.resolve(&ctx, scene)?;
+        resolved.view_id = id;
+        let origin = crate::RenderOrigin::default().resolve(Some(&resolved));
+        cpu.prep.set_render_origin(origin);
+        let request = ViewRequest { view: &resolved, options: entry.options };
+        let frames = cpu.prep.prepare(scene, &[request], &mut cpu.slots)?;
+        // One request, so one frame.
+        Ok(&frames[0])
+    }
+}
