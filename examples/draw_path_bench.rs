@@ -103,21 +103,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             Renderer::with_options(gpu, RendererOptions { draw_path: Some(path), ..Default::default() })?;
         let shared = Arc::new(Mutex::new((query_set.clone(), resolve.clone(), readback.clone())));
         let graph_resources = Arc::clone(&shared);
-        let view = renderer.register_view(camera, move |id, ctx, rec| {
+        let graph = async move |ctx: &RenderContext<'_>, rec: &mut CommandRecorder| {
             let resources = graph_resources.lock().map(|g| g.clone()).ok();
-            Box::pin(async move {
-                if let Some((Some(q), _, _)) = &resources {
-                    rec.encoder().write_timestamp(q, 0);
-                }
-                standard_render_graph(id, ctx, rec).await?;
-                if let Some((Some(q), resolve, readback)) = &resources {
-                    rec.encoder().write_timestamp(q, 1);
-                    rec.encoder().resolve_query_set(q, 0..2, resolve, 0);
-                    rec.encoder().copy_buffer_to_buffer(resolve, 0, readback, 0, 16);
-                }
-                Ok(())
-            })
-        });
+            if let Some((Some(q), _, _)) = &resources {
+                rec.encoder().write_timestamp(q, 0);
+            }
+            standard_render_graph.record(ctx, rec).await?;
+            if let Some((Some(q), resolve, readback)) = &resources {
+                rec.encoder().write_timestamp(q, 1);
+                rec.encoder().resolve_query_set(q, 0..2, resolve, 0);
+                rec.encoder().copy_buffer_to_buffer(resolve, 0, readback, 0, 16);
+            }
+            Ok(())
+        };
+        let view = renderer.register_view(camera, graph)?;
 
         let (mut record, mut gpu_ms, mut frame_ms) = (Vec::new(), Vec::new(), Vec::new());
         let mut report = None;

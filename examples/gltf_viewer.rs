@@ -156,7 +156,7 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
             }
             _ => size,
         };
-        let id = renderer.register_view(camera.resolver(viewport), standard_render_graph);
+        let id = renderer.register_view(camera.resolver(viewport), standard_render_graph)?;
         views.push((format!("camera{i}"), camera.name.clone(), id));
     }
     // Three orbit views around the scene's bounds: front, three-quarter, and from above.
@@ -174,7 +174,7 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
             up,
             viewport: size,
         };
-        views.push((tag.to_owned(), tag.to_owned(), renderer.register_view(orbit, standard_render_graph)));
+        views.push((tag.to_owned(), tag.to_owned(), renderer.register_view(orbit, standard_render_graph)?));
     }
 
     let report = renderer.render_frame(&scene)?;

@@ -25,8 +25,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     let demo = multi_view_scene();
     let views = [
-        ("main", renderer.register_view(main_camera(UVec2::new(960, 540)), standard_render_graph)),
-        ("side", renderer.register_view(side_camera(UVec2::new(640, 480)), standard_render_graph)),
+        ("main", renderer.register_view(main_camera(UVec2::new(960, 540)), standard_render_graph)?),
+        ("side", renderer.register_view(side_camera(UVec2::new(640, 480)), standard_render_graph)?),
     ];
     let report = renderer.render_frame(&demo.scene)?;
     println!(

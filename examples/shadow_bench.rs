@@ -12,12 +12,10 @@
 //! same run. The error side is `shadow_map_resolution_trades_edge_error`
 //! in `tests/shadow_cascades.rs`.
 
-use std::sync::Arc;
 use std::time::Instant;
 
 use oxygen::core::CascadeSettings;
 use oxygen::prelude::*;
-use oxygen::{register_sun_cascades, shadowed_render_graph};
 
 const WARM_UP: usize = 3;
 const MEASURED: usize = 10;
@@ -70,14 +68,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for config in configs {
         let mut renderer = Renderer::new_headless()?;
         adapter = renderer.gpu().describe();
-        let cascades = match config {
+        let desc = match config {
             Some((count, resolution)) => {
                 let settings = CascadeSettings { count, resolution, max_distance: 60.0, ..Default::default() };
-                register_sun_cascades(&mut renderer, &scene, Arc::new(camera), settings)
+                ViewDesc::new(camera).with_sun_shadows(settings)
             }
-            None => [None; 4],
+            None => ViewDesc::new(camera),
         };
-        renderer.register_view(camera, shadowed_render_graph(cascades));
+        renderer.register_view(desc, standard_render_graph)?;
         let mut times = Vec::with_capacity(MEASURED);
         for frame in 0..WARM_UP + MEASURED {
             let start = Instant::now();

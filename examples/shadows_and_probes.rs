@@ -8,12 +8,10 @@
 //! cargo run --release --example shadows_and_probes [OUTPUT_DIR]   # default: out/
 //! ```
 
-use std::path::PathBuf;
-use std::sync::Arc;
-
 use oxygen::core::CascadeSettings;
 use oxygen::prelude::*;
-use oxygen::{ProbeUpdate, ReflectionProbe, lit_render_graph, register_local_shadows, register_sun_cascades};
+use oxygen::{ProbeUpdate, ReflectionProbe, ViewRole};
+use std::path::PathBuf;
 
 fn scene() -> Result<Scene, Box<dyn std::error::Error>> {
     let mut scene = Scene::new();
@@ -69,10 +67,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         up: Vec3::Y,
         viewport: UVec2::new(960, 540),
     };
-    // Views that others read are registered first, so they render first.
+    // The main view comes first: the renderer records it after what it reads
+    // (its own sun cascades, the spot and point shadow views, the probe's
+    // faces), whatever the registration order.
+    renderer.set_local_shadows(Some(LocalShadowSettings { resolution: 1024, ..Default::default() }));
     let settings = CascadeSettings { count: 3, resolution: 1024, max_distance: 40.0, caster_margin: 20.0, lambda: 0.6 };
-    let cascades = register_sun_cascades(&mut renderer, &scene, Arc::new(camera), settings);
-    let local_shadows = register_local_shadows(&mut renderer, &scene, 1024);
+    let main = renderer.register_view(ViewDesc::new(camera).with_sun_shadows(settings), standard_render_graph)?;
     let mut probe = ReflectionProbe::register(
         &mut renderer,
         Vec3::new(0.0, 1.0, 0.0),
@@ -80,28 +80,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         (0.05, 60.0),
         ProbeUpdate::EveryNthFrame(10),
     )?;
-    let config = ShaderPassConfig {
-        shadow_cascades: cascades,
-        local_shadows,
-        reflection_probes: vec![probe.input()],
-        ..Default::default()
-    };
-    let main = renderer.register_view(camera, lit_render_graph(config));
+    renderer.link(main, probe.cube())?;
 
     probe.before_frame(&mut renderer)?;
     let report = renderer.render_frame(&scene)?;
-    let kind = |id: ViewId| {
-        if id == main {
-            "main"
-        } else if cascades.contains(&Some(id)) {
-            "sun cascade"
-        } else if local_shadows.contains(&Some(id)) {
-            "local-light shadow"
-        } else if probe.faces().contains(&id) {
-            "probe face"
-        } else {
-            "other"
-        }
+    let kind = |role: ViewRole| match role {
+        ViewRole::Registered => "main",
+        ViewRole::SunCascade { .. } => "sun cascade",
+        ViewRole::LocalShadow { .. } => "local-light shadow",
+        ViewRole::ProbeFace { .. } => "probe face",
     };
     println!("| view | kind | draws | partitions | prep ms | record ms |");
     println!("|---|---|---:|---:|---:|---:|");
@@ -109,7 +96,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         println!(
             "| {} | {} | {} | {} | {:.3} | {:.3} |",
             v.view,
-            kind(v.view),
+            kind(v.role),
             v.draws,
             v.partitions,
             v.prep_seconds * 1e3,
@@ -117,9 +104,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         );
     }
     println!(
-        "frame: prepare {:.2} ms (frame phase + all views), record {:.2} ms",
+        "frame: prepare {:.2} ms (frame phase + all views), record {:.2} ms on {} threads",
         report.prepare_seconds * 1e3,
-        report.record_seconds * 1e3
+        report.record_seconds * 1e3,
+        report.record_threads
     );
     let path = out_dir.join("shadows_and_probes.png");
     renderer.read_color(main)?.save(&path)?;

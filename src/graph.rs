@@ -22,7 +22,7 @@ use std::future::Future;
 use std::pin::Pin;
 
 use oxygen_passes::{
-    CommandRecorder, ForwardLitConfig, MeshPass, PassError, RenderContext, RenderPass, TonemapPass,
+    CommandRecorder, DepthBias, ForwardLitConfig, MeshPass, PassError, RenderContext, RenderPass, TonemapPass,
 };
 
 /// What a view records each frame: a future that awaits its passes.
@@ -121,13 +121,23 @@ pub fn lit_render_graph(config: ForwardLitConfig) -> StandardGraph {
     StandardGraph::new(config)
 }
 
-/// The graph of a shadow view: the depth of its casters, nothing else.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct ShadowGraph;
+/// The graph of a shadow view: the depth of its casters with a rasterizer
+/// depth bias, nothing else.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadowGraph {
+    /// The shadow map's rasterizer bias.
+    pub bias: DepthBias,
+}
+
+impl Default for ShadowGraph {
+    fn default() -> Self {
+        ShadowGraph { bias: DepthBias::SHADOW_DEFAULT }
+    }
+}
 
 impl RenderGraph for ShadowGraph {
     async fn record(&self, ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError> {
-        MeshPass::shadow().run(ctx, rec).await
+        MeshPass::shadow_with_bias(self.bias).run(ctx, rec).await
     }
 }
 

@@ -42,11 +42,9 @@ pub use gltf_import::{
 pub use graph::{ProbeFaceGraph, RenderGraph, ShadowGraph, StandardGraph, lit_render_graph, standard_render_graph};
 pub use oxygen_sceneprep::RenderOrigin;
 pub use probes::{ProbeUpdate, ReflectionProbe};
-pub use renderer::{
-    FrameReport, FrameWarning, RenderError, Renderer, RendererOptions, ViewReport, ViewRole,
-};
+pub use renderer::{FrameReport, FrameWarning, RenderError, Renderer, RendererOptions, ViewReport, ViewRole};
 pub use shadows::{LocalShadowSettings, PointShadowFaceResolver, SpotShadowResolver};
-pub use views::{ViewDesc, ViewHandle, Views};
+pub use views::{ViewDesc, Views};
 
 /// The bindless heap.
 pub use oxygen_bindless as bindless;
@@ -61,16 +59,16 @@ pub use oxygen_sceneprep as sceneprep;
 pub mod prelude {
     pub use crate::{
         FrameReport, FrameWarning, LocalShadowSettings, RenderError, RenderGraph, RenderOrigin, Renderer,
-        RendererOptions, StandardGraph, ViewDesc, ViewHandle, Views, lit_render_graph, standard_render_graph,
+        RendererOptions, StandardGraph, ViewDesc, Views, lit_render_graph, standard_render_graph,
     };
     pub use crate::{ImportLimits, ImportOptions, SceneChoice, import_gltf, import_gltf_with};
     pub use oxygen_bindless::TexturePath;
+    pub use oxygen_core::CascadeSettings;
     pub use oxygen_core::glam::{Mat4, Quat, UVec2, Vec3, Vec4};
     pub use oxygen_core::{
         AlphaMode, Camera, Geometry, Light, LookAtResolver, Material, NodeFlags, Renderable, ResolvedView, Scene,
         Transform, ViewContext, ViewId, ViewResolver,
     };
-    pub use oxygen_core::CascadeSettings;
     pub use oxygen_passes::{
         CommandRecorder, DrawPath, ForwardLitConfig, MeshPass, Output, PassError, RenderContext, RenderPass,
         TonemapPass,

@@ -12,7 +12,8 @@
 
 use glam::{UVec2, Vec3};
 use oxygen_core::{Camera, ResolvedView, Scene, ViewContext, ViewError, ViewId, ViewResolver, ViewTargets};
-use oxygen_passes::{Output, OutputSource, PROBE_FACE_AXES, PROBE_FACES, ProbeCube, ProbeId};
+use oxygen_core::{Output, ProbeCube, ProbeId};
+use oxygen_passes::{PROBE_FACE_AXES, PROBE_FACES};
 
 use crate::views::{TargetKind, ViewDesc};
 use crate::{ProbeFaceGraph, RenderError, Renderer};
@@ -98,7 +99,7 @@ impl ReflectionProbe {
             let resolver = ProbeFaceResolver { position, face, resolution, near: depth_range.0, far: depth_range.1 };
             let mut desc = ViewDesc::new(resolver);
             desc.target = TargetKind::ProbeFace { probe: id, face: face as u32 };
-            *slot = renderer.register_view(desc, ProbeFaceGraph)?.id();
+            *slot = renderer.register_view(desc, ProbeFaceGraph)?;
         }
         renderer.add_probe(id, faces, texture, position);
         Ok(ReflectionProbe { id, faces, update, frames_seen: 0, update_requested: true })
@@ -107,7 +108,7 @@ impl ReflectionProbe {
     /// The probe's cube, for [`ViewDesc::reads`](crate::ViewDesc::reads) or
     /// [`Renderer::link`].
     pub fn cube(&self) -> Output<ProbeCube> {
-        Output::new(OutputSource::Probe(self.id))
+        self.id.cube()
     }
 
     /// The probe's id.

@@ -19,7 +19,9 @@
 
 use std::collections::BTreeMap;
 
-use oxygen_core::{CascadeSettings, LightKind, NodeKey, ResolvedView, Scene, ViewError, ViewId, ViewResolver, fit_cascade};
+use oxygen_core::{
+    CascadeSettings, LightKind, NodeKey, ResolvedView, Scene, ViewError, ViewId, ViewResolver, fit_cascade,
+};
 use oxygen_sceneprep::{FrameCollection, LocalShadowKind, ViewFilter, ViewPrepOptions};
 
 /// ScenePrep options of a shadow view: casters only, depth only.
@@ -199,7 +201,8 @@ impl ShadowViews {
         let sun = frame.shadow_sun.and_then(|node| scene.world_transform(node));
         if let Some(light_world) = sun {
             for (owner, camera, settings) in owners {
-                let settings = CascadeSettings { count: settings.count.clamp(1, oxygen_passes::MAX_CASCADES as u32), ..*settings };
+                let settings =
+                    CascadeSettings { count: settings.count.clamp(1, oxygen_passes::MAX_CASCADES as u32), ..*settings };
                 for index in 0..settings.count {
                     let id = self.cascades.get(&(*owner, index)).copied().unwrap_or_else(&mut allocate);
                     wanted_cascades.insert((*owner, index), id);

@@ -8,62 +8,11 @@ use std::sync::Arc;
 
 use oxygen_bindless::SlotAllocators;
 use oxygen_core::{CascadeSettings, Scene, ViewContext, ViewId, ViewResolver};
-use oxygen_passes::{Depth, HdrColor, Output, OutputSource, ProbeId, ShadowMap};
+use oxygen_core::{Output, OutputSource, ProbeId};
 use oxygen_sceneprep::{PreparedSceneFrame, ScenePrep, ViewPrepOptions, ViewRequest};
 
 use crate::RenderError;
 use crate::graph::{ErasedGraph, RenderGraph};
-
-/// A registered view, as returned by `register_view`: its id, and its
-/// outputs as typed values another view can be linked to.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub struct ViewHandle(ViewId);
-
-impl ViewHandle {
-    /// The view's id.
-    pub fn id(self) -> ViewId {
-        self.0
-    }
-
-    /// Its depth target.
-    pub fn depth(self) -> Output<Depth> {
-        Output::new(OutputSource::View(self.0))
-    }
-
-    /// Its linear HDR colour target.
-    pub fn hdr(self) -> Output<HdrColor> {
-        Output::new(OutputSource::View(self.0))
-    }
-
-    /// Its shadow map (for a depth-only view).
-    pub fn shadow_map(self) -> Output<ShadowMap> {
-        Output::new(OutputSource::View(self.0))
-    }
-}
-
-impl From<ViewHandle> for ViewId {
-    fn from(handle: ViewHandle) -> ViewId {
-        handle.0
-    }
-}
-
-impl PartialEq<ViewId> for ViewHandle {
-    fn eq(&self, other: &ViewId) -> bool {
-        self.0 == *other
-    }
-}
-
-impl PartialEq<ViewHandle> for ViewId {
-    fn eq(&self, other: &ViewHandle) -> bool {
-        *self == other.0
-    }
-}
-
-impl std::fmt::Display for ViewHandle {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        self.0.fmt(f)
-    }
-}
 
 /// How a view is registered: its resolver, its ScenePrep options, the
 /// outputs of other views it reads, and the shadows it owns.
@@ -171,7 +120,7 @@ impl Views {
     /// Registers a view (a resolver, or a [`ViewDesc`] with links and
     /// options) with the graph it records each frame. Fails when a link
     /// names a view or probe that is not registered.
-    pub fn register(&mut self, desc: impl Into<ViewDesc>, graph: impl RenderGraph) -> Result<ViewHandle, RenderError> {
+    pub fn register(&mut self, desc: impl Into<ViewDesc>, graph: impl RenderGraph) -> Result<ViewId, RenderError> {
         let desc = desc.into();
         for link in &desc.links {
             self.check_source(*link)?;
@@ -190,7 +139,7 @@ impl Views {
             },
         );
         tracing::info!(view = %id, "view registered");
-        Ok(ViewHandle(id))
+        Ok(id)
     }
 
     /// A fresh view id (also used for the views the renderer creates itself:

@@ -49,7 +49,7 @@ fn overlap_colour(red_first: bool) -> [u8; 3] {
         add_quad(&mut scene, name, at, Quat::IDENTITY, material);
     }
     let mut renderer = gpu_renderer();
-    let view = renderer.register_view(front_camera(), standard_render_graph);
+    let view = renderer.register_view(front_camera(), standard_render_graph).unwrap();
     renderer.render_frame(&scene).unwrap();
     let resolved =
         front_camera().resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
@@ -85,7 +85,7 @@ fn a_double_sided_draw_next_to_a_single_sided_one_shows_its_back_face() {
     add_quad(&mut scene, "single", Vec3::new(-1.0, 0.0, 0.0), away, single);
     add_quad(&mut scene, "double", Vec3::new(1.0, 0.0, 0.0), away, double);
     let mut renderer = gpu_renderer();
-    let view = renderer.register_view(front_camera(), standard_render_graph);
+    let view = renderer.register_view(front_camera(), standard_render_graph).unwrap();
     renderer.render_frame(&scene).unwrap();
     let image = support::read_lit_color(&renderer, view);
     let resolved =

@@ -46,14 +46,16 @@ fn centre_is_lit_red(renderer: &Renderer, view: ViewId) {
 fn a_camera_that_cannot_be_resolved_skips_its_view_and_the_others_render() {
     let (scene, eye) = lit_cube_scene();
     let mut renderer = gpu_renderer();
-    let good_before = renderer.register_view(front_view(64), standard_render_graph);
+    let good_before = renderer.register_view(front_view(64), standard_render_graph).unwrap();
     // A glTF camera with yfov 0, as a crafted file can hold.
     let broken = Camera { projection: Projection::Perspective { fov_y: 0.0, near: 0.1, far: Some(100.0) } };
-    let bad = renderer.register_view(
-        NodeCameraResolver { node: eye, camera: broken, viewport: UVec2::splat(64) },
-        standard_render_graph,
-    );
-    let good_after = renderer.register_view(front_view(64), standard_render_graph);
+    let bad = renderer
+        .register_view(
+            NodeCameraResolver { node: eye, camera: broken, viewport: UVec2::splat(64) },
+            standard_render_graph,
+        )
+        .unwrap();
+    let good_after = renderer.register_view(front_view(64), standard_render_graph).unwrap();
     let report = renderer.render_frame(&scene).expect("a bad view must not fail the frame");
     let rendered: Vec<ViewId> = report.views.iter().map(|v| v.view).collect();
     assert_eq!(rendered, vec![good_before, good_after]);
@@ -78,7 +80,7 @@ fn a_node_with_non_finite_bounds_is_skipped_with_a_warning_and_the_rest_renders(
     );
     scene.set_renderable(broken, Renderable { geometry, materials: vec![blue] }).unwrap();
     let mut renderer = gpu_renderer();
-    let view = renderer.register_view(front_view(64), standard_render_graph);
+    let view = renderer.register_view(front_view(64), standard_render_graph).unwrap();
     let report = renderer.render_frame(&scene).unwrap();
     assert!(
         report.warnings.iter().any(|w| matches!(w, FrameWarning::NodeSkipped { name, .. } if name == "broken")),
@@ -100,8 +102,8 @@ fn an_oversized_target_request_is_refused_before_anything_is_allocated() {
     let budget = Renderer::target_bytes(UVec2::splat(64), false);
     assert_eq!(budget, 64 * 64 * 16);
     let mut renderer = gpu_renderer_with(RendererOptions { target_budget_bytes: budget, ..Default::default() });
-    let first = renderer.register_view(front_view(64), standard_render_graph);
-    let second = renderer.register_view(front_view(64), standard_render_graph);
+    let first = renderer.register_view(front_view(64), standard_render_graph).unwrap();
+    let second = renderer.register_view(front_view(64), standard_render_graph).unwrap();
     let err = renderer.check_target_budget(&[(UVec2::splat(64), false), (UVec2::splat(64), false)]).unwrap_err();
     assert!(err.to_string().contains("target budget"), "{err}");
     renderer.check_target_budget(&[(UVec2::splat(64), false)]).unwrap();
@@ -124,8 +126,9 @@ fn a_huge_viewport_is_skipped_not_allocated() {
     let (scene, _) = lit_cube_scene();
     let mut renderer = gpu_renderer();
     let huge = renderer
-        .register_view(LookAtResolver { viewport: UVec2::new(16384, 16384), ..front_view(64) }, standard_render_graph);
-    let small = renderer.register_view(front_view(64), standard_render_graph);
+        .register_view(LookAtResolver { viewport: UVec2::new(16384, 16384), ..front_view(64) }, standard_render_graph)
+        .unwrap();
+    let small = renderer.register_view(front_view(64), standard_render_graph).unwrap();
     let report = renderer.render_frame(&scene).unwrap();
     // 16384² × 16 bytes = 4 GiB: over the default 2 GiB budget (or over the
     // device's texture limit, whichever is checked first).

@@ -55,7 +55,7 @@ fn a_negatively_scaled_gltf_node_is_imported_mirrored_and_lit_like_the_original(
         viewport: UVec2::new(96, 96),
     };
     let mut renderer = gpu_renderer();
-    let view = renderer.register_view(camera, standard_render_graph);
+    let view = renderer.register_view(camera, standard_render_graph).unwrap();
     renderer.render_frame(&scene).unwrap();
     let frame = renderer.prepared_frame(view).unwrap();
     assert!(frame.partitions().iter().any(|p| p.mask.contains(PassMask::MIRRORED)), "{}", frame.dump());

@@ -43,7 +43,7 @@ fn framing(bounds: Aabb, direction: Vec3) -> LookAtResolver {
 
 fn render(scene: &Scene, resolver: LookAtResolver) -> image::RgbaImage {
     let mut renderer = support::gpu_renderer();
-    let view = renderer.register_view(resolver, standard_render_graph);
+    let view = renderer.register_view(resolver, standard_render_graph).unwrap();
     renderer.render_frame(scene).unwrap();
     support::read_lit_color(&renderer, view)
 }

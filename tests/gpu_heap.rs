@@ -85,7 +85,9 @@ fn a_long_run_of_view_and_node_churn_keeps_gpu_memory_bounded() {
         }
         if frame % 5 == 0 && views.len() < 4 {
             views.push(
-                renderer.register_view(oxygen::core::demo::main_camera(UVec2::new(16, 16)), standard_render_graph),
+                renderer
+                    .register_view(oxygen::core::demo::main_camera(UVec2::new(16, 16)), standard_render_graph)
+                    .unwrap(),
             );
         } else if frame % 7 == 0 && views.len() > 1 {
             renderer.unregister_view(views.remove(0)).unwrap();

@@ -10,24 +10,12 @@ use support::{Rgb, assert_region, gpu_renderer, linear_to_srgb8, pixel_of, regio
 /// A distinctive clear colour, so "background" cannot be confused with shading.
 const CLEAR: wgpu::Color = wgpu::Color { r: 0.5, g: 0.0, b: 0.5, a: 1.0 };
 
-fn graph_with_clear<'a>(
-    _id: ViewId,
-    ctx: &'a RenderContext<'a>,
-    rec: &'a mut CommandRecorder,
-) -> RenderGraphFuture<'a> {
-    Box::pin(async move {
-        let mut depth = DepthPrePass::new();
-        depth.prepare_resources(ctx, rec).await?;
-        depth.execute(ctx, rec).await?;
-        let mut shading =
-            ShaderPass::new(ShaderPassConfig { clear_color: CLEAR, depth_from_pre_pass: true, ..Default::default() });
-        shading.prepare_resources(ctx, rec).await?;
-        shading.execute(ctx, rec).await?;
-        let mut tonemap = TonemapPass::default();
-        tonemap.prepare_resources(ctx, rec).await?;
-        tonemap.execute(ctx, rec).await?;
-        Ok(())
-    })
+async fn graph_with_clear(ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError> {
+    MeshPass::depth_pre_pass().run(ctx, rec).await?;
+    let config = ForwardLitConfig { clear_color: CLEAR, depth_from_pre_pass: true, ..Default::default() };
+    MeshPass::forward_lit(config).run(ctx, rec).await?;
+    TonemapPass::default().run(ctx, rec).await?;
+    Ok(())
 }
 
 fn add_cube(
@@ -75,7 +63,7 @@ fn near_object_occludes_far_one_and_background_keeps_the_clear_colour() {
 
     let mut renderer = gpu_renderer();
     let cam = camera(Vec3::ZERO, Vec3::NEG_Z, 96);
-    let view = renderer.register_view(cam, graph_with_clear);
+    let view = renderer.register_view(cam, graph_with_clear).unwrap();
     renderer.render_frame(&scene).unwrap();
     let image = support::read_lit_color(&renderer, view);
     let resolved = cam.resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
@@ -102,7 +90,7 @@ fn the_lit_side_of_a_cube_is_brighter_than_the_unlit_side() {
 
     let mut renderer = gpu_renderer();
     let cam = camera(Vec3::new(2.5, 1.5, 2.5), Vec3::ZERO, 128);
-    let view = renderer.register_view(cam, graph_with_clear);
+    let view = renderer.register_view(cam, graph_with_clear).unwrap();
     renderer.render_frame(&scene).unwrap();
     let image = support::read_lit_color(&renderer, view);
     let resolved = cam.resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
@@ -140,7 +128,7 @@ fn masked_quad_is_kept_above_its_cutoff_dropped_below_and_visible_from_behind() 
     for eye in [Vec3::new(0.0, 0.0, 4.0), Vec3::new(0.0, 0.0, -4.0)] {
         let mut renderer = gpu_renderer();
         let cam = camera(eye, Vec3::ZERO, 96);
-        let view = renderer.register_view(cam, graph_with_clear);
+        let view = renderer.register_view(cam, graph_with_clear).unwrap();
         renderer.render_frame(&scene).unwrap();
         let image = support::read_lit_color(&renderer, view);
         let resolved = cam.resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
@@ -160,8 +148,10 @@ fn masked_quad_is_kept_above_its_cutoff_dropped_below_and_visible_from_behind() 
 fn pipelines_are_created_once_and_reused_across_frames() {
     let demo = oxygen::core::demo::multi_view_scene();
     let mut renderer = gpu_renderer();
-    let main = renderer.register_view(oxygen::core::demo::main_camera(UVec2::new(64, 48)), standard_render_graph);
-    let side = renderer.register_view(oxygen::core::demo::side_camera(UVec2::new(48, 48)), standard_render_graph);
+    let main =
+        renderer.register_view(oxygen::core::demo::main_camera(UVec2::new(64, 48)), standard_render_graph).unwrap();
+    let side =
+        renderer.register_view(oxygen::core::demo::side_camera(UVec2::new(48, 48)), standard_render_graph).unwrap();
     renderer.render_frame(&demo.scene).unwrap();
     support::assert_hdr_finite(&renderer, main);
     support::assert_hdr_finite(&renderer, side);
@@ -178,8 +168,8 @@ fn pipelines_are_created_once_and_reused_across_frames() {
 fn views_render_in_registration_order_and_can_be_unregistered() {
     let demo = oxygen::core::demo::multi_view_scene();
     let mut renderer = gpu_renderer();
-    let a = renderer.register_view(oxygen::core::demo::main_camera(UVec2::new(32, 32)), standard_render_graph);
-    let b = renderer.register_view(oxygen::core::demo::side_camera(UVec2::new(32, 32)), standard_render_graph);
+    let a = renderer.register_view(oxygen::core::demo::main_camera(UVec2::new(32, 32)), standard_render_graph).unwrap();
+    let b = renderer.register_view(oxygen::core::demo::side_camera(UVec2::new(32, 32)), standard_render_graph).unwrap();
     let report = renderer.render_frame(&demo.scene).unwrap();
     assert_eq!(report.views.iter().map(|v| v.view).collect::<Vec<_>>(), vec![a, b]);
     assert!(report.views.iter().all(|v| v.recorded.draw_calls > 0));
@@ -203,20 +193,12 @@ fn a_closure_factory_can_render_without_a_depth_pre_pass() {
 
     let mut renderer = gpu_renderer();
     let cam = camera(Vec3::ZERO, Vec3::NEG_Z, 64);
-    let view = renderer.register_view(cam, |_id, ctx, rec| {
-        Box::pin(async move {
-            let mut shading = ShaderPass::new(ShaderPassConfig {
-                clear_color: CLEAR,
-                depth_from_pre_pass: false,
-                ..Default::default()
-            });
-            shading.prepare_resources(ctx, rec).await?;
-            shading.execute(ctx, rec).await?;
-            let mut tonemap = TonemapPass::default();
-            tonemap.prepare_resources(ctx, rec).await?;
-            tonemap.execute(ctx, rec).await
-        })
-    });
+    let graph = async |ctx: &RenderContext<'_>, rec: &mut CommandRecorder| {
+        let config = ForwardLitConfig { clear_color: CLEAR, depth_from_pre_pass: false, ..Default::default() };
+        MeshPass::forward_lit(config).run(ctx, rec).await?;
+        TonemapPass::default().run(ctx, rec).await
+    };
+    let view = renderer.register_view(cam, graph).unwrap();
     let report = renderer.render_frame(&scene).unwrap();
     assert_eq!(report.views[0].recorded.render_passes, 2, "shading and tone map only");
     let image = support::read_lit_color(&renderer, view);
@@ -248,7 +230,9 @@ fn multi_draw_indirect_and_direct_draws_produce_the_same_image() {
             Err(e) => panic!("{path:?} must be available on the test adapter: {e}"),
         };
         assert_eq!(renderer.draw_path(), path);
-        let view = renderer.register_view(oxygen::core::demo::main_camera(UVec2::new(160, 120)), standard_render_graph);
+        let view = renderer
+            .register_view(oxygen::core::demo::main_camera(UVec2::new(160, 120)), standard_render_graph)
+            .unwrap();
         let report = renderer.render_frame(&demo.scene).unwrap();
         (support::read_lit_color(&renderer, view), report.views[0].recorded.draw_calls)
     };
@@ -274,7 +258,8 @@ fn multi_draw_indirect_and_direct_draws_produce_the_same_image() {
 fn materials_and_geometry_upload_only_when_new_or_changed() {
     let mut demo = oxygen::core::demo::multi_view_scene();
     let mut renderer = gpu_renderer();
-    let view = renderer.register_view(oxygen::core::demo::main_camera(UVec2::new(48, 32)), standard_render_graph);
+    let view =
+        renderer.register_view(oxygen::core::demo::main_camera(UVec2::new(48, 32)), standard_render_graph).unwrap();
     for _ in 0..3 {
         renderer.render_frame(&demo.scene).unwrap();
     }
@@ -307,7 +292,7 @@ fn a_mirrored_cube_is_lit_and_culled_like_its_original() {
     add_sun(&mut scene, Vec3::NEG_Y, 3.0);
     let mut renderer = gpu_renderer();
     let cam = camera(Vec3::new(0.0, 3.0, 5.0), Vec3::ZERO, 128);
-    let view = renderer.register_view(cam, graph_with_clear);
+    let view = renderer.register_view(cam, graph_with_clear).unwrap();
     renderer.render_frame(&scene).unwrap();
     let frame = renderer.prepared_frame(view).unwrap();
     assert!(

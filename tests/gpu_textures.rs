@@ -45,7 +45,7 @@ fn render(scene: &Scene, path: TexturePath) -> (image::RgbaImage, ResolvedView) 
         up: Vec3::Y,
         viewport: UVec2::new(96, 96),
     };
-    let view = renderer.register_view(camera, standard_render_graph);
+    let view = renderer.register_view(camera, standard_render_graph).unwrap();
     renderer.render_frame(scene).unwrap();
     let ctx = ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 };
     (support::read_lit_color(&renderer, view), camera.resolve(&ctx, scene).unwrap())
@@ -174,7 +174,7 @@ fn minified_textures_are_filtered_through_their_mip_chain() {
             let scene = sampled_checker_scene(256, 64, sampling);
             let options = RendererOptions { texture_path: Some(path), ..Default::default() };
             let mut renderer = Renderer::new_headless_with(options).unwrap_or_else(|e| panic!("{path:?}: {e}"));
-            let view = renderer.register_view(camera, standard_render_graph);
+            let view = renderer.register_view(camera, standard_render_graph).unwrap();
             renderer.render_frame(&scene).unwrap();
             let pixels = centre(&support::read_lit_color(&renderer, view));
             let red: Vec<f32> = pixels.iter().map(|p| p.r as f32).collect();
@@ -233,7 +233,7 @@ fn occlusion_textures_dim_ambient_light_but_not_direct_light() {
             up: Vec3::Y,
             viewport: UVec2::new(120, 60),
         };
-        let view = renderer.register_view(camera, standard_render_graph);
+        let view = renderer.register_view(camera, standard_render_graph).unwrap();
         renderer.render_frame(&scene).unwrap();
         let image = support::read_lit_color(&renderer, view);
         let resolved =

@@ -64,7 +64,7 @@ fn camera_at(offset: Vec3) -> LookAtResolver {
 
 fn render(offset: Vec3, origin: RenderOrigin) -> image::RgbaImage {
     let mut renderer = gpu_renderer_with(RendererOptions { origin, ..Default::default() });
-    let view = renderer.register_view(camera_at(offset), oxygen::standard_render_graph);
+    let view = renderer.register_view(camera_at(offset), oxygen::standard_render_graph).unwrap();
     renderer.render_frame(&scene_at(offset)).unwrap();
     support::read_lit_color(&renderer, view)
 }

@@ -35,7 +35,7 @@ fn render_with_camera(lamp: Option<Light>, eye: Vec3) -> image::RgbaImage {
         viewport: UVec2::new(64, 64),
     };
     let mut renderer = gpu_renderer();
-    let view = renderer.register_view(camera, standard_render_graph);
+    let view = renderer.register_view(camera, standard_render_graph).unwrap();
     renderer.render_frame(&scene).unwrap();
     support::read_lit_color(&renderer, view)
 }

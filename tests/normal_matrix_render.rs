@@ -73,7 +73,7 @@ fn a_face_under_a_rotated_non_uniform_scale_is_lit_by_its_analytic_normal() {
         viewport: UVec2::new(128, 128),
     };
     let mut renderer = gpu_renderer();
-    let view = renderer.register_view(camera, standard_render_graph);
+    let view = renderer.register_view(camera, standard_render_graph).unwrap();
     renderer.render_frame(&scene).unwrap();
     let image = support::read_lit_color(&renderer, view);
     let resolved = camera.resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();

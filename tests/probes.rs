@@ -47,22 +47,16 @@ fn a_mirror_sphere_reflects_the_red_box_through_the_probe() {
     let mut renderer = support::gpu_renderer();
     let mut probe =
         ReflectionProbe::register(&mut renderer, Vec3::ZERO, 64, (0.05, 50.0), ProbeUpdate::EveryFrame).unwrap();
-    let input = probe.input();
-    let view = renderer.register_view(camera(), move |_id, ctx, rec| {
-        let input = input.clone();
-        Box::pin(async move {
-            let mut depth = DepthPrePass::new();
-            depth.prepare_resources(ctx, rec).await?;
-            depth.execute(ctx, rec).await?;
-            let mut shading =
-                ShaderPass::new(ShaderPassConfig { reflection_probes: vec![input], ..Default::default() });
-            shading.prepare_resources(ctx, rec).await?;
-            shading.execute(ctx, rec).await?;
-            let mut tonemap = TonemapPass::default();
-            tonemap.prepare_resources(ctx, rec).await?;
-            tonemap.execute(ctx, rec).await
-        })
-    });
+    let cube = probe.cube();
+    let graph = async move |ctx: &RenderContext<'_>, rec: &mut CommandRecorder| {
+        // Awaits the probe's faces: this view records after them.
+        let linked = ctx.input(cube).await?;
+        assert_eq!(linked.faces.len(), 6);
+        MeshPass::depth_pre_pass().run(ctx, rec).await?;
+        MeshPass::forward_lit(ForwardLitConfig::default()).run(ctx, rec).await?;
+        TonemapPass::default().run(ctx, rec).await
+    };
+    let view = renderer.register_view(ViewDesc::new(camera()).reads(cube), graph).unwrap();
     probe.before_frame(&mut renderer).unwrap();
     renderer.render_frame(&scene).unwrap();
     let image = support::read_lit_color(&renderer, view);
@@ -93,8 +87,7 @@ fn a_rough_metal_reflects_a_blurred_image_of_the_probe() {
         let mut renderer = support::gpu_renderer();
         let mut probe =
             ReflectionProbe::register(&mut renderer, Vec3::ZERO, 64, (0.05, 50.0), ProbeUpdate::EveryFrame).unwrap();
-        let config = ShaderPassConfig { reflection_probes: vec![probe.input()], ..Default::default() };
-        let view = renderer.register_view(camera(), oxygen::lit_render_graph(config));
+        let view = renderer.register_view(ViewDesc::new(camera()).reads(probe.cube()), standard_render_graph).unwrap();
         probe.before_frame(&mut renderer).unwrap();
         renderer.render_frame(&scene).unwrap();
         let image = support::read_lit_color(&renderer, view);
@@ -132,7 +125,7 @@ fn a_probe_updated_every_third_frame_renders_its_faces_only_then() {
     let mut renderer = support::gpu_renderer();
     let mut probe =
         ReflectionProbe::register(&mut renderer, Vec3::ZERO, 16, (0.05, 50.0), ProbeUpdate::EveryNthFrame(3)).unwrap();
-    let view = renderer.register_view(camera(), standard_render_graph);
+    let view = renderer.register_view(camera(), standard_render_graph).unwrap();
     let mut views_per_frame = Vec::new();
     for _ in 0..6 {
         probe.before_frame(&mut renderer).unwrap();
@@ -179,7 +172,6 @@ fn each_surface_reflects_its_nearest_probe() {
         Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, Vec3::new(0.3, -0.5, -1.0).normalize())),
     );
     scene.set_light(sun, Some(Light::directional(3.0))).unwrap();
-    let inputs: Vec<_> = probes.iter().map(ReflectionProbe::input).collect();
     let mut views = Vec::new();
     for x in [-10.0f32, 10.0] {
         let camera = LookAtResolver {
@@ -189,8 +181,8 @@ fn each_surface_reflects_its_nearest_probe() {
             up: Vec3::Y,
             viewport: UVec2::new(96, 96),
         };
-        let config = ShaderPassConfig { reflection_probes: inputs.clone(), ..Default::default() };
-        views.push((x, camera, renderer.register_view(camera, oxygen::lit_render_graph(config))));
+        let desc = probes.iter().fold(ViewDesc::new(camera), |desc, probe| desc.reads(probe.cube()));
+        views.push((x, camera, renderer.register_view(desc, standard_render_graph).unwrap()));
     }
     for probe in &mut probes {
         probe.before_frame(&mut renderer).unwrap();
@@ -212,30 +204,32 @@ fn each_surface_reflects_its_nearest_probe() {
     }
 }
 
-/// Two cameras share one probe: the faces are copied into the probe (and
-/// its mips rebuilt) once per frame, by the first view that samples them,
-/// and the second view, submitted after it, still sees the reflection.
+/// Two cameras share one probe: its faces render straight into the cube
+/// once per frame (each rebuilding its layer's mips), both views record
+/// after them, and both see the reflection.
 #[test]
-fn views_sharing_a_probe_copy_its_faces_once_per_frame() {
+fn views_sharing_a_probe_render_its_faces_once_per_frame() {
     let scene = mirror_scene();
     let mut renderer = support::gpu_renderer();
     let mut probe =
         ReflectionProbe::register(&mut renderer, Vec3::ZERO, 32, (0.05, 50.0), ProbeUpdate::EveryFrame).unwrap();
-    let config = ShaderPassConfig { reflection_probes: vec![probe.input()], ..Default::default() };
-    let views = [renderer.register_view(camera(), oxygen::lit_render_graph(config.clone())), {
-        let other = LookAtResolver { eye: Vec3::new(0.3, 0.2, 4.0), ..camera() };
-        renderer.register_view(other, oxygen::lit_render_graph(config))
-    }];
+    let views =
+        [renderer.register_view(ViewDesc::new(camera()).reads(probe.cube()), standard_render_graph).unwrap(), {
+            let other = LookAtResolver { eye: Vec3::new(0.3, 0.2, 4.0), ..camera() };
+            renderer.register_view(ViewDesc::new(other).reads(probe.cube()), standard_render_graph).unwrap()
+        }];
     probe.before_frame(&mut renderer).unwrap();
     let report = renderer.render_frame(&scene).unwrap();
-    let frame = renderer.prepared_frame(views[0]).unwrap().frame_index();
-    // Every face of this frame has been claimed: a third view would skip it.
-    for (layer, face) in probe.faces().iter().enumerate() {
-        assert!(!renderer.pipelines().claim_copy(&probe.input().texture, layer as u32, *face, frame));
-    }
-    // A new frame copies again.
-    assert!(renderer.pipelines().claim_copy(&probe.input().texture, 0, probe.faces()[0], frame + 1));
     assert_eq!(report.views.len(), 8);
+    // Each face once, every face before either camera.
+    let position = |id: ViewId| report.views.iter().position(|v| v.view == id).unwrap();
+    for (face, id) in probe.faces().into_iter().enumerate() {
+        assert_eq!(
+            report.views[position(id)].role,
+            oxygen::ViewRole::ProbeFace { probe: probe.id(), face: face as u32 }
+        );
+        assert!(views.iter().all(|v| position(id) < position(*v)), "{id} must record before the cameras");
+    }
     for view in views {
         let image = support::read_lit_color(&renderer, view);
         let resolved =

@@ -12,7 +12,6 @@
 mod support;
 
 use std::path::PathBuf;
-use std::sync::Arc;
 
 use oxygen::core::CascadeSettings;
 use oxygen::prelude::*;
@@ -76,7 +75,7 @@ fn assert_nothing_black(image: &image::RgbaImage, what: &str) {
 fn lit_ground_beside_the_cubes_has_no_black_pixel() {
     let (scene, camera, hot_spot) = cubes_on_lit_ground();
     let mut renderer = support::gpu_renderer();
-    let view = renderer.register_view(camera, standard_render_graph);
+    let view = renderer.register_view(camera, standard_render_graph).unwrap();
     renderer.render_frame(&scene).unwrap();
     let resolved = camera.resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
     assert_eq!(support::pixel_of(&resolved, hot_spot), REPORTED_PIXEL, "the reported pixel is the sun's hot spot");
@@ -88,11 +87,10 @@ fn lit_ground_beside_the_cubes_has_no_black_pixel() {
 fn lit_ground_beside_the_cubes_has_no_black_pixel_under_shadow_cascades() {
     let (scene, camera, _) = cubes_on_lit_ground();
     let mut renderer = support::gpu_renderer();
-    let main: Arc<dyn ViewResolver> = Arc::new(camera);
-    let cascades = oxygen::register_sun_cascades(&mut renderer, &scene, main, CascadeSettings::default());
-    assert!(cascades[0].is_some(), "the sun casts shadows");
-    let view = renderer.register_view(camera, oxygen::shadowed_render_graph(cascades));
+    let desc = ViewDesc::new(camera).with_sun_shadows(CascadeSettings::default());
+    let view = renderer.register_view(desc, standard_render_graph).unwrap();
     renderer.render_frame(&scene).unwrap();
+    assert!(!renderer.sun_cascades(view).is_empty(), "the sun casts shadows");
     let image = support::read_lit_color(&renderer, view);
     assert_nothing_black(&image, "shadow cascades");
 }

@@ -16,29 +16,22 @@ fn shadow_options() -> ViewPrepOptions {
     ViewPrepOptions { filter: ViewFilter::ShadowCastersOnly, depth_only: true, ..Default::default() }
 }
 
-fn depth_only_graph<'a>(
-    _id: ViewId,
-    ctx: &'a RenderContext<'a>,
-    rec: &'a mut CommandRecorder,
-) -> RenderGraphFuture<'a> {
-    Box::pin(async move { oxygen::passes::ShadowPass::new().run(ctx, rec).await })
-}
-
 #[test]
 fn four_cascade_views_share_the_frame_phase() {
     let demo = multi_view_scene();
     let mut renderer = support::gpu_renderer();
-    let main: Arc<dyn ViewResolver> = Arc::new(main_camera(UVec2::new(64, 48)));
     let settings = CascadeSettings { count: 4, resolution: 256, max_distance: 40.0, ..Default::default() };
-    for index in 0..4 {
-        let cascade = CascadeResolver { main: Arc::clone(&main), light: demo.sun, settings, index };
-        renderer.register_view_with_options(cascade, shadow_options(), depth_only_graph);
-    }
-    let view = renderer.register_view(main_camera(UVec2::new(64, 48)), standard_render_graph);
+    let desc = ViewDesc::new(main_camera(UVec2::new(64, 48))).with_sun_shadows(settings);
+    let view = renderer.register_view(desc, standard_render_graph).unwrap();
     for _ in 0..3 {
         let report = renderer.render_frame(&demo.scene).unwrap();
         support::assert_hdr_finite(&renderer, view);
         assert_eq!(report.views.len(), 5);
+        // The view's own cascades, recorded before it.
+        assert_eq!(report.views[4].view, view);
+        for (index, v) in report.views[..4].iter().enumerate() {
+            assert_eq!(v.role, oxygen::ViewRole::SunCascade { owner: view, index: index as u32 });
+        }
         // The nearest slices end before the grid starts; the farther ones hold it.
         assert!(report.views[..4].iter().any(|v| v.draws > 0), "some cascade sees the casters");
     }
@@ -98,34 +91,16 @@ fn a_cube_casts_a_shadow_on_the_ground() {
         up: Vec3::Y,
         viewport: UVec2::new(160, 120),
     };
-    let main: Arc<dyn ViewResolver> = Arc::new(camera);
     let settings =
         CascadeSettings { count: 2, resolution: 512, max_distance: 30.0, caster_margin: 20.0, ..Default::default() };
     let mut renderer = support::gpu_renderer();
-    let mut cascade_ids = [None; 4];
-    for index in 0..settings.count {
-        let cascade = CascadeResolver { main: Arc::clone(&main), light: sun, settings, index };
-        cascade_ids[index as usize] =
-            Some(renderer.register_view_with_options(cascade, shadow_options(), depth_only_graph));
-    }
-    let view = renderer.register_view(camera, move |_id, ctx, rec| {
-        Box::pin(async move {
-            let mut depth = DepthPrePass::new();
-            depth.prepare_resources(ctx, rec).await?;
-            depth.execute(ctx, rec).await?;
-            let config = ShaderPassConfig { shadow_cascades: cascade_ids, ..Default::default() };
-            let mut shading = ShaderPass::new(config);
-            shading.prepare_resources(ctx, rec).await?;
-            shading.execute(ctx, rec).await?;
-            let mut tonemap = TonemapPass::default();
-            tonemap.prepare_resources(ctx, rec).await?;
-            tonemap.execute(ctx, rec).await
-        })
-    });
+    let view = renderer.register_view(ViewDesc::new(camera).with_sun_shadows(settings), standard_render_graph).unwrap();
     renderer.render_frame(&scene).unwrap();
     let image = support::read_lit_color(&renderer, view);
+    assert_eq!(renderer.sun_cascades(view).len(), 2);
+    let _ = sun;
     // Shadow views render depth only: no colour targets were made for them.
-    let cascade = cascade_ids[0].unwrap();
+    let cascade = renderer.sun_cascades(view)[0];
     assert!(
         matches!(renderer.read_color(cascade), Err(oxygen::RenderError::DepthOnly(id)) if id == cascade),
         "a cascade view has colour targets"
@@ -144,23 +119,20 @@ fn a_scene_without_shadow_casters_gets_no_shadow_views() {
     let sun_light = demo.scene.node(demo.sun).unwrap().light.clone().unwrap();
     demo.scene.set_light(demo.sun, Some(Light { casts_shadows: false, ..sun_light })).unwrap();
     let mut renderer = support::gpu_renderer();
-    let main: Arc<dyn ViewResolver> = Arc::new(main_camera(UVec2::new(48, 32)));
-    let cascades =
-        oxygen::register_sun_cascades(&mut renderer, &demo.scene, Arc::clone(&main), CascadeSettings::default());
-    assert_eq!(cascades, [None; 4]);
-    let view = renderer.register_view(main_camera(UVec2::new(48, 32)), oxygen::shadowed_render_graph(cascades));
+    let settings = CascadeSettings { count: 3, resolution: 128, ..Default::default() };
+    let desc = ViewDesc::new(main_camera(UVec2::new(48, 32))).with_sun_shadows(settings);
+    let view = renderer.register_view(desc, standard_render_graph).unwrap();
     renderer.render_frame(&demo.scene).unwrap();
     support::assert_hdr_finite(&renderer, view);
+    assert_eq!(renderer.sun_cascades(view), Vec::<ViewId>::new());
     assert_eq!(renderer.views().count(), 1);
     assert_eq!(renderer.scene_prep().stats().views_prepared, 1, "nothing prepared for shadows");
 
-    // With the caster back, the same call registers the cascades.
-    let mut demo = multi_view_scene();
-    demo.scene.set_flags(demo.ground, NodeFlags::VISIBLE).unwrap();
-    let mut renderer = support::gpu_renderer();
-    let settings = CascadeSettings { count: 3, resolution: 128, ..Default::default() };
-    let cascades = oxygen::register_sun_cascades(&mut renderer, &demo.scene, main, settings);
-    assert_eq!(cascades.iter().flatten().count(), 3);
+    // With the caster back, the next frame has the cascades, without any call.
+    demo.scene.set_light(demo.sun, Some(Light { casts_shadows: true, ..sun_light })).unwrap();
+    let report = renderer.render_frame(&demo.scene).unwrap();
+    assert_eq!(renderer.sun_cascades(view).len(), 3);
+    assert_eq!(report.views.len(), 4);
 }
 
 /// A spot light above a cube on a ground plane: the ground behind the cube
@@ -186,8 +158,7 @@ fn a_spot_light_casts_a_shadow_through_its_shadow_view() {
     scene.set_light(spot, Some(Light::spot(400.0, Some(30.0), 0.5, 0.7))).unwrap();
 
     let mut renderer = support::gpu_renderer();
-    let spots = oxygen::register_local_shadows(&mut renderer, &scene, 512);
-    assert!(spots[0].is_some() && spots[1].is_none());
+    renderer.set_local_shadows(Some(LocalShadowSettings { resolution: 512, ..Default::default() }));
     let camera = LookAtResolver {
         camera: Camera::perspective(50f32.to_radians(), 0.1, Some(60.0)),
         eye: Vec3::new(1.0, 7.0, 7.0),
@@ -195,20 +166,9 @@ fn a_spot_light_casts_a_shadow_through_its_shadow_view() {
         up: Vec3::Y,
         viewport: UVec2::new(160, 120),
     };
-    let view = renderer.register_view(camera, move |_id, ctx, rec| {
-        Box::pin(async move {
-            let mut depth = DepthPrePass::new();
-            depth.prepare_resources(ctx, rec).await?;
-            depth.execute(ctx, rec).await?;
-            let mut shading = ShaderPass::new(ShaderPassConfig { local_shadows: spots, ..Default::default() });
-            shading.prepare_resources(ctx, rec).await?;
-            shading.execute(ctx, rec).await?;
-            let mut tonemap = TonemapPass::default();
-            tonemap.prepare_resources(ctx, rec).await?;
-            tonemap.execute(ctx, rec).await
-        })
-    });
+    let view = renderer.register_view(camera, standard_render_graph).unwrap();
     renderer.render_frame(&scene).unwrap();
+    assert_eq!(renderer.shadow_views().len(), 1, "one shadow view for the one spot");
     let image = support::read_lit_color(&renderer, view);
     let resolved = camera.resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
     // The cube's shadow falls on the ground just right of it (away from the light).
@@ -242,8 +202,7 @@ fn two_spot_shadows_share_the_atlas() {
         scene.set_light(spot, Some(Light::spot(400.0, Some(30.0), 0.25, 0.35))).unwrap();
     }
     let mut renderer = support::gpu_renderer();
-    let spots = oxygen::register_local_shadows(&mut renderer, &scene, 256);
-    assert_eq!(spots.iter().flatten().count(), 2);
+    renderer.set_local_shadows(Some(LocalShadowSettings { resolution: 256, ..Default::default() }));
     let camera = LookAtResolver {
         camera: Camera::perspective(60f32.to_radians(), 0.1, Some(60.0)),
         eye: Vec3::new(0.0, 14.0, 12.0),
@@ -251,11 +210,9 @@ fn two_spot_shadows_share_the_atlas() {
         up: Vec3::Y,
         viewport: UVec2::new(240, 140),
     };
-    let view = renderer.register_view(
-        camera,
-        oxygen::lit_render_graph(ShaderPassConfig { local_shadows: spots, ..Default::default() }),
-    );
+    let view = renderer.register_view(camera, standard_render_graph).unwrap();
     renderer.render_frame(&scene).unwrap();
+    assert_eq!(renderer.shadow_views().len(), 2);
     let image = support::read_lit_color(&renderer, view);
     let resolved = camera.resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
     for side in [-1.0f32, 1.0] {
@@ -306,13 +263,11 @@ fn a_point_light_casts_shadows_through_its_cube_faces() {
     };
     let render = |with_shadows: bool| {
         let mut renderer = support::gpu_renderer();
-        let tiles = oxygen::register_local_shadows(&mut renderer, &scene, 256);
-        assert_eq!(tiles.iter().flatten().count(), 7, "six faces and one spot");
-        assert!(tiles[7].is_none());
-        let local_shadows = if with_shadows { tiles } else { [None; oxygen::passes::MAX_SHADOW_TILES] };
-        let view = renderer
-            .register_view(camera, oxygen::lit_render_graph(ShaderPassConfig { local_shadows, ..Default::default() }));
+        renderer.set_local_shadows(Some(LocalShadowSettings { resolution: 256, ..Default::default() }));
+        let config = ForwardLitConfig { local_shadows: with_shadows, ..Default::default() };
+        let view = renderer.register_view(camera, oxygen::lit_render_graph(config)).unwrap();
         renderer.render_frame(&scene).unwrap();
+        assert_eq!(renderer.shadow_views().len(), 7, "six faces and one spot");
         let lights = renderer.scene_prep().frame_collection().positional_lights.clone();
         assert_eq!(lights.iter().map(|l| l.shadow_slot).collect::<Vec<_>>(), vec![0, 6], "point then spot tiles");
         support::read_lit_color(&renderer, view)
@@ -393,15 +348,13 @@ fn shadow_map_resolution_trades_edge_error() {
     };
     let render = |resolution: Option<u32>| {
         let mut renderer = support::gpu_renderer();
-        let mut cascades = [None; 4];
+        let mut desc = ViewDesc::new(camera);
         if let Some(resolution) = resolution {
             let settings =
                 CascadeSettings { count: 1, resolution, max_distance: 20.0, caster_margin: 10.0, ..Default::default() };
-            let cascade = CascadeResolver { main: Arc::new(camera), light: sun, settings, index: 0 };
-            cascades[0] = Some(renderer.register_view_with_options(cascade, shadow_options(), depth_only_graph));
+            desc = desc.with_sun_shadows(settings);
         }
-        let config = ShaderPassConfig { shadow_cascades: cascades, ..Default::default() };
-        let view = renderer.register_view(camera, oxygen::lit_render_graph(config));
+        let view = renderer.register_view(desc, standard_render_graph).unwrap();
         renderer.render_frame(&scene).unwrap();
         support::read_lit_color(&renderer, view)
     };

@@ -9,14 +9,10 @@
 
 mod support;
 
-use std::sync::Arc;
-
-use oxygen::core::{CascadeResolver, CascadeSettings, NodeKey, Scene};
-use oxygen::passes::{DepthBias, MAX_CASCADES, MAX_SHADOW_TILES, PROBE_FACES, ShadowPass};
+use oxygen::core::{NodeKey, Scene};
+use oxygen::passes::DepthBias;
 use oxygen::prelude::*;
-use oxygen::shadows::shadow_view_options;
-use oxygen::{PointShadowFaceResolver, SpotShadowResolver};
-use support::{gpu_renderer, read_lit_color};
+use support::{gpu_renderer, gpu_renderer_with, read_lit_color};
 
 /// The three guards against acne, together.
 #[derive(Clone, Copy, Debug)]
@@ -29,13 +25,6 @@ struct Guards {
 const DEFAULT_GUARDS: Guards = Guards { raster_bias: DepthBias::SHADOW_DEFAULT, normal_offset: 1.5, depth_bias: 1e-4 };
 const NO_BIAS: Guards = Guards { raster_bias: DepthBias::NONE, depth_bias: 0.0, ..DEFAULT_GUARDS };
 const NO_NORMAL_OFFSET: Guards = Guards { normal_offset: 0.0, ..DEFAULT_GUARDS };
-
-/// Registers a shadow view whose map is drawn with `bias`.
-fn register_shadow_view(renderer: &mut Renderer, resolver: impl ViewResolver + 'static, bias: DepthBias) -> ViewId {
-    renderer.register_view_with_options(resolver, shadow_view_options(), move |_id, ctx, rec| {
-        Box::pin(async move { ShadowPass::with_bias(bias).run(ctx, rec).await })
-    })
-}
 
 fn ground(scene: &mut Scene, size: f32) -> NodeKey {
     let grey = scene.add_material(Material { roughness: 0.9, ..Material::opaque("ground", Vec4::splat(0.7)) });
@@ -103,36 +92,20 @@ fn grazing_plane(light: Grazing, guards: Option<Guards>) -> image::RgbaImage {
             node
         }
     };
-    let mut renderer = gpu_renderer();
-    let mut config = ShaderPassConfig::default();
+    let mut config = ForwardLitConfig::default();
+    let mut options = RendererOptions::default();
+    let mut desc = ViewDesc::new(camera);
     if let Some(g) = guards {
         config.shadow_normal_offset = g.normal_offset;
         config.shadow_depth_bias = g.depth_bias;
+        options.shadow_bias = g.raster_bias;
         match light {
             Grazing::Sun => {
                 let settings = CascadeSettings { count: 2, resolution: 512, max_distance: 30.0, ..Default::default() };
-                let main: Arc<dyn ViewResolver> = Arc::new(camera);
-                let mut cascades = [None; MAX_CASCADES];
-                for index in 0..settings.count {
-                    let resolver = CascadeResolver { main: Arc::clone(&main), light: lamp, settings, index };
-                    cascades[index as usize] = Some(register_shadow_view(&mut renderer, resolver, g.raster_bias));
-                }
-                config.shadow_cascades = cascades;
+                desc = desc.with_sun_shadows(settings);
             }
-            Grazing::Spot => {
-                let mut tiles = [None; MAX_SHADOW_TILES];
-                let resolver = SpotShadowResolver { light: lamp, resolution: 512, near: 0.05, far: 100.0 };
-                tiles[0] = Some(register_shadow_view(&mut renderer, resolver, g.raster_bias));
-                config.local_shadows = tiles;
-            }
-            Grazing::Point => {
-                let mut tiles = [None; MAX_SHADOW_TILES];
-                for (face, tile) in tiles.iter_mut().enumerate().take(PROBE_FACES) {
-                    let resolver =
-                        PointShadowFaceResolver { light: lamp, face, resolution: 512, near: 0.05, far: 100.0 };
-                    *tile = Some(register_shadow_view(&mut renderer, resolver, g.raster_bias));
-                }
-                config.local_shadows = tiles;
+            Grazing::Spot | Grazing::Point => {
+                options.local_shadows = Some(LocalShadowSettings { resolution: 512, near: 0.05, far: 100.0 });
             }
         }
     } else if !matches!(light, Grazing::Sun) {
@@ -142,7 +115,8 @@ fn grazing_plane(light: Grazing, guards: Option<Guards>) -> image::RgbaImage {
         l.casts_shadows = false;
         scene.set_light(lamp, Some(l)).unwrap();
     }
-    let view = renderer.register_view(camera, oxygen::lit_render_graph(config));
+    let mut renderer = gpu_renderer_with(options);
+    let view = renderer.register_view(desc, oxygen::lit_render_graph(config)).unwrap();
     renderer.render_frame(&scene).unwrap();
     read_lit_color(&renderer, view)
 }
@@ -214,15 +188,9 @@ fn penumbra(pcf_radius: u32) -> (usize, f32, f32) {
     };
     let mut renderer = gpu_renderer();
     let settings = CascadeSettings { count: 1, resolution: 256, max_distance: 20.0, ..Default::default() };
-    let main: Arc<dyn ViewResolver> = Arc::new(camera);
-    let mut cascades = [None; MAX_CASCADES];
-    cascades[0] = Some(register_shadow_view(
-        &mut renderer,
-        CascadeResolver { main, light: sun, settings, index: 0 },
-        DepthBias::SHADOW_DEFAULT,
-    ));
-    let config = ShaderPassConfig { shadow_cascades: cascades, shadow_pcf_radius: pcf_radius, ..Default::default() };
-    let view = renderer.register_view(camera, oxygen::lit_render_graph(config));
+    let config = ForwardLitConfig { shadow_pcf_radius: pcf_radius, ..Default::default() };
+    let desc = ViewDesc::new(camera).with_sun_shadows(settings);
+    let view = renderer.register_view(desc, oxygen::lit_render_graph(config)).unwrap();
     renderer.render_frame(&scene).unwrap();
     let image = read_lit_color(&renderer, view);
     // The shadow falls at +X (the sun travels towards +X and down); the box

@@ -23,14 +23,13 @@ fn render(exposure: f32) -> image::RgbaImage {
         viewport: UVec2::splat(32),
     };
     let mut renderer = gpu_renderer();
-    let view = renderer.register_view(camera, move |_id, ctx, rec| {
-        Box::pin(async move {
-            let config =
-                ShaderPassConfig { clear_color: wgpu::Color::BLACK, depth_from_pre_pass: false, ..Default::default() };
-            ShaderPass::new(config).run(ctx, rec).await?;
-            TonemapPass::new(exposure).run(ctx, rec).await
-        })
-    });
+    let graph = async move |ctx: &RenderContext<'_>, rec: &mut CommandRecorder| {
+        let config =
+            ForwardLitConfig { clear_color: wgpu::Color::BLACK, depth_from_pre_pass: false, ..Default::default() };
+        MeshPass::forward_lit(config).run(ctx, rec).await?;
+        TonemapPass::new(exposure).run(ctx, rec).await
+    };
+    let view = renderer.register_view(camera, graph).unwrap();
     renderer.render_frame(&scene).unwrap();
     read_lit_color(&renderer, view)
 }

@@ -26,6 +26,7 @@ pub mod gpu;
 pub mod light;
 pub mod material;
 pub mod math;
+pub mod output;
 pub mod scene;
 pub mod shadow;
 pub mod texture;
@@ -37,6 +38,7 @@ pub use gpu::{ColorTargets, GpuContext, GpuError, GpuOptions, ViewTargets};
 pub use light::{Light, LightKind, Mobility};
 pub use material::{AlphaMode, Material};
 pub use math::{Aabb, Frustum, Plane, Sphere};
+pub use output::{Depth, HdrColor, Output, OutputSource, ProbeCube, ProbeId, ShadowMap};
 pub use scene::{
     GeometryHandle, LodLevel, MaterialHandle, Node, NodeFlags, NodeKey, Renderable, Scene, SceneError, TextureHandle,
     Transform, WorldTransforms,

@@ -42,14 +42,14 @@ pub use lighting_inputs::{
     LightingInputs, MAX_CASCADES, MAX_PROBES, MAX_SHADOW_TILES, PROBE_FACE_AXES, PROBE_FACES, probe_view,
 };
 pub use mesh_pass::{ColorOps, ForwardLitConfig, MeshPass};
+pub use oxygen_core::{Depth, HdrColor, Output, OutputSource, ProbeCube, ProbeId, ShadowMap};
 pub use pipelines::{
     AlphaClass, CompilerGuard, DepthBias, PassKind, PipelineFuture, PipelineKey, PipelineVariant, Pipelines,
     TONEMAP_WGSL, shader_source,
 };
 pub use render_context::{
-    CommandRecorder, Depth, DrawPath, FrameProgress, HdrColor, LinkedView, LocalShadowsInput, Output, OutputKind,
-    OutputSource, PassError, ProbeCube, ProbeCubeInput, ProbeId, RecordStats, RenderContext, ShadowMap,
-    ShadowMapInput, ViewInputs,
+    CommandRecorder, DrawPath, FrameProgress, LinkedView, LocalShadowsInput, OutputKind, PassError, ProbeCubeInput,
+    RecordStats, RenderContext, ShadowMapInput, ViewInputs,
 };
 pub use render_pass::RenderPass;
 pub use shadow_atlas::SHADOW_ATLAS_FORMAT;

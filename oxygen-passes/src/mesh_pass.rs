@@ -122,11 +122,8 @@ impl MeshPass {
     /// view's cascades and the local shadow maps, reflecting its linked
     /// probes. Transparent partitions are left to [`MeshPass::transparent`].
     pub fn forward_lit(config: ForwardLitConfig) -> Self {
-        let (kind, clear_depth) = if config.depth_from_pre_pass {
-            (PassKind::ShadingAfterPrePass, false)
-        } else {
-            (PassKind::Shading, true)
-        };
+        let (kind, clear_depth) =
+            if config.depth_from_pre_pass { (PassKind::ShadingAfterPrePass, false) } else { (PassKind::Shading, true) };
         MeshPass {
             name: "forward lit",
             include: PassMask::OPAQUE | PassMask::MASKED,
@@ -190,7 +187,8 @@ impl RenderPass for MeshPass {
 }
 
 impl MeshPass {
-    async fn record(&self, ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError> {        // The transparent pass alone skips an empty frame: the others clear
+    async fn record(&self, ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError> {
+        // The transparent pass alone skips an empty frame: the others clear
         // their targets, which later passes rely on.
         if self.kind == PassKind::Transparent && self.partitions(ctx).next().is_none() {
             return Ok(());
@@ -203,7 +201,8 @@ impl MeshPass {
             Some(config) => crate::forward_lighting::bind_group(ctx, config).await?,
             None => None,
         };
-        let pipelines = partition_pipelines(ctx, self.kind, self.color_format(), self.depth_bias, self.partitions(ctx)).await;
+        let pipelines =
+            partition_pipelines(ctx, self.kind, self.color_format(), self.depth_bias, self.partitions(ctx)).await;
 
         let mut stats = rec.stats;
         {
@@ -283,7 +282,12 @@ fn bind_view_resources(pass: &mut wgpu::RenderPass<'_>, ctx: &RenderContext<'_>,
 /// Draws every draw of `partition`. Either way the draw's position in the
 /// view's array reaches the shader as `first_instance`, which is how the
 /// vertex shader finds its `DrawMetadata`.
-fn draw_partition(pass: &mut wgpu::RenderPass<'_>, ctx: &RenderContext<'_>, partition: &Partition, stats: &mut RecordStats) {
+fn draw_partition(
+    pass: &mut wgpu::RenderPass<'_>,
+    ctx: &RenderContext<'_>,
+    partition: &Partition,
+    stats: &mut RecordStats,
+) {
     if ctx.draw_path == DrawPath::MultiDrawIndirect {
         let stride = std::mem::size_of::<oxygen_sceneprep::DrawIndexedIndirect>() as u64;
         let first = ctx.prepared.slots().indirect_args.start as u64 + partition.begin as u64;
@@ -295,7 +299,11 @@ fn draw_partition(pass: &mut wgpu::RenderPass<'_>, ctx: &RenderContext<'_>, part
     let draws = &ctx.prepared.draws()[partition.range()];
     for (offset, draw) in draws.iter().enumerate() {
         let draw_index = partition.begin + offset as u32;
-        pass.draw_indexed(draw.index_range(), draw.absolute_base_vertex(), draw_index..draw_index + draw.instance_count);
+        pass.draw_indexed(
+            draw.index_range(),
+            draw.absolute_base_vertex(),
+            draw_index..draw_index + draw.instance_count,
+        );
         stats.draw_calls += 1;
     }
 }

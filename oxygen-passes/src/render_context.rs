@@ -1,7 +1,10 @@
 //! `RenderContext` and `CommandRecorder`: what a pass reads and where it records.
 
 use oxygen_bindless::{BindlessHeap, SceneConstantsBuffer};
-use oxygen_core::{ColorTargets, GpuContext, ResolvedView, ViewId, ViewTargets};
+use oxygen_core::{
+    ColorTargets, Depth, GpuContext, HdrColor, Output, OutputSource, ProbeCube, ProbeId, ResolvedView, ShadowMap,
+    ViewId, ViewTargets,
+};
 use oxygen_sceneprep::PreparedSceneFrame;
 use thiserror::Error;
 
@@ -142,77 +145,6 @@ impl<'a> RenderContext<'a> {
     }
 }
 
-/// Identifies a reflection probe registered with a renderer.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub struct ProbeId(pub u32);
-
-impl std::fmt::Display for ProbeId {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "probe#{}", self.0)
-    }
-}
-
-/// Whose output a link names: one view's, or a probe's (its six faces).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub enum OutputSource {
-    /// A view's targets.
-    View(ViewId),
-    /// A reflection probe's cube, rendered by its face views.
-    Probe(ProbeId),
-}
-
-impl std::fmt::Display for OutputSource {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            OutputSource::View(v) => v.fmt(f),
-            OutputSource::Probe(p) => p.fmt(f),
-        }
-    }
-}
-
-/// A typed output of a view (or a probe): what a graph names to read it.
-/// `K` says what it is: [`Depth`], [`HdrColor`], [`ShadowMap`] or
-/// [`ProbeCube`].
-pub struct Output<K> {
-    /// Who produces it.
-    pub source: OutputSource,
-    kind: std::marker::PhantomData<fn() -> K>,
-}
-
-impl<K> Clone for Output<K> {
-    fn clone(&self) -> Self {
-        *self
-    }
-}
-impl<K> Copy for Output<K> {}
-impl<K> std::fmt::Debug for Output<K> {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "Output<{}>({})", std::any::type_name::<K>().rsplit("::").next().unwrap_or("?"), self.source)
-    }
-}
-impl<K> PartialEq for Output<K> {
-    fn eq(&self, other: &Self) -> bool {
-        self.source == other.source
-    }
-}
-
-impl<K: OutputKind> Output<K> {
-    /// The output of `source`.
-    pub fn new(source: OutputSource) -> Self {
-        Output { source, kind: std::marker::PhantomData }
-    }
-}
-
-/// The depth target of a view (reverse-Z).
-pub enum Depth {}
-/// The linear HDR colour target of a view.
-pub enum HdrColor {}
-/// The shadow map a depth-only view rendered (its depth, where it lives:
-/// its own target or its atlas layer), with the light's view.
-pub enum ShadowMap {}
-/// A reflection probe's six-layer cube with its mip chain.
-pub enum ProbeCube {}
-
 /// What kinds of output exist and how a view's inputs find them.
 pub trait OutputKind: 'static {
     /// What reading it gives.
@@ -256,7 +188,8 @@ impl OutputKind for ShadowMap {
             return Some((map.clone(), vec![id]));
         }
         let v = linked_view(inputs, source)?;
-        let map = ShadowMapInput { producer: v.id, view: v.view, depth: &v.targets.depth_view, resolution: v.targets.width };
+        let map =
+            ShadowMapInput { producer: v.id, view: v.view, depth: &v.targets.depth_view, resolution: v.targets.width };
         Some((map, vec![v.id]))
     }
 }
@@ -347,7 +280,10 @@ impl FrameProgress {
     /// counts as recorded already (it keeps its last image).
     pub fn new(recording: impl IntoIterator<Item = ViewId>) -> Self {
         FrameProgress {
-            state: std::sync::Mutex::new(ProgressState { pending: recording.into_iter().collect(), wakers: Vec::new() }),
+            state: std::sync::Mutex::new(ProgressState {
+                pending: recording.into_iter().collect(),
+                wakers: Vec::new(),
+            }),
         }
     }
 

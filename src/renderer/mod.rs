@@ -21,16 +21,14 @@ use std::time::Instant;
 
 use oxygen_bindless::{BindlessHeap, SceneConstantsBuffer, TexturePath};
 use oxygen_core::{GpuContext, GpuError, GpuOptions, NodeKey, ResolvedView, Scene, ViewError, ViewId, ViewTargets};
-use oxygen_passes::{
-    DrawPath, LightingResources, Output, PassError, Pipelines, ProbeId, RecordStats,
-};
+use oxygen_passes::{DepthBias, DrawPath, LightingResources, Output, PassError, Pipelines, ProbeId, RecordStats};
 use oxygen_sceneprep::{PrepError, PreparedSceneFrame, RenderOrigin, ScenePrep, ViewPrepOptions};
 use thiserror::Error;
 use tracing::{info, info_span};
 
 use crate::graph::RenderGraph;
 use crate::shadows::{LocalShadowSettings, ShadowViews};
-use crate::views::{ViewDesc, ViewHandle, Views};
+use crate::views::{ViewDesc, Views};
 
 /// Why a frame (or a renderer) failed.
 #[derive(Debug, Error)]
@@ -62,7 +60,9 @@ pub enum RenderError {
     #[error("{0} is not registered")]
     NoSuchProbe(ProbeId),
     /// A link would make a view wait for itself.
-    #[error("linking {view} to the output of {output} would close a cycle: {output} already reads, through its links, what {view} renders")]
+    #[error(
+        "linking {view} to the output of {output} would close a cycle: {output} already reads, through its links, what {view} renders"
+    )]
     LinkCycle {
         /// The view being linked.
         view: ViewId,
@@ -244,6 +244,9 @@ pub struct RendererOptions {
     /// Render shadow maps for shadow-casting spot and point lights
     /// ([`Renderer::set_local_shadows`]); `None` renders none.
     pub local_shadows: Option<LocalShadowSettings>,
+    /// Rasterizer depth bias of every shadow map the renderer renders (sun
+    /// cascades and local shadows), against acne; see [`DepthBias`].
+    pub shadow_bias: DepthBias,
 }
 
 impl Default for RendererOptions {
@@ -257,10 +260,10 @@ impl Default for RendererOptions {
             trust_indirect_args: false,
             target_budget_bytes: 2 << 30,
             local_shadows: None,
+            shadow_bias: DepthBias::SHADOW_DEFAULT,
         }
     }
 }
-
 
 /// A probe's cube and position, kept by the renderer.
 pub(crate) struct ProbeResources {
@@ -295,6 +298,8 @@ pub struct Renderer {
     target_budget_bytes: u64,
     /// The last frame's views in submission order, with their roles.
     last_frame: Vec<(ViewId, ViewRole)>,
+    /// The graph of every shadow view the renderer creates.
+    shadow_graph: std::sync::Arc<dyn crate::graph::ErasedGraph>,
 }
 
 impl Renderer {
@@ -375,6 +380,7 @@ impl Renderer {
             frame_index: 0,
             started: Instant::now(),
             last_frame: Vec::new(),
+            shadow_graph: std::sync::Arc::new(crate::ShadowGraph { bias: options.shadow_bias }),
         })
     }
 
@@ -394,7 +400,7 @@ impl Renderer {
     /// ([`standard_render_graph`](crate::standard_render_graph) is the
     /// default). The renderer records views after the views whose outputs
     /// they read, whatever the registration order.
-    pub fn register_view(&mut self, desc: impl Into<ViewDesc>, graph: impl RenderGraph) -> Result<ViewHandle, RenderError> {
+    pub fn register_view(&mut self, desc: impl Into<ViewDesc>, graph: impl RenderGraph) -> Result<ViewId, RenderError> {
         self.views.register(desc, graph)
     }
 
@@ -404,7 +410,7 @@ impl Renderer {
         resolver: impl oxygen_core::ViewResolver + 'static,
         options: ViewPrepOptions,
         graph: impl RenderGraph,
-    ) -> Result<ViewHandle, RenderError> {
+    ) -> Result<ViewId, RenderError> {
         self.views.register(ViewDesc::new(resolver).with_options(options), graph)
     }
 
@@ -470,7 +476,13 @@ impl Renderer {
         &self.last_frame
     }
 
-    pub(crate) fn add_probe(&mut self, id: ProbeId, faces: [ViewId; oxygen_passes::PROBE_FACES], texture: wgpu::Texture, position: glam::Vec3) {
+    pub(crate) fn add_probe(
+        &mut self,
+        id: ProbeId,
+        faces: [ViewId; oxygen_passes::PROBE_FACES],
+        texture: wgpu::Texture,
+        position: glam::Vec3,
+    ) {
         self.views.probes.insert(id, faces);
         self.probes.insert(id, ProbeResources { texture, position });
     }

@@ -10,7 +10,7 @@ use tracing::{info_span, warn};
 
 use super::resolve::{FramePlan, FrameView, TargetPlan};
 use super::{FrameWarning, RenderError, Renderer, ViewRole};
-use crate::graph::{ErasedGraph, ShadowGraph};
+use crate::graph::ErasedGraph;
 use crate::shadows::{ShadowRole, shadow_view_options};
 
 impl Renderer {
@@ -41,7 +41,7 @@ impl Renderer {
         for id in released {
             self.release_view(id)?;
         }
-        let shadow_graph: Arc<dyn ErasedGraph> = Arc::new(ShadowGraph);
+        let shadow_graph: Arc<dyn ErasedGraph> = Arc::clone(&self.shadow_graph);
         let mut taken = self.planned_target_bytes(plan);
         for shadow in planned {
             let resolved = shadow.resolved.map_err(RenderError::from).and_then(|view| {

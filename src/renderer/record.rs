@@ -20,8 +20,8 @@ use std::time::{Duration, Instant};
 
 use oxygen_core::ViewId;
 use oxygen_passes::{
-    CommandRecorder, FrameProgress, LinkedView, LocalShadowsInput, OutputSource, PassError, Pipelines,
-    ProbeCubeInput, RecordStats, RenderContext, ShadowMapInput, ViewInputs,
+    CommandRecorder, FrameProgress, LinkedView, LocalShadowsInput, OutputSource, PassError, Pipelines, ProbeCubeInput,
+    RecordStats, RenderContext, ShadowMapInput, ViewInputs,
 };
 use tracing::{Instrument, info_span};
 
@@ -43,9 +43,8 @@ impl Renderer {
     /// cycles at registration.
     fn link_order(&self, plan: &FramePlan) -> Vec<usize> {
         let index: BTreeMap<ViewId, usize> = plan.views.iter().enumerate().map(|(i, v)| (v.id, i)).collect();
-        let local: Vec<usize> = (0..plan.views.len())
-            .filter(|i| matches!(plan.views[*i].target, TargetPlan::AtlasLayer { .. }))
-            .collect();
+        let local: Vec<usize> =
+            (0..plan.views.len()).filter(|i| matches!(plan.views[*i].target, TargetPlan::AtlasLayer { .. })).collect();
         let dependencies = |view: &FrameView| -> BTreeSet<usize> {
             let mut deps: BTreeSet<usize> = view
                 .links
@@ -104,7 +103,8 @@ impl Renderer {
         for source in &view.links {
             match *source {
                 OutputSource::Probe(probe) => {
-                    let (Some(faces), Some(resources)) = (self.views.probes.get(&probe), self.probes.get(&probe)) else {
+                    let (Some(faces), Some(resources)) = (self.views.probes.get(&probe), self.probes.get(&probe))
+                    else {
                         continue;
                     };
                     probes.push(ProbeCubeInput {

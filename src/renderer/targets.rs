@@ -61,9 +61,11 @@ impl Renderer {
                 }
                 TargetPlan::ProbeFace { probe, face } => {
                     if let Some(cube) = self.probes.get(&probe).map(|p| &p.texture) {
-                        let current = entry.targets.as_ref().and_then(|t| t.color.as_ref()).is_some_and(|c| {
-                            c.hdr == *cube && c.hdr_layer == face && c.hdr.width() == width
-                        });
+                        let current = entry
+                            .targets
+                            .as_ref()
+                            .and_then(|t| t.color.as_ref())
+                            .is_some_and(|c| c.hdr == *cube && c.hdr_layer == face && c.hdr.width() == width);
                         if !current {
                             entry.targets = Some(ViewTargets::probe_face(device, cube, face, &label));
                         }
@@ -73,7 +75,13 @@ impl Renderer {
             let v = &view.gpu;
             entry.constants.set_camera(
                 &self.gpu.queue,
-                &CameraConstants::new(v.view, v.projection, v.view_projection, v.inverse_view_projection, v.camera_position),
+                &CameraConstants::new(
+                    v.view,
+                    v.projection,
+                    v.view_projection,
+                    v.inverse_view_projection,
+                    v.camera_position,
+                ),
             );
             entry.constants.set_renderer(&self.gpu.queue, &frame.renderer_constants(time_seconds));
             entry.last_view = Some(view.gpu);

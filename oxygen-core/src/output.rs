@@ -1,0 +1,101 @@
+//! Typed outputs of views: what a render graph names to read another view's
+//! result. A view's id is its handle: [`ViewId::depth`], [`ViewId::hdr`] and
+//! [`ViewId::shadow_map`] name its outputs; a reflection probe's cube is
+//! named by its [`ProbeId`]. The renderer orders views by these links.
+
+use crate::ViewId;
+
+/// Identifies a reflection probe registered with a renderer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct ProbeId(pub u32);
+
+impl std::fmt::Display for ProbeId {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "probe#{}", self.0)
+    }
+}
+
+/// Whose output a link names: one view's, or a probe's (its six faces).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum OutputSource {
+    /// A view's targets.
+    View(ViewId),
+    /// A reflection probe's cube, rendered by its face views.
+    Probe(ProbeId),
+}
+
+impl std::fmt::Display for OutputSource {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            OutputSource::View(v) => v.fmt(f),
+            OutputSource::Probe(p) => p.fmt(f),
+        }
+    }
+}
+
+/// A typed output of a view (or a probe): what a graph names to read it.
+/// `K` says what it is: [`Depth`], [`HdrColor`], [`ShadowMap`] or
+/// [`ProbeCube`].
+pub struct Output<K> {
+    /// Who produces it.
+    pub source: OutputSource,
+    kind: std::marker::PhantomData<fn() -> K>,
+}
+
+impl<K> Clone for Output<K> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<K> Copy for Output<K> {}
+impl<K> std::fmt::Debug for Output<K> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Output<{}>({})", std::any::type_name::<K>().rsplit("::").next().unwrap_or("?"), self.source)
+    }
+}
+impl<K> PartialEq for Output<K> {
+    fn eq(&self, other: &Self) -> bool {
+        self.source == other.source
+    }
+}
+
+impl<K> Output<K> {
+    /// The output of `source`.
+    pub fn new(source: OutputSource) -> Self {
+        Output { source, kind: std::marker::PhantomData }
+    }
+}
+
+/// The depth target of a view (reverse-Z).
+pub enum Depth {}
+/// The linear HDR colour target of a view.
+pub enum HdrColor {}
+/// The shadow map a depth-only view rendered (its depth, where it lives:
+/// its own target or its atlas layer), with the light's view.
+pub enum ShadowMap {}
+/// A reflection probe's six-layer cube with its mip chain.
+pub enum ProbeCube {}
+
+impl ViewId {
+    /// This view's depth target.
+    pub fn depth(self) -> Output<Depth> {
+        Output::new(OutputSource::View(self))
+    }
+
+    /// This view's linear HDR colour target.
+    pub fn hdr(self) -> Output<HdrColor> {
+        Output::new(OutputSource::View(self))
+    }
+
+    /// This (depth-only) view's shadow map.
+    pub fn shadow_map(self) -> Output<ShadowMap> {
+        Output::new(OutputSource::View(self))
+    }
+}
+
+impl ProbeId {
+    /// The probe's cube.
+    pub fn cube(self) -> Output<ProbeCube> {
+        Output::new(OutputSource::Probe(self))
+    }
+}
