@@ -221,7 +221,12 @@ impl MeshPass {
             let depth_load = if self.clear_depth { wgpu::LoadOp::Clear(0.0) } else { wgpu::LoadOp::Load };
             let mut pass = rec.encoder().begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some(self.name),
-                color_attachments: &[color_attachment],
+                // A depth-only pass has no colour slot at all (not an empty one).
+                color_attachments: if color_attachment.is_some() {
+                    std::slice::from_ref(&color_attachment)
+                } else {
+                    &[]
+                },
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                     view: &ctx.targets.depth_view,
                     depth_ops: Some(wgpu::Operations { load: depth_load, store: wgpu::StoreOp::Store }),
