@@ -55,18 +55,38 @@ pub use oxygen_passes as passes;
 /// ScenePrep.
 pub use oxygen_sceneprep as sceneprep;
 
+/// The `glam` Oxygen's math is written in, so positions and matrices you
+/// build have the types Oxygen takes (no second `glam` in `Cargo.toml`).
+pub use oxygen_core::glam;
+/// The `image` crate of [`Renderer::read_color`]'s `RgbaImage`, to save or
+/// inspect a read-back without depending on a matching `image` version.
+pub use image;
+/// The `wgpu` Oxygen renders with, for code that reaches the device through
+/// [`Renderer::gpu`] or writes its own passes.
+pub use wgpu;
+
+/// Compiles the Rust blocks of `README.md` as doctests, so the README's
+/// examples cannot drift from the API.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;
+
 /// The names most applications use.
 pub mod prelude {
     pub use crate::{
         FrameReport, FrameWarning, RenderError, RenderGraphFuture, RenderOrigin, Renderer, RendererOptions,
         lit_render_graph, standard_render_graph,
     };
-    pub use crate::{ImportLimits, ImportOptions, SceneChoice, import_gltf, import_gltf_with};
+    pub use crate::{
+        GltfCamera, GltfError, GltfImport, ImportLimits, ImportOptions, SceneChoice, import_gltf, import_gltf_with,
+    };
+    pub use crate::{ProbeUpdate, ReflectionProbe, register_local_shadows, register_sun_cascades, shadowed_render_graph};
     pub use oxygen_bindless::TexturePath;
-    pub use oxygen_core::glam::{Mat4, Quat, UVec2, Vec3, Vec4};
+    pub use oxygen_core::glam::{Mat4, Quat, UVec2, Vec2, Vec3, Vec4};
     pub use oxygen_core::{
-        AlphaMode, Camera, Geometry, Light, LookAtResolver, Material, NodeFlags, Renderable, ResolvedView, Scene,
-        Transform, ViewContext, ViewId, ViewResolver,
+        AlphaMode, Camera, CameraError, CascadeSettings, Geometry, GeometryHandle, Light, LightKind, LookAtResolver,
+        Material, MaterialHandle, NodeFlags, NodeKey, Projection, Renderable, ResolvedView, Scene, Transform,
+        ViewContext, ViewError, ViewId, ViewResolver,
     };
     pub use oxygen_passes::{
         CommandRecorder, DepthPrePass, DrawPath, PassError, RenderContext, RenderPass, ShaderPass, ShaderPassConfig,
