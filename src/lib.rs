@@ -55,12 +55,12 @@ pub use oxygen_passes as passes;
 /// ScenePrep.
 pub use oxygen_sceneprep as sceneprep;
 
-/// The `glam` Oxygen's math is written in, so positions and matrices you
-/// build have the types Oxygen takes (no second `glam` in `Cargo.toml`).
-pub use oxygen_core::glam;
 /// The `image` crate of [`Renderer::read_color`]'s `RgbaImage`, to save or
 /// inspect a read-back without depending on a matching `image` version.
 pub use image;
+/// The `glam` Oxygen's math is written in, so positions and matrices you
+/// build have the types Oxygen takes (no second `glam` in `Cargo.toml`).
+pub use oxygen_core::glam;
 /// The `wgpu` Oxygen renders with, for code that reaches the device through
 /// [`Renderer::gpu`] or writes its own passes.
 pub use wgpu;
@@ -80,7 +80,9 @@ pub mod prelude {
     pub use crate::{
         GltfCamera, GltfError, GltfImport, ImportLimits, ImportOptions, SceneChoice, import_gltf, import_gltf_with,
     };
-    pub use crate::{ProbeUpdate, ReflectionProbe, register_local_shadows, register_sun_cascades, shadowed_render_graph};
+    pub use crate::{
+        ProbeUpdate, ReflectionProbe, register_local_shadows, register_sun_cascades, shadowed_render_graph,
+    };
     pub use oxygen_bindless::TexturePath;
     pub use oxygen_core::glam::{Mat4, Quat, UVec2, Vec2, Vec3, Vec4};
     pub use oxygen_core::{

@@ -149,7 +149,8 @@ fn duplicate_node_names_resolve_to_the_first_in_the_file_not_the_first_walked() 
     let json = r#"{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[2,0,3]}],
         "nodes":[{"name":"Lamp"},{"name":"Lamp"},{"name":"Rig","children":[1]},{}]}"#;
     let mut scene = Scene::new();
-    let import = oxygen::import_gltf_slice(&mut scene, json.as_bytes(), "lamps.gltf", &ImportOptions::default()).unwrap();
+    let import =
+        oxygen::import_gltf_slice(&mut scene, json.as_bytes(), "lamps.gltf", &ImportOptions::default()).unwrap();
     let lamps: Vec<NodeKey> = import.nodes_named("Lamp").collect();
     assert_eq!(lamps.len(), 2);
     assert_eq!(import.node("Lamp"), Some(lamps[0]));
