@@ -1,7 +1,7 @@
 //! glTF 2.0 import into a [`Scene`], safe on untrusted files.
 //!
 //! What comes in: the chosen scene's node hierarchy with local TRS; meshes
-//! (every triangle primitive becomes a submesh of one [`Geometry`], with its
+//! (every triangle primitive becomes a submesh of one [`Geometry`](oxygen_core::Geometry), with its
 //! own material); metallic-roughness materials with base-colour,
 //! metallic-roughness, normal, emissive and occlusion textures and their
 //! samplers, alpha mode and cutoff, double-sidedness;
@@ -28,7 +28,7 @@
 //! 3. the node graph is checked to be a forest ([`graph`]) and walked with
 //!    an explicit stack;
 //! 4. every accessor is validated for its semantic and byte range before it
-//!    is read ([`accessor`]), and vertex, index, texel and byte totals are
+//!    is read (`accessor`), and vertex, index, texel and byte totals are
 //!    charged to a budget before they are allocated.
 //!
 //! Nothing here calls the `gltf` crate's importer or readers, which trust the
