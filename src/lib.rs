@@ -4,15 +4,23 @@
 //!
 //! An application registers *views* with a [`Renderer`]: each brings a
 //! [`ViewResolver`](oxygen_core::ViewResolver) (camera → matrices and frustum)
-//! and an async render-graph factory (a future that awaits its passes). Every
-//! [`Renderer::render_frame`] then runs in two phases:
+//! and a [`RenderGraph`] (an async closure, or a named graph such as
+//! [`StandardGraph`], whose future awaits its passes). A view may read what
+//! other views render through typed links ([`ViewDesc::reads`],
+//! [`Renderer::link`]): another view's depth or HDR colour, a reflection
+//! probe's cube; a view registered with [`ViewDesc::with_sun_shadows`] owns
+//! its shadow cascades. Every [`Renderer::render_frame`] then:
 //!
-//! 1. **PreRender** — ScenePrep collects the scene once and prepares one
-//!    immutable [`PreparedSceneFrame`](oxygen_sceneprep::PreparedSceneFrame)
-//!    per view, then uploads what the views need into the bindless heap;
-//! 2. **Render** — each view's factory future is driven to completion against
-//!    a [`RenderContext`](oxygen_passes::RenderContext), and the command
-//!    buffers are submitted in view order.
+//! 1. **resolves** the views and picks the render origin;
+//! 2. **prepares**: ScenePrep collects the scene once, the renderer plans the
+//!    frame's shadow views from the lights it found, and one immutable
+//!    [`PreparedSceneFrame`](oxygen_sceneprep::PreparedSceneFrame) per view is
+//!    prepared and uploaded into the bindless heap;
+//! 3. **allocates targets** and writes each view's constants;
+//! 4. **records**: every view's graph future is polled together on the worker
+//!    threads, each into its own encoder (a pass awaiting a pipeline that is
+//!    still compiling, or another view's output, lets its thread record other
+//!    views), and the command buffers are submitted in link order.
 //!
 //! ```no_run
 //! use oxygen::prelude::*;
@@ -22,7 +30,7 @@
 //! let view = renderer.register_view(
 //!     oxygen::core::demo::main_camera(UVec2::new(640, 480)),
 //!     standard_render_graph,
-//! );
+//! )?;
 //! renderer.render_frame(&demo.scene)?;
 //! renderer.read_color(view)?.save("main.png")?;
 //! # Ok::<(), Box<dyn std::error::Error>>(())
@@ -55,19 +63,38 @@ pub use oxygen_passes as passes;
 /// ScenePrep.
 pub use oxygen_sceneprep as sceneprep;
 
+/// The `image` crate of [`Renderer::read_color`]'s `RgbaImage`, to save or
+/// inspect a read-back without depending on a matching `image` version.
+pub use image;
+/// The `glam` Oxygen's math is written in, so positions and matrices you
+/// build have the types Oxygen takes (no second `glam` in `Cargo.toml`).
+pub use oxygen_core::glam;
+/// The `wgpu` Oxygen renders with, for code that reaches the device through
+/// [`Renderer::gpu`] or writes its own passes.
+pub use wgpu;
+
+/// Compiles the Rust blocks of `README.md` as doctests, so the README's
+/// examples cannot drift from the API.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;
+
 /// The names most applications use.
 pub mod prelude {
     pub use crate::{
         FrameReport, FrameWarning, LocalShadowSettings, RenderError, RenderGraph, RenderOrigin, Renderer,
         RendererOptions, StandardGraph, ViewDesc, Views, lit_render_graph, standard_render_graph,
     };
-    pub use crate::{ImportLimits, ImportOptions, SceneChoice, import_gltf, import_gltf_with};
+    pub use crate::{
+        GltfCamera, GltfError, GltfImport, ImportLimits, ImportOptions, SceneChoice, import_gltf, import_gltf_with,
+    };
+    pub use crate::{ProbeUpdate, ReflectionProbe, ViewRole};
     pub use oxygen_bindless::TexturePath;
-    pub use oxygen_core::CascadeSettings;
-    pub use oxygen_core::glam::{Mat4, Quat, UVec2, Vec3, Vec4};
+    pub use oxygen_core::glam::{Mat4, Quat, UVec2, Vec2, Vec3, Vec4};
     pub use oxygen_core::{
-        AlphaMode, Camera, Geometry, Light, LookAtResolver, Material, NodeFlags, Renderable, ResolvedView, Scene,
-        Transform, ViewContext, ViewId, ViewResolver,
+        AlphaMode, Camera, CameraError, CascadeSettings, Geometry, GeometryHandle, Light, LightKind, LookAtResolver,
+        Material, MaterialHandle, NodeFlags, NodeKey, Projection, Renderable, ResolvedView, Scene, Transform,
+        ViewContext, ViewError, ViewId, ViewResolver,
     };
     pub use oxygen_passes::{
         CommandRecorder, DrawPath, ForwardLitConfig, MeshPass, Output, PassError, RenderContext, RenderPass,

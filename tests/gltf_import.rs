@@ -126,3 +126,51 @@ fn alpha_blend_mode_test_prepared_frame_dump() {
         .unwrap();
     insta::assert_snapshot!(frames[0].dump());
 }
+
+#[test]
+fn nodes_are_found_by_the_name_the_file_gives_them() {
+    let mut scene = Scene::new();
+    let import =
+        import_gltf(&mut scene, asset("AlphaBlendModeTest/AlphaBlendModeTest.glb"), &SceneChoice::Default).unwrap();
+    let key = import.node("TestBlend").expect("AlphaBlendModeTest has a node called TestBlend");
+    let node = scene.node(key).unwrap();
+    assert_eq!(node.name, "TestBlend");
+    assert!(node.renderable.is_some());
+    assert_eq!(import.nodes_named("TestBlend").collect::<Vec<_>>(), vec![key]);
+    assert_eq!(import.node("NoSuchNode"), None);
+    assert_eq!(import.nodes_named("NoSuchNode").count(), 0);
+}
+
+#[test]
+fn duplicate_node_names_resolve_to_the_first_in_the_file_not_the_first_walked() {
+    // File node 0 is a root listed after node 2, whose child is node 1: the
+    // walk meets node 1 before node 0, the file lists node 0 first. Node 3 has
+    // no name and must not answer to the "node 3" it is given in the scene.
+    let json = r#"{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[2,0,3]}],
+        "nodes":[{"name":"Lamp"},{"name":"Lamp"},{"name":"Rig","children":[1]},{}]}"#;
+    let mut scene = Scene::new();
+    let import =
+        oxygen::import_gltf_slice(&mut scene, json.as_bytes(), "lamps.gltf", &ImportOptions::default()).unwrap();
+    let lamps: Vec<NodeKey> = import.nodes_named("Lamp").collect();
+    assert_eq!(lamps.len(), 2);
+    assert_eq!(import.node("Lamp"), Some(lamps[0]));
+    assert_eq!(scene.node(lamps[0]).unwrap().parent, None, "file node 0 is a root");
+    assert_eq!(scene.node(lamps[1]).unwrap().parent, import.node("Rig"), "file node 1 is Rig's child");
+    assert_eq!(import.node("node 3"), None);
+}
+
+#[test]
+fn cameras_are_found_by_name() {
+    let json = r#"{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0,1]}],
+        "nodes":[{"name":"Tripod","camera":0},{"name":"Crane","camera":1}],
+        "cameras":[{"name":"Wide","type":"perspective","perspective":{"yfov":1.2,"znear":0.1}},
+                   {"type":"orthographic","orthographic":{"xmag":2,"ymag":1,"znear":0,"zfar":10}}]}"#;
+    let mut scene = Scene::new();
+    let import =
+        oxygen::import_gltf_slice(&mut scene, json.as_bytes(), "cameras.gltf", &ImportOptions::default()).unwrap();
+    let wide = import.camera("Wide").expect("the camera's own name");
+    assert_eq!(Some(wide.node), import.node("Tripod"));
+    let crane = import.camera("Crane").expect("an unnamed camera answers to its node's name");
+    assert_eq!(Some(crane.node), import.node("Crane"));
+    assert!(import.camera("Tripod").is_none(), "a named camera does not answer to its node's name");
+}

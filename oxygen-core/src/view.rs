@@ -237,6 +237,9 @@ where
 }
 
 /// A camera at `eye` looking at `target`, rendering `viewport` pixels.
+///
+/// [`LookAtResolver::new`] checks the camera and the pose where they are
+/// made; a struct literal is checked only when the view resolves.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LookAtResolver {
     /// Projection.
@@ -249,6 +252,49 @@ pub struct LookAtResolver {
     pub up: Vec3,
     /// Target size in pixels.
     pub viewport: UVec2,
+}
+
+impl LookAtResolver {
+    /// A camera at `eye` looking at `target` with +Y up, rendering `viewport`
+    /// pixels; [`LookAtResolver::with_up`] picks another up.
+    ///
+    /// Refused now rather than at render time: an invalid `camera` (see
+    /// [`Camera::validate`]), an empty viewport, a non-finite eye or target,
+    /// or an eye on its target. A camera looking straight along ±Y, where +Y
+    /// cannot be up, gets −Z as its up instead.
+    pub fn new(camera: Camera, eye: Vec3, target: Vec3, viewport: UVec2) -> Result<Self, CameraError> {
+        camera.validate()?;
+        if viewport.x == 0 || viewport.y == 0 {
+            return Err(CameraError::EmptyViewport { width: viewport.x, height: viewport.y });
+        }
+        let up = if is_usable_up(target - eye, Vec3::Y) { Vec3::Y } else { Vec3::NEG_Z };
+        let resolver = LookAtResolver { camera, eye, target, up, viewport };
+        resolver.check_pose()?;
+        Ok(resolver)
+    }
+
+    /// The same camera with `up` as its up direction; refused if `up` is zero,
+    /// not finite or parallel to `target - eye`.
+    pub fn with_up(self, up: Vec3) -> Result<Self, CameraError> {
+        let resolver = LookAtResolver { up, ..self };
+        resolver.check_pose()?;
+        Ok(resolver)
+    }
+
+    fn check_pose(&self) -> Result<(), CameraError> {
+        let forward = self.target - self.eye;
+        if self.eye.is_finite() && self.target.is_finite() && is_usable_up(forward, self.up) {
+            Ok(())
+        } else {
+            Err(CameraError::DegenerateLookAt { eye: self.eye, target: self.target, up: self.up })
+        }
+    }
+}
+
+/// Whether `up` and a `forward` direction span a plane, so that a view basis
+/// can be built from them. The threshold is the one `resolve` applies.
+fn is_usable_up(forward: Vec3, up: Vec3) -> bool {
+    forward.length_squared() > 0.0 && up.is_finite() && forward.cross(up).length_squared() > 1e-12
 }
 
 impl ViewResolver for LookAtResolver {

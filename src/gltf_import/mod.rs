@@ -1,7 +1,7 @@
 //! glTF 2.0 import into a [`Scene`], safe on untrusted files.
 //!
 //! What comes in: the chosen scene's node hierarchy with local TRS; meshes
-//! (every triangle primitive becomes a submesh of one [`Geometry`], with its
+//! (every triangle primitive becomes a submesh of one [`Geometry`](oxygen_core::Geometry), with its
 //! own material); metallic-roughness materials with base-colour,
 //! metallic-roughness, normal, emissive and occlusion textures and their
 //! samplers, alpha mode and cutoff, double-sidedness;
@@ -28,7 +28,7 @@
 //! 3. the node graph is checked to be a forest ([`graph`]) and walked with
 //!    an explicit stack;
 //! 4. every accessor is validated for its semantic and byte range before it
-//!    is read ([`accessor`]), and vertex, index, texel and byte totals are
+//!    is read (`accessor`), and vertex, index, texel and byte totals are
 //!    charged to a budget before they are allocated.
 //!
 //! Nothing here calls the `gltf` crate's importer or readers, which trust the
@@ -280,6 +280,36 @@ pub struct GltfImport {
     /// (once per image and once per texture made from it), vertices and
     /// indices.
     pub bytes_decoded: u64,
+    /// Each imported node the file names, with its name, in the order of
+    /// the file's `nodes` array: what [`GltfImport::node`] searches.
+    named_nodes: Vec<(usize, String, NodeKey)>,
+}
+
+impl GltfImport {
+    /// The imported node the file calls `name`, or `None` if no imported
+    /// node has that name.
+    ///
+    /// glTF does not require names to be unique: with duplicates this is the
+    /// first in the file's `nodes` array (see [`GltfImport::nodes_named`] for
+    /// all of them). Only names written in the file match, not the
+    /// `"node N"` that unnamed nodes are given in the [`Scene`], and only
+    /// nodes of the imported scene.
+    pub fn node(&self, name: &str) -> Option<NodeKey> {
+        self.nodes_named(name).next()
+    }
+
+    /// Every imported node the file calls `name`, in the order of the file's
+    /// `nodes` array.
+    pub fn nodes_named<'a>(&'a self, name: &'a str) -> impl Iterator<Item = NodeKey> + 'a {
+        self.named_nodes.iter().filter(move |(_, n, _)| n == name).map(|(_, _, key)| *key)
+    }
+
+    /// The first camera in [`GltfImport::cameras`] whose
+    /// [`GltfCamera::name`] is `name` (the camera's name in the file, or its
+    /// node's when the camera has none).
+    pub fn camera(&self, name: &str) -> Option<&GltfCamera> {
+        self.cameras.iter().find(|c| c.name == name)
+    }
 }
 
 /// Imports a `.gltf` or `.glb` file (with its buffers and images) into
@@ -387,6 +417,8 @@ fn import_bytes(
         out: GltfImport::default(),
     };
     importer.walk(scene, &roots).map_err(|e| e.at(path))?;
+    // The walk visits depth-first; lookups promise the file's order.
+    importer.out.named_nodes.sort_unstable_by_key(|(index, _, _)| *index);
     if !root.animations.is_empty() {
         importer.out.warnings.push("animations are not imported".into());
     }
@@ -519,6 +551,9 @@ impl Importer<'_> {
             None => scene.add_node(name.clone(), local),
         };
         let world = parent_world * local.to_dmat4();
+        if let Some(file_name) = &node.name {
+            self.out.named_nodes.push((index, file_name.clone(), key));
+        }
 
         if let Some(mesh) = node.mesh
             && let Some((geometry, materials)) = self.mesh(scene, mesh.value())?

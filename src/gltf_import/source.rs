@@ -5,7 +5,7 @@
 //! GLB binary chunk, and the bytes behind each buffer and image URI.
 //!
 //! This module is the only place the importer touches the file system, and it
-//! only reads regular files inside the [`AssetRoot`]:
+//! only reads regular files inside the asset root:
 //!
 //! * `data:` URIs are decoded here (base64 only, as glTF requires);
 //! * any other URI must be a relative path: percent-decoded, with no scheme,
