@@ -2,22 +2,78 @@
 # Runs every Oxygen test, as CI does (.ci/run calls exactly this).
 #
 # 1. checks for a Rust toolchain;
-# 2. makes sure a Vulkan driver is there (installs Mesa's lavapipe when run as
-#    root on Debian/Ubuntu; otherwise prints the command to run);
-# 3. prints the adapter the GPU tests will use;
-# 4. runs the whole workspace's tests (unit, snapshot, layout, GPU).
+# 2. makes sure the drivers are there (installs Mesa's lavapipe, and Mesa's
+#    GL drivers when GL is wanted, when run as root on Debian/Ubuntu;
+#    otherwise prints the command to run);
+# 3. runs the whole workspace's tests (unit, snapshot, layout, GPU) on
+#    Vulkan, printing the adapter first;
+# 4. when GL is wanted and a GL adapter exists, runs the GPU test binaries
+#    again with WGPU_BACKEND=gl (CPU-only tests and the fuzz corpus do not
+#    depend on the backend and run once).
+#
+# OXYGEN_BACKENDS picks the backends, in order: "vulkan gl" (the default),
+# "vulkan" or "gl". docs/backends.md says what differs between them.
+# Fails when any run fails; says which backend each run used.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
+say() { printf '[oxygen] %s\n' "$*" >&2; }
+
 if ! command -v cargo >/dev/null 2>&1; then
-  echo "[oxygen] cargo not found: install Rust (https://rustup.rs), then rerun $0" >&2
+  say "cargo not found: install Rust (https://rustup.rs), then rerun $0"
   exit 1
 fi
+backends=${OXYGEN_BACKENDS:-vulkan gl}
+export OXYGEN_BACKENDS="$backends"
 scripts/ensure-gpu.sh
 
-echo "[oxygen] building tests (the first build compiles wgpu and takes a few minutes)" >&2
+say "building tests (the first build compiles wgpu and takes a few minutes)"
 cargo build --locked --workspace --tests --examples
-echo "[oxygen] adapter used by the GPU tests:" >&2
-cargo run --locked --quiet --example adapter_info
-cargo test --locked --workspace "$@"
-echo "[oxygen] all tests passed" >&2
+
+# The adapter wgpu gives for WGPU_BACKEND=$1, printed; fails when none.
+adapter_for() {
+  WGPU_BACKEND=$1 cargo run --locked --quiet --example adapter_info 2>&1
+}
+
+# The integration-test binaries that render (they open an adapter).
+gpu_test_binaries() {
+  grep -l -E 'gpu_renderer|GpuContext|new_headless' tests/*.rs | xargs -n1 basename | sed 's/\.rs$//'
+}
+
+failed=()
+for backend in $backends; do
+  case "$backend" in
+    vulkan)
+      say "=== backend: Vulkan (WGPU_BACKEND=vulkan): the whole workspace ==="
+      if ! info=$(adapter_for vulkan); then
+        say "no Vulkan adapter: $info"
+        failed+=("vulkan (no adapter)")
+        continue
+      fi
+      printf '%s\n' "$info" >&2
+      WGPU_BACKEND=vulkan cargo test --locked --workspace "$@" || failed+=("vulkan")
+      ;;
+    gl)
+      say "=== backend: GL (WGPU_BACKEND=gl): the GPU test binaries ==="
+      if ! info=$(adapter_for gl) || ! printf '%s' "$info" | grep -q '(Gl,'; then
+        say "no GL adapter here (${info:-nothing}); skipping the GL run (OXYGEN_BACKENDS=vulkan silences this)"
+        continue
+      fi
+      printf '%s\n' "$info" >&2
+      args=()
+      for t in $(gpu_test_binaries); do args+=(--test "$t"); done
+      say "GPU test binaries: ${args[*]}"
+      WGPU_BACKEND=gl cargo test --locked "${args[@]}" "$@" || failed+=("gl")
+      ;;
+    *)
+      say "unknown backend '$backend' in OXYGEN_BACKENDS (use vulkan and/or gl)"
+      exit 2
+      ;;
+  esac
+done
+
+if [ "${#failed[@]}" -ne 0 ]; then
+  say "tests FAILED on: ${failed[*]}"
+  exit 1
+fi
+say "all tests passed on: $backends"

@@ -82,7 +82,12 @@ impl ReflectionProbe {
         let resolution = resolution.clamp(1, renderer.gpu().device.limits().max_texture_dimension_2d);
         let texture = renderer.gpu().device.create_texture(&wgpu::TextureDescriptor {
             label: Some("reflection probe"),
-            size: wgpu::Extent3d { width: resolution, height: resolution, depth_or_array_layers: PROBE_FACES as u32 },
+            // One spare layer on GL's account (see `array_layer_count`).
+            size: wgpu::Extent3d {
+                width: resolution,
+                height: resolution,
+                depth_or_array_layers: oxygen_passes::array_layer_count(PROBE_FACES as u32, true),
+            },
             // A full chain: rough surfaces reflect blurrier levels.
             mip_level_count: u32::BITS - resolution.leading_zeros(),
             sample_count: 1,

@@ -52,5 +52,5 @@ pub use render_context::{
     RecordStats, RenderContext, ShadowMapInput, ViewInputs,
 };
 pub use render_pass::RenderPass;
-pub use shadow_atlas::SHADOW_ATLAS_FORMAT;
+pub use shadow_atlas::{SHADOW_ATLAS_FORMAT, array_layer_count};
 pub use tonemap_pass::{TonemapPass, pbr_neutral};

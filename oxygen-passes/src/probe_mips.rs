@@ -7,23 +7,35 @@
 //! for a GGX-prefiltered environment, cheap enough to rebuild whenever a face
 //! is re-rendered. Faces are filtered one by one, so texels at a face's edge
 //! do not blend with the neighbouring face.
+//!
+//! The level above is bound as a one-level `D2Array` view of every layer and
+//! the draw picks the layer (the vertex index carries it): wgpu's GL backend
+//! binds a sampled view as its whole texture, so a `D2` view of layer `k > 0`
+//! would read layer 0 there (wgpu-hal logs "Unable to create a sampled
+//! texture binding for non-zero array layer").
 
 use oxygen_core::ViewTargets;
 
 const DOWNSAMPLE_WGSL: &str = r#"
-@group(0) @binding(0) var source: texture_2d<f32>;
+@group(0) @binding(0) var source: texture_2d_array<f32>;
 @group(0) @binding(1) var source_sampler: sampler;
-struct Varying { @builtin(position) position: vec4<f32>, @location(0) uv: vec2<f32> }
+struct Varying {
+    @builtin(position) position: vec4<f32>,
+    @location(0) uv: vec2<f32>,
+    @location(1) @interpolate(flat) layer: u32,
+}
+// Vertices 3k .. 3k + 2 draw the full-screen triangle for layer k.
 @vertex
 fn vs(@builtin(vertex_index) index: u32) -> Varying {
-    let uv = vec2<f32>(f32((index << 1u) & 2u), f32(index & 2u));
-    return Varying(vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 0.0, 1.0), uv);
+    let corner = index % 3u;
+    let uv = vec2<f32>(f32((corner << 1u) & 2u), f32(corner & 2u));
+    return Varying(vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 0.0, 1.0), uv, index / 3u);
 }
 @fragment
 fn fs(v: Varying) -> @location(0) vec4<f32> {
     // Level n is exactly half of level n - 1, so this bilinear tap lands on
     // the corner of four source texels and averages them.
-    return textureSampleLevel(source, source_sampler, v.uv, 0.0);
+    return textureSampleLevel(source, source_sampler, v.uv, v.layer, 0.0);
 }
 "#;
 
@@ -44,7 +56,7 @@ impl ProbeMipBuilder {
                     visibility: wgpu::ShaderStages::FRAGMENT,
                     ty: wgpu::BindingType::Texture {
                         sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                        view_dimension: wgpu::TextureViewDimension::D2,
+                        view_dimension: wgpu::TextureViewDimension::D2Array,
                         multisampled: false,
                     },
                     count: None,
@@ -90,8 +102,15 @@ impl ProbeMipBuilder {
         {
             return;
         }
-        let level_view = |mip| {
-            texture.create_view(&wgpu::TextureViewDescriptor {
+        for mip in 1..texture.mip_level_count() {
+            let source = texture.create_view(&wgpu::TextureViewDescriptor {
+                label: Some("probe mip source level"),
+                dimension: Some(wgpu::TextureViewDimension::D2Array),
+                base_mip_level: mip - 1,
+                mip_level_count: Some(1),
+                ..Default::default()
+            });
+            let target = texture.create_view(&wgpu::TextureViewDescriptor {
                 label: Some("probe mip level"),
                 dimension: Some(wgpu::TextureViewDimension::D2),
                 base_mip_level: mip,
@@ -99,11 +118,7 @@ impl ProbeMipBuilder {
                 base_array_layer: layer,
                 array_layer_count: Some(1),
                 ..Default::default()
-            })
-        };
-        for mip in 1..texture.mip_level_count() {
-            let source = level_view(mip - 1);
-            let target = level_view(mip);
+            });
             let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("probe mip"),
                 layout: &self.layout,
@@ -130,7 +145,7 @@ impl ProbeMipBuilder {
             });
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, &bind_group, &[]);
-            pass.draw(0..3, 0..1);
+            pass.draw(3 * layer..3 * layer + 3, 0..1);
         }
     }
 }

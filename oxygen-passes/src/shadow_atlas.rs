@@ -28,9 +28,10 @@ impl ShadowAtlas {
         let mut slot = self.texture.lock().unwrap_or_else(|e| e.into_inner());
         let fits = slot.as_ref().is_some_and(|t| t.width() == resolution && t.depth_or_array_layers() >= layers);
         if !fits {
+            let layers = atlas_layer_count(layers, true);
             *slot = Some(device.create_texture(&wgpu::TextureDescriptor {
                 label: Some("local shadow atlas"),
-                size: wgpu::Extent3d { width: resolution, height: resolution, depth_or_array_layers: layers.max(1) },
+                size: wgpu::Extent3d { width: resolution, height: resolution, depth_or_array_layers: layers },
                 mip_level_count: 1,
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
@@ -52,4 +53,37 @@ pub(crate) fn atlas_view(texture: &wgpu::Texture) -> wgpu::TextureView {
         dimension: Some(wgpu::TextureViewDimension::D2Array),
         ..Default::default()
     })
+}
+
+/// Layers of an array texture sampled as an array and holding `used`
+/// layers: at least 2, and never a multiple of 6 when the layers are square.
+/// wgpu's GL backend picks a texture's GL target from its descriptor
+/// (`TEXTURE_2D` for 1 layer, a cube map (array) for a square one with 6n
+/// layers, `TEXTURE_2D_ARRAY` otherwise), and a `D2Array` view of the first
+/// two cannot be bound there: such an array reads back as nothing on GL
+/// (`tests/gl_layer_experiments.rs`). The extra layer is never used.
+pub fn array_layer_count(used: u32, square: bool) -> u32 {
+    let layers = used.max(2);
+    if square && layers.is_multiple_of(6) { layers + 1 } else { layers }
+}
+
+fn atlas_layer_count(tiles: u32, square: bool) -> u32 {
+    array_layer_count(tiles, square)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn arrays_never_take_a_shape_gl_would_not_sample_as_an_array() {
+        for used in 0..40 {
+            let layers = array_layer_count(used, true);
+            assert!(layers >= used.max(2) && layers % 6 != 0, "{used} tiles -> {layers} layers");
+            assert_eq!(array_layer_count(used, false), used.max(2));
+        }
+        assert_eq!(array_layer_count(1, true), 2);
+        assert_eq!(array_layer_count(6, true), 7);
+        assert_eq!(array_layer_count(7, true), 7);
+    }
 }
