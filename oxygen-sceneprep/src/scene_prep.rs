@@ -83,7 +83,7 @@ pub struct ViewRequest<'a> {
 /// Counters for tests and reports.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct PrepStats {
-    /// Frame phases run (one per `prepare`).
+    /// Frame phases run (one per `begin_frame`, which `prepare` calls).
     pub frame_phase_runs: u64,
     /// Frame phases that found the scene unchanged and reused last frame's collection.
     pub frame_phase_reuses: u64,
@@ -242,13 +242,14 @@ impl ScenePrep {
         self.stats
     }
 
-    /// The prepared frames of the last `prepare`, in request order.
+    /// The prepared frames of the last `prepare` or `prepare_views`, in
+    /// request order; empty between `begin_frame` and `prepare_views`.
     pub fn frames(&self) -> &[PreparedSceneFrame] {
         &self.frames[..self.active_frames]
     }
 
     /// Forgets the cached frame phase (world transforms, renderables,
-    /// lights), so the next `prepare` collects the scene from scratch, as
+    /// lights), so the next frame phase collects the scene from scratch, as
     /// for a scene where everything moved. For benchmarks and tests.
     pub fn invalidate_frame_cache(&mut self) {
         self.frame.invalidate();

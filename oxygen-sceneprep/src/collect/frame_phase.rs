@@ -45,7 +45,7 @@ pub struct RenderableEntry {
     pub node: NodeKey,
     /// Stable node id (slot index).
     pub node_id: u32,
-    /// Index into the frame's [`FrameTransforms`].
+    /// Index into the frame's matrices, [`FrameCollection::transforms`].
     pub transform_index: u32,
     /// Its geometry.
     pub geometry: GeometryHandle,
