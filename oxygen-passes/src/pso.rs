@@ -136,8 +136,10 @@ pub fn shader_source(pass: PassKind, textures: TexturePath) -> String {
         TexturePath::BindingArray => "enable wgpu_binding_array;\n",
         TexturePath::GroupedArrays => "",
     };
+    // Numbers defined in Rust, emitted rather than copied into the WGSL.
+    let constants = oxygen_bindless::wgsl_constants();
     format!(
-        "{enables}{SCENE_CONSTANTS_WGSL}\n{GPU_RECORDS_WGSL}\n{}\n{}\n{MESH_VERTEX_WGSL}\n{body}",
+        "{enables}{constants}{SCENE_CONSTANTS_WGSL}\n{GPU_RECORDS_WGSL}\n{}\n{}\n{MESH_VERTEX_WGSL}\n{body}",
         DomainKind::wgsl_bindings(),
         textures.wgsl()
     )
