@@ -40,7 +40,7 @@ pub mod material_flags {
     pub const BLEND: u32 = 1 << 1;
     /// Double-sided.
     pub const DOUBLE_SIDED: u32 = 1 << 2;
-    /// Every flag with its name, the list [`super::MaterialRecord::wgsl_constants`]
+    /// Every flag with its name, the list [`MaterialRecord::wgsl_constants`](super::MaterialRecord::wgsl_constants)
     /// emits; a flag added above belongs here too (a test checks that the
     /// bits are distinct and cover every bit a record can set).
     pub const ALL: [(&str, u32); 3] = [("MASKED", MASKED), ("BLEND", BLEND), ("DOUBLE_SIDED", DOUBLE_SIDED)];
@@ -87,7 +87,7 @@ pub struct MaterialRecord {
 }
 
 impl MaterialRecord {
-    /// WGSL `const` declarations of the [`material_flags`] bits, named
+    /// WGSL `const` declarations of the `material_flags` bits, named
     /// `MATERIAL_` followed by the flag (`MATERIAL_DOUBLE_SIDED`).
     pub fn wgsl_constants() -> String {
         material_flags::ALL.iter().map(|(name, bit)| wgsl_constant(&format!("MATERIAL_{name}"), *bit)).collect()
