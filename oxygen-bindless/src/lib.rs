@@ -14,7 +14,10 @@
 //! * [`TexturePath`]: textures addressed by slot through a binding array
 //!   or, where the device has none, through texture arrays grouped by size;
 //! * [`SceneConstants`]: the per-view uniform block, declared once in Rust
-//!   and once in WGSL ([`SCENE_CONSTANTS_WGSL`]) with the same layout.
+//!   and once in WGSL ([`SCENE_CONSTANTS_WGSL`]) with the same layout;
+//! * [`wgsl_constants`]: the numbers shaders share with this crate
+//!   (`INVALID_SLOT`, texture-location bit fields, …), generated from their
+//!   Rust definitions rather than copied.
 //!
 //! It knows nothing of scenes or passes. `u32::MAX` ([`INVALID_SLOT`]) is the
 //! absent slot, and shaders treat it so.
@@ -28,6 +31,7 @@ mod heap;
 mod scene_constants;
 mod slot;
 mod textures;
+mod wgsl_constants;
 
 pub use domain::DomainKind;
 pub use heap::{BindlessError, BindlessHeap};
@@ -36,3 +40,4 @@ pub use scene_constants::{
 };
 pub use slot::{Allocation, INVALID_SLOT, SlotAllocator, SlotAllocators, SlotError};
 pub use textures::{MAX_TEXTURES, SAMPLERS, TexturePath, TextureUpload, allocate_texture_slot, resample_rgba8};
+pub use wgsl_constants::wgsl_constants;

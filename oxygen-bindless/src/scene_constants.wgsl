@@ -1,7 +1,6 @@
 // SceneConstants: twin of oxygen_bindless::SceneConstants (same layout;
-// asserted by the naga reflection test in oxygen-bindless).
-
-const INVALID_SLOT: u32 = 0xffffffffu;
+// asserted by the naga reflection test in oxygen-bindless). INVALID_SLOT
+// and the debug_flags bits come from oxygen_bindless::wgsl_constants().
 
 struct CameraConstants {
     view: mat4x4<f32>,

@@ -56,6 +56,36 @@ pub const MAX_SHADOW_TILES: usize = 16;
 
 const _: () = assert!(std::mem::size_of::<LightingInputs>() == 1472);
 const _: () = assert!(MAX_SHADOW_TILES as u32 == oxygen_sceneprep::MAX_SHADOW_TILES);
+// The WGSL twin packs the per-cascade floats into one vec4 each and the
+// per-tile floats four to a vec4 (uniform arrays have a 16-byte stride), and
+// declares one texture per cascade and probe with a `switch` over them:
+// other counts need those declarations changed, not just the constants.
+const _: () = assert!(MAX_CASCADES == 4 && MAX_PROBES == 4);
+const _: () = assert!(MAX_SHADOW_TILES.is_multiple_of(4));
+
+/// The numbers of group 3 that the shading pass's WGSL reads, by their
+/// Rust names: [`wgsl_constants`] emits exactly these.
+fn shared_numbers() -> [(&'static str, u32); 9] {
+    [
+        ("MAX_CASCADES", MAX_CASCADES as u32),
+        ("MAX_SHADOW_TILES", MAX_SHADOW_TILES as u32),
+        ("MAX_PROBES", MAX_PROBES as u32),
+        ("PROBE_FACES", PROBE_FACES as u32),
+        ("COMPARISON_SAMPLER_BINDING", COMPARISON_SAMPLER_BINDING),
+        ("UNIFORM_BINDING", UNIFORM_BINDING),
+        ("PROBE_SAMPLER_BINDING", PROBE_SAMPLER_BINDING),
+        ("SHADOW_ATLAS_BINDING", SHADOW_ATLAS_BINDING),
+        ("FIRST_PROBE_BINDING", FIRST_PROBE_BINDING),
+    ]
+}
+
+/// WGSL `const` declarations of the sizes the shading pass shares with
+/// [`LightingInputs`] (`MAX_CASCADES`, `MAX_SHADOW_TILES`, `MAX_PROBES`,
+/// `PROBE_FACES`) and the bindings of group 3, under their Rust names.
+/// Prepended to every mesh shader by [`crate::shader_source`].
+pub(crate) fn wgsl_constants() -> String {
+    shared_numbers().iter().map(|(name, value)| format!("const {name}: u32 = {value:#x}u;\n")).collect()
+}
 
 // Bindings of group 3 after the cascade maps (0..MAX_CASCADES).
 const COMPARISON_SAMPLER_BINDING: u32 = MAX_CASCADES as u32;
@@ -272,4 +302,34 @@ pub(crate) fn bind_group(
         resource: wgpu::BindingResource::TextureView(shadow_atlas),
     });
     device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("lighting inputs"), layout, entries: &entries })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_lighting_size_is_a_wgsl_constant_with_its_value() {
+        let wgsl = wgsl_constants();
+        for (name, value) in [
+            ("MAX_CASCADES", MAX_CASCADES),
+            ("MAX_SHADOW_TILES", MAX_SHADOW_TILES),
+            ("MAX_PROBES", MAX_PROBES),
+            ("PROBE_FACES", PROBE_FACES),
+        ] {
+            let line = format!("const {name}: u32 = {value:#x}u;");
+            assert!(wgsl.lines().any(|l| l == line), "{line} missing from\n{wgsl}");
+        }
+        for (name, binding) in [
+            ("COMPARISON_SAMPLER_BINDING", COMPARISON_SAMPLER_BINDING),
+            ("UNIFORM_BINDING", UNIFORM_BINDING),
+            ("PROBE_SAMPLER_BINDING", PROBE_SAMPLER_BINDING),
+            ("SHADOW_ATLAS_BINDING", SHADOW_ATLAS_BINDING),
+            ("FIRST_PROBE_BINDING", FIRST_PROBE_BINDING),
+        ] {
+            let line = format!("const {name}: u32 = {binding:#x}u;");
+            assert!(wgsl.lines().any(|l| l == line), "{line} missing from\n{wgsl}");
+        }
+        assert_eq!(wgsl.lines().count(), shared_numbers().len());
+    }
 }

@@ -28,7 +28,7 @@ fn vs_main(@builtin(vertex_index) vertex_index: u32, @builtin(instance_index) dr
     out.material = draw.material_handle;
     // Debug mode: a draw read through a stale or foreign range carries
     // another generation; flag it (the fragment stages paint it magenta).
-    let checking = (scene.renderer.debug_flags & 1u) != 0u;
+    let checking = (scene.renderer.debug_flags & DEBUG_GENERATIONS) != 0u;
     if checking && draw.reserved0 != scene.renderer.draw_metadata_generation {
         out.material = INVALID_SLOT;
     }

@@ -139,8 +139,17 @@ pub fn shader_source(pass: PassKind, textures: TexturePath) -> String {
         TexturePath::BindingArray => "enable wgpu_binding_array;\n",
         TexturePath::GroupedArrays => "",
     };
+    // Numbers defined in Rust, emitted rather than copied into the WGSL.
+    let constants = [
+        oxygen_bindless::wgsl_constants(),
+        PassMask::wgsl_constants(),
+        oxygen_sceneprep::MaterialRecord::wgsl_constants(),
+        oxygen_sceneprep::PositionalLightRecord::wgsl_constants(),
+        crate::lighting_inputs::wgsl_constants(),
+    ]
+    .concat();
     format!(
-        "{enables}{SCENE_CONSTANTS_WGSL}\n{GPU_RECORDS_WGSL}\n{}\n{}\n{MESH_VERTEX_WGSL}\n{body}",
+        "{enables}{constants}{SCENE_CONSTANTS_WGSL}\n{GPU_RECORDS_WGSL}\n{}\n{}\n{MESH_VERTEX_WGSL}\n{body}",
         DomainKind::wgsl_bindings(),
         textures.wgsl()
     )

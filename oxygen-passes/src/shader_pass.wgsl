@@ -56,19 +56,22 @@ fn fit_hdr(color: vec3<f32>) -> vec3<f32> {
 }
 
 // Group 3: what this view reads from other views (see lighting_inputs.rs):
-// cascade shadow maps and one reflection probe.
+// cascade shadow maps (bindings 0 to MAX_CASCADES - 1, one per cascade),
+// the local-light shadow atlas and the reflection probes. The sizes and
+// bindings are constants generated from lighting_inputs.rs.
 struct LightingInputs {
-    light_view_projection: array<mat4x4<f32>, 4>,
+    light_view_projection: array<mat4x4<f32>, MAX_CASCADES>,
     texel_world_size: vec4<f32>,
     uv_texel: vec4<f32>,
     count: u32,
     pcf_radius: u32,
     normal_offset: f32,
     depth_bias: f32,
-    probe_positions: array<vec4<f32>, 4>,
-    tile_view_projection: array<mat4x4<f32>, 16>,
-    // 16 floats packed four to a vec4 (uniform arrays have a 16-byte stride).
-    tile_texel_angle: array<vec4<f32>, 4>,
+    probe_positions: array<vec4<f32>, MAX_PROBES>,
+    tile_view_projection: array<mat4x4<f32>, MAX_SHADOW_TILES>,
+    // MAX_SHADOW_TILES floats packed four to a vec4 (uniform arrays have a
+    // 16-byte stride).
+    tile_texel_angle: array<vec4<f32>, MAX_SHADOW_TILES / 4u>,
     tile_count: u32,
     probe_count: u32,
     reserved0: u32,
@@ -78,13 +81,13 @@ struct LightingInputs {
 @group(3) @binding(1) var shadow_map_1: texture_depth_2d;
 @group(3) @binding(2) var shadow_map_2: texture_depth_2d;
 @group(3) @binding(3) var shadow_map_3: texture_depth_2d;
-@group(3) @binding(4) var shadow_sampler: sampler_comparison;
-@group(3) @binding(5) var<uniform> shadows: LightingInputs;
-@group(3) @binding(6) var probe_sampler: sampler;
-@group(3) @binding(8) var probe_faces_0: texture_2d_array<f32>;
-@group(3) @binding(9) var probe_faces_1: texture_2d_array<f32>;
-@group(3) @binding(10) var probe_faces_2: texture_2d_array<f32>;
-@group(3) @binding(11) var probe_faces_3: texture_2d_array<f32>;
+@group(3) @binding(COMPARISON_SAMPLER_BINDING) var shadow_sampler: sampler_comparison;
+@group(3) @binding(UNIFORM_BINDING) var<uniform> shadows: LightingInputs;
+@group(3) @binding(PROBE_SAMPLER_BINDING) var probe_sampler: sampler;
+@group(3) @binding(FIRST_PROBE_BINDING) var probe_faces_0: texture_2d_array<f32>;
+@group(3) @binding(FIRST_PROBE_BINDING + 1u) var probe_faces_1: texture_2d_array<f32>;
+@group(3) @binding(FIRST_PROBE_BINDING + 2u) var probe_faces_2: texture_2d_array<f32>;
+@group(3) @binding(FIRST_PROBE_BINDING + 3u) var probe_faces_3: texture_2d_array<f32>;
 
 // The probe nearest to `position` (the surface reflects what that probe saw).
 fn nearest_probe(position: vec3<f32>) -> u32 {
@@ -126,7 +129,7 @@ fn environment_brdf(f0: vec3<f32>, roughness: f32, n_dot_v: f32) -> vec3<f32> {
     let ab = vec2<f32>(-1.04, 1.04) * a004 + r.zw;
     return f0 * ab.x + ab.y;
 }
-@group(3) @binding(7) var shadow_atlas: texture_depth_2d_array;
+@group(3) @binding(SHADOW_ATLAS_BINDING) var shadow_atlas: texture_depth_2d_array;
 
 // Fraction of a shadow-casting local light's light reaching `world_position`
 // through atlas tile `slot` (a spot's map, or one cube face of a point
@@ -178,11 +181,11 @@ fn cube_face(direction: vec3<f32>) -> u32 {
 // direction onto the face's camera instead of using cube-map conventions.
 fn sample_probe(probe: u32, direction: vec3<f32>, roughness: f32) -> vec3<f32> {
     let face = cube_face(direction);
-    var forwards = array<vec3<f32>, 6>(
+    var forwards = array<vec3<f32>, PROBE_FACES>(
         vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(-1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0),
         vec3<f32>(0.0, -1.0, 0.0), vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0, 0.0, -1.0),
     );
-    var ups = array<vec3<f32>, 6>(
+    var ups = array<vec3<f32>, PROBE_FACES>(
         vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(0.0, 0.0, -1.0),
         vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(0.0, 1.0, 0.0),
     );
@@ -253,7 +256,7 @@ fn shading_normal(world_normal: vec3<f32>, flip: bool, d: Derivatives, to_viewer
 }
 
 fn surface_normal(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Derivatives) -> vec3<f32> {
-    let double_sided = (material.flags & 4u) != 0u;
+    let double_sided = (material.flags & MATERIAL_DOUBLE_SIDED) != 0u;
     let to_viewer = scene.camera.camera_position.xyz - mesh.world_position;
     return shading_normal(mesh.world_normal, double_sided && !front_facing, d, to_viewer);
 }
@@ -396,7 +399,7 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Der
         let light = directional_light_domain[scene.renderer.directional_lights_slot + i];
         var visibility = 1.0;
         // The cascades belong to the first shadow-casting directional light.
-        if (light.flags & 1u) != 0u && !shadowed_light_done {
+        if (light.flags & LIGHT_CASTS_SHADOWS) != 0u && !shadowed_light_done {
             shadowed_light_done = true;
             visibility = shadow_visibility(mesh.world_position, geometric_normal);
         }
@@ -414,7 +417,7 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Der
             let ratio = sqrt(distance_sq) / light.range;
             attenuation *= clamp(1.0 - ratio * ratio * ratio * ratio, 0.0, 1.0);
         }
-        if light.kind == 1u {
+        if light.kind == LIGHT_SPOT {
             attenuation *= spot_cone(light.cos_outer, light.cos_inner, dot(-l, light.direction));
             if light.shadow_slot != INVALID_SLOT {
                 attenuation *= tile_visibility(light.shadow_slot, light.position, mesh.world_position, geometric_normal);

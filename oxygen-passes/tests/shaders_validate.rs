@@ -1,38 +1,90 @@
-//! Every pass shader parses and validates with naga, without a GPU, so a
-//! WGSL mistake fails here with a readable message rather than at pipeline
-//! creation on some device.
+//! Every shader the passes build parses and validates with naga, without a
+//! GPU, so a WGSL mistake fails here with a readable message rather than at
+//! pipeline creation on some device.
+//!
+//! The mesh shaders are checked for every [`PassKind`] on every
+//! [`TexturePath`]; both lists (in `support`) come from exhaustive matches, so adding a
+//! kind or a path does not compile until it is listed here.
+
+mod support;
 
 use oxygen_bindless::TexturePath;
 use oxygen_passes::PassKind;
+use support::{all_kinds, all_paths};
+
+/// The capabilities a device on `path` grants: the binding-array path
+/// needs exactly what its device features enable, the grouped path nothing.
+fn capabilities(path: TexturePath) -> naga::valid::Capabilities {
+    match path {
+        TexturePath::BindingArray => {
+            naga::valid::Capabilities::TEXTURE_AND_SAMPLER_BINDING_ARRAY
+                | naga::valid::Capabilities::TEXTURE_AND_SAMPLER_BINDING_ARRAY_NON_UNIFORM_INDEXING
+        }
+        TexturePath::GroupedArrays => naga::valid::Capabilities::default(),
+    }
+}
+
+fn validate(what: &str, source: &str, capabilities: naga::valid::Capabilities) -> naga::Module {
+    let module = naga::front::wgsl::parse_str(source)
+        .unwrap_or_else(|e| panic!("{what} WGSL does not parse:\n{}", e.emit_to_string(source)));
+    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), capabilities)
+        .validate(&module)
+        .unwrap_or_else(|e| panic!("{what} WGSL does not validate: {e:?}"));
+    module
+}
 
 #[test]
-fn every_pass_shader_validates_on_both_texture_paths() {
-    for (pass, textures) in [PassKind::DepthPrePass, PassKind::Shading, PassKind::ShadingAfterPrePass]
-        .into_iter()
-        .flat_map(|p| [(p, TexturePath::BindingArray), (p, TexturePath::GroupedArrays)])
-    {
-        let source = oxygen_passes::shader_source(pass, textures);
-        let module = naga::front::wgsl::parse_str(&source)
-            .unwrap_or_else(|e| panic!("{pass:?} WGSL does not parse:\n{}", e.emit_to_string(&source)));
-        // The binding-array path needs exactly the capabilities its device features grant.
-        let capabilities = match textures {
-            TexturePath::BindingArray => {
-                naga::valid::Capabilities::TEXTURE_AND_SAMPLER_BINDING_ARRAY
-                    | naga::valid::Capabilities::TEXTURE_AND_SAMPLER_BINDING_ARRAY_NON_UNIFORM_INDEXING
+fn every_pass_shader_validates_on_every_texture_path() {
+    for pass in all_kinds() {
+        for textures in all_paths() {
+            let source = oxygen_passes::shader_source(pass, textures);
+            validate(&format!("{pass:?} / {textures:?}"), &source, capabilities(textures));
+        }
+    }
+}
+
+/// The entry points each kind's pipelines use exist in its module.
+#[test]
+fn every_pass_shader_has_its_entry_points() {
+    for pass in all_kinds() {
+        let expected: &[&str] = match pass {
+            PassKind::DepthPrePass | PassKind::Shadow => &["vs_main", "fs_alpha_test"],
+            PassKind::ShadingAfterPrePass | PassKind::Shading | PassKind::Transparent => {
+                &["vs_main", "fs_opaque", "fs_masked", "fs_blend"]
             }
-            TexturePath::GroupedArrays => naga::valid::Capabilities::default(),
         };
-        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), capabilities)
-            .validate(&module)
-            .unwrap_or_else(|e| panic!("{pass:?} / {textures:?} WGSL does not validate: {e:?}"));
+        for textures in all_paths() {
+            let source = oxygen_passes::shader_source(pass, textures);
+            let module = validate(&format!("{pass:?} / {textures:?}"), &source, capabilities(textures));
+            for name in expected {
+                assert!(module.entry_points.iter().any(|e| e.name == *name), "{pass:?} / {textures:?} lacks {name}");
+            }
+        }
     }
 }
 
 #[test]
 fn the_tonemap_shader_validates() {
-    let module = naga::front::wgsl::parse_str(oxygen_passes::TONEMAP_WGSL)
-        .unwrap_or_else(|e| panic!("tonemap WGSL does not parse:\n{}", e.emit_to_string(oxygen_passes::TONEMAP_WGSL)));
-    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::default())
-        .validate(&module)
-        .unwrap_or_else(|e| panic!("tonemap WGSL does not validate: {e:?}"));
+    let module = validate("tonemap", oxygen_passes::TONEMAP_WGSL, naga::valid::Capabilities::default());
+    for name in ["vs_fullscreen", "fs_tonemap"] {
+        assert!(module.entry_points.iter().any(|e| e.name == name), "tonemap lacks {name}");
+    }
+}
+
+/// The probe-mip downsampling shader is a private string in
+/// `probe_mips.rs`; it is read from that file so that the shader checked
+/// is the one the pipeline builds.
+#[test]
+fn the_probe_mip_shader_validates() {
+    let rust = include_str!("../src/probe_mips.rs");
+    let start = rust
+        .find("DOWNSAMPLE_WGSL: &str = r#\"")
+        .map(|i| i + "DOWNSAMPLE_WGSL: &str = r#\"".len())
+        .expect("probe_mips.rs declares DOWNSAMPLE_WGSL as a raw string (moved? point this test at it)");
+    let len = rust[start..].find("\"#").expect("DOWNSAMPLE_WGSL's raw string ends");
+    let source = &rust[start..start + len];
+    let module = validate("probe mip", source, naga::valid::Capabilities::default());
+    for name in ["vs", "fs"] {
+        assert!(module.entry_points.iter().any(|e| e.name == name), "probe mip lacks {name}");
+    }
 }

@@ -40,6 +40,15 @@ pub mod material_flags {
     pub const BLEND: u32 = 1 << 1;
     /// Double-sided.
     pub const DOUBLE_SIDED: u32 = 1 << 2;
+    /// Every flag with its name, the list [`MaterialRecord::wgsl_constants`](super::MaterialRecord::wgsl_constants)
+    /// emits; a flag added above belongs here too (a test checks that the
+    /// bits are distinct and cover every bit a record can set).
+    pub const ALL: [(&str, u32); 3] = [("MASKED", MASKED), ("BLEND", BLEND), ("DOUBLE_SIDED", DOUBLE_SIDED)];
+}
+
+/// One `const NAME: u32 = 0x..u;` line.
+fn wgsl_constant(name: &str, value: u32) -> String {
+    format!("const {name}: u32 = {value:#x}u;\n")
 }
 
 /// A material as shaders read it (80 bytes). Texture fields are slots in
@@ -78,6 +87,12 @@ pub struct MaterialRecord {
 }
 
 impl MaterialRecord {
+    /// WGSL `const` declarations of the `material_flags` bits, named
+    /// `MATERIAL_` followed by the flag (`MATERIAL_DOUBLE_SIDED`).
+    pub fn wgsl_constants() -> String {
+        material_flags::ALL.iter().map(|(name, bit)| wgsl_constant(&format!("MATERIAL_{name}"), *bit)).collect()
+    }
+
     /// The record for a (sanitized) material, textures not yet resolved.
     pub fn from_material(m: &Material) -> Self {
         let (alpha_cutoff, mut flags) = match m.alpha_mode {
@@ -162,11 +177,29 @@ pub fn shadow_tiles_for(kind: u32) -> u32 {
     if kind == PositionalLightRecord::POINT { 6 } else { 1 }
 }
 
+impl DirectionalLightRecord {
+    /// `flags` bit: the light casts shadows.
+    pub const CASTS_SHADOWS: u32 = 1 << 0;
+}
+
 impl PositionalLightRecord {
     /// `kind` of a point light.
     pub const POINT: u32 = 0;
     /// `kind` of a spot light.
     pub const SPOT: u32 = 1;
+    /// `flags` bit: the light casts shadows (the same bit as a directional
+    /// light's, so shaders test both with one constant).
+    pub const CASTS_SHADOWS: u32 = DirectionalLightRecord::CASTS_SHADOWS;
+
+    /// WGSL `const` declarations of the light records' numbers: the kinds
+    /// (`LIGHT_POINT`, `LIGHT_SPOT`) and the `flags` bit `LIGHT_CASTS_SHADOWS`
+    /// shared by directional and positional records.
+    pub fn wgsl_constants() -> String {
+        [("LIGHT_POINT", Self::POINT), ("LIGHT_SPOT", Self::SPOT), ("LIGHT_CASTS_SHADOWS", Self::CASTS_SHADOWS)]
+            .iter()
+            .map(|(name, value)| wgsl_constant(name, *value))
+            .collect()
+    }
 }
 
 /// One shadow map as shaders read it (96 bytes): produced by shadow views.
@@ -209,3 +242,48 @@ const _: () = {
     assert!(offset_of!(PositionalLightRecord, cos_inner) == 48);
     assert!(offset_of!(PositionalLightRecord, shadow_slot) == 60);
 };
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn declares(wgsl: &str, name: &str, value: u32) -> bool {
+        wgsl.lines().any(|line| line == format!("const {name}: u32 = {value:#x}u;"))
+    }
+
+    #[test]
+    fn every_material_flag_is_a_wgsl_constant_with_its_bit() {
+        let wgsl = MaterialRecord::wgsl_constants();
+        for (name, bit) in material_flags::ALL {
+            assert!(declares(&wgsl, &format!("MATERIAL_{name}"), bit), "{name}:\n{wgsl}");
+        }
+        assert_eq!(wgsl.lines().count(), material_flags::ALL.len());
+    }
+
+    /// `ALL` lists each flag once: distinct single bits, and together every
+    /// bit `from_material` sets for any alpha mode and sidedness.
+    #[test]
+    fn the_material_flag_list_is_complete() {
+        let union = material_flags::ALL.iter().fold(0, |acc, (_, bit)| {
+            assert_eq!(bit.count_ones(), 1);
+            assert_eq!(acc & bit, 0, "bit {bit:#x} listed twice");
+            acc | bit
+        });
+        for alpha_mode in [AlphaMode::Opaque, AlphaMode::Mask { cutoff: 0.5 }, AlphaMode::Blend] {
+            for double_sided in [false, true] {
+                let material = Material { alpha_mode, double_sided, ..Material::opaque("flags", glam::Vec4::ONE) };
+                let flags = MaterialRecord::from_material(&material).flags;
+                assert_eq!(flags & !union, 0, "{alpha_mode:?} sets an unlisted bit: {flags:#x}");
+            }
+        }
+    }
+
+    #[test]
+    fn light_kinds_and_flags_are_wgsl_constants_with_their_values() {
+        let wgsl = PositionalLightRecord::wgsl_constants();
+        assert!(declares(&wgsl, "LIGHT_POINT", PositionalLightRecord::POINT), "{wgsl}");
+        assert!(declares(&wgsl, "LIGHT_SPOT", PositionalLightRecord::SPOT), "{wgsl}");
+        assert!(declares(&wgsl, "LIGHT_CASTS_SHADOWS", DirectionalLightRecord::CASTS_SHADOWS), "{wgsl}");
+        assert!(declares(&wgsl, "LIGHT_CASTS_SHADOWS", PositionalLightRecord::CASTS_SHADOWS), "{wgsl}");
+    }
+}

@@ -1,6 +1,9 @@
 // GPU records read through bindless slots. Twins of the Rust structs in
 // oxygen-sceneprep (DrawMetadata, MaterialRecord, light records) and
 // oxygen-core (Vertex); layouts asserted by the naga reflection test.
+// The numbers shaders compare these fields with (PASS_*, MATERIAL_*, LIGHT_*)
+// are generated: PassMask::wgsl_constants, MaterialRecord::wgsl_constants,
+// PositionalLightRecord::wgsl_constants.
 
 struct DrawMetadata {
     vertex_slot: u32,
@@ -20,12 +23,6 @@ struct DrawMetadata {
     reserved3: u32,
     reserved4: u32,
 }
-
-const PASS_OPAQUE: u32 = 1u;
-const PASS_MASKED: u32 = 2u;
-const PASS_TRANSPARENT: u32 = 4u;
-const PASS_DOUBLE_SIDED: u32 = 8u;
-const PASS_CASTS_SHADOWS: u32 = 16u;
 
 struct MaterialRecord {
     base_color: vec4<f32>,

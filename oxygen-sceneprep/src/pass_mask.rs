@@ -1,4 +1,7 @@
 //! `PassMask`: which passes draw a record and with which pipeline variant.
+//!
+//! The flags are defined here once; shaders get them as `PASS_*` constants
+//! from [`PassMask::wgsl_constants`], never as copied literals.
 
 use bitflags::bitflags;
 use oxygen_core::AlphaMode;
@@ -54,9 +57,35 @@ impl PassMask {
         }
     }
 
+    /// WGSL `const` declarations of every flag, `PASS_` followed by the
+    /// flag's name (`const PASS_MASKED: u32 = 0x2u;`), one per line.
+    pub fn wgsl_constants() -> String {
+        PassMask::all()
+            .iter_names()
+            .map(|(name, flag)| format!("const PASS_{name}: u32 = {:#x}u;\n", flag.bits()))
+            .collect()
+    }
+
     /// Flag names joined by `|`, stable for dumps (e.g. `MASKED|DOUBLE_SIDED`).
     pub fn names(self) -> String {
         let names: Vec<&str> = self.iter_names().map(|(n, _)| n).collect();
         if names.is_empty() { "NONE".to_owned() } else { names.join("|") }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Iterating the flags themselves, so a flag added later is checked too.
+    #[test]
+    fn every_flag_is_a_wgsl_constant_with_its_bits() {
+        let wgsl = PassMask::wgsl_constants();
+        for (name, flag) in PassMask::all().iter_names() {
+            let line = format!("const PASS_{name}: u32 = {:#x}u;", flag.bits());
+            assert!(wgsl.lines().any(|l| l == line), "{line} missing from\n{wgsl}");
+        }
+        assert_eq!(wgsl.lines().count(), PassMask::all().iter().count());
+        assert!(wgsl.contains("const PASS_MIRRORED: u32 = 0x20u;"));
     }
 }

@@ -1,0 +1,116 @@
+//! The texture-location record: one `u32` per texture slot, written by the
+//! heap at upload and decoded by `sample_texture` in WGSL.
+//!
+//! Both sides read the bit fields declared here: Rust through
+//! [`binding_array_record`] and [`grouped_record`], WGSL through the
+//! constants [`wgsl_constants`] emits, so a field moved here moves in every
+//! shader.
+//!
+//! | bits  | binding-array path          | grouped-arrays path        |
+//! |-------|-----------------------------|----------------------------|
+//! | 0–23  | the slot (unused by shaders) | layer in the array        |
+//! | 24–26 | —                           | array (size class × colour space) |
+//! | 27    | —                           | nearest filtering          |
+//! | 29–31 | sampler-table index          | wrap mode (table index / 2) |
+
+use std::fmt::Write;
+
+/// The bit fields of a location record, named as a struct so that
+/// [`wgsl_constants`] must destructure (and so emit) every one of them.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LocationBits {
+    /// Grouped path: mask of the layer field (bits 0–23).
+    pub(crate) layer_mask: u32,
+    /// Grouped path: shift of the array field.
+    pub(crate) group_shift: u32,
+    /// Grouped path: mask of the array field once shifted down.
+    pub(crate) group_mask: u32,
+    /// Grouped path: set for nearest-filtered textures.
+    pub(crate) nearest_bit: u32,
+    /// Shift of the sampler index (binding-array path) or wrap mode
+    /// (grouped path); the field runs to bit 31, so it needs no mask.
+    pub(crate) sampler_shift: u32,
+}
+
+/// The one definition of the record's layout.
+pub(crate) const BITS: LocationBits =
+    LocationBits { layer_mask: 0x00ff_ffff, group_shift: 24, group_mask: 0x7, nearest_bit: 1 << 27, sampler_shift: 29 };
+
+/// The record of a binding-array texture: its slot and sampler-table index.
+pub(crate) fn binding_array_record(slot: u32, sampler: u32) -> u32 {
+    sampler << BITS.sampler_shift | slot
+}
+
+/// The record of a grouped-arrays texture: array `group`, `layer` in it,
+/// wrap mode and filter.
+pub(crate) fn grouped_record(group: u32, layer: u32, wrap: u32, nearest: bool) -> u32 {
+    let nearest_bit = if nearest { BITS.nearest_bit } else { 0 };
+    wrap << BITS.sampler_shift | nearest_bit | group << BITS.group_shift | layer
+}
+
+/// WGSL `const` declarations of every field of [`BITS`], prefixed
+/// `TEXTURE_LOCATION_`.
+pub(crate) fn wgsl_constants() -> String {
+    // No `..`: a field added to `LocationBits` does not compile until it is emitted.
+    let LocationBits { layer_mask, group_shift, group_mask, nearest_bit, sampler_shift } = BITS;
+    let fields = [
+        ("LAYER_MASK", layer_mask),
+        ("GROUP_SHIFT", group_shift),
+        ("GROUP_MASK", group_mask),
+        ("NEAREST_BIT", nearest_bit),
+        ("SAMPLER_SHIFT", sampler_shift),
+    ];
+    let mut out = String::new();
+    for (name, value) in fields {
+        // Writing into a String cannot fail.
+        let _ = writeln!(out, "const TEXTURE_LOCATION_{name}: u32 = {value:#x}u;");
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_location_field_is_emitted_with_its_value() {
+        let wgsl = wgsl_constants();
+        let LocationBits { layer_mask, group_shift, group_mask, nearest_bit, sampler_shift } = BITS;
+        for (name, value) in [
+            ("LAYER_MASK", layer_mask),
+            ("GROUP_SHIFT", group_shift),
+            ("GROUP_MASK", group_mask),
+            ("NEAREST_BIT", nearest_bit),
+            ("SAMPLER_SHIFT", sampler_shift),
+        ] {
+            assert!(wgsl.contains(&format!("const TEXTURE_LOCATION_{name}: u32 = {value:#x}u;\n")), "{name}:\n{wgsl}");
+        }
+        assert_eq!(wgsl.lines().count(), 5);
+    }
+
+    #[test]
+    fn the_fields_do_not_overlap() {
+        let group = BITS.group_mask << BITS.group_shift;
+        let sampler = u32::MAX << BITS.sampler_shift;
+        let fields = [BITS.layer_mask, group, BITS.nearest_bit, sampler];
+        for (i, a) in fields.iter().enumerate() {
+            for b in &fields[i + 1..] {
+                assert_eq!(a & b, 0, "{a:#x} overlaps {b:#x}");
+            }
+        }
+    }
+
+    /// Decoded the way `sample_texture` decodes it, a grouped record gives
+    /// back what was written.
+    #[test]
+    fn grouped_records_decode_to_what_was_written() {
+        for (group, layer, wrap, nearest) in [(0, 0, 0, false), (5, 0x00ff_ffff, 2, true), (3, 1234, 1, false)] {
+            let record = grouped_record(group, layer, wrap, nearest);
+            assert_eq!(record & BITS.layer_mask, layer);
+            assert_eq!((record >> BITS.group_shift) & BITS.group_mask, group);
+            assert_eq!(record >> BITS.sampler_shift, wrap);
+            assert_eq!(record & BITS.nearest_bit != 0, nearest);
+        }
+        assert_eq!(binding_array_record(17, 5) >> BITS.sampler_shift, 5);
+    }
+}
