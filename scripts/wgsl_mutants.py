@@ -21,10 +21,10 @@ import sys
 import time
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
-SHADER = "oxygen-passes/src/shader_pass.wgsl"
+SHADER = "oxygen-passes/src/forward_lit.wgsl"
 TONEMAP = "oxygen-passes/src/tonemap_pass.wgsl"
 VERTEX = "oxygen-passes/src/mesh_vertex.wgsl"
-DEPTH = "oxygen-passes/src/depth_pre_pass.wgsl"
+DEPTH = "oxygen-passes/src/depth_only.wgsl"
 
 # (name, file, old text, new text, what the mutant breaks)
 MUTANTS = [

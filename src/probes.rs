@@ -2,7 +2,7 @@
 //! six face views that render straight into its layers.
 //!
 //! Each face view (90° perspective, one per axis direction, as in
-//! [`PROBE_FACE_AXES`](oxygen_passes::PROBE_FACE_AXES)) runs a depth
+//! [`oxygen_passes::PROBE_FACE_AXES`]) runs a depth
 //! pre-pass and forward lit shading into its layer of the cube, then rebuilds
 //! that layer's mip chain ([`ProbeFaceGraph`](crate::ProbeFaceGraph)). A view
 //! linked to the probe's [`ReflectionProbe::cube`] records after the faces

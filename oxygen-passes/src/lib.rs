@@ -47,6 +47,7 @@ pub use pipelines::{
     AlphaClass, CompilerGuard, DepthBias, PassKind, PipelineFuture, PipelineKey, PipelineVariant, Pipelines,
     TONEMAP_WGSL, shader_source,
 };
+pub use probe_mips::PROBE_MIP_WGSL;
 pub use render_context::{
     CommandRecorder, DrawPath, FrameProgress, LinkedView, LocalShadowsInput, OutputKind, PassError, ProbeCubeInput,
     RecordStats, RenderContext, ShadowMapInput, ViewInputs,

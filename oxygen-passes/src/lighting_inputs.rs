@@ -13,7 +13,7 @@ use bytemuck::{Pod, Zeroable};
 /// Cascades the shading pass can sample.
 pub const MAX_CASCADES: usize = 4;
 
-/// The uniform block of group 3, twin of `LightingInputs` in `shader_pass.wgsl`.
+/// The uniform block of group 3, twin of `LightingInputs` in `forward_lit.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct LightingInputs {
@@ -207,7 +207,12 @@ impl LightingInputResources {
         });
         let dummy_probe = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("no probe"),
-            size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: PROBE_FACES as u32 },
+            // A spare layer, as probes have: see `array_layer_count`.
+            size: wgpu::Extent3d {
+                width: 1,
+                height: 1,
+                depth_or_array_layers: crate::array_layer_count(PROBE_FACES as u32, true),
+            },
             mip_level_count: 1,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
@@ -218,7 +223,8 @@ impl LightingInputResources {
         let dummy_probe_view = probe_view(&dummy_probe);
         let placeholder_atlas = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("no shadow atlas"),
-            size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
+            // Two layers: a one-layer array is a plain 2D texture on GL.
+            size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: crate::array_layer_count(1, true) },
             mip_level_count: 1,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,

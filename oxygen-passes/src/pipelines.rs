@@ -121,8 +121,8 @@ pub struct PipelineKey {
 }
 
 const MESH_VERTEX_WGSL: &str = include_str!("mesh_vertex.wgsl");
-const DEPTH_PRE_PASS_WGSL: &str = include_str!("depth_pre_pass.wgsl");
-const SHADER_PASS_WGSL: &str = include_str!("shader_pass.wgsl");
+const DEPTH_ONLY_WGSL: &str = include_str!("depth_only.wgsl");
+const FORWARD_LIT_WGSL: &str = include_str!("forward_lit.wgsl");
 /// The tone-map shader (self-contained: no bindless declarations).
 pub const TONEMAP_WGSL: &str = include_str!("tonemap_pass.wgsl");
 
@@ -131,8 +131,8 @@ pub const TONEMAP_WGSL: &str = include_str!("tonemap_pass.wgsl");
 /// vertex stage, then the pass's own code.
 pub fn shader_source(pass: PassKind, textures: TexturePath) -> String {
     let body = match pass {
-        PassKind::DepthPrePass | PassKind::Shadow => DEPTH_PRE_PASS_WGSL,
-        PassKind::Shading | PassKind::ShadingAfterPrePass | PassKind::Transparent => SHADER_PASS_WGSL,
+        PassKind::DepthPrePass | PassKind::Shadow => DEPTH_ONLY_WGSL,
+        PassKind::Shading | PassKind::ShadingAfterPrePass | PassKind::Transparent => FORWARD_LIT_WGSL,
     };
     // Enable directives must come before any declaration.
     let enables = match textures {

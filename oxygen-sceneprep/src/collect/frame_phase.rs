@@ -154,7 +154,7 @@ pub struct FrameCollection {
     /// the first gated directional light, in node order, that casts shadows
     /// (the light and its node both say so). That is the first record of
     /// [`Self::directional_lights`] with its shadow flag set, the one
-    /// `shader_pass.wgsl` gives the cascades to; `None` when no directional
+    /// `forward_lit.wgsl` gives the cascades to; `None` when no directional
     /// light casts shadows this frame.
     pub shadow_sun: Option<NodeKey>,
     /// Nodes skipped this frame because of a degenerate transform or bounds.
@@ -336,7 +336,7 @@ impl FrameCollection {
                 v(l.direction),
                 l.intensity,
                 v(l.color),
-                l.flags & 1 == 1
+                l.flags & DirectionalLightRecord::CASTS_SHADOWS != 0
             );
         }
         let _ = writeln!(out, "positional lights ({}):", self.positional_lights.len());
@@ -351,7 +351,7 @@ impl FrameCollection {
                 l.intensity,
                 l.cos_inner,
                 l.cos_outer,
-                l.flags & 1 == 1
+                l.flags & PositionalLightRecord::CASTS_SHADOWS != 0
             );
         }
         out
