@@ -132,7 +132,7 @@ fn render_value(gpu: &GpuContext, encoder: &mut wgpu::CommandEncoder, view: &wgp
     let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
         label: None,
         color_attachments: if depth { &[] } else { &color },
-        depth_stencil_attachment: depth.then(|| wgpu::RenderPassDepthStencilAttachment {
+        depth_stencil_attachment: depth.then_some(wgpu::RenderPassDepthStencilAttachment {
             view,
             depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(0.0), store: wgpu::StoreOp::Store }),
             stencil_ops: None,
