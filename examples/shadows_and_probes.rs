@@ -83,7 +83,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     renderer.link(main, probe.cube())?;
 
     probe.before_frame(&mut renderer)?;
+    let started = std::time::Instant::now();
     let report = renderer.render_frame(&scene)?;
+    renderer.gpu().device.poll(wgpu::PollType::wait_indefinitely())?;
+    let first_frame_ms = started.elapsed().as_secs_f64() * 1e3;
     let kind = |role: ViewRole| match role {
         ViewRole::Registered => "main",
         ViewRole::SunCascade { .. } => "sun cascade",
@@ -104,10 +107,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         );
     }
     println!(
-        "frame: prepare {:.2} ms (frame phase + all views), record {:.2} ms on {} threads",
+        "first frame: {first_frame_ms:.1} ms, GPU waited; prepare {:.2} ms (frame phase + all views), record {:.2} ms \
+         on {} threads, compiling {} pipelines",
         report.prepare_seconds * 1e3,
         report.record_seconds * 1e3,
-        report.record_threads
+        report.record_threads,
+        renderer.pipelines().pipelines_created()
     );
     let path = out_dir.join("shadows_and_probes.png");
     renderer.read_color(main)?.save(&path)?;

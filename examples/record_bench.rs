@@ -1,0 +1,157 @@
+//! Recording scaling: the views' graphs recorded on 1 thread against all
+//! worker threads, and the first frame (pipeline compilation included) on 1
+//! thread against all.
+//!
+//! ```text
+//! cargo run --release --example record_bench [CUBES] [direct|mdi]   # default 4 000, direct
+//! ```
+//!
+//! A field of CUBES boxes under a sun (each view owns two shadow cascades)
+//! with a shadow-casting spot light; V = 6 and V = 24 perspective views
+//! (480 × 270) on a circle around the field. For each V and each thread
+//! count (1, 2, 4, 8 and every core, up to the machine's cores) a fresh
+//! renderer renders 2 warm-up and 8 measured frames, each waited for on the
+//! GPU, and reports the median of `FrameReport::record_seconds` (the wall
+//! time of recording every view's graph) and its speed-up over 1 thread
+//! measured in the same run. The direct draw path records one draw call per
+//! draw, so recording is real CPU work; with `mdi` it is a few calls per
+//! partition. Then the first frame of a fresh renderer (every pipeline
+//! compiled during it) on 1 thread against all.
+
+use std::time::Instant;
+
+use oxygen::core::CascadeSettings;
+use oxygen::prelude::*;
+
+const WARM_UP: usize = 2;
+const MEASURED: usize = 8;
+
+fn field_of_boxes(count: usize) -> (Scene, f32) {
+    let mut scene = Scene::new();
+    let side = (count as f32).sqrt().ceil() as usize;
+    let ground_material = scene.add_material(Material::opaque("ground", Vec4::splat(0.6)));
+    let ground_mesh = scene.add_geometry(Geometry::plane(side as f32 * 2.0 + 10.0));
+    let ground = scene.add_node("ground", Transform::from_translation(Vec3::new(side as f32, 0.0, side as f32)));
+    scene.set_renderable(ground, Renderable { geometry: ground_mesh, materials: vec![ground_material] }).ok();
+    let cube = scene.add_geometry(Geometry::cube(1.0));
+    let materials: Vec<_> = (0..4)
+        .map(|i| scene.add_material(Material::opaque("box", Vec4::new(0.3 + 0.15 * i as f32, 0.6, 0.5, 1.0))))
+        .collect();
+    for i in 0..count {
+        let (x, z) = ((i % side) as f32 * 2.0, (i / side) as f32 * 2.0);
+        let height = 0.5 + ((i * 7919) % 13) as f32 * 0.25;
+        let transform =
+            Transform::from_translation(Vec3::new(x, height * 0.5, z)).with_scale(Vec3::new(0.8, height, 0.8));
+        let node = scene.add_node("box", transform);
+        scene.set_renderable(node, Renderable { geometry: cube, materials: vec![materials[i % 4]] }).ok();
+    }
+    let sun = scene.add_node(
+        "sun",
+        Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, Vec3::new(0.6, -0.5, 0.4).normalize())),
+    );
+    scene.set_light(sun, Some(Light::directional(3.0))).ok();
+    let centre = Vec3::new(side as f32, 0.0, side as f32);
+    let spot_at = centre + Vec3::new(0.0, 12.0, 0.0);
+    let spot = scene.add_node(
+        "spot",
+        Transform::from_translation(spot_at).with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, Vec3::NEG_Y)),
+    );
+    scene.set_light(spot, Some(Light::spot(500.0, Some(40.0), 0.4, 0.6))).ok();
+    (scene, side as f32 * 2.0)
+}
+
+struct Setup<'a> {
+    scene: &'a Scene,
+    extent: f32,
+    path: DrawPath,
+}
+
+/// A renderer on `threads` threads with `views` views around the field.
+fn renderer(setup: &Setup<'_>, views: usize, threads: usize) -> Result<Renderer, Box<dyn std::error::Error>> {
+    let options = RendererOptions {
+        draw_path: Some(setup.path),
+        prep_threads: Some(threads),
+        local_shadows: Some(LocalShadowSettings { resolution: 512, ..Default::default() }),
+        ..Default::default()
+    };
+    let mut renderer = Renderer::new_headless_with(options)?;
+    let centre = Vec3::new(setup.extent * 0.5, 0.0, setup.extent * 0.5);
+    let settings = CascadeSettings { count: 2, resolution: 512, max_distance: setup.extent, ..Default::default() };
+    for v in 0..views {
+        let angle = v as f32 / views as f32 * std::f32::consts::TAU;
+        let eye = centre + Vec3::new(angle.cos(), 0.0, angle.sin()) * setup.extent * 0.8 + Vec3::Y * setup.extent * 0.4;
+        let camera = LookAtResolver {
+            camera: Camera::perspective(60f32.to_radians(), 0.5, Some(setup.extent * 3.0)),
+            eye,
+            target: centre,
+            up: Vec3::Y,
+            viewport: UVec2::new(480, 270),
+        };
+        renderer.register_view(ViewDesc::new(camera).with_sun_shadows(settings), standard_render_graph)?;
+    }
+    Ok(renderer)
+}
+
+fn median(mut values: Vec<f64>) -> f64 {
+    values.sort_by(f64::total_cmp);
+    values[values.len() / 2]
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let mut args = std::env::args().skip(1);
+    let count: usize = args.next().map(|a| a.parse()).transpose()?.unwrap_or(4_000);
+    let path = match args.next().as_deref() {
+        None | Some("direct") => DrawPath::Direct,
+        Some("mdi") => DrawPath::MultiDrawIndirect,
+        Some(other) => return Err(format!("unknown draw path '{other}' (direct or mdi)").into()),
+    };
+    let (scene, extent) = field_of_boxes(count);
+    let setup = Setup { scene: &scene, extent, path };
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let mut thread_counts: Vec<usize> = [1, 2, 4, 8].into_iter().filter(|t| *t <= cores).collect();
+    if !thread_counts.contains(&cores) {
+        thread_counts.push(cores);
+    }
+    println!("{count} boxes, {path:?} draw path, {cores} cores");
+    println!("| views (incl. shadow views) | threads | record ms (median) | speed-up over 1 thread | per thread |");
+    println!("|---:|---:|---:|---:|---:|");
+    let mut adapter = String::new();
+    for views in [6, 24] {
+        let mut one_thread = None;
+        for &threads in &thread_counts {
+            let mut renderer = renderer(&setup, views, threads)?;
+            adapter = renderer.gpu().describe();
+            let mut times = Vec::with_capacity(MEASURED);
+            let mut recorded = 0;
+            for frame in 0..WARM_UP + MEASURED {
+                let report = renderer.render_frame(setup.scene)?;
+                renderer.gpu().device.poll(wgpu::PollType::wait_indefinitely())?;
+                recorded = report.views.len();
+                if frame >= WARM_UP {
+                    times.push(report.record_seconds * 1e3);
+                }
+            }
+            let time = median(times);
+            let base = *one_thread.get_or_insert(time);
+            let speed_up = base / time;
+            println!(
+                "| {views} ({recorded}) | {threads} | {time:.2} | {speed_up:.2} | {:.2} |",
+                speed_up / threads as f64
+            );
+        }
+    }
+    println!();
+    println!("| first frame, 24 views | threads | record ms (pipelines compiled in it) | frame ms (waited) | pipelines |");
+    println!("|---|---:|---:|---:|---:|");
+    for threads in [1, cores] {
+        let mut renderer = renderer(&setup, 24, threads)?;
+        let started = Instant::now();
+        let report = renderer.render_frame(setup.scene)?;
+        renderer.gpu().device.poll(wgpu::PollType::wait_indefinitely())?;
+        let ms = started.elapsed().as_secs_f64() * 1e3;
+        let record = report.record_seconds * 1e3;
+        println!("| | {threads} | {record:.1} | {ms:.1} | {} |", renderer.pipelines().pipelines_created());
+    }
+    println!("adapter: {adapter}");
+    Ok(())
+}
