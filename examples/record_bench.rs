@@ -113,8 +113,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         thread_counts.push(cores);
     }
     println!("{count} boxes, {path:?} draw path, {cores} cores");
-    println!("| views (incl. shadow views) | threads | record ms (median) | speed-up over 1 thread | per thread |");
-    println!("|---:|---:|---:|---:|---:|");
+    println!(
+        "| views (incl. shadow views) | threads | record ms (median) | speed-up over 1 thread | per thread | views' busy ms (sum) |"
+    );
+    println!("|---:|---:|---:|---:|---:|---:|");
     let mut adapter = String::new();
     for views in [6, 24] {
         let mut one_thread = None;
@@ -122,6 +124,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let mut renderer = renderer(&setup, views, threads)?;
             adapter = renderer.gpu().describe();
             let mut times = Vec::with_capacity(MEASURED);
+            let mut busy = Vec::with_capacity(MEASURED);
             let mut recorded = 0;
             for frame in 0..WARM_UP + MEASURED {
                 let report = renderer.render_frame(setup.scene)?;
@@ -129,19 +132,23 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 recorded = report.views.len();
                 if frame >= WARM_UP {
                     times.push(report.record_seconds * 1e3);
+                    busy.push(report.views.iter().map(|v| v.record_seconds).sum::<f64>() * 1e3);
                 }
             }
             let time = median(times);
             let base = *one_thread.get_or_insert(time);
             let speed_up = base / time;
             println!(
-                "| {views} ({recorded}) | {threads} | {time:.2} | {speed_up:.2} | {:.2} |",
-                speed_up / threads as f64
+                "| {views} ({recorded}) | {threads} | {time:.2} | {speed_up:.2} | {:.2} | {:.2} |",
+                speed_up / threads as f64,
+                median(busy)
             );
         }
     }
     println!();
-    println!("| first frame, 24 views | threads | record ms (pipelines compiled in it) | frame ms (waited) | pipelines |");
+    println!(
+        "| first frame, 24 views | threads | record ms (pipelines compiled in it) | frame ms (waited) | pipelines |"
+    );
     println!("|---|---:|---:|---:|---:|");
     for threads in [1, cores] {
         let mut renderer = renderer(&setup, 24, threads)?;

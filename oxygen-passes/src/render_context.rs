@@ -301,6 +301,12 @@ impl FrameProgress {
         wakers.into_iter().for_each(std::task::Waker::wake);
     }
 
+    /// Whether every view of `views` has recorded (or is not recording).
+    pub fn all_recorded(&self, views: &[ViewId]) -> bool {
+        let state = self.lock();
+        !views.iter().any(|v| state.pending.contains(v))
+    }
+
     /// Whether `view` still has to record.
     pub fn is_pending(&self, view: ViewId) -> bool {
         self.lock().pending.contains(&view)

@@ -2,18 +2,18 @@
 //! view's graph concurrently and submit the command buffers in that order.
 //!
 //! Each worker thread of ScenePrep's pool runs a small executor: it takes
-//! the next view not yet started, creates its graph's future (with a command
-//! encoder of its own) and polls it; when every future it holds is waiting
-//! — for a pipeline being compiled, for another view's output — it compiles
-//! a queued pipeline, and only when there is nothing else it parks until a
-//! future is woken. A future never leaves the thread that created it, so
+//! the first view not yet started whose inputs have all recorded, creates
+//! its graph's future (with a command encoder of its own) and polls it; when
+//! every future it holds is waiting — for a pipeline being compiled — it
+//! compiles a queued pipeline, and only when there is nothing else it parks
+//! until a future is woken. A future never leaves the thread that created it, so
 //! graphs need not be `Send`. Submission order is the link order, whatever
 //! order the recording finished in.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::future::Future;
 use std::pin::Pin;
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::task::{Context, Poll, Wake, Waker};
 use std::time::{Duration, Instant};
@@ -41,7 +41,7 @@ impl Renderer {
     /// the views it reads (its links, its sun cascades, and for colour views
     /// the local shadow views), ties broken by id. Links were checked for
     /// cycles at registration.
-    fn link_order(&self, plan: &FramePlan) -> Vec<usize> {
+    fn link_order(&self, plan: &FramePlan) -> (Vec<usize>, Vec<Vec<ViewId>>) {
         let index: BTreeMap<ViewId, usize> = plan.views.iter().enumerate().map(|(i, v)| (v.id, i)).collect();
         let local: Vec<usize> =
             (0..plan.views.len()).filter(|i| matches!(plan.views[*i].target, TargetPlan::AtlasLayer { .. })).collect();
@@ -72,7 +72,8 @@ impl Renderer {
             done[next] = true;
             order.push(next);
         }
-        order
+        let producers = deps.iter().map(|d| d.iter().map(|i| plan.views[*i].id).collect()).collect();
+        (order, producers)
     }
 
     /// What `view` may read this frame.
@@ -128,7 +129,7 @@ impl Renderer {
 
     /// Records every view of `plan` and submits them in link order.
     pub(super) fn record(&self, plan: &FramePlan) -> Result<(Vec<ViewReport>, usize), RenderError> {
-        let order = self.link_order(plan);
+        let (order, producers) = self.link_order(plan);
         let _span = info_span!("record", views = order.len()).entered();
         let atlas_texture = (Self::atlas_layers(plan) > 0).then(|| {
             plan.views.iter().find_map(|v| match v.target {
@@ -174,10 +175,14 @@ impl Renderer {
 
         let threads = self.prep.worker_pool().threads().min(contexts.len()).max(1);
         let results: Vec<Mutex<Option<Recorded>>> = contexts.iter().map(|_| Mutex::new(None)).collect();
-        let next = AtomicUsize::new(0);
+        let queue = ViewQueue {
+            started: Mutex::new(vec![false; contexts.len()]),
+            producers: contexts.iter().map(|(i, _)| producers[*i].as_slice()).collect(),
+            idle: Mutex::new(Vec::new()),
+        };
         let job = |_thread: usize| {
             let _compiler = self.pipelines.attach_compiler();
-            run_executor(&contexts, plan, &next, &results, &self.pipelines, &self.gpu.device, &progress);
+            run_executor(&contexts, plan, &queue, &results, &self.pipelines, &self.gpu.device, &progress);
         };
         self.prep.worker_pool().run(threads, &job);
 
@@ -222,6 +227,57 @@ impl Wake for TaskWaker {
     }
 }
 
+/// The views not yet started. A view starts once every view it reads has
+/// recorded, so a started view never waits for another: the views a thread
+/// holds are never stuck behind work held by a busier thread (a future
+/// cannot move between threads).
+struct ViewQueue<'a> {
+    started: Mutex<Vec<bool>>,
+    /// Per context: the views it reads.
+    producers: Vec<&'a [ViewId]>,
+    /// Threads with nothing to do until some view finishes recording.
+    idle: Mutex<Vec<std::thread::Thread>>,
+}
+
+/// What a thread may do next with the queue.
+enum Next {
+    /// Start this context.
+    Start(usize),
+    /// Views remain, but none is ready yet.
+    Wait,
+    /// Every view has started.
+    Done,
+}
+
+impl ViewQueue<'_> {
+    /// Registers the calling thread to be unparked when a view finishes.
+    fn wait_for_a_view(&self) {
+        self.idle.lock().unwrap_or_else(|e| e.into_inner()).push(std::thread::current());
+    }
+
+    /// A view finished: idle threads may find one ready now.
+    fn view_finished(&self) {
+        let idle = std::mem::take(&mut *self.idle.lock().unwrap_or_else(|e| e.into_inner()));
+        idle.iter().for_each(std::thread::Thread::unpark);
+    }
+
+    fn take(&self, progress: &FrameProgress) -> Next {
+        let mut started = self.started.lock().unwrap_or_else(|e| e.into_inner());
+        let mut remaining = false;
+        for (index, taken) in started.iter_mut().enumerate() {
+            if *taken {
+                continue;
+            }
+            if progress.all_recorded(self.producers[index]) {
+                *taken = true;
+                return Next::Start(index);
+            }
+            remaining = true;
+        }
+        if remaining { Next::Wait } else { Next::Done }
+    }
+}
+
 struct Task<'a> {
     index: usize,
     future: Pin<Box<dyn Future<Output = Recorded> + 'a>>,
@@ -233,7 +289,7 @@ struct Task<'a> {
 fn run_executor<'a>(
     contexts: &'a [(usize, RenderContext<'a>)],
     plan: &'a FramePlan,
-    next: &AtomicUsize,
+    queue: &ViewQueue<'_>,
     results: &[Mutex<Option<Recorded>>],
     pipelines: &Pipelines,
     device: &wgpu::Device,
@@ -261,6 +317,7 @@ fn run_executor<'a>(
                     let view = plan.views[contexts[task.index].0].id;
                     *results[task.index].lock().unwrap_or_else(|e| e.into_inner()) = Some(recorded);
                     progress.complete(view);
+                    queue.view_finished();
                 }
             }
         }
@@ -268,9 +325,15 @@ fn run_executor<'a>(
             continue;
         }
         // Start another view before compiling, so that its pipeline requests
-        // join the queue and compile side by side with the others'.
-        let index = next.fetch_add(1, Ordering::AcqRel);
-        if let Some((i, ctx)) = contexts.get(index) {
+        // join the queue and compile side by side with the others'. An idle
+        // thread registers before looking, so a view finishing between the
+        // look and the park still unparks it (unpark tokens persist).
+        if tasks.is_empty() {
+            queue.wait_for_a_view();
+        }
+        let next = queue.take(progress);
+        if let Next::Start(index) = next {
+            let (i, ctx) = &contexts[index];
             let view = &plan.views[*i];
             let graph = &*view.graph;
             let future = async move {
@@ -289,11 +352,13 @@ fn run_executor<'a>(
         if pipelines.compile_next(device) {
             continue;
         }
-        if tasks.is_empty() {
-            return;
+        match next {
+            Next::Done if tasks.is_empty() => return,
+            // Unpark tokens persist, so a wake between the checks above and
+            // here is not lost (views finishing unpark idle threads, woken
+            // futures their own); the timeout only bounds the cost of a
+            // missed one.
+            _ => std::thread::park_timeout(Duration::from_millis(20)),
         }
-        // Unpark tokens persist, so a wake between the checks above and here
-        // is not lost; the timeout only bounds the cost of a missed one.
-        std::thread::park_timeout(Duration::from_millis(20));
     }
 }
