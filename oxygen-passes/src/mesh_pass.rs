@@ -197,12 +197,17 @@ impl MeshPass {
             ColorOps::None => None,
             ops => Some((&ctx.color_targets(self.name)?.hdr_view, ops)),
         };
-        let lighting = match &self.lighting {
-            Some(config) => crate::forward_lighting::bind_group(ctx, config).await?,
-            None => None,
+        // The pipelines are requested before the inputs are awaited, so
+        // that they compile while the views producing the inputs record.
+        let lighting = async {
+            match &self.lighting {
+                Some(config) => crate::forward_lighting::bind_group(ctx, config).await,
+                None => Ok(None),
+            }
         };
-        let pipelines =
-            partition_pipelines(ctx, self.kind, self.color_format(), self.depth_bias, self.partitions(ctx)).await;
+        let pipelines = partition_pipelines(ctx, self.kind, self.color_format(), self.depth_bias, self.partitions(ctx));
+        let (lighting, pipelines) = futures::future::join(lighting, pipelines).await;
+        let lighting = lighting?;
 
         let mut stats = rec.stats;
         {

@@ -2,11 +2,12 @@
 //! view's graph concurrently and submit the command buffers in that order.
 //!
 //! Each worker thread of ScenePrep's pool runs a small executor: it takes
-//! the first view not yet started whose inputs have all recorded, creates
-//! its graph's future (with a command encoder of its own) and polls it; when
-//! every future it holds is waiting — for a pipeline being compiled — it
-//! compiles a queued pipeline, and only when there is nothing else it parks
-//! until a future is woken. A future never leaves the thread that created it, so
+//! the first view not yet started whose inputs have all recorded (or, when
+//! it holds nothing, the first view not yet started), creates its graph's
+//! future (with a command encoder of its own) and polls it; when every
+//! future it holds is waiting — for a pipeline being compiled, for another
+//! view's output — it compiles a queued pipeline, and only when there is
+//! nothing else it parks until a future is woken or a view finishes. A future never leaves the thread that created it, so
 //! graphs need not be `Send`. Submission order is the link order, whatever
 //! order the recording finished in.
 
@@ -227,10 +228,9 @@ impl Wake for TaskWaker {
     }
 }
 
-/// The views not yet started. A view starts once every view it reads has
-/// recorded, so a started view never waits for another: the views a thread
-/// holds are never stuck behind work held by a busier thread (a future
-/// cannot move between threads).
+/// The views not yet started, handed out so that a thread never holds views
+/// stuck behind work held by a busier thread (a future cannot move between
+/// threads): see [`ViewQueue::take`].
 struct ViewQueue<'a> {
     started: Mutex<Vec<bool>>,
     /// Per context: the views it reads.
@@ -261,20 +261,33 @@ impl ViewQueue<'_> {
         idle.iter().for_each(std::thread::Thread::unpark);
     }
 
-    fn take(&self, progress: &FrameProgress) -> Next {
+    /// The first view not yet started whose inputs have all recorded; when
+    /// there is none and `idle` (the thread holds no view), the first view
+    /// not yet started anyway: it records what it can (a depth pre-pass,
+    /// its pipeline requests) and then waits for its inputs. A thread thus
+    /// holds at most one view that waits for others, so no thread is left
+    /// with a pile of them while the others run dry.
+    fn take(&self, progress: &FrameProgress, idle: bool) -> Next {
         let mut started = self.started.lock().unwrap_or_else(|e| e.into_inner());
-        let mut remaining = false;
-        for (index, taken) in started.iter_mut().enumerate() {
+        let mut first_unready = None;
+        for (index, taken) in started.iter().enumerate() {
             if *taken {
                 continue;
             }
             if progress.all_recorded(self.producers[index]) {
-                *taken = true;
+                started[index] = true;
                 return Next::Start(index);
             }
-            remaining = true;
+            first_unready.get_or_insert(index);
         }
-        if remaining { Next::Wait } else { Next::Done }
+        match first_unready {
+            Some(index) if idle => {
+                started[index] = true;
+                Next::Start(index)
+            }
+            Some(_) => Next::Wait,
+            None => Next::Done,
+        }
     }
 }
 
@@ -331,7 +344,7 @@ fn run_executor<'a>(
         if tasks.is_empty() {
             queue.wait_for_a_view();
         }
-        let next = queue.take(progress);
+        let next = queue.take(progress, tasks.is_empty());
         if let Next::Start(index) = next {
             let (i, ctx) = &contexts[index];
             let view = &plan.views[*i];
