@@ -9,8 +9,8 @@
 
 use std::path::PathBuf;
 
-use oxygen::core::demo::{main_camera, multi_view_scene, side_camera};
 use oxygen::prelude::*;
+use oxygen_demo::{main_camera, multi_view_scene, side_camera};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     tracing_subscriber::fmt()

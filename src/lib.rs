@@ -26,9 +26,9 @@
 //! use oxygen::prelude::*;
 //!
 //! let mut renderer = Renderer::new_headless()?;
-//! let demo = oxygen::core::demo::multi_view_scene();
+//! let demo = oxygen_demo::multi_view_scene();
 //! let view = renderer.register_view(
-//!     oxygen::core::demo::main_camera(UVec2::new(640, 480)),
+//!     oxygen_demo::main_camera(UVec2::new(640, 480)),
 //!     standard_render_graph,
 //! )?;
 //! renderer.render_frame(&demo.scene)?;

@@ -5,11 +5,11 @@ mod support;
 
 use futures::executor::block_on;
 use oxygen::bindless::{BindlessHeap, CameraConstants, SceneConstantsBuffer, TexturePath};
-use oxygen::core::demo::{main_camera, multi_view_scene};
 use oxygen::core::{GpuContext, GpuOptions, ViewTargets};
 use oxygen::passes::{FrameProgress, LightingResources, Pipelines, ViewInputs};
 use oxygen::prelude::*;
 use oxygen::sceneprep::{ScenePrep, ViewRequest};
+use oxygen_demo::{main_camera, multi_view_scene};
 
 fn magenta_pixels(image: &image::RgbaImage) -> usize {
     image.pixels().filter(|p| p.0[0] > 220 && p.0[2] > 220 && p.0[1] < 40).count()

@@ -66,7 +66,7 @@ fn a_domain_grows_and_keeps_its_live_records() {
 fn a_long_run_of_view_and_node_churn_keeps_gpu_memory_bounded() {
     use oxygen::prelude::*;
     let mut renderer = Renderer::new_headless().expect("test adapter");
-    let mut demo = oxygen::core::demo::multi_view_scene();
+    let mut demo = oxygen_demo::multi_view_scene();
     let cube = demo.scene.add_geometry(Geometry::cube(0.5));
     let material = demo.scene.add_material(Material::opaque("churn", Vec4::ONE));
     let mut extra = Vec::new();
@@ -85,9 +85,7 @@ fn a_long_run_of_view_and_node_churn_keeps_gpu_memory_bounded() {
         }
         if frame % 5 == 0 && views.len() < 4 {
             views.push(
-                renderer
-                    .register_view(oxygen::core::demo::main_camera(UVec2::new(16, 16)), standard_render_graph)
-                    .unwrap(),
+                renderer.register_view(oxygen_demo::main_camera(UVec2::new(16, 16)), standard_render_graph).unwrap(),
             );
         } else if frame % 7 == 0 && views.len() > 1 {
             renderer.unregister_view(views.remove(0)).unwrap();

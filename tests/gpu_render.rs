@@ -146,12 +146,10 @@ fn masked_quad_is_kept_above_its_cutoff_dropped_below_and_visible_from_behind() 
 
 #[test]
 fn pipelines_are_created_once_and_reused_across_frames() {
-    let demo = oxygen::core::demo::multi_view_scene();
+    let demo = oxygen_demo::multi_view_scene();
     let mut renderer = gpu_renderer();
-    let main =
-        renderer.register_view(oxygen::core::demo::main_camera(UVec2::new(64, 48)), standard_render_graph).unwrap();
-    let side =
-        renderer.register_view(oxygen::core::demo::side_camera(UVec2::new(48, 48)), standard_render_graph).unwrap();
+    let main = renderer.register_view(oxygen_demo::main_camera(UVec2::new(64, 48)), standard_render_graph).unwrap();
+    let side = renderer.register_view(oxygen_demo::side_camera(UVec2::new(48, 48)), standard_render_graph).unwrap();
     renderer.render_frame(&demo.scene).unwrap();
     support::assert_hdr_finite(&renderer, main);
     support::assert_hdr_finite(&renderer, side);
@@ -166,10 +164,10 @@ fn pipelines_are_created_once_and_reused_across_frames() {
 
 #[test]
 fn views_render_in_registration_order_and_can_be_unregistered() {
-    let demo = oxygen::core::demo::multi_view_scene();
+    let demo = oxygen_demo::multi_view_scene();
     let mut renderer = gpu_renderer();
-    let a = renderer.register_view(oxygen::core::demo::main_camera(UVec2::new(32, 32)), standard_render_graph).unwrap();
-    let b = renderer.register_view(oxygen::core::demo::side_camera(UVec2::new(32, 32)), standard_render_graph).unwrap();
+    let a = renderer.register_view(oxygen_demo::main_camera(UVec2::new(32, 32)), standard_render_graph).unwrap();
+    let b = renderer.register_view(oxygen_demo::side_camera(UVec2::new(32, 32)), standard_render_graph).unwrap();
     let report = renderer.render_frame(&demo.scene).unwrap();
     assert_eq!(report.views.iter().map(|v| v.view).collect::<Vec<_>>(), vec![a, b]);
     assert!(report.views.iter().all(|v| v.recorded.draw_calls > 0));
@@ -216,7 +214,7 @@ fn a_closure_factory_can_render_without_a_depth_pre_pass() {
 
 #[test]
 fn multi_draw_indirect_and_direct_draws_produce_the_same_image() {
-    let demo = oxygen::core::demo::multi_view_scene();
+    let demo = oxygen_demo::multi_view_scene();
     let render = |path: DrawPath, trust_indirect_args: bool| {
         let options = RendererOptions { draw_path: Some(path), ..Default::default() };
         let gpu_options = oxygen::core::GpuOptions {
@@ -230,9 +228,8 @@ fn multi_draw_indirect_and_direct_draws_produce_the_same_image() {
             Err(e) => panic!("{path:?} must be available on the test adapter: {e}"),
         };
         assert_eq!(renderer.draw_path(), path);
-        let view = renderer
-            .register_view(oxygen::core::demo::main_camera(UVec2::new(160, 120)), standard_render_graph)
-            .unwrap();
+        let view =
+            renderer.register_view(oxygen_demo::main_camera(UVec2::new(160, 120)), standard_render_graph).unwrap();
         let report = renderer.render_frame(&demo.scene).unwrap();
         (support::read_lit_color(&renderer, view), report.views[0].recorded.draw_calls)
     };
@@ -256,10 +253,9 @@ fn multi_draw_indirect_and_direct_draws_produce_the_same_image() {
 
 #[test]
 fn materials_and_geometry_upload_only_when_new_or_changed() {
-    let mut demo = oxygen::core::demo::multi_view_scene();
+    let mut demo = oxygen_demo::multi_view_scene();
     let mut renderer = gpu_renderer();
-    let view =
-        renderer.register_view(oxygen::core::demo::main_camera(UVec2::new(48, 32)), standard_render_graph).unwrap();
+    let view = renderer.register_view(oxygen_demo::main_camera(UVec2::new(48, 32)), standard_render_graph).unwrap();
     for _ in 0..3 {
         renderer.render_frame(&demo.scene).unwrap();
     }

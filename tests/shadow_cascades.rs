@@ -6,11 +6,11 @@ mod support;
 use std::sync::Arc;
 
 use oxygen::bindless::SlotAllocators;
-use oxygen::core::demo::{main_camera, multi_view_scene};
 use oxygen::core::glam::Vec2;
 use oxygen::core::{CascadeResolver, CascadeSettings, NodeFlags};
 use oxygen::prelude::*;
 use oxygen::sceneprep::{ScenePrep, ViewFilter, ViewRequest};
+use oxygen_demo::{main_camera, multi_view_scene};
 
 fn shadow_options() -> ViewPrepOptions {
     ViewPrepOptions { filter: ViewFilter::ShadowCastersOnly, depth_only: true, ..Default::default() }

@@ -243,9 +243,9 @@ fn concurrent_recording_draws_what_one_thread_draws() {
 /// prepares for the same registered view.
 #[test]
 fn a_registered_view_prepares_without_a_gpu_as_the_renderer_does() {
-    let demo = oxygen::core::demo::multi_view_scene();
+    let demo = oxygen_demo::multi_view_scene();
     let mut views = Views::new();
-    let main = views.register(oxygen::core::demo::main_camera(UVec2::new(96, 64)), standard_render_graph).unwrap();
+    let main = views.register(oxygen_demo::main_camera(UVec2::new(96, 64)), standard_render_graph).unwrap();
     let cpu_dump = views.prepare(&demo.scene, main).unwrap().dump();
     let options = oxygen::core::GpuOptions { optional_features: Renderer::OPTIONAL_FEATURES, ..Default::default() };
     let gpu = oxygen::core::GpuContext::new_headless(&options).unwrap();

@@ -20,7 +20,6 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod camera;
-pub mod demo;
 pub mod geometry;
 pub mod gpu;
 pub mod light;

@@ -5,8 +5,8 @@
 
 use glam::{UVec2, Vec3};
 use oxygen_bindless::SlotAllocators;
-use oxygen_core::demo::{main_camera, multi_view_scene, side_camera};
 use oxygen_core::{Camera, Light, LookAtResolver, ResolvedView, Scene, Transform, ViewContext, ViewId, ViewResolver};
+use oxygen_demo::{main_camera, multi_view_scene, side_camera};
 use oxygen_sceneprep::{PrepError, ScenePrep, ViewFilter, ViewPrepOptions, ViewRequest};
 
 fn ctx(id: u32) -> ViewContext {

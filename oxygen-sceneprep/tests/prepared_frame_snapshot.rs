@@ -4,8 +4,8 @@
 
 use glam::UVec2;
 use oxygen_bindless::SlotAllocators;
-use oxygen_core::demo::{main_camera, multi_view_scene, side_camera};
 use oxygen_core::{ViewContext, ViewId, ViewResolver};
+use oxygen_demo::{main_camera, multi_view_scene, side_camera};
 use oxygen_sceneprep::{ScenePrep, ViewPrepOptions, ViewRequest};
 
 fn resolve(resolver: &dyn ViewResolver, id: u32, scene: &oxygen_core::Scene) -> oxygen_core::ResolvedView {

@@ -8,8 +8,8 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 use glam::{UVec2, Vec3};
 use oxygen_bindless::SlotAllocators;
-use oxygen_core::demo::{main_camera, multi_view_scene, side_camera};
 use oxygen_core::{LookAtResolver, Transform, ViewContext, ViewId, ViewResolver};
+use oxygen_demo::{main_camera, multi_view_scene, side_camera};
 use oxygen_sceneprep::{CullBound, ScenePrep, ViewFilter, ViewPrepOptions, ViewRequest};
 
 struct CountingAllocator;

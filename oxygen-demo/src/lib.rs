@@ -1,9 +1,13 @@
-//! Procedural scenes shared by examples, tests and benchmarks, so that each of
-//! them builds "the multi-view scene" in one line and they all agree on it.
+//! Procedural scenes shared by Oxygen's examples, tests and benchmarks, so
+//! that each of them builds "the multi-view scene" in one line and they all
+//! agree on it. A development crate (`publish = false`), not part of the
+//! library's public surface.
 
 use glam::{Quat, UVec2, Vec3, Vec4};
 
-use crate::{AlphaMode, Camera, Geometry, Light, LookAtResolver, Material, NodeKey, Renderable, Scene, Transform};
+use oxygen_core::{
+    AlphaMode, Camera, Geometry, Light, LookAtResolver, Material, NodeKey, Renderable, Scene, Transform,
+};
 
 /// The scene of the `multi_view` example and the walking-skeleton tests.
 pub struct DemoScene {
