@@ -4,7 +4,7 @@
 //! Each face view (90° perspective, one per axis direction, as in
 //! [`oxygen_passes::PROBE_FACE_AXES`]) runs a depth
 //! pre-pass and forward lit shading into its layer of the cube, then rebuilds
-//! that layer's mip chain ([`ProbeFaceGraph`](crate::ProbeFaceGraph)). A view
+//! that layer's mip chain ([`crate::ProbeFaceGraph`]). A view
 //! linked to the probe's [`ReflectionProbe::cube`] records after the faces
 //! and reflects the probe. Faces are paused between updates
 //! ([`ReflectionProbe::before_frame`]), so an every-N-frames probe costs

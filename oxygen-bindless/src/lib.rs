@@ -22,6 +22,7 @@
 //! It knows nothing of scenes or passes. `u32::MAX` ([`INVALID_SLOT`]) is the
 //! absent slot, and shaders treat it so.
 
+#![warn(missing_docs)]
 // `!(x > 0.0)` is how this crate rejects NaN along with the out-of-range values;
 // rewriting it with `partial_cmp` would hide that intent.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]

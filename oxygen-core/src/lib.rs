@@ -15,6 +15,7 @@
 //! It knows nothing about ScenePrep or passes: data flows out of this crate,
 //! never back in.
 
+#![warn(missing_docs)]
 // `!(x > 0.0)` is how this crate rejects NaN along with the out-of-range values;
 // rewriting it with `partial_cmp` would hide that intent.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]

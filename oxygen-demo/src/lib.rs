@@ -3,6 +3,7 @@
 //! agree on it. A development crate (`publish = false`), not part of the
 //! library's public surface.
 
+#![warn(missing_docs)]
 use glam::{Quat, UVec2, Vec3, Vec4};
 
 use oxygen_core::{

@@ -22,6 +22,7 @@
 //! `DrawMetadata` (found by `instance_index`), its world and normal matrix,
 //! its material and its vertices. No per-draw bind group exists.
 
+#![warn(missing_docs)]
 // `!(x > 0.0)` is how this crate rejects NaN along with the out-of-range values;
 // rewriting it with `partial_cmp` would hide that intent.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]

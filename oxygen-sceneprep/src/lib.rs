@@ -17,6 +17,7 @@
 //! [`ScenePrep::upload`] then writes the frame's data into the bindless heap.
 //! This crate knows nothing of passes.
 
+#![warn(missing_docs)]
 // `!(x > 0.0)` is how this crate rejects NaN along with the out-of-range values;
 // rewriting it with `partial_cmp` would hide that intent.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
