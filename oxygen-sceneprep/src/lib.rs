@@ -38,7 +38,7 @@ pub use collect::{
 pub use draw_metadata::{DrawIndexedIndirect, DrawMetadata};
 pub use gpu_records::{
     DirectionalLightRecord, GPU_RECORDS_WGSL, MAX_SHADOW_TILES, MaterialRecord, NormalMatrix, PositionalLightRecord,
-    ShadowRecord, shadow_tiles_for,
+    ShadowRecord, material_flags, shadow_tiles_for,
 };
 pub use pass_mask::PassMask;
 pub use prepared_frame::{Partition, PreparedSceneFrame, PreparedSlots};
