@@ -10,7 +10,9 @@
 //! sided), so each pass draws four partitions. Three ways to submit them:
 //! direct draws, one multi-draw-indirect per partition with wgpu's indirect
 //! validation (its default), and the same without it
-//! (`GpuOptions::trust_indirect_args`). For each it renders 5 warm-up and 30
+//! (`GpuOptions::trust_indirect_args`), each with one command per draw and
+//! with instanced runs (`Instancing::Adjacent`: the cubes of one material
+//! share one mesh, so each partition becomes one command). For each it renders 5 warm-up and 30
 //! measured frames and reports the CPU time to record the view's passes and
 //! the GPU time between timestamps written before and after them (when the
 //! adapter supports timestamps inside encoders).
@@ -19,6 +21,7 @@ use std::sync::{Arc, Mutex};
 
 use oxygen::core::{AlphaMode, GpuContext, GpuOptions, Projection};
 use oxygen::prelude::*;
+use oxygen::sceneprep::Instancing;
 use oxygen::standard_render_graph;
 
 const WARM_UP: usize = 5;
@@ -63,12 +66,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
 
     println!(
-        "| path | indirect validation | draws | partitions per pass | draw calls per frame | CPU record ms | GPU ms | frame ms (CPU, prep + record + submit) |"
+        "| path | indirect validation | instancing | draws | partitions per pass | draw calls per frame | draw commands per frame | CPU record ms | GPU ms | frame ms (CPU, prep + record + submit) |"
     );
-    println!("|---|---|---:|---:|---:|---:|---:|---:|");
+    println!("|---|---|---|---:|---:|---:|---:|---:|---:|---:|");
     let mut adapter_line = String::new();
-    let runs = [(DrawPath::Direct, false), (DrawPath::MultiDrawIndirect, false), (DrawPath::MultiDrawIndirect, true)];
-    for (path, trust_indirect_args) in runs {
+    let runs = [
+        (DrawPath::Direct, false, Instancing::Off),
+        (DrawPath::Direct, false, Instancing::Adjacent),
+        (DrawPath::MultiDrawIndirect, false, Instancing::Off),
+        (DrawPath::MultiDrawIndirect, true, Instancing::Off),
+        (DrawPath::MultiDrawIndirect, true, Instancing::Adjacent),
+    ];
+    for (path, trust_indirect_args, instancing) in runs {
         let options = GpuOptions {
             optional_features: Renderer::OPTIONAL_FEATURES
                 | wgpu::Features::TIMESTAMP_QUERY
@@ -116,7 +125,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
             Ok(())
         };
-        let view = renderer.register_view(camera, graph)?;
+        let options = ViewPrepOptions { instancing, ..Default::default() };
+        let view = renderer.register_view(ViewDesc::new(camera).with_options(options), graph)?;
 
         let (mut record, mut gpu_ms, mut frame_ms) = (Vec::new(), Vec::new(), Vec::new());
         let mut report = None;
@@ -156,9 +166,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             _ => "on (wgpu default)",
         };
         println!(
-            "| {path:?} | {validation} | {} | {partitions} | {} | {:.3} | {} | {:.3} |",
+            "| {path:?} | {validation} | {instancing:?} | {} | {partitions} | {} | {} | {:.3} | {} | {:.3} |",
             report.views[0].draws,
             report.views[0].recorded.draw_calls,
+            report.views[0].recorded.draw_commands,
             median(&mut record).unwrap_or(f64::NAN),
             median(&mut gpu_ms).map_or("n/a (no timestamps)".to_owned(), |g| format!("{g:.3}")),
             median(&mut frame_ms).unwrap_or(f64::NAN),

@@ -67,28 +67,89 @@ impl<G: RenderGraph> ErasedGraph for G {
     }
 }
 
-/// The standard graph: depth pre-pass, forward lit shading of the opaque and
-/// masked partitions into HDR (with the view's sun cascades, the frame's
-/// local shadows and the probes it is linked to), blended partitions
-/// back-to-front, then the tone map to the view's sRGB target.
-#[derive(Clone, Debug, Default, PartialEq)]
+/// The standard graph: a depth pre-pass when it pays ([`PrePass`]), forward
+/// lit shading of the opaque and masked partitions into HDR (with the view's
+/// sun cascades, the frame's local shadows and the probes it is linked to),
+/// blended partitions back-to-front, then the tone map to the view's sRGB
+/// target.
+#[derive(Clone, Debug, PartialEq)]
 pub struct StandardGraph {
-    /// The forward lit pass's configuration.
+    /// The forward lit pass's configuration; its `depth_from_pre_pass` is
+    /// decided by `pre_pass`.
     pub lit: ForwardLitConfig,
     /// Exposure of the tone map.
     pub exposure: f32,
+    /// Whether to lay down depth first.
+    pub pre_pass: PrePass,
+}
+
+impl Default for StandardGraph {
+    fn default() -> Self {
+        standard_render_graph
+    }
 }
 
 impl StandardGraph {
-    /// The standard graph with this forward configuration and exposure 1.
+    /// The standard graph with this forward configuration, exposure 1, and
+    /// the pre-pass as `lit.depth_from_pre_pass` says (on or off).
     pub fn new(lit: ForwardLitConfig) -> Self {
-        StandardGraph { lit, exposure: 1.0 }
+        let pre_pass = if lit.depth_from_pre_pass { PrePass::On } else { PrePass::Off };
+        StandardGraph { lit, exposure: 1.0, pre_pass }
+    }
+
+    /// The same graph with another pre-pass choice.
+    pub fn with_pre_pass(self, pre_pass: PrePass) -> Self {
+        StandardGraph { pre_pass, ..self }
+    }
+}
+
+/// Whether a view lays down depth before shading: a speed/accuracy-neutral
+/// trade of one more geometry pass against shading hidden fragments. The
+/// pre-pass pays when surfaces hide each other a lot (each pixel is then
+/// shaded once instead of several times) and costs when they do not (every
+/// draw is rasterised twice). `examples/prepass_bench.rs` measures both on
+/// a scene of each kind.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PrePass {
+    /// Always.
+    On,
+    /// Never: the forward pass writes depth itself.
+    Off,
+    /// When the view's estimated depth complexity
+    /// ([`PreparedSceneFrame::estimated_overdraw`](oxygen_sceneprep::PreparedSceneFrame::estimated_overdraw))
+    /// reaches `min_overdraw`, decided per view and per frame.
+    Auto {
+        /// The threshold.
+        min_overdraw: f32,
+    },
+}
+
+impl PrePass {
+    /// The default: automatic, from a depth complexity of 2.
+    pub const DEFAULT: PrePass = PrePass::Auto { min_overdraw: 2.0 };
+
+    /// Whether a view whose estimated depth complexity is `overdraw` gets
+    /// the pre-pass.
+    pub fn wanted(self, overdraw: f32) -> bool {
+        match self {
+            PrePass::On => true,
+            PrePass::Off => false,
+            // NaN never reaches the threshold: no pre-pass, the safe side.
+            PrePass::Auto { min_overdraw } => overdraw >= min_overdraw,
+        }
+    }
+}
+
+impl Default for PrePass {
+    fn default() -> Self {
+        Self::DEFAULT
     }
 }
 
 impl RenderGraph for StandardGraph {
     async fn record(&self, ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError> {
-        let lit = self.lit.clone();
+        let mut lit = self.lit.clone();
+        lit.depth_from_pre_pass = self.pre_pass.wanted(ctx.prepared.estimated_overdraw());
         if lit.depth_from_pre_pass {
             MeshPass::depth_pre_pass().run(ctx, rec).await?;
         }
@@ -114,9 +175,11 @@ pub const standard_render_graph: StandardGraph = StandardGraph {
         shadow_depth_bias: 1e-4,
     },
     exposure: 1.0,
+    pre_pass: PrePass::DEFAULT,
 };
 
-/// The standard graph with a chosen forward configuration.
+/// The standard graph with a chosen forward configuration; the pre-pass as
+/// `config.depth_from_pre_pass` says.
 pub fn lit_render_graph(config: ForwardLitConfig) -> StandardGraph {
     StandardGraph::new(config)
 }
@@ -164,6 +227,18 @@ mod tests {
 
     #[test]
     fn the_constant_standard_graph_matches_the_default_configuration() {
-        assert_eq!(standard_render_graph, StandardGraph::new(ForwardLitConfig::default()));
+        let default = StandardGraph::new(ForwardLitConfig::default()).with_pre_pass(PrePass::DEFAULT);
+        assert_eq!(standard_render_graph, default);
+        assert_eq!(StandardGraph::default(), default);
+    }
+
+    #[test]
+    fn the_automatic_pre_pass_follows_the_threshold_and_refuses_nan() {
+        let auto = PrePass::Auto { min_overdraw: 2.0 };
+        assert!(!auto.wanted(1.2));
+        assert!(auto.wanted(2.0));
+        assert!(auto.wanted(7.5));
+        assert!(!auto.wanted(f32::NAN));
+        assert!(PrePass::On.wanted(0.0) && !PrePass::Off.wanted(100.0));
     }
 }

@@ -48,7 +48,9 @@ pub use gltf_import::{
     GltfCamera, GltfError, GltfImport, ImportLimits, ImportOptions, NodeCameraResolver, SceneChoice, import_gltf,
     import_gltf_slice, import_gltf_with,
 };
-pub use graph::{ProbeFaceGraph, RenderGraph, ShadowGraph, StandardGraph, lit_render_graph, standard_render_graph};
+pub use graph::{
+    PrePass, ProbeFaceGraph, RenderGraph, ShadowGraph, StandardGraph, lit_render_graph, standard_render_graph,
+};
 pub use oxygen_sceneprep::RenderOrigin;
 pub use probes::{ProbeUpdate, ReflectionProbe};
 pub use renderer::{FrameReport, FrameWarning, RenderError, Renderer, RendererOptions, ViewReport, ViewRole};
@@ -83,7 +85,7 @@ pub struct ReadmeDoctests;
 /// The names most applications use.
 pub mod prelude {
     pub use crate::{
-        FrameReport, FrameWarning, LocalShadowSettings, RenderError, RenderGraph, RenderOrigin, Renderer,
+        FrameReport, FrameWarning, LocalShadowSettings, PrePass, RenderError, RenderGraph, RenderOrigin, Renderer,
         RendererOptions, StandardGraph, ViewDesc, Views, lit_render_graph, standard_render_graph,
     };
     pub use crate::{

@@ -228,8 +228,11 @@ fn multi_draw_indirect_and_direct_draws_produce_the_same_image() {
             Err(e) => panic!("{path:?} must be available on the test adapter: {e}"),
         };
         assert_eq!(renderer.draw_path(), path);
-        let view =
-            renderer.register_view(oxygen_demo::main_camera(UVec2::new(160, 120)), standard_render_graph).unwrap();
+        // One command per draw and the pre-pass always on, so the call
+        // counts below follow from the scene alone.
+        let options = ViewPrepOptions { instancing: oxygen::sceneprep::Instancing::Off, ..Default::default() };
+        let desc = ViewDesc::new(oxygen_demo::main_camera(UVec2::new(160, 120))).with_options(options);
+        let view = renderer.register_view(desc, lit_render_graph(ForwardLitConfig::default())).unwrap();
         let report = renderer.render_frame(&demo.scene).unwrap();
         (support::read_lit_color(&renderer, view), report.views[0].recorded.draw_calls)
     };

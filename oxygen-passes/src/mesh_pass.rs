@@ -289,8 +289,9 @@ fn bind_view_resources(pass: &mut wgpu::RenderPass<'_>, ctx: &RenderContext<'_>,
     pass.set_index_buffer(ctx.heap.index_buffer().slice(..), wgpu::IndexFormat::Uint32);
 }
 
-/// Draws every draw of `partition`. Either way the draw's position in the
-/// view's array reaches the shader as `first_instance`, which is how the
+/// Draws every draw of `partition` through its commands (one per draw, or
+/// one per instanced run). Either way a draw's position in the view's array
+/// reaches the shader as `first_instance + instance_index`, which is how the
 /// vertex shader finds its `DrawMetadata`.
 fn draw_partition(
     pass: &mut wgpu::RenderPass<'_>,
@@ -300,20 +301,18 @@ fn draw_partition(
 ) {
     if ctx.draw_path == DrawPath::MultiDrawIndirect {
         let stride = std::mem::size_of::<oxygen_sceneprep::DrawIndexedIndirect>() as u64;
-        let first = ctx.prepared.slots().indirect_args.start as u64 + partition.begin as u64;
+        let first = ctx.prepared.slots().indirect_args.start as u64 + partition.first_command as u64;
         let buffer = ctx.heap.buffer(oxygen_bindless::DomainKind::IndirectArgs);
-        pass.multi_draw_indexed_indirect(buffer, first * stride, partition.len());
+        pass.multi_draw_indexed_indirect(buffer, first * stride, partition.command_count);
         stats.draw_calls += 1;
+        stats.draw_commands += partition.command_count;
         return;
     }
-    let draws = &ctx.prepared.draws()[partition.range()];
-    for (offset, draw) in draws.iter().enumerate() {
-        let draw_index = partition.begin + offset as u32;
-        pass.draw_indexed(
-            draw.index_range(),
-            draw.absolute_base_vertex(),
-            draw_index..draw_index + draw.instance_count,
-        );
+    for command in &ctx.prepared.indirect_args()[partition.commands()] {
+        let indices = command.first_index..command.first_index + command.index_count;
+        let instances = command.first_instance..command.first_instance + command.instance_count;
+        pass.draw_indexed(indices, command.base_vertex, instances);
         stats.draw_calls += 1;
+        stats.draw_commands += 1;
     }
 }

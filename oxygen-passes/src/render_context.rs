@@ -334,8 +334,11 @@ pub struct RecordStats {
     pub render_passes: u32,
     /// Pipelines set (one per partition drawn).
     pub pipeline_binds: u32,
-    /// Draw calls.
+    /// Draw calls recorded (a multi-draw counts once).
     pub draw_calls: u32,
+    /// Draw commands the GPU executes (each command of a multi-draw counts;
+    /// an instanced run counts once).
+    pub draw_commands: u32,
 }
 
 /// The command encoder of one view plus counters.

@@ -108,6 +108,7 @@ impl RenderPass for TonemapPass {
         rec.stats.render_passes += 1;
         rec.stats.pipeline_binds += 1;
         rec.stats.draw_calls += 1;
+        rec.stats.draw_commands += 1;
         Ok(())
     }
 }

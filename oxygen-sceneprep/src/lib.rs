@@ -32,8 +32,8 @@ mod scene_prep;
 pub mod worker_pool;
 
 pub use collect::{
-    CullBound, FrameCollection, LocalShadowCaster, LocalShadowKind, RenderItem, RenderOrigin, RenderableEntry,
-    SkippedNode, SubmeshEntry, ViewFilter, ViewPrepOptions,
+    CullBound, FrameCollection, Instancing, LocalShadowCaster, LocalShadowKind, RenderItem, RenderOrigin,
+    RenderableEntry, SkippedNode, SubmeshEntry, ViewFilter, ViewPrepOptions,
 };
 pub use draw_metadata::{DrawIndexedIndirect, DrawMetadata};
 pub use gpu_records::{

@@ -71,6 +71,7 @@ pub struct PreparedSceneFrame {
     pub(crate) slots: PreparedSlots,
     pub(crate) debug_generations: bool,
     pub(crate) prep_seconds: f32,
+    pub(crate) estimated_overdraw: f32,
 }
 
 fn slot(a: &Allocation) -> String {
@@ -90,6 +91,7 @@ impl PreparedSceneFrame {
             transforms,
             debug_generations: false,
             prep_seconds: 0.0,
+            estimated_overdraw: 0.0,
             slots: PreparedSlots::unallocated(),
         }
     }
@@ -126,6 +128,17 @@ impl PreparedSceneFrame {
     pub fn transforms(&self) -> &Arc<FrameTransforms> {
         &self.transforms
     }
+    /// The view's expected depth complexity: the sum, over its opaque and
+    /// masked draws, of the fraction of the viewport each one's bounding
+    /// sphere covers (at most 1 each). About 1 when surfaces tile the
+    /// view without overlapping; higher when they hide each other. An
+    /// overestimate (spheres are larger than what they bound), computed
+    /// from data the view phase has anyway; the standard graph uses it to
+    /// choose the depth pre-pass.
+    pub fn estimated_overdraw(&self) -> f32 {
+        self.estimated_overdraw
+    }
+
     /// Wall time this view's view phase and finalization took (the frame
     /// phase, shared by all views, is not included).
     pub fn prep_seconds(&self) -> f32 {

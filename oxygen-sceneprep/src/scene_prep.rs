@@ -32,15 +32,16 @@ use thiserror::Error;
 use tracing::info_span;
 
 use crate::collect::view_phase::collect_view;
+use crate::collect::view_phase::projected_screen_fraction;
 use crate::finalize::emit::{FrameEmit, ViewEmit, emit_view};
 use crate::finalize::geometry_cache::{GeometryCache, GeometrySlots};
 use crate::finalize::materials::MaterialTable;
 use crate::finalize::radix_sort::radix_sort_by_key;
-use crate::finalize::sort_key::sort_key;
+use crate::finalize::sort_key::{sort_key, sort_key_grouped};
 use crate::finalize::texture_cache::TextureCache;
 use crate::prepared_frame::FrameTransforms;
 use crate::worker_pool::WorkerPool;
-use crate::{FrameCollection, PreparedSceneFrame, PreparedSlots, RenderItem, ViewPrepOptions};
+use crate::{FrameCollection, Instancing, PassMask, PreparedSceneFrame, PreparedSlots, RenderItem, ViewPrepOptions};
 
 /// Why a frame could not be prepared or uploaded.
 #[derive(Debug, Error, PartialEq)]
@@ -108,6 +109,8 @@ struct ViewWork {
     missing_geometry: Vec<GeometryHandle>,
     /// Seconds spent on this view in phases 1 and 2.
     seconds: f32,
+    /// Estimated depth complexity of its opaque and masked draws.
+    overdraw: f32,
     draw_allocation: Allocation,
     indirect_allocation: Allocation,
     frame: PreparedSceneFrame,
@@ -121,6 +124,7 @@ impl ViewWork {
             scratch: Vec::new(),
             missing_geometry: Vec::new(),
             seconds: 0.0,
+            overdraw: 0.0,
             draw_allocation: Allocation::empty(DomainKind::DrawMetadata),
             indirect_allocation: Allocation::empty(DomainKind::IndirectArgs),
             frame: PreparedSceneFrame::empty(transforms),
@@ -356,14 +360,34 @@ impl ScenePrep {
                 w.keyed.clear();
                 w.missing_geometry.clear();
                 let depth_only = views[i].options.depth_only;
+                let grouped = views[i].options.instancing == Instancing::ByGeometry;
+                let view = views[i].view;
+                // Disc area per unit of projected diameter², as a fraction of
+                // the viewport (the diameter is in viewport heights).
+                let disc = std::f32::consts::FRAC_PI_4 / view.aspect().max(f32::MIN_POSITIVE);
+                let mut overdraw = 0.0f32;
                 for (index, item) in w.items.iter().enumerate() {
+                    if !item.pass_mask.contains(PassMask::TRANSPARENT)
+                        && let Some(r) = frame.renderables.get(item.renderable as usize)
+                    {
+                        let diameter = 2.0 * projected_screen_fraction(view, r.world_sphere.radius, item.view_depth);
+                        // One draw covers the viewport at most once.
+                        overdraw += (disc * diameter * diameter).min(1.0);
+                    }
                     let material_key = if depth_only { 0 } else { item.material };
-                    w.keyed.push((sort_key(item.pass_mask, material_key, item.view_depth), index as u32));
+                    let key = if grouped {
+                        let geometry = frame.renderables.get(item.renderable as usize).map_or(0, |r| r.geometry_id);
+                        sort_key_grouped(item.pass_mask, material_key, geometry, item.view_depth)
+                    } else {
+                        sort_key(item.pass_mask, material_key, item.view_depth)
+                    };
+                    w.keyed.push((key, index as u32));
                     let handle = item.geometry;
                     if geometry.get(handle).is_none() && !w.missing_geometry.contains(&handle) {
                         w.missing_geometry.push(handle);
                     }
                 }
+                w.overdraw = if overdraw.is_finite() { overdraw } else { 0.0 };
                 // Items are in (node id, submesh) order, so a stable sort by
                 // key alone gives the deterministic tie-break.
                 radix_sort_by_key(&mut w.keyed, &mut w.scratch);
@@ -395,9 +419,11 @@ impl ScenePrep {
                     keyed: &w.keyed,
                     draw_allocation: w.draw_allocation,
                     indirect_allocation: w.indirect_allocation,
+                    instancing: views[i].options.instancing,
                 };
                 emit_view(&frame, &view, &mut w.frame);
                 w.frame.prep_seconds = w.seconds + started.elapsed().as_secs_f32();
+                w.frame.estimated_overdraw = w.overdraw;
             });
         }
 

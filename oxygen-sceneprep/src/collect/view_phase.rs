@@ -50,12 +50,41 @@ pub struct ViewPrepOptions {
     /// The view only writes depth (shadow views): transparent submeshes are
     /// dropped and draws sort by pass class and depth only, not by material.
     pub depth_only: bool,
+    /// Whether draws of one mesh become one instanced command.
+    pub instancing: Instancing,
 }
 
 impl Default for ViewPrepOptions {
     fn default() -> Self {
-        ViewPrepOptions { filter: ViewFilter::All, cull: CullBound::Aabb, lod_bias: 1.0, depth_only: false }
+        ViewPrepOptions {
+            filter: ViewFilter::All,
+            cull: CullBound::Aabb,
+            lod_bias: 1.0,
+            depth_only: false,
+            instancing: Instancing::default(),
+        }
     }
+}
+
+/// How a view's draws become draw commands.
+///
+/// The GPU pays a fixed front-end cost per command. Consecutive draws of a
+/// partition that share their geometry (mesh, index range, base vertex)
+/// can be one command whose `instance_count` is the run's length; each
+/// instance still finds its own `DrawMetadata` through `first_instance +
+/// instance_index`, so transforms and materials stay per draw.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Instancing {
+    /// One command per draw.
+    Off,
+    /// Runs that the sort already makes adjacent are merged; the draw order
+    /// is unchanged.
+    #[default]
+    Adjacent,
+    /// The sort key puts the geometry above the depth for opaque and masked
+    /// draws, so every draw of one mesh and material joins one command;
+    /// front-to-back order then holds within each mesh only.
+    ByGeometry,
 }
 
 /// The fraction of the viewport height covered by a sphere's projected

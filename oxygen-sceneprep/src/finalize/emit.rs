@@ -17,9 +17,9 @@ use oxygen_bindless::Allocation;
 use oxygen_core::ViewId;
 
 use crate::finalize::geometry_cache::GeometryCache;
-use crate::finalize::partition::build_partitions;
+use crate::finalize::partition::{build_commands, build_partitions};
 use crate::prepared_frame::FrameTransforms;
-use crate::{DrawIndexedIndirect, DrawMetadata, PreparedSceneFrame, PreparedSlots, RenderItem};
+use crate::{DrawMetadata, Instancing, PreparedSceneFrame, PreparedSlots, RenderItem};
 
 /// What every view of a frame emits against: shared, read-only.
 pub(crate) struct FrameEmit<'a> {
@@ -46,8 +46,10 @@ pub(crate) struct ViewEmit<'a> {
     pub keyed: &'a [(u64, u32)],
     /// This view's draw-metadata range.
     pub draw_allocation: Allocation,
-    /// This view's indirect-argument range, parallel to the draws.
+    /// This view's indirect-argument range (room for one command per draw).
     pub indirect_allocation: Allocation,
+    /// Whether runs of draws sharing a mesh become one command.
+    pub instancing: Instancing,
 }
 
 /// Fills `out` with the draws of `view`, reusing its buffers. Leaves
@@ -78,10 +80,8 @@ pub(crate) fn emit_view(frame: &FrameEmit<'_>, view: &ViewEmit<'_>, out: &mut Pr
         });
         out.sort_keys.push(key);
     }
-    for (index, draw) in out.draws.iter().enumerate() {
-        out.indirect_args.push(DrawIndexedIndirect::for_draw(draw, index as u32));
-    }
     build_partitions(&out.draws, &mut out.partitions);
+    build_commands(&out.draws, &mut out.partitions, view.instancing != Instancing::Off, &mut out.indirect_args);
     out.view_id = view.view_id;
     out.frame_index = frame.frame_index;
     out.debug_generations = frame.debug_generations;

@@ -1,8 +1,9 @@
 //! Partitions: maximal runs of sorted draws that share a pass class and variant.
 
-use crate::{DrawMetadata, PassMask};
+use crate::{DrawIndexedIndirect, DrawMetadata, PassMask};
 
-/// A contiguous range `[begin, end)` of a view's sorted draws with one mask.
+/// A contiguous range `[begin, end)` of a view's sorted draws with one mask,
+/// and the draw commands that draw them.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Partition {
     /// First draw.
@@ -11,6 +12,12 @@ pub struct Partition {
     pub end: u32,
     /// The pass class and variant bits ([`PassMask::PARTITION_BITS`]).
     pub mask: PassMask,
+    /// First of the partition's draw commands in the view's indirect
+    /// arguments ([`crate::PreparedSceneFrame::indirect_args`]).
+    pub first_command: u32,
+    /// Its draw commands: one per draw, or fewer when runs of draws sharing
+    /// a mesh are instanced ([`crate::Instancing`]).
+    pub command_count: u32,
 }
 
 impl Partition {
@@ -28,6 +35,11 @@ impl Partition {
     pub fn range(&self) -> std::ops::Range<usize> {
         self.begin as usize..self.end as usize
     }
+
+    /// The command index range.
+    pub fn commands(&self) -> std::ops::Range<usize> {
+        self.first_command as usize..(self.first_command + self.command_count) as usize
+    }
 }
 
 /// Splits sorted draws into partitions (cleared first).
@@ -37,7 +49,42 @@ pub fn build_partitions(draws: &[DrawMetadata], out: &mut Vec<Partition>) {
         let mask = draw.mask() & PassMask::PARTITION_BITS;
         match out.last_mut() {
             Some(last) if last.mask == mask => last.end = i as u32 + 1,
-            _ => out.push(Partition { begin: i as u32, end: i as u32 + 1, mask }),
+            _ => out.push(Partition { begin: i as u32, end: i as u32 + 1, mask, first_command: 0, command_count: 0 }),
         }
+    }
+}
+
+/// Writes the draw commands of `partitions` into `commands` (cleared first):
+/// one per draw, or with `merge` one per run of consecutive draws of a
+/// partition that share their geometry, with `instance_count` the run's
+/// length and `first_instance` its first draw (each instance finds its own
+/// draw at `first_instance + instance_index`).
+pub fn build_commands(
+    draws: &[DrawMetadata],
+    partitions: &mut [Partition],
+    merge: bool,
+    commands: &mut Vec<DrawIndexedIndirect>,
+) {
+    commands.clear();
+    for partition in partitions.iter_mut() {
+        partition.first_command = commands.len() as u32;
+        for index in partition.begin..partition.end {
+            let command = DrawIndexedIndirect::for_draw(&draws[index as usize], index);
+            // Only a command of this partition may be extended.
+            let open = commands.len() as u32 > partition.first_command;
+            match commands.last_mut() {
+                Some(last)
+                    if merge
+                        && open
+                        && last.first_instance + last.instance_count == index
+                        && (last.index_count, last.first_index, last.base_vertex)
+                            == (command.index_count, command.first_index, command.base_vertex) =>
+                {
+                    last.instance_count += command.instance_count;
+                }
+                _ => commands.push(command),
+            }
+        }
+        partition.command_count = commands.len() as u32 - partition.first_command;
     }
 }

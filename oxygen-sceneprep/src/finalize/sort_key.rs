@@ -25,6 +25,16 @@
 //! sorts back-to-front only within one material and blends wrongly across
 //! materials, so the measurement — the picture — wins.)
 //!
+//! With [`Instancing::ByGeometry`](crate::Instancing::ByGeometry), opaque and
+//! masked keys put the geometry above the depth, so that draws of one mesh
+//! and material sit side by side and become one instanced command:
+//!
+//! ```text
+//! bit 59..40  material        (20 bits)
+//! bit 39..24  geometry        stable geometry id (16 bits, saturating)
+//! bit 23..0   depth           24-bit quantized view depth, ascending
+//! ```
+//!
 //! Ties are broken by (node id, submesh) outside the key, so the same scene
 //! always gives the same order.
 //!
@@ -61,6 +71,22 @@ pub fn sort_key(mask: PassMask, material: u32, view_depth: f32) -> u64 {
         (class << 62) | (double_sided << 61) | (mirrored << 60) | (material << 40) | (depth << 16)
     }
 }
+
+/// The key for a draw when draws of one geometry are grouped: as
+/// [`sort_key`], with the geometry between material and depth for opaque and
+/// masked draws (front-to-back order then holds within one mesh of one
+/// material). Transparent draws keep their back-to-front key.
+pub fn sort_key_grouped(mask: PassMask, material: u32, geometry: u32, view_depth: f32) -> u64 {
+    let key = sort_key(mask, material, view_depth);
+    if mask.pass_class() == 2 {
+        return key;
+    }
+    let geometry = u64::from(geometry.min((1 << GEOMETRY_BITS) - 1));
+    let depth = u64::from(quantize_depth(view_depth));
+    (key & !((1u64 << 40) - 1)) | (geometry << DEPTH_BITS) | depth
+}
+
+const GEOMETRY_BITS: u32 = 16;
 
 #[cfg(test)]
 mod tests {
