@@ -85,6 +85,9 @@ pub struct MeshPass {
     clear_depth: bool,
     depth_bias: DepthBias,
     lighting: Option<ForwardLitConfig>,
+    /// Pipeline statistics (e.g. fragment shader invocations) written into
+    /// this query of the set, for benchmarks.
+    statistics: Option<(wgpu::QuerySet, u32)>,
 }
 
 impl MeshPass {
@@ -101,6 +104,7 @@ impl MeshPass {
             clear_depth: true,
             depth_bias: DepthBias::NONE,
             lighting: None,
+            statistics: None,
         }
     }
 
@@ -133,6 +137,7 @@ impl MeshPass {
             clear_depth,
             depth_bias: DepthBias::NONE,
             lighting: Some(config),
+            statistics: None,
         }
     }
 
@@ -151,6 +156,7 @@ impl MeshPass {
             clear_depth: false,
             depth_bias: DepthBias::NONE,
             lighting: None,
+            statistics: None,
         }
     }
 
@@ -159,6 +165,14 @@ impl MeshPass {
     /// [`oxygen_sceneprep::PreparedSceneFrame::partitions_matching`]).
     pub fn with_masks(self, include: PassMask, exclude: PassMask) -> Self {
         MeshPass { include, exclude, ..self }
+    }
+
+    /// The same pass recording pipeline statistics into query `index` of
+    /// `set` (a `QueryType::PipelineStatistics` set; needs
+    /// `Features::PIPELINE_STATISTICS_QUERY`): how a benchmark counts the
+    /// fragments a pass shades.
+    pub fn with_statistics(self, set: wgpu::QuerySet, index: u32) -> Self {
+        MeshPass { statistics: Some((set, index)), ..self }
     }
 
     /// The same pass under another name (logs, errors).
@@ -242,12 +256,18 @@ impl MeshPass {
                 multiview_mask: None,
             });
             stats.render_passes += 1;
+            if let Some((set, index)) = &self.statistics {
+                pass.begin_pipeline_statistics_query(set, *index);
+            }
             let group3 = lighting.as_ref().unwrap_or(ctx.lighting.no_lighting_inputs());
             bind_view_resources(&mut pass, ctx, group3);
             for (partition, pipeline) in self.partitions(ctx).zip(&pipelines) {
                 pass.set_pipeline(pipeline);
                 stats.pipeline_binds += 1;
                 draw_partition(&mut pass, ctx, partition, &mut stats);
+            }
+            if self.statistics.is_some() {
+                pass.end_pipeline_statistics_query();
             }
         }
         rec.stats = stats;

@@ -128,13 +128,15 @@ impl PreparedSceneFrame {
     pub fn transforms(&self) -> &Arc<FrameTransforms> {
         &self.transforms
     }
-    /// The view's expected depth complexity: the sum, over its opaque and
-    /// masked draws, of the fraction of the viewport each one's bounding
-    /// sphere covers (at most 1 each). About 1 when surfaces tile the
-    /// view without overlapping; higher when they hide each other. An
-    /// overestimate (spheres are larger than what they bound), computed
-    /// from data the view phase has anyway; the standard graph uses it to
-    /// choose the depth pre-pass.
+    /// The depth complexity a forward pass without a depth pre-pass is
+    /// expected to shade: over the runs of one material in draw order (each
+    /// run goes front to back, so early depth testing shades a pixel about
+    /// once per run), the sum of each run's viewport coverage (the fractions
+    /// its draws' bounding spheres cover), capped at 1 per run. About 1 when
+    /// the materials tile the view; up to the number of material runs when
+    /// runs drawn later cover what earlier ones shaded. An estimate from
+    /// data the view phase has anyway (spheres overestimate what they
+    /// bound); the standard graph's automatic pre-pass decides from it.
     pub fn estimated_overdraw(&self) -> f32 {
         self.estimated_overdraw
     }

@@ -109,6 +109,8 @@ struct ViewWork {
     missing_geometry: Vec<GeometryHandle>,
     /// Seconds spent on this view in phases 1 and 2.
     seconds: f32,
+    /// Per item: the fraction of the viewport it covers (0 for transparent).
+    coverage: Vec<f32>,
     /// Estimated depth complexity of its opaque and masked draws.
     overdraw: f32,
     draw_allocation: Allocation,
@@ -124,6 +126,7 @@ impl ViewWork {
             scratch: Vec::new(),
             missing_geometry: Vec::new(),
             seconds: 0.0,
+            coverage: Vec::new(),
             overdraw: 0.0,
             draw_allocation: Allocation::empty(DomainKind::DrawMetadata),
             indirect_allocation: Allocation::empty(DomainKind::IndirectArgs),
@@ -164,6 +167,26 @@ impl Default for ScenePrep {
     fn default() -> Self {
         Self::new()
     }
+}
+
+/// The depth complexity a forward pass without a depth pre-pass would shade,
+/// estimated from the sorted draws: within one run of a material the draws go
+/// front to back, so early depth testing shades each covered pixel about
+/// once; successive runs may each shade it again. So each run counts its
+/// coverage (the viewport fractions its draws' bounding spheres cover),
+/// capped at 1, and the runs add up.
+fn overdraw_in_draw_order(keyed: &[(u64, u32)], items: &[RenderItem], coverage: &[f32]) -> f32 {
+    let (mut total, mut run, mut material) = (0.0f32, 0.0f32, None);
+    for &(_, index) in keyed {
+        let item = &items[index as usize];
+        if material != Some(item.material) {
+            total += run.min(1.0);
+            run = 0.0;
+            material = Some(item.material);
+        }
+        run += coverage[index as usize];
+    }
+    total + run.min(1.0)
 }
 
 /// Locks a view's scratch; a poisoned lock (a panic in an earlier frame) is
@@ -365,15 +388,18 @@ impl ScenePrep {
                 // Disc area per unit of projected diameter², as a fraction of
                 // the viewport (the diameter is in viewport heights).
                 let disc = std::f32::consts::FRAC_PI_4 / view.aspect().max(f32::MIN_POSITIVE);
-                let mut overdraw = 0.0f32;
+                w.coverage.clear();
                 for (index, item) in w.items.iter().enumerate() {
-                    if !item.pass_mask.contains(PassMask::TRANSPARENT)
-                        && let Some(r) = frame.renderables.get(item.renderable as usize)
-                    {
-                        let diameter = 2.0 * projected_screen_fraction(view, r.world_sphere.radius, item.view_depth);
-                        // One draw covers the viewport at most once.
-                        overdraw += (disc * diameter * diameter).min(1.0);
-                    }
+                    let coverage = match frame.renderables.get(item.renderable as usize) {
+                        Some(r) if !item.pass_mask.contains(PassMask::TRANSPARENT) => {
+                            let diameter =
+                                2.0 * projected_screen_fraction(view, r.world_sphere.radius, item.view_depth);
+                            // One draw covers the viewport at most once.
+                            (disc * diameter * diameter).min(1.0)
+                        }
+                        _ => 0.0,
+                    };
+                    w.coverage.push(if coverage.is_finite() { coverage } else { 0.0 });
                     let material_key = if depth_only { 0 } else { item.material };
                     let key = if grouped {
                         let geometry = frame.renderables.get(item.renderable as usize).map_or(0, |r| r.geometry_id);
@@ -387,10 +413,10 @@ impl ScenePrep {
                         w.missing_geometry.push(handle);
                     }
                 }
-                w.overdraw = if overdraw.is_finite() { overdraw } else { 0.0 };
                 // Items are in (node id, submesh) order, so a stable sort by
                 // key alone gives the deterministic tie-break.
                 radix_sort_by_key(&mut w.keyed, &mut w.scratch);
+                w.overdraw = overdraw_in_draw_order(&w.keyed, &w.items, &w.coverage);
                 w.seconds = started.elapsed().as_secs_f32();
             });
         }
