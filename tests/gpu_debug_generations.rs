@@ -79,6 +79,9 @@ fn a_stale_draw_range_is_painted_magenta() {
         inputs: ViewInputs::default(),
         progress: &FrameProgress::new([]),
         origin: glam::DVec3::ZERO,
+        hdr_read_by_others: false,
+        textured_materials: true,
+        specialize_shaders: true,
     };
     let mut recorder = CommandRecorder::new(&gpu.device, "stale view");
     // Driven by hand under `block_on`: with no recording thread attached,
