@@ -59,7 +59,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for (name, options) in cases {
         let mut renderer = Renderer::new_headless_with(options)?;
         let view = renderer.register_view(camera, standard_render_graph)?;
-        let mut frame = |renderer: &mut Renderer| -> Result<(), Box<dyn std::error::Error>> {
+        let frame = |renderer: &mut Renderer| -> Result<(), Box<dyn std::error::Error>> {
             renderer.render_frame(&scene)?;
             renderer.gpu().device.poll(wgpu::PollType::wait_indefinitely())?;
             Ok(())
