@@ -3,7 +3,8 @@
 // with base-colour, metallic-roughness, normal and emissive textures,
 // from every directional and positional light of the frame (read through
 // their slots), and a small constant ambient term. Writes linear radiance to
-// the HDR target; the tone-map step makes it displayable.
+// the HDR target, which the tone-map step makes displayable, or, with
+// TONE_MAP_OUTPUT, the tone-mapped colour straight to the sRGB target.
 //
 // Finite in, finite out: every division, normalisation and square root of
 // the shading path is guarded (each guard says why its epsilon is safe), so
