@@ -71,7 +71,9 @@ impl<G: RenderGraph> ErasedGraph for G {
 /// lit shading of the opaque and masked partitions into HDR (with the view's
 /// sun cascades, the frame's local shadows and the probes it is linked to),
 /// blended partitions back-to-front, then the tone map to the view's sRGB
-/// target.
+/// target. A view with nothing blended whose HDR image no other view reads
+/// ([`RenderContext::hdr_read_after_shading`]) tone-maps at the end of
+/// shading straight into its sRGB target: one full-screen pass fewer.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StandardGraph {
     /// The forward lit pass's configuration; its `depth_from_pre_pass` is
@@ -153,9 +155,15 @@ impl RenderGraph for StandardGraph {
         if lit.depth_from_pre_pass {
             MeshPass::depth_pre_pass().run(ctx, rec).await?;
         }
+        let exposure = if self.exposure == 0.0 { 1.0 } else { self.exposure };
+        // Nothing blends over the HDR image and no other view reads it:
+        // shading tone-maps in place and the frame skips the HDR write and
+        // the full-screen tone-map pass.
+        if !ctx.hdr_read_after_shading() {
+            return MeshPass::forward_lit(lit).tone_mapped(exposure).run(ctx, rec).await;
+        }
         MeshPass::forward_lit(lit).run(ctx, rec).await?;
         MeshPass::transparent().run(ctx, rec).await?;
-        let exposure = if self.exposure == 0.0 { 1.0 } else { self.exposure };
         TonemapPass::new(exposure).run(ctx, rec).await
     }
 }

@@ -95,9 +95,9 @@ pub mod prelude {
     pub use oxygen_bindless::TexturePath;
     pub use oxygen_core::glam::{Mat4, Quat, UVec2, Vec2, Vec3, Vec4};
     pub use oxygen_core::{
-        AlphaMode, Camera, CameraError, CascadeSettings, Geometry, GeometryHandle, Light, LightKind, LookAtResolver,
-        Material, MaterialHandle, NodeFlags, NodeKey, Projection, Renderable, ResolvedView, Scene, Transform,
-        ViewContext, ViewError, ViewId, ViewResolver,
+        AlphaMode, Camera, CameraError, CascadeSettings, Geometry, GeometryHandle, HdrFormat, Light, LightKind,
+        LookAtResolver, Material, MaterialHandle, NodeFlags, NodeKey, Projection, Renderable, ResolvedView, Scene,
+        Transform, ViewContext, ViewError, ViewId, ViewResolver,
     };
     pub use oxygen_passes::{
         CommandRecorder, DrawPath, ForwardLitConfig, MeshPass, Output, PassError, RenderContext, RenderPass,

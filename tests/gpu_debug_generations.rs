@@ -17,7 +17,8 @@ fn magenta_pixels(image: &image::RgbaImage) -> usize {
 
 #[test]
 fn debug_generations_flag_nothing_when_slots_are_current() {
-    let options = RendererOptions { debug_generations: true, ..Default::default() };
+    // keep_hdr: the test reads the HDR target to check it is finite.
+    let options = RendererOptions { debug_generations: true, keep_hdr: true, ..Default::default() };
     let mut renderer = Renderer::new_headless_with(options).unwrap();
     let demo = multi_view_scene();
     let view = renderer.register_view(main_camera(UVec2::new(96, 64)), standard_render_graph).unwrap();
@@ -79,6 +80,9 @@ fn a_stale_draw_range_is_painted_magenta() {
         inputs: ViewInputs::default(),
         progress: &FrameProgress::new([]),
         origin: glam::DVec3::ZERO,
+        hdr_read_by_others: false,
+        textured_materials: true,
+        specialize_shaders: true,
     };
     let mut recorder = CommandRecorder::new(&gpu.device, "stale view");
     // Driven by hand under `block_on`: with no recording thread attached,

@@ -65,7 +65,9 @@ fn a_domain_grows_and_keeps_its_live_records() {
 #[test]
 fn a_long_run_of_view_and_node_churn_keeps_gpu_memory_bounded() {
     use oxygen::prelude::*;
-    let mut renderer = Renderer::new_headless().expect("test adapter");
+    // keep_hdr: the churn reads every HDR target to check it is finite.
+    let mut renderer =
+        Renderer::new_headless_with(RendererOptions { keep_hdr: true, ..Default::default() }).expect("test adapter");
     let mut demo = oxygen_demo::multi_view_scene();
     let cube = demo.scene.add_geometry(Geometry::cube(0.5));
     let material = demo.scene.add_material(Material::opaque("churn", Vec4::ONE));

@@ -216,7 +216,7 @@ fn a_closure_factory_can_render_without_a_depth_pre_pass() {
 fn multi_draw_indirect_and_direct_draws_produce_the_same_image() {
     let demo = oxygen_demo::multi_view_scene();
     let render = |path: DrawPath, trust_indirect_args: bool| {
-        let options = RendererOptions { draw_path: Some(path), ..Default::default() };
+        let options = RendererOptions { draw_path: Some(path), keep_hdr: true, ..Default::default() };
         let gpu_options = oxygen::core::GpuOptions {
             optional_features: Renderer::OPTIONAL_FEATURES,
             trust_indirect_args,

@@ -35,7 +35,7 @@ fn at_uv(u: f32, v: f32) -> Vec3 {
 }
 
 fn render(scene: &Scene, path: TexturePath) -> (image::RgbaImage, ResolvedView) {
-    let options = RendererOptions { texture_path: Some(path), ..Default::default() };
+    let options = RendererOptions { texture_path: Some(path), keep_hdr: true, ..Default::default() };
     let mut renderer = Renderer::new_headless_with(options).unwrap_or_else(|e| panic!("{path:?}: {e}"));
     assert_eq!(renderer.texture_path(), path);
     let camera = LookAtResolver {
@@ -172,7 +172,7 @@ fn minified_textures_are_filtered_through_their_mip_chain() {
         let mut spreads = Vec::new();
         for sampling in [linear, nearest] {
             let scene = sampled_checker_scene(256, 64, sampling);
-            let options = RendererOptions { texture_path: Some(path), ..Default::default() };
+            let options = RendererOptions { texture_path: Some(path), keep_hdr: true, ..Default::default() };
             let mut renderer = Renderer::new_headless_with(options).unwrap_or_else(|e| panic!("{path:?}: {e}"));
             let view = renderer.register_view(camera, standard_render_graph).unwrap();
             renderer.render_frame(&scene).unwrap();

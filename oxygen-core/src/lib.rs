@@ -34,7 +34,7 @@ pub mod view;
 
 pub use camera::{Camera, CameraError, Projection};
 pub use geometry::{Geometry, GeometryError, Submesh, Vertex};
-pub use gpu::{ColorTargets, GpuContext, GpuError, GpuOptions, ViewTargets};
+pub use gpu::{ColorTargets, GpuContext, GpuError, GpuOptions, HdrFormat, ViewTargets};
 pub use light::{Light, LightKind, Mobility};
 pub use material::{AlphaMode, Material};
 pub use math::{Aabb, Frustum, Plane, Sphere};

@@ -3,13 +3,30 @@
 // with base-colour, metallic-roughness, normal and emissive textures,
 // from every directional and positional light of the frame (read through
 // their slots), and a small constant ambient term. Writes linear radiance to
-// the HDR target; the tone-map step makes it displayable.
+// the HDR target, which the tone-map step makes displayable, or, with
+// TONE_MAP_OUTPUT, the tone-mapped colour straight to the sRGB target.
 //
 // Finite in, finite out: every division, normalisation and square root of
 // the shading path is guarded (each guard says why its epsilon is safe), so
 // grazing and degenerate inputs — a zero-length normal from the vertex data,
 // the view along the light, roughness 0 — shade to a finite colour.
 // `tests/shading_finite.rs` runs these functions over such inputs.
+
+// Pipeline-overridable constants (pipelines.rs `ShaderFeatures`, set when
+// a pipeline is created): each leaves out code the view does not need this
+// frame. The defaults keep everything, so the shader as written is right for
+// any scene; a pass turns a feature off only when its input is absent (no
+// cascades, no positional light, no atlas, no probe, no textured material),
+// where the code would compute exactly what leaving it out does.
+override HAS_SUN_SHADOWS: bool = true;
+override HAS_LOCAL_LIGHTS: bool = true;
+override HAS_LOCAL_SHADOWS: bool = true;
+override HAS_PROBES: bool = true;
+override HAS_TEXTURES: bool = true;
+// Tone-map at the end of shading and write the display colour (the view's
+// sRGB target) instead of radiance: for views whose HDR image nothing reads.
+override TONE_MAP_OUTPUT: bool = false;
+override EXPOSURE: f32 = 1.0;
 
 const PI: f32 = 3.14159265;
 const AMBIENT: f32 = 0.03;
@@ -374,23 +391,42 @@ fn tangent_space_normal(texel: vec3<f32>, normal_scale: f32) -> vec3<f32> {
     return normalize_or(vec3<f32>(decoded.xy * normal_scale, decoded.z), vec3<f32>(0.0, 0.0, 1.0));
 }
 
+// A material texture, or opaque white when the scene has no textured
+// material (what `sample_texture` returns for an absent texture anyway).
+fn material_texture(slot: u32, uv: vec2<f32>, duv_dx: vec2<f32>, duv_dy: vec2<f32>) -> vec4<f32> {
+    if !HAS_TEXTURES {
+        return vec4<f32>(1.0);
+    }
+    return sample_texture(slot, uv, duv_dx, duv_dy);
+}
+
+// What a fragment writes: radiance for the HDR target, or, with
+// TONE_MAP_OUTPUT, the tone-mapped colour for the sRGB target (the same
+// operator as the tone-map pass).
+fn output_color(radiance: vec3<f32>) -> vec4<f32> {
+    if TONE_MAP_OUTPUT {
+        return vec4<f32>(tone_map(radiance, EXPOSURE), 1.0);
+    }
+    return vec4<f32>(radiance, 1.0);
+}
+
 fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Derivatives) -> vec4<f32> {
     var n = surface_normal(mesh, front_facing, material, d);
     let geometric_normal = n;
-    if material.normal_texture != INVALID_SLOT {
+    if HAS_TEXTURES && material.normal_texture != INVALID_SLOT {
         let texel = sample_texture(material.normal_texture, mesh.uv, d.duv_dx, d.duv_dy).xyz;
         n = perturb_normal(n, d, tangent_space_normal(texel, material.normal_scale));
     }
     let v = view_direction(scene.camera.camera_position.xyz - mesh.world_position, n);
-    let base = base_color_of(mesh, material, d.duv_dx, d.duv_dy);
+    let base = material.base_color * material_texture(material.base_color_texture, mesh.uv, d.duv_dx, d.duv_dy);
     let albedo = base.rgb;
     // glTF packs roughness in G and metallic in B.
-    let metal_rough = sample_texture(material.metallic_roughness_texture, mesh.uv, d.duv_dx, d.duv_dy);
+    let metal_rough = material_texture(material.metallic_roughness_texture, mesh.uv, d.duv_dx, d.duv_dy);
     let metallic = clamp(material.metallic * metal_rough.b, 0.0, 1.0);
     let roughness = clamp(material.roughness * metal_rough.g, 0.045, 1.0);
     // Ambient occlusion dims indirect light only: the ambient term and the
     // probe reflection, not the lights.
-    let occlusion = mix(1.0, sample_texture(material.occlusion_texture, mesh.uv, d.duv_dx, d.duv_dy).r, material.occlusion_strength);
+    let occlusion = mix(1.0, material_texture(material.occlusion_texture, mesh.uv, d.duv_dx, d.duv_dy).r, material.occlusion_strength);
     var color = (albedo * (1.0 - metallic) * AMBIENT + mix(vec3<f32>(0.04), albedo, metallic) * AMBIENT) * occlusion;
 
     let dir_count = scene.renderer.directional_light_count;
@@ -399,14 +435,14 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Der
         let light = directional_light_domain[scene.renderer.directional_lights_slot + i];
         var visibility = 1.0;
         // The cascades belong to the first shadow-casting directional light.
-        if (light.flags & LIGHT_CASTS_SHADOWS) != 0u && !shadowed_light_done {
+        if HAS_SUN_SHADOWS && (light.flags & LIGHT_CASTS_SHADOWS) != 0u && !shadowed_light_done {
             shadowed_light_done = true;
             visibility = shadow_visibility(mesh.world_position, geometric_normal);
         }
         color += brdf_cosine(n, v, -light.direction, albedo, metallic, roughness) * light.color * light.intensity * visibility;
     }
 
-    let pos_count = scene.renderer.positional_light_count;
+    let pos_count = select(0u, scene.renderer.positional_light_count, HAS_LOCAL_LIGHTS);
     for (var i = 0u; i < pos_count; i++) {
         let light = positional_light_domain[scene.renderer.positional_lights_slot + i];
         let to_light = light.position - mesh.world_position;
@@ -419,10 +455,10 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Der
         }
         if light.kind == LIGHT_SPOT {
             attenuation *= spot_cone(light.cos_outer, light.cos_inner, dot(-l, light.direction));
-            if light.shadow_slot != INVALID_SLOT {
+            if HAS_LOCAL_SHADOWS && light.shadow_slot != INVALID_SLOT {
                 attenuation *= tile_visibility(light.shadow_slot, light.position, mesh.world_position, geometric_normal);
             }
-        } else if light.shadow_slot != INVALID_SLOT {
+        } else if HAS_LOCAL_SHADOWS && light.shadow_slot != INVALID_SLOT {
             // A point light's six faces follow its first tile, in
             // PROBE_FACE_AXES order: the face is the major axis of -l.
             let tile = light.shadow_slot + cube_face(-l);
@@ -434,12 +470,12 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Der
     // surfaces, from blurrier mip levels on rough ones, weighted by the
     // environment BRDF (strong on metals, a few percent on dielectrics
     // except at grazing angles).
-    if shadows.probe_count > 0u {
+    if HAS_PROBES && shadows.probe_count > 0u {
         let reflected = sample_probe(nearest_probe(mesh.world_position), reflect(-v, n), roughness);
         let f0 = mix(vec3<f32>(0.04), albedo, metallic);
         color += reflected * environment_brdf(f0, roughness, max(dot(n, v), 0.0)) * occlusion;
     }
-    color += material.emissive * sample_texture(material.emissive_texture, mesh.uv, d.duv_dx, d.duv_dy).rgb;
+    color += material.emissive * material_texture(material.emissive_texture, mesh.uv, d.duv_dx, d.duv_dy).rgb;
     return vec4<f32>(color, base.a);
 }
 
@@ -447,24 +483,24 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Der
 fn fs_opaque(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> @location(0) vec4<f32> {
     let d = derivatives_of(mesh);
     if mesh.material == INVALID_SLOT {
-        return STALE_DRAW_COLOR;
+        return output_color(STALE_DRAW_COLOR.rgb);
     }
     let shaded = shade(mesh, front_facing, material_of(mesh), d);
-    return vec4<f32>(fit_hdr(shaded.rgb), 1.0);
+    return output_color(fit_hdr(shaded.rgb));
 }
 
 @fragment
 fn fs_masked(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> @location(0) vec4<f32> {
     let d = derivatives_of(mesh);
     if mesh.material == INVALID_SLOT {
-        return STALE_DRAW_COLOR;
+        return output_color(STALE_DRAW_COLOR.rgb);
     }
     let material = material_of(mesh);
     let shaded = shade(mesh, front_facing, material, d);
     if shaded.a < material.alpha_cutoff {
         discard;
     }
-    return vec4<f32>(fit_hdr(shaded.rgb), 1.0);
+    return output_color(fit_hdr(shaded.rgb));
 }
 
 // Transparent surfaces: premultiplied alpha (blend One, OneMinusSrcAlpha).

@@ -45,8 +45,8 @@ pub use lighting_inputs::{
 pub use mesh_pass::{ColorOps, ForwardLitConfig, MeshPass};
 pub use oxygen_core::{Depth, HdrColor, Output, OutputSource, ProbeCube, ProbeId, ShadowMap};
 pub use pipelines::{
-    AlphaClass, CompilerGuard, DepthBias, PassKind, PipelineFuture, PipelineKey, PipelineVariant, Pipelines,
-    TONEMAP_WGSL, shader_source,
+    AlphaClass, CompilerGuard, DepthBias, Exposure, PassKind, PipelineFuture, PipelineKey, PipelineVariant, Pipelines,
+    ShaderFeatures, TONEMAP_OPERATOR_WGSL, TONEMAP_WGSL, shader_source,
 };
 pub use probe_mips::PROBE_MIP_WGSL;
 pub use render_context::{

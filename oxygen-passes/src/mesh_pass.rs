@@ -72,6 +72,31 @@ pub enum ColorOps {
     Clear(wgpu::Color),
     /// Draw over what the HDR target holds.
     Load,
+    /// Tone-map in the fragment shader with this exposure and write the
+    /// view's display (sRGB) target, cleared to the tone-mapped linear
+    /// colour: no HDR write and no tone-map pass
+    /// ([`MeshPass::tone_mapped`]).
+    ClearToneMapped(wgpu::Color, crate::Exposure),
+}
+
+impl ColorOps {
+    /// The load operation of the colour attachment. A tone-mapped clear
+    /// goes through the shader's operator on the CPU ([`crate::pbr_neutral`]),
+    /// so the background matches the two-pass path.
+    fn load(self) -> wgpu::LoadOp<wgpu::Color> {
+        match self {
+            ColorOps::Clear(c) => wgpu::LoadOp::Clear(c),
+            ColorOps::ClearToneMapped(c, exposure) => {
+                let scale = |v: f64| {
+                    let v = v as f32 * exposure.get();
+                    if v.is_finite() { v.clamp(0.0, 65504.0) } else { 0.0 }
+                };
+                let [r, g, b] = crate::pbr_neutral([scale(c.r), scale(c.g), scale(c.b)]).map(|v| v.clamp(0.0, 1.0));
+                wgpu::LoadOp::Clear(wgpu::Color { r: r.into(), g: g.into(), b: b.into(), a: 1.0 })
+            }
+            ColorOps::None | ColorOps::Load => wgpu::LoadOp::Load,
+        }
+    }
 }
 
 /// The mesh pass: draws the partitions that match its masks.
@@ -175,6 +200,22 @@ impl MeshPass {
         MeshPass { statistics: Some((set, index)), ..self }
     }
 
+    /// The same pass tone-mapping at the end of its fragment shader (the
+    /// same operator as [`crate::TonemapPass`], `exposure` as a pipeline
+    /// constant) into the view's display target instead of writing HDR. For
+    /// a forward lit pass whose HDR image nothing else reads
+    /// ([`RenderContext::hdr_read_after_shading`]): saves the HDR write and
+    /// the tone-map pass. Passes that load the colour target stay as they are.
+    pub fn tone_mapped(self, exposure: f32) -> Self {
+        let color = match self.color {
+            ColorOps::Clear(c) | ColorOps::ClearToneMapped(c, _) => {
+                ColorOps::ClearToneMapped(c, crate::Exposure::new(exposure))
+            }
+            other => other,
+        };
+        MeshPass { color, ..self }
+    }
+
     /// The same pass under another name (logs, errors).
     pub fn named(self, name: &'static str) -> Self {
         MeshPass { name, ..self }
@@ -185,8 +226,52 @@ impl MeshPass {
         ctx.prepared.partitions_matching(self.include, self.exclude)
     }
 
-    fn color_format(&self) -> Option<wgpu::TextureFormat> {
-        (self.color != ColorOps::None).then_some(ViewTargets::HDR_FORMAT)
+    /// The colour attachment: the HDR target (whatever format the view's
+    /// HDR has), or the display target when tone-mapping in the pass.
+    fn color_view<'a>(&self, ctx: &RenderContext<'a>) -> Result<Option<&'a wgpu::TextureView>, PassError> {
+        Ok(match self.color {
+            ColorOps::None => None,
+            ColorOps::ClearToneMapped(..) => Some(
+                ctx.color_targets(self.name)?
+                    .color_view
+                    .as_ref()
+                    .ok_or(PassError::NoColorTarget { pass: self.name })?,
+            ),
+            ColorOps::Clear(_) | ColorOps::Load => Some(&ctx.color_targets(self.name)?.hdr_view),
+        })
+    }
+
+    fn color_format(&self, ctx: &RenderContext<'_>) -> Option<wgpu::TextureFormat> {
+        match self.color {
+            ColorOps::None => None,
+            ColorOps::ClearToneMapped(..) => Some(ViewTargets::COLOR_FORMAT),
+            ColorOps::Clear(_) | ColorOps::Load => Some(ctx.targets.color.as_ref()?.hdr.format()),
+        }
+    }
+
+    /// The optional shader code this pass needs for this view this frame:
+    /// only what it will bind (the same choices as
+    /// `forward_lighting::bind_group`) and what the frame holds.
+    fn shader_features(&self, ctx: &RenderContext<'_>) -> crate::ShaderFeatures {
+        if !ctx.specialize_shaders {
+            return crate::ShaderFeatures::ALL;
+        }
+        let inputs = &ctx.inputs;
+        let config = self.lighting.as_ref();
+        crate::ShaderFeatures {
+            sun_shadows: config.is_some_and(|c| c.sun_shadows) && !inputs.cascades.is_empty(),
+            local_lights: ctx.prepared.slots().positional_lights.count > 0,
+            local_shadows: config.is_some_and(|c| c.local_shadows) && inputs.local_shadows.is_some(),
+            probes: config.is_some_and(|c| c.reflections) && !inputs.probes.is_empty(),
+            textures: ctx.textured_materials,
+        }
+    }
+
+    fn tone_map(&self) -> Option<crate::Exposure> {
+        match self.color {
+            ColorOps::ClearToneMapped(_, exposure) => Some(exposure),
+            _ => None,
+        }
     }
 }
 
@@ -207,10 +292,7 @@ impl MeshPass {
         if self.kind == PassKind::Transparent && self.partitions(ctx).next().is_none() {
             return Ok(());
         }
-        let color = match self.color {
-            ColorOps::None => None,
-            ops => Some((&ctx.color_targets(self.name)?.hdr_view, ops)),
-        };
+        let color = self.color_view(ctx)?.map(|view| (view, self.color));
         // The pipelines are requested before the inputs are awaited, so
         // that they compile while the views producing the inputs record.
         let lighting = async {
@@ -219,7 +301,16 @@ impl MeshPass {
                 None => Ok(None),
             }
         };
-        let pipelines = partition_pipelines(ctx, self.kind, self.color_format(), self.depth_bias, self.partitions(ctx));
+        let shading = crate::PipelineKey {
+            pass: self.kind,
+            variant: crate::PipelineVariant::from_mask(PassMask::empty()),
+            color_format: self.color_format(ctx),
+            depth_format: ViewTargets::DEPTH_FORMAT,
+            depth_bias: self.depth_bias,
+            features: self.shader_features(ctx),
+            tone_map: self.tone_map(),
+        };
+        let pipelines = partition_pipelines(ctx, shading, self.partitions(ctx));
         let (lighting, pipelines) = futures::future::join(lighting, pipelines).await;
         let lighting = lighting?;
 
@@ -229,13 +320,7 @@ impl MeshPass {
                 view,
                 depth_slice: None,
                 resolve_target: None,
-                ops: wgpu::Operations {
-                    load: match ops {
-                        ColorOps::Clear(c) => wgpu::LoadOp::Clear(c),
-                        _ => wgpu::LoadOp::Load,
-                    },
-                    store: wgpu::StoreOp::Store,
-                },
+                ops: wgpu::Operations { load: ops.load(), store: wgpu::StoreOp::Store },
             });
             let depth_load = if self.clear_depth { wgpu::LoadOp::Clear(0.0) } else { wgpu::LoadOp::Load };
             let mut pass = rec.encoder().begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -259,6 +344,7 @@ impl MeshPass {
             if let Some((set, index)) = &self.statistics {
                 pass.begin_pipeline_statistics_query(set, *index);
             }
+            stats.tone_mapped_in_pass |= shading.tone_map.is_some();
             let group3 = lighting.as_ref().unwrap_or(ctx.lighting.no_lighting_inputs());
             bind_view_resources(&mut pass, ctx, group3);
             for (partition, pipeline) in self.partitions(ctx).zip(&pipelines) {
@@ -275,26 +361,17 @@ impl MeshPass {
     }
 }
 
-/// The pipeline of every partition in `partitions` for `pass`: all requested
-/// at once, so the missing ones compile side by side, then awaited.
+/// The pipeline of every partition in `partitions`: `shading` with each
+/// partition's variant, all requested at once, so the missing ones compile
+/// side by side, then awaited.
 async fn partition_pipelines<'a>(
     ctx: &RenderContext<'_>,
-    pass: PassKind,
-    color_format: Option<wgpu::TextureFormat>,
-    depth_bias: DepthBias,
+    shading: crate::PipelineKey,
     partitions: impl Iterator<Item = &'a Partition>,
 ) -> Vec<wgpu::RenderPipeline> {
     let requests = partitions.map(|p| {
-        ctx.pipelines.get(
-            &ctx.gpu.device,
-            crate::PipelineKey {
-                pass,
-                variant: crate::PipelineVariant::from_mask(p.mask),
-                color_format,
-                depth_format: ViewTargets::DEPTH_FORMAT,
-                depth_bias,
-            },
-        )
+        ctx.pipelines
+            .get(&ctx.gpu.device, crate::PipelineKey { variant: crate::PipelineVariant::from_mask(p.mask), ..shading })
     });
     futures::future::join_all(requests).await
 }

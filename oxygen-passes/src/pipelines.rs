@@ -7,7 +7,7 @@
 //! use never change (heap growth only replaces the bind group), so nothing is
 //! ever rebuilt per frame. [`Pipelines::pipelines_created`] proves it.
 
-use std::collections::{HashMap, VecDeque};
+use std::collections::{HashMap, HashSet, VecDeque};
 use std::future::Future;
 use std::pin::Pin;
 use std::sync::Mutex;
@@ -118,21 +118,138 @@ pub struct PipelineKey {
     pub depth_format: wgpu::TextureFormat,
     /// Rasterizer depth bias ([`DepthBias::NONE`] except for shadow maps).
     pub depth_bias: DepthBias,
+    /// Optional shading code the pipeline keeps (forward lit and
+    /// transparent passes; [`ShaderFeatures::ALL`] for depth-only passes,
+    /// whose shader has none).
+    pub features: ShaderFeatures,
+    /// Tone-map in the fragment shader with this exposure and write the
+    /// display colour directly (the forward lit pass of a view whose HDR
+    /// nothing reads); `None` writes linear radiance.
+    pub tone_map: Option<Exposure>,
+}
+
+impl PipelineKey {
+    /// The key with the fields its pass ignores set to one value, so that
+    /// two requests for the same pipeline share it: depth-only shaders have
+    /// no optional code and never tone-map.
+    fn canonical(self) -> Self {
+        match self.pass {
+            PassKind::DepthPrePass | PassKind::Shadow => {
+                PipelineKey { features: ShaderFeatures::ALL, tone_map: None, ..self }
+            }
+            PassKind::ShadingAfterPrePass | PassKind::Shading | PassKind::Transparent => self,
+        }
+    }
+
+    /// The WGSL override constants the forward shader is specialised with
+    /// (empty for depth-only passes).
+    pub fn override_constants(&self) -> Vec<(&'static str, f64)> {
+        match self.pass {
+            PassKind::DepthPrePass | PassKind::Shadow => Vec::new(),
+            PassKind::ShadingAfterPrePass | PassKind::Shading | PassKind::Transparent => {
+                let mut constants = self.features.override_constants().to_vec();
+                constants.push(("TONE_MAP_OUTPUT", f64::from(u8::from(self.tone_map.is_some()))));
+                constants.push(("EXPOSURE", f64::from(self.tone_map.map_or(1.0, Exposure::get))));
+                constants
+            }
+        }
+    }
+}
+
+/// Optional parts of the forward shader. Each is a WGSL pipeline-overridable
+/// constant (`override HAS_SUN_SHADOWS: bool = true;` …) set when the
+/// pipeline is created, so a scene without, say, positional lights runs a
+/// pipeline whose light loop the shader compiler removed. A pass picks the
+/// features from what its view has this frame; every combination is a
+/// pipeline of its own, created the first time it is needed and cached.
+/// Masked materials need no flag: alpha testing lives in its own entry
+/// points (`fs_masked`, `fs_alpha_test`), used only by masked partitions.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct ShaderFeatures {
+    /// Sample the view's sun-shadow cascades (`HAS_SUN_SHADOWS`).
+    pub sun_shadows: bool,
+    /// Loop over the frame's spot and point lights (`HAS_LOCAL_LIGHTS`).
+    pub local_lights: bool,
+    /// Sample the local-light shadow atlas (`HAS_LOCAL_SHADOWS`).
+    pub local_shadows: bool,
+    /// Reflect the linked reflection probes (`HAS_PROBES`).
+    pub probes: bool,
+    /// Sample material textures (`HAS_TEXTURES`); without it every texture
+    /// reads as opaque white, which is what an untextured material gets.
+    pub textures: bool,
+}
+
+impl ShaderFeatures {
+    /// Every optional part: the shader as written, right for any scene.
+    pub const ALL: ShaderFeatures =
+        ShaderFeatures { sun_shadows: true, local_lights: true, local_shadows: true, probes: true, textures: true };
+    /// No optional part: sun and ambient light on untextured materials.
+    pub const NONE: ShaderFeatures = ShaderFeatures {
+        sun_shadows: false,
+        local_lights: false,
+        local_shadows: false,
+        probes: false,
+        textures: false,
+    };
+
+    /// The override constants, by their WGSL names (bools as 0 or 1).
+    pub fn override_constants(&self) -> [(&'static str, f64); 5] {
+        let flag = |on: bool| f64::from(u8::from(on));
+        [
+            ("HAS_SUN_SHADOWS", flag(self.sun_shadows)),
+            ("HAS_LOCAL_LIGHTS", flag(self.local_lights)),
+            ("HAS_LOCAL_SHADOWS", flag(self.local_shadows)),
+            ("HAS_PROBES", flag(self.probes)),
+            ("HAS_TEXTURES", flag(self.textures)),
+        ]
+    }
+}
+
+/// The exposure a tone-mapping pipeline multiplies radiance by: finite and
+/// non-negative (anything else becomes 1), compared and hashed by its bits
+/// so it can be part of a [`PipelineKey`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Exposure(f32);
+
+impl Exposure {
+    /// `value`, or 1 when it is not finite or negative (no NaN reaches a shader).
+    pub fn new(value: f32) -> Self {
+        Exposure(if value.is_finite() && value >= 0.0 { value } else { 1.0 })
+    }
+
+    /// The factor.
+    pub fn get(self) -> f32 {
+        self.0
+    }
+}
+
+impl Eq for Exposure {}
+
+impl std::hash::Hash for Exposure {
+    fn hash<H: std::hash::Hasher>(&self, state: &mut H) {
+        self.0.to_bits().hash(state);
+    }
 }
 
 const MESH_VERTEX_WGSL: &str = include_str!("mesh_vertex.wgsl");
 const DEPTH_ONLY_WGSL: &str = include_str!("depth_only.wgsl");
 const FORWARD_LIT_WGSL: &str = include_str!("forward_lit.wgsl");
-/// The tone-map shader (self-contained: no bindless declarations).
-pub const TONEMAP_WGSL: &str = include_str!("tonemap_pass.wgsl");
+/// The tone-map operator (`tone_map`, `pbr_neutral`), shared by the tone-map
+/// pass and the forward lit pass's in-pass tone map.
+pub const TONEMAP_OPERATOR_WGSL: &str = include_str!("tonemap.wgsl");
+/// The tone-map shader (self-contained: no bindless declarations): the
+/// operator followed by the pass.
+pub const TONEMAP_WGSL: &str = concat!(include_str!("tonemap.wgsl"), "\n", include_str!("tonemap_pass.wgsl"));
 
 /// The full WGSL of a pass: shared declarations (scene constants, GPU
 /// records, domain bindings, the texture path's bindings), then the shared
 /// vertex stage, then the pass's own code.
 pub fn shader_source(pass: PassKind, textures: TexturePath) -> String {
     let body = match pass {
-        PassKind::DepthPrePass | PassKind::Shadow => DEPTH_ONLY_WGSL,
-        PassKind::Shading | PassKind::ShadingAfterPrePass | PassKind::Transparent => FORWARD_LIT_WGSL,
+        PassKind::DepthPrePass | PassKind::Shadow => DEPTH_ONLY_WGSL.to_owned(),
+        PassKind::Shading | PassKind::ShadingAfterPrePass | PassKind::Transparent => {
+            format!("{TONEMAP_OPERATOR_WGSL}\n{FORWARD_LIT_WGSL}")
+        }
     };
     // Enable directives must come before any declaration.
     let enables = match textures {
@@ -173,6 +290,8 @@ pub struct Pipelines {
     tonemap: Mutex<Option<(wgpu::RenderPipeline, wgpu::BindGroupLayout)>>,
     created: AtomicU64,
     compilers: AtomicUsize,
+    /// Keys requested since [`Pipelines::begin_frame`].
+    used: Mutex<HashSet<PipelineKey>>,
 }
 
 #[derive(Default)]
@@ -209,6 +328,7 @@ impl Pipelines {
             tonemap: Mutex::new(None),
             created: AtomicU64::new(0),
             compilers: AtomicUsize::new(0),
+            used: Mutex::new(HashSet::new()),
         }
     }
 
@@ -220,7 +340,20 @@ impl Pipelines {
     /// The pipeline for `key`: ready at once when it exists, otherwise after
     /// it has been compiled (see the type's docs).
     pub fn get<'a>(&'a self, device: &'a wgpu::Device, key: PipelineKey) -> PipelineFuture<'a> {
+        let key = key.canonical();
+        self.used.lock().unwrap_or_else(|e| e.into_inner()).insert(key);
         PipelineFuture { pipelines: self, device, key }
+    }
+
+    /// Starts counting the pipelines a frame uses ([`Pipelines::used_this_frame`]).
+    pub fn begin_frame(&self) {
+        self.used.lock().unwrap_or_else(|e| e.into_inner()).clear();
+    }
+
+    /// The distinct mesh pipelines requested since [`Pipelines::begin_frame`]
+    /// (the tone-map and probe-mip pipelines are not keyed, so not listed).
+    pub fn used_this_frame(&self) -> Vec<PipelineKey> {
+        self.used.lock().unwrap_or_else(|e| e.into_inner()).iter().copied().collect()
     }
 
     /// Marks the calling thread as one that runs [`Pipelines::compile_next`]
@@ -245,7 +378,9 @@ impl Pipelines {
 
     /// Compiles `key` (taken off the queue by the caller) and publishes it.
     fn compile(&self, device: &wgpu::Device, key: PipelineKey) -> wgpu::RenderPipeline {
-        let _span = tracing::info_span!("compile_pipeline", pass = ?key.pass, variant = ?key.variant).entered();
+        let _span =
+            tracing::info_span!("compile_pipeline", pass = ?key.pass, variant = ?key.variant, features = ?key.features)
+                .entered();
         let module = self.module(device, key.pass);
         let pipeline = self.create(device, &module, key);
         self.created.fetch_add(1, Ordering::Relaxed);
@@ -334,10 +469,14 @@ impl Pipelines {
             blend,
             write_mask: wgpu::ColorWrites::ALL,
         })];
+        // The same constants for both stages: wgpu rejects a constant the
+        // stage's shader does not declare, and both stages share one module.
+        let constants = key.override_constants();
+        let compilation_options = || wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() };
         let fragment = fragment_entry.map(|entry| wgpu::FragmentState {
             module,
             entry_point: Some(entry),
-            compilation_options: Default::default(),
+            compilation_options: compilation_options(),
             targets: if key.color_format.is_some() { &targets } else { &[] },
         });
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
@@ -346,7 +485,7 @@ impl Pipelines {
             vertex: wgpu::VertexState {
                 module,
                 entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
+                compilation_options: compilation_options(),
                 buffers: &[],
             },
             primitive: wgpu::PrimitiveState {

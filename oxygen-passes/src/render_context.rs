@@ -5,7 +5,7 @@ use oxygen_core::{
     ColorTargets, Depth, GpuContext, HdrColor, Output, OutputSource, ProbeCube, ProbeId, ResolvedView, ShadowMap,
     ViewId, ViewTargets,
 };
-use oxygen_sceneprep::PreparedSceneFrame;
+use oxygen_sceneprep::{PassMask, PreparedSceneFrame};
 use thiserror::Error;
 
 use crate::{LightingResources, Pipelines};
@@ -122,6 +122,20 @@ pub struct RenderContext<'a> {
     /// (`view`, `inputs`, world matrices, lights) is relative to it. A pass
     /// that uploads a world position of its own subtracts it.
     pub origin: glam::DVec3,
+    /// Whether another view of the frame reads this view's HDR image (it is
+    /// linked to this view's output; links do not say which output, so a
+    /// link counts as reading the HDR), or the renderer was asked to keep
+    /// every HDR image (`RendererOptions::keep_hdr`). Not part of
+    /// [`ViewInputs`], which says what this view reads, not who reads it.
+    /// [`RenderContext::hdr_read_after_shading`] uses it.
+    pub hdr_read_by_others: bool,
+    /// Whether any material of the scene has a texture: shading pipelines
+    /// leave texture sampling out otherwise ([`crate::ShaderFeatures`]).
+    pub textured_materials: bool,
+    /// Specialise the shading pipelines to what the view has this frame
+    /// ([`crate::ShaderFeatures`]); `false` runs the fully featured shader
+    /// everywhere (for comparisons).
+    pub specialize_shaders: bool,
 }
 
 impl<'a> RenderContext<'a> {
@@ -129,6 +143,16 @@ impl<'a> RenderContext<'a> {
     /// `pass` when the view is depth-only.
     pub fn color_targets(&self, pass: &'static str) -> Result<&'a ColorTargets, PassError> {
         self.targets.color.as_ref().ok_or(PassError::NoColorTarget { pass })
+    }
+
+    /// Whether anything after the opaque shading reads the view's HDR
+    /// image this frame: its transparent partitions (blended over it) or
+    /// another view ([`RenderContext::hdr_read_by_others`]). When nothing
+    /// does, the standard graph tone-maps at the end of shading
+    /// ([`crate::MeshPass::tone_mapped`]) and skips the tone-map pass.
+    pub fn hdr_read_after_shading(&self) -> bool {
+        self.hdr_read_by_others
+            || self.prepared.partitions_matching(PassMask::TRANSPARENT, PassMask::empty()).next().is_some()
     }
 
     /// Another view's output this view is linked to, once the views that
@@ -339,6 +363,9 @@ pub struct RecordStats {
     /// Draw commands the GPU executes (each command of a multi-draw counts;
     /// an instanced run counts once).
     pub draw_commands: u32,
+    /// Shading tone-mapped in place and wrote the display colour: the HDR
+    /// image was not written this frame.
+    pub tone_mapped_in_pass: bool,
 }
 
 /// The command encoder of one view plus counters.

@@ -1,6 +1,6 @@
-// Tone map: exposure, then Khronos PBR Neutral (colours below about 0.76
-// pass almost unchanged; brighter ones compress towards white), written to
-// the sRGB target. A full-screen triangle; no bindless state.
+// Tone map pass: the HDR target through `tone_map` (tonemap.wgsl, prepended
+// by the Rust side) into the sRGB target. A full-screen triangle; no
+// bindless state.
 
 struct TonemapParams {
     exposure: f32,
@@ -24,31 +24,8 @@ fn vs_fullscreen(@builtin(vertex_index) index: u32) -> FullscreenVarying {
     return out;
 }
 
-fn pbr_neutral(input: vec3<f32>) -> vec3<f32> {
-    let start_compression = 0.8 - 0.04;
-    let desaturation = 0.15;
-    var color = input;
-    let x = min(color.r, min(color.g, color.b));
-    let offset = select(0.04, x - 6.25 * x * x, x < 0.08);
-    color -= offset;
-    let peak = max(color.r, max(color.g, color.b));
-    if peak < start_compression {
-        return color;
-    }
-    let d = 1.0 - start_compression;
-    let new_peak = 1.0 - d * d / (peak + d - start_compression);
-    color *= new_peak / peak;
-    let g = 1.0 - 1.0 / (desaturation * (peak - new_peak) + 1.0);
-    return mix(color, vec3<f32>(new_peak), g);
-}
-
 @fragment
 fn fs_tonemap(in: FullscreenVarying) -> @location(0) vec4<f32> {
     let hdr = textureLoad(hdr_texture, vec2<i32>(in.position.xy), 0).rgb;
-    // Shading writes finite radiance (tests/shading_finite.rs checks the
-    // HDR target); should a NaN get there anyway it shows black, and an
-    // infinity white (the operator itself would compute infinity × 0).
-    let not_nan = select(vec3<f32>(0.0), hdr, hdr == hdr);
-    let safe = min(not_nan, vec3<f32>(65504.0)); // the largest finite f16
-    return vec4<f32>(clamp(pbr_neutral(max(safe * params.exposure, vec3<f32>(0.0))), vec3<f32>(0.0), vec3<f32>(1.0)), 1.0);
+    return vec4<f32>(tone_map(hdr, params.exposure), 1.0);
 }

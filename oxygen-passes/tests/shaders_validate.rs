@@ -80,3 +80,32 @@ fn the_probe_mip_shader_validates() {
         assert!(module.entry_points.iter().any(|e| e.name == name), "probe mip lacks {name}");
     }
 }
+
+/// Every override constant a shading pipeline is created with is declared
+/// by the shading shader (wgpu rejects an unknown one at pipeline creation),
+/// and the module validates with each feature turned off in its source too.
+#[test]
+fn every_shading_override_constant_is_declared() {
+    use oxygen_passes::{DepthBias, Exposure, PipelineKey, PipelineVariant, ShaderFeatures};
+    let key = PipelineKey {
+        pass: PassKind::ShadingAfterPrePass,
+        variant: PipelineVariant::from_mask(oxygen_sceneprep::PassMask::OPAQUE),
+        color_format: None,
+        depth_format: wgpu::TextureFormat::Depth32Float,
+        depth_bias: DepthBias::NONE,
+        features: ShaderFeatures::NONE,
+        tone_map: Some(Exposure::new(1.0)),
+    };
+    for textures in all_paths() {
+        let source = oxygen_passes::shader_source(PassKind::ShadingAfterPrePass, textures);
+        let module = validate("shading", &source, capabilities(textures));
+        let declared: Vec<_> = module.overrides.iter().filter_map(|(_, o)| o.name.clone()).collect();
+        for (name, _) in key.override_constants() {
+            assert!(declared.iter().any(|d| d == name), "{name} is not declared; declared: {declared:?}");
+            // The defaults flipped, as a pipeline would set them.
+            let (on, off) = (format!("override {name}: bool = true;"), format!("override {name}: bool = false;"));
+            let flipped = if source.contains(&on) { source.replace(&on, &off) } else { source.replace(&off, &on) };
+            validate(&format!("shading with {name} flipped"), &flipped, capabilities(textures));
+        }
+    }
+}

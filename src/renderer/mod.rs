@@ -20,11 +20,13 @@ use std::collections::{BTreeMap, HashMap};
 use std::time::Instant;
 
 use oxygen_bindless::{BindlessHeap, SceneConstantsBuffer, TexturePath};
-use oxygen_core::{GpuContext, GpuError, GpuOptions, NodeKey, ResolvedView, Scene, ViewError, ViewId, ViewTargets};
+use oxygen_core::{
+    GpuContext, GpuError, GpuOptions, HdrFormat, NodeKey, ResolvedView, Scene, ViewError, ViewId, ViewTargets,
+};
 use oxygen_passes::{DepthBias, DrawPath, LightingResources, Output, PassError, Pipelines, ProbeId, RecordStats};
 use oxygen_sceneprep::{PrepError, PreparedSceneFrame, RenderOrigin, ScenePrep, ViewPrepOptions};
 use thiserror::Error;
-use tracing::{info, info_span};
+use tracing::{info, info_span, warn};
 
 use crate::graph::RenderGraph;
 use crate::shadows::{LocalShadowSettings, ShadowViews};
@@ -76,6 +78,10 @@ pub enum RenderError {
     /// The view is depth-only (a shadow view), so it has no image.
     #[error("{0} is depth-only: it has no colour target to read")]
     DepthOnly(ViewId),
+    /// The view's last frame tone-mapped while shading, so its HDR target
+    /// holds no image of that frame.
+    #[error("{0} did not write its HDR target (it tone-maps while shading; set RendererOptions::keep_hdr)")]
+    HdrNotWritten(ViewId),
     /// The view has not been rendered yet, so it has no image.
     #[error("{0} has not been rendered yet")]
     NotRendered(ViewId),
@@ -214,6 +220,13 @@ pub struct FrameReport {
     pub record_threads: usize,
     /// What the frame left out (views and nodes), in view then node order.
     pub warnings: Vec<FrameWarning>,
+    /// Distinct mesh pipelines the frame's passes used (pass, variant,
+    /// formats, shader features): what specialising shaders to the scene
+    /// costs in pipeline state ([`Pipelines::used_this_frame`] lists them).
+    pub pipelines_used: usize,
+    /// Pipelines created during this frame (zero once every combination
+    /// the scene needs exists).
+    pub pipelines_created: u64,
 }
 
 /// Choices made when the renderer is created.
@@ -247,6 +260,21 @@ pub struct RendererOptions {
     /// Rasterizer depth bias of every shadow map the renderer renders (sun
     /// cascades and local shadows), against acne; see [`DepthBias`].
     pub shadow_bias: DepthBias,
+    /// Format of every view's HDR target. [`HdrFormat::Rg11b10Ufloat`]
+    /// halves its memory and bandwidth at the price of coarser gradients
+    /// (measured in docs/performance.md); on an adapter without
+    /// `Features::RG11B10UFLOAT_RENDERABLE` the renderer falls back to
+    /// `Rgba16Float` with a warning ([`Renderer::hdr_format`] says which).
+    pub hdr_format: HdrFormat,
+    /// Write every view's HDR target even when nothing reads it, so that
+    /// [`Renderer::read_hdr`] sees what shading wrote (tests, debugging).
+    /// Off, a view without transparent surfaces whose HDR no other view
+    /// reads tone-maps at the end of shading and skips the tone-map pass.
+    pub keep_hdr: bool,
+    /// Specialise shading pipelines to what each view has this frame
+    /// (see `oxygen_passes::ShaderFeatures`); `false` runs the fully featured
+    /// shader everywhere.
+    pub specialize_shaders: bool,
 }
 
 impl Default for RendererOptions {
@@ -261,6 +289,9 @@ impl Default for RendererOptions {
             target_budget_bytes: 2 << 30,
             local_shadows: None,
             shadow_bias: DepthBias::SHADOW_DEFAULT,
+            hdr_format: HdrFormat::Rgba16Float,
+            keep_hdr: false,
+            specialize_shaders: true,
         }
     }
 }
@@ -278,6 +309,9 @@ pub(crate) struct ViewGpu {
     /// The view as last rendered (relative to that frame's origin), for
     /// views reading a paused view's output.
     pub(crate) last_view: Option<ResolvedView>,
+    /// Whether the last frame that rendered the view wrote its HDR target
+    /// (false when shading tone-mapped in place).
+    pub(crate) hdr_written: bool,
 }
 
 /// The renderer: views in, images out.
@@ -300,12 +334,19 @@ pub struct Renderer {
     last_frame: Vec<(ViewId, ViewRole)>,
     /// The graph of every shadow view the renderer creates.
     shadow_graph: std::sync::Arc<dyn crate::graph::ErasedGraph>,
+    /// The HDR format in use (the option, or its fallback).
+    hdr_format: HdrFormat,
+    keep_hdr: bool,
+    specialize_shaders: bool,
+    /// Whether any material of the frame's scene has a texture.
+    textured_materials: bool,
 }
 
 impl Renderer {
     /// The device features Oxygen uses when the adapter has them.
-    pub const OPTIONAL_FEATURES: wgpu::Features =
-        wgpu::Features::INDIRECT_FIRST_INSTANCE.union(TexturePath::BINDING_ARRAY_FEATURES);
+    pub const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::INDIRECT_FIRST_INSTANCE
+        .union(TexturePath::BINDING_ARRAY_FEATURES)
+        .union(wgpu::Features::RG11B10UFLOAT_RENDERABLE);
 
     /// A renderer on a headless device chosen by [`GpuContext::new_headless`].
     pub fn new_headless() -> Result<Self, RenderError> {
@@ -353,7 +394,17 @@ impl Renderer {
             Some(path) => path,
             None => TexturePath::best_for(gpu.features, &limits),
         };
-        info!(?draw_path, ?texture_path, "draw and texture paths chosen");
+        let hdr_format = if gpu.features.contains(options.hdr_format.required_features()) {
+            options.hdr_format
+        } else {
+            warn!(
+                asked = ?options.hdr_format,
+                adapter = %gpu.describe(),
+                "the adapter cannot render into this HDR format; using Rgba16Float"
+            );
+            HdrFormat::Rgba16Float
+        };
+        info!(?draw_path, ?texture_path, ?hdr_format, "draw and texture paths chosen");
         let heap = BindlessHeap::new(&gpu.device, &gpu.queue, texture_path);
         let lighting = LightingResources::new(&gpu.device);
         let pipelines = Pipelines::new(&gpu.device, &heap, &lighting);
@@ -381,6 +432,10 @@ impl Renderer {
             started: Instant::now(),
             last_frame: Vec::new(),
             shadow_graph: std::sync::Arc::new(crate::ShadowGraph { bias: options.shadow_bias }),
+            hdr_format,
+            keep_hdr: options.keep_hdr,
+            specialize_shaders: options.specialize_shaders,
+            textured_materials: true,
         })
     }
 
@@ -392,6 +447,12 @@ impl Renderer {
     /// How partitions are drawn on this device.
     pub fn draw_path(&self) -> DrawPath {
         self.draw_path
+    }
+
+    /// The format of the views' HDR targets ([`RendererOptions::hdr_format`],
+    /// or `Rgba16Float` where the adapter cannot render the one asked for).
+    pub fn hdr_format(&self) -> HdrFormat {
+        self.hdr_format
     }
 
     /// Registers a view: a resolver (camera → matrices, each frame) or a
@@ -488,7 +549,7 @@ impl Renderer {
     }
 
     /// What the targets of a `viewport`-sized view take, bytes (colour and
-    /// depth, or depth only).
+    /// depth, or depth only), with the default HDR format.
     pub fn target_bytes(viewport: glam::UVec2, depth_only: bool) -> u64 {
         ViewTargets::bytes_for(viewport.x, viewport.y, !depth_only)
     }
@@ -523,7 +584,7 @@ impl Renderer {
         with_color: bool,
         taken: &mut u64,
     ) -> Result<(), RenderError> {
-        let bytes = ViewTargets::bytes_for(viewport.x, viewport.y, with_color);
+        let bytes = ViewTargets::bytes_for_format(viewport.x, viewport.y, with_color.then_some(self.hdr_format));
         if taken.saturating_add(bytes) > self.target_budget_bytes {
             let (width, height, budget) = (viewport.x, viewport.y, self.target_budget_bytes);
             return Err(RenderError::TargetBudget { view, width, height, bytes, budget, taken: *taken });
@@ -545,8 +606,28 @@ impl Renderer {
         self.prepare(scene, &mut plan, &mut warnings, frame_index, time_seconds)?;
         let prepare_seconds = prepare_start.elapsed().as_secs_f64();
         self.allocate_targets(&plan, time_seconds);
+        self.textured_materials = scene.materials().any(|(_, m)| {
+            [
+                m.base_color_texture,
+                m.metallic_roughness_texture,
+                m.normal_texture,
+                m.emissive_texture,
+                m.occlusion_texture,
+            ]
+            .iter()
+            .any(Option::is_some)
+        });
         let record_start = Instant::now();
+        let created_before = self.pipelines.pipelines_created();
+        self.pipelines.begin_frame();
         let (reports, record_threads) = self.record(&plan)?;
+        let pipelines_used = self.pipelines.used_this_frame().len();
+        let pipelines_created = self.pipelines.pipelines_created() - created_before;
+        for report in &reports {
+            if let Some(gpu) = self.gpu_views.get_mut(&report.view) {
+                gpu.hdr_written = !report.recorded.tone_mapped_in_pass;
+            }
+        }
         let record_seconds = record_start.elapsed().as_secs_f64();
         warnings.extend(self.prep.frame_collection().skipped.iter().map(|s| FrameWarning::NodeSkipped {
             node: s.node,
@@ -554,7 +635,16 @@ impl Renderer {
             reason: s.reason,
         }));
         self.last_frame = reports.iter().map(|r| (r.view, r.role)).collect();
-        Ok(FrameReport { frame_index, views: reports, prepare_seconds, record_seconds, record_threads, warnings })
+        Ok(FrameReport {
+            frame_index,
+            views: reports,
+            prepare_seconds,
+            record_seconds,
+            record_threads,
+            warnings,
+            pipelines_used,
+            pipelines_created,
+        })
     }
 
     /// The view's colour target as an image (waits for the GPU).
@@ -566,14 +656,19 @@ impl Renderer {
     }
 
     /// Reads back a rendered view's linear HDR target (what shading wrote,
-    /// before the tone map), NaN and infinities included.
+    /// before the tone map), NaN and infinities included. Fails with
+    /// [`RenderError::HdrNotWritten`] when the view's last frame tone-mapped
+    /// in the shading pass (see [`RendererOptions::keep_hdr`]).
     pub fn read_hdr(&self, id: impl Into<ViewId>) -> Result<oxygen_core::gpu::HdrImage, RenderError> {
         let id = id.into();
         let color = self.color_targets(id)?;
         if color.hdr_layer != 0 {
             return Err(RenderError::NoDisplayTarget(id));
         }
-        Ok(self.gpu.read_rgba16_float(&color.hdr)?)
+        if !self.gpu_views.get(&id).is_some_and(|v| v.hdr_written) {
+            return Err(RenderError::HdrNotWritten(id));
+        }
+        Ok(self.gpu.read_hdr_texels(&color.hdr)?)
     }
 
     fn color_targets(&self, id: ViewId) -> Result<&oxygen_core::ColorTargets, RenderError> {

@@ -145,6 +145,19 @@ impl Renderer {
             })
         });
         let frames = self.prep.frames();
+        // Views whose targets another view of the frame is linked to. A link
+        // names the view, not which of its outputs, so any link counts as
+        // reading the HDR image: the cautious answer keeps it written.
+        let hdr_readers: BTreeSet<ViewId> = plan
+            .views
+            .iter()
+            .flat_map(|v| {
+                v.links.iter().filter_map(move |l| match l {
+                    OutputSource::View(id) if *id != v.id => Some(*id),
+                    _ => None,
+                })
+            })
+            .collect();
         let progress = FrameProgress::new(order.iter().map(|i| plan.views[*i].id));
         let mut contexts = Vec::with_capacity(order.len());
         for &i in &order {
@@ -170,6 +183,9 @@ impl Renderer {
                     inputs: self.inputs(plan, view, atlas.as_ref()),
                     progress: &progress,
                     origin: plan.origin,
+                    hdr_read_by_others: self.keep_hdr || hdr_readers.contains(&view.id),
+                    textured_materials: self.textured_materials,
+                    specialize_shaders: self.specialize_shaders,
                 },
             ));
         }

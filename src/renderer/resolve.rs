@@ -124,9 +124,11 @@ impl Renderer {
                 .views
                 .iter()
                 .filter_map(|v| match v.target {
-                    TargetPlan::Own { with_color } => {
-                        Some(oxygen_core::ViewTargets::bytes_for(v.world.viewport.x, v.world.viewport.y, with_color))
-                    }
+                    TargetPlan::Own { with_color } => Some(oxygen_core::ViewTargets::bytes_for_format(
+                        v.world.viewport.x,
+                        v.world.viewport.y,
+                        with_color.then_some(self.hdr_format),
+                    )),
                     _ => None,
                 })
                 .sum::<u64>()

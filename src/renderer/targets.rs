@@ -41,13 +41,14 @@ impl Renderer {
                     &format!("{} scene constants", view.id),
                 ),
                 last_view: None,
+                hdr_written: false,
             });
             let (width, height, label) = (view.gpu.viewport.x, view.gpu.viewport.y, view.id.to_string());
             match view.target {
                 TargetPlan::Own { with_color } => {
                     if !entry.targets.as_ref().is_some_and(|t| t.fits(width, height, with_color)) {
                         entry.targets = Some(if with_color {
-                            ViewTargets::new(device, width, height, &label)
+                            ViewTargets::with_hdr_format(device, width, height, &label, self.hdr_format)
                         } else {
                             ViewTargets::depth_only(device, width, height, &label)
                         });

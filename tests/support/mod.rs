@@ -46,9 +46,13 @@ pub fn linear_to_srgb8(linear: f64) -> u8 {
 
 /// A renderer on the test adapter; logs the adapter once per test binary.
 /// Fails (never skips) when there is no adapter: CI must not pass silently.
+///
+/// Every HDR target is kept (`RendererOptions::keep_hdr`) so that
+/// [`assert_hdr_finite`] reads what shading wrote; tests/frame_economy.rs
+/// covers the in-pass tone map that skips it.
 pub fn gpu_renderer() -> Renderer {
     static LOG: Once = Once::new();
-    match Renderer::new_headless() {
+    match Renderer::new_headless_with(RendererOptions { keep_hdr: true, ..Default::default() }) {
         Ok(renderer) => {
             LOG.call_once(|| eprintln!("GPU tests run on: {}", renderer.gpu().describe()));
             renderer
@@ -58,8 +62,10 @@ pub fn gpu_renderer() -> Renderer {
 }
 
 /// A renderer on the test adapter with explicit options.
+/// HDR targets are kept, as in [`gpu_renderer`].
 pub fn gpu_renderer_with(options: RendererOptions) -> Renderer {
-    Renderer::new_headless_with(options).unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"))
+    Renderer::new_headless_with(RendererOptions { keep_hdr: true, ..options })
+        .unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"))
 }
 
 /// Fails when the view's HDR target (linear radiance, before the tone map)

@@ -6,5 +6,5 @@ mod readback;
 mod target;
 
 pub use context::{GpuContext, GpuError, GpuOptions};
-pub use readback::{HdrImage, f16_to_f32};
-pub use target::{ColorTargets, ViewTargets};
+pub use readback::{HdrImage, f16_to_f32, unpack_rg11b10_ufloat};
+pub use target::{ColorTargets, HdrFormat, ViewTargets};

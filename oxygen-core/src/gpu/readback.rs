@@ -84,6 +84,21 @@ impl GpuContext {
         Ok(HdrImage { width: texture.width(), height: texture.height(), pixels })
     }
 
+    /// Reads a view's HDR target as `f32` texels, whichever
+    /// [`crate::HdrFormat`] it has (`Rg11b10Ufloat` reads with alpha 1).
+    /// Blocks until the GPU has finished all submitted work.
+    pub fn read_hdr_texels(&self, texture: &wgpu::Texture) -> Result<HdrImage, GpuError> {
+        if texture.format() != wgpu::TextureFormat::Rg11b10Ufloat {
+            return self.read_rgba16_float(texture);
+        }
+        let bytes = self.read_texels(texture, 4)?;
+        let pixels = bytes
+            .chunks_exact(4)
+            .map(|texel| unpack_rg11b10_ufloat(u32::from_le_bytes([texel[0], texel[1], texel[2], texel[3]])))
+            .collect();
+        Ok(HdrImage { width: texture.width(), height: texture.height(), pixels })
+    }
+
     /// The bytes of mip level 0 of a 2D texture of `bytes_per_texel`,
     /// tightly packed row by row.
     fn read_texels(&self, texture: &wgpu::Texture, bytes_per_texel: u32) -> Result<Vec<u8>, GpuError> {
@@ -130,8 +145,38 @@ impl GpuContext {
     }
 }
 
+/// One `Rg11b10Ufloat` texel as linear RGBA (alpha 1): red in bits 0–10,
+/// green in 11–21 (5 exponent bits, 6 mantissa bits each), blue in 22–31
+/// (5 exponent bits, 5 mantissa bits), exponent bias 15 as in half floats.
+pub fn unpack_rg11b10_ufloat(packed: u32) -> [f32; 4] {
+    let small_float = |bits: u32, mantissa_bits: u32| -> f32 {
+        let exponent = bits >> mantissa_bits;
+        let mantissa = (bits & ((1 << mantissa_bits) - 1)) as f32 / (1 << mantissa_bits) as f32;
+        match exponent {
+            0 => mantissa * f32::powi(2.0, -14),
+            31 if mantissa == 0.0 => f32::INFINITY,
+            31 => f32::NAN,
+            e => (1.0 + mantissa) * f32::powi(2.0, e as i32 - 15),
+        }
+    };
+    [small_float(packed & 0x7ff, 6), small_float((packed >> 11) & 0x7ff, 6), small_float(packed >> 22, 5), 1.0]
+}
+
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn packed_small_floats_widen_exactly() {
+        // 1.0 is exponent 15, mantissa 0 in every channel.
+        let one = (15 << 6) | ((15 << 6) << 11) | ((15 << 5) << 22);
+        assert_eq!(unpack_rg11b10_ufloat(one), [1.0, 1.0, 1.0, 1.0]);
+        assert_eq!(unpack_rg11b10_ufloat(0), [0.0, 0.0, 0.0, 1.0]);
+        // Largest finite 11-bit value: exponent 30, mantissa all ones.
+        assert_eq!(unpack_rg11b10_ufloat(0x7bf)[0], 65024.0);
+        assert_eq!(unpack_rg11b10_ufloat(0x7c0)[0], f32::INFINITY);
+        // Smallest subnormal of the 10-bit blue channel: 2^-14 / 32.
+        assert_eq!(unpack_rg11b10_ufloat(1 << 22)[2], f32::powi(2.0, -19));
+    }
+
     use super::*;
 
     #[test]

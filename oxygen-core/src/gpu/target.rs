@@ -44,8 +44,50 @@ pub struct ColorTargets {
     pub color_view: Option<wgpu::TextureView>,
 }
 
+/// The format of a view's HDR target: a speed/memory knob with a measured
+/// error (`tests/frame_economy.rs`, `examples/hdr_format_bench.rs`,
+/// docs/performance.md).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum HdrFormat {
+    /// Four half floats, 8 bytes a pixel: 11 significant bits per channel.
+    #[default]
+    Rgba16Float,
+    /// Packed unsigned floats, 4 bytes a pixel: 6 mantissa bits for red and
+    /// green, 5 for blue, no alpha, no negative values. Half the memory and
+    /// bandwidth; smooth gradients show coarser steps (blue most). Needs
+    /// `Features::RG11B10UFLOAT_RENDERABLE`.
+    Rg11b10Ufloat,
+}
+
+impl HdrFormat {
+    /// The texture format.
+    pub fn texture_format(self) -> wgpu::TextureFormat {
+        match self {
+            HdrFormat::Rgba16Float => wgpu::TextureFormat::Rgba16Float,
+            HdrFormat::Rg11b10Ufloat => wgpu::TextureFormat::Rg11b10Ufloat,
+        }
+    }
+
+    /// Bytes a pixel.
+    pub fn bytes_per_pixel(self) -> u64 {
+        match self {
+            HdrFormat::Rgba16Float => 8,
+            HdrFormat::Rg11b10Ufloat => 4,
+        }
+    }
+
+    /// The device features rendering into this format needs.
+    pub fn required_features(self) -> wgpu::Features {
+        match self {
+            HdrFormat::Rgba16Float => wgpu::Features::empty(),
+            HdrFormat::Rg11b10Ufloat => wgpu::Features::RG11B10UFLOAT_RENDERABLE,
+        }
+    }
+}
+
 impl ViewTargets {
-    /// Format of the HDR target.
+    /// Format of the HDR target by default ([`HdrFormat::Rgba16Float`];
+    /// [`ViewTargets::with_hdr_format`] picks another) and of probe cubes.
     pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
     /// Colour format of every view's displayable target.
     pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
@@ -56,13 +98,19 @@ impl ViewTargets {
     /// non-zero and within the device's `max_texture_dimension_2d`; callers
     /// validate).
     pub fn new(device: &wgpu::Device, width: u32, height: u32, label: &str) -> Self {
-        Self::create(device, width, height, label, true)
+        Self::with_hdr_format(device, width, height, label, HdrFormat::Rgba16Float)
+    }
+
+    /// [`ViewTargets::new`] with an HDR target of `hdr_format` (the device
+    /// must have its [`HdrFormat::required_features`]).
+    pub fn with_hdr_format(device: &wgpu::Device, width: u32, height: u32, label: &str, hdr_format: HdrFormat) -> Self {
+        Self::create(device, width, height, label, Some(hdr_format))
     }
 
     /// Creates only the depth target: what a shadow view renders. A 2048²
     /// shadow view saves the 48 MiB its colour targets would take.
     pub fn depth_only(device: &wgpu::Device, width: u32, height: u32, label: &str) -> Self {
-        Self::create(device, width, height, label, false)
+        Self::create(device, width, height, label, None)
     }
 
     /// Bytes of GPU memory the targets of a `width × height` view take:
@@ -70,7 +118,14 @@ impl ViewTargets {
     /// the view is depth-only. Known before anything is allocated, so a
     /// renderer can refuse an oversized view instead of trying.
     pub fn bytes_for(width: u32, height: u32, with_color: bool) -> u64 {
-        let per_pixel = if with_color { 4 + 8 + 4 } else { 4 };
+        Self::bytes_for_format(width, height, with_color.then_some(HdrFormat::Rgba16Float))
+    }
+
+    /// [`ViewTargets::bytes_for`] with the HDR target in `hdr_format`
+    /// (`None`: depth only): 16 bytes a pixel with `Rgba16Float`, 12 with
+    /// `Rg11b10Ufloat`.
+    pub fn bytes_for_format(width: u32, height: u32, hdr_format: Option<HdrFormat>) -> u64 {
+        let per_pixel = 4 + hdr_format.map_or(0, |f| f.bytes_per_pixel() + 4);
         u64::from(width) * u64::from(height) * per_pixel
     }
 
@@ -80,7 +135,7 @@ impl ViewTargets {
         let pixels = u64::from(self.width) * u64::from(self.height);
         let depth = if self.owns_depth { 4 } else { 0 };
         let color = match &self.color {
-            Some(c) if c.color.is_some() => 8 + 4,
+            Some(c) if c.color.is_some() => u64::from(c.hdr.format().block_copy_size(None).unwrap_or(8)) + 4,
             _ => 0,
         };
         pixels * (depth + color)
@@ -113,7 +168,7 @@ impl ViewTargets {
     /// `layer` of the probe's HDR `cube` (a six-layer `Rgba16Float` array)
     /// as its colour; nothing to tone-map into.
     pub fn probe_face(device: &wgpu::Device, cube: &wgpu::Texture, layer: u32, label: &str) -> Self {
-        let mut targets = Self::create(device, cube.width(), cube.height(), label, false);
+        let mut targets = Self::create(device, cube.width(), cube.height(), label, None);
         targets.color = Some(ColorTargets {
             hdr: cube.clone(),
             hdr_view: single_layer_view(cube, layer, "probe face"),
@@ -124,7 +179,7 @@ impl ViewTargets {
         targets
     }
 
-    fn create(device: &wgpu::Device, width: u32, height: u32, label: &str, with_color: bool) -> Self {
+    fn create(device: &wgpu::Device, width: u32, height: u32, label: &str, hdr_format: Option<HdrFormat>) -> Self {
         let size = wgpu::Extent3d { width, height, depth_or_array_layers: 1 };
         let make = |format, usage, suffix: &str| {
             device.create_texture(&wgpu::TextureDescriptor {
@@ -138,7 +193,7 @@ impl ViewTargets {
                 view_formats: &[],
             })
         };
-        let color = with_color.then(|| {
+        let color = hdr_format.map(|hdr_format| {
             let color = make(
                 Self::COLOR_FORMAT,
                 wgpu::TextureUsages::RENDER_ATTACHMENT
@@ -147,7 +202,7 @@ impl ViewTargets {
                 "colour",
             );
             let hdr = make(
-                Self::HDR_FORMAT,
+                hdr_format.texture_format(),
                 wgpu::TextureUsages::RENDER_ATTACHMENT
                     | wgpu::TextureUsages::TEXTURE_BINDING
                     | wgpu::TextureUsages::COPY_SRC,

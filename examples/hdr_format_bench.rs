@@ -1,0 +1,85 @@
+//! The frame-economy knobs, timed in one run on whatever adapter is found
+//! (the table in docs/performance.md says which):
+//!
+//! ```text
+//! cargo run --release --example hdr_format_bench [SIZE] [FRAMES]   # default 1280 and 20
+//! ```
+//!
+//! One SIZE × SIZE/16·9 view of a lit floor with a box and a point light,
+//! rendered four ways: the HDR target kept in `Rgba16Float` (shading, then
+//! the tone-map pass), the same in `Rg11b10Ufloat`, the tone map done while
+//! shading (no HDR write, no tone-map pass), and the fully featured shader
+//! without specialisation. Each renders 3 warm-up frames and FRAMES measured
+//! ones, waiting for the GPU after each, and reports milliseconds per frame
+//! and the ratio against the first.
+
+use std::time::Instant;
+
+use oxygen::prelude::*;
+
+fn scene() -> Scene {
+    let mut scene = Scene::new();
+    let grey = scene.add_material(Material::opaque("grey", Vec4::new(0.7, 0.7, 0.7, 1.0)));
+    let floor = scene.add_geometry(Geometry::plane(40.0));
+    let node = scene.add_node("floor", Transform::IDENTITY);
+    scene.set_renderable(node, Renderable { geometry: floor, materials: vec![grey] }).expect("valid handles");
+    let cube = scene.add_geometry(Geometry::cube(1.0));
+    let node = scene.add_node("box", Transform::from_translation(Vec3::new(1.5, 0.5, -1.0)));
+    scene.set_renderable(node, Renderable { geometry: cube, materials: vec![grey] }).expect("valid handles");
+    let sun = scene.add_node(
+        "sun",
+        Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, Vec3::new(1.0, -0.2, -0.3).normalize())),
+    );
+    scene.set_light(sun, Some(Light::directional(0.6))).expect("a node");
+    scene
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let mut args = std::env::args().skip(1);
+    let width: u32 = args.next().map(|a| a.parse()).transpose()?.unwrap_or(1280);
+    let frames: usize = args.next().map(|a| a.parse()).transpose()?.unwrap_or(20);
+    let height = (width * 9 / 16).max(1);
+    let scene = scene();
+    let camera = LookAtResolver {
+        camera: Camera::perspective(60f32.to_radians(), 0.1, None),
+        eye: Vec3::new(0.0, 3.0, 5.0),
+        target: Vec3::new(0.0, 0.0, -1.0),
+        up: Vec3::Y,
+        viewport: UVec2::new(width, height),
+    };
+    let kept = RendererOptions { keep_hdr: true, ..Default::default() };
+    let cases = [
+        ("Rgba16Float HDR + tone-map pass", kept),
+        ("Rg11b10Ufloat HDR + tone-map pass", RendererOptions { hdr_format: HdrFormat::Rg11b10Ufloat, ..kept }),
+        ("tone map while shading (no HDR)", RendererOptions::default()),
+        ("Rgba16Float, unspecialised shader", RendererOptions { specialize_shaders: false, ..kept }),
+    ];
+    let mut baseline = None;
+    println!("{width}x{height}, {frames} frames each");
+    for (name, options) in cases {
+        let mut renderer = Renderer::new_headless_with(options)?;
+        let view = renderer.register_view(camera, standard_render_graph)?;
+        let frame = |renderer: &mut Renderer| -> Result<(), Box<dyn std::error::Error>> {
+            renderer.render_frame(&scene)?;
+            renderer.gpu().device.poll(wgpu::PollType::wait_indefinitely())?;
+            Ok(())
+        };
+        for _ in 0..3 {
+            frame(&mut renderer)?;
+        }
+        let start = Instant::now();
+        for _ in 0..frames {
+            frame(&mut renderer)?;
+        }
+        let ms = start.elapsed().as_secs_f64() * 1e3 / frames.max(1) as f64;
+        let base = *baseline.get_or_insert(ms);
+        let bytes = renderer.target_memory();
+        println!(
+            "{name:<36} {ms:8.2} ms/frame  ×{:.3}  targets {:.1} MiB  (HDR format in use: {:?}, view {view})",
+            ms / base,
+            bytes as f64 / (1 << 20) as f64,
+            renderer.hdr_format()
+        );
+    }
+    Ok(())
+}
