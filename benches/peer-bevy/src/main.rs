@@ -51,6 +51,7 @@ use bevy::prelude::*;
 use bevy::render::RenderApp;
 use bevy::render::pipelined_rendering::PipelinedRenderingPlugin;
 use bevy::render::render_resource::{CachedPipelineState, PipelineCache, PollType, TextureFormat};
+use bevy::shader::ShaderCacheError;
 use bevy::render::renderer::{RenderAdapterInfo, RenderDevice};
 use bevy::window::ExitCondition;
 
@@ -166,13 +167,20 @@ fn spawn_scene(world: &mut World, config: &Config) -> f32 {
     side
 }
 
-/// Pipelines still compiling, and whether any failed.
+/// Pipelines not ready yet, or the first that failed. A pipeline whose
+/// shader asset is still loading is in `Err(ShaderNotLoaded)`, which Bevy
+/// retries every frame: that one counts as waiting, not failed.
 fn pipelines_pending(app: &App) -> Result<usize, String> {
     let cache = app.sub_app(RenderApp).world().resource::<PipelineCache>();
-    if let Some(failed) = cache.pipelines().find(|p| matches!(p.state, CachedPipelineState::Err(_))) {
-        return Err(format!("a pipeline failed to compile: {:?}", failed.state));
+    let mut waiting = cache.waiting_pipelines().count();
+    for pipeline in cache.pipelines() {
+        match &pipeline.state {
+            CachedPipelineState::Err(ShaderCacheError::ShaderNotLoaded(_)) => waiting += 1,
+            CachedPipelineState::Err(error) => return Err(format!("a pipeline failed to compile: {error:?}")),
+            _ => {}
+        }
     }
-    Ok(cache.waiting_pipelines().count())
+    Ok(waiting)
 }
 
 /// Mean over the cameras of the fraction of cubes Bevy's CPU culling kept.
