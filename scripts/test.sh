@@ -51,7 +51,7 @@ for backend in $backends; do
         continue
       fi
       printf '%s\n' "$info" >&2
-      WGPU_BACKEND=vulkan cargo test --locked --workspace "$@" || failed+=("vulkan")
+      WGPU_BACKEND=vulkan cargo test --locked --no-fail-fast --workspace "$@" || failed+=("vulkan")
       ;;
     gl)
       say "=== backend: GL (WGPU_BACKEND=gl): the GPU test binaries ==="
@@ -63,7 +63,7 @@ for backend in $backends; do
       args=()
       for t in $(gpu_test_binaries); do args+=(--test "$t"); done
       say "GPU test binaries: ${args[*]}"
-      WGPU_BACKEND=gl cargo test --locked "${args[@]}" "$@" || failed+=("gl")
+      WGPU_BACKEND=gl cargo test --locked --no-fail-fast "${args[@]}" "$@" || failed+=("gl")
       ;;
     *)
       say "unknown backend '$backend' in OXYGEN_BACKENDS (use vulkan and/or gl)"

@@ -155,7 +155,12 @@ fn rg11b10_hdr_stays_within_its_documented_error_and_shows_coarser_steps() {
 }
 
 fn forward_keys(renderer: &Renderer) -> Vec<PipelineKey> {
-    renderer.pipelines().used_this_frame().into_iter().filter(|k| k.pass == PassKind::ShadingAfterPrePass).collect()
+    renderer
+        .pipelines()
+        .used_this_frame()
+        .into_iter()
+        .filter(|k| matches!(k.pass, PassKind::ShadingAfterPrePass | PassKind::Shading))
+        .collect()
 }
 
 #[test]
