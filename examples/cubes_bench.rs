@@ -52,14 +52,17 @@ fn cube_grid(count: usize) -> (Scene, f32) {
     let cube = scene.add_geometry(Geometry::cube(1.0));
     let materials: Vec<_> = BASE_COLORS
         .iter()
-        .map(|&[r, g, b]| scene.add_material(Material { roughness: 0.5, ..Material::opaque("cube", Vec4::new(r, g, b, 1.0)) }))
+        .map(|&[r, g, b]| {
+            scene.add_material(Material { roughness: 0.5, ..Material::opaque("cube", Vec4::new(r, g, b, 1.0)) })
+        })
         .collect();
     for i in 0..count {
         let (x, z) = ((i % per_row) as f32 * 2.0 - half, (i / per_row) as f32 * 2.0 - half);
         let node = scene.add_node("cube", Transform::from_translation(Vec3::new(x, 0.5, z)));
         scene.set_renderable(node, Renderable { geometry: cube, materials: vec![materials[i % 4]] }).ok();
     }
-    let sun = scene.add_node("sun", Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, sun_direction())));
+    let sun =
+        scene.add_node("sun", Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, sun_direction())));
     scene.set_light(sun, Some(Light { casts_shadows: false, ..Light::directional(3.0) })).ok();
     (scene, per_row as f32 * 2.0)
 }
@@ -90,7 +93,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for v in 0..views {
         let angle = v as f32 / views as f32 * std::f32::consts::TAU;
         let eye = Vec3::new(angle.cos() * EYE_RADIUS * side, EYE_HEIGHT * side, angle.sin() * EYE_RADIUS * side);
-        let camera = LookAtResolver::new(Camera::try_perspective(60f32.to_radians(), 0.1, None)?, eye, Vec3::ZERO, VIEWPORT)?;
+        let camera =
+            LookAtResolver::new(Camera::try_perspective(60f32.to_radians(), 0.1, None)?, eye, Vec3::ZERO, VIEWPORT)?;
         view_ids.push(renderer.register_view(ViewDesc::new(camera), standard_render_graph)?);
     }
 
@@ -106,7 +110,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         if frame >= WARM_UP {
             times.push(ms);
-            visible = report.views.iter().map(|v| v.draws as f64 / count as f64).sum::<f64>() / report.views.len() as f64;
+            visible =
+                report.views.iter().map(|v| v.draws as f64 / count as f64).sum::<f64>() / report.views.len() as f64;
         }
     }
     times.sort_by(f64::total_cmp);
