@@ -134,7 +134,9 @@ impl PreparedSceneFrame {
     /// once per run), the sum of each run's viewport coverage (the fractions
     /// its draws' bounding spheres cover), capped at 1 per run. About 1 when
     /// the materials tile the view; up to the number of material runs when
-    /// runs drawn later cover what earlier ones shaded. An estimate from
+    /// runs drawn later cover what earlier ones shaded, and never more than
+    /// the sum of every draw's coverage (runs side by side do not cover
+    /// each other). An estimate from
     /// data the view phase has anyway (spheres overestimate what they
     /// bound); the standard graph's automatic pre-pass decides from it.
     pub fn estimated_overdraw(&self) -> f32 {

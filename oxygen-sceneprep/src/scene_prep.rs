@@ -174,19 +174,24 @@ impl Default for ScenePrep {
 /// front to back, so early depth testing shades each covered pixel about
 /// once; successive runs may each shade it again. So each run counts its
 /// coverage (the viewport fractions its draws' bounding spheres cover),
-/// capped at 1, and the runs add up.
+/// capped at 1, and the runs add up; never more than all draws' coverage
+/// together.
 fn overdraw_in_draw_order(keyed: &[(u64, u32)], items: &[RenderItem], coverage: &[f32]) -> f32 {
-    let (mut total, mut run, mut material) = (0.0f32, 0.0f32, None);
+    let (mut runs, mut run, mut material) = (0.0f32, 0.0f32, None);
     for &(_, index) in keyed {
         let item = &items[index as usize];
         if material != Some(item.material) {
-            total += run.min(1.0);
+            runs += run.min(1.0);
             run = 0.0;
             material = Some(item.material);
         }
         run += coverage[index as usize];
     }
-    total + run.min(1.0)
+    // Runs spread side by side over the view (a grid of objects in several
+    // materials) each cover much of it without covering each other: the
+    // whole frame's depth complexity bounds the estimate too.
+    let total: f32 = coverage.iter().sum();
+    (runs + run.min(1.0)).min(total)
 }
 
 /// Locks a view's scratch; a poisoned lock (a panic in an earlier frame) is
