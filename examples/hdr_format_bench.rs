@@ -5,7 +5,7 @@
 //! cargo run --release --example hdr_format_bench [SIZE] [FRAMES]   # default 1280 and 20
 //! ```
 //!
-//! One SIZE × SIZE/16·9 view of a lit floor with a box and a point light,
+//! One SIZE × SIZE/16·9 view of a lit floor with a box (`oxygen_demo::floor_with_box`),
 //! rendered four ways: the HDR target kept in `Rgba16Float` (shading, then
 //! the tone-map pass), the same in `Rg11b10Ufloat`, the tone map done while
 //! shading (no HDR write, no tone-map pass), and the fully featured shader
@@ -17,29 +17,12 @@ use std::time::Instant;
 
 use oxygen::prelude::*;
 
-fn scene() -> Scene {
-    let mut scene = Scene::new();
-    let grey = scene.add_material(Material::opaque("grey", Vec4::new(0.7, 0.7, 0.7, 1.0)));
-    let floor = scene.add_geometry(Geometry::plane(40.0));
-    let node = scene.add_node("floor", Transform::IDENTITY);
-    scene.set_renderable(node, Renderable { geometry: floor, materials: vec![grey] }).expect("valid handles");
-    let cube = scene.add_geometry(Geometry::cube(1.0));
-    let node = scene.add_node("box", Transform::from_translation(Vec3::new(1.5, 0.5, -1.0)));
-    scene.set_renderable(node, Renderable { geometry: cube, materials: vec![grey] }).expect("valid handles");
-    let sun = scene.add_node(
-        "sun",
-        Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, Vec3::new(1.0, -0.2, -0.3).normalize())),
-    );
-    scene.set_light(sun, Some(Light::directional(0.6))).expect("a node");
-    scene
-}
-
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let width: u32 = args.next().map(|a| a.parse()).transpose()?.unwrap_or(1280);
     let frames: usize = args.next().map(|a| a.parse()).transpose()?.unwrap_or(20);
     let height = (width * 9 / 16).max(1);
-    let scene = scene();
+    let scene = oxygen_demo::floor_with_box(0.6);
     let camera = LookAtResolver {
         camera: Camera::perspective(60f32.to_radians(), 0.1, None),
         eye: Vec3::new(0.0, 3.0, 5.0),

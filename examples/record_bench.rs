@@ -26,38 +26,18 @@ use oxygen::prelude::*;
 const WARM_UP: usize = 2;
 const MEASURED: usize = 8;
 
+/// The benchmarks' field of boxes in four materials, with a shadow-casting
+/// spot light above its centre.
 fn field_of_boxes(count: usize) -> (Scene, f32) {
-    let mut scene = Scene::new();
-    let side = (count as f32).sqrt().ceil() as usize;
-    let ground_material = scene.add_material(Material::opaque("ground", Vec4::splat(0.6)));
-    let ground_mesh = scene.add_geometry(Geometry::plane(side as f32 * 2.0 + 10.0));
-    let ground = scene.add_node("ground", Transform::from_translation(Vec3::new(side as f32, 0.0, side as f32)));
-    scene.set_renderable(ground, Renderable { geometry: ground_mesh, materials: vec![ground_material] }).ok();
-    let cube = scene.add_geometry(Geometry::cube(1.0));
-    let materials: Vec<_> = (0..4)
-        .map(|i| scene.add_material(Material::opaque("box", Vec4::new(0.3 + 0.15 * i as f32, 0.6, 0.5, 1.0))))
-        .collect();
-    for i in 0..count {
-        let (x, z) = ((i % side) as f32 * 2.0, (i / side) as f32 * 2.0);
-        let height = 0.5 + ((i * 7919) % 13) as f32 * 0.25;
-        let transform =
-            Transform::from_translation(Vec3::new(x, height * 0.5, z)).with_scale(Vec3::new(0.8, height, 0.8));
-        let node = scene.add_node("box", transform);
-        scene.set_renderable(node, Renderable { geometry: cube, materials: vec![materials[i % 4]] }).ok();
-    }
-    let sun = scene.add_node(
-        "sun",
-        Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, Vec3::new(0.6, -0.5, 0.4).normalize())),
-    );
-    scene.set_light(sun, Some(Light::directional(3.0))).ok();
-    let centre = Vec3::new(side as f32, 0.0, side as f32);
-    let spot_at = centre + Vec3::new(0.0, 12.0, 0.0);
+    let colors: Vec<Vec4> = (0..4).map(|i| Vec4::new(0.3 + 0.15 * i as f32, 0.6, 0.5, 1.0)).collect();
+    let (mut scene, extent) = oxygen_demo::field_of_boxes(count, &colors);
+    let spot_at = Vec3::new(extent * 0.5, 12.0, extent * 0.5);
     let spot = scene.add_node(
         "spot",
         Transform::from_translation(spot_at).with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, Vec3::NEG_Y)),
     );
     scene.set_light(spot, Some(Light::spot(500.0, Some(40.0), 0.4, 0.6))).ok();
-    (scene, side as f32 * 2.0)
+    (scene, extent)
 }
 
 struct Setup<'a> {

@@ -20,34 +20,9 @@ use oxygen::prelude::*;
 const WARM_UP: usize = 3;
 const MEASURED: usize = 10;
 
-fn field_of_boxes(count: usize) -> (Scene, f32) {
-    let mut scene = Scene::new();
-    let side = (count as f32).sqrt().ceil() as usize;
-    let ground_material = scene.add_material(Material::opaque("ground", Vec4::splat(0.6)));
-    let ground_mesh = scene.add_geometry(Geometry::plane(side as f32 * 2.0 + 10.0));
-    let ground = scene.add_node("ground", Transform::from_translation(Vec3::new(side as f32, 0.0, side as f32)));
-    scene.set_renderable(ground, Renderable { geometry: ground_mesh, materials: vec![ground_material] }).ok();
-    let cube = scene.add_geometry(Geometry::cube(1.0));
-    let material = scene.add_material(Material::opaque("box", Vec4::new(0.8, 0.7, 0.6, 1.0)));
-    for i in 0..count {
-        let (x, z) = ((i % side) as f32 * 2.0, (i / side) as f32 * 2.0);
-        let height = 0.5 + ((i * 7919) % 13) as f32 * 0.25;
-        let transform =
-            Transform::from_translation(Vec3::new(x, height * 0.5, z)).with_scale(Vec3::new(0.8, height, 0.8));
-        let node = scene.add_node("box", transform);
-        scene.set_renderable(node, Renderable { geometry: cube, materials: vec![material] }).ok();
-    }
-    let sun = scene.add_node(
-        "sun",
-        Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, Vec3::new(0.6, -0.5, 0.4).normalize())),
-    );
-    scene.set_light(sun, Some(Light::directional(3.0))).ok();
-    (scene, side as f32 * 2.0)
-}
-
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let count: usize = std::env::args().nth(1).map(|a| a.parse()).transpose()?.unwrap_or(10_000);
-    let (scene, extent) = field_of_boxes(count);
+    let (scene, extent) = oxygen_demo::field_of_boxes(count, &[Vec4::new(0.8, 0.7, 0.6, 1.0)]);
     let camera = LookAtResolver {
         camera: Camera::perspective(60f32.to_radians(), 0.1, Some(extent * 1.5)),
         eye: Vec3::new(-5.0, 12.0, -5.0),

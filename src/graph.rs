@@ -171,20 +171,8 @@ impl RenderGraph for StandardGraph {
 /// The default graph ([`StandardGraph`] with default settings), as a value
 /// to pass to `register_view`.
 #[allow(non_upper_case_globals)] // Reads as the function it replaced: `register_view(camera, standard_render_graph)`.
-pub const standard_render_graph: StandardGraph = StandardGraph {
-    lit: ForwardLitConfig {
-        clear_color: wgpu::Color { r: 0.02, g: 0.03, b: 0.05, a: 1.0 },
-        depth_from_pre_pass: true,
-        sun_shadows: true,
-        local_shadows: true,
-        reflections: true,
-        shadow_pcf_radius: 1,
-        shadow_normal_offset: 1.5,
-        shadow_depth_bias: 1e-4,
-    },
-    exposure: 1.0,
-    pre_pass: PrePass::DEFAULT,
-};
+pub const standard_render_graph: StandardGraph =
+    StandardGraph { lit: ForwardLitConfig::DEFAULT, exposure: 1.0, pre_pass: PrePass::DEFAULT };
 
 /// The standard graph with a chosen forward configuration; the pre-pass as
 /// `config.depth_from_pre_pass` says.

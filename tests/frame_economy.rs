@@ -15,20 +15,7 @@ const SIZE: u32 = 96;
 /// above it: a smooth radial gradient from bright to dark, and a box for
 /// an edge and a shadow.
 fn gradient_scene() -> Scene {
-    let mut scene = Scene::new();
-    let grey =
-        scene.add_material(Material { roughness: 0.8, ..Material::opaque("grey", Vec4::new(0.7, 0.7, 0.7, 1.0)) });
-    let floor = scene.add_geometry(Geometry::plane(40.0));
-    let node = scene.add_node("floor", Transform::IDENTITY);
-    scene.set_renderable(node, Renderable { geometry: floor, materials: vec![grey] }).expect("valid handles");
-    let cube = scene.add_geometry(Geometry::cube(1.0));
-    let node = scene.add_node("box", Transform::from_translation(Vec3::new(1.5, 0.5, -1.0)));
-    scene.set_renderable(node, Renderable { geometry: cube, materials: vec![grey] }).expect("valid handles");
-    let sun = scene.add_node(
-        "sun",
-        Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, Vec3::new(1.0, -0.2, -0.3).normalize())),
-    );
-    scene.set_light(sun, Some(Light::directional(0.6))).expect("a node");
+    let mut scene = oxygen_demo::floor_with_box(0.8);
     let lamp = scene.add_node("lamp", Transform::from_translation(Vec3::new(-1.0, 1.2, 0.0)));
     scene.set_light(lamp, Some(Light::point(6.0, None))).expect("a node");
     scene

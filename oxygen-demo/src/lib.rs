@@ -95,3 +95,53 @@ pub fn side_camera(viewport: UVec2) -> LookAtResolver {
         viewport,
     }
 }
+
+/// A square field of `count` boxes of varied heights (0.8 × 0.8, 2 apart,
+/// starting at the origin along +X and +Z) on a ground plane, cycling
+/// through `box_colors`, under a sun: the scene of the shadow and
+/// recording benchmarks. Returns the scene and the field's side length.
+pub fn field_of_boxes(count: usize, box_colors: &[Vec4]) -> (Scene, f32) {
+    let mut scene = Scene::new();
+    let side = (count as f32).sqrt().ceil() as usize;
+    let ground_material = scene.add_material(Material::opaque("ground", Vec4::splat(0.6)));
+    let ground_mesh = scene.add_geometry(Geometry::plane(side as f32 * 2.0 + 10.0));
+    let ground = scene.add_node("ground", Transform::from_translation(Vec3::new(side as f32, 0.0, side as f32)));
+    scene
+        .set_renderable(ground, Renderable { geometry: ground_mesh, materials: vec![ground_material] })
+        .expect("the ground's handles were just created");
+    let cube = scene.add_geometry(Geometry::cube(1.0));
+    let materials: Vec<_> = box_colors.iter().map(|c| scene.add_material(Material::opaque("box", *c))).collect();
+    for i in 0..count {
+        let (x, z) = ((i % side) as f32 * 2.0, (i / side) as f32 * 2.0);
+        let height = 0.5 + ((i * 7919) % 13) as f32 * 0.25;
+        let transform =
+            Transform::from_translation(Vec3::new(x, height * 0.5, z)).with_scale(Vec3::new(0.8, height, 0.8));
+        let node = scene.add_node("box", transform);
+        let material = materials[i % materials.len().max(1)];
+        scene
+            .set_renderable(node, Renderable { geometry: cube, materials: vec![material] })
+            .expect("the box's handles were just created");
+    }
+    let sun_rotation = Quat::from_rotation_arc(Vec3::NEG_Z, Vec3::new(0.6, -0.5, 0.4).normalize());
+    let sun = scene.add_node("sun", Transform::IDENTITY.with_rotation(sun_rotation));
+    scene.set_light(sun, Some(Light::directional(3.0))).expect("the sun node was just created");
+    (scene, side as f32 * 2.0)
+}
+
+/// A 40 × 40 grey floor (`roughness`) with a unit box on it at
+/// (1.5, 0.5, −1), lit by a low sun: the scene of the HDR-format bench and
+/// the frame-economy tests.
+pub fn floor_with_box(roughness: f32) -> Scene {
+    let mut scene = Scene::new();
+    let grey = scene.add_material(Material { roughness, ..Material::opaque("grey", Vec4::new(0.7, 0.7, 0.7, 1.0)) });
+    let floor = scene.add_geometry(Geometry::plane(40.0));
+    let node = scene.add_node("floor", Transform::IDENTITY);
+    scene.set_renderable(node, Renderable { geometry: floor, materials: vec![grey] }).expect("valid handles");
+    let cube = scene.add_geometry(Geometry::cube(1.0));
+    let node = scene.add_node("box", Transform::from_translation(Vec3::new(1.5, 0.5, -1.0)));
+    scene.set_renderable(node, Renderable { geometry: cube, materials: vec![grey] }).expect("valid handles");
+    let sun_rotation = Quat::from_rotation_arc(Vec3::NEG_Z, Vec3::new(1.0, -0.2, -0.3).normalize());
+    let sun = scene.add_node("sun", Transform::IDENTITY.with_rotation(sun_rotation));
+    scene.set_light(sun, Some(Light::directional(0.6))).expect("a node");
+    scene
+}

@@ -48,18 +48,23 @@ pub struct ForwardLitConfig {
     pub shadow_depth_bias: f32,
 }
 
+impl ForwardLitConfig {
+    /// The defaults, usable in constants (`standard_render_graph`).
+    pub const DEFAULT: ForwardLitConfig = ForwardLitConfig {
+        clear_color: wgpu::Color { r: 0.02, g: 0.03, b: 0.05, a: 1.0 },
+        depth_from_pre_pass: true,
+        sun_shadows: true,
+        local_shadows: true,
+        reflections: true,
+        shadow_pcf_radius: 1,
+        shadow_normal_offset: 1.5,
+        shadow_depth_bias: 1e-4,
+    };
+}
+
 impl Default for ForwardLitConfig {
     fn default() -> Self {
-        ForwardLitConfig {
-            clear_color: wgpu::Color { r: 0.02, g: 0.03, b: 0.05, a: 1.0 },
-            depth_from_pre_pass: true,
-            sun_shadows: true,
-            local_shadows: true,
-            reflections: true,
-            shadow_pcf_radius: 1,
-            shadow_normal_offset: 1.5,
-            shadow_depth_bias: 1e-4,
-        }
+        Self::DEFAULT
     }
 }
 

@@ -341,8 +341,11 @@ impl FrameProgress {
         std::future::poll_fn(move |cx| {
             let mut state = self.lock();
             if views.iter().any(|v| state.pending.contains(v)) {
-                // Woken on every completion; re-checked then.
-                state.wakers.push(cx.waker().clone());
+                // Woken on every completion; re-checked then. One waker per
+                // task, however often it is polled before that.
+                if !state.wakers.iter().any(|w| w.will_wake(cx.waker())) {
+                    state.wakers.push(cx.waker().clone());
+                }
                 std::task::Poll::Pending
             } else {
                 std::task::Poll::Ready(())

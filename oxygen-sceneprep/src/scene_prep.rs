@@ -111,8 +111,6 @@ struct ViewWork {
     seconds: f32,
     /// Per item: the fraction of the viewport it covers (0 for transparent).
     coverage: Vec<f32>,
-    /// Estimated depth complexity of its opaque and masked draws.
-    overdraw: f32,
     draw_allocation: Allocation,
     indirect_allocation: Allocation,
     frame: PreparedSceneFrame,
@@ -127,7 +125,6 @@ impl ViewWork {
             missing_geometry: Vec::new(),
             seconds: 0.0,
             coverage: Vec::new(),
-            overdraw: 0.0,
             draw_allocation: Allocation::empty(DomainKind::DrawMetadata),
             indirect_allocation: Allocation::empty(DomainKind::IndirectArgs),
             frame: PreparedSceneFrame::empty(transforms),
@@ -421,7 +418,7 @@ impl ScenePrep {
                 // Items are in (node id, submesh) order, so a stable sort by
                 // key alone gives the deterministic tie-break.
                 radix_sort_by_key(&mut w.keyed, &mut w.scratch);
-                w.overdraw = overdraw_in_draw_order(&w.keyed, &w.items, &w.coverage);
+                w.frame.estimated_overdraw = overdraw_in_draw_order(&w.keyed, &w.items, &w.coverage);
                 w.seconds = started.elapsed().as_secs_f32();
             });
         }
@@ -454,7 +451,6 @@ impl ScenePrep {
                 };
                 emit_view(&frame, &view, &mut w.frame);
                 w.frame.prep_seconds = w.seconds + started.elapsed().as_secs_f32();
-                w.frame.estimated_overdraw = w.overdraw;
             });
         }
 

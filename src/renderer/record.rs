@@ -78,28 +78,38 @@ impl Renderer {
     }
 
     /// What `view` may read this frame.
+    /// The shadow map `v` rendered this frame, as another view reads it.
+    fn shadow_map_input<'a>(&'a self, v: &'a FrameView) -> Option<ShadowMapInput<'a>> {
+        let t = self.gpu_views.get(&v.id)?.targets.as_ref()?;
+        Some(ShadowMapInput { producer: v.id, view: &v.gpu, depth: &t.depth_view, resolution: t.width })
+    }
+
+    /// The frame's local shadow maps by tile, once for every view that reads them.
+    fn local_shadows<'a>(
+        &'a self,
+        plan: &'a FramePlan,
+        atlas: Option<&'a wgpu::TextureView>,
+    ) -> Option<LocalShadowsInput<'a>> {
+        let atlas = atlas?;
+        let mut tiles = vec![None; Self::atlas_layers(plan) as usize];
+        for v in &plan.views {
+            if let TargetPlan::AtlasLayer { tile } = v.target {
+                tiles[tile as usize] = self.shadow_map_input(v);
+            }
+        }
+        Some(LocalShadowsInput { atlas, tiles })
+    }
+
     fn inputs<'a>(
         &'a self,
         plan: &'a FramePlan,
         view: &FrameView,
-        atlas: Option<&'a wgpu::TextureView>,
+        local: Option<&LocalShadowsInput<'a>>,
     ) -> ViewInputs<'a> {
-        let targets = |id: ViewId| self.gpu_views.get(&id).and_then(|g| g.targets.as_ref());
         let in_frame = |id: ViewId| plan.views.iter().find(|v| v.id == id);
-        let shadow_map = |v: &'a FrameView| -> Option<ShadowMapInput<'a>> {
-            let t = targets(v.id)?;
-            Some(ShadowMapInput { producer: v.id, view: &v.gpu, depth: &t.depth_view, resolution: t.width })
-        };
-        let cascades = self.shadows.cascades_of(view.id).filter_map(in_frame).filter_map(shadow_map).collect();
-        let local_shadows = (!view.options.depth_only).then_some(atlas).flatten().map(|atlas| {
-            let mut tiles = vec![None; Self::atlas_layers(plan) as usize];
-            for v in &plan.views {
-                if let TargetPlan::AtlasLayer { tile } = v.target {
-                    tiles[tile as usize] = shadow_map(v);
-                }
-            }
-            LocalShadowsInput { atlas, tiles }
-        });
+        let cascades =
+            self.shadows.cascades_of(view.id).filter_map(in_frame).filter_map(|v| self.shadow_map_input(v)).collect();
+        let local_shadows = local.filter(|_| !view.options.depth_only).cloned();
         let mut probes = Vec::new();
         let mut views = Vec::new();
         for source in &view.links {
@@ -144,6 +154,7 @@ impl Renderer {
                 ..Default::default()
             })
         });
+        let local_shadows = self.local_shadows(plan, atlas.as_ref());
         let frames = self.prep.frames();
         // Views whose targets another view of the frame is linked to. A link
         // names the view, not which of its outputs, so any link counts as
@@ -180,7 +191,7 @@ impl Renderer {
                     pipelines: &self.pipelines,
                     lighting: &self.lighting,
                     draw_path: self.draw_path,
-                    inputs: self.inputs(plan, view, atlas.as_ref()),
+                    inputs: self.inputs(plan, view, local_shadows.as_ref()),
                     progress: &progress,
                     origin: plan.origin,
                     hdr_read_by_others: self.keep_hdr || hdr_readers.contains(&view.id),

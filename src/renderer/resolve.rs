@@ -58,14 +58,7 @@ impl Renderer {
         let _span = info_span!("resolve_views").entered();
         let limit = self.gpu.device.limits().max_texture_dimension_2d;
         // Paused views keep their targets: their memory stays taken.
-        let mut taken: u64 = self
-            .views
-            .entries
-            .iter()
-            .filter(|(_, v)| !v.active)
-            .filter_map(|(id, _)| self.gpu_views.get(id)?.targets.as_ref())
-            .map(oxygen_core::ViewTargets::bytes)
-            .sum();
+        let mut taken = self.paused_target_bytes();
         let mut views = Vec::with_capacity(self.views.entries.len());
         let mut warnings = Vec::new();
         for (id, entry) in self.views.entries.iter().filter(|(_, entry)| entry.active) {
@@ -108,17 +101,21 @@ impl Renderer {
         (FramePlan { views, origin: glam::DVec3::ZERO }, warnings)
     }
 
-    /// Target bytes the frame's own targets take (for admitting the shadow
-    /// cascades the prepare step adds).
-    pub(super) fn planned_target_bytes(&self, plan: &FramePlan) -> u64 {
-        let paused: u64 = self
-            .views
+    /// Target bytes of paused views: they keep their targets.
+    fn paused_target_bytes(&self) -> u64 {
+        self.views
             .entries
             .iter()
             .filter(|(_, v)| !v.active)
             .filter_map(|(id, _)| self.gpu_views.get(id)?.targets.as_ref())
             .map(oxygen_core::ViewTargets::bytes)
-            .sum();
+            .sum()
+    }
+
+    /// Target bytes the frame's own targets take (for admitting the shadow
+    /// cascades the prepare step adds).
+    pub(super) fn planned_target_bytes(&self, plan: &FramePlan) -> u64 {
+        let paused = self.paused_target_bytes();
         paused
             + plan
                 .views
