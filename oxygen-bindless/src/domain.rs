@@ -116,7 +116,8 @@ impl DomainKind {
     pub(crate) fn usages(self) -> wgpu::BufferUsages {
         match self {
             DomainKind::Indices => wgpu::BufferUsages::INDEX,
-            DomainKind::IndirectArgs => wgpu::BufferUsages::INDIRECT,
+            // Storage too: GPU visibility writes commands with compute.
+            DomainKind::IndirectArgs => wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::STORAGE,
             _ => wgpu::BufferUsages::STORAGE,
         }
     }

@@ -73,6 +73,8 @@ pub struct BindlessHeap {
     max_binding_bytes: u64,
     growths: u64,
     textures: TextureHeap,
+    /// Bytes written by `write` (atomic: `write` takes `&self`).
+    bytes_written: std::sync::atomic::AtomicU64,
 }
 
 impl BindlessHeap {
@@ -126,6 +128,7 @@ impl BindlessHeap {
             max_binding_bytes,
             growths: 0,
             textures: TextureHeap::new(device, queue, texture_path),
+            bytes_written: std::sync::atomic::AtomicU64::new(0),
         }
     }
 
@@ -202,7 +205,15 @@ impl BindlessHeap {
             });
         }
         queue.write_buffer(&self.buffers[kind.index()], first * record_size, bytemuck::cast_slice(records));
+        self.bytes_written.fetch_add(records.len() as u64 * record_size, std::sync::atomic::Ordering::Relaxed);
         Ok(())
+    }
+
+    /// Bytes [`BindlessHeap::write`] has sent to the GPU so far (buffer
+    /// records; textures and growth copies not included): the renderer
+    /// reports the difference per frame.
+    pub fn bytes_written(&self) -> u64 {
+        self.bytes_written.load(std::sync::atomic::Ordering::Relaxed)
     }
 
     /// Uploads a texture for a `TextureLocations` slot and records where it

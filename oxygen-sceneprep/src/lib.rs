@@ -26,6 +26,7 @@ pub mod collect;
 mod draw_metadata;
 pub mod finalize;
 mod gpu_records;
+pub mod gpu_scene;
 mod pass_mask;
 mod prepared_frame;
 mod scene_prep;
@@ -40,6 +41,7 @@ pub use gpu_records::{
     DirectionalLightRecord, GPU_RECORDS_WGSL, MAX_SHADOW_TILES, MaterialRecord, NormalMatrix, PositionalLightRecord,
     ShadowRecord, material_flags, shadow_tiles_for,
 };
+pub use gpu_scene::{GpuScene, Visibility};
 pub use pass_mask::PassMask;
-pub use prepared_frame::{Partition, PreparedSceneFrame, PreparedSlots};
+pub use prepared_frame::{GpuViewPlan, Partition, PreparedSceneFrame, PreparedSlots};
 pub use scene_prep::{PrepError, PrepStats, ScenePrep, ViewRequest};

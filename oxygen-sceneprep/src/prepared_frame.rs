@@ -13,7 +13,7 @@ use oxygen_bindless::{Allocation, DomainKind, INVALID_SLOT, RendererConstants};
 use oxygen_core::ViewId;
 
 pub use crate::finalize::partition::Partition;
-use crate::{DrawIndexedIndirect, DrawMetadata, NormalMatrix, PassMask};
+use crate::{DrawIndexedIndirect, DrawMetadata, NormalMatrix, PassMask, Visibility};
 
 /// Where a prepared frame's data lives in the bindless heap.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -58,6 +58,49 @@ pub struct FrameTransforms {
     pub normal: Vec<NormalMatrix>,
 }
 
+/// How a view on a GPU visibility path lays out its ranges (the layout is
+/// drawn in [`crate::gpu_scene`]'s module docs).
+#[derive(Clone, Debug, PartialEq)]
+pub struct GpuViewPlan {
+    /// The path.
+    pub visibility: Visibility,
+    /// Draw room of the GPU-written draws; the CPU's (transparent) draws
+    /// follow it in the view's draw range.
+    pub capacity: u32,
+    /// Groups of the GPU scene: the commands of one list.
+    pub groups: u32,
+    /// Partitions of one list.
+    pub partitions: u32,
+    /// Instances the cull shader tests.
+    pub instances: u32,
+    /// Occlusion culling: the partitions of the draws visible last frame
+    /// (list A), which the depth pre-pass draws first.
+    pub early_partitions: Vec<Partition>,
+    /// Occlusion culling: the partitions of the draws found visible only
+    /// after the depth pyramid was built (list B), drawn second.
+    pub late_partitions: Vec<Partition>,
+}
+
+impl GpuViewPlan {
+    /// Where the CPU-written draws start in the view's draw range.
+    pub fn cpu_draw_offset(&self) -> u32 {
+        self.capacity
+    }
+    /// Where the CPU-written commands start in the view's indirect range.
+    pub fn cpu_command_offset(&self) -> u32 {
+        self.visibility.command_lists() * self.groups
+    }
+    /// Counters in the view's count buffer: per list and partition, then
+    /// two per group (early and late instance counts).
+    pub fn counters(&self) -> u32 {
+        self.visibility.command_lists() * self.partitions + 2 * self.groups
+    }
+    /// The first per-group counter (early counts; late counts follow).
+    pub fn group_counters(&self) -> u32 {
+        self.visibility.command_lists() * self.partitions
+    }
+}
+
 /// ScenePrep's immutable output for one view.
 #[derive(Debug)]
 pub struct PreparedSceneFrame {
@@ -72,6 +115,7 @@ pub struct PreparedSceneFrame {
     pub(crate) debug_generations: bool,
     pub(crate) prep_seconds: f32,
     pub(crate) estimated_overdraw: f32,
+    pub(crate) gpu: Option<GpuViewPlan>,
 }
 
 fn slot(a: &Allocation) -> String {
@@ -92,6 +136,7 @@ impl PreparedSceneFrame {
             debug_generations: false,
             prep_seconds: 0.0,
             estimated_overdraw: 0.0,
+            gpu: None,
             slots: PreparedSlots::unallocated(),
         }
     }
@@ -116,9 +161,36 @@ impl PreparedSceneFrame {
     pub fn sort_keys(&self) -> &[u64] {
         &self.sort_keys
     }
-    /// Partitions in draw order.
+    /// Partitions in draw order: on a GPU path the GPU-written ones first
+    /// (for occlusion culling, those of every draw, list C), then the CPU's.
     pub fn partitions(&self) -> &[Partition] {
         &self.partitions
+    }
+    /// The GPU visibility plan, `None` on the CPU path.
+    pub fn gpu_plan(&self) -> Option<&GpuViewPlan> {
+        self.gpu.as_ref()
+    }
+    /// Where the CPU-written draws and commands start in the view's ranges:
+    /// (0, 0) on the CPU path, after the GPU's room on a GPU path.
+    pub fn cpu_offsets(&self) -> (u32, u32) {
+        self.gpu.as_ref().map_or((0, 0), |g| (g.cpu_draw_offset(), g.cpu_command_offset()))
+    }
+    /// The draws of a CPU-written partition (empty for a GPU-written one,
+    /// whose draws exist only on the GPU).
+    pub fn draws_of(&self, partition: &Partition) -> &[DrawMetadata] {
+        if partition.gpu_count.is_some() {
+            return &[];
+        }
+        let offset = self.cpu_offsets().0;
+        self.draws.get((partition.begin - offset) as usize..(partition.end - offset) as usize).unwrap_or(&[])
+    }
+    /// The commands of a CPU-written partition (empty for a GPU-written one).
+    pub fn commands_of(&self, partition: &Partition) -> &[DrawIndexedIndirect] {
+        if partition.gpu_count.is_some() {
+            return &[];
+        }
+        let start = (partition.first_command - self.cpu_offsets().1) as usize;
+        self.indirect_args.get(start..start + partition.command_count as usize).unwrap_or(&[])
     }
     /// Partitions whose mask has any bit of `required` and none of `excluded`.
     pub fn partitions_matching(&self, required: PassMask, excluded: PassMask) -> impl Iterator<Item = &Partition> {
@@ -160,7 +232,7 @@ impl PreparedSceneFrame {
             frame_sequence: self.frame_index as u32,
             time_seconds_bits: time_seconds.to_bits(),
             draw_metadata_slot: s.draw_metadata.start,
-            draw_count: self.draws.len() as u32,
+            draw_count: self.draws.len() as u32 + self.cpu_offsets().0,
             world_transforms_slot: s.world_transforms.start,
             normal_transforms_slot: s.normal_transforms.start,
             materials_slot: s.materials.start,
@@ -195,7 +267,10 @@ impl PreparedSceneFrame {
         );
         let _ = writeln!(out, "partitions ({}):", self.partitions.len());
         for p in &self.partitions {
-            let _ = writeln!(out, "  [{}, {}) {}", p.begin, p.end, p.mask.names());
+            let _ = match p.gpu_count {
+                None => writeln!(out, "  [{}, {}) {}", p.begin, p.end, p.mask.names()),
+                Some(counter) => writeln!(out, "  [{}, {}) {} gpu counter {counter}", p.begin, p.end, p.mask.names()),
+            };
         }
         let _ = writeln!(out, "draws ({}):", self.draws.len());
         for (i, (d, key)) in self.draws.iter().zip(&self.sort_keys).enumerate() {

@@ -31,7 +31,7 @@ use oxygen_core::{Geometry, GeometryHandle, ResolvedView, Scene, TextureImage, V
 use thiserror::Error;
 use tracing::info_span;
 
-use crate::collect::view_phase::collect_view;
+use crate::collect::view_phase::collect_view_subset;
 use crate::collect::view_phase::projected_screen_fraction;
 use crate::finalize::emit::{FrameEmit, ViewEmit, emit_view};
 use crate::finalize::geometry_cache::{GeometryCache, GeometrySlots};
@@ -41,7 +41,10 @@ use crate::finalize::sort_key::{sort_key, sort_key_grouped};
 use crate::finalize::texture_cache::TextureCache;
 use crate::prepared_frame::FrameTransforms;
 use crate::worker_pool::WorkerPool;
-use crate::{FrameCollection, Instancing, PassMask, PreparedSceneFrame, PreparedSlots, RenderItem, ViewPrepOptions};
+use crate::gpu_scene::GpuScene;
+use crate::{
+    FrameCollection, Instancing, PassMask, PreparedSceneFrame, PreparedSlots, RenderItem, ViewPrepOptions, Visibility,
+};
 
 /// Why a frame could not be prepared or uploaded.
 #[derive(Debug, Error, PartialEq)]
@@ -98,6 +101,11 @@ pub struct PrepStats {
     pub geometry_uploads: u64,
     /// Material table uploads so far.
     pub material_uploads: u64,
+    /// Rebuilds of the GPU scene (GPU visibility paths) so far.
+    pub gpu_scene_rebuilds: u64,
+    /// Frames whose world and normal matrices were not uploaded at all,
+    /// because the scene had not changed since the last upload.
+    pub transform_uploads_skipped: u64,
 }
 
 /// Per-view scratch state, reused frame to frame.
@@ -158,6 +166,18 @@ pub struct ScenePrep {
     frame_slots: PreparedSlots,
     /// A frame was begun and its views are not prepared yet.
     frame_begun: bool,
+    /// The opaque and masked scene as GPU records, for GPU visibility.
+    gpu_scene: GpuScene,
+    /// Collections the frame phase has made (not counting reuses): the GPU
+    /// scene and the uploaded matrices remember which one they reflect.
+    collection_generation: u64,
+    gpu_scene_generation: Option<u64>,
+    /// What the heap holds of the frame-global data: the slots and the
+    /// collection it came from, with the matrices, so that an unchanged
+    /// frame uploads nothing and a changed one only what differs.
+    uploaded: Option<(PreparedSlots, u64)>,
+    uploaded_world: Vec<glam::Mat4>,
+    uploaded_normal: Vec<crate::NormalMatrix>,
 }
 
 impl Default for ScenePrep {
@@ -189,6 +209,16 @@ fn overdraw_in_draw_order(keyed: &[(u64, u32)], items: &[RenderItem], coverage: 
     // whole frame's depth complexity bounds the estimate too.
     let total: f32 = coverage.iter().sum();
     (runs + run.min(1.0)).min(total)
+}
+
+/// Whether two frames' frame-global ranges are the same slots (handles
+/// differ, since each frame allocates anew).
+fn same_frame_ranges(a: &PreparedSlots, b: &PreparedSlots) -> bool {
+    let same = |x: &Allocation, y: &Allocation| (x.start, x.count) == (y.start, y.count);
+    same(&a.world_transforms, &b.world_transforms)
+        && same(&a.normal_transforms, &b.normal_transforms)
+        && same(&a.directional_lights, &b.directional_lights)
+        && same(&a.positional_lights, &b.positional_lights)
 }
 
 /// Locks a view's scratch; a poisoned lock (a panic in an earlier frame) is
@@ -226,6 +256,12 @@ impl ScenePrep {
             render_origin: DVec3::ZERO,
             frame_slots: PreparedSlots::unallocated(),
             frame_begun: false,
+            gpu_scene: GpuScene::default(),
+            collection_generation: 0,
+            gpu_scene_generation: None,
+            uploaded: None,
+            uploaded_world: Vec::new(),
+            uploaded_normal: Vec::new(),
         }
     }
 
@@ -284,6 +320,17 @@ impl ScenePrep {
         self.frame.invalidate();
     }
 
+    /// The GPU scene of the last frame that had a view on a GPU visibility
+    /// path (empty before).
+    pub fn gpu_scene(&self) -> &GpuScene {
+        &self.gpu_scene
+    }
+
+    /// The GPU scene, for the uploader that takes its changes.
+    pub fn gpu_scene_mut(&mut self) -> &mut GpuScene {
+        &mut self.gpu_scene
+    }
+
     /// Meshes that have slots (drawn by some view at least once).
     pub fn resident_geometry(&self) -> usize {
         self.geometry.resident()
@@ -336,6 +383,9 @@ impl ScenePrep {
             w.frame.transforms = Arc::clone(&self.released_transforms);
         }
         self.frame.collect(scene, self.render_origin);
+        if !self.frame.reused_last() {
+            self.collection_generation += 1;
+        }
         self.stats.frame_phase_runs += 1;
         self.stats.frame_phase_reuses += u64::from(self.frame.reused_last());
         self.stats.renderables_last_frame = self.frame.renderables.len() as u64;
@@ -373,15 +423,24 @@ impl ScenePrep {
             self.frames.push(PreparedSceneFrame::empty(Arc::clone(&self.released_transforms)));
         }
 
+        if views.iter().any(|v| v.options.visibility.on_gpu()) {
+            self.sync_gpu_scene(scene, slots)?;
+        }
+
         // Phase 1: cull, produce items, key and sort them.
         {
             let _span = info_span!("view_phases").entered();
             let (frame, geometry, work) = (&self.frame, &self.geometry, &self.work);
+            let transparent = self.gpu_scene.transparent_renderables();
             self.pool.run(views.len(), &|i| {
                 let started = std::time::Instant::now();
                 let mut w = lock(&work[i]);
                 let w = &mut *w;
-                collect_view(scene, frame, views[i].view, &views[i].options, &mut w.items);
+                // On a GPU path the CPU handles the transparent draws only,
+                // so it visits only the renderables that have some.
+                let on_gpu = views[i].options.visibility.on_gpu();
+                let subset = on_gpu.then_some(transparent);
+                collect_view_subset(scene, frame, views[i].view, &views[i].options, subset, &mut w.items);
                 w.keyed.clear();
                 w.missing_geometry.clear();
                 let depth_only = views[i].options.depth_only;
@@ -418,7 +477,14 @@ impl ScenePrep {
                 // Items are in (node id, submesh) order, so a stable sort by
                 // key alone gives the deterministic tie-break.
                 radix_sort_by_key(&mut w.keyed, &mut w.scratch);
-                w.frame.estimated_overdraw = overdraw_in_draw_order(&w.keyed, &w.items, &w.coverage);
+                // The GPU's draws are neither known here nor front to back:
+                // the estimate says "unknown", which turns an automatic
+                // pre-pass on.
+                w.frame.estimated_overdraw = if on_gpu {
+                    f32::INFINITY
+                } else {
+                    overdraw_in_draw_order(&w.keyed, &w.items, &w.coverage)
+                };
                 w.seconds = started.elapsed().as_secs_f32();
             });
         }
@@ -436,7 +502,7 @@ impl ScenePrep {
                 frame_index: self.frame_index,
                 debug_generations: self.debug_generations,
             };
-            let work = &self.work;
+            let (work, gpu_scene) = (&self.work, &self.gpu_scene);
             self.pool.run(views.len(), &|i| {
                 let started = std::time::Instant::now();
                 let mut w = lock(&work[i]);
@@ -448,6 +514,7 @@ impl ScenePrep {
                     draw_allocation: w.draw_allocation,
                     indirect_allocation: w.indirect_allocation,
                     instancing: views[i].options.instancing,
+                    gpu: Some((gpu_scene, views[i].options.visibility)).filter(|(_, v)| v.on_gpu()),
                 };
                 emit_view(&frame, &view, &mut w.frame);
                 w.frame.prep_seconds = w.seconds + started.elapsed().as_secs_f32();
@@ -483,12 +550,42 @@ impl ScenePrep {
             if let Some(old) = self.view_allocations.remove(&view_id) {
                 old.into_iter().try_for_each(|a| slots.free(a))?;
             }
-            w.draw_allocation = slots.allocate(DomainKind::DrawMetadata, w.keyed.len() as u32)?;
-            w.indirect_allocation = slots.allocate(DomainKind::IndirectArgs, w.keyed.len() as u32)?;
+            // A GPU path's room comes first (see `gpu_scene`'s layout).
+            let (gpu_draws, gpu_commands) = match request.options.visibility {
+                Visibility::Cpu => (0, 0),
+                v => (self.gpu_scene.capacity(), v.command_lists() * self.gpu_scene.groups().len() as u32),
+            };
+            w.draw_allocation = slots.allocate(DomainKind::DrawMetadata, gpu_draws + w.keyed.len() as u32)?;
+            w.indirect_allocation = slots.allocate(DomainKind::IndirectArgs, gpu_commands + w.keyed.len() as u32)?;
             self.view_allocations.insert(view_id, [w.draw_allocation, w.indirect_allocation]);
             total_draws += w.keyed.len() as u64;
         }
         self.stats.draws_last_frame = total_draws;
+        Ok(())
+    }
+
+    /// Rebuilds the GPU scene when the frame phase recollected the scene
+    /// since it was built: every mesh it names (LODs included) gets slots
+    /// first, since the GPU may draw any of them.
+    fn sync_gpu_scene(&mut self, scene: &Scene, slots: &mut SlotAllocators) -> Result<(), PrepError> {
+        if self.gpu_scene_generation == Some(self.collection_generation) {
+            return Ok(());
+        }
+        let _span = info_span!("sync_gpu_scene").entered();
+        for entry in &self.frame.renderables {
+            let (start, count) = entry.lods;
+            let lods = &self.frame.lod_levels[start as usize..(start + count) as usize];
+            for handle in std::iter::once(entry.geometry).chain(lods.iter().map(|l| l.geometry)) {
+                if self.geometry.get(handle).is_none()
+                    && let Some(geometry) = scene.geometry(handle)
+                {
+                    self.geometry.resolve(handle, geometry, slots)?;
+                }
+            }
+        }
+        self.gpu_scene.rebuild(scene, &self.frame, &self.geometry);
+        self.gpu_scene_generation = Some(self.collection_generation);
+        self.stats.gpu_scene_rebuilds += 1;
         Ok(())
     }
 
@@ -535,10 +632,32 @@ impl ScenePrep {
         let frames = &self.frames[..self.active_frames];
         if let Some(first) = frames.first() {
             let s = first.slots;
-            heap.write(queue, &s.world_transforms, 0, &self.frame.transforms.world)?;
-            heap.write(queue, &s.normal_transforms, 0, &self.frame.transforms.normal)?;
-            heap.write(queue, &s.directional_lights, 0, &self.frame.directional_lights)?;
-            heap.write(queue, &s.positional_lights, 0, &self.frame.positional_lights)?;
+            // A heap that grew was copied whole, so what it held is still there.
+            let same_slots = self.uploaded.is_some_and(|(u, _)| same_frame_ranges(&u, &s));
+            let same_collection = self.uploaded.is_some_and(|(_, g)| g == self.collection_generation);
+            if same_slots && same_collection {
+                self.stats.transform_uploads_skipped += 1;
+            } else {
+                let transforms = &self.frame.transforms;
+                if same_slots {
+                    // Only what moved.
+                    for r in crate::gpu_scene::changed_ranges(&self.uploaded_world, &transforms.world) {
+                        heap.write(queue, &s.world_transforms, r.start, &transforms.world[r.start as usize..r.end as usize])?;
+                    }
+                    for r in crate::gpu_scene::changed_ranges(&self.uploaded_normal, &transforms.normal) {
+                        let normals = &transforms.normal[r.start as usize..r.end as usize];
+                        heap.write(queue, &s.normal_transforms, r.start, normals)?;
+                    }
+                } else {
+                    heap.write(queue, &s.world_transforms, 0, &transforms.world)?;
+                    heap.write(queue, &s.normal_transforms, 0, &transforms.normal)?;
+                }
+                heap.write(queue, &s.directional_lights, 0, &self.frame.directional_lights)?;
+                heap.write(queue, &s.positional_lights, 0, &self.frame.positional_lights)?;
+                self.uploaded_world.clone_from(&transforms.world);
+                self.uploaded_normal.clone_from(&transforms.normal);
+                self.uploaded = Some((s, self.collection_generation));
+            }
         }
         self.textures.take_pending(&mut self.pending_textures);
         for (slot, image) in self.pending_textures.drain(..) {
@@ -563,8 +682,9 @@ impl ScenePrep {
             self.stats.geometry_uploads += 1;
         }
         for frame in frames {
-            heap.write(queue, &frame.slots.draw_metadata, 0, &frame.draws)?;
-            heap.write(queue, &frame.slots.indirect_args, 0, &frame.indirect_args)?;
+            let (draws, commands) = frame.cpu_offsets();
+            heap.write(queue, &frame.slots.draw_metadata, draws, &frame.draws)?;
+            heap.write(queue, &frame.slots.indirect_args, commands, &frame.indirect_args)?;
         }
         Ok(())
     }

@@ -52,6 +52,10 @@ pub struct ViewPrepOptions {
     pub depth_only: bool,
     /// Whether draws of one mesh become one instanced command.
     pub instancing: Instancing,
+    /// Where visibility is decided: on the CPU (the reference), or by a
+    /// compute shader per view ([`crate::Visibility`]). On a GPU path the
+    /// CPU handles only the transparent draws.
+    pub visibility: crate::Visibility,
 }
 
 impl Default for ViewPrepOptions {
@@ -62,6 +66,7 @@ impl Default for ViewPrepOptions {
             lod_bias: 1.0,
             depth_only: false,
             instancing: Instancing::default(),
+            visibility: crate::Visibility::Cpu,
         }
     }
 }
@@ -130,11 +135,32 @@ pub fn collect_view(
     options: &ViewPrepOptions,
     items: &mut Vec<RenderItem>,
 ) {
+    collect_view_subset(scene, frame, view, options, None, items)
+}
+
+/// [`collect_view`] over the renderables `subset` names (indices into
+/// [`FrameCollection::renderables`], ascending) instead of all; with a GPU
+/// [`crate::Visibility`] only transparent submeshes become items.
+pub fn collect_view_subset(
+    scene: &Scene,
+    frame: &FrameCollection,
+    view: &ResolvedView,
+    options: &ViewPrepOptions,
+    subset: Option<&[u32]>,
+    items: &mut Vec<RenderItem>,
+) {
     let _span = info_span!("view_phase", view = %view.view_id).entered();
     items.clear();
     // View-space depth of a world point is -(row 2 of the view matrix) · p.
     let view_row_z = view.view.row(2);
-    for (i, entry) in frame.renderables.iter().enumerate() {
+    let transparent_only = options.visibility.on_gpu();
+    // One iterator type for both cases, so nothing is boxed per frame.
+    let (all, listed) = match subset {
+        Some(subset) => (0..0, subset),
+        None => (0..frame.renderables.len(), &[][..]),
+    };
+    for i in all.chain(listed.iter().map(|&i| i as usize)) {
+        let Some(entry) = frame.renderables.get(i) else { continue };
         if options.filter == ViewFilter::ShadowCastersOnly && !entry.flags.contains(NodeFlags::CASTS_SHADOWS) {
             continue;
         }
@@ -164,7 +190,8 @@ pub fn collect_view(
         let lod_mesh = lod_geometry.and_then(|g| scene.geometry(g).map(|m| (g, m)));
         let (start, count) = entry.submeshes;
         for (submesh, cached) in frame.submeshes[start as usize..(start + count) as usize].iter().enumerate() {
-            if options.depth_only && cached.pass_mask.contains(PassMask::TRANSPARENT) {
+            let transparent = cached.pass_mask.contains(PassMask::TRANSPARENT);
+            if (options.depth_only && transparent) || (transparent_only && !transparent) {
                 continue;
             }
             let (geometry, first_index, index_count) = match &lod_mesh {

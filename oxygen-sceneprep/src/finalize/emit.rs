@@ -19,7 +19,8 @@ use oxygen_core::ViewId;
 use crate::finalize::geometry_cache::GeometryCache;
 use crate::finalize::partition::{build_commands, build_partitions};
 use crate::prepared_frame::FrameTransforms;
-use crate::{DrawMetadata, Instancing, PreparedSceneFrame, PreparedSlots, RenderItem};
+use crate::gpu_scene::GpuScene;
+use crate::{DrawMetadata, GpuViewPlan, Instancing, PreparedSceneFrame, PreparedSlots, RenderItem, Visibility};
 
 /// What every view of a frame emits against: shared, read-only.
 pub(crate) struct FrameEmit<'a> {
@@ -50,6 +51,8 @@ pub(crate) struct ViewEmit<'a> {
     pub indirect_allocation: Allocation,
     /// Whether runs of draws sharing a mesh become one command.
     pub instancing: Instancing,
+    /// A GPU visibility path: the GPU scene whose partitions come first.
+    pub gpu: Option<(&'a GpuScene, Visibility)>,
 }
 
 /// Fills `out` with the draws of `view`, reusing its buffers. Leaves
@@ -82,6 +85,11 @@ pub(crate) fn emit_view(frame: &FrameEmit<'_>, view: &ViewEmit<'_>, out: &mut Pr
     }
     build_partitions(&out.draws, &mut out.partitions);
     build_commands(&out.draws, &mut out.partitions, view.instancing != Instancing::Off, &mut out.indirect_args);
+    // Last frame's plan lends its vectors, so a steady frame allocates nothing.
+    let previous = out.gpu.take();
+    if let Some((scene, visibility)) = view.gpu {
+        out.gpu = Some(gpu_plan(scene, visibility, previous, out));
+    }
     out.view_id = view.view_id;
     out.frame_index = frame.frame_index;
     out.debug_generations = frame.debug_generations;
@@ -91,4 +99,47 @@ pub(crate) fn emit_view(frame: &FrameEmit<'_>, view: &ViewEmit<'_>, out: &mut Pr
         indirect_args: view.indirect_allocation,
         ..frame.frame_slots
     };
+}
+
+/// Places a GPU path's partitions before the CPU's (transparent) ones,
+/// which move past the GPU's room in the view's ranges.
+fn gpu_plan(
+    scene: &GpuScene,
+    visibility: Visibility,
+    previous: Option<GpuViewPlan>,
+    out: &mut PreparedSceneFrame,
+) -> GpuViewPlan {
+    let (mut early, mut late) = previous.map_or((Vec::new(), Vec::new()), |p| (p.early_partitions, p.late_partitions));
+    early.clear();
+    late.clear();
+    let plan = GpuViewPlan {
+        visibility,
+        capacity: scene.capacity(),
+        groups: scene.groups().len() as u32,
+        partitions: scene.partitions().len() as u32,
+        instances: scene.instances().len() as u32,
+        early_partitions: early,
+        late_partitions: late,
+    };
+    let (draws, commands) = (plan.cpu_draw_offset(), plan.cpu_command_offset());
+    for command in &mut out.indirect_args {
+        command.first_instance += draws;
+    }
+    for partition in &mut out.partitions {
+        partition.begin += draws;
+        partition.end += draws;
+        partition.first_command += commands;
+    }
+    // Occlusion culling draws lists A then B in the depth pre-pass and
+    // list C (every draw) when shading; frustum culling has list A only.
+    let mut plan = plan;
+    let shading_list = if visibility == Visibility::GpuOcclusion {
+        plan.early_partitions.extend(scene.list_partitions(0));
+        plan.late_partitions.extend(scene.list_partitions(1));
+        2
+    } else {
+        0
+    };
+    out.partitions.splice(0..0, scene.list_partitions(shading_list));
+    plan
 }

@@ -16,8 +16,16 @@ pub struct Partition {
     /// arguments ([`crate::PreparedSceneFrame::indirect_args`]).
     pub first_command: u32,
     /// Its draw commands: one per draw, or fewer when runs of draws sharing
-    /// a mesh are instanced ([`crate::Instancing`]).
+    /// a mesh are instanced ([`crate::Instancing`]). For a partition the GPU
+    /// writes, the most there can be.
     pub command_count: u32,
+    /// `None` when the CPU wrote the partition (its draws are in
+    /// [`crate::PreparedSceneFrame::draws`]). `Some(counter)` when a GPU
+    /// visibility path writes its draws and commands
+    /// ([`crate::Visibility`]): the commands actually written are counted in
+    /// that counter of the view's count buffer, the draws are not on the CPU,
+    /// and `begin..end` is the room they may take.
+    pub gpu_count: Option<u32>,
 }
 
 impl Partition {
@@ -49,7 +57,7 @@ pub fn build_partitions(draws: &[DrawMetadata], out: &mut Vec<Partition>) {
         let mask = draw.mask() & PassMask::PARTITION_BITS;
         match out.last_mut() {
             Some(last) if last.mask == mask => last.end = i as u32 + 1,
-            _ => out.push(Partition { begin: i as u32, end: i as u32 + 1, mask, first_command: 0, command_count: 0 }),
+            _ => out.push(Partition { begin: i as u32, end: i as u32 + 1, mask, first_command: 0, command_count: 0, gpu_count: None }),
         }
     }
 }
