@@ -22,7 +22,8 @@ use std::future::Future;
 use std::pin::Pin;
 
 use oxygen_passes::{
-    CommandRecorder, DepthBias, ForwardLitConfig, MeshPass, PassError, RenderContext, RenderPass, TonemapPass,
+    CommandRecorder, DepthBias, DrawList, ForwardLitConfig, MeshPass, PassError, RenderContext, RenderPass,
+    TonemapPass,
 };
 
 /// What a view records each frame: a future that awaits its passes.
@@ -38,6 +39,16 @@ pub trait RenderGraph: Send + Sync + 'static {
         ctx: &'a RenderContext<'a>,
         rec: &'a mut CommandRecorder,
     ) -> impl Future<Output = Result<(), PassError>> + 'a;
+
+    /// Whether the graph runs occlusion culling's two phases (a depth
+    /// pre-pass of [`oxygen_passes::DrawList::Early`], then
+    /// [`RenderContext::cull_occluded`], then one of
+    /// [`oxygen_passes::DrawList::Late`]) when the view asks for
+    /// [`oxygen_sceneprep::Visibility::GpuOcclusion`]. A graph that does not
+    /// gets frustum culling instead. [`StandardGraph`] does.
+    fn runs_occlusion_phases(&self) -> bool {
+        false
+    }
 }
 
 impl<F> RenderGraph for F
@@ -59,11 +70,15 @@ pub(crate) type GraphFuture<'a> = Pin<Box<dyn Future<Output = Result<(), PassErr
 /// [`RenderGraph`] without the generic return type, so graphs can be stored.
 pub(crate) trait ErasedGraph: Send + Sync {
     fn record_boxed<'a>(&'a self, ctx: &'a RenderContext<'a>, rec: &'a mut CommandRecorder) -> GraphFuture<'a>;
+    fn two_phase(&self) -> bool;
 }
 
 impl<G: RenderGraph> ErasedGraph for G {
     fn record_boxed<'a>(&'a self, ctx: &'a RenderContext<'a>, rec: &'a mut CommandRecorder) -> GraphFuture<'a> {
         Box::pin(self.record(ctx, rec))
+    }
+    fn two_phase(&self) -> bool {
+        self.runs_occlusion_phases()
     }
 }
 
@@ -151,9 +166,15 @@ impl Default for PrePass {
 impl RenderGraph for StandardGraph {
     async fn record(&self, ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError> {
         let mut lit = self.lit.clone();
-        lit.depth_from_pre_pass = self.pre_pass.wanted(ctx.prepared.estimated_overdraw());
+        // Occlusion culling builds its pyramid from the pre-pass's depth.
+        let occlusion = ctx.occlusion_culling();
+        lit.depth_from_pre_pass = occlusion || self.pre_pass.wanted(ctx.prepared.estimated_overdraw());
         if lit.depth_from_pre_pass {
-            MeshPass::depth_pre_pass().run(ctx, rec).await?;
+            MeshPass::depth_pre_pass().drawing(DrawList::Early).run(ctx, rec).await?;
+        }
+        if occlusion {
+            ctx.cull_occluded(rec);
+            MeshPass::depth_pre_pass().drawing(DrawList::Late).run(ctx, rec).await?;
         }
         let exposure = if self.exposure == 0.0 { 1.0 } else { self.exposure };
         // Nothing blends over the HDR image and no other view reads it:
@@ -165,6 +186,10 @@ impl RenderGraph for StandardGraph {
         MeshPass::forward_lit(lit).run(ctx, rec).await?;
         MeshPass::transparent().run(ctx, rec).await?;
         TonemapPass::new(exposure).run(ctx, rec).await
+    }
+
+    fn runs_occlusion_phases(&self) -> bool {
+        true
     }
 }
 

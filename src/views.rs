@@ -9,7 +9,7 @@ use std::sync::Arc;
 use oxygen_bindless::SlotAllocators;
 use oxygen_core::{CascadeSettings, Scene, ViewContext, ViewId, ViewResolver};
 use oxygen_core::{Output, OutputSource, ProbeId};
-use oxygen_sceneprep::{PreparedSceneFrame, ScenePrep, ViewPrepOptions, ViewRequest};
+use oxygen_sceneprep::{PreparedSceneFrame, ScenePrep, ViewPrepOptions, ViewRequest, Visibility};
 
 use crate::RenderError;
 use crate::graph::{ErasedGraph, RenderGraph};
@@ -22,6 +22,7 @@ pub struct ViewDesc {
     pub(crate) links: Vec<OutputSource>,
     pub(crate) sun_shadows: Option<CascadeSettings>,
     pub(crate) target: TargetKind,
+    pub(crate) visibility: Option<Visibility>,
 }
 
 /// Where a view renders.
@@ -42,7 +43,20 @@ impl ViewDesc {
             links: Vec::new(),
             sun_shadows: None,
             target: TargetKind::Own,
+            visibility: None,
         }
+    }
+
+    /// Where the view's visibility is decided ([`Visibility`]); without it
+    /// the renderer's default for the adapter ([`Renderer::visibility`]).
+    /// A GPU path the device cannot run falls back to the CPU path with a
+    /// warning; a depth-only view asking for occlusion culling gets frustum
+    /// culling (it has no depth pre-pass to build a pyramid from).
+    ///
+    /// [`Renderer::visibility`]: crate::Renderer::visibility
+    pub fn with_visibility(mut self, visibility: Visibility) -> Self {
+        self.visibility = Some(visibility);
+        self
     }
 
     /// ScenePrep options (filter, cull bound, depth only).
@@ -86,6 +100,7 @@ pub(crate) struct ViewEntry {
     pub(crate) sun_shadows: Option<CascadeSettings>,
     pub(crate) target: TargetKind,
     pub(crate) active: bool,
+    pub(crate) visibility: Option<Visibility>,
 }
 
 /// The registered views and the links between them; no GPU needed.
@@ -136,6 +151,7 @@ impl Views {
                 sun_shadows: desc.sun_shadows,
                 target: desc.target,
                 active: true,
+                visibility: desc.visibility,
             },
         );
         tracing::info!(view = %id, "view registered");

@@ -83,6 +83,7 @@ fn a_stale_draw_range_is_painted_magenta() {
         hdr_read_by_others: false,
         textured_materials: true,
         specialize_shaders: true,
+        visibility: None,
     };
     let mut recorder = CommandRecorder::new(&gpu.device, "stale view");
     // Driven by hand under `block_on`: with no recording thread attached,

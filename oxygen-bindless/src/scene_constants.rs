@@ -137,6 +137,8 @@ pub struct SceneConstantsBuffer {
     buffer: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
     current: SceneConstants,
+    /// Both halves have been written once (before, `current` is only a guess).
+    written: bool,
 }
 
 impl SceneConstantsBuffer {
@@ -157,19 +159,30 @@ impl SceneConstantsBuffer {
         let current = SceneConstants { camera: CameraConstants::zeroed(), renderer: RendererConstants::default() };
         // wgpu zero-initialises new buffers, so the GPU copy starts as zeroes
         // until both halves are written.
-        SceneConstantsBuffer { buffer, bind_group, current }
+        SceneConstantsBuffer { buffer, bind_group, current, written: false }
     }
 
-    /// Writes the view-owned half only.
-    pub fn set_camera(&mut self, queue: &wgpu::Queue, camera: &CameraConstants) {
+    /// Writes the view-owned half only, when it changed; returns the bytes
+    /// written.
+    pub fn set_camera(&mut self, queue: &wgpu::Queue, camera: &CameraConstants) -> u64 {
+        if bytemuck::bytes_of(&self.current.camera) == bytemuck::bytes_of(camera) && self.written {
+            return 0;
+        }
         self.current.camera = *camera;
         queue.write_buffer(&self.buffer, offset_of!(SceneConstants, camera) as u64, bytemuck::bytes_of(camera));
+        size_of::<CameraConstants>() as u64
     }
 
-    /// Writes the renderer-owned half only.
-    pub fn set_renderer(&mut self, queue: &wgpu::Queue, renderer: &RendererConstants) {
+    /// Writes the renderer-owned half only, when it changed; returns the
+    /// bytes written.
+    pub fn set_renderer(&mut self, queue: &wgpu::Queue, renderer: &RendererConstants) -> u64 {
+        if self.current.renderer == *renderer && self.written {
+            return 0;
+        }
+        self.written = true;
         self.current.renderer = *renderer;
         queue.write_buffer(&self.buffer, offset_of!(SceneConstants, renderer) as u64, bytemuck::bytes_of(renderer));
+        size_of::<RendererConstants>() as u64
     }
 
     /// What the buffer holds after the last writes.

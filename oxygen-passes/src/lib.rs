@@ -28,6 +28,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 mod forward_lighting;
+pub mod hiz;
 mod lighting;
 mod lighting_inputs;
 mod mesh_pass;
@@ -37,12 +38,14 @@ mod render_context;
 mod render_pass;
 mod shadow_atlas;
 mod tonemap_pass;
+mod visibility;
 
 pub use lighting::LightingResources;
 pub use lighting_inputs::{
     LightingInputs, MAX_CASCADES, MAX_PROBES, MAX_SHADOW_TILES, PROBE_FACE_AXES, PROBE_FACES, probe_view,
 };
-pub use mesh_pass::{ColorOps, ForwardLitConfig, MeshPass};
+pub use mesh_pass::{ColorOps, DrawList, ForwardLitConfig, MeshPass};
+pub use visibility::{GPU_VISIBILITY_FEATURES, GpuViewRequest, GpuVisibility, cull_shader_source};
 pub use oxygen_core::{Depth, HdrColor, Output, OutputSource, ProbeCube, ProbeId, ShadowMap};
 pub use pipelines::{
     AlphaClass, CompilerGuard, DepthBias, Exposure, PassKind, PipelineFuture, PipelineKey, PipelineVariant, Pipelines,

@@ -104,9 +104,26 @@ impl ColorOps {
     }
 }
 
+/// Which of a view's draws a mesh pass draws: they differ only for a view
+/// with GPU occlusion culling, whose depth pre-pass runs in two phases
+/// around the occlusion test ([`RenderContext::cull_occluded`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum DrawList {
+    /// Every draw of the view ([`oxygen_sceneprep::PreparedSceneFrame::partitions`]).
+    #[default]
+    All,
+    /// Occlusion culling's first phase: what was visible last frame (every
+    /// draw for other views).
+    Early,
+    /// Occlusion culling's second phase: what the depth pyramid found
+    /// visible that the first phase did not draw (nothing for other views).
+    Late,
+}
+
 /// The mesh pass: draws the partitions that match its masks.
 #[derive(Clone, Debug)]
 pub struct MeshPass {
+    list: DrawList,
     name: &'static str,
     include: PassMask,
     exclude: PassMask,
@@ -126,6 +143,7 @@ impl MeshPass {
     /// runs once per visible pixel.
     pub fn depth_pre_pass() -> Self {
         MeshPass {
+            list: DrawList::All,
             name: "depth pre-pass",
             include: PassMask::OPAQUE | PassMask::MASKED,
             exclude: PassMask::TRANSPARENT,
@@ -159,6 +177,7 @@ impl MeshPass {
         let (kind, clear_depth) =
             if config.depth_from_pre_pass { (PassKind::ShadingAfterPrePass, false) } else { (PassKind::Shading, true) };
         MeshPass {
+            list: DrawList::All,
             name: "forward lit",
             include: PassMask::OPAQUE | PassMask::MASKED,
             exclude: PassMask::TRANSPARENT,
@@ -178,6 +197,7 @@ impl MeshPass {
     /// it. Begins no render pass when the view has nothing blended.
     pub fn transparent() -> Self {
         MeshPass {
+            list: DrawList::All,
             name: "transparent",
             include: PassMask::TRANSPARENT,
             exclude: PassMask::empty(),
@@ -221,6 +241,18 @@ impl MeshPass {
         MeshPass { color, ..self }
     }
 
+    /// The same pass drawing one phase of an occlusion-culled view's draws.
+    /// [`DrawList::Late`] keeps the depth the first phase wrote (loads it
+    /// instead of clearing).
+    pub fn drawing(self, list: DrawList) -> Self {
+        let clear_depth = self.clear_depth && list != DrawList::Late;
+        let name = match list {
+            DrawList::Late => "depth pre-pass (late)",
+            _ => self.name,
+        };
+        MeshPass { list, clear_depth, name, ..self }
+    }
+
     /// The same pass under another name (logs, errors).
     pub fn named(self, name: &'static str) -> Self {
         MeshPass { name, ..self }
@@ -228,7 +260,21 @@ impl MeshPass {
 
     /// The partitions of this view the pass draws.
     fn partitions<'a>(&self, ctx: &'a RenderContext<'_>) -> impl Iterator<Item = &'a Partition> + use<'a> {
-        ctx.prepared.partitions_matching(self.include, self.exclude)
+        let (include, exclude) = (self.include, self.exclude);
+        let prepared = ctx.prepared;
+        let plan = prepared.gpu_plan().filter(|p| p.visibility == oxygen_sceneprep::Visibility::GpuOcclusion);
+        // Occlusion culling: the GPU's partitions of the phase, then the
+        // CPU's (transparent) ones, which are drawn with the first phase.
+        let (gpu, cpu): (&[Partition], bool) = match (self.list, plan) {
+            (DrawList::Early, Some(plan)) => (&plan.early_partitions, true),
+            (DrawList::Late, Some(plan)) => (&plan.late_partitions, false),
+            (DrawList::Late, None) => (&[], false),
+            _ => (prepared.partitions(), false),
+        };
+        let cpu_part = prepared.partitions().iter().filter(move |p| cpu && p.gpu_count.is_none());
+        gpu.iter()
+            .chain(cpu_part)
+            .filter(move |p| p.mask.intersects(include) && !p.mask.intersects(exclude))
     }
 
     /// The colour attachment: the HDR target (whatever format the view's
@@ -294,7 +340,8 @@ impl MeshPass {
     async fn record(&self, ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError> {
         // The transparent pass alone skips an empty frame: the others clear
         // their targets, which later passes rely on.
-        if self.kind == PassKind::Transparent && self.partitions(ctx).next().is_none() {
+        if (self.kind == PassKind::Transparent || self.list == DrawList::Late) && self.partitions(ctx).next().is_none()
+        {
             return Ok(());
         }
         let color = self.color_view(ctx)?.map(|view| (view, self.color));
@@ -401,16 +448,33 @@ fn draw_partition(
     partition: &Partition,
     stats: &mut RecordStats,
 ) {
+    let stride = std::mem::size_of::<oxygen_sceneprep::DrawIndexedIndirect>() as u64;
+    let first = ctx.prepared.slots().indirect_args.start as u64 + partition.first_command as u64;
+    let buffer = ctx.heap.buffer(oxygen_bindless::DomainKind::IndirectArgs);
+    if let Some(counter) = partition.gpu_count {
+        // Written by GPU visibility: as many commands as its counter says,
+        // at most one per group. The renderer only puts a view on a GPU
+        // path where the device counts draws.
+        if let Some(counts) = ctx.visibility.and_then(|v| v.count_buffer(ctx.view.view_id)) {
+            pass.multi_draw_indexed_indirect_count(
+                buffer,
+                first * stride,
+                counts,
+                u64::from(counter) * 4,
+                partition.command_count,
+            );
+            stats.draw_calls += 1;
+            stats.draw_commands += partition.command_count;
+        }
+        return;
+    }
     if ctx.draw_path == DrawPath::MultiDrawIndirect {
-        let stride = std::mem::size_of::<oxygen_sceneprep::DrawIndexedIndirect>() as u64;
-        let first = ctx.prepared.slots().indirect_args.start as u64 + partition.first_command as u64;
-        let buffer = ctx.heap.buffer(oxygen_bindless::DomainKind::IndirectArgs);
         pass.multi_draw_indexed_indirect(buffer, first * stride, partition.command_count);
         stats.draw_calls += 1;
         stats.draw_commands += partition.command_count;
         return;
     }
-    for command in &ctx.prepared.indirect_args()[partition.commands()] {
+    for command in ctx.prepared.commands_of(partition) {
         let indices = command.first_index..command.first_index + command.index_count;
         let instances = command.first_instance..command.first_instance + command.instance_count;
         pass.draw_indexed(indices, command.base_vertex, instances);

@@ -136,6 +136,9 @@ pub struct RenderContext<'a> {
     /// ([`crate::ShaderFeatures`]); `false` runs the fully featured shader
     /// everywhere (for comparisons).
     pub specialize_shaders: bool,
+    /// GPU visibility's per-view state, when the renderer has it: the count
+    /// buffers of GPU-written partitions, and phase 2 of occlusion culling.
+    pub visibility: Option<&'a crate::GpuVisibility>,
 }
 
 impl<'a> RenderContext<'a> {
@@ -143,6 +146,23 @@ impl<'a> RenderContext<'a> {
     /// `pass` when the view is depth-only.
     pub fn color_targets(&self, pass: &'static str) -> Result<&'a ColorTargets, PassError> {
         self.targets.color.as_ref().ok_or(PassError::NoColorTarget { pass })
+    }
+
+    /// Whether this view's visibility is GPU occlusion culling this frame:
+    /// its depth pre-pass then runs in two phases around
+    /// [`RenderContext::cull_occluded`].
+    pub fn occlusion_culling(&self) -> bool {
+        self.prepared.gpu_plan().is_some_and(|p| p.visibility == oxygen_sceneprep::Visibility::GpuOcclusion)
+    }
+
+    /// Occlusion culling's second phase, between the depth pre-pass's two
+    /// phases ([`crate::DrawList`]): builds the depth pyramid from what the
+    /// first phase drew and finds the draws it hid not. Does nothing for a
+    /// view without occlusion culling.
+    pub fn cull_occluded(&self, rec: &mut CommandRecorder) {
+        if let (true, Some(visibility)) = (self.occlusion_culling(), self.visibility) {
+            visibility.record_late(&self.gpu.device, rec.encoder(), self.view.view_id, &self.targets.depth_view);
+        }
     }
 
     /// Whether anything after the opaque shading reads the view's HDR

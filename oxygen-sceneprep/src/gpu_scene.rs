@@ -164,7 +164,7 @@ pub struct GpuPartition {
     pub draws: Range<u32>,
 }
 
-/// Ranges of [`GpuScene::instances`] changed by the last rebuild.
+/// What one rebuild of the [`GpuScene`] changed.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct GpuSceneChanges {
     /// Instance ranges to upload (all of them after a layout change).
@@ -223,9 +223,11 @@ impl GpuScene {
     pub fn rebuilds(&self) -> u64 {
         self.rebuilds
     }
-    /// Takes what changed since the last call (for the uploader).
-    pub fn take_changes(&mut self) -> GpuSceneChanges {
-        std::mem::take(&mut self.changes)
+    /// What the last rebuild changed against the one before: an uploader
+    /// that holds rebuild `rebuilds() - 1` applies these; one further
+    /// behind uploads everything.
+    pub fn last_changes(&self) -> &GpuSceneChanges {
+        &self.changes
     }
 
     /// The partitions of one command list (`list` < [`Visibility::command_lists`]):
@@ -370,12 +372,12 @@ impl GpuScene {
         self.lods = lods;
         self.instances = instances;
 
-        self.changes.layout |= self.groups != old_groups || self.lods != old_lods;
-        if self.changes.layout || previous.len() != self.instances.len() {
-            self.changes.instances = vec![0..self.instances.len() as u32];
+        self.changes.layout = self.groups != old_groups || self.lods != old_lods;
+        self.changes.instances = if self.changes.layout || previous.len() != self.instances.len() {
+            vec![0..self.instances.len() as u32]
         } else {
-            merge_ranges(&mut self.changes.instances, changed_ranges(&previous, &self.instances));
-        }
+            changed_ranges(&previous, &self.instances)
+        };
         self.rebuilds += 1;
     }
 }
@@ -407,21 +409,6 @@ pub fn changed_ranges<T: PartialEq>(old: &[T], new: &[T]) -> Vec<Range<u32>> {
     out
 }
 
-/// Adds `more` to pending ranges not yet taken (a second rebuild before an
-/// upload), keeping them sorted and disjoint.
-fn merge_ranges(pending: &mut Vec<Range<u32>>, more: Vec<Range<u32>>) {
-    pending.extend(more);
-    pending.sort_unstable_by_key(|r| r.start);
-    let mut merged: Vec<Range<u32>> = Vec::with_capacity(pending.len());
-    for r in pending.drain(..) {
-        match merged.last_mut() {
-            Some(last) if r.start <= last.end => last.end = last.end.max(r.end),
-            _ => merged.push(r),
-        }
-    }
-    *pending = merged;
-}
-
 const _: () = {
     assert!(std::mem::size_of::<GpuInstance>() == 80);
     assert!(std::mem::size_of::<GpuGroup>() == 48);
@@ -441,12 +428,5 @@ mod tests {
         new[3] = 100;
         new[14] = 100;
         assert_eq!(changed_ranges(&old, &new), vec![1..4, 14..15]);
-    }
-
-    #[test]
-    fn pending_ranges_merge_sorted_and_disjoint() {
-        let mut pending = vec![10..12, 0..2];
-        merge_ranges(&mut pending, vec![1..5, 11..20, 30..31]);
-        assert_eq!(pending, vec![0..5, 10..20, 30..31]);
     }
 }

@@ -43,5 +43,5 @@ pub use gpu_records::{
 };
 pub use gpu_scene::{GpuScene, Visibility};
 pub use pass_mask::PassMask;
-pub use prepared_frame::{GpuViewPlan, Partition, PreparedSceneFrame, PreparedSlots};
+pub use prepared_frame::{GpuViewPlan, Partition, PreparedSceneFrame, PreparedSlots, canonical_draws, canonical_dump};
 pub use scene_prep::{PrepError, PrepStats, ScenePrep, ViewRequest};

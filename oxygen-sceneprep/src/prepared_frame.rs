@@ -247,6 +247,12 @@ impl PreparedSceneFrame {
         }
     }
 
+    /// The CPU-written draws per partition mask in canonical order (see
+    /// [`canonical_draws`]): for a CPU-path frame, every draw.
+    pub fn canonical_draws(&self) -> Vec<(PassMask, Vec<DrawMetadata>)> {
+        canonical_draws(self.partitions.iter().map(|p| (p.mask, self.draws_of(p).to_vec())).collect())
+    }
+
     /// A stable, human-readable dump for snapshot tests: slots, partitions and
     /// every draw with its key. Node and material ids are slot indices, so the
     /// text depends only on the scene's construction order.
@@ -291,4 +297,55 @@ impl PreparedSceneFrame {
         }
         out
     }
+}
+
+/// Draws per partition mask in an order that does not depend on the path
+/// that produced them: masks in the CPU sort key's order (pass class,
+/// double-sided, mirrored), draws of one mask merged and ordered by
+/// (node id, submesh). The CPU path orders draws by material and depth
+/// within a partition; the GPU paths in whatever order their threads won
+/// their slots; this order is how the two are compared (and dumped,
+/// [`canonical_dump`]).
+pub fn canonical_draws(mut partitions: Vec<(PassMask, Vec<DrawMetadata>)>) -> Vec<(PassMask, Vec<DrawMetadata>)> {
+    let rank = |mask: PassMask| {
+        (mask.pass_class(), mask.contains(PassMask::DOUBLE_SIDED), mask.contains(PassMask::MIRRORED), mask.bits())
+    };
+    partitions.sort_by_key(|(mask, _)| rank(*mask));
+    let mut out: Vec<(PassMask, Vec<DrawMetadata>)> = Vec::new();
+    for (mask, draws) in partitions {
+        match out.last_mut() {
+            Some((last, merged)) if *last == mask => merged.extend(draws),
+            _ => out.push((mask, draws)),
+        }
+    }
+    out.retain(|(_, draws)| !draws.is_empty());
+    for (_, draws) in &mut out {
+        draws.sort_by_key(|d| (d.node_id, d.submesh, d.transform_index, d.material_handle, d.index_slot, d.first_index));
+    }
+    out
+}
+
+/// A text dump of [`canonical_draws`]' output, for snapshot tests and
+/// failure messages.
+pub fn canonical_dump(partitions: &[(PassMask, Vec<DrawMetadata>)]) -> String {
+    let mut out = String::new();
+    for (mask, draws) in partitions {
+        let _ = writeln!(out, "{} ({} draws):", mask.names(), draws.len());
+        for d in draws {
+            let _ = writeln!(
+                out,
+                "  node={:<4} submesh={} vertices@{} indices@{}+{}..{} transform={} material={} {}",
+                d.node_id,
+                d.submesh,
+                d.vertex_slot,
+                d.index_slot,
+                d.first_index,
+                d.first_index + d.index_count,
+                d.transform_index,
+                d.material_handle,
+                d.mask().names()
+            );
+        }
+    }
+    out
 }

@@ -23,8 +23,13 @@ use oxygen_bindless::{BindlessHeap, SceneConstantsBuffer, TexturePath};
 use oxygen_core::{
     GpuContext, GpuError, GpuOptions, HdrFormat, NodeKey, ResolvedView, Scene, ViewError, ViewId, ViewTargets,
 };
-use oxygen_passes::{DepthBias, DrawPath, LightingResources, Output, PassError, Pipelines, ProbeId, RecordStats};
-use oxygen_sceneprep::{PrepError, PreparedSceneFrame, RenderOrigin, ScenePrep, ViewPrepOptions};
+use oxygen_passes::{
+    DepthBias, DrawPath, GPU_VISIBILITY_FEATURES, GpuVisibility, LightingResources, Output, PassError, Pipelines,
+    ProbeId, RecordStats,
+};
+use oxygen_sceneprep::{
+    DrawMetadata, PassMask, PrepError, PreparedSceneFrame, RenderOrigin, ScenePrep, ViewPrepOptions, Visibility,
+};
 use thiserror::Error;
 use tracing::{info, info_span, warn};
 
@@ -157,8 +162,11 @@ pub struct ViewReport {
     pub view: ViewId,
     /// What it is for.
     pub role: ViewRole,
-    /// Draws after culling.
+    /// Draws after culling on the CPU (on a GPU path only the transparent
+    /// ones: the GPU's count stays on the GPU).
     pub draws: usize,
+    /// Where its visibility was decided.
+    pub visibility: Visibility,
     /// Partitions.
     pub partitions: usize,
     /// What its passes recorded.
@@ -227,6 +235,12 @@ pub struct FrameReport {
     /// Pipelines created during this frame (zero once every combination
     /// the scene needs exists).
     pub pipelines_created: u64,
+    /// Bytes this frame wrote into GPU buffers: the bindless heap's records
+    /// (matrices, lights, materials, meshes, CPU-path draws), the GPU
+    /// scene's changed records, and per-view constants and cull parameters
+    /// that changed. Textures are not counted. A static scene seen by a
+    /// still camera on a GPU visibility path uploads next to nothing.
+    pub uploaded_bytes: u64,
 }
 
 /// Choices made when the renderer is created.
@@ -275,6 +289,14 @@ pub struct RendererOptions {
     /// (see `oxygen_passes::ShaderFeatures`); `false` runs the fully featured
     /// shader everywhere.
     pub specialize_shaders: bool,
+    /// Where views decide visibility unless they say
+    /// ([`crate::ViewDesc::with_visibility`]); `None` picks per adapter:
+    /// [`Visibility::GpuFrustum`] on a hardware GPU that counts indirect
+    /// draws, [`Visibility::Cpu`] on a CPU adapter (lavapipe, llvmpipe:
+    /// compute there runs on the same cores as ScenePrep, measured in
+    /// docs/performance.md) and wherever the GPU paths cannot run.
+    /// [`Renderer::visibility`] reports the choice.
+    pub visibility: Option<Visibility>,
 }
 
 impl Default for RendererOptions {
@@ -292,6 +314,7 @@ impl Default for RendererOptions {
             hdr_format: HdrFormat::Rgba16Float,
             keep_hdr: false,
             specialize_shaders: true,
+            visibility: None,
         }
     }
 }
@@ -340,11 +363,16 @@ pub struct Renderer {
     specialize_shaders: bool,
     /// Whether any material of the frame's scene has a texture.
     textured_materials: bool,
+    /// GPU-driven visibility, where the device can run it.
+    visibility: Option<GpuVisibility>,
+    /// The views' default visibility path.
+    default_visibility: Visibility,
 }
 
 impl Renderer {
     /// The device features Oxygen uses when the adapter has them.
     pub const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::INDIRECT_FIRST_INSTANCE
+        .union(GPU_VISIBILITY_FEATURES)
         .union(TexturePath::BINDING_ARRAY_FEATURES)
         .union(wgpu::Features::RG11B10UFLOAT_RENDERABLE);
 
@@ -404,7 +432,20 @@ impl Renderer {
             );
             HdrFormat::Rgba16Float
         };
-        info!(?draw_path, ?texture_path, ?hdr_format, "draw and texture paths chosen");
+        // GPU visibility draws through multi-draw-indirect with counts.
+        let gpu_visibility = (draw_path == DrawPath::MultiDrawIndirect && GpuVisibility::supported(gpu.features))
+            .then(|| GpuVisibility::new(&gpu.device));
+        let cpu_adapter = gpu.adapter_info.device_type == wgpu::DeviceType::Cpu;
+        let default_visibility = match options.visibility {
+            Some(v) if v.on_gpu() && gpu_visibility.is_none() => {
+                warn!(asked = ?v, adapter = %gpu.describe(), "GPU visibility needs multi-draw-indirect with counts; using the CPU path");
+                Visibility::Cpu
+            }
+            Some(v) => v,
+            None if gpu_visibility.is_some() && !cpu_adapter => Visibility::GpuFrustum,
+            None => Visibility::Cpu,
+        };
+        info!(?draw_path, ?texture_path, ?hdr_format, ?default_visibility, "draw, texture and visibility paths chosen");
         let heap = BindlessHeap::new(&gpu.device, &gpu.queue, texture_path);
         let lighting = LightingResources::new(&gpu.device);
         let pipelines = Pipelines::new(&gpu.device, &heap, &lighting);
@@ -436,7 +477,33 @@ impl Renderer {
             keep_hdr: options.keep_hdr,
             specialize_shaders: options.specialize_shaders,
             textured_materials: true,
+            visibility: gpu_visibility,
+            default_visibility,
         })
+    }
+
+    /// Where views decide visibility unless they say otherwise (the option,
+    /// or the choice made for the adapter).
+    pub fn visibility(&self) -> Visibility {
+        self.default_visibility
+    }
+
+    /// Whether the device runs the GPU visibility paths.
+    pub fn gpu_visibility_supported(&self) -> bool {
+        self.visibility.is_some()
+    }
+
+    /// The path a view gets: what it asked for or the default; a GPU path
+    /// the device lacks becomes the CPU path, and occlusion culling becomes
+    /// frustum culling for a view without a depth pre-pass to build the
+    /// pyramid from (depth-only views, graphs that do not run the two
+    /// phases).
+    pub(crate) fn view_visibility(&self, asked: Option<Visibility>, depth_only: bool, two_phase: bool) -> Visibility {
+        match asked.unwrap_or(self.default_visibility) {
+            v if v.on_gpu() && self.visibility.is_none() => Visibility::Cpu,
+            Visibility::GpuOcclusion if depth_only || !two_phase => Visibility::GpuFrustum,
+            v => v,
+        }
     }
 
     /// How textures are bound on this device.
@@ -602,10 +669,15 @@ impl Renderer {
         let time_seconds = self.started.elapsed().as_secs_f32();
         let _span = info_span!("render_frame", frame = frame_index).entered();
         let prepare_start = Instant::now();
+        let heap_bytes_before = self.heap.bytes_written();
         let (mut plan, mut warnings) = self.resolve_views(scene, frame_index, time_seconds);
         self.prepare(scene, &mut plan, &mut warnings, frame_index, time_seconds)?;
         let prepare_seconds = prepare_start.elapsed().as_secs_f64();
-        self.allocate_targets(&plan, time_seconds);
+        let constants_bytes = self.allocate_targets(&plan, time_seconds);
+        self.prepare_gpu_visibility(&plan);
+        let uploaded_bytes = self.heap.bytes_written() - heap_bytes_before
+            + constants_bytes
+            + self.visibility.as_ref().map_or(0, GpuVisibility::uploaded_last_frame);
         self.textured_materials = scene.materials().any(|(_, m)| {
             [
                 m.base_color_texture,
@@ -644,7 +716,23 @@ impl Renderer {
             warnings,
             pipelines_used,
             pipelines_created,
+            uploaded_bytes,
         })
+    }
+
+    /// Every draw `id` drew last frame, per partition mask in canonical order
+    /// ([`oxygen_sceneprep::canonical_draws`]), whichever path produced
+    /// them: on a GPU visibility path the GPU's draws are read back (waits
+    /// for the GPU) and joined with the CPU's transparent ones. How tests
+    /// compare the GPU paths with the CPU reference.
+    pub fn view_draws(&self, id: impl Into<ViewId>) -> Result<Vec<(PassMask, Vec<DrawMetadata>)>, RenderError> {
+        let id = id.into();
+        let frame = self.prepared_frame(id).ok_or(RenderError::NoSuchView(id))?;
+        let mut all = frame.canonical_draws();
+        if let Some(visibility) = &self.visibility {
+            all.extend(visibility.read_draws(&self.gpu, &self.heap, frame)?);
+        }
+        Ok(oxygen_sceneprep::canonical_draws(all))
     }
 
     /// The view's colour target as an image (waits for the GPU).

@@ -5,7 +5,7 @@
 use std::sync::Arc;
 
 use oxygen_core::{Scene, ViewContext};
-use oxygen_sceneprep::ViewRequest;
+use oxygen_sceneprep::{ViewPrepOptions, ViewRequest};
 use tracing::{info_span, warn};
 
 use super::resolve::{FramePlan, FrameView, TargetPlan};
@@ -71,7 +71,10 @@ impl Renderer {
                 role,
                 world: view,
                 gpu: view,
-                options: shadow_view_options(),
+                options: ViewPrepOptions {
+                    visibility: self.view_visibility(None, true, false),
+                    ..shadow_view_options()
+                },
                 graph: Arc::clone(&shadow_graph),
                 links: Vec::new(),
                 target,

@@ -197,6 +197,7 @@ impl Renderer {
                     hdr_read_by_others: self.keep_hdr || hdr_readers.contains(&view.id),
                     textured_materials: self.textured_materials,
                     specialize_shaders: self.specialize_shaders,
+                    visibility: self.visibility.as_ref(),
                 },
             ));
         }
@@ -227,6 +228,7 @@ impl Renderer {
                 view: view.id,
                 role: view.role,
                 draws: frames[*i].draws().len(),
+                visibility: view.options.visibility,
                 partitions: frames[*i].partitions().len(),
                 recorded: recorded.stats,
                 prep_seconds: frames[*i].prep_seconds() as f64,
@@ -378,6 +380,10 @@ fn run_executor<'a>(
             let graph = &*view.graph;
             let future = async move {
                 let mut rec = CommandRecorder::new(&ctx.gpu.device, &view.id.to_string());
+                // GPU visibility's first phase, before any pass reads its draws.
+                if let Some(visibility) = ctx.visibility {
+                    visibility.record_early(rec.encoder(), view.id);
+                }
                 let result = graph.record_boxed(ctx, &mut rec).await;
                 let (buffer, stats) = rec.finish();
                 Recorded { result, buffer, stats, busy: Duration::ZERO }

@@ -87,7 +87,14 @@ impl Renderer {
                     role,
                     world: view,
                     gpu: view,
-                    options: entry.options,
+                    options: ViewPrepOptions {
+                        visibility: self.view_visibility(
+                            entry.visibility,
+                            entry.options.depth_only,
+                            entry.graph.two_phase(),
+                        ),
+                        ..entry.options
+                    },
                     graph: Arc::clone(&entry.graph),
                     links: entry.links.clone(),
                     target,

@@ -4,6 +4,8 @@
 
 use oxygen_bindless::{CameraConstants, SceneConstantsBuffer};
 use oxygen_core::ViewTargets;
+use oxygen_passes::GpuViewRequest;
+use oxygen_sceneprep::ViewFilter;
 use tracing::info_span;
 
 use super::resolve::{FramePlan, TargetPlan};
@@ -22,7 +24,7 @@ impl Renderer {
             .unwrap_or(0)
     }
 
-    pub(super) fn allocate_targets(&mut self, plan: &FramePlan, time_seconds: f32) {
+    pub(super) fn allocate_targets(&mut self, plan: &FramePlan, time_seconds: f32) -> u64 {
         let _span = info_span!("targets", views = plan.views.len()).entered();
         let layers = Self::atlas_layers(plan);
         let atlas = (layers > 0).then(|| {
@@ -30,6 +32,7 @@ impl Renderer {
             self.lighting.local_shadow_atlas(&self.gpu.device, resolution, layers)
         });
         let frames = self.prep.frames();
+        let mut written = 0;
         for (view, frame) in plan.views.iter().zip(frames) {
             let device = &self.gpu.device;
             let heap = &self.heap;
@@ -74,7 +77,7 @@ impl Renderer {
                 }
             }
             let v = &view.gpu;
-            entry.constants.set_camera(
+            written += entry.constants.set_camera(
                 &self.gpu.queue,
                 &CameraConstants::new(
                     v.view,
@@ -84,8 +87,30 @@ impl Renderer {
                     v.camera_position,
                 ),
             );
-            entry.constants.set_renderer(&self.gpu.queue, &frame.renderer_constants(time_seconds));
+            written += entry.constants.set_renderer(&self.gpu.queue, &frame.renderer_constants(time_seconds));
             entry.last_view = Some(view.gpu);
         }
+        written
+    }
+
+    /// Uploads the GPU scene's changes and the GPU views' cull parameters
+    /// (after the targets, whose sizes the depth pyramids follow).
+    pub(super) fn prepare_gpu_visibility(&mut self, plan: &FramePlan) {
+        let Some(visibility) = self.visibility.as_mut() else { return };
+        let frames = self.prep.frames();
+        let requests: Vec<GpuViewRequest<'_>> = plan
+            .views
+            .iter()
+            .zip(frames)
+            .filter(|(_, frame)| frame.gpu_plan().is_some())
+            .map(|(view, frame)| GpuViewRequest {
+                view: &view.world,
+                prepared: frame,
+                lod_bias: view.options.lod_bias,
+                casters_only: view.options.filter == ViewFilter::ShadowCastersOnly,
+            })
+            .collect();
+        let scene = self.prep.gpu_scene();
+        visibility.prepare(&self.gpu.device, &self.gpu.queue, &self.heap, scene, &requests);
     }
 }

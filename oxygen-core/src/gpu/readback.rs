@@ -99,6 +99,34 @@ impl GpuContext {
         Ok(HdrImage { width: texture.width(), height: texture.height(), pixels })
     }
 
+    /// `size` bytes of `buffer` from `offset` (the buffer needs `COPY_SRC`;
+    /// offset and size multiples of 4). Waits for the GPU.
+    pub fn read_buffer(&self, buffer: &wgpu::Buffer, offset: u64, size: u64) -> Result<Vec<u8>, GpuError> {
+        let _span = tracing::info_span!("read_buffer", bytes = size).entered();
+        if size == 0 {
+            return Ok(Vec::new());
+        }
+        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("buffer readback"),
+            size,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(buffer, offset, &staging, 0, size);
+        self.queue.submit([encoder.finish()]);
+        let (sender, receiver) = std::sync::mpsc::channel();
+        staging.slice(..).map_async(wgpu::MapMode::Read, move |r| {
+            // The receiver outlives the poll below; a send error cannot happen.
+            let _ = sender.send(r);
+        });
+        self.device.poll(wgpu::PollType::wait_indefinitely())?;
+        receiver.recv().unwrap_or(Err(wgpu::BufferAsyncError))?;
+        let bytes = staging.slice(..).get_mapped_range()?.to_vec();
+        staging.unmap();
+        Ok(bytes)
+    }
+
     /// The bytes of mip level 0 of a 2D texture of `bytes_per_texel`,
     /// tightly packed row by row.
     fn read_texels(&self, texture: &wgpu::Texture, bytes_per_texel: u32) -> Result<Vec<u8>, GpuError> {

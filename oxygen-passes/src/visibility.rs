@@ -1,0 +1,552 @@
+//! GPU-driven visibility: the GPU scene's buffers, and per view the compute
+//! dispatches that cull it and write the view's draws and commands.
+//!
+//! ScenePrep builds the records ([`oxygen_sceneprep::GpuScene`]) and plans
+//! each GPU view's ranges ([`oxygen_sceneprep::GpuViewPlan`]); this module
+//! uploads what changed, keeps per view a parameter block, a count buffer
+//! (the indirect counts the passes draw with), the last frame's visibility
+//! (occlusion culling) and a depth pyramid, and records:
+//!
+//! * before the view's graph, [`GpuVisibility::record_early`]: clear the
+//!   counters, cull (frustum; with occlusion only last frame's visible), and
+//!   write list A's commands;
+//! * from the graph, after the depth pre-pass drew list A
+//!   ([`crate::RenderContext::cull_occluded`]): build the depth pyramid,
+//!   test the rest against it and write lists B and C.
+//!
+//! The passes only see partitions with a `gpu_count`, which they draw with
+//! `multi_draw_indexed_indirect_count` and this view's count buffer.
+
+use std::collections::HashMap;
+
+use bytemuck::{Pod, Zeroable};
+use oxygen_bindless::{BindlessHeap, DomainKind};
+use oxygen_core::{ResolvedView, ViewId};
+use oxygen_sceneprep::gpu_scene::GpuSceneChanges;
+use oxygen_sceneprep::{GPU_RECORDS_WGSL, GpuScene, PreparedSceneFrame, Visibility};
+use tracing::info_span;
+
+use crate::hiz::{HIZ_TEST_WGSL, HizPyramid};
+
+/// `CullParams::flags`: the view takes shadow casters only.
+const CULL_CASTERS_ONLY: u32 = 1;
+/// `CullParams::flags`: two-phase occlusion culling.
+const CULL_OCCLUSION: u32 = 2;
+
+/// The features a GPU visibility path needs on top of the multi-draw
+/// indirect path: counts written by the GPU.
+pub const GPU_VISIBILITY_FEATURES: wgpu::Features =
+    wgpu::Features::MULTI_DRAW_INDIRECT_COUNT.union(wgpu::Features::INDIRECT_FIRST_INSTANCE);
+
+/// The cull shader's per-view parameters (240 bytes, WGSL `CullParams`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+struct CullParams {
+    planes: [[f32; 4]; 6],
+    view_row_z: [f32; 4],
+    view_projection: [[f32; 4]; 4],
+    lod_scale: f32,
+    perspective: u32,
+    near: f32,
+    lod_bias: f32,
+    instance_count: u32,
+    group_count: u32,
+    partition_count: u32,
+    flags: u32,
+    draw_slot: u32,
+    command_slot: u32,
+    generation: u32,
+    hiz_levels: u32,
+    hiz_size: [u32; 2],
+    group_counters: u32,
+    reserved: u32,
+}
+
+const _: () = assert!(std::mem::size_of::<CullParams>() == 240);
+
+/// One GPU view this frame, as [`GpuVisibility::prepare`] takes it.
+#[derive(Clone, Copy, Debug)]
+pub struct GpuViewRequest<'a> {
+    /// The view in absolute world space (as ScenePrep culls it).
+    pub view: &'a ResolvedView,
+    /// Its prepared frame (which carries the plan and the view's slots).
+    pub prepared: &'a PreparedSceneFrame,
+    /// LOD bias, as in `ViewPrepOptions::lod_bias`.
+    pub lod_bias: f32,
+    /// Shadow casters only (shadow views).
+    pub casters_only: bool,
+}
+
+/// A storage buffer that grows by doubling.
+struct GrowingBuffer {
+    buffer: wgpu::Buffer,
+    label: &'static str,
+    usage: wgpu::BufferUsages,
+}
+
+impl GrowingBuffer {
+    fn new(device: &wgpu::Device, label: &'static str, usage: wgpu::BufferUsages, bytes: u64) -> Self {
+        let usage = usage | wgpu::BufferUsages::COPY_DST;
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: bytes.max(16),
+            usage,
+            mapped_at_creation: false,
+        });
+        GrowingBuffer { buffer, label, usage }
+    }
+
+    /// Makes room for `bytes`; true when the buffer was replaced (its
+    /// contents are lost and bind groups naming it are stale).
+    fn reserve(&mut self, device: &wgpu::Device, bytes: u64) -> bool {
+        if bytes <= self.buffer.size() {
+            return false;
+        }
+        *self = Self::new(device, self.label, self.usage, bytes.next_power_of_two());
+        true
+    }
+}
+
+/// Per-view state kept between frames.
+struct ViewCull {
+    params: wgpu::Buffer,
+    written: Option<CullParams>,
+    counts: GrowingBuffer,
+    history: GrowingBuffer,
+    hiz: Option<HizPyramid>,
+    bind_group: Option<wgpu::BindGroup>,
+    /// What `bind_group` was made from: buffer generation, heap growths,
+    /// pyramid size.
+    bound: (u64, u64, Option<(u32, u32)>),
+    plan_visibility: Visibility,
+    instances: u32,
+    groups: u32,
+    partitions: u32,
+    /// Seen this frame (views not seen are dropped at the next prepare).
+    seen: bool,
+}
+
+/// The GPU scene's buffers, the cull pipelines and every GPU view's state.
+pub struct GpuVisibility {
+    instances: GrowingBuffer,
+    groups: GrowingBuffer,
+    lods: GrowingBuffer,
+    /// Bumped whenever a scene buffer is replaced.
+    generation: u64,
+    layout: wgpu::BindGroupLayout,
+    cull_early: wgpu::ComputePipeline,
+    commands_early: wgpu::ComputePipeline,
+    cull_late: wgpu::ComputePipeline,
+    commands_late: wgpu::ComputePipeline,
+    /// Bound in place of a pyramid by views without occlusion culling.
+    no_hiz: wgpu::TextureView,
+    views: HashMap<ViewId, ViewCull>,
+    uploaded_last_frame: u64,
+    /// The GPU scene rebuild the buffers hold.
+    uploaded_rebuild: Option<u64>,
+}
+
+fn storage(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// The cull shader's full source: records, the pyramid test, the flags.
+pub fn cull_shader_source() -> String {
+    let constants = format!(
+        "const CULL_CASTERS_ONLY: u32 = {CULL_CASTERS_ONLY}u;\nconst CULL_OCCLUSION: u32 = {CULL_OCCLUSION}u;\n\
+         const INSTANCE_CASTS_SHADOWS: u32 = {}u;\n",
+        oxygen_sceneprep::gpu_scene::GpuInstance::CASTS_SHADOWS
+    );
+    [GPU_RECORDS_WGSL, HIZ_TEST_WGSL, &constants, include_str!("visibility_cull.wgsl")].join("\n")
+}
+
+impl GpuVisibility {
+    /// Whether `features` allow the GPU paths (the device also needs
+    /// compute shaders, which every adapter wgpu runs on Vulkan, Metal and
+    /// DX12 has).
+    pub fn supported(features: wgpu::Features) -> bool {
+        features.contains(GPU_VISIBILITY_FEATURES)
+    }
+
+    /// Pipelines and empty buffers.
+    pub fn new(device: &wgpu::Device) -> Self {
+        let _span = info_span!("gpu_visibility_new").entered();
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("gpu visibility"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+                storage(1, true),
+                storage(2, true),
+                storage(3, true),
+                storage(4, false),
+                storage(5, false),
+                storage(6, false),
+                storage(7, false),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 8,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+            ],
+        });
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("visibility cull"),
+            source: wgpu::ShaderSource::Wgsl(cull_shader_source().into()),
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("visibility cull"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = |entry: &'static str| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        let no_hiz = device
+            .create_texture(&wgpu::TextureDescriptor {
+                label: Some("no depth pyramid"),
+                size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::R32Float,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            })
+            .create_view(&Default::default());
+        let read = wgpu::BufferUsages::STORAGE;
+        GpuVisibility {
+            instances: GrowingBuffer::new(device, "gpu scene instances", read, 0),
+            groups: GrowingBuffer::new(device, "gpu scene groups", read, 0),
+            lods: GrowingBuffer::new(device, "gpu scene lods", read, 0),
+            generation: 0,
+            cull_early: pipeline("cull_early"),
+            commands_early: pipeline("commands_early"),
+            cull_late: pipeline("cull_late"),
+            commands_late: pipeline("commands_late"),
+            layout,
+            no_hiz,
+            views: HashMap::new(),
+            uploaded_last_frame: 0,
+            uploaded_rebuild: None,
+        }
+    }
+
+    /// Bytes the last [`GpuVisibility::prepare`] uploaded (scene records and
+    /// view parameters).
+    pub fn uploaded_last_frame(&self) -> u64 {
+        self.uploaded_last_frame
+    }
+
+    /// Uploads what changed in `scene` and each view's parameters (only when
+    /// they changed), and makes sure every view has its buffers, pyramid and
+    /// bind group. Views not named are forgotten.
+    pub fn prepare(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        heap: &BindlessHeap,
+        scene: &GpuScene,
+        views: &[GpuViewRequest<'_>],
+    ) {
+        let _span = info_span!("gpu_visibility_prepare", views = views.len()).entered();
+        let mut uploaded = 0u64;
+        let everything = GpuSceneChanges { instances: vec![0..scene.instances().len() as u32], layout: true };
+        let mut changes = match self.uploaded_rebuild {
+            Some(held) if held == scene.rebuilds() => GpuSceneChanges::default(),
+            Some(held) if held + 1 == scene.rebuilds() => scene.last_changes().clone(),
+            _ => everything.clone(),
+        };
+        self.uploaded_rebuild = Some(scene.rebuilds());
+        let bytes = |n: usize, size: usize| (n * size) as u64;
+        let instance_size = std::mem::size_of::<oxygen_sceneprep::gpu_scene::GpuInstance>();
+        let mut replaced = self.instances.reserve(device, bytes(scene.instances().len(), instance_size));
+        replaced |= self.groups.reserve(device, bytes(scene.groups().len(), 48));
+        replaced |= self.lods.reserve(device, bytes(scene.lods().len(), 8));
+        if replaced {
+            self.generation += 1;
+            changes = everything;
+        }
+        if changes.layout {
+            queue.write_buffer(&self.groups.buffer, 0, bytemuck::cast_slice(scene.groups()));
+            queue.write_buffer(&self.lods.buffer, 0, bytemuck::cast_slice(scene.lods()));
+            uploaded += bytes(scene.groups().len(), 48) + bytes(scene.lods().len(), 8);
+        }
+        for range in &changes.instances {
+            let records = &scene.instances()[range.start as usize..range.end as usize];
+            if !records.is_empty() {
+                let offset = bytes(range.start as usize, instance_size);
+                queue.write_buffer(&self.instances.buffer, offset, bytemuck::cast_slice(records));
+                uploaded += bytes(records.len(), instance_size);
+            }
+        }
+
+        for state in self.views.values_mut() {
+            state.seen = false;
+        }
+        for request in views {
+            let Some(plan) = request.prepared.gpu_plan() else { continue };
+            let id = request.view.view_id;
+            let state = self.views.entry(id).or_insert_with(|| ViewCull {
+                params: device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("cull params"),
+                    size: std::mem::size_of::<CullParams>() as u64,
+                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                }),
+                written: None,
+                counts: GrowingBuffer::new(
+                    device,
+                    "cull counts",
+                    // COPY_SRC: tests read the counts back.
+                    wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_SRC,
+                    0,
+                ),
+                history: GrowingBuffer::new(device, "cull history", wgpu::BufferUsages::STORAGE, 0),
+                hiz: None,
+                bind_group: None,
+                bound: (u64::MAX, u64::MAX, None),
+                plan_visibility: plan.visibility,
+                instances: 0,
+                groups: 0,
+                partitions: 0,
+                seen: true,
+            });
+            state.seen = true;
+            let mut stale = state.counts.reserve(device, u64::from(plan.counters()) * 4);
+            // New instance numbering or a new path: last frame's visibility
+            // means nothing, so start from "nothing was visible" (phase 2
+            // then tests everything).
+            let renumbered = state.instances != plan.instances || state.plan_visibility != plan.visibility;
+            stale |= state.history.reserve(device, u64::from(plan.instances) * 4);
+            if renumbered || changes.layout {
+                queue.write_buffer(&state.history.buffer, 0, &vec![0u8; plan.instances as usize * 4]);
+                uploaded += u64::from(plan.instances) * 4;
+            }
+            (state.instances, state.groups, state.partitions) = (plan.instances, plan.groups, plan.partitions);
+            state.plan_visibility = plan.visibility;
+            let occlusion = plan.visibility == Visibility::GpuOcclusion;
+            let size = (request.view.viewport.x.max(1), request.view.viewport.y.max(1));
+            if occlusion && state.hiz.as_ref().is_none_or(|h| h.size() != size) {
+                state.hiz = Some(HizPyramid::new(device, size.0, size.1));
+            } else if !occlusion {
+                state.hiz = None;
+            }
+            let hiz_size = state.hiz.as_ref().map(HizPyramid::size);
+            let bound = (self.generation, heap.growth_count(), hiz_size);
+            if stale || state.bind_group.is_none() || state.bound != bound {
+                let scene_buffers = [&self.instances.buffer, &self.groups.buffer, &self.lods.buffer];
+                state.bind_group = Some(bind_group(device, &self.layout, scene_buffers, &self.no_hiz, heap, state));
+                state.bound = bound;
+            }
+
+            let params = cull_params(request, plan, state.hiz.as_ref());
+            if state.written != Some(params) {
+                queue.write_buffer(&state.params, 0, bytemuck::bytes_of(&params));
+                state.written = Some(params);
+                uploaded += std::mem::size_of::<CullParams>() as u64;
+            }
+        }
+        self.views.retain(|_, state| state.seen);
+        self.uploaded_last_frame = uploaded;
+    }
+
+    /// The buffer whose counters a GPU-written partition's `gpu_count`
+    /// indexes, for `view` this frame.
+    pub fn count_buffer(&self, view: ViewId) -> Option<&wgpu::Buffer> {
+        self.views.get(&view).map(|s| &s.counts.buffer)
+    }
+
+    fn dispatch(&self, encoder: &mut wgpu::CommandEncoder, state: &ViewCull, steps: &[(&wgpu::ComputePipeline, u32)]) {
+        let Some(bind_group) = &state.bind_group else { return };
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("visibility cull"),
+            timestamp_writes: None,
+        });
+        pass.set_bind_group(0, bind_group, &[]);
+        for (pipeline, threads) in steps {
+            if *threads > 0 {
+                pass.set_pipeline(pipeline);
+                pass.dispatch_workgroups(threads.div_ceil(64), 1, 1);
+            }
+        }
+    }
+
+    /// Phase 1 for `view`: clears its counters, culls, writes list A.
+    /// Nothing for a view that is not on a GPU path this frame.
+    pub fn record_early(&self, encoder: &mut wgpu::CommandEncoder, view: ViewId) {
+        let Some(state) = self.views.get(&view) else { return };
+        let _span = info_span!("cull_early", view = %view).entered();
+        encoder.clear_buffer(&state.counts.buffer, 0, None);
+        self.dispatch(encoder, state, &[(&self.cull_early, state.instances), (&self.commands_early, state.groups)]);
+    }
+
+    /// Phase 2 for `view` (occlusion culling): builds the depth pyramid from
+    /// `depth` (what phase 1's draws left), tests the instances phase 1 did
+    /// not draw, writes lists B and C. Nothing for other views.
+    pub fn record_late(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        view: ViewId,
+        depth: &wgpu::TextureView,
+    ) {
+        let Some(state) = self.views.get(&view) else { return };
+        let Some(hiz) = &state.hiz else { return };
+        let _span = info_span!("cull_late", view = %view).entered();
+        hiz.build(device, encoder, depth);
+        self.dispatch(encoder, state, &[(&self.cull_late, state.instances), (&self.commands_late, state.groups)]);
+    }
+}
+
+/// One view's cull bind group.
+fn bind_group(
+device: &wgpu::Device,
+layout: &wgpu::BindGroupLayout,
+[instances, groups, lods]: [&wgpu::Buffer; 3],
+no_hiz: &wgpu::TextureView,
+heap: &BindlessHeap,
+state: &ViewCull,
+) -> wgpu::BindGroup {
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("gpu visibility"),
+        layout,
+        entries: &[
+            buffer(0, &state.params),
+            buffer(1, instances),
+            buffer(2, groups),
+            buffer(3, lods),
+            buffer(4, &state.counts.buffer),
+            buffer(5, &state.history.buffer),
+            buffer(6, heap.buffer(DomainKind::DrawMetadata)),
+            buffer(7, heap.buffer(DomainKind::IndirectArgs)),
+            wgpu::BindGroupEntry {
+                binding: 8,
+                resource: wgpu::BindingResource::TextureView(state.hiz.as_ref().map_or(no_hiz, |h| h.view())),
+            },
+        ],
+    })
+}
+
+
+fn buffer(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry { binding, resource: buffer.as_entire_binding() }
+}
+
+impl GpuVisibility {
+    /// Reads back what the GPU wrote for `prepared`'s view last frame: per
+    /// GPU-written partition its mask and draws, in the order the GPU wrote
+    /// them (which varies from run to run: threads race for slots). Waits
+    /// for the GPU. Empty for a view not on a GPU path.
+    pub fn read_draws(
+        &self,
+        gpu: &oxygen_core::GpuContext,
+        heap: &BindlessHeap,
+        prepared: &PreparedSceneFrame,
+    ) -> Result<Vec<(oxygen_sceneprep::PassMask, Vec<oxygen_sceneprep::DrawMetadata>)>, oxygen_core::GpuError> {
+        let _span = info_span!("read_draws", view = %prepared.view_id()).entered();
+        let (Some(plan), Some(state)) = (prepared.gpu_plan(), self.views.get(&prepared.view_id())) else {
+            return Ok(Vec::new());
+        };
+        let words = |bytes: Vec<u8>| -> Vec<u32> { bytemuck::pod_collect_to_vec(&bytes) };
+        let counts = words(gpu.read_buffer(&state.counts.buffer, 0, u64::from(plan.counters()) * 4)?);
+        let slots = prepared.slots();
+        let command_size = std::mem::size_of::<oxygen_sceneprep::DrawIndexedIndirect>() as u64;
+        let draw_size = std::mem::size_of::<oxygen_sceneprep::DrawMetadata>() as u64;
+        let commands: Vec<oxygen_sceneprep::DrawIndexedIndirect> = bytemuck::pod_collect_to_vec(&gpu.read_buffer(
+            heap.buffer(DomainKind::IndirectArgs),
+            u64::from(slots.indirect_args.start) * command_size,
+            u64::from(plan.cpu_command_offset()) * command_size,
+        )?);
+        let draws: Vec<oxygen_sceneprep::DrawMetadata> = bytemuck::pod_collect_to_vec(&gpu.read_buffer(
+            heap.buffer(DomainKind::DrawMetadata),
+            u64::from(slots.draw_metadata.start) * draw_size,
+            u64::from(plan.capacity) * draw_size,
+        )?);
+        let mut out = Vec::new();
+        for partition in prepared.partitions() {
+            let Some(counter) = partition.gpu_count else { continue };
+            let written = counts.get(counter as usize).copied().unwrap_or(0).min(partition.command_count);
+            let first = partition.first_command as usize;
+            let mut partition_draws = Vec::new();
+            for command in commands.get(first..first + written as usize).unwrap_or(&[]) {
+                let range = command.first_instance as usize..(command.first_instance + command.instance_count) as usize;
+                partition_draws.extend_from_slice(draws.get(range).unwrap_or(&[]));
+            }
+            out.push((partition.mask, partition_draws));
+        }
+        Ok(out)
+    }
+}
+
+/// The parameter block for one view.
+fn cull_params(
+    request: &GpuViewRequest<'_>,
+    plan: &oxygen_sceneprep::GpuViewPlan,
+    hiz: Option<&HizPyramid>,
+) -> CullParams {
+    let view = request.view;
+    let slots = request.prepared.slots();
+    let mut planes = [[0.0; 4]; 6];
+    for (out, plane) in planes.iter_mut().zip(&view.frustum.planes) {
+        *out = plane.normal.extend(plane.d).to_array();
+    }
+    let mut flags = 0;
+    if request.casters_only {
+        flags |= CULL_CASTERS_ONLY;
+    }
+    if plan.visibility == Visibility::GpuOcclusion {
+        flags |= CULL_OCCLUSION;
+    }
+    let generation = request.prepared.renderer_constants(0.0).debug_flags;
+    let generation = if generation != 0 { slots.draw_metadata.generation() } else { 0 };
+    CullParams {
+        planes,
+        view_row_z: view.view.row(2).to_array(),
+        view_projection: (view.projection * view.view).to_cols_array_2d(),
+        lod_scale: view.projection.y_axis.y,
+        perspective: u32::from(view.projection.w_axis.w == 0.0),
+        near: view.near,
+        lod_bias: request.lod_bias,
+        instance_count: plan.instances,
+        group_count: plan.groups,
+        partition_count: plan.partitions,
+        flags,
+        draw_slot: slots.draw_metadata.start,
+        command_slot: slots.indirect_args.start,
+        generation,
+        hiz_levels: hiz.map_or(0, HizPyramid::levels),
+        hiz_size: hiz.map_or([1, 1], |h| [h.size().0, h.size().1]),
+        group_counters: plan.group_counters(),
+        reserved: 0,
+    }
+}

@@ -1,0 +1,243 @@
+// GPU-driven visibility: frustum and occlusion culling of the GPU scene's
+// instances, compacted into the view's DrawMetadata range and its instanced
+// commands. The layout of the ranges and counters is drawn in
+// oxygen-sceneprep's gpu_scene module. Prepended: DrawMetadata (gpu_records),
+// hiz_visible (hiz_test), and the CULL_* flag constants.
+
+struct GpuInstance {
+    aabb_min: vec3<f32>,
+    group: u32,
+    aabb_max: vec3<f32>,
+    flags: u32,
+    sphere: vec4<f32>,
+    transform_index: u32,
+    node_id: u32,
+    submesh: u32,
+    lod_first: u32,
+    lod_count: u32,
+    reserved0: u32,
+    reserved1: u32,
+    reserved2: u32,
+}
+
+struct GpuGroup {
+    vertex_slot: u32,
+    index_slot: u32,
+    first_index: u32,
+    index_count: u32,
+    base_vertex: i32,
+    material: u32,
+    pass_mask: u32,
+    command_base: u32,
+    draw_base: u32,
+    partition: u32,
+    capacity: u32,
+    reserved: u32,
+}
+
+struct GpuLod {
+    below_screen_fraction: f32,
+    group: u32,
+}
+
+struct Command {
+    index_count: u32,
+    instance_count: u32,
+    first_index: u32,
+    base_vertex: i32,
+    first_instance: u32,
+}
+
+struct CullParams {
+    planes: array<vec4<f32>, 6>,
+    view_row_z: vec4<f32>,
+    view_projection: mat4x4<f32>,
+    lod_scale: f32,
+    perspective: u32,
+    near: f32,
+    lod_bias: f32,
+    instance_count: u32,
+    group_count: u32,
+    partition_count: u32,
+    flags: u32,
+    draw_slot: u32,
+    command_slot: u32,
+    generation: u32,
+    hiz_levels: u32,
+    hiz_size: vec2<u32>,
+    group_counters: u32,
+    reserved: u32,
+}
+
+@group(0) @binding(0) var<uniform> params: CullParams;
+@group(0) @binding(1) var<storage, read> instances: array<GpuInstance>;
+@group(0) @binding(2) var<storage, read> groups: array<GpuGroup>;
+@group(0) @binding(3) var<storage, read> lods: array<GpuLod>;
+@group(0) @binding(4) var<storage, read_write> counts: array<atomic<u32>>;
+@group(0) @binding(5) var<storage, read_write> history: array<u32>;
+@group(0) @binding(6) var<storage, read_write> draws: array<DrawMetadata>;
+@group(0) @binding(7) var<storage, read_write> commands: array<Command>;
+@group(0) @binding(8) var hiz: texture_2d<f32>;
+
+// The CPU path's test (Frustum::intersects_aabb): the box's corner farthest
+// along each plane's normal must not be behind it.
+fn in_frustum(instance: GpuInstance) -> bool {
+    for (var p = 0u; p < 6u; p++) {
+        let plane = params.planes[p];
+        let corner = select(instance.aabb_min, instance.aabb_max, plane.xyz >= vec3<f32>(0.0));
+        if dot(plane.xyz, corner) + plane.w < 0.0 {
+            return false;
+        }
+    }
+    return true;
+}
+
+// Whether this view tests the instance at all.
+fn wanted(instance: GpuInstance) -> bool {
+    return (params.flags & CULL_CASTERS_ONLY) == 0u || (instance.flags & INSTANCE_CASTS_SHADOWS) != 0u;
+}
+
+// The view phase's LOD choice: the last level whose threshold the sphere's
+// projected diameter is below.
+fn select_group(instance: GpuInstance) -> u32 {
+    var group = instance.group;
+    if instance.lod_count == 0u {
+        return group;
+    }
+    let depth = -(dot(params.view_row_z.xyz, instance.sphere.xyz) + params.view_row_z.w);
+    var fraction = instance.sphere.w * params.lod_scale;
+    if params.perspective != 0u {
+        fraction = instance.sphere.w * params.lod_scale / max(depth, params.near);
+    }
+    let projected = 2.0 * fraction * params.lod_bias;
+    for (var l = 0u; l < instance.lod_count; l++) {
+        let lod = lods[instance.lod_first + l];
+        if projected < lod.below_screen_fraction {
+            group = lod.group;
+        }
+    }
+    return group;
+}
+
+fn emit(group_index: u32, slot: u32, instance: GpuInstance) {
+    let group = groups[group_index];
+    var draw: DrawMetadata;
+    draw.vertex_slot = group.vertex_slot;
+    draw.index_slot = group.index_slot;
+    draw.first_index = group.first_index;
+    draw.index_count = group.index_count;
+    draw.base_vertex = group.base_vertex;
+    draw.instance_count = 1u;
+    draw.transform_index = instance.transform_index;
+    draw.material_handle = group.material;
+    draw.pass_mask = group.pass_mask;
+    draw.node_id = instance.node_id;
+    draw.submesh = instance.submesh;
+    draw.reserved0 = params.generation;
+    draw.reserved1 = 0u;
+    draw.reserved2 = 0u;
+    draw.reserved3 = 0u;
+    draw.reserved4 = 0u;
+    draws[params.draw_slot + group.draw_base + slot] = draw;
+}
+
+fn command(group: GpuGroup, instances: u32, first: u32) -> Command {
+    return Command(group.index_count, instances, group.index_slot + group.first_index,
+        i32(group.vertex_slot) + group.base_vertex, group.draw_base + first);
+}
+
+// Phase 1. Frustum culling: every instance in the frustum is drawn.
+// Occlusion culling: only those visible last frame are drawn now; the
+// others wait for the depth pyramid (cull_late).
+@compute @workgroup_size(64)
+fn cull_early(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= params.instance_count {
+        return;
+    }
+    let instance = instances[i];
+    if !wanted(instance) {
+        return;
+    }
+    let occlusion = (params.flags & CULL_OCCLUSION) != 0u;
+    if !in_frustum(instance) {
+        if occlusion {
+            history[i] = 0u;
+        }
+        return;
+    }
+    if occlusion && history[i] == 0u {
+        return;
+    }
+    let group = select_group(instance);
+    let slot = atomicAdd(&counts[params.group_counters + group], 1u);
+    emit(group, slot, instance);
+}
+
+// Phase 1's commands (list A): one instanced command per group with draws,
+// compacted at its partition's start and counted by the partition's counter.
+@compute @workgroup_size(64)
+fn commands_early(@builtin(global_invocation_id) id: vec3<u32>) {
+    let g = id.x;
+    if g >= params.group_count {
+        return;
+    }
+    let drawn = atomicLoad(&counts[params.group_counters + g]);
+    if drawn == 0u {
+        return;
+    }
+    let group = groups[g];
+    let c = atomicAdd(&counts[group.partition], 1u);
+    commands[params.command_slot + group.command_base + c] = command(group, drawn, 0u);
+}
+
+// Phase 2 (occlusion): every instance in the frustum is tested against the
+// pyramid of what phase 1 drew; the result is next frame's history, and the
+// visible ones phase 1 did not draw are drawn now.
+@compute @workgroup_size(64)
+fn cull_late(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= params.instance_count {
+        return;
+    }
+    let instance = instances[i];
+    if !wanted(instance) || !in_frustum(instance) {
+        return;
+    }
+    let drawn_early = history[i] != 0u;
+    // The box is widened by its coordinates' rounding at this distance from
+    // the world origin, so that f32 projection error never hides it.
+    let slack = (abs(instance.aabb_min) + abs(instance.aabb_max)) * 1e-6 + vec3<f32>(1e-6);
+    let visible = hiz_visible(hiz, params.hiz_levels, params.hiz_size, params.view_projection,
+        instance.aabb_min - slack, instance.aabb_max + slack);
+    history[i] = select(0u, 1u, visible);
+    if !visible || drawn_early {
+        return;
+    }
+    let group = select_group(instance);
+    let early = atomicLoad(&counts[params.group_counters + group]);
+    let slot = early + atomicAdd(&counts[params.group_counters + params.group_count + group], 1u);
+    emit(group, slot, instance);
+}
+
+// Phase 2's commands: list B (the newly visible, drawn into the depth
+// pre-pass second) and list C (every draw, for shading).
+@compute @workgroup_size(64)
+fn commands_late(@builtin(global_invocation_id) id: vec3<u32>) {
+    let g = id.x;
+    if g >= params.group_count {
+        return;
+    }
+    let early = atomicLoad(&counts[params.group_counters + g]);
+    let late = atomicLoad(&counts[params.group_counters + params.group_count + g]);
+    let group = groups[g];
+    if late > 0u {
+        let c = atomicAdd(&counts[params.partition_count + group.partition], 1u);
+        commands[params.command_slot + params.group_count + group.command_base + c] = command(group, late, early);
+    }
+    if early + late > 0u {
+        let c = atomicAdd(&counts[2u * params.partition_count + group.partition], 1u);
+        commands[params.command_slot + 2u * params.group_count + group.command_base + c] =
+            command(group, early + late, 0u);
+    }
+}
