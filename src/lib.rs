@@ -103,5 +103,5 @@ pub mod prelude {
         CommandRecorder, DrawPath, ForwardLitConfig, MeshPass, Output, PassError, RenderContext, RenderPass,
         TonemapPass,
     };
-    pub use oxygen_sceneprep::{PassMask, PreparedSceneFrame, ViewPrepOptions};
+    pub use oxygen_sceneprep::{PassMask, PreparedSceneFrame, ViewPrepOptions, Visibility};
 }

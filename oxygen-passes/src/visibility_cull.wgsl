@@ -30,7 +30,7 @@ struct GpuGroup {
     pass_mask: u32,
     command_base: u32,
     draw_base: u32,
-    partition: u32,
+    partition_index: u32,
     capacity: u32,
     reserved: u32,
 }
@@ -187,7 +187,7 @@ fn commands_early(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let group = groups[g];
-    let c = atomicAdd(&counts[group.partition], 1u);
+    let c = atomicAdd(&counts[group.partition_index], 1u);
     commands[params.command_slot + group.command_base + c] = command(group, drawn, 0u);
 }
 
@@ -232,11 +232,11 @@ fn commands_late(@builtin(global_invocation_id) id: vec3<u32>) {
     let late = atomicLoad(&counts[params.group_counters + params.group_count + g]);
     let group = groups[g];
     if late > 0u {
-        let c = atomicAdd(&counts[params.partition_count + group.partition], 1u);
+        let c = atomicAdd(&counts[params.partition_count + group.partition_index], 1u);
         commands[params.command_slot + params.group_count + group.command_base + c] = command(group, late, early);
     }
     if early + late > 0u {
-        let c = atomicAdd(&counts[2u * params.partition_count + group.partition], 1u);
+        let c = atomicAdd(&counts[2u * params.partition_count + group.partition_index], 1u);
         commands[params.command_slot + 2u * params.group_count + group.command_base + c] =
             command(group, early + late, 0u);
     }

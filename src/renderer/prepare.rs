@@ -58,6 +58,16 @@ impl Renderer {
                     continue;
                 }
             };
+            // A sun cascade culls the way its owner does (frustum culling
+            // for an owner with occlusion culling: a shadow map has no
+            // pre-pass to build a pyramid from); local shadows the default way.
+            let owner_visibility = match shadow.role {
+                ShadowRole::Cascade { owner, .. } => {
+                    plan.views.iter().find(|v| v.id == owner).map(|v| v.options.visibility)
+                }
+                ShadowRole::Local { .. } => None,
+            };
+            let visibility = self.view_visibility(owner_visibility, true, false);
             let (role, target) = match shadow.role {
                 ShadowRole::Cascade { owner, index } => {
                     (ViewRole::SunCascade { owner, index }, TargetPlan::Own { with_color: false })
@@ -72,7 +82,7 @@ impl Renderer {
                 world: view,
                 gpu: view,
                 options: ViewPrepOptions {
-                    visibility: self.view_visibility(None, true, false),
+                    visibility,
                     ..shadow_view_options()
                 },
                 graph: Arc::clone(&shadow_graph),

@@ -1,0 +1,322 @@
+//! GPU-driven visibility against the CPU reference, rendered for real.
+//!
+//! * Frustum culling on the GPU draws exactly the CPU path's draws (same
+//!   draws in every partition, compared in canonical order because the GPU's
+//!   order within a partition is whatever order its threads won their
+//!   slots), on seeded random scenes with every pass class, variant, LODs,
+//!   mirrored transforms and shadow cascades, and on shipped glTF scenes.
+//! * Two-phase occlusion culling never drops a visible object: along a
+//!   camera path through a dense procedural city, each frame's picture with
+//!   occlusion culling equals the same frame without it, and the test
+//!   reports (and checks) how many draws it culled.
+//! * A static scene seen by a still camera uploads under 1 KB per frame.
+//!
+//! The GPU paths need multi-draw-indirect with counts: on an adapter
+//! without it (the GL backend) each test says so and returns.
+
+mod support;
+
+use oxygen::prelude::*;
+use oxygen::core::LodLevel;
+use oxygen::sceneprep::{DrawMetadata, canonical_dump};
+use support::golden::compare;
+use support::gpu_renderer_with;
+
+/// A renderer whose default path is `visibility`, or `None` (with the
+/// reason printed) when the adapter cannot run the GPU paths.
+fn renderer(visibility: Visibility) -> Option<Renderer> {
+    let renderer = gpu_renderer_with(RendererOptions { visibility: Some(visibility), ..Default::default() });
+    if !renderer.gpu_visibility_supported() {
+        eprintln!(
+            "skipped: {} cannot run GPU visibility (needs multi-draw-indirect with counts)",
+            renderer.gpu().describe()
+        );
+        return None;
+    }
+    Some(renderer)
+}
+
+/// A small deterministic generator (xorshift64*), so scenes are the same
+/// on every run.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+    fn unit(&mut self) -> f32 {
+        (self.next() >> 40) as f32 / (1u64 << 24) as f32
+    }
+    fn range(&mut self, low: f32, high: f32) -> f32 {
+        low + (high - low) * self.unit()
+    }
+    fn below(&mut self, n: u32) -> u32 {
+        (self.next() % u64::from(n)) as u32
+    }
+}
+
+/// Boxes of every pass class and variant scattered around the origin, some
+/// mirrored, some not casting shadows, some with a coarser LOD, under a sun.
+fn random_scene(seed: u64, count: usize) -> Scene {
+    let mut rng = Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1);
+    let mut scene = Scene::new();
+    let mut materials = Vec::new();
+    for (i, alpha_mode) in
+        [AlphaMode::Opaque, AlphaMode::Mask { cutoff: 0.5 }, AlphaMode::Blend, AlphaMode::Opaque].into_iter().enumerate()
+    {
+        for double_sided in [false, true] {
+            let color = Vec4::new(rng.unit(), rng.unit(), rng.unit(), 0.7);
+            let name = format!("material {i} {double_sided}");
+            materials.push(scene.add_material(Material { alpha_mode, double_sided, ..Material::opaque(name, color) }));
+        }
+    }
+    let meshes: Vec<_> = (0..3).map(|i| scene.add_geometry(Geometry::cube(0.5 + i as f32 * 0.5))).collect();
+    let coarse = scene.add_geometry(Geometry::cube(1.0));
+    for i in 0..count {
+        let at = Vec3::new(rng.range(-40.0, 40.0), rng.range(-3.0, 6.0), rng.range(-40.0, 40.0));
+        let mut scale = Vec3::splat(rng.range(0.3, 2.0));
+        if rng.below(6) == 0 {
+            scale.x = -scale.x;
+        }
+        let rotation = Quat::from_rotation_y(rng.range(0.0, 6.28));
+        let node = scene.add_node(format!("box {i}"), Transform { translation: at, rotation, scale });
+        let geometry = meshes[rng.below(meshes.len() as u32) as usize];
+        let material = materials[rng.below(materials.len() as u32) as usize];
+        scene.set_renderable(node, Renderable { geometry, materials: vec![material] }).unwrap();
+        if rng.below(4) == 0 {
+            scene.set_flags(node, NodeFlags::VISIBLE).unwrap();
+        }
+        if rng.below(3) == 0 {
+            let lods = vec![LodLevel { geometry: coarse, below_screen_fraction: rng.range(0.02, 0.2) }];
+            scene.set_lods(node, lods).unwrap();
+        }
+    }
+    let sun = scene.add_node("sun", Transform::IDENTITY.with_rotation(Quat::from_rotation_x(-0.9)));
+    scene.set_light(sun, Some(Light::directional(3.0))).unwrap();
+    scene
+}
+
+fn look_at(eye: Vec3, target: Vec3, viewport: UVec2) -> LookAtResolver {
+    LookAtResolver { camera: Camera::perspective(60f32.to_radians(), 0.1, Some(200.0)), eye, target, up: Vec3::Y, viewport }
+}
+
+/// Draws with their slots, without the fields that only say which range
+/// they were read through (the generation tag).
+fn comparable(draws: Vec<(PassMask, Vec<DrawMetadata>)>) -> Vec<(PassMask, Vec<DrawMetadata>)> {
+    draws
+        .into_iter()
+        .map(|(mask, draws)| (mask, draws.into_iter().map(|d| DrawMetadata { reserved: [0; 5], ..d }).collect()))
+        .collect()
+}
+
+fn assert_same_draws(renderer: &Renderer, cpu: ViewId, gpu: ViewId, what: &str) -> usize {
+    let expected = comparable(renderer.view_draws(cpu).unwrap());
+    let actual = comparable(renderer.view_draws(gpu).unwrap());
+    if expected != actual {
+        let (e, a) = (canonical_dump(&expected), canonical_dump(&actual));
+        let first = e.lines().zip(a.lines()).position(|(x, y)| x != y);
+        panic!("{what}: GPU frustum culling drew other draws than the CPU path (first difference at line {first:?}):\n--- CPU\n{e}\n--- GPU\n{a}");
+    }
+    expected.iter().map(|(_, d)| d.len()).sum()
+}
+
+#[test]
+fn gpu_frustum_culling_draws_what_the_cpu_path_draws_on_random_scenes() {
+    let Some(mut renderer) = renderer(Visibility::GpuFrustum) else { return };
+    let viewport = UVec2::new(160, 96);
+    let mut checked = 0;
+    for seed in 0..6u64 {
+        let scene = random_scene(seed, 300);
+        let mut rng = Rng(seed + 77);
+        let eye = Vec3::new(rng.range(-30.0, 30.0), rng.range(2.0, 20.0), rng.range(-30.0, 30.0));
+        let target = Vec3::new(rng.range(-10.0, 10.0), 0.0, rng.range(-10.0, 10.0));
+        let cascades = CascadeSettings { count: 2, resolution: 256, ..Default::default() };
+        let desc = |visibility| ViewDesc::new(look_at(eye, target, viewport)).with_sun_shadows(cascades).with_visibility(visibility);
+        let cpu = renderer.register_view(desc(Visibility::Cpu), standard_render_graph).unwrap();
+        let gpu = renderer.register_view(desc(Visibility::GpuFrustum), standard_render_graph).unwrap();
+        let report = renderer.render_frame(&scene).unwrap();
+        let gpu_report = report.views.iter().find(|v| v.view == gpu).unwrap();
+        assert_eq!(gpu_report.visibility, Visibility::GpuFrustum);
+        checked += assert_same_draws(&renderer, cpu, gpu, &format!("seed {seed}, main view"));
+        // Each view's cascades cull the way their owner does.
+        for (c, g) in renderer.sun_cascades(cpu).into_iter().zip(renderer.sun_cascades(gpu)) {
+            let cascade = report.views.iter().find(|v| v.view == g).unwrap();
+            assert_eq!(cascade.visibility, Visibility::GpuFrustum, "a GPU view's cascade");
+            checked += assert_same_draws(&renderer, c, g, &format!("seed {seed}, cascade"));
+        }
+        // And the pictures agree (the order within a partition differs, so
+        // a few edge pixels of coplanar faces may too).
+        let (a, b) = (renderer.read_color(cpu).unwrap(), renderer.read_color(gpu).unwrap());
+        let diff = compare(&b, &a, 2);
+        assert!(diff.differing <= diff.total / 500, "seed {seed}: {} of {} pixels differ", diff.differing, diff.total);
+        renderer.unregister_view(cpu).unwrap();
+        renderer.unregister_view(gpu).unwrap();
+    }
+    eprintln!("{checked} draws compared");
+    assert!(checked > 1000, "the scenes should give many draws to compare, got {checked}");
+}
+
+#[test]
+fn gpu_frustum_culling_draws_what_the_cpu_path_draws_on_gltf_scenes() {
+    let Some(mut renderer) = renderer(Visibility::GpuFrustum) else { return };
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets");
+    let mut compared = 0;
+    for file in ["Cubes/Cubes.glb", "AlphaBlendModeTest/AlphaBlendModeTest.glb", "OrientationTest/OrientationTest.glb"] {
+        let mut scene = Scene::new();
+        let imported =
+            import_gltf(&mut scene, root.join(file), &SceneChoice::Default).unwrap_or_else(|e| panic!("{file}: {e}"));
+        let bounds = imported.bounds.unwrap_or_else(|| panic!("{file} has no bounds"));
+        let sun = scene.add_node("sun", Transform::IDENTITY.with_rotation(Quat::from_rotation_x(-0.9)));
+        scene.set_light(sun, Some(Light::directional(3.0))).unwrap();
+        let center = (bounds.min + bounds.max) * 0.5;
+        let radius = (bounds.max - bounds.min).length().max(1.0);
+        for eye in [center + Vec3::new(0.3, 0.4, 1.0) * radius, center + Vec3::new(-1.0, 0.2, -0.2) * radius * 0.6] {
+            let desc = |visibility| ViewDesc::new(look_at(eye, center, UVec2::new(128, 96))).with_visibility(visibility);
+            let cpu = renderer.register_view(desc(Visibility::Cpu), standard_render_graph).unwrap();
+            let gpu = renderer.register_view(desc(Visibility::GpuFrustum), standard_render_graph).unwrap();
+            renderer.render_frame(&scene).unwrap();
+            compared += assert_same_draws(&renderer, cpu, gpu, file);
+            renderer.unregister_view(cpu).unwrap();
+            renderer.unregister_view(gpu).unwrap();
+        }
+    }
+    assert!(compared > 10, "{compared} draws compared");
+}
+
+/// A grid of tall buildings with streets between them: from street level,
+/// the first row hides most of the city.
+fn city(blocks: u32) -> Scene {
+    let mut scene = Scene::new();
+    let mut rng = Rng(0xC17);
+    let colors = [Vec4::new(0.7, 0.7, 0.75, 1.0), Vec4::new(0.6, 0.5, 0.4, 1.0), Vec4::new(0.4, 0.45, 0.5, 1.0)];
+    let materials: Vec<_> =
+        colors.iter().enumerate().map(|(i, c)| scene.add_material(Material::opaque(format!("wall {i}"), *c))).collect();
+    let cube = scene.add_geometry(Geometry::cube(1.0));
+    let ground_material = scene.add_material(Material::opaque("ground", Vec4::new(0.2, 0.2, 0.2, 1.0)));
+    let ground = scene.add_geometry(Geometry::plane(1.0));
+    let half = blocks as f32 * 6.0;
+    let floor = scene.add_node("ground", Transform { scale: Vec3::new(half * 2.0, 1.0, half * 2.0), ..Transform::IDENTITY });
+    scene.set_renderable(floor, Renderable { geometry: ground, materials: vec![ground_material] }).unwrap();
+    for x in 0..blocks {
+        for z in 0..blocks {
+            let height = rng.range(6.0, 30.0);
+            let at = Vec3::new(x as f32 * 12.0 - half + 6.0, height * 0.5, z as f32 * 12.0 - half + 6.0);
+            let node = scene.add_node(
+                format!("building {x} {z}"),
+                Transform { translation: at, rotation: Quat::IDENTITY, scale: Vec3::new(8.0, height, 8.0) },
+            );
+            let material = materials[rng.below(materials.len() as u32) as usize];
+            scene.set_renderable(node, Renderable { geometry: cube, materials: vec![material] }).unwrap();
+        }
+    }
+    let sun = scene.add_node("sun", Transform::IDENTITY.with_rotation(Quat::from_rotation_x(-0.8)));
+    scene.set_light(sun, Some(Light::directional(3.0))).unwrap();
+    scene
+}
+
+/// A resolver whose camera the test moves between frames.
+#[derive(Clone)]
+struct Walker(std::sync::Arc<std::sync::Mutex<(Vec3, Vec3)>>, UVec2);
+
+impl ViewResolver for Walker {
+    fn resolve(&self, ctx: &ViewContext, scene: &Scene) -> Result<ResolvedView, ViewError> {
+        let (eye, target) = *self.0.lock().unwrap();
+        look_at(eye, target, self.1).resolve(ctx, scene)
+    }
+}
+
+#[test]
+fn occlusion_culling_never_drops_a_visible_object_along_a_camera_path() {
+    let Some(mut renderer) = renderer(Visibility::GpuFrustum) else { return };
+    let scene = city(16);
+    let viewport = UVec2::new(192, 128);
+    let camera = std::sync::Arc::new(std::sync::Mutex::new((Vec3::ZERO, Vec3::X)));
+    let walker = Walker(camera.clone(), viewport);
+    let reference = renderer
+        .register_view(ViewDesc::new(walker.clone()).with_visibility(Visibility::GpuFrustum), standard_render_graph)
+        .unwrap();
+    let occluded = renderer
+        .register_view(ViewDesc::new(walker).with_visibility(Visibility::GpuOcclusion), standard_render_graph)
+        .unwrap();
+    let (mut drawn_reference, mut drawn_occlusion) = (0usize, 0usize);
+    // Down a street, turning at the end, then up above the roofs: objects
+    // come into view every frame, from behind buildings and the frame edge.
+    let path: Vec<(Vec3, Vec3)> = (0..24)
+        .map(|i| {
+            let t = i as f32;
+            let eye = if i < 16 { Vec3::new(-90.0 + t * 9.0, 2.0, 0.0) } else { Vec3::new(40.0, 2.0 + (t - 15.0) * 8.0, 0.0) };
+            let target = eye + Vec3::new((t * 0.4).cos(), -0.05, (t * 0.4).sin() * 0.6);
+            (eye, target)
+        })
+        .collect();
+    for (frame, (eye, target)) in path.iter().enumerate() {
+        *camera.lock().unwrap() = (*eye, *target);
+        let report = renderer.render_frame(&scene).unwrap();
+        let visibility = report.views.iter().find(|v| v.view == occluded).unwrap().visibility;
+        assert_eq!(visibility, Visibility::GpuOcclusion);
+        let (a, b) = (renderer.read_color(reference).unwrap(), renderer.read_color(occluded).unwrap());
+        let diff = compare(&b, &a, 2);
+        if diff.differing > 0 {
+            let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"));
+            let _ = b.save(dir.join(format!("occlusion_frame{frame}.png")));
+            let _ = a.save(dir.join(format!("occlusion_frame{frame}_reference.png")));
+            let _ = diff.diff.save(dir.join(format!("occlusion_frame{frame}_diff.png")));
+        }
+        assert!(
+            diff.differing == 0,
+            "frame {frame}: {} of {} pixels differ with occlusion culling (worst {}); pictures in {}",
+            diff.differing,
+            diff.total,
+            diff.worst,
+            env!("CARGO_TARGET_TMPDIR")
+        );
+        let count = |id| renderer.view_draws(id).unwrap().iter().map(|(_, d)| d.len()).sum::<usize>();
+        let (r, o) = (count(reference), count(occluded));
+        assert!(o <= r, "frame {frame}: occlusion culling drew more ({o}) than frustum culling ({r})");
+        drawn_reference += r;
+        drawn_occlusion += o;
+    }
+    eprintln!(
+        "camera path of {} frames: frustum culling drew {drawn_reference} draws, occlusion culling {drawn_occlusion} ({:.0} % culled)",
+        path.len(),
+        100.0 * (1.0 - drawn_occlusion as f64 / drawn_reference as f64)
+    );
+    // At street level the first buildings hide most of the city.
+    assert!(
+        drawn_occlusion * 2 < drawn_reference,
+        "occlusion culling should cull at least half the draws in a dense city: {drawn_occlusion} of {drawn_reference}"
+    );
+}
+
+#[test]
+fn a_static_scene_uploads_under_a_kilobyte_per_frame_on_the_gpu_path() {
+    let Some(mut renderer) = renderer(Visibility::GpuFrustum) else { return };
+    let scene = city(12);
+    renderer.register_view(look_at(Vec3::new(-80.0, 20.0, -70.0), Vec3::ZERO, UVec2::new(128, 96)), standard_render_graph).unwrap();
+    let first = renderer.render_frame(&scene).unwrap();
+    assert!(first.uploaded_bytes > 10_000, "the first frame uploads the scene: {} bytes", first.uploaded_bytes);
+    for frame in 0..3 {
+        let report = renderer.render_frame(&scene).unwrap();
+        eprintln!("static frame {frame}: {} bytes uploaded", report.uploaded_bytes);
+        assert!(report.uploaded_bytes < 1024, "static frame {frame} uploaded {} bytes", report.uploaded_bytes);
+    }
+}
+
+#[test]
+fn moving_one_object_uploads_only_its_records() {
+    let Some(mut renderer) = renderer(Visibility::GpuFrustum) else { return };
+    let mut scene = city(12);
+    renderer.register_view(look_at(Vec3::new(-80.0, 20.0, -70.0), Vec3::ZERO, UVec2::new(128, 96)), standard_render_graph).unwrap();
+    renderer.render_frame(&scene).unwrap();
+    let everything = renderer.render_frame(&scene).unwrap().uploaded_bytes;
+    let (node, _) = scene.nodes().find(|(_, n)| n.name == "building 3 3").unwrap();
+    let moved = Transform { translation: Vec3::new(1.0, 5.0, 2.0), rotation: Quat::IDENTITY, scale: Vec3::splat(4.0) };
+    scene.set_local_transform(node, moved).unwrap();
+    let report = renderer.render_frame(&scene).unwrap();
+    // One world and one normal matrix, one instance record, the constants.
+    eprintln!("static frame: {everything} bytes; one object moved: {} bytes", report.uploaded_bytes);
+    assert!(report.uploaded_bytes < 2048, "moving one object uploaded {} bytes", report.uploaded_bytes);
+}
