@@ -187,12 +187,14 @@ fn gpu_frustum_culling_draws_what_the_cpu_path_draws_on_gltf_scenes() {
 }
 
 /// A grid of tall buildings with streets between them: from street level,
-/// the first row hides most of the city.
-fn city(blocks: u32) -> Scene {
+/// the first row hides most of the city. With `ids`, every building is
+/// unlit and emits its own colour, and there is no light: an ID render,
+/// from whose HDR image [`decode_id`] reads which building each pixel shows.
+fn city(blocks: u32, ids: bool) -> Scene {
     let mut scene = Scene::new();
     let mut rng = Rng(0xC17);
     let colors = [Vec4::new(0.7, 0.7, 0.75, 1.0), Vec4::new(0.6, 0.5, 0.4, 1.0), Vec4::new(0.4, 0.45, 0.5, 1.0)];
-    let materials: Vec<_> =
+    let mut materials: Vec<_> =
         colors.iter().enumerate().map(|(i, c)| scene.add_material(Material::opaque(format!("wall {i}"), *c))).collect();
     let cube = scene.add_geometry(Geometry::cube(1.0));
     let ground_material = scene.add_material(Material::opaque("ground", Vec4::new(0.2, 0.2, 0.2, 1.0)));
@@ -208,13 +210,31 @@ fn city(blocks: u32) -> Scene {
                 format!("building {x} {z}"),
                 Transform { translation: at, rotation: Quat::IDENTITY, scale: Vec3::new(8.0, height, 8.0) },
             );
-            let material = materials[rng.below(materials.len() as u32) as usize];
+            let mut material = materials[rng.below(materials.len() as u32) as usize];
+            if ids {
+                let id = x * blocks + z;
+                let emissive = Vec3::new((id % 8 + 1) as f32, (id / 8 % 8 + 1) as f32, (id / 64 + 1) as f32) / 8.0;
+                let unlit = Material { emissive, ..Material::opaque(format!("id {id}"), Vec4::new(0.0, 0.0, 0.0, 1.0)) };
+                material = scene.add_material(unlit);
+                materials.push(material);
+            }
             scene.set_renderable(node, Renderable { geometry: cube, materials: vec![material] }).unwrap();
         }
     }
-    let sun = scene.add_node("sun", Transform::IDENTITY.with_rotation(Quat::from_rotation_x(-0.8)));
-    scene.set_light(sun, Some(Light::directional(3.0))).unwrap();
+    if !ids {
+        let sun = scene.add_node("sun", Transform::IDENTITY.with_rotation(Quat::from_rotation_x(-0.8)));
+        scene.set_light(sun, Some(Light::directional(3.0))).unwrap();
+    }
     scene
+}
+
+/// The building an ID render's pixel shows (`None`: the ground or the sky).
+fn decode_id(pixel: [f32; 4]) -> Option<u32> {
+    let digit = |v: f32| {
+        let d = (v * 8.0).round();
+        (1.0..=8.0).contains(&d).then(|| d as u32 - 1)
+    };
+    Some(digit(pixel[0])? + 8 * digit(pixel[1])? + 64 * digit(pixel[2])?)
 }
 
 /// A resolver whose camera the test moves between frames.
@@ -228,22 +248,39 @@ impl ViewResolver for Walker {
     }
 }
 
+/// A renderer with two views of one moving camera: frustum culling (the
+/// reference) and occlusion culling.
+fn walkers(camera: &std::sync::Arc<std::sync::Mutex<(Vec3, Vec3)>>) -> Option<(Renderer, ViewId, ViewId)> {
+    let mut renderer = renderer(Visibility::GpuFrustum)?;
+    let walker = Walker(camera.clone(), UVec2::new(192, 128));
+    let mut view = |visibility| {
+        renderer.register_view(ViewDesc::new(walker.clone()).with_visibility(visibility), standard_render_graph).unwrap()
+    };
+    let (reference, occluded) = (view(Visibility::GpuFrustum), view(Visibility::GpuOcclusion));
+    Some((renderer, reference, occluded))
+}
+
+fn node_ids(renderer: &Renderer, view: ViewId) -> std::collections::BTreeSet<u32> {
+    renderer.view_draws(view).unwrap().iter().flat_map(|(_, d)| d.iter().map(|d| d.node_id)).collect()
+}
+
 #[test]
 fn occlusion_culling_never_drops_a_visible_object_along_a_camera_path() {
-    let Some(mut renderer) = renderer(Visibility::GpuFrustum) else { return };
-    let scene = city(16);
-    let viewport = UVec2::new(192, 128);
     let camera = std::sync::Arc::new(std::sync::Mutex::new((Vec3::ZERO, Vec3::X)));
-    let walker = Walker(camera.clone(), viewport);
-    let reference = renderer
-        .register_view(ViewDesc::new(walker.clone()).with_visibility(Visibility::GpuFrustum), standard_render_graph)
-        .unwrap();
-    let occluded = renderer
-        .register_view(ViewDesc::new(walker).with_visibility(Visibility::GpuOcclusion), standard_render_graph)
-        .unwrap();
-    let (mut drawn_reference, mut drawn_occlusion) = (0usize, 0usize);
-    // Down a street, turning at the end, then up above the roofs: objects
-    // come into view every frame, from behind buildings and the frame edge.
+    let Some((mut lit, lit_reference, lit_occluded)) = walkers(&camera) else { return };
+    let Some((mut id, id_reference, id_occluded)) = walkers(&camera) else { return };
+    let (lit_city, id_city) = (city(16, false), city(16, true));
+    // The node id (slot index) of building k = x·16 + z, as draws carry it.
+    let node_of: std::collections::BTreeMap<u32, u32> = id_city
+        .nodes()
+        .filter_map(|(key, node)| {
+            let mut xz = node.name.strip_prefix("building ")?.split(' ').map(|n| n.parse::<u32>().ok());
+            Some((xz.next()?? * 16 + xz.next()??, oxygen::core::scene::node_index(key)))
+        })
+        .collect();
+    let (mut drawn_reference, mut drawn_occlusion, mut visible_total) = (0usize, 0usize, 0usize);
+    // Down a street, turning, then up above the roofs: objects come into
+    // view every frame, from behind buildings and at the frame's edges.
     let path: Vec<(Vec3, Vec3)> = (0..24)
         .map(|i| {
             let t = i as f32;
@@ -254,10 +291,10 @@ fn occlusion_culling_never_drops_a_visible_object_along_a_camera_path() {
         .collect();
     for (frame, (eye, target)) in path.iter().enumerate() {
         *camera.lock().unwrap() = (*eye, *target);
-        let report = renderer.render_frame(&scene).unwrap();
-        let visibility = report.views.iter().find(|v| v.view == occluded).unwrap().visibility;
+        let report = lit.render_frame(&lit_city).unwrap();
+        let visibility = report.views.iter().find(|v| v.view == lit_occluded).unwrap().visibility;
         assert_eq!(visibility, Visibility::GpuOcclusion);
-        let (a, b) = (renderer.read_color(reference).unwrap(), renderer.read_color(occluded).unwrap());
+        let (a, b) = (lit.read_color(lit_reference).unwrap(), lit.read_color(lit_occluded).unwrap());
         let diff = compare(&b, &a, 2);
         if diff.differing > 0 {
             let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"));
@@ -273,17 +310,30 @@ fn occlusion_culling_never_drops_a_visible_object_along_a_camera_path() {
             diff.worst,
             env!("CARGO_TARGET_TMPDIR")
         );
-        let count = |id| renderer.view_draws(id).unwrap().iter().map(|(_, d)| d.len()).sum::<usize>();
-        let (r, o) = (count(reference), count(occluded));
-        assert!(o <= r, "frame {frame}: occlusion culling drew more ({o}) than frustum culling ({r})");
-        drawn_reference += r;
-        drawn_occlusion += o;
+
+        // Exact visibility from the ID render: every building some pixel
+        // shows must be among occlusion culling's draws.
+        id.render_frame(&id_city).unwrap();
+        let hdr = id.read_hdr(id_reference).unwrap();
+        let visible: std::collections::BTreeSet<u32> = hdr.pixels.iter().filter_map(|p| decode_id(*p)).filter_map(|b| node_of.get(&b).copied()).collect();
+        let (kept_reference, kept_occlusion) = (node_ids(&id, id_reference), node_ids(&id, id_occluded));
+        let dropped: Vec<_> = visible.difference(&kept_occlusion).collect();
+        assert!(dropped.is_empty(), "frame {frame}: occlusion culling dropped visible nodes {dropped:?} (visible {visible:?}, kept {kept_occlusion:?})");
+        assert!(kept_occlusion.is_subset(&kept_reference), "frame {frame}: occlusion kept what the frustum culled");
+        drawn_reference += kept_reference.len();
+        drawn_occlusion += kept_occlusion.len();
+        visible_total += visible.len();
     }
     eprintln!(
-        "camera path of {} frames: frustum culling drew {drawn_reference} draws, occlusion culling {drawn_occlusion} ({:.0} % culled)",
+        "camera path of {} frames: frustum culling drew {drawn_reference} buildings, occlusion culling \
+         {drawn_occlusion} ({:.0} % fewer); {visible_total} were visible (conservative overhead: frustum {:.1}×, \
+         occlusion {:.1}×)",
         path.len(),
-        100.0 * (1.0 - drawn_occlusion as f64 / drawn_reference as f64)
+        100.0 * (1.0 - drawn_occlusion as f64 / drawn_reference as f64),
+        drawn_reference as f64 / visible_total.max(1) as f64,
+        drawn_occlusion as f64 / visible_total.max(1) as f64,
     );
+    assert!(visible_total > 0, "the ID render shows no building: the test is not looking at the city");
     // At street level the first buildings hide most of the city.
     assert!(
         drawn_occlusion * 2 < drawn_reference,
@@ -294,7 +344,7 @@ fn occlusion_culling_never_drops_a_visible_object_along_a_camera_path() {
 #[test]
 fn a_static_scene_uploads_under_a_kilobyte_per_frame_on_the_gpu_path() {
     let Some(mut renderer) = renderer(Visibility::GpuFrustum) else { return };
-    let scene = city(12);
+    let scene = city(12, false);
     renderer.register_view(look_at(Vec3::new(-80.0, 20.0, -70.0), Vec3::ZERO, UVec2::new(128, 96)), standard_render_graph).unwrap();
     let first = renderer.render_frame(&scene).unwrap();
     assert!(first.uploaded_bytes > 10_000, "the first frame uploads the scene: {} bytes", first.uploaded_bytes);
@@ -308,7 +358,7 @@ fn a_static_scene_uploads_under_a_kilobyte_per_frame_on_the_gpu_path() {
 #[test]
 fn moving_one_object_uploads_only_its_records() {
     let Some(mut renderer) = renderer(Visibility::GpuFrustum) else { return };
-    let mut scene = city(12);
+    let mut scene = city(12, false);
     renderer.register_view(look_at(Vec3::new(-80.0, 20.0, -70.0), Vec3::ZERO, UVec2::new(128, 96)), standard_render_graph).unwrap();
     renderer.render_frame(&scene).unwrap();
     let everything = renderer.render_frame(&scene).unwrap().uploaded_bytes;
