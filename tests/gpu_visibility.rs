@@ -141,6 +141,13 @@ fn gpu_frustum_culling_draws_what_the_cpu_path_draws_on_random_scenes() {
         let gpu_report = report.views.iter().find(|v| v.view == gpu).unwrap();
         assert_eq!(gpu_report.visibility, Visibility::GpuFrustum);
         checked += assert_same_draws(&renderer, cpu, gpu, &format!("seed {seed}, main view"));
+        // Transparent draws stay on the CPU, back to front: the same order.
+        let order = |id| -> Vec<u32> {
+            let frame = renderer.prepared_frame(id).unwrap();
+            frame.draws().iter().filter(|d| d.mask().contains(PassMask::TRANSPARENT)).map(|d| d.node_id).collect()
+        };
+        assert_eq!(order(cpu), order(gpu), "seed {seed}: transparent draws in another order");
+        assert!(!order(gpu).is_empty(), "seed {seed}: the scene should have transparent draws in view");
         // Each view's cascades cull the way their owner does.
         for (c, g) in renderer.sun_cascades(cpu).into_iter().zip(renderer.sun_cascades(gpu)) {
             let cascade = report.views.iter().find(|v| v.view == g).unwrap();
