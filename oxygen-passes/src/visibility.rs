@@ -26,7 +26,7 @@ use oxygen_sceneprep::gpu_scene::GpuSceneChanges;
 use oxygen_sceneprep::{GPU_RECORDS_WGSL, GpuScene, PreparedSceneFrame, Visibility};
 use tracing::info_span;
 
-use crate::hiz::{HIZ_TEST_WGSL, HizPyramid};
+use crate::hiz::{HIZ_TEST_WGSL, HizPipelines, HizPyramid};
 
 /// `CullParams::flags`: the view takes shadow casters only.
 const CULL_CASTERS_ONLY: u32 = 1;
@@ -139,7 +139,8 @@ pub struct GpuVisibility {
     cull_late: wgpu::ComputePipeline,
     commands_late: wgpu::ComputePipeline,
     /// Bound in place of a pyramid by views without occlusion culling.
-    no_hiz: wgpu::TextureView,
+    no_hiz: wgpu::Buffer,
+    hiz: HizPipelines,
     views: HashMap<ViewId, ViewCull>,
     uploaded_last_frame: u64,
     /// The GPU scene rebuild the buffers hold.
@@ -166,7 +167,8 @@ pub fn cull_shader_source() -> String {
          const INSTANCE_CASTS_SHADOWS: u32 = {}u;\n",
         oxygen_sceneprep::gpu_scene::GpuInstance::CASTS_SHADOWS
     );
-    [GPU_RECORDS_WGSL, HIZ_TEST_WGSL, &constants, include_str!("visibility_cull.wgsl")].join("\n")
+    // The pyramid test reads `hiz_pyramid`, which the cull shader declares.
+    [GPU_RECORDS_WGSL, &constants, include_str!("visibility_cull.wgsl"), HIZ_TEST_WGSL].join("\n")
 }
 
 impl GpuVisibility {
@@ -200,16 +202,7 @@ impl GpuVisibility {
                 storage(5, false),
                 storage(6, false),
                 storage(7, false),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 8,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
+                storage(8, true),
             ],
         });
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -231,18 +224,12 @@ impl GpuVisibility {
                 cache: None,
             })
         };
-        let no_hiz = device
-            .create_texture(&wgpu::TextureDescriptor {
-                label: Some("no depth pyramid"),
-                size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: wgpu::TextureFormat::R32Float,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            })
-            .create_view(&Default::default());
+        let no_hiz = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("no depth pyramid"),
+            size: 16,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
         let read = wgpu::BufferUsages::STORAGE;
         GpuVisibility {
             instances: GrowingBuffer::new(device, "gpu scene instances", read, 0),
@@ -255,6 +242,7 @@ impl GpuVisibility {
             commands_late: pipeline("commands_late"),
             layout,
             no_hiz,
+            hiz: HizPipelines::new(device),
             views: HashMap::new(),
             uploaded_last_frame: 0,
             uploaded_rebuild: None,
@@ -357,7 +345,7 @@ impl GpuVisibility {
             let occlusion = plan.visibility == Visibility::GpuOcclusion;
             let size = (request.view.viewport.x.max(1), request.view.viewport.y.max(1));
             if occlusion && state.hiz.as_ref().is_none_or(|h| h.size() != size) {
-                state.hiz = Some(HizPyramid::new(device, size.0, size.1));
+                state.hiz = Some(HizPyramid::new(device, &self.hiz, size.0, size.1));
             } else if !occlusion {
                 state.hiz = None;
             }
@@ -423,7 +411,7 @@ impl GpuVisibility {
         let Some(state) = self.views.get(&view) else { return };
         let Some(hiz) = &state.hiz else { return };
         let _span = info_span!("cull_late", view = %view).entered();
-        hiz.build(device, encoder, depth);
+        hiz.build(device, &self.hiz, encoder, depth);
         self.dispatch(encoder, state, &[(&self.cull_late, state.instances), (&self.commands_late, state.groups)]);
     }
 }
@@ -433,7 +421,7 @@ fn bind_group(
 device: &wgpu::Device,
 layout: &wgpu::BindGroupLayout,
 [instances, groups, lods]: [&wgpu::Buffer; 3],
-no_hiz: &wgpu::TextureView,
+no_hiz: &wgpu::Buffer,
 heap: &BindlessHeap,
 state: &ViewCull,
 ) -> wgpu::BindGroup {
@@ -449,14 +437,10 @@ state: &ViewCull,
             buffer(5, &state.history.buffer),
             buffer(6, heap.buffer(DomainKind::DrawMetadata)),
             buffer(7, heap.buffer(DomainKind::IndirectArgs)),
-            wgpu::BindGroupEntry {
-                binding: 8,
-                resource: wgpu::BindingResource::TextureView(state.hiz.as_ref().map_or(no_hiz, |h| h.view())),
-            },
+            buffer(8, state.hiz.as_ref().map_or(no_hiz, |h| h.buffer())),
         ],
     })
 }
-
 
 fn buffer(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
     wgpu::BindGroupEntry { binding, resource: buffer.as_entire_binding() }

@@ -77,7 +77,7 @@ struct CullParams {
 @group(0) @binding(5) var<storage, read_write> history: array<u32>;
 @group(0) @binding(6) var<storage, read_write> draws: array<DrawMetadata>;
 @group(0) @binding(7) var<storage, read_write> commands: array<Command>;
-@group(0) @binding(8) var hiz: texture_2d<f32>;
+@group(0) @binding(8) var<storage, read> hiz_pyramid: array<f32>;
 
 // The CPU path's test (Frustum::intersects_aabb): the box's corner farthest
 // along each plane's normal must not be behind it.
@@ -208,7 +208,7 @@ fn cull_late(@builtin(global_invocation_id) id: vec3<u32>) {
     // The box is widened by its coordinates' rounding at this distance from
     // the world origin, so that f32 projection error never hides it.
     let slack = (abs(instance.aabb_min) + abs(instance.aabb_max)) * 1e-6 + vec3<f32>(1e-6);
-    let visible = hiz_visible(hiz, params.hiz_levels, params.hiz_size, params.view_projection,
+    let visible = hiz_visible(params.hiz_levels, params.hiz_size, params.view_projection,
         instance.aabb_min - slack, instance.aabb_max + slack);
     history[i] = select(0u, 1u, visible);
     if !visible || drawn_early {
