@@ -105,7 +105,12 @@ impl Timestamps {
             return None;
         }
         let buffer = |usage| {
-            gpu.device.create_buffer(&wgpu::BufferDescriptor { label: None, size: 16, usage, mapped_at_creation: false })
+            gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: None,
+                size: 16,
+                usage,
+                mapped_at_creation: false,
+            })
         };
         Some(Timestamps {
             set: gpu.device.create_query_set(&wgpu::QuerySetDescriptor {

@@ -22,8 +22,7 @@ use std::future::Future;
 use std::pin::Pin;
 
 use oxygen_passes::{
-    CommandRecorder, DepthBias, DrawList, ForwardLitConfig, MeshPass, PassError, RenderContext, RenderPass,
-    TonemapPass,
+    CommandRecorder, DepthBias, DrawList, ForwardLitConfig, MeshPass, PassError, RenderContext, RenderPass, TonemapPass,
 };
 
 /// What a view records each frame: a future that awaits its passes.

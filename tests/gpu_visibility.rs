@@ -16,8 +16,8 @@
 
 mod support;
 
-use oxygen::prelude::*;
 use oxygen::core::LodLevel;
+use oxygen::prelude::*;
 use oxygen::sceneprep::{DrawMetadata, canonical_dump};
 use support::golden::compare;
 use support::gpu_renderer_with;
@@ -64,8 +64,9 @@ fn random_scene(seed: u64, count: usize) -> Scene {
     let mut rng = Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1);
     let mut scene = Scene::new();
     let mut materials = Vec::new();
-    for (i, alpha_mode) in
-        [AlphaMode::Opaque, AlphaMode::Mask { cutoff: 0.5 }, AlphaMode::Blend, AlphaMode::Opaque].into_iter().enumerate()
+    for (i, alpha_mode) in [AlphaMode::Opaque, AlphaMode::Mask { cutoff: 0.5 }, AlphaMode::Blend, AlphaMode::Opaque]
+        .into_iter()
+        .enumerate()
     {
         for double_sided in [false, true] {
             let color = Vec4::new(rng.unit(), rng.unit(), rng.unit(), 0.7);
@@ -81,7 +82,7 @@ fn random_scene(seed: u64, count: usize) -> Scene {
         if rng.below(6) == 0 {
             scale.x = -scale.x;
         }
-        let rotation = Quat::from_rotation_y(rng.range(0.0, 6.28));
+        let rotation = Quat::from_rotation_y(rng.range(0.0, std::f32::consts::TAU));
         let node = scene.add_node(format!("box {i}"), Transform { translation: at, rotation, scale });
         let geometry = meshes[rng.below(meshes.len() as u32) as usize];
         let material = materials[rng.below(materials.len() as u32) as usize];
@@ -100,7 +101,13 @@ fn random_scene(seed: u64, count: usize) -> Scene {
 }
 
 fn look_at(eye: Vec3, target: Vec3, viewport: UVec2) -> LookAtResolver {
-    LookAtResolver { camera: Camera::perspective(60f32.to_radians(), 0.1, Some(200.0)), eye, target, up: Vec3::Y, viewport }
+    LookAtResolver {
+        camera: Camera::perspective(60f32.to_radians(), 0.1, Some(200.0)),
+        eye,
+        target,
+        up: Vec3::Y,
+        viewport,
+    }
 }
 
 /// Draws with their slots, without the fields that only say which range
@@ -118,7 +125,9 @@ fn assert_same_draws(renderer: &Renderer, cpu: ViewId, gpu: ViewId, what: &str) 
     if expected != actual {
         let (e, a) = (canonical_dump(&expected), canonical_dump(&actual));
         let first = e.lines().zip(a.lines()).position(|(x, y)| x != y);
-        panic!("{what}: GPU frustum culling drew other draws than the CPU path (first difference at line {first:?}):\n--- CPU\n{e}\n--- GPU\n{a}");
+        panic!(
+            "{what}: GPU frustum culling drew other draws than the CPU path (first difference at line {first:?}):\n--- CPU\n{e}\n--- GPU\n{a}"
+        );
     }
     expected.iter().map(|(_, d)| d.len()).sum()
 }
@@ -134,7 +143,9 @@ fn gpu_frustum_culling_draws_what_the_cpu_path_draws_on_random_scenes() {
         let eye = Vec3::new(rng.range(-30.0, 30.0), rng.range(2.0, 20.0), rng.range(-30.0, 30.0));
         let target = Vec3::new(rng.range(-10.0, 10.0), 0.0, rng.range(-10.0, 10.0));
         let cascades = CascadeSettings { count: 2, resolution: 256, ..Default::default() };
-        let desc = |visibility| ViewDesc::new(look_at(eye, target, viewport)).with_sun_shadows(cascades).with_visibility(visibility);
+        let desc = |visibility| {
+            ViewDesc::new(look_at(eye, target, viewport)).with_sun_shadows(cascades).with_visibility(visibility)
+        };
         let cpu = renderer.register_view(desc(Visibility::Cpu), standard_render_graph).unwrap();
         let gpu = renderer.register_view(desc(Visibility::GpuFrustum), standard_render_graph).unwrap();
         let report = renderer.render_frame(&scene).unwrap();
@@ -171,7 +182,8 @@ fn gpu_frustum_culling_draws_what_the_cpu_path_draws_on_gltf_scenes() {
     let Some(mut renderer) = renderer(Visibility::GpuFrustum) else { return };
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets");
     let mut compared = 0;
-    for file in ["Cubes/Cubes.glb", "AlphaBlendModeTest/AlphaBlendModeTest.glb", "OrientationTest/OrientationTest.glb"] {
+    for file in ["Cubes/Cubes.glb", "AlphaBlendModeTest/AlphaBlendModeTest.glb", "OrientationTest/OrientationTest.glb"]
+    {
         let mut scene = Scene::new();
         let imported =
             import_gltf(&mut scene, root.join(file), &SceneChoice::Default).unwrap_or_else(|e| panic!("{file}: {e}"));
@@ -181,7 +193,8 @@ fn gpu_frustum_culling_draws_what_the_cpu_path_draws_on_gltf_scenes() {
         let center = (bounds.min + bounds.max) * 0.5;
         let radius = (bounds.max - bounds.min).length().max(1.0);
         for eye in [center + Vec3::new(0.3, 0.4, 1.0) * radius, center + Vec3::new(-1.0, 0.2, -0.2) * radius * 0.6] {
-            let desc = |visibility| ViewDesc::new(look_at(eye, center, UVec2::new(128, 96))).with_visibility(visibility);
+            let desc =
+                |visibility| ViewDesc::new(look_at(eye, center, UVec2::new(128, 96))).with_visibility(visibility);
             let cpu = renderer.register_view(desc(Visibility::Cpu), standard_render_graph).unwrap();
             let gpu = renderer.register_view(desc(Visibility::GpuFrustum), standard_render_graph).unwrap();
             renderer.render_frame(&scene).unwrap();
@@ -207,7 +220,8 @@ fn city(blocks: u32, ids: bool) -> Scene {
     let ground_material = scene.add_material(Material::opaque("ground", Vec4::new(0.2, 0.2, 0.2, 1.0)));
     let ground = scene.add_geometry(Geometry::plane(1.0));
     let half = blocks as f32 * 6.0;
-    let floor = scene.add_node("ground", Transform { scale: Vec3::new(half * 2.0, 1.0, half * 2.0), ..Transform::IDENTITY });
+    let floor =
+        scene.add_node("ground", Transform { scale: Vec3::new(half * 2.0, 1.0, half * 2.0), ..Transform::IDENTITY });
     scene.set_renderable(floor, Renderable { geometry: ground, materials: vec![ground_material] }).unwrap();
     for x in 0..blocks {
         for z in 0..blocks {
@@ -221,7 +235,8 @@ fn city(blocks: u32, ids: bool) -> Scene {
             if ids {
                 let id = x * blocks + z;
                 let emissive = Vec3::new((id % 8 + 1) as f32, (id / 8 % 8 + 1) as f32, (id / 64 + 1) as f32) / 8.0;
-                let unlit = Material { emissive, ..Material::opaque(format!("id {id}"), Vec4::new(0.0, 0.0, 0.0, 1.0)) };
+                let unlit =
+                    Material { emissive, ..Material::opaque(format!("id {id}"), Vec4::new(0.0, 0.0, 0.0, 1.0)) };
                 material = scene.add_material(unlit);
                 materials.push(material);
             }
@@ -261,7 +276,9 @@ fn walkers(camera: &std::sync::Arc<std::sync::Mutex<(Vec3, Vec3)>>) -> Option<(R
     let mut renderer = renderer(Visibility::GpuFrustum)?;
     let walker = Walker(camera.clone(), UVec2::new(192, 128));
     let mut view = |visibility| {
-        renderer.register_view(ViewDesc::new(walker.clone()).with_visibility(visibility), standard_render_graph).unwrap()
+        renderer
+            .register_view(ViewDesc::new(walker.clone()).with_visibility(visibility), standard_render_graph)
+            .unwrap()
     };
     let (reference, occluded) = (view(Visibility::GpuFrustum), view(Visibility::GpuOcclusion));
     Some((renderer, reference, occluded))
@@ -316,22 +333,28 @@ fn occlusion_culling_never_drops_a_visible_object_along_a_camera_path() {
             let _ = a.save(dir.join(format!("occlusion_frame{frame}_reference.png")));
             let _ = diff.diff.save(dir.join(format!("occlusion_frame{frame}_diff.png")));
         }
-        let lit_failure = (diff.differing != 0).then(|| format!(
-            "frame {frame}: {} of {} pixels differ with occlusion culling (worst {}); pictures in {}",
-            diff.differing,
-            diff.total,
-            diff.worst,
-            env!("CARGO_TARGET_TMPDIR")
-        ));
+        let lit_failure = (diff.differing != 0).then(|| {
+            format!(
+                "frame {frame}: {} of {} pixels differ with occlusion culling (worst {}); pictures in {}",
+                diff.differing,
+                diff.total,
+                diff.worst,
+                env!("CARGO_TARGET_TMPDIR")
+            )
+        });
 
         // Exact visibility from the ID render: every building some pixel
         // shows must be among occlusion culling's draws.
         id.render_frame(&id_city).unwrap();
         let hdr = id.read_hdr(id_reference).unwrap();
-        let visible: std::collections::BTreeSet<u32> = hdr.pixels.iter().filter_map(|p| decode_id(*p)).filter_map(|b| node_of.get(&b).copied()).collect();
+        let visible: std::collections::BTreeSet<u32> =
+            hdr.pixels.iter().filter_map(|p| decode_id(*p)).filter_map(|b| node_of.get(&b).copied()).collect();
         let (kept_reference, kept_occlusion) = (node_ids(&id, id_reference), node_ids(&id, id_occluded));
         let dropped: Vec<_> = visible.difference(&kept_occlusion).collect();
-        assert!(dropped.is_empty(), "frame {frame}: occlusion culling dropped visible nodes {dropped:?} (visible {visible:?}, kept {kept_occlusion:?})");
+        assert!(
+            dropped.is_empty(),
+            "frame {frame}: occlusion culling dropped visible nodes {dropped:?} (visible {visible:?}, kept {kept_occlusion:?})"
+        );
         assert!(kept_occlusion.is_subset(&kept_reference), "frame {frame}: occlusion kept what the frustum culled");
         if let Some(failure) = lit_failure {
             panic!("{failure}");
@@ -366,7 +389,9 @@ fn occlusion_culling_never_drops_a_visible_object_along_a_camera_path() {
 fn a_static_scene_uploads_under_a_kilobyte_per_frame_on_the_gpu_path() {
     let Some(mut renderer) = renderer(Visibility::GpuFrustum) else { return };
     let scene = city(12, false);
-    renderer.register_view(look_at(Vec3::new(-80.0, 20.0, -70.0), Vec3::ZERO, UVec2::new(128, 96)), standard_render_graph).unwrap();
+    renderer
+        .register_view(look_at(Vec3::new(-80.0, 20.0, -70.0), Vec3::ZERO, UVec2::new(128, 96)), standard_render_graph)
+        .unwrap();
     let first = renderer.render_frame(&scene).unwrap();
     assert!(first.uploaded_bytes > 10_000, "the first frame uploads the scene: {} bytes", first.uploaded_bytes);
     for frame in 0..3 {
@@ -380,7 +405,9 @@ fn a_static_scene_uploads_under_a_kilobyte_per_frame_on_the_gpu_path() {
 fn moving_one_object_uploads_only_its_records() {
     let Some(mut renderer) = renderer(Visibility::GpuFrustum) else { return };
     let mut scene = city(12, false);
-    renderer.register_view(look_at(Vec3::new(-80.0, 20.0, -70.0), Vec3::ZERO, UVec2::new(128, 96)), standard_render_graph).unwrap();
+    renderer
+        .register_view(look_at(Vec3::new(-80.0, 20.0, -70.0), Vec3::ZERO, UVec2::new(128, 96)), standard_render_graph)
+        .unwrap();
     renderer.render_frame(&scene).unwrap();
     let everything = renderer.render_frame(&scene).unwrap().uploaded_bytes;
     let (node, _) = scene.nodes().find(|(_, n)| n.name == "building 3 3").unwrap();

@@ -54,8 +54,11 @@ const PYRAMID: wgpu::BindingType = wgpu::BindingType::Buffer {
     min_binding_size: None,
 };
 
-const LEVEL: wgpu::BindingType =
-    wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Uniform, has_dynamic_offset: false, min_binding_size: None };
+const LEVEL: wgpu::BindingType = wgpu::BindingType::Buffer {
+    ty: wgpu::BufferBindingType::Uniform,
+    has_dynamic_offset: false,
+    min_binding_size: None,
+};
 
 impl HizPipelines {
     /// Compiles the copy and reduction pipelines.
@@ -132,8 +135,15 @@ impl HizPyramid {
             .map(|k| {
                 let (dst_offset, dst_width, dst_height) = levels[k];
                 let (src_offset, src_width, src_height) = if k == 0 { (0, width, height) } else { levels[k - 1] };
-                let params =
-                    LevelParams { src_offset, src_width, src_height, dst_offset, dst_width, dst_height, reserved: [0; 2] };
+                let params = LevelParams {
+                    src_offset,
+                    src_width,
+                    src_height,
+                    dst_offset,
+                    dst_width,
+                    dst_height,
+                    reserved: [0; 2],
+                };
                 device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                     label: Some("depth pyramid level"),
                     contents: bytemuck::bytes_of(&params),
@@ -200,8 +210,10 @@ impl HizPyramid {
         // One compute pass per level: each level reads the one written just
         // before it, and a pass boundary makes that write visible.
         let mut dispatch = |pipeline: &wgpu::ComputePipeline, group: &wgpu::BindGroup, (_, w, h): (u32, u32, u32)| {
-            let mut pass = encoder
-                .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("depth pyramid"), timestamp_writes: None });
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("depth pyramid"),
+                timestamp_writes: None,
+            });
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, group, &[]);
             pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);

@@ -45,7 +45,6 @@ pub use lighting_inputs::{
     LightingInputs, MAX_CASCADES, MAX_PROBES, MAX_SHADOW_TILES, PROBE_FACE_AXES, PROBE_FACES, probe_view,
 };
 pub use mesh_pass::{ColorOps, DrawList, ForwardLitConfig, MeshPass};
-pub use visibility::{GPU_VISIBILITY_FEATURES, GpuViewRequest, GpuVisibility, cull_shader_source};
 pub use oxygen_core::{Depth, HdrColor, Output, OutputSource, ProbeCube, ProbeId, ShadowMap};
 pub use pipelines::{
     AlphaClass, CompilerGuard, DepthBias, Exposure, PassKind, PipelineFuture, PipelineKey, PipelineVariant, Pipelines,
@@ -59,3 +58,4 @@ pub use render_context::{
 pub use render_pass::RenderPass;
 pub use shadow_atlas::{SHADOW_ATLAS_FORMAT, array_layer_count};
 pub use tonemap_pass::{TonemapPass, pbr_neutral};
+pub use visibility::{GPU_VISIBILITY_FEATURES, GpuViewRequest, GpuVisibility, cull_shader_source};

@@ -272,9 +272,7 @@ impl MeshPass {
             _ => (prepared.partitions(), false),
         };
         let cpu_part = prepared.partitions().iter().filter(move |p| cpu && p.gpu_count.is_none());
-        gpu.iter()
-            .chain(cpu_part)
-            .filter(move |p| p.mask.intersects(include) && !p.mask.intersects(exclude))
+        gpu.iter().chain(cpu_part).filter(move |p| p.mask.intersects(include) && !p.mask.intersects(exclude))
     }
 
     /// The colour attachment: the HDR target (whatever format the view's

@@ -268,7 +268,8 @@ impl GpuVisibility {
     ) {
         let _span = info_span!("gpu_visibility_prepare", views = views.len()).entered();
         let mut uploaded = 0u64;
-        let everything = GpuSceneChanges { instances: vec![0..scene.instances().len() as u32], layout: true };
+        let everything =
+            GpuSceneChanges { instances: std::iter::once(0..scene.instances().len() as u32).collect(), layout: true };
         let mut changes = match self.uploaded_rebuild {
             Some(held) if held == scene.rebuilds() => GpuSceneChanges::default(),
             Some(held) if held + 1 == scene.rebuilds() => scene.last_changes().clone(),
@@ -418,12 +419,12 @@ impl GpuVisibility {
 
 /// One view's cull bind group.
 fn bind_group(
-device: &wgpu::Device,
-layout: &wgpu::BindGroupLayout,
-[instances, groups, lods]: [&wgpu::Buffer; 3],
-no_hiz: &wgpu::Buffer,
-heap: &BindlessHeap,
-state: &ViewCull,
+    device: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    [instances, groups, lods]: [&wgpu::Buffer; 3],
+    no_hiz: &wgpu::Buffer,
+    heap: &BindlessHeap,
+    state: &ViewCull,
 ) -> wgpu::BindGroup {
     device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("gpu visibility"),

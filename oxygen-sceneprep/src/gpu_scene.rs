@@ -374,7 +374,7 @@ impl GpuScene {
 
         self.changes.layout = self.groups != old_groups || self.lods != old_lods;
         self.changes.instances = if self.changes.layout || previous.len() != self.instances.len() {
-            vec![0..self.instances.len() as u32]
+            std::iter::once(0..self.instances.len() as u32).collect()
         } else {
             changed_ranges(&previous, &self.instances)
         };

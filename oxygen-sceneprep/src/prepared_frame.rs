@@ -320,7 +320,8 @@ pub fn canonical_draws(mut partitions: Vec<(PassMask, Vec<DrawMetadata>)>) -> Ve
     }
     out.retain(|(_, draws)| !draws.is_empty());
     for (_, draws) in &mut out {
-        draws.sort_by_key(|d| (d.node_id, d.submesh, d.transform_index, d.material_handle, d.index_slot, d.first_index));
+        draws
+            .sort_by_key(|d| (d.node_id, d.submesh, d.transform_index, d.material_handle, d.index_slot, d.first_index));
     }
     out
 }

@@ -39,9 +39,9 @@ use crate::finalize::materials::MaterialTable;
 use crate::finalize::radix_sort::radix_sort_by_key;
 use crate::finalize::sort_key::{sort_key, sort_key_grouped};
 use crate::finalize::texture_cache::TextureCache;
+use crate::gpu_scene::GpuScene;
 use crate::prepared_frame::FrameTransforms;
 use crate::worker_pool::WorkerPool;
-use crate::gpu_scene::GpuScene;
 use crate::{
     FrameCollection, Instancing, PassMask, PreparedSceneFrame, PreparedSlots, RenderItem, ViewPrepOptions, Visibility,
 };
@@ -480,11 +480,8 @@ impl ScenePrep {
                 // The GPU's draws are neither known here nor front to back:
                 // the estimate says "unknown", which turns an automatic
                 // pre-pass on.
-                w.frame.estimated_overdraw = if on_gpu {
-                    f32::INFINITY
-                } else {
-                    overdraw_in_draw_order(&w.keyed, &w.items, &w.coverage)
-                };
+                w.frame.estimated_overdraw =
+                    if on_gpu { f32::INFINITY } else { overdraw_in_draw_order(&w.keyed, &w.items, &w.coverage) };
                 w.seconds = started.elapsed().as_secs_f32();
             });
         }
@@ -642,7 +639,12 @@ impl ScenePrep {
                 if same_slots {
                     // Only what moved.
                     for r in crate::gpu_scene::changed_ranges(&self.uploaded_world, &transforms.world) {
-                        heap.write(queue, &s.world_transforms, r.start, &transforms.world[r.start as usize..r.end as usize])?;
+                        heap.write(
+                            queue,
+                            &s.world_transforms,
+                            r.start,
+                            &transforms.world[r.start as usize..r.end as usize],
+                        )?;
                     }
                     for r in crate::gpu_scene::changed_ranges(&self.uploaded_normal, &transforms.normal) {
                         let normals = &transforms.normal[r.start as usize..r.end as usize];

@@ -25,7 +25,8 @@ fn scene() -> Scene {
         double_sided: true,
         ..Material::opaque("leaves", Vec4::ONE)
     });
-    let glass = scene.add_material(Material { alpha_mode: AlphaMode::Blend, ..Material::opaque("glass", Vec4::splat(0.5)) });
+    let glass =
+        scene.add_material(Material { alpha_mode: AlphaMode::Blend, ..Material::opaque("glass", Vec4::splat(0.5)) });
     let add = |scene: &mut Scene, name: &str, at: Vec3, scale: Vec3, geometry, material| {
         let node = scene.add_node(name, Transform { translation: at, rotation: Quat::IDENTITY, scale });
         scene.set_renderable(node, Renderable { geometry, materials: vec![material] }).unwrap();
@@ -33,7 +34,14 @@ fn scene() -> Scene {
     };
     let mut with_lod = Vec::new();
     for i in 0..40 {
-        let node = add(&mut scene, "cube", Vec3::new(i as f32 * 2.0, 0.0, 0.0), Vec3::ONE, cube, if i % 2 == 0 { red } else { blue });
+        let node = add(
+            &mut scene,
+            "cube",
+            Vec3::new(i as f32 * 2.0, 0.0, 0.0),
+            Vec3::ONE,
+            cube,
+            if i % 2 == 0 { red } else { blue },
+        );
         if i < 10 {
             with_lod.push(node);
         }
@@ -45,7 +53,8 @@ fn scene() -> Scene {
         add(&mut scene, "glass", Vec3::new(i as f32 * 2.0, 6.0, 0.0), Vec3::ONE, cube, glass);
     }
     for i in 0..3 {
-        let node = add(&mut scene, "mirrored", Vec3::new(i as f32 * 2.0, 9.0, 0.0), Vec3::new(-1.0, 1.0, 1.0), cube, red);
+        let node =
+            add(&mut scene, "mirrored", Vec3::new(i as f32 * 2.0, 9.0, 0.0), Vec3::new(-1.0, 1.0, 1.0), cube, red);
         scene.set_flags(node, NodeFlags::VISIBLE).unwrap();
     }
     for node in with_lod {
@@ -123,9 +132,13 @@ fn a_gpu_view_keeps_only_its_transparent_draws_after_the_gpu_room() {
     let frame = &frames[0];
     let plan = frame.gpu_plan().expect("a GPU view has a plan");
     assert_eq!(plan.visibility, Visibility::GpuFrustum);
-    assert!(frame.draws().iter().all(|d| d.mask().contains(PassMask::TRANSPARENT)), "only transparent draws on the CPU");
+    assert!(
+        frame.draws().iter().all(|d| d.mask().contains(PassMask::TRANSPARENT)),
+        "only transparent draws on the CPU"
+    );
     assert_eq!(frame.draws().len(), 4);
-    let (gpu_parts, cpu_parts): (Vec<&oxygen_sceneprep::Partition>, Vec<_>) = frame.partitions().iter().partition(|p| p.gpu_count.is_some());
+    let (gpu_parts, cpu_parts): (Vec<&oxygen_sceneprep::Partition>, Vec<_>) =
+        frame.partitions().iter().partition(|p| p.gpu_count.is_some());
     assert_eq!(gpu_parts.len(), 3);
     assert_eq!(cpu_parts.len(), 1);
     let cpu = cpu_parts[0];
@@ -134,7 +147,11 @@ fn a_gpu_view_keeps_only_its_transparent_draws_after_the_gpu_room() {
     assert_eq!(frame.commands_of(cpu)[0].first_instance, plan.cpu_draw_offset());
     // The view's ranges hold the GPU's room and the CPU's draws.
     assert_eq!(frame.slots().draw_metadata.count, plan.capacity + 4);
-    assert_eq!(frame.slots().indirect_args.count, plan.groups + frame.draws().len() as u32, "room for a command per draw");
+    assert_eq!(
+        frame.slots().indirect_args.count,
+        plan.groups + frame.draws().len() as u32,
+        "room for a command per draw"
+    );
     insta::assert_snapshot!("gpu_view_dump", frame.dump());
 }
 

@@ -81,10 +81,7 @@ impl Renderer {
                 role,
                 world: view,
                 gpu: view,
-                options: ViewPrepOptions {
-                    visibility,
-                    ..shadow_view_options()
-                },
+                options: ViewPrepOptions { visibility, ..shadow_view_options() },
                 graph: Arc::clone(&shadow_graph),
                 links: Vec::new(),
                 target,

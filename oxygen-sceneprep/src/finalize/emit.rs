@@ -18,8 +18,8 @@ use oxygen_core::ViewId;
 
 use crate::finalize::geometry_cache::GeometryCache;
 use crate::finalize::partition::{build_commands, build_partitions};
-use crate::prepared_frame::FrameTransforms;
 use crate::gpu_scene::GpuScene;
+use crate::prepared_frame::FrameTransforms;
 use crate::{DrawMetadata, GpuViewPlan, Instancing, PreparedSceneFrame, PreparedSlots, RenderItem, Visibility};
 
 /// What every view of a frame emits against: shared, read-only.

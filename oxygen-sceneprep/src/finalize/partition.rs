@@ -57,7 +57,14 @@ pub fn build_partitions(draws: &[DrawMetadata], out: &mut Vec<Partition>) {
         let mask = draw.mask() & PassMask::PARTITION_BITS;
         match out.last_mut() {
             Some(last) if last.mask == mask => last.end = i as u32 + 1,
-            _ => out.push(Partition { begin: i as u32, end: i as u32 + 1, mask, first_command: 0, command_count: 0, gpu_count: None }),
+            _ => out.push(Partition {
+                begin: i as u32,
+                end: i as u32 + 1,
+                mask,
+                first_command: 0,
+                command_count: 0,
+                gpu_count: None,
+            }),
         }
     }
 }
