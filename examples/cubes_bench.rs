@@ -25,6 +25,10 @@
 //! clock, so CPU preparation, recording, submission and GPU execution all count
 //! and no frame overlaps the next. The Bevy side times the same span.
 //!
+//! Visibility is the renderer's default for the adapter (`Visibility::Cpu`
+//! on lavapipe, `GpuFrustum` on a hardware GPU); `OXYGEN_VISIBILITY=cpu`,
+//! `gpu` or `occlusion` forces one, and the line says which ran.
+//!
 //! The adapter follows `WGPU_BACKEND` and `OXYGEN_ADAPTER` (see the README);
 //! `CUBES_BENCH_PNG=dir` also writes each view's last image there, to check by
 //! eye that both renderers draw the same picture.
@@ -88,7 +92,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
 
     let (scene, side) = cube_grid(count);
-    let mut renderer = Renderer::new_headless()?;
+    let visibility = match std::env::var("OXYGEN_VISIBILITY").as_deref() {
+        Ok("cpu") => Some(Visibility::Cpu),
+        Ok("gpu") => Some(Visibility::GpuFrustum),
+        Ok("occlusion") => Some(Visibility::GpuOcclusion),
+        Ok(other) => return Err(format!("OXYGEN_VISIBILITY={other}: use cpu, gpu or occlusion").into()),
+        Err(_) => None,
+    };
+    let mut renderer = Renderer::new_headless_with(RendererOptions { visibility, ..Default::default() })?;
     let mut view_ids = Vec::with_capacity(views);
     for v in 0..views {
         let angle = v as f32 / views as f32 * std::f32::consts::TAU;
@@ -130,6 +141,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         percentile(&times, 0.9),
         visible
     );
-    println!("oxygen adapter: {}", renderer.gpu().describe());
+    println!("oxygen adapter: {} visibility: {:?}", renderer.gpu().describe(), renderer.visibility());
     Ok(())
 }

@@ -160,7 +160,8 @@ mod tests {
     #[test]
     fn index_and_indirect_domains_get_their_buffer_usages_and_the_rest_are_storage() {
         assert_eq!(DomainKind::Indices.usages(), wgpu::BufferUsages::INDEX);
-        assert_eq!(DomainKind::IndirectArgs.usages(), wgpu::BufferUsages::INDIRECT);
+        // Storage too: GPU visibility writes commands from a compute shader.
+        assert_eq!(DomainKind::IndirectArgs.usages(), wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::STORAGE);
         for kind in DomainKind::ALL.iter().filter(|k| k.binding().is_some()) {
             assert_eq!(kind.usages(), wgpu::BufferUsages::STORAGE, "{kind:?}");
         }
