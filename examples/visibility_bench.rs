@@ -21,10 +21,12 @@
 //! box moves every frame, which makes ScenePrep recollect the scene and the
 //! GPU scene diff its records) it renders warm-up frames, then `frames`
 //! measured ones, each waited for, and prints per frame (medians): the CPU
-//! time of `render_frame` (prepare + record + submit), the GPU time between
+//! time of `render_frame` alone (prepare + record + submit), the GPU time between
 //! timestamps written before and after the frame (when the adapter has
 //! timestamps inside encoders), the whole frame, the bytes uploaded, and the
-//! draws kept (read back after the last frame). `cull_only` repeats the GPU
+//! draws kept (read back after the last frame). `VISIBILITY_PATHS=cpu,gpu`
+//! runs only the paths named (`cpu`, `gpu`, `occlusion`); `VISIBILITY_TRACE=1`
+//! prints every `tracing` span's time on stderr. `cull_only` repeats the GPU
 //! path with an empty graph: what is left of the GPU time is the culling.
 
 use std::time::Instant;
@@ -196,8 +198,12 @@ fn run(
         if let Some(t) = &timestamps {
             t.write(renderer.gpu(), 0);
         }
+        // The CPU time is render_frame's alone: the timestamp's own submit
+        // before it does wgpu housekeeping that grows with the scene's
+        // buffers and is not the renderer's work.
+        let cpu_start = Instant::now();
         let report = renderer.render_frame(&scene)?;
-        let cpu_done = start.elapsed();
+        let cpu_done = cpu_start.elapsed();
         if let Some(t) = &timestamps {
             t.write(renderer.gpu(), 1);
         }
@@ -230,11 +236,29 @@ fn run(
     ))
 }
 
+/// `VISIBILITY_PATHS=cpu,gpu,occlusion` (default all) limits the paths run.
+fn wanted(visibility: Visibility) -> bool {
+    let name = match visibility {
+        Visibility::Cpu => "cpu",
+        Visibility::GpuFrustum => "gpu",
+        Visibility::GpuOcclusion => "occlusion",
+    };
+    std::env::var("VISIBILITY_PATHS").map_or(true, |paths| paths.split(',').any(|p| p == name))
+}
+
 fn list(arg: Option<String>, default: &[usize]) -> Result<Vec<usize>, std::num::ParseIntError> {
     arg.map_or(Ok(default.to_vec()), |a| a.split(',').map(str::parse).collect())
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
+    if std::env::var_os("VISIBILITY_TRACE").is_some() {
+        // Every span's time as it closes, on stderr (for finding where a
+        // frame's time goes).
+        tracing_subscriber::fmt()
+            .with_span_events(tracing_subscriber::fmt::format::FmtSpan::CLOSE)
+            .with_writer(std::io::stderr)
+            .init();
+    }
     let mut args = std::env::args().skip(1);
     let scene_kind = args.next().unwrap_or_else(|| "field".to_owned());
     if scene_kind != "field" && scene_kind != "city" {
@@ -250,6 +274,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         for &views in &view_counts {
             for moving in [false, true] {
                 for visibility in [Visibility::Cpu, Visibility::GpuFrustum, Visibility::GpuOcclusion] {
+                    if !wanted(visibility) {
+                        continue;
+                    }
                     println!("{}", run(&scene_kind, count, views, frames, visibility, moving, false)?);
                 }
             }
