@@ -158,7 +158,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 if let Some(set) = &q.timestamps {
                     rec.encoder().write_timestamp(set, 0);
                 }
-                let pre = pre_pass.wanted(ctx.prepared.estimated_overdraw());
+                let pre = pre_pass.wanted(ctx.estimated_overdraw());
                 if pre {
                     MeshPass::depth_pre_pass().run(ctx, rec).await?;
                 }

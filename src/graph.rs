@@ -167,7 +167,7 @@ impl RenderGraph for StandardGraph {
         let mut lit = self.lit.clone();
         // Occlusion culling builds its pyramid from the pre-pass's depth.
         let occlusion = ctx.occlusion_culling();
-        lit.depth_from_pre_pass = occlusion || self.pre_pass.wanted(ctx.prepared.estimated_overdraw());
+        lit.depth_from_pre_pass = occlusion || self.pre_pass.wanted(ctx.estimated_overdraw());
         if lit.depth_from_pre_pass {
             MeshPass::depth_pre_pass().drawing(DrawList::Early).run(ctx, rec).await?;
         }

@@ -418,3 +418,84 @@ fn moving_one_object_uploads_only_its_records() {
     eprintln!("static frame: {everything} bytes; one object moved: {} bytes", report.uploaded_bytes);
     assert!(report.uploaded_bytes < 2048, "moving one object uploaded {} bytes", report.uploaded_bytes);
 }
+
+/// On a GPU path the automatic pre-pass decides from the coverage the GPU
+/// summed a frame earlier: infinite (pre-pass) until it arrives, then low
+/// for boxes spread side by side (no pre-pass), high for walls stacked in
+/// front of each other (pre-pass).
+#[test]
+fn the_gpu_paths_estimate_overdraw_for_the_automatic_pre_pass() {
+    let Some(mut renderer) = renderer(Visibility::GpuFrustum) else { return };
+    // Boxes in four materials on a grid, seen from above: side by side.
+    let mut spread = Scene::new();
+    let cube = spread.add_geometry(Geometry::cube(1.0));
+    let colors =
+        [Vec4::new(0.8, 0.2, 0.2, 1.0), Vec4::new(0.2, 0.8, 0.2, 1.0), Vec4::new(0.2, 0.2, 0.8, 1.0), Vec4::ONE];
+    let materials: Vec<_> = colors.iter().map(|c| spread.add_material(Material::opaque("box", *c))).collect();
+    for i in 0..400 {
+        let node = spread
+            .add_node("box", Transform::from_translation(Vec3::new((i % 20) as f32 * 2.0, 0.0, (i / 20) as f32 * 2.0)));
+        spread.set_renderable(node, Renderable { geometry: cube, materials: vec![materials[i % 4]] }).unwrap();
+    }
+    let mut stacked = Scene::new();
+    let wall = stacked.add_geometry(Geometry::cube(1.0));
+    // A material per wall: each material's run is drawn front to back, but
+    // runs drawn later shade pixels again.
+    for i in 0..12 {
+        let grey = stacked.add_material(Material::opaque(format!("wall {i}"), Vec4::splat(0.3 + i as f32 * 0.05)));
+        let node = stacked.add_node(
+            format!("wall {i}"),
+            Transform {
+                translation: Vec3::new(0.0, 0.0, -(i as f32) * 2.0),
+                rotation: Quat::IDENTITY,
+                scale: Vec3::new(40.0, 40.0, 0.2),
+            },
+        );
+        stacked.set_renderable(node, Renderable { geometry: wall, materials: vec![grey] }).unwrap();
+    }
+    let cases = [
+        (
+            "spread",
+            &spread,
+            look_at(Vec3::new(20.0, 30.0, -10.0), Vec3::new(20.0, 0.0, 20.0), UVec2::new(128, 96)),
+            false,
+        ),
+        (
+            "stacked",
+            &stacked,
+            look_at(Vec3::new(0.0, 0.0, 10.0), Vec3::new(0.0, 0.0, -10.0), UVec2::new(128, 96)),
+            true,
+        ),
+    ];
+    for (name, scene, camera, wants_pre_pass) in cases {
+        let view = renderer.register_view(camera.clone(), standard_render_graph).unwrap();
+        let passes =
+            |report: &FrameReport| report.views.iter().find(|v| v.view == view).unwrap().recorded.render_passes;
+        // The first frame has no readback yet: it runs the pre-pass.
+        let first = renderer.render_frame(scene).unwrap();
+        let with_pre_pass = passes(&first);
+        renderer.read_color(view).unwrap(); // waits for the GPU
+        let mut last = first;
+        for _ in 0..3 {
+            last = renderer.render_frame(scene).unwrap();
+            renderer.read_color(view).unwrap();
+        }
+        let estimate = renderer.gpu_visibility().and_then(|v| v.estimated_overdraw(view));
+        let cpu_view = renderer
+            .register_view(ViewDesc::new(camera).with_visibility(Visibility::Cpu), standard_render_graph)
+            .unwrap();
+        renderer.render_frame(scene).unwrap();
+        let cpu_estimate = renderer.prepared_frame(cpu_view).unwrap().estimated_overdraw();
+        renderer.unregister_view(cpu_view).unwrap();
+        eprintln!("{name}: estimated overdraw {estimate:?}, CPU path {cpu_estimate}");
+        assert!(estimate.is_some_and(f32::is_finite), "{name}: no coverage read back after four frames");
+        let expected = if wants_pre_pass { with_pre_pass } else { with_pre_pass - 1 };
+        assert_eq!(
+            passes(&last),
+            expected,
+            "{name}: the pre-pass should {}run",
+            if wants_pre_pass { "" } else { "not " }
+        );
+        renderer.unregister_view(view).unwrap();
+    }
+}

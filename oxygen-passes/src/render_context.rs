@@ -148,6 +148,20 @@ impl<'a> RenderContext<'a> {
         self.targets.color.as_ref().ok_or(PassError::NoColorTarget { pass })
     }
 
+    /// The depth complexity a forward pass without a depth pre-pass is
+    /// expected to shade, for an automatic pre-pass: on the CPU path
+    /// ScenePrep's estimate from this frame's draws
+    /// ([`oxygen_sceneprep::PreparedSceneFrame::estimated_overdraw`]); on a
+    /// GPU path the coverage the GPU summed over the draws it kept, read
+    /// back from an earlier frame, and infinite (so: pre-pass) until the
+    /// first readback arrives.
+    pub fn estimated_overdraw(&self) -> f32 {
+        match (self.prepared.gpu_plan(), self.visibility) {
+            (Some(_), Some(visibility)) => visibility.estimated_overdraw(self.view.view_id).unwrap_or(f32::INFINITY),
+            _ => self.prepared.estimated_overdraw(),
+        }
+    }
+
     /// Whether this view's visibility is GPU occlusion culling this frame:
     /// its depth pre-pass then runs in two phases around
     /// [`RenderContext::cull_occluded`].

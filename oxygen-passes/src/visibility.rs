@@ -59,10 +59,17 @@ struct CullParams {
     hiz_levels: u32,
     hiz_size: [u32; 2],
     group_counters: u32,
-    reserved: u32,
+    disc: f32,
 }
 
 const _: () = assert!(std::mem::size_of::<CullParams>() == 240);
+
+/// Where a view's coverage readback stands (see [`GpuVisibility::record_readback`]).
+const READBACK_IDLE: u8 = 0;
+const READBACK_COPIED: u8 = 1;
+const READBACK_MAPPING: u8 = 2;
+const READBACK_MAPPED: u8 = 3;
+const READBACK_FAILED: u8 = 4;
 
 /// One GPU view this frame, as [`GpuVisibility::prepare`] takes it.
 #[derive(Clone, Copy, Debug)]
@@ -122,8 +129,17 @@ struct ViewCull {
     instances: u32,
     groups: u32,
     partitions: u32,
+    /// The plan's counters (the coverage counter follows them).
+    counters: u32,
     /// Seen this frame (views not seen are dropped at the next prepare).
     seen: bool,
+    /// The coverage counter copied here after the frame, mapped, read at
+    /// the next prepare; its state (`READBACK_*`), shared with the mapping
+    /// callback.
+    readback: wgpu::Buffer,
+    readback_state: std::sync::Arc<std::sync::atomic::AtomicU8>,
+    /// Depth complexity estimated from the last coverage read back.
+    overdraw: Option<f32>,
 }
 
 /// The GPU scene's buffers, the cull pipelines and every GPU view's state.
@@ -267,6 +283,7 @@ impl GpuVisibility {
         views: &[GpuViewRequest<'_>],
     ) {
         let _span = info_span!("gpu_visibility_prepare", views = views.len()).entered();
+        self.collect_coverage(device);
         let mut uploaded = 0u64;
         let everything =
             GpuSceneChanges { instances: std::iter::once(0..scene.instances().len() as u32).collect(), layout: true };
@@ -328,10 +345,22 @@ impl GpuVisibility {
                 instances: 0,
                 groups: 0,
                 partitions: 0,
+                counters: 0,
                 seen: true,
+                readback: device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("cull coverage readback"),
+                    size: 8,
+                    usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                    mapped_at_creation: false,
+                }),
+                readback_state: std::sync::Arc::new(std::sync::atomic::AtomicU8::new(READBACK_IDLE)),
+                overdraw: None,
             });
             state.seen = true;
-            let mut stale = state.counts.reserve(device, u64::from(plan.counters()) * 4);
+            // After the plan's counters, the coverage counters: the sum, the
+            // capped sum, one per group (see the cull shader).
+            let coverage_counters = 2 + u64::from(plan.groups);
+            let mut stale = state.counts.reserve(device, (u64::from(plan.counters()) + coverage_counters) * 4);
             // New instance numbering or a new path: last frame's visibility
             // means nothing, so start from "nothing was visible" (phase 2
             // then tests everything).
@@ -342,6 +371,7 @@ impl GpuVisibility {
                 uploaded += u64::from(plan.instances) * 4;
             }
             (state.instances, state.groups, state.partitions) = (plan.instances, plan.groups, plan.partitions);
+            state.counters = plan.counters();
             state.plan_visibility = plan.visibility;
             let occlusion = plan.visibility == Visibility::GpuOcclusion;
             let size = (request.view.viewport.x.max(1), request.view.viewport.y.max(1));
@@ -367,6 +397,79 @@ impl GpuVisibility {
         }
         self.views.retain(|_, state| state.seen);
         self.uploaded_last_frame = uploaded;
+    }
+
+    /// Collects the coverage counters the GPU has finished copying (never
+    /// waits): each view's depth complexity estimate for the next frames.
+    fn collect_coverage(&mut self, device: &wgpu::Device) {
+        use std::sync::atomic::Ordering;
+        // Advances mapping callbacks without blocking.
+        let _ = device.poll(wgpu::PollType::Poll);
+        for state in self.views.values_mut() {
+            match state.readback_state.load(Ordering::Acquire) {
+                READBACK_MAPPED => {
+                    let units = match state.readback.slice(..).get_mapped_range() {
+                        // The smaller of the sum and the capped sum.
+                        Ok(bytes) => bytes.get(..8).map(|b| {
+                            let sum = u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+                            let capped = u32::from_le_bytes([b[4], b[5], b[6], b[7]]);
+                            sum.min(capped)
+                        }),
+                        Err(_) => None,
+                    };
+                    state.readback.unmap();
+                    if let Some(units) = units {
+                        state.overdraw = Some(units as f32 / 1024.0);
+                    }
+                    state.readback_state.store(READBACK_IDLE, Ordering::Release);
+                }
+                READBACK_FAILED => state.readback_state.store(READBACK_IDLE, Ordering::Release),
+                _ => {}
+            }
+        }
+    }
+
+    /// The depth complexity `view`'s draws covered last time it was read
+    /// back, estimated as the CPU path does (over each group of one mesh
+    /// and material the viewport fractions its draws' bounding spheres
+    /// cover, capped at 1 per group and summed, and never more than all
+    /// draws' coverage): `None` before the first readback.
+    pub fn estimated_overdraw(&self, view: ViewId) -> Option<f32> {
+        self.views.get(&view)?.overdraw
+    }
+
+    /// Copies `view`'s coverage counter for reading back, when its last
+    /// copy has been read: call after the view's passes, in its encoder.
+    pub fn record_readback(&self, encoder: &mut wgpu::CommandEncoder, view: ViewId) {
+        use std::sync::atomic::Ordering;
+        let Some(state) = self.views.get(&view) else { return };
+        let swapped =
+            state.readback_state.compare_exchange(READBACK_IDLE, READBACK_COPIED, Ordering::AcqRel, Ordering::Acquire);
+        if swapped.is_ok() {
+            // The coverage counter is the one after the plan's counters.
+            let offset = u64::from(state.counters) * 4;
+            encoder.copy_buffer_to_buffer(&state.counts.buffer, offset, &state.readback, 0, 8);
+        }
+    }
+
+    /// Starts mapping the coverage copies of the frame just submitted.
+    pub fn after_submit(&self) {
+        use std::sync::atomic::Ordering;
+        for state in self.views.values() {
+            let swapped = state.readback_state.compare_exchange(
+                READBACK_COPIED,
+                READBACK_MAPPING,
+                Ordering::AcqRel,
+                Ordering::Acquire,
+            );
+            if swapped.is_ok() {
+                let flag = std::sync::Arc::clone(&state.readback_state);
+                state.readback.slice(..).map_async(wgpu::MapMode::Read, move |result| {
+                    let next = if result.is_ok() { READBACK_MAPPED } else { READBACK_FAILED };
+                    flag.store(next, Ordering::Release);
+                });
+            }
+        }
     }
 
     /// The buffer whose counters a GPU-written partition's `gpu_count`
@@ -532,6 +635,6 @@ fn cull_params(
         hiz_levels: hiz.map_or(0, HizPyramid::levels),
         hiz_size: hiz.map_or([1, 1], |h| [h.size().0, h.size().1]),
         group_counters: plan.group_counters(),
-        reserved: 0,
+        disc: std::f32::consts::FRAC_PI_4 / view.aspect().max(f32::MIN_POSITIVE),
     }
 }

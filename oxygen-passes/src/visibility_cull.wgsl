@@ -66,7 +66,9 @@ struct CullParams {
     hiz_levels: u32,
     hiz_size: vec2<u32>,
     group_counters: u32,
-    reserved: u32,
+    // Viewport area of a disc one viewport height across, as a fraction of
+    // the viewport (pi / 4 / aspect): the overdraw estimate's unit.
+    disc: f32,
 }
 
 @group(0) @binding(0) var<uniform> params: CullParams;
@@ -117,6 +119,46 @@ fn select_group(instance: GpuInstance) -> u32 {
         }
     }
     return group;
+}
+
+// Coverage counters after the group counters, in 1/1024ths of the viewport:
+// [the sum over drawn instances][the sum over groups of each group's sum,
+// capped at one viewport][one per group]. The CPU reads the first two back
+// a frame later and takes the smaller as the depth complexity a forward
+// pass without a pre-pass would shade (the CPU path's estimate, with
+// groups for its runs of one material).
+fn coverage_base() -> u32 {
+    return params.group_counters + 2u * params.group_count;
+}
+
+// Adds the instance's share of the viewport (its sphere's projected disc,
+// at most the whole viewport, as the CPU path's estimate counts it), rounded
+// stochastically so that many tiny instances sum right.
+fn add_coverage(i: u32, instance: GpuInstance, group: u32) {
+    let depth = -(dot(params.view_row_z.xyz, instance.sphere.xyz) + params.view_row_z.w);
+    var fraction = instance.sphere.w * params.lod_scale;
+    if params.perspective != 0u {
+        fraction = fraction / max(depth, params.near);
+    }
+    let diameter = 2.0 * fraction;
+    let coverage = min(params.disc * diameter * diameter, 1.0);
+    var h = i * 0x9E3779B9u;
+    h = (h ^ (h >> 16u)) * 0x85EBCA6Bu;
+    let dither = f32(h >> 8u) / 16777216.0;
+    let units = u32(coverage * 1024.0 + dither);
+    if units > 0u {
+        atomicAdd(&counts[coverage_base()], units);
+        atomicAdd(&counts[coverage_base() + 2u + group], units);
+    }
+}
+
+// A group's coverage, capped at one viewport, into the capped sum (once per
+// group, after its draws are final).
+fn add_capped_coverage(g: u32) {
+    let units = atomicLoad(&counts[coverage_base() + 2u + g]);
+    if units > 0u {
+        atomicAdd(&counts[coverage_base() + 1u], min(units, 1024u));
+    }
 }
 
 fn emit(group_index: u32, slot: u32, instance: GpuInstance) {
@@ -172,6 +214,7 @@ fn cull_early(@builtin(global_invocation_id) id: vec3<u32>) {
     let group = select_group(instance);
     let slot = atomicAdd(&counts[params.group_counters + group], 1u);
     emit(group, slot, instance);
+    add_coverage(i, instance, group);
 }
 
 // Phase 1's commands (list A): one instanced command per group with draws,
@@ -181,6 +224,10 @@ fn commands_early(@builtin(global_invocation_id) id: vec3<u32>) {
     let g = id.x;
     if g >= params.group_count {
         return;
+    }
+    // With occlusion culling the late phase adds draws: it caps then.
+    if (params.flags & CULL_OCCLUSION) == 0u {
+        add_capped_coverage(g);
     }
     let drawn = atomicLoad(&counts[params.group_counters + g]);
     if drawn == 0u {
@@ -218,6 +265,7 @@ fn cull_late(@builtin(global_invocation_id) id: vec3<u32>) {
     let early = atomicLoad(&counts[params.group_counters + group]);
     let slot = early + atomicAdd(&counts[params.group_counters + params.group_count + group], 1u);
     emit(group, slot, instance);
+    add_coverage(i, instance, group);
 }
 
 // Phase 2's commands: list B (the newly visible, drawn into the depth
@@ -228,6 +276,7 @@ fn commands_late(@builtin(global_invocation_id) id: vec3<u32>) {
     if g >= params.group_count {
         return;
     }
+    add_capped_coverage(g);
     let early = atomicLoad(&counts[params.group_counters + g]);
     let late = atomicLoad(&counts[params.group_counters + params.group_count + g]);
     let group = groups[g];

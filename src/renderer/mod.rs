@@ -488,6 +488,12 @@ impl Renderer {
         self.default_visibility
     }
 
+    /// GPU visibility's state (count buffers, depth pyramids, coverage
+    /// estimates), where the device runs it.
+    pub fn gpu_visibility(&self) -> Option<&GpuVisibility> {
+        self.visibility.as_ref()
+    }
+
     /// Whether the device runs the GPU visibility paths.
     pub fn gpu_visibility_supported(&self) -> bool {
         self.visibility.is_some()

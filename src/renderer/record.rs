@@ -236,6 +236,9 @@ impl Renderer {
             });
         }
         self.gpu.queue.submit(buffers);
+        if let Some(visibility) = &self.visibility {
+            visibility.after_submit();
+        }
         Ok((reports, threads))
     }
 }
@@ -385,6 +388,9 @@ fn run_executor<'a>(
                     visibility.record_early(rec.encoder(), view.id);
                 }
                 let result = graph.record_boxed(ctx, &mut rec).await;
+                if let Some(visibility) = ctx.visibility {
+                    visibility.record_readback(rec.encoder(), view.id);
+                }
                 let (buffer, stats) = rec.finish();
                 Recorded { result, buffer, stats, busy: Duration::ZERO }
             }
