@@ -468,7 +468,7 @@ fn the_gpu_paths_estimate_overdraw_for_the_automatic_pre_pass() {
         ),
     ];
     for (name, scene, camera, wants_pre_pass) in cases {
-        let view = renderer.register_view(camera.clone(), standard_render_graph).unwrap();
+        let view = renderer.register_view(camera, standard_render_graph).unwrap();
         let passes =
             |report: &FrameReport| report.views.iter().find(|v| v.view == view).unwrap().recorded.render_passes;
         // The first frame has no readback yet: it runs the pre-pass.
