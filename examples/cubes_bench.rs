@@ -100,13 +100,27 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Err(_) => None,
     };
     let mut renderer = Renderer::new_headless_with(RendererOptions { visibility, ..Default::default() })?;
+    // Experiment knobs (not part of the peer comparison): OXYGEN_PREPASS=on|off
+    // forces the depth pre-pass, OXYGEN_VIEWPORT=WxH the views' size.
+    let graph = match std::env::var("OXYGEN_PREPASS").as_deref() {
+        Ok("on") => standard_render_graph.with_pre_pass(PrePass::On),
+        Ok("off") => standard_render_graph.with_pre_pass(PrePass::Off),
+        _ => standard_render_graph,
+    };
+    let viewport = match std::env::var("OXYGEN_VIEWPORT") {
+        Ok(size) => {
+            let (w, h) = size.split_once('x').ok_or("OXYGEN_VIEWPORT=WxH")?;
+            UVec2::new(w.parse()?, h.parse()?)
+        }
+        Err(_) => VIEWPORT,
+    };
     let mut view_ids = Vec::with_capacity(views);
     for v in 0..views {
         let angle = v as f32 / views as f32 * std::f32::consts::TAU;
         let eye = Vec3::new(angle.cos() * EYE_RADIUS * side, EYE_HEIGHT * side, angle.sin() * EYE_RADIUS * side);
         let camera =
-            LookAtResolver::new(Camera::try_perspective(60f32.to_radians(), 0.1, None)?, eye, Vec3::ZERO, VIEWPORT)?;
-        view_ids.push(renderer.register_view(ViewDesc::new(camera), standard_render_graph)?);
+            LookAtResolver::new(Camera::try_perspective(60f32.to_radians(), 0.1, None)?, eye, Vec3::ZERO, viewport)?;
+        view_ids.push(renderer.register_view(ViewDesc::new(camera), graph.clone())?);
     }
 
     let mut times = Vec::with_capacity(measured);
@@ -142,6 +156,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             renderer.read_color(*id)?.save(&path)?;
         }
     }
+    // The first view's overdraw estimate, which decides the automatic pre-pass.
+    let overdraw = match (renderer.gpu_visibility(), renderer.prepared_frame(view_ids[0])) {
+        (Some(gpu), Some(frame)) if frame.gpu_plan().is_some() => gpu.estimated_overdraw(view_ids[0]).unwrap_or(f32::NAN),
+        (_, Some(frame)) => frame.estimated_overdraw(),
+        _ => f32::NAN,
+    };
+    eprintln!("oxygen overdraw estimate (view 0): {overdraw:.3}");
     println!(
         "oxygen N={count} V={views} median_ms={:.2} p10_ms={:.2} p90_ms={:.2} frames={measured} warmup={WARM_UP} visible={:.3}",
         percentile(&times, 0.5),
