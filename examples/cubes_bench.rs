@@ -158,7 +158,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     // The first view's overdraw estimate, which decides the automatic pre-pass.
     let overdraw = match (renderer.gpu_visibility(), renderer.prepared_frame(view_ids[0])) {
-        (Some(gpu), Some(frame)) if frame.gpu_plan().is_some() => gpu.estimated_overdraw(view_ids[0]).unwrap_or(f32::NAN),
+        (Some(gpu), Some(frame)) if frame.gpu_plan().is_some() => {
+            gpu.estimated_overdraw(view_ids[0]).unwrap_or(f32::NAN)
+        }
         (_, Some(frame)) => frame.estimated_overdraw(),
         _ => f32::NAN,
     };
