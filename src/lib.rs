@@ -43,6 +43,7 @@ pub mod probes;
 mod renderer;
 pub mod shadows;
 mod views;
+pub mod windows;
 
 pub use gltf_import::{
     GltfCamera, GltfError, GltfImport, ImportLimits, ImportOptions, NodeCameraResolver, SceneChoice, import_gltf,
@@ -56,6 +57,7 @@ pub use probes::{ProbeUpdate, ReflectionProbe};
 pub use renderer::{FrameReport, FrameWarning, RenderError, Renderer, RendererOptions, ViewReport, ViewRole};
 pub use shadows::{LocalShadowSettings, PointShadowFaceResolver, SpotShadowResolver};
 pub use views::{ViewDesc, Views};
+pub use windows::{PresentMode, WindowId, WindowRect};
 
 /// The bindless heap.
 pub use oxygen_bindless as bindless;
@@ -91,6 +93,7 @@ pub mod prelude {
     pub use crate::{
         GltfCamera, GltfError, GltfImport, ImportLimits, ImportOptions, SceneChoice, import_gltf, import_gltf_with,
     };
+    pub use crate::{PresentMode, WindowId, WindowRect};
     pub use crate::{ProbeUpdate, ReflectionProbe, ViewRole};
     pub use oxygen_bindless::TexturePath;
     pub use oxygen_core::glam::{Mat4, Quat, UVec2, Vec2, Vec3, Vec4};

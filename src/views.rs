@@ -23,6 +23,7 @@ pub struct ViewDesc {
     pub(crate) sun_shadows: Option<CascadeSettings>,
     pub(crate) target: TargetKind,
     pub(crate) visibility: Option<Visibility>,
+    pub(crate) shown: Option<(crate::WindowId, crate::WindowRect)>,
 }
 
 /// Where a view renders.
@@ -44,7 +45,18 @@ impl ViewDesc {
             sun_shadows: None,
             target: TargetKind::Own,
             visibility: None,
+            shown: None,
         }
+    }
+
+    /// Shows the view in `rect` of `window` ([`crate::Renderer::add_window`]):
+    /// each frame its image is composed there and presented. The view
+    /// follows the window: its size (targets, aspect ratio) is the
+    /// rectangle's size in pixels, whatever its resolver's viewport says,
+    /// and it is not rendered while the window is minimised.
+    pub fn shown_in(mut self, window: crate::WindowId, rect: crate::WindowRect) -> Self {
+        self.shown = Some((window, rect));
+        self
     }
 
     /// Where the view's visibility is decided ([`Visibility`]); without it
@@ -101,6 +113,7 @@ pub(crate) struct ViewEntry {
     pub(crate) target: TargetKind,
     pub(crate) active: bool,
     pub(crate) visibility: Option<Visibility>,
+    pub(crate) shown: Option<(crate::WindowId, crate::WindowRect)>,
 }
 
 /// The registered views and the links between them; no GPU needed.
@@ -152,6 +165,7 @@ impl Views {
                 target: desc.target,
                 active: true,
                 visibility: desc.visibility,
+                shown: desc.shown,
             },
         );
         tracing::info!(view = %id, "view registered");

@@ -140,6 +140,25 @@ impl ResolvedView {
         Self::new_f64(view_id, view.as_dmat4(), projection, viewport, near, far)
     }
 
+    /// The same view at another `viewport` size: the projection keeps its
+    /// vertical extent and widens or narrows horizontally with the new
+    /// aspect ratio (its first row scaled by old aspect / new aspect), as a
+    /// window resized under a camera does. Fails like [`Self::new_f64`].
+    pub fn with_viewport(&self, viewport: UVec2) -> Result<Self, ViewError> {
+        if viewport.x == 0 || viewport.y == 0 {
+            return Err(ViewError::EmptyViewport { view: self.view_id, width: viewport.x, height: viewport.y });
+        }
+        let old = self.viewport.x as f32 / self.viewport.y.max(1) as f32;
+        let new = viewport.x as f32 / viewport.y as f32;
+        let mut projection = self.projection;
+        let k = old / new;
+        projection.x_axis.x *= k;
+        projection.y_axis.x *= k;
+        projection.z_axis.x *= k;
+        projection.w_axis.x *= k;
+        Self::new_f64(self.view_id, self.world_to_view, projection, viewport, self.near, self.far)
+    }
+
     /// Builds and validates a resolved view from a world → view matrix in
     /// `f64`; the `f32` matrices used for culling are rounded from it.
     pub fn new_f64(

@@ -12,6 +12,7 @@
 //! frame are kept for inspection until the next frame replaces them.
 
 mod prepare;
+mod present;
 mod record;
 mod resolve;
 mod targets;
@@ -122,6 +123,13 @@ pub enum RenderError {
         /// `max_texture_dimension_2d`.
         limit: u32,
     },
+    /// No window with this id.
+    #[error("{0} does not exist")]
+    NoSuchWindow(crate::WindowId),
+    /// The window has not been composed yet (no frame since it was added
+    /// or resized from zero).
+    #[error("{0} has presented nothing yet")]
+    NothingPresented(crate::WindowId),
 }
 
 /// What a view of the frame is for.
@@ -191,6 +199,14 @@ pub enum FrameWarning {
         /// Why, as the error would have said it.
         reason: String,
     },
+    /// A window was not presented this frame (its surface was lost,
+    /// outdated, occluded or timed out; it was reconfigured).
+    WindowSkipped {
+        /// The window.
+        window: crate::WindowId,
+        /// Why.
+        reason: String,
+    },
     /// A node (or its light) was left out by ScenePrep: a non-finite or
     /// singular transform, non-finite bounds, a light with non-finite values.
     NodeSkipped {
@@ -208,6 +224,7 @@ impl std::fmt::Display for FrameWarning {
         match self {
             FrameWarning::ViewSkipped { view, reason } => write!(f, "{view} skipped: {reason}"),
             FrameWarning::NodeSkipped { name, reason, .. } => write!(f, "node '{name}' skipped: {reason}"),
+            FrameWarning::WindowSkipped { window, reason } => write!(f, "{window} not presented: {reason}"),
         }
     }
 }
@@ -241,6 +258,8 @@ pub struct FrameReport {
     /// that changed. Textures are not counted. A static scene seen by a
     /// still camera on a GPU visibility path uploads next to nothing.
     pub uploaded_bytes: u64,
+    /// Windows composed and presented (offscreen ones composed).
+    pub windows_presented: usize,
 }
 
 /// Choices made when the renderer is created.
@@ -367,6 +386,9 @@ pub struct Renderer {
     visibility: Option<GpuVisibility>,
     /// The views' default visibility path.
     default_visibility: Visibility,
+    /// Windows views are shown in.
+    windows: BTreeMap<crate::WindowId, present::Window>,
+    compositor: present::Compositor,
 }
 
 impl Renderer {
@@ -448,6 +470,7 @@ impl Renderer {
         info!(?draw_path, ?texture_path, ?hdr_format, ?default_visibility, "draw, texture and visibility paths chosen");
         let heap = BindlessHeap::new(&gpu.device, &gpu.queue, texture_path);
         let lighting = LightingResources::new(&gpu.device);
+        let compositor = present::Compositor::new(&gpu.device);
         let pipelines = Pipelines::new(&gpu.device, &heap, &lighting);
         let mut prep = match options.prep_threads {
             Some(threads) => ScenePrep::with_threads(threads),
@@ -479,6 +502,8 @@ impl Renderer {
             textured_materials: true,
             visibility: gpu_visibility,
             default_visibility,
+            windows: BTreeMap::new(),
+            compositor,
         })
     }
 
@@ -699,6 +724,8 @@ impl Renderer {
         let created_before = self.pipelines.pipelines_created();
         self.pipelines.begin_frame();
         let (reports, record_threads) = self.record(&plan)?;
+        let rendered: Vec<ViewId> = reports.iter().map(|r| r.view).collect();
+        let windows_presented = self.present_windows(&rendered, &mut warnings);
         let pipelines_used = self.pipelines.used_this_frame().len();
         let pipelines_created = self.pipelines.pipelines_created() - created_before;
         for report in &reports {
@@ -723,6 +750,7 @@ impl Renderer {
             pipelines_used,
             pipelines_created,
             uploaded_bytes,
+            windows_presented,
         })
     }
 

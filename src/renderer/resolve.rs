@@ -69,9 +69,20 @@ impl Renderer {
                     (ViewRole::ProbeFace { probe, face }, TargetPlan::ProbeFace { probe, face })
                 }
             };
+            // A view shown in a minimised window is not rendered.
+            let shown_size = self.shown_size(entry.shown);
+            if shown_size == Some(None) {
+                continue;
+            }
             let attempt = entry.resolver.resolve(&ctx, scene).map_err(RenderError::from).and_then(|mut view| {
                 // The id is the renderer's, whatever the resolver wrote.
                 view.view_id = *id;
+                // A view shown in a window takes its rectangle's size.
+                if let Some(Some(size)) = shown_size
+                    && size != view.viewport
+                {
+                    view = view.with_viewport(size)?;
+                }
                 let (width, height) = (view.viewport.x, view.viewport.y);
                 if width > limit || height > limit {
                     return Err(RenderError::ViewportTooLarge { view: *id, width, height, limit });

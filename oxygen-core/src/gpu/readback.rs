@@ -56,14 +56,20 @@ pub fn f16_to_f32(bits: u16) -> f32 {
 }
 
 impl GpuContext {
-    /// Reads a 2D RGBA8 texture (unorm or sRGB, stored bytes unchanged) into
-    /// an image. Blocks until the GPU has finished all submitted work.
+    /// Reads a 2D RGBA8 or BGRA8 texture (unorm or sRGB, stored bytes
+    /// unchanged, BGRA put in RGBA order) into an image. Blocks until the
+    /// GPU has finished all submitted work.
     pub fn read_rgba8(&self, texture: &wgpu::Texture) -> Result<image::RgbaImage, GpuError> {
+        use wgpu::TextureFormat as F;
         let format = texture.format();
-        if !matches!(format, wgpu::TextureFormat::Rgba8Unorm | wgpu::TextureFormat::Rgba8UnormSrgb) {
+        let bgra = matches!(format, F::Bgra8Unorm | F::Bgra8UnormSrgb);
+        if !bgra && !matches!(format, F::Rgba8Unorm | F::Rgba8UnormSrgb) {
             return Err(GpuError::UnsupportedReadbackFormat(format));
         }
-        let pixels = self.read_texels(texture, 4)?;
+        let mut pixels = self.read_texels(texture, 4)?;
+        if bgra {
+            pixels.chunks_exact_mut(4).for_each(|p| p.swap(0, 2));
+        }
         // Length is exactly width * height * 4 by construction.
         Ok(image::RgbaImage::from_raw(texture.width(), texture.height(), pixels)
             .expect("readback size matches the texture"))

@@ -1,0 +1,362 @@
+//! Step 5 of a frame: compose every window from the views shown in it and
+//! present it (see `crate::windows` for the model).
+
+use std::collections::HashMap;
+
+use glam::UVec2;
+use oxygen_core::ViewId;
+use tracing::{info_span, warn};
+
+use super::{FrameWarning, RenderError, Renderer};
+use crate::windows::{COMPOSE_WGSL, PresentMode, WindowId, WindowRect};
+
+/// The format of an offscreen window's image.
+const OFFSCREEN_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+
+/// A window surface and how it is configured.
+pub(crate) struct WindowSurface {
+    surface: wgpu::Surface<'static>,
+    config: wgpu::SurfaceConfiguration,
+    /// The surface texture can be a copy destination (else the views are
+    /// composed a second time, straight into it).
+    copy: bool,
+}
+
+/// A window: its surface (none for an offscreen one), size and image.
+pub(crate) struct Window {
+    surface: Option<WindowSurface>,
+    size: UVec2,
+    format: wgpu::TextureFormat,
+    /// What was composed last, `size` large; none while the size is zero.
+    image: Option<wgpu::Texture>,
+}
+
+/// The composition pipelines (one per window format) and what they bind.
+pub(crate) struct Compositor {
+    layout: wgpu::BindGroupLayout,
+    sampler: wgpu::Sampler,
+    module: wgpu::ShaderModule,
+    pipelines: HashMap<wgpu::TextureFormat, wgpu::RenderPipeline>,
+}
+
+impl Compositor {
+    pub(crate) fn new(device: &wgpu::Device) -> Self {
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("compose"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
+            ],
+        });
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("compose"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("compose"),
+            source: wgpu::ShaderSource::Wgsl(COMPOSE_WGSL.into()),
+        });
+        Compositor { layout, sampler, module, pipelines: HashMap::new() }
+    }
+
+    fn pipeline(&mut self, device: &wgpu::Device, format: wgpu::TextureFormat) -> &wgpu::RenderPipeline {
+        let (layout, module) = (&self.layout, &self.module);
+        self.pipelines.entry(format).or_insert_with(|| {
+            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("compose"),
+                bind_group_layouts: &[Some(layout)],
+                immediate_size: 0,
+            });
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("compose"),
+                layout: Some(&pipeline_layout),
+                vertex: wgpu::VertexState {
+                    module,
+                    entry_point: Some("vs"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: Default::default(),
+                depth_stencil: None,
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module,
+                    entry_point: Some("fs"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(format.into())],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        })
+    }
+}
+
+impl Renderer {
+    /// Adds a window surface (created from this renderer's
+    /// `gpu().instance`) of `size` pixels, presented with `present_mode`
+    /// (or `Fifo` where the surface lacks it). Views are shown in it with
+    /// [`crate::ViewDesc::shown_in`]. Fails when the adapter cannot present
+    /// to the surface.
+    pub fn add_window(
+        &mut self,
+        surface: wgpu::Surface<'static>,
+        size: UVec2,
+        present_mode: PresentMode,
+    ) -> Result<WindowId, RenderError> {
+        let caps = surface.get_capabilities(&self.gpu.adapter);
+        let format =
+            caps.formats.iter().copied().find(|f| f.is_srgb()).or(caps.formats.first().copied()).ok_or_else(|| {
+                RenderError::Unsupported(format!("presenting to this surface on {}", self.gpu.describe()))
+            })?;
+        let copy = caps.usages.contains(wgpu::TextureUsages::COPY_DST);
+        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
+            | if copy { wgpu::TextureUsages::COPY_DST } else { wgpu::TextureUsages::empty() };
+        let config = wgpu::SurfaceConfiguration {
+            usage,
+            format,
+            color_space: wgpu::SurfaceColorSpace::Auto,
+            width: size.x.max(1),
+            height: size.y.max(1),
+            present_mode: present_mode.wgpu(&caps.present_modes),
+            desired_maximum_frame_latency: 2,
+            alpha_mode: caps.alpha_modes.first().copied().unwrap_or(wgpu::CompositeAlphaMode::Auto),
+            view_formats: Vec::new(),
+        };
+        if size.x > 0 && size.y > 0 {
+            surface.configure(&self.gpu.device, &config);
+        }
+        tracing::info!(?format, present_mode = ?config.present_mode, copy, "window surface configured");
+        Ok(self.insert_window(Window {
+            surface: Some(WindowSurface { surface, config, copy }),
+            size,
+            format,
+            image: None,
+        }))
+    }
+
+    /// Adds a window with no surface: its views are composed into an image
+    /// of `size` that [`Renderer::read_window`] reads (tests, screenshots
+    /// on machines without a display).
+    pub fn add_offscreen_window(&mut self, size: UVec2) -> WindowId {
+        self.insert_window(Window { surface: None, size, format: OFFSCREEN_FORMAT, image: None })
+    }
+
+    fn insert_window(&mut self, window: Window) -> WindowId {
+        let id = WindowId(self.windows.keys().next_back().map_or(0, |w| w.0 + 1));
+        self.windows.insert(id, window);
+        id
+    }
+
+    /// The window was resized (0 × 0 when minimised: its views are skipped
+    /// until it has a size again).
+    pub fn resize_window(&mut self, id: WindowId, size: UVec2) -> Result<(), RenderError> {
+        let window = self.windows.get_mut(&id).ok_or(RenderError::NoSuchWindow(id))?;
+        window.size = size;
+        if let Some(surface) = &mut window.surface
+            && size.x > 0
+            && size.y > 0
+        {
+            surface.config.width = size.x;
+            surface.config.height = size.y;
+            surface.surface.configure(&self.gpu.device, &surface.config);
+        }
+        Ok(())
+    }
+
+    /// Removes a window; views shown in it are no longer rendered.
+    pub fn remove_window(&mut self, id: WindowId) -> Result<(), RenderError> {
+        self.windows.remove(&id).map(|_| ()).ok_or(RenderError::NoSuchWindow(id))
+    }
+
+    /// A window's size in pixels.
+    pub fn window_size(&self, id: WindowId) -> Option<UVec2> {
+        self.windows.get(&id).map(|w| w.size)
+    }
+
+    /// What was composed into the window last (what was presented), as an
+    /// image (waits for the GPU).
+    pub fn read_window(&self, id: WindowId) -> Result<image::RgbaImage, RenderError> {
+        let window = self.windows.get(&id).ok_or(RenderError::NoSuchWindow(id))?;
+        let image = window.image.as_ref().ok_or(RenderError::NothingPresented(id))?;
+        Ok(self.gpu.read_rgba8(image)?)
+    }
+
+    /// The size a view shown in a window has this frame: `None` when it is
+    /// not shown in one, `Some(None)` when the window is minimised or gone.
+    pub(super) fn shown_size(&self, shown: Option<(WindowId, WindowRect)>) -> Option<Option<UVec2>> {
+        let (window, rect) = shown?;
+        let size = self.windows.get(&window).map(|w| w.size).filter(|s| s.x > 0 && s.y > 0);
+        Some(size.map(|size| rect.pixels(size).1))
+    }
+
+    /// Composes every window with a size from the views shown in it that
+    /// rendered this frame (the others keep the window's clear colour),
+    /// then presents the ones with a surface. Returns how many were
+    /// presented (or composed, for offscreen windows).
+    pub(super) fn present_windows(&mut self, rendered: &[ViewId], warnings: &mut Vec<FrameWarning>) -> usize {
+        if self.windows.is_empty() {
+            return 0;
+        }
+        let _span = info_span!("present", windows = self.windows.len()).entered();
+        let device = self.gpu.device.clone();
+        let mut shown: Vec<(WindowId, WindowRect, ViewId)> = self
+            .views
+            .entries
+            .iter()
+            .filter_map(|(id, entry)| entry.shown.map(|(window, rect)| (window, rect, *id)))
+            .filter(|(_, _, id)| rendered.contains(id))
+            .collect();
+        shown.sort_by_key(|(window, _, id)| (*window, *id));
+        let mut presented = 0;
+        let ids: Vec<WindowId> = self.windows.keys().copied().collect();
+        for id in ids {
+            let Some(window) = self.windows.get(&id) else { continue };
+            let size = window.size;
+            if size.x == 0 || size.y == 0 {
+                continue;
+            }
+            let format = window.format;
+            let stale = window.image.as_ref().is_none_or(|i| i.width() != size.x || i.height() != size.y);
+            if stale {
+                let image = device.create_texture(&wgpu::TextureDescriptor {
+                    label: Some("window image"),
+                    size: wgpu::Extent3d { width: size.x, height: size.y, depth_or_array_layers: 1 },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format,
+                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                    view_formats: &[],
+                });
+                if let Some(window) = self.windows.get_mut(&id) {
+                    window.image = Some(image);
+                }
+            }
+            let views: Vec<(WindowRect, &wgpu::TextureView)> = shown
+                .iter()
+                .filter(|(window, ..)| *window == id)
+                .filter_map(|(_, rect, view)| {
+                    let color = self.gpu_views.get(view)?.targets.as_ref()?.color.as_ref()?;
+                    Some((*rect, color.color_view.as_ref()?))
+                })
+                .collect();
+            let bind_groups: Vec<(WindowRect, wgpu::BindGroup)> = views
+                .iter()
+                .map(|(rect, view)| {
+                    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                        label: Some("compose"),
+                        layout: &self.compositor.layout,
+                        entries: &[
+                            wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(view) },
+                            wgpu::BindGroupEntry {
+                                binding: 1,
+                                resource: wgpu::BindingResource::Sampler(&self.compositor.sampler),
+                            },
+                        ],
+                    });
+                    (*rect, group)
+                })
+                .collect();
+            let pipeline = self.compositor.pipeline(&device, format).clone();
+            let Some(window) = self.windows.get_mut(&id) else { continue };
+            let Some(image) = window.image.as_ref() else { continue };
+            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("compose") });
+            compose(&mut encoder, &pipeline, &bind_groups, &image.create_view(&Default::default()), size);
+            let Some(surface) = &mut window.surface else {
+                self.gpu.queue.submit([encoder.finish()]);
+                presented += 1;
+                continue;
+            };
+            match surface.surface.get_current_texture() {
+                wgpu::CurrentSurfaceTexture::Success(frame) | wgpu::CurrentSurfaceTexture::Suboptimal(frame) => {
+                    if surface.copy && frame.texture.format() == image.format() {
+                        encoder.copy_texture_to_texture(
+                            image.as_image_copy(),
+                            frame.texture.as_image_copy(),
+                            wgpu::Extent3d {
+                                width: size.x.min(frame.texture.width()),
+                                height: size.y.min(frame.texture.height()),
+                                depth_or_array_layers: 1,
+                            },
+                        );
+                    } else {
+                        let target = frame.texture.create_view(&Default::default());
+                        compose(&mut encoder, &pipeline, &bind_groups, &target, size);
+                    }
+                    self.gpu.queue.submit([encoder.finish()]);
+                    self.gpu.queue.present(frame);
+                    presented += 1;
+                }
+                other => {
+                    // Lost, outdated, timed out or occluded: configure again
+                    // and present next frame; the frame's work stands.
+                    self.gpu.queue.submit([encoder.finish()]);
+                    surface.surface.configure(&device, &surface.config);
+                    let reason = format!("the surface was not ready ({}); reconfigured", surface_state(&other));
+                    warn!(window = %id, "{reason}");
+                    warnings.push(FrameWarning::WindowSkipped { window: id, reason });
+                }
+            }
+        }
+        presented
+    }
+}
+
+fn surface_state(state: &wgpu::CurrentSurfaceTexture) -> &'static str {
+    match state {
+        wgpu::CurrentSurfaceTexture::Success(_) => "ready",
+        wgpu::CurrentSurfaceTexture::Suboptimal(_) => "suboptimal",
+        wgpu::CurrentSurfaceTexture::Timeout => "timeout",
+        wgpu::CurrentSurfaceTexture::Occluded => "occluded",
+        wgpu::CurrentSurfaceTexture::Outdated => "outdated",
+        wgpu::CurrentSurfaceTexture::Lost => "lost",
+        _ => "unavailable",
+    }
+}
+
+/// Clears `target` to black and draws each view's image into its rectangle.
+fn compose(
+    encoder: &mut wgpu::CommandEncoder,
+    pipeline: &wgpu::RenderPipeline,
+    views: &[(WindowRect, wgpu::BindGroup)],
+    target: &wgpu::TextureView,
+    size: UVec2,
+) {
+    let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some("compose"),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: target,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
+        })],
+        depth_stencil_attachment: None,
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    });
+    pass.set_pipeline(pipeline);
+    for (rect, group) in views {
+        let (origin, extent) = rect.pixels(size);
+        pass.set_viewport(origin.x as f32, origin.y as f32, extent.x as f32, extent.y as f32, 0.0, 1.0);
+        pass.set_bind_group(0, group, &[]);
+        pass.draw(0..3, 0..1);
+    }
+}

@@ -1,0 +1,134 @@
+//! Views shown in windows, without a display: offscreen windows compose
+//! exactly what a surface would get. Each view's rectangle of the window
+//! must equal the view rendered alone at that size; windows follow resizes
+//! (targets and aspect ratio) and skip their views while minimised.
+
+mod support;
+
+use oxygen::prelude::*;
+use support::golden::compare;
+use support::gpu_renderer;
+
+fn scene() -> Scene {
+    let mut scene = Scene::new();
+    let cube = scene.add_geometry(Geometry::cube(1.0));
+    let floor = scene.add_geometry(Geometry::plane(20.0));
+    let red = scene.add_material(Material::opaque("red", Vec4::new(0.8, 0.15, 0.1, 1.0)));
+    let grey = scene.add_material(Material::opaque("grey", Vec4::splat(0.5)));
+    let node = scene.add_node("cube", Transform::from_translation(Vec3::new(0.0, 0.5, 0.0)));
+    scene.set_renderable(node, Renderable { geometry: cube, materials: vec![red] }).unwrap();
+    let ground = scene.add_node("floor", Transform::IDENTITY);
+    scene.set_renderable(ground, Renderable { geometry: floor, materials: vec![grey] }).unwrap();
+    let sun = scene.add_node("sun", Transform::IDENTITY.with_rotation(Quat::from_rotation_x(-0.9)));
+    scene.set_light(sun, Some(Light::directional(3.0))).unwrap();
+    scene
+}
+
+fn camera(eye: Vec3) -> LookAtResolver {
+    LookAtResolver {
+        camera: Camera::perspective(60f32.to_radians(), 0.1, None),
+        eye,
+        target: Vec3::new(0.0, 0.5, 0.0),
+        up: Vec3::Y,
+        // Deliberately not the window's size: a view shown in a window
+        // takes its rectangle's.
+        viewport: UVec2::new(17, 31),
+    }
+}
+
+const EYES: [Vec3; 4] =
+    [Vec3::new(3.0, 2.0, 3.0), Vec3::new(-3.0, 2.0, 3.0), Vec3::new(0.0, 6.0, 0.01), Vec3::new(4.0, 0.6, 0.0)];
+
+/// The rectangle `origin`, `size` of `image`.
+fn crop(image: &oxygen::image::RgbaImage, origin: UVec2, size: UVec2) -> oxygen::image::RgbaImage {
+    oxygen::image::imageops::crop_imm(image, origin.x, origin.y, size.x, size.y).to_image()
+}
+
+#[test]
+fn a_two_by_two_layout_shows_each_view_in_its_cell() {
+    let scene = scene();
+    let mut renderer = gpu_renderer();
+    let window = renderer.add_offscreen_window(UVec2::new(257, 193));
+    let views: Vec<ViewId> = EYES
+        .iter()
+        .enumerate()
+        .map(|(i, eye)| {
+            let rect = WindowRect::grid(2, 2, i as u32 % 2, i as u32 / 2);
+            renderer.register_view(ViewDesc::new(camera(*eye)).shown_in(window, rect), standard_render_graph).unwrap()
+        })
+        .collect();
+    let report = renderer.render_frame(&scene).unwrap();
+    assert_eq!(report.windows_presented, 1);
+    let composed = renderer.read_window(window).unwrap();
+    assert_eq!(composed.dimensions(), (257, 193));
+    // The same views alone, at their cells' sizes.
+    let mut alone = gpu_renderer();
+    for (i, eye) in EYES.iter().enumerate() {
+        let (origin, size) = WindowRect::grid(2, 2, i as u32 % 2, i as u32 / 2).pixels(UVec2::new(257, 193));
+        let reference =
+            alone.register_view(LookAtResolver { viewport: size, ..camera(*eye) }, standard_render_graph).unwrap();
+        alone.render_frame(&scene).unwrap();
+        let expected = alone.read_color(reference).unwrap();
+        let shown = renderer.read_color(views[i]).unwrap();
+        assert_eq!(shown.dimensions(), (size.x, size.y), "view {i} takes its cell's size");
+        let diff = compare(&crop(&composed, origin, size), &expected, 2);
+        assert_eq!(
+            diff.differing, 0,
+            "cell {i}: {} of {} pixels differ (worst {})",
+            diff.differing, diff.total, diff.worst
+        );
+        alone.unregister_view(reference).unwrap();
+    }
+}
+
+#[test]
+fn views_follow_a_resized_window_and_skip_a_minimised_one() {
+    let scene = scene();
+    let mut renderer = gpu_renderer();
+    let window = renderer.add_offscreen_window(UVec2::new(160, 90));
+    let main = renderer
+        .register_view(ViewDesc::new(camera(EYES[0])).shown_in(window, WindowRect::FULL), standard_render_graph)
+        .unwrap();
+    let inset = WindowRect { x: 0.7, y: 0.05, width: 0.25, height: 0.25 };
+    let pip =
+        renderer.register_view(ViewDesc::new(camera(EYES[2])).shown_in(window, inset), standard_render_graph).unwrap();
+    renderer.render_frame(&scene).unwrap();
+    assert_eq!(renderer.read_color(main).unwrap().dimensions(), (160, 90));
+    let wide = renderer.prepared_frame(main).map(|f| f.view_id());
+    assert_eq!(wide, Some(main));
+
+    // Resized: the view's target and aspect follow.
+    renderer.resize_window(window, UVec2::new(90, 160)).unwrap();
+    let report = renderer.render_frame(&scene).unwrap();
+    assert_eq!(renderer.read_color(main).unwrap().dimensions(), (90, 160));
+    assert_eq!(renderer.read_window(window).unwrap().dimensions(), (90, 160));
+    assert_eq!(report.windows_presented, 1);
+    // The picture-in-picture is composed over the main view.
+    let composed = renderer.read_window(window).unwrap();
+    let (origin, size) = inset.pixels(UVec2::new(90, 160));
+    let diff = compare(&crop(&composed, origin, size), &renderer.read_color(pip).unwrap(), 2);
+    assert_eq!(diff.differing, 0, "the inset shows the second view");
+
+    // Minimised: nothing rendered, nothing presented, no warning.
+    renderer.resize_window(window, UVec2::ZERO).unwrap();
+    let report = renderer.render_frame(&scene).unwrap();
+    assert_eq!(report.windows_presented, 0);
+    assert!(report.views.iter().all(|v| v.view != main && v.view != pip), "a minimised window's views are skipped");
+    assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+
+    // Restored.
+    renderer.resize_window(window, UVec2::new(120, 80)).unwrap();
+    let report = renderer.render_frame(&scene).unwrap();
+    assert_eq!(report.windows_presented, 1);
+    assert_eq!(renderer.read_window(window).unwrap().dimensions(), (120, 80));
+}
+
+#[test]
+fn unknown_windows_are_errors_not_panics() {
+    let mut renderer = gpu_renderer();
+    let window = renderer.add_offscreen_window(UVec2::new(8, 8));
+    assert!(matches!(renderer.read_window(window), Err(RenderError::NothingPresented(_))));
+    renderer.remove_window(window).unwrap();
+    assert!(matches!(renderer.resize_window(window, UVec2::ONE), Err(RenderError::NoSuchWindow(_))));
+    assert!(matches!(renderer.read_window(window), Err(RenderError::NoSuchWindow(_))));
+}
