@@ -1,0 +1,440 @@
+//! The interactive viewer: a glTF file in a window.
+//!
+//! ```text
+//! cargo run --release --example viewer -- [FILE] [--size WxH] [--present fifo|mailbox|immediate]
+//!                                         [--frames N --screenshot PATH]
+//! ```
+//!
+//! FILE defaults to the shipped `assets/AlphaBlendModeTest/AlphaBlendModeTest.glb`.
+//!
+//! * Mouse: drag with the left button to orbit (or look around in fly
+//!   mode), wheel to zoom. Keys: `W` `A` `S` `D` `Q` `E` move in fly mode,
+//!   `F` switches between orbit and fly cameras.
+//! * Layouts: `1` one view; `2` a 2 × 2 layout (the file's cameras first,
+//!   then orbit views from the side and above); `3` the main view with a
+//!   picture-in-picture from above.
+//! * Knobs: `V` cycles the main view's visibility path (CPU, GPU frustum,
+//!   GPU occlusion; the GPU paths where the adapter has them), `P` the depth
+//!   pre-pass (automatic, on, off).
+//! * The title bar shows the frame's timings (prepare, record, whole frame)
+//!   and the knobs.
+//! * `--frames N --screenshot PATH` renders N frames, saves what was
+//!   presented last as a PNG and exits: for tests and for people without a
+//!   desktop (run it under `xvfb-run`).
+
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+use oxygen::prelude::*;
+use winit::application::ApplicationHandler;
+use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
+use winit::keyboard::{KeyCode, PhysicalKey};
+use winit::window::{Window, WindowAttributes};
+
+const USAGE: &str = "\
+usage: viewer [FILE] [--size WxH] [--present fifo|mailbox|immediate] [--frames N --screenshot PATH]";
+
+/// The parsed command line.
+struct Args {
+    file: PathBuf,
+    size: UVec2,
+    present: PresentMode,
+    frames: Option<u64>,
+    screenshot: Option<PathBuf>,
+}
+
+fn parse_args(mut args: impl Iterator<Item = String>) -> Result<Args, String> {
+    let mut parsed = Args {
+        file: PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/assets/AlphaBlendModeTest/AlphaBlendModeTest.glb")),
+        size: UVec2::new(960, 600),
+        present: PresentMode::Fifo,
+        frames: None,
+        screenshot: None,
+    };
+    while let Some(arg) = args.next() {
+        let mut value = |name: &str| args.next().ok_or(format!("{name} needs a value"));
+        match arg.as_str() {
+            "--size" => {
+                let v = value("--size")?;
+                let (w, h) = v.split_once('x').ok_or("--size needs WxH")?;
+                let size = UVec2::new(w.parse().map_err(|_| "bad width")?, h.parse().map_err(|_| "bad height")?);
+                if size.x == 0 || size.y == 0 {
+                    return Err("--size must be at least 1x1".into());
+                }
+                parsed.size = size;
+            }
+            "--present" => {
+                parsed.present = match value("--present")?.as_str() {
+                    "fifo" => PresentMode::Fifo,
+                    "mailbox" => PresentMode::Mailbox,
+                    "immediate" => PresentMode::Immediate,
+                    other => return Err(format!("unknown present mode '{other}'")),
+                }
+            }
+            "--frames" => parsed.frames = Some(value("--frames")?.parse().map_err(|_| "--frames needs a number")?),
+            "--screenshot" => parsed.screenshot = Some(PathBuf::from(value("--screenshot")?)),
+            "-h" | "--help" => return Err(String::new()),
+            flag if flag.starts_with('-') => return Err(format!("unknown option '{flag}'")),
+            _ => parsed.file = PathBuf::from(arg),
+        }
+    }
+    if parsed.screenshot.is_some() && parsed.frames.is_none() {
+        parsed.frames = Some(3);
+    }
+    Ok(parsed)
+}
+
+/// The main camera, moved by the mouse and keyboard, read by its resolver.
+#[derive(Clone, Copy, Debug)]
+struct CameraState {
+    target: Vec3,
+    yaw: f32,
+    pitch: f32,
+    distance: f32,
+    fly: bool,
+    eye: Vec3,
+    near: f32,
+}
+
+impl CameraState {
+    fn forward(&self) -> Vec3 {
+        Vec3::new(self.yaw.cos() * self.pitch.cos(), self.pitch.sin(), self.yaw.sin() * self.pitch.cos())
+    }
+    fn eye_and_target(&self) -> (Vec3, Vec3) {
+        if self.fly { (self.eye, self.eye + self.forward()) } else { (self.target - self.forward() * self.distance, self.target) }
+    }
+}
+
+/// Resolves the shared camera state each frame.
+struct SharedCamera(Arc<Mutex<CameraState>>);
+
+impl ViewResolver for SharedCamera {
+    fn resolve(&self, ctx: &ViewContext, scene: &Scene) -> Result<ResolvedView, ViewError> {
+        let state = *self.0.lock().unwrap_or_else(|e| e.into_inner());
+        let (eye, target) = state.eye_and_target();
+        LookAtResolver {
+            camera: Camera::perspective(50f32.to_radians(), state.near, None),
+            eye,
+            target,
+            up: Vec3::Y,
+            // The window's rectangle decides the size.
+            viewport: UVec2::new(16, 9),
+        }
+        .resolve(ctx, scene)
+    }
+}
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Layout {
+    Single,
+    Grid,
+    PictureInPicture,
+}
+
+struct Viewer {
+    args: Args,
+    scene: Scene,
+    cameras: Vec<GltfCamera>,
+    bounds: oxygen::core::Aabb,
+    camera: Arc<Mutex<CameraState>>,
+    renderer: Option<Renderer>,
+    window: Option<Arc<Window>>,
+    window_id: Option<WindowId>,
+    views: Vec<ViewId>,
+    layout: Layout,
+    visibility: Visibility,
+    pre_pass: PrePass,
+    frames: u64,
+    dragging: bool,
+    last_cursor: Option<(f64, f64)>,
+    error: Option<String>,
+}
+
+impl Viewer {
+    fn rebuild_views(&mut self) -> Result<(), RenderError> {
+        let (Some(renderer), Some(window)) = (self.renderer.as_mut(), self.window_id) else { return Ok(()) };
+        for view in self.views.drain(..) {
+            renderer.unregister_view(view)?;
+        }
+        let graph = standard_render_graph.with_pre_pass(self.pre_pass);
+        let main = |rect| ViewDesc::new(SharedCamera(Arc::clone(&self.camera))).shown_in(window, rect);
+        let center = self.bounds.center();
+        let radius = self.bounds.half_extents().length().max(1e-3);
+        let orbit = |direction: Vec3, up: Vec3| LookAtResolver {
+            camera: Camera::perspective(45f32.to_radians(), radius * 0.01, None),
+            eye: center + direction.normalize() * radius * 2.2,
+            target: center,
+            up,
+            viewport: UVec2::new(16, 9),
+        };
+        match self.layout {
+            Layout::Single => {
+                self.views.push(renderer.register_view(main(WindowRect::FULL).with_visibility(self.visibility), graph.clone())?);
+            }
+            Layout::Grid => {
+                let main_view = main(WindowRect::grid(2, 2, 0, 0)).with_visibility(self.visibility);
+                self.views.push(renderer.register_view(main_view, graph.clone())?);
+                let mut others: Vec<Box<dyn ViewResolver>> =
+                    self.cameras.iter().take(3).map(|c| Box::new(c.resolver(UVec2::new(16, 9))) as Box<dyn ViewResolver>).collect();
+                let fallbacks = [(Vec3::X, Vec3::Y), (Vec3::Y, Vec3::NEG_Z), (Vec3::Z, Vec3::Y)];
+                for (direction, up) in fallbacks.iter().skip(others.len()) {
+                    others.push(Box::new(orbit(*direction, *up)));
+                }
+                for (i, resolver) in others.into_iter().take(3).enumerate() {
+                    let cell = WindowRect::grid(2, 2, (i as u32 + 1) % 2, (i as u32 + 1) / 2);
+                    let desc = ViewDesc::new(BoxedResolver(resolver)).shown_in(window, cell);
+                    self.views.push(renderer.register_view(desc, graph.clone())?);
+                }
+            }
+            Layout::PictureInPicture => {
+                self.views.push(renderer.register_view(main(WindowRect::FULL).with_visibility(self.visibility), graph.clone())?);
+                let inset = WindowRect { x: 0.72, y: 0.03, width: 0.25, height: 0.25 };
+                let desc = ViewDesc::new(orbit(Vec3::new(0.0, 1.0, 0.2), Vec3::NEG_Z)).shown_in(window, inset);
+                self.views.push(renderer.register_view(desc, graph)?);
+            }
+        }
+        Ok(())
+    }
+
+    fn render(&mut self) -> Result<(), Box<dyn std::error::Error>> {
+        let Some(renderer) = self.renderer.as_mut() else { return Ok(()) };
+        let started = Instant::now();
+        let report = renderer.render_frame(&self.scene)?;
+        self.frames += 1;
+        for warning in &report.warnings {
+            eprintln!("warning: {warning}");
+        }
+        if let Some(window) = &self.window {
+            window.set_title(&format!(
+                "Oxygen — prepare {:.2} ms, record {:.2} ms, frame {:.2} ms — {:?}, pre-pass {:?} [1/2/3 layout, V visibility, P pre-pass, F fly]",
+                report.prepare_seconds * 1e3,
+                report.record_seconds * 1e3,
+                started.elapsed().as_secs_f64() * 1e3,
+                self.visibility,
+                self.pre_pass,
+            ));
+        }
+        if let (Some(total), Some(id)) = (self.args.frames, self.window_id)
+            && self.frames >= total
+        {
+            if let Some(path) = &self.args.screenshot {
+                renderer.read_window(id)?.save(path)?;
+                println!("saved {} after {} frames", path.display(), self.frames);
+            }
+        }
+        Ok(())
+    }
+
+    fn done(&self) -> bool {
+        self.error.is_some() || self.args.frames.is_some_and(|total| self.frames >= total)
+    }
+}
+
+/// A boxed resolver as a resolver.
+struct BoxedResolver(Box<dyn ViewResolver>);
+
+impl ViewResolver for BoxedResolver {
+    fn resolve(&self, ctx: &ViewContext, scene: &Scene) -> Result<ResolvedView, ViewError> {
+        self.0.resolve(ctx, scene)
+    }
+}
+
+impl ApplicationHandler for Viewer {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.window.is_some() {
+            return;
+        }
+        let attributes = WindowAttributes::default()
+            .with_title("Oxygen")
+            .with_inner_size(winit::dpi::PhysicalSize::new(self.args.size.x, self.args.size.y));
+        let result = (|| -> Result<(), Box<dyn std::error::Error>> {
+            let window = Arc::new(event_loop.create_window(attributes)?);
+            let mut renderer = Renderer::new_headless()?;
+            let surface = renderer.gpu().instance.create_surface(Arc::clone(&window))?;
+            let size = window.inner_size();
+            let id = renderer.add_window(surface, UVec2::new(size.width, size.height), self.args.present)?;
+            println!("adapter: {}; visibility {:?}", renderer.gpu().describe(), renderer.visibility());
+            self.visibility = renderer.visibility();
+            self.renderer = Some(renderer);
+            self.window = Some(window);
+            self.window_id = Some(id);
+            self.rebuild_views()?;
+            if let Some(window) = &self.window {
+                window.request_redraw();
+            }
+            Ok(())
+        })();
+        if let Err(e) = result {
+            self.error = Some(e.to_string());
+            event_loop.exit();
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _: winit::window::WindowId, event: WindowEvent) {
+        let outcome = (|| -> Result<(), Box<dyn std::error::Error>> {
+            match event {
+                WindowEvent::CloseRequested => event_loop.exit(),
+                WindowEvent::Resized(size) => {
+                    if let (Some(renderer), Some(id)) = (self.renderer.as_mut(), self.window_id) {
+                        renderer.resize_window(id, UVec2::new(size.width, size.height))?;
+                    }
+                }
+                WindowEvent::RedrawRequested => {
+                    self.render()?;
+                    if self.done() {
+                        event_loop.exit();
+                    } else if let Some(window) = &self.window {
+                        window.request_redraw();
+                    }
+                }
+                WindowEvent::MouseInput { state, button: MouseButton::Left, .. } => {
+                    self.dragging = state == ElementState::Pressed;
+                }
+                WindowEvent::CursorMoved { position, .. } => {
+                    if let (true, Some((x, y))) = (self.dragging, self.last_cursor) {
+                        let mut camera = self.camera.lock().unwrap_or_else(|e| e.into_inner());
+                        camera.yaw += (position.x - x) as f32 * 0.005;
+                        camera.pitch = (camera.pitch - (position.y - y) as f32 * 0.005).clamp(-1.5, 1.5);
+                    }
+                    self.last_cursor = Some((position.x, position.y));
+                }
+                WindowEvent::MouseWheel { delta, .. } => {
+                    let lines = match delta {
+                        MouseScrollDelta::LineDelta(_, y) => y,
+                        MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,
+                    };
+                    let mut camera = self.camera.lock().unwrap_or_else(|e| e.into_inner());
+                    camera.distance = (camera.distance * 0.9f32.powf(lines)).max(camera.near * 2.0);
+                }
+                WindowEvent::KeyboardInput { event, .. } if event.state == ElementState::Pressed => {
+                    let PhysicalKey::Code(code) = event.physical_key else { return Ok(()) };
+                    self.key(code)?;
+                }
+                _ => {}
+            }
+            Ok(())
+        })();
+        if let Err(e) = outcome {
+            self.error = Some(e.to_string());
+            event_loop.exit();
+        }
+    }
+}
+
+impl Viewer {
+    fn key(&mut self, code: KeyCode) -> Result<(), RenderError> {
+        let step = self.bounds.half_extents().length().max(1e-3) * 0.05;
+        {
+            let mut camera = self.camera.lock().unwrap_or_else(|e| e.into_inner());
+            let forward = camera.forward();
+            let right = forward.cross(Vec3::Y).normalize_or_zero();
+            match code {
+                KeyCode::KeyW => camera.eye += forward * step,
+                KeyCode::KeyS => camera.eye -= forward * step,
+                KeyCode::KeyA => camera.eye -= right * step,
+                KeyCode::KeyD => camera.eye += right * step,
+                KeyCode::KeyQ => camera.eye -= Vec3::Y * step,
+                KeyCode::KeyE => camera.eye += Vec3::Y * step,
+                KeyCode::KeyF => {
+                    if !camera.fly {
+                        camera.eye = camera.eye_and_target().0;
+                    }
+                    camera.fly = !camera.fly;
+                }
+                _ => {}
+            }
+        }
+        let supported = self.renderer.as_ref().is_some_and(Renderer::gpu_visibility_supported);
+        match code {
+            KeyCode::Digit1 => self.layout = Layout::Single,
+            KeyCode::Digit2 => self.layout = Layout::Grid,
+            KeyCode::Digit3 => self.layout = Layout::PictureInPicture,
+            KeyCode::KeyV => {
+                self.visibility = match self.visibility {
+                    Visibility::Cpu if supported => Visibility::GpuFrustum,
+                    Visibility::GpuFrustum => Visibility::GpuOcclusion,
+                    _ => Visibility::Cpu,
+                }
+            }
+            KeyCode::KeyP => {
+                self.pre_pass = match self.pre_pass {
+                    PrePass::Auto { .. } => PrePass::On,
+                    PrePass::On => PrePass::Off,
+                    PrePass::Off => PrePass::DEFAULT,
+                }
+            }
+            _ => return Ok(()),
+        }
+        self.rebuild_views()
+    }
+}
+
+fn main() {
+    let args = match parse_args(std::env::args().skip(1)) {
+        Ok(args) => args,
+        Err(e) => {
+            if !e.is_empty() {
+                eprintln!("error: {e}");
+            }
+            eprintln!("{USAGE}");
+            std::process::exit(2);
+        }
+    };
+    if let Err(e) = run(args) {
+        eprintln!("error: {e}");
+        std::process::exit(1);
+    }
+}
+
+fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
+    let mut scene = Scene::new();
+    let import = import_gltf(&mut scene, &args.file, &SceneChoice::Default)?;
+    for note in &import.warnings {
+        println!("note: {note}");
+    }
+    let bounds = import.bounds.ok_or("the scene has nothing to draw")?;
+    if import.lights == 0 {
+        let sun = scene.add_node(
+            "default sun",
+            Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, Vec3::new(-0.3, -0.8, -0.5).normalize())),
+        );
+        scene.set_light(sun, Some(Light::directional(2.5)))?;
+    }
+    let radius = bounds.half_extents().length().max(1e-3);
+    let camera = CameraState {
+        target: bounds.center(),
+        yaw: -1.2,
+        pitch: 0.35,
+        distance: radius * 2.5,
+        fly: false,
+        eye: bounds.center(),
+        near: radius * 0.01,
+    };
+    let event_loop = EventLoop::new()?;
+    event_loop.set_control_flow(ControlFlow::Poll);
+    let mut viewer = Viewer {
+        args,
+        scene,
+        cameras: import.cameras,
+        bounds,
+        camera: Arc::new(Mutex::new(camera)),
+        renderer: None,
+        window: None,
+        window_id: None,
+        views: Vec::new(),
+        layout: Layout::Single,
+        visibility: Visibility::Cpu,
+        pre_pass: PrePass::DEFAULT,
+        frames: 0,
+        dragging: false,
+        last_cursor: None,
+        error: None,
+    };
+    event_loop.run_app(&mut viewer)?;
+    match viewer.error {
+        Some(e) => Err(e.into()),
+        None => Ok(()),
+    }
+}
