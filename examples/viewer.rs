@@ -27,6 +27,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use oxygen::prelude::*;
+use oxygen_demo::OrbitCamera;
 use winit::application::ApplicationHandler;
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
@@ -86,24 +87,24 @@ fn parse_args(mut args: impl Iterator<Item = String>) -> Result<Args, String> {
     Ok(parsed)
 }
 
-/// The main camera, moved by the mouse and keyboard, read by its resolver.
+/// The main camera, moved by the mouse and keyboard, read by its resolver:
+/// an orbit camera (oxygen-demo's, which tests render headlessly), or a
+/// fly camera at `eye` looking along the orbit's direction.
 #[derive(Clone, Copy, Debug)]
 struct CameraState {
-    target: Vec3,
-    yaw: f32,
-    pitch: f32,
-    distance: f32,
+    orbit: OrbitCamera,
     fly: bool,
     eye: Vec3,
-    near: f32,
 }
 
 impl CameraState {
     fn forward(&self) -> Vec3 {
-        Vec3::new(self.yaw.cos() * self.pitch.cos(), self.pitch.sin(), self.yaw.sin() * self.pitch.cos())
+        self.orbit.forward()
     }
-    fn eye_and_target(&self) -> (Vec3, Vec3) {
-        if self.fly { (self.eye, self.eye + self.forward()) } else { (self.target - self.forward() * self.distance, self.target) }
+    fn resolver(&self) -> LookAtResolver {
+        // The window's rectangle decides the size.
+        let orbit = self.orbit.resolver(UVec2::new(16, 9));
+        if self.fly { LookAtResolver { eye: self.eye, target: self.eye + self.forward(), ..orbit } } else { orbit }
     }
 }
 
@@ -113,16 +114,7 @@ struct SharedCamera(Arc<Mutex<CameraState>>);
 impl ViewResolver for SharedCamera {
     fn resolve(&self, ctx: &ViewContext, scene: &Scene) -> Result<ResolvedView, ViewError> {
         let state = *self.0.lock().unwrap_or_else(|e| e.into_inner());
-        let (eye, target) = state.eye_and_target();
-        LookAtResolver {
-            camera: Camera::perspective(50f32.to_radians(), state.near, None),
-            eye,
-            target,
-            up: Vec3::Y,
-            // The window's rectangle decides the size.
-            viewport: UVec2::new(16, 9),
-        }
-        .resolve(ctx, scene)
+        state.resolver().resolve(ctx, scene)
     }
 }
 
@@ -295,8 +287,8 @@ impl ApplicationHandler for Viewer {
                 WindowEvent::CursorMoved { position, .. } => {
                     if let (true, Some((x, y))) = (self.dragging, self.last_cursor) {
                         let mut camera = self.camera.lock().unwrap_or_else(|e| e.into_inner());
-                        camera.yaw += (position.x - x) as f32 * 0.005;
-                        camera.pitch = (camera.pitch - (position.y - y) as f32 * 0.005).clamp(-1.5, 1.5);
+                        camera.orbit.yaw += (position.x - x) as f32 * 0.005;
+                        camera.orbit.pitch = (camera.orbit.pitch - (position.y - y) as f32 * 0.005).clamp(-1.5, 1.5);
                     }
                     self.last_cursor = Some((position.x, position.y));
                 }
@@ -306,7 +298,7 @@ impl ApplicationHandler for Viewer {
                         MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,
                     };
                     let mut camera = self.camera.lock().unwrap_or_else(|e| e.into_inner());
-                    camera.distance = (camera.distance * 0.9f32.powf(lines)).max(camera.near * 2.0);
+                    camera.orbit.distance = (camera.orbit.distance * 0.9f32.powf(lines)).max(camera.orbit.near * 2.0);
                 }
                 WindowEvent::KeyboardInput { event, .. } if event.state == ElementState::Pressed => {
                     let PhysicalKey::Code(code) = event.physical_key else { return Ok(()) };
@@ -339,7 +331,7 @@ impl Viewer {
                 KeyCode::KeyE => camera.eye += Vec3::Y * step,
                 KeyCode::KeyF => {
                     if !camera.fly {
-                        camera.eye = camera.eye_and_target().0;
+                        camera.eye = camera.orbit.eye();
                     }
                     camera.fly = !camera.fly;
                 }
@@ -396,22 +388,10 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
     }
     let bounds = import.bounds.ok_or("the scene has nothing to draw")?;
     if import.lights == 0 {
-        let sun = scene.add_node(
-            "default sun",
-            Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, Vec3::new(-0.3, -0.8, -0.5).normalize())),
-        );
-        scene.set_light(sun, Some(Light::directional(2.5)))?;
+        oxygen_demo::add_default_sun(&mut scene);
     }
-    let radius = bounds.half_extents().length().max(1e-3);
-    let camera = CameraState {
-        target: bounds.center(),
-        yaw: -1.2,
-        pitch: 0.35,
-        distance: radius * 2.5,
-        fly: false,
-        eye: bounds.center(),
-        near: radius * 0.01,
-    };
+    let orbit = OrbitCamera::framing(bounds.center(), bounds.half_extents());
+    let camera = CameraState { orbit, fly: false, eye: orbit.eye() };
     let event_loop = EventLoop::new()?;
     event_loop.set_control_flow(ControlFlow::Poll);
     let mut viewer = Viewer {

@@ -145,3 +145,58 @@ pub fn floor_with_box(roughness: f32) -> Scene {
     scene.set_light(sun, Some(Light::directional(0.6))).expect("a node");
     scene
 }
+
+/// The interactive viewer's orbit camera (`examples/viewer.rs`), here so
+/// that a test renders headlessly exactly the view the viewer presents.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OrbitCamera {
+    /// The point orbited.
+    pub target: Vec3,
+    /// Angle around +Y, radians.
+    pub yaw: f32,
+    /// Angle above the horizon, radians.
+    pub pitch: f32,
+    /// Distance from the target.
+    pub distance: f32,
+    /// Near plane.
+    pub near: f32,
+    /// Vertical field of view, radians.
+    pub fov_y: f32,
+}
+
+impl OrbitCamera {
+    /// A camera framing a box of `center` and `half_extents` from above
+    /// and to the side.
+    pub fn framing(center: Vec3, half_extents: Vec3) -> Self {
+        let radius = half_extents.length().max(1e-3);
+        OrbitCamera { target: center, yaw: -1.2, pitch: 0.35, distance: radius * 2.5, near: radius * 0.01, fov_y: 0.87 }
+    }
+
+    /// The unit direction the camera looks along.
+    pub fn forward(&self) -> Vec3 {
+        Vec3::new(self.yaw.cos() * self.pitch.cos(), self.pitch.sin(), self.yaw.sin() * self.pitch.cos())
+    }
+
+    /// Where the eye is.
+    pub fn eye(&self) -> Vec3 {
+        self.target - self.forward() * self.distance
+    }
+
+    /// A look-at resolver of `viewport` for this camera.
+    pub fn resolver(&self, viewport: UVec2) -> LookAtResolver {
+        LookAtResolver {
+            camera: Camera::perspective(self.fov_y, self.near, None),
+            eye: self.eye(),
+            target: self.target,
+            up: Vec3::Y,
+            viewport,
+        }
+    }
+}
+
+/// Adds the viewers' default sun to a scene that has no light.
+pub fn add_default_sun(scene: &mut Scene) {
+    let direction = Vec3::new(-0.3, -0.8, -0.5).normalize();
+    let sun = scene.add_node("default sun", Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, direction)));
+    scene.set_light(sun, Some(Light::directional(2.5))).expect("the sun node was just created");
+}
