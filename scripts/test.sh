@@ -4,7 +4,8 @@
 # 1. checks for a Rust toolchain;
 # 2. makes sure the drivers are there (installs Mesa's lavapipe, and Mesa's
 #    GL drivers when GL is wanted, when run as root on Debian/Ubuntu;
-#    otherwise prints the command to run);
+#    otherwise prints the command to run), and a virtual X server (xvfb)
+#    for the window test when it can;
 # 3. runs the whole workspace's tests (unit, snapshot, layout, GPU) on
 #    Vulkan, printing the adapter first;
 # 4. when GL is wanted and a GL adapter exists, runs the GPU test binaries
@@ -26,6 +27,22 @@ fi
 backends=${OXYGEN_BACKENDS:-vulkan gl}
 export OXYGEN_BACKENDS="$backends"
 scripts/ensure-gpu.sh
+
+# A virtual X server for the window test (tests/viewer_window.rs), installed
+# like the drivers when run as root on Debian/Ubuntu; without it that test
+# says so and is skipped.
+if ! command -v xvfb-run >/dev/null 2>&1; then
+  if [ "$(id -u)" -eq 0 ] && command -v apt-get >/dev/null 2>&1; then
+    say "installing xvfb (a virtual X server) for the window test"
+    if (apt-get update && DEBIAN_FRONTEND=noninteractive apt-get install -y xvfb xauth) >/tmp/oxygen-xvfb-setup.log 2>&1; then
+      say "installed xvfb"
+    else
+      say "could not install xvfb (log: /tmp/oxygen-xvfb-setup.log); the window test will say it is skipped"
+    fi
+  else
+    say "no xvfb-run here: the window test will say it is skipped (as root: apt-get install -y xvfb)"
+  fi
+fi
 
 say "building tests (the first build compiles wgpu and takes a few minutes)"
 cargo build --locked --workspace --tests --examples
