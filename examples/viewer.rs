@@ -11,8 +11,9 @@
 //!   mode), wheel to zoom. Keys: `W` `A` `S` `D` `Q` `E` move in fly mode,
 //!   `F` switches between orbit and fly cameras.
 //! * Layouts: `1` one view; `2` a 2 × 2 layout (the file's cameras first,
-//!   then orbit views from the side and above); `3` the main view with a
-//!   picture-in-picture from above.
+//!   then orbit views from the side and above); `3` the main view with its
+//!   sun's four shadow cascades shown as small viewports along the bottom
+//!   (depth as grey); `4` the main view with a picture-in-picture from above.
 //! * Knobs: `V` cycles the main view's visibility path (CPU, GPU frustum,
 //!   GPU occlusion; the GPU paths where the adapter has them), `P` the depth
 //!   pre-pass (automatic, on, off).
@@ -35,7 +36,7 @@ use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowAttributes};
 
 const USAGE: &str = "\
-usage: viewer [FILE] [--size WxH] [--present fifo|mailbox|immediate] [--frames N --screenshot PATH]";
+usage: viewer [FILE] [--size WxH] [--present fifo|mailbox|immediate] [--layout 1|2|3|4] [--frames N --screenshot PATH]";
 
 /// The parsed command line.
 struct Args {
@@ -44,6 +45,7 @@ struct Args {
     present: PresentMode,
     frames: Option<u64>,
     screenshot: Option<PathBuf>,
+    layout: Layout,
 }
 
 fn parse_args(mut args: impl Iterator<Item = String>) -> Result<Args, String> {
@@ -53,6 +55,7 @@ fn parse_args(mut args: impl Iterator<Item = String>) -> Result<Args, String> {
         present: PresentMode::Fifo,
         frames: None,
         screenshot: None,
+        layout: Layout::Single,
     };
     while let Some(arg) = args.next() {
         let mut value = |name: &str| args.next().ok_or(format!("{name} needs a value"));
@@ -76,6 +79,15 @@ fn parse_args(mut args: impl Iterator<Item = String>) -> Result<Args, String> {
             }
             "--frames" => parsed.frames = Some(value("--frames")?.parse().map_err(|_| "--frames needs a number")?),
             "--screenshot" => parsed.screenshot = Some(PathBuf::from(value("--screenshot")?)),
+            "--layout" => {
+                parsed.layout = match value("--layout")?.as_str() {
+                    "1" => Layout::Single,
+                    "2" => Layout::Grid,
+                    "3" => Layout::Cascades,
+                    "4" => Layout::PictureInPicture,
+                    other => return Err(format!("unknown layout '{other}' (1, 2, 3 or 4)")),
+                }
+            }
             "-h" | "--help" => return Err(String::new()),
             flag if flag.starts_with('-') => return Err(format!("unknown option '{flag}'")),
             _ => parsed.file = PathBuf::from(arg),
@@ -122,6 +134,7 @@ impl ViewResolver for SharedCamera {
 enum Layout {
     Single,
     Grid,
+    Cascades,
     PictureInPicture,
 }
 
@@ -148,6 +161,9 @@ impl Viewer {
     fn rebuild_views(&mut self) -> Result<(), RenderError> {
         let (Some(renderer), Some(window)) = (self.renderer.as_mut(), self.window_id) else { return Ok(()) };
         for view in self.views.drain(..) {
+            for cascade in renderer.sun_cascades(view) {
+                renderer.hide_from_window(cascade);
+            }
             renderer.unregister_view(view)?;
         }
         let graph = standard_render_graph.with_pre_pass(self.pre_pass);
@@ -163,25 +179,43 @@ impl Viewer {
         };
         match self.layout {
             Layout::Single => {
-                self.views.push(renderer.register_view(main(WindowRect::FULL).with_visibility(self.visibility), graph.clone())?);
+                self.views.push(
+                    renderer.register_view(main(WindowRect::FULL).with_visibility(self.visibility), graph.clone())?,
+                );
             }
             Layout::Grid => {
                 let main_view = main(WindowRect::grid(2, 2, 0, 0)).with_visibility(self.visibility);
                 self.views.push(renderer.register_view(main_view, graph.clone())?);
-                let mut others: Vec<Box<dyn ViewResolver>> =
-                    self.cameras.iter().take(3).map(|c| Box::new(c.resolver(UVec2::new(16, 9))) as Box<dyn ViewResolver>).collect();
+                let mut others: Vec<Box<dyn ViewResolver>> = self
+                    .cameras
+                    .iter()
+                    .take(3)
+                    .map(|c| Box::new(c.resolver(UVec2::new(16, 9))) as Box<dyn ViewResolver>)
+                    .collect();
                 let fallbacks = [(Vec3::X, Vec3::Y), (Vec3::Y, Vec3::NEG_Z), (Vec3::Z, Vec3::Y)];
                 for (direction, up) in fallbacks.iter().skip(others.len()) {
                     others.push(Box::new(orbit(*direction, *up)));
                 }
                 for (i, resolver) in others.into_iter().take(3).enumerate() {
-                    let cell = WindowRect::grid(2, 2, (i as u32 + 1) % 2, (i as u32 + 1) / 2);
+                    // Cells after the main view's, row by row.
+                    let cell_index = i as u32 + 1;
+                    let cell = WindowRect::grid(2, 2, cell_index % 2, cell_index / 2);
                     let desc = ViewDesc::new(BoxedResolver(resolver)).shown_in(window, cell);
                     self.views.push(renderer.register_view(desc, graph.clone())?);
                 }
             }
+            Layout::Cascades => {
+                let desc = main(WindowRect::FULL).with_visibility(self.visibility).with_sun_shadows(CascadeSettings {
+                    count: 4,
+                    resolution: 1024,
+                    ..Default::default()
+                });
+                self.views.push(renderer.register_view(desc, graph.clone())?);
+            }
             Layout::PictureInPicture => {
-                self.views.push(renderer.register_view(main(WindowRect::FULL).with_visibility(self.visibility), graph.clone())?);
+                self.views.push(
+                    renderer.register_view(main(WindowRect::FULL).with_visibility(self.visibility), graph.clone())?,
+                );
                 let inset = WindowRect { x: 0.72, y: 0.03, width: 0.25, height: 0.25 };
                 let desc = ViewDesc::new(orbit(Vec3::new(0.0, 1.0, 0.2), Vec3::NEG_Z)).shown_in(window, inset);
                 self.views.push(renderer.register_view(desc, graph)?);
@@ -195,12 +229,20 @@ impl Viewer {
         let started = Instant::now();
         let report = renderer.render_frame(&self.scene)?;
         self.frames += 1;
+        // The main view's cascades (created with the frame that first needs
+        // them) in a strip along the bottom, from the next frame on.
+        if let (Layout::Cascades, Some(window), Some(&main)) = (self.layout, self.window_id, self.views.first()) {
+            for (i, cascade) in renderer.sun_cascades(main).into_iter().enumerate() {
+                let rect = WindowRect { x: 0.01 + i as f32 * 0.2, y: 0.74, width: 0.18, height: 0.24 };
+                renderer.show_in_window(cascade, window, rect)?;
+            }
+        }
         for warning in &report.warnings {
             eprintln!("warning: {warning}");
         }
         if let Some(window) = &self.window {
             window.set_title(&format!(
-                "Oxygen — prepare {:.2} ms, record {:.2} ms, frame {:.2} ms — {:?}, pre-pass {:?} [1/2/3 layout, V visibility, P pre-pass, F fly]",
+                "Oxygen — prepare {:.2} ms, record {:.2} ms, frame {:.2} ms — {:?}, pre-pass {:?} [1/2/3/4 layout, V visibility, P pre-pass, F fly]",
                 report.prepare_seconds * 1e3,
                 report.record_seconds * 1e3,
                 started.elapsed().as_secs_f64() * 1e3,
@@ -208,13 +250,11 @@ impl Viewer {
                 self.pre_pass,
             ));
         }
-        if let (Some(total), Some(id)) = (self.args.frames, self.window_id)
+        if let (Some(total), Some(id), Some(path)) = (self.args.frames, self.window_id, &self.args.screenshot)
             && self.frames >= total
         {
-            if let Some(path) = &self.args.screenshot {
-                renderer.read_window(id)?.save(path)?;
-                println!("saved {} after {} frames", path.display(), self.frames);
-            }
+            renderer.read_window(id)?.save(path)?;
+            println!("saved {} after {} frames", path.display(), self.frames);
         }
         Ok(())
     }
@@ -342,7 +382,8 @@ impl Viewer {
         match code {
             KeyCode::Digit1 => self.layout = Layout::Single,
             KeyCode::Digit2 => self.layout = Layout::Grid,
-            KeyCode::Digit3 => self.layout = Layout::PictureInPicture,
+            KeyCode::Digit3 => self.layout = Layout::Cascades,
+            KeyCode::Digit4 => self.layout = Layout::PictureInPicture,
             KeyCode::KeyV => {
                 self.visibility = match self.visibility {
                     Visibility::Cpu if supported => Visibility::GpuFrustum,
@@ -394,6 +435,7 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
     let camera = CameraState { orbit, fly: false, eye: orbit.eye() };
     let event_loop = EventLoop::new()?;
     event_loop.set_control_flow(ControlFlow::Poll);
+    let layout = args.layout;
     let mut viewer = Viewer {
         args,
         scene,
@@ -404,7 +446,7 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
         window: None,
         window_id: None,
         views: Vec::new(),
-        layout: Layout::Single,
+        layout,
         visibility: Visibility::Cpu,
         pre_pass: PrePass::DEFAULT,
         frames: 0,

@@ -117,6 +117,31 @@ fn fs(in: Varying) -> @location(0) vec4<f32> {
 }
 "#;
 
+/// Composition of a depth-only view (a shadow map): its reverse-Z depth as
+/// grey, near white, far black, read texel by texel.
+pub(crate) const COMPOSE_DEPTH_WGSL: &str = r#"
+@group(0) @binding(0) var depth: texture_depth_2d;
+
+struct Varying {
+    @builtin(position) position: vec4<f32>,
+    @location(0) uv: vec2<f32>,
+}
+
+@vertex
+fn vs(@builtin(vertex_index) i: u32) -> Varying {
+    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
+    return Varying(vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 0.0, 1.0), uv);
+}
+
+@fragment
+fn fs(in: Varying) -> @location(0) vec4<f32> {
+    let size = vec2<f32>(textureDimensions(depth));
+    let texel = vec2<u32>(clamp(in.uv * size, vec2<f32>(0.0), size - 1.0));
+    let d = textureLoad(depth, texel, 0);
+    return vec4<f32>(d, d, d, 1.0);
+}
+"#;
+
 #[cfg(test)]
 mod tests {
     use super::*;

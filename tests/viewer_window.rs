@@ -57,7 +57,8 @@ fn the_viewer_presents_in_a_window_what_the_headless_renderer_renders() {
         .expect("xvfb-run runs");
     let log = format!("{}{}", String::from_utf8_lossy(&output.stdout), String::from_utf8_lossy(&output.stderr));
     assert!(output.status.success(), "the viewer failed under Xvfb:\n{log}");
-    let presented = oxygen::image::open(&screenshot).unwrap_or_else(|e| panic!("no screenshot ({e}):\n{log}")).to_rgba8();
+    let presented =
+        oxygen::image::open(&screenshot).unwrap_or_else(|e| panic!("no screenshot ({e}):\n{log}")).to_rgba8();
     // Xvfb gives the window the size asked for.
     assert_eq!(presented.dimensions(), (size.x, size.y), "{log}");
 

@@ -132,3 +132,36 @@ fn unknown_windows_are_errors_not_panics() {
     assert!(matches!(renderer.resize_window(window, UVec2::ONE), Err(RenderError::NoSuchWindow(_))));
     assert!(matches!(renderer.read_window(window), Err(RenderError::NoSuchWindow(_))));
 }
+
+/// A view's shadow cascades, depth-only views the renderer creates, shown
+/// in small rectangles: grey depth (near white), with the caster visible.
+#[test]
+fn shadow_cascades_can_be_shown_as_grey_depth() {
+    let scene = scene();
+    let mut renderer = gpu_renderer();
+    let window = renderer.add_offscreen_window(UVec2::new(200, 150));
+    let cascades = CascadeSettings { count: 2, resolution: 256, ..Default::default() };
+    let desc = ViewDesc::new(camera(EYES[0])).shown_in(window, WindowRect::FULL).with_sun_shadows(cascades);
+    let main = renderer.register_view(desc, standard_render_graph).unwrap();
+    renderer.render_frame(&scene).unwrap();
+    let ids = renderer.sun_cascades(main);
+    assert_eq!(ids.len(), 2);
+    let rects: Vec<WindowRect> =
+        (0..2).map(|i| WindowRect { x: 0.02 + i as f32 * 0.5, y: 0.6, width: 0.4, height: 0.38 }).collect();
+    for (id, rect) in ids.iter().zip(&rects) {
+        renderer.show_in_window(*id, window, *rect).unwrap();
+    }
+    renderer.render_frame(&scene).unwrap();
+    let composed = renderer.read_window(window).unwrap();
+    for rect in &rects {
+        let (origin, size) = rect.pixels(UVec2::new(200, 150));
+        let cell = crop(&composed, origin, size);
+        assert!(cell.pixels().all(|p| p[0] == p[1] && p[1] == p[2]), "a depth view is shown as grey");
+        let (lo, hi) = cell.pixels().fold((255u8, 0u8), |(lo, hi), p| (lo.min(p[0]), hi.max(p[0])));
+        assert!(hi > lo + 20, "the cascade shows its casters (grey levels {lo}..{hi})");
+    }
+    renderer.hide_from_window(ids[0]);
+    let gone = renderer.add_offscreen_window(UVec2::ONE);
+    renderer.remove_window(gone).unwrap();
+    assert!(matches!(renderer.show_in_window(ids[0], gone, WindowRect::FULL), Err(RenderError::NoSuchWindow(_))));
+}

@@ -197,6 +197,7 @@ impl OrbitCamera {
 /// Adds the viewers' default sun to a scene that has no light.
 pub fn add_default_sun(scene: &mut Scene) {
     let direction = Vec3::new(-0.3, -0.8, -0.5).normalize();
-    let sun = scene.add_node("default sun", Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, direction)));
+    let sun = scene
+        .add_node("default sun", Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, direction)));
     scene.set_light(sun, Some(Light::directional(2.5))).expect("the sun node was just created");
 }

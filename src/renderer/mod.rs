@@ -388,6 +388,10 @@ pub struct Renderer {
     default_visibility: Visibility,
     /// Windows views are shown in.
     windows: BTreeMap<crate::WindowId, present::Window>,
+    /// The next window's id.
+    next_window: u32,
+    /// Views shown with `show_in_window` (no resizing).
+    shown_views: BTreeMap<ViewId, (crate::WindowId, crate::WindowRect)>,
     compositor: present::Compositor,
 }
 
@@ -503,6 +507,8 @@ impl Renderer {
             visibility: gpu_visibility,
             default_visibility,
             windows: BTreeMap::new(),
+            shown_views: BTreeMap::new(),
+            next_window: 0,
             compositor,
         })
     }

@@ -8,7 +8,7 @@ use oxygen_core::ViewId;
 use tracing::{info_span, warn};
 
 use super::{FrameWarning, RenderError, Renderer};
-use crate::windows::{COMPOSE_WGSL, PresentMode, WindowId, WindowRect};
+use crate::windows::{COMPOSE_DEPTH_WGSL, COMPOSE_WGSL, PresentMode, WindowId, WindowRect};
 
 /// The format of an offscreen window's image.
 const OFFSCREEN_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
@@ -34,9 +34,12 @@ pub(crate) struct Window {
 /// The composition pipelines (one per window format) and what they bind.
 pub(crate) struct Compositor {
     layout: wgpu::BindGroupLayout,
+    depth_layout: wgpu::BindGroupLayout,
     sampler: wgpu::Sampler,
     module: wgpu::ShaderModule,
-    pipelines: HashMap<wgpu::TextureFormat, wgpu::RenderPipeline>,
+    depth_module: wgpu::ShaderModule,
+    /// By window format and whether the view shown is depth only.
+    pipelines: HashMap<(wgpu::TextureFormat, bool), wgpu::RenderPipeline>,
 }
 
 impl Compositor {
@@ -72,12 +75,30 @@ impl Compositor {
             label: Some("compose"),
             source: wgpu::ShaderSource::Wgsl(COMPOSE_WGSL.into()),
         });
-        Compositor { layout, sampler, module, pipelines: HashMap::new() }
+        let depth_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("compose depth"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Depth,
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+                count: None,
+            }],
+        });
+        let depth_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("compose depth"),
+            source: wgpu::ShaderSource::Wgsl(COMPOSE_DEPTH_WGSL.into()),
+        });
+        Compositor { layout, depth_layout, sampler, module, depth_module, pipelines: HashMap::new() }
     }
 
-    fn pipeline(&mut self, device: &wgpu::Device, format: wgpu::TextureFormat) -> &wgpu::RenderPipeline {
-        let (layout, module) = (&self.layout, &self.module);
-        self.pipelines.entry(format).or_insert_with(|| {
+    fn pipeline(&mut self, device: &wgpu::Device, format: wgpu::TextureFormat, depth: bool) -> &wgpu::RenderPipeline {
+        let (layout, module) =
+            if depth { (&self.depth_layout, &self.depth_module) } else { (&self.layout, &self.module) };
+        self.pipelines.entry((format, depth)).or_insert_with(|| {
             let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some("compose"),
                 bind_group_layouts: &[Some(layout)],
@@ -159,7 +180,9 @@ impl Renderer {
     }
 
     fn insert_window(&mut self, window: Window) -> WindowId {
-        let id = WindowId(self.windows.keys().next_back().map_or(0, |w| w.0 + 1));
+        // Never reused, so a view shown in a removed window stays hidden.
+        let id = WindowId(self.next_window);
+        self.next_window += 1;
         self.windows.insert(id, window);
         id
     }
@@ -180,8 +203,27 @@ impl Renderer {
         Ok(())
     }
 
+    /// Shows `view`'s image in `rect` of `window` without changing its size:
+    /// for views the renderer creates itself, such as a view's sun-shadow
+    /// cascades ([`Renderer::sun_cascades`]; a depth-only view is shown as
+    /// grey, near white). A registered view is better shown with
+    /// [`crate::ViewDesc::shown_in`], which also sizes it to the rectangle.
+    pub fn show_in_window(&mut self, view: ViewId, window: WindowId, rect: WindowRect) -> Result<(), RenderError> {
+        if !self.windows.contains_key(&window) {
+            return Err(RenderError::NoSuchWindow(window));
+        }
+        self.shown_views.insert(view, (window, rect));
+        Ok(())
+    }
+
+    /// Stops showing a view given to [`Renderer::show_in_window`].
+    pub fn hide_from_window(&mut self, view: ViewId) {
+        self.shown_views.remove(&view);
+    }
+
     /// Removes a window; views shown in it are no longer rendered.
     pub fn remove_window(&mut self, id: WindowId) -> Result<(), RenderError> {
+        self.shown_views.retain(|_, (window, _)| *window != id);
         self.windows.remove(&id).map(|_| ()).ok_or(RenderError::NoSuchWindow(id))
     }
 
@@ -221,6 +263,7 @@ impl Renderer {
             .entries
             .iter()
             .filter_map(|(id, entry)| entry.shown.map(|(window, rect)| (window, rect, *id)))
+            .chain(self.shown_views.iter().map(|(id, (window, rect))| (*window, *rect, *id)))
             .filter(|(_, _, id)| rendered.contains(id))
             .collect();
         shown.sort_by_key(|(window, _, id)| (*window, *id));
@@ -249,36 +292,50 @@ impl Renderer {
                     window.image = Some(image);
                 }
             }
-            let views: Vec<(WindowRect, &wgpu::TextureView)> = shown
+            // A view's display image, or the depth of a depth-only view.
+            let views: Vec<(WindowRect, &wgpu::TextureView, bool)> = shown
                 .iter()
                 .filter(|(window, ..)| *window == id)
                 .filter_map(|(_, rect, view)| {
-                    let color = self.gpu_views.get(view)?.targets.as_ref()?.color.as_ref()?;
-                    Some((*rect, color.color_view.as_ref()?))
+                    let targets = self.gpu_views.get(view)?.targets.as_ref()?;
+                    match &targets.color {
+                        Some(color) => Some((*rect, color.color_view.as_ref()?, false)),
+                        None => Some((*rect, &targets.depth_view, true)),
+                    }
                 })
                 .collect();
-            let bind_groups: Vec<(WindowRect, wgpu::BindGroup)> = views
+            let bind_groups: Vec<(WindowRect, wgpu::BindGroup, bool)> = views
                 .iter()
-                .map(|(rect, view)| {
-                    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                        label: Some("compose"),
-                        layout: &self.compositor.layout,
-                        entries: &[
-                            wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(view) },
-                            wgpu::BindGroupEntry {
-                                binding: 1,
-                                resource: wgpu::BindingResource::Sampler(&self.compositor.sampler),
-                            },
-                        ],
-                    });
-                    (*rect, group)
+                .map(|(rect, view, depth)| {
+                    let image = wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(view) };
+                    let sampler = wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::Sampler(&self.compositor.sampler),
+                    };
+                    let group = if *depth {
+                        device.create_bind_group(&wgpu::BindGroupDescriptor {
+                            label: Some("compose depth"),
+                            layout: &self.compositor.depth_layout,
+                            entries: &[image],
+                        })
+                    } else {
+                        device.create_bind_group(&wgpu::BindGroupDescriptor {
+                            label: Some("compose"),
+                            layout: &self.compositor.layout,
+                            entries: &[image, sampler],
+                        })
+                    };
+                    (*rect, group, *depth)
                 })
                 .collect();
-            let pipeline = self.compositor.pipeline(&device, format).clone();
+            let pipelines = [
+                self.compositor.pipeline(&device, format, false).clone(),
+                self.compositor.pipeline(&device, format, true).clone(),
+            ];
             let Some(window) = self.windows.get_mut(&id) else { continue };
             let Some(image) = window.image.as_ref() else { continue };
             let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("compose") });
-            compose(&mut encoder, &pipeline, &bind_groups, &image.create_view(&Default::default()), size);
+            compose(&mut encoder, &pipelines, &bind_groups, &image.create_view(&Default::default()), size);
             let Some(surface) = &mut window.surface else {
                 self.gpu.queue.submit([encoder.finish()]);
                 presented += 1;
@@ -298,7 +355,7 @@ impl Renderer {
                         );
                     } else {
                         let target = frame.texture.create_view(&Default::default());
-                        compose(&mut encoder, &pipeline, &bind_groups, &target, size);
+                        compose(&mut encoder, &pipelines, &bind_groups, &target, size);
                     }
                     self.gpu.queue.submit([encoder.finish()]);
                     self.gpu.queue.present(frame);
@@ -331,11 +388,12 @@ fn surface_state(state: &wgpu::CurrentSurfaceTexture) -> &'static str {
     }
 }
 
-/// Clears `target` to black and draws each view's image into its rectangle.
+/// Clears `target` to black and draws each view's image into its rectangle
+/// (`pipelines`: for colour images, for depth images).
 fn compose(
     encoder: &mut wgpu::CommandEncoder,
-    pipeline: &wgpu::RenderPipeline,
-    views: &[(WindowRect, wgpu::BindGroup)],
+    pipelines: &[wgpu::RenderPipeline; 2],
+    views: &[(WindowRect, wgpu::BindGroup, bool)],
     target: &wgpu::TextureView,
     size: UVec2,
 ) {
@@ -352,8 +410,8 @@ fn compose(
         occlusion_query_set: None,
         multiview_mask: None,
     });
-    pass.set_pipeline(pipeline);
-    for (rect, group) in views {
+    for (rect, group, depth) in views {
+        pass.set_pipeline(&pipelines[usize::from(*depth)]);
         let (origin, extent) = rect.pixels(size);
         pass.set_viewport(origin.x as f32, origin.y as f32, extent.x as f32, extent.y as f32, 0.0, 1.0);
         pass.set_bind_group(0, group, &[]);
