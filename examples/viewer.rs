@@ -242,9 +242,10 @@ impl Viewer {
         }
         if let Some(window) = &self.window {
             window.set_title(&format!(
-                "Oxygen — prepare {:.2} ms, record {:.2} ms, frame {:.2} ms — {:?}, pre-pass {:?} [1/2/3/4 layout, V visibility, P pre-pass, F fly]",
+                "Oxygen — prepare {:.2} ms, record {:.2} ms, GPU {}, frame {:.2} ms — {:?}, pre-pass {:?} [1/2/3/4 layout, V visibility, P pre-pass, F fly]",
                 report.prepare_seconds * 1e3,
                 report.record_seconds * 1e3,
+                report.gpu_seconds.map_or("n/a".to_owned(), |s| format!("{:.2} ms", s * 1e3)),
                 started.elapsed().as_secs_f64() * 1e3,
                 self.visibility,
                 self.pre_pass,

@@ -118,9 +118,11 @@ fn fs(in: Varying) -> @location(0) vec4<f32> {
 "#;
 
 /// Composition of a depth-only view (a shadow map): its reverse-Z depth as
-/// grey, near white, far black, read texel by texel.
+/// grey, near white, far black, read texel by texel. Bound as a plain
+/// unfilterable `texture_2d<f32>` (GL's shading language would turn a
+/// `texture_depth_2d` into a shadow sampler, which it cannot load from).
 pub(crate) const COMPOSE_DEPTH_WGSL: &str = r#"
-@group(0) @binding(0) var depth: texture_depth_2d;
+@group(0) @binding(0) var depth: texture_2d<f32>;
 
 struct Varying {
     @builtin(position) position: vec4<f32>,
@@ -137,7 +139,7 @@ fn vs(@builtin(vertex_index) i: u32) -> Varying {
 fn fs(in: Varying) -> @location(0) vec4<f32> {
     let size = vec2<f32>(textureDimensions(depth));
     let texel = vec2<u32>(clamp(in.uv * size, vec2<f32>(0.0), size - 1.0));
-    let d = textureLoad(depth, texel, 0);
+    let d = textureLoad(depth, texel, 0).x;
     return vec4<f32>(d, d, d, 1.0);
 }
 "#;

@@ -165,3 +165,27 @@ fn shadow_cascades_can_be_shown_as_grey_depth() {
     renderer.remove_window(gone).unwrap();
     assert!(matches!(renderer.show_in_window(ids[0], gone, WindowRect::FULL), Err(RenderError::NoSuchWindow(_))));
 }
+
+/// The viewer's title shows the GPU time of recent frames: reported once a
+/// frame's timestamps have been read back, where the device has them.
+#[test]
+fn frames_report_their_gpu_time() {
+    let scene = scene();
+    let mut renderer = gpu_renderer();
+    if !renderer.gpu().features.contains(wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS) {
+        eprintln!("skipped: {} has no timestamps inside encoders", renderer.gpu().describe());
+        return;
+    }
+    let view = renderer
+        .register_view(LookAtResolver { viewport: UVec2::new(64, 48), ..camera(EYES[0]) }, standard_render_graph)
+        .unwrap();
+    let first = renderer.render_frame(&scene).unwrap();
+    assert_eq!(first.gpu_seconds, None, "nothing has been read back before the first frame");
+    let mut reported = None;
+    for _ in 0..4 {
+        renderer.read_color(view).unwrap(); // waits for the GPU
+        reported = renderer.render_frame(&scene).unwrap().gpu_seconds;
+    }
+    let seconds = reported.expect("a frame time within four frames");
+    assert!(seconds.is_finite() && seconds > 0.0 && seconds < 10.0, "{seconds} s");
+}

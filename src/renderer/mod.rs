@@ -11,6 +11,7 @@
 //! worker threads, submitted in link order). Prepared frames of the last
 //! frame are kept for inspection until the next frame replaces them.
 
+mod gpu_timer;
 mod prepare;
 mod present;
 mod record;
@@ -260,6 +261,11 @@ pub struct FrameReport {
     pub uploaded_bytes: u64,
     /// Windows composed and presented (offscreen ones composed).
     pub windows_presented: usize,
+    /// GPU time of a recent frame's views (from a timestamp before its
+    /// first command buffer to one after its last), read back without
+    /// waiting, so one or two frames old; `None` before the first readback
+    /// and on devices without timestamps inside encoders.
+    pub gpu_seconds: Option<f64>,
 }
 
 /// Choices made when the renderer is created.
@@ -390,6 +396,8 @@ pub struct Renderer {
     windows: BTreeMap<crate::WindowId, present::Window>,
     /// The next window's id.
     next_window: u32,
+    /// Frame timestamps, where the device has them.
+    gpu_timer: Option<gpu_timer::GpuTimer>,
     /// Views shown with `show_in_window` (no resizing).
     shown_views: BTreeMap<ViewId, (crate::WindowId, crate::WindowRect)>,
     compositor: present::Compositor,
@@ -399,6 +407,7 @@ impl Renderer {
     /// The device features Oxygen uses when the adapter has them.
     pub const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::INDIRECT_FIRST_INSTANCE
         .union(GPU_VISIBILITY_FEATURES)
+        .union(gpu_timer::GpuTimer::FEATURES)
         .union(TexturePath::BINDING_ARRAY_FEATURES)
         .union(wgpu::Features::RG11B10UFLOAT_RENDERABLE);
 
@@ -475,6 +484,7 @@ impl Renderer {
         let heap = BindlessHeap::new(&gpu.device, &gpu.queue, texture_path);
         let lighting = LightingResources::new(&gpu.device);
         let compositor = present::Compositor::new(&gpu.device);
+        let gpu_timer = gpu_timer::GpuTimer::new(&gpu.device, &gpu.queue, gpu.features);
         let pipelines = Pipelines::new(&gpu.device, &heap, &lighting);
         let mut prep = match options.prep_threads {
             Some(threads) => ScenePrep::with_threads(threads),
@@ -509,6 +519,7 @@ impl Renderer {
             windows: BTreeMap::new(),
             shown_views: BTreeMap::new(),
             next_window: 0,
+            gpu_timer,
             compositor,
         })
     }
@@ -706,6 +717,10 @@ impl Renderer {
         let time_seconds = self.started.elapsed().as_secs_f32();
         let _span = info_span!("render_frame", frame = frame_index).entered();
         let prepare_start = Instant::now();
+        // Lets finished readbacks (frame times, GPU overdraw estimates)
+        // report in; never waits.
+        let _ = self.gpu.device.poll(wgpu::PollType::Poll);
+        let gpu_seconds = self.gpu_timer.as_mut().and_then(gpu_timer::GpuTimer::collect);
         let heap_bytes_before = self.heap.bytes_written();
         let (mut plan, mut warnings) = self.resolve_views(scene, frame_index, time_seconds);
         self.prepare(scene, &mut plan, &mut warnings, frame_index, time_seconds)?;
@@ -757,6 +772,7 @@ impl Renderer {
             pipelines_created,
             uploaded_bytes,
             windows_presented,
+            gpu_seconds,
         })
     }
 

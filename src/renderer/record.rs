@@ -235,7 +235,16 @@ impl Renderer {
                 record_seconds: recorded.busy.as_secs_f64(),
             });
         }
+        // The frame's GPU time, when the last one has been read back.
+        let timer = self.gpu_timer.as_ref().filter(|t| t.ready());
+        if let Some(timer) = timer {
+            buffers.insert(0, timer.start(&self.gpu.device));
+            buffers.push(timer.end(&self.gpu.device));
+        }
         self.gpu.queue.submit(buffers);
+        if let Some(timer) = timer {
+            timer.submitted();
+        }
         if let Some(visibility) = &self.visibility {
             visibility.after_submit();
         }
