@@ -16,7 +16,9 @@
 //!   (depth as grey); `4` the main view with a picture-in-picture from above.
 //! * Knobs: `V` cycles the main view's visibility path (CPU, GPU frustum,
 //!   GPU occlusion; the GPU paths where the adapter has them), `P` the depth
-//!   pre-pass (automatic, on, off).
+//!   pre-pass (automatic, on, off), `C` the sun's cascade count (1 to 4),
+//!   `R` the shadow maps' resolution (512, 1024, 2048), `K` the shadow
+//!   filter's radius (PCF 0, 1, 2).
 //! * The title bar shows the frame's timings (prepare, record, whole frame)
 //!   and the knobs.
 //! * `--frames N --screenshot PATH` renders N frames, saves what was
@@ -151,6 +153,8 @@ struct Viewer {
     layout: Layout,
     visibility: Visibility,
     pre_pass: PrePass,
+    cascades: CascadeSettings,
+    pcf_radius: u32,
     frames: u64,
     dragging: bool,
     last_cursor: Option<(f64, f64)>,
@@ -166,8 +170,12 @@ impl Viewer {
             }
             renderer.unregister_view(view)?;
         }
-        let graph = standard_render_graph.with_pre_pass(self.pre_pass);
-        let main = |rect| ViewDesc::new(SharedCamera(Arc::clone(&self.camera))).shown_in(window, rect);
+        let mut graph = standard_render_graph.with_pre_pass(self.pre_pass);
+        graph.lit.shadow_pcf_radius = self.pcf_radius;
+        let cascades = self.cascades;
+        let main = |rect| {
+            ViewDesc::new(SharedCamera(Arc::clone(&self.camera))).shown_in(window, rect).with_sun_shadows(cascades)
+        };
         let center = self.bounds.center();
         let radius = self.bounds.half_extents().length().max(1e-3);
         let orbit = |direction: Vec3, up: Vec3| LookAtResolver {
@@ -205,11 +213,7 @@ impl Viewer {
                 }
             }
             Layout::Cascades => {
-                let desc = main(WindowRect::FULL).with_visibility(self.visibility).with_sun_shadows(CascadeSettings {
-                    count: 4,
-                    resolution: 1024,
-                    ..Default::default()
-                });
+                let desc = main(WindowRect::FULL).with_visibility(self.visibility);
                 self.views.push(renderer.register_view(desc, graph.clone())?);
             }
             Layout::PictureInPicture => {
@@ -242,13 +246,16 @@ impl Viewer {
         }
         if let Some(window) = &self.window {
             window.set_title(&format!(
-                "Oxygen — prepare {:.2} ms, record {:.2} ms, GPU {}, frame {:.2} ms — {:?}, pre-pass {:?} [1/2/3/4 layout, V visibility, P pre-pass, F fly]",
+                "Oxygen — prepare {:.2} ms, record {:.2} ms, GPU {}, frame {:.2} ms — {:?}, pre-pass {:?}, {} cascades of {}, PCF {} [1-4 layout, V P C R K knobs, F fly]",
                 report.prepare_seconds * 1e3,
                 report.record_seconds * 1e3,
                 report.gpu_seconds.map_or("n/a".to_owned(), |s| format!("{:.2} ms", s * 1e3)),
                 started.elapsed().as_secs_f64() * 1e3,
                 self.visibility,
                 self.pre_pass,
+                self.cascades.count,
+                self.cascades.resolution,
+                self.pcf_radius,
             ));
         }
         if let (Some(total), Some(id), Some(path)) = (self.args.frames, self.window_id, &self.args.screenshot)
@@ -392,6 +399,15 @@ impl Viewer {
                     _ => Visibility::Cpu,
                 }
             }
+            KeyCode::KeyC => self.cascades.count = self.cascades.count % 4 + 1,
+            KeyCode::KeyR => {
+                self.cascades.resolution = match self.cascades.resolution {
+                    512 => 1024,
+                    1024 => 2048,
+                    _ => 512,
+                }
+            }
+            KeyCode::KeyK => self.pcf_radius = (self.pcf_radius + 1) % 3,
             KeyCode::KeyP => {
                 self.pre_pass = match self.pre_pass {
                     PrePass::Auto { .. } => PrePass::On,
@@ -450,6 +466,8 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
         layout,
         visibility: Visibility::Cpu,
         pre_pass: PrePass::DEFAULT,
+        cascades: oxygen_demo::viewer_cascades(),
+        pcf_radius: ForwardLitConfig::DEFAULT.shadow_pcf_radius,
         frames: 0,
         dragging: false,
         last_cursor: None,

@@ -63,7 +63,7 @@ fn the_viewer_presents_in_a_window_what_the_headless_renderer_renders() {
     assert_eq!(presented.dimensions(), (size.x, size.y), "{log}");
 
     // The same view, headless: the viewer's default orbit camera framing
-    // the file, its default sun, the standard graph.
+    // the file, its default sun and cascades, the standard graph.
     let mut scene = Scene::new();
     let import = import_gltf(&mut scene, &file, &SceneChoice::Default).unwrap();
     if import.lights == 0 {
@@ -72,7 +72,8 @@ fn the_viewer_presents_in_a_window_what_the_headless_renderer_renders() {
     let bounds = import.bounds.unwrap();
     let camera = OrbitCamera::framing(bounds.center(), bounds.half_extents()).resolver(size);
     let mut renderer = gpu_renderer_with(RendererOptions::default());
-    let view = renderer.register_view(camera, standard_render_graph).unwrap();
+    let desc = ViewDesc::new(camera).with_sun_shadows(oxygen_demo::viewer_cascades());
+    let view = renderer.register_view(desc, standard_render_graph).unwrap();
     renderer.render_frame(&scene).unwrap();
     let expected = renderer.read_color(view).unwrap();
     let diff = compare(&presented, &expected, 3);

@@ -201,3 +201,8 @@ pub fn add_default_sun(scene: &mut Scene) {
         .add_node("default sun", Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, direction)));
     scene.set_light(sun, Some(Light::directional(2.5))).expect("the sun node was just created");
 }
+
+/// The interactive viewer's default sun-shadow cascades for its main view.
+pub fn viewer_cascades() -> oxygen_core::CascadeSettings {
+    oxygen_core::CascadeSettings { count: 4, resolution: 1024, ..Default::default() }
+}
