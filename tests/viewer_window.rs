@@ -77,7 +77,10 @@ fn the_viewer_presents_in_a_window_what_the_headless_renderer_renders() {
     renderer.render_frame(&scene).unwrap();
     let expected = renderer.read_color(view).unwrap();
     let diff = compare(&presented, &expected, 3);
-    eprintln!("presented vs headless: {} of {} pixels differ by more than 3 levels (worst {})", diff.differing, diff.total, diff.worst);
+    eprintln!(
+        "presented vs headless: {} of {} pixels differ by more than 3 levels (worst {})",
+        diff.differing, diff.total, diff.worst
+    );
     if diff.differing > 0 {
         let _ = diff.diff.save(PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("viewer_window_diff.png"));
     }
