@@ -33,6 +33,9 @@ const CULL_CASTERS_ONLY: u32 = 1;
 /// `CullParams::flags`: two-phase occlusion culling.
 const CULL_OCCLUSION: u32 = 2;
 
+/// Workgroups per dimension every adapter allows.
+const MAX_WORKGROUPS: u32 = 65_535;
+
 /// The features a GPU visibility path needs on top of the multi-draw
 /// indirect path: counts written by the GPU.
 pub const GPU_VISIBILITY_FEATURES: wgpu::Features =
@@ -375,9 +378,13 @@ impl GpuVisibility {
             state.plan_visibility = plan.visibility;
             let occlusion = plan.visibility == Visibility::GpuOcclusion;
             let size = (request.view.viewport.x.max(1), request.view.viewport.y.max(1));
-            if occlusion && state.hiz.as_ref().is_none_or(|h| h.size() != size) {
+            // A pyramid too large for one storage binding is not built: the
+            // late test then finds everything visible (correct, no culling).
+            let pyramid_bytes = u64::from(size.0) * u64::from(size.1) * 4 * 4 / 3 + 64;
+            let fits = pyramid_bytes <= u64::from(device.limits().max_storage_buffer_binding_size);
+            if occlusion && fits && state.hiz.as_ref().is_none_or(|h| h.size() != size) {
                 state.hiz = Some(HizPyramid::new(device, &self.hiz, size.0, size.1));
-            } else if !occlusion {
+            } else if !occlusion || !fits {
                 state.hiz = None;
             }
             let hiz_size = state.hiz.as_ref().map(HizPyramid::size);
@@ -407,6 +414,9 @@ impl GpuVisibility {
         let _ = device.poll(wgpu::PollType::Poll);
         for state in self.views.values_mut() {
             match state.readback_state.load(Ordering::Acquire) {
+                // Recorded but never submitted (a frame that failed): the
+                // copy never happened.
+                READBACK_COPIED => state.readback_state.store(READBACK_IDLE, Ordering::Release),
                 READBACK_MAPPED => {
                     let units = match state.readback.slice(..).get_mapped_range() {
                         // The smaller of the sum and the capped sum.
@@ -488,7 +498,11 @@ impl GpuVisibility {
         for (pipeline, threads) in steps {
             if *threads > 0 {
                 pass.set_pipeline(pipeline);
-                pass.dispatch_workgroups(threads.div_ceil(64), 1, 1);
+                // Past 65 535 workgroups the rest go into y; the shader
+                // rebuilds the linear index and skips the overshoot.
+                let groups = threads.div_ceil(64);
+                let x = groups.min(MAX_WORKGROUPS);
+                pass.dispatch_workgroups(x, groups.div_ceil(x), 1);
             }
         }
     }
@@ -513,9 +527,13 @@ impl GpuVisibility {
         depth: &wgpu::TextureView,
     ) {
         let Some(state) = self.views.get(&view) else { return };
-        let Some(hiz) = &state.hiz else { return };
+        if state.plan_visibility != Visibility::GpuOcclusion {
+            return;
+        }
         let _span = info_span!("cull_late", view = %view).entered();
-        hiz.build(device, &self.hiz, encoder, depth);
+        if let Some(hiz) = &state.hiz {
+            hiz.build(device, &self.hiz, encoder, depth);
+        }
         self.dispatch(encoder, state, &[(&self.cull_late, state.instances), (&self.commands_late, state.groups)]);
     }
 }

@@ -146,7 +146,9 @@ fn add_coverage(i: u32, instance: GpuInstance, group: u32) {
     h = (h ^ (h >> 16u)) * 0x85EBCA6Bu;
     let dither = f32(h >> 8u) / 16777216.0;
     let units = u32(coverage * 1024.0 + dither);
-    if units > 0u {
+    // Saturating: a sum this large (a million viewports) already says
+    // "pre-pass", and must not wrap around to a small one.
+    if units > 0u && atomicLoad(&counts[coverage_base()]) < 0x40000000u {
         atomicAdd(&counts[coverage_base()], units);
         atomicAdd(&counts[coverage_base() + 2u + group], units);
     }
@@ -156,7 +158,7 @@ fn add_coverage(i: u32, instance: GpuInstance, group: u32) {
 // group, after its draws are final).
 fn add_capped_coverage(g: u32) {
     let units = atomicLoad(&counts[coverage_base() + 2u + g]);
-    if units > 0u {
+    if units > 0u && atomicLoad(&counts[coverage_base() + 1u]) < 0x40000000u {
         atomicAdd(&counts[coverage_base() + 1u], min(units, 1024u));
     }
 }
@@ -191,9 +193,15 @@ fn command(group: GpuGroup, instances: u32, first: u32) -> Command {
 // Phase 1. Frustum culling: every instance in the frustum is drawn.
 // Occlusion culling: only those visible last frame are drawn now; the
 // others wait for the depth pyramid (cull_late).
+// The invocation's index: dispatches wider than 65 535 workgroups spill
+// into y (more than four million instances or groups).
+fn linear(id: vec3<u32>, workgroups: vec3<u32>) -> u32 {
+    return id.x + id.y * workgroups.x * 64u;
+}
+
 @compute @workgroup_size(64)
-fn cull_early(@builtin(global_invocation_id) id: vec3<u32>) {
-    let i = id.x;
+fn cull_early(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) workgroups: vec3<u32>) {
+    let i = linear(id, workgroups);
     if i >= params.instance_count {
         return;
     }
@@ -220,8 +228,8 @@ fn cull_early(@builtin(global_invocation_id) id: vec3<u32>) {
 // Phase 1's commands (list A): one instanced command per group with draws,
 // compacted at its partition's start and counted by the partition's counter.
 @compute @workgroup_size(64)
-fn commands_early(@builtin(global_invocation_id) id: vec3<u32>) {
-    let g = id.x;
+fn commands_early(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) workgroups: vec3<u32>) {
+    let g = linear(id, workgroups);
     if g >= params.group_count {
         return;
     }
@@ -242,8 +250,8 @@ fn commands_early(@builtin(global_invocation_id) id: vec3<u32>) {
 // pyramid of what phase 1 drew; the result is next frame's history, and the
 // visible ones phase 1 did not draw are drawn now.
 @compute @workgroup_size(64)
-fn cull_late(@builtin(global_invocation_id) id: vec3<u32>) {
-    let i = id.x;
+fn cull_late(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) workgroups: vec3<u32>) {
+    let i = linear(id, workgroups);
     if i >= params.instance_count {
         return;
     }
@@ -271,8 +279,8 @@ fn cull_late(@builtin(global_invocation_id) id: vec3<u32>) {
 // Phase 2's commands: list B (the newly visible, drawn into the depth
 // pre-pass second) and list C (every draw, for shading).
 @compute @workgroup_size(64)
-fn commands_late(@builtin(global_invocation_id) id: vec3<u32>) {
-    let g = id.x;
+fn commands_late(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) workgroups: vec3<u32>) {
+    let g = linear(id, workgroups);
     if g >= params.group_count {
         return;
     }

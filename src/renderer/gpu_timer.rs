@@ -75,7 +75,8 @@ impl GpuTimer {
                 self.readback.unmap();
                 self.state.store(IDLE, Ordering::Release);
             }
-            FAILED => self.state.store(IDLE, Ordering::Release),
+            // Recorded but never submitted (a frame that failed).
+            FAILED | COPIED => self.state.store(IDLE, Ordering::Release),
             _ => {}
         }
         self.last_seconds

@@ -141,6 +141,7 @@ impl Renderer {
         size: UVec2,
         present_mode: PresentMode,
     ) -> Result<WindowId, RenderError> {
+        let size = self.clamp_window_size(size);
         let caps = surface.get_capabilities(&self.gpu.adapter);
         let format =
             caps.formats.iter().copied().find(|f| f.is_srgb()).or(caps.formats.first().copied()).ok_or_else(|| {
@@ -176,7 +177,14 @@ impl Renderer {
     /// of `size` that [`Renderer::read_window`] reads (tests, screenshots
     /// on machines without a display).
     pub fn add_offscreen_window(&mut self, size: UVec2) -> WindowId {
+        let size = self.clamp_window_size(size);
         self.insert_window(Window { surface: None, size, format: OFFSCREEN_FORMAT, image: None })
+    }
+
+    /// A window is never larger than the device's largest texture (a
+    /// surface or image beyond it would be a validation error).
+    fn clamp_window_size(&self, size: UVec2) -> UVec2 {
+        size.min(UVec2::splat(self.gpu.device.limits().max_texture_dimension_2d))
     }
 
     fn insert_window(&mut self, window: Window) -> WindowId {
@@ -190,6 +198,7 @@ impl Renderer {
     /// The window was resized (0 × 0 when minimised: its views are skipped
     /// until it has a size again).
     pub fn resize_window(&mut self, id: WindowId, size: UVec2) -> Result<(), RenderError> {
+        let size = self.clamp_window_size(size);
         let window = self.windows.get_mut(&id).ok_or(RenderError::NoSuchWindow(id))?;
         window.size = size;
         if let Some(surface) = &mut window.surface
