@@ -381,7 +381,7 @@ impl GpuVisibility {
             // A pyramid too large for one storage binding is not built: the
             // late test then finds everything visible (correct, no culling).
             let pyramid_bytes = u64::from(size.0) * u64::from(size.1) * 4 * 4 / 3 + 64;
-            let fits = pyramid_bytes <= u64::from(device.limits().max_storage_buffer_binding_size);
+            let fits = pyramid_bytes <= device.limits().max_storage_buffer_binding_size;
             if occlusion && fits && state.hiz.as_ref().is_none_or(|h| h.size() != size) {
                 state.hiz = Some(HizPyramid::new(device, &self.hiz, size.0, size.1));
             } else if !occlusion || !fits {
