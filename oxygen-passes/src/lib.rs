@@ -48,7 +48,7 @@ pub use mesh_pass::{ColorOps, DrawList, ForwardLitConfig, MeshPass};
 pub use oxygen_core::{Depth, HdrColor, Output, OutputSource, ProbeCube, ProbeId, ShadowMap};
 pub use pipelines::{
     AlphaClass, CompilerGuard, DepthBias, Exposure, PassKind, PipelineFuture, PipelineKey, PipelineVariant, Pipelines,
-    ShaderFeatures, TONEMAP_OPERATOR_WGSL, TONEMAP_WGSL, shader_source,
+    ShaderFeatures, TONEMAP_OPERATOR_WGSL, TONEMAP_WGSL, fullscreen_pipeline, shader_source,
 };
 pub use probe_mips::PROBE_MIP_WGSL;
 pub use render_context::{

@@ -570,8 +570,9 @@ impl Future for PipelineFuture<'_> {
 
 /// A pipeline drawing one full-screen triangle (three vertices, no buffers)
 /// into one colour target of `format`, with one bind group of `layout`:
-/// the shape of the tone map and of the probe mip downsampling.
-pub(crate) fn fullscreen_pipeline(
+/// the shape of the tone map, the probe mip downsampling and the
+/// renderer's window composition.
+pub fn fullscreen_pipeline(
     device: &wgpu::Device,
     label: &str,
     layout: &wgpu::BindGroupLayout,

@@ -280,23 +280,25 @@ impl PreparedSceneFrame {
         }
         let _ = writeln!(out, "draws ({}):", self.draws.len());
         for (i, (d, key)) in self.draws.iter().zip(&self.sort_keys).enumerate() {
-            let _ = writeln!(
-                out,
-                "  #{i:<3} node={:<3} submesh={} vertices@{} indices@{}+{}..{} transform={} material={} key={:016x} {}",
-                d.node_id,
-                d.submesh,
-                d.vertex_slot,
-                d.index_slot,
-                d.first_index,
-                d.first_index + d.index_count,
-                d.transform_index,
-                d.material_handle,
-                key,
-                d.mask().names()
-            );
+            let _ = writeln!(out, "  #{i:<3} {} key={key:016x} {}", draw_fields(d), d.mask().names());
         }
         out
     }
+}
+
+/// A draw's node, mesh range, transform and material, as both dumps print them.
+fn draw_fields(d: &DrawMetadata) -> String {
+    format!(
+        "node={:<3} submesh={} vertices@{} indices@{}+{}..{} transform={} material={}",
+        d.node_id,
+        d.submesh,
+        d.vertex_slot,
+        d.index_slot,
+        d.first_index,
+        d.first_index + d.index_count,
+        d.transform_index,
+        d.material_handle
+    )
 }
 
 /// Draws per partition mask in an order that does not depend on the path
@@ -333,19 +335,7 @@ pub fn canonical_dump(partitions: &[(PassMask, Vec<DrawMetadata>)]) -> String {
     for (mask, draws) in partitions {
         let _ = writeln!(out, "{} ({} draws):", mask.names(), draws.len());
         for d in draws {
-            let _ = writeln!(
-                out,
-                "  node={:<4} submesh={} vertices@{} indices@{}+{}..{} transform={} material={} {}",
-                d.node_id,
-                d.submesh,
-                d.vertex_slot,
-                d.index_slot,
-                d.first_index,
-                d.first_index + d.index_count,
-                d.transform_index,
-                d.material_handle,
-                d.mask().names()
-            );
+            let _ = writeln!(out, "  {} {}", draw_fields(d), d.mask().names());
         }
     }
     out

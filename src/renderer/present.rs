@@ -8,7 +8,7 @@ use oxygen_core::ViewId;
 use tracing::{info_span, warn};
 
 use super::{FrameWarning, RenderError, Renderer};
-use crate::windows::{COMPOSE_DEPTH_WGSL, COMPOSE_WGSL, PresentMode, WindowId, WindowRect};
+use crate::windows::{COMPOSE_WGSL, PresentMode, WindowId, WindowRect};
 
 /// The format of an offscreen window's image.
 const OFFSCREEN_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
@@ -36,8 +36,6 @@ pub(crate) struct Compositor {
     layout: wgpu::BindGroupLayout,
     depth_layout: wgpu::BindGroupLayout,
     sampler: wgpu::Sampler,
-    module: wgpu::ShaderModule,
-    depth_module: wgpu::ShaderModule,
     /// By window format and whether the view shown is depth only.
     pipelines: HashMap<(wgpu::TextureFormat, bool), wgpu::RenderPipeline>,
 }
@@ -71,10 +69,6 @@ impl Compositor {
             min_filter: wgpu::FilterMode::Linear,
             ..Default::default()
         });
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("compose"),
-            source: wgpu::ShaderSource::Wgsl(COMPOSE_WGSL.into()),
-        });
         let depth_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("compose depth"),
             entries: &[wgpu::BindGroupLayoutEntry {
@@ -88,43 +82,13 @@ impl Compositor {
                 count: None,
             }],
         });
-        let depth_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("compose depth"),
-            source: wgpu::ShaderSource::Wgsl(COMPOSE_DEPTH_WGSL.into()),
-        });
-        Compositor { layout, depth_layout, sampler, module, depth_module, pipelines: HashMap::new() }
+        Compositor { layout, depth_layout, sampler, pipelines: HashMap::new() }
     }
 
     fn pipeline(&mut self, device: &wgpu::Device, format: wgpu::TextureFormat, depth: bool) -> &wgpu::RenderPipeline {
-        let (layout, module) =
-            if depth { (&self.depth_layout, &self.depth_module) } else { (&self.layout, &self.module) };
+        let (layout, fragment) = if depth { (&self.depth_layout, "fs_depth") } else { (&self.layout, "fs_color") };
         self.pipelines.entry((format, depth)).or_insert_with(|| {
-            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("compose"),
-                bind_group_layouts: &[Some(layout)],
-                immediate_size: 0,
-            });
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("compose"),
-                layout: Some(&pipeline_layout),
-                vertex: wgpu::VertexState {
-                    module,
-                    entry_point: Some("vs"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: Default::default(),
-                depth_stencil: None,
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module,
-                    entry_point: Some("fs"),
-                    compilation_options: Default::default(),
-                    targets: &[Some(format.into())],
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
+            oxygen_passes::fullscreen_pipeline(device, "compose", layout, COMPOSE_WGSL, ("vs", fragment), format)
         })
     }
 }

@@ -112,7 +112,7 @@ fn gpu_plan(
     let (mut early, mut late) = previous.map_or((Vec::new(), Vec::new()), |p| (p.early_partitions, p.late_partitions));
     early.clear();
     late.clear();
-    let plan = GpuViewPlan {
+    let mut plan = GpuViewPlan {
         visibility,
         capacity: scene.capacity(),
         groups: scene.groups().len() as u32,
@@ -132,7 +132,6 @@ fn gpu_plan(
     }
     // Occlusion culling draws lists A then B in the depth pre-pass and
     // list C (every draw) when shading; frustum culling has list A only.
-    let mut plan = plan;
     let shading_list = if visibility == Visibility::GpuOcclusion {
         plan.early_partitions.extend(scene.list_partitions(0));
         plan.late_partitions.extend(scene.list_partitions(1));
