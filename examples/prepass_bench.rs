@@ -158,7 +158,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 if let Some(set) = &q.timestamps {
                     rec.encoder().write_timestamp(set, 0);
                 }
-                let pre = pre_pass.wanted(ctx.estimated_overdraw());
+                let pre = pre_pass.wanted(ctx.pre_pass_estimate());
                 if pre {
                     MeshPass::depth_pre_pass().run(ctx, rec).await?;
                 }
@@ -207,7 +207,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 v.sort_by(f64::total_cmp);
                 v.get(v.len() / 2).copied()
             };
-            let overdraw = renderer.prepared_frame(view).map_or(f32::NAN, |f| f.estimated_overdraw());
+            // On a GPU visibility path the estimate is the GPU's, read back.
+            let overdraw = match (renderer.gpu_visibility(), renderer.prepared_frame(view)) {
+                (Some(gpu), Some(frame)) if frame.gpu_plan().is_some() => {
+                    gpu.estimated_overdraw(view).unwrap_or(f32::NAN)
+                }
+                (_, Some(frame)) => frame.estimated_overdraw(),
+                _ => f32::NAN,
+            };
             println!(
                 "| {name} | {pre_pass:?} | {overdraw:.2} | {} | {:.2} | {} | {} |",
                 if ran { "yes" } else { "no" },

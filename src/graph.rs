@@ -22,7 +22,8 @@ use std::future::Future;
 use std::pin::Pin;
 
 use oxygen_passes::{
-    CommandRecorder, DepthBias, DrawList, ForwardLitConfig, MeshPass, PassError, RenderContext, RenderPass, TonemapPass,
+    CommandRecorder, DepthBias, DrawList, ForwardLitConfig, MeshPass, PassError, PrePassEstimate, RenderContext,
+    RenderPass, TonemapPass,
 };
 
 /// What a view records each frame: a future that awaits its passes.
@@ -122,36 +123,52 @@ impl StandardGraph {
 /// Whether a view lays down depth before shading: a speed/accuracy-neutral
 /// trade of one more geometry pass against shading hidden fragments. The
 /// pre-pass pays when surfaces hide each other a lot (each pixel is then
-/// shaded once instead of several times) and costs when they do not (every
-/// draw is rasterised twice). `examples/prepass_bench.rs` measures both on
-/// a scene of each kind.
+/// shaded once instead of several times) and costs when they do not, or
+/// when the geometry is dense (every index is drawn twice, and on some
+/// adapters vertices, not pixels, are what a frame costs).
+/// `examples/prepass_bench.rs` measures both on a scene of each kind.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum PrePass {
     /// Always.
     On,
     /// Never: the forward pass writes depth itself.
     Off,
-    /// When the view's estimated depth complexity
-    /// ([`PreparedSceneFrame::estimated_overdraw`](oxygen_sceneprep::PreparedSceneFrame::estimated_overdraw))
-    /// reaches `min_overdraw`, decided per view and per frame.
+    /// Decided per view and per frame from the view's
+    /// [`PrePassEstimate`](oxygen_passes::PrePassEstimate): the pre-pass
+    /// runs when the expected overdraw reaches `min_overdraw` and the
+    /// fragments it spares shading, `(overdraw − 1) × pixels`, are at least
+    /// `fragments_per_index` times the indices it draws.
     Auto {
-        /// The threshold.
+        /// The overdraw threshold.
         min_overdraw: f32,
+        /// Spared fragments one drawn index must buy. 0 ignores the
+        /// geometry's cost.
+        fragments_per_index: f32,
     },
 }
 
 impl PrePass {
-    /// The default: automatic, from a depth complexity of 2.
-    pub const DEFAULT: PrePass = PrePass::Auto { min_overdraw: 2.0 };
+    /// The default: automatic, from an expected overdraw of 2 and one
+    /// spared fragment per index drawn.
+    pub const DEFAULT: PrePass = PrePass::Auto { min_overdraw: 2.0, fragments_per_index: 1.0 };
 
-    /// Whether a view whose estimated depth complexity is `overdraw` gets
-    /// the pre-pass.
-    pub fn wanted(self, overdraw: f32) -> bool {
+    /// Whether a view with this estimate gets the pre-pass.
+    pub fn wanted(self, estimate: PrePassEstimate) -> bool {
         match self {
             PrePass::On => true,
             PrePass::Off => false,
-            // NaN never reaches the threshold: no pre-pass, the safe side.
-            PrePass::Auto { min_overdraw } => overdraw >= min_overdraw,
+            PrePass::Auto { min_overdraw, fragments_per_index } => {
+                // NaN never reaches the threshold: no pre-pass, the safe side.
+                if !(estimate.overdraw >= min_overdraw) {
+                    return false;
+                }
+                // Infinite overdraw (not known yet) spares everything.
+                if estimate.overdraw.is_infinite() {
+                    return true;
+                }
+                let spared = (f64::from(estimate.overdraw) - 1.0) * estimate.pixels as f64;
+                spared >= f64::from(fragments_per_index) * estimate.indices as f64
+            }
         }
     }
 }
@@ -167,7 +184,7 @@ impl RenderGraph for StandardGraph {
         let mut lit = self.lit.clone();
         // Occlusion culling builds its pyramid from the pre-pass's depth.
         let occlusion = ctx.occlusion_culling();
-        lit.depth_from_pre_pass = occlusion || self.pre_pass.wanted(ctx.estimated_overdraw());
+        lit.depth_from_pre_pass = occlusion || self.pre_pass.wanted(ctx.pre_pass_estimate());
         if lit.depth_from_pre_pass {
             MeshPass::depth_pre_pass().drawing(DrawList::Early).run(ctx, rec).await?;
         }
@@ -254,11 +271,29 @@ mod tests {
 
     #[test]
     fn the_automatic_pre_pass_follows_the_threshold_and_refuses_nan() {
-        let auto = PrePass::Auto { min_overdraw: 2.0 };
-        assert!(!auto.wanted(1.2));
-        assert!(auto.wanted(2.0));
-        assert!(auto.wanted(7.5));
-        assert!(!auto.wanted(f32::NAN));
-        assert!(PrePass::On.wanted(0.0) && !PrePass::Off.wanted(100.0));
+        let auto = PrePass::Auto { min_overdraw: 2.0, fragments_per_index: 0.0 };
+        let light = |overdraw| PrePassEstimate { overdraw, indices: 36, pixels: 1000 };
+        assert!(!auto.wanted(light(1.2)));
+        assert!(auto.wanted(light(2.0)));
+        assert!(auto.wanted(light(7.5)));
+        assert!(!auto.wanted(light(f32::NAN)));
+        assert!(auto.wanted(light(f32::INFINITY)), "unknown overdraw: pre-pass");
+        assert!(PrePass::On.wanted(light(0.0)) && !PrePass::Off.wanted(light(100.0)));
+    }
+
+    #[test]
+    fn dense_geometry_turns_the_automatic_pre_pass_off() {
+        // 960 × 540 pixels under an expected overdraw of 2.5: the pre-pass
+        // spares 777 600 fragments.
+        let estimate = |indices| PrePassEstimate { overdraw: 2.5, indices, pixels: 960 * 540 };
+        let auto = PrePass::DEFAULT;
+        assert!(auto.wanted(estimate(1_000)), "a few walls");
+        assert!(auto.wanted(estimate(777_600)), "one index per spared fragment");
+        assert!(!auto.wanted(estimate(777_601)));
+        assert!(!auto.wanted(estimate(3_300_000)), "92 000 cubes");
+        let ignoring_geometry = PrePass::Auto { min_overdraw: 2.0, fragments_per_index: 0.0 };
+        assert!(ignoring_geometry.wanted(estimate(3_300_000)));
+        // Not known yet (a GPU path's first frame): the pre-pass runs.
+        assert!(auto.wanted(PrePassEstimate { overdraw: f32::INFINITY, indices: 0, pixels: 0 }));
     }
 }

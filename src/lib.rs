@@ -103,8 +103,8 @@ pub mod prelude {
         Transform, ViewContext, ViewError, ViewId, ViewResolver,
     };
     pub use oxygen_passes::{
-        CommandRecorder, DrawPath, ForwardLitConfig, MeshPass, Output, PassError, RenderContext, RenderPass,
-        TonemapPass,
+        CommandRecorder, DrawPath, ForwardLitConfig, MeshPass, Output, PassError, PrePassEstimate, RenderContext,
+        RenderPass, TonemapPass,
     };
     pub use oxygen_sceneprep::{PassMask, PreparedSceneFrame, ViewPrepOptions, Visibility};
 }

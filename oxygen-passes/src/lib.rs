@@ -52,8 +52,8 @@ pub use pipelines::{
 };
 pub use probe_mips::PROBE_MIP_WGSL;
 pub use render_context::{
-    CommandRecorder, DrawPath, FrameProgress, LinkedView, LocalShadowsInput, OutputKind, PassError, ProbeCubeInput,
-    RecordStats, RenderContext, ShadowMapInput, ViewInputs,
+    CommandRecorder, DrawPath, FrameProgress, LinkedView, LocalShadowsInput, OutputKind, PassError, PrePassEstimate,
+    ProbeCubeInput, RecordStats, RenderContext, ShadowMapInput, ViewInputs,
 };
 pub use render_pass::RenderPass;
 pub use shadow_atlas::{SHADOW_ATLAS_FORMAT, array_layer_count};

@@ -141,6 +141,19 @@ pub struct RenderContext<'a> {
     pub visibility: Option<&'a crate::GpuVisibility>,
 }
 
+/// What an automatic depth pre-pass decides from, for one view and frame
+/// ([`RenderContext::pre_pass_estimate`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PrePassEstimate {
+    /// The times a forward pass without a pre-pass is expected to shade a
+    /// pixel; infinite when not known yet.
+    pub overdraw: f32,
+    /// The indices a pre-pass would draw (the opaque and masked draws').
+    pub indices: u64,
+    /// The view's pixels.
+    pub pixels: u64,
+}
+
 impl<'a> RenderContext<'a> {
     /// The view's colour targets, or [`PassError::NoColorTarget`] naming
     /// `pass` when the view is depth-only.
@@ -159,6 +172,23 @@ impl<'a> RenderContext<'a> {
         match (self.prepared.gpu_plan(), self.visibility) {
             (Some(_), Some(visibility)) => visibility.estimated_overdraw(self.view.view_id).unwrap_or(f32::INFINITY),
             _ => self.prepared.estimated_overdraw(),
+        }
+    }
+
+    /// What an automatic depth pre-pass decides from: the expected
+    /// overdraw ([`RenderContext::estimated_overdraw`]), the indices a
+    /// pre-pass would draw (ScenePrep's count on the CPU path, the GPU's
+    /// read back with the overdraw on a GPU path, 0 until it arrives) and
+    /// the view's pixels.
+    pub fn pre_pass_estimate(&self) -> PrePassEstimate {
+        let indices = match (self.prepared.gpu_plan(), self.visibility) {
+            (Some(_), Some(visibility)) => visibility.depth_pass_indices(self.view.view_id).unwrap_or(0),
+            _ => 0,
+        } + self.prepared.depth_pass_indices();
+        PrePassEstimate {
+            overdraw: self.estimated_overdraw(),
+            indices,
+            pixels: u64::from(self.view.viewport.x) * u64::from(self.view.viewport.y),
         }
     }
 

@@ -143,6 +143,8 @@ struct ViewCull {
     readback_state: std::sync::Arc<std::sync::atomic::AtomicU8>,
     /// Depth complexity estimated from the last coverage read back.
     overdraw: Option<f32>,
+    /// Indices of the opaque and masked draws, from the same readback.
+    depth_pass_indices: Option<u64>,
 }
 
 /// The GPU scene's buffers, the cull pipelines and every GPU view's state.
@@ -352,17 +354,19 @@ impl GpuVisibility {
                 seen: true,
                 readback: device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("cull coverage readback"),
-                    size: 8,
+                    size: 16,
                     usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
                     mapped_at_creation: false,
                 }),
                 readback_state: std::sync::Arc::new(std::sync::atomic::AtomicU8::new(READBACK_IDLE)),
                 overdraw: None,
+                depth_pass_indices: None,
             });
             state.seen = true;
             // After the plan's counters, the coverage counters: the sum, the
-            // capped sum, one per group (see the cull shader).
-            let coverage_counters = 2 + u64::from(plan.groups);
+            // capped sum, the indices drawn, one per group (see the cull
+            // shader).
+            let coverage_counters = 3 + u64::from(plan.groups);
             let mut stale = state.counts.reserve(device, (u64::from(plan.counters()) + coverage_counters) * 4);
             // New instance numbering or a new path: last frame's visibility
             // means nothing, so start from "nothing was visible" (phase 2
@@ -418,18 +422,19 @@ impl GpuVisibility {
                 // copy never happened.
                 READBACK_COPIED => state.readback_state.store(READBACK_IDLE, Ordering::Release),
                 READBACK_MAPPED => {
-                    let units = match state.readback.slice(..).get_mapped_range() {
-                        // The smaller of the sum and the capped sum.
-                        Ok(bytes) => bytes.get(..8).map(|b| {
-                            let sum = u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
-                            let capped = u32::from_le_bytes([b[4], b[5], b[6], b[7]]);
-                            sum.min(capped)
+                    let counters = match state.readback.slice(..).get_mapped_range() {
+                        Ok(bytes) => bytes.get(..12).map(|b| {
+                            let word =
+                                |i: usize| u32::from_le_bytes([b[4 * i], b[4 * i + 1], b[4 * i + 2], b[4 * i + 3]]);
+                            // The smaller of the sum and the capped sum; the indices.
+                            (word(0).min(word(1)), word(2))
                         }),
                         Err(_) => None,
                     };
                     state.readback.unmap();
-                    if let Some(units) = units {
-                        state.overdraw = Some(units as f32 / 1024.0);
+                    if let Some((units, indices)) = counters {
+                        state.overdraw = Some(oxygen_sceneprep::expected_shaded_layers(units as f32 / 1024.0));
+                        state.depth_pass_indices = Some(u64::from(indices));
                     }
                     state.readback_state.store(READBACK_IDLE, Ordering::Release);
                 }
@@ -442,10 +447,19 @@ impl GpuVisibility {
     /// The depth complexity `view`'s draws covered last time it was read
     /// back, estimated as the CPU path does (over each group of one mesh
     /// and material the viewport fractions its draws' bounding spheres
-    /// cover, capped at 1 per group and summed, and never more than all
-    /// draws' coverage): `None` before the first readback.
+    /// cover, capped at 1 per group and summed, never more than all draws'
+    /// coverage, then turned into times shaded by
+    /// [`oxygen_sceneprep::expected_shaded_layers`]): `None` before the
+    /// first readback.
     pub fn estimated_overdraw(&self, view: ViewId) -> Option<f32> {
         self.views.get(&view)?.overdraw
+    }
+
+    /// The indices of the opaque and masked draws `view`'s culling kept,
+    /// from the same readback as [`GpuVisibility::estimated_overdraw`]:
+    /// what a depth pre-pass would draw. `None` before the first readback.
+    pub fn depth_pass_indices(&self, view: ViewId) -> Option<u64> {
+        self.views.get(&view)?.depth_pass_indices
     }
 
     /// Copies `view`'s coverage counter for reading back, when its last
@@ -458,7 +472,7 @@ impl GpuVisibility {
         if swapped.is_ok() {
             // The coverage counter is the one after the plan's counters.
             let offset = u64::from(state.counters) * 4;
-            encoder.copy_buffer_to_buffer(&state.counts.buffer, offset, &state.readback, 0, 8);
+            encoder.copy_buffer_to_buffer(&state.counts.buffer, offset, &state.readback, 0, 12);
         }
     }
 

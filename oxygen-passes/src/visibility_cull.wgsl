@@ -123,10 +123,11 @@ fn select_group(instance: GpuInstance) -> u32 {
 
 // Coverage counters after the group counters, in 1/1024ths of the viewport:
 // [the sum over drawn instances][the sum over groups of each group's sum,
-// capped at one viewport][one per group]. The CPU reads the first two back
-// a frame later and takes the smaller as the depth complexity a forward
-// pass without a pre-pass would shade (the CPU path's estimate, with
-// groups for its runs of one material).
+// capped at one viewport][the indices of the drawn instances][one per
+// group]. The CPU reads the first three back a frame later: the smaller of
+// the first two is the layers a forward pass without a pre-pass would shade
+// (the CPU path's estimate, with groups for its runs of one material), the
+// third what a pre-pass would draw.
 fn coverage_base() -> u32 {
     return params.group_counters + 2u * params.group_count;
 }
@@ -135,6 +136,11 @@ fn coverage_base() -> u32 {
 // at most the whole viewport, as the CPU path's estimate counts it), rounded
 // stochastically so that many tiny instances sum right.
 fn add_coverage(i: u32, instance: GpuInstance, group: u32) {
+    // Saturating, and each add capped: a wrapped count would read as a
+    // cheap pre-pass.
+    if atomicLoad(&counts[coverage_base() + 2u]) < 0x80000000u {
+        atomicAdd(&counts[coverage_base() + 2u], min(groups[group].index_count, 0x00FFFFFFu));
+    }
     let depth = -(dot(params.view_row_z.xyz, instance.sphere.xyz) + params.view_row_z.w);
     var fraction = instance.sphere.w * params.lod_scale;
     if params.perspective != 0u {
@@ -150,14 +156,14 @@ fn add_coverage(i: u32, instance: GpuInstance, group: u32) {
     // "pre-pass", and must not wrap around to a small one.
     if units > 0u && atomicLoad(&counts[coverage_base()]) < 0x40000000u {
         atomicAdd(&counts[coverage_base()], units);
-        atomicAdd(&counts[coverage_base() + 2u + group], units);
+        atomicAdd(&counts[coverage_base() + 3u + group], units);
     }
 }
 
 // A group's coverage, capped at one viewport, into the capped sum (once per
 // group, after its draws are final).
 fn add_capped_coverage(g: u32) {
-    let units = atomicLoad(&counts[coverage_base() + 2u + g]);
+    let units = atomicLoad(&counts[coverage_base() + 3u + g]);
     if units > 0u && atomicLoad(&counts[coverage_base() + 1u]) < 0x40000000u {
         atomicAdd(&counts[coverage_base() + 1u], min(units, 1024u));
     }

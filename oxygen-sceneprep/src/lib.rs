@@ -27,6 +27,7 @@ mod draw_metadata;
 pub mod finalize;
 mod gpu_records;
 pub mod gpu_scene;
+pub mod overdraw;
 mod pass_mask;
 mod prepared_frame;
 mod scene_prep;
@@ -42,6 +43,7 @@ pub use gpu_records::{
     ShadowRecord, material_flags, shadow_tiles_for,
 };
 pub use gpu_scene::{GpuScene, Visibility};
+pub use overdraw::expected_shaded_layers;
 pub use pass_mask::PassMask;
 pub use prepared_frame::{GpuViewPlan, Partition, PreparedSceneFrame, PreparedSlots, canonical_draws, canonical_dump};
 pub use scene_prep::{PrepError, PrepStats, ScenePrep, ViewRequest};

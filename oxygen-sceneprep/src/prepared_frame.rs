@@ -115,6 +115,7 @@ pub struct PreparedSceneFrame {
     pub(crate) debug_generations: bool,
     pub(crate) prep_seconds: f32,
     pub(crate) estimated_overdraw: f32,
+    pub(crate) depth_pass_indices: u64,
     pub(crate) gpu: Option<GpuViewPlan>,
 }
 
@@ -136,6 +137,7 @@ impl PreparedSceneFrame {
             debug_generations: false,
             prep_seconds: 0.0,
             estimated_overdraw: 0.0,
+            depth_pass_indices: 0,
             gpu: None,
             slots: PreparedSlots::unallocated(),
         }
@@ -200,19 +202,28 @@ impl PreparedSceneFrame {
     pub fn transforms(&self) -> &Arc<FrameTransforms> {
         &self.transforms
     }
-    /// The depth complexity a forward pass without a depth pre-pass is
-    /// expected to shade: over the runs of one material in draw order (each
-    /// run goes front to back, so early depth testing shades a pixel about
-    /// once per run), the sum of each run's viewport coverage (the fractions
-    /// its draws' bounding spheres cover), capped at 1 per run. About 1 when
-    /// the materials tile the view; up to the number of material runs when
-    /// runs drawn later cover what earlier ones shaded, and never more than
-    /// the sum of every draw's coverage (runs side by side do not cover
-    /// each other). An estimate from
-    /// data the view phase has anyway (spheres overestimate what they
-    /// bound); the standard graph's automatic pre-pass decides from it.
+    /// The times a forward pass without a depth pre-pass is expected to
+    /// shade a pixel. Over the runs of one material in draw order (each run
+    /// goes front to back, so early depth testing shades a pixel about once
+    /// per run), each run's viewport coverage (the fractions its draws'
+    /// bounding spheres cover), capped at 1, adds up to the layers of runs
+    /// over a pixel, never more than the sum of every draw's coverage (runs
+    /// side by side do not cover each other); a pixel under `k` runs in no
+    /// particular depth order is shaded `H(k) = 1 + 1/2 + … + 1/k` times on
+    /// average ([`crate::expected_shaded_layers`]). About 1 when the
+    /// materials tile the view, 2.08 under four overlapping runs. An
+    /// estimate from data the view phase has anyway (spheres overestimate
+    /// what they bound); the standard graph's automatic pre-pass decides
+    /// from it.
     pub fn estimated_overdraw(&self) -> f32 {
         self.estimated_overdraw
+    }
+    /// The indices a depth pre-pass over this frame's CPU-written draws
+    /// would draw: those of its opaque and masked draws (the GPU path's
+    /// draws are counted on the GPU, see `GpuVisibility`). What the
+    /// automatic pre-pass weighs against the shading it would spare.
+    pub fn depth_pass_indices(&self) -> u64 {
+        self.depth_pass_indices
     }
 
     /// Wall time this view's view phase and finalization took (the frame

@@ -189,10 +189,12 @@ impl Default for ScenePrep {
 /// The depth complexity a forward pass without a depth pre-pass would shade,
 /// estimated from the sorted draws: within one run of a material the draws go
 /// front to back, so early depth testing shades each covered pixel about
-/// once; successive runs may each shade it again. So each run counts its
-/// coverage (the viewport fractions its draws' bounding spheres cover),
-/// capped at 1, and the runs add up; never more than all draws' coverage
-/// together.
+/// once. So each run counts its coverage (the viewport fractions its draws'
+/// bounding spheres cover), capped at 1; the runs add up to the layers of
+/// runs over a pixel, never more than all draws' coverage together; and
+/// [`expected_shaded_layers`](crate::expected_shaded_layers) turns those
+/// layers into the times a pixel is shaded when the runs come in no
+/// particular depth order.
 fn overdraw_in_draw_order(keyed: &[(u64, u32)], items: &[RenderItem], coverage: &[f32]) -> f32 {
     let (mut runs, mut run, mut material) = (0.0f32, 0.0f32, None);
     for &(_, index) in keyed {
@@ -206,9 +208,9 @@ fn overdraw_in_draw_order(keyed: &[(u64, u32)], items: &[RenderItem], coverage: 
     }
     // Runs spread side by side over the view (a grid of objects in several
     // materials) each cover much of it without covering each other: the
-    // whole frame's depth complexity bounds the estimate too.
+    // whole frame's depth complexity bounds the layers too.
     let total: f32 = coverage.iter().sum();
-    (runs + run.min(1.0)).min(total)
+    crate::expected_shaded_layers((runs + run.min(1.0)).min(total))
 }
 
 /// Whether two frames' frame-global ranges are the same slots (handles

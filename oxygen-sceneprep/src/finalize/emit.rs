@@ -20,7 +20,9 @@ use crate::finalize::geometry_cache::GeometryCache;
 use crate::finalize::partition::{build_commands, build_partitions};
 use crate::gpu_scene::GpuScene;
 use crate::prepared_frame::FrameTransforms;
-use crate::{DrawMetadata, GpuViewPlan, Instancing, PreparedSceneFrame, PreparedSlots, RenderItem, Visibility};
+use crate::{
+    DrawMetadata, GpuViewPlan, Instancing, PassMask, PreparedSceneFrame, PreparedSlots, RenderItem, Visibility,
+};
 
 /// What every view of a frame emits against: shared, read-only.
 pub(crate) struct FrameEmit<'a> {
@@ -61,12 +63,16 @@ pub(crate) fn emit_view(frame: &FrameEmit<'_>, view: &ViewEmit<'_>, out: &mut Pr
     out.draws.clear();
     out.indirect_args.clear();
     out.sort_keys.clear();
+    out.depth_pass_indices = 0;
     let generation_tag = if frame.debug_generations { view.draw_allocation.generation() } else { 0 };
     for &(key, item_index) in view.keyed {
         let item = &view.items[item_index as usize];
         // Resolved in the serial step; a mesh missing from the scene was
         // never turned into an item.
         let Some(g) = frame.geometry.get(item.geometry) else { continue };
+        if !item.pass_mask.contains(PassMask::TRANSPARENT) {
+            out.depth_pass_indices += u64::from(item.index_count);
+        }
         out.draws.push(DrawMetadata {
             vertex_slot: g.vertices.start,
             index_slot: g.indices.start,
