@@ -159,7 +159,7 @@ impl PrePass {
             PrePass::Off => false,
             PrePass::Auto { min_overdraw, fragments_per_index } => {
                 // NaN never reaches the threshold: no pre-pass, the safe side.
-                if !(estimate.overdraw >= min_overdraw) {
+                if estimate.overdraw.is_nan() || estimate.overdraw < min_overdraw {
                     return false;
                 }
                 // Infinite overdraw (not known yet) spares everything.
