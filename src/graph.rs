@@ -22,8 +22,8 @@ use std::future::Future;
 use std::pin::Pin;
 
 use oxygen_passes::{
-    CommandRecorder, DepthBias, DrawList, ForwardLitConfig, MeshPass, PassError, PrePassEstimate, RenderContext,
-    RenderPass, TonemapPass,
+    CommandRecorder, DepthBias, DrawList, ForwardLitConfig, MeshPass, PassError, PrePassEstimate, ReferencePass,
+    ReferenceSettings, RenderContext, RenderPass, TonemapPass,
 };
 
 /// What a view records each frame: a future that awaits its passes.
@@ -214,6 +214,31 @@ impl RenderGraph for StandardGraph {
 #[allow(non_upper_case_globals)] // Reads as the function it replaced: `register_view(camera, standard_render_graph)`.
 pub const standard_render_graph: StandardGraph =
     StandardGraph { lit: ForwardLitConfig::DEFAULT, exposure: 1.0, pre_pass: PrePass::DEFAULT };
+
+/// The graph of a path-traced reference view
+/// ([`ViewDesc::path_traced`](crate::ViewDesc::path_traced)): the frame's
+/// samples added to the view's running mean in its HDR target
+/// ([`ReferencePass`]), then the same tone map as the raster graphs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ReferenceGraph {
+    /// How to trace.
+    pub settings: ReferenceSettings,
+    /// Exposure before the tone map, as [`StandardGraph::exposure`].
+    pub exposure: f32,
+}
+
+impl RenderGraph for ReferenceGraph {
+    async fn record(&self, ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError> {
+        ReferencePass { settings: self.settings }.run(ctx, rec).await?;
+        let exposure = if self.exposure == 0.0 { 1.0 } else { self.exposure };
+        TonemapPass::new(exposure).run(ctx, rec).await
+    }
+}
+
+/// The reference graph with default settings ([`ReferenceSettings::DEFAULT`]).
+#[allow(non_upper_case_globals)] // Reads like `standard_render_graph`.
+pub const reference_render_graph: ReferenceGraph =
+    ReferenceGraph { settings: ReferenceSettings::DEFAULT, exposure: 1.0 };
 
 /// The standard graph with a chosen forward configuration; the pre-pass as
 /// `config.depth_from_pre_pass` says.

@@ -50,7 +50,8 @@ pub use gltf_import::{
     import_gltf_slice, import_gltf_with,
 };
 pub use graph::{
-    PrePass, ProbeFaceGraph, RenderGraph, ShadowGraph, StandardGraph, lit_render_graph, standard_render_graph,
+    PrePass, ProbeFaceGraph, ReferenceGraph, RenderGraph, ShadowGraph, StandardGraph, lit_render_graph,
+    reference_render_graph, standard_render_graph,
 };
 pub use oxygen_sceneprep::RenderOrigin;
 pub use probes::{ProbeUpdate, ReflectionProbe};
@@ -87,8 +88,9 @@ pub struct ReadmeDoctests;
 /// The names most applications use.
 pub mod prelude {
     pub use crate::{
-        FrameReport, FrameWarning, LocalShadowSettings, PrePass, RenderError, RenderGraph, RenderOrigin, Renderer,
-        RendererOptions, StandardGraph, ViewDesc, Views, lit_render_graph, standard_render_graph,
+        FrameReport, FrameWarning, LocalShadowSettings, PrePass, ReferenceGraph, RenderError, RenderGraph,
+        RenderOrigin, Renderer, RendererOptions, StandardGraph, ViewDesc, Views, lit_render_graph,
+        reference_render_graph, standard_render_graph,
     };
     pub use crate::{
         GltfCamera, GltfError, GltfImport, ImportLimits, ImportOptions, SceneChoice, import_gltf, import_gltf_with,
@@ -103,8 +105,8 @@ pub mod prelude {
         Transform, ViewContext, ViewError, ViewId, ViewResolver,
     };
     pub use oxygen_passes::{
-        CommandRecorder, DrawPath, ForwardLitConfig, MeshPass, Output, PassError, PrePassEstimate, RenderContext,
-        RenderPass, TonemapPass,
+        CommandRecorder, DrawPath, ForwardLitConfig, MeshPass, Output, PassError, PrePassEstimate, ReferenceSettings,
+        RenderContext, RenderPass, TonemapPass,
     };
     pub use oxygen_sceneprep::{PassMask, PreparedSceneFrame, ViewPrepOptions, Visibility};
 }

@@ -71,6 +71,17 @@ impl ViewDesc {
         self
     }
 
+    /// Makes the view a path-traced reference: ScenePrep keeps the
+    /// ray-tracing scene for it and the renderer's tracer accumulates its
+    /// samples. Register it with a [`ReferenceGraph`](crate::ReferenceGraph)
+    /// (e.g. [`reference_render_graph`](crate::reference_render_graph)); its
+    /// raster draws are still prepared on the CPU path, unused.
+    pub fn path_traced(mut self) -> Self {
+        self.options.ray_scene = true;
+        self.visibility = Some(Visibility::Cpu);
+        self
+    }
+
     /// ScenePrep options (filter, cull bound, depth only).
     pub fn with_options(mut self, options: ViewPrepOptions) -> Self {
         self.options = options;

@@ -84,6 +84,7 @@ fn a_stale_draw_range_is_painted_magenta() {
         textured_materials: true,
         specialize_shaders: true,
         visibility: None,
+        reference: None,
     };
     let mut recorder = CommandRecorder::new(&gpu.device, "stale view");
     // Driven by hand under `block_on`: with no recording thread attached,

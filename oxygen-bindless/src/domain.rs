@@ -107,15 +107,17 @@ impl DomainKind {
             DomainKind::DrawMetadata
             | DomainKind::WorldTransforms
             | DomainKind::NormalTransforms
-            | DomainKind::Vertices => wgpu::ShaderStages::VERTEX,
-            _ => wgpu::ShaderStages::FRAGMENT,
+            | DomainKind::Vertices => wgpu::ShaderStages::VERTEX.union(wgpu::ShaderStages::COMPUTE),
+            _ => wgpu::ShaderStages::FRAGMENT.union(wgpu::ShaderStages::COMPUTE),
         }
     }
 
     /// Buffer usages beyond copy source/destination.
     pub(crate) fn usages(self) -> wgpu::BufferUsages {
         match self {
-            DomainKind::Indices => wgpu::BufferUsages::INDEX,
+            // Storage too: the path-traced reference reads triangles from
+            // it (bound by that pass, not in group 0).
+            DomainKind::Indices => wgpu::BufferUsages::INDEX | wgpu::BufferUsages::STORAGE,
             // Storage too: GPU visibility writes commands with compute.
             DomainKind::IndirectArgs => wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::STORAGE,
             _ => wgpu::BufferUsages::STORAGE,
@@ -159,7 +161,7 @@ mod tests {
 
     #[test]
     fn index_and_indirect_domains_get_their_buffer_usages_and_the_rest_are_storage() {
-        assert_eq!(DomainKind::Indices.usages(), wgpu::BufferUsages::INDEX);
+        assert_eq!(DomainKind::Indices.usages(), wgpu::BufferUsages::INDEX | wgpu::BufferUsages::STORAGE);
         // Storage too: GPU visibility writes commands from a compute shader.
         assert_eq!(DomainKind::IndirectArgs.usages(), wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::STORAGE);
         for kind in DomainKind::ALL.iter().filter(|k| k.binding().is_some()) {

@@ -34,6 +34,7 @@ mod lighting_inputs;
 mod mesh_pass;
 mod pipelines;
 mod probe_mips;
+mod reference;
 mod render_context;
 mod render_pass;
 mod shadow_atlas;
@@ -47,10 +48,11 @@ pub use lighting_inputs::{
 pub use mesh_pass::{ColorOps, DrawList, ForwardLitConfig, MeshPass};
 pub use oxygen_core::{Depth, HdrColor, Output, OutputSource, ProbeCube, ProbeId, ShadowMap};
 pub use pipelines::{
-    AlphaClass, CompilerGuard, DepthBias, Exposure, PassKind, PipelineFuture, PipelineKey, PipelineVariant, Pipelines,
-    ShaderFeatures, TONEMAP_OPERATOR_WGSL, TONEMAP_WGSL, fullscreen_pipeline, shader_source,
+    AlphaClass, BRDF_WGSL, CompilerGuard, DepthBias, Exposure, PassKind, PipelineFuture, PipelineKey, PipelineVariant,
+    Pipelines, ShaderFeatures, TONEMAP_OPERATOR_WGSL, TONEMAP_WGSL, fullscreen_pipeline, shader_source,
 };
 pub use probe_mips::PROBE_MIP_WGSL;
+pub use reference::{ReferencePass, ReferenceSettings, ReferenceTracer, reference_shader_source};
 pub use render_context::{
     CommandRecorder, DrawPath, FrameProgress, LinkedView, LocalShadowsInput, OutputKind, PassError, PrePassEstimate,
     ProbeCubeInput, RecordStats, RenderContext, ShadowMapInput, ViewInputs,

@@ -234,6 +234,9 @@ impl std::hash::Hash for Exposure {
 const MESH_VERTEX_WGSL: &str = include_str!("mesh_vertex.wgsl");
 const DEPTH_ONLY_WGSL: &str = include_str!("depth_only.wgsl");
 const FORWARD_LIT_WGSL: &str = include_str!("forward_lit.wgsl");
+/// The reflectance model and light falloff shared by raster shading and the
+/// path-traced reference.
+pub const BRDF_WGSL: &str = include_str!("brdf.wgsl");
 /// The tone-map operator (`tone_map`, `pbr_neutral`), shared by the tone-map
 /// pass and the forward lit pass's in-pass tone map.
 pub const TONEMAP_OPERATOR_WGSL: &str = include_str!("tonemap.wgsl");
@@ -248,7 +251,7 @@ pub fn shader_source(pass: PassKind, textures: TexturePath) -> String {
     let body = match pass {
         PassKind::DepthPrePass | PassKind::Shadow => DEPTH_ONLY_WGSL.to_owned(),
         PassKind::Shading | PassKind::ShadingAfterPrePass | PassKind::Transparent => {
-            format!("{TONEMAP_OPERATOR_WGSL}\n{FORWARD_LIT_WGSL}")
+            format!("{TONEMAP_OPERATOR_WGSL}\n{BRDF_WGSL}\n{FORWARD_LIT_WGSL}")
         }
     };
     // Enable directives must come before any declaration.

@@ -139,6 +139,9 @@ pub struct RenderContext<'a> {
     /// GPU visibility's per-view state, when the renderer has it: the count
     /// buffers of GPU-written partitions, and phase 2 of occlusion culling.
     pub visibility: Option<&'a crate::GpuVisibility>,
+    /// The path-traced reference's scene and samples, when a view of the
+    /// renderer is path traced ([`crate::ReferencePass`]).
+    pub reference: Option<&'a crate::ReferenceTracer>,
 }
 
 /// What an automatic depth pre-pass decides from, for one view and frame

@@ -143,3 +143,13 @@ fn the_depth_pyramid_shader_validates() {
         assert!(module.entry_points.iter().any(|e| e.name == name), "the depth pyramid shader lacks {name}");
     }
 }
+
+/// The path-traced reference's shader, on every texture path.
+#[test]
+fn the_reference_tracer_validates_on_every_texture_path() {
+    for textures in all_paths() {
+        let source = oxygen_passes::reference_shader_source(textures);
+        let module = validate(&format!("reference / {textures:?}"), &source, capabilities(textures));
+        assert!(module.entry_points.iter().any(|e| e.name == "trace_paths"), "{textures:?} lacks trace_paths");
+    }
+}

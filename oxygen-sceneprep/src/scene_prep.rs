@@ -172,6 +172,9 @@ pub struct ScenePrep {
     /// scene and the uploaded matrices remember which one they reflect.
     collection_generation: u64,
     gpu_scene_generation: Option<u64>,
+    ray_scene: crate::RayScene,
+    /// The collection the ray scene was built from.
+    ray_scene_generation: Option<u64>,
     /// What the heap holds of the frame-global data: the slots and the
     /// collection it came from, with the matrices, so that an unchanged
     /// frame uploads nothing and a changed one only what differs.
@@ -261,6 +264,8 @@ impl ScenePrep {
             gpu_scene: GpuScene::default(),
             collection_generation: 0,
             gpu_scene_generation: None,
+            ray_scene: crate::RayScene::default(),
+            ray_scene_generation: None,
             uploaded: None,
             uploaded_world: Vec::new(),
             uploaded_normal: Vec::new(),
@@ -326,6 +331,12 @@ impl ScenePrep {
     /// path (empty before).
     pub fn gpu_scene(&self) -> &GpuScene {
         &self.gpu_scene
+    }
+
+    /// The ray-tracing scene, as of the last frame a view asked for it
+    /// ([`crate::ViewPrepOptions::ray_scene`]).
+    pub fn ray_scene(&self) -> &crate::RayScene {
+        &self.ray_scene
     }
 
     /// The GPU scene, for the uploader that takes its changes.
@@ -427,6 +438,12 @@ impl ScenePrep {
 
         if views.iter().any(|v| v.options.visibility.on_gpu()) {
             self.sync_gpu_scene(scene, slots)?;
+        }
+        if views.iter().any(|v| v.options.ray_scene) && self.ray_scene_generation != Some(self.collection_generation) {
+            // The GPU scene's sync gives every mesh its slots (LODs too).
+            self.resolve_all_geometry(scene, slots)?;
+            self.ray_scene.rebuild(scene, &self.frame, &self.geometry);
+            self.ray_scene_generation = Some(self.collection_generation);
         }
 
         // Phase 1: cull, produce items, key and sort them.
@@ -571,6 +588,15 @@ impl ScenePrep {
             return Ok(());
         }
         let _span = info_span!("sync_gpu_scene").entered();
+        self.resolve_all_geometry(scene, slots)?;
+        self.gpu_scene.rebuild(scene, &self.frame, &self.geometry);
+        self.gpu_scene_generation = Some(self.collection_generation);
+        self.stats.gpu_scene_rebuilds += 1;
+        Ok(())
+    }
+
+    /// Gives every mesh the collection names (LODs included) its slots.
+    fn resolve_all_geometry(&mut self, scene: &Scene, slots: &mut SlotAllocators) -> Result<(), PrepError> {
         for entry in &self.frame.renderables {
             let (start, count) = entry.lods;
             let lods = &self.frame.lod_levels[start as usize..(start + count) as usize];
@@ -582,9 +608,6 @@ impl ScenePrep {
                 }
             }
         }
-        self.gpu_scene.rebuild(scene, &self.frame, &self.geometry);
-        self.gpu_scene_generation = Some(self.collection_generation);
-        self.stats.gpu_scene_rebuilds += 1;
         Ok(())
     }
 

@@ -390,6 +390,8 @@ pub struct Renderer {
     textured_materials: bool,
     /// GPU-driven visibility, where the device can run it.
     visibility: Option<GpuVisibility>,
+    /// The path-traced reference's tracer, made when a view first asks.
+    reference: Option<oxygen_passes::ReferenceTracer>,
     /// The views' default visibility path.
     default_visibility: Visibility,
     /// Windows views are shown in.
@@ -515,6 +517,7 @@ impl Renderer {
             specialize_shaders: options.specialize_shaders,
             textured_materials: true,
             visibility: gpu_visibility,
+            reference: None,
             default_visibility,
             windows: BTreeMap::new(),
             shown_views: BTreeMap::new(),
@@ -534,6 +537,12 @@ impl Renderer {
     /// estimates), where the device runs it.
     pub fn gpu_visibility(&self) -> Option<&GpuVisibility> {
         self.visibility.as_ref()
+    }
+
+    /// Samples per pixel a path-traced view's image holds
+    /// ([`ViewDesc::path_traced`](crate::ViewDesc::path_traced)); 0 for other views.
+    pub fn reference_samples(&self, view: ViewId) -> u32 {
+        self.reference.as_ref().map_or(0, |r| r.samples(view))
     }
 
     /// Whether the device runs the GPU visibility paths.
@@ -727,6 +736,7 @@ impl Renderer {
         let prepare_seconds = prepare_start.elapsed().as_secs_f64();
         let constants_bytes = self.allocate_targets(&plan, time_seconds);
         self.prepare_gpu_visibility(&plan);
+        self.prepare_reference(&plan);
         let uploaded_bytes = self.heap.bytes_written() - heap_bytes_before
             + constants_bytes
             + self.visibility.as_ref().map_or(0, GpuVisibility::uploaded_last_frame);

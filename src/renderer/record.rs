@@ -198,6 +198,7 @@ impl Renderer {
                     textured_materials: self.textured_materials,
                     specialize_shaders: self.specialize_shaders,
                     visibility: self.visibility.as_ref(),
+                    reference: self.reference.as_ref(),
                 },
             ));
         }

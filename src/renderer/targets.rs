@@ -4,7 +4,7 @@
 
 use oxygen_bindless::{CameraConstants, SceneConstantsBuffer};
 use oxygen_core::ViewTargets;
-use oxygen_passes::GpuViewRequest;
+use oxygen_passes::{GpuViewRequest, ReferenceTracer};
 use oxygen_sceneprep::ViewFilter;
 use tracing::info_span;
 
@@ -112,5 +112,16 @@ impl Renderer {
             .collect();
         let scene = self.prep.gpu_scene();
         visibility.prepare(&self.gpu.device, &self.gpu.queue, &self.heap, scene, &requests);
+    }
+
+    /// Creates the path-traced reference's tracer when a view of the frame
+    /// is path traced, and uploads ScenePrep's ray-tracing scene to it.
+    pub(super) fn prepare_reference(&mut self, plan: &FramePlan) {
+        let traced: Vec<_> = plan.views.iter().filter(|v| v.options.ray_scene).map(|v| v.id).collect();
+        if traced.is_empty() && self.reference.is_none() {
+            return;
+        }
+        let tracer = self.reference.get_or_insert_with(|| ReferenceTracer::new(&self.gpu.device, &self.heap));
+        tracer.prepare(&self.gpu.device, &self.gpu.queue, self.prep.ray_scene(), &traced);
     }
 }

@@ -175,7 +175,8 @@ impl TextureHeap {
     pub(crate) fn new(device: &wgpu::Device, queue: &wgpu::Queue, path: TexturePath) -> Self {
         let texture_entry = |binding, dimension, count| wgpu::BindGroupLayoutEntry {
             binding,
-            visibility: wgpu::ShaderStages::FRAGMENT,
+            // Compute too: the path-traced reference samples materials.
+            visibility: wgpu::ShaderStages::FRAGMENT.union(wgpu::ShaderStages::COMPUTE),
             ty: wgpu::BindingType::Texture {
                 sample_type: wgpu::TextureSampleType::Float { filterable: true },
                 view_dimension: dimension,
@@ -185,7 +186,7 @@ impl TextureHeap {
         };
         let sampler_entry = |binding| wgpu::BindGroupLayoutEntry {
             binding,
-            visibility: wgpu::ShaderStages::FRAGMENT,
+            visibility: wgpu::ShaderStages::FRAGMENT.union(wgpu::ShaderStages::COMPUTE),
             ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
             count: None,
         };

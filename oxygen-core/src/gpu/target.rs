@@ -201,11 +201,13 @@ impl ViewTargets {
                     | wgpu::TextureUsages::TEXTURE_BINDING,
                 "colour",
             );
+            // Copy destination: a path-traced view copies its mean in.
             let hdr = make(
                 hdr_format.texture_format(),
                 wgpu::TextureUsages::RENDER_ATTACHMENT
                     | wgpu::TextureUsages::TEXTURE_BINDING
-                    | wgpu::TextureUsages::COPY_SRC,
+                    | wgpu::TextureUsages::COPY_SRC
+                    | wgpu::TextureUsages::COPY_DST,
                 "hdr",
             );
             ColorTargets {

@@ -56,6 +56,10 @@ pub struct ViewPrepOptions {
     /// compute shader per view ([`crate::Visibility`]). On a GPU path the
     /// CPU handles only the transparent draws.
     pub visibility: crate::Visibility,
+    /// The view reads the ray-tracing scene ([`crate::RayScene`], for the
+    /// path-traced reference): ScenePrep keeps it up to date while any
+    /// view of the frame asks for it.
+    pub ray_scene: bool,
 }
 
 impl Default for ViewPrepOptions {
@@ -67,6 +71,7 @@ impl Default for ViewPrepOptions {
             depth_only: false,
             instancing: Instancing::default(),
             visibility: crate::Visibility::Cpu,
+            ray_scene: false,
         }
     }
 }

@@ -1,0 +1,432 @@
+//! The path-traced reference view: Oxygen's ground truth for shading.
+//!
+//! [`ReferenceTracer`] holds the ray-tracing scene on the GPU (uploaded from
+//! ScenePrep's [`oxygen_sceneprep::RayScene`] whenever it was rebuilt), the
+//! tracing pipeline (`reference_trace.wgsl`, which reads the same bindless
+//! domains, camera constants and textures as the raster passes) and, per
+//! view, the running sum of the samples taken so far. [`ReferencePass`]
+//! adds a frame's samples and writes the mean into the view's HDR target, so
+//! the view's tone map is the raster views' tone map.
+//!
+//! Samples accumulate across frames while the view's camera, viewport and
+//! settings and the scene's collection stay the same, and restart from
+//! zero when any of them changes; [`ReferenceTracer::samples`] says how many
+//! the view's image holds. The traversal is a compute shader (a stack per
+//! invocation), which runs on every adapter the project supports; hardware
+//! ray queries are not used.
+
+use std::collections::HashMap;
+use std::sync::Mutex;
+
+use bytemuck::{Pod, Zeroable};
+use oxygen_bindless::{BindlessHeap, DomainKind, INVALID_SLOT, SCENE_CONSTANTS_WGSL};
+use oxygen_core::ViewId;
+use oxygen_sceneprep::{GPU_RECORDS_WGSL, RayScene};
+use tracing::info_span;
+
+use crate::render_context::{CommandRecorder, PassError, RenderContext};
+use crate::render_pass::RenderPass;
+
+/// How a reference view traces.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ReferenceSettings {
+    /// Paths per pixel added each frame.
+    pub samples_per_frame: u32,
+    /// Stop accumulating at this many samples per pixel (the frame then
+    /// traces nothing and keeps its image).
+    pub max_samples: u32,
+    /// Bounces after the first hit (0: direct light only).
+    pub max_bounces: u32,
+    /// Radiance arriving from every direction where a path escapes the
+    /// scene (linear RGB, the lights' units).
+    pub environment: [f32; 3],
+    /// Model the raster pass's light transport instead of global
+    /// illumination: direct light with traced shadows plus the raster's
+    /// constant ambient term, no bounces. For comparing raster views with
+    /// their reference where both model the same thing.
+    pub raster_model: bool,
+}
+
+impl ReferenceSettings {
+    /// Global illumination: 4 samples a frame up to 4096, 8 bounces, the
+    /// raster pass's ambient level (0.03) as the environment.
+    pub const DEFAULT: ReferenceSettings = ReferenceSettings {
+        samples_per_frame: 4,
+        max_samples: 4096,
+        max_bounces: 8,
+        environment: [0.03; 3],
+        raster_model: false,
+    };
+
+    /// The raster pass's light transport, traced: see [`Self::raster_model`].
+    /// The environment is the forward pass's default clear colour, what a
+    /// raster view shows where nothing is drawn.
+    pub const RASTER_MODEL: ReferenceSettings =
+        ReferenceSettings { max_bounces: 0, environment: [0.02, 0.03, 0.05], raster_model: true, ..Self::DEFAULT };
+
+    /// What restarts accumulation when it changes.
+    fn key(&self) -> [u32; 7] {
+        [
+            self.max_bounces,
+            self.environment[0].to_bits(),
+            self.environment[1].to_bits(),
+            self.environment[2].to_bits(),
+            u32::from(self.raster_model),
+            // A new cap continues; more samples per frame continue too.
+            0,
+            0,
+        ]
+    }
+}
+
+impl Default for ReferenceSettings {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct TraceParams {
+    width: u32,
+    height: u32,
+    samples_done: u32,
+    samples_this_frame: u32,
+    max_bounces: u32,
+    flags: u32,
+    tlas_root: u32,
+    seed: u32,
+    environment: [f32; 4],
+}
+
+/// One view's accumulation.
+struct ViewSamples {
+    sum: wgpu::Buffer,
+    output: wgpu::Texture,
+    size: (u32, u32),
+    samples: u32,
+    /// Camera matrices, settings and scene generation of the samples held.
+    key: Option<Vec<u32>>,
+}
+
+/// The scene buffers, the pipeline and every reference view's samples.
+pub struct ReferenceTracer {
+    layout: wgpu::BindGroupLayout,
+    pipeline: wgpu::ComputePipeline,
+    nodes: wgpu::Buffer,
+    words: wgpu::Buffer,
+    instances: wgpu::Buffer,
+    tlas_root: u32,
+    uploaded_generation: Option<u64>,
+    views: Mutex<HashMap<ViewId, ViewSamples>>,
+}
+
+/// The tracer's full WGSL: the heap's declarations, the shared reflectance
+/// model, the tracer.
+pub fn reference_shader_source(textures: oxygen_bindless::TexturePath) -> String {
+    let enables = match textures {
+        oxygen_bindless::TexturePath::BindingArray => "enable wgpu_binding_array;\n",
+        oxygen_bindless::TexturePath::GroupedArrays => "",
+    };
+    let constants = [
+        oxygen_bindless::wgsl_constants(),
+        oxygen_sceneprep::PassMask::wgsl_constants(),
+        oxygen_sceneprep::MaterialRecord::wgsl_constants(),
+        oxygen_sceneprep::PositionalLightRecord::wgsl_constants(),
+    ]
+    .concat();
+    format!(
+        "{enables}{constants}{SCENE_CONSTANTS_WGSL}\n{GPU_RECORDS_WGSL}\n{}\n{}\n{}\n{}",
+        DomainKind::wgsl_bindings(),
+        textures.wgsl(),
+        crate::pipelines::BRDF_WGSL,
+        include_str!("reference_trace.wgsl"),
+    )
+}
+
+fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+fn empty_storage(device: &wgpu::Device, label: &str) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: 32,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+impl ReferenceTracer {
+    /// The pipeline over the heap's layouts, and empty scene buffers.
+    pub fn new(device: &wgpu::Device, heap: &BindlessHeap) -> Self {
+        let _span = info_span!("reference_tracer_new").entered();
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("reference tracer"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+                storage_entry(1, true),
+                storage_entry(2, true),
+                storage_entry(3, true),
+                storage_entry(4, true),
+                storage_entry(5, false),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 6,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::StorageTexture {
+                        access: wgpu::StorageTextureAccess::WriteOnly,
+                        format: wgpu::TextureFormat::Rgba16Float,
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                    },
+                    count: None,
+                },
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("reference tracer"),
+            bind_group_layouts: &[
+                Some(heap.domain_layout()),
+                Some(heap.scene_constants_layout()),
+                Some(heap.texture_layout()),
+                Some(&layout),
+            ],
+            immediate_size: 0,
+        });
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("reference trace"),
+            source: wgpu::ShaderSource::Wgsl(reference_shader_source(heap.texture_path()).into()),
+        });
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("reference trace"),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some("trace_paths"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        ReferenceTracer {
+            layout,
+            pipeline,
+            nodes: empty_storage(device, "reference bvh nodes"),
+            words: empty_storage(device, "reference bvh words"),
+            instances: empty_storage(device, "reference instances"),
+            tlas_root: INVALID_SLOT,
+            uploaded_generation: None,
+            views: Mutex::new(HashMap::new()),
+        }
+    }
+
+    /// Uploads `scene` when it was rebuilt since the last upload, and
+    /// forgets the samples of views not in `views`.
+    pub fn prepare(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, scene: &RayScene, views: &[ViewId]) {
+        if let Ok(mut samples) = self.views.lock() {
+            samples.retain(|id, _| views.contains(id));
+        }
+        if self.uploaded_generation == Some(scene.generation()) {
+            return;
+        }
+        let _span =
+            info_span!("reference_upload", nodes = scene.nodes().len(), instances = scene.instances().len()).entered();
+        let upload = |buffer: &mut wgpu::Buffer, label: &str, bytes: &[u8]| {
+            let size = (bytes.len() as u64).max(32).next_power_of_two();
+            if buffer.size() < size {
+                *buffer = device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size,
+                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                });
+            }
+            if !bytes.is_empty() {
+                queue.write_buffer(buffer, 0, bytes);
+            }
+        };
+        upload(&mut self.nodes, "reference bvh nodes", bytemuck::cast_slice(scene.nodes()));
+        upload(&mut self.words, "reference bvh words", bytemuck::cast_slice(scene.words()));
+        upload(&mut self.instances, "reference instances", bytemuck::cast_slice(scene.instances()));
+        self.tlas_root = scene.tlas_root().unwrap_or(INVALID_SLOT);
+        self.uploaded_generation = Some(scene.generation());
+    }
+
+    /// Samples per pixel in `view`'s image (0 before its first frame).
+    pub fn samples(&self, view: ViewId) -> u32 {
+        self.views.lock().ok().and_then(|v| v.get(&view).map(|s| s.samples)).unwrap_or(0)
+    }
+
+    /// Adds this frame's samples for the context's view and copies the mean
+    /// into its HDR target.
+    fn trace(
+        &self,
+        ctx: &RenderContext<'_>,
+        rec: &mut CommandRecorder,
+        settings: &ReferenceSettings,
+    ) -> Result<(), PassError> {
+        const PASS: &str = "ReferencePass";
+        let color = ctx.color_targets(PASS)?;
+        if color.hdr.format() != wgpu::TextureFormat::Rgba16Float {
+            return Err(PassError::BadInput {
+                pass: PASS,
+                what: format!("needs an Rgba16Float HDR target, the view has {:?}", color.hdr.format()),
+            });
+        }
+        let device = &ctx.gpu.device;
+        let (width, height) = (ctx.view.viewport.x.max(1), ctx.view.viewport.y.max(1));
+        // The camera as the GPU sees it (relative to the render origin),
+        // and where that origin is.
+        let mut key: Vec<u32> = ctx.view.view_projection.to_cols_array().iter().map(|x| x.to_bits()).collect();
+        key.extend(ctx.origin.to_array().iter().flat_map(|x| {
+            let bits = x.to_bits();
+            [bits as u32, (bits >> 32) as u32]
+        }));
+        key.extend_from_slice(&settings.key());
+        key.extend_from_slice(&[width, height]);
+        let generation = self.uploaded_generation.unwrap_or(0);
+        key.extend_from_slice(&[generation as u32, (generation >> 32) as u32]);
+
+        let mut views = self.views.lock().map_err(|_| PassError::Graph("reference tracer state poisoned".into()))?;
+        let state = views.entry(ctx.view.view_id).or_insert_with(|| ViewSamples::new(device, (width, height)));
+        if state.size != (width, height) {
+            *state = ViewSamples::new(device, (width, height));
+        }
+        if state.key.as_ref() != Some(&key) {
+            state.samples = 0;
+            state.key = Some(key);
+        }
+        let this_frame = settings.samples_per_frame.min(settings.max_samples.saturating_sub(state.samples));
+        if this_frame > 0 {
+            let params = TraceParams {
+                width,
+                height,
+                samples_done: state.samples,
+                samples_this_frame: this_frame,
+                max_bounces: if settings.raster_model { 0 } else { settings.max_bounces },
+                flags: u32::from(settings.raster_model),
+                tlas_root: self.tlas_root,
+                seed: 0x6f78_7967,
+                environment: [
+                    finite_or_zero(settings.environment[0]),
+                    finite_or_zero(settings.environment[1]),
+                    finite_or_zero(settings.environment[2]),
+                    0.0,
+                ],
+            };
+            let params_buffer = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("reference params"),
+                size: std::mem::size_of::<TraceParams>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            ctx.gpu.queue.write_buffer(&params_buffer, 0, bytemuck::bytes_of(&params));
+            let output_view = state.output.create_view(&Default::default());
+            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("reference tracer"),
+                layout: &self.layout,
+                entries: &[
+                    wgpu::BindGroupEntry { binding: 0, resource: params_buffer.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 1, resource: self.nodes.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 2, resource: self.words.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 3, resource: self.instances.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 4, resource: ctx.heap.index_buffer().as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 5, resource: state.sum.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 6, resource: wgpu::BindingResource::TextureView(&output_view) },
+                ],
+            });
+            let mut pass = rec.encoder().begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("reference trace"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, ctx.heap.bind_group(), &[]);
+            pass.set_bind_group(1, ctx.scene_constants.bind_group(), &[]);
+            pass.set_bind_group(2, ctx.heap.texture_bind_group(), &[]);
+            pass.set_bind_group(3, &bind_group, &[]);
+            pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
+            drop(pass);
+            state.samples += this_frame;
+        }
+        rec.encoder().copy_texture_to_texture(
+            state.output.as_image_copy(),
+            wgpu::TexelCopyTextureInfo {
+                texture: &color.hdr,
+                mip_level: 0,
+                origin: wgpu::Origin3d { x: 0, y: 0, z: color.hdr_layer },
+                aspect: wgpu::TextureAspect::All,
+            },
+            wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+        );
+        Ok(())
+    }
+}
+
+fn finite_or_zero(x: f32) -> f32 {
+    if x.is_finite() && x > 0.0 { x } else { 0.0 }
+}
+
+impl ViewSamples {
+    fn new(device: &wgpu::Device, size: (u32, u32)) -> Self {
+        ViewSamples {
+            sum: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("reference running sum"),
+                size: u64::from(size.0) * u64::from(size.1) * 16,
+                usage: wgpu::BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            }),
+            output: device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("reference mean"),
+                size: wgpu::Extent3d { width: size.0, height: size.1, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rgba16Float,
+                usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            }),
+            size,
+            samples: 0,
+            key: None,
+        }
+    }
+}
+
+/// Traces a frame's samples for the view ([`ReferenceTracer`]) and writes
+/// the mean into its HDR target. Needs the renderer's tracer (a view
+/// registered as path traced).
+pub struct ReferencePass {
+    /// How to trace.
+    pub settings: ReferenceSettings,
+}
+
+impl RenderPass for ReferencePass {
+    fn name(&self) -> &'static str {
+        "ReferencePass"
+    }
+
+    async fn run(&mut self, ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError> {
+        let _span = info_span!("reference_trace", view = %ctx.view.view_id).entered();
+        let Some(tracer) = ctx.reference else {
+            return Err(PassError::MissingInput {
+                pass: self.name(),
+                input: "ReferenceTracer (register the view as path traced)",
+            });
+        };
+        tracer.trace(ctx, rec, &self.settings)
+    }
+}
