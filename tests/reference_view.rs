@@ -324,3 +324,38 @@ fn the_raster_view_and_its_traced_reference_agree_on_direct_light() {
     assert!(fraction > 0.93, "only {:.1} % of pixels agree within 5 %", 100.0 * fraction);
     assert!(mean < 0.02, "mean relative error {mean}");
 }
+
+#[test]
+fn samples_accumulate_until_the_view_or_the_scene_changes() {
+    let mut scene = sphere_scene(Material::opaque("ball", Vec4::new(0.7, 0.7, 0.7, 1.0)));
+    oxygen_demo::add_default_sun(&mut scene);
+    let mut renderer = gpu_renderer();
+    let settings = ReferenceSettings { samples_per_frame: 2, max_samples: 6, ..ReferenceSettings::DEFAULT };
+    // A camera the test can move: the eye's x, shared with the resolver.
+    let eye_x = std::sync::Arc::new(std::sync::Mutex::new(0.0f32));
+    let shared = std::sync::Arc::clone(&eye_x);
+    let camera = move |ctx: &ViewContext, scene: &Scene| {
+        let x = *shared.lock().unwrap();
+        look_at(Vec3::new(x, 0.0, 4.0), Vec3::ZERO, 8, 40.0).resolve(ctx, scene)
+    };
+    let view = renderer
+        .register_view(ViewDesc::new(camera).path_traced(), ReferenceGraph { settings, exposure: 1.0 })
+        .unwrap();
+    let mut counts = Vec::new();
+    for _ in 0..4 {
+        renderer.render_frame(&scene).unwrap();
+        counts.push(renderer.reference_samples(view));
+    }
+    assert_eq!(counts, [2, 4, 6, 6], "two a frame up to the cap of 6");
+    // The camera moves: start over.
+    *eye_x.lock().unwrap() = 0.5;
+    renderer.render_frame(&scene).unwrap();
+    assert_eq!(renderer.reference_samples(view), 2);
+    renderer.render_frame(&scene).unwrap();
+    assert_eq!(renderer.reference_samples(view), 4);
+    // The scene changes (the sphere moves): start over.
+    let node = scene.nodes().next().map(|(key, _)| key).unwrap();
+    scene.set_local_transform(node, Transform::from_translation(Vec3::new(0.0, 0.2, 0.0))).unwrap();
+    renderer.render_frame(&scene).unwrap();
+    assert_eq!(renderer.reference_samples(view), 2);
+}

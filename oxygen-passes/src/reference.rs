@@ -64,17 +64,15 @@ impl ReferenceSettings {
     pub const RASTER_MODEL: ReferenceSettings =
         ReferenceSettings { max_bounces: 0, environment: [0.02, 0.03, 0.05], raster_model: true, ..Self::DEFAULT };
 
-    /// What restarts accumulation when it changes.
-    fn key(&self) -> [u32; 7] {
+    /// What restarts accumulation when it changes (a new cap or a new
+    /// number of samples per frame continues the same mean).
+    fn key(&self) -> [u32; 5] {
         [
             self.max_bounces,
             self.environment[0].to_bits(),
             self.environment[1].to_bits(),
             self.environment[2].to_bits(),
             u32::from(self.raster_model),
-            // A new cap continues; more samples per frame continue too.
-            0,
-            0,
         ]
     }
 }
