@@ -5,7 +5,7 @@
 //! instance world boxes (top level), so it takes boxes, never triangles.
 //!
 //! The build is a top-down binned surface-area-heuristic (SAH) split with
-//! [`BINS`] bins along the axis of largest centroid extent, partitioning an
+//! 16 bins (`BINS`) along the axis of largest centroid extent, partitioning an
 //! index array in place, so a build is `O(n log n)` and allocation is linear.
 //! The result is flattened into 32-byte [`BvhNode`]s whose siblings sit next
 //! to each other, which lets the shader store one index per interior node.
@@ -79,7 +79,7 @@ impl BvhNode {
 /// A flattened bounding volume hierarchy over a list of boxes.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Bvh {
-    /// nodes[0] is the root. Empty when built from no boxes.
+    /// `nodes[0]` is the root. Empty when built from no boxes.
     pub nodes: Vec<BvhNode>,
     /// Primitive indices (into the boxes given to `build`) in leaf order.
     pub order: Vec<u32>,
