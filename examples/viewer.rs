@@ -108,17 +108,21 @@ fn parse_args(mut args: impl Iterator<Item = String>) -> Result<Args, String> {
 struct CameraState {
     orbit: OrbitCamera,
     fly: bool,
-    eye: Vec3,
+    eye: DVec3,
 }
 
 impl CameraState {
     fn forward(&self) -> Vec3 {
         self.orbit.forward()
     }
-    fn resolver(&self) -> LookAtResolver {
+    fn resolver(&self) -> DLookAtResolver {
         // The window's rectangle decides the size.
         let orbit = self.orbit.resolver(UVec2::new(16, 9));
-        if self.fly { LookAtResolver { eye: self.eye, target: self.eye + self.forward(), ..orbit } } else { orbit }
+        if self.fly {
+            DLookAtResolver { eye: self.eye, target: self.eye + self.forward().as_dvec3(), ..orbit }
+        } else {
+            orbit
+        }
     }
 }
 
@@ -144,7 +148,9 @@ struct Viewer {
     args: Args,
     scene: Scene,
     cameras: Vec<GltfCamera>,
-    bounds: oxygen::core::Aabb,
+    /// The scene's bounds in f64: framing does not depend on where the
+    /// scene sits.
+    bounds: DAabb,
     camera: Arc<Mutex<CameraState>>,
     renderer: Option<Renderer>,
     window: Option<Arc<Window>>,
@@ -177,10 +183,10 @@ impl Viewer {
             ViewDesc::new(SharedCamera(Arc::clone(&self.camera))).shown_in(window, rect).with_sun_shadows(cascades)
         };
         let center = self.bounds.center();
-        let radius = self.bounds.half_extents().length().max(1e-3);
-        let orbit = |direction: Vec3, up: Vec3| LookAtResolver {
+        let radius = (self.bounds.half_extents().length() as f32).max(1e-3);
+        let orbit = |direction: Vec3, up: Vec3| DLookAtResolver {
             camera: Camera::perspective(45f32.to_radians(), radius * 0.01, None),
-            eye: center + direction.normalize() * radius * 2.2,
+            eye: center + (direction.normalize() * radius * 2.2).as_dvec3(),
             target: center,
             up,
             viewport: UVec2::new(16, 9),
@@ -365,18 +371,18 @@ impl ApplicationHandler for Viewer {
 
 impl Viewer {
     fn key(&mut self, code: KeyCode) -> Result<(), RenderError> {
-        let step = self.bounds.half_extents().length().max(1e-3) * 0.05;
+        let step = (self.bounds.half_extents().length() as f32 * 0.05).max(1e-4);
         {
             let mut camera = self.camera.lock().unwrap_or_else(|e| e.into_inner());
             let forward = camera.forward();
             let right = forward.cross(Vec3::Y).normalize_or_zero();
             match code {
-                KeyCode::KeyW => camera.eye += forward * step,
-                KeyCode::KeyS => camera.eye -= forward * step,
-                KeyCode::KeyA => camera.eye -= right * step,
-                KeyCode::KeyD => camera.eye += right * step,
-                KeyCode::KeyQ => camera.eye -= Vec3::Y * step,
-                KeyCode::KeyE => camera.eye += Vec3::Y * step,
+                KeyCode::KeyW => camera.eye += (forward * step).as_dvec3(),
+                KeyCode::KeyS => camera.eye -= (forward * step).as_dvec3(),
+                KeyCode::KeyA => camera.eye -= (right * step).as_dvec3(),
+                KeyCode::KeyD => camera.eye += (right * step).as_dvec3(),
+                KeyCode::KeyQ => camera.eye -= DVec3::Y * f64::from(step),
+                KeyCode::KeyE => camera.eye += DVec3::Y * f64::from(step),
                 KeyCode::KeyF => {
                     if !camera.fly {
                         camera.eye = camera.orbit.eye();
@@ -444,11 +450,11 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
     for note in &import.warnings {
         println!("note: {note}");
     }
-    let bounds = import.bounds.ok_or("the scene has nothing to draw")?;
+    let bounds = import.precise_bounds.ok_or("the scene has nothing to draw")?;
     if import.lights == 0 {
         oxygen_demo::add_default_sun(&mut scene);
     }
-    let orbit = OrbitCamera::framing(bounds.center(), bounds.half_extents());
+    let orbit = OrbitCamera::framing(&bounds);
     let camera = CameraState { orbit, fly: false, eye: orbit.eye() };
     let event_loop = EventLoop::new()?;
     event_loop.set_control_flow(ControlFlow::Poll);

@@ -98,11 +98,11 @@ pub mod prelude {
     pub use crate::{PresentMode, WindowId, WindowRect};
     pub use crate::{ProbeUpdate, ReflectionProbe, ViewRole};
     pub use oxygen_bindless::TexturePath;
-    pub use oxygen_core::glam::{Mat4, Quat, UVec2, Vec2, Vec3, Vec4};
+    pub use oxygen_core::glam::{DVec3, Mat4, Quat, UVec2, Vec2, Vec3, Vec4};
     pub use oxygen_core::{
-        AlphaMode, Camera, CameraError, CascadeSettings, Geometry, GeometryHandle, HdrFormat, Light, LightKind,
-        LookAtResolver, Material, MaterialHandle, NodeFlags, NodeKey, Projection, Renderable, ResolvedView, Scene,
-        Transform, ViewContext, ViewError, ViewId, ViewResolver,
+        AlphaMode, Camera, CameraError, CascadeSettings, DAabb, DLookAtResolver, Geometry, GeometryHandle, HdrFormat,
+        Light, LightKind, LookAtResolver, Material, MaterialHandle, NodeFlags, NodeKey, Projection, Renderable,
+        ResolvedView, Scene, Transform, ViewContext, ViewError, ViewId, ViewResolver,
     };
     pub use oxygen_passes::{
         CommandRecorder, DrawPath, ForwardLitConfig, MeshPass, Output, PassError, PrePassEstimate, ReferenceSettings,

@@ -69,8 +69,8 @@ fn the_viewer_presents_in_a_window_what_the_headless_renderer_renders() {
     if import.lights == 0 {
         oxygen_demo::add_default_sun(&mut scene);
     }
-    let bounds = import.bounds.unwrap();
-    let camera = OrbitCamera::framing(bounds.center(), bounds.half_extents()).resolver(size);
+    let bounds = import.precise_bounds.unwrap();
+    let camera = OrbitCamera::framing(&bounds).resolver(size);
     let mut renderer = gpu_renderer_with(RendererOptions::default());
     let desc = ViewDesc::new(camera).with_sun_shadows(oxygen_demo::viewer_cascades());
     let view = renderer.register_view(desc, standard_render_graph).unwrap();

@@ -37,7 +37,7 @@ pub use geometry::{Geometry, GeometryError, Submesh, Vertex};
 pub use gpu::{ColorTargets, GpuContext, GpuError, GpuOptions, HdrFormat, ViewTargets};
 pub use light::{Light, LightKind, Mobility};
 pub use material::{AlphaMode, Material};
-pub use math::{Aabb, Frustum, Plane, Sphere};
+pub use math::{Aabb, DAabb, Frustum, Plane, Sphere};
 pub use output::{Depth, HdrColor, Output, OutputSource, ProbeCube, ProbeId, ShadowMap};
 pub use scene::{
     GeometryHandle, LodLevel, MaterialHandle, Node, NodeFlags, NodeKey, Renderable, Scene, SceneError, TextureHandle,
@@ -45,7 +45,7 @@ pub use scene::{
 };
 pub use shadow::{Cascade, CascadeResolver, CascadeSettings, cascade_splits, fit_cascade};
 pub use texture::{ColorSpace, Filter, Sampling, TextureError, TextureImage, Wrap};
-pub use view::{LookAtResolver, ResolvedView, ViewContext, ViewError, ViewId, ViewResolver};
+pub use view::{DLookAtResolver, LookAtResolver, ResolvedView, ViewContext, ViewError, ViewId, ViewResolver};
 
 /// Re-exported so that users name the same `glam` types Oxygen uses.
 pub use glam;

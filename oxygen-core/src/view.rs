@@ -194,7 +194,9 @@ impl ResolvedView {
             projection,
             view_projection,
             inverse_view_projection,
-            frustum: Frustum::from_view_projection(&view_projection),
+            // In f64: the f32 view-projection of a camera far from the
+            // origin would misplace the planes by units.
+            frustum: Frustum::from_view_projection_f64(&(projection.as_dmat4() * world_to_view)),
             viewport,
             near,
             far,
@@ -338,9 +340,76 @@ impl ViewResolver for LookAtResolver {
     }
 }
 
+/// A look-at camera whose eye and target are f64 world positions: for
+/// cameras far from the origin, where f32 positions would move the view by
+/// whole units (the view matrix is built in f64, like every world matrix,
+/// and only the camera-relative result is rounded to f32).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DLookAtResolver {
+    /// Projection.
+    pub camera: Camera,
+    /// Eye position.
+    pub eye: glam::DVec3,
+    /// Point looked at.
+    pub target: glam::DVec3,
+    /// Up direction.
+    pub up: Vec3,
+    /// Viewport size in pixels.
+    pub viewport: UVec2,
+}
+
+impl ViewResolver for DLookAtResolver {
+    fn resolve(&self, ctx: &ViewContext, _scene: &Scene) -> Result<ResolvedView, ViewError> {
+        let view_id = ctx.view_id;
+        let forward = self.target - self.eye;
+        let degenerate = || ViewError::DegenerateLookAt {
+            view: view_id,
+            eye: self.eye.as_vec3(),
+            target: self.target.as_vec3(),
+            up: self.up,
+        };
+        if !(forward.length_squared() > 0.0)
+            || !(forward.normalize().cross(self.up.as_dvec3()).length_squared() > 1e-12)
+            || !self.eye.is_finite()
+            || !self.target.is_finite()
+        {
+            return Err(degenerate());
+        }
+        if self.viewport.x == 0 || self.viewport.y == 0 {
+            return Err(ViewError::EmptyViewport { view: view_id, width: self.viewport.x, height: self.viewport.y });
+        }
+        let aspect = self.viewport.x as f32 / self.viewport.y as f32;
+        let projection =
+            self.camera.projection_matrix(aspect).map_err(|source| ViewError::Camera { view: view_id, source })?;
+        let view = DMat4::look_at_rh(self.eye, self.target, self.up.as_dvec3());
+        let (near, far) = self.camera.depth_range();
+        ResolvedView::new_f64(view_id, view, projection, self.viewport, near, far)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_f64_look_at_thirty_million_units_out_sees_what_it_sees_at_the_origin() {
+        let camera = |offset: glam::DVec3| DLookAtResolver {
+            camera: Camera::perspective(1.0, 0.01, None),
+            eye: offset + glam::DVec3::new(0.3, 0.2, 1.0),
+            target: offset,
+            up: Vec3::Y,
+            viewport: UVec2::new(64, 64),
+        };
+        let near = camera(glam::DVec3::ZERO).resolve(&ctx(), &Scene::new()).unwrap();
+        let far = camera(glam::DVec3::new(3e7, -1e6, 3e7)).resolve(&ctx(), &Scene::new()).unwrap();
+        // The same rotation, and the same eye relative to the target.
+        let rotation = |v: &ResolvedView| v.world_to_view.to_cols_array()[..11].to_vec();
+        for (a, b) in rotation(&near).iter().zip(rotation(&far)) {
+            assert!((a - b).abs() < 1e-9, "{a} against {b}");
+        }
+        let eye = |v: &ResolvedView, offset: glam::DVec3| v.world_to_view.inverse().w_axis.truncate() - offset;
+        assert!((eye(&near, glam::DVec3::ZERO) - eye(&far, glam::DVec3::new(3e7, -1e6, 3e7))).length() < 1e-6);
+    }
 
     fn ctx() -> ViewContext {
         ViewContext { view_id: ViewId(3), frame_index: 1, time_seconds: 0.0 }

@@ -4,10 +4,11 @@
 //! library's public surface.
 
 #![warn(missing_docs)]
-use glam::{Quat, UVec2, Vec3, Vec4};
+use glam::{DVec3, Quat, UVec2, Vec3, Vec4};
 
 use oxygen_core::{
-    AlphaMode, Camera, Geometry, Light, LookAtResolver, Material, NodeKey, Renderable, Scene, Transform,
+    AlphaMode, Camera, DAabb, DLookAtResolver, Geometry, Light, LookAtResolver, Material, NodeKey, Renderable, Scene,
+    Transform,
 };
 
 /// The scene of the `multi_view` example and the walking-skeleton tests.
@@ -148,10 +149,13 @@ pub fn floor_with_box(roughness: f32) -> Scene {
 
 /// The interactive viewer's orbit camera (`examples/viewer.rs`), here so
 /// that a test renders headlessly exactly the view the viewer presents.
+/// The target is an f64 world position, so that the framing does not
+/// depend on where the scene sits (thirty million units out an f32 target
+/// is two units off).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct OrbitCamera {
     /// The point orbited.
-    pub target: Vec3,
+    pub target: DVec3,
     /// Angle around +Y, radians.
     pub yaw: f32,
     /// Angle above the horizon, radians.
@@ -165,11 +169,17 @@ pub struct OrbitCamera {
 }
 
 impl OrbitCamera {
-    /// A camera framing a box of `center` and `half_extents` from above
-    /// and to the side.
-    pub fn framing(center: Vec3, half_extents: Vec3) -> Self {
-        let radius = half_extents.length().max(1e-3);
-        OrbitCamera { target: center, yaw: -1.2, pitch: 0.35, distance: radius * 2.5, near: radius * 0.01, fov_y: 0.87 }
+    /// A camera framing `bounds` from above and to the side.
+    pub fn framing(bounds: &DAabb) -> Self {
+        let radius = (bounds.half_extents().length() as f32).max(1e-3);
+        OrbitCamera {
+            target: bounds.center(),
+            yaw: -1.2,
+            pitch: 0.35,
+            distance: radius * 2.5,
+            near: radius * 0.01,
+            fov_y: 0.87,
+        }
     }
 
     /// The unit direction the camera looks along.
@@ -178,13 +188,13 @@ impl OrbitCamera {
     }
 
     /// Where the eye is.
-    pub fn eye(&self) -> Vec3 {
-        self.target - self.forward() * self.distance
+    pub fn eye(&self) -> DVec3 {
+        self.target - (self.forward() * self.distance).as_dvec3()
     }
 
     /// A look-at resolver of `viewport` for this camera.
-    pub fn resolver(&self, viewport: UVec2) -> LookAtResolver {
-        LookAtResolver {
+    pub fn resolver(&self, viewport: UVec2) -> DLookAtResolver {
+        DLookAtResolver {
             camera: Camera::perspective(self.fov_y, self.near, None),
             eye: self.eye(),
             target: self.target,

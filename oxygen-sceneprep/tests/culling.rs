@@ -87,3 +87,80 @@ fn culling_keeps_objects_straddling_a_plane() {
         assert_eq!(visible_nodes(&scene, cull), ids, "{cull:?}");
     }
 }
+
+/// Property (seeded): ten million units out, where f32 steps by a whole
+/// unit, a cube with any corner strictly inside the frustum (computed here
+/// in f64 from the eye and the target, independently of ScenePrep) is never
+/// culled: world bounds are composed in f64 and rounded outward.
+#[test]
+fn culling_never_drops_a_visible_cube_ten_million_units_out() {
+    use glam::DVec3;
+    use oxygen_core::DLookAtResolver;
+    let mut state = 0x2545_F491_4F6C_DD1Du64;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    };
+    let origin = DVec3::new(1.0e7, -1.0e7, 1.0e7);
+    let mut checked = 0;
+    for _ in 0..12 {
+        let mut scene = Scene::new();
+        let root = scene.add_node("far", Transform::from_translation(origin.as_vec3()));
+        let cube = scene.add_geometry(Geometry::cube(0.3));
+        let material = scene.add_material(Material::opaque("m", Vec4::ONE));
+        let mut centres = Vec::new();
+        for i in 0..400 {
+            let offset = Vec3::new(next() as f32 * 30.0, next() as f32 * 30.0, next() as f32 * 30.0);
+            let node = scene.add_child(root, format!("c{i}"), Transform::from_translation(offset)).unwrap();
+            scene.set_renderable(node, Renderable { geometry: cube, materials: vec![material] }).unwrap();
+            centres.push((node_index(node), origin + offset.as_dvec3()));
+        }
+        let eye = origin + DVec3::new(next() * 5.0, next() * 5.0, next() * 5.0);
+        let target = origin + DVec3::new(next() * 20.0, next() * 20.0, next() * 20.0);
+        let resolver = DLookAtResolver {
+            camera: Camera::perspective(90f32.to_radians(), 0.5, Some(80.0)),
+            eye,
+            target,
+            up: Vec3::Y,
+            viewport: UVec2::new(64, 64),
+        };
+        let view =
+            resolver.resolve(&ViewContext { view_id: ViewId(0), frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
+        let mut prep = ScenePrep::new();
+        let frames = prep
+            .prepare(
+                &scene,
+                &[ViewRequest { view: &view, options: ViewPrepOptions::default() }],
+                &mut SlotAllocators::default(),
+            )
+            .unwrap();
+        let kept: std::collections::HashSet<u32> = frames[0].draws().iter().map(|d| d.node_id).collect();
+        // The frustum in f64: 90° both ways, near 0.5, far 80.
+        let forward = (target - eye).normalize();
+        let right = forward.cross(DVec3::Y).normalize();
+        let up = right.cross(forward);
+        let inside = |p: DVec3| {
+            let d = p - eye;
+            let (x, y, z) = (d.dot(right), d.dot(up), d.dot(forward));
+            let margin = 1e-4;
+            z > 0.5 + margin && z < 80.0 - margin && x.abs() < z - margin && y.abs() < z - margin
+        };
+        for (id, centre) in centres {
+            let corners = (0..8).map(|k| {
+                centre
+                    + DVec3::new(
+                        if k & 1 == 0 { -0.15 } else { 0.15 },
+                        if k & 2 == 0 { -0.15 } else { 0.15 },
+                        if k & 4 == 0 { -0.15 } else { 0.15 },
+                    )
+            });
+            if corners.clone().any(inside) {
+                checked += 1;
+                assert!(kept.contains(&id), "cube {id} at {centre:?} is visible from {eye:?} but was culled");
+            }
+        }
+    }
+    assert!(checked > 200, "only {checked} visible cubes checked");
+}

@@ -271,8 +271,13 @@ pub struct GltfImport {
     pub lights: usize,
     /// Renderable nodes added.
     pub renderables: usize,
-    /// World-space bounds of every imported renderable with finite bounds.
+    /// World-space bounds of every imported renderable with finite bounds,
+    /// in f32, rounded outward from [`GltfImport::precise_bounds`].
     pub bounds: Option<Aabb>,
+    /// The same bounds in f64: what to frame a camera on when the scene may
+    /// sit far from the origin (the f32 corners are whole units off thirty
+    /// million units out).
+    pub precise_bounds: Option<oxygen_core::DAabb>,
     /// What was skipped or approximated, one line each.
     pub warnings: Vec<String>,
     /// Bytes the import charged to [`ImportLimits::max_total_bytes`]: the
@@ -559,12 +564,13 @@ impl Importer<'_> {
             && let Some((geometry, materials)) = self.mesh(scene, mesh.value())?
         {
             if let Some(g) = scene.geometry(geometry) {
-                let bounds = g.local_aabb().transformed(&world.as_mat4());
+                // In f64: a model placed a million units out keeps its
+                // bounds to the millimetre (f32 would round them by units).
+                let bounds = oxygen_core::DAabb::transformed(&g.local_aabb(), &world);
                 if bounds.is_finite() {
-                    self.out.bounds = Some(match self.out.bounds {
-                        Some(b) => Aabb::new(b.min.min(bounds.min), b.max.max(bounds.max)),
-                        None => bounds,
-                    });
+                    let precise = self.out.precise_bounds.map_or(bounds, |b| b.union(bounds));
+                    self.out.precise_bounds = Some(precise);
+                    self.out.bounds = Some(precise.to_f32_outward());
                 } else {
                     self.out.warnings.push(format!("node '{name}': non-finite bounds, left out of the scene bounds"));
                 }

@@ -1,6 +1,6 @@
 //! Axis-aligned bounding boxes.
 
-use glam::{Mat4, Vec3};
+use glam::{DMat4, DVec3, Mat4, Vec3};
 
 /// An axis-aligned bounding box. `min <= max` on every axis for a non-empty box.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -85,9 +85,98 @@ impl Aabb {
     }
 }
 
+/// An axis-aligned bounding box in f64: world bounds far from the origin,
+/// where f32 corners would be rounded by whole units (a million units out
+/// f32 steps by 1/16, thirty million out by 2).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DAabb {
+    /// Smallest corner.
+    pub min: DVec3,
+    /// Largest corner.
+    pub max: DVec3,
+}
+
+impl DAabb {
+    /// A box from two corners, in any order.
+    pub fn new(a: DVec3, b: DVec3) -> Self {
+        DAabb { min: a.min(b), max: a.max(b) }
+    }
+
+    /// `local` (an f32 box, exact in f64) moved by `m`: the box around its
+    /// transformed corners, computed in f64.
+    pub fn transformed(local: &Aabb, m: &DMat4) -> Self {
+        let center = m.transform_point3(local.center().as_dvec3());
+        let e = local.half_extents().as_dvec3();
+        let extent =
+            m.x_axis.truncate().abs() * e.x + m.y_axis.truncate().abs() * e.y + m.z_axis.truncate().abs() * e.z;
+        DAabb { min: center - extent, max: center + extent }
+    }
+
+    /// The smallest box holding both.
+    pub fn union(self, other: DAabb) -> Self {
+        DAabb { min: self.min.min(other.min), max: self.max.max(other.max) }
+    }
+
+    /// Centre point.
+    pub fn center(&self) -> DVec3 {
+        (self.min + self.max) * 0.5
+    }
+
+    /// Half the size along each axis.
+    pub fn half_extents(&self) -> DVec3 {
+        (self.max - self.min) * 0.5
+    }
+
+    /// True when both corners are finite numbers.
+    pub fn is_finite(&self) -> bool {
+        self.min.is_finite() && self.max.is_finite()
+    }
+
+    /// The f32 box that holds this one: each corner rounded outward (a
+    /// corner that f32 rounds inward moves one step out), so culling with
+    /// it never drops what the f64 box would keep.
+    pub fn to_f32_outward(&self) -> Aabb {
+        let down = |x: f64| {
+            let f = x as f32;
+            if f64::from(f) > x { f.next_down() } else { f }
+        };
+        let up = |x: f64| {
+            let f = x as f32;
+            if f64::from(f) < x { f.next_up() } else { f }
+        };
+        Aabb {
+            min: Vec3::new(down(self.min.x), down(self.min.y), down(self.min.z)),
+            max: Vec3::new(up(self.max.x), up(self.max.y), up(self.max.z)),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn f64_boxes_round_outward_to_f32_far_from_the_origin() {
+        // Seeded corners 1e7 out, where f32 steps by a whole unit.
+        let mut state = 0x9E37_79B9_7F4A_7C15u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..10_000 {
+            let a = DVec3::new(1e7 + next() * 100.0, -3e7 + next() * 100.0, next() * 1e-3);
+            let b = a + DVec3::new(next(), next(), next()) * 0.5;
+            let exact = DAabb::new(a, b);
+            let rounded = exact.to_f32_outward();
+            assert!(rounded.min.as_dvec3().cmple(exact.min).all(), "{rounded:?} loses the minimum of {exact:?}");
+            assert!(rounded.max.as_dvec3().cmpge(exact.max).all(), "{rounded:?} loses the maximum of {exact:?}");
+            // And by at most one f32 step each way.
+            let step = DVec3::splat(4.0);
+            assert!((exact.min - rounded.min.as_dvec3()).cmple(step).all());
+        }
+    }
 
     #[test]
     fn transformed_box_holds_every_transformed_corner() {

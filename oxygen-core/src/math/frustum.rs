@@ -7,7 +7,7 @@
 //! near planes respectively. An infinite far plane yields a degenerate
 //! `row2` (zero normal); it is replaced by a plane that keeps everything.
 
-use glam::{Mat4, Vec3, Vec4};
+use glam::{DMat4, DVec4, Mat4, Vec3, Vec4};
 
 use super::{Aabb, Sphere};
 
@@ -31,6 +31,22 @@ impl Plane {
             return Plane::KEEP_ALL;
         }
         Plane { normal: v.truncate() / len, d: v.w / len }
+    }
+
+    /// Normalizes `(a, b, c, d)` in f64, then rounds to f32 and moves the
+    /// plane outward by a bound on the f32 error of testing a point near
+    /// it: the rounding of `d` and of `dot(normal, p)` for points about
+    /// `|d|` from the origin (eight f32 epsilons of `|d| + 1`). A thousandth
+    /// of a unit at 1e4, ten units ten million units out: never culling
+    /// what is inside, at the price of keeping a sliver outside.
+    fn from_row_f64(v: DVec4) -> Plane {
+        let len = v.truncate().length();
+        if !(len > 1e-12) || !len.is_finite() {
+            return Plane::KEEP_ALL;
+        }
+        let d = v.w / len;
+        let slack = 8.0 * f64::from(f32::EPSILON) * (d.abs() + 1.0);
+        Plane { normal: (v.truncate() / len).as_vec3(), d: (d + slack) as f32 }
     }
 
     /// Signed distance from the plane, positive inside.
@@ -78,6 +94,25 @@ impl Frustum {
             let p = Vec3::select(plane.normal.cmpge(Vec3::ZERO), aabb.max, aabb.min);
             plane.distance(p) >= 0.0
         })
+    }
+
+    /// The frustum of `projection × world_to_view`, extracted in f64 and
+    /// rounded outward ([`Plane`]'s f64 path): for views far from the
+    /// origin, whose f32 view-projection would place the planes a unit or
+    /// more off.
+    pub fn from_view_projection_f64(view_projection: &DMat4) -> Self {
+        let m = view_projection.transpose();
+        let (r0, r1, r2, r3) = (m.x_axis, m.y_axis, m.z_axis, m.w_axis);
+        Frustum {
+            planes: [
+                Plane::from_row_f64(r3 + r0),
+                Plane::from_row_f64(r3 - r0),
+                Plane::from_row_f64(r3 + r1),
+                Plane::from_row_f64(r3 - r1),
+                Plane::from_row_f64(r3 - r2),
+                Plane::from_row_f64(r2),
+            ],
+        }
     }
 
     /// Conservative sphere test: cheaper and looser than [`Self::intersects_aabb`].

@@ -9,6 +9,6 @@ mod frustum;
 pub mod projection;
 mod sphere;
 
-pub use aabb::Aabb;
+pub use aabb::{Aabb, DAabb};
 pub use frustum::{Frustum, Plane};
 pub use sphere::Sphere;

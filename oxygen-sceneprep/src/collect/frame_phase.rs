@@ -261,7 +261,10 @@ impl FrameCollection {
                 warn!(node = %node.name, "skipping renderable whose geometry was removed");
                 continue;
             };
-            let world_aabb = geometry.local_aabb().transformed(&world);
+            // In f64 and rounded outward: far from the origin the f32
+            // matrix and corners would round the box inward by up to a
+            // unit, and culling must never lose what it bounds.
+            let world_aabb = oxygen_core::DAabb::transformed(&geometry.local_aabb(), &world64).to_f32_outward();
             if !world_aabb.is_finite() {
                 warn!(node = %node.name, "skipping renderable with non-finite world bounds");
                 self.skip(key, &node.name, "non-finite world bounds");

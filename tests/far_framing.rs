@@ -1,0 +1,106 @@
+//! A model wrapped in a node a million or thirty million units from the
+//! origin looks, through the viewer's framing camera, exactly as it does at
+//! the origin: its bounds are kept in f64 (`GltfImport::precise_bounds`)
+//! and the orbit camera builds its view in f64 (`DLookAtResolver`). With
+//! the f32 bounds and camera the framing moved by whole units thirty
+//! million out (1–7 % of pixels differed a million out, 12–38 % thirty
+//! million out, in a user's report).
+
+mod support;
+
+use oxygen::import_gltf_slice;
+use oxygen::prelude::*;
+use oxygen_demo::OrbitCamera;
+use support::golden::compare;
+use support::gpu_renderer;
+
+const SIZE: u32 = 96;
+
+/// The shipped GLB with its scene's roots wrapped in one node at `offset`.
+fn wrapped_glb(offset: [f64; 3]) -> Vec<u8> {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/OrientationTest/OrientationTest.glb");
+    let glb = std::fs::read(path).unwrap();
+    let chunk_length = |at: usize| u32::from_le_bytes(glb[at..at + 4].try_into().unwrap()) as usize;
+    let json_length = chunk_length(12);
+    let mut json: serde_json::Value = serde_json::from_slice(&glb[20..20 + json_length]).unwrap();
+    let rest = &glb[20 + json_length..];
+    // A new node holding the default scene's roots.
+    let scene_index = json["scene"].as_u64().unwrap_or(0) as usize;
+    let roots = json["scenes"][scene_index]["nodes"].clone();
+    let nodes = json["nodes"].as_array_mut().unwrap();
+    nodes.push(serde_json::json!({ "name": "far away", "translation": offset, "children": roots }));
+    let wrapper = nodes.len() - 1;
+    json["scenes"][scene_index]["nodes"] = serde_json::json!([wrapper]);
+    let mut text = serde_json::to_vec(&json).unwrap();
+    while !text.len().is_multiple_of(4) {
+        text.push(b' ');
+    }
+    let mut out = Vec::new();
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&((12 + 8 + text.len() + rest.len()) as u32).to_le_bytes());
+    out.extend_from_slice(&(text.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&text);
+    out.extend_from_slice(rest);
+    out
+}
+
+/// The viewer's default view of the model at `offset`; with `f32_bounds`,
+/// framed on the f32 bounds instead (the way it was, as a control).
+fn framed_with(offset: [f64; 3], f32_bounds: bool) -> (image::RgbaImage, DAabb) {
+    let mut scene = Scene::new();
+    let import = import_gltf_slice(&mut scene, &wrapped_glb(offset), "wrapped.glb", &ImportOptions::default()).unwrap();
+    oxygen_demo::add_default_sun(&mut scene);
+    let mut bounds = import.precise_bounds.expect("the model has bounds");
+    if f32_bounds {
+        // What f32 corners (rounded to nearest) and an f32 centre give.
+        let b = import.bounds.expect("the model has bounds");
+        let center = b.center().as_dvec3();
+        let half = b.half_extents().as_dvec3();
+        bounds = DAabb::new(center - half, center + half);
+    }
+    let mut renderer = gpu_renderer();
+    let view = renderer
+        .register_view(OrbitCamera::framing(&bounds).resolver(UVec2::splat(SIZE)), standard_render_graph)
+        .unwrap();
+    renderer.render_frame(&scene).unwrap();
+    (renderer.read_color(view).unwrap(), bounds)
+}
+
+fn framed(offset: [f64; 3]) -> (image::RgbaImage, DAabb) {
+    framed_with(offset, false)
+}
+
+#[test]
+fn the_viewer_frames_a_far_model_as_it_frames_it_at_the_origin() {
+    let (at_origin, bounds) = framed([0.0; 3]);
+    for offset in [[1.0e6, 0.0, -1.0e6], [3.0e7, 1.0e3, 3.0e7]] {
+        let (far, far_bounds) = framed(offset);
+        // The bounds moved by the offset, to well under a millimetre.
+        let shift = far_bounds.center() - bounds.center() - DVec3::from_array(offset);
+        assert!(shift.length() < 1e-6, "bounds centre off by {shift:?} at {offset:?}");
+        // Rounded outward, the f32 bounds still hold the f64 ones.
+        let outward = far_bounds.to_f32_outward();
+        assert!(
+            outward.min.as_dvec3().cmple(far_bounds.min).all() && outward.max.as_dvec3().cmpge(far_bounds.max).all()
+        );
+        let comparison = compare(&far, &at_origin, 8);
+        eprintln!(
+            "{offset:?}: {} of {} pixels differ (worst {})",
+            comparison.differing, comparison.total, comparison.worst
+        );
+        assert!(
+            comparison.differing * 200 <= comparison.total,
+            "{offset:?}: {} of {} pixels differ from the model at the origin",
+            comparison.differing,
+            comparison.total
+        );
+    }
+    // The control: framed on f32 bounds thirty million units out, the
+    // picture moves, so the comparison above can fail.
+    let (f32_framed, _) = framed_with([3.0e7, 1.0e3, 3.0e7], true);
+    let control = compare(&f32_framed, &at_origin, 8);
+    eprintln!("f32 framing 3e7 out: {} of {} pixels differ", control.differing, control.total);
+    assert!(control.differing * 200 > control.total, "the f32 framing should have moved the picture");
+}
