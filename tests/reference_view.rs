@@ -124,6 +124,7 @@ fn a_white_furnace_returns_the_environment_times_the_brdf_albedo() {
         max_bounces: 4,
         environment: [1.0; 3],
         raster_model: false,
+        raster_reflections: false,
     };
     for (name, metallic, roughness) in [("white diffuse", 0.0, 1.0), ("rough white metal", 1.0, 0.6)] {
         let material = Material { metallic, roughness, ..Material::opaque(name, Vec4::ONE) };
@@ -159,6 +160,7 @@ fn the_error_falls_as_one_over_the_square_root_of_the_samples() {
         max_bounces: 3,
         environment: [0.2; 3],
         raster_model: false,
+        raster_reflections: false,
     };
     let (reference, _) =
         trace(&scene, camera, ReferenceSettings { samples_per_frame: 256, max_samples: 1024, ..settings(0) }, 4);
@@ -227,6 +229,7 @@ fn an_emissive_square_lights_a_plane_as_the_closed_form_says() {
         max_bounces: 1,
         environment: [0.0; 3],
         raster_model: false,
+        raster_reflections: false,
     };
     for point_x in [0.8f32, 1.5] {
         let target = Vec3::new(point_x, 0.0, 0.0);

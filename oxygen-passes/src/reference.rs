@@ -45,6 +45,10 @@ pub struct ReferenceSettings {
     /// constant ambient term, no bounces. For comparing raster views with
     /// their reference where both model the same thing.
     pub raster_model: bool,
+    /// With `raster_model`: add what a perfect reflection probe would, the
+    /// surroundings' raster-model radiance along the reflection, weighted
+    /// by the raster's environment BRDF. The reference for probe knobs.
+    pub raster_reflections: bool,
 }
 
 impl ReferenceSettings {
@@ -56,6 +60,7 @@ impl ReferenceSettings {
         max_bounces: 8,
         environment: [0.03; 3],
         raster_model: false,
+        raster_reflections: false,
     };
 
     /// The raster pass's light transport, traced: see [`Self::raster_model`].
@@ -64,16 +69,27 @@ impl ReferenceSettings {
     pub const RASTER_MODEL: ReferenceSettings =
         ReferenceSettings { max_bounces: 0, environment: [0.02, 0.03, 0.05], raster_model: true, ..Self::DEFAULT };
 
+    /// The raster model with perfect reflection probes: see
+    /// [`Self::raster_reflections`].
+    pub const RASTER_MODEL_WITH_REFLECTIONS: ReferenceSettings =
+        ReferenceSettings { raster_reflections: true, ..Self::RASTER_MODEL };
+
     /// What restarts accumulation when it changes (a new cap or a new
     /// number of samples per frame continues the same mean).
-    fn key(&self) -> [u32; 5] {
+    fn key(&self) -> [u32; 6] {
         [
             self.max_bounces,
             self.environment[0].to_bits(),
             self.environment[1].to_bits(),
             self.environment[2].to_bits(),
             u32::from(self.raster_model),
+            u32::from(self.raster_reflections),
         ]
+    }
+
+    fn flags(&self) -> u32 {
+        let reflections = self.raster_model && self.raster_reflections;
+        u32::from(self.raster_model) | (u32::from(reflections) << 1)
     }
 }
 
@@ -315,8 +331,14 @@ impl ReferenceTracer {
                 height,
                 samples_done: state.samples,
                 samples_this_frame: this_frame,
-                max_bounces: if settings.raster_model { 0 } else { settings.max_bounces },
-                flags: u32::from(settings.raster_model),
+                // The raster model stops at the first hit, or after the one
+                // reflection of its probe term.
+                max_bounces: if settings.raster_model {
+                    u32::from(settings.raster_reflections)
+                } else {
+                    settings.max_bounces
+                },
+                flags: settings.flags(),
                 tlas_root: self.tlas_root,
                 seed: 0x6f78_7967,
                 environment: [

@@ -56,6 +56,8 @@ struct TraceParams {
 }
 
 const RASTER_MODEL: u32 = 1u;
+// With RASTER_MODEL: also the probe's term, exactly (see radiance()).
+const RASTER_REFLECTIONS: u32 = 2u;
 const STACK_SIZE: u32 = 48u;
 const NO_HIT: u32 = 0xFFFFFFFFu;
 // The raster pass's constant ambient (forward_lit.wgsl's AMBIENT).
@@ -499,7 +501,25 @@ fn radiance(first: Ray, rng: ptr<function, Rng>) -> vec3<f32> {
         if raster_model {
             // forward_lit.wgsl's ambient term, unoccluded, as the raster has it.
             color += throughput * (s.albedo * (1.0 - s.metallic) * RASTER_AMBIENT + mix(vec3<f32>(0.04), s.albedo, s.metallic) * RASTER_AMBIENT);
-            break;
+            // What a perfect reflection probe would add: the surroundings'
+            // raster-model radiance along the reflection (GGX-distributed
+            // around it for a rough surface, as the probe's blurred mips
+            // approximate), weighted by the same environment BRDF. Once:
+            // the probe's faces have no probe themselves.
+            if (params.flags & RASTER_REFLECTIONS) == 0u || bounce > 0u {
+                break;
+            }
+            let frame = tangent_frame(s.normal);
+            let v_local = transpose(frame) * v;
+            let h = frame * sample_vndf(vec3<f32>(v_local.xy, max(v_local.z, 1e-4)), ggx_alpha(s.roughness), next_f32(rng), next_f32(rng));
+            let l = reflect(-v, h);
+            if dot(l, s.geometric) <= 0.0 {
+                break;
+            }
+            let f0 = mix(vec3<f32>(0.04), s.albedo, s.metallic);
+            throughput *= environment_brdf(f0, s.roughness, max(dot(s.normal, v), 0.0));
+            ray = Ray(offset_origin(s, l), l);
+            continue;
         }
         if bounce == params.max_bounces {
             break;
