@@ -29,11 +29,18 @@ pub enum DomainKind {
     /// (light view-projection, atlas rectangle, biases). Declared now so the
     /// layout is fixed; filled once shadow views exist.
     ShadowData,
+    /// `BvhNode`s (32 B) of the path-traced reference's two-level bounding
+    /// volume hierarchy, one range per ray-scene rebuild (compute only).
+    BvhNodes,
+    /// `u32` words of the ray scene: leaf orders and submesh tables.
+    RayWords,
+    /// `RayInstance`s (80 B): one per instance the reference traces.
+    RayInstances,
 }
 
 impl DomainKind {
     /// Every domain, in binding order.
-    pub const ALL: [DomainKind; 11] = [
+    pub const ALL: [DomainKind; 14] = [
         DomainKind::DrawMetadata,
         DomainKind::WorldTransforms,
         DomainKind::NormalTransforms,
@@ -45,6 +52,9 @@ impl DomainKind {
         DomainKind::IndirectArgs,
         DomainKind::TextureLocations,
         DomainKind::ShadowData,
+        DomainKind::BvhNodes,
+        DomainKind::RayWords,
+        DomainKind::RayInstances,
     ];
 
     /// Number of domains.
@@ -71,6 +81,9 @@ impl DomainKind {
             DomainKind::IndirectArgs => 20,
             DomainKind::TextureLocations => 4,
             DomainKind::ShadowData => 96,
+            DomainKind::BvhNodes => 32,
+            DomainKind::RayWords => 4,
+            DomainKind::RayInstances => 80,
         }
     }
 
@@ -97,6 +110,9 @@ impl DomainKind {
             DomainKind::IndirectArgs => ("indirect_args_domain", "u32"),
             DomainKind::TextureLocations => ("texture_location_domain", "u32"),
             DomainKind::ShadowData => ("shadow_domain", "ShadowRecord"),
+            DomainKind::BvhNodes => ("bvh_node_domain", "BvhNode"),
+            DomainKind::RayWords => ("ray_word_domain", "u32"),
+            DomainKind::RayInstances => ("ray_instance_domain", "RayInstance"),
         }
     }
 
@@ -108,6 +124,8 @@ impl DomainKind {
             | DomainKind::WorldTransforms
             | DomainKind::NormalTransforms
             | DomainKind::Vertices => wgpu::ShaderStages::VERTEX.union(wgpu::ShaderStages::COMPUTE),
+            // Only the reference tracer (a compute shader) reads the ray scene.
+            DomainKind::BvhNodes | DomainKind::RayWords | DomainKind::RayInstances => wgpu::ShaderStages::COMPUTE,
             _ => wgpu::ShaderStages::FRAGMENT.union(wgpu::ShaderStages::COMPUTE),
         }
     }
@@ -138,6 +156,9 @@ impl DomainKind {
             DomainKind::IndirectArgs => "indirect-args",
             DomainKind::TextureLocations => "texture-locations",
             DomainKind::ShadowData => "shadow-data",
+            DomainKind::BvhNodes => "bvh-nodes",
+            DomainKind::RayWords => "ray-words",
+            DomainKind::RayInstances => "ray-instances",
         }
     }
 

@@ -19,7 +19,7 @@ use std::collections::HashMap;
 use std::sync::Mutex;
 
 use bytemuck::{Pod, Zeroable};
-use oxygen_bindless::{BindlessHeap, DomainKind, INVALID_SLOT, SCENE_CONSTANTS_WGSL};
+use oxygen_bindless::{Allocation, BindlessError, BindlessHeap, DomainKind, INVALID_SLOT, SCENE_CONSTANTS_WGSL};
 use oxygen_core::ViewId;
 use oxygen_sceneprep::{GPU_RECORDS_WGSL, RayScene};
 use tracing::info_span;
@@ -110,6 +110,10 @@ struct TraceParams {
     flags: u32,
     tlas_root: u32,
     seed: u32,
+    node_base: u32,
+    word_base: u32,
+    instance_base: u32,
+    reserved: u32,
     environment: [f32; 4],
 }
 
@@ -123,13 +127,13 @@ struct ViewSamples {
     key: Option<Vec<u32>>,
 }
 
-/// The scene buffers, the pipeline and every reference view's samples.
+/// The ray scene's ranges in the heap, the pipeline and every reference
+/// view's samples.
 pub struct ReferenceTracer {
     layout: wgpu::BindGroupLayout,
     pipeline: wgpu::ComputePipeline,
-    nodes: wgpu::Buffer,
-    words: wgpu::Buffer,
-    instances: wgpu::Buffer,
+    /// The ray scene's nodes, words and instances in the heap's domains.
+    ranges: Option<[Allocation; 3]>,
     tlas_root: u32,
     uploaded_generation: Option<u64>,
     views: Mutex<HashMap<ViewId, ViewSamples>>,
@@ -171,15 +175,6 @@ fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
-fn empty_storage(device: &wgpu::Device, label: &str) -> wgpu::Buffer {
-    device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some(label),
-        size: 32,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    })
-}
-
 impl ReferenceTracer {
     /// The pipeline over the heap's layouts, and empty scene buffers.
     pub fn new(device: &wgpu::Device, heap: &BindlessHeap) -> Self {
@@ -197,9 +192,6 @@ impl ReferenceTracer {
                     },
                     count: None,
                 },
-                storage_entry(1, true),
-                storage_entry(2, true),
-                storage_entry(3, true),
                 storage_entry(4, true),
                 storage_entry(5, false),
                 wgpu::BindGroupLayoutEntry {
@@ -239,45 +231,50 @@ impl ReferenceTracer {
         ReferenceTracer {
             layout,
             pipeline,
-            nodes: empty_storage(device, "reference bvh nodes"),
-            words: empty_storage(device, "reference bvh words"),
-            instances: empty_storage(device, "reference instances"),
+            ranges: None,
             tlas_root: INVALID_SLOT,
             uploaded_generation: None,
             views: Mutex::new(HashMap::new()),
         }
     }
 
-    /// Uploads `scene` when it was rebuilt since the last upload, and
+    /// Writes `scene` into the heap's ray-scene domains when it was
+    /// rebuilt since the last upload (freeing the previous ranges), and
     /// forgets the samples of views not in `views`.
-    pub fn prepare(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, scene: &RayScene, views: &[ViewId]) {
+    pub fn prepare(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        heap: &mut BindlessHeap,
+        scene: &RayScene,
+        views: &[ViewId],
+    ) -> Result<(), BindlessError> {
         if let Ok(mut samples) = self.views.lock() {
             samples.retain(|id, _| views.contains(id));
         }
         if self.uploaded_generation == Some(scene.generation()) {
-            return;
+            return Ok(());
         }
         let _span =
             info_span!("reference_upload", nodes = scene.nodes().len(), instances = scene.instances().len()).entered();
-        let upload = |buffer: &mut wgpu::Buffer, label: &str, bytes: &[u8]| {
-            let size = (bytes.len() as u64).max(32).next_power_of_two();
-            if buffer.size() < size {
-                *buffer = device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some(label),
-                    size,
-                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                });
+        if let Some(ranges) = self.ranges.take() {
+            for range in ranges {
+                heap.slots.free(range)?;
             }
-            if !bytes.is_empty() {
-                queue.write_buffer(buffer, 0, bytes);
-            }
-        };
-        upload(&mut self.nodes, "reference bvh nodes", bytemuck::cast_slice(scene.nodes()));
-        upload(&mut self.words, "reference bvh words", bytemuck::cast_slice(scene.words()));
-        upload(&mut self.instances, "reference instances", bytemuck::cast_slice(scene.instances()));
+        }
+        // Past u32 the allocation fails as a full domain, with its numbers.
+        let count = |n: usize| u32::try_from(n).unwrap_or(u32::MAX);
+        let nodes = heap.slots.allocate(DomainKind::BvhNodes, count(scene.nodes().len()))?;
+        let words = heap.slots.allocate(DomainKind::RayWords, count(scene.words().len()))?;
+        let instances = heap.slots.allocate(DomainKind::RayInstances, count(scene.instances().len()))?;
+        self.ranges = Some([nodes, words, instances]);
+        heap.ensure_capacity(device, queue);
+        heap.write(queue, &nodes, 0, scene.nodes())?;
+        heap.write(queue, &words, 0, scene.words())?;
+        heap.write(queue, &instances, 0, scene.instances())?;
         self.tlas_root = scene.tlas_root().unwrap_or(INVALID_SLOT);
         self.uploaded_generation = Some(scene.generation());
+        Ok(())
     }
 
     /// Samples per pixel in `view`'s image (0 before its first frame).
@@ -341,6 +338,10 @@ impl ReferenceTracer {
                 flags: settings.flags(),
                 tlas_root: self.tlas_root,
                 seed: 0x6f78_7967,
+                node_base: self.ranges.map_or(0, |r| r[0].start),
+                word_base: self.ranges.map_or(0, |r| r[1].start),
+                instance_base: self.ranges.map_or(0, |r| r[2].start),
+                reserved: 0,
                 environment: [
                     finite_or_zero(settings.environment[0]),
                     finite_or_zero(settings.environment[1]),
@@ -361,9 +362,6 @@ impl ReferenceTracer {
                 layout: &self.layout,
                 entries: &[
                     wgpu::BindGroupEntry { binding: 0, resource: params_buffer.as_entire_binding() },
-                    wgpu::BindGroupEntry { binding: 1, resource: self.nodes.as_entire_binding() },
-                    wgpu::BindGroupEntry { binding: 2, resource: self.words.as_entire_binding() },
-                    wgpu::BindGroupEntry { binding: 3, resource: self.instances.as_entire_binding() },
                     wgpu::BindGroupEntry { binding: 4, resource: ctx.heap.index_buffer().as_entire_binding() },
                     wgpu::BindGroupEntry { binding: 5, resource: state.sum.as_entire_binding() },
                     wgpu::BindGroupEntry { binding: 6, resource: wgpu::BindingResource::TextureView(&output_view) },

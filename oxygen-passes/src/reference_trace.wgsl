@@ -4,11 +4,12 @@
 // camera (group 1) and textures (group 2), and adds them to the view's
 // running sum; the HDR target gets the mean, for the same tone map.
 //
-// Group 3 holds what only the tracer needs: a two-level bounding volume
-// hierarchy (instances on top, one tree per mesh below, all nodes in one
-// array with absolute indices), the instance records, a word array (leaf
-// orders, then each instance's submesh table), the heap's index buffer, the
-// running sum and the output.
+// The ray scene lives in three compute-only domains of the heap (group 0):
+// a two-level bounding volume hierarchy (instances on top, one tree per
+// mesh below, all nodes in one range with indices relative to its start),
+// the instance records, and a word range (leaf orders, then each instance's
+// submesh table). Group 3 holds the tracer's parameters (with the ranges'
+// starts), the heap's index buffer, the view's running sum and the output.
 //
 // Light transport: next-event estimation towards every directional and
 // positional light (a shadow ray each), the BRDF of brdf.wgsl for both the
@@ -18,28 +19,6 @@
 // bounces. With RASTER_MODEL the path stops at the first hit and adds the
 // raster pass's constant ambient term instead: the same light transport as
 // the raster path, shadows traced exactly, for comparing the two.
-
-struct BvhNode {
-    min: vec3<f32>,
-    first: u32,
-    max: vec3<f32>,
-    count: u32,
-}
-
-struct RayInstance {
-    // Rows of the inverse world matrix (world → object), affine.
-    inverse_row0: vec4<f32>,
-    inverse_row1: vec4<f32>,
-    inverse_row2: vec4<f32>,
-    transform_index: u32,
-    blas_root: u32,
-    vertex_slot: u32,
-    index_slot: u32,
-    submesh_first: u32,
-    submesh_count: u32,
-    reserved0: u32,
-    reserved1: u32,
-}
 
 struct TraceParams {
     width: u32,
@@ -52,6 +31,12 @@ struct TraceParams {
     // INVALID_SLOT when the scene has nothing to hit.
     tlas_root: u32,
     seed: u32,
+    // Where the ray scene's ranges start in the heap's domains; the
+    // scene's indices are relative to them.
+    node_base: u32,
+    word_base: u32,
+    instance_base: u32,
+    reserved: u32,
     environment: vec4<f32>,
 }
 
@@ -64,9 +49,6 @@ const NO_HIT: u32 = 0xFFFFFFFFu;
 const RASTER_AMBIENT: f32 = 0.03;
 
 @group(3) @binding(0) var<uniform> params: TraceParams;
-@group(3) @binding(1) var<storage, read> nodes: array<BvhNode>;
-@group(3) @binding(2) var<storage, read> words: array<u32>;
-@group(3) @binding(3) var<storage, read> ray_instances: array<RayInstance>;
 @group(3) @binding(4) var<storage, read> index_words: array<u32>;
 @group(3) @binding(5) var<storage, read_write> running_sum: array<vec4<f32>>;
 @group(3) @binding(6) var output: texture_storage_2d<rgba16float, write>;
@@ -168,7 +150,7 @@ fn ray_triangle(origin: vec3<f32>, dir: vec3<f32>, a: vec3<f32>, b: vec3<f32>, c
 fn submesh_of(instance: RayInstance, triangle: u32) -> u32 {
     for (var s = 0u; s < instance.submesh_count; s++) {
         let entry = instance.submesh_first + 3u * s;
-        if triangle >= words[entry] && triangle < words[entry + 1u] {
+        if triangle >= ray_word_domain[params.word_base + entry] && triangle < ray_word_domain[params.word_base + entry + 1u] {
             return entry;
         }
     }
@@ -209,7 +191,7 @@ fn trace(ray: Ray, t_max: f32, any: bool, salt: u32) -> Hit {
     top = 1u;
     while top > 0u {
         top -= 1u;
-        let node = nodes[stack[top]];
+        let node = bvh_node_domain[params.node_base + stack[top]];
         if box_entry(node, ray.origin, inv_dir, best.t) < 0.0 {
             continue;
         }
@@ -222,8 +204,8 @@ fn trace(ray: Ray, t_max: f32, any: bool, salt: u32) -> Hit {
             continue;
         }
         for (var k = 0u; k < node.count; k++) {
-            let instance_index = words[node.first + k];
-            let instance = ray_instances[instance_index];
+            let instance_index = ray_word_domain[params.word_base + node.first + k];
+            let instance = ray_instance_domain[params.instance_base + instance_index];
             // The ray in the instance's own space: an affine map keeps t.
             let m = mat3x3<f32>(instance.inverse_row0.xyz, instance.inverse_row1.xyz, instance.inverse_row2.xyz);
             let translation = vec3<f32>(instance.inverse_row0.w, instance.inverse_row1.w, instance.inverse_row2.w);
@@ -235,7 +217,7 @@ fn trace(ray: Ray, t_max: f32, any: bool, salt: u32) -> Hit {
             local_stack[0] = instance.blas_root;
             while local_top > 0u {
                 local_top -= 1u;
-                let local = nodes[local_stack[local_top]];
+                let local = bvh_node_domain[params.node_base + local_stack[local_top]];
                 if box_entry(local, origin, local_inv, best.t) < 0.0 {
                     continue;
                 }
@@ -248,7 +230,7 @@ fn trace(ray: Ray, t_max: f32, any: bool, salt: u32) -> Hit {
                     continue;
                 }
                 for (var j = 0u; j < local.count; j++) {
-                    let triangle = words[local.first + j];
+                    let triangle = ray_word_domain[params.word_base + local.first + j];
                     let base = instance.index_slot + 3u * triangle;
                     let a = vertex_position(instance.vertex_slot + index_words[base]);
                     let b = vertex_position(instance.vertex_slot + index_words[base + 1u]);
@@ -261,7 +243,7 @@ fn trace(ray: Ray, t_max: f32, any: bool, salt: u32) -> Hit {
                     if entry == NO_HIT {
                         continue;
                     }
-                    let material = material_domain[scene.renderer.materials_slot + words[entry + 2u]];
+                    let material = material_domain[scene.renderer.materials_slot + ray_word_domain[params.word_base + entry + 2u]];
                     if !opaque_here(instance, triangle, tuv.y, tuv.z, material, salt) {
                         continue;
                     }
@@ -291,7 +273,7 @@ struct Surface {
 }
 
 fn surface_at(ray: Ray, hit: Hit) -> Surface {
-    let instance = ray_instances[hit.instance];
+    let instance = ray_instance_domain[params.instance_base + hit.instance];
     let base = instance.index_slot + 3u * hit.triangle;
     let v0 = vertex_domain[instance.vertex_slot + index_words[base]];
     let v1 = vertex_domain[instance.vertex_slot + index_words[base + 1u]];
@@ -314,7 +296,7 @@ fn surface_at(ray: Ray, hit: Hit) -> Surface {
     let interpolated = normal_matrix * (vec3<f32>(v0.nx, v0.ny, v0.nz) * w.x + vec3<f32>(v1.nx, v1.ny, v1.nz) * w.y + vec3<f32>(v2.nx, v2.ny, v2.nz) * w.z);
     var n = normalize_or(select(-interpolated, interpolated, facing), geometric);
     let entry = submesh_of(instance, hit.triangle);
-    let material = material_domain[scene.renderer.materials_slot + words[entry + 2u]];
+    let material = material_domain[scene.renderer.materials_slot + ray_word_domain[params.word_base + entry + 2u]];
     if material.normal_texture != INVALID_SLOT {
         let texel = sample_texture(material.normal_texture, uv, vec2<f32>(0.0), vec2<f32>(0.0)).xyz;
         let decoded = texel * 2.0 - 1.0;

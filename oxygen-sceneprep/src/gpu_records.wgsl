@@ -81,3 +81,27 @@ struct ShadowRecord {
     texel_size: f32,
     flags: u32,
 }
+
+// The path-traced reference's ray scene (oxygen_sceneprep::bvh::BvhNode,
+// oxygen_sceneprep::RayInstance): see ray_scene.rs for the layout.
+struct BvhNode {
+    min: vec3<f32>,
+    first: u32,
+    max: vec3<f32>,
+    count: u32,
+}
+
+struct RayInstance {
+    // Rows of the inverse world matrix (world → object), affine.
+    inverse_row0: vec4<f32>,
+    inverse_row1: vec4<f32>,
+    inverse_row2: vec4<f32>,
+    transform_index: u32,
+    blas_root: u32,
+    vertex_slot: u32,
+    index_slot: u32,
+    submesh_first: u32,
+    submesh_count: u32,
+    reserved0: u32,
+    reserved1: u32,
+}

@@ -94,4 +94,14 @@ fn gpu_records_wgsl_matches_rust_layouts() {
     assert_eq!(span as usize, size_of::<Vertex>());
     assert_eq!(offset(&members, "nx") as usize, offset_of!(Vertex, normal));
     assert_eq!(offset(&members, "u") as usize, offset_of!(Vertex, uv));
+    // The path-traced reference's ray scene.
+    check!(module, oxygen_sceneprep::bvh::BvhNode, "BvhNode", [min, first, max, count]);
+    check!(
+        module,
+        oxygen_sceneprep::RayInstance,
+        "RayInstance",
+        [transform_index, blas_root, vertex_slot, index_slot, submesh_first, submesh_count]
+    );
+    let (members, _) = layout(&module, "RayInstance");
+    assert_eq!(offset(&members, "inverse_row0") as usize, offset_of!(oxygen_sceneprep::RayInstance, inverse_rows));
 }

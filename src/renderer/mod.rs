@@ -736,7 +736,7 @@ impl Renderer {
         let prepare_seconds = prepare_start.elapsed().as_secs_f64();
         let constants_bytes = self.allocate_targets(&plan, time_seconds);
         self.prepare_gpu_visibility(&plan);
-        self.prepare_reference(&plan);
+        self.prepare_reference(&plan)?;
         let uploaded_bytes = self.heap.bytes_written() - heap_bytes_before
             + constants_bytes
             + self.visibility.as_ref().map_or(0, GpuVisibility::uploaded_last_frame);

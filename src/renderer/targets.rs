@@ -9,7 +9,7 @@ use oxygen_sceneprep::ViewFilter;
 use tracing::info_span;
 
 use super::resolve::{FramePlan, TargetPlan};
-use super::{Renderer, ViewGpu};
+use super::{RenderError, Renderer, ViewGpu};
 
 impl Renderer {
     /// Tiles of the local shadow atlas this frame (one past the highest).
@@ -116,12 +116,14 @@ impl Renderer {
 
     /// Creates the path-traced reference's tracer when a view of the frame
     /// is path traced, and uploads ScenePrep's ray-tracing scene to it.
-    pub(super) fn prepare_reference(&mut self, plan: &FramePlan) {
+    pub(super) fn prepare_reference(&mut self, plan: &FramePlan) -> Result<(), RenderError> {
         let traced: Vec<_> = plan.views.iter().filter(|v| v.options.ray_scene).map(|v| v.id).collect();
         if traced.is_empty() && self.reference.is_none() {
-            return;
+            return Ok(());
         }
         let tracer = self.reference.get_or_insert_with(|| ReferenceTracer::new(&self.gpu.device, &self.heap));
-        tracer.prepare(&self.gpu.device, &self.gpu.queue, self.prep.ray_scene(), &traced);
+        tracer
+            .prepare(&self.gpu.device, &self.gpu.queue, &mut self.heap, self.prep.ray_scene(), &traced)
+            .map_err(|e| RenderError::Prep(oxygen_sceneprep::PrepError::from(e)))
     }
 }
