@@ -11,9 +11,11 @@
 //!   mode), wheel to zoom. Keys: `W` `A` `S` `D` `Q` `E` move in fly mode,
 //!   `F` switches between orbit and fly cameras.
 //! * Layouts: `1` one view; `2` a 2 × 2 layout (the file's cameras first,
-//!   then orbit views from the side and above); `3` the main view with its
-//!   sun's four shadow cascades shown as small viewports along the bottom
-//!   (depth as grey); `4` the main view with a picture-in-picture from above.
+//!   then orthographic views from the front, the side and above); `3` the
+//!   main view with its sun's four shadow cascades shown as small viewports
+//!   along the bottom (depth as grey); `4` the main view with a
+//!   picture-in-picture from above; `5` an editor's 2 × 2: the main
+//!   perspective view and orthographic front, side and top views.
 //! * Knobs: `V` cycles the main view's visibility path (CPU, GPU frustum,
 //!   GPU occlusion; the GPU paths where the adapter has them), `P` the depth
 //!   pre-pass (automatic, on, off), `C` the sun's cascade count (1 to 4),
@@ -23,7 +25,9 @@
 //!   and the knobs.
 //! * `--frames N --screenshot PATH` renders N frames, saves what was
 //!   presented last as a PNG and exits: for tests and for people without a
-//!   desktop (run it under `xvfb-run`).
+//!   desktop (run it under `xvfb-run`). `--resize WxH` asks for a new
+//!   window size after the first frame and counts the N frames from when
+//!   the window has it (the test of resizing a real surface).
 
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
@@ -38,7 +42,7 @@ use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowAttributes};
 
 const USAGE: &str = "\
-usage: viewer [FILE] [--size WxH] [--present fifo|mailbox|immediate] [--layout 1|2|3|4] [--frames N --screenshot PATH]";
+usage: viewer [FILE] [--size WxH] [--present fifo|mailbox|immediate] [--layout 1|2|3|4|5] [--frames N --screenshot PATH [--resize WxH]]";
 
 /// The parsed command line.
 struct Args {
@@ -47,7 +51,18 @@ struct Args {
     present: PresentMode,
     frames: Option<u64>,
     screenshot: Option<PathBuf>,
+    /// A window size asked for after the first frame.
+    resize: Option<UVec2>,
     layout: Layout,
+}
+
+fn parse_size(name: &str, v: &str) -> Result<UVec2, String> {
+    let (w, h) = v.split_once('x').ok_or(format!("{name} needs WxH"))?;
+    let size = UVec2::new(w.parse().map_err(|_| "bad width")?, h.parse().map_err(|_| "bad height")?);
+    if size.x == 0 || size.y == 0 {
+        return Err(format!("{name} must be at least 1x1"));
+    }
+    Ok(size)
 }
 
 fn parse_args(mut args: impl Iterator<Item = String>) -> Result<Args, String> {
@@ -57,20 +72,14 @@ fn parse_args(mut args: impl Iterator<Item = String>) -> Result<Args, String> {
         present: PresentMode::Fifo,
         frames: None,
         screenshot: None,
+        resize: None,
         layout: Layout::Single,
     };
     while let Some(arg) = args.next() {
         let mut value = |name: &str| args.next().ok_or(format!("{name} needs a value"));
         match arg.as_str() {
-            "--size" => {
-                let v = value("--size")?;
-                let (w, h) = v.split_once('x').ok_or("--size needs WxH")?;
-                let size = UVec2::new(w.parse().map_err(|_| "bad width")?, h.parse().map_err(|_| "bad height")?);
-                if size.x == 0 || size.y == 0 {
-                    return Err("--size must be at least 1x1".into());
-                }
-                parsed.size = size;
-            }
+            "--size" => parsed.size = parse_size("--size", &value("--size")?)?,
+            "--resize" => parsed.resize = Some(parse_size("--resize", &value("--resize")?)?),
             "--present" => {
                 parsed.present = match value("--present")?.as_str() {
                     "fifo" => PresentMode::Fifo,
@@ -87,7 +96,8 @@ fn parse_args(mut args: impl Iterator<Item = String>) -> Result<Args, String> {
                     "2" => Layout::Grid,
                     "3" => Layout::Cascades,
                     "4" => Layout::PictureInPicture,
-                    other => return Err(format!("unknown layout '{other}' (1, 2, 3 or 4)")),
+                    "5" => Layout::Editor,
+                    other => return Err(format!("unknown layout '{other}' (1 to 5)")),
                 }
             }
             "-h" | "--help" => return Err(String::new()),
@@ -142,6 +152,8 @@ enum Layout {
     Grid,
     Cascades,
     PictureInPicture,
+    /// Perspective plus orthographic front, side and top.
+    Editor,
 }
 
 struct Viewer {
@@ -162,6 +174,10 @@ struct Viewer {
     cascades: CascadeSettings,
     pcf_radius: u32,
     frames: u64,
+    /// The window's size as the renderer last heard it.
+    window_size: UVec2,
+    /// Frames rendered while waiting for `--resize` to take effect.
+    frames_before_resize: u64,
     dragging: bool,
     last_cursor: Option<(f64, f64)>,
     error: Option<String>,
@@ -191,6 +207,9 @@ impl Viewer {
             up,
             viewport: UVec2::new(16, 9),
         };
+        let bounds = self.bounds;
+        let axis_view = |from: Vec3, up: Vec3| oxygen_demo::editor_axis_view(&bounds, from, up);
+        let axes = oxygen_demo::EDITOR_AXES;
         match self.layout {
             Layout::Single => {
                 self.views.push(
@@ -206,15 +225,24 @@ impl Viewer {
                     .take(3)
                     .map(|c| Box::new(c.resolver(UVec2::new(16, 9))) as Box<dyn ViewResolver>)
                     .collect();
-                let fallbacks = [(Vec3::X, Vec3::Y), (Vec3::Y, Vec3::NEG_Z), (Vec3::Z, Vec3::Y)];
-                for (direction, up) in fallbacks.iter().skip(others.len()) {
-                    others.push(Box::new(orbit(*direction, *up)));
+                for (direction, up) in axes.iter().skip(others.len()) {
+                    others.push(Box::new(axis_view(*direction, *up)));
                 }
                 for (i, resolver) in others.into_iter().take(3).enumerate() {
                     // Cells after the main view's, row by row.
                     let cell_index = i as u32 + 1;
                     let cell = WindowRect::grid(2, 2, cell_index % 2, cell_index / 2);
                     let desc = ViewDesc::new(BoxedResolver(resolver)).shown_in(window, cell);
+                    self.views.push(renderer.register_view(desc, graph.clone())?);
+                }
+            }
+            Layout::Editor => {
+                let main_view = main(WindowRect::grid(2, 2, 0, 0)).with_visibility(self.visibility);
+                self.views.push(renderer.register_view(main_view, graph.clone())?);
+                for (i, (direction, up)) in axes.iter().enumerate() {
+                    let cell_index = i as u32 + 1;
+                    let cell = WindowRect::grid(2, 2, cell_index % 2, cell_index / 2);
+                    let desc = ViewDesc::new(axis_view(*direction, *up)).shown_in(window, cell);
                     self.views.push(renderer.register_view(desc, graph.clone())?);
                 }
             }
@@ -238,6 +266,23 @@ impl Viewer {
         let Some(renderer) = self.renderer.as_mut() else { return Ok(()) };
         let started = Instant::now();
         let report = renderer.render_frame(&self.scene)?;
+        if let (Some(wanted), Some(window)) = (self.args.resize, &self.window)
+            && self.window_size != wanted
+        {
+            // Frames count from when the renderer has the new size.
+            if self.frames_before_resize == 0 {
+                let _ = window.request_inner_size(winit::dpi::PhysicalSize::new(wanted.x, wanted.y));
+            }
+            self.frames_before_resize += 1;
+            if self.frames_before_resize > 600 {
+                return Err(format!(
+                    "the window was not resized to {}x{} (it is {}x{})",
+                    wanted.x, wanted.y, self.window_size.x, self.window_size.y
+                )
+                .into());
+            }
+            return Ok(());
+        }
         self.frames += 1;
         // The main view's cascades (created with the frame that first needs
         // them) in a strip along the bottom, from the next frame on.
@@ -252,7 +297,7 @@ impl Viewer {
         }
         if let Some(window) = &self.window {
             window.set_title(&format!(
-                "Oxygen — prepare {:.2} ms, record {:.2} ms, GPU {}, frame {:.2} ms — {:?}, pre-pass {:?}, {} cascades of {}, PCF {} [1-4 layout, V P C R K knobs, F fly]",
+                "Oxygen — prepare {:.2} ms, record {:.2} ms, GPU {}, frame {:.2} ms — {:?}, pre-pass {:?}, {} cascades of {}, PCF {} [1-5 layout, V P C R K knobs, F fly]",
                 report.prepare_seconds * 1e3,
                 report.record_seconds * 1e3,
                 report.gpu_seconds.map_or("n/a".to_owned(), |s| format!("{:.2} ms", s * 1e3)),
@@ -300,7 +345,8 @@ impl ApplicationHandler for Viewer {
             let mut renderer = Renderer::new_headless()?;
             let surface = renderer.gpu().instance.create_surface(Arc::clone(&window))?;
             let size = window.inner_size();
-            let id = renderer.add_window(surface, UVec2::new(size.width, size.height), self.args.present)?;
+            self.window_size = UVec2::new(size.width, size.height);
+            let id = renderer.add_window(surface, self.window_size, self.args.present)?;
             println!("adapter: {}; visibility {:?}", renderer.gpu().describe(), renderer.visibility());
             self.visibility = renderer.visibility();
             self.renderer = Some(renderer);
@@ -324,7 +370,8 @@ impl ApplicationHandler for Viewer {
                 WindowEvent::CloseRequested => event_loop.exit(),
                 WindowEvent::Resized(size) => {
                     if let (Some(renderer), Some(id)) = (self.renderer.as_mut(), self.window_id) {
-                        renderer.resize_window(id, UVec2::new(size.width, size.height))?;
+                        self.window_size = UVec2::new(size.width, size.height);
+                        renderer.resize_window(id, self.window_size)?;
                     }
                 }
                 WindowEvent::RedrawRequested => {
@@ -398,6 +445,7 @@ impl Viewer {
             KeyCode::Digit2 => self.layout = Layout::Grid,
             KeyCode::Digit3 => self.layout = Layout::Cascades,
             KeyCode::Digit4 => self.layout = Layout::PictureInPicture,
+            KeyCode::Digit5 => self.layout = Layout::Editor,
             KeyCode::KeyV => {
                 self.visibility = match self.visibility {
                     Visibility::Cpu if supported => Visibility::GpuFrustum,
@@ -475,6 +523,8 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
         cascades: oxygen_demo::viewer_cascades(),
         pcf_radius: ForwardLitConfig::DEFAULT.shadow_pcf_radius,
         frames: 0,
+        window_size: UVec2::ZERO,
+        frames_before_resize: 0,
         dragging: false,
         last_cursor: None,
         error: None,

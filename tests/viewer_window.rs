@@ -29,30 +29,43 @@ fn have(program: &str) -> bool {
     Command::new("sh").arg("-c").arg(format!("command -v {program}")).output().is_ok_and(|o| o.status.success())
 }
 
-#[test]
-fn the_viewer_presents_in_a_window_what_the_headless_renderer_renders() {
+/// Why the window tests cannot run here, if they cannot.
+fn cannot_run() -> Option<&'static str> {
     if std::env::var("WGPU_BACKEND").is_ok_and(|b| b.eq_ignore_ascii_case("gl")) {
         // The viewer opens its own instance from the environment too; on GL
         // through EGL on Xvfb the surface path is a different test.
-        eprintln!("skipped: the window test runs on the Vulkan backend only");
-        return;
+        return Some("the window test runs on the Vulkan backend only");
     }
     if !have("xvfb-run") {
-        eprintln!("skipped: no virtual X server (install Debian's `xvfb`; scripts/test.sh does when run as root)");
-        return;
+        return Some("no virtual X server (install Debian's `xvfb`; scripts/test.sh does when run as root)");
     }
+    None
+}
+
+fn shipped_file() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/AlphaBlendModeTest/AlphaBlendModeTest.glb")
+}
+
+/// Runs the viewer under Xvfb with `extra` arguments for four frames and
+/// returns the picture it presented last.
+fn run_viewer(name: &str, size: UVec2, extra: &[&str]) -> oxygen::image::RgbaImage {
+    run_viewer_sized(name, size, size, extra)
+}
+
+/// As [`run_viewer`], for a window opened at `size` that presents at
+/// `presented_size` (after `--resize`).
+fn run_viewer_sized(name: &str, size: UVec2, presented_size: UVec2, extra: &[&str]) -> oxygen::image::RgbaImage {
     let viewer = viewer_binary();
     assert!(viewer.exists(), "{} is missing: build the examples first (`cargo test` builds them)", viewer.display());
-    let file = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/AlphaBlendModeTest/AlphaBlendModeTest.glb");
-    let screenshot = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("viewer_window.png");
+    let screenshot = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("{name}.png"));
     let _ = std::fs::remove_file(&screenshot);
-    let size = UVec2::new(320, 200);
     let output = Command::new("xvfb-run")
         .args(["-a", "-s", "-screen 0 1024x768x24"])
         .arg(&viewer)
-        .arg(&file)
+        .arg(shipped_file())
         .args(["--size", &format!("{}x{}", size.x, size.y), "--frames", "4", "--screenshot"])
         .arg(&screenshot)
+        .args(extra)
         .output()
         .expect("xvfb-run runs");
     let log = format!("{}{}", String::from_utf8_lossy(&output.stdout), String::from_utf8_lossy(&output.stderr));
@@ -60,16 +73,33 @@ fn the_viewer_presents_in_a_window_what_the_headless_renderer_renders() {
     let presented =
         oxygen::image::open(&screenshot).unwrap_or_else(|e| panic!("no screenshot ({e}):\n{log}")).to_rgba8();
     // Xvfb gives the window the size asked for.
-    assert_eq!(presented.dimensions(), (size.x, size.y), "{log}");
+    assert_eq!(presented.dimensions(), (presented_size.x, presented_size.y), "{log}");
+    presented
+}
 
-    // The same view, headless: the viewer's default orbit camera framing
-    // the file, its default sun and cascades, the standard graph.
+/// The shipped scene as the viewer loads it (with its default sun when the
+/// file has no light), and its f64 bounds.
+fn viewer_scene() -> (Scene, DAabb) {
     let mut scene = Scene::new();
-    let import = import_gltf(&mut scene, &file, &SceneChoice::Default).unwrap();
+    let import = import_gltf(&mut scene, shipped_file(), &SceneChoice::Default).unwrap();
     if import.lights == 0 {
         oxygen_demo::add_default_sun(&mut scene);
     }
-    let bounds = import.precise_bounds.unwrap();
+    (scene, import.precise_bounds.unwrap())
+}
+
+#[test]
+fn the_viewer_presents_in_a_window_what_the_headless_renderer_renders() {
+    if let Some(reason) = cannot_run() {
+        eprintln!("skipped: {reason}");
+        return;
+    }
+    let size = UVec2::new(320, 200);
+    let presented = run_viewer("viewer_window", size, &[]);
+
+    // The same view, headless: the viewer's default orbit camera framing
+    // the file, its default sun and cascades, the standard graph.
+    let (scene, bounds) = viewer_scene();
     let camera = OrbitCamera::framing(&bounds).resolver(size);
     let mut renderer = gpu_renderer_with(RendererOptions::default());
     let desc = ViewDesc::new(camera).with_sun_shadows(oxygen_demo::viewer_cascades());
@@ -94,4 +124,68 @@ fn the_viewer_presents_in_a_window_what_the_headless_renderer_renders() {
         diff.worst,
         env!("CARGO_TARGET_TMPDIR")
     );
+}
+
+/// The editor layout (`--layout 5`): the orthographic front, side and top
+/// cells of the presented window each equal the same orthographic view
+/// rendered headlessly at the cell's size.
+#[test]
+fn the_viewers_editor_layout_shows_three_orthographic_views() {
+    if let Some(reason) = cannot_run() {
+        eprintln!("skipped: {reason}");
+        return;
+    }
+    let size = UVec2::new(320, 200);
+    let presented = run_viewer("viewer_editor_layout", size, &["--layout", "5"]);
+    let (scene, bounds) = viewer_scene();
+    let mut renderer = gpu_renderer_with(RendererOptions::default());
+    for (i, (from, up)) in oxygen_demo::EDITOR_AXES.iter().enumerate() {
+        let cell = i as u32 + 1;
+        let (origin, cell_size) = WindowRect::grid(2, 2, cell % 2, cell / 2).pixels(size);
+        let camera = DLookAtResolver { viewport: cell_size, ..oxygen_demo::editor_axis_view(&bounds, *from, *up) };
+        let view = renderer.register_view(ViewDesc::new(camera), standard_render_graph).unwrap();
+        renderer.render_frame(&scene).unwrap();
+        let expected = renderer.read_color(view).unwrap();
+        renderer.unregister_view(view).unwrap();
+        let shown =
+            oxygen::image::imageops::crop_imm(&presented, origin.x, origin.y, cell_size.x, cell_size.y).to_image();
+        let diff = compare(&shown, &expected, 3);
+        eprintln!(
+            "orthographic cell {cell}: {} of {} pixels differ by more than 3 levels (worst {})",
+            diff.differing, diff.total, diff.worst
+        );
+        assert!(
+            diff.differing <= diff.total / 1000,
+            "cell {cell}: {} of {} pixels differ from the headless orthographic view (worst {})",
+            diff.differing,
+            diff.total,
+            diff.worst
+        );
+    }
+}
+
+/// A real surface resized while the viewer runs (`--resize`): the frames
+/// after it are presented at the new size and equal the headless render
+/// at that size, so the surface was configured again and the view's
+/// target and aspect followed.
+#[test]
+fn the_viewer_follows_a_resized_window() {
+    if let Some(reason) = cannot_run() {
+        eprintln!("skipped: {reason}");
+        return;
+    }
+    let resized = UVec2::new(240, 180);
+    let presented = run_viewer_sized("viewer_resized", UVec2::new(320, 200), resized, &["--resize", "240x180"]);
+    let (scene, bounds) = viewer_scene();
+    let mut renderer = gpu_renderer_with(RendererOptions::default());
+    let desc =
+        ViewDesc::new(OrbitCamera::framing(&bounds).resolver(resized)).with_sun_shadows(oxygen_demo::viewer_cascades());
+    let view = renderer.register_view(desc, standard_render_graph).unwrap();
+    renderer.render_frame(&scene).unwrap();
+    let diff = compare(&presented, &renderer.read_color(view).unwrap(), 3);
+    eprintln!(
+        "resized: {} of {} pixels differ by more than 3 levels (worst {})",
+        diff.differing, diff.total, diff.worst
+    );
+    assert!(diff.differing <= diff.total / 1000, "{} of {} pixels differ after the resize", diff.differing, diff.total);
 }

@@ -25,8 +25,13 @@ fn scene() -> Scene {
 }
 
 fn camera(eye: Vec3) -> LookAtResolver {
+    LookAtResolver { camera: Camera::perspective(60f32.to_radians(), 0.1, None), ..orthographic(eye) }
+}
+
+/// An editor's axis view from `eye` (an orthographic camera).
+fn orthographic(eye: Vec3) -> LookAtResolver {
     LookAtResolver {
-        camera: Camera::perspective(60f32.to_radians(), 0.1, None),
+        camera: Camera::orthographic(2.5, 0.1, 20.0),
         eye,
         target: Vec3::new(0.0, 0.5, 0.0),
         up: Vec3::Y,
@@ -39,22 +44,30 @@ fn camera(eye: Vec3) -> LookAtResolver {
 const EYES: [Vec3; 4] =
     [Vec3::new(3.0, 2.0, 3.0), Vec3::new(-3.0, 2.0, 3.0), Vec3::new(0.0, 6.0, 0.01), Vec3::new(4.0, 0.6, 0.0)];
 
+/// An editor's 2 × 2 layout: the perspective view, then orthographic
+/// front, side and top views.
+fn editor_cell(i: usize) -> LookAtResolver {
+    const AXIS_EYES: [Vec3; 3] = [Vec3::new(0.0, 0.5, 6.0), Vec3::new(6.0, 0.5, 0.0), Vec3::new(0.0, 6.0, 0.01)];
+    if i == 0 { camera(EYES[0]) } else { orthographic(AXIS_EYES[i - 1]) }
+}
+
 /// The rectangle `origin`, `size` of `image`.
 fn crop(image: &oxygen::image::RgbaImage, origin: UVec2, size: UVec2) -> oxygen::image::RgbaImage {
     oxygen::image::imageops::crop_imm(image, origin.x, origin.y, size.x, size.y).to_image()
 }
 
+/// An editor's layout (perspective + orthographic front, side, top): each
+/// cell equals its view rendered alone at the cell's size, and each shows
+/// the red cube.
 #[test]
 fn a_two_by_two_layout_shows_each_view_in_its_cell() {
     let scene = scene();
     let mut renderer = gpu_renderer();
     let window = renderer.add_offscreen_window(UVec2::new(257, 193));
-    let views: Vec<ViewId> = EYES
-        .iter()
-        .enumerate()
-        .map(|(i, eye)| {
+    let views: Vec<ViewId> = (0..4)
+        .map(|i| {
             let rect = WindowRect::grid(2, 2, i as u32 % 2, i as u32 / 2);
-            renderer.register_view(ViewDesc::new(camera(*eye)).shown_in(window, rect), standard_render_graph).unwrap()
+            renderer.register_view(ViewDesc::new(editor_cell(i)).shown_in(window, rect), standard_render_graph).unwrap()
         })
         .collect();
     let report = renderer.render_frame(&scene).unwrap();
@@ -63,13 +76,13 @@ fn a_two_by_two_layout_shows_each_view_in_its_cell() {
     assert_eq!(composed.dimensions(), (257, 193));
     // The same views alone, at their cells' sizes.
     let mut alone = gpu_renderer();
-    for (i, eye) in EYES.iter().enumerate() {
+    for (i, &shown_view) in views.iter().enumerate() {
         let (origin, size) = WindowRect::grid(2, 2, i as u32 % 2, i as u32 / 2).pixels(UVec2::new(257, 193));
         let reference =
-            alone.register_view(LookAtResolver { viewport: size, ..camera(*eye) }, standard_render_graph).unwrap();
+            alone.register_view(LookAtResolver { viewport: size, ..editor_cell(i) }, standard_render_graph).unwrap();
         alone.render_frame(&scene).unwrap();
         let expected = alone.read_color(reference).unwrap();
-        let shown = renderer.read_color(views[i]).unwrap();
+        let shown = renderer.read_color(shown_view).unwrap();
         assert_eq!(shown.dimensions(), (size.x, size.y), "view {i} takes its cell's size");
         let diff = compare(&crop(&composed, origin, size), &expected, 2);
         assert_eq!(
@@ -77,6 +90,9 @@ fn a_two_by_two_layout_shows_each_view_in_its_cell() {
             "cell {i}: {} of {} pixels differ (worst {})",
             diff.differing, diff.total, diff.worst
         );
+        let red = expected.pixels().filter(|p| i32::from(p[0]) > i32::from(p[1]) + 30).count();
+        // The side cell sees the unlit face, dark red.
+        assert!(red > 20, "cell {i} shows the cube ({red} red pixels)");
         alone.unregister_view(reference).unwrap();
     }
 }

@@ -204,6 +204,27 @@ impl OrbitCamera {
     }
 }
 
+/// The axes of an editor's orthographic views, as (looking from, up):
+/// front (+Z), side (+X) and top (+Y).
+pub const EDITOR_AXES: [(Vec3, Vec3); 3] = [(Vec3::Z, Vec3::Y), (Vec3::X, Vec3::Y), (Vec3::Y, Vec3::NEG_Z)];
+
+/// An orthographic view of `bounds` from `from` (a direction, the side the
+/// eye is on), as a modelling tool's front, side and top views: the
+/// bounding sphere fills the view's height and lies between its near and
+/// far planes. The viewport is a placeholder; a view shown in a window
+/// takes its rectangle's size.
+pub fn editor_axis_view(bounds: &DAabb, from: Vec3, up: Vec3) -> DLookAtResolver {
+    let radius = (bounds.half_extents().length() as f32).max(1e-3);
+    let center = bounds.center();
+    DLookAtResolver {
+        camera: Camera::orthographic(radius * 1.05, radius * 0.01, radius * 4.5),
+        eye: center + (from.normalize_or(Vec3::Z) * radius * 2.2).as_dvec3(),
+        target: center,
+        up,
+        viewport: UVec2::new(16, 9),
+    }
+}
+
 /// Adds the viewers' default sun to a scene that has no light.
 pub fn add_default_sun(scene: &mut Scene) {
     let direction = Vec3::new(-0.3, -0.8, -0.5).normalize();
