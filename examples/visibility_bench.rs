@@ -23,15 +23,23 @@
 //! measured ones, each waited for, and prints per frame (medians): the CPU
 //! time of `render_frame` alone (prepare + record + submit), the GPU time between
 //! timestamps written before and after the frame (when the adapter has
-//! timestamps inside encoders), the whole frame, the bytes uploaded, and the
-//! draws kept (read back after the last frame). `VISIBILITY_PATHS=cpu,gpu`
+//! timestamps inside encoders), the whole frame, an empty submit on the idle
+//! queue (the floor of wgpu and the driver under every frame's submit), the
+//! bytes uploaded, and the draws kept (read back after the last frame). `VISIBILITY_PATHS=cpu,gpu`
 //! runs only the paths named (`cpu`, `gpu`, `occlusion`); `VISIBILITY_TRACE=1`
 //! prints every `tracing` span's time on stderr. `cull_only` repeats the GPU
 //! path with an empty graph: what is left of the GPU time is the culling.
+//! `VISIBILITY_GPU_BUSY_MS=T` keeps the GPU busy for T ms before every
+//! frame, so a small scene's CPU frame can be compared with a large one's
+//! after the same GPU time (the driver makes the frame after a long GPU
+//! frame slower whatever is in it; `indirect_count_cost` measures that).
 
 use std::time::Instant;
 
 use oxygen::core::{GpuContext, GpuOptions};
+
+#[path = "support/gpu_spin.rs"]
+mod gpu_spin;
 use oxygen::prelude::*;
 
 const WARM_UP: usize = 3;
@@ -189,10 +197,16 @@ fn run(
     }
     let mover = scene.nodes().filter(|(_, n)| n.name == "box" || n.name == "building").map(|(k, _)| k).nth(count / 2);
     let (mut cpu, mut gpu_ms, mut whole, mut uploaded) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let mut empty_submit = Vec::new();
+    let busy_ms = busy_before_frames();
+    let spin = if busy_ms > 0.0 { Some(gpu_spin::GpuSpin::new(renderer.gpu())?) } else { None };
     for frame in 0..WARM_UP + frames {
         if let (true, Some(node)) = (moving, mover) {
             let at = Vec3::new(frame as f32 * 0.01, 1.0, 0.0);
             scene.set_local_transform(node, Transform::from_translation(at))?;
+        }
+        if let Some(spin) = &spin {
+            spin.busy(renderer.gpu(), busy_ms)?;
         }
         let start = Instant::now();
         if let Some(t) = &timestamps {
@@ -209,9 +223,19 @@ fn run(
         }
         renderer.gpu().device.poll(wgpu::PollType::wait_indefinitely())?;
         let frame_done = start.elapsed();
+        // The floor under any frame: one submit of an empty command buffer
+        // on an idle queue, with this scene's buffers alive. What it costs
+        // is wgpu's and the driver's, and every frame pays it once.
+        let device = &renderer.gpu().device;
+        let encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("empty") });
+        let submit_start = Instant::now();
+        renderer.gpu().queue.submit([encoder.finish()]);
+        let submit_done = submit_start.elapsed();
+        device.poll(wgpu::PollType::wait_indefinitely())?;
         if frame >= WARM_UP {
             cpu.push(cpu_done.as_secs_f64() * 1e3);
             whole.push(frame_done.as_secs_f64() * 1e3);
+            empty_submit.push(submit_done.as_secs_f64() * 1e3);
             uploaded.push(report.uploaded_bytes as f64 / 1024.0);
             if let Some(t) = &timestamps {
                 gpu_ms.push(t.read_ms(renderer.gpu())?);
@@ -225,15 +249,23 @@ fn run(
     };
     let gpu_text = if gpu_ms.is_empty() { "n/a".to_owned() } else { format!("{:.3}", median(&mut gpu_ms)) };
     Ok(format!(
-        "{scene_kind:<5} N={count:<8} V={views:<3} {:<12} {:<7} {:<9} cpu_ms={:<8.3} gpu_ms={gpu_text:<8} frame_ms={:<8.3} upload_kb={:<9.1} kept_per_view={:.0}",
+        "{scene_kind:<5} N={count:<8} V={views:<3} {:<12} {:<7} {:<9} busy_before_ms={busy_ms:<5} cpu_ms={:<8.3} gpu_ms={gpu_text:<8} frame_ms={:<8.3} empty_submit_ms={:<6.3} upload_kb={:<9.1} kept_per_view={:.0}",
         format!("{visibility:?}"),
         if moving { "moving" } else { "static" },
         if cull_only { "cull_only" } else { "full" },
         median(&mut cpu),
         median(&mut whole),
+        median(&mut empty_submit),
         median(&mut uploaded),
         kept as f64 / views as f64,
     ))
+}
+
+/// `VISIBILITY_GPU_BUSY_MS=T` keeps the GPU busy for T ms (and waits)
+/// before every frame: the control that compares a small scene's CPU frame
+/// with a large one's after the same GPU time (see `indirect_count_cost`).
+fn busy_before_frames() -> f64 {
+    std::env::var("VISIBILITY_GPU_BUSY_MS").ok().and_then(|v| v.parse().ok()).unwrap_or(0.0)
 }
 
 /// `VISIBILITY_PATHS=cpu,gpu,occlusion` (default all) limits the paths run.
