@@ -26,7 +26,7 @@ fn debug_generations_flag_nothing_when_slots_are_current() {
         renderer.render_frame(&demo.scene).unwrap();
     }
     let frame = renderer.prepared_frame(view).unwrap();
-    assert!(frame.draws().iter().all(|d| d.reserved[0] == frame.slots().draw_metadata.generation()));
+    assert!(frame.draws().iter().all(|d| d.generation == frame.slots().draw_metadata.generation()));
     assert_eq!(magenta_pixels(&support::read_lit_color(&renderer, view)), 0);
 }
 

@@ -115,7 +115,7 @@ fn look_at(eye: Vec3, target: Vec3, viewport: UVec2) -> LookAtResolver {
 fn comparable(draws: Vec<(PassMask, Vec<DrawMetadata>)>) -> Vec<(PassMask, Vec<DrawMetadata>)> {
     draws
         .into_iter()
-        .map(|(mask, draws)| (mask, draws.into_iter().map(|d| DrawMetadata { reserved: [0; 5], ..d }).collect()))
+        .map(|(mask, draws)| (mask, draws.into_iter().map(|d| DrawMetadata { generation: 0, ..d }).collect()))
         .collect()
 }
 

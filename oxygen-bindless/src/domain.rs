@@ -9,13 +9,14 @@ pub enum DomainKind {
     WorldTransforms,
     /// Normal matrices (`mat3x3<f32>`, 48 B), parallel to the world matrices.
     NormalTransforms,
-    /// `MaterialRecord`s (80 B), persistent per material.
+    /// `MaterialRecord`s (240 B), persistent per material.
     Materials,
     /// `DirectionalLightRecord`s (48 B), one range per frame.
     DirectionalLights,
     /// `PositionalLightRecord`s (64 B), one range per frame.
     PositionalLights,
-    /// `VertexRecord`s (32 B), persistent per geometry.
+    /// `VertexRecord`s (32 B), persistent per geometry: its vertices, then
+    /// its `VertexAttributes` (colour, second UV set) when it has them.
     Vertices,
     /// `u32` indices, persistent per geometry; bound as the index buffer.
     Indices,
@@ -73,7 +74,7 @@ impl DomainKind {
             DomainKind::DrawMetadata => 64,
             DomainKind::WorldTransforms => 64,
             DomainKind::NormalTransforms => 48,
-            DomainKind::Materials => 80,
+            DomainKind::Materials => 240,
             DomainKind::DirectionalLights => 48,
             DomainKind::PositionalLights => 64,
             DomainKind::Vertices => 32,

@@ -72,7 +72,7 @@ pub struct RendererConstants {
     pub positional_light_count: u32,
     /// Shadow data (not yet produced: always [`INVALID_SLOT`]).
     pub shadows_slot: u32,
-    /// Bit 0: the shader checks `DrawMetadata.reserved[0]` against
+    /// Bit 0: the shader checks `DrawMetadata.generation` against
     /// `draw_metadata_generation` and paints mismatching draws magenta.
     pub debug_flags: u32,
     /// Generation of this view's draw-metadata range (debug mode).

@@ -4,7 +4,7 @@
 //! GPU) never see an index past the end of the vertex array or a NaN position.
 
 use bytemuck::{Pod, Zeroable};
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 use thiserror::Error;
 
 use crate::math::Aabb;
@@ -27,6 +27,47 @@ impl Vertex {
     /// A vertex from glam vectors.
     pub fn new(position: Vec3, normal: Vec3, uv: Vec2) -> Self {
         Vertex { position: position.to_array(), normal: normal.to_array(), uv: uv.to_array() }
+    }
+}
+
+/// A vertex's optional attributes (glTF `COLOR_0` and `TEXCOORD_1`), stored
+/// in the vertex domain right after the geometry's vertices, one 32-byte
+/// record per vertex, only for geometry that has them: a mesh without
+/// vertex colours or a second UV set pays nothing for them.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct VertexAttributes {
+    /// Linear RGBA vertex colour, multiplied into the base colour.
+    pub color: [f32; 4],
+    /// Second texture coordinate set (glTF `TEXCOORD_1`).
+    pub uv1: [f32; 2],
+    /// Zero.
+    pub reserved: [f32; 2],
+}
+
+const _: () = assert!(std::mem::size_of::<VertexAttributes>() == std::mem::size_of::<Vertex>());
+
+impl Default for VertexAttributes {
+    /// White, second UV set at the origin: what a vertex without them means.
+    fn default() -> Self {
+        VertexAttributes { color: [1.0; 4], uv1: [0.0; 2], reserved: [0.0; 2] }
+    }
+}
+
+impl VertexAttributes {
+    /// Attributes from glam vectors.
+    pub fn new(color: Vec4, uv1: Vec2) -> Self {
+        VertexAttributes { color: color.to_array(), uv1: uv1.to_array(), reserved: [0.0; 2] }
+    }
+
+    /// Non-finite values replaced (colour by white, UV by zero) and the
+    /// colour clamped to `[0, 1]`, so nothing meaningless reaches the GPU.
+    fn sanitized(self) -> Self {
+        let color = Vec4::from(self.color);
+        let color = if color.is_finite() { color.clamp(Vec4::ZERO, Vec4::ONE) } else { Vec4::ONE };
+        let uv1 = Vec2::from(self.uv1);
+        let uv1 = if uv1.is_finite() { uv1 } else { Vec2::ZERO };
+        VertexAttributes::new(color, uv1)
     }
 }
 
@@ -84,6 +125,17 @@ pub enum GeometryError {
         /// Geometry name.
         name: String,
     },
+    /// [`Geometry::with_attributes`] got a different number of records than
+    /// there are vertices.
+    #[error("geometry '{name}': {attributes} vertex attribute records for {vertices} vertices")]
+    AttributeCount {
+        /// Geometry name.
+        name: String,
+        /// Attribute records given.
+        attributes: usize,
+        /// Vertices.
+        vertices: usize,
+    },
     /// More vertices or indices than a `u32` can address.
     #[error("geometry '{name}' is too large for 32-bit indices")]
     TooLarge {
@@ -99,6 +151,7 @@ pub struct Geometry {
     vertices: Vec<Vertex>,
     indices: Vec<u32>,
     submeshes: Vec<Submesh>,
+    attributes: Option<Vec<VertexAttributes>>,
     local_aabb: Aabb,
 }
 
@@ -145,7 +198,38 @@ impl Geometry {
             }
         }
         let local_aabb = Aabb::from_points(vertices.iter().map(|v| Vec3::from(v.position)));
-        Ok(Geometry { name, vertices, indices, submeshes, local_aabb })
+        Ok(Geometry { name, vertices, indices, submeshes, attributes: None, local_aabb })
+    }
+
+    /// The geometry with per-vertex colours and a second UV set, one record
+    /// per vertex (sanitised: non-finite colours become white, non-finite
+    /// UVs zero, colours are clamped to `[0, 1]`).
+    pub fn with_attributes(mut self, attributes: Vec<VertexAttributes>) -> Result<Self, GeometryError> {
+        if attributes.len() != self.vertices.len() {
+            return Err(GeometryError::AttributeCount {
+                name: self.name,
+                attributes: attributes.len(),
+                vertices: self.vertices.len(),
+            });
+        }
+        // The vertex domain holds the vertices and their attributes: both
+        // together must stay addressable with 32 bits.
+        if attributes.len().checked_mul(2).and_then(|n| u32::try_from(n).ok()).is_none() {
+            return Err(GeometryError::TooLarge { name: self.name });
+        }
+        self.attributes = Some(attributes.into_iter().map(VertexAttributes::sanitized).collect());
+        Ok(self)
+    }
+
+    /// Per-vertex colours and second UV set, when the geometry has them.
+    pub fn attributes(&self) -> Option<&[VertexAttributes]> {
+        self.attributes.as_deref()
+    }
+
+    /// Records the geometry occupies in the vertex domain: its vertices,
+    /// then its attribute records when it has them (fits in a `u32`).
+    pub fn vertex_domain_records(&self) -> usize {
+        self.vertices.len() * if self.attributes.is_some() { 2 } else { 1 }
     }
 
     /// Name for logs and dumps.
@@ -283,6 +367,22 @@ mod tests {
         let err = Geometry::new("bad", v, vec![0, 1, 7], vec![Submesh { first_index: 0, index_count: 3 }]);
         assert!(matches!(err, Err(GeometryError::IndexOutOfRange { value: 7, .. })));
         assert!(err.unwrap_err().to_string().contains("'bad'"));
+    }
+
+    #[test]
+    fn attributes_must_match_the_vertices_and_are_sanitized() {
+        let quad = Geometry::quad(1.0);
+        let err = quad.clone().with_attributes(vec![VertexAttributes::default(); 3]);
+        assert!(matches!(err, Err(GeometryError::AttributeCount { attributes: 3, vertices: 4, .. })));
+        let mut attributes = vec![VertexAttributes::new(Vec4::new(0.5, 2.0, -1.0, 1.0), Vec2::new(3.0, 4.0)); 4];
+        attributes[1].color[0] = f32::NAN;
+        attributes[2].uv1[1] = f32::INFINITY;
+        let quad = quad.with_attributes(attributes).unwrap();
+        let a = quad.attributes().unwrap();
+        assert_eq!(a[0].color, [0.5, 1.0, 0.0, 1.0]);
+        assert_eq!(a[1].color, [1.0; 4]);
+        assert_eq!(a[2].uv1, [0.0, 0.0]);
+        assert_eq!(quad.vertex_domain_records(), 8);
     }
 
     #[test]

@@ -33,10 +33,10 @@ pub mod texture;
 pub mod view;
 
 pub use camera::{Camera, CameraError, Projection};
-pub use geometry::{Geometry, GeometryError, Submesh, Vertex};
+pub use geometry::{Geometry, GeometryError, Submesh, Vertex, VertexAttributes};
 pub use gpu::{ColorTargets, GpuContext, GpuError, GpuOptions, HdrFormat, ViewTargets};
 pub use light::{Light, LightKind, Mobility};
-pub use material::{AlphaMode, Material};
+pub use material::{AlphaMode, Material, MaterialUvs, UvTransform};
 pub use math::{Aabb, DAabb, Frustum, Plane, Sphere};
 pub use output::{Depth, HdrColor, Output, OutputSource, ProbeCube, ProbeId, ShadowMap};
 pub use scene::{

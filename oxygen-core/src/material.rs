@@ -1,6 +1,6 @@
 //! Materials: the metallic-roughness parameters a renderable's submesh uses.
 
-use glam::{Vec3, Vec4};
+use glam::{Vec2, Vec3, Vec4};
 
 use crate::TextureHandle;
 
@@ -16,6 +16,92 @@ pub enum AlphaMode {
     },
     /// Alpha-blended; drawn back-to-front by the transparent pass.
     Blend,
+}
+
+/// Which texture coordinate set a texture reads and how the coordinates are
+/// transformed first (glTF `texCoord` and `KHR_texture_transform`):
+/// `uv' = translate(offset) · rotate(rotation) · scale(scale) · uv`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UvTransform {
+    /// Texture coordinate set: 0 (`TEXCOORD_0`) or 1 (`TEXCOORD_1`).
+    pub uv_set: u32,
+    /// Added after rotation and scale.
+    pub offset: Vec2,
+    /// Radians, counter-clockwise in UV space (glTF's convention).
+    pub rotation: f32,
+    /// Per-axis scale, applied first.
+    pub scale: Vec2,
+}
+
+impl Default for UvTransform {
+    fn default() -> Self {
+        UvTransform::IDENTITY
+    }
+}
+
+impl UvTransform {
+    /// Set 0, untransformed.
+    pub const IDENTITY: UvTransform = UvTransform { uv_set: 0, offset: Vec2::ZERO, rotation: 0.0, scale: Vec2::ONE };
+
+    /// The two rows of the 3 × 3 matrix that maps `(u, v, 1)` (the third
+    /// row is `(0, 0, 1)`).
+    pub fn rows(&self) -> [[f32; 3]; 2] {
+        let (sin, cos) = self.rotation.sin_cos();
+        [
+            [cos * self.scale.x, sin * self.scale.y, self.offset.x],
+            [-sin * self.scale.x, cos * self.scale.y, self.offset.y],
+        ]
+    }
+
+    /// Applies the transform to a coordinate (the CPU twin of the shader's).
+    pub fn apply(&self, uv: Vec2) -> Vec2 {
+        let [r0, r1] = self.rows();
+        Vec2::new(r0[0] * uv.x + r0[1] * uv.y + r0[2], r1[0] * uv.x + r1[1] * uv.y + r1[2])
+    }
+
+    /// Non-finite values replaced by the identity's, the set clamped to 0 or 1.
+    fn sanitized(self) -> UvTransform {
+        let finite_or = |v: Vec2, d: Vec2| if v.is_finite() { v } else { d };
+        UvTransform {
+            uv_set: self.uv_set.min(1),
+            offset: finite_or(self.offset, Vec2::ZERO),
+            rotation: if self.rotation.is_finite() { self.rotation } else { 0.0 },
+            scale: finite_or(self.scale, Vec2::ONE),
+        }
+    }
+}
+
+/// The [`UvTransform`] of each of a material's five textures.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MaterialUvs {
+    /// Of the base-colour texture.
+    pub base_color: UvTransform,
+    /// Of the metallic-roughness texture.
+    pub metallic_roughness: UvTransform,
+    /// Of the normal map.
+    pub normal: UvTransform,
+    /// Of the emissive texture.
+    pub emissive: UvTransform,
+    /// Of the occlusion texture.
+    pub occlusion: UvTransform,
+}
+
+impl MaterialUvs {
+    /// The five in the order of the GPU record: base colour,
+    /// metallic-roughness, normal, emissive, occlusion.
+    pub fn in_record_order(&self) -> [UvTransform; 5] {
+        [self.base_color, self.metallic_roughness, self.normal, self.emissive, self.occlusion]
+    }
+
+    fn sanitized(&self) -> MaterialUvs {
+        MaterialUvs {
+            base_color: self.base_color.sanitized(),
+            metallic_roughness: self.metallic_roughness.sanitized(),
+            normal: self.normal.sanitized(),
+            emissive: self.emissive.sanitized(),
+            occlusion: self.occlusion.sanitized(),
+        }
+    }
 }
 
 /// A metallic-roughness material.
@@ -51,6 +137,12 @@ pub struct Material {
     pub alpha_mode: AlphaMode,
     /// Draw both faces (no back-face culling, normals flipped for back faces).
     pub double_sided: bool,
+    /// Texture coordinate set and transform of each texture.
+    pub uvs: MaterialUvs,
+    /// Unlit (glTF `KHR_materials_unlit`): the base colour (times vertex
+    /// colour and texture) is the pixel's radiance; lights, shadows, the
+    /// ambient term and reflections are ignored.
+    pub unlit: bool,
 }
 
 impl Material {
@@ -71,6 +163,8 @@ impl Material {
             roughness: 0.6,
             alpha_mode: AlphaMode::Opaque,
             double_sided: false,
+            uvs: MaterialUvs::default(),
+            unlit: false,
         }
     }
 
@@ -97,6 +191,8 @@ impl Material {
                 other => other,
             },
             double_sided: self.double_sided,
+            uvs: self.uvs.sanitized(),
+            unlit: self.unlit,
         }
     }
 }

@@ -5,10 +5,9 @@
 fn fs_alpha_test(mesh: MeshVarying) {
     // Derivatives first, in uniform control flow, as in the shading pass so
     // both passes test the same mip level's alpha.
-    let duv_dx = dpdx(mesh.uv);
-    let duv_dy = dpdy(mesh.uv);
+    let d = uv_derivatives_of(mesh);
     let material = material_of(mesh);
-    if base_color_of(mesh, material, duv_dx, duv_dy).a < material.alpha_cutoff {
+    if base_color_of(mesh, material, d).a < material.alpha_cutoff {
         discard;
     }
 }

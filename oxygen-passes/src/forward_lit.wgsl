@@ -258,22 +258,22 @@ fn view_direction(to_viewer: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
 struct Derivatives {
     dp_dx: vec3<f32>,
     dp_dy: vec3<f32>,
-    duv_dx: vec2<f32>,
-    duv_dy: vec2<f32>,
+    uv: UvDerivatives,
 }
 
 fn derivatives_of(mesh: MeshVarying) -> Derivatives {
-    return Derivatives(dpdx(mesh.world_position), dpdy(mesh.world_position), dpdx(mesh.uv), dpdy(mesh.uv));
+    return Derivatives(dpdx(mesh.world_position), dpdy(mesh.world_position), uv_derivatives_of(mesh));
 }
 
 // Tangent frame from position and UV derivatives (a cotangent frame), so a
 // tangent-space normal map needs no per-vertex tangents. glTF's v axis points
-// down the image, hence the bitangent's sign.
-fn perturb_normal(n: vec3<f32>, d: Derivatives, tangent_normal: vec3<f32>) -> vec3<f32> {
+// down the image, hence the bitangent's sign. `at` carries the normal map's
+// own UV derivatives (its set, through its transform).
+fn perturb_normal(n: vec3<f32>, d: Derivatives, at: TexCoord, tangent_normal: vec3<f32>) -> vec3<f32> {
     let dp2_perp = cross(d.dp_dy, n);
     let dp1_perp = cross(n, d.dp_dx);
-    let t = dp2_perp * d.duv_dx.x + dp1_perp * d.duv_dy.x;
-    let b = -(dp2_perp * d.duv_dx.y + dp1_perp * d.duv_dy.y);
+    let t = dp2_perp * at.dx.x + dp1_perp * at.dy.x;
+    let b = -(dp2_perp * at.dx.y + dp1_perp * at.dy.y);
     let largest = max(dot(t, t), dot(b, b));
     if !(largest > 1e-20) {
         return n; // no UV variation here: keep the geometric normal
@@ -294,11 +294,11 @@ fn tangent_space_normal(texel: vec3<f32>, normal_scale: f32) -> vec3<f32> {
 
 // A material texture, or opaque white when the scene has no textured
 // material (what `sample_texture` returns for an absent texture anyway).
-fn material_texture(slot: u32, uv: vec2<f32>, duv_dx: vec2<f32>, duv_dy: vec2<f32>) -> vec4<f32> {
+fn material_texture(slot: u32, at: TexCoord) -> vec4<f32> {
     if !HAS_TEXTURES {
         return vec4<f32>(1.0);
     }
-    return sample_texture(slot, uv, duv_dx, duv_dy);
+    return sample_at(slot, at);
 }
 
 // What a fragment writes: radiance for the HDR target, or, with
@@ -312,22 +312,29 @@ fn output_color(radiance: vec3<f32>) -> vec4<f32> {
 }
 
 fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Derivatives) -> vec4<f32> {
+    let base = material.base_color * mesh.color
+        * material_texture(material.base_color_texture, tex_coord(mesh, material, material.uv_transforms[0], d.uv));
+    // Unlit (KHR_materials_unlit): the base colour is the radiance.
+    if (material.flags & MATERIAL_UNLIT) != 0u {
+        return base;
+    }
     var n = surface_normal(mesh, front_facing, material, d);
     let geometric_normal = n;
     if HAS_TEXTURES && material.normal_texture != INVALID_SLOT {
-        let texel = sample_texture(material.normal_texture, mesh.uv, d.duv_dx, d.duv_dy).xyz;
-        n = perturb_normal(n, d, tangent_space_normal(texel, material.normal_scale));
+        let at = tex_coord(mesh, material, material.uv_transforms[2], d.uv);
+        let texel = sample_at(material.normal_texture, at).xyz;
+        n = perturb_normal(n, d, at, tangent_space_normal(texel, material.normal_scale));
     }
     let v = view_direction(scene.camera.camera_position.xyz - mesh.world_position, n);
-    let base = material.base_color * material_texture(material.base_color_texture, mesh.uv, d.duv_dx, d.duv_dy);
     let albedo = base.rgb;
     // glTF packs roughness in G and metallic in B.
-    let metal_rough = material_texture(material.metallic_roughness_texture, mesh.uv, d.duv_dx, d.duv_dy);
+    let metal_rough = material_texture(material.metallic_roughness_texture, tex_coord(mesh, material, material.uv_transforms[1], d.uv));
     let metallic = clamp(material.metallic * metal_rough.b, 0.0, 1.0);
     let roughness = clamp(material.roughness * metal_rough.g, 0.045, 1.0);
     // Ambient occlusion dims indirect light only: the ambient term and the
     // probe reflection, not the lights.
-    let occlusion = mix(1.0, material_texture(material.occlusion_texture, mesh.uv, d.duv_dx, d.duv_dy).r, material.occlusion_strength);
+    let occlusion_texel = material_texture(material.occlusion_texture, tex_coord(mesh, material, material.uv_transforms[4], d.uv));
+    let occlusion = mix(1.0, occlusion_texel.r, material.occlusion_strength);
     var color = (albedo * (1.0 - metallic) * AMBIENT + mix(vec3<f32>(0.04), albedo, metallic) * AMBIENT) * occlusion;
 
     let dir_count = scene.renderer.directional_light_count;
@@ -370,7 +377,7 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Der
         let f0 = mix(vec3<f32>(0.04), albedo, metallic);
         color += reflected * environment_brdf(f0, roughness, max(dot(n, v), 0.0)) * occlusion;
     }
-    color += material.emissive * material_texture(material.emissive_texture, mesh.uv, d.duv_dx, d.duv_dy).rgb;
+    color += material.emissive * material_texture(material.emissive_texture, tex_coord(mesh, material, material.uv_transforms[3], d.uv)).rgb;
     return vec4<f32>(color, base.a);
 }
 

@@ -11,6 +11,9 @@ struct MeshVarying {
     @location(1) world_normal: vec3<f32>,
     @location(2) uv: vec2<f32>,
     @location(3) @interpolate(flat) material: u32,
+    // Vertex colour (white without COLOR_0) and the second UV set.
+    @location(4) color: vec4<f32>,
+    @location(5) uv1: vec2<f32>,
 }
 
 @vertex
@@ -26,10 +29,19 @@ fn vs_main(@builtin(vertex_index) vertex_index: u32, @builtin(instance_index) dr
     out.world_normal = normal_matrix * vec3<f32>(v.nx, v.ny, v.nz);
     out.uv = vec2<f32>(v.u, v.v);
     out.material = draw.material_handle;
+    // Attribute records run parallel to the geometry's vertices (stored as
+    // VertexRecords: colour in px..nx, the second UV set in ny, nz).
+    out.color = vec4<f32>(1.0);
+    out.uv1 = vec2<f32>(0.0);
+    if draw.attributes_slot != INVALID_SLOT {
+        let a = vertex_domain[draw.attributes_slot + (vertex_index - draw.vertex_slot)];
+        out.color = vec4<f32>(a.px, a.py, a.pz, a.nx);
+        out.uv1 = vec2<f32>(a.ny, a.nz);
+    }
     // Debug mode: a draw read through a stale or foreign range carries
     // another generation; flag it (the fragment stages paint it magenta).
     let checking = (scene.renderer.debug_flags & DEBUG_GENERATIONS) != 0u;
-    if checking && draw.reserved0 != scene.renderer.draw_metadata_generation {
+    if checking && draw.generation != scene.renderer.draw_metadata_generation {
         out.material = INVALID_SLOT;
     }
     return out;
@@ -39,15 +51,66 @@ const STALE_DRAW_COLOR: vec4<f32> = vec4<f32>(1.0, 0.0, 1.0, 1.0);
 
 fn material_of(mesh: MeshVarying) -> MaterialRecord {
     if mesh.material == INVALID_SLOT {
-        // A flagged draw: an opaque, untextured magenta material.
-        return MaterialRecord(STALE_DRAW_COLOR, vec3<f32>(0.0), 1.0, 0.0, 1.0, 0.0, 0u, INVALID_SLOT, INVALID_SLOT, INVALID_SLOT, INVALID_SLOT, INVALID_SLOT, 1.0, 0u, 0u);
+        // A flagged draw: an opaque, untextured, unlit magenta material.
+        var stale: MaterialRecord;
+        stale.base_color = STALE_DRAW_COLOR;
+        stale.normal_scale = 1.0;
+        stale.roughness = 1.0;
+        stale.flags = MATERIAL_UNLIT;
+        stale.base_color_texture = INVALID_SLOT;
+        stale.metallic_roughness_texture = INVALID_SLOT;
+        stale.normal_texture = INVALID_SLOT;
+        stale.emissive_texture = INVALID_SLOT;
+        stale.occlusion_texture = INVALID_SLOT;
+        stale.occlusion_strength = 1.0;
+        return stale;
     }
     return material_domain[scene.renderer.materials_slot + mesh.material];
 }
 
-// Base colour: the material factor times its texture (white when absent).
-// `duv_dx`, `duv_dy`: screen derivatives of the UV, taken by the caller in
-// uniform control flow, which choose the texture's mip level.
-fn base_color_of(mesh: MeshVarying, material: MaterialRecord, duv_dx: vec2<f32>, duv_dy: vec2<f32>) -> vec4<f32> {
-    return material.base_color * sample_texture(material.base_color_texture, mesh.uv, duv_dx, duv_dy);
+// Screen derivatives of both UV sets, taken by the caller in uniform
+// control flow; they choose each texture's mip level.
+struct UvDerivatives {
+    dx0: vec2<f32>,
+    dy0: vec2<f32>,
+    dx1: vec2<f32>,
+    dy1: vec2<f32>,
+}
+
+fn uv_derivatives_of(mesh: MeshVarying) -> UvDerivatives {
+    return UvDerivatives(dpdx(mesh.uv), dpdy(mesh.uv), dpdx(mesh.uv1), dpdy(mesh.uv1));
+}
+
+// Where one texture is read: its UV set through its transform, and the
+// transformed derivatives (the transform is affine, so they map by its
+// linear part).
+struct TexCoord {
+    uv: vec2<f32>,
+    dx: vec2<f32>,
+    dy: vec2<f32>,
+}
+
+// The coordinates of the texture whose record is `t`. Without
+// MATERIAL_UV_TRANSFORMS every texture reads set 0 as is.
+fn tex_coord(mesh: MeshVarying, material: MaterialRecord, t: UvTransformRecord, d: UvDerivatives) -> TexCoord {
+    if (material.flags & MATERIAL_UV_TRANSFORMS) == 0u {
+        return TexCoord(mesh.uv, d.dx0, d.dy0);
+    }
+    let set1 = t.uv_set == 1u;
+    let uv = select(mesh.uv, mesh.uv1, set1);
+    let dx = select(d.dx0, d.dx1, set1);
+    let dy = select(d.dy0, d.dy1, set1);
+    let linear = mat2x2<f32>(vec2<f32>(t.row0.x, t.row1.x), vec2<f32>(t.row0.y, t.row1.y));
+    return TexCoord(linear * uv + vec2<f32>(t.row0.z, t.row1.z), linear * dx, linear * dy);
+}
+
+fn sample_at(slot: u32, at: TexCoord) -> vec4<f32> {
+    return sample_texture(slot, at.uv, at.dx, at.dy);
+}
+
+// Base colour: the material factor times the vertex colour times its
+// texture (white when absent).
+fn base_color_of(mesh: MeshVarying, material: MaterialRecord, d: UvDerivatives) -> vec4<f32> {
+    let at = tex_coord(mesh, material, material.uv_transforms[0], d);
+    return material.base_color * mesh.color * sample_at(material.base_color_texture, at);
 }

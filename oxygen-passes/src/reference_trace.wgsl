@@ -119,6 +119,32 @@ fn vertex_uv(slot: u32) -> vec2<f32> {
     return vec2<f32>(v.u, v.v);
 }
 
+// A vertex's colour and second UV set (mesh_vertex.wgsl's layout of the
+// attribute records), white and zero for a mesh without them; `local` is
+// the vertex's index within its mesh.
+struct VertexExtras {
+    color: vec4<f32>,
+    uv1: vec2<f32>,
+}
+
+fn vertex_extras(instance: RayInstance, local: u32) -> VertexExtras {
+    if instance.attributes_slot == INVALID_SLOT {
+        return VertexExtras(vec4<f32>(1.0), vec2<f32>(0.0));
+    }
+    let a = vertex_domain[instance.attributes_slot + local];
+    return VertexExtras(vec4<f32>(a.px, a.py, a.pz, a.nx), vec2<f32>(a.ny, a.nz));
+}
+
+// A texture's coordinate at a vertex: its set through its transform (the
+// rasterizer's tex_coord without derivatives).
+fn ray_tex_coord(material: MaterialRecord, t: UvTransformRecord, uv0: vec2<f32>, uv1: vec2<f32>) -> vec2<f32> {
+    if (material.flags & MATERIAL_UV_TRANSFORMS) == 0u {
+        return uv0;
+    }
+    let uv = vec3<f32>(select(uv0, uv1, t.uv_set == 1u), 1.0);
+    return vec2<f32>(dot(t.row0, uv), dot(t.row1, uv));
+}
+
 // Möller–Trumbore, the twin of oxygen_sceneprep::bvh::ray_triangle;
 // returns (t, u, v), t < 0 for a miss. The origin first slides along the
 // ray to the point nearest `a` (on `origin - a`, so no large coordinate is
@@ -167,10 +193,16 @@ fn opaque_here(instance: RayInstance, triangle: u32, u: f32, v: f32, material: M
         return true;
     }
     let base = instance.index_slot + 3u * triangle;
-    let uv = vertex_uv(instance.vertex_slot + index_words[base]) * (1.0 - u - v)
-        + vertex_uv(instance.vertex_slot + index_words[base + 1u]) * u
-        + vertex_uv(instance.vertex_slot + index_words[base + 2u]) * v;
-    let alpha = material.base_color.a * sample_texture(material.base_color_texture, uv, vec2<f32>(0.0), vec2<f32>(0.0)).a;
+    let w = vec3<f32>(1.0 - u - v, u, v);
+    var uv = vec2<f32>(0.0);
+    var alpha = 0.0;
+    for (var k = 0u; k < 3u; k++) {
+        let local = index_words[base + k];
+        let extras = vertex_extras(instance, local);
+        uv += ray_tex_coord(material, material.uv_transforms[0], vertex_uv(instance.vertex_slot + local), extras.uv1) * w[k];
+        alpha += extras.color.a * w[k];
+    }
+    alpha *= material.base_color.a * sample_texture(material.base_color_texture, uv, vec2<f32>(0.0), vec2<f32>(0.0)).a;
     if masked {
         return alpha >= material.alpha_cutoff;
     }
@@ -270,6 +302,8 @@ struct Surface {
     metallic: f32,
     roughness: f32,
     emissive: vec3<f32>,
+    // KHR_materials_unlit: `emissive` holds its colour; nothing reflects.
+    unlit: bool,
 }
 
 fn surface_at(ray: Ray, hit: Hit) -> Surface {
@@ -284,10 +318,10 @@ fn surface_at(ray: Ray, hit: Hit) -> Surface {
     let p0 = (world * vec4<f32>(v0.px, v0.py, v0.pz, 1.0)).xyz;
     let p1 = (world * vec4<f32>(v1.px, v1.py, v1.pz, 1.0)).xyz;
     let p2 = (world * vec4<f32>(v2.px, v2.py, v2.pz, 1.0)).xyz;
-    let uv0 = vec2<f32>(v0.u, v0.v);
-    let uv1 = vec2<f32>(v1.u, v1.v);
-    let uv2 = vec2<f32>(v2.u, v2.v);
-    let uv = uv0 * w.x + uv1 * w.y + uv2 * w.z;
+    let x0 = vertex_extras(instance, index_words[base]);
+    let x1 = vertex_extras(instance, index_words[base + 1u]);
+    let x2 = vertex_extras(instance, index_words[base + 2u]);
+    let vertex_color = x0.color * w.x + x1.color * w.y + x2.color * w.z;
     let e1 = p1 - p0;
     let e2 = p2 - p0;
     var geometric = normalize_or(cross(e1, e2), -ray.dir);
@@ -297,7 +331,22 @@ fn surface_at(ray: Ray, hit: Hit) -> Surface {
     var n = normalize_or(select(-interpolated, interpolated, facing), geometric);
     let entry = submesh_of(instance, hit.triangle);
     let material = material_domain[scene.renderer.materials_slot + ray_word_domain[params.word_base + entry + 2u]];
+    // Each texture's coordinate at the hit, interpolated from its vertices'.
+    let base_t = material.uv_transforms[0];
+    let base_uv = ray_tex_coord(material, base_t, vec2<f32>(v0.u, v0.v), x0.uv1) * w.x
+        + ray_tex_coord(material, base_t, vec2<f32>(v1.u, v1.v), x1.uv1) * w.y
+        + ray_tex_coord(material, base_t, vec2<f32>(v2.u, v2.v), x2.uv1) * w.z;
+    let base_color = material.base_color * vertex_color * sample_texture(material.base_color_texture, base_uv, vec2<f32>(0.0), vec2<f32>(0.0));
+    if (material.flags & MATERIAL_UNLIT) != 0u {
+        // Unlit: the surface shows its colour and reflects nothing.
+        return Surface(ray.origin + ray.dir * hit.t, n, geometric, vec3<f32>(0.0), 0.0, 1.0, base_color.rgb, true);
+    }
     if material.normal_texture != INVALID_SLOT {
+        let normal_t = material.uv_transforms[2];
+        let uv0 = ray_tex_coord(material, normal_t, vec2<f32>(v0.u, v0.v), x0.uv1);
+        let uv1 = ray_tex_coord(material, normal_t, vec2<f32>(v1.u, v1.v), x1.uv1);
+        let uv2 = ray_tex_coord(material, normal_t, vec2<f32>(v2.u, v2.v), x2.uv1);
+        let uv = uv0 * w.x + uv1 * w.y + uv2 * w.z;
         let texel = sample_texture(material.normal_texture, uv, vec2<f32>(0.0), vec2<f32>(0.0)).xyz;
         let decoded = texel * 2.0 - 1.0;
         let tangent_normal = normalize_or(vec3<f32>(decoded.xy * material.normal_scale, decoded.z), vec3<f32>(0.0, 0.0, 1.0));
@@ -316,9 +365,16 @@ fn surface_at(ray: Ray, hit: Hit) -> Surface {
             n = normalize_or(mat3x3<f32>(t * scale, b * scale, n) * tangent_normal, n);
         }
     }
-    let base_color = material.base_color * sample_texture(material.base_color_texture, uv, vec2<f32>(0.0), vec2<f32>(0.0));
-    let metal_rough = sample_texture(material.metallic_roughness_texture, uv, vec2<f32>(0.0), vec2<f32>(0.0));
-    let emissive = material.emissive * sample_texture(material.emissive_texture, uv, vec2<f32>(0.0), vec2<f32>(0.0)).rgb;
+    let mr_t = material.uv_transforms[1];
+    let mr_uv = ray_tex_coord(material, mr_t, vec2<f32>(v0.u, v0.v), x0.uv1) * w.x
+        + ray_tex_coord(material, mr_t, vec2<f32>(v1.u, v1.v), x1.uv1) * w.y
+        + ray_tex_coord(material, mr_t, vec2<f32>(v2.u, v2.v), x2.uv1) * w.z;
+    let emissive_t = material.uv_transforms[3];
+    let emissive_uv = ray_tex_coord(material, emissive_t, vec2<f32>(v0.u, v0.v), x0.uv1) * w.x
+        + ray_tex_coord(material, emissive_t, vec2<f32>(v1.u, v1.v), x1.uv1) * w.y
+        + ray_tex_coord(material, emissive_t, vec2<f32>(v2.u, v2.v), x2.uv1) * w.z;
+    let metal_rough = sample_texture(material.metallic_roughness_texture, mr_uv, vec2<f32>(0.0), vec2<f32>(0.0));
+    let emissive = material.emissive * sample_texture(material.emissive_texture, emissive_uv, vec2<f32>(0.0), vec2<f32>(0.0)).rgb;
     return Surface(
         ray.origin + ray.dir * hit.t,
         n,
@@ -327,6 +383,7 @@ fn surface_at(ray: Ray, hit: Hit) -> Surface {
         clamp(material.metallic * metal_rough.b, 0.0, 1.0),
         clamp(material.roughness * metal_rough.g, 0.045, 1.0),
         emissive,
+        false,
     );
 }
 
@@ -479,6 +536,11 @@ fn radiance(first: Ray, rng: ptr<function, Rng>) -> vec3<f32> {
         }
         let s = surface_at(ray, hit);
         let v = -ray.dir;
+        if s.unlit {
+            // Light stops at an unlit surface: it shows its colour only.
+            color += throughput * s.emissive;
+            break;
+        }
         color += throughput * (s.emissive + direct_light(s, v, salt));
         if raster_model {
             // forward_lit.wgsl's ambient term, unoccluded, as the raster has it.

@@ -32,7 +32,7 @@ struct GpuGroup {
     draw_base: u32,
     partition_index: u32,
     capacity: u32,
-    reserved: u32,
+    attributes_slot: u32,
 }
 
 struct GpuLod {
@@ -183,8 +183,8 @@ fn emit(group_index: u32, slot: u32, instance: GpuInstance) {
     draw.pass_mask = group.pass_mask;
     draw.node_id = instance.node_id;
     draw.submesh = instance.submesh;
-    draw.reserved0 = params.generation;
-    draw.reserved1 = 0u;
+    draw.generation = params.generation;
+    draw.attributes_slot = group.attributes_slot;
     draw.reserved2 = 0u;
     draw.reserved3 = 0u;
     draw.reserved4 = 0u;

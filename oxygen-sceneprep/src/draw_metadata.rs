@@ -35,8 +35,15 @@ pub struct DrawMetadata {
     pub node_id: u32,
     /// Submesh number within the geometry.
     pub submesh: u32,
+    /// The draw-metadata range's generation when the renderer checks
+    /// generations (debug mode), else zero.
+    pub generation: u32,
+    /// First attribute record (colour, second UV set) of the geometry in
+    /// the vertex domain, parallel to its vertices; [`oxygen_bindless::INVALID_SLOT`]
+    /// when the geometry has none.
+    pub attributes_slot: u32,
     /// Zero; room for growth without changing the stride.
-    pub reserved: [u32; 5],
+    pub reserved: [u32; 3],
 }
 
 const _: () = {
@@ -53,7 +60,9 @@ const _: () = {
     assert!(offset_of!(DrawMetadata, pass_mask) == 32);
     assert!(offset_of!(DrawMetadata, node_id) == 36);
     assert!(offset_of!(DrawMetadata, submesh) == 40);
-    assert!(offset_of!(DrawMetadata, reserved) == 44);
+    assert!(offset_of!(DrawMetadata, generation) == 44);
+    assert!(offset_of!(DrawMetadata, attributes_slot) == 48);
+    assert!(offset_of!(DrawMetadata, reserved) == 52);
 };
 
 impl DrawMetadata {

@@ -40,10 +40,22 @@ pub mod material_flags {
     pub const BLEND: u32 = 1 << 1;
     /// Double-sided.
     pub const DOUBLE_SIDED: u32 = 1 << 2;
+    /// Unlit (`KHR_materials_unlit`): base colour is the radiance.
+    pub const UNLIT: u32 = 1 << 3;
+    /// Some texture reads set 1 or has a transform: the shader applies
+    /// [`MaterialRecord::uv_transforms`](super::MaterialRecord::uv_transforms);
+    /// without it, every texture reads set 0 as is.
+    pub const UV_TRANSFORMS: u32 = 1 << 4;
     /// Every flag with its name, the list [`MaterialRecord::wgsl_constants`](super::MaterialRecord::wgsl_constants)
     /// emits; a flag added above belongs here too (a test checks that the
     /// bits are distinct and cover every bit a record can set).
-    pub const ALL: [(&str, u32); 3] = [("MASKED", MASKED), ("BLEND", BLEND), ("DOUBLE_SIDED", DOUBLE_SIDED)];
+    pub const ALL: [(&str, u32); 5] = [
+        ("MASKED", MASKED),
+        ("BLEND", BLEND),
+        ("DOUBLE_SIDED", DOUBLE_SIDED),
+        ("UNLIT", UNLIT),
+        ("UV_TRANSFORMS", UV_TRANSFORMS),
+    ];
 }
 
 /// One `const NAME: u32 = 0x..u;` line.
@@ -51,7 +63,30 @@ fn wgsl_constant(name: &str, value: u32) -> String {
     format!("const {name}: u32 = {value:#x}u;\n")
 }
 
-/// A material as shaders read it (80 bytes). Texture fields are slots in
+/// A texture's coordinate set and transform as shaders read it (32 bytes):
+/// `uv' = (dot(row0, (u, v, 1)), dot(row1, (u, v, 1)))` of set `uv_set`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct UvTransformRecord {
+    /// First row of the affine map.
+    pub row0: [f32; 3],
+    /// Texture coordinate set, 0 or 1.
+    pub uv_set: u32,
+    /// Second row of the affine map.
+    pub row1: [f32; 3],
+    /// Zero.
+    pub reserved: u32,
+}
+
+impl UvTransformRecord {
+    /// The record of a (sanitized) transform.
+    pub fn from_transform(t: &oxygen_core::UvTransform) -> Self {
+        let [row0, row1] = t.rows();
+        UvTransformRecord { row0, uv_set: t.uv_set, row1, reserved: 0 }
+    }
+}
+
+/// A material as shaders read it (240 bytes). Texture fields are slots in
 /// the texture-locations domain, [`INVALID_SLOT`] when absent.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
@@ -84,6 +119,10 @@ pub struct MaterialRecord {
     pub occlusion_strength: f32,
     /// Zero.
     pub reserved: [u32; 2],
+    /// Coordinate set and transform of each texture, in the order base
+    /// colour, metallic-roughness, normal, emissive, occlusion; read only
+    /// when `flags` has [`material_flags::UV_TRANSFORMS`].
+    pub uv_transforms: [UvTransformRecord; 5],
 }
 
 impl MaterialRecord {
@@ -103,6 +142,13 @@ impl MaterialRecord {
         if m.double_sided {
             flags |= material_flags::DOUBLE_SIDED;
         }
+        if m.unlit {
+            flags |= material_flags::UNLIT;
+        }
+        let uvs = m.uvs.in_record_order();
+        if uvs.iter().any(|t| *t != oxygen_core::UvTransform::IDENTITY) {
+            flags |= material_flags::UV_TRANSFORMS;
+        }
         MaterialRecord {
             base_color: m.base_color.to_array(),
             emissive: m.emissive.to_array(),
@@ -118,6 +164,7 @@ impl MaterialRecord {
             occlusion_texture: INVALID_SLOT,
             occlusion_strength: m.occlusion_strength,
             reserved: [0; 2],
+            uv_transforms: uvs.map(|t| UvTransformRecord::from_transform(&t)),
         }
     }
 }
@@ -235,6 +282,8 @@ const _: () = {
     assert!(offset_of!(MaterialRecord, emissive_texture) == 60);
     assert!(offset_of!(MaterialRecord, occlusion_texture) == 64);
     assert!(offset_of!(MaterialRecord, occlusion_strength) == 68);
+    assert!(offset_of!(MaterialRecord, uv_transforms) == 80);
+    assert!(size_of::<UvTransformRecord>() == 32);
     assert!(offset_of!(DirectionalLightRecord, color) == 16);
     assert!(offset_of!(DirectionalLightRecord, shadow_slot) == 32);
     assert!(offset_of!(PositionalLightRecord, direction) == 16);

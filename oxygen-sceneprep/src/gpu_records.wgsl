@@ -17,11 +17,18 @@ struct DrawMetadata {
     pass_mask: u32,
     node_id: u32,
     submesh: u32,
-    reserved0: u32,
-    reserved1: u32,
+    generation: u32,
+    attributes_slot: u32,
     reserved2: u32,
     reserved3: u32,
     reserved4: u32,
+}
+
+struct UvTransformRecord {
+    row0: vec3<f32>,
+    uv_set: u32,
+    row1: vec3<f32>,
+    reserved: u32,
 }
 
 struct MaterialRecord {
@@ -40,6 +47,7 @@ struct MaterialRecord {
     occlusion_strength: f32,
     reserved0: u32,
     reserved1: u32,
+    uv_transforms: array<UvTransformRecord, 5>,
 }
 
 struct DirectionalLightRecord {
@@ -102,6 +110,6 @@ struct RayInstance {
     index_slot: u32,
     submesh_first: u32,
     submesh_count: u32,
-    reserved0: u32,
-    reserved1: u32,
+    attributes_slot: u32,
+    reserved: u32,
 }

@@ -138,8 +138,9 @@ pub struct GpuGroup {
     pub partition: u32,
     /// Instances that may select it: its room in the draw range.
     pub capacity: u32,
-    /// Zero.
-    pub reserved: u32,
+    /// The mesh's attribute records in the vertex domain (colour, second
+    /// UV set), [`oxygen_bindless::INVALID_SLOT`] when it has none.
+    pub attributes_slot: u32,
 }
 
 /// One LOD level of an instance: used below a projected size (8 bytes).
@@ -268,8 +269,11 @@ impl GpuScene {
         };
         let mut instances = Vec::with_capacity(previous.len());
         let mut lods = Vec::new();
+        // A mesh's attribute records, by its first vertex (which names it).
+        let mut attributes_of: HashMap<u32, u32> = HashMap::new();
         for (index, entry) in frame.renderables.iter().enumerate() {
             let Some(base) = geometry.get(entry.geometry) else { continue };
+            attributes_of.insert(base.vertices.start, base.attributes);
             let (start, count) = entry.submeshes;
             let submeshes = &frame.submeshes[start as usize..(start + count) as usize];
             if submeshes.iter().any(|s| s.pass_mask.contains(PassMask::TRANSPARENT)) {
@@ -297,6 +301,7 @@ impl GpuScene {
                     let lod = scene.geometry(level.geometry).and_then(|mesh| {
                         let range = *mesh.submeshes().get(submesh)?;
                         let slots = geometry.get(level.geometry)?;
+                        attributes_of.insert(slots.vertices.start, slots.attributes);
                         Some(key(slots.vertices.start, slots.indices.start, range.first_index, range.index_count))
                     });
                     // A level the CPU path could not draw either falls back
@@ -358,7 +363,7 @@ impl GpuScene {
                 draw_base,
                 partition,
                 capacity,
-                reserved: 0,
+                attributes_slot: attributes_of.get(&vertex_slot).copied().unwrap_or(oxygen_bindless::INVALID_SLOT),
             });
             draw_base += capacity;
         }

@@ -299,8 +299,14 @@ impl PreparedSceneFrame {
 
 /// A draw's node, mesh range, transform and material, as both dumps print them.
 fn draw_fields(d: &DrawMetadata) -> String {
+    // Printed only when present, so dumps of scenes without vertex colours
+    // or a second UV set read as they always did.
+    let attributes = match d.attributes_slot {
+        oxygen_bindless::INVALID_SLOT => String::new(),
+        slot => format!(" attributes@{slot}"),
+    };
     format!(
-        "node={:<3} submesh={} vertices@{} indices@{}+{}..{} transform={} material={}",
+        "node={:<3} submesh={} vertices@{}{attributes} indices@{}+{}..{} transform={} material={}",
         d.node_id,
         d.submesh,
         d.vertex_slot,

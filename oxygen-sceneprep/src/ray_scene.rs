@@ -52,8 +52,11 @@ pub struct RayInstance {
     pub submesh_first: u32,
     /// Submeshes in the table.
     pub submesh_count: u32,
+    /// The mesh's attribute records (colour, second UV set) in the vertex
+    /// domain, [`oxygen_bindless::INVALID_SLOT`] when it has none.
+    pub attributes_slot: u32,
     /// Zero.
-    pub reserved: [u32; 2],
+    pub reserved: u32,
 }
 
 const _: () = assert!(std::mem::size_of::<RayInstance>() == 80);
@@ -146,7 +149,8 @@ impl RayScene {
                 index_slot: slots.indices.start,
                 submesh_first,
                 submesh_count: submeshes.len() as u32,
-                reserved: [0; 2],
+                attributes_slot: slots.attributes,
+                reserved: 0,
             });
             world_boxes.push(transform_box(&world, bvh.bounds()));
             if !used.contains(&entry.geometry_id) {

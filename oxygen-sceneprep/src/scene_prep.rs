@@ -288,7 +288,7 @@ impl ScenePrep {
     }
 
     /// Debug mode: every `DrawMetadata` carries its range's generation in
-    /// `reserved[0]`, and the view's constants ask the shader to check it.
+    /// `generation`, and the view's constants ask the shader to check it.
     pub fn set_debug_generations(&mut self, enabled: bool) {
         self.debug_generations = enabled;
     }
@@ -705,6 +705,9 @@ impl ScenePrep {
         self.geometry.take_pending(&mut self.pending_geometry);
         for (slots, geometry) in self.pending_geometry.drain(..) {
             heap.write(queue, &slots.vertices, 0, geometry.vertices())?;
+            if let Some(attributes) = geometry.attributes() {
+                heap.write(queue, &slots.vertices, geometry.vertices().len() as u32, attributes)?;
+            }
             heap.write(queue, &slots.indices, 0, geometry.indices())?;
             self.stats.geometry_uploads += 1;
         }

@@ -56,7 +56,9 @@ fn gpu_records_wgsl_matches_rust_layouts() {
         ]
     );
     let (members, _) = layout(&module, "DrawMetadata");
-    assert_eq!(offset(&members, "reserved0") as usize, offset_of!(DrawMetadata, reserved));
+    assert_eq!(offset(&members, "generation") as usize, offset_of!(DrawMetadata, generation));
+    assert_eq!(offset(&members, "attributes_slot") as usize, offset_of!(DrawMetadata, attributes_slot));
+    assert_eq!(offset(&members, "reserved2") as usize, offset_of!(DrawMetadata, reserved));
     check!(
         module,
         MaterialRecord,
@@ -74,9 +76,11 @@ fn gpu_records_wgsl_matches_rust_layouts() {
             normal_texture,
             emissive_texture,
             occlusion_texture,
-            occlusion_strength
+            occlusion_strength,
+            uv_transforms
         ]
     );
+    check!(module, oxygen_sceneprep::UvTransformRecord, "UvTransformRecord", [row0, uv_set, row1]);
     check!(module, DirectionalLightRecord, "DirectionalLightRecord", [direction, intensity, color, flags, shadow_slot]);
     check!(
         module,
@@ -100,7 +104,7 @@ fn gpu_records_wgsl_matches_rust_layouts() {
         module,
         oxygen_sceneprep::RayInstance,
         "RayInstance",
-        [transform_index, blas_root, vertex_slot, index_slot, submesh_first, submesh_count]
+        [transform_index, blas_root, vertex_slot, index_slot, submesh_first, submesh_count, attributes_slot]
     );
     let (members, _) = layout(&module, "RayInstance");
     assert_eq!(offset(&members, "inverse_row0") as usize, offset_of!(oxygen_sceneprep::RayInstance, inverse_rows));

@@ -31,15 +31,20 @@ pub(crate) enum Semantic {
 impl Semantic {
     /// The glTF 2.0 table (3.7.2.1 and 3.7.2.2): element types and
     /// component types allowed, and whether integer components must be
-    /// normalized.
-    fn allows(self, ty: Type, component: ComponentType, normalized: bool) -> bool {
-        use ComponentType::{F32, U8, U16, U32};
+    /// normalized; with `quantized` (the file uses `KHR_mesh_quantization`)
+    /// also that extension's 8- and 16-bit positions, normals, tangents and
+    /// texture coordinates.
+    fn allows(self, ty: Type, component: ComponentType, normalized: bool, quantized: bool) -> bool {
+        use ComponentType::{F32, I8, I16, U8, U16, U32};
         let float = component == F32 && !normalized;
         let unorm = matches!(component, U8 | U16) && normalized;
+        let small = matches!(component, I8 | U8 | I16 | U16);
+        let snorm = matches!(component, I8 | I16) && normalized;
         match self {
-            Semantic::Position | Semantic::Normal => ty == Type::Vec3 && float,
-            Semantic::Tangent => ty == Type::Vec4 && float,
-            Semantic::TexCoord => ty == Type::Vec2 && (float || unorm),
+            Semantic::Position => ty == Type::Vec3 && (float || (quantized && small)),
+            Semantic::Normal => ty == Type::Vec3 && (float || (quantized && snorm)),
+            Semantic::Tangent => ty == Type::Vec4 && (float || (quantized && snorm)),
+            Semantic::TexCoord => ty == Type::Vec2 && (float || unorm || (quantized && small)),
             Semantic::Color => matches!(ty, Type::Vec3 | Type::Vec4) && (float || unorm),
             Semantic::Joints => ty == Type::Vec4 && matches!(component, U8 | U16) && !normalized,
             Semantic::Weights => ty == Type::Vec4 && (float || unorm),
@@ -149,7 +154,8 @@ pub(crate) fn validate<'a>(
     let Checked::Valid(ty) = a.type_ else {
         return Err(format!("accessor {index}: unknown type"));
     };
-    if !semantic.allows(ty, component, a.normalized) {
+    let quantized = root.extensions_used.iter().chain(&root.extensions_required).any(|e| e == "KHR_mesh_quantization");
+    if !semantic.allows(ty, component, a.normalized, quantized) {
         return Err(format!(
             "accessor {index}: {ty:?} of {component:?}{} is not allowed for {semantic:?}",
             if a.normalized { " (normalized)" } else { "" }
@@ -329,17 +335,38 @@ mod tests {
     #[test]
     fn the_semantic_tables_refuse_what_gltf_forbids() {
         use ComponentType::*;
-        assert!(Semantic::Indices.allows(Type::Scalar, U16, false));
+        assert!(Semantic::Indices.allows(Type::Scalar, U16, false, false));
         for c in [I8, I16, F32] {
-            assert!(!Semantic::Indices.allows(Type::Scalar, c, false), "{c:?} indices");
+            assert!(!Semantic::Indices.allows(Type::Scalar, c, false, false), "{c:?} indices");
         }
-        assert!(!Semantic::Indices.allows(Type::Scalar, U16, true));
-        assert!(!Semantic::TexCoord.allows(Type::Vec2, U32, false));
-        assert!(!Semantic::TexCoord.allows(Type::Vec2, U8, false));
-        assert!(Semantic::TexCoord.allows(Type::Vec2, U8, true));
-        assert!(!Semantic::Position.allows(Type::Vec2, F32, false));
-        assert!(!Semantic::Position.allows(Type::Vec3, F32, true));
-        assert!(Semantic::Color.allows(Type::Vec4, U16, true));
+        assert!(!Semantic::Indices.allows(Type::Scalar, U16, true, false));
+        assert!(!Semantic::TexCoord.allows(Type::Vec2, U32, false, false));
+        assert!(!Semantic::TexCoord.allows(Type::Vec2, U8, false, false));
+        assert!(Semantic::TexCoord.allows(Type::Vec2, U8, true, false));
+        assert!(!Semantic::Position.allows(Type::Vec2, F32, false, false));
+        assert!(!Semantic::Position.allows(Type::Vec3, F32, true, false));
+        assert!(Semantic::Color.allows(Type::Vec4, U16, true, false));
+    }
+
+    #[test]
+    fn mesh_quantization_admits_small_integers_only_where_it_says() {
+        use ComponentType::*;
+        // Without the extension, 16-bit positions are refused ...
+        assert!(!Semantic::Position.allows(Type::Vec3, I16, false, false));
+        // ... with it, positions of any small integer type, normalized or not.
+        for (c, n) in [(I8, false), (U8, true), (I16, true), (U16, false)] {
+            assert!(Semantic::Position.allows(Type::Vec3, c, n, true), "{c:?} {n}");
+        }
+        // Normals and tangents only as signed normalized integers.
+        assert!(Semantic::Normal.allows(Type::Vec3, I8, true, true));
+        assert!(!Semantic::Normal.allows(Type::Vec3, U8, true, true));
+        assert!(!Semantic::Normal.allows(Type::Vec3, I16, false, true));
+        assert!(Semantic::Tangent.allows(Type::Vec4, I16, true, true));
+        // Texture coordinates as any small integer; never 32-bit integers.
+        assert!(Semantic::TexCoord.allows(Type::Vec2, I16, false, true));
+        assert!(!Semantic::TexCoord.allows(Type::Vec2, U32, false, true));
+        // Indices are untouched by the extension.
+        assert!(!Semantic::Indices.allows(Type::Scalar, I16, false, true));
     }
 
     #[test]

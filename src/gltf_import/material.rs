@@ -14,8 +14,10 @@ use std::io::Cursor;
 use glam::{Vec3, Vec4};
 use gltf::json;
 use gltf::json::validation::Checked;
+use glam::Vec2;
 use oxygen_core::{
-    AlphaMode, ColorSpace, Filter, Material, MaterialHandle, Sampling, Scene, TextureHandle, TextureImage, Wrap,
+    AlphaMode, ColorSpace, Filter, Material, MaterialHandle, MaterialUvs, Sampling, Scene, TextureHandle,
+    TextureImage, UvTransform, Wrap,
 };
 
 use super::limits::{Budget, check};
@@ -67,35 +69,46 @@ impl<'a> MaterialImporter<'a> {
         };
         let label = index.map_or_else(|| "the default material".to_owned(), |i| format!("material {i}"));
         let pbr = &m.pbr_metallic_roughness;
-        let mut texture = |this: &mut Self, info: Option<(json::Index<json::Texture>, u32)>, space, what: &str| {
-            let Some((texture, tex_coord)) = info else { return Ok(None) };
-            if tex_coord != 0 {
-                warnings.push(format!("{label}: the {what} texture uses texcoord set {tex_coord}; set 0 is used"));
-            }
-            this.texture(scene, texture.value(), space, budget, warnings).map(Some)
+        let mut texture = |this: &mut Self, info: Option<TextureRef>, space, what: &str| {
+            let Some(info) = info else { return Ok((None, UvTransform::IDENTITY)) };
+            let uv = uv_transform(&info, &label, what, warnings);
+            this.texture(scene, info.index.value(), space, budget, warnings).map(|t| (Some(t), uv))
         };
-        let base_color_texture = texture(
+        let info = |t: &json::texture::Info| TextureRef {
+            index: t.index,
+            tex_coord: t.tex_coord,
+            transform: t.extensions.as_ref().and_then(|e| e.texture_transform.clone()),
+        };
+        let (base_color_texture, base_color_uv) =
+            texture(self, pbr.base_color_texture.as_ref().map(info), ColorSpace::Srgb, "base-colour")?;
+        let (metallic_roughness_texture, metallic_roughness_uv) = texture(
             self,
-            pbr.base_color_texture.as_ref().map(|t| (t.index, t.tex_coord)),
-            ColorSpace::Srgb,
-            "base-colour",
-        )?;
-        let metallic_roughness_texture = texture(
-            self,
-            pbr.metallic_roughness_texture.as_ref().map(|t| (t.index, t.tex_coord)),
+            pbr.metallic_roughness_texture.as_ref().map(info),
             ColorSpace::Linear,
             "metallic-roughness",
         )?;
-        let normal_texture =
-            texture(self, m.normal_texture.as_ref().map(|t| (t.index, t.tex_coord)), ColorSpace::Linear, "normal")?;
-        let emissive_texture =
-            texture(self, m.emissive_texture.as_ref().map(|t| (t.index, t.tex_coord)), ColorSpace::Srgb, "emissive")?;
-        let occlusion_texture = texture(
-            self,
-            m.occlusion_texture.as_ref().map(|t| (t.index, t.tex_coord)),
-            ColorSpace::Linear,
-            "occlusion",
-        )?;
+        let normal = m.normal_texture.as_ref().map(|t| TextureRef {
+            index: t.index,
+            tex_coord: t.tex_coord,
+            transform: t.extensions.as_ref().and_then(|e| transform_in(e.others.get("KHR_texture_transform"))),
+        });
+        let (normal_texture, normal_uv) = texture(self, normal, ColorSpace::Linear, "normal")?;
+        let (emissive_texture, emissive_uv) =
+            texture(self, m.emissive_texture.as_ref().map(info), ColorSpace::Srgb, "emissive")?;
+        let occlusion = m.occlusion_texture.as_ref().map(|t| TextureRef {
+            index: t.index,
+            tex_coord: t.tex_coord,
+            transform: t.extensions.as_ref().and_then(|e| transform_in(e.others.get("KHR_texture_transform"))),
+        });
+        let (occlusion_texture, occlusion_uv) = texture(self, occlusion, ColorSpace::Linear, "occlusion")?;
+        let uvs = MaterialUvs {
+            base_color: base_color_uv,
+            metallic_roughness: metallic_roughness_uv,
+            normal: normal_uv,
+            emissive: emissive_uv,
+            occlusion: occlusion_uv,
+        };
+        let unlit = m.extensions.as_ref().is_some_and(|e| e.unlit.is_some());
         let alpha_mode = match m.alpha_mode {
             Checked::Valid(json::material::AlphaMode::Opaque) => AlphaMode::Opaque,
             Checked::Valid(json::material::AlphaMode::Mask) => {
@@ -121,6 +134,8 @@ impl<'a> MaterialImporter<'a> {
             roughness: pbr.roughness_factor.0,
             alpha_mode,
             double_sided: m.double_sided,
+            uvs,
+            unlit,
         };
         warn_non_finite(&material, &label, warnings);
         let handle = scene.add_material(material);
@@ -242,6 +257,46 @@ impl<'a> MaterialImporter<'a> {
         let (w, h, pixels) = self.images.entry(index).or_insert(decoded);
         Ok((*w, *h, pixels))
     }
+}
+
+/// A material's reference to a texture: which texture, which coordinate
+/// set, and its `KHR_texture_transform` when it has one.
+struct TextureRef {
+    index: json::Index<json::Texture>,
+    tex_coord: u32,
+    transform: Option<json::extensions::texture::TextureTransform>,
+}
+
+/// `KHR_texture_transform` from an extension map that gltf-json keeps as
+/// raw JSON (normal and occlusion textures); an unreadable one is ignored
+/// like any unknown extension data.
+fn transform_in(value: Option<&json::Value>) -> Option<json::extensions::texture::TextureTransform> {
+    json::deserialize::from_value(value?.clone()).ok()
+}
+
+/// The coordinate set and transform of one texture reference. glTF
+/// defines sets 0 and 1 for every texture; a later set (2 and up) is read
+/// as set 0 with a warning, since Oxygen keeps two.
+fn uv_transform(info: &TextureRef, label: &str, what: &str, warnings: &mut Vec<String>) -> UvTransform {
+    let mut uv = UvTransform::IDENTITY;
+    let mut set = info.tex_coord;
+    if let Some(t) = &info.transform {
+        uv.offset = Vec2::from(t.offset.0);
+        uv.rotation = t.rotation.0;
+        uv.scale = Vec2::from(t.scale.0);
+        // The extension's texCoord overrides the texture info's.
+        set = t.tex_coord.unwrap_or(set);
+        if !(uv.offset.is_finite() && uv.rotation.is_finite() && uv.scale.is_finite()) {
+            warnings.push(format!("{label}: the {what} texture's transform is not finite; ignored"));
+            uv = UvTransform::IDENTITY;
+        }
+    }
+    if set > 1 {
+        warnings.push(format!("{label}: the {what} texture uses texcoord set {set}; set 0 is used (Oxygen keeps two)"));
+        set = 0;
+    }
+    uv.uv_set = set;
+    uv
 }
 
 enum DecodeError {

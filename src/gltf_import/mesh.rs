@@ -9,11 +9,11 @@
 
 use std::borrow::Cow;
 
-use glam::{DVec3, Vec2, Vec3};
+use glam::{DVec3, Vec2, Vec3, Vec4};
 use gltf::json;
 use gltf::json::mesh::{Mode, Semantic as JsonSemantic};
 use gltf::json::validation::Checked;
-use oxygen_core::{Geometry, Submesh, Vertex};
+use oxygen_core::{Geometry, Submesh, Vertex, VertexAttributes};
 
 use super::accessor::{self, Semantic};
 use super::limits::Budget;
@@ -85,6 +85,8 @@ pub(crate) fn build(
         let mut position = None;
         let mut normal = None;
         let mut texcoord0 = None;
+        let mut texcoord1 = None;
+        let mut color0 = None;
         let mut count: Option<(usize, usize)> = None;
         for (semantic, accessor_index) in &primitive.attributes {
             let a = accessor_index.value();
@@ -92,8 +94,10 @@ pub(crate) fn build(
                 Checked::Valid(JsonSemantic::Positions) => (Semantic::Position, Some(&mut position)),
                 Checked::Valid(JsonSemantic::Normals) => (Semantic::Normal, Some(&mut normal)),
                 Checked::Valid(JsonSemantic::TexCoords(0)) => (Semantic::TexCoord, Some(&mut texcoord0)),
+                Checked::Valid(JsonSemantic::TexCoords(1)) => (Semantic::TexCoord, Some(&mut texcoord1)),
                 Checked::Valid(JsonSemantic::TexCoords(_)) => (Semantic::TexCoord, None),
                 Checked::Valid(JsonSemantic::Tangents) => (Semantic::Tangent, None),
+                Checked::Valid(JsonSemantic::Colors(0)) => (Semantic::Color, Some(&mut color0)),
                 Checked::Valid(JsonSemantic::Colors(_)) => (Semantic::Color, None),
                 Checked::Valid(JsonSemantic::Joints(_)) => (Semantic::Joints, None),
                 Checked::Valid(JsonSemantic::Weights(_)) => (Semantic::Weights, None),
@@ -141,13 +145,17 @@ pub(crate) fn build(
             .checked_add(index_count)
             .filter(|t| u32::try_from(*t).is_ok())
             .ok_or_else(|| fail(p, None, "more than 2^32 indices in one mesh".into()))?;
+        // A primitive with a colour or second UV set gives its mesh attribute
+        // records (one per vertex, the size of a vertex) for every vertex.
+        let extras = color0.is_some() || texcoord1.is_some();
+        let vertex_bytes = size_of::<Vertex>() as u64 * if extras { 2 } else { 1 };
         budget
-            .spend_geometry(vertex_count as u64, index_count as u64, size_of::<Vertex>() as u64)
+            .spend_geometry(vertex_count as u64, index_count as u64, vertex_bytes)
             .map_err(|e| super::GltfErrorKind::Limit { context: format!("mesh {index} ('{name}')"), source: e })?;
         // While a primitive is read, its attributes live in scratch arrays
         // beside the mesh's: positions, normals (and their f64 sums when
         // generated), texture coordinates, its own indices.
-        let scratch_per_vertex: u64 = 12 + 12 + 8 + if normal.is_none() { 24 } else { 0 };
+        let scratch_per_vertex: u64 = 12 + 12 + 8 + if normal.is_none() { 24 } else { 0 } + if extras { 24 } else { 0 };
         let scratch = (vertex_count as u64)
             .saturating_mul(scratch_per_vertex)
             .saturating_add((index_count as u64).saturating_mul(4));
@@ -157,6 +165,8 @@ pub(crate) fn build(
             position,
             normal,
             texcoord0,
+            texcoord1,
+            color0,
             indices: index_view,
             material: primitive.material.map(|m| m.value()),
         });
@@ -170,6 +180,10 @@ pub(crate) fn build(
 
     // Pass 2: the mesh's arrays, allocated once at their final size, filled
     // primitive by primitive.
+    // Attribute records for the whole mesh when any primitive has colours
+    // or a second UV set (the others get white and zero).
+    let any_extras = plans.iter().any(|p| p.color0.is_some() || p.texcoord1.is_some());
+    let mut attributes: Vec<VertexAttributes> = Vec::with_capacity(if any_extras { total_vertices } else { 0 });
     let mut vertices: Vec<Vertex> = Vec::with_capacity(total_vertices);
     let mut indices: Vec<u32> = Vec::with_capacity(total_indices);
     let mut submeshes = Vec::with_capacity(plans.len());
@@ -213,12 +227,38 @@ pub(crate) fn build(
             None => vec![Vec2::ZERO; vertex_count],
         };
         vertices.extend(positions.iter().zip(&normals).zip(&uvs).map(|((p, n), uv)| Vertex::new(*p, *n, *uv)));
+        if any_extras {
+            let colors: Vec<Vec4> = match plan.color0 {
+                Some(view) => {
+                    let rgb_only = view.components == 3;
+                    view.read_floats::<4>()
+                        .map_err(|e| fail(p, Some(view.index), e))?
+                        .into_iter()
+                        .map(|c| if rgb_only { Vec4::new(c[0], c[1], c[2], 1.0) } else { Vec4::from(c) })
+                        .collect()
+                }
+                None => vec![Vec4::ONE; vertex_count],
+            };
+            let uv1: Vec<Vec2> = match plan.texcoord1 {
+                Some(view) => view
+                    .read_floats::<2>()
+                    .map_err(|e| fail(p, Some(view.index), e))?
+                    .into_iter()
+                    .map(Vec2::from)
+                    .collect(),
+                None => vec![Vec2::ZERO; vertex_count],
+            };
+            attributes.extend(colors.iter().zip(&uv1).map(|(c, uv)| VertexAttributes::new(*c, *uv)));
+        }
         submeshes.push(Submesh { first_index, index_count: local_indices.len() as u32 });
         indices.extend(local_indices.iter().map(|i| i + base));
         materials.push(plan.material);
     }
-    let geometry = Geometry::new(name.clone(), vertices, indices, submeshes)
-        .map_err(|e| super::GltfErrorKind::Invalid(format!("mesh {index} ('{name}'): {e}")))?;
+    let invalid = |e| super::GltfErrorKind::Invalid(format!("mesh {index} ('{name}'): {e}"));
+    let mut geometry = Geometry::new(name.clone(), vertices, indices, submeshes).map_err(invalid)?;
+    if any_extras {
+        geometry = geometry.with_attributes(attributes).map_err(invalid)?;
+    }
     Ok(MeshResult::Geometry(geometry, materials))
 }
 
@@ -228,6 +268,8 @@ struct PrimitivePlan<'a> {
     position: accessor::AccessorView<'a>,
     normal: Option<accessor::AccessorView<'a>>,
     texcoord0: Option<accessor::AccessorView<'a>>,
+    texcoord1: Option<accessor::AccessorView<'a>>,
+    color0: Option<accessor::AccessorView<'a>>,
     indices: Option<accessor::AccessorView<'a>>,
     material: Option<usize>,
 }

@@ -65,7 +65,13 @@ use source::{AssetRoot, AssetRootRef};
 
 /// Extensions whose meaning Oxygen implements; a file that *requires* any
 /// other is refused, as glTF asks of a loader that does not support it.
-pub const SUPPORTED_REQUIRED_EXTENSIONS: &[&str] = &["KHR_lights_punctual", "KHR_materials_emissive_strength"];
+pub const SUPPORTED_REQUIRED_EXTENSIONS: &[&str] = &[
+    "KHR_lights_punctual",
+    "KHR_materials_emissive_strength",
+    "KHR_materials_unlit",
+    "KHR_mesh_quantization",
+    "KHR_texture_transform",
+];
 
 /// Why a glTF file could not be imported. Every variant names the file; the
 /// ones about one part of it name that part (node, mesh, primitive,

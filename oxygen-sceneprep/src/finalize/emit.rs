@@ -85,7 +85,9 @@ pub(crate) fn emit_view(frame: &FrameEmit<'_>, view: &ViewEmit<'_>, out: &mut Pr
             pass_mask: item.pass_mask.bits(),
             node_id: item.node_id,
             submesh: item.submesh,
-            reserved: [generation_tag, 0, 0, 0, 0],
+            generation: generation_tag,
+            attributes_slot: g.attributes,
+            reserved: [0; 3],
         });
         out.sort_keys.push(key);
     }

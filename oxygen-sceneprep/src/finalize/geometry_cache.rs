@@ -14,10 +14,13 @@ use oxygen_core::{Geometry, GeometryHandle};
 /// Where a mesh lives in the vertex and index domains.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct GeometrySlots {
-    /// Vertex range.
+    /// Vertex range: the vertices, then the attribute records when the
+    /// mesh has them.
     pub vertices: Allocation,
     /// Index range.
     pub indices: Allocation,
+    /// First attribute record, [`oxygen_bindless::INVALID_SLOT`] when none.
+    pub attributes: u32,
 }
 
 /// Lazily allocated geometry slots plus the uploads still owed.
@@ -52,7 +55,8 @@ impl GeometryCache {
         if let Some(Some((_, old))) = self.entries.get(index).copied() {
             self.free_slots(old, slots)?;
         }
-        let vertices = slots.allocate(DomainKind::Vertices, geometry.vertices().len() as u32)?;
+        // Fits in u32: `Geometry` refuses more records than that.
+        let vertices = slots.allocate(DomainKind::Vertices, geometry.vertex_domain_records() as u32)?;
         let indices = match slots.allocate(DomainKind::Indices, geometry.indices().len() as u32) {
             Ok(i) => i,
             Err(e) => {
@@ -60,7 +64,11 @@ impl GeometryCache {
                 return Err(e);
             }
         };
-        let s = GeometrySlots { vertices, indices };
+        let attributes = match geometry.attributes() {
+            Some(_) => vertices.start + geometry.vertices().len() as u32,
+            None => oxygen_bindless::INVALID_SLOT,
+        };
+        let s = GeometrySlots { vertices, indices, attributes };
         if self.entries.len() <= index {
             self.entries.resize(index + 1, None);
         }
