@@ -11,13 +11,13 @@ use std::borrow::Cow;
 use std::collections::HashMap;
 use std::io::Cursor;
 
+use glam::Vec2;
 use glam::{Vec3, Vec4};
 use gltf::json;
 use gltf::json::validation::Checked;
-use glam::Vec2;
 use oxygen_core::{
-    AlphaMode, ColorSpace, Filter, Material, MaterialHandle, MaterialUvs, Sampling, Scene, TextureHandle,
-    TextureImage, UvTransform, Wrap,
+    AlphaMode, ColorSpace, Filter, Material, MaterialHandle, MaterialUvs, Sampling, Scene, TextureHandle, TextureImage,
+    UvTransform, Wrap,
 };
 
 use super::limits::{Budget, check};
@@ -81,12 +81,8 @@ impl<'a> MaterialImporter<'a> {
         };
         let (base_color_texture, base_color_uv) =
             texture(self, pbr.base_color_texture.as_ref().map(info), ColorSpace::Srgb, "base-colour")?;
-        let (metallic_roughness_texture, metallic_roughness_uv) = texture(
-            self,
-            pbr.metallic_roughness_texture.as_ref().map(info),
-            ColorSpace::Linear,
-            "metallic-roughness",
-        )?;
+        let (metallic_roughness_texture, metallic_roughness_uv) =
+            texture(self, pbr.metallic_roughness_texture.as_ref().map(info), ColorSpace::Linear, "metallic-roughness")?;
         let normal = m.normal_texture.as_ref().map(|t| TextureRef {
             index: t.index,
             tex_coord: t.tex_coord,

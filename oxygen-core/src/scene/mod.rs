@@ -175,6 +175,15 @@ impl Scene {
         self.materials.insert(material.sanitized())
     }
 
+    /// Replaces a material (sanitized like [`Scene::add_material`]); every
+    /// draw using it shows the new one from the next frame.
+    pub fn set_material(&mut self, handle: MaterialHandle, material: Material) -> Result<(), SceneError> {
+        let slot = self.materials.get_mut(handle).ok_or(SceneError::NoSuchMaterial(handle))?;
+        *slot = material.sanitized();
+        self.revision += 1;
+        Ok(())
+    }
+
     /// Adds a texture asset.
     pub fn add_texture(&mut self, texture: TextureImage) -> TextureHandle {
         self.revision += 1;
