@@ -23,9 +23,12 @@ fn read_buffer(gpu: &GpuContext, buffer: &wgpu::Buffer, bytes: u64) -> Vec<u8> {
     data
 }
 
-/// A material-sized record (80 bytes) whose words all equal `value`.
-fn record(value: u32) -> [u32; 20] {
-    [value; 20]
+/// Words in one material record.
+const WORDS: usize = DomainKind::Materials.record_size() as usize / 4;
+
+/// A material-sized record whose words all equal `value`.
+fn record(value: u32) -> [u32; WORDS] {
+    [value; WORDS]
 }
 
 #[test]
@@ -47,8 +50,8 @@ fn a_domain_grows_and_keeps_its_live_records() {
     let second_records: Vec<_> = (0..5000).map(|i| record(50_000 + i)).collect();
     heap.write(&gpu.queue, &second, 0, &second_records).unwrap();
 
-    let bytes = read_buffer(&gpu, heap.buffer(DomainKind::Materials), 5010 * 80);
-    let words: &[[u32; 20]] = bytemuck::cast_slice(&bytes);
+    let bytes = read_buffer(&gpu, heap.buffer(DomainKind::Materials), 5010 * DomainKind::Materials.record_size());
+    let words: &[[u32; WORDS]] = bytemuck::cast_slice(&bytes);
     assert_eq!(&words[first.start as usize..first.end() as usize], &first_records[..], "copied across growth");
     assert_eq!(&words[second.start as usize..second.end() as usize], &second_records[..]);
 

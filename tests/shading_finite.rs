@@ -125,7 +125,8 @@ fn shading_properties(@builtin(global_invocation_id) id: vec3<u32>) {
     let normal_scale = shading_cases[c + 3u].w;
     let world_normal = shading_cases[c + 4u].xyz;
     let brightness = shading_cases[c + 4u].w;
-    let d = Derivatives(shading_cases[c + 5u].xyz, shading_cases[c + 6u].xyz, shading_cases[c + 7u].xy, shading_cases[c + 7u].zw);
+    let uv_d = UvDerivatives(shading_cases[c + 7u].xy, shading_cases[c + 7u].zw, shading_cases[c + 7u].xy, shading_cases[c + 7u].zw);
+    let d = Derivatives(shading_cases[c + 5u].xyz, shading_cases[c + 6u].xyz, uv_d);
     let to_viewer = shading_cases[c + 8u].xyz;
     let texel = shading_cases[c + 9u].xyz;
     let spot = shading_cases[c + 10u].xyz;
@@ -136,7 +137,8 @@ fn shading_properties(@builtin(global_invocation_id) id: vec3<u32>) {
     // direction -> normal map -> BRDF.
     let shading = shading_normal(world_normal, flip, d, to_viewer);
     let view = view_direction(to_viewer, shading);
-    let mapped = perturb_normal(shading, d, tangent_space_normal(texel, normal_scale));
+    let at = TexCoord(vec2<f32>(0.0), d.uv.dx0, d.uv.dy0);
+    let mapped = perturb_normal(shading, d, at, tangent_space_normal(texel, normal_scale));
     let chained = brdf_cosine(mapped, view, l, albedo, metallic, roughness);
     let r = i * 6u;
     shading_results[r] = vec4<f32>(direct, 0.0);
