@@ -478,3 +478,31 @@ fn a_texture_reads_the_uv_set_its_material_names() {
     assert!(c.differing > c.total / 20, "reading set 1 must change the picture: {} of {}", c.differing, c.total);
     assert_golden("multi_uv_test", &two_sets, Tolerance::default());
 }
+
+/// The texture paths this backend offers (wgpu's GL backend has no binding
+/// arrays, docs/backends.md).
+fn texture_paths() -> Vec<TexturePath> {
+    if std::env::var("WGPU_BACKEND").is_ok_and(|b| b.eq_ignore_ascii_case("gl")) {
+        eprintln!("GL backend: TexturePath::BindingArray does not exist there; testing GroupedArrays only");
+        return vec![TexturePath::GroupedArrays];
+    }
+    vec![TexturePath::BindingArray, TexturePath::GroupedArrays]
+}
+
+/// TextureSettingsTest: every row's "Test" cell must look like its "Sample
+/// pass" cell, which needs wrapS and wrapT to be applied separately (clamp
+/// along one axis, repeat or mirror along the other). One golden, checked
+/// by eye against the file's reference screenshot; both texture paths must
+/// match it.
+#[test]
+fn golden_texture_settings_test_on_both_texture_paths() {
+    let (scene, resolver) = shipped("TextureSettingsTest/TextureSettingsTest.glb");
+    for path in texture_paths() {
+        let options = RendererOptions { texture_path: Some(path), keep_hdr: true, ..Default::default() };
+        let mut renderer = Renderer::new_headless_with(options).unwrap_or_else(|e| panic!("{path:?}: {e}"));
+        let view = renderer.register_view(resolver.clone(), standard_render_graph).unwrap();
+        renderer.render_frame(&scene).unwrap();
+        let image = support::read_lit_color(&renderer, view);
+        assert_golden("texture_settings_test", &image, Tolerance::default());
+    }
+}

@@ -111,8 +111,8 @@ fn a_texture_of_another_size_is_resampled_on_the_grouped_path() {
 fn the_sampler_table_applies_nearest_and_linear_filtering() {
     // A 2 × 2 texel checker: at u = 0.4 (a fifth of a texel from the middle)
     // nearest filtering gives pure red, linear a red-blue mix.
-    let nearest = Sampling { wrap: Wrap::Repeat, filter: Filter::Nearest };
-    let linear = Sampling { wrap: Wrap::ClampToEdge, filter: Filter::Linear };
+    let nearest = Sampling::new(Wrap::Repeat, Filter::Nearest);
+    let linear = Sampling::new(Wrap::ClampToEdge, Filter::Linear);
     for path in texture_paths() {
         let (image, view) = render(&sampled_checker_scene(2, 2, nearest), path);
         assert_region(&image, pixel_of(&view, at_uv(0.4, 0.25)), 0, is_red, 0, &format!("{path:?} nearest"));
@@ -143,7 +143,7 @@ fn wrap_modes_repeat_clamp_and_mirror_outside_the_unit_square() {
         [(Wrap::Repeat, [true, false]), (Wrap::ClampToEdge, [false, false]), (Wrap::MirroredRepeat, [false, true])];
     for path in texture_paths() {
         for (wrap, red_at) in expected {
-            let mut scene = sampled_checker_scene(2, 2, Sampling { wrap, filter: Filter::Nearest });
+            let mut scene = sampled_checker_scene(2, 2, Sampling::new(wrap, Filter::Nearest));
             let geometry = scene.add_geometry(wide.clone());
             let (node, renderable) =
                 scene.nodes().find_map(|(k, n)| n.renderable.clone().map(|r| (k, r))).expect("the quad node");
@@ -158,6 +158,62 @@ fn wrap_modes_repeat_clamp_and_mirror_outside_the_unit_square() {
     }
 }
 
+/// glTF's wrapS and wrapT are independent: each axis wraps its own way
+/// (the binding-array path's table sampler wraps u, the shader v; the
+/// grouped path's shader both), with either filter, on both paths.
+#[test]
+fn each_axis_wraps_its_own_way() {
+    // A quad whose u and v both run 0..2.
+    let vertices = Geometry::quad(2.0)
+        .vertices()
+        .iter()
+        .map(|v| oxygen::core::Vertex { uv: [v.uv[0] * 2.0, v.uv[1] * 2.0], ..*v })
+        .collect();
+    let big = Geometry::new(
+        "uv 0..2 quad",
+        vertices,
+        vec![0, 1, 2, 0, 2, 3],
+        vec![oxygen::core::Submesh { first_index: 0, index_count: 6 }],
+    )
+    .unwrap();
+    let at = |u: f32, v: f32| Vec3::new(u - 1.0, 1.0 - v, 0.0);
+    // Along one axis, at 1.25 and 1.75 (the other at 0.25, in the red
+    // cell's row or column): red where the mode lands in cell 0.
+    let red_at = |wrap: Wrap| match wrap {
+        Wrap::Repeat => [true, false],
+        Wrap::ClampToEdge => [false, false],
+        Wrap::MirroredRepeat => [false, true],
+    };
+    let pairs = [
+        (Wrap::Repeat, Wrap::ClampToEdge),
+        (Wrap::ClampToEdge, Wrap::Repeat),
+        (Wrap::MirroredRepeat, Wrap::Repeat),
+        (Wrap::Repeat, Wrap::MirroredRepeat),
+        (Wrap::ClampToEdge, Wrap::MirroredRepeat),
+    ];
+    for path in texture_paths() {
+        for filter in [Filter::Nearest, Filter::Linear] {
+            for (wrap_u, wrap_v) in pairs {
+                let mut scene = sampled_checker_scene(2, 2, Sampling { wrap_u, wrap_v, filter });
+                let geometry = scene.add_geometry(big.clone());
+                let (node, renderable) =
+                    scene.nodes().find_map(|(k, n)| n.renderable.clone().map(|r| (k, r))).expect("the quad node");
+                scene.set_renderable(node, Renderable { geometry, ..renderable }).unwrap();
+                let (image, view) = render(&scene, path);
+                for (i, x) in [1.25, 1.75].into_iter().enumerate() {
+                    for (axis, point, red) in
+                        [("u", at(x, 0.25), red_at(wrap_u)[i]), ("v", at(0.25, x), red_at(wrap_v)[i])]
+                    {
+                        let check: fn(Rgb) -> bool = if red { is_red } else { is_blue };
+                        let what = format!("{path:?} {filter:?} u {wrap_u:?} v {wrap_v:?}: {axis} = {x}");
+                        assert_region(&image, pixel_of(&view, point), 1, check, 0, &what);
+                    }
+                }
+            }
+        }
+    }
+}
+
 /// A finely chequered texture seen ten times minified: with a linear filter
 /// it is sampled from its mip chain, so every pixel shows the cells' average
 /// (an even purple); a nearest-filtered texture keeps one level and aliases
@@ -165,8 +221,8 @@ fn wrap_modes_repeat_clamp_and_mirror_outside_the_unit_square() {
 /// error the nearest filter costs here.
 #[test]
 fn minified_textures_are_filtered_through_their_mip_chain() {
-    let linear = Sampling { wrap: Wrap::Repeat, filter: Filter::Linear };
-    let nearest = Sampling { wrap: Wrap::Repeat, filter: Filter::Nearest };
+    let linear = Sampling::new(Wrap::Repeat, Filter::Linear);
+    let nearest = Sampling::new(Wrap::Repeat, Filter::Nearest);
     let camera = LookAtResolver {
         camera: Camera::perspective(60f32.to_radians(), 0.1, None),
         eye: Vec3::new(0.0, 0.0, 6.9),

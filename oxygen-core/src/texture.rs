@@ -33,24 +33,40 @@ pub enum Filter {
     Nearest,
 }
 
-/// How a texture is sampled (one wrap mode for both axes).
+/// How a texture is sampled: a wrap mode per axis and a filter.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct Sampling {
-    /// Wrap mode.
-    pub wrap: Wrap,
+    /// Wrap mode along u (glTF `wrapS`).
+    pub wrap_u: Wrap,
+    /// Wrap mode along v (glTF `wrapT`).
+    pub wrap_v: Wrap,
     /// Filter.
     pub filter: Filter,
 }
 
-impl Sampling {
-    /// Index into the renderer's sampler table (wrap × filter, 6 entries).
-    pub fn table_index(self) -> u32 {
-        let wrap = match self.wrap {
+impl Wrap {
+    /// The mode's number in the renderer's sampler table and location
+    /// records: repeat 0, clamp 1, mirrored repeat 2.
+    pub fn index(self) -> u32 {
+        match self {
             Wrap::Repeat => 0,
             Wrap::ClampToEdge => 1,
             Wrap::MirroredRepeat => 2,
-        };
-        wrap * 2 + u32::from(self.filter == Filter::Nearest)
+        }
+    }
+}
+
+impl Sampling {
+    /// The same wrap mode on both axes.
+    pub fn new(wrap: Wrap, filter: Filter) -> Self {
+        Sampling { wrap_u: wrap, wrap_v: wrap, filter }
+    }
+
+    /// Index into the renderer's sampler table (wrap × filter, 6 entries):
+    /// the entry that wraps both axes like u. Where v wraps differently,
+    /// the shader wraps v itself (see `oxygen_bindless`'s texture module).
+    pub fn table_index(self) -> u32 {
+        self.wrap_u.index() * 2 + u32::from(self.filter == Filter::Nearest)
     }
 }
 

@@ -689,13 +689,16 @@ impl ScenePrep {
         self.textures.take_pending(&mut self.pending_textures);
         for (slot, image) in self.pending_textures.drain(..) {
             let srgb = image.color_space() == oxygen_core::ColorSpace::Srgb;
-            let sampler = image.sampling().table_index();
-            heap.upload_texture(
-                device,
-                queue,
-                &slot,
-                &TextureUpload { width: image.width(), height: image.height(), srgb, sampler, pixels: image.pixels() },
-            )?;
+            let sampling = image.sampling();
+            let upload = TextureUpload {
+                width: image.width(),
+                height: image.height(),
+                srgb,
+                sampler: sampling.table_index(),
+                wrap_v: sampling.wrap_v.index(),
+                pixels: image.pixels(),
+            };
+            heap.upload_texture(device, queue, &slot, &upload)?;
         }
         if self.materials.is_dirty() {
             heap.write(queue, &self.materials.allocation(), 0, self.materials.records())?;

@@ -72,7 +72,7 @@ impl<'a> MaterialImporter<'a> {
         let mut texture = |this: &mut Self, info: Option<TextureRef>, space, what: &str| {
             let Some(info) = info else { return Ok((None, UvTransform::IDENTITY)) };
             let uv = uv_transform(&info, &label, what, warnings);
-            this.texture(scene, info.index.value(), space, budget, warnings).map(|t| (Some(t), uv))
+            this.texture(scene, info.index.value(), space, budget).map(|t| (Some(t), uv))
         };
         let info = |t: &json::texture::Info| TextureRef {
             index: t.index,
@@ -145,7 +145,6 @@ impl<'a> MaterialImporter<'a> {
         index: usize,
         color_space: ColorSpace,
         budget: &mut Budget,
-        warnings: &mut Vec<String>,
     ) -> Result<TextureHandle, GltfErrorKind> {
         let key = (index, color_space == ColorSpace::Srgb);
         if let Some(h) = self.textures.get(&key) {
@@ -171,9 +170,6 @@ impl<'a> MaterialImporter<'a> {
                     Checked::Invalid => Err(GltfErrorKind::Invalid(format!("sampler {s}: unknown {axis}"))),
                 };
                 let (wrap_s, wrap_t) = (wrap(sampler.wrap_s, "wrapS")?, wrap(sampler.wrap_t, "wrapT")?);
-                if wrap_s != wrap_t {
-                    warnings.push(format!("texture {index}: different wrap modes per axis; using the s mode"));
-                }
                 let filter = match sampler.mag_filter {
                     Some(Checked::Valid(json::texture::MagFilter::Nearest)) => Filter::Nearest,
                     Some(Checked::Valid(json::texture::MagFilter::Linear)) | None => Filter::Linear,
@@ -181,7 +177,7 @@ impl<'a> MaterialImporter<'a> {
                         return Err(GltfErrorKind::Invalid(format!("sampler {s}: unknown magFilter")));
                     }
                 };
-                Sampling { wrap: wrap_s, filter }
+                Sampling { wrap_u: wrap_s, wrap_v: wrap_t, filter }
             }
         };
         let source = t.source.value();

@@ -76,8 +76,11 @@ pub struct TextureUpload<'a> {
     pub height: u32,
     /// The texels are sRGB-encoded colour (decoded when sampled).
     pub srgb: bool,
-    /// Sampler-table index (wrap × 2 + nearest), see [`SAMPLERS`].
+    /// Sampler-table index (wrap along u × 2 + nearest), see [`SAMPLERS`].
     pub sampler: u32,
+    /// Wrap mode along v (0 repeat, 1 clamp, 2 mirrored repeat); where it
+    /// differs from u's, the shader wraps v itself.
+    pub wrap_v: u32,
     /// Tightly packed RGBA8 rows.
     pub pixels: &'a [u8],
 }
@@ -264,7 +267,7 @@ impl TextureHeap {
         slot: u32,
         texture: &TextureUpload<'_>,
     ) -> Result<u32, BindlessError> {
-        let TextureUpload { width, height, srgb, sampler, pixels } = *texture;
+        let TextureUpload { width, height, srgb, sampler, wrap_v, pixels } = *texture;
         self.uploads += 1;
         let table_entry = sampler.min(SAMPLERS - 1);
         self.stale_bind_group = true;
@@ -277,7 +280,7 @@ impl TextureHeap {
                 let texture = create_texture(device, (width, height), 1, levels.len() as u32, srgb, "material texture");
                 write_levels(queue, &texture, 0, &levels);
                 self.views[slot as usize] = texture.create_view(&Default::default());
-                Ok(binding_array_record(slot, table_entry))
+                Ok(binding_array_record(slot, table_entry, wrap_v))
             }
             TexturePath::GroupedArrays => {
                 let side = width.max(height);
@@ -317,7 +320,7 @@ impl TextureHeap {
                 // The whole chain even for nearest textures: the array's layers share a level count.
                 write_levels(queue, &group.texture, layer, &mip_chain(&resampled, class_side, class_side, srgb));
                 // The shader applies the wrap mode itself: the record carries it, not the table index.
-                Ok(grouped_record(g as u32, layer, table_entry / 2, nearest))
+                Ok(grouped_record(g as u32, layer, table_entry / 2, wrap_v, nearest))
             }
         }
     }
