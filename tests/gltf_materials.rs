@@ -443,7 +443,7 @@ fn yellow_pixels(image: &image::RgbaImage) -> usize {
 #[test]
 fn texture_transforms_move_the_test_files_offsets_off_their_yellow_quarter() {
     let (scene, resolver) = shipped("TextureTransformTest/TextureTransformTest.gltf");
-    let transformed = render(&scene, resolver.clone());
+    let transformed = render(&scene, resolver);
     let (mut plain, _) = shipped("TextureTransformTest/TextureTransformTest.gltf");
     edit_materials(&mut plain, |m| m.uvs = Default::default());
     let untransformed = render(&plain, resolver);
@@ -470,7 +470,7 @@ fn a_texture_reads_the_uv_set_its_material_names() {
     let (scene, resolver) = shipped("MultiUVTest/MultiUVTest.glb");
     let emissive_set = scene.materials().map(|(_, m)| m.uvs.emissive.uv_set).max();
     assert_eq!(emissive_set, Some(1), "the file's emissive texture reads TEXCOORD_1");
-    let two_sets = render(&scene, resolver.clone());
+    let two_sets = render(&scene, resolver);
     let (mut first_set_only, _) = shipped("MultiUVTest/MultiUVTest.glb");
     edit_materials(&mut first_set_only, |m| m.uvs.emissive.uv_set = 0);
     let one_set = render(&first_set_only, resolver);
@@ -500,7 +500,7 @@ fn golden_texture_settings_test_on_both_texture_paths() {
     for path in texture_paths() {
         let options = RendererOptions { texture_path: Some(path), keep_hdr: true, ..Default::default() };
         let mut renderer = Renderer::new_headless_with(options).unwrap_or_else(|e| panic!("{path:?}: {e}"));
-        let view = renderer.register_view(resolver.clone(), standard_render_graph).unwrap();
+        let view = renderer.register_view(resolver, standard_render_graph).unwrap();
         renderer.render_frame(&scene).unwrap();
         let image = support::read_lit_color(&renderer, view);
         assert_golden("texture_settings_test", &image, Tolerance::default());

@@ -143,6 +143,6 @@ mod tests {
         assert_eq!(record >> BITS.sampler_shift, 5);
         assert_eq!((record >> BITS.wrap_v_shift) & BITS.wrap_v_mask, 1);
         // Every slot the binding-array path can have fits its field.
-        assert!(super::super::path::MAX_TEXTURES <= BITS.layer_mask);
+        const _: () = assert!(super::super::path::MAX_TEXTURES <= BITS.layer_mask);
     }
 }
