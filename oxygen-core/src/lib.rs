@@ -20,6 +20,7 @@
 // rewriting it with `partial_cmp` would hide that intent.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod animation;
 pub mod camera;
 pub mod geometry;
 pub mod gpu;
@@ -32,6 +33,7 @@ pub mod shadow;
 pub mod texture;
 pub mod view;
 
+pub use animation::{Animation, Channel, ChannelError, ChannelValues, Interpolation};
 pub use camera::{Camera, CameraError, Projection};
 pub use geometry::{Geometry, GeometryError, Submesh, Vertex, VertexAttributes};
 pub use gpu::{ColorTargets, GpuContext, GpuError, GpuOptions, HdrFormat, ViewTargets};

@@ -26,6 +26,12 @@ pub(crate) enum Semantic {
     Joints,
     Weights,
     Indices,
+    /// Keyframe times.
+    AnimationInput,
+    /// Keyframe translations and scales.
+    AnimationVector,
+    /// Keyframe rotations.
+    AnimationRotation,
 }
 
 impl Semantic {
@@ -49,6 +55,11 @@ impl Semantic {
             Semantic::Joints => ty == Type::Vec4 && matches!(component, U8 | U16) && !normalized,
             Semantic::Weights => ty == Type::Vec4 && (float || unorm),
             Semantic::Indices => ty == Type::Scalar && matches!(component, U8 | U16 | U32) && !normalized,
+            // glTF 2.0 3.11: times are floats; translations and scales
+            // float VEC3; rotations float or normalized-integer VEC4.
+            Semantic::AnimationInput => ty == Type::Scalar && float,
+            Semantic::AnimationVector => ty == Type::Vec3 && float,
+            Semantic::AnimationRotation => ty == Type::Vec4 && (float || unorm || snorm),
         }
     }
 }

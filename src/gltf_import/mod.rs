@@ -35,6 +35,7 @@
 //! file; only its JSON types are used, through indices that are checked.
 
 mod accessor;
+mod animation;
 pub mod graph;
 mod limits;
 mod material;
@@ -286,6 +287,9 @@ pub struct GltfImport {
     pub precise_bounds: Option<oxygen_core::DAabb>,
     /// What was skipped or approximated, one line each.
     pub warnings: Vec<String>,
+    /// The file's animations, their channels bound to the imported nodes;
+    /// [`oxygen_core::Animation::apply`] poses the scene at a time.
+    pub animations: Vec<oxygen_core::Animation>,
     /// Bytes the import charged to [`ImportLimits::max_total_bytes`]: the
     /// file, external buffers, the parsed JSON's estimate, decoded texels
     /// (once per image and once per texture made from it), vertices and
@@ -424,15 +428,16 @@ fn import_bytes(
         buffers: &buffers,
         materials: material::MaterialImporter::new(&root, &buffers, folder),
         meshes: HashMap::new(),
+        node_keys: HashMap::new(),
         budget,
         out: GltfImport::default(),
     };
     importer.walk(scene, &roots).map_err(|e| e.at(path))?;
     // The walk visits depth-first; lookups promise the file's order.
     importer.out.named_nodes.sort_unstable_by_key(|(index, _, _)| *index);
-    if !root.animations.is_empty() {
-        importer.out.warnings.push("animations are not imported".into());
-    }
+    importer.out.animations =
+        animation::import(&root, &buffers, &importer.node_keys, &mut importer.budget, &mut importer.out.warnings)
+            .map_err(|e| e.at(path))?;
     if !root.skins.is_empty() {
         importer.out.warnings.push("skins are not imported; skinned meshes are drawn in their bind pose".into());
     }
@@ -517,6 +522,8 @@ struct Importer<'a> {
     buffers: &'a [Cow<'a, [u8]>],
     materials: material::MaterialImporter<'a>,
     meshes: HashMap<usize, Option<(GeometryHandle, Vec<MaterialHandle>)>>,
+    /// Every imported node by its index in the file (animation targets).
+    node_keys: HashMap<usize, NodeKey>,
     budget: Budget,
     out: GltfImport,
 }
@@ -562,6 +569,7 @@ impl Importer<'_> {
             None => scene.add_node(name.clone(), local),
         };
         let world = parent_world * local.to_dmat4();
+        self.node_keys.insert(index, key);
         if let Some(file_name) = &node.name {
             self.out.named_nodes.push((index, file_name.clone(), key));
         }
