@@ -4,7 +4,12 @@
 //!
 //! ```text
 //! cargo run --release --example gltf_viewer -- [FILE] [OUTPUT_DIR] [--scene N|NAME] [--size WxH]
+//!     [--time T] [--animation N|NAME] [--frames N --fps F]
 //! ```
+//! With `--time`, `--animation` or `--frames` the scene is posed by one of
+//! the file's animations (the first unless `--animation` names one) at `T`
+//! seconds; `--frames N --fps F` renders N frames, T + i/F seconds, as a
+//! numbered sequence (`NAME_VIEW_0000.png`, ...).
 //! FILE defaults to the shipped `assets/AlphaBlendModeTest/AlphaBlendModeTest.glb`,
 //! OUTPUT_DIR to `out/`. A scene without lights gets a default sun (said so).
 //! The file is imported with Oxygen's default import limits and its external
@@ -19,12 +24,17 @@ use oxygen::prelude::*;
 
 const USAGE: &str = "\
 usage: gltf_viewer [FILE] [OUTPUT_DIR] [--scene N|NAME] [--size WxH]
+                   [--time T] [--animation N|NAME] [--frames N --fps F]
 
-  FILE          a .gltf or .glb file (default: the shipped AlphaBlendModeTest.glb)
-  OUTPUT_DIR    where the PNGs go, created if missing (default: out)
-  --scene N     import scene N (an index) or NAME instead of the default scene
-  --size WxH    size of each view in pixels (default: 800x600)
-  -h, --help    print this help";
+  FILE            a .gltf or .glb file (default: the shipped AlphaBlendModeTest.glb)
+  OUTPUT_DIR      where the PNGs go, created if missing (default: out)
+  --scene N       import scene N (an index) or NAME instead of the default scene
+  --size WxH      size of each view in pixels (default: 800x600)
+  --time T        pose the scene with its animation at T seconds (default 0)
+  --animation N   which animation (an index or a name; default the first)
+  --frames N      render N frames as a numbered sequence (needs --fps)
+  --fps F         frames per second of the sequence
+  -h, --help      print this help";
 
 /// The parsed command line.
 #[derive(Debug)]
@@ -33,6 +43,19 @@ struct Args {
     out_dir: PathBuf,
     choice: SceneChoice,
     size: UVec2,
+    /// Posing by an animation, when any animation option was given.
+    animation: Option<AnimationArgs>,
+}
+
+/// Which animation, from when, and how many frames.
+#[derive(Debug)]
+struct AnimationArgs {
+    /// Index or name; `None`: the first.
+    which: Option<String>,
+    /// Seconds of the first frame.
+    time: f32,
+    /// Frames of the sequence and their rate; `None`: one frame.
+    sequence: Option<(u32, f32)>,
 }
 
 fn main() {
@@ -58,6 +81,7 @@ fn parse_args(args: impl Iterator<Item = String>) -> Result<Option<Args>, String
     let mut positional = Vec::new();
     let mut choice = SceneChoice::Default;
     let mut size = UVec2::new(800, 600);
+    let (mut time, mut which, mut frames, mut fps) = (None, None, None, None);
     let mut args = args;
     while let Some(arg) = args.next() {
         match arg.as_str() {
@@ -75,6 +99,22 @@ fn parse_args(args: impl Iterator<Item = String>) -> Result<Option<Args>, String
                     return Err("--size must be at least 1x1".into());
                 }
                 size = UVec2::new(w, h);
+            }
+            "--time" => {
+                let v = args.next().ok_or("--time needs seconds")?;
+                let t = v.parse::<f32>().ok().filter(|t| t.is_finite());
+                time = Some(t.ok_or_else(|| format!("--time needs a finite number of seconds (got '{v}')"))?);
+            }
+            "--animation" => which = Some(args.next().ok_or("--animation needs an index or a name")?),
+            "--frames" => {
+                let v = args.next().ok_or("--frames needs a count")?;
+                let n = v.parse::<u32>().ok().filter(|n| (1..=100_000).contains(n));
+                frames = Some(n.ok_or_else(|| format!("--frames needs a count from 1 to 100000 (got '{v}')"))?);
+            }
+            "--fps" => {
+                let v = args.next().ok_or("--fps needs frames per second")?;
+                let f = v.parse::<f32>().ok().filter(|f| f.is_finite() && *f > 0.0);
+                fps = Some(f.ok_or_else(|| format!("--fps needs a positive number (got '{v}')"))?);
             }
             flag if flag.starts_with('-') && flag.len() > 1 => return Err(format!("unknown option '{flag}'")),
             _ => positional.push(arg),
@@ -95,7 +135,18 @@ fn parse_args(args: impl Iterator<Item = String>) -> Result<Option<Args>, String
     if out_dir.as_os_str().is_empty() {
         return Err("OUTPUT_DIR is empty (give a folder, e.g. out)".into());
     }
-    Ok(Some(Args { file, out_dir, choice, size }))
+    let sequence = match (frames, fps) {
+        (Some(n), Some(f)) => Some((n, f)),
+        (None, None) => None,
+        (Some(_), None) => return Err("--frames needs --fps (the sequence's frame rate)".into()),
+        (None, Some(_)) => return Err("--fps needs --frames (how many frames)".into()),
+    };
+    let animation = (time.is_some() || which.is_some() || sequence.is_some()).then(|| AnimationArgs {
+        which,
+        time: time.unwrap_or(0.0),
+        sequence,
+    });
+    Ok(Some(Args { file, out_dir, choice, size, animation }))
 }
 
 fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
@@ -108,7 +159,7 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
         )
         .with_writer(std::io::stderr)
         .init();
-    let Args { file, out_dir, choice, size } = args;
+    let Args { file, out_dir, choice, size, animation } = args;
     std::fs::create_dir_all(&out_dir)
         .map_err(|e| format!("cannot create output directory {}: {e}", out_dir.display()))?;
 
@@ -127,6 +178,10 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
         println!("  note: {w}");
     }
     let bounds = import.bounds.ok_or("the scene has nothing to draw")?;
+    let posing = match &animation {
+        Some(a) => Some((choose_animation(&import.animations, a.which.as_deref())?, a)),
+        None => None,
+    };
     if import.lights == 0 {
         let sun = scene.add_node(
             "default sun",
@@ -177,39 +232,70 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
         views.push((tag.to_owned(), tag.to_owned(), renderer.register_view(orbit, standard_render_graph)?));
     }
 
-    let report = renderer.render_frame(&scene)?;
-    for warning in &report.warnings {
-        println!("  warning: {warning}");
-    }
-    println!(
-        "frame {}: prepare {:.2} ms, record {:.2} ms, {} pipelines created",
-        report.frame_index,
-        report.prepare_seconds * 1e3,
-        report.record_seconds * 1e3,
-        renderer.pipelines().pipelines_created()
-    );
+    // One frame, or the sequence: frame i at T + i / F.
+    let (count, fps) = posing.as_ref().and_then(|(_, a)| a.sequence).unwrap_or((1, 1.0));
     let mut written = 0;
-    for (tag, name, id) in &views {
-        let Some(view_report) = report.views.iter().find(|r| r.view == *id) else {
-            println!("{id} '{name}': skipped (see the warning above)");
-            continue;
-        };
-        let path = out_dir.join(format!("{stem}_{tag}.png"));
-        renderer.read_color(*id)?.save(&path).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-        written += 1;
-        let frame = renderer.prepared_frame(*id).ok_or("view was not prepared")?;
-        let partitions: Vec<String> =
-            frame.partitions().iter().map(|p| format!("{}×{}", p.mask.names(), p.len())).collect();
+    for i in 0..count {
+        let numbered = posing.as_ref().is_some_and(|(_, a)| a.sequence.is_some());
+        if let Some((animation, args)) = &posing {
+            let time = args.time + i as f32 / fps;
+            animation.apply(&mut scene, time)?;
+            println!("animation '{}' at {time:.3} s (of {:.3} s)", animation.name, animation.duration());
+        }
+        let report = renderer.render_frame(&scene)?;
+        for warning in &report.warnings {
+            println!("  warning: {warning}");
+        }
         println!(
-            "{id} '{name}': {} draws, {} draw calls in [{}] -> {}",
-            view_report.draws,
-            view_report.recorded.draw_calls,
-            partitions.join(", "),
-            path.display()
+            "frame {}: prepare {:.2} ms, record {:.2} ms, {} pipelines created",
+            report.frame_index,
+            report.prepare_seconds * 1e3,
+            report.record_seconds * 1e3,
+            renderer.pipelines().pipelines_created()
         );
+        for (tag, name, id) in &views {
+            let Some(view_report) = report.views.iter().find(|r| r.view == *id) else {
+                println!("{id} '{name}': skipped (see the warning above)");
+                continue;
+            };
+            let file_name = if numbered { format!("{stem}_{tag}_{i:04}.png") } else { format!("{stem}_{tag}.png") };
+            let path = out_dir.join(file_name);
+            renderer.read_color(*id)?.save(&path).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+            written += 1;
+            let frame = renderer.prepared_frame(*id).ok_or("view was not prepared")?;
+            let partitions: Vec<String> =
+                frame.partitions().iter().map(|p| format!("{}×{}", p.mask.names(), p.len())).collect();
+            println!(
+                "{id} '{name}': {} draws, {} draw calls in [{}] -> {}",
+                view_report.draws,
+                view_report.recorded.draw_calls,
+                partitions.join(", "),
+                path.display()
+            );
+        }
     }
     if written == 0 {
         return Err("no view could be rendered".into());
     }
     Ok(())
+}
+
+/// The animation `which` names (an index or a name; `None`: the first),
+/// or an error listing what the file has.
+fn choose_animation<'a>(
+    animations: &'a [oxygen::core::Animation],
+    which: Option<&str>,
+) -> Result<&'a oxygen::core::Animation, String> {
+    let listed = || {
+        let names: Vec<String> = animations.iter().enumerate().map(|(i, a)| format!("{i} ('{}')", a.name)).collect();
+        if names.is_empty() { "the file has no animations".to_owned() } else { format!("it has {}", names.join(", ")) }
+    };
+    let found = match which {
+        None => animations.first(),
+        Some(w) => match w.parse::<usize>() {
+            Ok(i) => animations.get(i),
+            Err(_) => animations.iter().find(|a| a.name == w),
+        },
+    };
+    found.ok_or_else(|| format!("no animation {} to pose the scene with: {}", which.unwrap_or("at all"), listed()))
 }

@@ -77,3 +77,50 @@ fn a_file_reaching_outside_its_folder_is_refused_by_name() {
     assert_eq!(output.status.code(), Some(1), "{text}");
     assert!(text.contains("escape.gltf") && text.contains("etc/hostname") && text.contains("refused"), "{text}");
 }
+
+fn asset(relative: &str) -> String {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets").join(relative).display().to_string()
+}
+
+#[test]
+fn animation_options_are_checked_before_anything_renders() {
+    for (args, expected) in [
+        (&["--frames", "3"][..], "--frames needs --fps"),
+        (&["--fps", "24"][..], "--fps needs --frames"),
+        (&["--time", "soon"][..], "'soon'"),
+        (&["--time", "inf"][..], "finite"),
+        (&["--fps", "0", "--frames", "2"][..], "positive"),
+        (&["--frames", "0", "--fps", "2"][..], "from 1"),
+    ] {
+        let (output, text) = run(args);
+        assert_eq!(output.status.code(), Some(2), "{args:?}: {text}");
+        assert!(text.contains(expected) && text.contains("usage:"), "{args:?}: {text}");
+    }
+    // An animation the file does not have: the ones it has are listed.
+    let out = tmp("no_such_animation");
+    let (output, text) =
+        run(&[&asset("AnimatedCube/AnimatedCube.gltf"), out.to_str().unwrap(), "--animation", "7", "--size", "32x24"]);
+    assert_eq!(output.status.code(), Some(1), "{text}");
+    assert!(text.contains("0 ('animation_AnimatedCube')"), "{text}");
+}
+
+/// `--frames 3 --fps 2 --time 0.25`: three numbered frames per view, at
+/// 0.25, 0.75 and 1.25 s; the cube turns between them.
+#[test]
+fn a_numbered_sequence_is_written_at_the_given_rate() {
+    let out = tmp("sequence");
+    let args = [&asset("AnimatedCube/AnimatedCube.gltf"), out.to_str().unwrap()];
+    let (output, text) = run(&[args[0], args[1], "--frames", "3", "--fps", "2", "--time", "0.25", "--size", "64x48"]);
+    assert!(output.status.success(), "{text}");
+    for time in ["0.250", "0.750", "1.250"] {
+        assert!(text.contains(&format!("at {time} s")), "{text}");
+    }
+    let frame = |i: u32| {
+        let path = out.join(format!("AnimatedCube_orbit_three_quarter_{i:04}.png"));
+        image::open(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display())).to_rgba8()
+    };
+    let (first, last) = (frame(0), frame(2));
+    let differing = first.pixels().zip(last.pixels()).filter(|(a, b)| a != b).count();
+    assert!(differing > 100, "the cube must turn between frames 0 and 2 ({differing} pixels differ)");
+    assert!(out.join("AnimatedCube_orbit_front_0001.png").exists());
+}
