@@ -3,6 +3,7 @@
 //! ```text
 //! cargo run --release --example viewer -- [FILE] [--size WxH] [--present fifo|mailbox|immediate]
 //!                                         [--frames N --screenshot PATH]
+//!                                         [--time T] [--animation N|NAME] [--fps F]
 //! ```
 //!
 //! FILE defaults to the shipped `assets/AlphaBlendModeTest/AlphaBlendModeTest.glb`.
@@ -28,6 +29,11 @@
 //!   desktop (run it under `xvfb-run`). `--resize WxH` asks for a new
 //!   window size after the first frame and counts the N frames from when
 //!   the window has it (the test of resizing a real surface).
+//! * Animation: a file with animations plays its first (or the one
+//!   `--animation` names) from `--time T` (default 0), in real time and
+//!   looping; with `--fps F` each frame advances 1/F s instead (no loop),
+//!   and with `--screenshot PATH` every frame is saved as a numbered
+//!   sequence, `PATH` with `_0000`, `_0001`, ... before its extension.
 
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
@@ -42,7 +48,7 @@ use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowAttributes};
 
 const USAGE: &str = "\
-usage: viewer [FILE] [--size WxH] [--present fifo|mailbox|immediate] [--layout 1|2|3|4|5] [--frames N --screenshot PATH [--resize WxH]]";
+usage: viewer [FILE] [--size WxH] [--present fifo|mailbox|immediate] [--layout 1|2|3|4|5] [--frames N --screenshot PATH [--resize WxH]] [--time T] [--animation N|NAME] [--fps F]";
 
 /// The parsed command line.
 struct Args {
@@ -54,6 +60,12 @@ struct Args {
     /// A window size asked for after the first frame.
     resize: Option<UVec2>,
     layout: Layout,
+    /// Seconds into the animation of the first frame.
+    time: f32,
+    /// Which animation (index or name); `None`: the first.
+    animation: Option<String>,
+    /// Fixed frame rate of the animation clock; `None`: real time.
+    fps: Option<f32>,
 }
 
 fn parse_size(name: &str, v: &str) -> Result<UVec2, String> {
@@ -74,6 +86,9 @@ fn parse_args(mut args: impl Iterator<Item = String>) -> Result<Args, String> {
         screenshot: None,
         resize: None,
         layout: Layout::Single,
+        time: 0.0,
+        animation: None,
+        fps: None,
     };
     while let Some(arg) = args.next() {
         let mut value = |name: &str| args.next().ok_or(format!("{name} needs a value"));
@@ -87,6 +102,20 @@ fn parse_args(mut args: impl Iterator<Item = String>) -> Result<Args, String> {
                     "immediate" => PresentMode::Immediate,
                     other => return Err(format!("unknown present mode '{other}'")),
                 }
+            }
+            "--time" => {
+                let v = value("--time")?;
+                parsed.time = v
+                    .parse::<f32>()
+                    .ok()
+                    .filter(|t| t.is_finite())
+                    .ok_or(format!("--time needs a finite number of seconds (got '{v}')"))?;
+            }
+            "--animation" => parsed.animation = Some(value("--animation")?),
+            "--fps" => {
+                let v = value("--fps")?;
+                let fps = v.parse::<f32>().ok().filter(|f| f.is_finite() && *f > 0.0);
+                parsed.fps = Some(fps.ok_or(format!("--fps needs a positive number (got '{v}')"))?);
             }
             "--frames" => parsed.frames = Some(value("--frames")?.parse().map_err(|_| "--frames needs a number")?),
             "--screenshot" => parsed.screenshot = Some(PathBuf::from(value("--screenshot")?)),
@@ -181,6 +210,12 @@ struct Viewer {
     dragging: bool,
     last_cursor: Option<(f64, f64)>,
     error: Option<String>,
+    /// The animation that poses the scene, if the file has one.
+    animation: Option<oxygen::core::Animation>,
+    /// When the real-time animation clock started (the first frame).
+    clock: Option<Instant>,
+    /// The pose's time in the last frame, for the title.
+    pose_time: Option<f32>,
 }
 
 impl Viewer {
@@ -262,7 +297,29 @@ impl Viewer {
         Ok(())
     }
 
+    /// Poses the scene for the next frame: frame `self.frames` at
+    /// T + frames / F with `--fps`, else T + wall time, looping.
+    fn pose(&mut self) -> Result<(), Box<dyn std::error::Error>> {
+        let Some(animation) = &self.animation else { return Ok(()) };
+        let time = match self.args.fps {
+            Some(fps) => self.args.time + self.frames as f32 / fps,
+            None => {
+                let elapsed = self.clock.get_or_insert_with(Instant::now).elapsed().as_secs_f32();
+                let duration = animation.duration();
+                let t = self.args.time + elapsed;
+                if duration > 0.0 { t % duration } else { t }
+            }
+        };
+        animation.apply(&mut self.scene, time)?;
+        self.pose_time = Some(time);
+        Ok(())
+    }
+
     fn render(&mut self) -> Result<(), Box<dyn std::error::Error>> {
+        if self.renderer.is_none() {
+            return Ok(());
+        }
+        self.pose()?;
         let Some(renderer) = self.renderer.as_mut() else { return Ok(()) };
         let started = Instant::now();
         let report = renderer.render_frame(&self.scene)?;
@@ -296,8 +353,9 @@ impl Viewer {
             eprintln!("warning: {warning}");
         }
         if let Some(window) = &self.window {
+            let pose = self.pose_time.map_or(String::new(), |t| format!(", t = {t:.2} s"));
             window.set_title(&format!(
-                "Oxygen — prepare {:.2} ms, record {:.2} ms, GPU {}, frame {:.2} ms — {:?}, pre-pass {:?}, {} cascades of {}, PCF {} [1-5 layout, V P C R K knobs, F fly]",
+                "Oxygen — prepare {:.2} ms, record {:.2} ms, GPU {}, frame {:.2} ms — {:?}, pre-pass {:?}, {} cascades of {}, PCF {}{pose} [1-5 layout, V P C R K knobs, F fly]",
                 report.prepare_seconds * 1e3,
                 report.record_seconds * 1e3,
                 report.gpu_seconds.map_or("n/a".to_owned(), |s| format!("{:.2} ms", s * 1e3)),
@@ -309,7 +367,14 @@ impl Viewer {
                 self.pcf_radius,
             ));
         }
-        if let (Some(total), Some(id), Some(path)) = (self.args.frames, self.window_id, &self.args.screenshot)
+        if let (Some(_), Some(id), Some(path)) = (self.args.fps, self.window_id, &self.args.screenshot)
+            && self.animation.is_some()
+        {
+            // A numbered sequence: every frame, PATH_0000.png, PATH_0001.png, ...
+            let numbered = numbered_path(path, self.frames - 1);
+            renderer.read_window(id)?.save(&numbered)?;
+            println!("saved {} (t = {:.3} s)", numbered.display(), self.pose_time.unwrap_or(0.0));
+        } else if let (Some(total), Some(id), Some(path)) = (self.args.frames, self.window_id, &self.args.screenshot)
             && self.frames >= total
         {
             renderer.read_window(id)?.save(path)?;
@@ -321,6 +386,16 @@ impl Viewer {
     fn done(&self) -> bool {
         self.error.is_some() || self.args.frames.is_some_and(|total| self.frames >= total)
     }
+}
+
+/// `path` with `_NNNN` (frame `i`) before its extension.
+fn numbered_path(path: &std::path::Path, i: u64) -> PathBuf {
+    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("frame");
+    let name = match path.extension().and_then(|e| e.to_str()) {
+        Some(ext) => format!("{stem}_{i:04}.{ext}"),
+        None => format!("{stem}_{i:04}"),
+    };
+    path.with_file_name(name)
 }
 
 /// A boxed resolver as a resolver.
@@ -502,6 +577,10 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
     if import.lights == 0 {
         oxygen_demo::add_default_sun(&mut scene);
     }
+    let animation = choose_animation(import.animations, args.animation.as_deref())?;
+    if let Some(a) = &animation {
+        println!("animation '{}' ({:.2} s) from t = {} s", a.name, a.duration(), args.time);
+    }
     let orbit = OrbitCamera::framing(&bounds);
     let camera = CameraState { orbit, fly: false, eye: orbit.eye() };
     let event_loop = EventLoop::new()?;
@@ -528,10 +607,38 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
         dragging: false,
         last_cursor: None,
         error: None,
+        animation,
+        clock: None,
+        pose_time: None,
     };
     event_loop.run_app(&mut viewer)?;
     match viewer.error {
         Some(e) => Err(e.into()),
         None => Ok(()),
+    }
+}
+
+/// The animation `which` names (index or name), the first when `None`, or
+/// `None` for a file without animations; a name the file does not have is
+/// an error listing what it has.
+fn choose_animation(
+    animations: Vec<oxygen::core::Animation>,
+    which: Option<&str>,
+) -> Result<Option<oxygen::core::Animation>, String> {
+    let Some(which) = which else { return Ok(animations.into_iter().next()) };
+    let index = match which.parse::<usize>() {
+        Ok(i) => (i < animations.len()).then_some(i),
+        Err(_) => animations.iter().position(|a| a.name == which),
+    };
+    match index {
+        Some(i) => Ok(animations.into_iter().nth(i)),
+        None => {
+            let names: Vec<String> =
+                animations.iter().enumerate().map(|(i, a)| format!("{i} ('{}')", a.name)).collect();
+            Err(format!(
+                "no animation {which}: the file has {}",
+                if names.is_empty() { "none".into() } else { names.join(", ") }
+            ))
+        }
     }
 }

@@ -189,3 +189,57 @@ fn the_viewer_follows_a_resized_window() {
     );
     assert!(diff.differing <= diff.total / 1000, "{} of {} pixels differ after the resize", diff.differing, diff.total);
 }
+
+/// `--time 0.25 --fps 4 --frames 2 --screenshot PATH` on an animated file:
+/// two numbered frames, posed at 0.25 s and 0.5 s; the second equals the
+/// headless render of the scene posed at 0.5 s.
+#[test]
+fn the_viewer_writes_a_numbered_sequence_of_an_animation() {
+    if let Some(reason) = cannot_run() {
+        eprintln!("skipped: {reason}");
+        return;
+    }
+    let file = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/AnimatedCube/AnimatedCube.gltf");
+    let size = UVec2::new(160, 120);
+    let screenshot = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("viewer_sequence.png");
+    let numbered = |i: u32| PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("viewer_sequence_{i:04}.png"));
+    for i in 0..2 {
+        let _ = std::fs::remove_file(numbered(i));
+    }
+    let output = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 1024x768x24"])
+        .arg(viewer_binary())
+        .arg(&file)
+        .args(["--size", "160x120", "--time", "0.25", "--fps", "4", "--frames", "2", "--screenshot"])
+        .arg(&screenshot)
+        .output()
+        .expect("xvfb-run runs");
+    let log = format!("{}{}", String::from_utf8_lossy(&output.stdout), String::from_utf8_lossy(&output.stderr));
+    assert!(output.status.success(), "the viewer failed under Xvfb:\n{log}");
+    assert!(log.contains("t = 0.250 s") && log.contains("t = 0.500 s"), "{log}");
+    let frames: Vec<_> = (0..2)
+        .map(|i| oxygen::image::open(numbered(i)).unwrap_or_else(|e| panic!("frame {i}: {e}\n{log}")).to_rgba8())
+        .collect();
+
+    let mut scene = Scene::new();
+    let import = import_gltf(&mut scene, &file, &SceneChoice::Default).unwrap();
+    if import.lights == 0 {
+        oxygen_demo::add_default_sun(&mut scene);
+    }
+    import.animations[0].apply(&mut scene, 0.5).unwrap();
+    let camera = OrbitCamera::framing(&import.precise_bounds.unwrap()).resolver(size);
+    let mut renderer = gpu_renderer_with(RendererOptions::default());
+    let desc = ViewDesc::new(camera).with_sun_shadows(oxygen_demo::viewer_cascades());
+    let view = renderer.register_view(desc, standard_render_graph).unwrap();
+    renderer.render_frame(&scene).unwrap();
+    let expected = renderer.read_color(view).unwrap();
+    let second = compare(&frames[1], &expected, 3);
+    assert!(
+        second.differing <= second.total / 1000,
+        "frame 1 vs t = 0.5 s: {} of {} differ",
+        second.differing,
+        second.total
+    );
+    let first = compare(&frames[0], &expected, 3);
+    assert!(first.differing > first.total / 50, "frame 0 (t = 0.25 s) must differ from t = 0.5 s");
+}
