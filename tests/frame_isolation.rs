@@ -1,6 +1,8 @@
 //! One bad object or view costs only itself: a view whose resolver fails or
 //! whose targets would pass the budget, and a node with non-finite bounds,
-//! are left out with a `FrameWarning` while everything else renders.
+//! are left out with a `FrameWarning` while everything else renders. And
+//! one scene costs only itself: a renderer that renders another scene draws
+//! that scene's meshes and textures, not the last one's.
 
 mod support;
 
@@ -139,4 +141,42 @@ fn a_huge_viewport_is_skipped_not_allocated() {
     );
     assert!(renderer.target_memory() < 1 << 20);
     centre_is_lit_red(&renderer, small);
+}
+
+/// Asset handles are slot indices, alike in every scene: the first mesh and
+/// texture of two scenes have equal handles. A renderer that draws one
+/// scene and then another must draw the second's own mesh and texture
+/// (regression: it drew the first scene's cube in the second's place).
+#[test]
+fn a_renderer_switching_scenes_draws_the_new_scenes_meshes_and_textures() {
+    let (first, _) = lit_cube_scene();
+    let second = || {
+        let mut scene = Scene::new();
+        let texture = scene.add_texture(oxygen::core::TextureImage::checker(
+            "checker",
+            8,
+            2,
+            [20, 200, 40, 255],
+            [240, 240, 240, 255],
+        ));
+        let material = scene
+            .add_material(Material { base_color_texture: Some(texture), ..Material::opaque("checkered", Vec4::ONE) });
+        let geometry = scene.add_geometry(Geometry::uv_sphere(0.7, 24, 12));
+        let node = scene.add_node("sphere", Transform::IDENTITY);
+        scene.set_renderable(node, Renderable { geometry, materials: vec![material] }).unwrap();
+        let sun = scene.add_node("sun", Transform::IDENTITY.with_rotation(Quat::from_rotation_x(-0.6)));
+        scene.set_light(sun, Some(Light::directional(3.0))).unwrap();
+        scene
+    };
+    let mut switched = gpu_renderer();
+    let view = switched.register_view(front_view(96), standard_render_graph).unwrap();
+    switched.render_frame(&first).unwrap();
+    switched.render_frame(&second()).unwrap();
+    let after_switch = support::read_lit_color(&switched, view);
+    let mut fresh = gpu_renderer();
+    let fresh_view = fresh.register_view(front_view(96), standard_render_graph).unwrap();
+    fresh.render_frame(&second()).unwrap();
+    let expected = support::read_lit_color(&fresh, fresh_view);
+    let c = support::golden::compare(&after_switch, &expected, 2);
+    assert_eq!(c.differing, 0, "{} of {} pixels differ from a fresh renderer's picture", c.differing, c.total);
 }

@@ -182,8 +182,14 @@ fn gpu_frustum_culling_draws_what_the_cpu_path_draws_on_gltf_scenes() {
     let Some(mut renderer) = renderer(Visibility::GpuFrustum) else { return };
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets");
     let mut compared = 0;
-    for file in ["Cubes/Cubes.glb", "AlphaBlendModeTest/AlphaBlendModeTest.glb", "OrientationTest/OrientationTest.glb"]
-    {
+    // MultiUVTest: a mesh with attribute records (its second UV set), whose
+    // slot the GPU path must carry into its draws like the CPU path.
+    for file in [
+        "Cubes/Cubes.glb",
+        "AlphaBlendModeTest/AlphaBlendModeTest.glb",
+        "OrientationTest/OrientationTest.glb",
+        "MultiUVTest/MultiUVTest.glb",
+    ] {
         let mut scene = Scene::new();
         let imported =
             import_gltf(&mut scene, root.join(file), &SceneChoice::Default).unwrap_or_else(|e| panic!("{file}: {e}"));

@@ -76,6 +76,12 @@ pub struct RayScene {
 }
 
 impl RayScene {
+    /// Forgets every mesh's tree (another scene's geometry ids name other
+    /// meshes); the next rebuild builds them again.
+    pub fn forget_meshes(&mut self) {
+        self.meshes.clear();
+    }
+
     /// Every node, top level first.
     pub fn nodes(&self) -> &[BvhNode] {
         &self.nodes

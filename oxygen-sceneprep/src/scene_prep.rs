@@ -173,6 +173,8 @@ pub struct ScenePrep {
     collection_generation: u64,
     gpu_scene_generation: Option<u64>,
     ray_scene: crate::RayScene,
+    /// The scene whose meshes and textures the caches hold.
+    cached_scene: Option<u64>,
     /// The collection the ray scene was built from.
     ray_scene_generation: Option<u64>,
     /// What the heap holds of the frame-global data: the slots and the
@@ -265,6 +267,7 @@ impl ScenePrep {
             collection_generation: 0,
             gpu_scene_generation: None,
             ray_scene: crate::RayScene::default(),
+            cached_scene: None,
             ray_scene_generation: None,
             uploaded: None,
             uploaded_world: Vec::new(),
@@ -394,6 +397,17 @@ impl ScenePrep {
         for w in &mut self.work {
             let w = w.get_mut().unwrap_or_else(|e| e.into_inner());
             w.frame.transforms = Arc::clone(&self.released_transforms);
+        }
+        // Asset handles are slot indices, alike in every scene: a frame of
+        // another scene must not find its meshes and textures in the cache.
+        if self.cached_scene != Some(scene.id()) {
+            if self.cached_scene.is_some() {
+                let _span = info_span!("evict_other_scene").entered();
+                self.geometry.clear(slots)?;
+                self.textures.clear(slots)?;
+                self.ray_scene.forget_meshes();
+            }
+            self.cached_scene = Some(scene.id());
         }
         self.frame.collect(scene, self.render_origin);
         if !self.frame.reused_last() {

@@ -2,17 +2,23 @@
 //!
 //! What comes in: the chosen scene's node hierarchy with local TRS; meshes
 //! (every triangle primitive becomes a submesh of one [`Geometry`](oxygen_core::Geometry), with its
-//! own material); metallic-roughness materials with base-colour,
-//! metallic-roughness, normal, emissive and occlusion textures and their
-//! samplers, alpha mode and cutoff, double-sidedness;
+//! own material), with `COLOR_0` (vec3 or vec4; float, normalized u8 or
+//! u16) and `TEXCOORD_1` as vertex attributes and `KHR_mesh_quantization`'s
+//! 8- and 16-bit positions, normals and texture coordinates;
+//! metallic-roughness materials with base-colour, metallic-roughness,
+//! normal, emissive and occlusion textures, each with its texture
+//! coordinate set and `KHR_texture_transform`, their samplers (wrap mode per
+//! axis, filter), alpha mode and cutoff, double-sidedness,
+//! `KHR_materials_emissive_strength` and `KHR_materials_unlit`;
 //! `KHR_lights_punctual` lights; cameras (as [`GltfCamera`]s an application
-//! can register as views). Nodes with a negative scale are imported as they
-//! are: ScenePrep flips the winding of mirrored draws.
+//! can register as views); animations of node translation, rotation and
+//! scale ([`GltfImport::animations`]). Nodes with a negative scale are
+//! imported as they are: ScenePrep flips the winding of mirrored draws.
 //!
 //! What is left out (with a warning, never a panic): primitives that are not
-//! triangle lists, skins and morph targets, animations, texture coordinate
-//! sets other than 0. Missing normals are generated (area-weighted smooth
-//! normals); missing texture coordinates are zero.
+//! triangle lists, skins and morph targets (and animations of morph
+//! weights), texture coordinate sets above 1. Missing normals are generated
+//! (area-weighted smooth normals); missing texture coordinates are zero.
 //!
 //! # Untrusted input
 //!

@@ -96,6 +96,18 @@ impl GeometryCache {
         slots.free(s.indices)
     }
 
+    /// Frees every mesh's slots: the handles of another scene name other
+    /// meshes (handles are slot indices, the same in every scene).
+    pub fn clear(&mut self, slots: &mut SlotAllocators) -> Result<(), SlotError> {
+        for (_, s) in self.entries.drain(..).flatten() {
+            slots.free(s.vertices)?;
+            slots.free(s.indices)?;
+        }
+        self.pending.clear();
+        self.resident = 0;
+        Ok(())
+    }
+
     /// Frees a mesh's slots (e.g. when the asset is removed).
     pub fn evict(&mut self, handle: GeometryHandle, slots: &mut SlotAllocators) -> Result<(), SlotError> {
         if let Some(s) = self.get(handle) {

@@ -42,6 +42,16 @@ impl TextureCache {
         Ok(allocation.start)
     }
 
+    /// Frees every texture's slot: the handles of another scene name other
+    /// textures.
+    pub fn clear(&mut self, slots: &mut SlotAllocators) -> Result<(), SlotError> {
+        for (_, allocation) in self.entries.drain(..).flatten() {
+            slots.free(allocation)?;
+        }
+        self.pending.clear();
+        Ok(())
+    }
+
     /// Moves the uploads owed into `out` (cleared first).
     pub fn take_pending(&mut self, out: &mut Vec<(Allocation, Arc<TextureImage>)>) {
         out.clear();
