@@ -21,7 +21,8 @@
 //!   GPU occlusion; the GPU paths where the adapter has them), `P` the depth
 //!   pre-pass (automatic, on, off), `C` the sun's cascade count (1 to 4),
 //!   `R` the shadow maps' resolution (512, 1024, 2048), `K` the shadow
-//!   filter's radius (PCF 0, 1, 2).
+//!   filter's radius (PCF 0, 1, 2), `M` the main view's anti-aliasing
+//!   (MSAA 1, 2, 4 samples; `--msaa N` starts with N).
 //! * The title bar shows the frame's timings (prepare, record, whole frame)
 //!   and the knobs.
 //! * `--frames N --screenshot PATH` renders N frames, saves what was
@@ -48,7 +49,7 @@ use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowAttributes};
 
 const USAGE: &str = "\
-usage: viewer [FILE] [--size WxH] [--present fifo|mailbox|immediate] [--layout 1|2|3|4|5] [--frames N --screenshot PATH [--resize WxH]] [--time T] [--animation N|NAME] [--fps F]";
+usage: viewer [FILE] [--size WxH] [--present fifo|mailbox|immediate] [--layout 1|2|3|4|5] [--frames N --screenshot PATH [--resize WxH]] [--time T] [--animation N|NAME] [--fps F] [--msaa 1|2|4]";
 
 /// The parsed command line.
 struct Args {
@@ -66,6 +67,8 @@ struct Args {
     animation: Option<String>,
     /// Fixed frame rate of the animation clock; `None`: real time.
     fps: Option<f32>,
+    /// The main view's anti-aliasing at start.
+    msaa: Msaa,
 }
 
 fn parse_size(name: &str, v: &str) -> Result<UVec2, String> {
@@ -89,6 +92,7 @@ fn parse_args(mut args: impl Iterator<Item = String>) -> Result<Args, String> {
         time: 0.0,
         animation: None,
         fps: None,
+        msaa: Msaa::Off,
     };
     while let Some(arg) = args.next() {
         let mut value = |name: &str| args.next().ok_or(format!("{name} needs a value"));
@@ -112,6 +116,14 @@ fn parse_args(mut args: impl Iterator<Item = String>) -> Result<Args, String> {
                     .ok_or(format!("--time needs a finite number of seconds (got '{v}')"))?;
             }
             "--animation" => parsed.animation = Some(value("--animation")?),
+            "--msaa" => {
+                let v = value("--msaa")?;
+                parsed.msaa = v
+                    .parse::<u32>()
+                    .ok()
+                    .and_then(Msaa::from_samples)
+                    .ok_or(format!("--msaa needs 1, 2 or 4 (got '{v}')"))?;
+            }
             "--fps" => {
                 let v = value("--fps")?;
                 let fps = v.parse::<f32>().ok().filter(|f| f.is_finite() && *f > 0.0);
@@ -202,6 +214,7 @@ struct Viewer {
     pre_pass: PrePass,
     cascades: CascadeSettings,
     pcf_radius: u32,
+    msaa: Msaa,
     frames: u64,
     /// The window's size as the renderer last heard it.
     window_size: UVec2,
@@ -230,8 +243,12 @@ impl Viewer {
         let mut graph = standard_render_graph.with_pre_pass(self.pre_pass);
         graph.lit.shadow_pcf_radius = self.pcf_radius;
         let cascades = self.cascades;
+        let msaa = self.msaa;
         let main = |rect| {
-            ViewDesc::new(SharedCamera(Arc::clone(&self.camera))).shown_in(window, rect).with_sun_shadows(cascades)
+            ViewDesc::new(SharedCamera(Arc::clone(&self.camera)))
+                .shown_in(window, rect)
+                .with_sun_shadows(cascades)
+                .with_msaa(msaa)
         };
         let center = self.bounds.center();
         let radius = (self.bounds.half_extents().length() as f32).max(1e-3);
@@ -355,7 +372,7 @@ impl Viewer {
         if let Some(window) = &self.window {
             let pose = self.pose_time.map_or(String::new(), |t| format!(", t = {t:.2} s"));
             window.set_title(&format!(
-                "Oxygen — prepare {:.2} ms, record {:.2} ms, GPU {}, frame {:.2} ms — {:?}, pre-pass {:?}, {} cascades of {}, PCF {}{pose} [1-5 layout, V P C R K knobs, F fly]",
+                "Oxygen — prepare {:.2} ms, record {:.2} ms, GPU {}, frame {:.2} ms — {:?}, pre-pass {:?}, {} cascades of {}, PCF {}, MSAA {}{pose} [1-5 layout, V P C R K M knobs, F fly]",
                 report.prepare_seconds * 1e3,
                 report.record_seconds * 1e3,
                 report.gpu_seconds.map_or("n/a".to_owned(), |s| format!("{:.2} ms", s * 1e3)),
@@ -365,6 +382,7 @@ impl Viewer {
                 self.cascades.count,
                 self.cascades.resolution,
                 self.pcf_radius,
+                renderer.msaa_samples(self.msaa),
             ));
         }
         if let (Some(_), Some(id), Some(path)) = (self.args.fps, self.window_id, &self.args.screenshot)
@@ -537,6 +555,13 @@ impl Viewer {
                 }
             }
             KeyCode::KeyK => self.pcf_radius = (self.pcf_radius + 1) % 3,
+            KeyCode::KeyM => {
+                self.msaa = match self.msaa {
+                    Msaa::Off => Msaa::X2,
+                    Msaa::X2 => Msaa::X4,
+                    Msaa::X4 => Msaa::Off,
+                }
+            }
             KeyCode::KeyP => {
                 self.pre_pass = match self.pre_pass {
                     PrePass::Auto { .. } => PrePass::On,
@@ -585,7 +610,7 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
     let camera = CameraState { orbit, fly: false, eye: orbit.eye() };
     let event_loop = EventLoop::new()?;
     event_loop.set_control_flow(ControlFlow::Poll);
-    let layout = args.layout;
+    let (layout, msaa) = (args.layout, args.msaa);
     let mut viewer = Viewer {
         args,
         scene,
@@ -601,6 +626,7 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
         pre_pass: PrePass::DEFAULT,
         cascades: oxygen_demo::viewer_cascades(),
         pcf_radius: ForwardLitConfig::DEFAULT.shadow_pcf_radius,
+        msaa,
         frames: 0,
         window_size: UVec2::ZERO,
         frames_before_resize: 0,

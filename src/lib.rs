@@ -101,7 +101,7 @@ pub mod prelude {
     pub use oxygen_core::glam::{DVec3, Mat4, Quat, UVec2, Vec2, Vec3, Vec4};
     pub use oxygen_core::{
         AlphaMode, Camera, CameraError, CascadeSettings, DAabb, DLookAtResolver, Geometry, GeometryHandle, HdrFormat,
-        Light, LightKind, LookAtResolver, Material, MaterialHandle, NodeFlags, NodeKey, Projection, Renderable,
+        Light, LightKind, LookAtResolver, Material, MaterialHandle, Msaa, NodeFlags, NodeKey, Projection, Renderable,
         ResolvedView, Scene, Transform, ViewContext, ViewError, ViewId, ViewResolver,
     };
     pub use oxygen_passes::{

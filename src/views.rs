@@ -24,6 +24,7 @@ pub struct ViewDesc {
     pub(crate) target: TargetKind,
     pub(crate) visibility: Option<Visibility>,
     pub(crate) shown: Option<(crate::WindowId, crate::WindowRect)>,
+    pub(crate) msaa: oxygen_core::Msaa,
 }
 
 /// Where a view renders.
@@ -46,7 +47,22 @@ impl ViewDesc {
             target: TargetKind::Own,
             visibility: None,
             shown: None,
+            msaa: oxygen_core::Msaa::Off,
         }
+    }
+
+    /// Anti-aliases the view's mesh passes with `msaa` samples per pixel
+    /// (depth pre-pass, shading and transparent passes, all four variants;
+    /// the colour resolves before the tone map). Costs: the multisampled
+    /// targets' memory (counted against the target budget) and time
+    /// (docs/performance.md); a multisampled view has no depth output for
+    /// other views to read, and GPU occlusion culling falls back to GPU
+    /// frustum culling for it (its depth pyramid needs a single-sample
+    /// depth). Where the adapter cannot multisample the HDR format at that
+    /// count, the renderer uses the largest count it can, with a warning.
+    pub fn with_msaa(mut self, msaa: oxygen_core::Msaa) -> Self {
+        self.msaa = msaa;
+        self
     }
 
     /// Shows the view in `rect` of `window` ([`crate::Renderer::add_window`]):
@@ -125,6 +141,7 @@ pub(crate) struct ViewEntry {
     pub(crate) active: bool,
     pub(crate) visibility: Option<Visibility>,
     pub(crate) shown: Option<(crate::WindowId, crate::WindowRect)>,
+    pub(crate) msaa: oxygen_core::Msaa,
 }
 
 /// The registered views and the links between them; no GPU needed.
@@ -177,6 +194,7 @@ impl Views {
                 active: true,
                 visibility: desc.visibility,
                 shown: desc.shown,
+                msaa: desc.msaa,
             },
         );
         tracing::info!(view = %id, "view registered");

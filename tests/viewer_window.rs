@@ -243,3 +243,30 @@ fn the_viewer_writes_a_numbered_sequence_of_an_animation() {
     let first = compare(&frames[0], &expected, 3);
     assert!(first.differing > first.total / 50, "frame 0 (t = 0.25 s) must differ from t = 0.5 s");
 }
+
+/// `--msaa 4`: the window shows the multisampled main view, equal to the
+/// headless 4× render and not to the 1× one.
+#[test]
+fn the_viewer_anti_aliases_its_main_view_when_asked() {
+    if let Some(reason) = cannot_run() {
+        eprintln!("skipped: {reason}");
+        return;
+    }
+    let size = UVec2::new(240, 160);
+    let presented = run_viewer("viewer_msaa", size, &["--msaa", "4"]);
+    let (scene, bounds) = viewer_scene();
+    let render = |msaa| {
+        let camera = OrbitCamera::framing(&bounds).resolver(size);
+        let mut renderer = gpu_renderer_with(RendererOptions::default());
+        let desc = ViewDesc::new(camera).with_sun_shadows(oxygen_demo::viewer_cascades()).with_msaa(msaa);
+        let view = renderer.register_view(desc, standard_render_graph).unwrap();
+        renderer.render_frame(&scene).unwrap();
+        renderer.read_color(view).unwrap()
+    };
+    let (smooth, aliased) = (render(Msaa::X4), render(Msaa::Off));
+    let same = compare(&presented, &smooth, 3);
+    let other = compare(&presented, &aliased, 3);
+    eprintln!("against 4×: {} differ; against 1×: {} differ (of {})", same.differing, other.differing, same.total);
+    assert!(same.differing <= same.total / 1000, "{} of {} differ from the 4× render", same.differing, same.total);
+    assert!(other.differing > 4 * same.differing.max(10), "the presented picture must not be the 1× one");
+}

@@ -36,7 +36,7 @@ pub mod view;
 pub use animation::{Animation, Channel, ChannelError, ChannelValues, Interpolation};
 pub use camera::{Camera, CameraError, Projection};
 pub use geometry::{Geometry, GeometryError, Submesh, Vertex, VertexAttributes};
-pub use gpu::{ColorTargets, GpuContext, GpuError, GpuOptions, HdrFormat, ViewTargets};
+pub use gpu::{ColorTargets, GpuContext, GpuError, GpuOptions, HdrFormat, Msaa, MsaaTargets, ViewTargets};
 pub use light::{Light, LightKind, Mobility};
 pub use material::{AlphaMode, Material, MaterialUvs, UvTransform};
 pub use math::{Aabb, DAabb, Frustum, Plane, Sphere};

@@ -359,6 +359,7 @@ impl MeshPass {
             depth_bias: self.depth_bias,
             features: self.shader_features(ctx),
             tone_map: self.tone_map(),
+            samples: ctx.targets.samples(),
         };
         let pipelines = partition_pipelines(ctx, shading, self.partitions(ctx));
         let (lighting, pipelines) = futures::future::join(lighting, pipelines).await;
@@ -366,10 +367,14 @@ impl MeshPass {
 
         let mut stats = rec.stats;
         {
+            // With MSAA the pass draws into the multisampled HDR target and
+            // resolves it into the view's HDR target at its end (every
+            // colour pass: a later one loads the samples, not the resolve).
+            let msaa = ctx.targets.msaa.as_ref();
             let color_attachment = color.map(|(view, ops)| wgpu::RenderPassColorAttachment {
-                view,
+                view: msaa.map_or(view, |m| &m.color_view),
                 depth_slice: None,
-                resolve_target: None,
+                resolve_target: msaa.map(|_| view),
                 ops: wgpu::Operations { load: ops.load(), store: wgpu::StoreOp::Store },
             });
             let depth_load = if self.clear_depth { wgpu::LoadOp::Clear(0.0) } else { wgpu::LoadOp::Load };
@@ -382,7 +387,7 @@ impl MeshPass {
                     &[]
                 },
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &ctx.targets.depth_view,
+                    view: ctx.targets.render_depth_view(),
                     depth_ops: Some(wgpu::Operations { load: depth_load, store: wgpu::StoreOp::Store }),
                     stencil_ops: None,
                 }),

@@ -126,6 +126,8 @@ pub struct PipelineKey {
     /// display colour directly (the forward lit pass of a view whose HDR
     /// nothing reads); `None` writes linear radiance.
     pub tone_map: Option<Exposure>,
+    /// Samples per pixel of the targets (1, or 2 and 4 with MSAA).
+    pub samples: u32,
 }
 
 impl PipelineKey {
@@ -510,7 +512,9 @@ impl Pipelines {
                     clamp: 0.0,
                 },
             }),
-            multisample: Default::default(),
+            // Alpha-tested variants discard per pixel, not per sample: their
+            // cut-out edges stay aliased (alpha to coverage is not used).
+            multisample: wgpu::MultisampleState { count: key.samples.max(1), ..Default::default() },
             fragment,
             multiview_mask: None,
             cache: None,

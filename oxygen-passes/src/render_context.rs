@@ -218,7 +218,10 @@ impl<'a> RenderContext<'a> {
     /// does, the standard graph tone-maps at the end of shading
     /// ([`crate::MeshPass::tone_mapped`]) and skips the tone-map pass.
     pub fn hdr_read_after_shading(&self) -> bool {
+        // With MSAA the shading pass resolves into the HDR target, which the
+        // tone-map pass then reads.
         self.hdr_read_by_others
+            || self.targets.msaa.is_some()
             || self.prepared.partitions_matching(PassMask::TRANSPARENT, PassMask::empty()).next().is_some()
     }
 
@@ -256,6 +259,11 @@ impl OutputKind for Depth {
     const NAME: &'static str = "depth";
     fn find<'a>(inputs: &ViewInputs<'a>, source: OutputSource) -> Option<(Self::Value<'a>, Vec<ViewId>)> {
         let v = linked_view(inputs, source)?;
+        // A multisampled view's single-sample depth is never written (depth
+        // does not resolve): there is no depth output to read.
+        if v.targets.msaa.is_some() {
+            return None;
+        }
         Some(((v.view, &v.targets.depth_view), vec![v.id]))
     }
 }

@@ -95,6 +95,7 @@ fn every_shading_override_constant_is_declared() {
         depth_bias: DepthBias::NONE,
         features: ShaderFeatures::NONE,
         tone_map: Some(Exposure::new(1.0)),
+        samples: 1,
     };
     for textures in all_paths() {
         let source = oxygen_passes::shader_source(PassKind::ShadingAfterPrePass, textures);

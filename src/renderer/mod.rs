@@ -563,6 +563,19 @@ impl Renderer {
         }
     }
 
+    /// Samples per pixel a view asking for `msaa` gets: what it asks
+    /// where the adapter can multisample the HDR and depth formats at that
+    /// count, else the largest count below it that it can (1 at least).
+    pub fn msaa_samples(&self, msaa: oxygen_core::Msaa) -> u32 {
+        let asked = msaa.samples();
+        let supports = |samples: u32| {
+            [self.hdr_format.texture_format(), ViewTargets::DEPTH_FORMAT]
+                .iter()
+                .all(|f| self.gpu.adapter.get_texture_format_features(*f).flags.sample_count_supported(samples))
+        };
+        [4, 2, 1].into_iter().find(|s| *s <= asked && (*s == 1 || supports(*s))).unwrap_or(1)
+    }
+
     /// How textures are bound on this device.
     pub fn texture_path(&self) -> TexturePath {
         self.heap.texture_path()
@@ -586,7 +599,13 @@ impl Renderer {
     /// default). The renderer records views after the views whose outputs
     /// they read, whatever the registration order.
     pub fn register_view(&mut self, desc: impl Into<ViewDesc>, graph: impl RenderGraph) -> Result<ViewId, RenderError> {
-        self.views.register(desc, graph)
+        let desc = desc.into();
+        let (asked, samples) = (desc.msaa.samples(), self.msaa_samples(desc.msaa));
+        let id = self.views.register(desc, graph)?;
+        if samples != asked {
+            warn!(view = %id, asked, samples, "the adapter cannot multisample the view's targets as asked");
+        }
+        Ok(id)
     }
 
     /// Registers a view with explicit ScenePrep options (filter, cull bound).
@@ -694,7 +713,7 @@ impl Renderer {
     pub fn check_target_budget(&self, views: &[(glam::UVec2, bool)]) -> Result<u64, RenderError> {
         let mut taken = 0u64;
         for (i, (viewport, depth_only)) in views.iter().enumerate() {
-            self.admit_targets(ViewId(i as u32), *viewport, !depth_only, &mut taken)?;
+            self.admit_targets(ViewId(i as u32), *viewport, !depth_only, 1, &mut taken)?;
         }
         Ok(taken)
     }
@@ -706,9 +725,10 @@ impl Renderer {
         view: ViewId,
         viewport: glam::UVec2,
         with_color: bool,
+        samples: u32,
         taken: &mut u64,
     ) -> Result<(), RenderError> {
-        let bytes = ViewTargets::bytes_for_format(viewport.x, viewport.y, with_color.then_some(self.hdr_format));
+        let bytes = ViewTargets::bytes_for_msaa(viewport.x, viewport.y, with_color.then_some(self.hdr_format), samples);
         if taken.saturating_add(bytes) > self.target_budget_bytes {
             let (width, height, budget) = (viewport.x, viewport.y, self.target_budget_bytes);
             return Err(RenderError::TargetBudget { view, width, height, bytes, budget, taken: *taken });

@@ -46,7 +46,7 @@ impl Renderer {
         for shadow in planned {
             let resolved = shadow.resolved.map_err(RenderError::from).and_then(|view| {
                 if let ShadowRole::Cascade { .. } = shadow.role {
-                    self.admit_targets(shadow.id, view.viewport, false, &mut taken)?;
+                    self.admit_targets(shadow.id, view.viewport, false, 1, &mut taken)?;
                 }
                 Ok(view)
             });
@@ -70,7 +70,7 @@ impl Renderer {
             let visibility = self.view_visibility(owner_visibility, true, false);
             let (role, target) = match shadow.role {
                 ShadowRole::Cascade { owner, index } => {
-                    (ViewRole::SunCascade { owner, index }, TargetPlan::Own { with_color: false })
+                    (ViewRole::SunCascade { owner, index }, TargetPlan::Own { with_color: false, samples: 1 })
                 }
                 ShadowRole::Local { light, face, tile } => {
                     (ViewRole::LocalShadow { light, face, tile }, TargetPlan::AtlasLayer { tile })

@@ -17,8 +17,8 @@ use crate::views::TargetKind;
 /// Where a view of this frame renders.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum TargetPlan {
-    /// Targets of its own, with colour or depth only.
-    Own { with_color: bool },
+    /// Targets of its own, with colour or depth only, and samples per pixel.
+    Own { with_color: bool, samples: u32 },
     /// Layer `tile` of the local shadow atlas.
     AtlasLayer { tile: u32 },
     /// Layer `face` of probe `probe`'s cube.
@@ -64,7 +64,11 @@ impl Renderer {
         for (id, entry) in self.views.entries.iter().filter(|(_, entry)| entry.active) {
             let ctx = ViewContext { view_id: *id, frame_index, time_seconds };
             let (role, target) = match entry.target {
-                TargetKind::Own => (ViewRole::Registered, TargetPlan::Own { with_color: !entry.options.depth_only }),
+                TargetKind::Own => {
+                    let with_color = !entry.options.depth_only;
+                    let samples = if with_color { self.msaa_samples(entry.msaa) } else { 1 };
+                    (ViewRole::Registered, TargetPlan::Own { with_color, samples })
+                }
                 TargetKind::ProbeFace { probe, face } => {
                     (ViewRole::ProbeFace { probe, face }, TargetPlan::ProbeFace { probe, face })
                 }
@@ -87,8 +91,8 @@ impl Renderer {
                 if width > limit || height > limit {
                     return Err(RenderError::ViewportTooLarge { view: *id, width, height, limit });
                 }
-                if let TargetPlan::Own { with_color } = target {
-                    self.admit_targets(*id, view.viewport, with_color, &mut taken)?;
+                if let TargetPlan::Own { with_color, samples } = target {
+                    self.admit_targets(*id, view.viewport, with_color, samples, &mut taken)?;
                 }
                 Ok(view)
             });
@@ -102,7 +106,9 @@ impl Renderer {
                         visibility: self.view_visibility(
                             entry.visibility,
                             entry.options.depth_only,
-                            entry.graph.two_phase(),
+                            // A multisampled view has no single-sample depth
+                            // for the occlusion test's pyramid.
+                            entry.graph.two_phase() && !matches!(target, TargetPlan::Own { samples: 2.., .. }),
                         ),
                         ..entry.options
                     },
@@ -139,10 +145,11 @@ impl Renderer {
                 .views
                 .iter()
                 .filter_map(|v| match v.target {
-                    TargetPlan::Own { with_color } => Some(oxygen_core::ViewTargets::bytes_for_format(
+                    TargetPlan::Own { with_color, samples } => Some(oxygen_core::ViewTargets::bytes_for_msaa(
                         v.world.viewport.x,
                         v.world.viewport.y,
                         with_color.then_some(self.hdr_format),
+                        samples,
                     )),
                     _ => None,
                 })

@@ -48,10 +48,11 @@ impl Renderer {
             });
             let (width, height, label) = (view.gpu.viewport.x, view.gpu.viewport.y, view.id.to_string());
             match view.target {
-                TargetPlan::Own { with_color } => {
-                    if !entry.targets.as_ref().is_some_and(|t| t.fits(width, height, with_color)) {
+                TargetPlan::Own { with_color, samples } => {
+                    if !entry.targets.as_ref().is_some_and(|t| t.fits(width, height, with_color, samples)) {
                         entry.targets = Some(if with_color {
                             ViewTargets::with_hdr_format(device, width, height, &label, self.hdr_format)
+                                .with_msaa(device, samples, &label)
                         } else {
                             ViewTargets::depth_only(device, width, height, &label)
                         });

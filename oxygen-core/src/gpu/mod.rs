@@ -7,4 +7,4 @@ mod target;
 
 pub use context::{GpuContext, GpuError, GpuOptions};
 pub use readback::{HdrImage, f16_to_f32, unpack_rg11b10_ufloat};
-pub use target::{ColorTargets, HdrFormat, ViewTargets};
+pub use target::{ColorTargets, HdrFormat, Msaa, MsaaTargets, ViewTargets};

@@ -25,6 +25,60 @@ pub struct ViewTargets {
     pub width: u32,
     /// Height in pixels.
     pub height: u32,
+    /// Multisampled colour and depth the mesh passes render into when the
+    /// view asks for anti-aliasing ([`Msaa`]); the colour resolves into
+    /// `color.hdr` at the end of each pass. `depth` is then not written.
+    pub msaa: Option<MsaaTargets>,
+}
+
+/// Samples per pixel of a view's mesh passes: the anti-aliasing knob
+/// (multisample anti-aliasing; time in `examples/msaa_bench.rs`, edge error
+/// against a supersampled render in `tests/msaa.rs`, both in
+/// docs/performance.md).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Msaa {
+    /// One sample per pixel: aliased edges, no extra memory or time.
+    #[default]
+    Off,
+    /// Two samples per pixel.
+    X2,
+    /// Four samples per pixel.
+    X4,
+}
+
+impl Msaa {
+    /// Samples per pixel.
+    pub fn samples(self) -> u32 {
+        match self {
+            Msaa::Off => 1,
+            Msaa::X2 => 2,
+            Msaa::X4 => 4,
+        }
+    }
+
+    /// The setting of `samples` samples per pixel (1, 2 or 4).
+    pub fn from_samples(samples: u32) -> Option<Msaa> {
+        match samples {
+            1 => Some(Msaa::Off),
+            2 => Some(Msaa::X2),
+            4 => Some(Msaa::X4),
+            _ => None,
+        }
+    }
+}
+
+/// A view's multisampled attachments.
+pub struct MsaaTargets {
+    /// Samples per pixel (2 or 4).
+    pub samples: u32,
+    /// Multisampled HDR colour (the HDR target's format).
+    pub color: wgpu::Texture,
+    /// Its default view.
+    pub color_view: wgpu::TextureView,
+    /// Multisampled depth (`Depth32Float`).
+    pub depth: wgpu::Texture,
+    /// Its default view.
+    pub depth_view: wgpu::TextureView,
 }
 
 /// The colour half of a view's targets.
@@ -129,25 +183,88 @@ impl ViewTargets {
         u64::from(width) * u64::from(height) * per_pixel
     }
 
+    /// [`ViewTargets::bytes_for_format`] with `samples` samples per pixel:
+    /// the multisampled colour and depth come on top (`samples` × (HDR
+    /// bytes + 4) a pixel).
+    pub fn bytes_for_msaa(width: u32, height: u32, hdr_format: Option<HdrFormat>, samples: u32) -> u64 {
+        let single = Self::bytes_for_format(width, height, hdr_format);
+        match hdr_format {
+            Some(f) if samples > 1 => {
+                single + u64::from(width) * u64::from(height) * u64::from(samples) * (f.bytes_per_pixel() + 4)
+            }
+            _ => single,
+        }
+    }
+
     /// Bytes of the textures these targets own: a shadow view's atlas
     /// layer and a probe face's cube are counted by their owners.
     pub fn bytes(&self) -> u64 {
         let pixels = u64::from(self.width) * u64::from(self.height);
         let depth = if self.owns_depth { 4 } else { 0 };
+        let hdr_bytes = |c: &ColorTargets| u64::from(c.hdr.format().block_copy_size(None).unwrap_or(8));
         let color = match &self.color {
-            Some(c) if c.color.is_some() => u64::from(c.hdr.format().block_copy_size(None).unwrap_or(8)) + 4,
+            Some(c) if c.color.is_some() => hdr_bytes(c) + 4,
             _ => 0,
         };
-        pixels * (depth + color)
+        let msaa = match (&self.msaa, &self.color) {
+            (Some(m), Some(c)) => u64::from(m.samples) * (hdr_bytes(c) + 4),
+            _ => 0,
+        };
+        pixels * (depth + color + msaa)
     }
 
-    /// True when the targets are `width × height`, own their textures, and
-    /// have colour exactly when `with_color` says so.
-    pub fn fits(&self, width: u32, height: u32, with_color: bool) -> bool {
+    /// Samples per pixel of the mesh passes (1 without MSAA).
+    pub fn samples(&self) -> u32 {
+        self.msaa.as_ref().map_or(1, |m| m.samples)
+    }
+
+    /// The depth view mesh passes render into: the multisampled one with
+    /// MSAA, else [`ViewTargets::depth_view`].
+    pub fn render_depth_view(&self) -> &wgpu::TextureView {
+        self.msaa.as_ref().map_or(&self.depth_view, |m| &m.depth_view)
+    }
+
+    /// True when the targets are `width × height`, own their textures, have
+    /// colour exactly when `with_color` says so, and `samples` samples.
+    pub fn fits(&self, width: u32, height: u32, with_color: bool, samples: u32) -> bool {
         self.width == width
             && self.height == height
             && self.owns_depth
+            && self.samples() == samples
             && self.color.as_ref().map_or(!with_color, |c| with_color && c.color.is_some())
+    }
+
+    /// These targets with multisampled colour and depth of `samples`
+    /// samples (2 or 4; the device must support the count for the HDR and
+    /// depth formats). Targets without colour are returned as they are.
+    pub fn with_msaa(mut self, device: &wgpu::Device, samples: u32, label: &str) -> Self {
+        let Some(color) = &self.color else { return self };
+        if samples <= 1 {
+            return self;
+        }
+        let size = wgpu::Extent3d { width: self.width, height: self.height, depth_or_array_layers: 1 };
+        let make = |format, suffix: &str| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(&format!("{label} {suffix} ×{samples}")),
+                size,
+                mip_level_count: 1,
+                sample_count: samples,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+                view_formats: &[],
+            })
+        };
+        let msaa_color = make(color.hdr.format(), "hdr");
+        let msaa_depth = make(Self::DEPTH_FORMAT, "depth");
+        self.msaa = Some(MsaaTargets {
+            samples,
+            color_view: msaa_color.create_view(&Default::default()),
+            color: msaa_color,
+            depth_view: msaa_depth.create_view(&Default::default()),
+            depth: msaa_depth,
+        });
+        self
     }
 
     /// Targets of a shadow view that renders into `layer` of a depth array
@@ -161,6 +278,7 @@ impl ViewTargets {
             owns_depth: false,
             width: atlas.width(),
             height: atlas.height(),
+            msaa: None,
         }
     }
 
@@ -234,6 +352,7 @@ impl ViewTargets {
             owns_depth: true,
             width,
             height,
+            msaa: None,
         }
     }
 }
