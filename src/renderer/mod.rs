@@ -411,7 +411,9 @@ impl Renderer {
         .union(GPU_VISIBILITY_FEATURES)
         .union(gpu_timer::GpuTimer::FEATURES)
         .union(TexturePath::BINDING_ARRAY_FEATURES)
-        .union(wgpu::Features::RG11B10UFLOAT_RENDERABLE);
+        .union(wgpu::Features::RG11B10UFLOAT_RENDERABLE)
+        // MSAA counts beyond WebGPU's guaranteed 1 and 4 (2× on most GPUs).
+        .union(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES);
 
     /// A renderer on a headless device chosen by [`GpuContext::new_headless`].
     pub fn new_headless() -> Result<Self, RenderError> {
@@ -568,10 +570,17 @@ impl Renderer {
     /// count, else the largest count below it that it can (1 at least).
     pub fn msaa_samples(&self, msaa: oxygen_core::Msaa) -> u32 {
         let asked = msaa.samples();
+        // The adapter's own counts only count once the device has enabled
+        // them; without the feature, WebGPU guarantees 1 and 4.
+        let adapter_specific = self.gpu.features.contains(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES);
         let supports = |samples: u32| {
-            [self.hdr_format.texture_format(), ViewTargets::DEPTH_FORMAT]
-                .iter()
-                .all(|f| self.gpu.adapter.get_texture_format_features(*f).flags.sample_count_supported(samples))
+            [self.hdr_format.texture_format(), ViewTargets::DEPTH_FORMAT].iter().all(|f| {
+                if adapter_specific {
+                    self.gpu.adapter.get_texture_format_features(*f).flags.sample_count_supported(samples)
+                } else {
+                    f.guaranteed_format_features(self.gpu.features).flags.sample_count_supported(samples)
+                }
+            })
         };
         [4, 2, 1].into_iter().find(|s| *s <= asked && (*s == 1 || supports(*s))).unwrap_or(1)
     }
