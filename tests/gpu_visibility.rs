@@ -183,12 +183,14 @@ fn gpu_frustum_culling_draws_what_the_cpu_path_draws_on_gltf_scenes() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets");
     let mut compared = 0;
     // MultiUVTest: a mesh with attribute records (its second UV set), whose
-    // slot the GPU path must carry into its draws like the CPU path.
+    // slot the GPU path must carry into its draws like the CPU path;
+    // RiggedSimple: a skinned mesh (skin records, joint matrices).
     for file in [
         "Cubes/Cubes.glb",
         "AlphaBlendModeTest/AlphaBlendModeTest.glb",
         "OrientationTest/OrientationTest.glb",
         "MultiUVTest/MultiUVTest.glb",
+        "RiggedSimple/RiggedSimple.glb",
     ] {
         let mut scene = Scene::new();
         let imported =

@@ -71,6 +71,38 @@ impl VertexAttributes {
     }
 }
 
+/// A vertex's skin: up to four joints (indices into its node's
+/// [`Skin::joints`](crate::scene::Skin::joints)) and their weights, stored in
+/// the vertex domain after the geometry's vertices and attribute records
+/// (32 bytes; joints as floats, exact below 2^24).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct SkinWeights {
+    /// Joint indices (whole numbers).
+    pub joints: [f32; 4],
+    /// Weights, non-negative, summing to 1.
+    pub weights: [f32; 4],
+}
+
+const _: () = assert!(std::mem::size_of::<SkinWeights>() == std::mem::size_of::<Vertex>());
+
+impl SkinWeights {
+    /// Four joints and weights; the weights are normalised to sum to 1
+    /// (negative and non-finite ones count as 0; all zero binds the vertex
+    /// to its first joint alone).
+    pub fn new(joints: [u32; 4], weights: [f32; 4]) -> Self {
+        let weights = weights.map(|w| if w.is_finite() && w > 0.0 { w } else { 0.0 });
+        let sum: f32 = weights.iter().sum();
+        let weights = if sum > 0.0 { weights.map(|w| w / sum) } else { [1.0, 0.0, 0.0, 0.0] };
+        SkinWeights { joints: joints.map(|j| j as f32), weights }
+    }
+
+    /// The joints with a weight above zero.
+    pub fn influences(&self) -> impl Iterator<Item = u32> + '_ {
+        self.joints.iter().zip(&self.weights).filter(|(_, w)| **w > 0.0).map(|(j, _)| *j as u32)
+    }
+}
+
 /// A range of the index array drawn with one material.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Submesh {
@@ -125,6 +157,17 @@ pub enum GeometryError {
         /// Geometry name.
         name: String,
     },
+    /// [`Geometry::with_skin_weights`] got a different number of records
+    /// than there are vertices, or a joint index of 2^24 or more.
+    #[error("geometry '{name}': {weights} skin records for {vertices} vertices, or a joint index of 2^24 or more")]
+    SkinWeights {
+        /// Geometry name.
+        name: String,
+        /// Skin records given.
+        weights: usize,
+        /// Vertices.
+        vertices: usize,
+    },
     /// [`Geometry::with_attributes`] got a different number of records than
     /// there are vertices.
     #[error("geometry '{name}': {attributes} vertex attribute records for {vertices} vertices")]
@@ -152,6 +195,9 @@ pub struct Geometry {
     indices: Vec<u32>,
     submeshes: Vec<Submesh>,
     attributes: Option<Vec<VertexAttributes>>,
+    skin: Option<Vec<SkinWeights>>,
+    /// Per joint, the bound of the vertices it moves (skinned geometry).
+    joint_bounds: Vec<Option<Aabb>>,
     local_aabb: Aabb,
 }
 
@@ -198,7 +244,16 @@ impl Geometry {
             }
         }
         let local_aabb = Aabb::from_points(vertices.iter().map(|v| Vec3::from(v.position)));
-        Ok(Geometry { name, vertices, indices, submeshes, attributes: None, local_aabb })
+        Ok(Geometry {
+            name,
+            vertices,
+            indices,
+            submeshes,
+            attributes: None,
+            skin: None,
+            joint_bounds: Vec::new(),
+            local_aabb,
+        })
     }
 
     /// The geometry with per-vertex colours and a second UV set, one record
@@ -214,7 +269,7 @@ impl Geometry {
         }
         // The vertex domain holds the vertices and their attributes: both
         // together must stay addressable with 32 bits.
-        if attributes.len().checked_mul(2).and_then(|n| u32::try_from(n).ok()).is_none() {
+        if attributes.len().checked_mul(3).and_then(|n| u32::try_from(n).ok()).is_none() {
             return Err(GeometryError::TooLarge { name: self.name });
         }
         self.attributes = Some(attributes.into_iter().map(VertexAttributes::sanitized).collect());
@@ -226,10 +281,59 @@ impl Geometry {
         self.attributes.as_deref()
     }
 
+    /// The geometry skinned: one record per vertex (joint indices below
+    /// 2^24, weights as [`SkinWeights::new`] leaves them). Also computes,
+    /// per joint, the bound of the vertices it moves, from which a skinned
+    /// renderable's bound in any pose follows ([`Geometry::joint_bounds`]).
+    pub fn with_skin_weights(mut self, skin: Vec<SkinWeights>) -> Result<Self, GeometryError> {
+        let too_large = skin.iter().any(|s| s.joints.iter().any(|j| !(*j >= 0.0 && *j < 16_777_216.0)));
+        if skin.len() != self.vertices.len() || too_large {
+            return Err(GeometryError::SkinWeights {
+                name: self.name,
+                weights: skin.len(),
+                vertices: self.vertices.len(),
+            });
+        }
+        if skin.len().checked_mul(3).and_then(|n| u32::try_from(n).ok()).is_none() {
+            return Err(GeometryError::TooLarge { name: self.name });
+        }
+        let mut bounds: Vec<Option<Aabb>> = Vec::new();
+        for (vertex, s) in self.vertices.iter().zip(&skin) {
+            let p = Vec3::from(vertex.position);
+            for joint in s.influences() {
+                let j = joint as usize;
+                if bounds.len() <= j {
+                    bounds.resize(j + 1, None);
+                }
+                bounds[j] = Some(match bounds[j] {
+                    Some(b) => Aabb::new(b.min.min(p), b.max.max(p)),
+                    None => Aabb::new(p, p),
+                });
+            }
+        }
+        self.joint_bounds = bounds;
+        self.skin = Some(skin);
+        Ok(self)
+    }
+
+    /// Per-vertex joints and weights, when the geometry is skinned.
+    pub fn skin_weights(&self) -> Option<&[SkinWeights]> {
+        self.skin.as_deref()
+    }
+
+    /// Per joint index, the object-space bound of the vertices that joint
+    /// moves (`None` for a joint no vertex uses): a skinned vertex is a
+    /// weighted mean of its joints' transforms of it, so it lies inside the
+    /// union of each joint's transform of its bound, in every pose.
+    pub fn joint_bounds(&self) -> &[Option<Aabb>] {
+        &self.joint_bounds
+    }
+
     /// Records the geometry occupies in the vertex domain: its vertices,
-    /// then its attribute records when it has them (fits in a `u32`).
+    /// then its attribute records and its skin records when it has them
+    /// (fits in a `u32`).
     pub fn vertex_domain_records(&self) -> usize {
-        self.vertices.len() * if self.attributes.is_some() { 2 } else { 1 }
+        self.vertices.len() * (1 + usize::from(self.attributes.is_some()) + usize::from(self.skin.is_some()))
     }
 
     /// Name for logs and dumps.

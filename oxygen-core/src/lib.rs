@@ -35,15 +35,15 @@ pub mod view;
 
 pub use animation::{Animation, Channel, ChannelError, ChannelValues, Interpolation};
 pub use camera::{Camera, CameraError, Projection};
-pub use geometry::{Geometry, GeometryError, Submesh, Vertex, VertexAttributes};
+pub use geometry::{Geometry, GeometryError, SkinWeights, Submesh, Vertex, VertexAttributes};
 pub use gpu::{ColorTargets, GpuContext, GpuError, GpuOptions, HdrFormat, Msaa, MsaaTargets, ViewTargets};
 pub use light::{Light, LightKind, Mobility};
 pub use material::{AlphaMode, Material, MaterialUvs, UvTransform};
 pub use math::{Aabb, DAabb, Frustum, Plane, Sphere};
 pub use output::{Depth, HdrColor, Output, OutputSource, ProbeCube, ProbeId, ShadowMap};
 pub use scene::{
-    GeometryHandle, LodLevel, MaterialHandle, Node, NodeFlags, NodeKey, Renderable, Scene, SceneError, TextureHandle,
-    Transform, WorldTransforms,
+    GeometryHandle, LodLevel, MaterialHandle, Node, NodeFlags, NodeKey, Renderable, Scene, SceneError, Skin,
+    TextureHandle, Transform, WorldTransforms,
 };
 pub use shadow::{Cascade, CascadeResolver, CascadeSettings, cascade_splits, fit_cascade};
 pub use texture::{ColorSpace, Filter, Sampling, TextureError, TextureImage, Wrap};

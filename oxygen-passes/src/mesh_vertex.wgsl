@@ -20,13 +20,37 @@ struct MeshVarying {
 fn vs_main(@builtin(vertex_index) vertex_index: u32, @builtin(instance_index) draw_index: u32) -> MeshVarying {
     let draw = draw_metadata_domain[scene.renderer.draw_metadata_slot + draw_index];
     let v = vertex_domain[vertex_index];
-    let world = world_transform_domain[scene.renderer.world_transforms_slot + draw.transform_index];
-    let normal_matrix = normal_transform_domain[scene.renderer.normal_transforms_slot + draw.transform_index];
-    let world_position = world * vec4<f32>(v.px, v.py, v.pz, 1.0);
+    var world_position: vec4<f32>;
+    var world_normal: vec3<f32>;
+    if draw.skin_slot != INVALID_SLOT {
+        // Skinned: the weighted sum of the vertex's joint matrices (world
+        // of the joint × inverse bind), parallel to the geometry's vertices
+        // as joints (px..nx, whole numbers) and weights (ny, nz, u, v).
+        let s = vertex_domain[draw.skin_slot + (vertex_index - draw.vertex_slot)];
+        let joints = vec4<u32>(u32(s.px), u32(s.py), u32(s.pz), u32(s.nx));
+        let weights = vec4<f32>(s.ny, s.nz, s.u, s.v);
+        let base = scene.renderer.world_transforms_slot + draw.joint_base;
+        let normal_base = scene.renderer.normal_transforms_slot + draw.joint_base;
+        var position = vec4<f32>(0.0);
+        var normal = vec3<f32>(0.0);
+        for (var k = 0u; k < 4u; k++) {
+            if weights[k] > 0.0 {
+                position += weights[k] * (world_transform_domain[base + joints[k]] * vec4<f32>(v.px, v.py, v.pz, 1.0));
+                normal += weights[k] * (normal_transform_domain[normal_base + joints[k]] * vec3<f32>(v.nx, v.ny, v.nz));
+            }
+        }
+        world_position = vec4<f32>(position.xyz, 1.0);
+        world_normal = normal;
+    } else {
+        let world = world_transform_domain[scene.renderer.world_transforms_slot + draw.transform_index];
+        let normal_matrix = normal_transform_domain[scene.renderer.normal_transforms_slot + draw.transform_index];
+        world_position = world * vec4<f32>(v.px, v.py, v.pz, 1.0);
+        world_normal = normal_matrix * vec3<f32>(v.nx, v.ny, v.nz);
+    }
     var out: MeshVarying;
     out.clip_position = scene.camera.view_projection * world_position;
     out.world_position = world_position.xyz;
-    out.world_normal = normal_matrix * vec3<f32>(v.nx, v.ny, v.nz);
+    out.world_normal = world_normal;
     out.uv = vec2<f32>(v.u, v.v);
     out.material = draw.material_handle;
     // Attribute records run parallel to the geometry's vertices (stored as

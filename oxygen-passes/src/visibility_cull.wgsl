@@ -15,9 +15,9 @@ struct GpuInstance {
     submesh: u32,
     lod_first: u32,
     lod_count: u32,
-    reserved0: u32,
-    reserved1: u32,
-    reserved2: u32,
+    joint_base: u32,
+    skin_slot: u32,
+    reserved: u32,
 }
 
 struct GpuGroup {
@@ -185,8 +185,8 @@ fn emit(group_index: u32, slot: u32, instance: GpuInstance) {
     draw.submesh = instance.submesh;
     draw.generation = params.generation;
     draw.attributes_slot = group.attributes_slot;
-    draw.reserved2 = 0u;
-    draw.reserved3 = 0u;
+    draw.skin_slot = instance.skin_slot;
+    draw.joint_base = instance.joint_base;
     draw.reserved4 = 0u;
     draws[params.draw_slot + group.draw_base + slot] = draw;
 }

@@ -42,8 +42,14 @@ pub struct DrawMetadata {
     /// the vertex domain, parallel to its vertices; [`oxygen_bindless::INVALID_SLOT`]
     /// when the geometry has none.
     pub attributes_slot: u32,
+    /// First skin record (joints, weights) of the geometry in the vertex
+    /// domain, parallel to its vertices; `INVALID_SLOT` for a rigid draw.
+    pub skin_slot: u32,
+    /// A skinned draw's first joint matrix, relative to the frame's
+    /// transform slots (joint `i` at `joint_base + i`).
+    pub joint_base: u32,
     /// Zero; room for growth without changing the stride.
-    pub reserved: [u32; 3],
+    pub reserved: u32,
 }
 
 const _: () = {
@@ -62,7 +68,9 @@ const _: () = {
     assert!(offset_of!(DrawMetadata, submesh) == 40);
     assert!(offset_of!(DrawMetadata, generation) == 44);
     assert!(offset_of!(DrawMetadata, attributes_slot) == 48);
-    assert!(offset_of!(DrawMetadata, reserved) == 52);
+    assert!(offset_of!(DrawMetadata, skin_slot) == 52);
+    assert!(offset_of!(DrawMetadata, joint_base) == 56);
+    assert!(offset_of!(DrawMetadata, reserved) == 60);
 };
 
 impl DrawMetadata {

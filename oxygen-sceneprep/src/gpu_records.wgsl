@@ -19,8 +19,8 @@ struct DrawMetadata {
     submesh: u32,
     generation: u32,
     attributes_slot: u32,
-    reserved2: u32,
-    reserved3: u32,
+    skin_slot: u32,
+    joint_base: u32,
     reserved4: u32,
 }
 

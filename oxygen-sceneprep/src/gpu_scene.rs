@@ -102,8 +102,12 @@ pub struct GpuInstance {
     pub lod_first: u32,
     /// Its LOD count (0: none).
     pub lod_count: u32,
+    /// A skinned instance's first joint matrix, `INVALID_SLOT` when rigid.
+    pub joint_base: u32,
+    /// Its mesh's skin records, `INVALID_SLOT` when rigid.
+    pub skin_slot: u32,
     /// Zero.
-    pub reserved: [u32; 3],
+    pub reserved: u32,
 }
 
 impl GpuInstance {
@@ -321,7 +325,15 @@ impl GpuScene {
                     submesh: submesh as u32,
                     lod_first,
                     lod_count: lods.len() as u32 - lod_first,
-                    reserved: [0; 3],
+                    joint_base: entry.joint_base,
+                    // A skinned renderable has no LODs (the frame phase drops
+                    // them): its one group is its base mesh's.
+                    skin_slot: if entry.joint_base == oxygen_bindless::INVALID_SLOT {
+                        oxygen_bindless::INVALID_SLOT
+                    } else {
+                        base.skin
+                    },
+                    reserved: 0,
                 });
             }
         }

@@ -725,6 +725,9 @@ impl ScenePrep {
             if let Some(attributes) = geometry.attributes() {
                 heap.write(queue, &slots.vertices, geometry.vertices().len() as u32, attributes)?;
             }
+            if let Some(skin) = geometry.skin_weights() {
+                heap.write(queue, &slots.vertices, slots.skin - slots.vertices.start, skin)?;
+            }
             heap.write(queue, &slots.indices, 0, geometry.indices())?;
             self.stats.geometry_uploads += 1;
         }

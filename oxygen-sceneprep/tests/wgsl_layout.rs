@@ -58,7 +58,9 @@ fn gpu_records_wgsl_matches_rust_layouts() {
     let (members, _) = layout(&module, "DrawMetadata");
     assert_eq!(offset(&members, "generation") as usize, offset_of!(DrawMetadata, generation));
     assert_eq!(offset(&members, "attributes_slot") as usize, offset_of!(DrawMetadata, attributes_slot));
-    assert_eq!(offset(&members, "reserved2") as usize, offset_of!(DrawMetadata, reserved));
+    assert_eq!(offset(&members, "skin_slot") as usize, offset_of!(DrawMetadata, skin_slot));
+    assert_eq!(offset(&members, "joint_base") as usize, offset_of!(DrawMetadata, joint_base));
+    assert_eq!(offset(&members, "reserved4") as usize, offset_of!(DrawMetadata, reserved));
     check!(
         module,
         MaterialRecord,

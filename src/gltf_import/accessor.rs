@@ -32,6 +32,8 @@ pub(crate) enum Semantic {
     AnimationVector,
     /// Keyframe rotations.
     AnimationRotation,
+    /// A skin's inverse bind matrices.
+    InverseBindMatrices,
 }
 
 impl Semantic {
@@ -60,6 +62,7 @@ impl Semantic {
             Semantic::AnimationInput => ty == Type::Scalar && float,
             Semantic::AnimationVector => ty == Type::Vec3 && float,
             Semantic::AnimationRotation => ty == Type::Vec4 && (float || unorm || snorm),
+            Semantic::InverseBindMatrices => ty == Type::Mat4 && float,
         }
     }
 }

@@ -13,7 +13,7 @@ use glam::{DVec3, Vec2, Vec3, Vec4};
 use gltf::json;
 use gltf::json::mesh::{Mode, Semantic as JsonSemantic};
 use gltf::json::validation::Checked;
-use oxygen_core::{Geometry, Submesh, Vertex, VertexAttributes};
+use oxygen_core::{Geometry, SkinWeights, Submesh, Vertex, VertexAttributes};
 
 use super::accessor::{self, Semantic};
 use super::limits::Budget;
@@ -87,6 +87,8 @@ pub(crate) fn build(
         let mut texcoord0 = None;
         let mut texcoord1 = None;
         let mut color0 = None;
+        let mut joints0 = None;
+        let mut weights0 = None;
         let mut count: Option<(usize, usize)> = None;
         for (semantic, accessor_index) in &primitive.attributes {
             let a = accessor_index.value();
@@ -99,7 +101,9 @@ pub(crate) fn build(
                 Checked::Valid(JsonSemantic::Tangents) => (Semantic::Tangent, None),
                 Checked::Valid(JsonSemantic::Colors(0)) => (Semantic::Color, Some(&mut color0)),
                 Checked::Valid(JsonSemantic::Colors(_)) => (Semantic::Color, None),
+                Checked::Valid(JsonSemantic::Joints(0)) => (Semantic::Joints, Some(&mut joints0)),
                 Checked::Valid(JsonSemantic::Joints(_)) => (Semantic::Joints, None),
+                Checked::Valid(JsonSemantic::Weights(0)) => (Semantic::Weights, Some(&mut weights0)),
                 Checked::Valid(JsonSemantic::Weights(_)) => (Semantic::Weights, None),
                 // Application-specific attributes (`_NAME`) are not read.
                 _ => continue,
@@ -146,16 +150,28 @@ pub(crate) fn build(
             .filter(|t| u32::try_from(*t).is_ok())
             .ok_or_else(|| fail(p, None, "more than 2^32 indices in one mesh".into()))?;
         // A primitive with a colour or second UV set gives its mesh attribute
-        // records (one per vertex, the size of a vertex) for every vertex.
+        // records (one per vertex, the size of a vertex) for every vertex;
+        // one with joints and weights, skin records.
         let extras = color0.is_some() || texcoord1.is_some();
-        let vertex_bytes = size_of::<Vertex>() as u64 * if extras { 2 } else { 1 };
+        if joints0.is_some() != weights0.is_some() {
+            warnings.push(format!("mesh '{name}': JOINTS_0 without WEIGHTS_0 (or the reverse); not skinned"));
+            joints0 = None;
+            weights0 = None;
+        }
+        let skinned = joints0.is_some();
+        let vertex_bytes = size_of::<Vertex>() as u64 * (1 + u64::from(extras) + u64::from(skinned));
         budget
             .spend_geometry(vertex_count as u64, index_count as u64, vertex_bytes)
             .map_err(|e| super::GltfErrorKind::Limit { context: format!("mesh {index} ('{name}')"), source: e })?;
         // While a primitive is read, its attributes live in scratch arrays
         // beside the mesh's: positions, normals (and their f64 sums when
         // generated), texture coordinates, its own indices.
-        let scratch_per_vertex: u64 = 12 + 12 + 8 + if normal.is_none() { 24 } else { 0 } + if extras { 24 } else { 0 };
+        let scratch_per_vertex: u64 = 12
+            + 12
+            + 8
+            + if normal.is_none() { 24 } else { 0 }
+            + if extras { 24 } else { 0 }
+            + if skinned { 32 } else { 0 };
         let scratch = (vertex_count as u64)
             .saturating_mul(scratch_per_vertex)
             .saturating_add((index_count as u64).saturating_mul(4));
@@ -167,6 +183,8 @@ pub(crate) fn build(
             texcoord0,
             texcoord1,
             color0,
+            joints0,
+            weights0,
             indices: index_view,
             material: primitive.material.map(|m| m.value()),
         });
@@ -184,6 +202,10 @@ pub(crate) fn build(
     // or a second UV set (the others get white and zero).
     let any_extras = plans.iter().any(|p| p.color0.is_some() || p.texcoord1.is_some());
     let mut attributes: Vec<VertexAttributes> = Vec::with_capacity(if any_extras { total_vertices } else { 0 });
+    // Skin records for the whole mesh when any primitive is skinned (the
+    // others bound wholly to joint 0).
+    let any_skin = plans.iter().any(|p| p.joints0.is_some());
+    let mut skin: Vec<SkinWeights> = Vec::with_capacity(if any_skin { total_vertices } else { 0 });
     let mut vertices: Vec<Vertex> = Vec::with_capacity(total_vertices);
     let mut indices: Vec<u32> = Vec::with_capacity(total_indices);
     let mut submeshes = Vec::with_capacity(plans.len());
@@ -250,6 +272,16 @@ pub(crate) fn build(
             };
             attributes.extend(colors.iter().zip(&uv1).map(|(c, uv)| VertexAttributes::new(*c, *uv)));
         }
+        if any_skin {
+            match (plan.joints0, plan.weights0) {
+                (Some(j), Some(w)) => {
+                    let joints = j.read_floats::<4>().map_err(|e| fail(p, Some(j.index), e))?;
+                    let weights = w.read_floats::<4>().map_err(|e| fail(p, Some(w.index), e))?;
+                    skin.extend(joints.iter().zip(&weights).map(|(j, w)| SkinWeights::new(j.map(|v| v as u32), *w)));
+                }
+                _ => skin.extend(std::iter::repeat_n(SkinWeights::new([0; 4], [1.0, 0.0, 0.0, 0.0]), vertex_count)),
+            }
+        }
         submeshes.push(Submesh { first_index, index_count: local_indices.len() as u32 });
         indices.extend(local_indices.iter().map(|i| i + base));
         materials.push(plan.material);
@@ -258,6 +290,9 @@ pub(crate) fn build(
     let mut geometry = Geometry::new(name.clone(), vertices, indices, submeshes).map_err(invalid)?;
     if any_extras {
         geometry = geometry.with_attributes(attributes).map_err(invalid)?;
+    }
+    if any_skin {
+        geometry = geometry.with_skin_weights(skin).map_err(invalid)?;
     }
     Ok(MeshResult::Geometry(geometry, materials))
 }
@@ -270,6 +305,8 @@ struct PrimitivePlan<'a> {
     texcoord0: Option<accessor::AccessorView<'a>>,
     texcoord1: Option<accessor::AccessorView<'a>>,
     color0: Option<accessor::AccessorView<'a>>,
+    joints0: Option<accessor::AccessorView<'a>>,
+    weights0: Option<accessor::AccessorView<'a>>,
     indices: Option<accessor::AccessorView<'a>>,
     material: Option<usize>,
 }

@@ -435,18 +435,17 @@ fn import_bytes(
         materials: material::MaterialImporter::new(&root, &buffers, folder),
         meshes: HashMap::new(),
         node_keys: HashMap::new(),
+        pending_skins: Vec::new(),
         budget,
         out: GltfImport::default(),
     };
     importer.walk(scene, &roots).map_err(|e| e.at(path))?;
     // The walk visits depth-first; lookups promise the file's order.
     importer.out.named_nodes.sort_unstable_by_key(|(index, _, _)| *index);
+    importer.bind_skins(scene).map_err(|e| e.at(path))?;
     importer.out.animations =
         animation::import(&root, &buffers, &importer.node_keys, &mut importer.budget, &mut importer.out.warnings)
             .map_err(|e| e.at(path))?;
-    if !root.skins.is_empty() {
-        importer.out.warnings.push("skins are not imported; skinned meshes are drawn in their bind pose".into());
-    }
     for w in &importer.out.warnings {
         warn!(path = %path.display(), "{w}");
     }
@@ -530,6 +529,8 @@ struct Importer<'a> {
     meshes: HashMap<usize, Option<(GeometryHandle, Vec<MaterialHandle>)>>,
     /// Every imported node by its index in the file (animation targets).
     node_keys: HashMap<usize, NodeKey>,
+    /// Skinned mesh nodes and their skin, bound after the walk.
+    pending_skins: Vec<(NodeKey, usize, String)>,
     budget: Budget,
     out: GltfImport,
 }
@@ -610,10 +611,64 @@ impl Importer<'_> {
             scene.set_camera(key, Some(camera_value)).map_err(|e| GltfErrorKind::Invalid(e.to_string()))?;
             self.out.cameras.push(GltfCamera { name: camera_name, node: key, camera: camera_value, aspect_ratio });
         }
-        if node.skin.is_some() {
-            self.out.warnings.push(format!("node '{name}': skinning is not supported; drawn in bind pose"));
+        if let Some(skin) = node.skin {
+            if node.mesh.is_some() {
+                // Bound once every node exists (joints may come later).
+                self.pending_skins.push((key, skin.value(), name.clone()));
+            } else {
+                self.out.warnings.push(format!("node '{name}': a skin without a mesh is ignored"));
+            }
         }
         Ok((key, world))
+    }
+
+    /// Gives every skinned mesh node its skin: the joints (imported nodes)
+    /// and inverse bind matrices (identity when the file has none). A skin
+    /// whose joints are not all in the imported scene leaves its mesh rigid,
+    /// with a warning.
+    fn bind_skins(&mut self, scene: &mut Scene) -> Result<(), GltfErrorKind> {
+        for (node, index, name) in std::mem::take(&mut self.pending_skins) {
+            let skin = self
+                .root
+                .skins
+                .get(index)
+                .ok_or_else(|| GltfErrorKind::Invalid(format!("node '{name}': skin {index} does not exist")))?;
+            let joints: Option<Vec<NodeKey>> =
+                skin.joints.iter().map(|j| self.node_keys.get(&j.value()).copied()).collect();
+            let Some(joints) = joints else {
+                self.out.warnings.push(format!(
+                    "node '{name}': skin {index} names joints outside the imported scene; drawn in its bind pose"
+                ));
+                continue;
+            };
+            let inverse_bind_matrices = match skin.inverse_bind_matrices {
+                None => vec![glam::Mat4::IDENTITY; joints.len()],
+                Some(a) => {
+                    let view =
+                        accessor::validate(self.root, self.buffers, a.value(), accessor::Semantic::InverseBindMatrices)
+                            .map_err(|e| GltfErrorKind::Invalid(format!("skin {index}: {e}")))?;
+                    if view.count != joints.len() {
+                        return Err(GltfErrorKind::Invalid(format!(
+                            "skin {index}: {} inverse bind matrices for {} joints",
+                            view.count,
+                            joints.len()
+                        )));
+                    }
+                    self.budget
+                        .spend_bytes(view.count as u64 * 64)
+                        .map_err(|source| GltfErrorKind::Limit { context: format!("skin {index}"), source })?;
+                    view.read_floats::<16>()
+                        .map_err(|e| GltfErrorKind::Invalid(format!("skin {index}: {e}")))?
+                        .iter()
+                        .map(glam::Mat4::from_cols_array)
+                        .collect()
+                }
+            };
+            scene
+                .set_skin(node, Some(oxygen_core::Skin { joints, inverse_bind_matrices }))
+                .map_err(|e| GltfErrorKind::Invalid(format!("node '{name}': {e}")))?;
+        }
+        Ok(())
     }
 
     fn mesh(

@@ -13,7 +13,7 @@
 mod node;
 mod world;
 
-pub use node::{LodLevel, Node, NodeFlags, Renderable, Transform};
+pub use node::{LodLevel, Node, NodeFlags, Renderable, Skin, Transform};
 pub use world::WorldTransforms;
 
 use std::sync::Arc;
@@ -80,6 +80,14 @@ pub enum SceneError {
         given: usize,
         /// Submeshes in the geometry.
         submeshes: usize,
+    },
+    /// A skin that does not fit its node.
+    #[error("skin of node '{node}': {reason}")]
+    BadSkin {
+        /// Node name.
+        node: String,
+        /// What is wrong.
+        reason: String,
     },
     /// A level of detail that does not fit its node.
     #[error("LOD of node '{node}': {reason}")]
@@ -335,6 +343,37 @@ impl Scene {
             });
         }
         self.node_mut(key)?.renderable = Some(renderable);
+        self.touch(key);
+        Ok(())
+    }
+
+    /// Makes a node's renderable follow `skin` (`None`: rigid again). The
+    /// joints must be nodes of this scene, one finite inverse bind matrix
+    /// each. Only a skinned geometry ([`Geometry::with_skin_weights`](crate::Geometry::with_skin_weights))
+    /// moves with it; joint indices past the skin's joints are refused when
+    /// the renderable is drawn (the frame skips it with a reason).
+    pub fn set_skin(&mut self, key: NodeKey, skin: Option<Skin>) -> Result<(), SceneError> {
+        let name = self.nodes.get(key).ok_or(SceneError::NoSuchNode(key))?.name.clone();
+        if let Some(skin) = &skin {
+            let bad = |reason: String| SceneError::BadSkin { node: name.clone(), reason };
+            if skin.joints.len() != skin.inverse_bind_matrices.len() {
+                return Err(bad(format!(
+                    "{} joints but {} inverse bind matrices",
+                    skin.joints.len(),
+                    skin.inverse_bind_matrices.len()
+                )));
+            }
+            if skin.joints.is_empty() || skin.joints.len() >= 1 << 24 {
+                return Err(bad(format!("{} joints (1 to 2^24 - 1)", skin.joints.len())));
+            }
+            if let Some(i) = skin.joints.iter().position(|j| !self.nodes.contains_key(*j)) {
+                return Err(bad(format!("joint {i} is not a node of this scene")));
+            }
+            if let Some(i) = skin.inverse_bind_matrices.iter().position(|m| !m.is_finite()) {
+                return Err(bad(format!("inverse bind matrix {i} is not finite")));
+            }
+        }
+        self.node_mut(key)?.skin = skin.map(std::sync::Arc::new);
         self.touch(key);
         Ok(())
     }

@@ -83,6 +83,18 @@ pub struct Renderable {
     pub materials: Vec<MaterialHandle>,
 }
 
+/// How a skinned renderable's vertices follow other nodes: each vertex of
+/// its (skinned) geometry is moved by up to four of these joints, joint `i`
+/// by `world(joints[i]) × inverse_bind_matrices[i]` (the node's own
+/// transform is not applied, as glTF specifies).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Skin {
+    /// The joint nodes, in the order the geometry's joint indices count.
+    pub joints: Vec<NodeKey>,
+    /// Per joint, the matrix taking the mesh into the joint's bind space.
+    pub inverse_bind_matrices: Vec<glam::Mat4>,
+}
+
 /// A coarser mesh a renderable switches to when it covers little of the screen.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LodLevel {
@@ -114,6 +126,8 @@ pub struct Node {
     pub camera: Option<Camera>,
     /// Coarser meshes of its renderable, by decreasing screen fraction.
     pub lods: Vec<LodLevel>,
+    /// The skin its renderable follows ([`Scene::set_skin`](super::Scene::set_skin)).
+    pub skin: Option<std::sync::Arc<Skin>>,
     /// Scene revision of this node's last own edit.
     pub(crate) revision: u64,
     /// Newest revision of any edit in this node's subtree.
@@ -132,6 +146,7 @@ impl Node {
             light: None,
             camera: None,
             lods: Vec::new(),
+            skin: None,
             revision: 0,
             subtree_revision: 0,
         }

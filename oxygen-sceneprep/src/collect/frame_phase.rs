@@ -61,6 +61,9 @@ pub struct RenderableEntry {
     pub lods: (u32, u32),
     /// Its submeshes: `FrameCollection::submeshes[start..start + count]`.
     pub submeshes: (u32, u32),
+    /// A skinned renderable's first joint matrix in the frame's matrices
+    /// (joint `i` at `joint_base + i`), `INVALID_SLOT` for a rigid one.
+    pub joint_base: u32,
 }
 
 /// One submesh of a renderable with its material resolved once per frame.
@@ -261,10 +264,28 @@ impl FrameCollection {
                 warn!(node = %node.name, "skipping renderable whose geometry was removed");
                 continue;
             };
+            // A skinned renderable: its joint matrices join the frame's
+            // matrices, and its bound is the union of each joint's move of
+            // the vertices it weighs (every pose stays inside).
+            let skinned = match (&node.skin, geometry.skin_weights()) {
+                (Some(skin), Some(_)) => match self.collect_joints(skin, geometry, origin) {
+                    Ok(joints) => Some(joints),
+                    Err(reason) => {
+                        warn!(node = %node.name, "skipping skinned renderable: {reason}");
+                        self.skip(key, &node.name, reason);
+                        continue;
+                    }
+                },
+                _ => None,
+            };
             // In f64 and rounded outward: far from the origin the f32
             // matrix and corners would round the box inward by up to a
             // unit, and culling must never lose what it bounds.
-            let world_aabb = oxygen_core::DAabb::transformed(&geometry.local_aabb(), &world64).to_f32_outward();
+            let world_aabb = match skinned {
+                Some((_, bounds)) => bounds.to_f32_outward(),
+                None => oxygen_core::DAabb::transformed(&geometry.local_aabb(), &world64).to_f32_outward(),
+            };
+            let joint_base = skinned.map_or(oxygen_bindless::INVALID_SLOT, |(base, _)| base);
             if !world_aabb.is_finite() {
                 warn!(node = %node.name, "skipping renderable with non-finite world bounds");
                 self.skip(key, &node.name, "non-finite world bounds");
@@ -287,8 +308,11 @@ impl FrameCollection {
                 });
             }
             let submeshes = (submesh_start, self.submeshes.len() as u32 - submesh_start);
-            let lods = (self.lod_levels.len() as u32, node.lods.len() as u32);
-            self.lod_levels.extend_from_slice(&node.lods);
+            // A skinned renderable is drawn with its base mesh: its LODs'
+            // vertices have no skin records matching its joints.
+            let node_lods: &[oxygen_core::LodLevel] = if skinned.is_some() { &[] } else { &node.lods };
+            let lods = (self.lod_levels.len() as u32, node_lods.len() as u32);
+            self.lod_levels.extend_from_slice(node_lods);
             let transforms = Arc::make_mut(&mut self.transforms);
             let transform_index = transforms.world.len() as u32;
             transforms.world.push(relative_to_origin(&world64, origin));
@@ -304,8 +328,47 @@ impl FrameCollection {
                 flags: node.flags,
                 lods,
                 submeshes,
+                joint_base,
             });
         }
+    }
+
+    /// Pushes a skin's joint matrices (world of the joint × inverse bind,
+    /// relative to the render origin) and returns where they start and the
+    /// skinned geometry's bound in this pose. Leaves the matrices as they
+    /// were on failure.
+    fn collect_joints(
+        &mut self,
+        skin: &oxygen_core::Skin,
+        geometry: &oxygen_core::Geometry,
+        origin: DVec3,
+    ) -> Result<(u32, oxygen_core::DAabb), &'static str> {
+        if geometry.joint_bounds().len() > skin.joints.len() {
+            return Err("a vertex names a joint past the skin's joints");
+        }
+        let transforms = Arc::make_mut(&mut self.transforms);
+        let base = transforms.world.len();
+        let mut bounds: Option<oxygen_core::DAabb> = None;
+        for (i, (joint, inverse_bind)) in skin.joints.iter().zip(&skin.inverse_bind_matrices).enumerate() {
+            let Some(joint_world) = self.world.get_f64(*joint) else {
+                transforms.world.truncate(base);
+                transforms.normal.truncate(base);
+                return Err("a joint node is missing");
+            };
+            let m = joint_world * inverse_bind.as_dmat4();
+            let relative = relative_to_origin(&m, origin);
+            // A joint scaled to nothing moves its vertices to a point: no
+            // normal to keep there, so the unit matrix stands in.
+            let normal = normal_matrix(&relative).unwrap_or(Mat3::IDENTITY);
+            transforms.world.push(relative);
+            transforms.normal.push(normal.into());
+            if let Some(Some(local)) = geometry.joint_bounds().get(i) {
+                let moved = oxygen_core::DAabb::transformed(local, &m);
+                bounds = Some(bounds.map_or(moved, |b| b.union(moved)));
+            }
+        }
+        let bounds = bounds.ok_or("no vertex is weighted to any joint")?;
+        Ok((base as u32, bounds))
     }
 
     fn skip(&mut self, node: NodeKey, name: &str, reason: &'static str) {

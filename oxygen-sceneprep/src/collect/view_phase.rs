@@ -130,6 +130,8 @@ pub struct RenderItem {
     pub first_index: u32,
     /// Index count of the submesh in `geometry`.
     pub index_count: u32,
+    /// The renderable's first joint matrix, `INVALID_SLOT` when rigid.
+    pub joint_base: u32,
 }
 
 /// Runs the view phase for one view, appending to `items` (cleared first).
@@ -217,6 +219,7 @@ pub fn collect_view_subset(
                 node_id: entry.node_id,
                 first_index,
                 index_count,
+                joint_base: entry.joint_base,
             });
         }
     }

@@ -87,7 +87,13 @@ pub(crate) fn emit_view(frame: &FrameEmit<'_>, view: &ViewEmit<'_>, out: &mut Pr
             submesh: item.submesh,
             generation: generation_tag,
             attributes_slot: g.attributes,
-            reserved: [0; 3],
+            skin_slot: if item.joint_base == oxygen_bindless::INVALID_SLOT {
+                oxygen_bindless::INVALID_SLOT
+            } else {
+                g.skin
+            },
+            joint_base: item.joint_base,
+            reserved: 0,
         });
         out.sort_keys.push(key);
     }

@@ -21,6 +21,8 @@ pub struct GeometrySlots {
     pub indices: Allocation,
     /// First attribute record, [`oxygen_bindless::INVALID_SLOT`] when none.
     pub attributes: u32,
+    /// First skin record, [`oxygen_bindless::INVALID_SLOT`] when none.
+    pub skin: u32,
 }
 
 /// Lazily allocated geometry slots plus the uploads still owed.
@@ -64,11 +66,17 @@ impl GeometryCache {
                 return Err(e);
             }
         };
+        // Vertices, then attribute records, then skin records.
+        let n = geometry.vertices().len() as u32;
         let attributes = match geometry.attributes() {
-            Some(_) => vertices.start + geometry.vertices().len() as u32,
+            Some(_) => vertices.start + n,
             None => oxygen_bindless::INVALID_SLOT,
         };
-        let s = GeometrySlots { vertices, indices, attributes };
+        let skin = match geometry.skin_weights() {
+            Some(_) => vertices.start + n * (1 + u32::from(geometry.attributes().is_some())),
+            None => oxygen_bindless::INVALID_SLOT,
+        };
+        let s = GeometrySlots { vertices, indices, attributes, skin };
         if self.entries.len() <= index {
             self.entries.resize(index + 1, None);
         }

@@ -1,0 +1,130 @@
+//! Skins on the GPU: a skinned mesh's vertices follow its joints through
+//! the bindless buffers (joint matrices among the frame's matrices, joints
+//! and weights beside the vertices). Each pose is checked against the same
+//! mesh drawn rigidly where the pose should put it: the two pictures must
+//! be the same. Culling follows the pose (a bound that covers it).
+
+mod support;
+
+use oxygen::core::{SceneError, Skin, SkinWeights};
+use oxygen::prelude::*;
+use support::golden::compare;
+
+const VIEWPORT: UVec2 = UVec2::new(160, 100);
+
+fn camera(target: Vec3) -> LookAtResolver {
+    LookAtResolver {
+        camera: Camera::perspective(50f32.to_radians(), 0.1, None),
+        eye: target + Vec3::new(0.0, 0.5, 4.0),
+        target,
+        up: Vec3::Y,
+        viewport: VIEWPORT,
+    }
+}
+
+fn with_sun(scene: &mut Scene) {
+    let sun = scene.add_node(
+        "sun",
+        Transform::IDENTITY
+            .with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, Vec3::new(-0.3, -0.5, -0.8).normalize())),
+    );
+    scene.set_light(sun, Some(Light::directional(3.0))).unwrap();
+}
+
+/// A cube drawn rigidly at `transform`.
+fn rigid(transform: Transform) -> Scene {
+    let mut scene = Scene::new();
+    let material = scene.add_material(Material::opaque("orange", Vec4::new(0.9, 0.5, 0.1, 1.0)));
+    let geometry = scene.add_geometry(Geometry::cube(1.0));
+    let node = scene.add_node("rigid", transform);
+    scene.set_renderable(node, Renderable { geometry, materials: vec![material] }).unwrap();
+    with_sun(&mut scene);
+    scene
+}
+
+/// The same cube skinned to two joints at `a` and `b`, every vertex
+/// weighted `weight_b` to the second; the mesh node itself sits far away
+/// at `node_at` (glTF ignores a skinned mesh's own transform).
+fn skinned(a: Transform, b: Transform, weight_b: f32, node_at: Vec3) -> (Scene, NodeKey) {
+    let mut scene = Scene::new();
+    let material = scene.add_material(Material::opaque("orange", Vec4::new(0.9, 0.5, 0.1, 1.0)));
+    let cube = Geometry::cube(1.0);
+    let weights = vec![SkinWeights::new([0, 1, 0, 0], [1.0 - weight_b, weight_b, 0.0, 0.0]); cube.vertices().len()];
+    let geometry = scene.add_geometry(cube.with_skin_weights(weights).unwrap());
+    let joint_a = scene.add_node("joint a", a);
+    let joint_b = scene.add_node("joint b", b);
+    let node = scene.add_node("skinned", Transform::from_translation(node_at));
+    scene.set_renderable(node, Renderable { geometry, materials: vec![material] }).unwrap();
+    let skin = Skin { joints: vec![joint_a, joint_b], inverse_bind_matrices: vec![Mat4::IDENTITY; 2] };
+    scene.set_skin(node, Some(skin)).unwrap();
+    with_sun(&mut scene);
+    (scene, joint_b)
+}
+
+fn render(scene: &Scene, target: Vec3) -> (image::RgbaImage, usize) {
+    let mut renderer = support::gpu_renderer();
+    let view = renderer.register_view(camera(target), standard_render_graph).unwrap();
+    let report = renderer.render_frame(scene).unwrap();
+    let draws = report.views.iter().find(|v| v.view == view).map_or(0, |v| v.draws);
+    (support::read_lit_color(&renderer, view), draws)
+}
+
+fn assert_same(a: &image::RgbaImage, b: &image::RgbaImage, what: &str) {
+    let c = compare(a, b, 3);
+    assert!(c.differing <= c.total / 500, "{what}: {} of {} pixels differ (worst {})", c.differing, c.total, c.worst);
+}
+
+#[test]
+fn a_skinned_mesh_is_where_its_joints_put_it() {
+    let moved = Transform::from_translation(Vec3::new(0.8, 0.2, -0.3)).with_rotation(Quat::from_rotation_y(0.6));
+    // All weight on one joint: the joint's transform, rotation included
+    // (normals follow: the lighting is the rigid cube's).
+    let (scene, _) = skinned(moved, Transform::IDENTITY, 0.0, Vec3::new(50.0, 0.0, 0.0));
+    let (expected, _) = render(&rigid(moved), Vec3::ZERO);
+    let (actual, draws) = render(&scene, Vec3::ZERO);
+    assert_eq!(draws, 1, "the skinned cube is in view wherever its node is");
+    assert_same(&actual, &expected, "one joint");
+    // Half the weight on each of two translated joints: the cube halfway.
+    let (scene, _) = skinned(
+        Transform::from_translation(Vec3::new(-1.0, 0.0, 0.0)),
+        Transform::from_translation(Vec3::new(1.4, 0.4, 0.0)),
+        0.5,
+        Vec3::ZERO,
+    );
+    let (expected, _) = render(&rigid(Transform::from_translation(Vec3::new(0.2, 0.2, 0.0))), Vec3::ZERO);
+    let (actual, _) = render(&scene, Vec3::ZERO);
+    assert_same(&actual, &expected, "two joints, half each");
+}
+
+#[test]
+fn culling_follows_the_pose_not_the_mesh_node() {
+    // The joint carries the cube 30 units to the side, where the camera
+    // looks; the mesh node stays at the origin, out of that view.
+    let far = Vec3::new(30.0, 0.0, 0.0);
+    let (mut scene, joint_b) = skinned(Transform::IDENTITY, Transform::from_translation(far), 1.0, Vec3::ZERO);
+    let (image, draws) = render(&scene, far);
+    assert_eq!(draws, 1, "the posed cube must not be culled by its bind-pose bound");
+    let (expected, _) = render(&rigid(Transform::from_translation(far)), far);
+    assert_same(&image, &expected, "posed far away");
+    // Moved out of that view, it is culled.
+    scene.set_local_transform(joint_b, Transform::from_translation(Vec3::new(-30.0, 0.0, 0.0))).unwrap();
+    let (_, draws) = render(&scene, far);
+    assert_eq!(draws, 0, "a pose outside the view is culled");
+}
+
+#[test]
+fn bad_skins_are_refused_or_skipped_with_a_reason() {
+    let (mut scene, joint) = skinned(Transform::IDENTITY, Transform::IDENTITY, 0.5, Vec3::ZERO);
+    let node = scene.nodes().find(|(_, n)| n.name == "skinned").map(|(k, _)| k).unwrap();
+    let mismatched = Skin { joints: vec![joint], inverse_bind_matrices: vec![] };
+    assert!(matches!(scene.set_skin(node, Some(mismatched)), Err(SceneError::BadSkin { .. })));
+    let nan = Skin { joints: vec![joint], inverse_bind_matrices: vec![Mat4::NAN] };
+    assert!(matches!(scene.set_skin(node, Some(nan)), Err(SceneError::BadSkin { .. })));
+    // One joint where the vertices name two: the frame skips the mesh and says why.
+    scene.set_skin(node, Some(Skin { joints: vec![joint], inverse_bind_matrices: vec![Mat4::IDENTITY] })).unwrap();
+    let mut renderer = support::gpu_renderer();
+    let view = renderer.register_view(camera(Vec3::ZERO), standard_render_graph).unwrap();
+    let report = renderer.render_frame(&scene).unwrap();
+    assert_eq!(report.views.iter().find(|v| v.view == view).map(|v| v.draws), Some(0));
+    assert!(report.warnings.iter().any(|w| format!("{w:?}").contains("joint past the skin")), "{:?}", report.warnings);
+}
