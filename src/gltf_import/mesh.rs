@@ -38,7 +38,7 @@ pub struct MeshError {
 pub(crate) enum MeshResult {
     /// At least one triangle primitive: the geometry and each submesh's
     /// material index (`None` for the default material).
-    Geometry(Geometry, Vec<Option<usize>>),
+    Geometry(Box<Geometry>, Vec<Option<usize>>),
     /// Nothing drawable (every primitive skipped with a warning).
     Empty,
 }
@@ -294,7 +294,7 @@ pub(crate) fn build(
     if any_skin {
         geometry = geometry.with_skin_weights(skin).map_err(invalid)?;
     }
-    Ok(MeshResult::Geometry(geometry, materials))
+    Ok(MeshResult::Geometry(Box::new(geometry), materials))
 }
 
 /// One triangle primitive, validated and charged, waiting to be read.

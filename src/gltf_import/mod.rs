@@ -687,7 +687,7 @@ impl Importer<'_> {
                 for m in material_indices {
                     materials.push(self.materials.material(scene, m, &mut self.budget, &mut self.out.warnings)?);
                 }
-                Some((scene.add_geometry(geometry), materials))
+                Some((scene.add_geometry(*geometry), materials))
             }
         };
         self.meshes.insert(index, result.clone());
