@@ -184,13 +184,15 @@ fn gpu_frustum_culling_draws_what_the_cpu_path_draws_on_gltf_scenes() {
     let mut compared = 0;
     // MultiUVTest: a mesh with attribute records (its second UV set), whose
     // slot the GPU path must carry into its draws like the CPU path;
-    // RiggedSimple: a skinned mesh (skin records, joint matrices).
+    // RiggedSimple: a skinned mesh (skin records, joint matrices);
+    // SimpleMorph: morph targets (a morph header among the matrices).
     for file in [
         "Cubes/Cubes.glb",
         "AlphaBlendModeTest/AlphaBlendModeTest.glb",
         "OrientationTest/OrientationTest.glb",
         "MultiUVTest/MultiUVTest.glb",
         "RiggedSimple/RiggedSimple.glb",
+        "SimpleMorph/SimpleMorph.gltf",
     ] {
         let mut scene = Scene::new();
         let imported =

@@ -2,7 +2,8 @@
 //! application gives.
 //!
 //! An [`Animation`] is a set of [`Channel`]s, each driving one property of
-//! one node (translation, rotation or scale) through keyframes with step,
+//! one node (translation, rotation, scale or morph-target weights) through
+//! keyframes with step,
 //! linear (spherical for rotations) or cubic-spline interpolation, the
 //! three glTF defines. [`Animation::apply`] writes the sampled transforms
 //! into the scene; the frame pipeline then sees ordinary transform edits.
@@ -47,6 +48,14 @@ pub enum ChannelValues {
     Rotation(Vec<Quat>),
     /// Node scale.
     Scale(Vec<Vec3>),
+    /// Morph-target weights: `count` per value (keyframe or tangent), one
+    /// run after another.
+    Weights {
+        /// The weights, `count` at a time.
+        values: Vec<f32>,
+        /// Weights per value (the geometry's target count).
+        count: usize,
+    },
 }
 
 impl ChannelValues {
@@ -54,6 +63,7 @@ impl ChannelValues {
         match self {
             ChannelValues::Translation(v) | ChannelValues::Scale(v) => v.len(),
             ChannelValues::Rotation(v) => v.len(),
+            ChannelValues::Weights { values, count } => values.len() / (*count).max(1),
         }
     }
 }
@@ -128,9 +138,15 @@ impl Channel {
         if values.len() != times.len() * per_key {
             return Err(ChannelError::Count { values: values.len(), times: times.len(), interpolation });
         }
+        if let ChannelValues::Weights { values: w, count } = &values
+            && (*count == 0 || w.len() % count != 0)
+        {
+            return Err(ChannelError::Count { values: w.len(), times: times.len(), interpolation });
+        }
         let bad = match &values {
             ChannelValues::Translation(v) | ChannelValues::Scale(v) => v.iter().position(|x| !x.is_finite()),
             ChannelValues::Rotation(v) => v.iter().position(|x| !x.is_finite()),
+            ChannelValues::Weights { values, .. } => values.iter().position(|x| !x.is_finite()),
         };
         if let Some(index) = bad {
             return Err(ChannelError::NonFinite { index });
@@ -171,6 +187,30 @@ impl Channel {
         (previous, next, (time - self.times[previous]) / dt, dt)
     }
 
+    /// The morph weights at `time` (`None` unless a weights channel).
+    pub fn sample_weights(&self, time: f32) -> Option<Vec<f32>> {
+        let ChannelValues::Weights { values, count } = &self.values else { return None };
+        let (a, b, s, dt) = self.segment(time);
+        let at = |i: usize, k: usize| values[i * count + k];
+        Some(
+            (0..*count)
+                .map(|k| match self.interpolation {
+                    Interpolation::Step => at(a, k),
+                    Interpolation::Linear => at(a, k) + (at(b, k) - at(a, k)) * s,
+                    Interpolation::CubicSpline => {
+                        let (p0, m0) = (at(3 * a + 1, k), at(3 * a + 2, k) * dt);
+                        let (p1, m1) = (at(3 * b + 1, k), at(3 * b, k) * dt);
+                        let (s2, s3) = (s * s, s * s * s);
+                        p0 * (2.0 * s3 - 3.0 * s2 + 1.0)
+                            + m0 * (s3 - 2.0 * s2 + s)
+                            + p1 * (-2.0 * s3 + 3.0 * s2)
+                            + m1 * (s3 - s2)
+                    }
+                })
+                .collect(),
+        )
+    }
+
     /// The value at `time` as a vector of four (xyz for translation and
     /// scale, xyzw for rotations, normalised).
     fn sample4(&self, time: f32) -> Vec4 {
@@ -179,6 +219,7 @@ impl Channel {
             match &self.values {
                 ChannelValues::Translation(v) | ChannelValues::Scale(v) => v[i].extend(0.0),
                 ChannelValues::Rotation(v) => Vec4::from(v[i]),
+                ChannelValues::Weights { .. } => Vec4::ZERO,
             }
         };
         let rotation = matches!(self.values, ChannelValues::Rotation(_));
@@ -206,8 +247,8 @@ impl Channel {
     /// The translation or scale at `time` (`None` for a rotation channel).
     pub fn sample_vec3(&self, time: f32) -> Option<Vec3> {
         match self.values {
-            ChannelValues::Rotation(_) => None,
-            _ => Some(self.sample4(time).truncate()),
+            ChannelValues::Translation(_) | ChannelValues::Scale(_) => Some(self.sample4(time).truncate()),
+            _ => None,
         }
     }
 
@@ -248,6 +289,11 @@ impl Animation {
                 ChannelValues::Translation(_) => local.translation = channel.sample4(time).truncate(),
                 ChannelValues::Scale(_) => local.scale = channel.sample4(time).truncate(),
                 ChannelValues::Rotation(_) => local.rotation = Quat::from_vec4(channel.sample4(time)),
+                ChannelValues::Weights { .. } => {
+                    let weights = channel.sample_weights(time).unwrap_or_default();
+                    scene.set_morph_weights(channel.node, weights)?;
+                    continue;
+                }
             }
             scene.set_local_transform(channel.node, local)?;
         }

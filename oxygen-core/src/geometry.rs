@@ -103,6 +103,23 @@ impl SkinWeights {
     }
 }
 
+/// One morph target: a displacement of every vertex's position and
+/// (optionally) normal, blended in with the renderable's weight for it
+/// ([`Scene::set_morph_weights`](crate::Scene::set_morph_weights)). Stored
+/// in the vertex domain right after the vertices, one record per vertex per
+/// target (position delta in the position's place, normal delta in the
+/// normal's).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MorphTarget {
+    /// Position displacement per vertex.
+    pub positions: Vec<Vec3>,
+    /// Normal displacement per vertex (`None`: normals do not change).
+    pub normals: Option<Vec<Vec3>>,
+}
+
+/// Morph targets a geometry may have (each vertex loops over them).
+pub const MAX_MORPH_TARGETS: usize = 64;
+
 /// A range of the index array drawn with one material.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Submesh {
@@ -157,6 +174,14 @@ pub enum GeometryError {
         /// Geometry name.
         name: String,
     },
+    /// [`Geometry::with_morph_targets`] got targets that do not fit.
+    #[error("geometry '{name}': morph targets: {reason}")]
+    MorphTargets {
+        /// Geometry name.
+        name: String,
+        /// What is wrong.
+        reason: String,
+    },
     /// [`Geometry::with_skin_weights`] got a different number of records
     /// than there are vertices, or a joint index of 2^24 or more.
     #[error("geometry '{name}': {weights} skin records for {vertices} vertices, or a joint index of 2^24 or more")]
@@ -196,6 +221,9 @@ pub struct Geometry {
     submeshes: Vec<Submesh>,
     attributes: Option<Vec<VertexAttributes>>,
     skin: Option<Vec<SkinWeights>>,
+    morph_targets: Vec<MorphTarget>,
+    /// Per morph target, the bound of its position displacements.
+    morph_bounds: Vec<Aabb>,
     /// Per joint, the bound of the vertices it moves (skinned geometry).
     joint_bounds: Vec<Option<Aabb>>,
     local_aabb: Aabb,
@@ -251,6 +279,8 @@ impl Geometry {
             submeshes,
             attributes: None,
             skin: None,
+            morph_targets: Vec::new(),
+            morph_bounds: Vec::new(),
             joint_bounds: Vec::new(),
             local_aabb,
         })
@@ -329,11 +359,81 @@ impl Geometry {
         &self.joint_bounds
     }
 
+    /// The geometry with morph targets (at most [`MAX_MORPH_TARGETS`], one
+    /// displacement per vertex each, finite; at most 2^24 vertices, which
+    /// shaders count in a float).
+    pub fn with_morph_targets(mut self, targets: Vec<MorphTarget>) -> Result<Self, GeometryError> {
+        let n = self.vertices.len();
+        let fail = |name: String, reason: String| Err(GeometryError::MorphTargets { name, reason });
+        if targets.len() > MAX_MORPH_TARGETS {
+            return fail(self.name, format!("{} targets (at most {MAX_MORPH_TARGETS})", targets.len()));
+        }
+        if n >= 1 << 24 {
+            return fail(self.name, format!("{n} vertices (morphing counts them below 2^24)"));
+        }
+        let records = (targets.len() + 3).checked_mul(n).and_then(|r| u32::try_from(r).ok());
+        if records.is_none() {
+            return Err(GeometryError::TooLarge { name: self.name });
+        }
+        for (i, t) in targets.iter().enumerate() {
+            let normals_fit = t.normals.as_ref().is_none_or(|v| v.len() == n);
+            if t.positions.len() != n || !normals_fit {
+                return fail(self.name, format!("target {i} does not have one displacement per vertex"));
+            }
+            let finite = t.positions.iter().chain(t.normals.iter().flatten()).all(|d| d.is_finite());
+            if !finite {
+                return fail(self.name, format!("target {i} has a non-finite displacement"));
+            }
+        }
+        self.morph_bounds = targets
+            .iter()
+            .map(|t| {
+                let (min, max) = t.positions.iter().fold((Vec3::ZERO, Vec3::ZERO), |(a, b), d| (a.min(*d), b.max(*d)));
+                Aabb::new(min, max)
+            })
+            .collect();
+        self.morph_targets = targets;
+        Ok(self)
+    }
+
+    /// Its morph targets (empty for most geometry).
+    pub fn morph_targets(&self) -> &[MorphTarget] {
+        &self.morph_targets
+    }
+
+    /// `bound` grown to hold every vertex in it displaced by the targets
+    /// with `weights` (missing weights are 0): each target adds its weighted
+    /// displacement range, so the result holds the morphed mesh.
+    pub fn morphed_bound(&self, bound: Aabb, weights: &[f32]) -> Aabb {
+        let (mut min, mut max) = (bound.min, bound.max);
+        for (b, w) in self.morph_bounds.iter().zip(weights) {
+            let (a, c) = (b.min * *w, b.max * *w);
+            min += a.min(c);
+            max += a.max(c);
+        }
+        Aabb::new(min, max)
+    }
+
     /// Records the geometry occupies in the vertex domain: its vertices,
-    /// then its attribute records and its skin records when it has them
-    /// (fits in a `u32`).
+    /// then one block per morph target, then its attribute records and its
+    /// skin records when it has them (fits in a `u32`).
     pub fn vertex_domain_records(&self) -> usize {
-        self.vertices.len() * (1 + usize::from(self.attributes.is_some()) + usize::from(self.skin.is_some()))
+        self.vertices.len()
+            * (1 + self.morph_targets.len() + usize::from(self.attributes.is_some()) + usize::from(self.skin.is_some()))
+    }
+
+    /// The vertex-domain records of its morph targets, target by target
+    /// (position delta where a vertex has its position, normal delta where
+    /// it has its normal).
+    pub fn morph_records(&self) -> Vec<Vertex> {
+        let mut out = Vec::with_capacity(self.morph_targets.len() * self.vertices.len());
+        for t in &self.morph_targets {
+            for (i, d) in t.positions.iter().enumerate() {
+                let n = t.normals.as_ref().map_or(Vec3::ZERO, |v| v[i]);
+                out.push(Vertex::new(*d, n, Vec2::ZERO));
+            }
+        }
+        out
     }
 
     /// Name for logs and dumps.

@@ -35,7 +35,9 @@ pub mod view;
 
 pub use animation::{Animation, Channel, ChannelError, ChannelValues, Interpolation};
 pub use camera::{Camera, CameraError, Projection};
-pub use geometry::{Geometry, GeometryError, SkinWeights, Submesh, Vertex, VertexAttributes};
+pub use geometry::{
+    Geometry, GeometryError, MAX_MORPH_TARGETS, MorphTarget, SkinWeights, Submesh, Vertex, VertexAttributes,
+};
 pub use gpu::{ColorTargets, GpuContext, GpuError, GpuOptions, HdrFormat, Msaa, MsaaTargets, ViewTargets};
 pub use light::{Light, LightKind, Mobility};
 pub use material::{AlphaMode, Material, MaterialUvs, UvTransform};

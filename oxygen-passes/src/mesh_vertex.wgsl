@@ -20,6 +20,27 @@ struct MeshVarying {
 fn vs_main(@builtin(vertex_index) vertex_index: u32, @builtin(instance_index) draw_index: u32) -> MeshVarying {
     let draw = draw_metadata_domain[scene.renderer.draw_metadata_slot + draw_index];
     let v = vertex_domain[vertex_index];
+    // Morph targets first (glTF: morph, then skin): the weighted sum of the
+    // targets' displacements, stored after the vertices, target by target;
+    // the weights come in a header among the frame's matrices:
+    // [vertex count, target count, w0, w1, ...], 16 floats a matrix.
+    var position = vec3<f32>(v.px, v.py, v.pz);
+    var normal = vec3<f32>(v.nx, v.ny, v.nz);
+    if draw.morph_base != INVALID_SLOT {
+        let header = scene.renderer.world_transforms_slot + draw.morph_base;
+        let vertex_count = u32(world_transform_domain[header][0][0]);
+        let targets = u32(world_transform_domain[header][0][1]);
+        let local = vertex_index - draw.vertex_slot;
+        for (var t = 0u; t < targets; t++) {
+            let k = t + 2u;
+            let w = world_transform_domain[header + k / 16u][(k % 16u) / 4u][k % 4u];
+            if w != 0.0 {
+                let d = vertex_domain[draw.vertex_slot + vertex_count * (1u + t) + local];
+                position += w * vec3<f32>(d.px, d.py, d.pz);
+                normal += w * vec3<f32>(d.nx, d.ny, d.nz);
+            }
+        }
+    }
     var world_position: vec4<f32>;
     var world_normal: vec3<f32>;
     if draw.skin_slot != INVALID_SLOT {
@@ -31,21 +52,21 @@ fn vs_main(@builtin(vertex_index) vertex_index: u32, @builtin(instance_index) dr
         let weights = vec4<f32>(s.ny, s.nz, s.u, s.v);
         let base = scene.renderer.world_transforms_slot + draw.joint_base;
         let normal_base = scene.renderer.normal_transforms_slot + draw.joint_base;
-        var position = vec4<f32>(0.0);
-        var normal = vec3<f32>(0.0);
+        var skinned_position = vec4<f32>(0.0);
+        var skinned_normal = vec3<f32>(0.0);
         for (var k = 0u; k < 4u; k++) {
             if weights[k] > 0.0 {
-                position += weights[k] * (world_transform_domain[base + joints[k]] * vec4<f32>(v.px, v.py, v.pz, 1.0));
-                normal += weights[k] * (normal_transform_domain[normal_base + joints[k]] * vec3<f32>(v.nx, v.ny, v.nz));
+                skinned_position += weights[k] * (world_transform_domain[base + joints[k]] * vec4<f32>(position, 1.0));
+                skinned_normal += weights[k] * (normal_transform_domain[normal_base + joints[k]] * normal);
             }
         }
-        world_position = vec4<f32>(position.xyz, 1.0);
-        world_normal = normal;
+        world_position = vec4<f32>(skinned_position.xyz, 1.0);
+        world_normal = skinned_normal;
     } else {
         let world = world_transform_domain[scene.renderer.world_transforms_slot + draw.transform_index];
         let normal_matrix = normal_transform_domain[scene.renderer.normal_transforms_slot + draw.transform_index];
-        world_position = world * vec4<f32>(v.px, v.py, v.pz, 1.0);
-        world_normal = normal_matrix * vec3<f32>(v.nx, v.ny, v.nz);
+        world_position = world * vec4<f32>(position, 1.0);
+        world_normal = normal_matrix * normal;
     }
     var out: MeshVarying;
     out.clip_position = scene.camera.view_projection * world_position;

@@ -17,7 +17,7 @@ struct GpuInstance {
     lod_count: u32,
     joint_base: u32,
     skin_slot: u32,
-    reserved: u32,
+    morph_base: u32,
 }
 
 struct GpuGroup {
@@ -187,7 +187,7 @@ fn emit(group_index: u32, slot: u32, instance: GpuInstance) {
     draw.attributes_slot = group.attributes_slot;
     draw.skin_slot = instance.skin_slot;
     draw.joint_base = instance.joint_base;
-    draw.reserved4 = 0u;
+    draw.morph_base = instance.morph_base;
     draws[params.draw_slot + group.draw_base + slot] = draw;
 }
 

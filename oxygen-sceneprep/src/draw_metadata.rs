@@ -48,8 +48,9 @@ pub struct DrawMetadata {
     /// A skinned draw's first joint matrix, relative to the frame's
     /// transform slots (joint `i` at `joint_base + i`).
     pub joint_base: u32,
-    /// Zero; room for growth without changing the stride.
-    pub reserved: u32,
+    /// A morphed draw's morph header (weights) relative to the frame's
+    /// transform slots; `INVALID_SLOT` without morph targets.
+    pub morph_base: u32,
 }
 
 const _: () = {
@@ -70,7 +71,7 @@ const _: () = {
     assert!(offset_of!(DrawMetadata, attributes_slot) == 48);
     assert!(offset_of!(DrawMetadata, skin_slot) == 52);
     assert!(offset_of!(DrawMetadata, joint_base) == 56);
-    assert!(offset_of!(DrawMetadata, reserved) == 60);
+    assert!(offset_of!(DrawMetadata, morph_base) == 60);
 };
 
 impl DrawMetadata {

@@ -21,7 +21,7 @@ struct DrawMetadata {
     attributes_slot: u32,
     skin_slot: u32,
     joint_base: u32,
-    reserved4: u32,
+    morph_base: u32,
 }
 
 struct UvTransformRecord {

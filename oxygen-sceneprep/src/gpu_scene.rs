@@ -106,8 +106,8 @@ pub struct GpuInstance {
     pub joint_base: u32,
     /// Its mesh's skin records, `INVALID_SLOT` when rigid.
     pub skin_slot: u32,
-    /// Zero.
-    pub reserved: u32,
+    /// Its morph header, `INVALID_SLOT` without morph targets.
+    pub morph_base: u32,
 }
 
 impl GpuInstance {
@@ -333,7 +333,7 @@ impl GpuScene {
                     } else {
                         base.skin
                     },
-                    reserved: 0,
+                    morph_base: entry.morph_base,
                 });
             }
         }

@@ -722,8 +722,11 @@ impl ScenePrep {
         self.geometry.take_pending(&mut self.pending_geometry);
         for (slots, geometry) in self.pending_geometry.drain(..) {
             heap.write(queue, &slots.vertices, 0, geometry.vertices())?;
+            if !geometry.morph_targets().is_empty() {
+                heap.write(queue, &slots.vertices, geometry.vertices().len() as u32, &geometry.morph_records())?;
+            }
             if let Some(attributes) = geometry.attributes() {
-                heap.write(queue, &slots.vertices, geometry.vertices().len() as u32, attributes)?;
+                heap.write(queue, &slots.vertices, slots.attributes - slots.vertices.start, attributes)?;
             }
             if let Some(skin) = geometry.skin_weights() {
                 heap.write(queue, &slots.vertices, slots.skin - slots.vertices.start, skin)?;

@@ -60,7 +60,7 @@ fn gpu_records_wgsl_matches_rust_layouts() {
     assert_eq!(offset(&members, "attributes_slot") as usize, offset_of!(DrawMetadata, attributes_slot));
     assert_eq!(offset(&members, "skin_slot") as usize, offset_of!(DrawMetadata, skin_slot));
     assert_eq!(offset(&members, "joint_base") as usize, offset_of!(DrawMetadata, joint_base));
-    assert_eq!(offset(&members, "reserved4") as usize, offset_of!(DrawMetadata, reserved));
+    assert_eq!(offset(&members, "morph_base") as usize, offset_of!(DrawMetadata, morph_base));
     check!(
         module,
         MaterialRecord,

@@ -34,6 +34,8 @@ pub(crate) enum Semantic {
     AnimationRotation,
     /// A skin's inverse bind matrices.
     InverseBindMatrices,
+    /// Keyframe morph-target weights.
+    AnimationWeights,
 }
 
 impl Semantic {
@@ -63,6 +65,7 @@ impl Semantic {
             Semantic::AnimationVector => ty == Type::Vec3 && float,
             Semantic::AnimationRotation => ty == Type::Vec4 && (float || unorm || snorm),
             Semantic::InverseBindMatrices => ty == Type::Mat4 && float,
+            Semantic::AnimationWeights => ty == Type::Scalar && (float || unorm || snorm),
         }
     }
 }

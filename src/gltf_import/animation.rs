@@ -44,10 +44,6 @@ pub(crate) fn import(
                 Checked::Valid(p) => p,
                 Checked::Invalid => return Err(fail(c, "unknown target path".into())),
             };
-            if property == Property::MorphTargetWeights {
-                warnings.push(format!("animation '{name}': morph-target weights are not animated (no morph targets)"));
-                continue;
-            }
             let Some(&node) = nodes.get(&channel.target.node.value()) else {
                 warnings.push(format!(
                     "animation '{name}': channel {c} drives node {}, which is not in the imported scene; skipped",
@@ -65,6 +61,7 @@ pub(crate) fn import(
                 .map_err(|e| fail(c, e))?;
             let semantic = match property {
                 Property::Rotation => Semantic::AnimationRotation,
+                Property::MorphTargetWeights => Semantic::AnimationWeights,
                 _ => Semantic::AnimationVector,
             };
             let output = accessor::validate(root, buffers, sampler.output.value(), semantic).map_err(|e| fail(c, e))?;
@@ -92,7 +89,25 @@ pub(crate) fn import(
                         ChannelValues::Scale(v)
                     }
                 }
-                Property::MorphTargetWeights => unreachable!("skipped above"),
+                Property::MorphTargetWeights => {
+                    // As many weights per keyframe as the node's mesh has targets.
+                    let count = root
+                        .nodes
+                        .get(channel.target.node.value())
+                        .and_then(|n| n.mesh)
+                        .and_then(|m| root.meshes.get(m.value()))
+                        .and_then(|m| m.primitives.first())
+                        .map_or(0, |p| p.targets.as_ref().map_or(0, Vec::len));
+                    if count == 0 {
+                        warnings.push(format!(
+                            "animation '{name}': channel {c} animates morph weights of a node without morph targets; skipped"
+                        ));
+                        continue;
+                    }
+                    let values: Vec<f32> =
+                        output.read_floats::<1>().map_err(|e| fail(c, e))?.into_iter().map(|w| w[0]).collect();
+                    ChannelValues::Weights { values, count }
+                }
             };
             channels.push(Channel::new(node, interpolation, times, values).map_err(|e| fail(c, e.to_string()))?);
         }

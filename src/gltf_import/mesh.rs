@@ -13,7 +13,7 @@ use glam::{DVec3, Vec2, Vec3, Vec4};
 use gltf::json;
 use gltf::json::mesh::{Mode, Semantic as JsonSemantic};
 use gltf::json::validation::Checked;
-use oxygen_core::{Geometry, SkinWeights, Submesh, Vertex, VertexAttributes};
+use oxygen_core::{Geometry, MorphTarget, SkinWeights, Submesh, Vertex, VertexAttributes};
 
 use super::accessor::{self, Semantic};
 use super::limits::Budget;
@@ -73,9 +73,6 @@ pub(crate) fn build(
         {
             return Err(fail(p, None, format!("material {} does not exist", material.value())));
         }
-        if primitive.targets.as_ref().is_some_and(|t| !t.is_empty()) {
-            warnings.push(format!("mesh '{name}': morph targets are not imported; drawn in its base shape"));
-        }
         if mode != Mode::Triangles {
             warnings.push(format!("mesh '{name}': skipped a {mode:?} primitive (only triangles)"));
             continue;
@@ -128,6 +125,41 @@ pub(crate) fn build(
             warnings.push(format!("mesh '{name}': skipped a primitive without positions"));
             continue;
         };
+        // Morph targets: position and normal displacements, one per vertex.
+        let mut targets = Vec::new();
+        for target in primitive.targets.iter().flatten() {
+            let view = |a: Option<json::Index<json::Accessor>>, use_as| -> Result<_, super::GltfErrorKind> {
+                let Some(a) = a else { return Ok(None) };
+                let v =
+                    accessor::validate(root, buffers, a.value(), use_as).map_err(|e| fail(p, Some(a.value()), e))?;
+                if v.count != position.count {
+                    let what = format!("a morph target has {} elements for {} vertices", v.count, position.count);
+                    return Err(fail(p, Some(a.value()), what));
+                }
+                Ok(Some(v))
+            };
+            if target.tangents.is_some() {
+                warnings
+                    .push(format!("mesh '{name}': morph-target tangent displacements ignored (tangents are derived)"));
+            }
+            targets.push((view(target.positions, Semantic::Position)?, view(target.normals, Semantic::Normal)?));
+        }
+        if let Some(first) = plans.first().map(|p: &PrimitivePlan<'_>| p.targets.len())
+            && first != targets.len()
+        {
+            return Err(fail(
+                p,
+                None,
+                format!("{} morph targets where the mesh's first primitive has {first}", targets.len()),
+            ));
+        }
+        if targets.len() > oxygen_core::MAX_MORPH_TARGETS {
+            return Err(fail(
+                p,
+                None,
+                format!("{} morph targets (at most {})", targets.len(), oxygen_core::MAX_MORPH_TARGETS),
+            ));
+        }
         let index_view = match primitive.indices {
             Some(i) => Some(
                 accessor::validate(root, buffers, i.value(), Semantic::Indices)
@@ -159,7 +191,8 @@ pub(crate) fn build(
             weights0 = None;
         }
         let skinned = joints0.is_some();
-        let vertex_bytes = size_of::<Vertex>() as u64 * (1 + u64::from(extras) + u64::from(skinned));
+        let vertex_bytes =
+            size_of::<Vertex>() as u64 * (1 + u64::from(extras) + u64::from(skinned) + targets.len() as u64);
         budget
             .spend_geometry(vertex_count as u64, index_count as u64, vertex_bytes)
             .map_err(|e| super::GltfErrorKind::Limit { context: format!("mesh {index} ('{name}')"), source: e })?;
@@ -185,6 +218,7 @@ pub(crate) fn build(
             color0,
             joints0,
             weights0,
+            targets,
             indices: index_view,
             material: primitive.material.map(|m| m.value()),
         });
@@ -205,6 +239,15 @@ pub(crate) fn build(
     // Skin records for the whole mesh when any primitive is skinned (the
     // others bound wholly to joint 0).
     let any_skin = plans.iter().any(|p| p.joints0.is_some());
+    // Morph targets for the whole mesh (every primitive has as many).
+    let target_count = plans.first().map_or(0, |p| p.targets.len());
+    let any_morph_normals = plans.iter().any(|p| p.targets.iter().any(|(_, n)| n.is_some()));
+    let mut morph: Vec<MorphTarget> = (0..target_count)
+        .map(|_| MorphTarget {
+            positions: Vec::with_capacity(total_vertices),
+            normals: any_morph_normals.then(|| Vec::with_capacity(total_vertices)),
+        })
+        .collect();
     let mut skin: Vec<SkinWeights> = Vec::with_capacity(if any_skin { total_vertices } else { 0 });
     let mut vertices: Vec<Vertex> = Vec::with_capacity(total_vertices);
     let mut indices: Vec<u32> = Vec::with_capacity(total_indices);
@@ -272,6 +315,23 @@ pub(crate) fn build(
             };
             attributes.extend(colors.iter().zip(&uv1).map(|(c, uv)| VertexAttributes::new(*c, *uv)));
         }
+        for (target, (positions, normals)) in morph.iter_mut().zip(&plan.targets) {
+            let read = |v: Option<accessor::AccessorView<'_>>| -> Result<Vec<Vec3>, super::GltfErrorKind> {
+                match v {
+                    Some(v) => Ok(v
+                        .read_floats::<3>()
+                        .map_err(|e| fail(p, Some(v.index), e))?
+                        .into_iter()
+                        .map(Vec3::from)
+                        .collect()),
+                    None => Ok(vec![Vec3::ZERO; vertex_count]),
+                }
+            };
+            target.positions.extend(read(*positions)?);
+            if let Some(out) = &mut target.normals {
+                out.extend(read(*normals)?);
+            }
+        }
         if any_skin {
             match (plan.joints0, plan.weights0) {
                 (Some(j), Some(w)) => {
@@ -294,6 +354,9 @@ pub(crate) fn build(
     if any_skin {
         geometry = geometry.with_skin_weights(skin).map_err(invalid)?;
     }
+    if target_count > 0 {
+        geometry = geometry.with_morph_targets(morph).map_err(invalid)?;
+    }
     Ok(MeshResult::Geometry(Box::new(geometry), materials))
 }
 
@@ -307,6 +370,8 @@ struct PrimitivePlan<'a> {
     color0: Option<accessor::AccessorView<'a>>,
     joints0: Option<accessor::AccessorView<'a>>,
     weights0: Option<accessor::AccessorView<'a>>,
+    /// Per morph target, its position and normal displacements.
+    targets: Vec<(Option<accessor::AccessorView<'a>>, Option<accessor::AccessorView<'a>>)>,
     indices: Option<accessor::AccessorView<'a>>,
     material: Option<usize>,
 }

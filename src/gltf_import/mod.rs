@@ -584,6 +584,12 @@ impl Importer<'_> {
         if let Some(mesh) = node.mesh
             && let Some((geometry, materials)) = self.mesh(scene, mesh.value())?
         {
+            // Morph weights: the node's, else the mesh's defaults.
+            let weights =
+                node.weights.clone().or_else(|| root.meshes.get(mesh.value()).and_then(|m| m.weights.clone()));
+            if let Some(weights) = weights {
+                scene.set_morph_weights(key, weights).map_err(|e| GltfErrorKind::Invalid(e.to_string()))?;
+            }
             if let Some(g) = scene.geometry(geometry) {
                 // In f64: a model placed a million units out keeps its
                 // bounds to the millimetre (f32 would round them by units).

@@ -378,6 +378,16 @@ impl Scene {
         Ok(())
     }
 
+    /// Sets the weights of a node's morph targets (target order; a
+    /// non-finite weight counts as 0, weights past the geometry's targets
+    /// are ignored).
+    pub fn set_morph_weights(&mut self, key: NodeKey, weights: Vec<f32>) -> Result<(), SceneError> {
+        let node = self.node_mut(key)?;
+        node.morph_weights = weights.into_iter().map(|w| if w.is_finite() { w } else { 0.0 }).collect();
+        self.touch(key);
+        Ok(())
+    }
+
     /// Gives a renderable node coarser meshes for when it is small on screen
     /// (sorted by decreasing `below_screen_fraction`; empty removes them).
     pub fn set_lods(&mut self, key: NodeKey, mut lods: Vec<LodLevel>) -> Result<(), SceneError> {

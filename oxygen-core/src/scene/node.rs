@@ -128,6 +128,9 @@ pub struct Node {
     pub lods: Vec<LodLevel>,
     /// The skin its renderable follows ([`Scene::set_skin`](super::Scene::set_skin)).
     pub skin: Option<std::sync::Arc<Skin>>,
+    /// Weights of its geometry's morph targets, in target order (missing
+    /// ones are 0; [`Scene::set_morph_weights`](super::Scene::set_morph_weights)).
+    pub morph_weights: Vec<f32>,
     /// Scene revision of this node's last own edit.
     pub(crate) revision: u64,
     /// Newest revision of any edit in this node's subtree.
@@ -147,6 +150,7 @@ impl Node {
             camera: None,
             lods: Vec::new(),
             skin: None,
+            morph_weights: Vec::new(),
             revision: 0,
             subtree_revision: 0,
         }

@@ -64,6 +64,21 @@ pub struct RenderableEntry {
     /// A skinned renderable's first joint matrix in the frame's matrices
     /// (joint `i` at `joint_base + i`), `INVALID_SLOT` for a rigid one.
     pub joint_base: u32,
+    /// A morphed renderable's morph header among the frame's matrices
+    /// ([`morph_header`]), `INVALID_SLOT` without morph targets.
+    pub morph_base: u32,
+}
+
+/// The matrices that carry a renderable's morph weights to the vertex
+/// shader: 16 floats each, `[vertex count, target count, w0, w1, ...]`
+/// padded with zeros (the counts are whole numbers below 2^24).
+pub fn morph_header(vertex_count: usize, weights: &[f32], targets: usize) -> Vec<Mat4> {
+    let mut floats = Vec::with_capacity(2 + targets);
+    floats.push(vertex_count as f32);
+    floats.push(targets as f32);
+    floats.extend((0..targets).map(|t| weights.get(t).copied().unwrap_or(0.0)));
+    floats.resize(floats.len().div_ceil(16) * 16, 0.0);
+    floats.chunks_exact(16).map(Mat4::from_cols_slice).collect()
 }
 
 /// One submesh of a renderable with its material resolved once per frame.
@@ -268,7 +283,7 @@ impl FrameCollection {
             // matrices, and its bound is the union of each joint's move of
             // the vertices it weighs (every pose stays inside).
             let skinned = match (&node.skin, geometry.skin_weights()) {
-                (Some(skin), Some(_)) => match self.collect_joints(skin, geometry, origin) {
+                (Some(skin), Some(_)) => match self.collect_joints(skin, geometry, &node.morph_weights, origin) {
                     Ok(joints) => Some(joints),
                     Err(reason) => {
                         warn!(node = %node.name, "skipping skinned renderable: {reason}");
@@ -283,7 +298,26 @@ impl FrameCollection {
             // unit, and culling must never lose what it bounds.
             let world_aabb = match skinned {
                 Some((_, bounds)) => bounds.to_f32_outward(),
-                None => oxygen_core::DAabb::transformed(&geometry.local_aabb(), &world64).to_f32_outward(),
+                None => {
+                    let local = geometry.morphed_bound(geometry.local_aabb(), &node.morph_weights);
+                    oxygen_core::DAabb::transformed(&local, &world64).to_f32_outward()
+                }
+            };
+            // Morph weights travel with the frame's matrices (a header the
+            // vertex shader reads), so they change without any upload but
+            // the matrices'.
+            let morph_base = if geometry.morph_targets().is_empty() {
+                oxygen_bindless::INVALID_SLOT
+            } else {
+                let header =
+                    morph_header(geometry.vertices().len(), &node.morph_weights, geometry.morph_targets().len());
+                let transforms = Arc::make_mut(&mut self.transforms);
+                let base = transforms.world.len() as u32;
+                for m in header {
+                    transforms.world.push(m);
+                    transforms.normal.push(Mat3::ZERO.into());
+                }
+                base
             };
             let joint_base = skinned.map_or(oxygen_bindless::INVALID_SLOT, |(base, _)| base);
             if !world_aabb.is_finite() {
@@ -308,9 +342,10 @@ impl FrameCollection {
                 });
             }
             let submeshes = (submesh_start, self.submeshes.len() as u32 - submesh_start);
-            // A skinned renderable is drawn with its base mesh: its LODs'
-            // vertices have no skin records matching its joints.
-            let node_lods: &[oxygen_core::LodLevel] = if skinned.is_some() { &[] } else { &node.lods };
+            // A skinned or morphed renderable is drawn with its base mesh:
+            // its LODs' vertices have no skin or morph records matching it.
+            let deformed = skinned.is_some() || !geometry.morph_targets().is_empty();
+            let node_lods: &[oxygen_core::LodLevel] = if deformed { &[] } else { &node.lods };
             let lods = (self.lod_levels.len() as u32, node_lods.len() as u32);
             self.lod_levels.extend_from_slice(node_lods);
             let transforms = Arc::make_mut(&mut self.transforms);
@@ -329,6 +364,7 @@ impl FrameCollection {
                 lods,
                 submeshes,
                 joint_base,
+                morph_base,
             });
         }
     }
@@ -341,6 +377,7 @@ impl FrameCollection {
         &mut self,
         skin: &oxygen_core::Skin,
         geometry: &oxygen_core::Geometry,
+        morph_weights: &[f32],
         origin: DVec3,
     ) -> Result<(u32, oxygen_core::DAabb), &'static str> {
         if geometry.joint_bounds().len() > skin.joints.len() {
@@ -363,7 +400,10 @@ impl FrameCollection {
             transforms.world.push(relative);
             transforms.normal.push(normal.into());
             if let Some(Some(local)) = geometry.joint_bounds().get(i) {
-                let moved = oxygen_core::DAabb::transformed(local, &m);
+                // Morphing comes before skinning: the joint moves the
+                // morphed vertices.
+                let local = geometry.morphed_bound(*local, morph_weights);
+                let moved = oxygen_core::DAabb::transformed(&local, &m);
                 bounds = Some(bounds.map_or(moved, |b| b.union(moved)));
             }
         }

@@ -132,6 +132,8 @@ pub struct RenderItem {
     pub index_count: u32,
     /// The renderable's first joint matrix, `INVALID_SLOT` when rigid.
     pub joint_base: u32,
+    /// The renderable's morph header, `INVALID_SLOT` without morph targets.
+    pub morph_base: u32,
 }
 
 /// Runs the view phase for one view, appending to `items` (cleared first).
@@ -220,6 +222,7 @@ pub fn collect_view_subset(
                 first_index,
                 index_count,
                 joint_base: entry.joint_base,
+                morph_base: entry.morph_base,
             });
         }
     }

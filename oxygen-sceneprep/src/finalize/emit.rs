@@ -93,7 +93,7 @@ pub(crate) fn emit_view(frame: &FrameEmit<'_>, view: &ViewEmit<'_>, out: &mut Pr
                 g.skin
             },
             joint_base: item.joint_base,
-            reserved: 0,
+            morph_base: item.morph_base,
         });
         out.sort_keys.push(key);
     }

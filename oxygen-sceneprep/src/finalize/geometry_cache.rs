@@ -66,14 +66,16 @@ impl GeometryCache {
                 return Err(e);
             }
         };
-        // Vertices, then attribute records, then skin records.
+        // Vertices, then one block per morph target, then attribute
+        // records, then skin records.
         let n = geometry.vertices().len() as u32;
+        let after_morphs = vertices.start + n * (1 + geometry.morph_targets().len() as u32);
         let attributes = match geometry.attributes() {
-            Some(_) => vertices.start + n,
+            Some(_) => after_morphs,
             None => oxygen_bindless::INVALID_SLOT,
         };
         let skin = match geometry.skin_weights() {
-            Some(_) => vertices.start + n * (1 + u32::from(geometry.attributes().is_some())),
+            Some(_) => after_morphs + n * u32::from(geometry.attributes().is_some()),
             None => oxygen_bindless::INVALID_SLOT,
         };
         let s = GeometrySlots { vertices, indices, attributes, skin };

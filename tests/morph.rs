@@ -1,0 +1,169 @@
+//! Morph targets on the GPU: each vertex adds its targets' displacements,
+//! weighted by the node's morph weights (carried with the frame's
+//! matrices), before skinning. Checked against the same mesh drawn rigidly
+//! where the weights should put it; culling follows the weights; glTF's
+//! SimpleMorph animates its weights.
+
+mod support;
+
+use std::path::PathBuf;
+
+use oxygen::core::{MorphTarget, Skin, SkinWeights};
+use oxygen::prelude::*;
+use support::golden::{Tolerance, assert_golden, compare};
+
+const VIEWPORT: UVec2 = UVec2::new(160, 100);
+
+fn camera(target: Vec3) -> LookAtResolver {
+    LookAtResolver {
+        camera: Camera::perspective(50f32.to_radians(), 0.1, None),
+        eye: target + Vec3::new(0.0, 0.5, 4.0),
+        target,
+        up: Vec3::Y,
+        viewport: VIEWPORT,
+    }
+}
+
+fn with_sun(scene: &mut Scene) {
+    let sun = scene.add_node(
+        "sun",
+        Transform::IDENTITY
+            .with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, Vec3::new(-0.3, -0.5, -0.8).normalize())),
+    );
+    scene.set_light(sun, Some(Light::directional(3.0))).unwrap();
+}
+
+fn material(scene: &mut Scene) -> MaterialHandle {
+    scene.add_material(Material::opaque("teal", Vec4::new(0.1, 0.6, 0.6, 1.0)))
+}
+
+fn rigid(at: Vec3) -> Scene {
+    let mut scene = Scene::new();
+    let m = material(&mut scene);
+    let geometry = scene.add_geometry(Geometry::cube(1.0));
+    let node = scene.add_node("rigid", Transform::from_translation(at));
+    scene.set_renderable(node, Renderable { geometry, materials: vec![m] }).unwrap();
+    with_sun(&mut scene);
+    scene
+}
+
+/// A unit cube at the origin whose targets move every vertex by each of
+/// `displacements`, posed with `weights`.
+fn morphed(displacements: &[Vec3], weights: Vec<f32>) -> (Scene, NodeKey) {
+    let mut scene = Scene::new();
+    let m = material(&mut scene);
+    let cube = Geometry::cube(1.0);
+    let n = cube.vertices().len();
+    let targets = displacements.iter().map(|d| MorphTarget { positions: vec![*d; n], normals: None }).collect();
+    let geometry = scene.add_geometry(cube.with_morph_targets(targets).unwrap());
+    let node = scene.add_node("morphed", Transform::IDENTITY);
+    scene.set_renderable(node, Renderable { geometry, materials: vec![m] }).unwrap();
+    scene.set_morph_weights(node, weights).unwrap();
+    with_sun(&mut scene);
+    (scene, node)
+}
+
+fn render(scene: &Scene, target: Vec3) -> (image::RgbaImage, usize) {
+    let mut renderer = support::gpu_renderer();
+    let view = renderer.register_view(camera(target), standard_render_graph).unwrap();
+    let report = renderer.render_frame(scene).unwrap();
+    let draws = report.views.iter().find(|v| v.view == view).map_or(0, |v| v.draws);
+    (support::read_lit_color(&renderer, view), draws)
+}
+
+fn assert_same(a: &image::RgbaImage, b: &image::RgbaImage, what: &str) {
+    let c = compare(a, b, 3);
+    assert!(c.differing <= c.total / 500, "{what}: {} of {} pixels differ (worst {})", c.differing, c.total, c.worst);
+}
+
+#[test]
+fn weighted_targets_move_the_mesh_where_the_weights_say() {
+    let (scene, _) = morphed(&[Vec3::X, Vec3::Y], vec![0.8, 0.5]);
+    let (expected, _) = render(&rigid(Vec3::new(0.8, 0.5, 0.0)), Vec3::ZERO);
+    let (actual, _) = render(&scene, Vec3::ZERO);
+    assert_same(&actual, &expected, "two targets");
+    // Weights of zero: the base shape.
+    let (scene, _) = morphed(&[Vec3::X, Vec3::Y], vec![0.0, 0.0]);
+    let (expected, _) = render(&rigid(Vec3::ZERO), Vec3::ZERO);
+    assert_same(&render(&scene, Vec3::ZERO).0, &expected, "zero weights");
+}
+
+#[test]
+fn culling_follows_the_weights() {
+    let far = Vec3::new(30.0, 0.0, 0.0);
+    let (mut scene, node) = morphed(&[far], vec![1.0]);
+    let (image, draws) = render(&scene, far);
+    assert_eq!(draws, 1, "the morphed cube must not be culled by its base bound");
+    assert_same(&image, &render(&rigid(far), far).0, "morphed far away");
+    scene.set_morph_weights(node, vec![0.0]).unwrap();
+    assert_eq!(render(&scene, far).1, 0, "back at the origin it is out of that view");
+}
+
+#[test]
+fn morphing_comes_before_skinning() {
+    let (mut scene, node) = morphed(&[Vec3::Y], vec![1.0]);
+    // Replace the geometry by a skinned one with the same target.
+    let cube = Geometry::cube(1.0);
+    let n = cube.vertices().len();
+    let geometry = cube
+        .with_morph_targets(vec![MorphTarget { positions: vec![Vec3::Y; n], normals: None }])
+        .unwrap()
+        .with_skin_weights(vec![SkinWeights::new([0; 4], [1.0, 0.0, 0.0, 0.0]); n])
+        .unwrap();
+    let geometry = scene.add_geometry(geometry);
+    let materials = scene.node(node).unwrap().renderable.clone().unwrap().materials;
+    scene.set_renderable(node, Renderable { geometry, materials }).unwrap();
+    // The joint turns the morphed cube a quarter turn about Z: +Y becomes -X.
+    let joint =
+        scene.add_node("joint", Transform::IDENTITY.with_rotation(Quat::from_rotation_z(std::f32::consts::FRAC_PI_2)));
+    scene.set_skin(node, Some(Skin { joints: vec![joint], inverse_bind_matrices: vec![Mat4::IDENTITY] })).unwrap();
+    let expected = {
+        let mut s = Scene::new();
+        let m = material(&mut s);
+        let g = s.add_geometry(Geometry::cube(1.0));
+        let r = s.add_node(
+            "rigid",
+            Transform::from_translation(Vec3::new(-1.0, 0.0, 0.0))
+                .with_rotation(Quat::from_rotation_z(std::f32::consts::FRAC_PI_2)),
+        );
+        s.set_renderable(r, Renderable { geometry: g, materials: vec![m] }).unwrap();
+        with_sun(&mut s);
+        render(&s, Vec3::ZERO).0
+    };
+    assert_same(&render(&scene, Vec3::ZERO).0, &expected, "morph then skin");
+}
+
+#[test]
+fn golden_simple_morph_at_two_times() {
+    let mut scene = Scene::new();
+    let file = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/SimpleMorph/SimpleMorph.gltf");
+    let import = import_gltf(&mut scene, file, &SceneChoice::Default).unwrap();
+    assert!(!import.warnings.iter().any(|w| w.contains("morph")), "{:?}", import.warnings);
+    with_sun(&mut scene);
+    let animation = &import.animations[0];
+    let resolver = LookAtResolver {
+        camera: Camera::perspective(45f32.to_radians(), 0.05, None),
+        eye: Vec3::new(0.5, 0.6, 3.2),
+        target: Vec3::new(0.5, 0.5, 0.0),
+        up: Vec3::Y,
+        viewport: UVec2::new(160, 120),
+    };
+    let images: Vec<_> = [0.5f32, 1.5]
+        .iter()
+        .map(|t| {
+            animation.apply(&mut scene, *t).unwrap();
+            render_with(&scene, resolver)
+        })
+        .collect();
+    let c = compare(&images[0], &images[1], 10);
+    assert!(c.differing > c.total / 100, "the weights must change the shape: {} of {} differ", c.differing, c.total);
+    assert_golden("simple_morph_t50", &images[0], Tolerance::default());
+    assert_golden("simple_morph_t150", &images[1], Tolerance::default());
+}
+
+fn render_with(scene: &Scene, resolver: LookAtResolver) -> image::RgbaImage {
+    let mut renderer = support::gpu_renderer();
+    let view = renderer.register_view(resolver, standard_render_graph).unwrap();
+    renderer.render_frame(scene).unwrap();
+    support::read_lit_color(&renderer, view)
+}
