@@ -522,3 +522,55 @@ fn golden_texture_settings_test_on_both_texture_paths() {
         assert_golden(&golden_name("texture_settings_test", path), &image, Tolerance::default());
     }
 }
+
+/// `KHR_materials_emissive_strength` multiplies the emissive factor (glTF
+/// clamps the factor to 1; the strength carries brighter emission), and
+/// `KHR_materials_unlit` and texture transforms land in the material.
+#[test]
+fn material_extensions_are_read_into_the_material() {
+    let mut b = Buffers::default();
+    let p = b.vertex(
+        f32_bytes(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]),
+        5126,
+        "VEC3",
+        3,
+        false,
+        r#","min":[0,0,0],"max":[1,1,0]"#,
+    );
+    let file = format!(
+        r#"{{"asset":{{"version":"2.0"}},"extensionsUsed":["KHR_materials_emissive_strength","KHR_materials_unlit"],
+        "scene":0,"scenes":[{{"nodes":[0,1]}}],"nodes":[{{"mesh":0}},{{"mesh":1}}],
+        "meshes":[{{"primitives":[{{"attributes":{{"POSITION":{p}}},"material":0}}]}},{{"primitives":[{{"attributes":{{"POSITION":{p}}},"material":1}}]}}],
+        "materials":[{{"emissiveFactor":[1,0.5,0],"extensions":{{"KHR_materials_emissive_strength":{{"emissiveStrength":4}}}}}},
+                     {{"extensions":{{"KHR_materials_unlit":{{}}}}}}],
+        "accessors":[{}],"bufferViews":[{}],"buffers":[{{"byteLength":{},"uri":"{}"}}]}}"#,
+        b.accessors.join(","),
+        b.views.join(","),
+        b.bin.len(),
+        data_uri("application/octet-stream", &b.bin)
+    );
+    let mut scene = Scene::new();
+    oxygen::import_gltf_slice(&mut scene, file.as_bytes(), "m.gltf", &ImportOptions::default()).unwrap();
+    let materials: Vec<Material> = scene.materials().map(|(_, m)| m.clone()).collect();
+    let emissive = materials.iter().find(|m| m.emissive != Vec3::ZERO).expect("the emissive material");
+    assert_eq!(emissive.emissive, Vec3::new(4.0, 2.0, 0.0));
+    assert!(!emissive.unlit);
+    assert!(materials.iter().any(|m| m.unlit), "the unlit material");
+}
+
+/// NormalTangentTest: each pair shows a real bump beside a normal-mapped
+/// quad in five UV orientations; with tangents built right, both cells of a
+/// pair look alike (checked by eye against the file's reference; the
+/// direction itself is tested in `gpu_textures.rs`). The golden guards
+/// the look; without its normal maps the picture must change.
+#[test]
+fn golden_normal_tangent_test() {
+    let (scene, mut resolver) = shipped("NormalTangentTest/NormalTangentTest.glb");
+    resolver.viewport = UVec2::new(240, 180);
+    let mapped = render(&scene, resolver);
+    let (mut flat, _) = shipped("NormalTangentTest/NormalTangentTest.glb");
+    edit_materials(&mut flat, |m| m.normal_texture = None);
+    let c = compare(&mapped, &render(&flat, resolver), 10);
+    assert!(c.differing > c.total / 50, "the normal maps must show: {} of {} differ", c.differing, c.total);
+    assert_golden("normal_tangent_test", &mapped, Tolerance::default());
+}

@@ -324,3 +324,52 @@ fn occlusion_textures_dim_ambient_light_but_not_direct_light() {
     let [full, _, none] = render(Vec3::NEG_Z);
     assert!(full > 0.85 * none, "direct light must not be occluded: {full:.1} against {none:.1}");
 }
+
+/// A normal map turns the shading normal the way glTF says: a texel
+/// leaning to +X (red above half) leans the normal towards the texture's
+/// +u, and one leaning to +Y (green above half) towards the image's up
+/// (−v). On a quad facing +Z whose u runs along +x and v down along −y, a
+/// light from the lean's side brightens it and a light from the other side
+/// darkens it, against the same quad without the map. Both texture paths.
+/// (Regression: the frame built from screen derivatives had both axes
+/// turned around, which NormalTangentTest shows as bowls instead of bumps.)
+#[test]
+fn a_normal_map_leans_the_normal_the_way_gltf_says() {
+    let lean = |rgb: [u8; 3]| {
+        TextureImage::new("lean", 4, 4, oxygen::core::ColorSpace::Linear, [rgb[0], rgb[1], rgb[2], 255].repeat(16))
+            .unwrap()
+    };
+    let brightness = |path: TexturePath, map: Option<[u8; 3]>, light_from: Vec3| -> f32 {
+        let mut scene = Scene::new();
+        let normal_texture = map.map(|rgb| scene.add_texture(lean(rgb)));
+        let material = scene.add_material(Material { normal_texture, ..Material::opaque("grey", Vec4::splat(0.7)) });
+        let quad = scene.add_geometry(Geometry::quad(2.0));
+        let node = scene.add_node("quad", Transform::IDENTITY);
+        scene.set_renderable(node, Renderable { geometry: quad, materials: vec![material] }).unwrap();
+        let sun = scene.add_node(
+            "sun",
+            Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, -light_from.normalize())),
+        );
+        scene.set_light(sun, Some(Light::directional(2.0))).unwrap();
+        let (image, view) = render(&scene, path);
+        support::region_mean(&image, pixel_of(&view, Vec3::ZERO), 4)
+    };
+    // Tangent-space (0.6, 0, 0.8) and (0, 0.6, 0.8), encoded.
+    let enc = |v: f32| ((v * 0.5 + 0.5) * 255.0).round() as u8;
+    let towards_u = [enc(0.6), enc(0.0), enc(0.8)];
+    let towards_up = [enc(0.0), enc(0.6), enc(0.8)];
+    for path in texture_paths() {
+        for (map, side, what) in [(towards_u, Vec3::X, "+u (+x)"), (towards_up, Vec3::Y, "up (+y)")] {
+            let light_on_lean = side + Vec3::Z * 0.5;
+            let light_against = -side + Vec3::Z * 0.5;
+            let flat_on = brightness(path, None, light_on_lean);
+            let flat_against = brightness(path, None, light_against);
+            let mapped_on = brightness(path, Some(map), light_on_lean);
+            let mapped_against = brightness(path, Some(map), light_against);
+            assert!(
+                mapped_on > flat_on + 5.0 && mapped_against < flat_against - 5.0,
+                "{path:?}: a normal leaning {what}: lit from that side {mapped_on} (flat {flat_on}), from the other {mapped_against} (flat {flat_against})"
+            );
+        }
+    }
+}

@@ -272,8 +272,11 @@ fn derivatives_of(mesh: MeshVarying) -> Derivatives {
 fn perturb_normal(n: vec3<f32>, d: Derivatives, at: TexCoord, tangent_normal: vec3<f32>) -> vec3<f32> {
     let dp2_perp = cross(d.dp_dy, n);
     let dp1_perp = cross(n, d.dp_dx);
-    let t = dp2_perp * at.dx.x + dp1_perp * at.dy.x;
-    let b = -(dp2_perp * at.dx.y + dp1_perp * at.dy.y);
+    // Window y grows downwards here (dpdy too), which turns the cotangent
+    // frame of a y-up derivation around: both vectors change sign. glTF's
+    // v grows down the image, which turns the bitangent once more.
+    let t = -(dp2_perp * at.dx.x + dp1_perp * at.dy.x);
+    let b = dp2_perp * at.dx.y + dp1_perp * at.dy.y;
     let largest = max(dot(t, t), dot(b, b));
     if !(largest > 1e-20) {
         return n; // no UV variation here: keep the geometric normal

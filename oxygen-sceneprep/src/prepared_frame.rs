@@ -301,10 +301,17 @@ impl PreparedSceneFrame {
 fn draw_fields(d: &DrawMetadata) -> String {
     // Printed only when present, so dumps of scenes without vertex colours
     // or a second UV set read as they always did.
-    let attributes = match d.attributes_slot {
+    let optional = |name: &str, slot: u32| match slot {
         oxygen_bindless::INVALID_SLOT => String::new(),
-        slot => format!(" attributes@{slot}"),
+        slot => format!(" {name}@{slot}"),
     };
+    let attributes = format!(
+        "{}{}{}{}",
+        optional("attributes", d.attributes_slot),
+        optional("skin", d.skin_slot),
+        optional("joints", d.joint_base),
+        optional("morph", d.morph_base)
+    );
     format!(
         "node={:<3} submesh={} vertices@{}{attributes} indices@{}+{}..{} transform={} material={}",
         d.node_id,

@@ -1,7 +1,7 @@
 //! Snapshots of ScenePrep output for scenes that exercise one rule each:
 //! every alpha class × sidedness, and every light type × gating rule.
 
-use glam::{Quat, UVec2, Vec3, Vec4};
+use glam::{Mat4, Quat, UVec2, Vec3, Vec4};
 use oxygen_bindless::SlotAllocators;
 use oxygen_core::light::Mobility;
 use oxygen_core::{
@@ -90,4 +90,55 @@ fn every_light_type_and_gating_rule() {
     let lights = prep.frame_collection().dump_lights();
     let frames = prep.frames();
     insta::assert_snapshot!(format!("{lights}\n{}", frames[0].dump()));
+}
+
+/// A skinned mesh, a morphed one and one with vertex colours: their draws
+/// name their skin records, joint matrices, morph header and attribute
+/// records, and the dump is the same for the same construction.
+#[test]
+fn skinned_morphed_and_coloured_meshes() {
+    use oxygen_core::{MorphTarget, Skin, SkinWeights, VertexAttributes};
+    let build = || {
+        let mut scene = Scene::new();
+        let material = scene.add_material(Material::opaque("grey", Vec4::splat(0.5)));
+        let quad = Geometry::quad(1.0);
+        let n = quad.vertices().len();
+        let skinned =
+            quad.clone().with_skin_weights(vec![SkinWeights::new([0, 1, 0, 0], [0.5, 0.5, 0.0, 0.0]); n]).unwrap();
+        let morphed = quad
+            .clone()
+            .with_morph_targets(vec![MorphTarget { positions: vec![Vec3::Y; n], normals: None }; 2])
+            .unwrap();
+        let coloured = quad.with_attributes(vec![VertexAttributes::default(); n]).unwrap();
+        let mut add = |scene: &mut Scene, name: &str, geometry: Geometry, z: f32| {
+            let geometry = scene.add_geometry(geometry);
+            let node = scene.add_node(name, Transform::from_translation(Vec3::new(0.0, 0.0, z)));
+            scene.set_renderable(node, Renderable { geometry, materials: vec![material] }).unwrap();
+            node
+        };
+        let skin_node = add(&mut scene, "skinned", skinned, -2.0);
+        let morph_node = add(&mut scene, "morphed", morphed, -3.0);
+        add(&mut scene, "coloured", coloured, -4.0);
+        let joints = vec![
+            scene.add_node("joint 0", Transform::from_translation(Vec3::new(0.0, 0.0, -2.0))),
+            scene.add_node("joint 1", Transform::from_translation(Vec3::new(0.5, 0.0, -2.0))),
+        ];
+        scene.set_skin(skin_node, Some(Skin { joints, inverse_bind_matrices: vec![Mat4::IDENTITY; 2] })).unwrap();
+        scene.set_morph_weights(morph_node, vec![0.25, 0.5]).unwrap();
+        scene
+    };
+    let dump = |scene: &Scene| {
+        let view = view_of(scene);
+        let mut prep = ScenePrep::new();
+        let frames = prep
+            .prepare(scene, &[ViewRequest { view: &view, options: Default::default() }], &mut SlotAllocators::default())
+            .unwrap();
+        frames[0].dump()
+    };
+    let first = dump(&build());
+    assert_eq!(first, dump(&build()), "the same construction must dump the same");
+    for field in ["skin@", "joints@", "morph@", "attributes@"] {
+        assert!(first.contains(field), "{field} missing:\n{first}");
+    }
+    insta::assert_snapshot!(first);
 }
