@@ -110,7 +110,7 @@ fn skinned_morphed_and_coloured_meshes() {
             .with_morph_targets(vec![MorphTarget { positions: vec![Vec3::Y; n], normals: None }; 2])
             .unwrap();
         let coloured = quad.with_attributes(vec![VertexAttributes::default(); n]).unwrap();
-        let mut add = |scene: &mut Scene, name: &str, geometry: Geometry, z: f32| {
+        let add = |scene: &mut Scene, name: &str, geometry: Geometry, z: f32| {
             let geometry = scene.add_geometry(geometry);
             let node = scene.add_node(name, Transform::from_translation(Vec3::new(0.0, 0.0, z)));
             scene.set_renderable(node, Renderable { geometry, materials: vec![material] }).unwrap();
