@@ -22,6 +22,7 @@
 
 pub mod animation;
 pub mod camera;
+pub mod environment;
 pub mod geometry;
 pub mod gpu;
 pub mod light;
@@ -35,6 +36,7 @@ pub mod view;
 
 pub use animation::{Animation, Channel, ChannelError, ChannelValues, Interpolation};
 pub use camera::{Camera, CameraError, Projection};
+pub use environment::{Environment, EnvironmentError, EquirectImage, PrefilteredEnvironment, Sky};
 pub use geometry::{
     Geometry, GeometryError, MAX_MORPH_TARGETS, MorphTarget, SkinWeights, Submesh, Vertex, VertexAttributes,
 };

@@ -69,8 +69,9 @@ struct LightingInputs {
     tile_texel_angle: array<vec4<f32>, MAX_SHADOW_TILES / 4u>,
     tile_count: u32,
     probe_count: u32,
-    reserved0: u32,
-    reserved1: u32,
+    environment_levels: u32,
+    reserved: u32,
+    environment_sh: array<vec4<f32>, 9>,
 }
 @group(3) @binding(0) var shadow_map_0: texture_depth_2d;
 @group(3) @binding(1) var shadow_map_1: texture_depth_2d;
@@ -83,6 +84,7 @@ struct LightingInputs {
 @group(3) @binding(FIRST_PROBE_BINDING + 1u) var probe_faces_1: texture_2d_array<f32>;
 @group(3) @binding(FIRST_PROBE_BINDING + 2u) var probe_faces_2: texture_2d_array<f32>;
 @group(3) @binding(FIRST_PROBE_BINDING + 3u) var probe_faces_3: texture_2d_array<f32>;
+@group(3) @binding(ENVIRONMENT_BINDING) var environment_faces: texture_2d_array<f32>;
 
 // The probe nearest to `position` (the surface reflects what that probe saw).
 fn nearest_probe(position: vec3<f32>) -> u32 {
@@ -162,10 +164,11 @@ fn cube_face(direction: vec3<f32>) -> u32 {
     return select(5u, 4u, direction.z >= 0.0);
 }
 
-// Radiance the probe saw along `direction`. Faces are rendered by ordinary
-// cameras (forward, up as in PROBE_FACE_AXES), so the lookup projects the
-// direction onto the face's camera instead of using cube-map conventions.
-fn sample_probe(probe: u32, direction: vec3<f32>, roughness: f32) -> vec3<f32> {
+// The face `direction` falls on and its UV there (xy: uv, z: face). Faces
+// are rendered by ordinary cameras (forward, up as in PROBE_FACE_AXES), so
+// the lookup projects the direction onto the face's camera instead of using
+// cube-map conventions. Probes and the environment share the layout.
+fn cube_face_uv(direction: vec3<f32>) -> vec3<f32> {
     let face = cube_face(direction);
     var forwards = array<vec3<f32>, PROBE_FACES>(
         vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(-1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0),
@@ -180,8 +183,33 @@ fn sample_probe(probe: u32, direction: vec3<f32>, roughness: f32) -> vec3<f32> {
     let right = cross(forward, up);
     let depth = dot(direction, forward);
     let ndc = vec2<f32>(dot(direction, right), dot(direction, up)) / depth;
-    let uv = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
-    return sample_probe_face(probe, uv, face, roughness);
+    return vec3<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5, f32(face));
+}
+
+// Radiance the probe saw along `direction`.
+fn sample_probe(probe: u32, direction: vec3<f32>, roughness: f32) -> vec3<f32> {
+    let at = cube_face_uv(direction);
+    return sample_probe_face(probe, at.xy, u32(at.z), roughness);
+}
+
+// The prefiltered environment along `direction` for a surface of
+// `roughness`: level l holds the GGX lobe of roughness l / (levels - 1).
+fn sample_environment(direction: vec3<f32>, roughness: f32) -> vec3<f32> {
+    let at = cube_face_uv(direction);
+    let lod = clamp(roughness, 0.0, 1.0) * f32(max(shadows.environment_levels, 1u) - 1u);
+    return textureSampleLevel(environment_faces, probe_sampler, at.xy, u32(at.z), lod).rgb;
+}
+
+// Irradiance from the environment on a surface facing `n` (its nine
+// spherical-harmonic coefficients, cosine-convolved on the CPU).
+fn environment_irradiance(n: vec3<f32>) -> vec3<f32> {
+    let c = shadows.environment_sh;
+    let e = c[0].xyz * 0.282095
+        + c[1].xyz * (0.488603 * n.y) + c[2].xyz * (0.488603 * n.z) + c[3].xyz * (0.488603 * n.x)
+        + c[4].xyz * (1.092548 * n.x * n.y) + c[5].xyz * (1.092548 * n.y * n.z)
+        + c[6].xyz * (0.315392 * (3.0 * n.z * n.z - 1.0)) + c[7].xyz * (1.092548 * n.x * n.z)
+        + c[8].xyz * (0.546274 * (n.x * n.x - n.y * n.y));
+    return max(e, vec3<f32>(0.0));
 }
 
 fn compare_cascade(cascade: u32, uv: vec2<f32>, depth: f32) -> f32 {
@@ -338,7 +366,16 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Der
     // probe reflection, not the lights.
     let occlusion_texel = material_texture(material.occlusion_texture, tex_coord(mesh, material, material.uv_transforms[4], d.uv));
     let occlusion = mix(1.0, occlusion_texel.r, material.occlusion_strength);
-    var color = (albedo * (1.0 - metallic) * AMBIENT + mix(vec3<f32>(0.04), albedo, metallic) * AMBIENT) * occlusion;
+    // Ambient light: the environment's irradiance (diffuse) and its
+    // prefiltered reflection (specular, below) when the renderer has one;
+    // else a constant.
+    let has_environment = shadows.environment_levels > 0u;
+    var color: vec3<f32>;
+    if has_environment {
+        color = albedo * (1.0 - metallic) * environment_irradiance(n) * (occlusion / PI);
+    } else {
+        color = (albedo * (1.0 - metallic) * AMBIENT + mix(vec3<f32>(0.04), albedo, metallic) * AMBIENT) * occlusion;
+    }
 
     let dir_count = scene.renderer.directional_light_count;
     var shadowed_light_done = false;
@@ -377,6 +414,10 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Der
     // except at grazing angles).
     if HAS_PROBES && shadows.probe_count > 0u {
         let reflected = sample_probe(nearest_probe(mesh.world_position), reflect(-v, n), roughness);
+        let f0 = mix(vec3<f32>(0.04), albedo, metallic);
+        color += reflected * environment_brdf(f0, roughness, max(dot(n, v), 0.0)) * occlusion;
+    } else if has_environment {
+        let reflected = sample_environment(reflect(-v, n), roughness);
         let f0 = mix(vec3<f32>(0.04), albedo, metallic);
         color += reflected * environment_brdf(f0, roughness, max(dot(n, v), 0.0)) * occlusion;
     }
@@ -420,4 +461,34 @@ fn fs_blend(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> @lo
     // Premultiplied and at most HDR_MAX × alpha, so blending over a target
     // texel of at most HDR_MAX stays at most HDR_MAX.
     return vec4<f32>(fit_hdr(shaded.rgb) * alpha, alpha);
+}
+
+// The environment behind the scene: a full-screen triangle at the far plane
+// (reverse-Z depth 0, written with an always-passing test before any mesh,
+// which then draws over it), radiance along each pixel's view ray.
+struct SkyVarying {
+    @builtin(position) position: vec4<f32>,
+    @location(0) ndc: vec2<f32>,
+}
+
+@vertex
+fn vs_sky(@builtin(vertex_index) index: u32) -> SkyVarying {
+    let corner = vec2<f32>(f32((index << 1u) & 2u), f32(index & 2u));
+    let ndc = corner * 2.0 - 1.0;
+    return SkyVarying(vec4<f32>(ndc, 0.0, 1.0), ndc);
+}
+
+// The world point at normalised device coordinates (ndc, depth).
+fn unproject(ndc: vec2<f32>, depth: f32) -> vec3<f32> {
+    let p = scene.camera.inverse_view_projection * vec4<f32>(ndc, depth, 1.0);
+    return p.xyz / p.w;
+}
+
+@fragment
+fn fs_sky(v: SkyVarying) -> @location(0) vec4<f32> {
+    // Two points on the pixel's ray (reverse-Z: 1 is the near plane; 0.5
+    // is finite even with an infinite far plane), for perspective and
+    // orthographic views alike.
+    let direction = normalize(unproject(v.ndc, 0.5) - unproject(v.ndc, 1.0));
+    return output_color(fit_hdr(sample_environment(direction, 0.0)));
 }

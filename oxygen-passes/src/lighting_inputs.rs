@@ -43,8 +43,14 @@ pub struct LightingInputs {
     pub tile_count: u32,
     /// Reflection probes in use; each surface samples the nearest.
     pub probe_count: u32,
+    /// Mip levels of the prefiltered environment (0: none; the constant
+    /// ambient term lights the scene instead).
+    pub environment_levels: u32,
     /// Zero.
-    pub reserved: [u32; 2],
+    pub reserved: u32,
+    /// The environment's irradiance as nine spherical-harmonic coefficients
+    /// (`w` unused; see `oxygen_core::PrefilteredEnvironment`).
+    pub environment_sh: [[f32; 4]; 9],
 }
 
 /// Reflection probes the shading pass can choose from.
@@ -54,7 +60,7 @@ pub const MAX_PROBES: usize = 4;
 /// per shadow-casting point light.
 pub const MAX_SHADOW_TILES: usize = 16;
 
-const _: () = assert!(std::mem::size_of::<LightingInputs>() == 1472);
+const _: () = assert!(std::mem::size_of::<LightingInputs>() == 1616);
 const _: () = assert!(MAX_SHADOW_TILES as u32 == oxygen_sceneprep::MAX_SHADOW_TILES);
 // The WGSL twin packs the per-cascade floats into one vec4 each and the
 // per-tile floats four to a vec4 (uniform arrays have a 16-byte stride), and
@@ -65,7 +71,7 @@ const _: () = assert!(MAX_SHADOW_TILES.is_multiple_of(4));
 
 /// The numbers of group 3 that the shading pass's WGSL reads, by their
 /// Rust names: [`wgsl_constants`] emits exactly these.
-fn shared_numbers() -> [(&'static str, u32); 9] {
+fn shared_numbers() -> [(&'static str, u32); 10] {
     [
         ("MAX_CASCADES", MAX_CASCADES as u32),
         ("MAX_SHADOW_TILES", MAX_SHADOW_TILES as u32),
@@ -76,6 +82,7 @@ fn shared_numbers() -> [(&'static str, u32); 9] {
         ("PROBE_SAMPLER_BINDING", PROBE_SAMPLER_BINDING),
         ("SHADOW_ATLAS_BINDING", SHADOW_ATLAS_BINDING),
         ("FIRST_PROBE_BINDING", FIRST_PROBE_BINDING),
+        ("ENVIRONMENT_BINDING", ENVIRONMENT_BINDING),
     ]
 }
 
@@ -93,6 +100,7 @@ const UNIFORM_BINDING: u32 = MAX_CASCADES as u32 + 1;
 const PROBE_SAMPLER_BINDING: u32 = MAX_CASCADES as u32 + 2;
 const SHADOW_ATLAS_BINDING: u32 = MAX_CASCADES as u32 + 3;
 const FIRST_PROBE_BINDING: u32 = MAX_CASCADES as u32 + 4;
+const ENVIRONMENT_BINDING: u32 = FIRST_PROBE_BINDING + MAX_PROBES as u32;
 
 /// Layers of a probe texture: +X, −X, +Y, −Y, +Z, −Z.
 pub const PROBE_FACES: usize = 6;
@@ -159,6 +167,18 @@ impl LightingInputResources {
                 count: None,
             });
         }
+        // The prefiltered environment: six faces with their mip chain (the
+        // probes' layout), sampled with the probe sampler.
+        entries.push(wgpu::BindGroupLayoutEntry {
+            binding: ENVIRONMENT_BINDING,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                view_dimension: wgpu::TextureViewDimension::D2Array,
+                multisampled: false,
+            },
+            count: None,
+        });
         entries.push(wgpu::BindGroupLayoutEntry {
             binding: PROBE_SAMPLER_BINDING,
             visibility: wgpu::ShaderStages::FRAGMENT,
@@ -239,7 +259,7 @@ impl LightingInputResources {
             &layout,
             (&sampler, &probe_sampler),
             ([&dummy_view; MAX_CASCADES], &placeholder_atlas),
-            [&dummy_probe_view; MAX_PROBES],
+            ([&dummy_probe_view; MAX_PROBES], &dummy_probe_view),
             &uniform,
         );
         LightingInputResources {
@@ -280,7 +300,7 @@ pub(crate) fn bind_group(
     layout: &wgpu::BindGroupLayout,
     (sampler, probe_sampler): (&wgpu::Sampler, &wgpu::Sampler),
     (maps, shadow_atlas): ([&wgpu::TextureView; MAX_CASCADES], &wgpu::TextureView),
-    probes: [&wgpu::TextureView; MAX_PROBES],
+    (probes, environment): ([&wgpu::TextureView; MAX_PROBES], &wgpu::TextureView),
     uniform: &wgpu::Buffer,
 ) -> wgpu::BindGroup {
     let mut entries: Vec<wgpu::BindGroupEntry<'_>> = maps
@@ -299,6 +319,10 @@ pub(crate) fn bind_group(
             resource: wgpu::BindingResource::TextureView(probe),
         });
     }
+    entries.push(wgpu::BindGroupEntry {
+        binding: ENVIRONMENT_BINDING,
+        resource: wgpu::BindingResource::TextureView(environment),
+    });
     entries.push(wgpu::BindGroupEntry {
         binding: PROBE_SAMPLER_BINDING,
         resource: wgpu::BindingResource::Sampler(probe_sampler),
@@ -332,6 +356,7 @@ mod tests {
             ("PROBE_SAMPLER_BINDING", PROBE_SAMPLER_BINDING),
             ("SHADOW_ATLAS_BINDING", SHADOW_ATLAS_BINDING),
             ("FIRST_PROBE_BINDING", FIRST_PROBE_BINDING),
+            ("ENVIRONMENT_BINDING", ENVIRONMENT_BINDING),
         ] {
             let line = format!("const {name}: u32 = {binding:#x}u;");
             assert!(wgsl.lines().any(|l| l == line), "{line} missing from\n{wgsl}");

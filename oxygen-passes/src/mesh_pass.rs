@@ -402,6 +402,15 @@ impl MeshPass {
             stats.tone_mapped_in_pass |= shading.tone_map.is_some();
             let group3 = lighting.as_ref().unwrap_or(ctx.lighting.no_lighting_inputs());
             bind_view_resources(&mut pass, ctx, group3);
+            // The environment behind the scene: drawn first by the pass that
+            // clears the colour target, meshes then draw over it.
+            let clears_color = matches!(self.color, ColorOps::Clear(_) | ColorOps::ClearToneMapped(..));
+            let is_shading = matches!(self.kind, PassKind::Shading | PassKind::ShadingAfterPrePass);
+            if clears_color && is_shading && ctx.lighting.has_environment() {
+                pass.set_pipeline(&ctx.pipelines.sky(&ctx.gpu.device, shading));
+                pass.draw(0..3, 0..1);
+                stats.draw_calls += 1;
+            }
             for (partition, pipeline) in self.partitions(ctx).zip(&pipelines) {
                 pass.set_pipeline(pipeline);
                 stats.pipeline_binds += 1;

@@ -293,6 +293,9 @@ pub struct Pipelines {
     modules: Mutex<HashMap<PassKind, wgpu::ShaderModule>>,
     state: Mutex<CompileState>,
     tonemap: Mutex<Option<(wgpu::RenderPipeline, wgpu::BindGroupLayout)>>,
+    /// The environment's full-screen draw, per shading key (targets,
+    /// samples, tone map).
+    sky: Mutex<HashMap<PipelineKey, wgpu::RenderPipeline>>,
     created: AtomicU64,
     compilers: AtomicUsize,
     /// Keys requested since [`Pipelines::begin_frame`].
@@ -331,6 +334,7 @@ impl Pipelines {
             modules: Mutex::new(HashMap::new()),
             state: Mutex::new(CompileState::default()),
             tonemap: Mutex::new(None),
+            sky: Mutex::new(HashMap::new()),
             created: AtomicU64::new(0),
             compilers: AtomicUsize::new(0),
             used: Mutex::new(HashSet::new()),
@@ -438,6 +442,55 @@ impl Pipelines {
         self.created.fetch_add(1, Ordering::Relaxed);
         *slot = Some((pipeline.clone(), layout.clone()));
         (pipeline, layout)
+    }
+
+    /// The pipeline that draws the environment behind the scene for a
+    /// shading pass of `key` (its targets, samples and tone map): the
+    /// shading module's `vs_sky`/`fs_sky`, depth untouched and always
+    /// passing, drawn before the pass's meshes.
+    pub fn sky(&self, device: &wgpu::Device, key: PipelineKey) -> wgpu::RenderPipeline {
+        let key = PipelineKey { variant: PipelineVariant::from_mask(oxygen_sceneprep::PassMask::OPAQUE), ..key };
+        if let Some(p) = self.sky.lock().unwrap_or_else(|e| e.into_inner()).get(&key) {
+            return p.clone();
+        }
+        let module = self.module(device, PassKind::Shading);
+        let constants = PipelineKey { pass: PassKind::Shading, ..key }.override_constants();
+        let options = || wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() };
+        let targets = [key.color_format.map(|format| wgpu::ColorTargetState {
+            format,
+            blend: None,
+            write_mask: wgpu::ColorWrites::ALL,
+        })];
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("sky"),
+            layout: Some(&self.layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_sky"),
+                compilation_options: options(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: key.depth_format,
+                depth_write_enabled: Some(false),
+                depth_compare: Some(wgpu::CompareFunction::Always),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: wgpu::MultisampleState { count: key.samples.max(1), ..Default::default() },
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_sky"),
+                compilation_options: options(),
+                targets: &targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        self.created.fetch_add(1, Ordering::Relaxed);
+        self.sky.lock().unwrap_or_else(|e| e.into_inner()).insert(key, pipeline.clone());
+        pipeline
     }
 
     fn module(&self, device: &wgpu::Device, pass: PassKind) -> wgpu::ShaderModule {

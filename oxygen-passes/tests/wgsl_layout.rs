@@ -53,8 +53,9 @@ fn lighting_inputs_wgsl_matches_rust_layout() {
         ("tile_texel_angle", offset_of!(LightingInputs, tile_texel_angle)),
         ("tile_count", offset_of!(LightingInputs, tile_count)),
         ("probe_count", offset_of!(LightingInputs, probe_count)),
-        ("reserved0", offset_of!(LightingInputs, reserved)),
-        ("reserved1", offset_of!(LightingInputs, reserved) + 4),
+        ("environment_levels", offset_of!(LightingInputs, environment_levels)),
+        ("reserved", offset_of!(LightingInputs, reserved)),
+        ("environment_sh", offset_of!(LightingInputs, environment_sh)),
     ];
     assert_eq!(members, expected.map(|(n, o)| (n.to_owned(), o as u32)).to_vec());
 

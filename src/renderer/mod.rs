@@ -658,6 +658,25 @@ impl Renderer {
         self.views.set_active(id, active)
     }
 
+    /// Lights the scene with an environment (image-based lighting;
+    /// `None`: the constant ambient term): prefiltered on the CPU into a
+    /// cube of 64² faces with 7 GGX levels (64 samples a texel) and nine
+    /// irradiance harmonics, uploaded once. Every view's shading then takes
+    /// its ambient diffuse and specular light from it (reflection probes,
+    /// where a view has them, still give the specular part) and draws it
+    /// behind the scene. [`Renderer::set_prefiltered_environment`] takes
+    /// one prefiltered at another size.
+    pub fn set_environment(&mut self, environment: Option<&oxygen_core::Environment>) {
+        let prefiltered = environment.map(|e| e.prefilter(64, 7, 64));
+        self.set_prefiltered_environment(prefiltered.as_ref());
+    }
+
+    /// [`Renderer::set_environment`] with an environment already
+    /// prefiltered ([`oxygen_core::Environment::prefilter`]).
+    pub fn set_prefiltered_environment(&mut self, environment: Option<&oxygen_core::PrefilteredEnvironment>) {
+        self.lighting.set_environment(&self.gpu.device, &self.gpu.queue, environment);
+    }
+
     /// Turns shadow maps of spot and point lights on (`Some`) or off.
     pub fn set_local_shadows(&mut self, settings: Option<LocalShadowSettings>) {
         self.shadows.local_settings = settings;

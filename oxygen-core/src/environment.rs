@@ -1,0 +1,405 @@
+//! Image-based lighting: the light arriving from every direction, as a
+//! prefiltered cube for specular reflections and spherical harmonics for
+//! diffuse irradiance.
+//!
+//! An [`Environment`] is a radiance function over directions: a uniform
+//! colour, a procedural sky matched to the sun, or an equirectangular image
+//! (from a Radiance `.hdr` file, `oxygen::load_hdr_environment`).
+//! [`Environment::prefilter`] turns it into a [`PrefilteredEnvironment`]:
+//!
+//! * a cube of six square faces (the reflection probes' face layout: each
+//!   face as seen by a camera looking along its axis) with a mip chain whose
+//!   level `l` holds the radiance convolved with the GGX lobe of roughness
+//!   `l / (levels − 1)`, importance-sampled across face seams (the split-sum
+//!   approximation: view direction = normal = reflection direction);
+//! * nine spherical-harmonic coefficients of the cosine-convolved radiance
+//!   (irradiance), evaluated per pixel for the diffuse term.
+//!
+//! The shader combines them with the analytic environment BRDF it already
+//! uses for probes. Prefiltering runs on the CPU: the cube is small (64²
+//! faces by default), sampled from the environment function itself, so it
+//! is deterministic and testable without a GPU.
+
+use glam::{Vec2, Vec3};
+
+/// Light arriving from every direction (linear radiance).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Environment {
+    /// The same radiance from everywhere.
+    Uniform(Vec3),
+    /// A procedural sky: a gradient from horizon to zenith, a glow around
+    /// the sun, a darker ground below the horizon.
+    Sky(Sky),
+    /// An equirectangular image: longitude along x (−Z at the centre,
+    /// turning towards +X), latitude along y (+Y at the top row).
+    Image(EquirectImage),
+}
+
+/// A procedural sky's parameters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sky {
+    /// Direction the sunlight travels (as a directional light's).
+    pub sun_direction: Vec3,
+    /// Radiance straight up.
+    pub zenith: Vec3,
+    /// Radiance at the horizon.
+    pub horizon: Vec3,
+    /// Radiance from the ground (below the horizon).
+    pub ground: Vec3,
+    /// Extra radiance around the sun (its glow, not its disc: the sun's
+    /// own light is the directional light's).
+    pub glow: Vec3,
+}
+
+impl Sky {
+    /// A clear day's sky for a sun travelling along `sun_direction`, bright
+    /// enough to stand beside a directional light of about 3: its
+    /// irradiance on an upward surface is about a fifth of the sun's.
+    /// A sun below the horizon dims it to a dusk.
+    pub fn matched_to_sun(sun_direction: Vec3) -> Self {
+        let d = sun_direction.try_normalize().unwrap_or(Vec3::NEG_Y);
+        // Sun elevation: 1 overhead, 0 at the horizon.
+        let elevation = (-d.y).clamp(0.0, 1.0);
+        let day = 0.25 + 0.75 * elevation.sqrt();
+        Sky {
+            sun_direction: d,
+            zenith: Vec3::new(0.10, 0.17, 0.32) * day,
+            horizon: Vec3::new(0.26, 0.28, 0.30) * day,
+            ground: Vec3::new(0.07, 0.065, 0.06) * day,
+            glow: Vec3::new(0.5, 0.42, 0.3) * day,
+        }
+    }
+
+    fn radiance(&self, dir: Vec3) -> Vec3 {
+        let up = dir.y;
+        let base = if up >= 0.0 {
+            // Brighter towards the horizon, bluer towards the zenith.
+            self.horizon.lerp(self.zenith, up.sqrt())
+        } else {
+            // A soft step from horizon to ground within a few degrees.
+            self.ground.lerp(self.horizon, (1.0 + up * 12.0).clamp(0.0, 1.0))
+        };
+        let towards_sun = dir.dot(-self.sun_direction).max(0.0);
+        base + self.glow * towards_sun.powi(32) * if up > -0.05 { 1.0 } else { 0.0 }
+    }
+}
+
+/// An equirectangular radiance image.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EquirectImage {
+    /// Width in texels (longitude).
+    pub width: u32,
+    /// Height in texels (latitude).
+    pub height: u32,
+    /// Linear RGB, row by row from the top (+Y).
+    pub texels: Vec<Vec3>,
+}
+
+/// What was wrong with an environment.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum EnvironmentError {
+    /// The image's size and texels do not agree, or it is empty.
+    #[error("an equirectangular image of {width} × {height} with {texels} texels")]
+    BadImage {
+        /// Width.
+        width: u32,
+        /// Height.
+        height: u32,
+        /// Texels given.
+        texels: usize,
+    },
+}
+
+impl EquirectImage {
+    /// A checked image; non-finite and negative texels become black, so
+    /// no NaN reaches the prefilter or the GPU.
+    pub fn new(width: u32, height: u32, texels: Vec<Vec3>) -> Result<Self, EnvironmentError> {
+        if width == 0 || height == 0 || texels.len() as u64 != u64::from(width) * u64::from(height) {
+            return Err(EnvironmentError::BadImage { width, height, texels: texels.len() });
+        }
+        let texels = texels.into_iter().map(|t| if t.is_finite() { t.max(Vec3::ZERO) } else { Vec3::ZERO }).collect();
+        Ok(EquirectImage { width, height, texels })
+    }
+
+    /// Bilinear radiance along `dir`, wrapping in longitude.
+    fn radiance(&self, dir: Vec3) -> Vec3 {
+        let longitude = dir.x.atan2(-dir.z); // 0 towards −Z, π/2 towards +X
+        let latitude = dir.y.clamp(-1.0, 1.0).acos(); // 0 at +Y
+        let u = longitude / std::f32::consts::TAU + 0.5;
+        let v = latitude / std::f32::consts::PI;
+        let x = u * self.width as f32 - 0.5;
+        let y = (v * self.height as f32 - 0.5).clamp(0.0, (self.height - 1) as f32);
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let texel = |x: f32, y: f32| {
+            let xi = (x as i64).rem_euclid(i64::from(self.width)) as usize;
+            let yi = (y as i64).clamp(0, i64::from(self.height) - 1) as usize;
+            self.texels[yi * self.width as usize + xi]
+        };
+        let top = texel(x0, y0).lerp(texel(x0 + 1.0, y0), fx);
+        let bottom = texel(x0, y0 + 1.0).lerp(texel(x0 + 1.0, y0 + 1.0), fx);
+        top.lerp(bottom, fy)
+    }
+}
+
+/// (forward, up) of each cube face, in layer order +X, −X, +Y, −Y, +Z, −Z:
+/// the reflection probes' face cameras, so the shader looks up both alike.
+pub const CUBE_FACE_AXES: [(Vec3, Vec3); 6] = [
+    (Vec3::X, Vec3::Y),
+    (Vec3::NEG_X, Vec3::Y),
+    (Vec3::Y, Vec3::NEG_Z),
+    (Vec3::NEG_Y, Vec3::Z),
+    (Vec3::Z, Vec3::Y),
+    (Vec3::NEG_Z, Vec3::Y),
+];
+
+/// The direction through texel `(x, y)` of face `face` of a `size`² face.
+pub fn cube_texel_direction(face: usize, x: u32, y: u32, size: u32) -> Vec3 {
+    let (forward, up) = CUBE_FACE_AXES[face];
+    let right = forward.cross(up);
+    let ndc = Vec2::new((x as f32 + 0.5) / size as f32 * 2.0 - 1.0, 1.0 - (y as f32 + 0.5) / size as f32 * 2.0);
+    (forward + right * ndc.x + up * ndc.y).normalize()
+}
+
+/// An environment ready for shading: the GGX-prefiltered cube and the
+/// irradiance's spherical harmonics.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PrefilteredEnvironment {
+    /// Side of level 0's faces.
+    pub size: u32,
+    /// `levels[l][face]`: `(size >> l)²` texels, row by row; level `l` is
+    /// the radiance seen by a mirror of roughness `l / (levels − 1)`.
+    pub levels: Vec<[Vec<Vec3>; 6]>,
+    /// Irradiance E(n) = Σ `irradiance_sh[i]` · Y_i(n) (the nine real
+    /// spherical harmonics of bands 0–2, cosine-convolved): a Lambertian
+    /// surface of albedo ρ reflects ρ / π · E(n).
+    pub irradiance_sh: [Vec3; 9],
+}
+
+/// The nine real spherical harmonics of bands 0–2 at unit direction `n`.
+pub fn sh9(n: Vec3) -> [f32; 9] {
+    [
+        0.282_095,
+        0.488_603 * n.y,
+        0.488_603 * n.z,
+        0.488_603 * n.x,
+        1.092_548 * n.x * n.y,
+        1.092_548 * n.y * n.z,
+        0.315_392 * (3.0 * n.z * n.z - 1.0),
+        1.092_548 * n.x * n.z,
+        0.546_274 * (n.x * n.x - n.y * n.y),
+    ]
+}
+
+impl PrefilteredEnvironment {
+    /// Irradiance arriving at a surface facing `n` (the CPU twin of the
+    /// shader's).
+    pub fn irradiance(&self, n: Vec3) -> Vec3 {
+        sh9(n.normalize()).iter().zip(&self.irradiance_sh).map(|(y, c)| *c * *y).sum::<Vec3>().max(Vec3::ZERO)
+    }
+}
+
+/// The `i`-th point of a 2-D Hammersley set of `n`.
+fn hammersley(i: u32, n: u32) -> Vec2 {
+    Vec2::new(i as f32 / n as f32, i.reverse_bits() as f32 / 4_294_967_296.0)
+}
+
+impl Environment {
+    /// The procedural sky for a sun travelling along `sun_direction`.
+    pub fn sky_for_sun(sun_direction: Vec3) -> Self {
+        Environment::Sky(Sky::matched_to_sun(sun_direction))
+    }
+
+    /// Radiance arriving from direction `dir` (unit vector).
+    pub fn radiance(&self, dir: Vec3) -> Vec3 {
+        match self {
+            Environment::Uniform(c) => *c,
+            Environment::Sky(sky) => sky.radiance(dir),
+            Environment::Image(image) => image.radiance(dir),
+        }
+    }
+
+    /// The prefiltered cube (faces of `size`², `levels` mip levels, each
+    /// specular texel from `samples` GGX-distributed directions) and the
+    /// irradiance harmonics. Non-finite radiance counts as black.
+    pub fn prefilter(&self, size: u32, levels: u32, samples: u32) -> PrefilteredEnvironment {
+        let _span = tracing::info_span!("environment_prefilter", size, levels, samples).entered();
+        let size = size.max(1);
+        let levels = levels.clamp(1, 32 - size.leading_zeros());
+        let samples = samples.max(1);
+        let radiance = |d: Vec3| {
+            let r = self.radiance(d);
+            if r.is_finite() { r.max(Vec3::ZERO) } else { Vec3::ZERO }
+        };
+        let mut out = Vec::with_capacity(levels as usize);
+        for level in 0..levels {
+            let side = (size >> level).max(1);
+            let roughness = if levels > 1 { level as f32 / (levels - 1) as f32 } else { 0.0 };
+            let alpha = (roughness * roughness).max(1e-4);
+            let faces: [Vec<Vec3>; 6] = std::array::from_fn(|face| {
+                let mut texels = Vec::with_capacity((side * side) as usize);
+                for y in 0..side {
+                    for x in 0..side {
+                        let n = cube_texel_direction(face, x, y, side);
+                        if level == 0 {
+                            texels.push(radiance(n));
+                            continue;
+                        }
+                        // GGX importance sampling around n (view = normal):
+                        // half-vectors h with D(h)·cos, light l = reflect.
+                        let t = if n.y.abs() < 0.999 { Vec3::Y.cross(n).normalize() } else { Vec3::X };
+                        let b = n.cross(t);
+                        let (mut sum, mut weight) = (Vec3::ZERO, 0.0);
+                        for i in 0..samples {
+                            let u = hammersley(i, samples);
+                            let phi = std::f32::consts::TAU * u.x;
+                            let cos_theta = ((1.0 - u.y) / (1.0 + (alpha * alpha - 1.0) * u.y)).sqrt();
+                            let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+                            let h = t * (sin_theta * phi.cos()) + b * (sin_theta * phi.sin()) + n * cos_theta;
+                            let l = h * (2.0 * n.dot(h)) - n;
+                            let n_dot_l = n.dot(l);
+                            if n_dot_l > 0.0 {
+                                sum += radiance(l) * n_dot_l;
+                                weight += n_dot_l;
+                            }
+                        }
+                        texels.push(if weight > 0.0 { sum / weight } else { radiance(n) });
+                    }
+                }
+                texels
+            });
+            out.push(faces);
+        }
+        // Irradiance harmonics from level 0, each texel weighted by its
+        // solid angle, convolved with the clamped cosine (Ramamoorthi and
+        // Hanrahan's band factors π, 2π/3, π/4).
+        let mut sh = [Vec3::ZERO; 9];
+        let side = size;
+        for (face, texels) in out[0].iter().enumerate() {
+            for y in 0..side {
+                for x in 0..side {
+                    let (forward, up) = CUBE_FACE_AXES[face];
+                    let right = forward.cross(up);
+                    let a = (x as f32 + 0.5) / side as f32 * 2.0 - 1.0;
+                    let c = 1.0 - (y as f32 + 0.5) / side as f32 * 2.0;
+                    let unnormalised = forward + right * a + up * c;
+                    let d2 = unnormalised.length_squared();
+                    // dω = dA / r³ with dA = (2 / side)².
+                    let solid_angle = (2.0 / side as f32).powi(2) / (d2 * d2.sqrt());
+                    let n = unnormalised / d2.sqrt();
+                    let l = texels[(y * side + x) as usize];
+                    for (s, basis) in sh.iter_mut().zip(sh9(n)) {
+                        *s += l * basis * solid_angle;
+                    }
+                }
+            }
+        }
+        let band = [
+            std::f32::consts::PI,
+            2.0 * std::f32::consts::PI / 3.0,
+            2.0 * std::f32::consts::PI / 3.0,
+            2.0 * std::f32::consts::PI / 3.0,
+            std::f32::consts::PI / 4.0,
+            std::f32::consts::PI / 4.0,
+            std::f32::consts::PI / 4.0,
+            std::f32::consts::PI / 4.0,
+            std::f32::consts::PI / 4.0,
+        ];
+        for (s, a) in sh.iter_mut().zip(band) {
+            *s *= a;
+        }
+        PrefilteredEnvironment { size, levels: out, irradiance_sh: sh }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_uniform_environment_prefilters_to_itself_and_its_irradiance_is_pi_times_it() {
+        let c = Vec3::new(0.5, 0.25, 1.0);
+        let p = Environment::Uniform(c).prefilter(16, 5, 32);
+        for level in &p.levels {
+            for face in level {
+                assert!(face.iter().all(|t| (*t - c).abs().max_element() < 1e-5));
+            }
+        }
+        for n in [Vec3::X, Vec3::NEG_Y, Vec3::new(0.3, 0.8, -0.5)] {
+            let e = p.irradiance(n);
+            assert!((e - c * std::f32::consts::PI).abs().max_element() < 0.01 * std::f32::consts::PI, "{e}");
+        }
+    }
+
+    #[test]
+    fn the_sky_lights_an_upward_surface_more_than_a_downward_one() {
+        let p = Environment::sky_for_sun(Vec3::new(-0.3, -0.8, -0.5)).prefilter(16, 4, 32);
+        assert!(p.irradiance(Vec3::Y).x > 2.0 * p.irradiance(Vec3::NEG_Y).x);
+    }
+
+    /// Texels on either side of a cube edge see nearly the same directions:
+    /// at every level their prefiltered radiance differs far less than the
+    /// radiance changes across the face.
+    #[test]
+    fn prefiltered_levels_are_continuous_across_face_seams() {
+        // A strongly directional environment: bright towards +X+Y.
+        let image = EquirectImage::new(
+            64,
+            32,
+            (0..32 * 64)
+                .map(|i| {
+                    let (x, y) = (i % 64, i / 64);
+                    if (40..52).contains(&x) && y < 10 { Vec3::splat(20.0) } else { Vec3::splat(0.1) }
+                })
+                .collect(),
+        )
+        .unwrap();
+        let p = Environment::Image(image).prefilter(32, 5, 128);
+        for (level, faces) in p.levels.iter().enumerate().skip(1) {
+            let side = (32 >> level).max(1) as usize;
+            // The +X face's top row meets the +Y face's right column
+            // (right of +Y is +X: +Y's camera looks up with −Z as up).
+            let mut seam = 0.0f32;
+            let mut across = 0.0f32;
+            for i in 0..side {
+                let px = faces[0][i]; // +X, top row
+                // The +Y texel touching it: +Y's right = forward × up = +Y × −Z = −X... find by direction.
+                let d = cube_texel_direction(0, i as u32, 0, side as u32);
+                let (face, x, y) = nearest_texel(d + Vec3::Y * 0.5 / side as f32, side as u32);
+                let other = faces[face][(y * side as u32 + x) as usize];
+                seam = seam.max((px - other).abs().max_element());
+                across = across.max((faces[0][i] - faces[0][(side - 1) * side + i]).abs().max_element());
+            }
+            assert!(seam < 0.35 * across.max(0.05), "level {level}: seam jump {seam}, across the face {across}");
+        }
+    }
+
+    /// The face and texel a direction falls on (the shader's lookup).
+    fn nearest_texel(d: Vec3, side: u32) -> (usize, u32, u32) {
+        let a = d.abs();
+        let face = if a.x >= a.y && a.x >= a.z {
+            if d.x >= 0.0 { 0 } else { 1 }
+        } else if a.y >= a.z {
+            if d.y >= 0.0 { 2 } else { 3 }
+        } else if d.z >= 0.0 {
+            4
+        } else {
+            5
+        };
+        let (forward, up) = CUBE_FACE_AXES[face];
+        let right = forward.cross(up);
+        let depth = d.dot(forward);
+        let ndc = Vec2::new(d.dot(right), d.dot(up)) / depth;
+        let uv = Vec2::new(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
+        let x = ((uv.x * side as f32) as u32).min(side - 1);
+        let y = ((uv.y * side as f32) as u32).min(side - 1);
+        (face, x, y)
+    }
+
+    #[test]
+    fn bad_images_are_refused_and_bad_texels_cleaned() {
+        assert!(EquirectImage::new(2, 2, vec![Vec3::ONE; 3]).is_err());
+        let image = EquirectImage::new(2, 1, vec![Vec3::NAN, Vec3::new(-1.0, 2.0, 3.0)]).unwrap();
+        assert_eq!(image.texels, vec![Vec3::ZERO, Vec3::new(0.0, 2.0, 3.0)]);
+    }
+}
