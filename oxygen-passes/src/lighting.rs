@@ -24,19 +24,6 @@ struct EnvironmentTexture {
     no_inputs: wgpu::BindGroup,
 }
 
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn half_floats_round_trip_within_their_precision() {
-        for v in [0.0f32, 1.0, -2.5, 0.1, 3.14159, 1e-5, 6.1e-5, 65504.0, 1e6, -1e6] {
-            let back = oxygen_core::gpu::f16_to_f32(super::f32_to_f16(v));
-            let expected = v.clamp(-65504.0, 65504.0);
-            assert!((back - expected).abs() <= expected.abs() * 1e-3 + 1e-7, "{v} -> {back}");
-        }
-        assert_eq!(super::f32_to_f16(f32::NAN), 0);
-    }
-}
-
 /// `value` as a half float (round to nearest even; overflow to the largest
 /// finite half, which the HDR target can hold; NaN to 0).
 fn f32_to_f16(value: f32) -> u16 {
@@ -219,5 +206,18 @@ impl LightingResources {
         layer: u32,
     ) {
         self.probe_mips.rebuild(device, encoder, texture, layer);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn half_floats_round_trip_within_their_precision() {
+        for v in [0.0f32, 1.0, -2.5, 0.1, 2.71828, 1e-5, 6.1e-5, 65504.0, 1e6, -1e6] {
+            let back = oxygen_core::gpu::f16_to_f32(super::f32_to_f16(v));
+            let expected = v.clamp(-65504.0, 65504.0);
+            assert!((back - expected).abs() <= expected.abs() * 1e-3 + 1e-7, "{v} -> {back}");
+        }
+        assert_eq!(super::f32_to_f16(f32::NAN), 0);
     }
 }
