@@ -4,7 +4,13 @@
 //! cargo run --release --example viewer -- [FILE] [--size WxH] [--present fifo|mailbox|immediate]
 //!                                         [--frames N --screenshot PATH]
 //!                                         [--time T] [--animation N|NAME] [--fps F]
+//!                                         [--msaa 1|2|4] [--environment sky|none|FILE.hdr]
 //! ```
+//!
+//! The scene is lit by an environment (image-based lighting): by default a
+//! procedural sky matched to its sun, drawn behind it; `--environment
+//! FILE.hdr` takes an equirectangular Radiance image, `none` the constant
+//! ambient term.
 //!
 //! FILE defaults to the shipped `assets/AlphaBlendModeTest/AlphaBlendModeTest.glb`.
 //!
@@ -49,7 +55,7 @@ use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowAttributes};
 
 const USAGE: &str = "\
-usage: viewer [FILE] [--size WxH] [--present fifo|mailbox|immediate] [--layout 1|2|3|4|5] [--frames N --screenshot PATH [--resize WxH]] [--time T] [--animation N|NAME] [--fps F] [--msaa 1|2|4]";
+usage: viewer [FILE] [--size WxH] [--present fifo|mailbox|immediate] [--layout 1|2|3|4|5] [--frames N --screenshot PATH [--resize WxH]] [--time T] [--animation N|NAME] [--fps F] [--msaa 1|2|4] [--environment sky|none|FILE.hdr]";
 
 /// The parsed command line.
 struct Args {
@@ -69,6 +75,8 @@ struct Args {
     fps: Option<f32>,
     /// The main view's anti-aliasing at start.
     msaa: Msaa,
+    /// `sky` (default), `none`, or an `.hdr` file.
+    environment: String,
 }
 
 fn parse_size(name: &str, v: &str) -> Result<UVec2, String> {
@@ -93,6 +101,7 @@ fn parse_args(mut args: impl Iterator<Item = String>) -> Result<Args, String> {
         animation: None,
         fps: None,
         msaa: Msaa::Off,
+        environment: "sky".to_owned(),
     };
     while let Some(arg) = args.next() {
         let mut value = |name: &str| args.next().ok_or(format!("{name} needs a value"));
@@ -116,6 +125,7 @@ fn parse_args(mut args: impl Iterator<Item = String>) -> Result<Args, String> {
                     .ok_or(format!("--time needs a finite number of seconds (got '{v}')"))?;
             }
             "--animation" => parsed.animation = Some(value("--animation")?),
+            "--environment" => parsed.environment = value("--environment")?,
             "--msaa" => {
                 let v = value("--msaa")?;
                 parsed.msaa = v
@@ -229,6 +239,8 @@ struct Viewer {
     clock: Option<Instant>,
     /// The pose's time in the last frame, for the title.
     pose_time: Option<f32>,
+    /// The environment lighting the scene, given to the renderer once it exists.
+    environment: Option<oxygen::core::Environment>,
 }
 
 impl Viewer {
@@ -440,6 +452,7 @@ impl ApplicationHandler for Viewer {
             let size = window.inner_size();
             self.window_size = UVec2::new(size.width, size.height);
             let id = renderer.add_window(surface, self.window_size, self.args.present)?;
+            renderer.set_environment(self.environment.as_ref());
             println!("adapter: {}; visibility {:?}", renderer.gpu().describe(), renderer.visibility());
             self.visibility = renderer.visibility();
             self.renderer = Some(renderer);
@@ -606,6 +619,11 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
     if let Some(a) = &animation {
         println!("animation '{}' ({:.2} s) from t = {} s", a.name, a.duration(), args.time);
     }
+    let environment = match args.environment.as_str() {
+        "none" => None,
+        "sky" => Some(oxygen_demo::viewer_environment(&scene)),
+        file => Some(oxygen::load_hdr_environment(file)?),
+    };
     let orbit = OrbitCamera::framing(&bounds);
     let camera = CameraState { orbit, fly: false, eye: orbit.eye() };
     let event_loop = EventLoop::new()?;
@@ -636,6 +654,7 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
         animation,
         clock: None,
         pose_time: None,
+        environment,
     };
     event_loop.run_app(&mut viewer)?;
     match viewer.error {

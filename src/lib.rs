@@ -37,6 +37,7 @@
 //! ```
 
 #![warn(missing_docs)]
+mod environment_file;
 pub mod gltf_import;
 mod graph;
 pub mod probes;
@@ -45,6 +46,7 @@ pub mod shadows;
 mod views;
 pub mod windows;
 
+pub use environment_file::{EnvironmentFileError, MAX_ENVIRONMENT_SIDE, load_hdr_environment};
 pub use gltf_import::{
     GltfCamera, GltfError, GltfImport, ImportLimits, ImportOptions, NodeCameraResolver, SceneChoice, import_gltf,
     import_gltf_slice, import_gltf_with,

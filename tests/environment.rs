@@ -112,3 +112,32 @@ fn multisampled_views_draw_the_environment_too() {
     let ratio = at(&image, 48, 48) / radiance;
     assert!(ratio.min_element() > 0.95 && ratio.max_element() < 1.2, "{ratio}");
 }
+
+/// A Radiance `.hdr` file loads as an equirectangular environment: its
+/// centre column looks along −Z, its top row up; a missing file is named.
+#[test]
+fn an_hdr_file_loads_as_an_equirectangular_environment() {
+    let (width, height) = (16u32, 8u32);
+    let texels: Vec<image::Rgb<f32>> = (0..width * height)
+        .map(|i| {
+            let (x, y) = (i % width, i / width);
+            // Red towards −Z (the centre columns), blue in the top rows.
+            let red = if (6..10).contains(&x) { 4.0 } else { 0.1 };
+            let blue = if y < 2 { 3.0 } else { 0.1 };
+            image::Rgb([red, 0.2, blue])
+        })
+        .collect();
+    let path = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("environment_test.hdr");
+    let file = std::fs::File::create(&path).unwrap();
+    image::codecs::hdr::HdrEncoder::new(std::io::BufWriter::new(file))
+        .encode(&texels, width as usize, height as usize)
+        .unwrap();
+    let environment = oxygen::load_hdr_environment(&path).unwrap();
+    let forward = environment.radiance(Vec3::NEG_Z);
+    let back = environment.radiance(Vec3::Z);
+    let up = environment.radiance(Vec3::Y);
+    assert!(forward.x > 3.0 && back.x < 0.5, "−Z {forward}, +Z {back}");
+    assert!(up.z > 2.0, "up {up}");
+    let missing = oxygen::load_hdr_environment("/nonexistent/sky.hdr").unwrap_err().to_string();
+    assert!(missing.contains("/nonexistent/sky.hdr"), "{missing}");
+}

@@ -18,6 +18,10 @@ use oxygen_demo::OrbitCamera;
 use support::golden::compare;
 use support::gpu_renderer_with;
 
+/// An `extra` argument that is not passed on: it asks [`run_viewer`] to
+/// leave the viewer's default environment (the sky) as it is.
+const DEFAULT_SKY: &str = "(default environment)";
+
 /// `target/<profile>/examples/viewer`, next to this test's own binary.
 fn viewer_binary() -> PathBuf {
     let exe = std::env::current_exe().expect("the test knows its own path");
@@ -65,7 +69,14 @@ fn run_viewer_sized(name: &str, size: UVec2, presented_size: UVec2, extra: &[&st
         .arg(shipped_file())
         .args(["--size", &format!("{}x{}", size.x, size.y), "--frames", "4", "--screenshot"])
         .arg(&screenshot)
-        .args(extra)
+        // The constant ambient term, as the headless references have, unless
+        // a test says otherwise (`--environment` in `extra`, or `DEFAULT_SKY`).
+        .args(if extra.contains(&"--environment") || extra.contains(&DEFAULT_SKY) {
+            &[][..]
+        } else {
+            &["--environment", "none"][..]
+        })
+        .args(extra.iter().filter(|a| **a != DEFAULT_SKY))
         .output()
         .expect("xvfb-run runs");
     let log = format!("{}{}", String::from_utf8_lossy(&output.stdout), String::from_utf8_lossy(&output.stderr));
@@ -210,7 +221,8 @@ fn the_viewer_writes_a_numbered_sequence_of_an_animation() {
         .args(["-a", "-s", "-screen 0 1024x768x24"])
         .arg(viewer_binary())
         .arg(&file)
-        .args(["--size", "160x120", "--time", "0.25", "--fps", "4", "--frames", "2", "--screenshot"])
+        .args(["--environment", "none", "--size", "160x120", "--time", "0.25", "--fps", "4", "--frames", "2"])
+        .arg("--screenshot")
         .arg(&screenshot)
         .output()
         .expect("xvfb-run runs");
@@ -269,4 +281,37 @@ fn the_viewer_anti_aliases_its_main_view_when_asked() {
     eprintln!("against 4×: {} differ; against 1×: {} differ (of {})", same.differing, other.differing, same.total);
     assert!(same.differing <= same.total / 1000, "{} of {} differ from the 4× render", same.differing, same.total);
     assert!(other.differing > 4 * same.differing.max(10), "the presented picture must not be the 1× one");
+}
+
+/// By default the viewer lights the scene with the procedural sky matched
+/// to its sun and draws it behind: the window equals the headless render
+/// with that environment, and differs from the one without.
+#[test]
+fn the_viewer_lights_its_scene_with_the_sky_by_default() {
+    if let Some(reason) = cannot_run() {
+        eprintln!("skipped: {reason}");
+        return;
+    }
+    let size = UVec2::new(240, 160);
+    let presented = run_viewer("viewer_sky", size, &[DEFAULT_SKY]);
+    let (scene, bounds) = viewer_scene();
+    let render = |environment: Option<&oxygen::core::Environment>| {
+        let camera = OrbitCamera::framing(&bounds).resolver(size);
+        let mut renderer = gpu_renderer_with(RendererOptions::default());
+        renderer.set_environment(environment);
+        let desc = ViewDesc::new(camera).with_sun_shadows(oxygen_demo::viewer_cascades());
+        let view = renderer.register_view(desc, standard_render_graph).unwrap();
+        renderer.render_frame(&scene).unwrap();
+        renderer.read_color(view).unwrap()
+    };
+    let sky = oxygen_demo::viewer_environment(&scene);
+    let (with_sky, without) = (render(Some(&sky)), render(None));
+    let same = compare(&presented, &with_sky, 3);
+    let other = compare(&presented, &without, 3);
+    eprintln!(
+        "against the sky render: {} differ; against none: {} differ (of {})",
+        same.differing, other.differing, same.total
+    );
+    assert!(same.differing <= same.total / 1000, "{} of {} differ from the sky render", same.differing, same.total);
+    assert!(other.differing > same.total / 4, "the sky must show behind the scene");
 }

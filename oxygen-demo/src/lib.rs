@@ -233,6 +233,22 @@ pub fn add_default_sun(scene: &mut Scene) {
     scene.set_light(sun, Some(Light::directional(2.5))).expect("the sun node was just created");
 }
 
+/// The interactive viewer's default environment: the procedural sky matched
+/// to the scene's first directional light (the default sun's direction when
+/// it has none).
+pub fn viewer_environment(scene: &Scene) -> oxygen_core::Environment {
+    let sun = scene.nodes().find_map(|(key, node)| {
+        let light = node.light.as_ref()?;
+        matches!(light.kind, oxygen_core::LightKind::Directional).then_some(key)
+    });
+    let direction = sun
+        .and_then(|key| scene.world_transform(key))
+        .map(|world| world.as_mat4().transform_vector3(Vec3::NEG_Z))
+        .and_then(|d| d.try_normalize())
+        .unwrap_or(Vec3::new(-0.3, -0.8, -0.5).normalize());
+    oxygen_core::Environment::sky_for_sun(direction)
+}
+
 /// The interactive viewer's default sun-shadow cascades for its main view.
 pub fn viewer_cascades() -> oxygen_core::CascadeSettings {
     oxygen_core::CascadeSettings { count: 4, resolution: 1024, ..Default::default() }
