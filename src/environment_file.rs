@@ -33,10 +33,10 @@ pub enum EnvironmentFileError {
     },
 }
 
-/// Loads an equirectangular environment from a Radiance `.hdr` file (or any
-/// format the `image` crate decodes here; 8-bit images are taken as sRGB
-/// and linearised by the decoder's float conversion). The header's size is
-/// checked before the texels are decoded.
+/// Loads an equirectangular environment from a Radiance `.hdr` file (or a
+/// PNG or JPEG panorama, whose 8- or 16-bit texels are taken as sRGB and
+/// converted to linear radiance in [0, 1]). The header's size is checked
+/// before the texels are decoded.
 pub fn load_hdr_environment(path: impl AsRef<Path>) -> Result<Environment, EnvironmentFileError> {
     let path = path.as_ref();
     let _span = tracing::info_span!("load_hdr_environment", path = %path.display()).entered();
@@ -53,8 +53,19 @@ pub fn load_hdr_environment(path: impl AsRef<Path>) -> Result<Environment, Envir
     if width == 0 || height == 0 || width > MAX_ENVIRONMENT_SIDE || height > MAX_ENVIRONMENT_SIDE {
         return Err(EnvironmentFileError::Size { path: path.to_owned(), width, height });
     }
-    let image = reader.decode().map_err(|e| read(e.to_string()))?.into_rgb32f();
-    let texels = image.pixels().map(|p| oxygen_core::glam::Vec3::from(p.0)).collect();
+    let decoded = reader.decode().map_err(|e| read(e.to_string()))?;
+    // Float images hold linear radiance; integer ones hold sRGB-encoded
+    // colour, which `into_rgb32f` only rescales.
+    let encoded = !matches!(decoded, image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_));
+    let image = decoded.into_rgb32f();
+    let linear = |c: f32| if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) };
+    let texels = image
+        .pixels()
+        .map(|p| {
+            let c = oxygen_core::glam::Vec3::from(p.0);
+            if encoded { oxygen_core::glam::Vec3::new(linear(c.x), linear(c.y), linear(c.z)) } else { c }
+        })
+        .collect();
     let image = EquirectImage::new(width, height, texels).map_err(|e| read(e.to_string()))?;
     Ok(Environment::Image(image))
 }

@@ -141,3 +141,14 @@ fn an_hdr_file_loads_as_an_equirectangular_environment() {
     let missing = oxygen::load_hdr_environment("/nonexistent/sky.hdr").unwrap_err().to_string();
     assert!(missing.contains("/nonexistent/sky.hdr"), "{missing}");
 }
+
+/// Found in review: an 8-bit panorama was taken as linear radiance. Its
+/// sRGB texels are decoded: 128 of 255 is 0.216, not 0.5.
+#[test]
+fn an_8_bit_panorama_is_decoded_from_srgb() {
+    let path = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("environment_test.png");
+    image::RgbImage::from_pixel(8, 4, image::Rgb([128, 128, 128])).save(&path).unwrap();
+    let environment = oxygen::load_hdr_environment(&path).unwrap();
+    let r = environment.radiance(Vec3::NEG_Z);
+    assert!((r.x - 0.2158).abs() < 0.002, "{r}");
+}

@@ -200,3 +200,29 @@ fn golden_rigged_simple_bends_with_its_bones() {
     let c = compare(&posed, &rigid, 10);
     assert!(c.differing > c.total / 100, "the skin must bend the mesh: {} of {} differ", c.differing, c.total);
 }
+
+/// Found in review: an animation accessor without a buffer view claiming
+/// 2^62 keyframes overflowed the byte count (a panic); and a skin listing a
+/// joint twice allocated per listing. Both are refused with a message now.
+#[test]
+fn absurd_keyframe_counts_and_repeated_joints_are_refused_not_a_panic() {
+    let import = |json: &str| {
+        let mut scene = Scene::new();
+        oxygen::import_gltf_slice(&mut scene, json.as_bytes(), "hostile.gltf", &ImportOptions::default())
+    };
+    let huge = r#"{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{}],
+        "animations":[{"channels":[{"sampler":0,"target":{"node":0,"path":"translation"}}],
+        "samplers":[{"input":0,"output":1}]}],
+        "accessors":[{"componentType":5126,"count":4611686018427387904,"type":"SCALAR"},
+                     {"componentType":5126,"count":4611686018427387904,"type":"VEC3"}]}"#;
+    let err = import(huge).expect_err("2^62 keyframes");
+    assert!(err.to_string().contains("animation 0"), "{err}");
+    let twice = r#"{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0,1]}],
+        "nodes":[{"mesh":0,"skin":0},{}],"skins":[{"joints":[1,1]}],
+        "meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],
+        "accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}],
+        "bufferViews":[{"buffer":0,"byteLength":36}],
+        "buffers":[{"byteLength":36,"uri":"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}]}"#;
+    let err = import(twice).expect_err("a joint listed twice");
+    assert!(err.to_string().contains("listed twice"), "{err}");
+}

@@ -128,3 +128,24 @@ fn bad_skins_are_refused_or_skipped_with_a_reason() {
     assert_eq!(report.views.iter().find(|v| v.view == view).map(|v| v.draws), Some(0));
     assert!(report.warnings.iter().any(|w| format!("{w:?}").contains("joint past the skin")), "{:?}", report.warnings);
 }
+
+/// Found in review: a skinned mesh took its winding and its visibility from
+/// its node's transform, which skinning ignores. A mirrored or collapsed
+/// mesh node must not change the skinned picture.
+#[test]
+fn the_mesh_nodes_own_transform_does_not_touch_a_skinned_mesh() {
+    let moved = Transform::from_translation(Vec3::new(0.3, 0.0, 0.0));
+    let (reference, _) = skinned(moved, Transform::IDENTITY, 0.0, Vec3::ZERO);
+    let (expected, _) = render(&reference, Vec3::ZERO);
+    for (what, node_transform) in [
+        ("mirrored", Transform::IDENTITY.with_scale(Vec3::new(-1.0, 1.0, 1.0))),
+        ("collapsed", Transform::IDENTITY.with_scale(Vec3::ZERO)),
+    ] {
+        let (mut scene, _) = skinned(moved, Transform::IDENTITY, 0.0, Vec3::ZERO);
+        let node = scene.nodes().find(|(_, n)| n.name == "skinned").map(|(k, _)| k).unwrap();
+        scene.set_local_transform(node, node_transform).unwrap();
+        let (actual, draws) = render(&scene, Vec3::ZERO);
+        assert_eq!(draws, 1, "{what}: the skinned cube must still be drawn");
+        assert_same(&actual, &expected, what);
+    }
+}

@@ -85,6 +85,7 @@ struct LightingInputs {
 @group(3) @binding(FIRST_PROBE_BINDING + 2u) var probe_faces_2: texture_2d_array<f32>;
 @group(3) @binding(FIRST_PROBE_BINDING + 3u) var probe_faces_3: texture_2d_array<f32>;
 @group(3) @binding(ENVIRONMENT_BINDING) var environment_faces: texture_2d_array<f32>;
+@group(3) @binding(ENVIRONMENT_SAMPLER_BINDING) var environment_sampler: sampler;
 
 // The probe nearest to `position` (the surface reflects what that probe saw).
 fn nearest_probe(position: vec3<f32>) -> u32 {
@@ -197,7 +198,7 @@ fn sample_probe(probe: u32, direction: vec3<f32>, roughness: f32) -> vec3<f32> {
 fn sample_environment(direction: vec3<f32>, roughness: f32) -> vec3<f32> {
     let at = cube_face_uv(direction);
     let lod = clamp(roughness, 0.0, 1.0) * f32(max(shadows.environment_levels, 1u) - 1u);
-    return textureSampleLevel(environment_faces, probe_sampler, at.xy, u32(at.z), lod).rgb;
+    return textureSampleLevel(environment_faces, environment_sampler, at.xy, u32(at.z), lod).rgb;
 }
 
 // Irradiance from the environment on a surface facing `n` (its nine

@@ -132,7 +132,7 @@ impl LightingResources {
         let no_inputs = crate::lighting_inputs::bind_group(
             device,
             &inputs.layout,
-            (&inputs.sampler, &inputs.probe_sampler),
+            (&inputs.sampler, &inputs.probe_sampler, &inputs.environment_sampler),
             ([&inputs.placeholder_map; MAX_CASCADES], &inputs.placeholder_atlas),
             ([&inputs.placeholder_probe; MAX_PROBES], &view),
             &buffer,
@@ -179,7 +179,7 @@ impl LightingResources {
         let shadow_atlas = shadow_atlas.unwrap_or(&inputs.placeholder_atlas);
         let probes = probes.map(|p| p.unwrap_or(&inputs.placeholder_probe));
         let environment = self.environment.as_ref().map_or(&inputs.placeholder_probe, |e| &e.view);
-        let samplers = (&inputs.sampler, &inputs.probe_sampler);
+        let samplers = (&inputs.sampler, &inputs.probe_sampler, &inputs.environment_sampler);
         crate::lighting_inputs::bind_group(
             device,
             &inputs.layout,

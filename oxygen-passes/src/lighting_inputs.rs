@@ -71,7 +71,7 @@ const _: () = assert!(MAX_SHADOW_TILES.is_multiple_of(4));
 
 /// The numbers of group 3 that the shading pass's WGSL reads, by their
 /// Rust names: [`wgsl_constants`] emits exactly these.
-fn shared_numbers() -> [(&'static str, u32); 10] {
+fn shared_numbers() -> [(&'static str, u32); 11] {
     [
         ("MAX_CASCADES", MAX_CASCADES as u32),
         ("MAX_SHADOW_TILES", MAX_SHADOW_TILES as u32),
@@ -83,6 +83,7 @@ fn shared_numbers() -> [(&'static str, u32); 10] {
         ("SHADOW_ATLAS_BINDING", SHADOW_ATLAS_BINDING),
         ("FIRST_PROBE_BINDING", FIRST_PROBE_BINDING),
         ("ENVIRONMENT_BINDING", ENVIRONMENT_BINDING),
+        ("ENVIRONMENT_SAMPLER_BINDING", ENVIRONMENT_SAMPLER_BINDING),
     ]
 }
 
@@ -101,6 +102,7 @@ const PROBE_SAMPLER_BINDING: u32 = MAX_CASCADES as u32 + 2;
 const SHADOW_ATLAS_BINDING: u32 = MAX_CASCADES as u32 + 3;
 const FIRST_PROBE_BINDING: u32 = MAX_CASCADES as u32 + 4;
 const ENVIRONMENT_BINDING: u32 = FIRST_PROBE_BINDING + MAX_PROBES as u32;
+const ENVIRONMENT_SAMPLER_BINDING: u32 = ENVIRONMENT_BINDING + 1;
 
 /// Layers of a probe texture: +X, −X, +Y, −Y, +Z, −Z.
 pub const PROBE_FACES: usize = 6;
@@ -120,6 +122,7 @@ pub(crate) struct LightingInputResources {
     pub(crate) layout: wgpu::BindGroupLayout,
     pub(crate) sampler: wgpu::Sampler,
     pub(crate) probe_sampler: wgpu::Sampler,
+    pub(crate) environment_sampler: wgpu::Sampler,
     pub(crate) no_inputs: wgpu::BindGroup,
     pub(crate) placeholder_map: wgpu::TextureView,
     pub(crate) placeholder_probe: wgpu::TextureView,
@@ -186,6 +189,12 @@ impl LightingInputResources {
             count: None,
         });
         entries.push(wgpu::BindGroupLayoutEntry {
+            binding: ENVIRONMENT_SAMPLER_BINDING,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+            count: None,
+        });
+        entries.push(wgpu::BindGroupLayoutEntry {
             binding: SHADOW_ATLAS_BINDING,
             visibility: wgpu::ShaderStages::FRAGMENT,
             ty: wgpu::BindingType::Texture {
@@ -225,6 +234,14 @@ impl LightingInputResources {
             min_filter: wgpu::FilterMode::Linear,
             ..Default::default()
         });
+        // Trilinear: a roughness between two prefiltered levels blends them.
+        let environment_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("environment"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            mipmap_filter: wgpu::MipmapFilterMode::Linear,
+            ..Default::default()
+        });
         let dummy_probe = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("no probe"),
             // A spare layer, as probes have: see `array_layer_count`.
@@ -257,7 +274,7 @@ impl LightingInputResources {
         let no_inputs = bind_group(
             device,
             &layout,
-            (&sampler, &probe_sampler),
+            (&sampler, &probe_sampler, &environment_sampler),
             ([&dummy_view; MAX_CASCADES], &placeholder_atlas),
             ([&dummy_probe_view; MAX_PROBES], &dummy_probe_view),
             &uniform,
@@ -266,6 +283,7 @@ impl LightingInputResources {
             layout,
             sampler,
             probe_sampler,
+            environment_sampler,
             no_inputs,
             placeholder_map: dummy_view,
             placeholder_probe: dummy_probe_view,
@@ -298,7 +316,7 @@ pub(crate) fn uniform_buffer(device: &wgpu::Device, uniform: &LightingInputs) ->
 pub(crate) fn bind_group(
     device: &wgpu::Device,
     layout: &wgpu::BindGroupLayout,
-    (sampler, probe_sampler): (&wgpu::Sampler, &wgpu::Sampler),
+    (sampler, probe_sampler, environment_sampler): (&wgpu::Sampler, &wgpu::Sampler, &wgpu::Sampler),
     (maps, shadow_atlas): ([&wgpu::TextureView; MAX_CASCADES], &wgpu::TextureView),
     (probes, environment): ([&wgpu::TextureView; MAX_PROBES], &wgpu::TextureView),
     uniform: &wgpu::Buffer,
@@ -326,6 +344,10 @@ pub(crate) fn bind_group(
     entries.push(wgpu::BindGroupEntry {
         binding: PROBE_SAMPLER_BINDING,
         resource: wgpu::BindingResource::Sampler(probe_sampler),
+    });
+    entries.push(wgpu::BindGroupEntry {
+        binding: ENVIRONMENT_SAMPLER_BINDING,
+        resource: wgpu::BindingResource::Sampler(environment_sampler),
     });
     entries.push(wgpu::BindGroupEntry {
         binding: SHADOW_ATLAS_BINDING,
@@ -357,6 +379,7 @@ mod tests {
             ("SHADOW_ATLAS_BINDING", SHADOW_ATLAS_BINDING),
             ("FIRST_PROBE_BINDING", FIRST_PROBE_BINDING),
             ("ENVIRONMENT_BINDING", ENVIRONMENT_BINDING),
+            ("ENVIRONMENT_SAMPLER_BINDING", ENVIRONMENT_SAMPLER_BINDING),
         ] {
             let line = format!("const {name}: u32 = {binding:#x}u;");
             assert!(wgsl.lines().any(|l| l == line), "{line} missing from\n{wgsl}");

@@ -342,6 +342,14 @@ impl MeshPass {
         {
             return Ok(());
         }
+        if self.tone_map().is_some() && ctx.targets.msaa.is_some() {
+            return Err(PassError::BadInput {
+                pass: self.name,
+                what: "tone-mapping while shading needs a single-sampled view (MSAA resolves into the HDR target, \
+                       which the tone-map pass reads)"
+                    .into(),
+            });
+        }
         let color = self.color_view(ctx)?.map(|view| (view, self.color));
         // The pipelines are requested before the inputs are awaited, so
         // that they compile while the views producing the inputs record.

@@ -102,8 +102,10 @@ impl RayScene {
     pub fn generation(&self) -> u64 {
         self.generation
     }
-    /// Renderables left out of the last rebuild because their world matrix
-    /// cannot be inverted (a scale of zero: nothing a ray could hit).
+    /// Renderables left out of the last rebuild: their world matrix cannot
+    /// be inverted (a scale of zero: nothing a ray could hit), or they are
+    /// skinned or morphed (traced from their rest shape, they would be in
+    /// the wrong place).
     pub fn skipped(&self) -> u32 {
         self.skipped
     }
@@ -120,6 +122,13 @@ impl RayScene {
         let mut tables: Vec<[u32; 3]> = Vec::new();
         let mut used: Vec<u32> = Vec::new();
         for entry in &frame.renderables {
+            // Skinned and morphed meshes are left out: the trees are built
+            // from the meshes' rest shapes, which are not what the raster
+            // draws (counted in `skipped`).
+            if entry.joint_base != oxygen_bindless::INVALID_SLOT || entry.morph_base != oxygen_bindless::INVALID_SLOT {
+                self.skipped += 1;
+                continue;
+            }
             let (Some(slots), Some(mesh)) = (geometry.get(entry.geometry), scene.geometry(entry.geometry)) else {
                 continue;
             };

@@ -66,7 +66,7 @@ pub(crate) fn import(
             };
             let output = accessor::validate(root, buffers, sampler.output.value(), semantic).map_err(|e| fail(c, e))?;
             // Times and values, 4 bytes a component, charged before they are read.
-            let bytes = (input.count as u64).saturating_mul(4) + (output.count as u64).saturating_mul(16);
+            let bytes = (input.count as u64).saturating_mul(4).saturating_add((output.count as u64).saturating_mul(16));
             budget
                 .spend_bytes(bytes)
                 .map_err(|source| GltfErrorKind::Limit { context: format!("animation {a} ('{name}')"), source })?;

@@ -639,6 +639,16 @@ impl Importer<'_> {
                 .skins
                 .get(index)
                 .ok_or_else(|| GltfErrorKind::Invalid(format!("node '{name}': skin {index} does not exist")))?;
+            // Joints and matrices (64 + 8 bytes a joint) charged before they
+            // are built; glTF forbids a joint listed twice, which also bounds
+            // a skin by the file's nodes.
+            self.budget
+                .spend_bytes((skin.joints.len() as u64).saturating_mul(72))
+                .map_err(|source| GltfErrorKind::Limit { context: format!("skin {index}"), source })?;
+            let mut seen = std::collections::HashSet::with_capacity(skin.joints.len());
+            if let Some(twice) = skin.joints.iter().find(|j| !seen.insert(j.value())) {
+                return Err(GltfErrorKind::Invalid(format!("skin {index}: joint {} is listed twice", twice.value())));
+            }
             let joints: Option<Vec<NodeKey>> =
                 skin.joints.iter().map(|j| self.node_keys.get(&j.value()).copied()).collect();
             let Some(joints) = joints else {

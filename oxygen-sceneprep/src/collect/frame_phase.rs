@@ -263,7 +263,15 @@ impl FrameCollection {
             }
             let Some(world64) = self.world.get_f64(key) else { continue };
             let world = world64.as_mat4();
-            let Some(normal) = normal_matrix(&world) else {
+            // A skinned mesh does not use its node's transform (its joints
+            // place it), so a singular one there does not hide it.
+            let skinned_node = node.skin.is_some()
+                && node
+                    .renderable
+                    .as_ref()
+                    .and_then(|r| scene.geometry(r.geometry))
+                    .is_some_and(|g| g.skin_weights().is_some());
+            let Some(normal) = normal_matrix(&world).or_else(|| skinned_node.then_some(Mat3::IDENTITY)) else {
                 warn!(node = %node.name, "skipping node with a non-finite or singular world transform");
                 self.skip(key, &node.name, "non-finite or singular world transform");
                 continue;
@@ -328,8 +336,16 @@ impl FrameCollection {
             let submesh_start = self.submeshes.len() as u32;
             let mut per_node =
                 if node.flags.contains(NodeFlags::CASTS_SHADOWS) { PassMask::CASTS_SHADOWS } else { PassMask::empty() };
-            // A mirroring world transform flips the triangles' winding.
-            if Mat3::from_mat4(world).determinant() < 0.0 {
+            // A mirroring world transform flips the triangles' winding; a
+            // skinned mesh's is its joints' (the first one's sign: a skin
+            // whose joints disagree has no one winding to draw).
+            let placing = match skinned {
+                Some((base, _)) => {
+                    Arc::make_mut(&mut self.transforms).world.get(base as usize).copied().unwrap_or(world)
+                }
+                None => world,
+            };
+            if Mat3::from_mat4(placing).determinant() < 0.0 {
                 per_node |= PassMask::MIRRORED;
             }
             for (range, handle) in geometry.submeshes().iter().zip(&renderable.materials) {
