@@ -179,7 +179,7 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
     }
     let bounds = import.bounds.ok_or("the scene has nothing to draw")?;
     let posing = match &animation {
-        Some(a) => Some((choose_animation(&import.animations, a.which.as_deref())?, a)),
+        Some(a) => Some((import.animation(a.which.as_deref())?, a)),
         None => None,
     };
     if import.lights == 0 {
@@ -278,24 +278,4 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
         return Err("no view could be rendered".into());
     }
     Ok(())
-}
-
-/// The animation `which` names (an index or a name; `None`: the first),
-/// or an error listing what the file has.
-fn choose_animation<'a>(
-    animations: &'a [oxygen::core::Animation],
-    which: Option<&str>,
-) -> Result<&'a oxygen::core::Animation, String> {
-    let listed = || {
-        let names: Vec<String> = animations.iter().enumerate().map(|(i, a)| format!("{i} ('{}')", a.name)).collect();
-        if names.is_empty() { "the file has no animations".to_owned() } else { format!("it has {}", names.join(", ")) }
-    };
-    let found = match which {
-        None => animations.first(),
-        Some(w) => match w.parse::<usize>() {
-            Ok(i) => animations.get(i),
-            Err(_) => animations.iter().find(|a| a.name == w),
-        },
-    };
-    found.ok_or_else(|| format!("no animation {} to pose the scene with: {}", which.unwrap_or("at all"), listed()))
 }

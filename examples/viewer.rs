@@ -615,7 +615,12 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
     if import.lights == 0 {
         oxygen_demo::add_default_sun(&mut scene);
     }
-    let animation = choose_animation(import.animations, args.animation.as_deref())?;
+    // A file without animations is simply not animated, unless one was asked for.
+    let animation = match import.animation(args.animation.as_deref()) {
+        Ok(a) => Some(a.clone()),
+        Err(_) if args.animation.is_none() => None,
+        Err(e) => return Err(e.into()),
+    };
     if let Some(a) = &animation {
         println!("animation '{}' ({:.2} s) from t = {} s", a.name, a.duration(), args.time);
     }
@@ -660,30 +665,5 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
     match viewer.error {
         Some(e) => Err(e.into()),
         None => Ok(()),
-    }
-}
-
-/// The animation `which` names (index or name), the first when `None`, or
-/// `None` for a file without animations; a name the file does not have is
-/// an error listing what it has.
-fn choose_animation(
-    animations: Vec<oxygen::core::Animation>,
-    which: Option<&str>,
-) -> Result<Option<oxygen::core::Animation>, String> {
-    let Some(which) = which else { return Ok(animations.into_iter().next()) };
-    let index = match which.parse::<usize>() {
-        Ok(i) => (i < animations.len()).then_some(i),
-        Err(_) => animations.iter().position(|a| a.name == which),
-    };
-    match index {
-        Some(i) => Ok(animations.into_iter().nth(i)),
-        None => {
-            let names: Vec<String> =
-                animations.iter().enumerate().map(|(i, a)| format!("{i} ('{}')", a.name)).collect();
-            Err(format!(
-                "no animation {which}: the file has {}",
-                if names.is_empty() { "none".into() } else { names.join(", ") }
-            ))
-        }
     }
 }

@@ -18,6 +18,7 @@ use oxygen::core::{Material, UvTransform};
 use oxygen::prelude::*;
 use support::encode::data_uri;
 use support::golden::{Tolerance, assert_golden, compare};
+use support::texture_paths;
 
 /// A quad's vertex-colour encoding (or none).
 #[derive(Clone, Copy, Debug)]
@@ -498,16 +499,6 @@ fn a_texture_reads_the_uv_set_its_material_names() {
     let c = compare(&two_sets, &one_set, 10);
     assert!(c.differing > c.total / 20, "reading set 1 must change the picture: {} of {}", c.differing, c.total);
     assert_golden("multi_uv_test", &two_sets, Tolerance::default());
-}
-
-/// The texture paths this backend offers (wgpu's GL backend has no binding
-/// arrays, docs/backends.md).
-fn texture_paths() -> Vec<TexturePath> {
-    if std::env::var("WGPU_BACKEND").is_ok_and(|b| b.eq_ignore_ascii_case("gl")) {
-        eprintln!("GL backend: TexturePath::BindingArray does not exist there; testing GroupedArrays only");
-        return vec![TexturePath::GroupedArrays];
-    }
-    vec![TexturePath::BindingArray, TexturePath::GroupedArrays]
 }
 
 /// TextureSettingsTest: every row's "Test" cell must look like its "Sample

@@ -5,7 +5,7 @@ mod support;
 
 use oxygen::core::{Filter, Sampling, TextureImage, Wrap};
 use oxygen::prelude::*;
-use support::{Rgb, assert_region, pixel_of};
+use support::{Rgb, assert_region, pixel_of, texture_paths};
 
 const RED: [u8; 4] = [230, 20, 20, 255];
 const BLUE: [u8; 4] = [20, 40, 230, 255];
@@ -32,17 +32,6 @@ fn sampled_checker_scene(texels: u32, cells: u32, sampling: Sampling) -> Scene {
 /// The world point of the quad at texture coordinate (u, v).
 fn at_uv(u: f32, v: f32) -> Vec3 {
     Vec3::new((u - 0.5) * 2.0, (0.5 - v) * 2.0, 0.0)
-}
-
-/// Both texture paths, except on wgpu's GL backend, which has no binding
-/// arrays (docs/backends.md): there only the grouped arrays, said aloud.
-/// Every other backend the tests run on must offer both.
-fn texture_paths() -> Vec<TexturePath> {
-    if std::env::var("WGPU_BACKEND").is_ok_and(|b| b.eq_ignore_ascii_case("gl")) {
-        eprintln!("GL backend: TexturePath::BindingArray does not exist there; testing GroupedArrays only");
-        return vec![TexturePath::GroupedArrays];
-    }
-    vec![TexturePath::BindingArray, TexturePath::GroupedArrays]
 }
 
 fn render(scene: &Scene, path: TexturePath) -> (image::RgbaImage, ResolvedView) {

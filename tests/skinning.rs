@@ -8,28 +8,7 @@ mod support;
 
 use oxygen::core::{SceneError, Skin, SkinWeights};
 use oxygen::prelude::*;
-use support::golden::compare;
-
-const VIEWPORT: UVec2 = UVec2::new(160, 100);
-
-fn camera(target: Vec3) -> LookAtResolver {
-    LookAtResolver {
-        camera: Camera::perspective(50f32.to_radians(), 0.1, None),
-        eye: target + Vec3::new(0.0, 0.5, 4.0),
-        target,
-        up: Vec3::Y,
-        viewport: VIEWPORT,
-    }
-}
-
-fn with_sun(scene: &mut Scene) {
-    let sun = scene.add_node(
-        "sun",
-        Transform::IDENTITY
-            .with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, Vec3::new(-0.3, -0.5, -0.8).normalize())),
-    );
-    scene.set_light(sun, Some(Light::directional(3.0))).unwrap();
-}
+use support::deform::{assert_same, camera, with_sun};
 
 /// A cube drawn rigidly at `transform`.
 fn rigid(transform: Transform) -> Scene {
@@ -67,11 +46,6 @@ fn render(scene: &Scene, target: Vec3) -> (image::RgbaImage, usize) {
     let report = renderer.render_frame(scene).unwrap();
     let draws = report.views.iter().find(|v| v.view == view).map_or(0, |v| v.draws);
     (support::read_lit_color(&renderer, view), draws)
-}
-
-fn assert_same(a: &image::RgbaImage, b: &image::RgbaImage, what: &str) {
-    let c = compare(a, b, 3);
-    assert!(c.differing <= c.total / 500, "{what}: {} of {} pixels differ (worst {})", c.differing, c.total, c.worst);
 }
 
 #[test]

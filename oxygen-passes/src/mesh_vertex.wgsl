@@ -146,7 +146,7 @@ fn tex_coord(mesh: MeshVarying, material: MaterialRecord, t: UvTransformRecord, 
     let dx = select(d.dx0, d.dx1, set1);
     let dy = select(d.dy0, d.dy1, set1);
     let linear = mat2x2<f32>(vec2<f32>(t.row0.x, t.row1.x), vec2<f32>(t.row0.y, t.row1.y));
-    return TexCoord(linear * uv + vec2<f32>(t.row0.z, t.row1.z), linear * dx, linear * dy);
+    return TexCoord(apply_uv_transform(t, uv), linear * dx, linear * dy);
 }
 
 fn sample_at(slot: u32, at: TexCoord) -> vec4<f32> {

@@ -141,8 +141,7 @@ fn ray_tex_coord(material: MaterialRecord, t: UvTransformRecord, uv0: vec2<f32>,
     if (material.flags & MATERIAL_UV_TRANSFORMS) == 0u {
         return uv0;
     }
-    let uv = vec3<f32>(select(uv0, uv1, t.uv_set == 1u), 1.0);
-    return vec2<f32>(dot(t.row0, uv), dot(t.row1, uv));
+    return apply_uv_transform(t, select(uv0, uv1, t.uv_set == 1u));
 }
 
 // Möller–Trumbore, the twin of oxygen_sceneprep::bvh::ray_triangle;

@@ -31,6 +31,13 @@ struct UvTransformRecord {
     reserved: u32,
 }
 
+// Texture coordinate `uv` through a texture's transform (its affine rows):
+// what the rasterizer and the path-traced reference both apply.
+fn apply_uv_transform(t: UvTransformRecord, uv: vec2<f32>) -> vec2<f32> {
+    let p = vec3<f32>(uv, 1.0);
+    return vec2<f32>(dot(t.row0, p), dot(t.row1, p));
+}
+
 struct MaterialRecord {
     base_color: vec4<f32>,
     emissive: vec3<f32>,

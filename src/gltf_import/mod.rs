@@ -307,6 +307,24 @@ pub struct GltfImport {
 }
 
 impl GltfImport {
+    /// The animation `which` names (an index or a name; `None`: the first),
+    /// or an error that lists the file's animations.
+    pub fn animation(&self, which: Option<&str>) -> Result<&oxygen_core::Animation, String> {
+        let found = match which {
+            None => self.animations.first(),
+            Some(w) => match w.parse::<usize>() {
+                Ok(i) => self.animations.get(i),
+                Err(_) => self.animations.iter().find(|a| a.name == w),
+            },
+        };
+        found.ok_or_else(|| {
+            let names: Vec<String> =
+                self.animations.iter().enumerate().map(|(i, a)| format!("{i} ('{}')", a.name)).collect();
+            let has = if names.is_empty() { "none".to_owned() } else { names.join(", ") };
+            format!("no animation {}: the file has {has}", which.unwrap_or("at all"))
+        })
+    }
+
     /// The imported node the file calls `name`, or `None` if no imported
     /// node has that name.
     ///

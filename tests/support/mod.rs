@@ -4,6 +4,7 @@
 
 #![allow(dead_code)] // Each test binary uses a different subset.
 
+pub mod deform;
 pub mod encode;
 pub mod golden;
 
@@ -144,4 +145,15 @@ pub fn assert_region(
             &bad[..bad.len().min(4)]
         );
     }
+}
+
+/// Both texture paths, except on wgpu's GL backend, which has no binding
+/// arrays (docs/backends.md): there only the grouped arrays, said aloud.
+/// Every other backend the tests run on must offer both.
+pub fn texture_paths() -> Vec<TexturePath> {
+    if std::env::var("WGPU_BACKEND").is_ok_and(|b| b.eq_ignore_ascii_case("gl")) {
+        eprintln!("GL backend: TexturePath::BindingArray does not exist there; testing GroupedArrays only");
+        return vec![TexturePath::GroupedArrays];
+    }
+    vec![TexturePath::BindingArray, TexturePath::GroupedArrays]
 }

@@ -65,20 +65,41 @@ pub struct RenderableEntry {
     /// (joint `i` at `joint_base + i`), `INVALID_SLOT` for a rigid one.
     pub joint_base: u32,
     /// A morphed renderable's morph header among the frame's matrices
-    /// ([`morph_header`]), `INVALID_SLOT` without morph targets.
+    /// (see [`push_morph_header`]), `INVALID_SLOT` without morph targets.
     pub morph_base: u32,
 }
 
-/// The matrices that carry a renderable's morph weights to the vertex
-/// shader: 16 floats each, `[vertex count, target count, w0, w1, ...]`
-/// padded with zeros (the counts are whole numbers below 2^24).
-pub fn morph_header(vertex_count: usize, weights: &[f32], targets: usize) -> Vec<Mat4> {
-    let mut floats = Vec::with_capacity(2 + targets);
-    floats.push(vertex_count as f32);
-    floats.push(targets as f32);
-    floats.extend((0..targets).map(|t| weights.get(t).copied().unwrap_or(0.0)));
-    floats.resize(floats.len().div_ceil(16) * 16, 0.0);
-    floats.chunks_exact(16).map(Mat4::from_cols_slice).collect()
+/// Appends the matrices that carry a renderable's morph weights to the
+/// vertex shader and returns where they start: 16 floats each,
+/// `[vertex count, target count, w0, w1, ...]` padded with zeros (the counts
+/// are whole numbers below 2^24; missing weights are 0). Written in place:
+/// the frame phase allocates nothing per renderable.
+fn push_morph_header(transforms: &mut FrameTransforms, vertex_count: usize, weights: &[f32], targets: usize) -> u32 {
+    let base = transforms.world.len() as u32;
+    let float = |k: usize| match k {
+        0 => vertex_count as f32,
+        1 => targets as f32,
+        k if k - 2 < targets => weights.get(k - 2).copied().unwrap_or(0.0),
+        _ => 0.0,
+    };
+    for m in 0..(2 + targets).div_ceil(16) {
+        let columns: [f32; 16] = std::array::from_fn(|j| float(m * 16 + j));
+        transforms.world.push(Mat4::from_cols_array(&columns));
+        transforms.normal.push(Mat3::ZERO.into());
+    }
+    base
+}
+
+/// Where a skinned renderable's joint matrices went and what they give.
+#[derive(Clone, Copy)]
+struct Joints {
+    /// The first joint matrix among the frame's matrices.
+    base: u32,
+    /// The skinned geometry's bound in this pose.
+    bounds: oxygen_core::DAabb,
+    /// The first joint mirrors: the skinned triangles' winding flips (a
+    /// skin whose joints disagree has no one winding to draw).
+    mirrored: bool,
 }
 
 /// One submesh of a renderable with its material resolved once per frame.
@@ -305,7 +326,7 @@ impl FrameCollection {
             // matrix and corners would round the box inward by up to a
             // unit, and culling must never lose what it bounds.
             let world_aabb = match skinned {
-                Some((_, bounds)) => bounds.to_f32_outward(),
+                Some(joints) => joints.bounds.to_f32_outward(),
                 None => {
                     let local = geometry.morphed_bound(geometry.local_aabb(), &node.morph_weights);
                     oxygen_core::DAabb::transformed(&local, &world64).to_f32_outward()
@@ -317,17 +338,14 @@ impl FrameCollection {
             let morph_base = if geometry.morph_targets().is_empty() {
                 oxygen_bindless::INVALID_SLOT
             } else {
-                let header =
-                    morph_header(geometry.vertices().len(), &node.morph_weights, geometry.morph_targets().len());
-                let transforms = Arc::make_mut(&mut self.transforms);
-                let base = transforms.world.len() as u32;
-                for m in header {
-                    transforms.world.push(m);
-                    transforms.normal.push(Mat3::ZERO.into());
-                }
-                base
+                push_morph_header(
+                    Arc::make_mut(&mut self.transforms),
+                    geometry.vertices().len(),
+                    &node.morph_weights,
+                    geometry.morph_targets().len(),
+                )
             };
-            let joint_base = skinned.map_or(oxygen_bindless::INVALID_SLOT, |(base, _)| base);
+            let joint_base = skinned.map_or(oxygen_bindless::INVALID_SLOT, |joints| joints.base);
             if !world_aabb.is_finite() {
                 warn!(node = %node.name, "skipping renderable with non-finite world bounds");
                 self.skip(key, &node.name, "non-finite world bounds");
@@ -337,15 +355,9 @@ impl FrameCollection {
             let mut per_node =
                 if node.flags.contains(NodeFlags::CASTS_SHADOWS) { PassMask::CASTS_SHADOWS } else { PassMask::empty() };
             // A mirroring world transform flips the triangles' winding; a
-            // skinned mesh's is its joints' (the first one's sign: a skin
-            // whose joints disagree has no one winding to draw).
-            let placing = match skinned {
-                Some((base, _)) => {
-                    Arc::make_mut(&mut self.transforms).world.get(base as usize).copied().unwrap_or(world)
-                }
-                None => world,
-            };
-            if Mat3::from_mat4(placing).determinant() < 0.0 {
+            // skinned mesh's is its joints'.
+            let mirrored = skinned.map_or(Mat3::from_mat4(world).determinant() < 0.0, |joints| joints.mirrored);
+            if mirrored {
                 per_node |= PassMask::MIRRORED;
             }
             for (range, handle) in geometry.submeshes().iter().zip(&renderable.materials) {
@@ -386,16 +398,16 @@ impl FrameCollection {
     }
 
     /// Pushes a skin's joint matrices (world of the joint × inverse bind,
-    /// relative to the render origin) and returns where they start and the
-    /// skinned geometry's bound in this pose. Leaves the matrices as they
-    /// were on failure.
+    /// relative to the render origin) and says where they start, the
+    /// skinned geometry's bound in this pose and whether it is mirrored.
+    /// Leaves the matrices as they were on failure.
     fn collect_joints(
         &mut self,
         skin: &oxygen_core::Skin,
         geometry: &oxygen_core::Geometry,
         morph_weights: &[f32],
         origin: DVec3,
-    ) -> Result<(u32, oxygen_core::DAabb), &'static str> {
+    ) -> Result<Joints, &'static str> {
         if geometry.joint_bounds().len() > skin.joints.len() {
             return Err("a vertex names a joint past the skin's joints");
         }
@@ -424,7 +436,8 @@ impl FrameCollection {
             }
         }
         let bounds = bounds.ok_or("no vertex is weighted to any joint")?;
-        Ok((base as u32, bounds))
+        let mirrored = transforms.world.get(base).is_some_and(|m| Mat3::from_mat4(*m).determinant() < 0.0);
+        Ok(Joints { base: base as u32, bounds, mirrored })
     }
 
     fn skip(&mut self, node: NodeKey, name: &str, reason: &'static str) {
