@@ -268,18 +268,16 @@ impl RenderGraph for ShadowGraph {
 
 /// The graph of a reflection-probe face: depth pre-pass and forward lit
 /// shading straight into the face's layer of the probe cube (no
-/// transparency, no tone map), then that layer's mip chain, which rough
-/// surfaces reflect.
+/// transparency, no tone map). Once all six faces have recorded, the
+/// renderer prefilters the cube's levels across them (GGX, as the
+/// environment's), which rough surfaces reflect.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ProbeFaceGraph;
 
 impl RenderGraph for ProbeFaceGraph {
     async fn record(&self, ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError> {
         MeshPass::depth_pre_pass().run(ctx, rec).await?;
-        MeshPass::forward_lit(ForwardLitConfig::default()).run(ctx, rec).await?;
-        let color = ctx.color_targets("probe face")?;
-        ctx.lighting.rebuild_probe_mips(&ctx.gpu.device, rec.encoder(), &color.hdr, color.hdr_layer);
-        Ok(())
+        MeshPass::forward_lit(ForwardLitConfig::default()).run(ctx, rec).await
     }
 }
 

@@ -36,7 +36,7 @@ fn a_stale_draw_range_is_painted_magenta() {
     let gpu = GpuContext::new_headless(&gpu_options).unwrap();
     let texture_path = TexturePath::best_for(gpu.features, &gpu.device.limits());
     let mut heap = BindlessHeap::new(&gpu.device, &gpu.queue, texture_path);
-    let lighting = LightingResources::new(&gpu.device);
+    let lighting = LightingResources::new(&gpu.device, &gpu.queue);
     let pipelines = Pipelines::new(&gpu.device, &heap, &lighting);
     let demo = multi_view_scene();
     let resolver = main_camera(UVec2::new(96, 64));

@@ -76,7 +76,8 @@ fn a_mirror_sphere_reflects_the_red_box_through_the_probe() {
 }
 
 /// A rough metal sphere reflects the probe from blurrier mip levels: the
-/// red box still shows (the reflection does not fade out with roughness)
+/// red box still shows at roughness 0.4 (a GGX lobe of that roughness
+/// spreads the box's 30° over much of the sphere but keeps its tint)
 /// but its edge spreads. Measured along the sphere's equator: the steepest
 /// step in the box's red tint between neighbouring pixels, smooth against
 /// rough.
@@ -105,7 +106,7 @@ fn a_rough_metal_reflects_a_blurred_image_of_the_probe() {
         (steepest, towards_box)
     };
     let (sharp_step, sharp_box) = render(0.02);
-    let (rough_step, rough_box) = render(0.6);
+    let (rough_step, rough_box) = render(0.4);
     eprintln!(
         "steepest step of the red tint along the equator: smooth {sharp_step}, rough {rough_step}; box reflection smooth {sharp_box:?}, rough {rough_box:?}"
     );
@@ -239,4 +240,40 @@ fn views_sharing_a_probe_render_its_faces_once_per_frame() {
         let p = image.get_pixel(x, y).0;
         assert!(p[0] > 80 && p[0] as i32 > p[1] as i32 + 40, "{view}: no red reflection: {p:?}");
     }
+}
+
+/// The probe's levels are GGX-prefiltered across its faces, as the
+/// environment's are: every level from 1 to the roughest (4 × 4 faces) is
+/// continuous across face seams, and the red box (+X) leaks into the
+/// rough levels of the neighbouring faces (+Y's right-hand border).
+#[test]
+fn probe_levels_are_prefiltered_across_face_seams() {
+    let scene = mirror_scene();
+    let mut renderer = support::gpu_renderer();
+    let mut probe =
+        ReflectionProbe::register(&mut renderer, Vec3::ZERO, 64, (0.05, 50.0), ProbeUpdate::EveryFrame).unwrap();
+    renderer.register_view(ViewDesc::new(camera()).reads(probe.cube()), standard_render_graph).unwrap();
+    probe.before_frame(&mut renderer).unwrap();
+    renderer.render_frame(&scene).unwrap();
+    // 64² faces: 7 levels, prefiltered 1..=4.
+    for level in 1..=4u32 {
+        let side = 64 >> level;
+        let faces: Vec<Vec<Vec3>> =
+            (0..6).map(|face| renderer.read_probe_face(probe.id(), face, level).unwrap().unwrap()).collect();
+        let (seam, inner) = support::cube::seam_and_interior_jumps(&faces, side);
+        eprintln!("probe level {level}: mean jump across seams {seam:.5}, inside faces {inner:.5}");
+        assert!(seam < 2.0 * inner + 1e-3, "level {level}: seam jump {seam} against {inner} inside the faces");
+    }
+    // On the +Y face of the roughest level, the side towards +X (the box)
+    // is redder than the side towards −X.
+    let top = renderer.read_probe_face(probe.id(), 2, 4).unwrap().unwrap();
+    let tint = |d: Vec3| {
+        let (face, x, y) = support::cube::texel_of(d.normalize(), 4);
+        assert_eq!(face, 2);
+        let t = top[(y * 4 + x) as usize];
+        t.x - t.y
+    };
+    let (towards_box, away) = (tint(Vec3::new(0.9, 1.0, 0.0)), tint(Vec3::new(-0.9, 1.0, 0.0)));
+    assert!(towards_box > 2.0 * away.max(0.0) + 1e-3, "+Y face: red tint {towards_box} towards the box, {away} away");
+    assert!(renderer.read_probe_face(probe.id(), 6, 0).unwrap().is_none());
 }

@@ -36,7 +36,7 @@ pub mod view;
 
 pub use animation::{Animation, Channel, ChannelError, ChannelValues, Interpolation};
 pub use camera::{Camera, CameraError, Projection};
-pub use environment::{Environment, EnvironmentError, EquirectImage, PrefilteredEnvironment, Sky};
+pub use environment::{Environment, EnvironmentError, EquirectImage, PrefilteredEnvironment, Sky, split_sum_brdf};
 pub use geometry::{
     Geometry, GeometryError, MAX_MORPH_TARGETS, MorphTarget, SkinWeights, Submesh, Vertex, VertexAttributes,
 };

@@ -71,7 +71,6 @@ struct LightingInputs {
     probe_count: u32,
     environment_levels: u32,
     reserved: u32,
-    environment_sh: array<vec4<f32>, 9>,
 }
 @group(3) @binding(0) var shadow_map_0: texture_depth_2d;
 @group(3) @binding(1) var shadow_map_1: texture_depth_2d;
@@ -86,6 +85,7 @@ struct LightingInputs {
 @group(3) @binding(FIRST_PROBE_BINDING + 3u) var probe_faces_3: texture_2d_array<f32>;
 @group(3) @binding(ENVIRONMENT_BINDING) var environment_faces: texture_2d_array<f32>;
 @group(3) @binding(ENVIRONMENT_SAMPLER_BINDING) var environment_sampler: sampler;
+@group(3) @binding(SPLIT_SUM_BINDING) var split_sum: texture_2d<f32>;
 
 // The probe nearest to `position` (the surface reflects what that probe saw).
 fn nearest_probe(position: vec3<f32>) -> u32 {
@@ -103,7 +103,8 @@ fn nearest_probe(position: vec3<f32>) -> u32 {
 }
 
 // `roughness` picks the mip level: a rough surface reflects a blurrier
-// level (levels are 2 x 2 box-filtered, see probe_mips.rs).
+// level (levels are GGX-prefiltered like the environment's, see
+// cube_filter.rs).
 fn sample_probe_face(probe: u32, uv: vec2<f32>, face: u32, roughness: f32) -> vec3<f32> {
     switch probe {
         case 0u: { return textureSampleLevel(probe_faces_0, probe_sampler, uv, face, probe_lod(textureNumLevels(probe_faces_0), roughness)).rgb; }
@@ -112,8 +113,8 @@ fn sample_probe_face(probe: u32, uv: vec2<f32>, face: u32, roughness: f32) -> ve
         default: { return textureSampleLevel(probe_faces_3, probe_sampler, uv, face, probe_lod(textureNumLevels(probe_faces_3), roughness)).rgb; }
     }
 }
-// Level for `roughness`: perceptual roughness across the chain, leaving the
-// last few (tiny) levels unused so even a rough reflection keeps some shape.
+// Level for `roughness`: level l holds roughness l / (levels - 3), the
+// roughest with 4 x 4 faces; the last two (tiny) levels are not filtered.
 fn probe_lod(levels: u32, roughness: f32) -> f32 {
     let usable = max(f32(levels) - 3.0, 0.0);
     return clamp(roughness, 0.0, 1.0) * usable;
@@ -201,16 +202,34 @@ fn sample_environment(direction: vec3<f32>, roughness: f32) -> vec3<f32> {
     return textureSampleLevel(environment_faces, environment_sampler, at.xy, u32(at.z), lod).rgb;
 }
 
+// Coefficient `i` of the environment's irradiance harmonics: the 3 x 3
+// corner of the layer after the faces (cube_filter.rs).
+fn harmonic(i: u32) -> vec3<f32> {
+    return textureLoad(environment_faces, vec2<u32>(i % 3u, i / 3u), PROBE_FACES, 0).rgb;
+}
+
 // Irradiance from the environment on a surface facing `n` (its nine
-// spherical-harmonic coefficients, cosine-convolved on the CPU).
+// spherical-harmonic coefficients, cosine-convolved).
 fn environment_irradiance(n: vec3<f32>) -> vec3<f32> {
-    let c = shadows.environment_sh;
-    let e = c[0].xyz * 0.282095
-        + c[1].xyz * (0.488603 * n.y) + c[2].xyz * (0.488603 * n.z) + c[3].xyz * (0.488603 * n.x)
-        + c[4].xyz * (1.092548 * n.x * n.y) + c[5].xyz * (1.092548 * n.y * n.z)
-        + c[6].xyz * (0.315392 * (3.0 * n.z * n.z - 1.0)) + c[7].xyz * (1.092548 * n.x * n.z)
-        + c[8].xyz * (0.546274 * (n.x * n.x - n.y * n.y));
+    var c: array<vec3<f32>, 9>;
+    for (var i = 0u; i < 9u; i++) {
+        c[i] = harmonic(i);
+    }
+    let e = c[0] * 0.282095
+        + c[1] * (0.488603 * n.y) + c[2] * (0.488603 * n.z) + c[3] * (0.488603 * n.x)
+        + c[4] * (1.092548 * n.x * n.y) + c[5] * (1.092548 * n.y * n.z)
+        + c[6] * (0.315392 * (3.0 * n.z * n.z - 1.0)) + c[7] * (1.092548 * n.x * n.z)
+        + c[8] * (0.546274 * (n.x * n.x - n.y * n.y));
     return max(e, vec3<f32>(0.0));
+}
+
+// The split-sum scale and bias for F0 (split_sum.rs): texel i of the
+// table is n·v = i / (N - 1), so the sample sits half a texel in.
+fn split_sum_brdf(f0: vec3<f32>, roughness: f32, n_dot_v: f32) -> vec3<f32> {
+    let n = f32(SPLIT_SUM_LUT_SIZE);
+    let uv = (clamp(vec2<f32>(n_dot_v, roughness), vec2<f32>(0.0), vec2<f32>(1.0)) * (n - 1.0) + 0.5) / n;
+    let ab = textureSampleLevel(split_sum, environment_sampler, uv, 0.0).rg;
+    return f0 * ab.x + ab.y;
 }
 
 fn compare_cascade(cascade: u32, uv: vec2<f32>, depth: f32) -> f32 {
@@ -411,16 +430,16 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Der
     }
     // Specular reflection of the probe's surroundings: sharp on smooth
     // surfaces, from blurrier mip levels on rough ones, weighted by the
-    // environment BRDF (strong on metals, a few percent on dielectrics
+    // split-sum BRDF (strong on metals, a few percent on dielectrics
     // except at grazing angles).
     if HAS_PROBES && shadows.probe_count > 0u {
         let reflected = sample_probe(nearest_probe(mesh.world_position), reflect(-v, n), roughness);
         let f0 = mix(vec3<f32>(0.04), albedo, metallic);
-        color += reflected * environment_brdf(f0, roughness, max(dot(n, v), 0.0)) * occlusion;
+        color += reflected * split_sum_brdf(f0, roughness, max(dot(n, v), 0.0)) * occlusion;
     } else if has_environment {
         let reflected = sample_environment(reflect(-v, n), roughness);
         let f0 = mix(vec3<f32>(0.04), albedo, metallic);
-        color += reflected * environment_brdf(f0, roughness, max(dot(n, v), 0.0)) * occlusion;
+        color += reflected * split_sum_brdf(f0, roughness, max(dot(n, v), 0.0)) * occlusion;
     }
     color += material.emissive * material_texture(material.emissive_texture, tex_coord(mesh, material, material.uv_transforms[3], d.uv)).rgb;
     return vec4<f32>(color, base.a);

@@ -27,20 +27,25 @@
 // rewriting it with `partial_cmp` would hide that intent.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+mod cube_filter;
 mod forward_lighting;
+mod half;
 pub mod hiz;
 mod lighting;
 mod lighting_inputs;
 mod mesh_pass;
 mod pipelines;
-mod probe_mips;
 mod reference;
 mod render_context;
 mod render_pass;
 mod shadow_atlas;
+mod split_sum;
 mod tonemap_pass;
 mod visibility;
 
+pub use cube_filter::{
+    CUBE_FILTER_WGSL, EnvironmentQuality, HARMONICS_LAYER, PROBE_FILTER_SAMPLES, prefiltered_levels,
+};
 pub use lighting::LightingResources;
 pub use lighting_inputs::{
     LightingInputs, MAX_CASCADES, MAX_PROBES, MAX_SHADOW_TILES, PROBE_FACE_AXES, PROBE_FACES, probe_view,
@@ -51,7 +56,6 @@ pub use pipelines::{
     AlphaClass, BRDF_WGSL, CompilerGuard, DepthBias, Exposure, PassKind, PipelineFuture, PipelineKey, PipelineVariant,
     Pipelines, ShaderFeatures, TONEMAP_OPERATOR_WGSL, TONEMAP_WGSL, fullscreen_pipeline, shader_source,
 };
-pub use probe_mips::PROBE_MIP_WGSL;
 pub use reference::{ReferencePass, ReferenceSettings, ReferenceTracer, reference_shader_source};
 pub use render_context::{
     CommandRecorder, DrawPath, FrameProgress, LinkedView, LocalShadowsInput, OutputKind, PassError, PrePassEstimate,
@@ -59,5 +63,6 @@ pub use render_context::{
 };
 pub use render_pass::RenderPass;
 pub use shadow_atlas::{SHADOW_ATLAS_FORMAT, array_layer_count};
+pub use split_sum::{SPLIT_SUM_LUT_FORMAT, SPLIT_SUM_LUT_SIZE, SPLIT_SUM_WGSL, split_sum_shader_source};
 pub use tonemap_pass::{TonemapPass, pbr_neutral};
 pub use visibility::{GPU_VISIBILITY_FEATURES, GpuViewRequest, GpuVisibility, cull_shader_source};

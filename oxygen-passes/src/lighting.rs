@@ -1,78 +1,70 @@
 //! The lighting resources every view shares: the layout and placeholders of
 //! bind group 3 (what the forward pass reads from other views), the local
-//! shadow atlas and the probe mip builder. Split from [`crate::Pipelines`]
-//! because they are inputs of the lighting, not pipeline state.
+//! shadow atlas, the split-sum table, the prefiltered environment and the
+//! cube filter that builds it and re-filters probes. Split from
+//! [`crate::Pipelines`] because they are inputs of the lighting, not
+//! pipeline state.
 
+use crate::cube_filter::{CubeFilter, EnvironmentQuality, HARMONICS_LAYER};
 use crate::lighting_inputs::LightingInputResources;
 use crate::{LightingInputs, MAX_CASCADES, MAX_PROBES};
 
-/// Group 3's layout and placeholders, the local shadow atlas, the probe mip
-/// builder.
+/// Group 3's layout and placeholders, the local shadow atlas, the
+/// environment and the cube filter.
 pub struct LightingResources {
     inputs: LightingInputResources,
     shadow_atlas: crate::shadow_atlas::ShadowAtlas,
-    probe_mips: crate::probe_mips::ProbeMipBuilder,
+    cube_filter: CubeFilter,
     environment: Option<EnvironmentTexture>,
 }
 
-/// The prefiltered environment on the GPU, and the group 3 that binds it
-/// for passes without other lighting inputs.
+/// The prefiltered environment on the GPU (faces and levels, the
+/// harmonics in layer 6), and the group 3 that binds it for passes without
+/// other lighting inputs.
 struct EnvironmentTexture {
+    texture: wgpu::Texture,
     view: wgpu::TextureView,
-    levels: u32,
-    sh: [[f32; 4]; 9],
     no_inputs: wgpu::BindGroup,
 }
 
-/// `value` as a half float (round to nearest even; overflow to the largest
-/// finite half, which the HDR target can hold; NaN to 0).
-fn f32_to_f16(value: f32) -> u16 {
-    if !value.is_finite() {
-        return if value.is_nan() {
-            0
-        } else if value > 0.0 {
-            0x7bff
-        } else {
-            0xfbff
-        };
-    }
-    let bits = value.to_bits();
-    let sign = ((bits >> 16) & 0x8000) as u16;
-    let exponent = ((bits >> 23) & 0xff) as i32 - 127 + 15;
-    let mantissa = bits & 0x7f_ffff;
-    if exponent >= 31 {
-        return sign | 0x7bff;
-    }
-    if exponent <= 0 {
-        if exponent < -10 {
-            return sign;
-        }
-        // Subnormal half: shift the implicit one in.
-        let m = (mantissa | 0x80_0000) >> (1 - exponent);
-        let rounded = (m + 0x1000) >> 13;
-        return sign | rounded as u16;
-    }
-    let rounded = ((exponent as u32) << 10 | (mantissa >> 13))
-        + u32::from((mantissa & 0x1fff) > 0x1000 || ((mantissa & 0x1fff) == 0x1000 && (mantissa >> 13) & 1 == 1));
-    if rounded >= 0x7c00 { sign | 0x7bff } else { sign | rounded as u16 }
-}
-
 impl LightingResources {
-    /// Creates the layout, placeholders and builders.
-    pub fn new(device: &wgpu::Device) -> Self {
+    /// Creates the layout, placeholders and builders, and computes the
+    /// split-sum table (submitted on `queue`).
+    pub fn new(device: &wgpu::Device, queue: &wgpu::Queue) -> Self {
         LightingResources {
-            inputs: LightingInputResources::new(device),
+            inputs: LightingInputResources::new(device, queue),
             shadow_atlas: Default::default(),
-            probe_mips: crate::probe_mips::ProbeMipBuilder::new(device),
+            cube_filter: CubeFilter::new(device),
             environment: None,
         }
     }
 
-    /// Uploads a prefiltered environment (`None` removes it): from the next
-    /// recorded pass on, shading takes its diffuse and specular ambient
-    /// light from it (and draws it behind the scene) instead of the
-    /// constant ambient term.
+    /// Lights the scene with `environment` (`None`: the constant ambient
+    /// term), converted and prefiltered on the GPU at `quality` (submitted
+    /// on `queue` before this returns): from the next recorded pass on,
+    /// shading takes its diffuse and specular ambient light from it and
+    /// the clearing pass draws it behind the scene.
     pub fn set_environment(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        environment: Option<&oxygen_core::Environment>,
+        quality: EnvironmentQuality,
+    ) {
+        let Some(environment) = environment else {
+            self.environment = None;
+            return;
+        };
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("environment") });
+        let texture = self.cube_filter.build_environment(device, queue, &mut encoder, environment, quality);
+        queue.submit([encoder.finish()]);
+        self.install_environment(device, texture);
+    }
+
+    /// [`LightingResources::set_environment`] with an environment
+    /// prefiltered on the CPU ([`oxygen_core::Environment::prefilter`],
+    /// the reference the GPU's is tested against): uploaded as it is.
+    pub fn set_prefiltered_environment(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
@@ -82,62 +74,81 @@ impl LightingResources {
             self.environment = None;
             return;
         };
-        let levels = env.levels.len() as u32;
+        // At least 4 wide: the harmonics layer holds a 3 × 3 block.
+        let size = env.size.max(4);
+        let levels = env.levels.len().max(1) as u32;
         let texture = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("environment"),
-            size: wgpu::Extent3d {
-                width: env.size,
-                height: env.size,
-                depth_or_array_layers: crate::array_layer_count(6, true),
-            },
-            mip_level_count: levels,
+            size: wgpu::Extent3d { width: size, height: size, depth_or_array_layers: HARMONICS_LAYER + 1 },
+            mip_level_count: levels.min(u32::BITS - size.leading_zeros()),
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
             format: oxygen_core::ViewTargets::HDR_FORMAT,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::COPY_SRC,
             view_formats: &[],
         });
-        for (level, faces) in env.levels.iter().enumerate() {
-            let side = (env.size >> level).max(1);
+        let write = |level: u32, layer: u32, side: u32, texels: &[glam::Vec3]| {
+            let bytes: Vec<u8> = texels
+                .iter()
+                .flat_map(|t| [t.x, t.y, t.z, 1.0])
+                .flat_map(|v| crate::half::f32_to_f16(v).to_le_bytes())
+                .collect();
+            let rows = (texels.len() as u32).div_ceil(side);
+            // `side` texels per row (the harmonics: three rows of three).
+            queue.write_texture(
+                wgpu::TexelCopyTextureInfo {
+                    texture: &texture,
+                    mip_level: level,
+                    origin: wgpu::Origin3d { x: 0, y: 0, z: layer },
+                    aspect: wgpu::TextureAspect::All,
+                },
+                &bytes,
+                wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(side * 8), rows_per_image: Some(rows) },
+                wgpu::Extent3d { width: (texels.len() as u32).min(side), height: rows, depth_or_array_layers: 1 },
+            );
+        };
+        for (level, faces) in env.levels.iter().enumerate().take(texture.mip_level_count() as usize) {
+            let side = (size >> level).max(1);
             for (face, texels) in faces.iter().enumerate() {
-                let bytes: Vec<u8> = texels
-                    .iter()
-                    .flat_map(|t| [t.x, t.y, t.z, 1.0])
-                    .flat_map(|v| f32_to_f16(v).to_le_bytes())
-                    .collect();
-                queue.write_texture(
-                    wgpu::TexelCopyTextureInfo {
-                        texture: &texture,
-                        mip_level: level as u32,
-                        origin: wgpu::Origin3d { x: 0, y: 0, z: face as u32 },
-                        aspect: wgpu::TextureAspect::All,
-                    },
-                    &bytes,
-                    wgpu::TexelCopyBufferLayout {
-                        offset: 0,
-                        bytes_per_row: Some(side * 8),
-                        rows_per_image: Some(side),
-                    },
-                    wgpu::Extent3d { width: side, height: side, depth_or_array_layers: 1 },
-                );
+                // A face of the wrong size (a hand-made environment) is
+                // skipped rather than written out of bounds.
+                if texels.len() as u64 == u64::from(side) * u64::from(side) {
+                    write(level as u32, face as u32, side, texels);
+                }
             }
         }
+        write(0, HARMONICS_LAYER, 3, &env.irradiance_sh);
+        self.install_environment(device, texture);
+    }
+
+    fn install_environment(&mut self, device: &wgpu::Device, texture: wgpu::Texture) {
         let view = crate::probe_view(&texture);
-        let sh = env.irradiance_sh.map(|c| c.extend(0.0).to_array());
         let mut uniform = <LightingInputs as bytemuck::Zeroable>::zeroed();
-        uniform.environment_levels = levels;
-        uniform.environment_sh = sh;
+        uniform.environment_levels = texture.mip_level_count();
         let inputs = &self.inputs;
         let buffer = crate::lighting_inputs::uniform_buffer(device, &uniform);
         let no_inputs = crate::lighting_inputs::bind_group(
             device,
             &inputs.layout,
-            (&inputs.sampler, &inputs.probe_sampler, &inputs.environment_sampler),
+            inputs.shared(),
             ([&inputs.placeholder_map; MAX_CASCADES], &inputs.placeholder_atlas),
             ([&inputs.placeholder_probe; MAX_PROBES], &view),
             &buffer,
         );
-        self.environment = Some(EnvironmentTexture { view, levels, sh, no_inputs });
+        self.environment = Some(EnvironmentTexture { texture, view, no_inputs });
+    }
+
+    /// The environment's texture as the GPU holds it: faces `0..6` with
+    /// their prefiltered levels, the nine harmonics in the 3 × 3 corner of
+    /// layer 6 (coefficient `i` at `(i % 3, i / 3)`) (for
+    /// tools and tests that read it back).
+    pub fn environment_texture(&self) -> Option<&wgpu::Texture> {
+        self.environment.as_ref().map(|e| &e.texture)
+    }
+
+    /// The split-sum table (`A`, `B` in red and green; see `split_sum.rs`).
+    pub fn split_sum_lut(&self) -> &wgpu::Texture {
+        &self.inputs.split_sum_lut
     }
 
     /// Whether an environment lights the scene ([`LightingResources::set_environment`]).
@@ -170,8 +181,7 @@ impl LightingResources {
         let inputs = &self.inputs;
         let mut uniform = *uniform;
         if let Some(env) = &self.environment {
-            uniform.environment_levels = env.levels;
-            uniform.environment_sh = env.sh;
+            uniform.environment_levels = env.texture.mip_level_count();
         }
         let buffer = crate::lighting_inputs::uniform_buffer(device, &uniform);
         // Unused slots are never sampled (the uniform's counts say so) but must be bound.
@@ -179,11 +189,10 @@ impl LightingResources {
         let shadow_atlas = shadow_atlas.unwrap_or(&inputs.placeholder_atlas);
         let probes = probes.map(|p| p.unwrap_or(&inputs.placeholder_probe));
         let environment = self.environment.as_ref().map_or(&inputs.placeholder_probe, |e| &e.view);
-        let samplers = (&inputs.sampler, &inputs.probe_sampler, &inputs.environment_sampler);
         crate::lighting_inputs::bind_group(
             device,
             &inputs.layout,
-            samplers,
+            inputs.shared(),
             (maps, shadow_atlas),
             (probes, environment),
             &buffer,
@@ -196,28 +205,17 @@ impl LightingResources {
         self.shadow_atlas.ensure(device, resolution, layers)
     }
 
-    /// Rebuilds the mip levels of one layer of a probe texture from its
-    /// level 0 (nothing for a one-level texture).
-    pub fn rebuild_probe_mips(
+    /// Re-filters a probe texture whose faces (level 0) were just
+    /// rendered: levels `1..=levels − 3` become its GGX-prefiltered
+    /// radiance, as the environment's are (`samples` per texel; nothing
+    /// for a texture too small or not renderable).
+    pub fn prefilter_probe(
         &self,
         device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
         texture: &wgpu::Texture,
-        layer: u32,
+        samples: u32,
     ) {
-        self.probe_mips.rebuild(device, encoder, texture, layer);
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn half_floats_round_trip_within_their_precision() {
-        for v in [0.0f32, 1.0, -2.5, 0.1, 2.7, 1e-5, 6.1e-5, 65504.0, 1e6, -1e6] {
-            let back = oxygen_core::gpu::f16_to_f32(super::f32_to_f16(v));
-            let expected = v.clamp(-65504.0, 65504.0);
-            assert!((back - expected).abs() <= expected.abs() * 1e-3 + 1e-7, "{v} -> {back}");
-        }
-        assert_eq!(super::f32_to_f16(f32::NAN), 0);
+        self.cube_filter.prefilter_probe(device, encoder, texture, samples);
     }
 }

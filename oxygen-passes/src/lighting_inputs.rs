@@ -48,9 +48,6 @@ pub struct LightingInputs {
     pub environment_levels: u32,
     /// Zero.
     pub reserved: u32,
-    /// The environment's irradiance as nine spherical-harmonic coefficients
-    /// (`w` unused; see `oxygen_core::PrefilteredEnvironment`).
-    pub environment_sh: [[f32; 4]; 9],
 }
 
 /// Reflection probes the shading pass can choose from.
@@ -60,7 +57,7 @@ pub const MAX_PROBES: usize = 4;
 /// per shadow-casting point light.
 pub const MAX_SHADOW_TILES: usize = 16;
 
-const _: () = assert!(std::mem::size_of::<LightingInputs>() == 1616);
+const _: () = assert!(std::mem::size_of::<LightingInputs>() == 1472);
 const _: () = assert!(MAX_SHADOW_TILES as u32 == oxygen_sceneprep::MAX_SHADOW_TILES);
 // The WGSL twin packs the per-cascade floats into one vec4 each and the
 // per-tile floats four to a vec4 (uniform arrays have a 16-byte stride), and
@@ -71,7 +68,7 @@ const _: () = assert!(MAX_SHADOW_TILES.is_multiple_of(4));
 
 /// The numbers of group 3 that the shading pass's WGSL reads, by their
 /// Rust names: [`wgsl_constants`] emits exactly these.
-fn shared_numbers() -> [(&'static str, u32); 11] {
+fn shared_numbers() -> [(&'static str, u32); 13] {
     [
         ("MAX_CASCADES", MAX_CASCADES as u32),
         ("MAX_SHADOW_TILES", MAX_SHADOW_TILES as u32),
@@ -84,6 +81,8 @@ fn shared_numbers() -> [(&'static str, u32); 11] {
         ("FIRST_PROBE_BINDING", FIRST_PROBE_BINDING),
         ("ENVIRONMENT_BINDING", ENVIRONMENT_BINDING),
         ("ENVIRONMENT_SAMPLER_BINDING", ENVIRONMENT_SAMPLER_BINDING),
+        ("SPLIT_SUM_BINDING", SPLIT_SUM_BINDING),
+        ("SPLIT_SUM_LUT_SIZE", crate::split_sum::SPLIT_SUM_LUT_SIZE),
     ]
 }
 
@@ -103,6 +102,7 @@ const SHADOW_ATLAS_BINDING: u32 = MAX_CASCADES as u32 + 3;
 const FIRST_PROBE_BINDING: u32 = MAX_CASCADES as u32 + 4;
 const ENVIRONMENT_BINDING: u32 = FIRST_PROBE_BINDING + MAX_PROBES as u32;
 const ENVIRONMENT_SAMPLER_BINDING: u32 = ENVIRONMENT_BINDING + 1;
+const SPLIT_SUM_BINDING: u32 = ENVIRONMENT_SAMPLER_BINDING + 1;
 
 /// Layers of a probe texture: +X, −X, +Y, −Y, +Z, −Z.
 pub const PROBE_FACES: usize = 6;
@@ -123,14 +123,33 @@ pub(crate) struct LightingInputResources {
     pub(crate) sampler: wgpu::Sampler,
     pub(crate) probe_sampler: wgpu::Sampler,
     pub(crate) environment_sampler: wgpu::Sampler,
+    pub(crate) split_sum_lut: wgpu::Texture,
+    split_sum_view: wgpu::TextureView,
     pub(crate) no_inputs: wgpu::BindGroup,
     pub(crate) placeholder_map: wgpu::TextureView,
     pub(crate) placeholder_probe: wgpu::TextureView,
     pub(crate) placeholder_atlas: wgpu::TextureView,
 }
 
+/// What every group 3 binds alike: the samplers and the split-sum table.
+pub(crate) struct SharedInputs<'a> {
+    sampler: &'a wgpu::Sampler,
+    probe_sampler: &'a wgpu::Sampler,
+    environment_sampler: &'a wgpu::Sampler,
+    split_sum: &'a wgpu::TextureView,
+}
+
 impl LightingInputResources {
-    pub(crate) fn new(device: &wgpu::Device) -> Self {
+    pub(crate) fn shared(&self) -> SharedInputs<'_> {
+        SharedInputs {
+            sampler: &self.sampler,
+            probe_sampler: &self.probe_sampler,
+            environment_sampler: &self.environment_sampler,
+            split_sum: &self.split_sum_view,
+        }
+    }
+
+    pub(crate) fn new(device: &wgpu::Device, queue: &wgpu::Queue) -> Self {
         let map_entry = |binding| wgpu::BindGroupLayoutEntry {
             binding,
             visibility: wgpu::ShaderStages::FRAGMENT,
@@ -183,6 +202,16 @@ impl LightingInputResources {
             count: None,
         });
         entries.push(wgpu::BindGroupLayoutEntry {
+            binding: SPLIT_SUM_BINDING,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            count: None,
+        });
+        entries.push(wgpu::BindGroupLayoutEntry {
             binding: PROBE_SAMPLER_BINDING,
             visibility: wgpu::ShaderStages::FRAGMENT,
             ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
@@ -228,10 +257,12 @@ impl LightingInputResources {
             view_formats: &[],
         });
         let dummy_view = dummy.create_view(&Default::default());
+        // Trilinear, as the environment's: probes are prefiltered alike.
         let probe_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("probe"),
             mag_filter: wgpu::FilterMode::Linear,
             min_filter: wgpu::FilterMode::Linear,
+            mipmap_filter: wgpu::MipmapFilterMode::Linear,
             ..Default::default()
         });
         // Trilinear: a roughness between two prefiltered levels blends them.
@@ -271,10 +302,18 @@ impl LightingInputResources {
         });
         let placeholder_atlas = crate::shadow_atlas::atlas_view(&placeholder_atlas);
         let uniform = uniform_buffer(device, &LightingInputs::zeroed());
+        let split_sum_lut = crate::split_sum::build_lut(device, queue);
+        let split_sum_view = split_sum_lut.create_view(&Default::default());
+        let shared = SharedInputs {
+            sampler: &sampler,
+            probe_sampler: &probe_sampler,
+            environment_sampler: &environment_sampler,
+            split_sum: &split_sum_view,
+        };
         let no_inputs = bind_group(
             device,
             &layout,
-            (&sampler, &probe_sampler, &environment_sampler),
+            shared,
             ([&dummy_view; MAX_CASCADES], &placeholder_atlas),
             ([&dummy_probe_view; MAX_PROBES], &dummy_probe_view),
             &uniform,
@@ -284,6 +323,8 @@ impl LightingInputResources {
             sampler,
             probe_sampler,
             environment_sampler,
+            split_sum_lut,
+            split_sum_view,
             no_inputs,
             placeholder_map: dummy_view,
             placeholder_probe: dummy_probe_view,
@@ -316,7 +357,7 @@ pub(crate) fn uniform_buffer(device: &wgpu::Device, uniform: &LightingInputs) ->
 pub(crate) fn bind_group(
     device: &wgpu::Device,
     layout: &wgpu::BindGroupLayout,
-    (sampler, probe_sampler, environment_sampler): (&wgpu::Sampler, &wgpu::Sampler, &wgpu::Sampler),
+    shared: SharedInputs<'_>,
     (maps, shadow_atlas): ([&wgpu::TextureView; MAX_CASCADES], &wgpu::TextureView),
     (probes, environment): ([&wgpu::TextureView; MAX_PROBES], &wgpu::TextureView),
     uniform: &wgpu::Buffer,
@@ -328,7 +369,7 @@ pub(crate) fn bind_group(
         .collect();
     entries.push(wgpu::BindGroupEntry {
         binding: COMPARISON_SAMPLER_BINDING,
-        resource: wgpu::BindingResource::Sampler(sampler),
+        resource: wgpu::BindingResource::Sampler(shared.sampler),
     });
     entries.push(wgpu::BindGroupEntry { binding: UNIFORM_BINDING, resource: uniform.as_entire_binding() });
     for (i, probe) in probes.iter().enumerate() {
@@ -343,11 +384,15 @@ pub(crate) fn bind_group(
     });
     entries.push(wgpu::BindGroupEntry {
         binding: PROBE_SAMPLER_BINDING,
-        resource: wgpu::BindingResource::Sampler(probe_sampler),
+        resource: wgpu::BindingResource::Sampler(shared.probe_sampler),
     });
     entries.push(wgpu::BindGroupEntry {
         binding: ENVIRONMENT_SAMPLER_BINDING,
-        resource: wgpu::BindingResource::Sampler(environment_sampler),
+        resource: wgpu::BindingResource::Sampler(shared.environment_sampler),
+    });
+    entries.push(wgpu::BindGroupEntry {
+        binding: SPLIT_SUM_BINDING,
+        resource: wgpu::BindingResource::TextureView(shared.split_sum),
     });
     entries.push(wgpu::BindGroupEntry {
         binding: SHADOW_ATLAS_BINDING,
@@ -380,6 +425,7 @@ mod tests {
             ("FIRST_PROBE_BINDING", FIRST_PROBE_BINDING),
             ("ENVIRONMENT_BINDING", ENVIRONMENT_BINDING),
             ("ENVIRONMENT_SAMPLER_BINDING", ENVIRONMENT_SAMPLER_BINDING),
+            ("SPLIT_SUM_BINDING", SPLIT_SUM_BINDING),
         ] {
             let line = format!("const {name}: u32 = {binding:#x}u;");
             assert!(wgsl.lines().any(|l| l == line), "{line} missing from\n{wgsl}");

@@ -71,13 +71,19 @@ fn the_tonemap_shader_validates() {
     }
 }
 
-/// The probe-mip downsampling shader, as the pipeline builds it.
+/// The cube filter (environment conversion, box mips, GGX prefiltering,
+/// irradiance harmonics) and the split-sum table, as their pipelines build
+/// them.
 #[test]
-fn the_probe_mip_shader_validates() {
-    let source = oxygen_passes::PROBE_MIP_WGSL;
-    let module = validate("probe mip", source, naga::valid::Capabilities::default());
+fn the_cube_filter_and_split_sum_shaders_validate() {
+    let module = validate("cube filter", oxygen_passes::CUBE_FILTER_WGSL, naga::valid::Capabilities::default());
+    for name in ["vs", "fs_downsample", "fs_sky", "fs_equirect", "fs_ggx", "fs_harmonics"] {
+        assert!(module.entry_points.iter().any(|e| e.name == name), "cube filter lacks {name}");
+    }
+    let source = oxygen_passes::split_sum_shader_source();
+    let module = validate("split sum", &source, naga::valid::Capabilities::default());
     for name in ["vs", "fs"] {
-        assert!(module.entry_points.iter().any(|e| e.name == name), "probe mip lacks {name}");
+        assert!(module.entry_points.iter().any(|e| e.name == name), "split sum lacks {name}");
     }
 }
 

@@ -55,7 +55,6 @@ fn lighting_inputs_wgsl_matches_rust_layout() {
         ("probe_count", offset_of!(LightingInputs, probe_count)),
         ("environment_levels", offset_of!(LightingInputs, environment_levels)),
         ("reserved", offset_of!(LightingInputs, reserved)),
-        ("environment_sh", offset_of!(LightingInputs, environment_sh)),
     ];
     assert_eq!(members, expected.map(|(n, o)| (n.to_owned(), o as u32)).to_vec());
 

@@ -26,8 +26,8 @@ use oxygen_core::{
     GpuContext, GpuError, GpuOptions, HdrFormat, NodeKey, ResolvedView, Scene, ViewError, ViewId, ViewTargets,
 };
 use oxygen_passes::{
-    DepthBias, DrawPath, GPU_VISIBILITY_FEATURES, GpuVisibility, LightingResources, Output, PassError, Pipelines,
-    ProbeId, RecordStats,
+    DepthBias, DrawPath, EnvironmentQuality, GPU_VISIBILITY_FEATURES, GpuVisibility, LightingResources, Output,
+    PassError, Pipelines, ProbeId, RecordStats,
 };
 use oxygen_sceneprep::{
     DrawMetadata, PassMask, PrepError, PreparedSceneFrame, RenderOrigin, ScenePrep, ViewPrepOptions, Visibility,
@@ -373,6 +373,8 @@ pub struct Renderer {
     shadows: ShadowViews,
     gpu_views: HashMap<ViewId, ViewGpu>,
     probes: BTreeMap<ProbeId, ProbeResources>,
+    /// GGX samples per texel when a probe's levels are prefiltered.
+    probe_filter_samples: u32,
     draw_path: DrawPath,
     frame_index: u64,
     started: Instant,
@@ -486,7 +488,7 @@ impl Renderer {
         };
         info!(?draw_path, ?texture_path, ?hdr_format, ?default_visibility, "draw, texture and visibility paths chosen");
         let heap = BindlessHeap::new(&gpu.device, &gpu.queue, texture_path);
-        let lighting = LightingResources::new(&gpu.device);
+        let lighting = LightingResources::new(&gpu.device, &gpu.queue);
         let compositor = present::Compositor::new(&gpu.device);
         let gpu_timer = gpu_timer::GpuTimer::new(&gpu.device, &gpu.queue, gpu.features);
         let pipelines = Pipelines::new(&gpu.device, &heap, &lighting);
@@ -509,6 +511,7 @@ impl Renderer {
             shadows,
             gpu_views: HashMap::new(),
             probes: BTreeMap::new(),
+            probe_filter_samples: oxygen_passes::PROBE_FILTER_SAMPLES,
             draw_path,
             frame_index: 0,
             started: Instant::now(),
@@ -659,22 +662,93 @@ impl Renderer {
     }
 
     /// Lights the scene with an environment (image-based lighting;
-    /// `None`: the constant ambient term): prefiltered on the CPU into a
-    /// cube of 64² faces with 7 GGX levels (64 samples a texel) and nine
-    /// irradiance harmonics, uploaded once. Every view's shading then takes
-    /// its ambient diffuse and specular light from it (reflection probes,
-    /// where a view has them, still give the specular part) and draws it
-    /// behind the scene. [`Renderer::set_prefiltered_environment`] takes
-    /// one prefiltered at another size.
+    /// `None`: the constant ambient term), converted to a cube and
+    /// prefiltered on the GPU at the default [`EnvironmentQuality`] (128²
+    /// faces, 64 GGX samples a texel; `set_environment_with_quality` picks
+    /// another). Every view's shading then takes its ambient diffuse light
+    /// (nine irradiance harmonics) and specular light (the GGX levels,
+    /// weighted by the split-sum table) from it — reflection probes, where
+    /// a view has them, still give the specular part — and draws it behind
+    /// the scene.
     pub fn set_environment(&mut self, environment: Option<&oxygen_core::Environment>) {
-        let prefiltered = environment.map(|e| e.prefilter(64, 7, 64));
-        self.set_prefiltered_environment(prefiltered.as_ref());
+        self.set_environment_with_quality(environment, EnvironmentQuality::default());
     }
 
-    /// [`Renderer::set_environment`] with an environment already
-    /// prefiltered ([`oxygen_core::Environment::prefilter`]).
+    /// [`Renderer::set_environment`] at a chosen quality: faces of
+    /// `quality.size` (sharper mirror reflections, more memory and time)
+    /// and `quality.samples` GGX samples per texel (less noise in the
+    /// rough levels, more time); `examples/environment_bench.rs` measures
+    /// both.
+    pub fn set_environment_with_quality(
+        &mut self,
+        environment: Option<&oxygen_core::Environment>,
+        quality: EnvironmentQuality,
+    ) {
+        self.lighting.set_environment(&self.gpu.device, &self.gpu.queue, environment, quality);
+    }
+
+    /// [`Renderer::set_environment`] with an environment prefiltered on
+    /// the CPU ([`oxygen_core::Environment::prefilter`], the slow reference
+    /// the GPU's is tested against), uploaded as it is.
     pub fn set_prefiltered_environment(&mut self, environment: Option<&oxygen_core::PrefilteredEnvironment>) {
-        self.lighting.set_environment(&self.gpu.device, &self.gpu.queue, environment);
+        self.lighting.set_prefiltered_environment(&self.gpu.device, &self.gpu.queue, environment);
+    }
+
+    /// Reads the environment back as the GPU holds it (the prefiltered
+    /// levels and the irradiance harmonics, half floats widened), for tools
+    /// and tests; `None` without one. Waits for the GPU.
+    pub fn read_environment(&self) -> Result<Option<oxygen_core::PrefilteredEnvironment>, RenderError> {
+        let Some(texture) = self.lighting.environment_texture() else { return Ok(None) };
+        let rgb = |image: oxygen_core::gpu::HdrImage| -> Vec<glam::Vec3> {
+            image.pixels.iter().map(|p| glam::Vec3::new(p[0], p[1], p[2])).collect()
+        };
+        let mut levels = Vec::with_capacity(texture.mip_level_count() as usize);
+        for level in 0..texture.mip_level_count() {
+            let mut faces: [Vec<glam::Vec3>; 6] = Default::default();
+            for (face, texels) in faces.iter_mut().enumerate() {
+                *texels = rgb(self.gpu.read_rgba16_float_layer(texture, level, face as u32)?);
+            }
+            levels.push(faces);
+        }
+        let block = rgb(self.gpu.read_rgba16_float_layer(texture, 0, oxygen_passes::HARMONICS_LAYER)?);
+        let side = texture.width() as usize;
+        let irradiance_sh = std::array::from_fn(|i| block[(i / 3) * side + i % 3]);
+        Ok(Some(oxygen_core::PrefilteredEnvironment { size: texture.width(), levels, irradiance_sh }))
+    }
+
+    /// Reads back the split-sum table: `(A, B)` for n·v = i / (N − 1)
+    /// (column i) and roughness j / (N − 1) (row j), N =
+    /// [`oxygen_passes::SPLIT_SUM_LUT_SIZE`], row by row. Waits for the GPU.
+    pub fn read_split_sum_lut(&self) -> Result<Vec<glam::Vec2>, RenderError> {
+        let image = self.gpu.read_rgba16_float(self.lighting.split_sum_lut())?;
+        Ok(image.pixels.iter().map(|p| glam::Vec2::new(p[0], p[1])).collect())
+    }
+
+    /// Reads back level `level` of face `face` of a reflection probe's cube
+    /// (linear radiance, row by row), or `None` for an unknown probe or a
+    /// level or face it does not have. Waits for the GPU.
+    pub fn read_probe_face(
+        &self,
+        probe: ProbeId,
+        face: u32,
+        level: u32,
+    ) -> Result<Option<Vec<glam::Vec3>>, RenderError> {
+        let Some(resources) = self.probes.get(&probe) else { return Ok(None) };
+        let texture = &resources.texture;
+        if face >= oxygen_passes::PROBE_FACES as u32 || level >= texture.mip_level_count() {
+            return Ok(None);
+        }
+        let image = self.gpu.read_rgba16_float_layer(texture, level, face)?;
+        Ok(Some(image.pixels.iter().map(|p| glam::Vec3::new(p[0], p[1], p[2])).collect()))
+    }
+
+    /// GGX samples per texel when a reflection probe's levels are
+    /// prefiltered after its faces render (default
+    /// [`oxygen_passes::PROBE_FILTER_SAMPLES`]; at least 1): fewer cost
+    /// less GPU time per probe update and leave rough reflections noisier
+    /// (`environment_bench` measures both).
+    pub fn set_probe_filter_samples(&mut self, samples: u32) {
+        self.probe_filter_samples = samples.max(1);
     }
 
     /// Turns shadow maps of spot and point lights on (`Some`) or off.

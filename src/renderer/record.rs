@@ -22,12 +22,12 @@ use std::time::{Duration, Instant};
 use oxygen_core::ViewId;
 use oxygen_passes::{
     CommandRecorder, FrameProgress, LinkedView, LocalShadowsInput, OutputSource, PassError, Pipelines, ProbeCubeInput,
-    RecordStats, RenderContext, ShadowMapInput, ViewInputs,
+    ProbeId, RecordStats, RenderContext, ShadowMapInput, ViewInputs,
 };
 use tracing::{Instrument, info_span};
 
 use super::resolve::{FramePlan, FrameView, TargetPlan};
-use super::{RenderError, Renderer, ViewReport};
+use super::{RenderError, Renderer, ViewReport, ViewRole};
 
 /// What one view's recording produced.
 struct Recorded {
@@ -218,6 +218,9 @@ impl Renderer {
 
         let mut buffers = Vec::with_capacity(contexts.len());
         let mut reports = Vec::with_capacity(contexts.len());
+        // Per probe whose faces rendered: how many buffers precede its
+        // prefilter (one past its last face's).
+        let mut probe_filters: BTreeMap<ProbeId, usize> = BTreeMap::new();
         for ((i, _), slot) in contexts.iter().zip(results) {
             let view = &plan.views[*i];
             let recorded = slot.into_inner().unwrap_or_else(|e| e.into_inner());
@@ -225,6 +228,9 @@ impl Renderer {
             let Some(recorded) = recorded else { continue };
             recorded.result.map_err(|source| RenderError::Pass { view: view.id, source })?;
             buffers.push(recorded.buffer);
+            if let ViewRole::ProbeFace { probe, .. } = view.role {
+                probe_filters.insert(probe, buffers.len());
+            }
             reports.push(ViewReport {
                 view: view.id,
                 role: view.role,
@@ -235,6 +241,26 @@ impl Renderer {
                 prep_seconds: frames[*i].prep_seconds() as f64,
                 record_seconds: recorded.busy.as_secs_f64(),
             });
+        }
+        // A probe's levels are prefiltered across its faces, so after all
+        // six have rendered and before any view reads it (link order puts
+        // readers after the faces). Later positions first, so earlier ones
+        // stay valid.
+        let mut filters: Vec<(ProbeId, usize)> = probe_filters.into_iter().collect();
+        filters.sort_by_key(|(_, at)| std::cmp::Reverse(*at));
+        for (probe, at) in filters {
+            let Some(resources) = self.probes.get(&probe) else { continue };
+            let mut encoder = self
+                .gpu
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("probe prefilter") });
+            self.lighting.prefilter_probe(
+                &self.gpu.device,
+                &mut encoder,
+                &resources.texture,
+                self.probe_filter_samples,
+            );
+            buffers.insert(at, encoder.finish());
         }
         // The frame's GPU time, when the last one has been read back.
         let timer = self.gpu_timer.as_ref().filter(|t| t.ready());

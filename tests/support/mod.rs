@@ -4,6 +4,7 @@
 
 #![allow(dead_code)] // Each test binary uses a different subset.
 
+pub mod cube;
 pub mod deform;
 pub mod encode;
 pub mod golden;

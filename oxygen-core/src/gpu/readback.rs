@@ -82,12 +82,29 @@ impl GpuContext {
         if format != wgpu::TextureFormat::Rgba16Float {
             return Err(GpuError::UnsupportedReadbackFormat(format));
         }
-        let bytes = self.read_texels(texture, 8)?;
+        self.read_rgba16_float_layer(texture, 0, 0)
+    }
+
+    /// Reads mip level `level` of array layer `layer` of a 2D
+    /// `Rgba16Float` texture (a probe face, an environment level) as `f32`
+    /// texels. Blocks until the GPU has finished all submitted work.
+    pub fn read_rgba16_float_layer(
+        &self,
+        texture: &wgpu::Texture,
+        level: u32,
+        layer: u32,
+    ) -> Result<HdrImage, GpuError> {
+        let format = texture.format();
+        if format != wgpu::TextureFormat::Rgba16Float {
+            return Err(GpuError::UnsupportedReadbackFormat(format));
+        }
+        let bytes = self.read_texels_at(texture, 8, level, layer)?;
         let pixels = bytes
             .chunks_exact(8)
             .map(|texel| std::array::from_fn(|c| f16_to_f32(u16::from_le_bytes([texel[2 * c], texel[2 * c + 1]]))))
             .collect();
-        Ok(HdrImage { width: texture.width(), height: texture.height(), pixels })
+        let (width, height) = ((texture.width() >> level).max(1), (texture.height() >> level).max(1));
+        Ok(HdrImage { width, height, pixels })
     }
 
     /// Reads a view's HDR target as `f32` texels, whichever
@@ -136,8 +153,19 @@ impl GpuContext {
     /// The bytes of mip level 0 of a 2D texture of `bytes_per_texel`,
     /// tightly packed row by row.
     fn read_texels(&self, texture: &wgpu::Texture, bytes_per_texel: u32) -> Result<Vec<u8>, GpuError> {
+        self.read_texels_at(texture, bytes_per_texel, 0, 0)
+    }
+
+    /// [`GpuContext::read_texels`] of one mip level of one array layer.
+    fn read_texels_at(
+        &self,
+        texture: &wgpu::Texture,
+        bytes_per_texel: u32,
+        level: u32,
+        layer: u32,
+    ) -> Result<Vec<u8>, GpuError> {
         let _span = tracing::info_span!("readback").entered();
-        let (width, height) = (texture.width(), texture.height());
+        let (width, height) = ((texture.width() >> level).max(1), (texture.height() >> level).max(1));
         let unpadded = width * bytes_per_texel;
         // Buffer rows must be 256-byte aligned for texture copies.
         let padded = unpadded.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
@@ -149,7 +177,12 @@ impl GpuContext {
         });
         let mut encoder = self.device.create_command_encoder(&Default::default());
         encoder.copy_texture_to_buffer(
-            texture.as_image_copy(),
+            wgpu::TexelCopyTextureInfo {
+                texture,
+                mip_level: level,
+                origin: wgpu::Origin3d { x: 0, y: 0, z: layer },
+                aspect: wgpu::TextureAspect::All,
+            },
             wgpu::TexelCopyBufferInfo {
                 buffer: &buffer,
                 layout: wgpu::TexelCopyBufferLayout {

@@ -1,0 +1,70 @@
+//! The split-sum environment BRDF as a lookup table: which fraction of the
+//! prefiltered environment a surface reflects, `F0 · A + B`, by `n·v` and
+//! roughness. Computed once per renderer on the GPU (a 32 × 32 draw, 1024
+//! GGX samples per texel) for the lobe the direct lights use, so a surface
+//! lit by its environment and by a light agrees on how shiny it is. The
+//! analytic fit the shader used before (Karis 2014) stays in `brdf.wgsl`
+//! for the path-traced reference; the tests measure the two against the
+//! CPU twin, `oxygen_core::split_sum_brdf`.
+
+/// Side of the table: texel `(i, j)` holds n·v = i / (N − 1), roughness
+/// j / (N − 1); the shader samples it bilinearly between those.
+pub const SPLIT_SUM_LUT_SIZE: u32 = 32;
+
+/// The table's format: A in red, B in green.
+pub const SPLIT_SUM_LUT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+
+/// The table-building shader, without its size constant.
+pub const SPLIT_SUM_WGSL: &str = include_str!("split_sum.wgsl");
+
+/// The shader as compiled: [`SPLIT_SUM_WGSL`] with `LUT_SIZE` declared.
+pub fn split_sum_shader_source() -> String {
+    format!("const LUT_SIZE: u32 = {SPLIT_SUM_LUT_SIZE}u;\n{SPLIT_SUM_WGSL}")
+}
+
+/// Builds the table (submitted on `queue`; ready for any later submission).
+pub(crate) fn build_lut(device: &wgpu::Device, queue: &wgpu::Queue) -> wgpu::Texture {
+    let _span = tracing::info_span!("split_sum_lut", size = SPLIT_SUM_LUT_SIZE).entered();
+    let texture = device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("split-sum BRDF"),
+        size: wgpu::Extent3d { width: SPLIT_SUM_LUT_SIZE, height: SPLIT_SUM_LUT_SIZE, depth_or_array_layers: 1 },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: SPLIT_SUM_LUT_FORMAT,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    });
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: None, entries: &[] });
+    let pipeline = crate::pipelines::fullscreen_pipeline(
+        device,
+        "split-sum BRDF",
+        &layout,
+        &split_sum_shader_source(),
+        ("vs", "fs"),
+        SPLIT_SUM_LUT_FORMAT,
+    );
+    let view = texture.create_view(&Default::default());
+    let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("split-sum BRDF") });
+    {
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("split-sum BRDF"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&pipeline);
+        pass.draw(0..3, 0..1);
+    }
+    queue.submit([encoder.finish()]);
+    texture
+}
