@@ -1,66 +1,145 @@
-//! What prefiltering an environment costs on the CPU, and how far a coarser
-//! prefilter strays from a fine one (the knob behind
-//! `Renderer::set_environment`'s defaults: 64² faces, 7 levels, 64 samples):
+//! What building an environment costs on the GPU against the CPU reference,
+//! how far each [`EnvironmentQuality`] strays from that reference, and what
+//! re-filtering a reflection probe costs per update:
 //!
 //! ```text
-//! cargo run --release --example environment_bench
+//! cargo run --release --example environment_bench [REPEATS]
 //! ```
 //!
-//! The procedural sky for a sun 50° high. For each (face size, samples) the
-//! prefilter's wall time and, against 128² faces with 512 samples, the
-//! largest relative difference of level 3's texels (roughness 0.5 at 7
-//! levels) from the reference's nearest texel in the same direction.
+//! The environment is a 1024 × 512 panorama (a sky gradient, a bright
+//! blob, stripes; see `panorama`). For each (face size, samples):
+//! the GPU's wall time for `Renderer::set_environment_with_quality` (upload,
+//! conversion, box mips, GGX levels, harmonics, waiting for the GPU; median
+//! of REPEATS), the CPU reference's time at the same size and levels with
+//! the same samples, and the GPU's error: per level, the worst face's
+//! relative RMS difference from the CPU prefilter at 512 samples. Then the
+//! probe filter: a 128² probe's levels re-filtered with 8 to 64 samples a
+//! texel (median wall time, an empty submission's subtracted).
 
 use std::time::Instant;
 
-use oxygen::core::environment::cube_texel_direction;
-use oxygen::core::{Environment, PrefilteredEnvironment};
+use oxygen::core::{Environment, EquirectImage, PrefilteredEnvironment};
+use oxygen::passes::{EnvironmentQuality, prefiltered_levels};
 use oxygen::prelude::*;
 
-/// Level `level` of `p` looked up along `dir` (nearest texel).
-fn lookup(p: &PrefilteredEnvironment, level: usize, dir: Vec3) -> Vec3 {
-    let side = (p.size >> level).max(1);
-    let mut best = (f32::MIN, Vec3::ZERO);
-    for face in 0..6 {
-        for y in 0..side {
-            for x in 0..side {
-                let d = cube_texel_direction(face, x, y, side);
-                let c = d.dot(dir);
-                if c > best.0 {
-                    best = (c, p.levels[level][face][(y * side + x) as usize]);
-                }
-            }
-        }
-    }
-    best.1
+/// A smooth bright blob up and to the right, a sky gradient, stripes in
+/// longitude (the environment of `tests/environment.rs`, at 1024 × 512).
+/// Smooth enough for the CPU reference, which point-samples the image, to
+/// converge; a tiny bright sun would not (512 point samples a texel catch it
+/// or miss it), while the GPU's filtered samples keep its energy.
+fn panorama() -> Environment {
+    let (width, height) = (1024u32, 512u32);
+    let texels = (0..width * height)
+        .map(|i| {
+            let (x, y) = (i % width, i / width);
+            let u = (x as f32 + 0.5) / width as f32;
+            let v = (y as f32 + 0.5) / height as f32;
+            let sky = Vec3::new(0.2, 0.3, 0.6).lerp(Vec3::new(0.05, 0.04, 0.03), v);
+            let stripe = if (u * 16.0) as u32 % 2 == 0 { 0.05 } else { 0.0 };
+            let (du, dv) = (u - 0.75, v - 0.25);
+            let blob = (-(du * du + dv * dv) / 0.004).exp() * 6.0;
+            sky + Vec3::splat(stripe) + Vec3::new(1.0, 0.8, 0.5) * blob
+        })
+        .collect();
+    Environment::Image(EquirectImage::new(width, height, texels).expect("a consistent panorama"))
+}
+
+fn relative_rms(got: &[Vec3], reference: &[Vec3]) -> f32 {
+    let error: f32 = got.iter().zip(reference).map(|(a, b)| (*a - *b).length_squared()).sum();
+    let energy: f32 = reference.iter().map(|b| b.length_squared()).sum();
+    (error / energy.max(1e-12)).sqrt()
+}
+
+fn worst_per_level(gpu: &PrefilteredEnvironment, cpu: &PrefilteredEnvironment) -> Vec<f32> {
+    gpu.levels
+        .iter()
+        .zip(&cpu.levels)
+        .map(|(g, c)| (0..6).map(|face| relative_rms(&g[face], &c[face])).fold(0.0, f32::max))
+        .collect()
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn wait(renderer: &Renderer) {
+    renderer.gpu().device.poll(wgpu::PollType::wait_indefinitely()).expect("the device answers");
 }
 
 fn main() {
-    let sky = Environment::sky_for_sun(Vec3::new(0.3, -0.77, -0.56).normalize());
-    let started = Instant::now();
-    let reference = sky.prefilter(128, 7, 512);
-    println!("reference 128² × 512 samples: {:.1} ms", started.elapsed().as_secs_f64() * 1e3);
-    for (size, samples) in [(32, 32), (32, 64), (64, 32), (64, 64), (64, 128), (128, 64)] {
-        let levels = 7;
-        let started = Instant::now();
-        let p = sky.prefilter(size, levels, samples);
-        let ms = started.elapsed().as_secs_f64() * 1e3;
-        // Level 3 of 7 (roughness 0.5 in both), at the centres of its own
-        // texels: the reference (twice as fine or more) looked up there.
-        let side = (size >> 3).max(1);
-        let mut worst = 0.0f32;
-        for face in 0..6 {
-            for y in 0..side {
-                for x in 0..side {
-                    let d = cube_texel_direction(face, x, y, side);
-                    let (a, b) = (p.levels[3][face][(y * side + x) as usize], lookup(&reference, 3, d));
-                    worst = worst.max(((a - b).abs() / b.max(Vec3::splat(1e-3))).max_element());
-                }
-            }
-        }
-        println!(
-            "{size:>3}² × {samples:>3} samples: {ms:8.1} ms, level 3 texels within {:.1} % of the reference",
-            worst * 100.0
+    let repeats: usize = std::env::args().nth(1).and_then(|a| a.parse().ok()).unwrap_or(5).max(1);
+    let environment = panorama();
+    let mut renderer = Renderer::new_headless().expect("a GPU adapter");
+    println!("adapter: {}", renderer.gpu().adapter_info.name);
+    println!("size × samples | GPU ms | CPU ms (same samples) | CPU/GPU | worst relative RMS per level vs CPU × 512");
+    for (size, samples) in [(64, 16), (64, 32), (64, 64), (128, 32), (128, 64), (128, 128), (256, 64)] {
+        let quality = EnvironmentQuality { size, samples };
+        // Warm-up: pipelines exist, the panorama's first upload is done.
+        renderer.set_environment_with_quality(Some(&environment), quality);
+        wait(&renderer);
+        let gpu_ms = median(
+            (0..repeats)
+                .map(|_| {
+                    let started = Instant::now();
+                    renderer.set_environment_with_quality(Some(&environment), quality);
+                    wait(&renderer);
+                    started.elapsed().as_secs_f64() * 1e3
+                })
+                .collect(),
         );
+        let gpu = renderer.read_environment().expect("readback").expect("an environment");
+        let levels = prefiltered_levels(size);
+        let started = Instant::now();
+        let _ = environment.prefilter(size, levels, samples);
+        let cpu_ms = started.elapsed().as_secs_f64() * 1e3;
+        let reference = environment.prefilter(size, levels, 512);
+        let errors: Vec<String> =
+            worst_per_level(&gpu, &reference).iter().map(|e| format!("{:.1}%", e * 100.0)).collect();
+        println!(
+            "{size:>4}² × {samples:>3} | {gpu_ms:7.2} | {cpu_ms:9.1} | {:7.1}× | {}",
+            cpu_ms / gpu_ms,
+            errors.join(" ")
+        );
+    }
+
+    // The probe filter alone, on a probe-shaped texture.
+    let size = 128u32;
+    let device = &renderer.gpu().device;
+    let probe = device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("bench probe"),
+        size: wgpu::Extent3d {
+            width: size,
+            height: size,
+            depth_or_array_layers: oxygen::passes::array_layer_count(6, true),
+        },
+        mip_level_count: u32::BITS - size.leading_zeros(),
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: oxygen::core::ViewTargets::HDR_FORMAT,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::RENDER_ATTACHMENT,
+        view_formats: &[],
+    });
+    let time = |samples: Option<u32>| {
+        median(
+            (0..repeats.max(3) * 4)
+                .map(|_| {
+                    let mut encoder = device.create_command_encoder(&Default::default());
+                    if let Some(samples) = samples {
+                        renderer.lighting().prefilter_probe(device, &mut encoder, &probe, samples);
+                    }
+                    let started = Instant::now();
+                    renderer.gpu().queue.submit([encoder.finish()]);
+                    wait(&renderer);
+                    started.elapsed().as_secs_f64() * 1e3
+                })
+                .collect(),
+        )
+    };
+    let empty = time(None);
+    println!("probe {size}² re-filter (levels 1..=5), empty submission {empty:.3} ms subtracted:");
+    for samples in [8, 16, 32, 64] {
+        let _ = time(Some(samples));
+        println!("  {samples:>2} samples: {:.3} ms", time(Some(samples)) - empty);
     }
 }

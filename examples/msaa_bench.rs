@@ -14,6 +14,13 @@
 //! error each setting leaves is measured by `tests/msaa.rs`. BOXES 0 draws
 //! the ground alone: what is left is the cost of the multisampled targets
 //! (clear, store, resolve) and of shading one full-screen surface.
+//!
+//! `MSAA_BENCH_GRAPH` takes the frame apart to find where the samples cost:
+//! `full` (the standard graph, default), `no-pre-pass` (shading writes
+//! depth itself), `pre-pass` (the depth pre-pass alone), `unlit` (pre-pass,
+//! then shading that clears and draws nothing: the colour target's clear,
+//! store and resolve alone; `MSAA_BENCH_REPEAT=N` records that pass N
+//! times, which tells a per-pass cost from a per-frame one).
 
 use std::time::Instant;
 
@@ -47,7 +54,32 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for msaa in [Msaa::Off, Msaa::X2, Msaa::X4] {
         let mut renderer = Renderer::new_headless()?;
         let samples = renderer.msaa_samples(msaa);
-        renderer.register_view(ViewDesc::new(camera).with_msaa(msaa), standard_render_graph)?;
+        let desc = ViewDesc::new(camera).with_msaa(msaa);
+        // `unlit` repeats its empty shading pass this many times: the cost
+        // of one more clear, store and resolve of the colour target.
+        let repeat: usize = std::env::var("MSAA_BENCH_REPEAT").ok().and_then(|r| r.parse().ok()).unwrap_or(1);
+        match std::env::var("MSAA_BENCH_GRAPH").as_deref().unwrap_or("full") {
+            "no-pre-pass" => renderer.register_view(desc, StandardGraph::default().with_pre_pass(PrePass::Off))?,
+            "pre-pass" => {
+                renderer.register_view(desc, async |ctx: &RenderContext<'_>, rec: &mut CommandRecorder| {
+                    MeshPass::depth_pre_pass().run(ctx, rec).await
+                })?
+            }
+            "unlit" => {
+                renderer.register_view(desc, async move |ctx: &RenderContext<'_>, rec: &mut CommandRecorder| {
+                    MeshPass::depth_pre_pass().run(ctx, rec).await?;
+                    let nothing = oxygen::sceneprep::PassMask::empty();
+                    for _ in 0..repeat {
+                        MeshPass::forward_lit(ForwardLitConfig::default())
+                            .with_masks(nothing, nothing)
+                            .run(ctx, rec)
+                            .await?;
+                    }
+                    Ok(())
+                })?
+            }
+            _ => renderer.register_view(desc, standard_render_graph)?,
+        };
         let (mut wall, mut gpu) = (Vec::new(), Vec::new());
         for i in 0..frames + 3 {
             let start = Instant::now();

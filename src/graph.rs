@@ -199,8 +199,15 @@ impl RenderGraph for StandardGraph {
         if !ctx.hdr_read_after_shading() {
             return MeshPass::forward_lit(lit).tone_mapped(exposure).run(ctx, rec).await;
         }
-        MeshPass::forward_lit(lit).run(ctx, rec).await?;
-        MeshPass::transparent().run(ctx, rec).await?;
+        let mut transparent = MeshPass::transparent();
+        if transparent.has_draws(ctx) {
+            MeshPass::forward_lit(lit).run(ctx, rec).await?;
+            transparent.run(ctx, rec).await?;
+        } else {
+            // Shading is the last colour pass: a multisampled view keeps
+            // only the resolve.
+            MeshPass::forward_lit(lit).discarding_samples().run(ctx, rec).await?;
+        }
         TonemapPass::new(exposure).run(ctx, rec).await
     }
 

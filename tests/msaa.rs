@@ -152,6 +152,8 @@ fn every_pass_and_variant_renders_multisampled() {
         let view = renderer.register_view(ViewDesc::new(resolver).with_msaa(msaa), graph).unwrap();
         let report = renderer.render_frame(&scene).unwrap();
         assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+        // Pre-pass, shading, transparent (the blended quads), tone map.
+        assert_eq!(report.views[0].recorded.render_passes, 4, "{msaa:?}");
         let samples = renderer.msaa_samples(msaa);
         (support::read_lit_color(&renderer, view), samples)
     };
@@ -162,6 +164,25 @@ fn every_pass_and_variant_renders_multisampled() {
     eprintln!("4× against 1×: {} of {} pixels differ by more than 24 levels (edges)", c.differing, c.total);
     assert!(c.differing > 0, "MSAA must change edge pixels");
     assert!(c.differing < c.total / 12, "only edges may differ: {} of {}", c.differing, c.total);
+    // Away from edges (pixels whose neighbours in the plain picture are
+    // within the tolerance) the two agree: a pass that went missing or
+    // drew over lost samples (the blended quads, a fraction of the
+    // picture) would show there.
+    let (w, h) = plain.dimensions();
+    let channel = |image: &image::RgbaImage, x: u32, y: u32| image.get_pixel(x, y).0;
+    let far = |a: [u8; 4], b: [u8; 4]| a.iter().zip(b).any(|(p, q)| p.abs_diff(q) > 24);
+    let mut interior_differing = 0;
+    for y in 1..h - 1 {
+        for x in 1..w - 1 {
+            let here = channel(&plain, x, y);
+            let edge = (y - 1..=y + 1).any(|ny| (x - 1..=x + 1).any(|nx| far(channel(&plain, nx, ny), here)));
+            if !edge && far(channel(&smooth, x, y), here) {
+                interior_differing += 1;
+            }
+        }
+    }
+    eprintln!("away from edges: {interior_differing} pixels differ");
+    assert!(interior_differing < c.total / 400, "{interior_differing} pixels differ away from edges");
 }
 
 #[test]

@@ -135,6 +135,9 @@ pub struct MeshPass {
     /// Pipeline statistics (e.g. fragment shader invocations) written into
     /// this query of the set, for benchmarks.
     statistics: Option<(wgpu::QuerySet, u32)>,
+    /// With MSAA: whether the multisampled colour is stored after the
+    /// resolve (for a later pass that loads it).
+    keep_samples: bool,
 }
 
 impl MeshPass {
@@ -153,6 +156,7 @@ impl MeshPass {
             depth_bias: DepthBias::NONE,
             lighting: None,
             statistics: None,
+            keep_samples: true,
         }
     }
 
@@ -187,6 +191,7 @@ impl MeshPass {
             depth_bias: DepthBias::NONE,
             lighting: Some(config),
             statistics: None,
+            keep_samples: true,
         }
     }
 
@@ -207,7 +212,23 @@ impl MeshPass {
             depth_bias: DepthBias::NONE,
             lighting: None,
             statistics: None,
+            keep_samples: true,
         }
+    }
+
+    /// The same pass, on a multisampled view, dropping the multisampled
+    /// colour once it is resolved into the view's HDR target: for the last
+    /// pass that draws colour (no later pass may load the samples). Saves
+    /// storing every sample, which on an H100 costs about as much as the
+    /// resolve itself (`msaa_bench`, docs/performance.md).
+    pub fn discarding_samples(self) -> Self {
+        MeshPass { keep_samples: false, ..self }
+    }
+
+    /// Whether the pass has anything to draw this frame (the transparent
+    /// pass skips an empty frame; a graph may skip work after it).
+    pub fn has_draws(&self, ctx: &RenderContext<'_>) -> bool {
+        self.partitions(ctx).next().is_some()
     }
 
     /// The same pass drawing the partitions whose mask has any bit of
@@ -379,11 +400,13 @@ impl MeshPass {
             // resolves it into the view's HDR target at its end (every
             // colour pass: a later one loads the samples, not the resolve).
             let msaa = ctx.targets.msaa.as_ref();
+            let store =
+                if msaa.is_some() && !self.keep_samples { wgpu::StoreOp::Discard } else { wgpu::StoreOp::Store };
             let color_attachment = color.map(|(view, ops)| wgpu::RenderPassColorAttachment {
                 view: msaa.map_or(view, |m| &m.color_view),
                 depth_slice: None,
                 resolve_target: msaa.map(|_| view),
-                ops: wgpu::Operations { load: ops.load(), store: wgpu::StoreOp::Store },
+                ops: wgpu::Operations { load: ops.load(), store },
             });
             let depth_load = if self.clear_depth { wgpu::LoadOp::Clear(0.0) } else { wgpu::LoadOp::Load };
             let mut pass = rec.encoder().begin_render_pass(&wgpu::RenderPassDescriptor {
