@@ -189,18 +189,20 @@ fn fs_ggx(v: Varying) -> @location(0) vec4<f32> {
 @fragment
 fn fs_harmonics(v: Varying) -> @location(0) vec4<f32> {
     let index = u32(v.position.x) + 3u * u32(v.position.y);
-    let level = params.harmonics_level;
-    let side = textureDimensions(source, level).x;
+    // Signed level and coordinates: GLSL's textureSize and texelFetch take
+    // ints (naga passes a u32 through and GL refuses the shader).
+    let level = i32(params.harmonics_level);
+    let side = i32(textureDimensions(source, level).x);
     var sum = vec3<f32>(0.0);
-    for (var face = 0u; face < 6u; face++) {
-        for (var y = 0u; y < side; y++) {
-            for (var x = 0u; x < side; x++) {
+    for (var face = 0; face < 6; face++) {
+        for (var y = 0; y < side; y++) {
+            for (var x = 0; x < side; x++) {
                 let uv = (vec2<f32>(f32(x), f32(y)) + 0.5) / f32(side);
-                let p = face_point(face, uv);
+                let p = face_point(u32(face), uv);
                 let d2 = dot(p, p);
                 let solid_angle = (2.0 / f32(side)) * (2.0 / f32(side)) / (d2 * sqrt(d2));
                 let n = p / sqrt(d2);
-                let radiance = textureLoad(source, vec2<u32>(x, y), face, level).rgb;
+                let radiance = textureLoad(source, vec2<i32>(x, y), face, level).rgb;
                 sum += radiance * (sh_basis(index, n) * solid_angle);
             }
         }

@@ -85,7 +85,8 @@ struct LightingInputs {
 @group(3) @binding(FIRST_PROBE_BINDING + 3u) var probe_faces_3: texture_2d_array<f32>;
 @group(3) @binding(ENVIRONMENT_BINDING) var environment_faces: texture_2d_array<f32>;
 @group(3) @binding(ENVIRONMENT_SAMPLER_BINDING) var environment_sampler: sampler;
-@group(3) @binding(SPLIT_SUM_BINDING) var split_sum: texture_2d<f32>;
+// The split-sum table's half floats, two texels (RGBA16F) per vec4<u32>.
+@group(3) @binding(SPLIT_SUM_BINDING) var<uniform> split_sum: array<vec4<u32>, SPLIT_SUM_LUT_SIZE * SPLIT_SUM_LUT_SIZE / 2u>;
 
 // The probe nearest to `position` (the surface reflects what that probe saw).
 fn nearest_probe(position: vec3<f32>) -> u32 {
@@ -205,7 +206,7 @@ fn sample_environment(direction: vec3<f32>, roughness: f32) -> vec3<f32> {
 // Coefficient `i` of the environment's irradiance harmonics: the 3 x 3
 // corner of the layer after the faces (cube_filter.rs).
 fn harmonic(i: u32) -> vec3<f32> {
-    return textureLoad(environment_faces, vec2<u32>(i % 3u, i / 3u), PROBE_FACES, 0).rgb;
+    return textureLoad(environment_faces, vec2<i32>(i32(i % 3u), i32(i / 3u)), i32(PROBE_FACES), 0).rgb;
 }
 
 // Irradiance from the environment on a surface facing `n` (its nine
@@ -223,12 +224,36 @@ fn environment_irradiance(n: vec3<f32>) -> vec3<f32> {
     return max(e, vec3<f32>(0.0));
 }
 
-// The split-sum scale and bias for F0 (split_sum.rs): texel i of the
-// table is n·v = i / (N - 1), so the sample sits half a texel in.
+// A non-negative finite half float's value, decoded by hand:
+// unpack2x16float needs a capability some adapters lack.
+fn half_to_f32(bits: u32) -> f32 {
+    let exponent = (bits >> 10u) & 0x1fu;
+    let mantissa = bits & 0x3ffu;
+    if exponent == 0u {
+        return f32(mantissa) * 5.9604645e-8;
+    }
+    return bitcast<f32>(((exponent + 112u) << 23u) | (mantissa << 13u));
+}
+
+// Texel (x, y) of the split-sum table: (A, B), red in the low half of the
+// texel's first word.
+fn split_sum_texel(x: u32, y: u32) -> vec2<f32> {
+    let t = y * SPLIT_SUM_LUT_SIZE + x;
+    let words = split_sum[t / 2u];
+    let rg = select(words.x, words.z, (t & 1u) == 1u);
+    return vec2<f32>(half_to_f32(rg & 0xffffu), half_to_f32(rg >> 16u));
+}
+
+// The split-sum scale and bias for F0 (split_sum.rs), interpolated
+// bilinearly: texel i of the table is n·v (or roughness) i / (N - 1).
 fn split_sum_brdf(f0: vec3<f32>, roughness: f32, n_dot_v: f32) -> vec3<f32> {
-    let n = f32(SPLIT_SUM_LUT_SIZE);
-    let uv = (clamp(vec2<f32>(n_dot_v, roughness), vec2<f32>(0.0), vec2<f32>(1.0)) * (n - 1.0) + 0.5) / n;
-    let ab = textureSampleLevel(split_sum, environment_sampler, uv, 0.0).rg;
+    let last = f32(SPLIT_SUM_LUT_SIZE - 1u);
+    let p = clamp(vec2<f32>(n_dot_v, roughness), vec2<f32>(0.0), vec2<f32>(1.0)) * last;
+    let i = min(vec2<u32>(floor(p)), vec2<u32>(SPLIT_SUM_LUT_SIZE - 2u));
+    let f = p - vec2<f32>(i);
+    let top = mix(split_sum_texel(i.x, i.y), split_sum_texel(i.x + 1u, i.y), f.x);
+    let bottom = mix(split_sum_texel(i.x, i.y + 1u), split_sum_texel(i.x + 1u, i.y + 1u), f.x);
+    let ab = mix(top, bottom, f.y);
     return f0 * ab.x + ab.y;
 }
 

@@ -124,7 +124,7 @@ pub(crate) struct LightingInputResources {
     pub(crate) probe_sampler: wgpu::Sampler,
     pub(crate) environment_sampler: wgpu::Sampler,
     pub(crate) split_sum_lut: wgpu::Texture,
-    split_sum_view: wgpu::TextureView,
+    pub(crate) split_sum_buffer: wgpu::Buffer,
     pub(crate) no_inputs: wgpu::BindGroup,
     pub(crate) placeholder_map: wgpu::TextureView,
     pub(crate) placeholder_probe: wgpu::TextureView,
@@ -136,7 +136,7 @@ pub(crate) struct SharedInputs<'a> {
     sampler: &'a wgpu::Sampler,
     probe_sampler: &'a wgpu::Sampler,
     environment_sampler: &'a wgpu::Sampler,
-    split_sum: &'a wgpu::TextureView,
+    split_sum: &'a wgpu::Buffer,
 }
 
 impl LightingInputResources {
@@ -145,7 +145,7 @@ impl LightingInputResources {
             sampler: &self.sampler,
             probe_sampler: &self.probe_sampler,
             environment_sampler: &self.environment_sampler,
-            split_sum: &self.split_sum_view,
+            split_sum: &self.split_sum_buffer,
         }
     }
 
@@ -204,10 +204,10 @@ impl LightingInputResources {
         entries.push(wgpu::BindGroupLayoutEntry {
             binding: SPLIT_SUM_BINDING,
             visibility: wgpu::ShaderStages::FRAGMENT,
-            ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                view_dimension: wgpu::TextureViewDimension::D2,
-                multisampled: false,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: wgpu::BufferSize::new(crate::split_sum::SPLIT_SUM_LUT_BYTES),
             },
             count: None,
         });
@@ -302,13 +302,12 @@ impl LightingInputResources {
         });
         let placeholder_atlas = crate::shadow_atlas::atlas_view(&placeholder_atlas);
         let uniform = uniform_buffer(device, &LightingInputs::zeroed());
-        let split_sum_lut = crate::split_sum::build_lut(device, queue);
-        let split_sum_view = split_sum_lut.create_view(&Default::default());
+        let (split_sum_lut, split_sum_buffer) = crate::split_sum::build_lut(device, queue);
         let shared = SharedInputs {
             sampler: &sampler,
             probe_sampler: &probe_sampler,
             environment_sampler: &environment_sampler,
-            split_sum: &split_sum_view,
+            split_sum: &split_sum_buffer,
         };
         let no_inputs = bind_group(
             device,
@@ -324,7 +323,7 @@ impl LightingInputResources {
             probe_sampler,
             environment_sampler,
             split_sum_lut,
-            split_sum_view,
+            split_sum_buffer,
             no_inputs,
             placeholder_map: dummy_view,
             placeholder_probe: dummy_probe_view,
@@ -390,10 +389,7 @@ pub(crate) fn bind_group(
         binding: ENVIRONMENT_SAMPLER_BINDING,
         resource: wgpu::BindingResource::Sampler(shared.environment_sampler),
     });
-    entries.push(wgpu::BindGroupEntry {
-        binding: SPLIT_SUM_BINDING,
-        resource: wgpu::BindingResource::TextureView(shared.split_sum),
-    });
+    entries.push(wgpu::BindGroupEntry { binding: SPLIT_SUM_BINDING, resource: shared.split_sum.as_entire_binding() });
     entries.push(wgpu::BindGroupEntry {
         binding: SHADOW_ATLAS_BINDING,
         resource: wgpu::BindingResource::TextureView(shadow_atlas),

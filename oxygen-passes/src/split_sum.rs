@@ -2,7 +2,12 @@
 //! prefiltered environment a surface reflects, `F0 · A + B`, by `n·v` and
 //! roughness. Computed once per renderer on the GPU (a 32 × 32 draw, 1024
 //! GGX samples per texel) for the lobe the direct lights use, so a surface
-//! lit by its environment and by a light agrees on how shiny it is. The
+//! lit by its environment and by a light agrees on how shiny it is.
+//!
+//! Shaders read it from a uniform buffer (the texture's half floats copied
+//! as they are, two texels per `vec4<u32>`) with their own bilinear
+//! interpolation, not as a texture: GL allows 16 sampled textures per
+//! stage and the shading pass already binds 16. The
 //! analytic fit the shader used before (Karis 2014) stays in `brdf.wgsl`
 //! for the path-traced reference; the tests measure the two against the
 //! CPU twin, `oxygen_core::split_sum_brdf`.
@@ -22,8 +27,17 @@ pub fn split_sum_shader_source() -> String {
     format!("const LUT_SIZE: u32 = {SPLIT_SUM_LUT_SIZE}u;\n{SPLIT_SUM_WGSL}")
 }
 
-/// Builds the table (submitted on `queue`; ready for any later submission).
-pub(crate) fn build_lut(device: &wgpu::Device, queue: &wgpu::Queue) -> wgpu::Texture {
+/// Bytes of the table: N² texels of four half floats.
+pub(crate) const SPLIT_SUM_LUT_BYTES: u64 = (SPLIT_SUM_LUT_SIZE * SPLIT_SUM_LUT_SIZE * 8) as u64;
+
+// One row is 256 bytes, the copy alignment: the texture copies into the
+// buffer tightly packed.
+const _: () = assert!(SPLIT_SUM_LUT_SIZE * 8 == wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+
+/// Builds the table (submitted on `queue`; ready for any later
+/// submission): the texture (for readback) and the uniform buffer the
+/// shaders read.
+pub(crate) fn build_lut(device: &wgpu::Device, queue: &wgpu::Queue) -> (wgpu::Texture, wgpu::Buffer) {
     let _span = tracing::info_span!("split_sum_lut", size = SPLIT_SUM_LUT_SIZE).entered();
     let texture = device.create_texture(&wgpu::TextureDescriptor {
         label: Some("split-sum BRDF"),
@@ -65,6 +79,24 @@ pub(crate) fn build_lut(device: &wgpu::Device, queue: &wgpu::Queue) -> wgpu::Tex
         pass.set_pipeline(&pipeline);
         pass.draw(0..3, 0..1);
     }
+    let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("split-sum BRDF"),
+        size: SPLIT_SUM_LUT_BYTES,
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    encoder.copy_texture_to_buffer(
+        texture.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buffer,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(SPLIT_SUM_LUT_SIZE * 8),
+                rows_per_image: Some(SPLIT_SUM_LUT_SIZE),
+            },
+        },
+        texture.size(),
+    );
     queue.submit([encoder.finish()]);
-    texture
+    (texture, buffer)
 }
