@@ -119,13 +119,3 @@ fn positional_light_at(light: PositionalLightRecord, position: vec3<f32>) -> Lig
     }
     return LightReach(l, attenuation, sqrt(distance_sq));
 }
-
-// Scale and bias applied to F0 by the split-sum specular integral,
-// approximated analytically (Karis 2014, "Physically Based Shading on
-// Mobile"): what fraction of the prefiltered environment a surface reflects.
-fn environment_brdf(f0: vec3<f32>, roughness: f32, n_dot_v: f32) -> vec3<f32> {
-    let r = roughness * vec4<f32>(-1.0, -0.0275, -0.572, 0.022) + vec4<f32>(1.0, 0.0425, 1.04, -0.04);
-    let a004 = min(r.x * r.x, exp2(-9.28 * n_dot_v)) * r.x + r.y;
-    let ab = vec2<f32>(-1.04, 1.04) * a004 + r.zw;
-    return f0 * ab.x + ab.y;
-}

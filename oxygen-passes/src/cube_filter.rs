@@ -28,8 +28,9 @@ use std::sync::Mutex;
 
 use oxygen_core::{Environment, Sky, ViewTargets};
 
-/// The cube-building shader (self-contained).
-pub const CUBE_FILTER_WGSL: &str = include_str!("cube_filter.wgsl");
+/// The cube-building shader (self-contained: the cube layout, then the
+/// filter's passes).
+pub const CUBE_FILTER_WGSL: &str = concat!(include_str!("cube_faces.wgsl"), "\n", include_str!("cube_filter.wgsl"));
 
 /// Faces of a cube, in layer order +X, −X, +Y, −Y, +Z, −Z.
 const FACES: u32 = 6;

@@ -1,8 +1,6 @@
 // Building prefiltered cubes (environments and reflection probes) on the
 // GPU, one full-screen triangle per face and level (see cube_filter.rs).
-//
-// Faces are layers of a 2D array in the probes' order +X, -X, +Y, -Y, +Z, -Z;
-// each face is what a 90-degree camera looking along its axis sees.
+// The cube layout (cube_face_uv, cube_face_point) is cube_faces.wgsl's.
 
 @group(0) @binding(0) var source: texture_2d_array<f32>;
 @group(0) @binding(1) var source_sampler: sampler;
@@ -42,50 +40,6 @@ fn vs(@builtin(vertex_index) index: u32) -> Varying {
     return Varying(vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 0.0, 1.0), uv, index / 3u);
 }
 
-fn face_forward(face: u32) -> vec3<f32> {
-    var forwards = array<vec3<f32>, 6>(
-        vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(-1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0),
-        vec3<f32>(0.0, -1.0, 0.0), vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0, 0.0, -1.0),
-    );
-    return forwards[face];
-}
-
-fn face_up(face: u32) -> vec3<f32> {
-    var ups = array<vec3<f32>, 6>(
-        vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(0.0, 0.0, -1.0),
-        vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(0.0, 1.0, 0.0),
-    );
-    return ups[face];
-}
-
-// Unnormalised direction through `uv` of `face` (its length squared is
-// 1 + x² + y² in the face's plane at distance 1).
-fn face_point(face: u32, uv: vec2<f32>) -> vec3<f32> {
-    let forward = face_forward(face);
-    let up = face_up(face);
-    let ndc = vec2<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0);
-    return forward + cross(forward, up) * ndc.x + up * ndc.y;
-}
-
-// The face a direction falls on and the uv within it (the shading shader's
-// `cube_face_uv`).
-fn cube_face_uv(d: vec3<f32>) -> vec3<f32> {
-    let a = abs(d);
-    var face: u32;
-    if a.x >= a.y && a.x >= a.z {
-        face = select(1u, 0u, d.x >= 0.0);
-    } else if a.y >= a.z {
-        face = select(3u, 2u, d.y >= 0.0);
-    } else {
-        face = select(5u, 4u, d.z >= 0.0);
-    }
-    let forward = face_forward(face);
-    let up = face_up(face);
-    let depth = dot(d, forward);
-    let ndc = vec2<f32>(dot(d, cross(forward, up)), dot(d, up)) / depth;
-    return vec3<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5, f32(face));
-}
-
 // Copies or halves a level: with a source twice the target's size this
 // bilinear tap lands on the corner of four texels and averages them; with
 // an equal size it lands on one texel's centre and copies it.
@@ -97,7 +51,7 @@ fn fs_downsample(v: Varying) -> @location(0) vec4<f32> {
 // The procedural sky (twin of `oxygen_core::Sky::radiance`).
 @fragment
 fn fs_sky(v: Varying) -> @location(0) vec4<f32> {
-    let d = normalize(face_point(v.layer, v.uv));
+    let d = normalize(cube_face_point(v.layer, v.uv));
     let up = d.y;
     var base: vec3<f32>;
     if up >= 0.0 {
@@ -117,7 +71,7 @@ fn fs_sky(v: Varying) -> @location(0) vec4<f32> {
 // (the sun) keeps its energy instead of falling between samples.
 @fragment
 fn fs_equirect(v: Varying) -> @location(0) vec4<f32> {
-    let p = face_point(v.layer, v.uv);
+    let p = cube_face_point(v.layer, v.uv);
     let d = normalize(p);
     let longitude = atan2(d.x, -d.z);
     let latitude = acos(clamp(d.y, -1.0, 1.0));
@@ -142,7 +96,7 @@ fn hammersley(i: u32, n: u32) -> vec2<f32> {
 // few dozen samples give a smooth result. Samples cross face seams freely.
 @fragment
 fn fs_ggx(v: Varying) -> @location(0) vec4<f32> {
-    let n = normalize(face_point(v.layer, v.uv));
+    let n = normalize(cube_face_point(v.layer, v.uv));
     let alpha = max(params.roughness * params.roughness, 1e-4);
     let a2 = alpha * alpha;
     var t = vec3<f32>(1.0, 0.0, 0.0);
@@ -198,7 +152,7 @@ fn fs_harmonics(v: Varying) -> @location(0) vec4<f32> {
         for (var y = 0; y < side; y++) {
             for (var x = 0; x < side; x++) {
                 let uv = (vec2<f32>(f32(x), f32(y)) + 0.5) / f32(side);
-                let p = face_point(u32(face), uv);
+                let p = cube_face_point(u32(face), uv);
                 let d2 = dot(p, p);
                 let solid_angle = (2.0 / f32(side)) * (2.0 / f32(side)) / (d2 * sqrt(d2));
                 let n = p / sqrt(d2);

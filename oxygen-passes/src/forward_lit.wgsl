@@ -85,7 +85,8 @@ struct LightingInputs {
 @group(3) @binding(FIRST_PROBE_BINDING + 3u) var probe_faces_3: texture_2d_array<f32>;
 @group(3) @binding(ENVIRONMENT_BINDING) var environment_faces: texture_2d_array<f32>;
 @group(3) @binding(ENVIRONMENT_SAMPLER_BINDING) var environment_sampler: sampler;
-// The split-sum table's half floats, two texels (RGBA16F) per vec4<u32>.
+// The split-sum table's half floats, two texels (RGBA16F) per vec4<u32>
+// (environment.wgsl reads it, the environment and the cube layout).
 @group(3) @binding(SPLIT_SUM_BINDING) var<uniform> split_sum: array<vec4<u32>, SPLIT_SUM_LUT_SIZE * SPLIT_SUM_LUT_SIZE / 2u>;
 
 // The probe nearest to `position` (the surface reflects what that probe saw).
@@ -154,107 +155,10 @@ fn tile_visibility(slot: u32, light_position: vec3<f32>, world_position: vec3<f3
     return lit / 9.0;
 }
 
-// The cube face (PROBE_FACE_AXES order: +X, -X, +Y, -Y, +Z, -Z) whose
-// camera looks along the major axis of `direction`.
-fn cube_face(direction: vec3<f32>) -> u32 {
-    let a = abs(direction);
-    if a.x >= a.y && a.x >= a.z {
-        return select(1u, 0u, direction.x >= 0.0);
-    }
-    if a.y >= a.z {
-        return select(3u, 2u, direction.y >= 0.0);
-    }
-    return select(5u, 4u, direction.z >= 0.0);
-}
-
-// The face `direction` falls on and its UV there (xy: uv, z: face). Faces
-// are rendered by ordinary cameras (forward, up as in PROBE_FACE_AXES), so
-// the lookup projects the direction onto the face's camera instead of using
-// cube-map conventions. Probes and the environment share the layout.
-fn cube_face_uv(direction: vec3<f32>) -> vec3<f32> {
-    let face = cube_face(direction);
-    var forwards = array<vec3<f32>, PROBE_FACES>(
-        vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(-1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0),
-        vec3<f32>(0.0, -1.0, 0.0), vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0, 0.0, -1.0),
-    );
-    var ups = array<vec3<f32>, PROBE_FACES>(
-        vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(0.0, 0.0, -1.0),
-        vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(0.0, 1.0, 0.0),
-    );
-    let forward = forwards[face];
-    let up = ups[face];
-    let right = cross(forward, up);
-    let depth = dot(direction, forward);
-    let ndc = vec2<f32>(dot(direction, right), dot(direction, up)) / depth;
-    return vec3<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5, f32(face));
-}
-
 // Radiance the probe saw along `direction`.
 fn sample_probe(probe: u32, direction: vec3<f32>, roughness: f32) -> vec3<f32> {
     let at = cube_face_uv(direction);
     return sample_probe_face(probe, at.xy, u32(at.z), roughness);
-}
-
-// The prefiltered environment along `direction` for a surface of
-// `roughness`: level l holds the GGX lobe of roughness l / (levels - 1).
-fn sample_environment(direction: vec3<f32>, roughness: f32) -> vec3<f32> {
-    let at = cube_face_uv(direction);
-    let lod = clamp(roughness, 0.0, 1.0) * f32(max(shadows.environment_levels, 1u) - 1u);
-    return textureSampleLevel(environment_faces, environment_sampler, at.xy, u32(at.z), lod).rgb;
-}
-
-// Coefficient `i` of the environment's irradiance harmonics: the 3 x 3
-// corner of the layer after the faces (cube_filter.rs).
-fn harmonic(i: u32) -> vec3<f32> {
-    return textureLoad(environment_faces, vec2<i32>(i32(i % 3u), i32(i / 3u)), i32(PROBE_FACES), 0).rgb;
-}
-
-// Irradiance from the environment on a surface facing `n` (its nine
-// spherical-harmonic coefficients, cosine-convolved).
-fn environment_irradiance(n: vec3<f32>) -> vec3<f32> {
-    var c: array<vec3<f32>, 9>;
-    for (var i = 0u; i < 9u; i++) {
-        c[i] = harmonic(i);
-    }
-    let e = c[0] * 0.282095
-        + c[1] * (0.488603 * n.y) + c[2] * (0.488603 * n.z) + c[3] * (0.488603 * n.x)
-        + c[4] * (1.092548 * n.x * n.y) + c[5] * (1.092548 * n.y * n.z)
-        + c[6] * (0.315392 * (3.0 * n.z * n.z - 1.0)) + c[7] * (1.092548 * n.x * n.z)
-        + c[8] * (0.546274 * (n.x * n.x - n.y * n.y));
-    return max(e, vec3<f32>(0.0));
-}
-
-// A non-negative finite half float's value, decoded by hand:
-// unpack2x16float needs a capability some adapters lack.
-fn half_to_f32(bits: u32) -> f32 {
-    let exponent = (bits >> 10u) & 0x1fu;
-    let mantissa = bits & 0x3ffu;
-    if exponent == 0u {
-        return f32(mantissa) * 5.9604645e-8;
-    }
-    return bitcast<f32>(((exponent + 112u) << 23u) | (mantissa << 13u));
-}
-
-// Texel (x, y) of the split-sum table: (A, B), red in the low half of the
-// texel's first word.
-fn split_sum_texel(x: u32, y: u32) -> vec2<f32> {
-    let t = y * SPLIT_SUM_LUT_SIZE + x;
-    let words = split_sum[t / 2u];
-    let rg = select(words.x, words.z, (t & 1u) == 1u);
-    return vec2<f32>(half_to_f32(rg & 0xffffu), half_to_f32(rg >> 16u));
-}
-
-// The split-sum scale and bias for F0 (split_sum.rs), interpolated
-// bilinearly: texel i of the table is n·v (or roughness) i / (N - 1).
-fn split_sum_brdf(f0: vec3<f32>, roughness: f32, n_dot_v: f32) -> vec3<f32> {
-    let last = f32(SPLIT_SUM_LUT_SIZE - 1u);
-    let p = clamp(vec2<f32>(n_dot_v, roughness), vec2<f32>(0.0), vec2<f32>(1.0)) * last;
-    let i = min(vec2<u32>(floor(p)), vec2<u32>(SPLIT_SUM_LUT_SIZE - 2u));
-    let f = p - vec2<f32>(i);
-    let top = mix(split_sum_texel(i.x, i.y), split_sum_texel(i.x + 1u, i.y), f.x);
-    let bottom = mix(split_sum_texel(i.x, i.y + 1u), split_sum_texel(i.x + 1u, i.y + 1u), f.x);
-    let ab = mix(top, bottom, f.y);
-    return f0 * ab.x + ab.y;
 }
 
 fn compare_cascade(cascade: u32, uv: vec2<f32>, depth: f32) -> f32 {

@@ -53,8 +53,9 @@ pub use lighting_inputs::{
 pub use mesh_pass::{ColorOps, DrawList, ForwardLitConfig, MeshPass};
 pub use oxygen_core::{Depth, HdrColor, Output, OutputSource, ProbeCube, ProbeId, ShadowMap};
 pub use pipelines::{
-    AlphaClass, BRDF_WGSL, CompilerGuard, DepthBias, Exposure, PassKind, PipelineFuture, PipelineKey, PipelineVariant,
-    Pipelines, ShaderFeatures, TONEMAP_OPERATOR_WGSL, TONEMAP_WGSL, fullscreen_pipeline, shader_source,
+    AlphaClass, BRDF_WGSL, CUBE_FACES_WGSL, CompilerGuard, DepthBias, ENVIRONMENT_WGSL, Exposure, PassKind,
+    PipelineFuture, PipelineKey, PipelineVariant, Pipelines, ShaderFeatures, TONEMAP_OPERATOR_WGSL, TONEMAP_WGSL,
+    fullscreen_pipeline, shader_source,
 };
 pub use reference::{ReferencePass, ReferenceSettings, ReferenceTracer, reference_shader_source};
 pub use render_context::{

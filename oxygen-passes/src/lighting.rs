@@ -16,6 +16,8 @@ pub struct LightingResources {
     shadow_atlas: crate::shadow_atlas::ShadowAtlas,
     cube_filter: CubeFilter,
     environment: Option<EnvironmentTexture>,
+    /// Counts environment changes (views that accumulate restart on one).
+    environment_generation: u64,
 }
 
 /// The prefiltered environment on the GPU (faces and levels, the
@@ -36,6 +38,7 @@ impl LightingResources {
             shadow_atlas: Default::default(),
             cube_filter: CubeFilter::new(device),
             environment: None,
+            environment_generation: 0,
         }
     }
 
@@ -51,6 +54,7 @@ impl LightingResources {
         environment: Option<&oxygen_core::Environment>,
         quality: EnvironmentQuality,
     ) {
+        self.environment_generation += 1;
         let Some(environment) = environment else {
             self.environment = None;
             return;
@@ -70,6 +74,7 @@ impl LightingResources {
         queue: &wgpu::Queue,
         environment: Option<&oxygen_core::PrefilteredEnvironment>,
     ) {
+        self.environment_generation += 1;
         let Some(env) = environment else {
             self.environment = None;
             return;
@@ -144,6 +149,29 @@ impl LightingResources {
     /// tools and tests that read it back).
     pub fn environment_texture(&self) -> Option<&wgpu::Texture> {
         self.environment.as_ref().map(|e| &e.texture)
+    }
+
+    /// How many times the environment was set or removed: a view that
+    /// accumulates over frames (the path-traced reference) restarts when
+    /// it changes.
+    pub fn environment_generation(&self) -> u64 {
+        self.environment_generation
+    }
+
+    /// The environment's six-face array view, or a 1 × 1 black placeholder
+    /// without one.
+    pub(crate) fn environment_view(&self) -> &wgpu::TextureView {
+        self.environment.as_ref().map_or(&self.inputs.placeholder_probe, |e| &e.view)
+    }
+
+    /// The environment's trilinear sampler.
+    pub(crate) fn environment_sampler(&self) -> &wgpu::Sampler {
+        &self.inputs.environment_sampler
+    }
+
+    /// The split-sum table as the shaders read it (a uniform buffer).
+    pub(crate) fn split_sum_buffer(&self) -> &wgpu::Buffer {
+        &self.inputs.split_sum_buffer
     }
 
     /// The split-sum table (`A`, `B` in red and green; see `split_sum.rs`).

@@ -239,6 +239,12 @@ const FORWARD_LIT_WGSL: &str = include_str!("forward_lit.wgsl");
 /// The reflectance model and light falloff shared by raster shading and the
 /// path-traced reference.
 pub const BRDF_WGSL: &str = include_str!("brdf.wgsl");
+/// The cube layout every cube shares (probes, the environment, point-light
+/// shadow faces): `cube_face`, `cube_face_uv`, `cube_face_point`.
+pub const CUBE_FACES_WGSL: &str = include_str!("cube_faces.wgsl");
+/// Reading the environment (irradiance harmonics, prefiltered levels) and
+/// the split-sum table; shared by shading and the path-traced reference.
+pub const ENVIRONMENT_WGSL: &str = include_str!("environment.wgsl");
 /// The tone-map operator (`tone_map`, `pbr_neutral`), shared by the tone-map
 /// pass and the forward lit pass's in-pass tone map.
 pub const TONEMAP_OPERATOR_WGSL: &str = include_str!("tonemap.wgsl");
@@ -253,7 +259,7 @@ pub fn shader_source(pass: PassKind, textures: TexturePath) -> String {
     let body = match pass {
         PassKind::DepthPrePass | PassKind::Shadow => DEPTH_ONLY_WGSL.to_owned(),
         PassKind::Shading | PassKind::ShadingAfterPrePass | PassKind::Transparent => {
-            format!("{TONEMAP_OPERATOR_WGSL}\n{BRDF_WGSL}\n{FORWARD_LIT_WGSL}")
+            format!("{TONEMAP_OPERATOR_WGSL}\n{BRDF_WGSL}\n{CUBE_FACES_WGSL}\n{ENVIRONMENT_WGSL}\n{FORWARD_LIT_WGSL}")
         }
     };
     // Enable directives must come before any declaration.

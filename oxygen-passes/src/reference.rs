@@ -38,16 +38,20 @@ pub struct ReferenceSettings {
     /// Bounces after the first hit (0: direct light only).
     pub max_bounces: u32,
     /// Radiance arriving from every direction where a path escapes the
-    /// scene (linear RGB, the lights' units).
+    /// scene (linear RGB, the lights' units) when the renderer has no
+    /// environment; with one (`Renderer::set_environment`), escaping paths
+    /// read its radiance (level 0 of the cube the shading reads) instead.
     pub environment: [f32; 3],
     /// Model the raster pass's light transport instead of global
     /// illumination: direct light with traced shadows plus the raster's
-    /// constant ambient term, no bounces. For comparing raster views with
-    /// their reference where both model the same thing.
+    /// ambient term (the constant, or the environment's irradiance
+    /// harmonics and prefiltered reflection as the shading reads them), no
+    /// bounces. For comparing raster views with their reference where both
+    /// model the same thing.
     pub raster_model: bool,
     /// With `raster_model`: add what a perfect reflection probe would, the
     /// surroundings' raster-model radiance along the reflection, weighted
-    /// by the raster's environment BRDF. The reference for probe knobs.
+    /// by the raster's split-sum BRDF. The reference for probe knobs.
     pub raster_reflections: bool,
 }
 
@@ -87,11 +91,17 @@ impl ReferenceSettings {
         ]
     }
 
+    /// The shader's flags from the settings (`ENVIRONMENT_MAP` is the
+    /// renderer's to add).
     fn flags(&self) -> u32 {
         let reflections = self.raster_model && self.raster_reflections;
         u32::from(self.raster_model) | (u32::from(reflections) << 1)
     }
 }
+
+/// Flag: escaping paths (and the raster model's ambient) read the
+/// renderer's environment.
+const ENVIRONMENT_MAP: u32 = 4;
 
 impl Default for ReferenceSettings {
     fn default() -> Self {
@@ -140,7 +150,7 @@ pub struct ReferenceTracer {
 }
 
 /// The tracer's full WGSL: the heap's declarations, the shared reflectance
-/// model, the tracer.
+/// model, cube layout and environment reads, the tracer.
 pub fn reference_shader_source(textures: oxygen_bindless::TexturePath) -> String {
     let enables = match textures {
         oxygen_bindless::TexturePath::BindingArray => "enable wgpu_binding_array;\n",
@@ -153,11 +163,18 @@ pub fn reference_shader_source(textures: oxygen_bindless::TexturePath) -> String
         oxygen_sceneprep::PositionalLightRecord::wgsl_constants(),
     ]
     .concat();
+    let cube = format!(
+        "const PROBE_FACES: u32 = {}u;\nconst SPLIT_SUM_LUT_SIZE: u32 = {}u;\n",
+        crate::PROBE_FACES,
+        crate::SPLIT_SUM_LUT_SIZE
+    );
     format!(
-        "{enables}{constants}{SCENE_CONSTANTS_WGSL}\n{GPU_RECORDS_WGSL}\n{}\n{}\n{}\n{}",
+        "{enables}{constants}{cube}{SCENE_CONSTANTS_WGSL}\n{GPU_RECORDS_WGSL}\n{}\n{}\n{}\n{}\n{}\n{}",
         DomainKind::wgsl_bindings(),
         textures.wgsl(),
         crate::pipelines::BRDF_WGSL,
+        crate::pipelines::CUBE_FACES_WGSL,
+        crate::pipelines::ENVIRONMENT_WGSL,
         include_str!("reference_trace.wgsl"),
     )
 }
@@ -201,6 +218,34 @@ impl ReferenceTracer {
                         access: wgpu::StorageTextureAccess::WriteOnly,
                         format: wgpu::TextureFormat::Rgba16Float,
                         view_dimension: wgpu::TextureViewDimension::D2,
+                    },
+                    count: None,
+                },
+                // The renderer's environment (a placeholder without one),
+                // its sampler and the split-sum table: what the shading reads.
+                wgpu::BindGroupLayoutEntry {
+                    binding: 7,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D2Array,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 8,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 9,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: wgpu::BufferSize::new(crate::split_sum::SPLIT_SUM_LUT_BYTES),
                     },
                     count: None,
                 },
@@ -311,6 +356,9 @@ impl ReferenceTracer {
         key.extend_from_slice(&[width, height]);
         let generation = self.uploaded_generation.unwrap_or(0);
         key.extend_from_slice(&[generation as u32, (generation >> 32) as u32]);
+        // A new environment restarts the mean too.
+        let environment = ctx.lighting.environment_generation();
+        key.extend_from_slice(&[environment as u32, (environment >> 32) as u32]);
 
         let mut views = self.views.lock().map_err(|_| PassError::Graph("reference tracer state poisoned".into()))?;
         let state = views.entry(ctx.view.view_id).or_insert_with(|| ViewSamples::new(device, (width, height)));
@@ -335,7 +383,7 @@ impl ReferenceTracer {
                 } else {
                     settings.max_bounces
                 },
-                flags: settings.flags(),
+                flags: settings.flags() | if ctx.lighting.has_environment() { ENVIRONMENT_MAP } else { 0 },
                 tlas_root: self.tlas_root,
                 seed: 0x6f78_7967,
                 node_base: self.ranges.map_or(0, |r| r[0].start),
@@ -365,6 +413,15 @@ impl ReferenceTracer {
                     wgpu::BindGroupEntry { binding: 4, resource: ctx.heap.index_buffer().as_entire_binding() },
                     wgpu::BindGroupEntry { binding: 5, resource: state.sum.as_entire_binding() },
                     wgpu::BindGroupEntry { binding: 6, resource: wgpu::BindingResource::TextureView(&output_view) },
+                    wgpu::BindGroupEntry {
+                        binding: 7,
+                        resource: wgpu::BindingResource::TextureView(ctx.lighting.environment_view()),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 8,
+                        resource: wgpu::BindingResource::Sampler(ctx.lighting.environment_sampler()),
+                    },
+                    wgpu::BindGroupEntry { binding: 9, resource: ctx.lighting.split_sum_buffer().as_entire_binding() },
                 ],
             });
             let mut pass = rec.encoder().begin_compute_pass(&wgpu::ComputePassDescriptor {

@@ -14,11 +14,13 @@
 // Light transport: next-event estimation towards every directional and
 // positional light (a shadow ray each), the BRDF of brdf.wgsl for both the
 // lights and the sampled bounces (a mix of cosine-weighted diffuse and GGX
-// visible-normal sampling), emission counted where a path hits it, a
-// uniform environment where a path escapes, Russian roulette after three
-// bounces. With RASTER_MODEL the path stops at the first hit and adds the
-// raster pass's constant ambient term instead: the same light transport as
-// the raster path, shadows traced exactly, for comparing the two.
+// visible-normal sampling), emission counted where a path hits it, the
+// renderer's environment where a path escapes (a uniform colour without
+// one), Russian roulette after three bounces. With RASTER_MODEL the path
+// stops at the first hit and adds the raster pass's ambient term instead
+// (the constant, or the environment's harmonics and prefiltered
+// reflection): the same light transport as the raster path, shadows traced
+// exactly, for comparing the two.
 
 struct TraceParams {
     width: u32,
@@ -43,6 +45,8 @@ struct TraceParams {
 const RASTER_MODEL: u32 = 1u;
 // With RASTER_MODEL: also the probe's term, exactly (see radiance()).
 const RASTER_REFLECTIONS: u32 = 2u;
+// The renderer has an environment: bindings 7-9 hold it.
+const ENVIRONMENT_MAP: u32 = 4u;
 const STACK_SIZE: u32 = 48u;
 const NO_HIT: u32 = 0xFFFFFFFFu;
 // The raster pass's constant ambient (forward_lit.wgsl's AMBIENT).
@@ -52,6 +56,23 @@ const RASTER_AMBIENT: f32 = 0.03;
 @group(3) @binding(4) var<storage, read> index_words: array<u32>;
 @group(3) @binding(5) var<storage, read_write> running_sum: array<vec4<f32>>;
 @group(3) @binding(6) var output: texture_storage_2d<rgba16float, write>;
+// What the shading pass reads (environment.wgsl): the renderer's
+// environment (a placeholder without one) and the split-sum table.
+@group(3) @binding(7) var environment_faces: texture_2d_array<f32>;
+@group(3) @binding(8) var environment_sampler: sampler;
+@group(3) @binding(9) var<uniform> split_sum: array<vec4<u32>, SPLIT_SUM_LUT_SIZE * SPLIT_SUM_LUT_SIZE / 2u>;
+
+fn has_environment_map() -> bool {
+    return (params.flags & ENVIRONMENT_MAP) != 0u;
+}
+
+// Radiance arriving along `direction` from outside the scene.
+fn escaped(direction: vec3<f32>) -> vec3<f32> {
+    if has_environment_map() {
+        return sample_environment(direction, 0.0);
+    }
+    return params.environment.rgb;
+}
 
 // ---- random numbers: a PCG hash per (pixel, sample, dimension) ----
 
@@ -530,7 +551,7 @@ fn radiance(first: Ray, rng: ptr<function, Rng>) -> vec3<f32> {
         let salt = next_u32(rng);
         let hit = trace(ray, 3.0e38, false, salt);
         if hit.instance == NO_HIT {
-            color += throughput * params.environment.rgb;
+            color += throughput * escaped(ray.dir);
             break;
         }
         let s = surface_at(ray, hit);
@@ -542,8 +563,19 @@ fn radiance(first: Ray, rng: ptr<function, Rng>) -> vec3<f32> {
         }
         color += throughput * (s.emissive + direct_light(s, v, salt));
         if raster_model {
-            // forward_lit.wgsl's ambient term, unoccluded, as the raster has it.
-            color += throughput * (s.albedo * (1.0 - s.metallic) * RASTER_AMBIENT + mix(vec3<f32>(0.04), s.albedo, s.metallic) * RASTER_AMBIENT);
+            // forward_lit.wgsl's ambient term, unoccluded, as the raster has
+            // it: the environment's irradiance and (without the probe term)
+            // its prefiltered reflection, or the constant.
+            let f0 = mix(vec3<f32>(0.04), s.albedo, s.metallic);
+            if has_environment_map() {
+                color += throughput * s.albedo * (1.0 - s.metallic) * environment_irradiance(s.normal) / PI;
+                if (params.flags & RASTER_REFLECTIONS) == 0u {
+                    let reflected = sample_environment(reflect(-v, s.normal), s.roughness);
+                    color += throughput * reflected * split_sum_brdf(f0, s.roughness, max(dot(s.normal, v), 0.0));
+                }
+            } else {
+                color += throughput * (s.albedo * (1.0 - s.metallic) * RASTER_AMBIENT + f0 * RASTER_AMBIENT);
+            }
             // What a perfect reflection probe would add: the surroundings'
             // raster-model radiance along the reflection (GGX-distributed
             // around it for a rough surface, as the probe's blurred mips
@@ -559,8 +591,7 @@ fn radiance(first: Ray, rng: ptr<function, Rng>) -> vec3<f32> {
             if dot(l, s.geometric) <= 0.0 {
                 break;
             }
-            let f0 = mix(vec3<f32>(0.04), s.albedo, s.metallic);
-            throughput *= environment_brdf(f0, s.roughness, max(dot(s.normal, v), 0.0));
+            throughput *= split_sum_brdf(f0, s.roughness, max(dot(s.normal, v), 0.0));
             ray = Ray(offset_origin(s, l), l);
             continue;
         }

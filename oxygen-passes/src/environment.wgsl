@@ -1,0 +1,70 @@
+// Reading the renderer's environment and the split-sum table, shared by the
+// shading pass and the path-traced reference. The including shader
+// declares `environment_faces` (the prefiltered cube, texture_2d_array),
+// `environment_sampler` (trilinear), `split_sum` (the table's uniform
+// array) and the constants PROBE_FACES and SPLIT_SUM_LUT_SIZE; the cube
+// layout comes from cube_faces.wgsl.
+
+// Coefficient `i` of the environment's irradiance harmonics: the 3 x 3
+// corner of the layer after the faces (cube_filter.rs). Signed
+// coordinates: GLSL's texelFetch takes ints.
+fn harmonic(i: u32) -> vec3<f32> {
+    return textureLoad(environment_faces, vec2<i32>(i32(i % 3u), i32(i / 3u)), i32(PROBE_FACES), 0).rgb;
+}
+
+// Irradiance from the environment on a surface facing `n` (its nine
+// spherical-harmonic coefficients, cosine-convolved).
+fn environment_irradiance(n: vec3<f32>) -> vec3<f32> {
+    var c: array<vec3<f32>, 9>;
+    for (var i = 0u; i < 9u; i++) {
+        c[i] = harmonic(i);
+    }
+    let e = c[0] * 0.282095
+        + c[1] * (0.488603 * n.y) + c[2] * (0.488603 * n.z) + c[3] * (0.488603 * n.x)
+        + c[4] * (1.092548 * n.x * n.y) + c[5] * (1.092548 * n.y * n.z)
+        + c[6] * (0.315392 * (3.0 * n.z * n.z - 1.0)) + c[7] * (1.092548 * n.x * n.z)
+        + c[8] * (0.546274 * (n.x * n.x - n.y * n.y));
+    return max(e, vec3<f32>(0.0));
+}
+
+// The prefiltered environment along `direction` for a surface of
+// `roughness`: level l holds the GGX lobe of roughness l / (levels - 1);
+// level 0 is the radiance itself.
+fn sample_environment(direction: vec3<f32>, roughness: f32) -> vec3<f32> {
+    let at = cube_face_uv(direction);
+    let lod = clamp(roughness, 0.0, 1.0) * f32(textureNumLevels(environment_faces) - 1u);
+    return textureSampleLevel(environment_faces, environment_sampler, at.xy, u32(at.z), lod).rgb;
+}
+
+// A non-negative finite half float's value, decoded by hand:
+// unpack2x16float needs a capability some adapters lack.
+fn half_to_f32(bits: u32) -> f32 {
+    let exponent = (bits >> 10u) & 0x1fu;
+    let mantissa = bits & 0x3ffu;
+    if exponent == 0u {
+        return f32(mantissa) * 5.9604645e-8;
+    }
+    return bitcast<f32>(((exponent + 112u) << 23u) | (mantissa << 13u));
+}
+
+// Texel (x, y) of the split-sum table: (A, B), red in the low half of the
+// texel's first word (two RGBA16F texels per vec4<u32>).
+fn split_sum_texel(x: u32, y: u32) -> vec2<f32> {
+    let t = y * SPLIT_SUM_LUT_SIZE + x;
+    let words = split_sum[t / 2u];
+    let rg = select(words.x, words.z, (t & 1u) == 1u);
+    return vec2<f32>(half_to_f32(rg & 0xffffu), half_to_f32(rg >> 16u));
+}
+
+// The split-sum scale and bias for F0 (split_sum.rs), interpolated
+// bilinearly: texel i of the table is n·v (or roughness) i / (N - 1).
+fn split_sum_brdf(f0: vec3<f32>, roughness: f32, n_dot_v: f32) -> vec3<f32> {
+    let last = f32(SPLIT_SUM_LUT_SIZE - 1u);
+    let p = clamp(vec2<f32>(n_dot_v, roughness), vec2<f32>(0.0), vec2<f32>(1.0)) * last;
+    let i = min(vec2<u32>(floor(p)), vec2<u32>(SPLIT_SUM_LUT_SIZE - 2u));
+    let f = p - vec2<f32>(i);
+    let top = mix(split_sum_texel(i.x, i.y), split_sum_texel(i.x + 1u, i.y), f.x);
+    let bottom = mix(split_sum_texel(i.x, i.y + 1u), split_sum_texel(i.x + 1u, i.y + 1u), f.x);
+    let ab = mix(top, bottom, f.y);
+    return f0 * ab.x + ab.y;
+}
