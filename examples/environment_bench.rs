@@ -6,8 +6,8 @@
 //! cargo run --release --example environment_bench [REPEATS]
 //! ```
 //!
-//! The environment is a 1024 × 512 panorama (a sky gradient, a bright
-//! blob, stripes; see `panorama`). For each (face size, samples):
+//! The environment is `oxygen_demo::structured_panorama` at 1024 × 512 (a
+//! sky gradient, a bright blob, stripes). For each (face size, samples):
 //! the GPU's wall time for `Renderer::set_environment_with_quality` (upload,
 //! conversion, box mips, GGX levels, harmonics, waiting for the GPU; median
 //! of REPEATS), the CPU reference's time at the same size and levels with
@@ -18,30 +18,16 @@
 
 use std::time::Instant;
 
-use oxygen::core::{Environment, EquirectImage, PrefilteredEnvironment};
+use oxygen::core::{Environment, PrefilteredEnvironment};
 use oxygen::passes::{EnvironmentQuality, prefiltered_levels};
 use oxygen::prelude::*;
 
-/// A smooth bright blob up and to the right, a sky gradient, stripes in
-/// longitude (the environment of `tests/environment.rs`, at 1024 × 512).
-/// Smooth enough for the CPU reference, which point-samples the image, to
-/// converge; a tiny bright sun would not (512 point samples a texel catch it
-/// or miss it), while the GPU's filtered samples keep its energy.
+/// `oxygen_demo::structured_panorama` at 1024 × 512: smooth enough for
+/// the CPU reference, which point-samples the image, to converge; a tiny
+/// bright sun would not (512 point samples a texel catch it or miss it),
+/// while the GPU's filtered samples keep its energy.
 fn panorama() -> Environment {
-    let (width, height) = (1024u32, 512u32);
-    let texels = (0..width * height)
-        .map(|i| {
-            let (x, y) = (i % width, i / width);
-            let u = (x as f32 + 0.5) / width as f32;
-            let v = (y as f32 + 0.5) / height as f32;
-            let sky = Vec3::new(0.2, 0.3, 0.6).lerp(Vec3::new(0.05, 0.04, 0.03), v);
-            let stripe = if (u * 16.0) as u32 % 2 == 0 { 0.05 } else { 0.0 };
-            let (du, dv) = (u - 0.75, v - 0.25);
-            let blob = (-(du * du + dv * dv) / 0.004).exp() * 6.0;
-            sky + Vec3::splat(stripe) + Vec3::new(1.0, 0.8, 0.5) * blob
-        })
-        .collect();
-    Environment::Image(EquirectImage::new(width, height, texels).expect("a consistent panorama"))
+    oxygen_demo::structured_panorama(1024, 512)
 }
 
 fn relative_rms(got: &[Vec3], reference: &[Vec3]) -> f32 {

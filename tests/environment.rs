@@ -155,25 +155,9 @@ fn an_8_bit_panorama_is_decoded_from_srgb() {
     assert!((r.x - 0.2158).abs() < 0.002, "{r}");
 }
 
-/// An environment with structure at every scale: a bright warm blob up and
-/// to the right (+X, +Y), a blue sky fading to a dark ground, a faint
-/// stripe in longitude.
+/// `oxygen_demo::structured_panorama` at 256 × 128.
 fn structured_environment() -> Environment {
-    let (width, height) = (256u32, 128u32);
-    let texels = (0..width * height)
-        .map(|i| {
-            let (x, y) = (i % width, i / width);
-            let u = (x as f32 + 0.5) / width as f32;
-            let v = (y as f32 + 0.5) / height as f32;
-            let sky = Vec3::new(0.2, 0.3, 0.6).lerp(Vec3::new(0.05, 0.04, 0.03), v);
-            let stripe = if (u * 16.0) as u32 % 2 == 0 { 0.05 } else { 0.0 };
-            // The blob around longitude 90° (+X), latitude 45° up.
-            let (du, dv) = (u - 0.75, v - 0.25);
-            let blob = (-(du * du + dv * dv) / 0.004).exp() * 6.0;
-            sky + Vec3::splat(stripe) + Vec3::new(1.0, 0.8, 0.5) * blob
-        })
-        .collect();
-    Environment::Image(oxygen::core::EquirectImage::new(width, height, texels).unwrap())
+    oxygen_demo::structured_panorama(256, 128)
 }
 
 /// Root-mean-square of the difference of two faces' texels, relative to

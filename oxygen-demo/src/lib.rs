@@ -233,6 +233,30 @@ pub fn add_default_sun(scene: &mut Scene) {
     scene.set_light(sun, Some(Light::directional(2.5))).expect("the sun node was just created");
 }
 
+/// A `width` × `height` panorama with structure at every scale: a sky
+/// gradient from blue above to a dark ground, faint stripes in longitude,
+/// a bright warm blob up and towards +X. Smooth enough that the CPU
+/// prefilter (which point-samples the image) converges on it: the
+/// environment the GPU prefilter is tested and measured against.
+pub fn structured_panorama(width: u32, height: u32) -> oxygen_core::Environment {
+    let (width, height) = (width.max(1), height.max(1));
+    let texels = (0..width * height)
+        .map(|i| {
+            let (x, y) = (i % width, i / width);
+            let u = (x as f32 + 0.5) / width as f32;
+            let v = (y as f32 + 0.5) / height as f32;
+            let sky = Vec3::new(0.2, 0.3, 0.6).lerp(Vec3::new(0.05, 0.04, 0.03), v);
+            let stripe = if ((u * 16.0) as u32).is_multiple_of(2) { 0.05 } else { 0.0 };
+            // The blob around longitude 90° (+X), latitude 45° up.
+            let (du, dv) = (u - 0.75, v - 0.25);
+            let blob = (-(du * du + dv * dv) / 0.004).exp() * 6.0;
+            sky + Vec3::splat(stripe) + Vec3::new(1.0, 0.8, 0.5) * blob
+        })
+        .collect();
+    let image = oxygen_core::EquirectImage::new(width, height, texels).expect("width × height texels");
+    oxygen_core::Environment::Image(image)
+}
+
 /// The interactive viewer's default environment: the procedural sky matched
 /// to the scene's first directional light (the default sun's direction when
 /// it has none).
