@@ -537,3 +537,92 @@ fn the_raster_model_reads_the_environment_as_the_raster_does() {
     renderer.render_frame(&scene).unwrap();
     assert_eq!(renderer.reference_samples(traced), 16);
 }
+
+/// The raster view of `scene` against its reference traced with the
+/// raster's light transport: per pixel, whether they agree within 5 %.
+fn raster_model_agreement(scene: &Scene, camera: LookAtResolver) -> Vec<bool> {
+    let mut renderer = support::gpu_renderer_with(RendererOptions { keep_hdr: true, ..Default::default() });
+    let raster = renderer.register_view(camera, standard_render_graph).unwrap();
+    let settings = ReferenceSettings { samples_per_frame: 16, max_samples: 32, ..ReferenceSettings::RASTER_MODEL };
+    let traced = renderer
+        .register_view(ViewDesc::new(camera).path_traced(), ReferenceGraph { settings, exposure: 1.0 })
+        .unwrap();
+    for _ in 0..2 {
+        renderer.render_frame(scene).unwrap();
+    }
+    assert_eq!(renderer.scene_prep().ray_scene().skipped(), 0);
+    let (a, b) = (renderer.read_hdr(raster).unwrap(), renderer.read_hdr(traced).unwrap());
+    support::assert_hdr_image_finite(&b, "reference");
+    a.pixels
+        .iter()
+        .zip(&b.pixels)
+        .map(|(p, q)| (0..3).all(|c| (p[c] - q[c]).abs() / p[c].abs().max(0.05) < 0.05))
+        .collect()
+}
+
+/// Skinned and morphed meshes are traced in the pose the raster draws
+/// (posed on the CPU with the frame's joint matrices and weights): the
+/// raster view and its raster-model reference agree on RiggedSimple bent
+/// by its bones and SimpleMorph with its targets blended, as they do on
+/// rigid scenes. Traced in the rest pose instead, the bent cylinder's
+/// silhouette and the morphed surface disagree (the pose moves pixels:
+/// checked on the raster pictures of both poses).
+#[test]
+fn skinned_and_morphed_meshes_are_traced_in_their_pose() {
+    let import = |file: &str| {
+        let mut scene = Scene::new();
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets").join(file);
+        let import = import_gltf(&mut scene, path, &SceneChoice::Default).unwrap();
+        let sun = scene.add_node(
+            "sun",
+            Transform::IDENTITY
+                .with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, Vec3::new(-0.3, -0.8, -0.5).normalize())),
+        );
+        scene.set_light(sun, Some(Light::directional(2.5))).unwrap();
+        (scene, import)
+    };
+    let rigged_camera = LookAtResolver {
+        camera: Camera::perspective(45f32.to_radians(), 0.05, None),
+        eye: Vec3::new(14.0, 1.4, 0.0),
+        target: Vec3::ZERO,
+        up: Vec3::Y,
+        viewport: UVec2::new(64, 64),
+    };
+    let morph_camera = LookAtResolver {
+        camera: Camera::perspective(45f32.to_radians(), 0.05, None),
+        eye: Vec3::new(0.5, 0.6, 3.2),
+        target: Vec3::new(0.5, 0.5, 0.0),
+        up: Vec3::Y,
+        viewport: UVec2::new(64, 48),
+    };
+    for (file, time, camera) in
+        [("RiggedSimple/RiggedSimple.glb", 1.05, rigged_camera), ("SimpleMorph/SimpleMorph.gltf", 1.5, morph_camera)]
+    {
+        let (mut scene, import) = import(file);
+        // The pose matters here: the raster pictures at rest and posed differ.
+        let rest = raster_hdr(&scene, camera);
+        import.animations[0].apply(&mut scene, time).unwrap();
+        let posed = raster_hdr(&scene, camera);
+        let moved: Vec<bool> = rest.pixels.iter().zip(&posed.pixels).map(|(p, q)| (p[0] - q[0]).abs() > 0.05).collect();
+        let moved_count = moved.iter().filter(|m| **m).count();
+        assert!(moved_count > rest.pixels.len() / 40, "{file}: the pose moves only {moved_count} pixels");
+        let agree = raster_model_agreement(&scene, camera);
+        let fraction = agree.iter().filter(|a| **a).count() as f64 / agree.len() as f64;
+        // Where the pose moved the picture, the reference follows the pose.
+        let moved_agree = agree.iter().zip(&moved).filter(|(a, m)| **a && **m).count() as f64 / moved_count as f64;
+        eprintln!(
+            "{file} at {time} s: {:.1} % of pixels within 5 %, {:.1} % of the {moved_count} the pose moved",
+            100.0 * fraction,
+            100.0 * moved_agree
+        );
+        assert!(fraction > 0.9, "{file}: only {:.1} % of pixels agree within 5 %", 100.0 * fraction);
+        assert!(moved_agree > 0.75, "{file}: only {:.1} % of the moved pixels agree", 100.0 * moved_agree);
+    }
+}
+
+fn raster_hdr(scene: &Scene, camera: LookAtResolver) -> oxygen::core::gpu::HdrImage {
+    let mut renderer = support::gpu_renderer_with(RendererOptions { keep_hdr: true, ..Default::default() });
+    let view = renderer.register_view(camera, standard_render_graph).unwrap();
+    renderer.render_frame(scene).unwrap();
+    renderer.read_hdr(view).unwrap()
+}

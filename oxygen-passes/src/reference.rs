@@ -21,7 +21,7 @@ use std::sync::Mutex;
 use bytemuck::{Pod, Zeroable};
 use oxygen_bindless::{Allocation, BindlessError, BindlessHeap, DomainKind, INVALID_SLOT, SCENE_CONSTANTS_WGSL};
 use oxygen_core::ViewId;
-use oxygen_sceneprep::{GPU_RECORDS_WGSL, RayScene};
+use oxygen_sceneprep::{GPU_RECORDS_WGSL, RayInstance, RayScene, ray_scene::POSED};
 use tracing::info_span;
 
 use crate::render_context::{CommandRecorder, PassError, RenderContext};
@@ -144,6 +144,9 @@ pub struct ReferenceTracer {
     pipeline: wgpu::ComputePipeline,
     /// The ray scene's nodes, words and instances in the heap's domains.
     ranges: Option<[Allocation; 3]>,
+    /// The posed vertices of skinned and morphed instances, in the vertex
+    /// domain (`None` without any).
+    posed: Option<Allocation>,
     tlas_root: u32,
     uploaded_generation: Option<u64>,
     views: Mutex<HashMap<ViewId, ViewSamples>>,
@@ -277,6 +280,7 @@ impl ReferenceTracer {
             layout,
             pipeline,
             ranges: None,
+            posed: None,
             tlas_root: INVALID_SLOT,
             uploaded_generation: None,
             views: Mutex::new(HashMap::new()),
@@ -307,6 +311,9 @@ impl ReferenceTracer {
                 heap.slots.free(range)?;
             }
         }
+        if let Some(range) = self.posed.take() {
+            heap.slots.free(range)?;
+        }
         // Past u32 the allocation fails as a full domain, with its numbers.
         let count = |n: usize| u32::try_from(n).unwrap_or(u32::MAX);
         let nodes = heap.slots.allocate(DomainKind::BvhNodes, count(scene.nodes().len()))?;
@@ -316,7 +323,27 @@ impl ReferenceTracer {
         heap.ensure_capacity(device, queue);
         heap.write(queue, &nodes, 0, scene.nodes())?;
         heap.write(queue, &words, 0, scene.words())?;
-        heap.write(queue, &instances, 0, scene.instances())?;
+        // Posed instances point into their own vertices: rebased onto
+        // where those land in the vertex domain.
+        let posed = scene.posed_vertices();
+        let posed_range = if posed.is_empty() {
+            None
+        } else {
+            let range = heap.slots.allocate(DomainKind::Vertices, count(posed.len()))?;
+            self.posed = Some(range);
+            heap.ensure_capacity(device, queue);
+            heap.write(queue, &range, 0, posed)?;
+            Some(range)
+        };
+        let rebased: Vec<RayInstance> = scene
+            .instances()
+            .iter()
+            .map(|i| match posed_range {
+                Some(range) if i.flags & POSED != 0 => RayInstance { vertex_slot: i.vertex_slot + range.start, ..*i },
+                _ => *i,
+            })
+            .collect();
+        heap.write(queue, &instances, 0, &rebased)?;
         self.tlas_root = scene.tlas_root().unwrap_or(INVALID_SLOT);
         self.uploaded_generation = Some(scene.generation());
         Ok(())

@@ -118,5 +118,7 @@ struct RayInstance {
     submesh_first: u32,
     submesh_count: u32,
     attributes_slot: u32,
-    reserved: u32,
+    // POSED (1) for a skinned or morphed instance posed on the CPU: its
+    // vertex_slot was rebased onto its posed vertices on upload.
+    flags: u32,
 }

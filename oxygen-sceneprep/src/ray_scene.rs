@@ -19,12 +19,20 @@
 //! at the instance's vertex and index slots, so the tracer and the raster
 //! passes see the same bytes. The matrices are the frame's, relative to the
 //! render origin like everything else the GPU reads.
+//!
+//! Skinned and morphed meshes are the exception: the raster deforms them in
+//! its vertex shader, which the tracer cannot follow into a tree. Each such
+//! instance is posed here on the CPU with the frame's own joint matrices and
+//! morph weights (the same arithmetic as `mesh_vertex.wgsl`), expressed in
+//! its node's space, and gets a tree of its own over the posed triangles;
+//! its posed vertices ([`RayScene::posed_vertices`]) are uploaded by the
+//! tracer, and the instance, flagged [`POSED`], points into them.
 
 use std::collections::HashMap;
 
 use bytemuck::{Pod, Zeroable};
-use glam::{Mat4, Vec3};
-use oxygen_core::{Aabb, Scene};
+use glam::{Mat3, Mat4, Vec3};
+use oxygen_core::{Aabb, Geometry, Scene, Vertex};
 use tracing::info_span;
 
 use crate::FrameCollection;
@@ -55,9 +63,13 @@ pub struct RayInstance {
     /// The mesh's attribute records (colour, second UV set) in the vertex
     /// domain, [`oxygen_bindless::INVALID_SLOT`] when it has none.
     pub attributes_slot: u32,
-    /// Zero.
-    pub reserved: u32,
+    /// [`POSED`] when `vertex_slot` is an offset into
+    /// [`RayScene::posed_vertices`] (the tracer rebases it on upload), else 0.
+    pub flags: u32,
 }
+
+/// [`RayInstance::flags`]: a skinned or morphed instance, posed on the CPU.
+pub const POSED: u32 = 1;
 
 const _: () = assert!(std::mem::size_of::<RayInstance>() == 80);
 
@@ -73,6 +85,8 @@ pub struct RayScene {
     tlas_root: Option<u32>,
     generation: u64,
     skipped: u32,
+    /// Vertices of the posed instances, one run per instance.
+    posed_vertices: Vec<Vertex>,
 }
 
 impl RayScene {
@@ -103,11 +117,16 @@ impl RayScene {
         self.generation
     }
     /// Renderables left out of the last rebuild: their world matrix cannot
-    /// be inverted (a scale of zero: nothing a ray could hit), or they are
-    /// skinned or morphed (traced from their rest shape, they would be in
-    /// the wrong place).
+    /// be inverted (a scale of zero: nothing a ray could hit), or posing
+    /// them gave a non-finite vertex (a degenerate joint matrix).
     pub fn skipped(&self) -> u32 {
         self.skipped
+    }
+    /// The posed vertices of the skinned and morphed instances, in their
+    /// nodes' spaces: the tracer uploads them to the vertex domain and adds
+    /// where they land to the [`POSED`] instances' `vertex_slot`.
+    pub fn posed_vertices(&self) -> &[Vertex] {
+        &self.posed_vertices
     }
 
     /// Rebuilds from the frame phase's output; every mesh named must have
@@ -121,14 +140,10 @@ impl RayScene {
         let mut world_boxes = Vec::with_capacity(frame.renderables.len());
         let mut tables: Vec<[u32; 3]> = Vec::new();
         let mut used: Vec<u32> = Vec::new();
+        self.posed_vertices.clear();
+        // Trees over posed instances, by the order they were posed in.
+        let mut posed_trees: Vec<Bvh> = Vec::new();
         for entry in &frame.renderables {
-            // Skinned and morphed meshes are left out: the trees are built
-            // from the meshes' rest shapes, which are not what the raster
-            // draws (counted in `skipped`).
-            if entry.joint_base != oxygen_bindless::INVALID_SLOT || entry.morph_base != oxygen_bindless::INVALID_SLOT {
-                self.skipped += 1;
-                continue;
-            }
             let (Some(slots), Some(mesh)) = (geometry.get(entry.geometry), scene.geometry(entry.geometry)) else {
                 continue;
             };
@@ -139,14 +154,30 @@ impl RayScene {
                 continue;
             }
             let inverse = world.inverse();
-            let index_count = mesh.indices().len();
-            let stale = self.meshes.get(&entry.geometry_id).is_none_or(|(count, _)| *count != index_count);
-            if stale {
-                let positions: Vec<[f32; 3]> = mesh.vertices().iter().map(|v| v.position).collect();
-                let bvh = Bvh::build(&triangle_boxes(&positions, mesh.indices()), MAX_LEAF);
-                self.meshes.insert(entry.geometry_id, (index_count, bvh));
-            }
-            let Some((_, bvh)) = self.meshes.get(&entry.geometry_id) else { continue };
+            let deformed =
+                entry.joint_base != oxygen_bindless::INVALID_SLOT || entry.morph_base != oxygen_bindless::INVALID_SLOT;
+            let (bvh, vertex_slot, flags, tree) = if deformed {
+                let Some(vertices) = pose(mesh, entry, frame, &world) else {
+                    self.skipped += 1;
+                    continue;
+                };
+                let positions: Vec<[f32; 3]> = vertices.iter().map(|v| v.position).collect();
+                posed_trees.push(Bvh::build(&triangle_boxes(&positions, mesh.indices()), MAX_LEAF));
+                let offset = self.posed_vertices.len() as u32;
+                self.posed_vertices.extend_from_slice(&vertices);
+                let index = posed_trees.len() - 1;
+                (&posed_trees[index], offset, POSED, index as u32)
+            } else {
+                let index_count = mesh.indices().len();
+                let stale = self.meshes.get(&entry.geometry_id).is_none_or(|(count, _)| *count != index_count);
+                if stale {
+                    let positions: Vec<[f32; 3]> = mesh.vertices().iter().map(|v| v.position).collect();
+                    let bvh = Bvh::build(&triangle_boxes(&positions, mesh.indices()), MAX_LEAF);
+                    self.meshes.insert(entry.geometry_id, (index_count, bvh));
+                }
+                let Some((_, bvh)) = self.meshes.get(&entry.geometry_id) else { continue };
+                (bvh, slots.vertices.start, 0, entry.geometry_id)
+            };
             if bvh.nodes.is_empty() {
                 continue;
             }
@@ -159,16 +190,16 @@ impl RayScene {
             instances.push(RayInstance {
                 inverse_rows: [rows[0], rows[1], rows[2]],
                 transform_index: entry.transform_index,
-                blas_root: entry.geometry_id, // resolved below
-                vertex_slot: slots.vertices.start,
+                blas_root: tree, // resolved below
+                vertex_slot,
                 index_slot: slots.indices.start,
                 submesh_first,
                 submesh_count: submeshes.len() as u32,
                 attributes_slot: slots.attributes,
-                reserved: 0,
+                flags,
             });
             world_boxes.push(transform_box(&world, bvh.bounds()));
-            if !used.contains(&entry.geometry_id) {
+            if !deformed && !used.contains(&entry.geometry_id) {
                 used.push(entry.geometry_id);
             }
         }
@@ -193,16 +224,92 @@ impl RayScene {
             );
             self.words.extend_from_slice(&bvh.order);
         }
+        let mut posed_roots = Vec::with_capacity(posed_trees.len());
+        for bvh in &posed_trees {
+            let (node_base, word_base) = (self.nodes.len() as u32, self.words.len() as u32);
+            posed_roots.push(node_base);
+            self.nodes.extend(
+                bvh.nodes
+                    .iter()
+                    .map(|n| BvhNode { first: n.first + if n.count == 0 { node_base } else { word_base }, ..*n }),
+            );
+            self.words.extend_from_slice(&bvh.order);
+        }
         let table_base = self.words.len() as u32;
         self.words.extend(tables.iter().flatten());
         for instance in &mut instances {
-            instance.blas_root = roots.get(&instance.blas_root).copied().unwrap_or(0);
+            instance.blas_root = if instance.flags & POSED != 0 {
+                posed_roots.get(instance.blas_root as usize).copied().unwrap_or(0)
+            } else {
+                roots.get(&instance.blas_root).copied().unwrap_or(0)
+            };
             // From an entry of the tables to its first word (3 per entry).
             instance.submesh_first = table_base + instance.submesh_first * 3;
         }
         self.instances = instances;
         self.tlas_root = (!top.nodes.is_empty()).then_some(0);
     }
+}
+
+/// The mesh as the raster's vertex shader deforms it this frame, in the
+/// space of its node (`world`): morph targets with the weights of the
+/// frame's morph header, then the skin with the frame's joint matrices.
+/// `None` when the frame lacks the matrices named or a posed vertex is not
+/// finite.
+fn pose(mesh: &Geometry, entry: &crate::RenderableEntry, frame: &FrameCollection, world: &Mat4) -> Option<Vec<Vertex>> {
+    let matrices = &frame.transforms;
+    let mut vertices = mesh.vertices().to_vec();
+    if entry.morph_base != oxygen_bindless::INVALID_SLOT {
+        // [vertex count, target count, w0, w1, ...], 16 floats a matrix.
+        let header = |k: usize| -> Option<f32> {
+            let m = matrices.world.get(entry.morph_base as usize + k / 16)?;
+            Some(m.to_cols_array()[k % 16])
+        };
+        let targets = header(1)? as usize;
+        for (t, target) in mesh.morph_targets().iter().enumerate().take(targets) {
+            let w = header(t + 2)?;
+            if w == 0.0 {
+                continue;
+            }
+            for (i, v) in vertices.iter_mut().enumerate() {
+                let d = target.positions.get(i).copied().unwrap_or(Vec3::ZERO);
+                v.position = (Vec3::from(v.position) + w * d).to_array();
+                if let Some(normals) = &target.normals {
+                    let d = normals.get(i).copied().unwrap_or(Vec3::ZERO);
+                    v.normal = (Vec3::from(v.normal) + w * d).to_array();
+                }
+            }
+        }
+    }
+    if entry.joint_base != oxygen_bindless::INVALID_SLOT {
+        let skin = mesh.skin_weights()?;
+        // The skin gives world space; the tracer applies the node's world
+        // matrix, so the posed mesh goes back through its inverse (normals
+        // through its transpose, the inverse of the normal matrix).
+        let to_node = world.inverse();
+        let normal_to_node = Mat3::from_mat4(*world).transpose();
+        for (v, s) in vertices.iter_mut().zip(skin) {
+            let (mut position, mut normal) = (Vec3::ZERO, Vec3::ZERO);
+            for k in 0..4 {
+                let weight = s.weights[k];
+                if weight > 0.0 {
+                    let joint = entry.joint_base as usize + s.joints[k] as usize;
+                    let m = matrices.world.get(joint)?;
+                    let n = matrices.normal.get(joint)?;
+                    let n = Mat3::from_cols(
+                        Vec3::from_slice(&n.columns[0]),
+                        Vec3::from_slice(&n.columns[1]),
+                        Vec3::from_slice(&n.columns[2]),
+                    );
+                    position += weight * m.transform_point3(Vec3::from(v.position));
+                    normal += weight * (n * Vec3::from(v.normal));
+                }
+            }
+            v.position = to_node.transform_point3(position).to_array();
+            v.normal = (normal_to_node * normal).to_array();
+        }
+    }
+    vertices.iter().all(|v| Vec3::from(v.position).is_finite() && Vec3::from(v.normal).is_finite()).then_some(vertices)
 }
 
 /// The box around `local` once `world` has moved it (its eight corners).
