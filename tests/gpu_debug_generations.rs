@@ -82,6 +82,7 @@ fn a_stale_draw_range_is_painted_magenta() {
         origin: glam::DVec3::ZERO,
         hdr_read_by_others: false,
         textured_materials: true,
+        uv_transforms: true,
         specialize_shaders: true,
         visibility: None,
         reference: None,

@@ -13,17 +13,18 @@ fn harmonic(i: u32) -> vec3<f32> {
 }
 
 // Irradiance from the environment on a surface facing `n` (its nine
-// spherical-harmonic coefficients, cosine-convolved).
+// spherical-harmonic coefficients, cosine-convolved), summed as they are
+// loaded.
 fn environment_irradiance(n: vec3<f32>) -> vec3<f32> {
-    var c: array<vec3<f32>, 9>;
-    for (var i = 0u; i < 9u; i++) {
-        c[i] = harmonic(i);
-    }
-    let e = c[0] * 0.282095
-        + c[1] * (0.488603 * n.y) + c[2] * (0.488603 * n.z) + c[3] * (0.488603 * n.x)
-        + c[4] * (1.092548 * n.x * n.y) + c[5] * (1.092548 * n.y * n.z)
-        + c[6] * (0.315392 * (3.0 * n.z * n.z - 1.0)) + c[7] * (1.092548 * n.x * n.z)
-        + c[8] * (0.546274 * (n.x * n.x - n.y * n.y));
+    var e = harmonic(0u) * 0.282095;
+    e += harmonic(1u) * (0.488603 * n.y);
+    e += harmonic(2u) * (0.488603 * n.z);
+    e += harmonic(3u) * (0.488603 * n.x);
+    e += harmonic(4u) * (1.092548 * n.x * n.y);
+    e += harmonic(5u) * (1.092548 * n.y * n.z);
+    e += harmonic(6u) * (0.315392 * (3.0 * n.z * n.z - 1.0));
+    e += harmonic(7u) * (1.092548 * n.x * n.z);
+    e += harmonic(8u) * (0.546274 * (n.x * n.x - n.y * n.y));
     return max(e, vec3<f32>(0.0));
 }
 

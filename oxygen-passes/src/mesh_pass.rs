@@ -334,6 +334,7 @@ impl MeshPass {
             local_shadows: config.is_some_and(|c| c.local_shadows) && inputs.local_shadows.is_some(),
             probes: config.is_some_and(|c| c.reflections) && !inputs.probes.is_empty(),
             textures: ctx.textured_materials,
+            uv_transforms: ctx.uv_transforms,
         }
     }
 

@@ -122,7 +122,15 @@ struct UvDerivatives {
     dy1: vec2<f32>,
 }
 
+// Whether any material reads a second UV set or a texture transform
+// (pipelines.rs `ShaderFeatures::uv_transforms`); without, set 1's
+// derivatives are never taken and every texture reads set 0 as is.
+override HAS_UV_TRANSFORMS: bool = true;
+
 fn uv_derivatives_of(mesh: MeshVarying) -> UvDerivatives {
+    if !HAS_UV_TRANSFORMS {
+        return UvDerivatives(dpdx(mesh.uv), dpdy(mesh.uv), vec2<f32>(0.0), vec2<f32>(0.0));
+    }
     return UvDerivatives(dpdx(mesh.uv), dpdy(mesh.uv), dpdx(mesh.uv1), dpdy(mesh.uv1));
 }
 
@@ -138,7 +146,7 @@ struct TexCoord {
 // The coordinates of the texture whose record is `t`. Without
 // MATERIAL_UV_TRANSFORMS every texture reads set 0 as is.
 fn tex_coord(mesh: MeshVarying, material: MaterialRecord, t: UvTransformRecord, d: UvDerivatives) -> TexCoord {
-    if (material.flags & MATERIAL_UV_TRANSFORMS) == 0u {
+    if !HAS_UV_TRANSFORMS || (material.flags & MATERIAL_UV_TRANSFORMS) == 0u {
         return TexCoord(mesh.uv, d.dx0, d.dy0);
     }
     let set1 = t.uv_set == 1u;

@@ -132,6 +132,9 @@ pub struct RenderContext<'a> {
     /// Whether any material of the scene has a texture: shading pipelines
     /// leave texture sampling out otherwise ([`crate::ShaderFeatures`]).
     pub textured_materials: bool,
+    /// Whether any material of the scene reads a second UV set or a
+    /// texture transform: shading pipelines leave that path out otherwise.
+    pub uv_transforms: bool,
     /// Specialise the shading pipelines to what the view has this frame
     /// ([`crate::ShaderFeatures`]); `false` runs the fully featured shader
     /// everywhere (for comparisons).

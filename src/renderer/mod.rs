@@ -390,6 +390,8 @@ pub struct Renderer {
     specialize_shaders: bool,
     /// Whether any material of the frame's scene has a texture.
     textured_materials: bool,
+    /// Whether any material reads a second UV set or a texture transform.
+    uv_transforms: bool,
     /// GPU-driven visibility, where the device can run it.
     visibility: Option<GpuVisibility>,
     /// The path-traced reference's tracer, made when a view first asks.
@@ -521,6 +523,7 @@ impl Renderer {
             keep_hdr: options.keep_hdr,
             specialize_shaders: options.specialize_shaders,
             textured_materials: true,
+            uv_transforms: true,
             visibility: gpu_visibility,
             reference: None,
             default_visibility,
@@ -873,6 +876,9 @@ impl Renderer {
             .iter()
             .any(Option::is_some)
         });
+        self.uv_transforms = scene
+            .materials()
+            .any(|(_, m)| m.uvs.in_record_order().iter().any(|t| *t != oxygen_core::UvTransform::IDENTITY));
         let record_start = Instant::now();
         let created_before = self.pipelines.pipelines_created();
         self.pipelines.begin_frame();

@@ -196,6 +196,7 @@ impl Renderer {
                     origin: plan.origin,
                     hdr_read_by_others: self.keep_hdr || hdr_readers.contains(&view.id),
                     textured_materials: self.textured_materials,
+                    uv_transforms: self.uv_transforms,
                     specialize_shaders: self.specialize_shaders,
                     visibility: self.visibility.as_ref(),
                     reference: self.reference.as_ref(),
