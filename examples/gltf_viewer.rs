@@ -4,7 +4,7 @@
 //!
 //! ```text
 //! cargo run --release --example gltf_viewer -- [FILE] [OUTPUT_DIR] [--scene N|NAME] [--size WxH]
-//!     [--time T] [--animation N|NAME] [--frames N --fps F]
+//!     [--time T] [--animation N|NAME] [--frames N --fps F] [--environment sky|none|FILE.hdr]
 //! ```
 //! With `--time`, `--animation` or `--frames` the scene is posed by one of
 //! the file's animations (the first unless `--animation` names one) at `T`
@@ -12,6 +12,10 @@
 //! numbered sequence (`NAME_VIEW_0000.png`, ...).
 //! FILE defaults to the shipped `assets/AlphaBlendModeTest/AlphaBlendModeTest.glb`,
 //! OUTPUT_DIR to `out/`. A scene without lights gets a default sun (said so).
+//! The scene is lit by an environment too (image-based lighting, drawn
+//! behind it): by default the procedural sky matched to its sun;
+//! `--environment FILE.hdr` takes a panorama, `--environment none` the
+//! constant ambient term.
 //! The file is imported with Oxygen's default import limits and its external
 //! files confined to its folder (`docs/security.md`); a view that cannot be
 //! rendered (a glTF camera with an unusable projection, say) is reported and
@@ -25,6 +29,7 @@ use oxygen::prelude::*;
 const USAGE: &str = "\
 usage: gltf_viewer [FILE] [OUTPUT_DIR] [--scene N|NAME] [--size WxH]
                    [--time T] [--animation N|NAME] [--frames N --fps F]
+                   [--environment sky|none|FILE.hdr]
 
   FILE            a .gltf or .glb file (default: the shipped AlphaBlendModeTest.glb)
   OUTPUT_DIR      where the PNGs go, created if missing (default: out)
@@ -34,6 +39,9 @@ usage: gltf_viewer [FILE] [OUTPUT_DIR] [--scene N|NAME] [--size WxH]
   --animation N   which animation (an index or a name; default the first)
   --frames N      render N frames as a numbered sequence (needs --fps)
   --fps F         frames per second of the sequence
+  --environment E the light from everywhere: sky (default, matched to the
+                  sun), none (a constant ambient term) or an
+                  equirectangular .hdr file
   -h, --help      print this help";
 
 /// The parsed command line.
@@ -45,6 +53,8 @@ struct Args {
     size: UVec2,
     /// Posing by an animation, when any animation option was given.
     animation: Option<AnimationArgs>,
+    /// `sky`, `none` or a panorama's path.
+    environment: String,
 }
 
 /// Which animation, from when, and how many frames.
@@ -82,6 +92,7 @@ fn parse_args(args: impl Iterator<Item = String>) -> Result<Option<Args>, String
     let mut choice = SceneChoice::Default;
     let mut size = UVec2::new(800, 600);
     let (mut time, mut which, mut frames, mut fps) = (None, None, None, None);
+    let mut environment = "sky".to_owned();
     let mut args = args;
     while let Some(arg) = args.next() {
         match arg.as_str() {
@@ -106,6 +117,12 @@ fn parse_args(args: impl Iterator<Item = String>) -> Result<Option<Args>, String
                 time = Some(t.ok_or_else(|| format!("--time needs a finite number of seconds (got '{v}')"))?);
             }
             "--animation" => which = Some(args.next().ok_or("--animation needs an index or a name")?),
+            "--environment" => {
+                environment = args.next().ok_or("--environment needs sky, none or a .hdr file")?;
+                if environment.is_empty() {
+                    return Err("--environment needs sky, none or a .hdr file (got '')".into());
+                }
+            }
             "--frames" => {
                 let v = args.next().ok_or("--frames needs a count")?;
                 let n = v.parse::<u32>().ok().filter(|n| (1..=100_000).contains(n));
@@ -146,7 +163,7 @@ fn parse_args(args: impl Iterator<Item = String>) -> Result<Option<Args>, String
         time: time.unwrap_or(0.0),
         sequence,
     });
-    Ok(Some(Args { file, out_dir, choice, size, animation }))
+    Ok(Some(Args { file, out_dir, choice, size, animation, environment }))
 }
 
 fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
@@ -159,7 +176,7 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
         )
         .with_writer(std::io::stderr)
         .init();
-    let Args { file, out_dir, choice, size, animation } = args;
+    let Args { file, out_dir, choice, size, animation, environment } = args;
     std::fs::create_dir_all(&out_dir)
         .map_err(|e| format!("cannot create output directory {}: {e}", out_dir.display()))?;
 
@@ -192,7 +209,21 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
         println!("  no lights in the file: added a default directional light");
     }
 
+    let environment = match environment.as_str() {
+        "none" => None,
+        "sky" => Some(oxygen_demo::viewer_environment(&scene)),
+        file => Some(oxygen::load_hdr_environment(file)?),
+    };
     let mut renderer = Renderer::new_headless()?;
+    if let Some(e) = &environment {
+        let what = match e {
+            oxygen::core::Environment::Sky(_) => "the sky matched to the sun".to_owned(),
+            oxygen::core::Environment::Uniform(_) => "a uniform colour".to_owned(),
+            oxygen::core::Environment::Image(i) => format!("a {} × {} panorama", i.width, i.height),
+        };
+        println!("environment: {what} (image-based lighting; --environment none turns it off)");
+    }
+    renderer.set_environment(environment.as_ref());
     // Three orbit views of `size`: refuse a size whose targets would not fit
     // before anything is allocated.
     renderer.check_target_budget(&[(size, false); 3]).map_err(|e| format!("--size {}x{}: {e}", size.x, size.y))?;

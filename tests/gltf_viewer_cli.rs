@@ -124,3 +124,28 @@ fn a_numbered_sequence_is_written_at_the_given_rate() {
     assert!(differing > 100, "the cube must turn between frames 0 and 2 ({differing} pixels differ)");
     assert!(out.join("AnimatedCube_orbit_front_0001.png").exists());
 }
+
+/// The main job lights the scene with the sky by default (said so, and
+/// drawn behind the scene: a corner of the picture is sky, not the clear
+/// colour); `--environment none` turns it off; a missing panorama is named.
+#[test]
+fn the_sky_lights_the_scene_unless_told_otherwise() {
+    let corner = |dir: &PathBuf| {
+        let path = dir.join("BoxTextured_orbit_front.png");
+        image::open(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display())).to_rgba8().get_pixel(1, 1).0
+    };
+    let file = asset("BoxTextured/BoxTextured.glb");
+    let lit = tmp("environment_sky");
+    let (output, text) = run(&[&file, lit.to_str().unwrap(), "--size", "64x48"]);
+    assert!(output.status.success(), "{text}");
+    assert!(text.contains("environment: the sky matched to the sun"), "{text}");
+    let plain = tmp("environment_none");
+    let (output, text) = run(&[&file, plain.to_str().unwrap(), "--size", "64x48", "--environment", "none"]);
+    assert!(output.status.success(), "{text}");
+    assert!(!text.contains("environment:"), "{text}");
+    let (sky, clear) = (corner(&lit), corner(&plain));
+    assert!(sky[2] > clear[2] + 40, "the sky behind the scene: {sky:?} against the clear colour {clear:?}");
+    let (output, text) = run(&[&file, plain.to_str().unwrap(), "--environment", "/nonexistent/sky.hdr"]);
+    assert!(!output.status.success());
+    assert!(text.contains("/nonexistent/sky.hdr"), "{text}");
+}
