@@ -3,8 +3,10 @@
 //!
 //! Each face view (90° perspective, one per axis direction, as in
 //! [`oxygen_passes::PROBE_FACE_AXES`]) runs a depth
-//! pre-pass and forward lit shading into its layer of the cube, then rebuilds
-//! that layer's mip chain ([`crate::ProbeFaceGraph`]). A view
+//! pre-pass and forward lit shading into its layer of the cube
+//! ([`crate::ProbeFaceGraph`]); once all six have recorded, the renderer
+//! GGX-prefilters the cube's levels across its faces, as the environment's
+//! (`Renderer::set_probe_filter_samples`). A view
 //! linked to the probe's [`ReflectionProbe::cube`] records after the faces
 //! and reflects the probe. Faces are paused between updates
 //! ([`ReflectionProbe::before_frame`]), so an every-N-frames probe costs

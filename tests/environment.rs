@@ -310,3 +310,27 @@ fn a_metal_reflects_a_uniform_environment_by_the_split_sum() {
         }
     }
 }
+
+/// Found in review: the irradiance harmonics live in half floats, and
+/// coefficient 0 is about 11 × the mean radiance, so an environment brighter
+/// than about 5 900 overflowed to infinity and shaded NaN. Stored scaled
+/// down, a uniform 30 000 (near the half floats' limit for the cube
+/// itself) lights a sphere with finite radiance and reads back as π L.
+#[test]
+fn a_very_bright_environment_stays_finite() {
+    let radiance = Vec3::splat(30000.0);
+    let environment = Environment::Uniform(radiance);
+    // `render` fails on any NaN or infinity in the HDR image.
+    let image = render(&sphere_scene(0.0, 1.0, false), Some(&environment), Msaa::Off);
+    let centre = at(&image, 48, 48);
+    assert!(centre.is_finite() && centre.x > 0.9 * radiance.x, "{centre}");
+    let mut renderer = support::gpu_renderer();
+    renderer
+        .set_environment_with_quality(Some(&environment), oxygen::passes::EnvironmentQuality { size: 16, samples: 8 });
+    let read = renderer.read_environment().unwrap().unwrap();
+    let e = read.irradiance(Vec3::Y);
+    assert!(
+        (e - radiance * std::f32::consts::PI).abs().max_element() < 0.02 * radiance.x * std::f32::consts::PI,
+        "{e}"
+    );
+}

@@ -15,10 +15,13 @@
 //! * nine spherical-harmonic coefficients of the cosine-convolved radiance
 //!   (irradiance), evaluated per pixel for the diffuse term.
 //!
-//! The shader combines them with the analytic environment BRDF it already
-//! uses for probes. Prefiltering runs on the CPU: the cube is small (64²
-//! faces by default), sampled from the environment function itself, so it
-//! is deterministic and testable without a GPU.
+//! The renderer builds the same thing on the GPU (`oxygen_passes`'s cube
+//! filter, what `Renderer::set_environment` uses); this CPU prefilter,
+//! sampled from the environment function itself, is deterministic and
+//! testable without a GPU: the reference the GPU's is tested against, and
+//! what `Renderer::set_prefiltered_environment` uploads as it is. The
+//! shading weighs the prefiltered radiance by the split-sum table, whose
+//! CPU twin is [`split_sum_brdf`].
 
 use glam::{Vec2, Vec3};
 
@@ -79,7 +82,9 @@ impl Sky {
             // A soft step from horizon to ground within a few degrees.
             self.ground.lerp(self.horizon, (1.0 + up * 12.0).clamp(0.0, 1.0))
         };
-        let towards_sun = dir.dot(-self.sun_direction).max(0.0);
+        // Normalised as the GPU's twin does: a hand-made sky may not be.
+        let sun = self.sun_direction.try_normalize().unwrap_or(Vec3::NEG_Y);
+        let towards_sun = dir.dot(-sun).max(0.0);
         base + self.glow * towards_sun.powi(32) * if up > -0.05 { 1.0 } else { 0.0 }
     }
 }

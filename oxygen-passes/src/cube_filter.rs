@@ -16,7 +16,8 @@
 //!    4 × 4 faces ([`prefiltered_levels`]); smaller faces would show seams.
 //! 4. For environments, **irradiance harmonics**: nine coefficients written
 //!    into a 3 × 3 block of the layer after the faces (layer 6; coefficient
-//!    `i` at `(i % 3, i / 3)`), read by the shader.
+//!    `i` at `(i % 3, i / 3)`, divided by [`HARMONICS_SCALE`]), read by the
+//!    shader.
 //!
 //! Each step is a full-screen triangle per face and level, so it runs on
 //! every backend the renderer runs on (GL included). The CPU twin, slower
@@ -38,6 +39,20 @@ const FACES: u32 = 6;
 /// Layer holding an environment's irradiance harmonics (after the faces).
 pub const HARMONICS_LAYER: u32 = FACES;
 
+/// The harmonics are stored divided by this: coefficient 0 is about 11 ×
+/// the mean radiance, which for a bright environment would overflow a half
+/// float (65 504) and turn shading into NaN; sixteen times the range keeps
+/// even an environment at the half floats' limit finite. A power of two, so
+/// the division costs no precision.
+pub const HARMONICS_SCALE: f32 = 16.0;
+
+/// Largest face side an environment is built at.
+pub const MAX_ENVIRONMENT_SIZE: u32 = 4096;
+
+/// Most GGX samples per texel (more would keep one draw long enough for a
+/// GPU watchdog to reset the device).
+pub const MAX_FILTER_SAMPLES: u32 = 4096;
+
 /// Layers of a prefiltered environment texture: the faces and the
 /// harmonics layer (seven, a shape every backend samples as an array).
 const ENVIRONMENT_LAYERS: u32 = FACES + 1;
@@ -47,11 +62,13 @@ const ENVIRONMENT_LAYERS: u32 = FACES + 1;
 /// against the CPU reference in `tests/environment.rs`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct EnvironmentQuality {
-    /// Side of level 0's faces, 16 to the device's texture limit: the
-    /// sharpness of mirror reflections (a detailed panorama wants 256 or
-    /// more).
+    /// Side of level 0's faces: the sharpness of mirror reflections (a
+    /// detailed panorama wants 256 or more). Rounded up to a power of two
+    /// (halving exactly is what lets each box level keep the energy of the
+    /// one above), from 16 to [`MAX_ENVIRONMENT_SIZE`] or the device's
+    /// texture limit.
     pub size: u32,
-    /// GGX samples per prefiltered texel (at least 1).
+    /// GGX samples per prefiltered texel, 1 to [`MAX_FILTER_SAMPLES`].
     pub samples: u32,
 }
 
@@ -192,10 +209,14 @@ impl CubeFilter {
         environment: &Environment,
         quality: EnvironmentQuality,
     ) -> wgpu::Texture {
-        let limit = device.limits().max_texture_dimension_2d;
-        let size = quality.size.clamp(16, limit.max(16));
+        let limit = device.limits().max_texture_dimension_2d.clamp(16, MAX_ENVIRONMENT_SIZE);
+        // The largest power of two within the limit, then the request
+        // rounded up to a power of two below it.
+        let cap = 1u32 << (u32::BITS - 1 - limit.leading_zeros());
+        let size = quality.size.clamp(16, cap).next_power_of_two().min(cap);
+        let samples = quality.samples.clamp(1, MAX_FILTER_SAMPLES);
         let levels = prefiltered_levels(size);
-        let _span = tracing::info_span!("environment_gpu_prefilter", size, levels, samples = quality.samples).entered();
+        let _span = tracing::info_span!("environment_gpu_prefilter", size, levels, samples).entered();
         let scratch = scratch_cube(device, size);
         let scratch_levels = scratch.mip_level_count();
 
@@ -208,8 +229,10 @@ impl CubeFilter {
             Environment::Sky(sky) => *sky,
             Environment::Image(_) => Sky::matched_to_sun(glam::Vec3::NEG_Y),
         };
+        // Finite, non-negative and within what the half-float cube holds.
         let clean = |v: glam::Vec3| {
-            let v = if v.is_finite() { v.max(glam::Vec3::ZERO) } else { glam::Vec3::ZERO };
+            let v =
+                if v.is_finite() { v.clamp(glam::Vec3::ZERO, glam::Vec3::splat(65504.0)) } else { glam::Vec3::ZERO };
             v.extend(1.0).to_array()
         };
         let sun = sky.sun_direction.try_normalize().unwrap_or(glam::Vec3::NEG_Y);
@@ -220,10 +243,10 @@ impl CubeFilter {
             glow: clean(sky.glow),
             sun_direction: sun.extend(0.0).to_array(),
             roughness: 0.0,
-            samples: quality.samples.max(1),
+            samples,
             target_size: size,
-            // The box level whose faces are at most 32 wide: 6 × 32² reads
-            // per coefficient.
+            // The box level whose faces are 32 wide (the size is a power of
+            // two of at least 16): 6 × 32² reads per coefficient.
             harmonics_level: scratch_levels.saturating_sub(6),
         };
         let mut params = vec![base; levels as usize + 1];
@@ -297,7 +320,9 @@ impl CubeFilter {
     /// `1..=mip_level_count − 3` become the GGX-prefiltered radiance
     /// (roughness `l / (mip_level_count − 3)`, as `probe_lod` in the
     /// shading shader reads them). Does nothing for a texture that is not
-    /// an HDR, renderable probe with at least two prefiltered levels.
+    /// an HDR, renderable probe with at least two prefiltered levels. A
+    /// side that is not a power of two loses a little energy in the box
+    /// levels the samples read (each halving rounds down).
     pub(crate) fn prefilter_probe(
         &self,
         device: &wgpu::Device,
@@ -305,6 +330,7 @@ impl CubeFilter {
         texture: &wgpu::Texture,
         samples: u32,
     ) {
+        let samples = samples.clamp(1, MAX_FILTER_SAMPLES);
         let roughest = texture.mip_level_count().saturating_sub(3);
         if roughest < 1
             || texture.format() != ViewTargets::HDR_FORMAT
@@ -494,6 +520,12 @@ fn upload_equirect(device: &wgpu::Device, queue: &wgpu::Queue, image: &oxygen_co
     let limit = device.limits().max_texture_dimension_2d.max(1);
     let (mut width, mut height) = (image.width, image.height);
     let mut texels = std::borrow::Cow::Borrowed(&image.texels);
+    // The fields are public: an image built by hand may not hold what its
+    // size says (`EquirectImage::new` would have refused it). Black then.
+    if width == 0 || height == 0 || texels.len() as u64 != u64::from(width) * u64::from(height) {
+        tracing::warn!(width, height, texels = texels.len(), "an inconsistent equirectangular image: black instead");
+        (width, height, texels) = (1, 1, std::borrow::Cow::Owned(vec![glam::Vec3::ZERO]));
+    }
     while width > limit || height > limit {
         let (w, h) = (width.div_ceil(2), height.div_ceil(2));
         let mut half = Vec::with_capacity((w * h) as usize);

@@ -167,7 +167,9 @@ fn fs_harmonics(v: Varying) -> @location(0) vec4<f32> {
     } else if index < 4u {
         band = 2.0 * PI / 3.0;
     }
-    return vec4<f32>(sum * band, 1.0);
+    // Stored divided by HARMONICS_SCALE (16): the half float would overflow
+    // for a bright environment.
+    return vec4<f32>(sum * (band / 16.0), 1.0);
 }
 
 // Real spherical harmonic `i` of bands 0-2 (`oxygen_core::sh9`).

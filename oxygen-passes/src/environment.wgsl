@@ -6,10 +6,11 @@
 // layout comes from cube_faces.wgsl.
 
 // Coefficient `i` of the environment's irradiance harmonics: the 3 x 3
-// corner of the layer after the faces (cube_filter.rs). Signed
-// coordinates: GLSL's texelFetch takes ints.
+// corner of the layer after the faces, stored divided by 16
+// (cube_filter.rs HARMONICS_SCALE). Signed coordinates: GLSL's texelFetch
+// takes ints.
 fn harmonic(i: u32) -> vec3<f32> {
-    return textureLoad(environment_faces, vec2<i32>(i32(i % 3u), i32(i / 3u)), i32(PROBE_FACES), 0).rgb;
+    return textureLoad(environment_faces, vec2<i32>(i32(i % 3u), i32(i / 3u)), i32(PROBE_FACES), 0).rgb * 16.0;
 }
 
 // Irradiance from the environment on a surface facing `n` (its nine

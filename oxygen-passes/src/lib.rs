@@ -44,7 +44,8 @@ mod tonemap_pass;
 mod visibility;
 
 pub use cube_filter::{
-    CUBE_FILTER_WGSL, EnvironmentQuality, HARMONICS_LAYER, PROBE_FILTER_SAMPLES, prefiltered_levels,
+    CUBE_FILTER_WGSL, EnvironmentQuality, HARMONICS_LAYER, HARMONICS_SCALE, MAX_ENVIRONMENT_SIZE, MAX_FILTER_SAMPLES,
+    PROBE_FILTER_SAMPLES, prefiltered_levels,
 };
 pub use lighting::LightingResources;
 pub use lighting_inputs::{

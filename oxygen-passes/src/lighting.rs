@@ -67,7 +67,9 @@ impl LightingResources {
 
     /// [`LightingResources::set_environment`] with an environment
     /// prefiltered on the CPU ([`oxygen_core::Environment::prefilter`],
-    /// the reference the GPU's is tested against): uploaded as it is.
+    /// the reference the GPU's is tested against): uploaded as it is
+    /// (faces narrower than 4 texels excepted, which stay black; a face of
+    /// the wrong texel count is skipped).
     pub fn set_prefiltered_environment(
         &mut self,
         device: &wgpu::Device,
@@ -79,8 +81,16 @@ impl LightingResources {
             self.environment = None;
             return;
         };
-        // At least 4 wide: the harmonics layer holds a 3 × 3 block.
+        // At least 4 wide: the harmonics layer holds a 3 × 3 block. A
+        // smaller environment's faces do not fit the padded texture: its
+        // cube stays black (said so), its harmonics still light.
         let size = env.size.max(4);
+        if env.size < 4 {
+            tracing::warn!(
+                size = env.size,
+                "a prefiltered environment narrower than 4 texels: its faces are left black"
+            );
+        }
         let levels = env.levels.len().max(1) as u32;
         let texture = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("environment"),
@@ -122,7 +132,8 @@ impl LightingResources {
                 }
             }
         }
-        write(0, HARMONICS_LAYER, 3, &env.irradiance_sh);
+        let scaled = env.irradiance_sh.map(|c| c / crate::cube_filter::HARMONICS_SCALE);
+        write(0, HARMONICS_LAYER, 3, &scaled);
         self.install_environment(device, texture);
     }
 
@@ -151,9 +162,10 @@ impl LightingResources {
         self.environment.as_ref().map(|e| &e.texture)
     }
 
-    /// How many times the environment was set or removed: a view that
+    /// How many times the environment was set or removed (setting the same
+    /// one again counts: the renderer does not compare them): a view that
     /// accumulates over frames (the path-traced reference) restarts when
-    /// it changes.
+    /// it changes, so set it once, not every frame.
     pub fn environment_generation(&self) -> u64 {
         self.environment_generation
     }

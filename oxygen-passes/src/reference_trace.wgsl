@@ -569,7 +569,9 @@ fn radiance(first: Ray, rng: ptr<function, Rng>) -> vec3<f32> {
             let f0 = mix(vec3<f32>(0.04), s.albedo, s.metallic);
             if has_environment_map() {
                 color += throughput * s.albedo * (1.0 - s.metallic) * environment_irradiance(s.normal) / PI;
-                if (params.flags & RASTER_REFLECTIONS) == 0u {
+                // A probe's faces have no probe: what they show reflects
+                // the environment, so past the first hit it is added too.
+                if (params.flags & RASTER_REFLECTIONS) == 0u || bounce > 0u {
                     let reflected = sample_environment(reflect(-v, s.normal), s.roughness);
                     color += throughput * reflected * split_sum_brdf(f0, s.roughness, max(dot(s.normal, v), 0.0));
                 }

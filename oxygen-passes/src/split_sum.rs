@@ -7,10 +7,10 @@
 //! Shaders read it from a uniform buffer (the texture's half floats copied
 //! as they are, two texels per `vec4<u32>`) with their own bilinear
 //! interpolation, not as a texture: GL allows 16 sampled textures per
-//! stage and the shading pass already binds 16. The
-//! analytic fit the shader used before (Karis 2014) stays in `brdf.wgsl`
-//! for the path-traced reference; the tests measure the two against the
-//! CPU twin, `oxygen_core::split_sum_brdf`.
+//! stage and the shading pass already binds 16. It replaces the analytic
+//! fit (Karis 2014) the shading and the reference's raster model used
+//! before; `tests/environment.rs` measures both against the CPU twin,
+//! `oxygen_core::split_sum_brdf`.
 
 /// Side of the table: texel `(i, j)` holds n·v = i / (N − 1), roughness
 /// j / (N − 1); the shader samples it bilinearly between those.

@@ -117,7 +117,9 @@ impl RayScene {
         self.generation
     }
     /// Renderables left out of the last rebuild: their world matrix cannot
-    /// be inverted (a scale of zero: nothing a ray could hit), or posing
+    /// be inverted (a scale of zero: nothing a ray could hit, unless the
+    /// mesh is skinned, whose joints place it: the tracer poses skinned
+    /// meshes in their node's space and cannot for such a node), or posing
     /// them gave a non-finite vertex (a degenerate joint matrix).
     pub fn skipped(&self) -> u32 {
         self.skipped

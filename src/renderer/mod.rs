@@ -715,7 +715,7 @@ impl Renderer {
         }
         let block = rgb(self.gpu.read_rgba16_float_layer(texture, 0, oxygen_passes::HARMONICS_LAYER)?);
         let side = texture.width() as usize;
-        let irradiance_sh = std::array::from_fn(|i| block[(i / 3) * side + i % 3]);
+        let irradiance_sh = std::array::from_fn(|i| block[(i / 3) * side + i % 3] * oxygen_passes::HARMONICS_SCALE);
         Ok(Some(oxygen_core::PrefilteredEnvironment { size: texture.width(), levels, irradiance_sh }))
     }
 
@@ -747,11 +747,12 @@ impl Renderer {
 
     /// GGX samples per texel when a reflection probe's levels are
     /// prefiltered after its faces render (default
-    /// [`oxygen_passes::PROBE_FILTER_SAMPLES`]; at least 1): fewer cost
+    /// [`oxygen_passes::PROBE_FILTER_SAMPLES`]; 1 to
+    /// [`oxygen_passes::MAX_FILTER_SAMPLES`]): fewer cost
     /// less GPU time per probe update and leave rough reflections noisier
     /// (`environment_bench` measures both).
     pub fn set_probe_filter_samples(&mut self, samples: u32) {
-        self.probe_filter_samples = samples.max(1);
+        self.probe_filter_samples = samples.clamp(1, oxygen_passes::MAX_FILTER_SAMPLES);
     }
 
     /// Turns shadow maps of spot and point lights on (`Some`) or off.

@@ -42,6 +42,18 @@ pub enum GpuError {
     /// A texture cannot be read back by this path.
     #[error("cannot read back texture of format {0:?} (only RGBA8 unorm or sRGB, and Rgba16Float)")]
     UnsupportedReadbackFormat(wgpu::TextureFormat),
+    /// A mip level or array layer the texture does not have.
+    #[error("texture has {levels} mip levels and {layers} layers; asked for level {level}, layer {layer}")]
+    NoSuchSubresource {
+        /// Level asked for.
+        level: u32,
+        /// Layer asked for.
+        layer: u32,
+        /// Levels the texture has.
+        levels: u32,
+        /// Layers the texture has.
+        layers: u32,
+    },
 }
 
 /// What the application needs from the device.

@@ -98,6 +98,14 @@ impl GpuContext {
         if format != wgpu::TextureFormat::Rgba16Float {
             return Err(GpuError::UnsupportedReadbackFormat(format));
         }
+        if level >= texture.mip_level_count() || layer >= texture.depth_or_array_layers() {
+            return Err(GpuError::NoSuchSubresource {
+                level,
+                layer,
+                levels: texture.mip_level_count(),
+                layers: texture.depth_or_array_layers(),
+            });
+        }
         let bytes = self.read_texels_at(texture, 8, level, layer)?;
         let pixels = bytes
             .chunks_exact(8)
