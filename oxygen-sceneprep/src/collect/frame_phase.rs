@@ -65,7 +65,8 @@ pub struct RenderableEntry {
     /// (joint `i` at `joint_base + i`), `INVALID_SLOT` for a rigid one.
     pub joint_base: u32,
     /// A morphed renderable's morph header among the frame's matrices
-    /// (see [`push_morph_header`]), `INVALID_SLOT` without morph targets.
+    /// (laid out by the frame phase's `push_morph_header`), `INVALID_SLOT`
+    /// without morph targets.
     pub morph_base: u32,
 }
 
