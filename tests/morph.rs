@@ -142,3 +142,60 @@ fn render_with(scene: &Scene, resolver: LookAtResolver) -> image::RgbaImage {
     renderer.render_frame(scene).unwrap();
     support::read_lit_color(&renderer, view)
 }
+
+/// Tangents follow the morph: the renderer derives each pixel's tangent
+/// frame from the surface's positions and UVs (it reads no vertex tangents,
+/// so there are no tangent displacements to apply), so a morph that turns a
+/// normal-mapped quad a quarter turn in its plane shades it exactly as the
+/// quad turned rigidly by its node: the map's lean turns with it. Lit from
+/// the side the turned lean faces, the picture also differs from the
+/// unmorphed quad's.
+#[test]
+fn a_normal_mapped_surface_s_tangents_follow_its_morph() {
+    let enc = |v: f32| ((v * 0.5 + 0.5) * 255.0).round() as u8;
+    // Tangent-space (0.6, 0, 0.8): leaning towards +u.
+    let texel = [enc(0.6), enc(0.0), enc(0.8), 255];
+    let quarter = Quat::from_rotation_z(std::f32::consts::FRAC_PI_2);
+    let scene = |weight: Option<f32>| {
+        let mut scene = Scene::new();
+        let map = scene.add_texture(
+            oxygen::core::TextureImage::new("lean", 4, 4, oxygen::core::ColorSpace::Linear, texel.repeat(16)).unwrap(),
+        );
+        let material =
+            scene.add_material(Material { normal_texture: Some(map), ..Material::opaque("grey", Vec4::splat(0.7)) });
+        let quad = Geometry::quad(2.0);
+        let (geometry, rotation) = match weight {
+            Some(_) => {
+                let turn: Vec<Vec3> =
+                    quad.vertices().iter().map(|v| quarter * Vec3::from(v.position) - Vec3::from(v.position)).collect();
+                let target = MorphTarget { positions: turn, normals: None };
+                (scene.add_geometry(quad.with_morph_targets(vec![target]).unwrap()), Quat::IDENTITY)
+            }
+            None => (scene.add_geometry(quad), quarter),
+        };
+        let node = scene.add_node("quad", Transform::IDENTITY.with_rotation(rotation));
+        scene.set_renderable(node, Renderable { geometry, materials: vec![material] }).unwrap();
+        if let Some(w) = weight {
+            scene.set_morph_weights(node, vec![w]).unwrap();
+        }
+        // Light from +y (where the turned lean points) and the front.
+        let sun = scene.add_node(
+            "sun",
+            Transform::IDENTITY
+                .with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, -Vec3::new(0.0, 1.0, 0.5).normalize())),
+        );
+        scene.set_light(sun, Some(Light::directional(2.0))).unwrap();
+        render(&scene, Vec3::ZERO).0
+    };
+    let morphed = scene(Some(1.0));
+    let turned = scene(None);
+    let unmorphed = scene(Some(0.0));
+    assert_same(&morphed, &turned, "the morph's quarter turn against the node's");
+    let c = compare(&morphed, &unmorphed, 8);
+    assert!(
+        c.differing > c.total / 20,
+        "the turned lean must shade differently: {} of {} differ",
+        c.differing,
+        c.total
+    );
+}
