@@ -404,6 +404,40 @@ fn the_reference_is_lit_by_the_renderer_environment() {
     }
 }
 
+/// `scene` rendered by the standard graph and traced with `settings` from
+/// the same camera, `frames` frames, the renderer lit by `environment`:
+/// the two HDR images and the reference's sample count.
+fn raster_and_reference(
+    scene: &Scene,
+    camera: LookAtResolver,
+    settings: ReferenceSettings,
+    frames: usize,
+    environment: Option<&oxygen::core::Environment>,
+) -> (oxygen::core::gpu::HdrImage, oxygen::core::gpu::HdrImage, u32) {
+    let mut renderer = support::gpu_renderer_with(RendererOptions { keep_hdr: true, ..Default::default() });
+    renderer.set_environment(environment);
+    let raster = renderer.register_view(camera, standard_render_graph).unwrap();
+    let traced = renderer
+        .register_view(ViewDesc::new(camera).path_traced(), ReferenceGraph { settings, exposure: 1.0 })
+        .unwrap();
+    for _ in 0..frames {
+        renderer.render_frame(scene).unwrap();
+    }
+    assert_eq!(renderer.scene_prep().ray_scene().skipped(), 0);
+    let (a, b) = (renderer.read_hdr(raster).unwrap(), renderer.read_hdr(traced).unwrap());
+    support::assert_hdr_image_finite(&b, "reference");
+    (a, b, renderer.reference_samples(traced))
+}
+
+/// Per pixel, whether the two images agree within 5 % in every channel.
+fn agreement(a: &oxygen::core::gpu::HdrImage, b: &oxygen::core::gpu::HdrImage) -> Vec<bool> {
+    a.pixels
+        .iter()
+        .zip(&b.pixels)
+        .map(|(p, q)| (0..3).all(|c| (p[c] - q[c]).abs() / p[c].abs().max(0.05) < 0.05))
+        .collect()
+}
+
 /// The mean over the disc of `radius` pixels around the centre of the
 /// largest relative difference of a channel between two HDR images.
 fn disc_relative_error(a: &oxygen::core::gpu::HdrImage, b: &oxygen::core::gpu::HdrImage, radius: f32) -> f64 {
@@ -454,18 +488,8 @@ fn image_based_lighting_against_the_traced_reference() {
         ("rough gold", Vec4::new(1.0, 0.78, 0.34, 1.0), 1.0, 0.7, 0.135),
     ] {
         let scene = sphere_scene(Material { metallic, roughness, ..Material::opaque(name, base) });
-        let mut renderer = support::gpu_renderer_with(RendererOptions { keep_hdr: true, ..Default::default() });
-        renderer.set_environment(Some(&sky));
-        let raster = renderer.register_view(camera, standard_render_graph).unwrap();
-        let traced = renderer
-            .register_view(ViewDesc::new(camera).path_traced(), ReferenceGraph { settings, exposure: 1.0 })
-            .unwrap();
-        for _ in 0..8 {
-            renderer.render_frame(&scene).unwrap();
-        }
-        assert_eq!(renderer.reference_samples(traced), 512);
-        let (a, b) = (renderer.read_hdr(raster).unwrap(), renderer.read_hdr(traced).unwrap());
-        support::assert_hdr_image_finite(&b, name);
+        let (a, b, samples) = raster_and_reference(&scene, camera, settings, 8, Some(&sky));
+        assert_eq!(samples, 512);
         let error = disc_relative_error(&a, &b, 20.0);
         eprintln!("{name}: raster IBL against the traced reference, mean relative error {error:.4}");
         assert!(error < bound, "{name}: mean relative error {error} (bound {bound})");
@@ -501,13 +525,7 @@ fn the_raster_model_reads_the_environment_as_the_raster_does() {
         renderer.render_frame(&scene).unwrap();
     }
     let (a, b) = (renderer.read_hdr(raster).unwrap(), renderer.read_hdr(traced).unwrap());
-    let close = a
-        .pixels
-        .iter()
-        .zip(&b.pixels)
-        .filter(|(p, q)| (0..3).all(|c| (p[c] - q[c]).abs() / p[c].abs().max(0.05) < 0.05))
-        .count();
-    let fraction = close as f64 / a.pixels.len() as f64;
+    let fraction = agreement(&a, &b).iter().filter(|c| **c).count() as f64 / a.pixels.len() as f64;
     // The sphere (about 8 px in radius here), its inner disc of 4 px: the
     // reflection term.
     let resolved = camera.resolve(&ViewContext { view_id: raster, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
@@ -541,23 +559,9 @@ fn the_raster_model_reads_the_environment_as_the_raster_does() {
 /// The raster view of `scene` against its reference traced with the
 /// raster's light transport: per pixel, whether they agree within 5 %.
 fn raster_model_agreement(scene: &Scene, camera: LookAtResolver) -> Vec<bool> {
-    let mut renderer = support::gpu_renderer_with(RendererOptions { keep_hdr: true, ..Default::default() });
-    let raster = renderer.register_view(camera, standard_render_graph).unwrap();
     let settings = ReferenceSettings { samples_per_frame: 16, max_samples: 32, ..ReferenceSettings::RASTER_MODEL };
-    let traced = renderer
-        .register_view(ViewDesc::new(camera).path_traced(), ReferenceGraph { settings, exposure: 1.0 })
-        .unwrap();
-    for _ in 0..2 {
-        renderer.render_frame(scene).unwrap();
-    }
-    assert_eq!(renderer.scene_prep().ray_scene().skipped(), 0);
-    let (a, b) = (renderer.read_hdr(raster).unwrap(), renderer.read_hdr(traced).unwrap());
-    support::assert_hdr_image_finite(&b, "reference");
-    a.pixels
-        .iter()
-        .zip(&b.pixels)
-        .map(|(p, q)| (0..3).all(|c| (p[c] - q[c]).abs() / p[c].abs().max(0.05) < 0.05))
-        .collect()
+    let (a, b, _) = raster_and_reference(scene, camera, settings, 2, None);
+    agreement(&a, &b)
 }
 
 /// Skinned and morphed meshes are traced in the pose the raster draws

@@ -166,6 +166,31 @@ pub fn cube_texel_direction(face: usize, x: u32, y: u32, size: u32) -> Vec3 {
     (forward + right * ndc.x + up * ndc.y).normalize()
 }
 
+/// The face and texel of a `size`² face that direction `d` falls on: the
+/// shader's lookup (`cube_face_uv`), inverse of [`cube_texel_direction`].
+pub fn cube_texel_of(d: Vec3, size: u32) -> (usize, u32, u32) {
+    let size = size.max(1);
+    let a = d.abs();
+    let face = if a.x >= a.y && a.x >= a.z {
+        if d.x >= 0.0 { 0 } else { 1 }
+    } else if a.y >= a.z {
+        if d.y >= 0.0 { 2 } else { 3 }
+    } else if d.z >= 0.0 {
+        4
+    } else {
+        5
+    };
+    let (forward, up) = CUBE_FACE_AXES[face];
+    let right = forward.cross(up);
+    let depth = d.dot(forward);
+    let ndc = Vec2::new(d.dot(right), d.dot(up)) / depth;
+    let uv = Vec2::new(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
+    // `as u32` saturates: a NaN or negative coordinate lands on texel 0.
+    let x = ((uv.x * size as f32) as u32).min(size - 1);
+    let y = ((uv.y * size as f32) as u32).min(size - 1);
+    (face, x, y)
+}
+
 /// An environment ready for shading: the GGX-prefiltered cube and the
 /// irradiance's spherical harmonics.
 #[derive(Clone, Debug, PartialEq)]
@@ -406,7 +431,7 @@ mod tests {
                 let px = faces[0][i]; // +X, top row
                 // The +Y texel touching it: +Y's right = forward × up = +Y × −Z = −X... find by direction.
                 let d = cube_texel_direction(0, i as u32, 0, side as u32);
-                let (face, x, y) = nearest_texel(d + Vec3::Y * 0.5 / side as f32, side as u32);
+                let (face, x, y) = cube_texel_of(d + Vec3::Y * 0.5 / side as f32, side as u32);
                 let other = faces[face][(y * side as u32 + x) as usize];
                 seam = seam.max((px - other).abs().max_element());
                 across = across.max((faces[0][i] - faces[0][(side - 1) * side + i]).abs().max_element());
@@ -415,31 +440,6 @@ mod tests {
         }
     }
 
-    /// The face and texel a direction falls on (the shader's lookup).
-    fn nearest_texel(d: Vec3, side: u32) -> (usize, u32, u32) {
-        let a = d.abs();
-        let face = if a.x >= a.y && a.x >= a.z {
-            if d.x >= 0.0 { 0 } else { 1 }
-        } else if a.y >= a.z {
-            if d.y >= 0.0 { 2 } else { 3 }
-        } else if d.z >= 0.0 {
-            4
-        } else {
-            5
-        };
-        let (forward, up) = CUBE_FACE_AXES[face];
-        let right = forward.cross(up);
-        let depth = d.dot(forward);
-        let ndc = Vec2::new(d.dot(right), d.dot(up)) / depth;
-        let uv = Vec2::new(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
-        let x = ((uv.x * side as f32) as u32).min(side - 1);
-        let y = ((uv.y * side as f32) as u32).min(side - 1);
-        (face, x, y)
-    }
-
-    /// The split sum's known values: a smooth surface seen head-on
-    /// reflects F0 (A = 1, B = 0); A + B (white F0) never exceeds 1 and
-    /// falls with roughness at grazing angles (energy lost to masking).
     #[test]
     fn the_split_sum_matches_its_limits() {
         let smooth = split_sum_brdf(1.0, 0.0, 256);
@@ -454,6 +454,18 @@ mod tests {
         let grazing_smooth = split_sum_brdf(0.1, 0.1, 1024);
         assert!(grazing_rough.x + grazing_rough.y < grazing_smooth.x + grazing_smooth.y);
         assert_eq!(split_sum_brdf(f32::NAN, f32::NAN, 16), split_sum_brdf(1.0, 1.0, 16));
+    }
+
+    #[test]
+    fn the_texel_lookup_inverts_the_texel_direction() {
+        for face in 0..6 {
+            for y in 0..8 {
+                for x in 0..8 {
+                    assert_eq!(cube_texel_of(cube_texel_direction(face, x, y, 8), 8), (face, x, y));
+                }
+            }
+        }
+        assert_eq!(cube_texel_of(Vec3::NAN, 8).1, 0);
     }
 
     #[test]

@@ -307,7 +307,7 @@ impl CubeFilter {
         // 4. Harmonics: a 3 × 3 viewport of layer 6, level 0.
         let step = self.step(&self.harmonics, &whole, &self.cube_sampler, &params, levels);
         let view = layer_view(&target, 0, HARMONICS_LAYER);
-        let mut pass = begin(encoder, &view, "environment harmonics");
+        let mut pass = crate::pipelines::fullscreen_pass(encoder, &view, "environment harmonics");
         pass.set_viewport(0.0, 0.0, 3.0, 3.0, 0.0, 1.0);
         pass.set_scissor_rect(0, 0, 3, 3);
         self.bind(device, &mut pass, &step);
@@ -424,27 +424,11 @@ impl CubeFilter {
     ) {
         for layer in layers {
             let view = layer_view(target, level, layer);
-            let mut pass = begin(encoder, &view, "cube filter");
+            let mut pass = crate::pipelines::fullscreen_pass(encoder, &view, "cube filter");
             self.bind(device, &mut pass, step);
             pass.draw(3 * layer..3 * layer + 3, 0..1);
         }
     }
-}
-
-fn begin<'e>(encoder: &'e mut wgpu::CommandEncoder, view: &wgpu::TextureView, label: &str) -> wgpu::RenderPass<'e> {
-    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-        label: Some(label),
-        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-            view,
-            depth_slice: None,
-            resolve_target: None,
-            ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
-        })],
-        depth_stencil_attachment: None,
-        timestamp_writes: None,
-        occlusion_query_set: None,
-        multiview_mask: None,
-    })
 }
 
 fn array_view() -> wgpu::TextureViewDescriptor<'static> {

@@ -648,9 +648,32 @@ impl Future for PipelineFuture<'_> {
     }
 }
 
+/// A render pass that clears `view` to black and draws into it, with no
+/// depth: what the full-screen passes that build textures (the cube
+/// filter, the split-sum table) begin.
+pub(crate) fn fullscreen_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    view: &wgpu::TextureView,
+    label: &str,
+) -> wgpu::RenderPass<'e> {
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(label),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
+        })],
+        depth_stencil_attachment: None,
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    })
+}
+
 /// A pipeline drawing one full-screen triangle (three vertices, no buffers)
 /// into one colour target of `format`, with one bind group of `layout`:
-/// the shape of the tone map, the probe mip downsampling and the
+/// the shape of the tone map, the cube filter, the split-sum table and the
 /// renderer's window composition.
 pub fn fullscreen_pipeline(
     device: &wgpu::Device,

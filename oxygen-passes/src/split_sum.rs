@@ -63,19 +63,7 @@ pub(crate) fn build_lut(device: &wgpu::Device, queue: &wgpu::Queue) -> (wgpu::Te
     let view = texture.create_view(&Default::default());
     let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("split-sum BRDF") });
     {
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("split-sum BRDF"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
-            })],
-            depth_stencil_attachment: None,
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        let mut pass = crate::pipelines::fullscreen_pass(&mut encoder, &view, "split-sum BRDF");
         pass.set_pipeline(&pipeline);
         pass.draw(0..3, 0..1);
     }

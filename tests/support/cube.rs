@@ -5,23 +5,7 @@ use oxygen::prelude::*;
 
 /// The face, x, y of the texel direction `d` falls on (the shader's lookup).
 pub fn texel_of(d: Vec3, side: u32) -> (usize, u32, u32) {
-    let a = d.abs();
-    let face = if a.x >= a.y && a.x >= a.z {
-        if d.x >= 0.0 { 0 } else { 1 }
-    } else if a.y >= a.z {
-        if d.y >= 0.0 { 2 } else { 3 }
-    } else if d.z >= 0.0 {
-        4
-    } else {
-        5
-    };
-    let (forward, up) = oxygen::core::environment::CUBE_FACE_AXES[face];
-    let right = forward.cross(up);
-    let depth = d.dot(forward);
-    let (x, y) = (d.dot(right) / depth, d.dot(up) / depth);
-    let px = (((x * 0.5 + 0.5) * side as f32) as u32).min(side - 1);
-    let py = (((0.5 - y * 0.5) * side as f32) as u32).min(side - 1);
-    (face, px, py)
+    oxygen::core::environment::cube_texel_of(d, side)
 }
 
 /// Across every edge of every face: the mean jump between a border texel
