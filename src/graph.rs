@@ -200,14 +200,15 @@ impl RenderGraph for StandardGraph {
             return MeshPass::forward_lit(lit).tone_mapped(exposure).run(ctx, rec).await;
         }
         let mut transparent = MeshPass::transparent();
-        if transparent.has_draws(ctx) {
-            MeshPass::forward_lit(lit).run(ctx, rec).await?;
-            transparent.run(ctx, rec).await?;
-        } else {
+        let mut shading = MeshPass::forward_lit(lit);
+        if !transparent.has_draws(ctx) {
             // Shading is the last colour pass: a multisampled view keeps
             // only the resolve.
-            MeshPass::forward_lit(lit).discarding_samples().run(ctx, rec).await?;
+            shading = shading.discarding_samples();
         }
+        shading.run(ctx, rec).await?;
+        // Records nothing on a frame without blended draws.
+        transparent.run(ctx, rec).await?;
         TonemapPass::new(exposure).run(ctx, rec).await
     }
 

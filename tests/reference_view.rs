@@ -291,12 +291,8 @@ fn the_raster_view_and_its_traced_reference_agree_on_direct_light() {
     // saves both pictures there.
     let scene = oxygen_demo::floor_with_box(0.6);
     let camera = look_at(Vec3::new(0.0, 3.0, 5.0), Vec3::new(0.0, 0.0, -1.0), 48, 60.0);
-    let mut renderer = support::gpu_renderer_with(RendererOptions { keep_hdr: true, ..Default::default() });
-    let raster = renderer.register_view(camera, standard_render_graph).unwrap();
     let settings = ReferenceSettings { samples_per_frame: 16, max_samples: 64, ..ReferenceSettings::RASTER_MODEL };
-    let traced = renderer
-        .register_view(ViewDesc::new(camera).path_traced(), ReferenceGraph { settings, exposure: 1.0 })
-        .unwrap();
+    let (mut renderer, raster, traced) = raster_and_reference_views(camera, settings, None);
     for _ in 0..4 {
         renderer.render_frame(&scene).unwrap();
     }
@@ -404,6 +400,22 @@ fn the_reference_is_lit_by_the_renderer_environment() {
     }
 }
 
+/// A renderer keeping its HDR images, lit by `environment`, with a
+/// standard view and a view traced with `settings` from the same camera.
+fn raster_and_reference_views(
+    camera: LookAtResolver,
+    settings: ReferenceSettings,
+    environment: Option<&oxygen::core::Environment>,
+) -> (Renderer, ViewId, ViewId) {
+    let mut renderer = support::gpu_renderer_with(RendererOptions { keep_hdr: true, ..Default::default() });
+    renderer.set_environment(environment);
+    let raster = renderer.register_view(camera, standard_render_graph).unwrap();
+    let traced = renderer
+        .register_view(ViewDesc::new(camera).path_traced(), ReferenceGraph { settings, exposure: 1.0 })
+        .unwrap();
+    (renderer, raster, traced)
+}
+
 /// `scene` rendered by the standard graph and traced with `settings` from
 /// the same camera, `frames` frames, the renderer lit by `environment`:
 /// the two HDR images and the reference's sample count.
@@ -414,12 +426,7 @@ fn raster_and_reference(
     frames: usize,
     environment: Option<&oxygen::core::Environment>,
 ) -> (oxygen::core::gpu::HdrImage, oxygen::core::gpu::HdrImage, u32) {
-    let mut renderer = support::gpu_renderer_with(RendererOptions { keep_hdr: true, ..Default::default() });
-    renderer.set_environment(environment);
-    let raster = renderer.register_view(camera, standard_render_graph).unwrap();
-    let traced = renderer
-        .register_view(ViewDesc::new(camera).path_traced(), ReferenceGraph { settings, exposure: 1.0 })
-        .unwrap();
+    let (mut renderer, raster, traced) = raster_and_reference_views(camera, settings, environment);
     for _ in 0..frames {
         renderer.render_frame(scene).unwrap();
     }
@@ -514,13 +521,9 @@ fn the_raster_model_reads_the_environment_as_the_raster_does() {
     let node = scene.add_node("gold ball", Transform::from_translation(Vec3::new(-0.8, 0.6, -0.5)));
     scene.set_renderable(node, Renderable { geometry: ball, materials: vec![gold] }).unwrap();
     let camera = look_at(Vec3::new(0.0, 3.0, 5.0), Vec3::new(0.0, 0.0, -1.0), 96, 60.0);
-    let mut renderer = support::gpu_renderer_with(RendererOptions { keep_hdr: true, ..Default::default() });
-    renderer.set_environment(Some(&oxygen::core::Environment::sky_for_sun(Vec3::new(0.3, -0.6, -0.75))));
-    let raster = renderer.register_view(camera, standard_render_graph).unwrap();
+    let sky = oxygen::core::Environment::sky_for_sun(Vec3::new(0.3, -0.6, -0.75));
     let settings = ReferenceSettings { samples_per_frame: 16, max_samples: 64, ..ReferenceSettings::RASTER_MODEL };
-    let traced = renderer
-        .register_view(ViewDesc::new(camera).path_traced(), ReferenceGraph { settings, exposure: 1.0 })
-        .unwrap();
+    let (mut renderer, raster, traced) = raster_and_reference_views(camera, settings, Some(&sky));
     for _ in 0..4 {
         renderer.render_frame(&scene).unwrap();
     }

@@ -93,6 +93,12 @@ impl MaterialUvs {
         [self.base_color, self.metallic_roughness, self.normal, self.emissive, self.occlusion]
     }
 
+    /// Whether every texture reads UV set 0 untransformed (what a material
+    /// without `texCoord` or `KHR_texture_transform` has).
+    pub fn is_identity(&self) -> bool {
+        self.in_record_order().iter().all(|t| *t == UvTransform::IDENTITY)
+    }
+
     fn sanitized(&self) -> MaterialUvs {
         MaterialUvs {
             base_color: self.base_color.sanitized(),

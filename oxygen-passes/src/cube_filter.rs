@@ -131,6 +131,18 @@ struct Step<'a> {
     params_index: u32,
 }
 
+impl<'a> Step<'a> {
+    fn new(
+        pipeline: &'a wgpu::RenderPipeline,
+        source: &'a wgpu::TextureView,
+        sampler: &'a wgpu::Sampler,
+        params: &'a wgpu::Buffer,
+        params_index: u32,
+    ) -> Self {
+        Step { pipeline, source, sampler, params, params_index }
+    }
+}
+
 impl CubeFilter {
     pub(crate) fn new(device: &wgpu::Device) -> Self {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -263,17 +275,17 @@ impl CubeFilter {
                 let equirect = upload_equirect(device, queue, image);
                 for level in 1..equirect.mip_level_count() {
                     let source = single_level_view(&equirect, level - 1);
-                    let step = self.step(&self.downsample, &source, &self.cube_sampler, &params, 0);
+                    let step = Step::new(&self.downsample, &source, &self.cube_sampler, &params, 0);
                     self.draw(device, encoder, &step, &equirect, level, 0..1);
                 }
                 let source = equirect.create_view(&array_view());
-                let step = self.step(&self.equirect, &source, &self.equirect_sampler, &params, 0);
+                let step = Step::new(&self.equirect, &source, &self.equirect_sampler, &params, 0);
                 self.draw(device, encoder, &step, &scratch, 0, 0..FACES);
             }
             Environment::Uniform(_) | Environment::Sky(_) => {
                 // The sky reads no texture; any view of the right kind binds.
                 let unused = scratch_level(scratch_levels - 1);
-                let step = self.step(&self.sky, &unused, &self.cube_sampler, &params, 0);
+                let step = Step::new(&self.sky, &unused, &self.cube_sampler, &params, 0);
                 // Writing level 0 while level `last` is bound is allowed:
                 // distinct subresources.
                 self.draw(device, encoder, &step, &scratch, 0, 0..FACES);
@@ -297,15 +309,15 @@ impl CubeFilter {
         });
         // 3. Level 0 is the radiance itself; the rest GGX-filtered.
         let source = scratch_level(0);
-        let step = self.step(&self.downsample, &source, &self.cube_sampler, &params, 0);
+        let step = Step::new(&self.downsample, &source, &self.cube_sampler, &params, 0);
         self.draw(device, encoder, &step, &target, 0, 0..FACES);
         let whole = scratch.create_view(&array_view());
         for level in 1..levels {
-            let step = self.step(&self.ggx, &whole, &self.cube_sampler, &params, level);
+            let step = Step::new(&self.ggx, &whole, &self.cube_sampler, &params, level);
             self.draw(device, encoder, &step, &target, level, 0..FACES);
         }
         // 4. Harmonics: a 3 × 3 viewport of layer 6, level 0.
-        let step = self.step(&self.harmonics, &whole, &self.cube_sampler, &params, levels);
+        let step = Step::new(&self.harmonics, &whole, &self.cube_sampler, &params, levels);
         let view = layer_view(&target, 0, HARMONICS_LAYER);
         let mut pass = crate::pipelines::fullscreen_pass(encoder, &view, "environment harmonics");
         pass.set_viewport(0.0, 0.0, 3.0, 3.0, 0.0, 1.0);
@@ -355,12 +367,12 @@ impl CubeFilter {
         }));
         let params = params_buffer(device, &params);
         let source = single_level_view(texture, 0);
-        let step = self.step(&self.downsample, &source, &self.cube_sampler, &params, 0);
+        let step = Step::new(&self.downsample, &source, &self.cube_sampler, &params, 0);
         self.draw(device, encoder, &step, &scratch, 0, 0..FACES);
         self.box_mips(device, encoder, &scratch, &params);
         let whole = scratch.create_view(&array_view());
         for level in 1..=roughest {
-            let step = self.step(&self.ggx, &whole, &self.cube_sampler, &params, level);
+            let step = Step::new(&self.ggx, &whole, &self.cube_sampler, &params, level);
             self.draw(device, encoder, &step, texture, level, 0..FACES);
         }
     }
@@ -375,20 +387,9 @@ impl CubeFilter {
     ) {
         for level in 1..cube.mip_level_count() {
             let source = single_level_view(cube, level - 1);
-            let step = self.step(&self.downsample, &source, &self.cube_sampler, params, 0);
+            let step = Step::new(&self.downsample, &source, &self.cube_sampler, params, 0);
             self.draw(device, encoder, &step, cube, level, 0..FACES);
         }
-    }
-
-    fn step<'a>(
-        &self,
-        pipeline: &'a wgpu::RenderPipeline,
-        source: &'a wgpu::TextureView,
-        sampler: &'a wgpu::Sampler,
-        params: &'a wgpu::Buffer,
-        params_index: u32,
-    ) -> Step<'a> {
-        Step { pipeline, source, sampler, params, params_index }
     }
 
     fn bind(&self, device: &wgpu::Device, pass: &mut wgpu::RenderPass<'_>, step: &Step<'_>) {

@@ -56,7 +56,7 @@ pub use oxygen_core::{Depth, HdrColor, Output, OutputSource, ProbeCube, ProbeId,
 pub use pipelines::{
     AlphaClass, BRDF_WGSL, CUBE_FACES_WGSL, CompilerGuard, DepthBias, ENVIRONMENT_WGSL, Exposure, PassKind,
     PipelineFuture, PipelineKey, PipelineVariant, Pipelines, ShaderFeatures, TONEMAP_OPERATOR_WGSL, TONEMAP_WGSL,
-    fullscreen_pipeline, shader_source,
+    fullscreen_pass, fullscreen_pipeline, shader_source,
 };
 pub use reference::{ReferencePass, ReferenceSettings, ReferenceTracer, reference_shader_source};
 pub use render_context::{

@@ -218,9 +218,9 @@ impl MeshPass {
 
     /// The same pass, on a multisampled view, dropping the multisampled
     /// colour once it is resolved into the view's HDR target: for the last
-    /// pass that draws colour (no later pass may load the samples). Saves
-    /// storing every sample, which on an H100 costs about as much as the
-    /// resolve itself (`msaa_bench`, docs/performance.md).
+    /// pass that draws colour (no later pass may load the samples). A tiled
+    /// GPU can then skip storing every sample; on the H100 it measured no
+    /// change (`msaa_bench`, docs/performance.md).
     pub fn discarding_samples(self) -> Self {
         MeshPass { keep_samples: false, ..self }
     }

@@ -649,9 +649,9 @@ impl Future for PipelineFuture<'_> {
 }
 
 /// A render pass that clears `view` to black and draws into it, with no
-/// depth: what the full-screen passes that build textures (the cube
-/// filter, the split-sum table) begin.
-pub(crate) fn fullscreen_pass<'e>(
+/// depth: what every full-screen pass begins (the tone map, the cube
+/// filter, the split-sum table, the renderer's window composition).
+pub fn fullscreen_pass<'e>(
     encoder: &'e mut wgpu::CommandEncoder,
     view: &wgpu::TextureView,
     label: &str,

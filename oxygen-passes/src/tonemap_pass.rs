@@ -88,19 +88,7 @@ impl RenderPass for TonemapPass {
         let Some(color_view) = color.color_view.as_ref() else {
             return Err(PassError::NoColorTarget { pass: self.name() });
         };
-        let mut pass = rec.encoder().begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("tonemap"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: color_view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
-            })],
-            depth_stencil_attachment: None,
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        let mut pass = crate::pipelines::fullscreen_pass(rec.encoder(), color_view, "tonemap");
         pass.set_pipeline(&pipeline);
         pass.set_bind_group(0, &bind_group, &[]);
         pass.draw(0..3, 0..1);

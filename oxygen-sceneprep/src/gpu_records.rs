@@ -145,10 +145,10 @@ impl MaterialRecord {
         if m.unlit {
             flags |= material_flags::UNLIT;
         }
-        let uvs = m.uvs.in_record_order();
-        if uvs.iter().any(|t| *t != oxygen_core::UvTransform::IDENTITY) {
+        if !m.uvs.is_identity() {
             flags |= material_flags::UV_TRANSFORMS;
         }
+        let uvs = m.uvs.in_record_order();
         MaterialRecord {
             base_color: m.base_color.to_array(),
             emissive: m.emissive.to_array(),

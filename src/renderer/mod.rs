@@ -866,8 +866,11 @@ impl Renderer {
         let uploaded_bytes = self.heap.bytes_written() - heap_bytes_before
             + constants_bytes
             + self.visibility.as_ref().map_or(0, GpuVisibility::uploaded_last_frame);
-        self.textured_materials = scene.materials().any(|(_, m)| {
-            [
+        // What the shading pipelines must carry, from one walk over the
+        // materials: texture sampling, and the second UV set or transforms.
+        (self.textured_materials, self.uv_transforms) = (false, false);
+        for (_, m) in scene.materials() {
+            self.textured_materials |= [
                 m.base_color_texture,
                 m.metallic_roughness_texture,
                 m.normal_texture,
@@ -875,11 +878,9 @@ impl Renderer {
                 m.occlusion_texture,
             ]
             .iter()
-            .any(Option::is_some)
-        });
-        self.uv_transforms = scene
-            .materials()
-            .any(|(_, m)| m.uvs.in_record_order().iter().any(|t| *t != oxygen_core::UvTransform::IDENTITY));
+            .any(Option::is_some);
+            self.uv_transforms |= !m.uvs.is_identity();
+        }
         let record_start = Instant::now();
         let created_before = self.pipelines.pipelines_created();
         self.pipelines.begin_frame();

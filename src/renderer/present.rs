@@ -370,19 +370,7 @@ fn compose(
     target: &wgpu::TextureView,
     size: UVec2,
 ) {
-    let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-        label: Some("compose"),
-        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-            view: target,
-            depth_slice: None,
-            resolve_target: None,
-            ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
-        })],
-        depth_stencil_attachment: None,
-        timestamp_writes: None,
-        occlusion_query_set: None,
-        multiview_mask: None,
-    });
+    let mut pass = oxygen_passes::fullscreen_pass(encoder, target, "compose");
     for (rect, group, depth) in views {
         pass.set_pipeline(&pipelines[usize::from(*depth)]);
         let (origin, extent) = rect.pixels(size);
