@@ -1,11 +1,12 @@
-//! Animations: channels on the imported nodes' translation, rotation and
-//! scale, read through validated accessors and charged to the budget.
+//! Animations: channels on the imported nodes' translation, rotation, scale
+//! and morph-target weights, read through validated accessors and charged
+//! to the budget.
 //!
 //! A channel whose node is not part of the imported scene, or that drives
-//! morph-target weights (morph targets are not imported), is skipped with a
-//! warning; a malformed one (bad accessor, times not increasing, counts that
-//! do not match) fails the import naming the animation and channel, like any
-//! other malformed part of a file.
+//! the morph-target weights of a node whose mesh has no morph targets, is
+//! skipped with a warning; a malformed one (bad accessor, times not
+//! increasing, counts that do not match) fails the import naming the
+//! animation and channel, like any other malformed part of a file.
 
 use std::borrow::Cow;
 use std::collections::HashMap;

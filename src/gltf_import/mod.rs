@@ -11,14 +11,27 @@
 //! axis, filter), alpha mode and cutoff, double-sidedness,
 //! `KHR_materials_emissive_strength` and `KHR_materials_unlit`;
 //! `KHR_lights_punctual` lights; cameras (as [`GltfCamera`]s an application
-//! can register as views); animations of node translation, rotation and
-//! scale ([`GltfImport::animations`]). Nodes with a negative scale are
-//! imported as they are: ScenePrep flips the winding of mirrored draws.
+//! can register as views); skins (`JOINTS_0`/`WEIGHTS_0`, four joints a
+//! vertex, with their joints and inverse bind matrices, identity where the
+//! file has none); morph targets (position and normal displacements, at
+//! most [`MAX_MORPH_TARGETS`](oxygen_core::MAX_MORPH_TARGETS) a mesh, with
+//! the node's or else the mesh's default weights); animations of node
+//! translation, rotation, scale and morph weights
+//! ([`GltfImport::animations`]). Nodes with a negative scale are imported
+//! as they are: ScenePrep flips the winding of mirrored draws.
 //!
-//! What is left out (with a warning, never a panic): primitives that are not
-//! triangle lists, skins and morph targets (and animations of morph
-//! weights), texture coordinate sets above 1. Missing normals are generated
-//! (area-weighted smooth normals); missing texture coordinates are zero.
+//! What is left out (never a panic): primitives that are not triangle
+//! lists; texture coordinate sets above 1 (a texture naming one reads set
+//! 0); morph targets' tangent displacements; a skin whose joints are not
+//! all in the imported scene (its mesh stays in its bind pose), a skin on a
+//! node without a mesh, and `JOINTS_0` without `WEIGHTS_0` or the reverse;
+//! animation channels on nodes outside the imported scene or on the morph
+//! weights of a node without targets: each with a warning. Validated but
+//! not read, without one: `TANGENT` (tangents are derived per pixel from
+//! positions and texture coordinates, so they follow skins and morphs),
+//! colour sets above 0, and joint and weight sets above 0 (at most four
+//! joints a vertex). Missing normals are generated (area-weighted smooth
+//! normals, with a warning); missing texture coordinates are zero.
 //!
 //! # Untrusted input
 //!
