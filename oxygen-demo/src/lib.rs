@@ -4,6 +4,9 @@
 //! library's public surface.
 
 #![warn(missing_docs)]
+
+pub mod record;
+
 use glam::{DVec3, Quat, UVec2, Vec3, Vec4};
 
 use oxygen_core::{
