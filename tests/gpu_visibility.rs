@@ -27,10 +27,10 @@ use support::gpu_renderer_with;
 fn renderer(visibility: Visibility) -> Option<Renderer> {
     let renderer = gpu_renderer_with(RendererOptions { visibility: Some(visibility), ..Default::default() });
     if !renderer.gpu_visibility_supported() {
-        eprintln!(
-            "skipped: {} cannot run GPU visibility (needs multi-draw-indirect with counts)",
+        support::skip::skip(format_args!(
+            "{} cannot run GPU visibility (needs multi-draw-indirect with counts)",
             renderer.gpu().describe()
-        );
+        ));
         return None;
     }
     Some(renderer)

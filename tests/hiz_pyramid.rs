@@ -4,6 +4,8 @@
 //! one dispatch (neighbouring invocations picking different levels), never
 //! hides a box that a pixel of its screen rectangle shows.
 
+mod support;
+
 use oxygen::core::{GpuContext, GpuOptions};
 use oxygen::passes::hiz::{HizPipelines, HizPyramid};
 
@@ -33,7 +35,10 @@ fn fs(@builtin(position) p: vec4<f32>) -> Out {
 fn context() -> Option<GpuContext> {
     let gpu = GpuContext::new_headless(&GpuOptions::default()).expect("GPU tests need an adapter");
     if !oxygen::passes::GpuVisibility::supported(gpu.adapter.features()) {
-        eprintln!("skipped: {} cannot run GPU visibility, which the depth pyramid serves", gpu.describe());
+        support::skip::skip(format_args!(
+            "{} cannot run GPU visibility, which the depth pyramid serves",
+            gpu.describe()
+        ));
         return None;
     }
     Some(gpu)

@@ -214,7 +214,7 @@ fn a_multisampled_view_counts_its_samples_against_the_target_budget() {
 fn occlusion_culling_falls_back_to_frustum_culling_for_a_multisampled_view() {
     let mut renderer = support::gpu_renderer_with(RendererOptions { keep_hdr: true, ..Default::default() });
     if !renderer.gpu_visibility_supported() {
-        eprintln!("skipped: {} has no GPU visibility", renderer.gpu().describe());
+        support::skip::skip(format_args!("{} has no GPU visibility", renderer.gpu().describe()));
         return;
     }
     let desc = ViewDesc::new(camera(64)).with_msaa(Msaa::X4).with_visibility(Visibility::GpuOcclusion);

@@ -102,7 +102,7 @@ fn viewer_scene() -> (Scene, DAabb) {
 #[test]
 fn the_viewer_presents_in_a_window_what_the_headless_renderer_renders() {
     if let Some(reason) = cannot_run() {
-        eprintln!("skipped: {reason}");
+        support::skip::skip(reason);
         return;
     }
     let size = UVec2::new(320, 200);
@@ -143,7 +143,7 @@ fn the_viewer_presents_in_a_window_what_the_headless_renderer_renders() {
 #[test]
 fn the_viewers_editor_layout_shows_three_orthographic_views() {
     if let Some(reason) = cannot_run() {
-        eprintln!("skipped: {reason}");
+        support::skip::skip(reason);
         return;
     }
     let size = UVec2::new(320, 200);
@@ -182,7 +182,7 @@ fn the_viewers_editor_layout_shows_three_orthographic_views() {
 #[test]
 fn the_viewer_follows_a_resized_window() {
     if let Some(reason) = cannot_run() {
-        eprintln!("skipped: {reason}");
+        support::skip::skip(reason);
         return;
     }
     let resized = UVec2::new(240, 180);
@@ -207,7 +207,7 @@ fn the_viewer_follows_a_resized_window() {
 #[test]
 fn the_viewer_writes_a_numbered_sequence_of_an_animation() {
     if let Some(reason) = cannot_run() {
-        eprintln!("skipped: {reason}");
+        support::skip::skip(reason);
         return;
     }
     let file = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/AnimatedCube/AnimatedCube.gltf");
@@ -261,7 +261,7 @@ fn the_viewer_writes_a_numbered_sequence_of_an_animation() {
 #[test]
 fn the_viewer_anti_aliases_its_main_view_when_asked() {
     if let Some(reason) = cannot_run() {
-        eprintln!("skipped: {reason}");
+        support::skip::skip(reason);
         return;
     }
     let size = UVec2::new(240, 160);
@@ -289,7 +289,7 @@ fn the_viewer_anti_aliases_its_main_view_when_asked() {
 #[test]
 fn the_viewer_lights_its_scene_with_the_sky_by_default() {
     if let Some(reason) = cannot_run() {
-        eprintln!("skipped: {reason}");
+        support::skip::skip(reason);
         return;
     }
     let size = UVec2::new(240, 160);

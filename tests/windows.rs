@@ -189,7 +189,7 @@ fn frames_report_their_gpu_time() {
     let scene = scene();
     let mut renderer = gpu_renderer();
     if !renderer.gpu().features.contains(wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS) {
-        eprintln!("skipped: {} has no timestamps inside encoders", renderer.gpu().describe());
+        support::skip::skip(format_args!("{} has no timestamps inside encoders", renderer.gpu().describe()));
         return;
     }
     let view = renderer

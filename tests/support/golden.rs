@@ -6,8 +6,10 @@
 //! (differing pixels red, matching ones dimmed) are written next to the
 //! golden for a person to look at.
 //!
-//! A missing golden is written (and the test passes, saying so) unless `CI`
-//! is set, where it fails. `OXYGEN_UPDATE_GOLDEN=1` rewrites every golden.
+//! Outside CI a missing golden is written (and the test passes, saying so)
+//! and `OXYGEN_UPDATE_GOLDEN=1` rewrites every golden. Under `CI` goldens are
+//! never written: a missing golden fails, and so does an update request, with
+//! a message saying how to make the golden on a developer's machine.
 
 use std::path::PathBuf;
 
@@ -37,13 +39,19 @@ pub fn assert_golden(name: &str, actual: &RgbaImage, tolerance: Tolerance) {
     let dir = golden_dir();
     let golden_path = dir.join(format!("{name}.png"));
     let update = std::env::var("OXYGEN_UPDATE_GOLDEN").is_ok_and(|v| v == "1");
-    if update || !golden_path.exists() {
-        if std::env::var("CI").is_ok_and(|v| !v.is_empty() && v != "0") && !update {
-            panic!(
-                "golden image {} is missing (run the tests locally to create it, then commit it)",
-                golden_path.display()
-            );
-        }
+    if under_ci() {
+        assert!(
+            !update,
+            "OXYGEN_UPDATE_GOLDEN=1 under CI: goldens are never written by CI; \
+             update {} on a developer's machine and commit it",
+            golden_path.display()
+        );
+        assert!(
+            golden_path.exists(),
+            "golden image {} is missing: run the test without CI to create it, look at it, then commit it",
+            golden_path.display()
+        );
+    } else if update || !golden_path.exists() {
         std::fs::create_dir_all(&dir).expect("create tests/golden");
         actual.save(&golden_path).expect("write golden");
         eprintln!("wrote golden image {}", golden_path.display());
@@ -66,6 +74,12 @@ pub fn assert_golden(name: &str, actual: &RgbaImage, tolerance: Tolerance) {
             golden_path.display()
         );
     }
+}
+
+/// Whether this run is CI's (`CI` set to anything but empty or `0`, as CI
+/// services and `.ci/run` set it).
+pub fn under_ci() -> bool {
+    std::env::var("CI").is_ok_and(|v| !v.is_empty() && v != "0" && !v.eq_ignore_ascii_case("false"))
 }
 
 /// How two pictures of one size differ.

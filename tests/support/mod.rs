@@ -7,7 +7,9 @@
 pub mod cube;
 pub mod deform;
 pub mod encode;
+pub mod far;
 pub mod golden;
+pub mod skip;
 
 use std::sync::Once;
 

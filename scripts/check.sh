@@ -1,0 +1,49 @@
+#!/usr/bin/env bash
+# The code as a reviewer reads it; scripts/test.sh runs this after the tests.
+#
+# 1. formatting (`cargo fmt --check`);
+# 2. clippy over every target of the workspace (library, tests, examples,
+#    benches) with warnings as errors: clippy type-checks everything
+#    `cargo check --all-targets` would;
+# 3. `cargo check` of the two projects outside the workspace: the fuzz
+#    target (fuzz/, its own workspace for cargo-fuzz) and the Bevy peer
+#    bench (benches/peer-bevy, its own workspace and target folder; the
+#    first check downloads and compiles Bevy's crates, a few minutes).
+#
+# OXYGEN_SKIP_PEER_CHECK=1 leaves out the Bevy check (refused under CI).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+say() { printf '[oxygen] %s\n' "$*" >&2; }
+failed=()
+step() {
+  local what=$1
+  shift
+  local start=$SECONDS
+  say "check: $what"
+  if "$@"; then
+    say "check: $what passed ($((SECONDS - start)) s)"
+  else
+    say "check: $what FAILED"
+    failed+=("$what")
+  fi
+}
+
+step "cargo fmt --check" cargo fmt --all -- --check
+step "clippy -D warnings (every target)" \
+  cargo clippy --locked --workspace --all-targets -- -D warnings
+step "cargo check of the fuzz target" \
+  cargo check --locked --manifest-path fuzz/Cargo.toml --all-targets
+case "${CI:-}" in ""|0|false|FALSE) ci=0 ;; *) ci=1 ;; esac
+if [ "${OXYGEN_SKIP_PEER_CHECK:-0}" = 1 ] && [ "$ci" = 0 ]; then
+  say "OXYGEN_SKIP_PEER_CHECK=1: not checking the Bevy peer bench"
+else
+  step "cargo check of the Bevy peer bench" \
+    cargo check --locked --manifest-path benches/peer-bevy/Cargo.toml --all-targets
+fi
+
+if [ "${#failed[@]}" -ne 0 ]; then
+  say "checks FAILED: ${failed[*]}"
+  exit 1
+fi
+say "checks passed"
