@@ -30,8 +30,6 @@ DEPTH = "oxygen-passes/src/depth_only.wgsl"
 MUTANTS = [
     ("cascade-pcf-off", SHADER, "let r = i32(shadows.pcf_radius);", "let r = 0;",
      "cascade PCF radius ignored (hard shadow edges)"),
-    ("cascade-depth-bias-off", SHADER, "ndc.z + shadows.depth_bias", "ndc.z",
-     "cascade comparison without its depth bias"),
     ("cascade-normal-offset-off", SHADER,
      "let offset = geometric_normal * shadows.texel_world_size[i] * shadows.normal_offset;",
      "let offset = vec3<f32>(0.0);", "cascade lookups without the normal offset"),

@@ -26,10 +26,6 @@ pub enum DomainKind {
     /// Texture location records (`u32`), one per texture slot, persistent:
     /// where the texture lives on the chosen [`crate::TexturePath`].
     TextureLocations,
-    /// `ShadowRecord`s (96 B), per frame: one per shadow-casting light's map
-    /// (light view-projection, atlas rectangle, biases). Declared now so the
-    /// layout is fixed; filled once shadow views exist.
-    ShadowData,
     /// `BvhNode`s (32 B) of the path-traced reference's two-level bounding
     /// volume hierarchy, one range per ray-scene rebuild (compute only).
     BvhNodes,
@@ -41,7 +37,7 @@ pub enum DomainKind {
 
 impl DomainKind {
     /// Every domain, in binding order.
-    pub const ALL: [DomainKind; 14] = [
+    pub const ALL: [DomainKind; 13] = [
         DomainKind::DrawMetadata,
         DomainKind::WorldTransforms,
         DomainKind::NormalTransforms,
@@ -52,7 +48,6 @@ impl DomainKind {
         DomainKind::Indices,
         DomainKind::IndirectArgs,
         DomainKind::TextureLocations,
-        DomainKind::ShadowData,
         DomainKind::BvhNodes,
         DomainKind::RayWords,
         DomainKind::RayInstances,
@@ -81,7 +76,6 @@ impl DomainKind {
             DomainKind::Indices => 4,
             DomainKind::IndirectArgs => 20,
             DomainKind::TextureLocations => 4,
-            DomainKind::ShadowData => 96,
             DomainKind::BvhNodes => 32,
             DomainKind::RayWords => 4,
             DomainKind::RayInstances => 80,
@@ -110,7 +104,6 @@ impl DomainKind {
             DomainKind::Indices => ("index_domain", "u32"),
             DomainKind::IndirectArgs => ("indirect_args_domain", "u32"),
             DomainKind::TextureLocations => ("texture_location_domain", "u32"),
-            DomainKind::ShadowData => ("shadow_domain", "ShadowRecord"),
             DomainKind::BvhNodes => ("bvh_node_domain", "BvhNode"),
             DomainKind::RayWords => ("ray_word_domain", "u32"),
             DomainKind::RayInstances => ("ray_instance_domain", "RayInstance"),
@@ -156,7 +149,6 @@ impl DomainKind {
             DomainKind::Indices => "indices",
             DomainKind::IndirectArgs => "indirect-args",
             DomainKind::TextureLocations => "texture-locations",
-            DomainKind::ShadowData => "shadow-data",
             DomainKind::BvhNodes => "bvh-nodes",
             DomainKind::RayWords => "ray-words",
             DomainKind::RayInstances => "ray-instances",

@@ -70,15 +70,15 @@ pub struct RendererConstants {
     pub positional_lights_slot: u32,
     /// Number of positional lights.
     pub positional_light_count: u32,
-    /// Shadow data (not yet produced: always [`INVALID_SLOT`]).
-    pub shadows_slot: u32,
     /// Bit 0: the shader checks `DrawMetadata.generation` against
     /// `draw_metadata_generation` and paints mismatching draws magenta.
     pub debug_flags: u32,
     /// Generation of this view's draw-metadata range (debug mode).
     pub draw_metadata_generation: u32,
-    /// Zero.
-    pub reserved: [u32; 2],
+    /// Zero: explicit padding to 64 bytes. WGSL's uniform layout rounds the
+    /// block up to a multiple of 16 (336 bytes) whatever the Rust size, so
+    /// the padding is spelled out here to keep the two layouts equal.
+    pub reserved: [u32; 3],
 }
 
 impl RendererConstants {
@@ -100,10 +100,9 @@ impl Default for RendererConstants {
             directional_light_count: 0,
             positional_lights_slot: INVALID_SLOT,
             positional_light_count: 0,
-            shadows_slot: INVALID_SLOT,
             debug_flags: 0,
             draw_metadata_generation: 0,
-            reserved: [0; 2],
+            reserved: [0; 3],
         }
     }
 }
@@ -125,8 +124,9 @@ const _: () = {
     assert!(offset_of!(SceneConstants, renderer) == 272);
     assert!(offset_of!(CameraConstants, camera_position) == 256);
     assert!(offset_of!(RendererConstants, draw_metadata_slot) == 8);
-    assert!(offset_of!(RendererConstants, shadows_slot) == 44);
-    assert!(offset_of!(RendererConstants, draw_metadata_generation) == 52);
+    assert!(offset_of!(RendererConstants, debug_flags) == 44);
+    assert!(offset_of!(RendererConstants, draw_metadata_generation) == 48);
+    assert!(offset_of!(RendererConstants, reserved) == 52);
 };
 
 /// The WGSL twin of [`SceneConstants`] and its binding (group 1, binding 0).

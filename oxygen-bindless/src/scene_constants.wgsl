@@ -22,11 +22,14 @@ struct RendererConstants {
     directional_light_count: u32,
     positional_lights_slot: u32,
     positional_light_count: u32,
-    shadows_slot: u32,
     debug_flags: u32,
     draw_metadata_generation: u32,
+    // Explicit padding to 64 bytes (the Rust `reserved: [u32; 3]`): uniform
+    // layout rounds SceneConstants up to a multiple of 16 (336 bytes) anyway,
+    // and spelling it out keeps the Rust twin the same size.
     reserved0: u32,
     reserved1: u32,
+    reserved2: u32,
 }
 
 struct SceneConstants {

@@ -16,10 +16,9 @@ const EXPECTED: &[(DomainKind, Option<u32>, &str, &str)] = &[
     (DomainKind::Indices, None, "index_domain", "u32"),
     (DomainKind::IndirectArgs, None, "indirect_args_domain", "u32"),
     (DomainKind::TextureLocations, Some(9), "texture_location_domain", "u32"),
-    (DomainKind::ShadowData, Some(10), "shadow_domain", "ShadowRecord"),
-    (DomainKind::BvhNodes, Some(11), "bvh_node_domain", "BvhNode"),
-    (DomainKind::RayWords, Some(12), "ray_word_domain", "u32"),
-    (DomainKind::RayInstances, Some(13), "ray_instance_domain", "RayInstance"),
+    (DomainKind::BvhNodes, Some(10), "bvh_node_domain", "BvhNode"),
+    (DomainKind::RayWords, Some(11), "ray_word_domain", "u32"),
+    (DomainKind::RayInstances, Some(12), "ray_instance_domain", "RayInstance"),
 ];
 
 #[test]
@@ -40,7 +39,6 @@ fn the_generated_declarations_parse_and_declare_each_bound_domain() {
         "DirectionalLightRecord",
         "PositionalLightRecord",
         "VertexRecord",
-        "ShadowRecord",
         "BvhNode",
         "RayInstance",
     ]

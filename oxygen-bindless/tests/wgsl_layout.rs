@@ -49,11 +49,11 @@ fn scene_constants_wgsl_matches_rust_layout() {
         ("directional_light_count", offset_of!(RendererConstants, directional_light_count)),
         ("positional_lights_slot", offset_of!(RendererConstants, positional_lights_slot)),
         ("positional_light_count", offset_of!(RendererConstants, positional_light_count)),
-        ("shadows_slot", offset_of!(RendererConstants, shadows_slot)),
         ("debug_flags", offset_of!(RendererConstants, debug_flags)),
         ("draw_metadata_generation", offset_of!(RendererConstants, draw_metadata_generation)),
         ("reserved0", offset_of!(RendererConstants, reserved)),
         ("reserved1", offset_of!(RendererConstants, reserved) + 4),
+        ("reserved2", offset_of!(RendererConstants, reserved) + 8),
     ];
     assert_eq!(renderer, expected_renderer.map(|(n, o)| (n.to_owned(), o as u32)).to_vec());
 

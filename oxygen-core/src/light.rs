@@ -32,8 +32,6 @@ pub enum LightKind {
 pub enum Mobility {
     /// Fully dynamic.
     Realtime,
-    /// Static with dynamic contribution (still collected).
-    Mixed,
     /// Static and baked: excluded from real-time light lists.
     Baked,
 }
@@ -51,7 +49,7 @@ pub struct Light {
     pub casts_shadows: bool,
     /// The light contributes to the lit world at all.
     pub affects_world: bool,
-    /// Real-time, mixed or baked.
+    /// Real-time or baked.
     pub mobility: Mobility,
 }
 

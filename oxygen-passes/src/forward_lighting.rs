@@ -40,11 +40,12 @@ pub(crate) async fn bind_group(
         uniform.count = i as u32 + 1;
     }
     uniform.pcf_radius = config.shadow_pcf_radius.min(3);
-    // Non-finite knobs fall back to the defaults: no NaN reaches a shader.
-    let defaults = ForwardLitConfig::default();
-    let finite_or = |v: f32, default: f32| if v.is_finite() { v } else { default };
-    uniform.normal_offset = finite_or(config.shadow_normal_offset, defaults.shadow_normal_offset);
-    uniform.depth_bias = finite_or(config.shadow_depth_bias, defaults.shadow_depth_bias);
+    // A non-finite offset falls back to the default: no NaN reaches a shader.
+    uniform.normal_offset = if config.shadow_normal_offset.is_finite() {
+        config.shadow_normal_offset
+    } else {
+        ForwardLitConfig::DEFAULT.shadow_normal_offset
+    };
 
     if let Some(local) = local {
         for (tile, map) in local.tiles.iter().enumerate() {

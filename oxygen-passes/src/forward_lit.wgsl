@@ -61,7 +61,9 @@ struct LightingInputs {
     count: u32,
     pcf_radius: u32,
     normal_offset: f32,
-    depth_bias: f32,
+    // Explicit padding (the Rust `padding`): probe_positions is 16-byte
+    // aligned either way, so the Rust twin spells it out.
+    padding: u32,
     probe_positions: array<vec4<f32>, MAX_PROBES>,
     tile_view_projection: array<mat4x4<f32>, MAX_SHADOW_TILES>,
     // MAX_SHADOW_TILES floats packed four to a vec4 (uniform arrays have a
@@ -184,7 +186,7 @@ fn shadow_visibility(world_position: vec3<f32>, geometric_normal: vec3<f32>) -> 
             for (var y = -r; y <= r; y++) {
                 for (var x = -r; x <= r; x++) {
                     let tap = uv + vec2<f32>(f32(x), f32(y)) * shadows.uv_texel[i];
-                    lit += compare_cascade(i, tap, ndc.z + shadows.depth_bias);
+                    lit += compare_cascade(i, tap, ndc.z);
                 }
             }
             let taps = f32((2 * r + 1) * (2 * r + 1));

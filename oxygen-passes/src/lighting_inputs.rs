@@ -29,8 +29,9 @@ pub struct LightingInputs {
     pub pcf_radius: u32,
     /// Normal offset, in texels of the cascade.
     pub normal_offset: f32,
-    /// Constant depth bias in reverse-Z depth units (towards the light).
-    pub depth_bias: f32,
+    /// Zero: explicit padding, so `probe_positions` starts on the 16-byte
+    /// boundary where WGSL's uniform layout puts an array of `vec4`.
+    pub padding: u32,
     /// World positions of the reflection probes (`w` = 1).
     pub probe_positions: [[f32; 4]; MAX_PROBES],
     /// World → light clip space, per tile of the local-light shadow atlas

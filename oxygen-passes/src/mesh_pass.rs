@@ -43,9 +43,6 @@ pub struct ForwardLitConfig {
     /// lit surface does not shadow itself (acne). Larger values detach
     /// shadows from their casters. Default 1.5.
     pub shadow_normal_offset: f32,
-    /// Bias added to the cascade comparison depth (NDC depth units, towards
-    /// the light), on top of the shadow map's rasterizer bias. Default 1e-4.
-    pub shadow_depth_bias: f32,
 }
 
 impl ForwardLitConfig {
@@ -58,7 +55,6 @@ impl ForwardLitConfig {
         reflections: true,
         shadow_pcf_radius: 1,
         shadow_normal_offset: 1.5,
-        shadow_depth_bias: 1e-4,
     };
 }
 

@@ -21,14 +21,6 @@ pub enum PassError {
         /// Whose output.
         from: String,
     },
-    /// A partition has a mask this pass cannot draw.
-    #[error("{pass}: no pipeline variant for partition mask {mask}")]
-    UnsupportedPartition {
-        /// The pass.
-        pass: &'static str,
-        /// The partition's mask names.
-        mask: String,
-    },
     /// A pass needs what an earlier pass should have produced.
     #[error("{pass}: needs {input}, which no earlier pass of this view produced")]
     MissingInput {

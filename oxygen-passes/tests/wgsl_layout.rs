@@ -47,7 +47,7 @@ fn lighting_inputs_wgsl_matches_rust_layout() {
         ("count", offset_of!(LightingInputs, count)),
         ("pcf_radius", offset_of!(LightingInputs, pcf_radius)),
         ("normal_offset", offset_of!(LightingInputs, normal_offset)),
-        ("depth_bias", offset_of!(LightingInputs, depth_bias)),
+        ("padding", offset_of!(LightingInputs, padding)),
         ("probe_positions", offset_of!(LightingInputs, probe_positions)),
         ("tile_view_projection", offset_of!(LightingInputs, tile_view_projection)),
         ("tile_texel_angle", offset_of!(LightingInputs, tile_texel_angle)),

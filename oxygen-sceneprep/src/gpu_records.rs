@@ -249,28 +249,7 @@ impl PositionalLightRecord {
     }
 }
 
-/// One shadow map as shaders read it (96 bytes): produced by shadow views.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct ShadowRecord {
-    /// World → light clip space.
-    pub light_view_projection: [[f32; 4]; 4],
-    /// Atlas rectangle: offset and scale in UV.
-    pub atlas_rect: [f32; 4],
-    /// Constant depth bias.
-    pub depth_bias: f32,
-    /// Slope-scaled bias.
-    pub slope_bias: f32,
-    /// One texel in UV.
-    pub texel_size: f32,
-    /// Zero for now.
-    pub flags: u32,
-}
-
 const _: () = {
-    assert!(size_of::<ShadowRecord>() as u64 == DomainKind::ShadowData.record_size());
-    assert!(offset_of!(ShadowRecord, atlas_rect) == 64);
-    assert!(offset_of!(ShadowRecord, depth_bias) == 80);
     assert!(size_of::<NormalMatrix>() as u64 == DomainKind::NormalTransforms.record_size());
     assert!(size_of::<MaterialRecord>() as u64 == DomainKind::Materials.record_size());
     assert!(size_of::<DirectionalLightRecord>() as u64 == DomainKind::DirectionalLights.record_size());

@@ -88,15 +88,6 @@ struct VertexRecord {
     u: f32, v: f32,
 }
 
-struct ShadowRecord {
-    light_view_projection: mat4x4<f32>,
-    atlas_rect: vec4<f32>,
-    depth_bias: f32,
-    slope_bias: f32,
-    texel_size: f32,
-    flags: u32,
-}
-
 // The path-traced reference's ray scene (oxygen_sceneprep::bvh::BvhNode,
 // oxygen_sceneprep::RayInstance): see ray_scene.rs for the layout.
 struct BvhNode {

@@ -42,7 +42,7 @@ pub use collect::{
 pub use draw_metadata::{DrawIndexedIndirect, DrawMetadata};
 pub use gpu_records::{
     DirectionalLightRecord, GPU_RECORDS_WGSL, MAX_SHADOW_TILES, MaterialRecord, NormalMatrix, PositionalLightRecord,
-    ShadowRecord, UvTransformRecord, material_flags, shadow_tiles_for,
+    UvTransformRecord, material_flags, shadow_tiles_for,
 };
 pub use gpu_scene::{GpuScene, Visibility};
 pub use overdraw::expected_shaded_layers;

@@ -251,10 +251,9 @@ impl PreparedSceneFrame {
             directional_light_count: s.directional_lights.count,
             positional_lights_slot: s.positional_lights.start,
             positional_light_count: s.positional_lights.count,
-            shadows_slot: INVALID_SLOT,
             debug_flags: if self.debug_generations { RendererConstants::DEBUG_GENERATIONS } else { 0 },
             draw_metadata_generation: s.draw_metadata.generation(),
-            reserved: [0; 2],
+            reserved: [0; 3],
         }
     }
 

@@ -70,8 +70,8 @@ fn every_light_type_and_gating_rule() {
     add(&mut scene, "spot (kept)", Vec3::new(-2.0, 4.0, 0.0), Vec3::NEG_Y, spot, both);
     let baked = Light { mobility: Mobility::Baked, ..Light::point(10.0, None) };
     add(&mut scene, "baked (excluded)", Vec3::X, Vec3::NEG_Y, baked, both);
-    let mixed = Light { mobility: Mobility::Mixed, ..Light::point(11.0, None) };
-    add(&mut scene, "mixed (kept)", Vec3::Y, Vec3::NEG_Y, mixed, both);
+    let realtime = Light { mobility: Mobility::Realtime, ..Light::point(11.0, None) };
+    add(&mut scene, "realtime (kept)", Vec3::Y, Vec3::NEG_Y, realtime, both);
     let dark = Light { affects_world: false, ..Light::point(12.0, None) };
     add(&mut scene, "affects nothing (excluded)", Vec3::Z, Vec3::NEG_Y, dark, both);
     add(&mut scene, "invisible (excluded)", Vec3::ONE, Vec3::NEG_Y, Light::point(13.0, None), NodeFlags::CASTS_SHADOWS);

@@ -4,9 +4,7 @@
 use std::mem::{offset_of, size_of};
 
 use oxygen_core::Vertex;
-use oxygen_sceneprep::{
-    DirectionalLightRecord, DrawMetadata, GPU_RECORDS_WGSL, MaterialRecord, PositionalLightRecord, ShadowRecord,
-};
+use oxygen_sceneprep::{DirectionalLightRecord, DrawMetadata, GPU_RECORDS_WGSL, MaterialRecord, PositionalLightRecord};
 
 fn layout(module: &naga::Module, name: &str) -> (Vec<(String, u32)>, u32) {
     let (_, ty) = module
@@ -89,12 +87,6 @@ fn gpu_records_wgsl_matches_rust_layouts() {
         PositionalLightRecord,
         "PositionalLightRecord",
         [position, range, direction, intensity, color, kind, cos_inner, cos_outer, flags, shadow_slot]
-    );
-    check!(
-        module,
-        ShadowRecord,
-        "ShadowRecord",
-        [light_view_projection, atlas_rect, depth_bias, slope_bias, texel_size, flags]
     );
     let (members, span) = layout(&module, "VertexRecord");
     assert_eq!(span as usize, size_of::<Vertex>());
