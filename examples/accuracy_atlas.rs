@@ -34,12 +34,18 @@
 //! GPU frustum, GPU occlusion: each must cost no accuracy), and the render
 //! origin once more on the numerical extremes (a million units out, near
 //! plane 1e-4, objects of 1e-3 and 1e4, a grazing sun).
+//!
+//! With `OXYGEN_RECORD_DIR` set, the atlas's rows (the CSV's figures at
+//! full precision, and whether each time came from GPU timestamps) and the
+//! references' times are also appended as one record to
+//! `$OXYGEN_RECORD_DIR/accuracy_atlas.jsonl` (`oxygen_demo::record`).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use oxygen::core::LodLevel;
 use oxygen::prelude::*;
+use oxygen_demo::record::{Record, Row as RecordRow};
 use plotters::prelude::*;
 
 const WARM_UP: usize = 3;
@@ -110,6 +116,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut stages = stages(viewport)?;
     let settings = settings();
 
+    let mut record = Record::new("accuracy_atlas")
+        .value("viewport_px", [viewport.x, viewport.y])
+        .value("reference_samples_per_pixel", samples)
+        .value("warm_up_frames", WARM_UP)
+        .value("measured_frames", MEASURED)
+        .value("rmse_clamp", RMSE_CLAMP);
+
     // The references, one per stage, traced once.
     let mut references = Vec::new();
     for stage in &mut stages {
@@ -119,18 +132,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let started = Instant::now();
         let (hdr, srgb, adapter) = reference(stage, samples)?;
         srgb.save(out.join(format!("reference_{}.png", file_name(stage.name))))?;
+        let seconds = started.elapsed().as_secs_f64();
         eprintln!(
-            "[atlas] reference of {}: {samples} samples per pixel in {:.1} s on {adapter}",
-            stage.name,
-            started.elapsed().as_secs_f64()
+            "[atlas] reference of {}: {samples} samples per pixel in {seconds:.1} s on {}",
+            stage.name, adapter.name
         );
+        record.set_adapter(&adapter);
+        record
+            .push_row_to("reference_rows", RecordRow::new().value("scene", stage.name).value("trace_seconds", seconds));
         references.push((hdr, srgb));
     }
 
     let mut rows = Vec::new();
     for (i, setting) in settings.iter().enumerate() {
         let stage = &mut stages[setting.stage];
-        let (hdr, srgb, ms) = raster(stage, setting)?;
+        let (hdr, srgb, ms, timed_on_gpu) = raster(stage, setting)?;
         let (reference_hdr, reference_srgb) = &references[setting.stage];
         let rmse = rmse(&hdr, reference_hdr);
         let ssim = ssim(&srgb, reference_srgb);
@@ -149,6 +165,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             setting.value
         );
         let stage_name = stages[setting.stage].name;
+        record.push_row(
+            RecordRow::new()
+                .value("knob", setting.knob)
+                .value("setting", &setting.value)
+                .value("scene", stage_name)
+                .value("frame_ms", ms)
+                .value("frame_ms_from", if timed_on_gpu { "gpu timestamps" } else { "wall clock, waited" })
+                .value("rmse_linear", rmse)
+                .value("ssim", ssim),
+        );
         rows.push(Row { knob: setting.knob, value: setting.value.clone(), stage: stage_name, ms, rmse, ssim });
     }
 
@@ -169,6 +195,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     std::fs::write(out.join("atlas.csv"), csv)?;
     chart(&rows, &out.join("atlas.png"))?;
     eprintln!("[atlas] wrote {}", out.display());
+    record.write()?;
     Ok(())
 }
 
@@ -437,7 +464,10 @@ fn settings() -> Vec<Setting> {
 }
 
 /// The stage's reference: HDR and tone-mapped images, and the adapter.
-fn reference(stage: &Stage, samples: u32) -> Result<(HdrPixels, image::RgbaImage, String), Box<dyn std::error::Error>> {
+fn reference(
+    stage: &Stage,
+    samples: u32,
+) -> Result<(HdrPixels, image::RgbaImage, wgpu::AdapterInfo), Box<dyn std::error::Error>> {
     let mut renderer = Renderer::new_headless_with(RendererOptions {
         keep_hdr: true,
         // Camera-relative: the reference must not inherit the precision
@@ -453,19 +483,20 @@ fn reference(stage: &Stage, samples: u32) -> Result<(HdrPixels, image::RgbaImage
         renderer.gpu().device.poll(wgpu::PollType::wait_indefinitely())?;
     }
     let hdr = renderer.read_hdr(view)?;
-    let adapter = renderer.gpu().adapter.get_info().name;
+    let adapter = renderer.gpu().adapter_info.clone();
     Ok((hdr.pixels, renderer.read_color(view)?, adapter))
 }
 
 type HdrPixels = Vec<[f32; 4]>;
 
-/// The raster view of `setting`: HDR and tone-mapped images, and its GPU
+/// The raster view of `setting`: HDR and tone-mapped images, its GPU
 /// milliseconds per frame (the median; the mean for the probe's update
-/// interval, whose cost comes every Nth frame).
+/// interval, whose cost comes every Nth frame), and whether they came from
+/// GPU timestamps (else from the wall clock).
 fn raster(
     stage: &mut Stage,
     setting: &Setting,
-) -> Result<(HdrPixels, image::RgbaImage, f64), Box<dyn std::error::Error>> {
+) -> Result<(HdrPixels, image::RgbaImage, f64, bool), Box<dyn std::error::Error>> {
     let mut renderer = Renderer::new_headless_with(setting.options)?;
     let mut probe = match setting.probe {
         Some((resolution, update)) => {
@@ -506,7 +537,8 @@ fn raster(
             gpu_times.extend(report.gpu_seconds.map(|s| s * 1e3));
         }
     }
-    let mut times = if gpu_times.len() == wall_times.len() { gpu_times } else { wall_times };
+    let timed_on_gpu = gpu_times.len() == wall_times.len();
+    let mut times = if timed_on_gpu { gpu_times } else { wall_times };
     let ms = if setting.knob == "probe update interval" {
         times.iter().sum::<f64>() / times.len().max(1) as f64
     } else {
@@ -514,7 +546,7 @@ fn raster(
         times[times.len() / 2]
     };
     let hdr = renderer.read_hdr(view)?;
-    Ok((hdr.pixels, renderer.read_color(view)?, ms))
+    Ok((hdr.pixels, renderer.read_color(view)?, ms, timed_on_gpu))
 }
 
 /// Radiance above this is clamped before the RMSE: the sun's highlight on

@@ -32,10 +32,15 @@
 //! The adapter follows `WGPU_BACKEND` and `OXYGEN_ADAPTER` (see the README);
 //! `CUBES_BENCH_PNG=dir` also writes each view's last image there, to check by
 //! eye that both renderers draw the same picture.
+//!
+//! With `OXYGEN_RECORD_DIR` set, the run's figures (and every frame's time)
+//! are appended to `$OXYGEN_RECORD_DIR/cubes_bench.jsonl`
+//! (`oxygen_demo::record`).
 
 use std::time::Instant;
 
 use oxygen::prelude::*;
+use oxygen_demo::record::Record;
 
 const WARM_UP: usize = 5;
 const DEFAULT_MEASURED: usize = 30;
@@ -139,6 +144,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 report.views.iter().map(|v| v.draws as f64 / count as f64).sum::<f64>() / report.views.len() as f64;
         }
     }
+    let samples = times.clone();
     times.sort_by(f64::total_cmp);
     if renderer.visibility().on_gpu() {
         // The GPU's draws stay on the GPU: read the last frame's back.
@@ -173,5 +179,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         visible
     );
     println!("oxygen adapter: {} visibility: {:?}", renderer.gpu().describe(), renderer.visibility());
+    Record::new("cubes_bench")
+        .adapter(&renderer.gpu().adapter_info)
+        .value("cubes", count)
+        .value("views", views)
+        .value("viewport_px", [viewport.x, viewport.y])
+        .value("warm_up_frames", WARM_UP)
+        .value("measured_frames", measured)
+        .value("visibility", format!("{:?}", renderer.visibility()))
+        .value("frame_ms_median", percentile(&times, 0.5))
+        .value("frame_ms_p10", percentile(&times, 0.1))
+        .value("frame_ms_p90", percentile(&times, 0.9))
+        .value("frame_ms_samples", samples)
+        .value("visible_fraction", visible)
+        .value("overdraw_estimate_view0", overdraw.is_finite().then_some(overdraw))
+        .write()?;
     Ok(())
 }

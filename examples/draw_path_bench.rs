@@ -16,6 +16,10 @@
 //! measured frames and reports the CPU time to record the view's passes and
 //! the GPU time between timestamps written before and after them (when the
 //! adapter supports timestamps inside encoders).
+//!
+//! With `OXYGEN_RECORD_DIR` set, one record of the run (a row per line of
+//! the table, with every frame's times) is appended to
+//! `$OXYGEN_RECORD_DIR/draw_path_bench.jsonl` (`oxygen_demo::record`).
 
 use std::sync::{Arc, Mutex};
 
@@ -23,6 +27,7 @@ use oxygen::core::{AlphaMode, GpuContext, GpuOptions, Projection};
 use oxygen::prelude::*;
 use oxygen::sceneprep::Instancing;
 use oxygen::standard_render_graph;
+use oxygen_demo::record::{Record, Row};
 
 const WARM_UP: usize = 5;
 const MEASURED: usize = 30;
@@ -70,6 +75,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     println!("|---|---|---|---:|---:|---:|---:|---:|---:|---:|");
     let mut adapter_line = String::new();
+    let mut record = Record::new("draw_path_bench")
+        .value("draws", draws)
+        .value("warm_up_frames", WARM_UP)
+        .value("measured_frames", MEASURED);
     let runs = [
         (DrawPath::Direct, false, Instancing::Off),
         (DrawPath::Direct, false, Instancing::Adjacent),
@@ -110,6 +119,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         });
         let mut renderer =
             Renderer::with_options(gpu, RendererOptions { draw_path: Some(path), ..Default::default() })?;
+        record.set_adapter(&renderer.gpu().adapter_info);
         let shared = Arc::new(Mutex::new((query_set.clone(), resolve.clone(), readback.clone())));
         let graph_resources = Arc::clone(&shared);
         let graph = async move |ctx: &RenderContext<'_>, rec: &mut CommandRecorder| {
@@ -128,7 +138,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let options = ViewPrepOptions { instancing, ..Default::default() };
         let view = renderer.register_view(ViewDesc::new(camera).with_options(options), graph)?;
 
-        let (mut record, mut gpu_ms, mut frame_ms) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut record_ms, mut gpu_ms, mut frame_ms) = (Vec::new(), Vec::new(), Vec::new());
         let mut report = None;
         for frame in 0..WARM_UP + MEASURED {
             let start = std::time::Instant::now();
@@ -146,7 +156,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 None
             };
             if frame >= WARM_UP {
-                record.push(r.record_seconds * 1e3);
+                record_ms.push(r.record_seconds * 1e3);
                 frame_ms.push(cpu);
                 if let Some(g) = gpu_time {
                     gpu_ms.push(g);
@@ -165,17 +175,36 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             _ if trust_indirect_args => "off",
             _ => "on (wgpu default)",
         };
+        let row = Row::new()
+            .value("path", format!("{path:?}"))
+            .value("indirect_validation", validation)
+            .value("instancing", format!("{instancing:?}"))
+            .value("draws", report.views[0].draws)
+            .value("partitions_per_pass", partitions)
+            .value("draw_calls_per_frame", report.views[0].recorded.draw_calls)
+            .value("draw_commands_per_frame", report.views[0].recorded.draw_commands)
+            .value("cpu_record_ms_samples", &record_ms)
+            .value("gpu_ms_samples", &gpu_ms)
+            .value("frame_cpu_ms_samples", &frame_ms);
+        let (record_median, gpu_median, frame_median) =
+            (median(&mut record_ms), median(&mut gpu_ms), median(&mut frame_ms));
+        record.push_row(
+            row.value("cpu_record_ms_median", record_median)
+                .value("gpu_ms_median", gpu_median)
+                .value("frame_cpu_ms_median", frame_median),
+        );
         println!(
             "| {path:?} | {validation} | {instancing:?} | {} | {partitions} | {} | {} | {:.3} | {} | {:.3} |",
             report.views[0].draws,
             report.views[0].recorded.draw_calls,
             report.views[0].recorded.draw_commands,
-            median(&mut record).unwrap_or(f64::NAN),
-            median(&mut gpu_ms).map_or("n/a (no timestamps)".to_owned(), |g| format!("{g:.3}")),
-            median(&mut frame_ms).unwrap_or(f64::NAN),
+            record_median.unwrap_or(f64::NAN),
+            gpu_median.map_or("n/a (no timestamps)".to_owned(), |g| format!("{g:.3}")),
+            frame_median.unwrap_or(f64::NAN),
         );
     }
     println!();
     println!("adapter: {adapter_line}; medians of {MEASURED} frames after {WARM_UP} warm-up frames");
+    record.write()?;
     Ok(())
 }

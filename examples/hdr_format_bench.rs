@@ -12,10 +12,14 @@
 //! without specialisation. Each renders 3 warm-up frames and FRAMES measured
 //! ones, waiting for the GPU after each, and reports milliseconds per frame
 //! and the ratio against the first.
+//!
+//! With `OXYGEN_RECORD_DIR` set, the run's figures are appended to
+//! `$OXYGEN_RECORD_DIR/hdr_format_bench.jsonl` (`oxygen_demo::record`).
 
 use std::time::Instant;
 
 use oxygen::prelude::*;
+use oxygen_demo::record::{Record, Row};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
@@ -38,9 +42,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ("Rgba16Float, unspecialised shader", RendererOptions { specialize_shaders: false, ..kept }),
     ];
     let mut baseline = None;
+    let mut record = Record::new("hdr_format_bench")
+        .value("viewport_px", [width, height])
+        .value("warm_up_frames", 3)
+        .value("measured_frames", frames);
     println!("{width}x{height}, {frames} frames each");
     for (name, options) in cases {
         let mut renderer = Renderer::new_headless_with(options)?;
+        record.set_adapter(&renderer.gpu().adapter_info);
         let view = renderer.register_view(camera, standard_render_graph)?;
         let frame = |renderer: &mut Renderer| -> Result<(), Box<dyn std::error::Error>> {
             renderer.render_frame(&scene)?;
@@ -63,6 +72,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             bytes as f64 / (1 << 20) as f64,
             renderer.hdr_format()
         );
+        record.push_row(
+            Row::new()
+                .value("case", name)
+                .value("frame_ms_mean", ms)
+                .value("ratio_to_first", ms / base)
+                .value("target_memory_bytes", bytes)
+                .value("hdr_format_in_use", format!("{:?}", renderer.hdr_format())),
+        );
     }
+    record.write()?;
     Ok(())
 }

@@ -32,10 +32,15 @@
 //! submit follows. A large scene's frame is a long GPU frame, so growth
 //! here with `busy_ms` is a cost of the scene's GPU time, not of its size
 //! on the CPU.
+//!
+//! With `OXYGEN_RECORD_DIR` set, both tables (with every frame's times) are
+//! appended as one record to `$OXYGEN_RECORD_DIR/indirect_count_cost.jsonl`
+//! (`oxygen_demo::record`).
 
 use std::time::Instant;
 
 use oxygen::core::{GpuContext, GpuOptions};
+use oxygen_demo::record::{Record, Row};
 
 #[path = "support/gpu_spin.rs"]
 mod gpu_spin;
@@ -63,10 +68,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     })?;
     println!("adapter: {}", gpu.describe());
     let device = &gpu.device;
-    if !device.features().contains(wgpu::Features::MULTI_DRAW_INDIRECT_COUNT) {
+    let mut record = Record::new("indirect_count_cost").adapter(&gpu.adapter_info);
+    let supported = device.features().contains(wgpu::Features::MULTI_DRAW_INDIRECT_COUNT);
+    record.insert("multi_draw_indirect_count_supported", supported);
+    if !supported {
         println!("this adapter has no indirect-count draws: nothing to measure");
+        record.write()?;
         return Ok(());
     }
+    record.insert("measured_frames", frames);
+    record.insert("warm_up_frames", 3);
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("indirect count cost"),
         source: wgpu::ShaderSource::Wgsl(SHADER.into()),
@@ -132,7 +143,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     cases.extend(max_counts.iter().copied().map(Some));
     for round in 0..2 {
         for &case in &cases {
-            let (mut record, mut empty) = (Vec::new(), Vec::new());
+            let (mut record_ms, mut empty) = (Vec::new(), Vec::new());
             for frame in 0..frames + 3 {
                 let start = Instant::now();
                 let mut encoder = device.create_command_encoder(&Default::default());
@@ -165,19 +176,28 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 let emptied = start.elapsed();
                 wait()?;
                 if frame >= 3 {
-                    record.push(recorded.as_secs_f64() * 1e3);
+                    record_ms.push(recorded.as_secs_f64() * 1e3);
                     empty.push(emptied.as_secs_f64() * 1e3);
                 }
             }
             let name = case.map_or("no draw".to_owned(), |m| format!("max_count {m}"));
+            let row = Row::new()
+                .value("round", round)
+                .value("max_count", case)
+                .value("record_submit_ms_samples", &record_ms)
+                .value("next_empty_submit_ms_samples", &empty);
+            let (record_median, empty_median) = (median(&mut record_ms), median(&mut empty));
             println!(
-                "round {round} {name:<18} record_submit_ms={:<7.4} next_empty_submit_ms={:.4}",
-                median(&mut record),
-                median(&mut empty)
+                "round {round} {name:<18} record_submit_ms={record_median:<7.4} next_empty_submit_ms={empty_median:.4}"
+            );
+            record.push_row_to(
+                "max_count_rows",
+                row.value("record_submit_ms_median", record_median).value("next_empty_submit_ms_median", empty_median),
             );
         }
     }
-    busy_frames(&gpu, frames, &target, &pipeline, &index)?;
+    busy_frames(&gpu, frames, &target, &pipeline, &index, &mut record)?;
+    record.write()?;
     Ok(())
 }
 
@@ -189,12 +209,13 @@ fn busy_frames(
     target: &wgpu::TextureView,
     pipeline: &wgpu::RenderPipeline,
     index: &wgpu::Buffer,
+    record: &mut Record,
 ) -> Result<(), Box<dyn std::error::Error>> {
     let device = &gpu.device;
     let spin = gpu_spin::GpuSpin::new(gpu)?;
     for round in 0..2 {
         for busy_ms in [0.0f64, 1.0, 5.0, 17.0] {
-            let (mut gpu_ms, mut record, mut empty) = (Vec::new(), Vec::new(), Vec::new());
+            let (mut gpu_ms, mut record_ms, mut empty) = (Vec::new(), Vec::new(), Vec::new());
             for frame in 0..frames + 3 {
                 let busy_took = spin.busy(gpu, busy_ms)?;
                 let start = Instant::now();
@@ -225,15 +246,26 @@ fn busy_frames(
                 device.poll(wgpu::PollType::wait_indefinitely())?;
                 if frame >= 3 {
                     gpu_ms.push(busy_took);
-                    record.push(recorded.as_secs_f64() * 1e3);
+                    record_ms.push(recorded.as_secs_f64() * 1e3);
                     empty.push(emptied.as_secs_f64() * 1e3);
                 }
             }
+            let row = Row::new()
+                .value("round", round)
+                .value("busy_ms_asked", busy_ms)
+                .value("busy_ms_samples", &gpu_ms)
+                .value("record_submit_ms_samples", &record_ms)
+                .value("then_empty_submit_ms_samples", &empty);
+            let (busy_median, record_median, empty_median) =
+                (median(&mut gpu_ms), median(&mut record_ms), median(&mut empty));
             println!(
-                "round {round} busy_ms={:<7.2} record_submit_ms={:<7.4} then_empty_submit_ms={:.4}",
-                median(&mut gpu_ms),
-                median(&mut record),
-                median(&mut empty)
+                "round {round} busy_ms={busy_median:<7.2} record_submit_ms={record_median:<7.4} then_empty_submit_ms={empty_median:.4}"
+            );
+            record.push_row_to(
+                "busy_rows",
+                row.value("busy_ms_median", busy_median)
+                    .value("record_submit_ms_median", record_median)
+                    .value("then_empty_submit_ms_median", empty_median),
             );
         }
     }

@@ -21,10 +21,15 @@
 //! then shading that clears and draws nothing: the colour target's clear,
 //! store and resolve alone; `MSAA_BENCH_REPEAT=N` records that pass N
 //! times, which tells a per-pass cost from a per-frame one).
+//!
+//! With `OXYGEN_RECORD_DIR` set, the run's figures (and every frame's
+//! times) are appended to `$OXYGEN_RECORD_DIR/msaa_bench.jsonl`
+//! (`oxygen_demo::record`).
 
 use std::time::Instant;
 
 use oxygen::prelude::*;
+use oxygen_demo::record::{Record, Row};
 
 fn median(values: &mut [f64]) -> f64 {
     values.sort_by(f64::total_cmp);
@@ -51,8 +56,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     println!("{width}x{height}, {boxes} boxes, {frames} frames each");
     let mut baseline = None;
+    let graph_name = std::env::var("MSAA_BENCH_GRAPH").unwrap_or_else(|_| "full".to_owned());
+    let mut record = Record::new("msaa_bench")
+        .value("viewport_px", [width, height])
+        .value("boxes", boxes)
+        .value("warm_up_frames", 3)
+        .value("measured_frames", frames)
+        .value("graph", graph_name.as_str());
     for msaa in [Msaa::Off, Msaa::X2, Msaa::X4] {
         let mut renderer = Renderer::new_headless()?;
+        record.set_adapter(&renderer.gpu().adapter_info);
         let samples = renderer.msaa_samples(msaa);
         let desc = ViewDesc::new(camera).with_msaa(msaa);
         // `unlit` repeats its empty shading pass this many times: the cost
@@ -90,6 +103,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 gpu.extend(report.gpu_seconds.map(|s| s * 1e3));
             }
         }
+        let row = Row::new()
+            .value("msaa", format!("{msaa:?}"))
+            .value("samples_per_pixel", samples)
+            .value("frame_ms_samples", &wall)
+            .value("gpu_ms_samples", &gpu);
         let ms = median(&mut wall);
         let gpu_ms = median(&mut gpu);
         let base = *baseline.get_or_insert(ms);
@@ -99,6 +117,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             if gpu_ms.is_nan() { "n/a".to_owned() } else { format!("{gpu_ms:.2} ms") },
             renderer.target_memory() as f64 / (1 << 20) as f64,
         );
+        record.push_row(
+            row.value("frame_ms_median", ms)
+                .value("ratio_to_one_sample", ms / base)
+                .value("gpu_ms_median", (!gpu_ms.is_nan()).then_some(gpu_ms))
+                .value("target_memory_bytes", renderer.target_memory()),
+        );
     }
+    record.write()?;
     Ok(())
 }

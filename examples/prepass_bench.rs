@@ -1,7 +1,7 @@
 //! The depth pre-pass knob, both ways: its time and its benefit.
 //!
 //! ```text
-//! cargo run --release --example prepass_bench [CUBES]   # default 10 000
+//! cargo run --release --example prepass_bench [CUBES] [FRAMES]   # default 10 000 and 15
 //! ```
 //!
 //! Scenes at the two ends of the trade: a grid of CUBES cubes seen
@@ -10,21 +10,26 @@
 //! the first material drawn (front-to-back order within each material then
 //! hides everything behind them) and once with the farthest walls in the
 //! first material drawn (each later material paints over the earlier ones). For each, `PrePass::On`, `Off` and the default `Auto` render 3
-//! warm-up and 15 measured frames (each waited for on the GPU); the table
+//! warm-up and FRAMES measured frames (each waited for on the GPU); the table
 //! gives the median frame time, the GPU time between timestamps around the
 //! view's passes (where the adapter has timestamps inside encoders), the
 //! fragments the forward lit pass shaded (pipeline statistics, where the
 //! adapter has them: the benefit), and the view's estimated overdraw that
 //! `Auto` decides from.
+//!
+//! With `OXYGEN_RECORD_DIR` set, the table (with every frame's figures) is
+//! appended as one record to `$OXYGEN_RECORD_DIR/prepass_bench.jsonl`
+//! (`oxygen_demo::record`).
 
 use std::sync::Arc;
 use std::time::Instant;
 
 use oxygen::core::{GpuContext, GpuOptions};
 use oxygen::prelude::*;
+use oxygen_demo::record::{Record, Row};
 
 const WARM_UP: usize = 3;
-const MEASURED: usize = 15;
+const DEFAULT_MEASURED: usize = 15;
 
 fn grid(count: usize) -> (Scene, LookAtResolver) {
     let mut scene = Scene::new();
@@ -98,7 +103,13 @@ struct Queries {
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let count: usize = std::env::args().nth(1).map(|a| a.parse()).transpose()?.unwrap_or(10_000);
+    let mut args = std::env::args().skip(1);
+    let count: usize = args.next().map(|a| a.parse()).transpose()?.unwrap_or(10_000);
+    let measured: usize = args.next().map(|a| a.parse()).transpose()?.unwrap_or(DEFAULT_MEASURED).max(1);
+    let mut record = Record::new("prepass_bench")
+        .value("cubes", count)
+        .value("warm_up_frames", WARM_UP)
+        .value("measured_frames", measured);
     println!(
         "| scene | pre-pass | estimated overdraw | pre-pass ran | frame ms (waited) | GPU ms | fragments shaded by the forward pass |"
     );
@@ -152,6 +163,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 }),
             });
             let mut renderer = Renderer::with_options(gpu, RendererOptions::default())?;
+            record.set_adapter(&renderer.gpu().adapter_info);
             let graph_queries = Arc::clone(&queries);
             let graph = async move |ctx: &RenderContext<'_>, rec: &mut CommandRecorder| {
                 let q = &graph_queries;
@@ -182,7 +194,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let view = renderer.register_view(*camera, graph)?;
             let (mut frame_ms, mut gpu_ms, mut fragments) = (Vec::new(), Vec::new(), Vec::new());
             let mut ran = false;
-            for frame in 0..WARM_UP + MEASURED {
+            for frame in 0..WARM_UP + measured {
                 let started = Instant::now();
                 let report = renderer.render_frame(scene)?;
                 renderer.gpu().device.poll(wgpu::PollType::wait_indefinitely())?;
@@ -215,16 +227,32 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 (_, Some(frame)) => frame.estimated_overdraw(),
                 _ => f32::NAN,
             };
+            let row = Row::new()
+                .value("scene", *name)
+                .value("pre_pass", format!("{pre_pass:?}"))
+                .value("estimated_overdraw", overdraw.is_finite().then_some(overdraw))
+                .value("pre_pass_ran", ran)
+                .value("frame_ms_samples", &frame_ms)
+                .value("gpu_ms_samples", &gpu_ms)
+                .value("fragments_shaded_samples", &fragments);
+            let (frame_median, gpu_median, fragments_median) =
+                (median(&mut frame_ms), median(&mut gpu_ms), median(&mut fragments));
             println!(
                 "| {name} | {pre_pass:?} | {overdraw:.2} | {} | {:.2} | {} | {} |",
                 if ran { "yes" } else { "no" },
-                median(&mut frame_ms).unwrap_or(f64::NAN),
-                median(&mut gpu_ms).map_or("n/a".to_owned(), |g| format!("{g:.2}")),
-                median(&mut fragments).map_or("n/a".to_owned(), |f| format!("{f:.0}")),
+                frame_median.unwrap_or(f64::NAN),
+                gpu_median.map_or("n/a".to_owned(), |g| format!("{g:.2}")),
+                fragments_median.map_or("n/a".to_owned(), |f| format!("{f:.0}")),
+            );
+            record.push_row(
+                row.value("frame_ms_median", frame_median)
+                    .value("gpu_ms_median", gpu_median)
+                    .value("fragments_shaded_median", fragments_median),
             );
         }
     }
     println!();
-    println!("adapter: {adapter}; medians of {MEASURED} frames after {WARM_UP} warm-up frames");
+    println!("adapter: {adapter}; medians of {measured} frames after {WARM_UP} warm-up frames");
+    record.write()?;
     Ok(())
 }

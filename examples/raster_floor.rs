@@ -28,9 +28,14 @@
 //!
 //! When the cheapest lines are already near `cubes_bench`'s GPU time, the
 //! frame is bound by how fast the adapter takes in geometry, not by Oxygen.
+//!
+//! With `OXYGEN_RECORD_DIR` set, the run's figures (and every frame's GPU
+//! time) are appended to `$OXYGEN_RECORD_DIR/raster_floor.jsonl`
+//! (`oxygen_demo::record`).
 
 use std::time::Instant;
 
+use oxygen_demo::record::{Record, Row};
 use wgpu::util::DeviceExt;
 
 const SIZE: (u32, u32) = (960, 540);
@@ -311,10 +316,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let period_ns = f64::from(queue.get_timestamp_period());
 
     println!("{} ({:?}), {count} cubes, {}x{}, median of {frames} frames", info.name, info.backend, SIZE.0, SIZE.1);
+    let mut record = Record::new("raster_floor")
+        .adapter(&info)
+        .value("cubes", count)
+        .value("viewport_px", [SIZE.0, SIZE.1])
+        .value("warm_up_frames", 3)
+        .value("measured_frames", frames);
     let ways = [Way::CulledInVertexStage, Way::DepthOnly, Way::Colour, Way::Pulled, Way::PulledBothFaces, Way::Merged];
     for way in ways {
         if matches!(way, Way::Merged) && !merged_fits {
             println!("{:<34} skipped: larger than one buffer may be", way.name());
+            record.push_row(Row::new().value("way", way.name()).value("skipped", "larger than one buffer may be"));
             continue;
         }
         let pipeline = pipeline(way);
@@ -382,11 +394,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 gpu_ms.push(ticks[1].saturating_sub(ticks[0]) as f64 * period_ns / 1e6);
             }
         }
+        let samples = gpu_ms.clone();
         gpu_ms.sort_by(f64::total_cmp);
-        let median = gpu_ms.get(gpu_ms.len() / 2).copied().unwrap_or(f64::NAN);
+        let median = gpu_ms.get(gpu_ms.len() / 2).copied();
         let wall = started.elapsed().as_secs_f64() * 1e3 / (frames + 3) as f64;
-        println!("{:<34} GPU {median:7.3} ms   (wall {wall:6.2} ms/frame)", way.name());
+        println!("{:<34} GPU {:7.3} ms   (wall {wall:6.2} ms/frame)", way.name(), median.unwrap_or(f64::NAN));
+        record.push_row(
+            Row::new()
+                .value("way", way.name())
+                .value("gpu_ms_median", median)
+                .value("gpu_ms_samples", samples)
+                .value("wall_ms_per_frame_mean_incl_warm_up", wall),
+        );
     }
+    record.write()?;
     Ok(())
 }
 

@@ -3,25 +3,30 @@
 //! thread against all.
 //!
 //! ```text
-//! cargo run --release --example record_bench [CUBES] [direct|mdi]   # default 4 000, direct
+//! cargo run --release --example record_bench [CUBES] [direct|mdi] [V,V,..]   # default 4 000, direct, 6,24
 //! ```
 //!
 //! A field of CUBES boxes under a sun (each view owns two shadow cascades)
-//! with a shadow-casting spot light; V = 6 and V = 24 perspective views
-//! (480 × 270) on a circle around the field. For each V and each thread
+//! with a shadow-casting spot light; V = 6 and V = 24 (or the V given)
+//! perspective views (480 × 270) on a circle around the field. For each V and each thread
 //! count (1, 2, 4, 8 and every core, up to the machine's cores) a fresh
 //! renderer renders 2 warm-up and 8 measured frames, each waited for on the
 //! GPU, and reports the median of `FrameReport::record_seconds` (the wall
 //! time of recording every view's graph) and its speed-up over 1 thread
 //! measured in the same run. The direct draw path records one draw call per
 //! draw, so recording is real CPU work; with `mdi` it is a few calls per
-//! partition. Then the first frame of a fresh renderer (every pipeline
-//! compiled during it) on 1 thread against all.
+//! partition. Then the first frame of a fresh renderer with the largest V
+//! (every pipeline compiled during it) on 1 thread against all.
+//!
+//! With `OXYGEN_RECORD_DIR` set, both tables (with every frame's times) are
+//! appended as one record to `$OXYGEN_RECORD_DIR/record_bench.jsonl`
+//! (`oxygen_demo::record`).
 
 use std::time::Instant;
 
 use oxygen::core::CascadeSettings;
 use oxygen::prelude::*;
+use oxygen_demo::record::{Record, Row};
 
 const WARM_UP: usize = 2;
 const MEASURED: usize = 8;
@@ -74,7 +79,7 @@ fn renderer(setup: &Setup<'_>, views: usize, threads: usize) -> Result<Renderer,
 
 fn median(mut values: Vec<f64>) -> f64 {
     values.sort_by(f64::total_cmp);
-    values[values.len() / 2]
+    values.get(values.len() / 2).copied().unwrap_or(f64::NAN)
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -85,6 +90,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Some("mdi") => DrawPath::MultiDrawIndirect,
         Some(other) => return Err(format!("unknown draw path '{other}' (direct or mdi)").into()),
     };
+    let view_counts: Vec<usize> = match args.next() {
+        Some(list) => list.split(',').map(str::parse).collect::<Result<_, _>>()?,
+        None => vec![6, 24],
+    };
+    if view_counts.contains(&0) {
+        return Err("every V must be at least 1".into());
+    }
+    let most_views = view_counts.iter().copied().max().ok_or("no view count given")?;
     let (scene, extent) = field_of_boxes(count);
     let setup = Setup { scene: &scene, extent, path };
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
@@ -98,11 +111,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     println!("|---:|---:|---:|---:|---:|---:|");
     let mut adapter = String::new();
-    for views in [6, 24] {
+    let mut record = Record::new("record_bench")
+        .value("boxes", count)
+        .value("draw_path", format!("{path:?}"))
+        .value("cores", cores)
+        .value("warm_up_frames", WARM_UP)
+        .value("measured_frames", MEASURED);
+    for &views in &view_counts {
         let mut one_thread = None;
         for &threads in &thread_counts {
             let mut renderer = renderer(&setup, views, threads)?;
             adapter = renderer.gpu().describe();
+            record.set_adapter(&renderer.gpu().adapter_info);
             let mut times = Vec::with_capacity(MEASURED);
             let mut busy = Vec::with_capacity(MEASURED);
             let mut recorded = 0;
@@ -115,30 +135,53 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     busy.push(report.views.iter().map(|v| v.record_seconds).sum::<f64>() * 1e3);
                 }
             }
+            let row = Row::new()
+                .value("views", views)
+                .value("views_incl_shadow_views", recorded)
+                .value("threads", threads)
+                .value("record_ms_samples", &times)
+                .value("views_busy_ms_sum_samples", &busy);
             let time = median(times);
             let base = *one_thread.get_or_insert(time);
             let speed_up = base / time;
+            let busy = median(busy);
             println!(
-                "| {views} ({recorded}) | {threads} | {time:.2} | {speed_up:.2} | {:.2} | {:.2} |",
+                "| {views} ({recorded}) | {threads} | {time:.2} | {speed_up:.2} | {:.2} | {busy:.2} |",
                 speed_up / threads as f64,
-                median(busy)
+            );
+            record.push_row(
+                row.value("record_ms_median", time)
+                    .value("speed_up_over_one_thread", speed_up)
+                    .value("speed_up_per_thread", speed_up / threads as f64)
+                    .value("views_busy_ms_sum_median", busy),
             );
         }
     }
     println!();
     println!(
-        "| first frame, 24 views | threads | record ms (pipelines compiled in it) | frame ms (waited) | pipelines |"
+        "| first frame, {most_views} views | threads | record ms (pipelines compiled in it) | frame ms (waited) | pipelines |"
     );
     println!("|---|---:|---:|---:|---:|");
     for threads in [1, cores] {
-        let mut renderer = renderer(&setup, 24, threads)?;
+        let mut renderer = renderer(&setup, most_views, threads)?;
         let started = Instant::now();
         let report = renderer.render_frame(setup.scene)?;
         renderer.gpu().device.poll(wgpu::PollType::wait_indefinitely())?;
         let ms = started.elapsed().as_secs_f64() * 1e3;
-        let record = report.record_seconds * 1e3;
-        println!("| | {threads} | {record:.1} | {ms:.1} | {} |", renderer.pipelines().pipelines_created());
+        let record_ms = report.record_seconds * 1e3;
+        let pipelines = renderer.pipelines().pipelines_created();
+        println!("| | {threads} | {record_ms:.1} | {ms:.1} | {pipelines} |");
+        record.push_row_to(
+            "first_frame_rows",
+            Row::new()
+                .value("views", most_views)
+                .value("threads", threads)
+                .value("record_ms", record_ms)
+                .value("frame_ms_waited", ms)
+                .value("pipelines_created", pipelines),
+        );
     }
     println!("adapter: {adapter}");
+    record.write()?;
     Ok(())
 }

@@ -11,11 +11,16 @@
 //! frame time and its ratio to the frame without shadows, measured in the
 //! same run. The error side is `shadow_map_resolution_trades_edge_error`
 //! in `tests/shadow_cascades.rs`.
+//!
+//! With `OXYGEN_RECORD_DIR` set, the table (with every frame's time) is
+//! appended as one record to `$OXYGEN_RECORD_DIR/shadow_bench.jsonl`
+//! (`oxygen_demo::record`).
 
 use std::time::Instant;
 
 use oxygen::core::CascadeSettings;
 use oxygen::prelude::*;
+use oxygen_demo::record::{Record, Row};
 
 const WARM_UP: usize = 3;
 const MEASURED: usize = 10;
@@ -40,9 +45,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("|---:|---:|---:|---:|");
     let mut baseline = None;
     let mut adapter = String::new();
+    let mut record = Record::new("shadow_bench")
+        .value("boxes", count)
+        .value("viewport_px", [960, 540])
+        .value("warm_up_frames", WARM_UP)
+        .value("measured_frames", MEASURED);
     for config in configs {
         let mut renderer = Renderer::new_headless()?;
         adapter = renderer.gpu().describe();
+        record.set_adapter(&renderer.gpu().adapter_info);
         let desc = match config {
             Some((count, resolution)) => {
                 let settings = CascadeSettings { count, resolution, max_distance: 60.0, ..Default::default() };
@@ -60,14 +71,24 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 times.push(start.elapsed().as_secs_f64() * 1e3);
             }
         }
+        let samples = times.clone();
         times.sort_by(f64::total_cmp);
         let median = times[times.len() / 2];
         let base = *baseline.get_or_insert(median);
         let (cascades, resolution) =
             config.map_or(("0".to_owned(), "—".to_owned()), |(c, r)| (c.to_string(), r.to_string()));
         println!("| {cascades} | {resolution} | {median:.2} | {:.2} |", median / base);
+        record.push_row(
+            Row::new()
+                .value("cascades", config.map_or(0, |(c, _)| c))
+                .value("map_resolution_px", config.map(|(_, r)| r))
+                .value("frame_ms_median", median)
+                .value("ratio_to_no_shadows", median / base)
+                .value("frame_ms_samples", samples),
+        );
     }
     println!();
     println!("adapter: {adapter}; {count} boxes; medians of {MEASURED} frames after {WARM_UP} warm-up frames");
+    record.write()?;
     Ok(())
 }

@@ -33,10 +33,15 @@
 //! frame, so a small scene's CPU frame can be compared with a large one's
 //! after the same GPU time (the driver makes the frame after a long GPU
 //! frame slower whatever is in it; `indirect_count_cost` measures that).
+//!
+//! With `OXYGEN_RECORD_DIR` set, every line (with every frame's figures)
+//! is appended as one record to `$OXYGEN_RECORD_DIR/visibility_bench.jsonl`
+//! (`oxygen_demo::record`).
 
 use std::time::Instant;
 
 use oxygen::core::{GpuContext, GpuOptions};
+use oxygen_demo::record::{Record, Row};
 
 #[path = "support/gpu_spin.rs"]
 mod gpu_spin;
@@ -166,7 +171,7 @@ fn run(
     visibility: Visibility,
     moving: bool,
     cull_only: bool,
-) -> Result<String, Box<dyn std::error::Error>> {
+) -> Result<(String, Row), Box<dyn std::error::Error>> {
     let (mut scene, side) = if scene_kind == "city" {
         city(count)
     } else {
@@ -183,8 +188,16 @@ fn run(
     let timestamps = Timestamps::new(&gpu);
     let mut renderer =
         Renderer::with_options(gpu, RendererOptions { visibility: Some(visibility), ..Default::default() })?;
+    let row = Row::new()
+        .value("scene", scene_kind)
+        .value("objects", count)
+        .value("views", views)
+        .value("visibility", format!("{visibility:?}"))
+        .value("motion", if moving { "moving" } else { "static" })
+        .value("graph", if cull_only { "cull_only" } else { "full" });
     if visibility.on_gpu() && !renderer.gpu_visibility_supported() {
-        return Ok(format!("{visibility:?}: not supported on {}", renderer.gpu().describe()));
+        let line = format!("{visibility:?}: not supported on {}", renderer.gpu().describe());
+        return Ok((line, row.value("supported", false)));
     }
     let mut ids = Vec::new();
     for camera in cameras(scene_kind, side, views) {
@@ -247,18 +260,33 @@ fn run(
     } else {
         ids.iter().map(|id| renderer.view_draws(*id).map_or(0, |d| d.iter().map(|(_, d)| d.len()).sum())).sum()
     };
-    let gpu_text = if gpu_ms.is_empty() { "n/a".to_owned() } else { format!("{:.3}", median(&mut gpu_ms)) };
-    Ok(format!(
-        "{scene_kind:<5} N={count:<8} V={views:<3} {:<12} {:<7} {:<9} busy_before_ms={busy_ms:<5} cpu_ms={:<8.3} gpu_ms={gpu_text:<8} frame_ms={:<8.3} empty_submit_ms={:<6.3} upload_kb={:<9.1} kept_per_view={:.0}",
+    let row = row
+        .value("supported", true)
+        .value("busy_before_ms", busy_ms)
+        .value("cpu_ms_samples", &cpu)
+        .value("gpu_ms_samples", &gpu_ms)
+        .value("frame_ms_samples", &whole)
+        .value("empty_submit_ms_samples", &empty_submit)
+        .value("upload_kb_samples", &uploaded)
+        .value("kept_per_view", kept as f64 / views as f64);
+    let gpu_median = (!gpu_ms.is_empty()).then(|| median(&mut gpu_ms));
+    let gpu_text = gpu_median.map_or("n/a".to_owned(), |g| format!("{g:.3}"));
+    let (cpu_median, frame_median, submit_median, upload_median) =
+        (median(&mut cpu), median(&mut whole), median(&mut empty_submit), median(&mut uploaded));
+    let line = format!(
+        "{scene_kind:<5} N={count:<8} V={views:<3} {:<12} {:<7} {:<9} busy_before_ms={busy_ms:<5} cpu_ms={cpu_median:<8.3} gpu_ms={gpu_text:<8} frame_ms={frame_median:<8.3} empty_submit_ms={submit_median:<6.3} upload_kb={upload_median:<9.1} kept_per_view={:.0}",
         format!("{visibility:?}"),
         if moving { "moving" } else { "static" },
         if cull_only { "cull_only" } else { "full" },
-        median(&mut cpu),
-        median(&mut whole),
-        median(&mut empty_submit),
-        median(&mut uploaded),
         kept as f64 / views as f64,
-    ))
+    );
+    let row = row
+        .value("cpu_ms_median", cpu_median)
+        .value("gpu_ms_median", gpu_median)
+        .value("frame_ms_median", frame_median)
+        .value("empty_submit_ms_median", submit_median)
+        .value("upload_kb_median", upload_median);
+    Ok((line, row))
 }
 
 /// `VISIBILITY_GPU_BUSY_MS=T` keeps the GPU busy for T ms (and waits)
@@ -301,7 +329,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let frames: usize = args.next().map(|a| a.parse()).transpose()?.unwrap_or(10).max(1);
     let gpu = GpuContext::new_headless(&GpuOptions::default())?;
     println!("adapter: {}", gpu.describe());
+    let mut record = Record::new("visibility_bench")
+        .adapter(&gpu.adapter_info)
+        .value("scene", scene_kind.as_str())
+        .value("warm_up_frames", WARM_UP)
+        .value("measured_frames", frames)
+        .value("viewport_px", [VIEWPORT.x, VIEWPORT.y]);
     drop(gpu);
+    let mut line = |(text, row): (String, Row)| {
+        println!("{text}");
+        record.push_row(row);
+    };
     for &count in &counts {
         for &views in &view_counts {
             for moving in [false, true] {
@@ -309,13 +347,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     if !wanted(visibility) {
                         continue;
                     }
-                    println!("{}", run(&scene_kind, count, views, frames, visibility, moving, false)?);
+                    line(run(&scene_kind, count, views, frames, visibility, moving, false)?);
                 }
             }
             // (A graph that draws nothing has no pre-pass: occlusion culling
             // would fall back to frustum culling, so only that is timed.)
-            println!("{}", run(&scene_kind, count, views, frames, Visibility::GpuFrustum, false, true)?);
+            line(run(&scene_kind, count, views, frames, Visibility::GpuFrustum, false, true)?);
         }
     }
+    record.write()?;
     Ok(())
 }

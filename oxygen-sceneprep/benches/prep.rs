@@ -3,6 +3,7 @@
 //! ```text
 //! cargo bench -p oxygen-sceneprep --bench prep            # full table (N up to 1M)
 //! cargo bench -p oxygen-sceneprep --bench prep -- --quick # N up to 100k
+//! cargo test -p oxygen-sceneprep --bench prep -- --smoke  # toy sizes, unoptimised: does it run?
 //! ```
 //!
 //! For each city size N and view count V it reports the mean `prepare` time
@@ -15,6 +16,13 @@
 //! * write: world + normal matrices once per frame, one `DrawMetadata` per draw.
 //!
 //! It also times the draw sort: radix sort against `sort_unstable` on the same keys.
+//!
+//! `--smoke` runs every step at toy sizes (N = 1000, 1 and 6 views, a few
+//! milliseconds a measurement): a check that the bench runs, not a
+//! measurement. With `OXYGEN_RECORD_DIR` set, every table is appended as
+//! one record to `$OXYGEN_RECORD_DIR/prep.jsonl` (`oxygen_demo::record`;
+//! a relative directory is under the workspace root, although `cargo bench`
+//! runs this in `oxygen-sceneprep/`).
 
 use std::hint::black_box;
 use std::time::{Duration, Instant};
@@ -23,6 +31,7 @@ use glam::{UVec2, Vec3, Vec4};
 use oxygen_bindless::SlotAllocators;
 use oxygen_core::{AlphaMode, Camera, Geometry, LookAtResolver, Material, Renderable, ResolvedView, Scene, Transform};
 use oxygen_core::{ViewContext, ViewId, ViewResolver};
+use oxygen_demo::record::{Record, Row};
 use oxygen_sceneprep::finalize::radix_sort::radix_sort_by_key;
 use oxygen_sceneprep::{
     CullBound, DrawMetadata, NormalMatrix, RenderableEntry, ScenePrep, SubmeshEntry, ViewPrepOptions, ViewRequest,
@@ -100,11 +109,33 @@ fn time_it(budget: Duration, mut f: impl FnMut()) -> f64 {
     start.elapsed().as_secs_f64() / runs as f64
 }
 
-fn main() {
+fn main() -> Result<(), oxygen_demo::record::RecordError> {
     let quick = std::env::args().any(|a| a == "--quick");
-    let sizes: &[usize] = if quick { &[10_000, 100_000] } else { &[10_000, 100_000, 1_000_000] };
-    let view_counts = [1usize, 6, 24];
-    let budget = Duration::from_millis(if quick { 300 } else { 1500 });
+    let smoke = std::env::args().any(|a| a == "--smoke");
+    let sizes: &[usize] = match (smoke, quick) {
+        (true, _) => &[1_000],
+        (false, true) => &[10_000, 100_000],
+        (false, false) => &[10_000, 100_000, 1_000_000],
+    };
+    let view_counts: &[usize] = if smoke { &[1, 6] } else { &[1, 6, 24] };
+    let budget = Duration::from_millis(match (smoke, quick) {
+        (true, _) => 5,
+        (false, true) => 300,
+        (false, false) => 1500,
+    });
+    let mut record = Record::new("prep")
+        .value(
+            "mode",
+            if smoke {
+                "smoke"
+            } else if quick {
+                "quick"
+            } else {
+                "full"
+            },
+        )
+        .value("budget_ms_per_measurement", budget.as_secs_f64() * 1e3)
+        .value("threads_available", std::thread::available_parallelism().map_or(1, |t| t.get()));
 
     println!(
         "| N | V | draws/frame | prep ms (static) | ns / renderable / view | memcpy floor ms | prep / floor | V-view / 1-view (static) | prep ms (all moved) | V-view / 1-view (all moved) |"
@@ -114,7 +145,7 @@ fn main() {
         eprintln!("building a city of {n} renderables…");
         let (scene, extent) = city(n);
         let (mut one_view_seconds, mut one_view_moving) = (0.0, 0.0);
-        for &v in &view_counts {
+        for &v in view_counts {
             let resolved = views(&scene, extent, v);
             let requests: Vec<_> =
                 resolved.iter().map(|view| ViewRequest { view, options: Default::default() }).collect();
@@ -145,6 +176,21 @@ fn main() {
                 destination.copy_from_slice(black_box(&source));
                 black_box(&mut destination);
             });
+            record.push_row(
+                Row::new()
+                    .value("renderables", n)
+                    .value("views", v)
+                    .value("draws_per_frame", draws)
+                    .value("prep_ms_static_mean", seconds * 1e3)
+                    .value("ns_per_renderable_per_view", seconds * 1e9 / (n * v) as f64)
+                    .value("memcpy_floor_ms_mean", floor * 1e3)
+                    .value("memcpy_floor_bytes", floor_bytes)
+                    .value("prep_over_floor", seconds / floor)
+                    .value("v_view_over_one_view_static", seconds / one_view_seconds)
+                    .value("v_view_over_one_view_aim", 1.0 + 0.3 * (v as f64 - 1.0))
+                    .value("prep_ms_all_moved_mean", moving * 1e3)
+                    .value("v_view_over_one_view_all_moved", moving / one_view_moving),
+            );
             println!(
                 "| {n} | {v} | {draws} | {:.2} | {:.1} | {:.3} | {:.1}× | {:.2} (aim {:.1}) | {:.2} | {:.2} |",
                 seconds * 1e3,
@@ -161,7 +207,7 @@ fn main() {
 
     // The cull-bound knob: the sphere test is cheaper per object but keeps
     // more draws (the `sphere_culling_keeps_a_superset` test reports how many).
-    let n = 100_000;
+    let n = if smoke { 1_000 } else { 100_000 };
     let (scene, extent) = city(n);
     let resolved = views(&scene, extent, 6);
     println!();
@@ -178,6 +224,15 @@ fn main() {
             draws = frames.iter().map(|f| f.draws().len()).sum::<usize>();
         });
         println!("| {cull:?} | {:.2} | {draws} |", seconds * 1e3);
+        record.push_row_to(
+            "cull_rows",
+            Row::new()
+                .value("renderables", n)
+                .value("views", 6)
+                .value("cull_bound", format!("{cull:?}"))
+                .value("prep_ms_mean", seconds * 1e3)
+                .value("draws_per_frame", draws),
+        );
     }
 
     // Threads: the same frame on 1 thread and on all of them.
@@ -196,12 +251,21 @@ fn main() {
     println!();
     for (threads, seconds) in &per_threads {
         println!("N = {n}, V = 6 on {threads} thread(s): {:.2} ms", seconds * 1e3);
+        record.push_row_to(
+            "thread_rows",
+            Row::new()
+                .value("renderables", n)
+                .value("views", 6)
+                .value("threads", *threads)
+                .value("prep_ms_mean", seconds * 1e3),
+        );
     }
 
     // Sort: radix against the standard unstable comparison sort, 100k keys
     // shaped like real ones (few pass classes and materials, varied depth).
     let mut state = 0x9e37_79b9_7f4a_7c15u64;
-    let keys: Vec<(u64, u32)> = (0..100_000u32)
+    let key_count: u32 = if smoke { 1_000 } else { 100_000 };
+    let keys: Vec<(u64, u32)> = (0..key_count)
         .map(|i| {
             state ^= state << 13;
             state ^= state >> 7;
@@ -226,10 +290,19 @@ fn main() {
     });
     println!();
     println!(
-        "sort of 100k draw keys: radix {:.3} ms, sort_unstable {:.3} ms (copy of the input {:.3} ms included in both): radix is {:.2}× faster",
+        "sort of {key_count} draw keys: radix {:.3} ms, sort_unstable {:.3} ms (copy of the input {:.3} ms included in both): radix is {:.2}× faster",
         radix * 1e3,
         comparison * 1e3,
         copy_only * 1e3,
         (comparison - copy_only) / (radix - copy_only)
     );
+    let speed_up = (comparison - copy_only) / (radix - copy_only);
+    record
+        .value("sort_keys", key_count)
+        .value("sort_radix_ms_mean", radix * 1e3)
+        .value("sort_unstable_ms_mean", comparison * 1e3)
+        .value("sort_input_copy_ms_mean", copy_only * 1e3)
+        .value("sort_radix_speed_up", speed_up.is_finite().then_some(speed_up))
+        .write()?;
+    Ok(())
 }
