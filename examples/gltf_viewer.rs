@@ -194,7 +194,9 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
     for w in &import.warnings {
         println!("  note: {w}");
     }
-    let bounds = import.bounds.ok_or("the scene has nothing to draw")?;
+    // f64 bounds: a model far from the origin is framed as it is at the
+    // origin (the f32 corners are whole units off thirty million units out).
+    let bounds = import.precise_bounds.ok_or("the scene has nothing to draw")?;
     let posing = match &animation {
         Some(a) => Some((import.animation(a.which.as_deref())?, a)),
         None => None,
@@ -245,16 +247,18 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
         let id = renderer.register_view(camera.resolver(viewport), standard_render_graph)?;
         views.push((format!("camera{i}"), camera.name.clone(), id));
     }
-    // Three orbit views around the scene's bounds: front, three-quarter, and from above.
+    // Three orbit views around the scene's bounds: front, three-quarter, and
+    // from above, built in f64 (`DLookAtResolver`) so that the eye and the
+    // target keep their millimetres far from the origin.
     let center = bounds.center();
     let radius = bounds.half_extents().length().max(1e-3);
     for (tag, direction, up) in [
-        ("orbit_front", Vec3::new(0.0, 0.15, 1.0), Vec3::Y),
-        ("orbit_three_quarter", Vec3::new(0.8, 0.45, 0.8), Vec3::Y),
-        ("orbit_top", Vec3::new(0.0, 1.0, 0.25), Vec3::NEG_Z),
+        ("orbit_front", DVec3::new(0.0, 0.15, 1.0), Vec3::Y),
+        ("orbit_three_quarter", DVec3::new(0.8, 0.45, 0.8), Vec3::Y),
+        ("orbit_top", DVec3::new(0.0, 1.0, 0.25), Vec3::NEG_Z),
     ] {
-        let orbit = LookAtResolver {
-            camera: Camera::perspective(45f32.to_radians(), radius * 0.01, None),
+        let orbit = DLookAtResolver {
+            camera: Camera::perspective(45f32.to_radians(), (radius * 0.01) as f32, None),
             eye: center + direction.normalize() * radius * 2.0,
             target: center,
             up,
