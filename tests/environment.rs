@@ -60,11 +60,14 @@ fn a_rough_white_sphere_in_a_uniform_environment_shows_the_environment() {
     let radiance = Vec3::new(0.6, 0.5, 0.4);
     let image = render(&sphere_scene(0.0, 1.0, false), Some(&Environment::Uniform(radiance)), Msaa::Off);
     // Diffuse albedo 1 reflects exactly the radiance; the rough dielectric's
-    // specular adds a few percent (the environment BRDF at F0 = 0.04).
+    // specular adds a little (the environment BRDF at F0 = 0.04): measured
+    // 1.0107–1.0127 on Vulkan and GL (lavapipe, llvmpipe), so the bound on
+    // the excess is 1.5 × 0.0127 ≈ 0.019 and a darker sphere fails too.
     for (x, y) in [(48, 48), (40, 56), (58, 40)] {
         let p = at(&image, x, y);
         let ratio = p / radiance;
-        assert!(ratio.min_element() > 0.95 && ratio.max_element() < 1.2, "({x}, {y}): {p} against {radiance}");
+        eprintln!("white furnace ({x}, {y}): ratio {ratio}");
+        assert!(ratio.min_element() > 1.0 && ratio.max_element() < 1.019, "({x}, {y}): {p} against {radiance}");
     }
     // Behind the sphere: the environment itself (f16 precision).
     let corner = at(&image, 2, 2);
@@ -112,7 +115,9 @@ fn multisampled_views_draw_the_environment_too() {
     let image = render(&sphere_scene(0.0, 1.0, false), Some(&Environment::Uniform(radiance)), Msaa::X4);
     assert!((at(&image, 2, 2) - radiance).abs().max_element() < 2e-3);
     let ratio = at(&image, 48, 48) / radiance;
-    assert!(ratio.min_element() > 0.95 && ratio.max_element() < 1.2, "{ratio}");
+    eprintln!("white furnace, 4× MSAA: ratio {ratio}");
+    // As without MSAA (measured 1.0107–1.0120 on Vulkan and GL).
+    assert!(ratio.min_element() > 1.0 && ratio.max_element() < 1.019, "{ratio}");
 }
 
 /// A Radiance `.hdr` file loads as an equirectangular environment: its
@@ -273,7 +278,9 @@ fn the_split_sum_table_matches_its_cpu_twin() {
         }
     }
     eprintln!("split sum: table vs CPU worst {worst:.4}; analytic fit vs CPU worst {worst_fit:.4}");
-    assert!(worst < 0.01, "table differs from the CPU integral by {worst}");
+    // Measured 0.0014 on Vulkan and GL (the same 1 024 samples a texel, in
+    // f16 on the GPU); 1.5 × that.
+    assert!(worst < 0.0021, "table differs from the CPU integral by {worst}");
 }
 
 /// A coloured metal under a uniform environment reflects exactly

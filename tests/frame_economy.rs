@@ -109,7 +109,7 @@ fn rg11b10_hdr_stays_within_its_documented_error_and_shows_coarser_steps() {
     let (packed, packed_view, _) =
         render_once(RendererOptions { hdr_format: HdrFormat::Rg11b10Ufloat, ..options }, &scene);
     if packed.hdr_format() != HdrFormat::Rg11b10Ufloat {
-        eprintln!("the adapter cannot render Rg11b10Ufloat; the renderer fell back, nothing to compare");
+        support::skip::skip("the adapter cannot render Rg11b10Ufloat; the renderer fell back, nothing to compare");
         return;
     }
     // Relative error of the stored radiance: 5 mantissa bits in blue, so
@@ -134,8 +134,10 @@ fn rg11b10_hdr_stays_within_its_documented_error_and_shows_coarser_steps() {
         "Rg11b10Ufloat on screen: {count} pixels differ by more than 2 levels, largest {largest}; \
          distinct levels (Rgba16Float, Rg11b10Ufloat) per channel: {levels:?}"
     );
-    assert!(largest <= 8, "largest difference {largest} levels");
-    assert!(count * 20 <= x.pixels().len(), "{count} pixels differ by more than 2 levels");
+    // Measured on lavapipe: 3 pixels, largest 3 levels (GL cannot render
+    // the format: skipped there). Allowed: 1.5 × each, rounded down.
+    assert!(largest <= 4, "largest difference {largest} levels");
+    assert!(count <= 4, "{count} pixels differ by more than 2 levels");
     // The banding: the packed format's gradient has fewer distinct steps in
     // blue (5 mantissa bits) than the half-float one.
     assert!(levels[2].1 < levels[2].0, "blue levels {:?}", levels[2]);

@@ -123,7 +123,9 @@ fn more_samples_bring_edges_closer_to_the_supersampled_picture() {
         }
     }
     assert_eq!(errors[2].0, 4, "4× is what the test adapter must support");
-    assert!(errors[2].1 < 0.5 * errors[0].1, "4× MSAA must remove most of the edge error: {errors:?}");
+    // Measured: 4× leaves 0.316 of 1×'s edge error (0.0312 against 0.0988,
+    // Vulkan and GL alike); allowed 1.5 × that.
+    assert!(errors[2].1 < 0.47 * errors[0].1, "4× MSAA must remove most of the edge error: {errors:?}");
 }
 
 /// AlphaBlendModeTest has opaque, masked and blended materials, some

@@ -71,7 +71,15 @@ fn a_mirror_sphere_reflects_the_red_box_through_the_probe() {
     assert!(reflected.r > 80 && reflected.r as i32 > reflected.g as i32 + 40, "no red reflection: {reflected:?}");
     let q = image.get_pixel(away.0, away.1).0;
     assert!((q[0] as i32) < reflected.r as i32 - 40, "the other side reflects the box too: {q:?}");
-    assert!(region_mean(&image, towards_box, 1) > 0.0);
+    eprintln!(
+        "mirror: towards the box {reflected:?}, region mean {}; away {q:?}, region mean {}",
+        region_mean(&image, towards_box, 1),
+        region_mean(&image, away, 1)
+    );
+    // The 3 × 3 patch around the reflected box: measured mean luma 53.5 on
+    // Vulkan and GL (the background's reflection 43.7); within 10 %.
+    let mean = region_mean(&image, towards_box, 1);
+    assert!((mean - 53.5).abs() < 5.4, "the reflected box's patch has mean luma {mean}, measured 53.5");
     support::golden::assert_golden("mirror_sphere_probe", &image, support::golden::Tolerance::default());
 }
 
@@ -341,6 +349,7 @@ fn reflected_surfaces_reflect_the_environment_in_the_probe_and_the_reference() {
     eprintln!("the gold sphere in the mirror: raster (probe) against the reference, mean relative error {error:.3}");
     // Measured 0.154 (the probe sees from its centre, the mirror from its
     // surface); without the environment's reflection past the first hit the
-    // reference's gold was black: 0.867.
-    assert!(error < 0.3, "the reflected gold sphere differs by {error}");
+    // reference's gold was black: 0.867. The same 0.154 on Vulkan and GL;
+    // allowed 1.5 × that.
+    assert!(error < 0.231, "the reflected gold sphere differs by {error}");
 }

@@ -401,6 +401,12 @@ fn shadow_map_resolution_trades_edge_error() {
         "shadow edge error (ground pixels misclassified, of {shadowed_pixels} exactly shadowed), by map resolution: 128: {}, 256: {}, 512: {}, 1024: {}",
         errors[0], errors[1], errors[2], errors[3]
     );
-    assert!(errors[0] > errors[3], "finer maps must not be worse: {errors:?}");
-    assert!(errors[3] * 10 < shadowed_pixels, "a 1024 map should get the shadow nearly right: {errors:?}");
+    // Measured 834, 426, 233, 90 on Vulkan and GL: each finer map roughly
+    // halves the edge error. Every resolution must do better than the
+    // coarser one and stay within 1.5 × its measured error.
+    const MEASURED: [usize; 4] = [834, 426, 233, 90];
+    assert!(errors.windows(2).all(|w| w[1] < w[0]), "finer maps must be better: {errors:?}");
+    for (error, measured) in errors.iter().zip(MEASURED) {
+        assert!(error * 2 <= measured * 3, "edge errors {errors:?} against the measured {MEASURED:?}");
+    }
 }

@@ -1,0 +1,105 @@
+#!/usr/bin/env bash
+# Runs the benches whose figures docs/performance.md and docs/accuracy.md
+# quote for a hardware GPU, with the arguments the docs give, and collects
+# their records (oxygen_demo::record) in one folder. This is the script the
+# H100 tables come from; the records it writes are committed under
+# docs/records/ (docs/records/README.md).
+#
+#   scripts/gpu-records.sh BIN_DIR RECORD_DIR [GROUP..]
+#
+# BIN_DIR holds release builds of the bench examples (built elsewhere, e.g.
+# `cargo build --release --examples` and copied, stripped, to a GPU machine);
+# RECORD_DIR receives <bench>.jsonl files and a log per run. GROUPs
+# (default: all) split the work so that each part fits one sitting:
+#   draws      draw_path_bench, raster_floor, record_bench, indirect_count_cost
+#   frame      shadow_bench, hdr_format_bench, prepass_bench, cubes_bench (pre-pass), msaa_bench
+#   visibility visibility_bench (field, city, the static-frame aims)
+#   lighting   environment_bench, accuracy_atlas
+# Each run's stdout/stderr goes to RECORD_DIR/<n>-<bench>.log; a failing run
+# is reported and the others go on; the exit status is non-zero if any failed.
+set -uo pipefail
+
+if [ $# -lt 2 ]; then
+  sed -n '2,20p' "$0" >&2
+  exit 2
+fi
+bin=$(cd "$1" && pwd)
+out=$2
+shift 2
+groups=${*:-draws frame visibility lighting}
+mkdir -p "$out"
+out=$(cd "$out" && pwd)
+export OXYGEN_RECORD_DIR="$out"
+
+say() { printf '[gpu-records] %s\n' "$*" >&2; }
+n=0
+failed=()
+# run BENCH [ENV=VALUE..] -- ARGS..: one bench run, logged.
+run() {
+  local bench=$1
+  shift
+  local envs=()
+  while [ $# -gt 0 ] && [ "$1" != "--" ]; do envs+=("$1"); shift; done
+  [ "${1:-}" = "--" ] && shift
+  n=$((n + 1))
+  local log
+  log=$(printf '%s/%02d-%s.log' "$out" "$n" "$bench")
+  say "$bench ${envs[*]} $* (log: $log)"
+  local start=$SECONDS
+  if env "${envs[@]}" "$bin/$bench" "$@" >"$log" 2>&1; then
+    say "  done in $((SECONDS - start)) s"
+  else
+    say "  FAILED (exit $?) after $((SECONDS - start)) s; last lines:"
+    tail -5 "$log" >&2
+    failed+=("$bench $*")
+  fi
+}
+
+for group in $groups; do
+  case "$group" in
+    draws)
+      run draw_path_bench -- 100000
+      run draw_path_bench -- 1000000
+      run raster_floor -- 10000
+      run raster_floor -- 100000
+      run raster_floor -- 1000000
+      run record_bench -- 20000 direct
+      run record_bench -- 20000 mdi
+      run indirect_count_cost -- 60
+      ;;
+    frame)
+      run shadow_bench -- 10000
+      run hdr_format_bench -- 1920 60
+      run hdr_format_bench -- 3840 30
+      run prepass_bench -- 10000
+      for prepass in auto on off; do
+        run cubes_bench OXYGEN_PREPASS=$prepass -- 10000 1 20
+        run cubes_bench OXYGEN_PREPASS=$prepass -- 100000 1 20
+      done
+      run msaa_bench -- 1920 2500 40
+      run msaa_bench -- 1920 0 40
+      run msaa_bench -- 3840 10000 40
+      ;;
+    visibility)
+      run visibility_bench -- field 10000,100000 1,6,24 10
+      run visibility_bench -- field 1000000 1,6 8
+      run visibility_bench -- city 4096,16384 1,6 10
+      run visibility_bench VISIBILITY_PATHS=gpu VISIBILITY_GPU_BUSY_MS=16.7 -- field 10000 1 40
+      run visibility_bench VISIBILITY_PATHS=gpu -- field 1000000 1 40
+      ;;
+    lighting)
+      run environment_bench -- 7
+      run accuracy_atlas -- "$out/atlas" 1280 1024
+      ;;
+    *)
+      say "unknown group '$group' (draws, frame, visibility, lighting)"
+      exit 2
+      ;;
+  esac
+done
+
+if [ "${#failed[@]}" -ne 0 ]; then
+  say "failed: ${failed[*]}"
+  exit 1
+fi
+say "records in $out: $(ls "$out"/*.jsonl 2>/dev/null | xargs -n1 basename | tr '\n' ' ')"
