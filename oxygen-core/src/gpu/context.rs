@@ -6,6 +6,9 @@
 //! it prefers a discrete GPU, then integrated, then a CPU rasterizer, and
 //! Vulkan over GL among equals.
 
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Mutex, PoisonError};
+
 use thiserror::Error;
 use tracing::{info, info_span};
 
@@ -108,7 +111,44 @@ fn rank(info: &wgpu::AdapterInfo) -> u32 {
     device * 2 + backend
 }
 
+/// How many wgpu instances this process has created (see
+/// [`GpuContext::instances_created`]).
+static INSTANCES_CREATED: AtomicUsize = AtomicUsize::new(0);
+
+/// The process's wgpu instance for `descriptor`'s backends and flags,
+/// created the first time it is asked for and shared by every context
+/// after that.
+///
+/// Each `wgpu::Instance` is a driver instance (a `VkInstance`), and the
+/// NVIDIA driver (580, H100) stops listing adapters after some twenty
+/// instances have been created in one process, even when every earlier one
+/// and its device were dropped ("no adapters at all" from the 21st
+/// context, whether or not it rendered). Benches, test suites and
+/// applications that recreate their renderer make contexts one after
+/// another; one instance serves them all, and each context still gets a
+/// device of its own.
+fn shared_instance(descriptor: wgpu::InstanceDescriptor) -> wgpu::Instance {
+    static INSTANCES: Mutex<Vec<((u32, u32), wgpu::Instance)>> = Mutex::new(Vec::new());
+    let key = (descriptor.backends.bits(), descriptor.flags.bits());
+    // The list is only ever pushed to, so a panic elsewhere leaves it whole.
+    let mut instances = INSTANCES.lock().unwrap_or_else(PoisonError::into_inner);
+    if let Some((_, instance)) = instances.iter().find(|(k, _)| *k == key) {
+        return instance.clone();
+    }
+    let instance = wgpu::Instance::new(descriptor);
+    INSTANCES_CREATED.fetch_add(1, Ordering::Relaxed);
+    instances.push((key, instance.clone()));
+    instance
+}
+
 impl GpuContext {
+    /// How many wgpu instances (driver instances) this process has created:
+    /// one per backend set and instance flags, however many contexts were
+    /// made ([`Self::new_headless`] shares them).
+    pub fn instances_created() -> usize {
+        INSTANCES_CREATED.load(Ordering::Relaxed)
+    }
+
     /// Picks an adapter and creates a device; blocks until done.
     pub fn new_headless(options: &GpuOptions) -> Result<Self, GpuError> {
         futures::executor::block_on(Self::new_headless_async(options))
@@ -122,7 +162,7 @@ impl GpuContext {
             descriptor.flags.remove(wgpu::InstanceFlags::VALIDATION_INDIRECT_CALL);
         }
         let backends = descriptor.backends;
-        let instance = wgpu::Instance::new(descriptor);
+        let instance = shared_instance(descriptor);
         let wanted_name = std::env::var("OXYGEN_ADAPTER").ok().map(|s| s.to_lowercase());
 
         let mut tried = Vec::new();
