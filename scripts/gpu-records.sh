@@ -15,6 +15,10 @@
 #   frame      shadow_bench, hdr_format_bench, prepass_bench, cubes_bench (pre-pass), msaa_bench
 #   visibility visibility_bench (field, city, the static-frame aims)
 #   lighting   environment_bench, accuracy_atlas
+#   lavapipe   the docs' lavapipe columns (smaller sizes, for the 2-core
+#              machine without a GPU): shadow_bench, hdr_format_bench,
+#              prepass_bench, msaa_bench, environment_bench, and the
+#              ScenePrep bench through cargo (CPU only)
 # Each run's stdout/stderr goes to RECORD_DIR/<n>-<bench>.log; a failing run
 # is reported and the others go on; the exit status is non-zero if any failed.
 set -uo pipefail
@@ -26,7 +30,7 @@ fi
 bin=$(cd "$1" && pwd)
 out=$2
 shift 2
-groups=${*:-draws frame visibility lighting}
+groups=${*:-draws frame visibility lighting}  # lavapipe only when named
 mkdir -p "$out"
 out=$(cd "$out" && pwd)
 export OXYGEN_RECORD_DIR="$out"
@@ -91,8 +95,22 @@ for group in $groups; do
       run environment_bench -- 7
       run accuracy_atlas -- "$out/atlas" 1280 1024
       ;;
+    lavapipe)
+      run shadow_bench -- 10000
+      run hdr_format_bench -- 1280 10
+      run prepass_bench -- 10000
+      run msaa_bench -- 640 400 20
+      run msaa_bench -- 640 0 20
+      run environment_bench -- 3
+      n=$((n + 1))
+      say "prep (cargo bench -p oxygen-sceneprep --bench prep)"
+      if ! cargo bench --locked -p oxygen-sceneprep --bench prep >"$(printf '%s/%02d-prep.log' "$out" "$n")" 2>&1; then
+        say "  FAILED"
+        failed+=("prep")
+      fi
+      ;;
     *)
-      say "unknown group '$group' (draws, frame, visibility, lighting)"
+      say "unknown group '$group' (draws, frame, visibility, lighting, lavapipe)"
       exit 2
       ;;
   esac
