@@ -17,6 +17,13 @@
 # WGPU_ADAPTER_NAME (Bevy) pick the adapter by a substring of its name.
 # ADAPTER sets both (default: llvmpipe, i.e. Mesa's lavapipe on Vulkan);
 # each run prints the adapter it got, and the table says which it was.
+#
+# OXYGEN_BIN and BEVY_BIN name prebuilt binaries (release builds carried to
+# a GPU machine, say) and skip the builds; OXYGEN_CPU_PATH=1 also runs
+# Oxygen with OXYGEN_VISIBILITY=cpu in each round. With OXYGEN_RECORD_DIR
+# set, the run is appended as one record to $OXYGEN_RECORD_DIR/peer_bench.jsonl
+# (docs/records/README.md): every run's line, the medians and ratios of the
+# table, both adapters and the command.
 # Not part of CI: Bevy's build is long and the numbers depend on the machine.
 set -euo pipefail
 
@@ -29,12 +36,17 @@ adapter="${ADAPTER:-llvmpipe}"
 export OXYGEN_ADAPTER="$adapter" WGPU_ADAPTER_NAME="$adapter"
 nice_cmd=(nice -n "${NICE:-10}")
 
-echo "building Oxygen's cubes_bench and peer-bevy (release)…" >&2
-(cd "$root" && "${nice_cmd[@]}" cargo build --release --example cubes_bench >&2)
-bevy_target="${PEER_BEVY_TARGET:-$root/benches/peer-bevy/target}"
-(cd "$root/benches/peer-bevy" && CARGO_TARGET_DIR="$bevy_target" "${nice_cmd[@]}" cargo build --release >&2)
-oxygen_bin="${CARGO_TARGET_DIR:-$root/target}/release/examples/cubes_bench"
-bevy_bin="$bevy_target/release/peer-bevy"
+if [ -n "${OXYGEN_BIN:-}" ] && [ -n "${BEVY_BIN:-}" ]; then
+    oxygen_bin=$OXYGEN_BIN
+    bevy_bin=$BEVY_BIN
+else
+    echo "building Oxygen's cubes_bench and peer-bevy (release)…" >&2
+    (cd "$root" && "${nice_cmd[@]}" cargo build --release --example cubes_bench >&2)
+    bevy_target="${PEER_BEVY_TARGET:-$root/benches/peer-bevy/target}"
+    (cd "$root/benches/peer-bevy" && CARGO_TARGET_DIR="$bevy_target" "${nice_cmd[@]}" cargo build --release >&2)
+    oxygen_bin="${CARGO_TARGET_DIR:-$root/target}/release/examples/cubes_bench"
+    bevy_bin="$bevy_target/release/peer-bevy"
+fi
 
 log="$(mktemp)"
 trap 'rm -f "$log"' EXIT
@@ -43,16 +55,20 @@ for round in $(seq 1 "$rounds"); do
         n="${config%x*}"
         v="${config#*x}"
         echo "round $round/$rounds: N=$n V=$v" >&2
-        "$oxygen_bin" "$n" "$v" "$frames" | tee -a "$log" >&2
+        # The loop's record is the harness's own (below), not each run's.
+        env -u OXYGEN_RECORD_DIR "$oxygen_bin" "$n" "$v" "$frames" | tee -a "$log" >&2
         "$bevy_bin" "$n" "$v" "$frames" | tee -a "$log" >&2
         "$bevy_bin" "$n" "$v" "$frames" --msaa-off | sed 's/^bevy /bevy_nomsaa /' | tee -a "$log" >&2
+        if [ "${OXYGEN_CPU_PATH:-0}" = 1 ]; then
+            env -u OXYGEN_RECORD_DIR OXYGEN_VISIBILITY=cpu "$oxygen_bin" "$n" "$v" "$frames" | sed 's/^oxygen /oxygen_cpu /' | tee -a "$log" >&2
+        fi
     done
 done
 
 # Median over rounds of each run's median_ms, per renderer and configuration.
-python3 - "$log" "$rounds" "$frames" <<'EOF'
-import re, statistics, sys
-log, rounds, frames = sys.argv[1], sys.argv[2], sys.argv[3]
+python3 - "$log" "$rounds" "$frames" "$configs" <<'EOF'
+import datetime, json, os, platform, re, statistics, subprocess, sys
+log, rounds, frames, config_list = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4]
 runs, visible, adapters = {}, {}, {}
 for line in open(log):
     if " adapter: " in line:
@@ -78,4 +94,52 @@ print(f"Median over {rounds} interleaved rounds of each run's median of {frames}
 print("each frame timed from its start until the GPU finished it.")
 for who in ("oxygen", "bevy"):
     print(f"{who} adapter: {adapters.get(who, '?')}")
+if ("oxygen_cpu", configs[0][0], configs[0][1]) in runs:
+    print()
+    print("Oxygen's CPU path (OXYGEN_VISIBILITY=cpu), same rounds: " + ", ".join(
+        f"N={n} V={v}: {med('oxygen_cpu', n, v):.2f} ms" for n, v in configs))
+
+# The record of the run, in docs/records' format.
+record_dir = os.environ.get("OXYGEN_RECORD_DIR")
+if record_dir:
+    def git(*args):
+        try:
+            return subprocess.run(["git", *args], capture_output=True, text=True, check=True).stdout.strip()
+        except Exception:
+            return None
+    commit = git("rev-parse", "HEAD") or os.environ.get("OXYGEN_COMMIT", "unknown")
+    status = git("status", "--porcelain", "--untracked-files=no")
+    # "NAME (Vulkan, DiscreteGpu, driver DRIVER INFO)", as peer-bevy prints it.
+    bevy = adapters.get("bevy", "")
+    m = re.match(r"(.*) \((\w+), (\w+), driver (\S*) ?(.*)\)$", bevy)
+    adapter = ({"name": m[1], "backend": m[2], "device_type": m[3], "driver": m[4], "driver_info": m[5]}
+               if m else {"name": bevy, "backend": "", "device_type": "", "driver": "", "driver_info": ""})
+    rows = []
+    for n, v in configs:
+        row = {"n": n, "v": v}
+        for who in ("oxygen", "oxygen_cpu", "bevy", "bevy_nomsaa"):
+            if (who, n, v) in runs:
+                row[f"{who}_ms_median"] = med(who, n, v)
+                row[f"{who}_ms_rounds"] = runs[(who, n, v)]
+                row[f"{who}_visible"] = statistics.mean(visible[(who, n, v)])
+        row["bevy_over_oxygen"] = row["bevy_ms_median"] / row["oxygen_ms_median"]
+        row["bevy_nomsaa_over_oxygen"] = row["bevy_nomsaa_ms_median"] / row["oxygen_ms_median"]
+        rows.append(row)
+    record = {
+        "bench": "peer_bench",
+        "commit": commit,
+        "dirty": None if status is None else bool(status),
+        "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
+        "adapter": adapter,
+        "host": {"available_parallelism": os.cpu_count(), "os": platform.system().lower(), "arch": platform.machine()},
+        "command": {"argv": f"peer-bench.sh CONFIGS={config_list} ROUNDS={rounds} FRAMES={frames}",
+                    "env": {k: v for k, v in os.environ.items() if k.startswith(("OXYGEN_", "WGPU_"))}},
+        "values": {"rounds": int(rounds), "frames": int(frames), "oxygen_adapter": adapters.get("oxygen", ""),
+                   "rows": rows, "lines": [l.rstrip("\n") for l in open(log) if "median_ms" in l]},
+    }
+    os.makedirs(record_dir, exist_ok=True)
+    path = os.path.join(record_dir, "peer_bench.jsonl")
+    with open(path, "a") as f:
+        f.write(json.dumps(record) + "\n")
+    print(f"record: appended to {path}", file=sys.stderr)
 EOF

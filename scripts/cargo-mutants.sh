@@ -1,0 +1,94 @@
+#!/usr/bin/env bash
+# cargo-mutants over the CPU logic of one crate, one shard at a time, each
+# shard's outcome kept under docs/records/mutants/ (docs/testing.md keeps
+# the scores and explains the survivors).
+#
+#   scripts/cargo-mutants.sh SCOPE K N      # shard K of N (0-based) of SCOPE
+#   scripts/cargo-mutants.sh SCOPE list     # the mutants of SCOPE, one a line
+#
+# SCOPE is one of:
+#   core       oxygen-core without the device code (src/gpu/: needs an adapter)
+#   bindless   oxygen-bindless without its GPU buffers, samplers and bind groups
+#   sceneprep  oxygen-sceneprep (its tests and oxygen-bindless's)
+#   passes     oxygen-passes' CPU helpers (half floats); the rest of that
+#              crate records GPU work, measured by scripts/wgsl_mutants.py
+#              and the GPU tests
+#   importer   the root crate's glTF importer and .hdr loader (untrusted input),
+#              tested by the importer's CPU tests and the mutant corpus
+#
+# A full run is long on a 2-core machine (about 13 s a mutant for the CPU
+# crates, a minute or more for the importer, whose every mutant relinks the
+# root crate's test binaries): shards let it go on across sessions. The
+# shard's outcomes.json is copied to
+# docs/records/mutants/<SCOPE>-<K>-of-<N>.json and its summary printed.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+say() { printf '[mutants] %s\n' "$*" >&2; }
+if [ $# -lt 2 ]; then
+  sed -n '2,20p' "$0" >&2
+  exit 2
+fi
+scope=$1
+
+case "$scope" in
+  core)
+    args=(-p oxygen-core --test-package oxygen-core --exclude 'oxygen-core/src/gpu/**')
+    ;;
+  bindless)
+    args=(-p oxygen-bindless --test-package oxygen-bindless --test-package oxygen-sceneprep
+      --exclude 'oxygen-bindless/src/heap.rs'
+      -E 'TextureHeap::|create_sampler|create_texture|build_bind_group|write_level|SceneConstantsBuffer::|allocate_texture_slot|array_view')
+    ;;
+  sceneprep)
+    args=(-p oxygen-sceneprep --test-package oxygen-sceneprep --test-package oxygen-bindless)
+    ;;
+  passes)
+    args=(-p oxygen-passes --test-package oxygen-passes --file oxygen-passes/src/half.rs)
+    ;;
+  importer)
+    args=(-p oxygen --file 'src/gltf_import/**' --file src/environment_file.rs
+      --cargo-test-arg=--test=gltf_import --cargo-test-arg=--test=gltf_untrusted
+      --cargo-test-arg=--test=gltf_fuzz_corpus --cargo-test-arg=--lib)
+    ;;
+  *)
+    say "unknown scope '$scope' (core, bindless, sceneprep, passes, importer)"
+    exit 2
+    ;;
+esac
+
+if [ "$2" = list ]; then
+  exec cargo mutants --list "${args[@]}"
+fi
+k=$2
+n=${3:?shard count}
+command -v cargo-mutants >/dev/null || { say "cargo-mutants is missing: cargo install --locked cargo-mutants"; exit 1; }
+out=target/mutants/$scope-$k-of-$n
+mkdir -p "$out" docs/records/mutants
+say "$scope: shard $k of $n (output: $out)"
+set +e
+cargo mutants "${args[@]}" --shard "$k/$n" --timeout 300 --output "$out"
+status=$?
+set -e
+# cargo-mutants exits 2 when mutants were missed, 3 on timeouts: a result,
+# not a failure of the run. Anything else is.
+case "$status" in
+  0 | 2 | 3) ;;
+  *) say "cargo mutants failed (exit $status)"; exit "$status" ;;
+esac
+cp "$out/mutants.out/outcomes.json" "docs/records/mutants/$scope-$k-of-$n.json"
+python3 - "$out/mutants.out/outcomes.json" <<'PY'
+import json, sys
+outcomes = json.load(open(sys.argv[1]))
+counts = {}
+for o in outcomes.get("outcomes", []):
+    if o.get("scenario") == "Baseline":
+        continue
+    summary = o.get("summary", "?")
+    counts[summary] = counts.get(summary, 0) + 1
+caught = counts.get("CaughtMutant", 0) + counts.get("Timeout", 0)
+missed = counts.get("MissedMutant", 0)
+viable = caught + missed
+score = f"{100 * caught / viable:.1f} %" if viable else "n/a"
+print(f"[mutants] {counts}; caught {caught} of {viable} viable: {score}")
+PY
