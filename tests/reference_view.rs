@@ -13,6 +13,7 @@ mod support;
 
 use glam::DVec3;
 use oxygen::prelude::*;
+use oxygen_demo::record::Row;
 use support::gpu_renderer;
 
 const PI: f64 = std::f64::consts::PI;
@@ -129,6 +130,7 @@ fn a_white_furnace_returns_the_environment_times_the_brdf_albedo() {
         raster_model: false,
         raster_reflections: false,
     };
+    let mut rows = Vec::new();
     for (name, metallic, roughness) in [("white diffuse", 0.0, 1.0), ("rough white metal", 1.0, 0.6)] {
         let material = Material { metallic, roughness, ..Material::opaque(name, Vec4::ONE) };
         let scene = sphere_scene(material);
@@ -142,7 +144,25 @@ fn a_white_furnace_returns_the_environment_times_the_brdf_albedo() {
         // 25 pixels × 256 samples: the noise is well under 1 %; the centre
         // pixels see the sphere within 2° of head on.
         assert!((measured - expected).abs() < 0.02, "{name}: traced {measured}, expected {expected}");
+        rows.push(
+            Row::new()
+                .value("material", name)
+                .value("metallic", metallic)
+                .value("roughness", roughness)
+                .value("traced", measured)
+                .value("brdf_albedo", expected)
+                .value("albedo_lost", 1.0 - expected),
+        );
     }
+    // docs/accuracy.md's tests of the tracer (scripts/test-records.sh).
+    support::record::write(|mut record| {
+        record.insert("environment_radiance", 1.0);
+        record.insert("dielectric_f0", 0.04);
+        record.insert("samples", 256);
+        record.insert("tolerance_abs", 0.02);
+        rows.into_iter().for_each(|row| record.push_row(row));
+        record
+    });
 }
 
 #[test]
@@ -184,6 +204,16 @@ fn the_error_falls_as_one_over_the_square_root_of_the_samples() {
         let ratio = pair[0] / pair[1];
         assert!((1.6..2.5).contains(&ratio), "error ratio {ratio} for 4× the samples ({errors:?})");
     }
+    let ratios: Vec<f64> = errors.windows(2).map(|pair| pair[0] / pair[1]).collect();
+    support::record::write(|record| {
+        record
+            .value("reference_samples", 1024)
+            .value("samples", [4, 16, 64])
+            .value("rmse", errors)
+            .value("ratios", ratios)
+            .value("ratio_min", 1.6)
+            .value("ratio_max", 2.5)
+    });
 }
 
 /// Irradiance at a point of the plane y = 0 from a Lambertian square
@@ -234,6 +264,7 @@ fn an_emissive_square_lights_a_plane_as_the_closed_form_says() {
         raster_model: false,
         raster_reflections: false,
     };
+    let mut rows = Vec::new();
     for point_x in [0.8f32, 1.5] {
         let target = Vec3::new(point_x, 0.0, 0.0);
         // From the +X side, low and narrow: the square (x ≤ 0.5, y = 1)
@@ -277,7 +308,25 @@ fn an_emissive_square_lights_a_plane_as_the_closed_form_says() {
             (measured - reflected).abs() < 0.05 * reflected,
             "x = {point_x}: traced {measured}, expected {reflected}"
         );
+        rows.push(
+            Row::new()
+                .value("x", point_x)
+                .value("traced", measured)
+                .value("expected", reflected)
+                .value("irradiance_closed_form", closed)
+                .value("irradiance_quadrature", irradiance),
+        );
     }
+    support::record::write(|mut record| {
+        record.insert("square_side", 1.0);
+        record.insert("square_height", 1.0);
+        record.insert("square_radiance", 4.0);
+        record.insert("samples", 2048);
+        record.insert("tolerance_rel", 0.05);
+        record.insert("quadrature_tolerance_rel", 1e-3);
+        rows.into_iter().for_each(|row| record.push_row(row));
+        record
+    });
 }
 
 #[test]
@@ -325,6 +374,14 @@ fn the_raster_view_and_its_traced_reference_agree_on_direct_light() {
     // map's edge and the box's silhouette).
     assert!(fraction > 0.93, "only {:.1} % of pixels agree within 5 %", 100.0 * fraction);
     assert!(mean < 0.02, "mean relative error {mean}");
+    support::record::write(|record| {
+        record
+            .value("pixels_within", fraction)
+            .value("mean_relative_error", mean)
+            .value("pixel_tolerance_rel", 0.05)
+            .value("pixels_within_min", 0.93)
+            .value("mean_relative_error_max", 0.02)
+    });
 }
 
 #[test]
@@ -398,6 +455,17 @@ fn the_reference_is_lit_by_the_renderer_environment() {
     for c in 0..3 {
         assert!((corner[c] - radiance[c]).abs() < 2e-3, "background {corner:?}");
     }
+    let background_error = (0..3).map(|c| (corner[c] - radiance[c]).abs()).fold(0.0f32, f32::max);
+    support::record::write(|record| {
+        record
+            .value("environment_radiance", radiance.to_array())
+            .value("centre", centre)
+            .value("expected", f64::from(radiance.x) * albedo)
+            .value("brdf_albedo", albedo)
+            .value("tolerance_abs", 0.02)
+            .value("background_error", background_error)
+            .value("background_tolerance_abs", 2e-3)
+    });
 }
 
 /// A renderer keeping its HDR images, lit by `environment`, with a
@@ -486,6 +554,7 @@ fn image_based_lighting_against_the_traced_reference() {
     // The camera looks at the sphere from +Z; the disc of 20 px stays
     // inside its 22.7 px silhouette.
     let camera = look_at(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, 64, 40.0);
+    let mut rows = Vec::new();
     for (name, base, metallic, roughness, bound) in [
         // Measured on lavapipe: 0.058, 0.034, 0.105 (the split sum's
         // view = normal assumption costs most on rough metal seen
@@ -500,7 +569,20 @@ fn image_based_lighting_against_the_traced_reference() {
         let error = disc_relative_error(&a, &b, 20.0);
         eprintln!("{name}: raster IBL against the traced reference, mean relative error {error:.4}");
         assert!(error < bound, "{name}: mean relative error {error} (bound {bound})");
+        rows.push(
+            Row::new()
+                .value("material", name)
+                .value("metallic", metallic)
+                .value("roughness", roughness)
+                .value("mean_relative_error", error)
+                .value("bound", bound),
+        );
     }
+    support::record::write(|mut record| {
+        record.insert("disc_radius_px", 20);
+        rows.into_iter().for_each(|row| record.push_row(row));
+        record
+    });
 }
 
 /// The raster model reads the environment as the shading does: a box and a
@@ -553,6 +635,14 @@ fn the_raster_model_reads_the_environment_as_the_raster_does() {
     // Measured 0.020 (the reference averages each pixel's area, the raster
     // shades its centre); reflecting the wrong way gave 0.77.
     assert!(sphere_error < 0.04, "the gold sphere differs by {sphere_error}");
+    support::record::write(|record| {
+        record
+            .value("pixels_within", fraction)
+            .value("sphere_mean_relative_error", sphere_error)
+            .value("pixel_tolerance_rel", 0.05)
+            .value("pixels_within_min", 0.9)
+            .value("sphere_mean_relative_error_max", 0.04)
+    });
     // Removing the environment restarts the reference's mean.
     renderer.set_environment(None);
     renderer.render_frame(&scene).unwrap();
@@ -602,6 +692,7 @@ fn skinned_and_morphed_meshes_are_traced_in_their_pose() {
         up: Vec3::Y,
         viewport: UVec2::new(64, 48),
     };
+    let mut rows = Vec::new();
     for (file, time, camera) in
         [("RiggedSimple/RiggedSimple.glb", 1.05, rigged_camera), ("SimpleMorph/SimpleMorph.gltf", 1.5, morph_camera)]
     {
@@ -624,7 +715,22 @@ fn skinned_and_morphed_meshes_are_traced_in_their_pose() {
         );
         assert!(fraction > 0.9, "{file}: only {:.1} % of pixels agree within 5 %", 100.0 * fraction);
         assert!(moved_agree > 0.75, "{file}: only {:.1} % of the moved pixels agree", 100.0 * moved_agree);
+        rows.push(
+            Row::new()
+                .value("file", file)
+                .value("time_s", time)
+                .value("pixels_within", fraction)
+                .value("moved_pixels", moved_count)
+                .value("moved_pixels_within", moved_agree),
+        );
     }
+    support::record::write(|mut record| {
+        record.insert("pixel_tolerance_rel", 0.05);
+        record.insert("pixels_within_min", 0.9);
+        record.insert("moved_pixels_within_min", 0.75);
+        rows.into_iter().for_each(|row| record.push_row(row));
+        record
+    });
 }
 
 fn raster_hdr(scene: &Scene, camera: LookAtResolver) -> oxygen::core::gpu::HdrImage {

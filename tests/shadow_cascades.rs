@@ -10,6 +10,7 @@ use oxygen::core::glam::Vec2;
 use oxygen::core::{CascadeResolver, CascadeSettings, NodeFlags};
 use oxygen::prelude::*;
 use oxygen::sceneprep::{ScenePrep, ViewFilter, ViewRequest};
+use oxygen_demo::record::Row;
 use oxygen_demo::{main_camera, multi_view_scene};
 
 fn shadow_options() -> ViewPrepOptions {
@@ -409,4 +410,14 @@ fn shadow_map_resolution_trades_edge_error() {
     for (error, measured) in errors.iter().zip(MEASURED) {
         assert!(error * 2 <= measured * 3, "edge errors {errors:?} against the measured {MEASURED:?}");
     }
+    // docs/performance.md's table of the edge error (scripts/test-records.sh).
+    support::record::write(|mut record| {
+        record.insert("viewport_px", [w, h]);
+        record.insert("cascades", 1);
+        record.insert("exactly_shadowed_pixels", shadowed_pixels);
+        for (resolution, wrong) in [128, 256, 512, 1024].into_iter().zip(&errors) {
+            record.push_row(Row::new().value("resolution", resolution).value("misclassified_pixels", *wrong));
+        }
+        record
+    });
 }

@@ -9,6 +9,7 @@ pub mod deform;
 pub mod encode;
 pub mod far;
 pub mod golden;
+pub mod record;
 pub mod skip;
 
 use std::sync::Once;
@@ -59,6 +60,7 @@ pub fn gpu_renderer() -> Renderer {
     match Renderer::new_headless_with(RendererOptions { keep_hdr: true, ..Default::default() }) {
         Ok(renderer) => {
             LOG.call_once(|| eprintln!("GPU tests run on: {}", renderer.gpu().describe()));
+            record::note_renderer(&renderer);
             renderer
         }
         Err(e) => panic!("GPU tests need an adapter: {e}"),
@@ -68,8 +70,10 @@ pub fn gpu_renderer() -> Renderer {
 /// A renderer on the test adapter with explicit options.
 /// HDR targets are kept, as in [`gpu_renderer`].
 pub fn gpu_renderer_with(options: RendererOptions) -> Renderer {
-    Renderer::new_headless_with(RendererOptions { keep_hdr: true, ..options })
-        .unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"))
+    let renderer = Renderer::new_headless_with(RendererOptions { keep_hdr: true, ..options })
+        .unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
+    record::note_renderer(&renderer);
+    renderer
 }
 
 /// Fails when the view's HDR target (linear radiance, before the tone map)

@@ -1,0 +1,43 @@
+#!/usr/bin/env bash
+# Runs the GPU tests whose measurements the docs quote, on the current
+# backend, and APPENDS THEIR RECORDS TO THE COMMITTED ONES in docs/records/
+# (OXYGEN_RECORD_DIR=docs/records; tests/support/record.rs):
+#
+#   shadow_cascades_tests.jsonl  tests/shadow_cascades.rs
+#       shadow_map_resolution_trades_edge_error: docs/performance.md, the
+#       shadow map's edge error by resolution
+#   reference_view_tests.jsonl   tests/reference_view.rs, one record per
+#       test: docs/accuracy.md, "Tests of the tracer" (measured figures and
+#       the tolerances they are checked against)
+#
+#   scripts/test-records.sh [CARGO TEST ARGS..]
+#
+# The backend is wgpu's pick, or WGPU_BACKEND (vulkan, gl); the docs' figures
+# are lavapipe's (Mesa's software Vulkan): WGPU_BACKEND=vulkan on a machine
+# with no other Vulkan adapter. A test that fails writes no record, and the
+# script fails. Review the new lines (`git diff docs/records`), copy their
+# figures into the docs, and commit both; to try it without touching the
+# committed records, set OXYGEN_RECORD_DIR to another folder first.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+export OXYGEN_RECORD_DIR=${OXYGEN_RECORD_DIR:-docs/records}
+say() { printf '[test-records] %s\n' "$*" >&2; }
+say "records go to $OXYGEN_RECORD_DIR (WGPU_BACKEND=${WGPU_BACKEND:-unset})"
+
+say "tests/shadow_cascades.rs"
+cargo test --locked "$@" --test shadow_cascades -- --exact \
+  shadow_map_resolution_trades_edge_error
+
+say "tests/reference_view.rs"
+cargo test --locked "$@" --test reference_view -- --exact \
+  a_white_furnace_returns_the_environment_times_the_brdf_albedo \
+  the_error_falls_as_one_over_the_square_root_of_the_samples \
+  an_emissive_square_lights_a_plane_as_the_closed_form_says \
+  the_raster_view_and_its_traced_reference_agree_on_direct_light \
+  the_reference_is_lit_by_the_renderer_environment \
+  image_based_lighting_against_the_traced_reference \
+  the_raster_model_reads_the_environment_as_the_raster_does \
+  skinned_and_morphed_meshes_are_traced_in_their_pose
+
+say "done: git diff docs/records/shadow_cascades_tests.jsonl docs/records/reference_view_tests.jsonl"
