@@ -37,8 +37,10 @@ use serde_json::{Map, Value};
 /// The environment variable naming the directory records are appended to.
 pub const RECORD_DIR_VAR: &str = "OXYGEN_RECORD_DIR";
 
-/// The environment variable giving the commit when `git` cannot (a build
-/// outside a checkout).
+/// The environment variable giving the commit a bench binary was built
+/// from, when it runs away from that checkout (a release build carried to a
+/// GPU machine, whose copy of the tree may hold another `.git`): when set it
+/// wins over `git`, and the record's `dirty` is then unknown.
 pub const COMMIT_VAR: &str = "OXYGEN_COMMIT";
 
 /// Environment variables whose names start with one of these change what a
@@ -440,8 +442,9 @@ fn resolve_dir(dir: &Path, root: Option<&Path>) -> PathBuf {
     }
 }
 
-/// The commit (`git rev-parse HEAD`, else `$OXYGEN_COMMIT`, else
-/// "unknown") and whether tracked files differ from it (`None`: unknown).
+/// The commit (`$OXYGEN_COMMIT`, else `git rev-parse HEAD`, else
+/// "unknown") and whether tracked files differ from it (`None`: unknown,
+/// always so when the commit was given).
 fn git_state(root: Option<&Path>) -> (String, Option<bool>) {
     let git = |args: &[&str]| {
         let mut command = Command::new("git");
@@ -455,10 +458,14 @@ fn git_state(root: Option<&Path>) -> (String, Option<bool>) {
             .filter(|out| out.status.success())
             .map(|out| String::from_utf8_lossy(&out.stdout).trim().to_owned())
     };
-    let commit = git(&["rev-parse", "HEAD"])
-        .filter(|c| !c.is_empty())
-        .or_else(|| std::env::var(COMMIT_VAR).ok().filter(|c| !c.is_empty()))
-        .unwrap_or_else(|| "unknown".to_owned());
+    // A commit given by the caller names the build; this directory's git
+    // state says nothing about it. (On the GPU machine the tree's copy held
+    // the session's first commit, and records named it instead of the
+    // commit the binaries were built from.)
+    if let Some(given) = std::env::var(COMMIT_VAR).ok().filter(|c| !c.is_empty()) {
+        return (given, None);
+    }
+    let commit = git(&["rev-parse", "HEAD"]).filter(|c| !c.is_empty()).unwrap_or_else(|| "unknown".to_owned());
     let dirty = git(&["status", "--porcelain", "--untracked-files=no"]).map(|status| !status.is_empty());
     (commit, dirty)
 }
