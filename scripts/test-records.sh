@@ -9,6 +9,8 @@
 #   reference_view_tests.jsonl   tests/reference_view.rs, one record per
 #       test: docs/accuracy.md, "Tests of the tracer" (measured figures and
 #       the tolerances they are checked against)
+#   gltf_fuzz_corpus_tests.jsonl tests/gltf_fuzz_corpus.rs: docs/security.md,
+#       the importer's mutant corpus (imports, outcomes, slowest, peak heap)
 #
 #   scripts/test-records.sh [CARGO TEST ARGS..]
 #
@@ -40,4 +42,8 @@ cargo test --locked "$@" --test reference_view -- --exact \
   the_raster_model_reads_the_environment_as_the_raster_does \
   skinned_and_morphed_meshes_are_traced_in_their_pose
 
-say "done: git diff docs/records/shadow_cascades_tests.jsonl docs/records/reference_view_tests.jsonl"
+say "tests/gltf_fuzz_corpus.rs (CPU only: the importer's mutant corpus)"
+cargo test --locked "$@" --test gltf_fuzz_corpus -- --exact \
+  every_mutant_of_the_shipped_scenes_ends_in_ok_or_a_clear_error_within_time_and_memory_budgets
+
+say "done: git diff docs/records/shadow_cascades_tests.jsonl docs/records/reference_view_tests.jsonl docs/records/gltf_fuzz_corpus_tests.jsonl"

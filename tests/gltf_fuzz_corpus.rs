@@ -39,6 +39,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 use oxygen::core::Scene;
+use oxygen_demo::record::Row;
 use oxygen::{GltfError, ImportLimits, ImportOptions, import_gltf_slice, import_gltf_with};
 use serde_json::{Value, json};
 use support::encode::{base64_encode, data_uri, png_chunk};
@@ -1506,4 +1507,20 @@ fn every_mutant_of_the_shipped_scenes_ends_in_ok_or_a_clear_error_within_time_an
         summary.failures.len(),
         summary.failures.join("\n")
     );
+    // The run's figures (docs/security.md quotes them), when recording.
+    let elapsed = started.elapsed();
+    support::record::write_cpu(|record| {
+        let outcomes = summary.by_result.iter().fold(Row::new(), |row, (result, count)| row.value(result, *count as u64));
+        record
+            .value("corpus_seed", corpus_seed)
+            .value("mutants", cases.len() as u64)
+            .value("seeds", seeds.len() as u64)
+            .value("imports", summary.imports as u64)
+            .value("seconds", elapsed.as_secs_f64())
+            .value("slowest_import_seconds", summary.slowest.0.as_secs_f64())
+            .value("peak_heap_mib", summary.heaviest.0 as f64 / (1 << 20) as f64)
+            .value("panics", panics.len() as u64)
+            .value("failures", summary.failures.len() as u64)
+            .value("outcomes", outcomes)
+    });
 }

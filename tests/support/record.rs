@@ -82,3 +82,11 @@ pub fn write_on(adapter: &wgpu::AdapterInfo, build: impl FnOnce(Record) -> Recor
     let record = build(Record::new(&bench).adapter(adapter).value("test", test_name()));
     record.write().unwrap_or_else(|e| panic!("the record of this test ({bench}.jsonl) was not written: {e}"))
 }
+
+/// [`write`] for a test that measures the CPU alone (the record's adapter
+/// is null).
+pub fn write_cpu(build: impl FnOnce(Record) -> Record) -> Option<PathBuf> {
+    let bench = bench();
+    let record = build(Record::new(&bench).value("test", test_name()));
+    record.write().unwrap_or_else(|e| panic!("the record of this test ({bench}.jsonl) was not written: {e}"))
+}
