@@ -39,8 +39,8 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 use oxygen::core::Scene;
-use oxygen_demo::record::Row;
 use oxygen::{GltfError, ImportLimits, ImportOptions, import_gltf_slice, import_gltf_with};
+use oxygen_demo::record::Row;
 use serde_json::{Value, json};
 use support::encode::{base64_encode, data_uri, png_chunk};
 
@@ -1510,7 +1510,8 @@ fn every_mutant_of_the_shipped_scenes_ends_in_ok_or_a_clear_error_within_time_an
     // The run's figures (docs/security.md quotes them), when recording.
     let elapsed = started.elapsed();
     support::record::write_cpu(|record| {
-        let outcomes = summary.by_result.iter().fold(Row::new(), |row, (result, count)| row.value(result, *count as u64));
+        let outcomes =
+            summary.by_result.iter().fold(Row::new(), |row, (result, count)| row.value(result, *count as u64));
         record
             .value("corpus_seed", corpus_seed)
             .value("mutants", cases.len() as u64)
