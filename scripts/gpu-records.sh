@@ -15,6 +15,8 @@
 #   frame      shadow_bench, hdr_format_bench, prepass_bench, cubes_bench (pre-pass), msaa_bench
 #   visibility visibility_bench (field, city, the static-frame aims)
 #   lighting   environment_bench, accuracy_atlas
+#   msaa-parts msaa_bench's frame taken apart (MSAA_BENCH_GRAPH, MSAA_BENCH_REPEAT)
+#   first-frame record_bench's first frame with the drivers' shader caches off
 #   lavapipe   the docs' lavapipe columns (smaller sizes, for the 2-core
 #              machine without a GPU): shadow_bench, hdr_format_bench,
 #              prepass_bench, msaa_bench, environment_bench, and the
@@ -95,6 +97,22 @@ for group in $groups; do
       run environment_bench -- 7
       run accuracy_atlas -- "$out/atlas" 1280 1024
       ;;
+    msaa-parts)
+      for graph in full no-pre-pass pre-pass unlit; do
+        run msaa_bench MSAA_BENCH_GRAPH=$graph -- 1920 0 40
+      done
+      for repeat in 2 8; do
+        run msaa_bench MSAA_BENCH_GRAPH=unlit MSAA_BENCH_REPEAT=$repeat -- 1920 0 40
+      done
+      run msaa_bench MSAA_BENCH_GRAPH=unlit -- 3840 0 40
+      ;;
+    first-frame)
+      # Mesa's and NVIDIA's on-disk shader caches off: the first frame pays
+      # for every pipeline's compilation.
+      for mode in direct mdi; do
+        run record_bench MESA_SHADER_CACHE_DISABLE=true __GL_SHADER_DISK_CACHE=0 -- 20000 "$mode"
+      done
+      ;;
     lavapipe)
       run shadow_bench -- 10000
       run hdr_format_bench -- 1280 10
@@ -110,7 +128,7 @@ for group in $groups; do
       fi
       ;;
     *)
-      say "unknown group '$group' (draws, frame, visibility, lighting, lavapipe)"
+      say "unknown group '$group' (draws, frame, visibility, lighting, msaa-parts, first-frame, lavapipe)"
       exit 2
       ;;
   esac

@@ -46,9 +46,10 @@ pub const COMMIT_VAR: &str = "OXYGEN_COMMIT";
 /// Environment variables whose names start with one of these change what a
 /// bench measures; those set are kept in the record's `command.env`
 /// (except [`RECORD_DIR_VAR`] and [`COMMIT_VAR`], which only say where the
-/// record goes and what it belongs to).
+/// record goes and what it belongs to). `MESA_` and `__GL_` are the
+/// drivers' knobs (their shader caches, for first-frame runs).
 pub const RECORDED_ENV_PREFIXES: &[&str] =
-    &["OXYGEN_", "WGPU_", "MSAA_BENCH_", "VISIBILITY_", "CUBES_BENCH_", "ATLAS_"];
+    &["OXYGEN_", "WGPU_", "MSAA_BENCH_", "VISIBILITY_", "CUBES_BENCH_", "ATLAS_", "MESA_", "__GL_"];
 
 /// Why a record was not written.
 #[derive(Debug)]
