@@ -107,8 +107,11 @@ if record_dir:
             return subprocess.run(["git", *args], capture_output=True, text=True, check=True).stdout.strip()
         except Exception:
             return None
-    commit = git("rev-parse", "HEAD") or os.environ.get("OXYGEN_COMMIT", "unknown")
-    status = git("status", "--porcelain", "--untracked-files=no")
+    # A commit given names the binaries' build (carried away from their
+    # checkout); the git state here says nothing about them then.
+    given = os.environ.get("OXYGEN_COMMIT")
+    commit = given or git("rev-parse", "HEAD") or "unknown"
+    status = None if given else git("status", "--porcelain", "--untracked-files=no")
     # "NAME (Vulkan, DiscreteGpu, driver DRIVER INFO)", as peer-bevy prints it.
     bevy = adapters.get("bevy", "")
     m = re.match(r"(.*) \((\w+), (\w+), driver (\S*) ?(.*)\)$", bevy)

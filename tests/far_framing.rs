@@ -11,7 +11,7 @@ mod support;
 use oxygen::import_gltf_slice;
 use oxygen::prelude::*;
 use oxygen_demo::OrbitCamera;
-use support::far::wrapped_glb;
+use support::far::{assert_framed_alike, wrapped_glb};
 use support::golden::compare;
 use support::gpu_renderer;
 
@@ -59,17 +59,7 @@ fn the_viewer_frames_a_far_model_as_it_frames_it_at_the_origin() {
         assert!(
             outward.min.as_dvec3().cmple(far_bounds.min).all() && outward.max.as_dvec3().cmpge(far_bounds.max).all()
         );
-        let comparison = compare(&far, &at_origin, 8);
-        eprintln!(
-            "{offset:?}: {} of {} pixels differ (worst {})",
-            comparison.differing, comparison.total, comparison.worst
-        );
-        assert!(
-            comparison.differing * 200 <= comparison.total,
-            "{offset:?}: {} of {} pixels differ from the model at the origin",
-            comparison.differing,
-            comparison.total
-        );
+        assert_framed_alike(&far, &at_origin, &format!("{offset:?}"));
     }
     // The control: framed on f32 bounds thirty million units out, the
     // picture moves, so the comparison above can fail.
