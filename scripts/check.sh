@@ -36,7 +36,7 @@ step "clippy -D warnings (every target)" \
 # workspace's, already checked by clippy above.
 step "cargo check of the fuzz target" \
   env CARGO_TARGET_DIR="$PWD/target" cargo check --locked --manifest-path fuzz/Cargo.toml --all-targets
-case "${CI:-}" in ""|0|false|FALSE) ci=0 ;; *) ci=1 ;; esac
+case "${CI:-}" in ""|0|[Ff][Aa][Ll][Ss][Ee]) ci=0 ;; *) ci=1 ;; esac
 if [ "${OXYGEN_SKIP_PEER_CHECK:-0}" = 1 ] && [ "$ci" = 0 ]; then
   say "OXYGEN_SKIP_PEER_CHECK=1: not checking the Bevy peer bench"
 else

@@ -156,8 +156,8 @@ fn the_sky_lights_the_scene_unless_told_otherwise() {
 
 /// The main job frames a model thirty million units out as it frames it at
 /// the origin: the orbit views are built on the import's f64 bounds with an
-/// f64 camera. (Framed on the f32 bounds with an f32 camera, 19–40 % of the
-/// pixels differed, in a user's report.)
+/// f64 camera. (The main job built before that, framing on the f32 bounds
+/// with an f32 camera, moved 2 927 of the front view's 9 216 pixels here.)
 #[test]
 fn the_main_job_frames_a_far_model_as_it_frames_it_at_the_origin() {
     let original = asset("OrientationTest/OrientationTest.glb");

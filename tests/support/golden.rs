@@ -76,8 +76,9 @@ pub fn assert_golden(name: &str, actual: &RgbaImage, tolerance: Tolerance) {
     }
 }
 
-/// Whether this run is CI's (`CI` set to anything but empty or `0`, as CI
-/// services and `.ci/run` set it).
+/// Whether this run is CI's: `CI` set to anything but empty, `0` or
+/// `false` in any case (as CI services and `.ci/run` set it; the same rule
+/// as scripts/test.sh and scripts/check.sh).
 pub fn under_ci() -> bool {
     std::env::var("CI").is_ok_and(|v| !v.is_empty() && v != "0" && !v.eq_ignore_ascii_case("false"))
 }

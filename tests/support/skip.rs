@@ -14,10 +14,25 @@ use std::io::Write;
 /// Records that the running test cannot run its subject here, and why.
 /// The caller returns right after.
 pub fn skip(reason: impl std::fmt::Display) {
+    record(None, reason);
+}
+
+/// Records that the running test leaves out one `part` of its subject here
+/// (one of two texture paths, say), and why; the rest of the test runs. It
+/// is counted as `binary::test[part]`.
+pub fn skip_part(part: &str, reason: impl std::fmt::Display) {
+    record(Some(part), reason);
+}
+
+fn record(part: Option<&str>, reason: impl std::fmt::Display) {
     let binary = env!("CARGO_CRATE_NAME");
     // libtest runs each test on a thread named after it.
     let thread = std::thread::current();
-    let test = thread.name().unwrap_or("unnamed test");
+    let name = thread.name().unwrap_or("unnamed test");
+    let test = match part {
+        Some(part) => format!("{name}[{part}]"),
+        None => name.to_owned(),
+    };
     eprintln!("skipped: {binary}::{test}: {reason}");
     let Some(log) = std::env::var_os("OXYGEN_SKIP_LOG") else { return };
     // One short write with O_APPEND: lines from tests running in parallel

@@ -126,7 +126,8 @@ static INSTANCES_CREATED: AtomicUsize = AtomicUsize::new(0);
 /// context, whether or not it rendered). Benches, test suites and
 /// applications that recreate their renderer make contexts one after
 /// another; one instance serves them all, and each context still gets a
-/// device of its own.
+/// device of its own. (A context on a GL adapter then makes an instance of
+/// its own: see [`GpuContext::new_headless_async`].)
 fn shared_instance(descriptor: wgpu::InstanceDescriptor) -> wgpu::Instance {
     static INSTANCES: Mutex<Vec<((u32, u32), wgpu::Instance)>> = Mutex::new(Vec::new());
     let key = (descriptor.backends.bits(), descriptor.flags.bits());
@@ -141,10 +142,48 @@ fn shared_instance(descriptor: wgpu::InstanceDescriptor) -> wgpu::Instance {
     instance
 }
 
+/// The best adapter of `instance` that `OXYGEN_ADAPTER` (lowercased in
+/// `wanted_name`) allows and that has the required features, by [`rank`];
+/// the error lists what was tried and why each was passed over.
+async fn pick_adapter(
+    instance: &wgpu::Instance,
+    backends: wgpu::Backends,
+    options: &GpuOptions,
+    wanted_name: Option<&str>,
+) -> Result<(wgpu::Adapter, wgpu::AdapterInfo), GpuError> {
+    let mut tried = Vec::new();
+    let mut candidates = Vec::new();
+    for adapter in instance.enumerate_adapters(backends).await {
+        let info = adapter.get_info();
+        let label = format!("{} ({:?})", info.name, info.backend);
+        if let Some(wanted) = wanted_name
+            && !info.name.to_lowercase().contains(wanted)
+        {
+            tried.push(format!("{label}: not matching OXYGEN_ADAPTER"));
+            continue;
+        }
+        let missing = options.required_features - adapter.features();
+        if !missing.is_empty() {
+            tried.push(format!("{label}: lacks {missing:?}"));
+            continue;
+        }
+        candidates.push((rank(&info), adapter, info));
+    }
+    candidates.sort_by_key(|(r, _, _)| *r);
+    match candidates.into_iter().next() {
+        Some((_, adapter, info)) => Ok((adapter, info)),
+        None => {
+            let tried = if tried.is_empty() { "no adapters at all".to_owned() } else { tried.join("; ") };
+            Err(GpuError::NoAdapter { tried })
+        }
+    }
+}
+
 impl GpuContext {
     /// How many wgpu instances (driver instances) this process has created:
     /// one per backend set and instance flags, however many contexts were
-    /// made ([`Self::new_headless`] shares them).
+    /// made ([`Self::new_headless`] shares them), plus one per context on a
+    /// GL adapter (which cannot share its instance's EGL context).
     pub fn instances_created() -> usize {
         INSTANCES_CREATED.load(Ordering::Relaxed)
     }
@@ -157,37 +196,33 @@ impl GpuContext {
     /// Async form of [`Self::new_headless`].
     pub async fn new_headless_async(options: &GpuOptions) -> Result<Self, GpuError> {
         let _span = info_span!("gpu_context").entered();
-        let mut descriptor = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
-        if options.trust_indirect_args {
-            descriptor.flags.remove(wgpu::InstanceFlags::VALIDATION_INDIRECT_CALL);
-        }
-        let backends = descriptor.backends;
-        let instance = shared_instance(descriptor);
-        let wanted_name = std::env::var("OXYGEN_ADAPTER").ok().map(|s| s.to_lowercase());
-
-        let mut tried = Vec::new();
-        let mut candidates = Vec::new();
-        for adapter in instance.enumerate_adapters(backends).await {
-            let info = adapter.get_info();
-            let label = format!("{} ({:?})", info.name, info.backend);
-            if let Some(wanted) = &wanted_name
-                && !info.name.to_lowercase().contains(wanted)
-            {
-                tried.push(format!("{label}: not matching OXYGEN_ADAPTER"));
-                continue;
+        let descriptor = |backends: Option<wgpu::Backends>| {
+            let mut descriptor = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+            if options.trust_indirect_args {
+                descriptor.flags.remove(wgpu::InstanceFlags::VALIDATION_INDIRECT_CALL);
             }
-            let missing = options.required_features - adapter.features();
-            if !missing.is_empty() {
-                tried.push(format!("{label}: lacks {missing:?}"));
-                continue;
+            if let Some(backends) = backends {
+                descriptor.backends = backends;
             }
-            candidates.push((rank(&info), adapter, info));
-        }
-        candidates.sort_by_key(|(r, _, _)| *r);
-        let Some((_, adapter, adapter_info)) = candidates.into_iter().next() else {
-            let tried = if tried.is_empty() { "no adapters at all".to_owned() } else { tried.join("; ") };
-            return Err(GpuError::NoAdapter { tried });
+            descriptor
         };
+        let wanted_name = std::env::var("OXYGEN_ADAPTER").ok().map(|s| s.to_lowercase());
+        let first = descriptor(None);
+        let backends = first.backends;
+        let instance = shared_instance(first);
+        let (mut adapter, mut adapter_info) =
+            pick_adapter(&instance, backends, options, wanted_name.as_deref()).await?;
+        if adapter_info.backend == wgpu::Backend::Gl {
+            // A GL instance has one EGL context, which every device made
+            // from it shares: devices of one GL instance on two threads
+            // fight over it (EGL's make_current fails and wgpu panics).
+            // A GL context keeps an instance of its own, as every context
+            // did before instances were shared (the driver limit that made
+            // them shared is NVIDIA's Vulkan one).
+            let own = wgpu::Instance::new(descriptor(Some(wgpu::Backends::GL)));
+            INSTANCES_CREATED.fetch_add(1, Ordering::Relaxed);
+            (adapter, adapter_info) = pick_adapter(&own, wgpu::Backends::GL, options, wanted_name.as_deref()).await?;
+        }
 
         let features = options.required_features | (options.optional_features & adapter.features());
         let (device, queue) = adapter
