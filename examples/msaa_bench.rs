@@ -20,7 +20,10 @@
 //! depth itself), `pre-pass` (the depth pre-pass alone), `unlit` (pre-pass,
 //! then shading that clears and draws nothing: the colour target's clear,
 //! store and resolve alone; `MSAA_BENCH_REPEAT=N` records that pass N
-//! times, which tells a per-pass cost from a per-frame one).
+//! times, which tells a per-pass cost from a per-frame one). Another value
+//! of either variable (a typo, a repeat that is not a whole number ≥ 1, a
+//! repeat above 1 without `unlit`) ends the run with an error naming the
+//! accepted ones; the record keeps `graph` and `repeat`.
 //!
 //! With `OXYGEN_RECORD_DIR` set, the run's figures (and every frame's
 //! times) are appended to `$OXYGEN_RECORD_DIR/msaa_bench.jsonl`
@@ -31,12 +34,84 @@ use std::time::Instant;
 use oxygen::prelude::*;
 use oxygen_demo::record::{Record, Row};
 
+/// What `MSAA_BENCH_GRAPH` renders (see the top comment).
+#[derive(Clone, Copy)]
+enum Graph {
+    Full,
+    NoPrePass,
+    PrePass,
+    Unlit,
+}
+
+impl Graph {
+    const ALL: [Graph; 4] = [Graph::Full, Graph::NoPrePass, Graph::PrePass, Graph::Unlit];
+
+    fn name(self) -> &'static str {
+        match self {
+            Graph::Full => "full",
+            Graph::NoPrePass => "no-pre-pass",
+            Graph::PrePass => "pre-pass",
+            Graph::Unlit => "unlit",
+        }
+    }
+
+    /// `MSAA_BENCH_GRAPH`, `full` when unset; an error naming the accepted
+    /// values for any other.
+    fn from_env() -> Result<Graph, String> {
+        let Some(value) = env_var("MSAA_BENCH_GRAPH")? else {
+            return Ok(Graph::Full);
+        };
+        Graph::ALL.into_iter().find(|g| g.name() == value).ok_or_else(|| {
+            let names: Vec<&str> = Graph::ALL.iter().map(|g| g.name()).collect();
+            format!("MSAA_BENCH_GRAPH={value:?}: expected one of {}", names.join(", "))
+        })
+    }
+}
+
+/// `MSAA_BENCH_REPEAT`, 1 when unset; an error for anything but a whole
+/// number ≥ 1.
+fn repeat_from_env() -> Result<usize, String> {
+    let Some(value) = env_var("MSAA_BENCH_REPEAT")? else {
+        return Ok(1);
+    };
+    value
+        .parse::<usize>()
+        .ok()
+        .filter(|&n| n >= 1)
+        .ok_or_else(|| format!("MSAA_BENCH_REPEAT={value:?}: expected a whole number of 1 or more"))
+}
+
+/// The variable's value, `None` when it is unset; an error when it is not
+/// Unicode.
+fn env_var(name: &str) -> Result<Option<String>, String> {
+    match std::env::var(name) {
+        Ok(value) => Ok(Some(value)),
+        Err(std::env::VarError::NotPresent) => Ok(None),
+        Err(std::env::VarError::NotUnicode(value)) => Err(format!("{name}={value:?} is not Unicode")),
+    }
+}
+
 fn median(values: &mut [f64]) -> f64 {
     values.sort_by(f64::total_cmp);
     values.get(values.len() / 2).copied().unwrap_or(f64::NAN)
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
+    // Both variables are read once, before anything runs: a bad value ends
+    // the run here, not after it recorded a graph it did not render.
+    let (graph, repeat) = match (Graph::from_env(), repeat_from_env()) {
+        (Ok(graph), Ok(repeat)) if repeat > 1 && !matches!(graph, Graph::Unlit) => {
+            eprintln!(
+                "msaa_bench: MSAA_BENCH_REPEAT={repeat} repeats the unlit graph's pass: set MSAA_BENCH_GRAPH=unlit"
+            );
+            std::process::exit(2);
+        }
+        (Ok(graph), Ok(repeat)) => (graph, repeat),
+        (Err(error), _) | (_, Err(error)) => {
+            eprintln!("msaa_bench: {error}");
+            std::process::exit(2);
+        }
+    };
     let mut args = std::env::args().skip(1);
     let width: u32 = args.next().map(|a| a.parse()).transpose()?.unwrap_or(1920);
     let boxes: usize = args.next().map(|a| a.parse()).transpose()?.unwrap_or(2500);
@@ -56,32 +131,31 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     println!("{width}x{height}, {boxes} boxes, {frames} frames each");
     let mut baseline = None;
-    let graph_name = std::env::var("MSAA_BENCH_GRAPH").unwrap_or_else(|_| "full".to_owned());
     let mut record = Record::new("msaa_bench")
         .value("viewport_px", [width, height])
         .value("boxes", boxes)
         .value("warm_up_frames", 3)
         .value("measured_frames", frames)
-        .value("graph", graph_name.as_str());
+        .value("graph", graph.name())
+        .value("repeat", repeat);
     for msaa in [Msaa::Off, Msaa::X2, Msaa::X4] {
         let mut renderer = Renderer::new_headless()?;
         record.set_adapter(&renderer.gpu().adapter_info);
         let samples = renderer.msaa_samples(msaa);
         let desc = ViewDesc::new(camera).with_msaa(msaa);
-        // `unlit` repeats its empty shading pass this many times: the cost
-        // of one more clear, store and resolve of the colour target.
-        let repeat: usize = std::env::var("MSAA_BENCH_REPEAT").ok().and_then(|r| r.parse().ok()).unwrap_or(1);
-        match std::env::var("MSAA_BENCH_GRAPH").as_deref().unwrap_or("full") {
-            "no-pre-pass" => renderer.register_view(desc, StandardGraph::default().with_pre_pass(PrePass::Off))?,
-            "pre-pass" => {
+        match graph {
+            Graph::NoPrePass => renderer.register_view(desc, StandardGraph::default().with_pre_pass(PrePass::Off))?,
+            Graph::PrePass => {
                 renderer.register_view(desc, async |ctx: &RenderContext<'_>, rec: &mut CommandRecorder| {
                     MeshPass::depth_pre_pass().run(ctx, rec).await
                 })?
             }
-            "unlit" => {
+            Graph::Unlit => {
                 renderer.register_view(desc, async move |ctx: &RenderContext<'_>, rec: &mut CommandRecorder| {
                     MeshPass::depth_pre_pass().run(ctx, rec).await?;
                     let nothing = oxygen::sceneprep::PassMask::empty();
+                    // Its empty shading pass `repeat` times: the cost of one
+                    // more clear, store and resolve of the colour target.
                     for _ in 0..repeat {
                         MeshPass::forward_lit(ForwardLitConfig::default())
                             .with_masks(nothing, nothing)
@@ -91,7 +165,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     Ok(())
                 })?
             }
-            _ => renderer.register_view(desc, standard_render_graph)?,
+            Graph::Full => renderer.register_view(desc, standard_render_graph)?,
         };
         let (mut wall, mut gpu) = (Vec::new(), Vec::new());
         for i in 0..frames + 3 {

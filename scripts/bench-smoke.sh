@@ -8,6 +8,9 @@
 #   scripts/bench-smoke.sh                 # WGPU_BACKEND defaults to vulkan
 #   BENCH_SMOKE_KEEP=dir scripts/bench-smoke.sh   # keep the records and logs in dir
 #
+# (Each run's folder in dir, run<i>-<bench>, is removed and made afresh first,
+# so that a reused dir never lends a run the records of an earlier one.)
+#
 # Fails (naming the bench) when a bench panics, exits non-zero, runs past
 # BENCH_SMOKE_TIMEOUT seconds (default 300), or writes no record or a
 # malformed one; and when a bench exists that this script does not run
@@ -81,6 +84,9 @@ summary=()
 for i in "${!runs[@]}"; do
   IFS='|' read -r name kind device args <<<"${runs[$i]}"
   dir="$work/run$i-$name"
+  # Afresh: with BENCH_SMOKE_KEEP reused, an old run's records would
+  # otherwise pass for this run's (a bench that stopped writing included).
+  rm -rf "$dir"
   mkdir -p "$dir/out"
   args="${args//@OUT@/$dir/out}"
   read -r -a argv <<<"$args"

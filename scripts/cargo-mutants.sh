@@ -26,7 +26,9 @@ cd "$(dirname "$0")/.."
 
 say() { printf '[mutants] %s\n' "$*" >&2; }
 if [ $# -lt 2 ]; then
-  sed -n '2,20p' "$0" >&2
+  # The whole header comment: every line after the first up to the first
+  # that is not a comment.
+  awk 'NR > 1 && !/^#/ { exit } NR > 1' "$0" >&2
   exit 2
 fi
 scope=$1

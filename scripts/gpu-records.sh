@@ -9,7 +9,12 @@
 #
 # BIN_DIR holds release builds of the bench examples (built elsewhere, e.g.
 # `cargo build --release --examples` and copied, stripped, to a GPU machine);
-# RECORD_DIR receives <bench>.jsonl files and a log per run. GROUPs
+# RECORD_DIR receives <bench>.jsonl files and a log per run. OXYGEN_COMMIT
+# must name the commit the binaries were built from (records name it; a
+# carried copy's .git may name another): without it the script refuses to
+# run (exit 2), unless BIN_DIR is inside this checkout's target/ and the
+# checkout's tracked files are clean (`git status --porcelain
+# --untracked-files=no`), when it takes `git rev-parse HEAD`. GROUPs
 # (default: all) split the work so that each part fits one sitting:
 #   draws      draw_path_bench, raster_floor, record_bench, indirect_count_cost
 #   frame      shadow_bench, hdr_format_bench, prepass_bench, cubes_bench (pre-pass), msaa_bench
@@ -20,18 +25,46 @@
 #   lavapipe   the docs' lavapipe columns (smaller sizes, for the 2-core
 #              machine without a GPU): shadow_bench, hdr_format_bench,
 #              prepass_bench, msaa_bench, environment_bench, and the
-#              ScenePrep bench through cargo (CPU only)
+#              ScenePrep bench through cargo (CPU only), run in this
+#              checkout (the script's ..), whatever the caller's directory
 # Each run's stdout/stderr goes to RECORD_DIR/<n>-<bench>.log; a failing run
 # is reported and the others go on; the exit status is non-zero if any failed.
 set -uo pipefail
 
 if [ $# -lt 2 ]; then
-  sed -n '2,20p' "$0" >&2
+  # The whole header comment: every line after the first up to the first
+  # that is not a comment.
+  awk 'NR > 1 && !/^#/ { exit } NR > 1' "$0" >&2
   exit 2
 fi
-bin=$(cd "$1" && pwd)
+root=$(cd "$(dirname "$0")/.." && pwd -P)
+bin=$(cd "$1" && pwd -P)
 out=$2
 shift 2
+
+# The records must name the commit the binaries were built from.
+if [ -z "${OXYGEN_COMMIT:-}" ]; then
+  case "$bin/" in
+    "$root/target/"*)
+      if ! head=$(git -C "$root" rev-parse HEAD) || ! changes=$(git -C "$root" status --porcelain --untracked-files=no); then
+        echo "[gpu-records] OXYGEN_COMMIT is not set and git cannot say what $root is at: set OXYGEN_COMMIT" >&2
+        exit 2
+      fi
+      if [ -n "$changes" ]; then
+        echo "[gpu-records] OXYGEN_COMMIT is not set and $root has uncommitted changes to tracked files:" \
+          "the binaries in $bin need not be HEAD's; commit (and rebuild) or set OXYGEN_COMMIT" >&2
+        exit 2
+      fi
+      export OXYGEN_COMMIT=$head
+      echo "[gpu-records] OXYGEN_COMMIT=$head (this clean checkout's HEAD; BIN_DIR is in its target/)" >&2
+      ;;
+    *)
+      echo "[gpu-records] OXYGEN_COMMIT is not set: name the commit the binaries in $bin were built from" \
+        "(OXYGEN_COMMIT=<hash> $0 ...); a carried copy's .git may name another" >&2
+      exit 2
+      ;;
+  esac
+fi
 groups=${*:-draws frame visibility lighting}  # lavapipe only when named
 mkdir -p "$out"
 out=$(cd "$out" && pwd)
@@ -122,7 +155,7 @@ for group in $groups; do
       run environment_bench -- 3
       n=$((n + 1))
       say "prep (cargo bench -p oxygen-sceneprep --bench prep)"
-      if ! cargo bench --locked -p oxygen-sceneprep --bench prep >"$(printf '%s/%02d-prep.log' "$out" "$n")" 2>&1; then
+      if ! (cd "$root" && cargo bench --locked -p oxygen-sceneprep --bench prep) >"$(printf '%s/%02d-prep.log' "$out" "$n")" 2>&1; then
         say "  FAILED"
         failed+=("prep")
       fi

@@ -19,11 +19,17 @@
 # each run prints the adapter it got, and the table says which it was.
 #
 # OXYGEN_BIN and BEVY_BIN name prebuilt binaries (release builds carried to
-# a GPU machine, say) and skip the builds; OXYGEN_CPU_PATH=1 also runs
-# Oxygen with OXYGEN_VISIBILITY=cpu in each round. With OXYGEN_RECORD_DIR
-# set, the run is appended as one record to $OXYGEN_RECORD_DIR/peer_bench.jsonl
+# a GPU machine, say) and skip the builds; OXYGEN_COMMIT must then name the
+# commit they were built from (the record names it; a carried copy's .git
+# may name another), else the script refuses to run (exit 2).
+# OXYGEN_CPU_PATH=1 also runs Oxygen with OXYGEN_VISIBILITY=cpu in each
+# round. With OXYGEN_RECORD_DIR set (a relative one is taken from the
+# repository root, as oxygen-demo/src/record.rs does), the run is appended
+# as one record to $OXYGEN_RECORD_DIR/peer_bench.jsonl
 # (docs/records/README.md): every run's line, the medians and ratios of the
-# table, both adapters and the command.
+# table, both adapters and the command; its command.env keeps the variables
+# record.rs keeps (RECORDED_ENV_PREFIXES: OXYGEN_, WGPU_, ..., MESA_, __GL_),
+# less OXYGEN_RECORD_DIR and OXYGEN_COMMIT.
 # Not part of CI: Bevy's build is long and the numbers depend on the machine.
 set -euo pipefail
 
@@ -37,6 +43,11 @@ export OXYGEN_ADAPTER="$adapter" WGPU_ADAPTER_NAME="$adapter"
 nice_cmd=(nice -n "${NICE:-10}")
 
 if [ -n "${OXYGEN_BIN:-}" ] && [ -n "${BEVY_BIN:-}" ]; then
+    if [ -z "${OXYGEN_COMMIT:-}" ]; then
+        echo "peer-bench: OXYGEN_BIN and BEVY_BIN are given but OXYGEN_COMMIT is not: name the commit" \
+            "they were built from (OXYGEN_COMMIT=<hash>); a carried copy's .git may name another" >&2
+        exit 2
+    fi
     oxygen_bin=$OXYGEN_BIN
     bevy_bin=$BEVY_BIN
 else
@@ -66,9 +77,9 @@ for round in $(seq 1 "$rounds"); do
 done
 
 # Median over rounds of each run's median_ms, per renderer and configuration.
-python3 - "$log" "$rounds" "$frames" "$configs" <<'EOF'
+python3 - "$log" "$rounds" "$frames" "$configs" "$root" <<'EOF'
 import datetime, json, os, platform, re, statistics, subprocess, sys
-log, rounds, frames, config_list = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4]
+log, rounds, frames, config_list, root = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4], sys.argv[5]
 runs, visible, adapters = {}, {}, {}
 for line in open(log):
     if " adapter: " in line:
@@ -102,9 +113,12 @@ if ("oxygen_cpu", configs[0][0], configs[0][1]) in runs:
 # The record of the run, in docs/records' format.
 record_dir = os.environ.get("OXYGEN_RECORD_DIR")
 if record_dir:
+    # Relative to the repository root, as oxygen-demo/src/record.rs takes it.
+    record_dir = os.path.join(root, record_dir)
     def git(*args):
         try:
-            return subprocess.run(["git", *args], capture_output=True, text=True, check=True).stdout.strip()
+            return subprocess.run(["git", *args], cwd=root, capture_output=True, text=True,
+                                  check=True).stdout.strip()
         except Exception:
             return None
     # A commit given names the binaries' build (carried away from their
@@ -117,6 +131,11 @@ if record_dir:
     m = re.match(r"(.*) \((\w+), (\w+), driver (\S*) ?(.*)\)$", bevy)
     adapter = ({"name": m[1], "backend": m[2], "device_type": m[3], "driver": m[4], "driver_info": m[5]}
                if m else {"name": bevy, "backend": "", "device_type": "", "driver": "", "driver_info": ""})
+    # What oxygen-demo/src/record.rs keeps (RECORDED_ENV_PREFIXES), less the
+    # record's own directory and commit.
+    prefixes = ("OXYGEN_", "WGPU_", "MSAA_BENCH_", "VISIBILITY_", "CUBES_BENCH_", "ATLAS_", "MESA_", "__GL_")
+    env = {k: v for k, v in sorted(os.environ.items())
+           if k.startswith(prefixes) and k not in ("OXYGEN_RECORD_DIR", "OXYGEN_COMMIT")}
     rows = []
     for n, v in configs:
         row = {"n": n, "v": v}
@@ -136,7 +155,7 @@ if record_dir:
         "adapter": adapter,
         "host": {"available_parallelism": os.cpu_count(), "os": platform.system().lower(), "arch": platform.machine()},
         "command": {"argv": f"peer-bench.sh CONFIGS={config_list} ROUNDS={rounds} FRAMES={frames}",
-                    "env": {k: v for k, v in os.environ.items() if k.startswith(("OXYGEN_", "WGPU_"))}},
+                    "env": env},
         "values": {"rounds": int(rounds), "frames": int(frames), "oxygen_adapter": adapters.get("oxygen", ""),
                    "rows": rows, "lines": [l.rstrip("\n") for l in open(log) if "median_ms" in l]},
     }

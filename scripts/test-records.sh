@@ -17,22 +17,50 @@
 # The backend is wgpu's pick, or WGPU_BACKEND (vulkan, gl); the docs' figures
 # are lavapipe's (Mesa's software Vulkan): WGPU_BACKEND=vulkan on a machine
 # with no other Vulkan adapter. A test that fails writes no record, and the
-# script fails. Review the new lines (`git diff docs/records`), copy their
-# figures into the docs, and commit both; to try it without touching the
-# committed records, set OXYGEN_RECORD_DIR to another folder first.
+# script fails. Each record file must grow by one line per test named (its
+# line count is taken before and after): a test that wrote nothing (renamed,
+# so that `--exact` matched no test and cargo still exited 0; skipped on this
+# adapter) fails the script too, naming the file. Review the new lines
+# (`git diff docs/records`), copy their figures into the docs, and commit
+# both; to try it without touching the committed records, set
+# OXYGEN_RECORD_DIR to another folder first.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 export OXYGEN_RECORD_DIR=${OXYGEN_RECORD_DIR:-docs/records}
 say() { printf '[test-records] %s\n' "$*" >&2; }
 say "records go to $OXYGEN_RECORD_DIR (WGPU_BACKEND=${WGPU_BACKEND:-unset})"
+cargo_args=("$@")
+
+# The number of lines of $OXYGEN_RECORD_DIR/FILE, 0 when it is missing.
+lines_of() {
+  local file="$OXYGEN_RECORD_DIR/$1"
+  if [ -f "$file" ]; then wc -l <"$file"; else echo 0; fi
+}
+
+# recorded_tests BINARY TEST..: runs the named tests of tests/BINARY.rs
+# (each writes one record to BINARY_tests.jsonl) and fails, naming the file,
+# unless that file grew by exactly one line per test.
+recorded_tests() {
+  local binary=$1
+  shift
+  local file="${binary}_tests.jsonl" before after
+  before=$(lines_of "$file")
+  cargo test --locked "${cargo_args[@]}" --test "$binary" -- --exact "$@"
+  after=$(lines_of "$file")
+  if [ $((after - before)) -ne $# ]; then
+    say "FAIL: $OXYGEN_RECORD_DIR/$file grew by $((after - before)) record(s), expected $# (one per test named):" \
+      "a test renamed (--exact matched nothing) or skipped on this adapter?"
+    exit 1
+  fi
+}
 
 say "tests/shadow_cascades.rs"
-cargo test --locked "$@" --test shadow_cascades -- --exact \
+recorded_tests shadow_cascades \
   shadow_map_resolution_trades_edge_error
 
 say "tests/reference_view.rs"
-cargo test --locked "$@" --test reference_view -- --exact \
+recorded_tests reference_view \
   a_white_furnace_returns_the_environment_times_the_brdf_albedo \
   the_error_falls_as_one_over_the_square_root_of_the_samples \
   an_emissive_square_lights_a_plane_as_the_closed_form_says \
@@ -43,7 +71,7 @@ cargo test --locked "$@" --test reference_view -- --exact \
   skinned_and_morphed_meshes_are_traced_in_their_pose
 
 say "tests/gltf_fuzz_corpus.rs (CPU only: the importer's mutant corpus)"
-cargo test --locked "$@" --test gltf_fuzz_corpus -- --exact \
+recorded_tests gltf_fuzz_corpus \
   every_mutant_of_the_shipped_scenes_ends_in_ok_or_a_clear_error_within_time_and_memory_budgets
 
 say "done: git diff docs/records/shadow_cascades_tests.jsonl docs/records/reference_view_tests.jsonl docs/records/gltf_fuzz_corpus_tests.jsonl"

@@ -2,19 +2,37 @@
 """Shows that each tolerance tightened in issue 27 bites: for every entry
 below, breaks the behaviour the test guards (one textual edit of the
 product, never of the test), runs that one test on the current backend,
-expects it to FAIL, and restores the file whatever happens.
+expects it to FAIL at one of its assertions, and restores the file whatever
+happens.
 
     scripts/tolerance_breaks.py            # every break (a rebuild and one test each)
     scripts/tolerance_breaks.py furnace    # those whose name contains a word
+
+First every chosen test runs once on the unbroken product and must PASS
+(else the script stops, naming it: a test already failing would count as
+catching its break). A break is "caught" only when its test fails at an
+assertion: the output has the test's own panic "'<test>' panicked at
+tests/..." (a helper under tests/ included); a build error stops the
+script, and a panic elsewhere (a shader that no longer validates, inside
+the library) counts as MISSED. Tests run as scripts/wgsl_mutants.py runs
+them (CI=1: no golden written from a broken product) and without
+OXYGEN_RECORD_DIR (no record from this run).
+
+The file is restored on an exception, Ctrl-C, SIGTERM or SIGHUP; a run
+killed with -9 leaves a journal in target/tolerance-breaks/ that the next
+start restores from. That machinery is scripts/wgsl_mutants.py's, imported
+(`applied`, `recover_from_journal`, `run`), with its own journal. Each
+test's cargo output goes to target/tolerance-breaks/logs/.
 
 Prints one line per break (caught / MISSED) and exits non-zero when a
 break was missed or its text no longer matches. Not part of CI: each break
 rebuilds the crates it touches.
 """
 
+import importlib.util
 import pathlib
+import re
 import signal
-import subprocess
 import sys
 import time
 
@@ -75,39 +93,121 @@ BREAKS = [
 ]
 
 
+def load_wgsl_mutants():
+    """scripts/wgsl_mutants.py as a module, its journal moved to
+    target/tolerance-breaks/ (a wgsl_mutants run beside this one keeps
+    its own)."""
+    sys.dont_write_bytecode = True  # no scripts/__pycache__ in the tree
+    spec = importlib.util.spec_from_file_location("wgsl_mutants", ROOT / "scripts" / "wgsl_mutants.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    module.WORK = WORK
+    module.JOURNAL = WORK / "journal.json"
+    return module
+
+
+WORK = ROOT / "target" / "tolerance-breaks"
+LOGS = WORK / "logs"
+MUTANTS = load_wgsl_mutants()
+
+
+def test_env():
+    """wgsl_mutants' test environment (CI=1, no golden or snapshot
+    written), without OXYGEN_RECORD_DIR: a passing test writes no record."""
+    env = MUTANTS.test_env()
+    env.pop("OXYGEN_RECORD_DIR", None)
+    return env
+
+
+def cargo_test(binary, tests, log):
+    """(exit status, output) of the named tests of tests/<binary>.rs."""
+    if log.exists():
+        log.unlink()
+    return MUTANTS.run(["cargo", "test", "--locked", "--test", binary, "--", "--exact", *tests],
+                       log=log, env=test_env())
+
+
+def baseline(chosen):
+    """Every chosen test passes on the unbroken product, or the script
+    stops naming those that do not."""
+    tests = {}
+    for _name, _path, _old, _new, binary, test, _what in chosen:
+        tests.setdefault(binary, [])
+        if test not in tests[binary]:
+            tests[binary].append(test)
+    failing = []
+    for binary, names in tests.items():
+        start = time.time()
+        log = LOGS / f"baseline-{binary}.log"
+        status, output = cargo_test(binary, names, log)
+        # Each must be seen passing: --exact matching nothing passes too.
+        bad = [t for t in names if not re.search(rf"^test {re.escape(t)} \.\.\. ok$", output, re.M)]
+        print(f"{'passes' if not bad and status == 0 else 'FAILS '}  baseline {binary}: {len(names)} test(s)"
+              f"  ({time.time() - start:.0f} s)", flush=True)
+        failing += [f"{binary}::{t}" for t in bad]
+        if status != 0 and not bad:
+            failing.append(f"{binary} (exit status {status})")
+    if failing:
+        sys.exit(f"unbroken, these do not pass or no longer exist (log: {shown(LOGS)}/baseline-*.log): "
+                 f"{', '.join(failing)}; a break of a failing test proves nothing: fix that first")
+
+
+def shown(path):
+    return str(path.relative_to(ROOT))
+
+
+def breaks(chosen):
+    missed = []
+    for name, path, old, new, binary, test, what in chosen:
+        start = time.time()
+        log = LOGS / f"{name}.log"
+        with MUTANTS.applied([(name, path, old, new, what)]):
+            status, output = cargo_test(binary, [test], log)
+        if "error[" in output or "could not compile" in output:
+            sys.exit(f"{name}: the broken build does not compile (log: {shown(log)}):\n{output[-3000:]}")
+        lines = output.splitlines()
+        # The test's own thread panicking in a file under tests/: one of its
+        # assertions (or a helper's there) failed, not the library.
+        # (`thread '<test>' (<id>) panicked at tests/<file>:<line>:<column>:`;
+        # the id is newer Rust's; older printed none.)
+        own_panic = re.compile(rf"'{re.escape(test)}'( \(\d+\))? panicked at tests/")
+        panic = next((i for i, line in enumerate(lines) if own_panic.search(line)), None)
+        caught = status != 0 and panic is not None and f"test {test} ... FAILED" in output
+        print(f"{'caught' if caught else 'MISSED'}  {name:34} {binary}::{test}  ({time.time() - start:.0f} s)  {what}",
+              flush=True)
+        if caught:
+            message = lines[panic + 1] if panic + 1 < len(lines) else ""
+            print(f"        {message.strip()[:200]}")
+        else:
+            other = next((line for line in lines if "panicked at" in line), None)
+            print(f"        {other.strip()[:200] if other else f'exit status {status}, no panic'} (log: {shown(log)})")
+            missed.append(name)
+    return missed
+
+
 def main():
     words = sys.argv[1:]
     chosen = [b for b in BREAKS if not words or any(w in b[0] for w in words)]
-    # Every break's text must match exactly once before anything runs.
-    for name, path, old, _new, *_ in chosen:
-        count = (ROOT / path).read_text().count(old)
-        if count != 1:
-            sys.exit(f"{name}: its text occurs {count} times in {path} (must be once): update the break")
-    missed = []
-    for name, path, old, new, binary, test, what in chosen:
-        file = ROOT / path
-        original = file.read_text()
-        start = time.time()
-        previous = signal.signal(signal.SIGINT, signal.default_int_handler)
-        try:
-            file.write_text(original.replace(old, new))
-            run = subprocess.run(
-                ["cargo", "test", "--locked", "--test", binary, "--", "--exact", test],
-                cwd=ROOT, capture_output=True, text=True)
-        finally:
-            file.write_text(original)
-            signal.signal(signal.SIGINT, previous)
-        log = run.stdout + run.stderr
-        if "error[" in log or "could not compile" in log:
-            sys.exit(f"{name}: the broken build does not compile:\n{log[-3000:]}")
-        caught = run.returncode != 0 and "1 failed" in log
-        panic = next((line for line in log.splitlines() if "panicked at" in line or "assertion" in line), "")
-        message = next((line for line in log.splitlines()[log.splitlines().index(panic) + 1:][:1]), "") if panic else ""
-        print(f"{'caught' if caught else 'MISSED'}  {name:34} {binary}::{test}  ({time.time() - start:.0f} s)  {what}")
-        if caught:
-            print(f"        {message.strip()[:200]}")
-        else:
-            missed.append(name)
+    if not chosen:
+        sys.exit(f"no break's name contains any of: {' '.join(words)}")
+    signal.signal(signal.SIGTERM, MUTANTS.raise_interrupt)
+    signal.signal(signal.SIGHUP, MUTANTS.raise_interrupt)
+    try:
+        # What a run killed with -9 left broken, restored before the texts
+        # are counted.
+        MUTANTS.recover_from_journal()
+        # Every break's text must match exactly once before anything runs.
+        for name, path, old, _new, *_ in chosen:
+            count = (ROOT / path).read_text().count(old)
+            if count != 1:
+                sys.exit(f"{name}: its text occurs {count} times in {path} (must be once): update the break")
+        baseline(chosen)
+        missed = breaks(chosen)
+    except MUTANTS.Failure as e:
+        sys.exit(f"tolerance_breaks: {e}")
+    except KeyboardInterrupt as e:
+        print(f"tolerance_breaks: interrupted ({str(e) or 'SIGINT'}); files restored", file=sys.stderr)
+        sys.exit(130)
     if missed:
         sys.exit(f"missed: {', '.join(missed)}")
 

@@ -27,9 +27,9 @@ applied together (a failing round is retried mutant by mutant to name the
 culprit). A mutated file that test does not validate (the composition
 shader embedded in src/windows.rs) is named in the output.
 
-The rendering test binaries are derived, never listed here: every
-tests/*.rs that opens an adapter (matches `gpu_renderer|GpuContext|new_headless`,
-scripts/test.sh's `gpu_test_binaries`), so a new GPU test binary counts
+The rendering test binaries are derived, never listed here: they are what
+scripts/gpu-test-binaries prints (every tests/*.rs that renders; the list
+scripts/test.sh runs again on GL), so a new GPU test binary counts
 automatically. By default every mutant runs against all of them; the
 binaries run one at a time (the binary that caught the mutant in the last
 record, then its subject's hints, then the rest) up to the first failure.
@@ -43,7 +43,9 @@ first failing test) and per-subject scores on stdout, progress on stderr,
 each mutant's cargo output in target/wgsl-mutants/logs/. `--record` appends
 one line to docs/records/wgsl_mutants.jsonl in the records' format
 (docs/records/README.md: bench, commit, dirty, date, adapter from
-`cargo run --example adapter_info`, host, command, values); `values` holds
+`cargo run --example adapter_info`, host, command, values; the commit is
+OXYGEN_COMMIT when set, dirty then null, and command.env keeps what
+oxygen-demo/src/record.rs keeps, as that writer does); `values` holds
 the adapter line, the binaries, the tests that skipped in the baseline, and
 per mutant its name, file, caught, first failing test and seconds.
 
@@ -469,8 +471,12 @@ VALIDATED_BY = [
     ("oxygen_passes::reference_shader_source(", BINDLESS + [BRDF, PASSES + "cube_faces.wgsl", ENVIRONMENT, TRACE]),
 ]
 
-# The binaries that render: scripts/test.sh's gpu_test_binaries.
-GPU_TEST_PATTERN = re.compile(r"gpu_renderer|GpuContext|new_headless")
+# Prints the binaries that render, one a line (shared with scripts/test.sh).
+GPU_TEST_BINARIES = ROOT / "scripts" / "gpu-test-binaries"
+# What oxygen-demo/src/record.rs keeps in a record's command.env
+# (RECORDED_ENV_PREFIXES), less the record's own directory and commit.
+RECORDED_ENV_PREFIXES = ("OXYGEN_", "WGPU_", "MSAA_BENCH_", "VISIBILITY_", "CUBES_BENCH_", "ATLAS_", "MESA_", "__GL_")
+UNRECORDED_ENV = ("OXYGEN_RECORD_DIR", "OXYGEN_COMMIT")
 
 WORK = ROOT / "target" / "wgsl-mutants"
 JOURNAL = WORK / "journal.json"
@@ -714,8 +720,12 @@ def test_env(skip_log=None):
 
 
 def gpu_test_binaries():
-    return sorted(p.stem for p in (ROOT / "tests").glob("*.rs")
-                  if GPU_TEST_PATTERN.search(read(p)))
+    result = subprocess.run([str(GPU_TEST_BINARIES)], cwd=ROOT, capture_output=True, text=True)
+    binaries = sorted(result.stdout.split())
+    if result.returncode != 0 or not binaries:
+        raise Failure(f"{shown(GPU_TEST_BINARIES)} failed (status {result.returncode}) or listed no binary: "
+                      f"{result.stderr.strip()}")
+    return binaries
 
 
 FAILED_LINE = re.compile(r"^test (\S+) \.\.\. FAILED", re.M)
@@ -903,13 +913,17 @@ def new_record(chosen, binaries, restricted):
     """The record's fields but `values` (docs/records/README.md's format:
     bench, commit, dirty, date, adapter, host, command, values), taken
     before anything is mutated."""
-    status = git("status", "--porcelain", "--untracked-files=no")
+    # A commit given names the build (as in oxygen-demo/src/record.rs): the
+    # checkout's git state says nothing about it then.
+    given = os.environ.get("OXYGEN_COMMIT")
+    status = None if given else git("status", "--porcelain", "--untracked-files=no")
     files = sorted({m[1] for m in chosen})
     line, adapter = adapter_of(test_env())
-    env = {k: v for k, v in sorted(os.environ.items()) if k.startswith(("OXYGEN_", "WGPU_"))}
+    env = {k: v for k, v in sorted(os.environ.items())
+           if k.startswith(RECORDED_ENV_PREFIXES) and k not in UNRECORDED_ENV}
     record = {
         "bench": RECORD.stem,
-        "commit": git("rev-parse", "HEAD") or "unknown",
+        "commit": given or git("rev-parse", "HEAD") or "unknown",
         "dirty": None if status is None else bool(status),
         "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
         "adapter": adapter,

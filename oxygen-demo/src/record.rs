@@ -512,7 +512,7 @@ fn shell_quote(arg: &str) -> String {
 }
 
 /// `time` as `YYYY-MM-DDThh:mm:ssZ` (UTC).
-pub fn utc_iso8601(time: SystemTime) -> String {
+fn utc_iso8601(time: SystemTime) -> String {
     let seconds = match time.duration_since(UNIX_EPOCH) {
         Ok(after) => i64::try_from(after.as_secs()).unwrap_or(i64::MAX),
         Err(before) => -i64::try_from(before.duration().as_secs()).unwrap_or(i64::MAX),
