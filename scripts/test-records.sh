@@ -11,8 +11,20 @@
 #       the tolerances they are checked against)
 #   gltf_fuzz_corpus_tests.jsonl tests/gltf_fuzz_corpus.rs: docs/security.md,
 #       the importer's mutant corpus (imports, outcomes, slowest, peak heap)
+#   frame_economy_tests.jsonl    tests/frame_economy.rs
+#       rg11b10_hdr_stays_within_its_documented_error_and_shows_coarser_steps:
+#       docs/performance.md, the packed HDR format's error (worst relative
+#       error, pixels differing on screen, distinct levels per channel)
+#   msaa_tests.jsonl             tests/msaa.rs
+#       more_samples_bring_edges_closer_to_the_supersampled_picture:
+#       docs/performance.md, MSAA's edge error against a supersampled render
+#   gpu_visibility_tests.jsonl   tests/gpu_visibility.rs
+#       occlusion_culling_never_drops_a_visible_object_along_a_camera_path:
+#       docs/performance.md, what the GPU visibility paths keep against what
+#       an ID render shows
 #
 #   scripts/test-records.sh [CARGO TEST ARGS..]
+#   TEST_RECORDS_ONLY="msaa frame_economy" scripts/test-records.sh   # only those binaries' tests
 #
 # The backend is wgpu's pick, or WGPU_BACKEND (vulkan, gl); the docs' figures
 # are lavapipe's (Mesa's software Vulkan): WGPU_BACKEND=vulkan on a machine
@@ -38,12 +50,27 @@ lines_of() {
   if [ -f "$file" ]; then wc -l <"$file"; else echo 0; fi
 }
 
+# The binaries below; TEST_RECORDS_ONLY (names separated by spaces) runs
+# some of them only.
+binaries=" shadow_cascades reference_view gltf_fuzz_corpus frame_economy msaa gpu_visibility "
+for only in ${TEST_RECORDS_ONLY:-}; do
+  case "$binaries" in
+    *" $only "*) ;;
+    *) say "TEST_RECORDS_ONLY names $only: not one of$binaries"; exit 2 ;;
+  esac
+done
+
 # recorded_tests BINARY TEST..: runs the named tests of tests/BINARY.rs
 # (each writes one record to BINARY_tests.jsonl) and fails, naming the file,
-# unless that file grew by exactly one line per test.
+# unless that file grew by exactly one line per test. Nothing when
+# TEST_RECORDS_ONLY leaves BINARY out.
 recorded_tests() {
   local binary=$1
   shift
+  if [ -n "${TEST_RECORDS_ONLY:-}" ] && [[ " $TEST_RECORDS_ONLY " != *" $binary "* ]]; then
+    return 0
+  fi
+  say "tests/$binary.rs"
   local file="${binary}_tests.jsonl" before after
   before=$(lines_of "$file")
   cargo test --locked "${cargo_args[@]}" --test "$binary" -- --exact "$@"
@@ -55,11 +82,9 @@ recorded_tests() {
   fi
 }
 
-say "tests/shadow_cascades.rs"
 recorded_tests shadow_cascades \
   shadow_map_resolution_trades_edge_error
 
-say "tests/reference_view.rs"
 recorded_tests reference_view \
   a_white_furnace_returns_the_environment_times_the_brdf_albedo \
   the_error_falls_as_one_over_the_square_root_of_the_samples \
@@ -70,8 +95,17 @@ recorded_tests reference_view \
   the_raster_model_reads_the_environment_as_the_raster_does \
   skinned_and_morphed_meshes_are_traced_in_their_pose
 
-say "tests/gltf_fuzz_corpus.rs (CPU only: the importer's mutant corpus)"
+# CPU only: the importer's mutant corpus.
 recorded_tests gltf_fuzz_corpus \
   every_mutant_of_the_shipped_scenes_ends_in_ok_or_a_clear_error_within_time_and_memory_budgets
 
-say "done: git diff docs/records/shadow_cascades_tests.jsonl docs/records/reference_view_tests.jsonl docs/records/gltf_fuzz_corpus_tests.jsonl"
+recorded_tests frame_economy \
+  rg11b10_hdr_stays_within_its_documented_error_and_shows_coarser_steps
+
+recorded_tests msaa \
+  more_samples_bring_edges_closer_to_the_supersampled_picture
+
+recorded_tests gpu_visibility \
+  occlusion_culling_never_drops_a_visible_object_along_a_camera_path
+
+say "done: git diff $OXYGEN_RECORD_DIR"

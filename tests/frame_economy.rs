@@ -8,6 +8,7 @@ mod support;
 use image::RgbaImage;
 use oxygen::passes::{PassKind, PipelineKey};
 use oxygen::prelude::*;
+use oxygen_demo::record::Row;
 
 const SIZE: u32 = 96;
 
@@ -141,6 +142,25 @@ fn rg11b10_hdr_stays_within_its_documented_error_and_shows_coarser_steps() {
     // The banding: the packed format's gradient has fewer distinct steps in
     // blue (5 mantissa bits) than the half-float one.
     assert!(levels[2].1 < levels[2].0, "blue levels {:?}", levels[2]);
+    // docs/performance.md, "Frame economy" (scripts/test-records.sh).
+    support::record::write_on(&packed.gpu().adapter_info, |mut record| {
+        record.insert("viewport_px", [SIZE, SIZE]);
+        record.insert("pixels", x.width() * x.height());
+        record.insert("worst_relative_hdr_error", worst);
+        record.insert("worst_relative_hdr_error_max", 1.0 / 32.0 + 1.0 / 2048.0);
+        record.insert("pixels_over_2_levels", count);
+        record.insert("pixels_over_2_levels_max", 4);
+        record.insert("largest_difference_levels", largest);
+        record.insert("largest_difference_levels_max", 4);
+        for (channel, (wide, packed)) in ["red", "green", "blue"].into_iter().zip(&levels) {
+            let row = Row::new()
+                .value("channel", channel)
+                .value("rgba16float_levels", *wide)
+                .value("rg11b10ufloat_levels", *packed);
+            record.push_row(row);
+        }
+        record
+    });
 }
 
 fn forward_keys(renderer: &Renderer) -> Vec<PipelineKey> {

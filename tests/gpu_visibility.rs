@@ -393,6 +393,22 @@ fn occlusion_culling_never_drops_a_visible_object_along_a_camera_path() {
         street_occlusion * 2 < street_reference,
         "at street level occlusion culling should cull at least half the draws: {street_occlusion} of {street_reference}"
     );
+    // docs/performance.md, the GPU visibility's error side
+    // (scripts/test-records.sh); the counts are summed over the frames.
+    support::record::write(|record| {
+        record
+            .value("city_blocks", [16, 16])
+            .value("frames", path.len())
+            .value("street_frames", STREET_FRAMES)
+            .value("viewport_px", [192, 128])
+            .value("visible_buildings", visible_total)
+            .value("frustum_kept", drawn_reference)
+            .value("occlusion_kept", drawn_occlusion)
+            .value("frustum_kept_over_visible", drawn_reference as f64 / visible_total as f64)
+            .value("occlusion_kept_over_visible", drawn_occlusion as f64 / visible_total as f64)
+            .value("street_frustum_kept", street_reference)
+            .value("street_occlusion_kept", street_occlusion)
+    });
 }
 
 #[test]

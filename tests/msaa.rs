@@ -8,6 +8,7 @@ mod support;
 
 use oxygen::core::gpu::HdrImage;
 use oxygen::prelude::*;
+use oxygen_demo::record::Row;
 use support::golden::compare;
 
 /// A red cube turned so that all its silhouette edges are diagonal, lit by
@@ -103,13 +104,15 @@ fn more_samples_bring_edges_closer_to_the_supersampled_picture() {
     // falls back to 1, which the renderer reports).
     let probe = support::gpu_renderer();
     let mut errors = Vec::new();
+    let mut rows = Vec::new();
+    let edges = edge.iter().filter(|e| **e).count();
     for msaa in [Msaa::Off, Msaa::X2, Msaa::X4] {
         let samples = probe.msaa_samples(msaa);
         let image = render_hdr(&scene, size, msaa);
         let error = edge_rmse(&image, &reference, &edge);
-        let edges = edge.iter().filter(|e| **e).count();
         eprintln!("{msaa:?} ({samples} samples): edge RMSE {error:.4} (linear radiance) over {edges} edge pixels");
         errors.push((samples, error));
+        rows.push(Row::new().value("msaa", format!("{msaa:?}")).value("samples", samples).value("edge_rmse", error));
     }
     // More samples, no more edge error; the same samples, the same picture.
     // (llvmpipe's GL driver accepts 2 samples and renders 4: its 2× and 4×
@@ -126,6 +129,17 @@ fn more_samples_bring_edges_closer_to_the_supersampled_picture() {
     // Measured: 4× leaves 0.316 of 1×'s edge error (0.0312 against 0.0988,
     // Vulkan and GL alike); allowed 1.5 × that.
     assert!(errors[2].1 < 0.47 * errors[0].1, "4× MSAA must remove most of the edge error: {errors:?}");
+    // docs/performance.md, MSAA's error side (scripts/test-records.sh).
+    support::record::write(|mut record| {
+        record.insert("viewport_px", [size, size]);
+        record.insert("reference_viewport_px", [size * factor, size * factor]);
+        record.insert("edge_pixels", edges);
+        record.insert("edge_spread_min", 0.05);
+        record.insert("x4_over_x1_edge_rmse", errors[2].1 / errors[0].1);
+        record.insert("x4_over_x1_edge_rmse_max", 0.47);
+        rows.into_iter().for_each(|row| record.push_row(row));
+        record
+    });
 }
 
 /// AlphaBlendModeTest has opaque, masked and blended materials, some
