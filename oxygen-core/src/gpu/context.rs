@@ -111,7 +111,7 @@ fn rank(info: &wgpu::AdapterInfo) -> u32 {
     device * 2 + backend
 }
 
-/// How many wgpu instances this process has created (see
+/// How many shared wgpu instances this process has created (see
 /// [`GpuContext::instances_created`]).
 static INSTANCES_CREATED: AtomicUsize = AtomicUsize::new(0);
 
@@ -180,10 +180,11 @@ async fn pick_adapter(
 }
 
 impl GpuContext {
-    /// How many wgpu instances (driver instances) this process has created:
-    /// one per backend set and instance flags, however many contexts were
-    /// made ([`Self::new_headless`] shares them), plus one per context on a
-    /// GL adapter (which cannot share its instance's EGL context).
+    /// How many shared wgpu instances (driver instances) this process has
+    /// created: one per backend set and instance flags, however many
+    /// contexts were made ([`Self::new_headless`] shares them). GL's
+    /// instances are not shared and not counted: each context whose
+    /// backends include GL makes one of its own for its GL adapters.
     pub fn instances_created() -> usize {
         INSTANCES_CREATED.load(Ordering::Relaxed)
     }
@@ -207,22 +208,39 @@ impl GpuContext {
             descriptor
         };
         let wanted_name = std::env::var("OXYGEN_ADAPTER").ok().map(|s| s.to_lowercase());
-        let first = descriptor(None);
-        let backends = first.backends;
-        let instance = shared_instance(first);
-        let (mut adapter, mut adapter_info) =
-            pick_adapter(&instance, backends, options, wanted_name.as_deref()).await?;
-        if adapter_info.backend == wgpu::Backend::Gl {
-            // A GL instance has one EGL context, which every device made
-            // from it shares: devices of one GL instance on two threads
-            // fight over it (EGL's make_current fails and wgpu panics).
-            // A GL context keeps an instance of its own, as every context
-            // did before instances were shared (the driver limit that made
-            // them shared is NVIDIA's Vulkan one).
-            let own = wgpu::Instance::new(descriptor(Some(wgpu::Backends::GL)));
-            INSTANCES_CREATED.fetch_add(1, Ordering::Relaxed);
-            (adapter, adapter_info) = pick_adapter(&own, wgpu::Backends::GL, options, wanted_name.as_deref()).await?;
+        let backends = descriptor(None).backends;
+        // Every backend but GL from the process's shared instance. GL
+        // adapters come from an instance of this context's own: a GL
+        // instance has one EGL context, which every adapter and device made
+        // from it uses, and two threads using it at once fail in EGL's
+        // make_current (wgpu panics, even when an unused GL adapter is only
+        // dropped). Private GL instances are what every context had before
+        // instances were shared; the driver limit that made them shared is
+        // NVIDIA's Vulkan one.
+        let shared_backends = backends - wgpu::Backends::GL;
+        let mut picks = Vec::new();
+        let mut tried = Vec::new();
+        if !shared_backends.is_empty() {
+            let instance = shared_instance(descriptor(Some(shared_backends)));
+            match pick_adapter(&instance, shared_backends, options, wanted_name.as_deref()).await {
+                Ok((adapter, info)) => picks.push((instance, adapter, info)),
+                Err(GpuError::NoAdapter { tried: why }) => tried.push(why),
+                Err(e) => return Err(e),
+            }
         }
+        if backends.contains(wgpu::Backends::GL) {
+            let own = wgpu::Instance::new(descriptor(Some(wgpu::Backends::GL)));
+            match pick_adapter(&own, wgpu::Backends::GL, options, wanted_name.as_deref()).await {
+                Ok((adapter, info)) => picks.push((own, adapter, info)),
+                Err(GpuError::NoAdapter { tried: why }) => tried.push(why),
+                Err(e) => return Err(e),
+            }
+        }
+        // The best of the two by the same ranking as one enumeration of
+        // every backend (a tie keeps the shared instance's adapter).
+        let Some((instance, adapter, adapter_info)) = picks.into_iter().min_by_key(|(_, _, info)| rank(info)) else {
+            return Err(GpuError::NoAdapter { tried: tried.join("; ") });
+        };
 
         let features = options.required_features | (options.optional_features & adapter.features());
         let (device, queue) = adapter
