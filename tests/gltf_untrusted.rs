@@ -748,3 +748,38 @@ fn every_shipped_scene_still_imports() {
     }
     assert!(imported >= 8, "{imported} scenes");
 }
+
+/// A panorama's header is read before its pixels: a side past
+/// `MAX_ENVIRONMENT_SIDE` is refused by size, naming the file, without
+/// decoding; the largest side allowed gets as far as decoding (whose short
+/// data then fails as a read error).
+#[test]
+fn an_hdr_panorama_past_the_size_limit_is_refused_before_decoding() {
+    use oxygen::{EnvironmentFileError, MAX_ENVIRONMENT_SIDE, load_hdr_environment};
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("hdr_limits");
+    std::fs::create_dir_all(&dir).unwrap();
+    let panorama = |width: u32, height: u32| {
+        let path = dir.join(format!("{width}x{height}.hdr"));
+        let mut bytes = format!("#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y {height} +X {width}\n").into_bytes();
+        bytes.extend_from_slice(&[128, 128, 128, 129].repeat(4)); // far fewer texels than declared
+        std::fs::write(&path, bytes).unwrap();
+        path
+    };
+    let max = MAX_ENVIRONMENT_SIDE;
+    for (width, height) in [(max + 1, 1), (1, max + 1), (max + 1, max + 1)] {
+        let path = panorama(width, height);
+        match load_hdr_environment(&path) {
+            Err(EnvironmentFileError::Size { path: named, width: w, height: h }) => {
+                assert_eq!((named, w, h), (path.clone(), width, height));
+            }
+            other => panic!("{width} × {height}: expected a size error, got {other:?}"),
+        }
+    }
+    for (width, height) in [(max, 1), (1, max)] {
+        let path = panorama(width, height);
+        match load_hdr_environment(&path) {
+            Err(EnvironmentFileError::Read { path: named, .. }) => assert_eq!(named, path),
+            other => panic!("{width} × {height}: expected the short data to fail decoding, got {other:?}"),
+        }
+    }
+}
