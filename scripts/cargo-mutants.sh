@@ -14,7 +14,9 @@
 #              crate records GPU work, measured by scripts/wgsl_mutants.py
 #              and the GPU tests
 #   importer   the root crate's glTF importer and .hdr loader (untrusted input),
-#              tested by the importer's CPU tests and the mutant corpus
+#              tested by the importer's CPU tests, the mutant corpus and
+#              tests/environment.rs (which loads .hdr files; it renders, on
+#              whatever adapter the machine gives: lavapipe here)
 #
 # A full run is long on a 2-core machine (about 13 s a mutant for the CPU
 # crates, a minute or more for the importer, whose every mutant relinks the
@@ -51,7 +53,8 @@ case "$scope" in
   importer)
     args=(-p oxygen --file 'src/gltf_import/**' --file src/environment_file.rs
       --cargo-test-arg=--test=gltf_import --cargo-test-arg=--test=gltf_untrusted
-      --cargo-test-arg=--test=gltf_fuzz_corpus --cargo-test-arg=--lib)
+      --cargo-test-arg=--test=gltf_fuzz_corpus --cargo-test-arg=--lib
+      --cargo-test-arg=--test=environment)
     ;;
   *)
     say "unknown scope '$scope' (core, bindless, sceneprep, passes, importer)"
