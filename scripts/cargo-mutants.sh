@@ -23,6 +23,11 @@
 # root crate's test binaries): shards let it go on across sessions. The
 # shard's outcomes.json is copied to
 # docs/records/mutants/<SCOPE>-<K>-of-<N>.json and its summary printed.
+#
+# OXYGEN_MUTANTS_IN_PLACE=1 mutates this checkout's files in place instead of
+# a fresh copy per shard (whose first build is a whole wgpu build, minutes on
+# two cores): use it only in a checkout of its own (`git worktree add`),
+# never in one you are editing.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -72,7 +77,11 @@ out=target/mutants/$scope-$k-of-$n
 mkdir -p "$out" docs/records/mutants
 say "$scope: shard $k of $n (output: $out)"
 set +e
-cargo mutants "${args[@]}" --shard "$k/$n" --timeout 300 --output "$out"
+in_place=()
+if [ "${OXYGEN_MUTANTS_IN_PLACE:-}" = 1 ]; then
+  in_place=(--in-place)
+fi
+cargo mutants "${args[@]}" "${in_place[@]}" --shard "$k/$n" --timeout 300 --output "$out"
 status=$?
 set -e
 # cargo-mutants exits 2 when mutants were missed, 3 on timeouts: a result,
