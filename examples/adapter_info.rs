@@ -2,7 +2,7 @@
 //! features that matter to it. `scripts/test.sh` runs it before the tests so
 //! every test log starts with the device the pictures came from.
 
-use oxygen::core::{GpuContext, GpuOptions};
+use oxygen::gpu::{GpuContext, GpuOptions};
 
 fn main() {
     match GpuContext::new_headless(&GpuOptions::default()) {

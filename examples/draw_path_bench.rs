@@ -23,7 +23,8 @@
 
 use std::sync::{Arc, Mutex};
 
-use oxygen::core::{AlphaMode, GpuContext, GpuOptions, Projection};
+use oxygen::core::{AlphaMode, Projection};
+use oxygen::gpu::{GpuContext, GpuOptions};
 use oxygen::prelude::*;
 use oxygen::sceneprep::Instancing;
 use oxygen::standard_render_graph;

@@ -132,7 +132,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         mip_level_count: u32::BITS - size.leading_zeros(),
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
-        format: oxygen::core::ViewTargets::HDR_FORMAT,
+        format: oxygen::gpu::ViewTargets::HDR_FORMAT,
         usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::RENDER_ATTACHMENT,
         view_formats: &[],
     });

@@ -39,7 +39,7 @@
 
 use std::time::Instant;
 
-use oxygen::core::{GpuContext, GpuOptions};
+use oxygen::gpu::{GpuContext, GpuOptions};
 use oxygen_demo::record::{Record, Row};
 
 #[path = "support/gpu_spin.rs"]

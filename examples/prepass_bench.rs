@@ -24,7 +24,7 @@
 use std::sync::Arc;
 use std::time::Instant;
 
-use oxygen::core::{GpuContext, GpuOptions};
+use oxygen::gpu::{GpuContext, GpuOptions};
 use oxygen::prelude::*;
 use oxygen_demo::record::{Record, Row};
 

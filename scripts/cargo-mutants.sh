@@ -7,7 +7,7 @@
 #   scripts/cargo-mutants.sh SCOPE list     # the mutants of SCOPE, one a line
 #
 # SCOPE is one of:
-#   core       oxygen-core without the device code (src/gpu/: needs an adapter)
+#   core       oxygen-core (all CPU logic: the device code is oxygen-gpu's)
 #   bindless   oxygen-bindless without its GPU buffers, samplers and bind groups
 #   sceneprep  oxygen-sceneprep (its tests and oxygen-bindless's)
 #   passes     oxygen-passes' CPU helpers (half floats); the rest of that
@@ -42,7 +42,7 @@ scope=$1
 
 case "$scope" in
   core)
-    args=(-p oxygen-core --test-package oxygen-core --exclude 'oxygen-core/src/gpu/**')
+    args=(-p oxygen-core --test-package oxygen-core)
     ;;
   bindless)
     args=(-p oxygen-bindless --test-package oxygen-bindless --test-package oxygen-sceneprep

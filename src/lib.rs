@@ -64,8 +64,10 @@ pub use windows::{PresentMode, WindowId, WindowRect};
 
 /// The bindless heap.
 pub use oxygen_bindless as bindless;
-/// The core crate: math, scene, assets, views, GPU context.
+/// The core crate: math, scene, assets, views (no GPU).
 pub use oxygen_core as core;
+/// The GPU device, view targets and readback.
+pub use oxygen_gpu as gpu;
 /// The render passes.
 pub use oxygen_passes as passes;
 /// ScenePrep.
@@ -102,10 +104,11 @@ pub mod prelude {
     pub use oxygen_bindless::TexturePath;
     pub use oxygen_core::glam::{DVec3, Mat4, Quat, UVec2, Vec2, Vec3, Vec4};
     pub use oxygen_core::{
-        AlphaMode, Camera, CameraError, CascadeSettings, DAabb, DLookAtResolver, Geometry, GeometryHandle, HdrFormat,
-        Light, LightKind, LookAtResolver, Material, MaterialHandle, Msaa, NodeFlags, NodeKey, Projection, Renderable,
-        ResolvedView, Scene, Transform, ViewContext, ViewError, ViewId, ViewResolver,
+        AlphaMode, Camera, CameraError, CascadeSettings, DAabb, DLookAtResolver, Geometry, GeometryHandle, Light,
+        LightKind, LookAtResolver, Material, MaterialHandle, NodeFlags, NodeKey, Projection, Renderable, ResolvedView,
+        Scene, Transform, ViewContext, ViewError, ViewId, ViewResolver,
     };
+    pub use oxygen_gpu::{HdrFormat, Msaa};
     pub use oxygen_passes::{
         CommandRecorder, DrawPath, ForwardLitConfig, MeshPass, Output, PassError, PrePassEstimate, ReferenceSettings,
         RenderContext, RenderPass, TonemapPass,

@@ -13,8 +13,9 @@
 //! nothing on the other frames and keeps its last image.
 
 use glam::{UVec2, Vec3};
-use oxygen_core::{Camera, ResolvedView, Scene, ViewContext, ViewError, ViewId, ViewResolver, ViewTargets};
+use oxygen_core::{Camera, ResolvedView, Scene, ViewContext, ViewError, ViewId, ViewResolver};
 use oxygen_core::{Output, ProbeCube, ProbeId};
+use oxygen_gpu::ViewTargets;
 use oxygen_passes::{PROBE_FACE_AXES, PROBE_FACES};
 
 use crate::views::{TargetKind, ViewDesc};

@@ -24,7 +24,7 @@ pub struct ViewDesc {
     pub(crate) target: TargetKind,
     pub(crate) visibility: Option<Visibility>,
     pub(crate) shown: Option<(crate::WindowId, crate::WindowRect)>,
-    pub(crate) msaa: oxygen_core::Msaa,
+    pub(crate) msaa: oxygen_gpu::Msaa,
 }
 
 /// Where a view renders.
@@ -47,7 +47,7 @@ impl ViewDesc {
             target: TargetKind::Own,
             visibility: None,
             shown: None,
-            msaa: oxygen_core::Msaa::Off,
+            msaa: oxygen_gpu::Msaa::Off,
         }
     }
 
@@ -60,7 +60,7 @@ impl ViewDesc {
     /// frustum culling for it (its depth pyramid needs a single-sample
     /// depth). Where the adapter cannot multisample the HDR format at that
     /// count, the renderer uses the largest count it can, with a warning.
-    pub fn with_msaa(mut self, msaa: oxygen_core::Msaa) -> Self {
+    pub fn with_msaa(mut self, msaa: oxygen_gpu::Msaa) -> Self {
         self.msaa = msaa;
         self
     }
@@ -141,7 +141,7 @@ pub(crate) struct ViewEntry {
     pub(crate) active: bool,
     pub(crate) visibility: Option<Visibility>,
     pub(crate) shown: Option<(crate::WindowId, crate::WindowRect)>,
-    pub(crate) msaa: oxygen_core::Msaa,
+    pub(crate) msaa: oxygen_gpu::Msaa,
 }
 
 /// The registered views and the links between them; no GPU needed.

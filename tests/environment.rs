@@ -41,7 +41,7 @@ fn camera() -> LookAtResolver {
 }
 
 /// The HDR image of `scene` lit by `environment`, with `msaa`.
-fn render(scene: &Scene, environment: Option<&Environment>, msaa: Msaa) -> oxygen::core::gpu::HdrImage {
+fn render(scene: &Scene, environment: Option<&Environment>, msaa: Msaa) -> oxygen::gpu::HdrImage {
     let mut renderer = support::gpu_renderer();
     renderer.set_environment(environment);
     let view = renderer.register_view(ViewDesc::new(camera()).with_msaa(msaa), standard_render_graph).unwrap();
@@ -50,7 +50,7 @@ fn render(scene: &Scene, environment: Option<&Environment>, msaa: Msaa) -> oxyge
     renderer.read_hdr(view).unwrap()
 }
 
-fn at(image: &oxygen::core::gpu::HdrImage, x: u32, y: u32) -> Vec3 {
+fn at(image: &oxygen::gpu::HdrImage, x: u32, y: u32) -> Vec3 {
     let p = image.pixels[(y * image.width + x) as usize];
     Vec3::new(p[0], p[1], p[2])
 }
@@ -88,7 +88,7 @@ fn a_metal_sphere_reflects_the_sky_instead_of_going_black() {
     let plain = render(&scene, None, Msaa::Off);
     // Over the sphere's disc the metal reflects the sky and the ground
     // instead of the 0.03 ambient alone.
-    let disc_mean = |image: &oxygen::core::gpu::HdrImage| {
+    let disc_mean = |image: &oxygen::gpu::HdrImage| {
         let mut sum = Vec3::ZERO;
         let mut n = 0.0;
         for y in 20..76u32 {

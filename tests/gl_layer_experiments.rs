@@ -7,7 +7,7 @@
 //! Run with `-- --nocapture` to see the table; every case asserts what the
 //! shading pass relies on. `WGPU_BACKEND=gl` runs the same on GL.
 
-use oxygen::core::{GpuContext, GpuOptions};
+use oxygen::gpu::{GpuContext, GpuOptions};
 
 const SIDE: u32 = 8;
 const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
@@ -394,7 +394,7 @@ fn copied_back(gpu: &GpuContext, texture: &wgpu::Texture, mip: u32) -> Vec<f32> 
         if texel == 4 {
             f32::from_le_bytes(data[p..p + 4].try_into().unwrap())
         } else {
-            oxygen::core::gpu::f16_to_f32(u16::from_le_bytes(data[p..p + 2].try_into().unwrap()))
+            oxygen::gpu::f16_to_f32(u16::from_le_bytes(data[p..p + 2].try_into().unwrap()))
         }
     };
     (0..layers).map(at).collect()

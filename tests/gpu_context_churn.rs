@@ -7,7 +7,7 @@
 
 mod support;
 
-use oxygen::core::{GpuContext, GpuOptions};
+use oxygen::gpu::{GpuContext, GpuOptions};
 
 #[test]
 fn contexts_made_one_after_another_share_one_instance() {

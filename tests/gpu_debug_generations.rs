@@ -5,7 +5,7 @@ mod support;
 
 use futures::executor::block_on;
 use oxygen::bindless::{BindlessHeap, CameraConstants, SceneConstantsBuffer, TexturePath};
-use oxygen::core::{GpuContext, GpuOptions, ViewTargets};
+use oxygen::gpu::{GpuContext, GpuOptions, ViewTargets};
 use oxygen::passes::{FrameProgress, LightingResources, Pipelines, ViewInputs};
 use oxygen::prelude::*;
 use oxygen::sceneprep::{ScenePrep, ViewRequest};

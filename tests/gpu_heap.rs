@@ -4,7 +4,7 @@
 mod support;
 
 use oxygen::bindless::{BindlessError, BindlessHeap, DomainKind, SlotError, TexturePath};
-use oxygen::core::{GpuContext, GpuOptions};
+use oxygen::gpu::{GpuContext, GpuOptions};
 
 fn read_buffer(gpu: &GpuContext, buffer: &wgpu::Buffer, bytes: u64) -> Vec<u8> {
     let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {

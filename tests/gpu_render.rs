@@ -220,12 +220,12 @@ fn multi_draw_indirect_and_direct_draws_produce_the_same_image() {
     let demo = oxygen_demo::multi_view_scene();
     let render = |path: DrawPath, trust_indirect_args: bool| {
         let options = RendererOptions { draw_path: Some(path), keep_hdr: true, ..Default::default() };
-        let gpu_options = oxygen::core::GpuOptions {
+        let gpu_options = oxygen::gpu::GpuOptions {
             optional_features: Renderer::OPTIONAL_FEATURES,
             trust_indirect_args,
             ..Default::default()
         };
-        let gpu = oxygen::core::GpuContext::new_headless(&gpu_options).expect("a test adapter");
+        let gpu = oxygen::gpu::GpuContext::new_headless(&gpu_options).expect("a test adapter");
         let mut renderer = match Renderer::with_options(gpu, options) {
             Ok(r) => r,
             Err(e) => panic!("{path:?} must be available on the test adapter: {e}"),

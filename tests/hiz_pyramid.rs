@@ -6,7 +6,7 @@
 
 mod support;
 
-use oxygen::core::{GpuContext, GpuOptions};
+use oxygen::gpu::{GpuContext, GpuOptions};
 use oxygen::passes::hiz::{HizPipelines, HizPyramid};
 
 /// Fills a depth target with a per-pixel hash through `frag_depth` (depth

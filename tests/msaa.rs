@@ -6,7 +6,7 @@
 
 mod support;
 
-use oxygen::core::gpu::HdrImage;
+use oxygen::gpu::HdrImage;
 use oxygen::prelude::*;
 use oxygen_demo::record::Row;
 use support::golden::compare;
@@ -203,8 +203,8 @@ fn every_pass_and_variant_renders_multisampled() {
 
 #[test]
 fn a_multisampled_view_counts_its_samples_against_the_target_budget() {
-    let single = oxygen::core::ViewTargets::bytes_for_msaa(100, 100, Some(HdrFormat::Rgba16Float), 1);
-    let four = oxygen::core::ViewTargets::bytes_for_msaa(100, 100, Some(HdrFormat::Rgba16Float), 4);
+    let single = oxygen::gpu::ViewTargets::bytes_for_msaa(100, 100, Some(HdrFormat::Rgba16Float), 1);
+    let four = oxygen::gpu::ViewTargets::bytes_for_msaa(100, 100, Some(HdrFormat::Rgba16Float), 4);
     // 16 bytes a pixel single-sampled; 4 samples × (8 + 4) more.
     assert_eq!(single, 100 * 100 * 16);
     assert_eq!(four, single + 100 * 100 * 4 * 12);

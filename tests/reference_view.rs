@@ -131,7 +131,7 @@ fn sphere_scene(material: Material) -> Scene {
 
 /// The mean of the HDR image's red channel over the square of `radius`
 /// around the centre.
-fn centre_mean(image: &oxygen::core::gpu::HdrImage, radius: u32) -> f64 {
+fn centre_mean(image: &oxygen::gpu::HdrImage, radius: u32) -> f64 {
     let (cx, cy) = (image.width / 2, image.height / 2);
     let mut sum = 0.0;
     let mut count = 0.0;
@@ -151,7 +151,7 @@ fn trace(
     camera: LookAtResolver,
     settings: ReferenceSettings,
     frames: usize,
-) -> (oxygen::core::gpu::HdrImage, u32) {
+) -> (oxygen::gpu::HdrImage, u32) {
     let mut renderer = gpu_renderer();
     let view = renderer
         .register_view(ViewDesc::new(camera).path_traced(), ReferenceGraph { settings, exposure: 1.0 })
@@ -236,7 +236,7 @@ fn the_error_falls_as_one_over_the_square_root_of_the_samples() {
     let reference_settings =
         ReferenceSettings { samples_per_frame: 256, max_samples: ERROR_REFERENCE_SAMPLES, ..settings(0) };
     let (reference, _) = trace(&scene, camera, reference_settings, 4);
-    let rmse = |image: &oxygen::core::gpu::HdrImage| {
+    let rmse = |image: &oxygen::gpu::HdrImage| {
         let sum: f64 = image
             .pixels
             .iter()
@@ -545,7 +545,7 @@ fn raster_and_reference(
     settings: ReferenceSettings,
     frames: usize,
     environment: Option<&oxygen::core::Environment>,
-) -> (oxygen::core::gpu::HdrImage, oxygen::core::gpu::HdrImage, u32) {
+) -> (oxygen::gpu::HdrImage, oxygen::gpu::HdrImage, u32) {
     let (mut renderer, raster, traced) = raster_and_reference_views(camera, settings, environment);
     for _ in 0..frames {
         renderer.render_frame(scene).unwrap();
@@ -557,7 +557,7 @@ fn raster_and_reference(
 }
 
 /// Per pixel, whether the two images agree within 5 % in every channel.
-fn agreement(a: &oxygen::core::gpu::HdrImage, b: &oxygen::core::gpu::HdrImage) -> Vec<bool> {
+fn agreement(a: &oxygen::gpu::HdrImage, b: &oxygen::gpu::HdrImage) -> Vec<bool> {
     a.pixels
         .iter()
         .zip(&b.pixels)
@@ -567,7 +567,7 @@ fn agreement(a: &oxygen::core::gpu::HdrImage, b: &oxygen::core::gpu::HdrImage) -
 
 /// The mean over the disc of `radius` pixels around the centre of the
 /// largest relative difference of a channel between two HDR images.
-fn disc_relative_error(a: &oxygen::core::gpu::HdrImage, b: &oxygen::core::gpu::HdrImage, radius: f32) -> f64 {
+fn disc_relative_error(a: &oxygen::gpu::HdrImage, b: &oxygen::gpu::HdrImage, radius: f32) -> f64 {
     let (cx, cy) = (a.width as f32 / 2.0, a.height as f32 / 2.0);
     let (mut sum, mut count) = (0.0, 0.0);
     for y in 0..a.height {
@@ -793,7 +793,7 @@ fn skinned_and_morphed_meshes_are_traced_in_their_pose() {
     });
 }
 
-fn raster_hdr(scene: &Scene, camera: LookAtResolver) -> oxygen::core::gpu::HdrImage {
+fn raster_hdr(scene: &Scene, camera: LookAtResolver) -> oxygen::gpu::HdrImage {
     let mut renderer = support::gpu_renderer_with(RendererOptions { keep_hdr: true, ..Default::default() });
     let view = renderer.register_view(camera, standard_render_graph).unwrap();
     renderer.render_frame(scene).unwrap();

@@ -247,8 +247,8 @@ fn a_registered_view_prepares_without_a_gpu_as_the_renderer_does() {
     let mut views = Views::new();
     let main = views.register(oxygen_demo::main_camera(UVec2::new(96, 64)), standard_render_graph).unwrap();
     let cpu_dump = views.prepare(&demo.scene, main).unwrap().dump();
-    let options = oxygen::core::GpuOptions { optional_features: Renderer::OPTIONAL_FEATURES, ..Default::default() };
-    let gpu = oxygen::core::GpuContext::new_headless(&options).unwrap();
+    let options = oxygen::gpu::GpuOptions { optional_features: Renderer::OPTIONAL_FEATURES, ..Default::default() };
+    let gpu = oxygen::gpu::GpuContext::new_headless(&options).unwrap();
     let mut renderer = Renderer::with_views(gpu, RendererOptions::default(), views).unwrap();
     renderer.render_frame(&demo.scene).unwrap();
     assert_eq!(renderer.prepared_frame(main).unwrap().dump(), cpu_dump);

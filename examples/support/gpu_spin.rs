@@ -6,7 +6,7 @@
 
 use std::time::Instant;
 
-use oxygen::core::GpuContext;
+use oxygen::gpu::GpuContext;
 
 const SHADER: &str = r#"
 @group(0) @binding(0) var<storage, read_write> sink: array<u32>;

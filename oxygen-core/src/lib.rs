@@ -9,10 +9,10 @@
 //!   ScenePrep runs once per frame;
 //! * [`geometry`] and [`material`]: the assets a renderable points at;
 //! * [`view`]: [`ViewId`], [`ViewContext`], [`ResolvedView`] and the
-//!   [`ViewResolver`] contract;
-//! * [`gpu`]: a headless wgpu device, offscreen targets and readback.
+//!   [`ViewResolver`] contract.
 //!
-//! It knows nothing about ScenePrep or passes: data flows out of this crate,
+//! It needs no GPU (the device, targets and readback are `oxygen-gpu`'s) and
+//! knows nothing about ScenePrep or passes: data flows out of this crate,
 //! never back in.
 
 #![warn(missing_docs)]
@@ -24,7 +24,6 @@ pub mod animation;
 pub mod camera;
 pub mod environment;
 pub mod geometry;
-pub mod gpu;
 pub mod light;
 pub mod material;
 pub mod math;
@@ -40,7 +39,6 @@ pub use environment::{Environment, EnvironmentError, EquirectImage, PrefilteredE
 pub use geometry::{
     Geometry, GeometryError, MAX_MORPH_TARGETS, MorphTarget, SkinWeights, Submesh, Vertex, VertexAttributes,
 };
-pub use gpu::{ColorTargets, GpuContext, GpuError, GpuOptions, HdrFormat, Msaa, MsaaTargets, ViewTargets};
 pub use light::{Light, LightKind, Mobility};
 pub use material::{AlphaMode, Material, MaterialUvs, UvTransform};
 pub use math::{Aabb, DAabb, Frustum, Plane, Sphere};

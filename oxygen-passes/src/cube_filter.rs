@@ -27,7 +27,8 @@
 use std::collections::HashMap;
 use std::sync::Mutex;
 
-use oxygen_core::{Environment, Sky, ViewTargets};
+use oxygen_core::{Environment, Sky};
+use oxygen_gpu::ViewTargets;
 
 /// The cube-building shader (self-contained: the cube layout, then the
 /// filter's passes).

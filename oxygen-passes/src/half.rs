@@ -46,7 +46,7 @@ mod tests {
     #[test]
     fn half_floats_round_trip_within_their_precision() {
         for v in [0.0f32, 1.0, -2.5, 0.1, 2.7, 1e-5, 6.1e-5, 65504.0, 1e6, -1e6] {
-            let back = oxygen_core::gpu::f16_to_f32(super::f32_to_f16(v));
+            let back = oxygen_gpu::f16_to_f32(super::f32_to_f16(v));
             let expected = v.clamp(-65504.0, 65504.0);
             assert!((back - expected).abs() <= expected.abs() * 1e-3 + 1e-7, "{v} -> {back}");
         }
@@ -60,7 +60,7 @@ mod tests {
     /// half, values flush to a signed zero.
     #[test]
     fn every_half_round_trips_and_midpoints_round_to_even() {
-        use oxygen_core::gpu::f16_to_f32;
+        use oxygen_gpu::f16_to_f32;
         let to_half = super::f32_to_f16;
         for sign in [0u16, 0x8000] {
             for magnitude in 0..0x7c00u16 {

@@ -98,7 +98,7 @@ impl LightingResources {
             mip_level_count: levels.min(u32::BITS - size.leading_zeros()),
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
-            format: oxygen_core::ViewTargets::HDR_FORMAT,
+            format: oxygen_gpu::ViewTargets::HDR_FORMAT,
             usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::COPY_SRC,
             view_formats: &[],
         });

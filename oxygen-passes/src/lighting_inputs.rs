@@ -253,7 +253,7 @@ impl LightingInputResources {
             mip_level_count: 1,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
-            format: oxygen_core::ViewTargets::DEPTH_FORMAT,
+            format: oxygen_gpu::ViewTargets::DEPTH_FORMAT,
             usage: wgpu::TextureUsages::TEXTURE_BINDING,
             view_formats: &[],
         });
@@ -285,7 +285,7 @@ impl LightingInputResources {
             mip_level_count: 1,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
-            format: oxygen_core::ViewTargets::HDR_FORMAT,
+            format: oxygen_gpu::ViewTargets::HDR_FORMAT,
             usage: wgpu::TextureUsages::TEXTURE_BINDING,
             view_formats: &[],
         });

@@ -11,7 +11,7 @@
 //! per draw. Shaders find each draw's `DrawMetadata` through
 //! `first_instance`.
 
-use oxygen_core::ViewTargets;
+use oxygen_gpu::ViewTargets;
 use oxygen_sceneprep::{Partition, PassMask};
 use tracing::{Instrument, info_span};
 

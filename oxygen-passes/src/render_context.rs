@@ -1,10 +1,8 @@
 //! `RenderContext` and `CommandRecorder`: what a pass reads and where it records.
 
 use oxygen_bindless::{BindlessHeap, SceneConstantsBuffer};
-use oxygen_core::{
-    ColorTargets, Depth, GpuContext, HdrColor, Output, OutputSource, ProbeCube, ProbeId, ResolvedView, ShadowMap,
-    ViewId, ViewTargets,
-};
+use oxygen_core::{Depth, HdrColor, Output, OutputSource, ProbeCube, ProbeId, ResolvedView, ShadowMap, ViewId};
+use oxygen_gpu::{ColorTargets, GpuContext, ViewTargets};
 use oxygen_sceneprep::{PassMask, PreparedSceneFrame};
 use thiserror::Error;
 

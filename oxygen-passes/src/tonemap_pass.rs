@@ -7,7 +7,7 @@
 //! [`pbr_neutral`] is the CPU twin of the shader's operator, for tests.
 
 use bytemuck::{Pod, Zeroable};
-use oxygen_core::ViewTargets;
+use oxygen_gpu::ViewTargets;
 use tracing::info_span;
 
 use crate::{CommandRecorder, PassError, RenderContext, RenderPass};

@@ -589,10 +589,10 @@ impl GpuVisibility {
     /// for the GPU. Empty for a view not on a GPU path.
     pub fn read_draws(
         &self,
-        gpu: &oxygen_core::GpuContext,
+        gpu: &oxygen_gpu::GpuContext,
         heap: &BindlessHeap,
         prepared: &PreparedSceneFrame,
-    ) -> Result<Vec<(oxygen_sceneprep::PassMask, Vec<oxygen_sceneprep::DrawMetadata>)>, oxygen_core::GpuError> {
+    ) -> Result<Vec<(oxygen_sceneprep::PassMask, Vec<oxygen_sceneprep::DrawMetadata>)>, oxygen_gpu::GpuError> {
         let _span = info_span!("read_draws", view = %prepared.view_id()).entered();
         let (Some(plan), Some(state)) = (prepared.gpu_plan(), self.views.get(&prepared.view_id())) else {
             return Ok(Vec::new());

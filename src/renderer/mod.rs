@@ -22,9 +22,8 @@ use std::collections::{BTreeMap, HashMap};
 use std::time::Instant;
 
 use oxygen_bindless::{BindlessHeap, SceneConstantsBuffer, TexturePath};
-use oxygen_core::{
-    GpuContext, GpuError, GpuOptions, HdrFormat, NodeKey, ResolvedView, Scene, ViewError, ViewId, ViewTargets,
-};
+use oxygen_core::{NodeKey, ResolvedView, Scene, ViewError, ViewId};
+use oxygen_gpu::{GpuContext, GpuError, GpuOptions, HdrFormat, ViewTargets};
 use oxygen_passes::{
     DepthBias, DrawPath, EnvironmentQuality, GPU_VISIBILITY_FEATURES, GpuVisibility, LightingResources, Output,
     PassError, Pipelines, ProbeId, RecordStats,
@@ -574,7 +573,7 @@ impl Renderer {
     /// Samples per pixel a view asking for `msaa` gets: what it asks
     /// where the adapter can multisample the HDR and depth formats at that
     /// count, else the largest count below it that it can (1 at least).
-    pub fn msaa_samples(&self, msaa: oxygen_core::Msaa) -> u32 {
+    pub fn msaa_samples(&self, msaa: oxygen_gpu::Msaa) -> u32 {
         let asked = msaa.samples();
         // The adapter's own counts only count once the device has enabled
         // them; without the feature, WebGPU guarantees 1 and 4.
@@ -702,7 +701,7 @@ impl Renderer {
     /// and tests; `None` without one. Waits for the GPU.
     pub fn read_environment(&self) -> Result<Option<oxygen_core::PrefilteredEnvironment>, RenderError> {
         let Some(texture) = self.lighting.environment_texture() else { return Ok(None) };
-        let rgb = |image: oxygen_core::gpu::HdrImage| -> Vec<glam::Vec3> {
+        let rgb = |image: oxygen_gpu::HdrImage| -> Vec<glam::Vec3> {
             image.pixels.iter().map(|p| glam::Vec3::new(p[0], p[1], p[2])).collect()
         };
         let mut levels = Vec::with_capacity(texture.mip_level_count() as usize);
@@ -943,7 +942,7 @@ impl Renderer {
     /// before the tone map), NaN and infinities included. Fails with
     /// [`RenderError::HdrNotWritten`] when the view's last frame tone-mapped
     /// in the shading pass (see [`RendererOptions::keep_hdr`]).
-    pub fn read_hdr(&self, id: impl Into<ViewId>) -> Result<oxygen_core::gpu::HdrImage, RenderError> {
+    pub fn read_hdr(&self, id: impl Into<ViewId>) -> Result<oxygen_gpu::HdrImage, RenderError> {
         let id = id.into();
         let color = self.color_targets(id)?;
         if color.hdr_layer != 0 {
@@ -955,7 +954,7 @@ impl Renderer {
         Ok(self.gpu.read_hdr_texels(&color.hdr)?)
     }
 
-    fn color_targets(&self, id: ViewId) -> Result<&oxygen_core::ColorTargets, RenderError> {
+    fn color_targets(&self, id: ViewId) -> Result<&oxygen_gpu::ColorTargets, RenderError> {
         let known = self.views.entries.contains_key(&id) || self.shadows.all().any(|v| v == id);
         if !known {
             return Err(RenderError::NoSuchView(id));

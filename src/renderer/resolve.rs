@@ -132,7 +132,7 @@ impl Renderer {
             .iter()
             .filter(|(_, v)| !v.active)
             .filter_map(|(id, _)| self.gpu_views.get(id)?.targets.as_ref())
-            .map(oxygen_core::ViewTargets::bytes)
+            .map(oxygen_gpu::ViewTargets::bytes)
             .sum()
     }
 
@@ -145,7 +145,7 @@ impl Renderer {
                 .views
                 .iter()
                 .filter_map(|v| match v.target {
-                    TargetPlan::Own { with_color, samples } => Some(oxygen_core::ViewTargets::bytes_for_msaa(
+                    TargetPlan::Own { with_color, samples } => Some(oxygen_gpu::ViewTargets::bytes_for_msaa(
                         v.world.viewport.x,
                         v.world.viewport.y,
                         with_color.then_some(self.hdr_format),

@@ -3,7 +3,7 @@
 //! cube) and its scene constants.
 
 use oxygen_bindless::{CameraConstants, SceneConstantsBuffer};
-use oxygen_core::ViewTargets;
+use oxygen_gpu::ViewTargets;
 use oxygen_passes::{GpuViewRequest, ReferenceTracer};
 use oxygen_sceneprep::ViewFilter;
 use tracing::info_span;

@@ -15,7 +15,7 @@ pub mod skip;
 use std::sync::Once;
 
 use image::RgbaImage;
-use oxygen::core::gpu::HdrImage;
+use oxygen::gpu::HdrImage;
 use oxygen::prelude::*;
 
 /// A pixel's colour.

@@ -4,7 +4,7 @@
 //! Both block until the GPU has finished all submitted work; they are for
 //! tests, tools and screenshots, never for use inside a frame.
 
-use super::{GpuContext, GpuError};
+use crate::{GpuContext, GpuError};
 
 /// A linear HDR picture read back from an `Rgba16Float` texture, each
 /// half-float widened to `f32` exactly (NaN and infinities kept as they are,

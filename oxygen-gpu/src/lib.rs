@@ -1,0 +1,20 @@
+//! # oxygen-gpu
+//!
+//! The GPU device every Oxygen renderer draws on: adapter and device
+//! selection ([`GpuContext`], shared wgpu instances per backend set), the
+//! offscreen targets of a view ([`ViewTargets`]: HDR colour, display colour,
+//! depth, MSAA) and readback into images ([`HdrImage`], RGBA8).
+//!
+//! It sits beside `oxygen-core` rather than in it: the scene, assets and view
+//! contracts are plain data that ScenePrep and the snapshot tests use without
+//! a device, while everything here needs wgpu.
+
+#![warn(missing_docs)]
+
+mod context;
+mod readback;
+mod target;
+
+pub use context::{GpuContext, GpuError, GpuOptions};
+pub use readback::{HdrImage, f16_to_f32, unpack_rg11b10_ufloat};
+pub use target::{ColorTargets, HdrFormat, Msaa, MsaaTargets, ViewTargets};
