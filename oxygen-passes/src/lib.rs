@@ -27,44 +27,38 @@
 // rewriting it with `partial_cmp` would hide that intent.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-mod cube_filter;
-mod forward_lighting;
-mod half;
-pub mod hiz;
+mod context;
 mod lighting;
-mod lighting_inputs;
-mod mesh_pass;
+mod mesh;
 mod pipelines;
+mod post;
 mod reference;
-mod render_context;
-mod render_pass;
-mod shadow_atlas;
-mod split_sum;
-mod tonemap_pass;
+mod shaders;
 mod visibility;
 
-pub use cube_filter::{
+pub use context::{
+    CommandRecorder, DrawPath, FrameProgress, LinkedView, LocalShadowsInput, OutputKind, PassError, PrePassEstimate,
+    ProbeCubeInput, RecordStats, RenderContext, RenderPass, ShadowMapInput, ViewInputs,
+};
+pub use lighting::LightingResources;
+pub use lighting::ibl::cube_filter::{
     CUBE_FILTER_WGSL, EnvironmentQuality, HARMONICS_LAYER, HARMONICS_SCALE, MAX_ENVIRONMENT_SIZE, MAX_FILTER_SAMPLES,
     PROBE_FILTER_SAMPLES, prefiltered_levels,
 };
-pub use lighting::LightingResources;
-pub use lighting_inputs::{
+pub use lighting::ibl::{CUBE_FACES_WGSL, ENVIRONMENT_WGSL};
+pub use lighting::inputs::{
     LightingInputs, MAX_CASCADES, MAX_PROBES, MAX_SHADOW_TILES, PROBE_FACE_AXES, PROBE_FACES, probe_view,
 };
-pub use mesh_pass::{ColorOps, DrawList, ForwardLitConfig, MeshPass};
+pub use lighting::shadow_atlas::{SHADOW_ATLAS_FORMAT, array_layer_count};
+pub use lighting::split_sum::{SPLIT_SUM_LUT_FORMAT, SPLIT_SUM_LUT_SIZE, SPLIT_SUM_WGSL, split_sum_shader_source};
+pub use mesh::{ColorOps, DrawList, ForwardLitConfig, MeshPass};
 pub use oxygen_core::{Depth, HdrColor, Output, OutputSource, ProbeCube, ProbeId, ShadowMap};
 pub use pipelines::{
-    AlphaClass, BRDF_WGSL, CUBE_FACES_WGSL, CompilerGuard, DepthBias, ENVIRONMENT_WGSL, Exposure, PassKind,
-    PipelineFuture, PipelineKey, PipelineVariant, Pipelines, ShaderFeatures, TONEMAP_OPERATOR_WGSL, TONEMAP_WGSL,
-    fullscreen_pass, fullscreen_pipeline, shader_source,
+    AlphaClass, CompilerGuard, DepthBias, Exposure, PassKind, PipelineFuture, PipelineKey, PipelineVariant, Pipelines,
+    ShaderFeatures, fullscreen_pass, fullscreen_pipeline, shader_source,
 };
+pub use post::{TONEMAP_OPERATOR_WGSL, TONEMAP_WGSL, TonemapPass, pbr_neutral};
 pub use reference::{ReferencePass, ReferenceSettings, ReferenceTracer, reference_shader_source};
-pub use render_context::{
-    CommandRecorder, DrawPath, FrameProgress, LinkedView, LocalShadowsInput, OutputKind, PassError, PrePassEstimate,
-    ProbeCubeInput, RecordStats, RenderContext, ShadowMapInput, ViewInputs,
-};
-pub use render_pass::RenderPass;
-pub use shadow_atlas::{SHADOW_ATLAS_FORMAT, array_layer_count};
-pub use split_sum::{SPLIT_SUM_LUT_FORMAT, SPLIT_SUM_LUT_SIZE, SPLIT_SUM_WGSL, split_sum_shader_source};
-pub use tonemap_pass::{TonemapPass, pbr_neutral};
+pub use shaders::BRDF_WGSL;
+pub use visibility::hiz;
 pub use visibility::{GPU_VISIBILITY_FEATURES, GpuViewRequest, GpuVisibility, cull_shader_source};

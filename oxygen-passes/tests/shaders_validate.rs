@@ -145,7 +145,8 @@ fn the_visibility_cull_shader_validates_and_matches_its_records() {
 /// The depth pyramid's shader validates with both its entry points.
 #[test]
 fn the_depth_pyramid_shader_validates() {
-    let module = validate("depth pyramid", include_str!("../src/hiz.wgsl"), naga::valid::Capabilities::default());
+    let module =
+        validate("depth pyramid", include_str!("../src/visibility/hiz.wgsl"), naga::valid::Capabilities::default());
     for name in ["copy_depth", "reduce"] {
         assert!(module.entry_points.iter().any(|e| e.name == name), "the depth pyramid shader lacks {name}");
     }

@@ -12,7 +12,7 @@
 // the view along the light, roughness 0 — shade to a finite colour.
 // `tests/shading_finite.rs` runs these functions over such inputs.
 
-// Pipeline-overridable constants (pipelines.rs `ShaderFeatures`, set when
+// Pipeline-overridable constants (pipelines/features.rs `ShaderFeatures`, set when
 // a pipeline is created): each leaves out code the view does not need this
 // frame. The defaults keep everything, so the shader as written is right for
 // any scene; a pass turns a feature off only when its input is absent (no
@@ -50,10 +50,10 @@ fn fit_hdr(color: vec3<f32>) -> vec3<f32> {
     return color;
 }
 
-// Group 3: what this view reads from other views (see lighting_inputs.rs):
+// Group 3: what this view reads from other views (see lighting/inputs.rs):
 // cascade shadow maps (bindings 0 to MAX_CASCADES - 1, one per cascade),
 // the local-light shadow atlas and the reflection probes. The sizes and
-// bindings are constants generated from lighting_inputs.rs.
+// bindings are constants generated from lighting/inputs.rs.
 struct LightingInputs {
     light_view_projection: array<mat4x4<f32>, MAX_CASCADES>,
     texel_world_size: vec4<f32>,
@@ -108,7 +108,7 @@ fn nearest_probe(position: vec3<f32>) -> u32 {
 
 // `roughness` picks the mip level: a rough surface reflects a blurrier
 // level (levels are GGX-prefiltered like the environment's, see
-// cube_filter.rs).
+// lighting/ibl/cube_filter.rs).
 fn sample_probe_face(probe: u32, uv: vec2<f32>, face: u32, roughness: f32) -> vec3<f32> {
     switch probe {
         case 0u: { return textureSampleLevel(probe_faces_0, probe_sampler, uv, face, probe_lod(textureNumLevels(probe_faces_0), roughness)).rgb; }

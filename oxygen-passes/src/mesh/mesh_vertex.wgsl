@@ -123,7 +123,7 @@ struct UvDerivatives {
 }
 
 // Whether any material reads a second UV set or a texture transform
-// (pipelines.rs `ShaderFeatures::uv_transforms`); without, set 1's
+// (pipelines/features.rs `ShaderFeatures::uv_transforms`); without, set 1's
 // derivatives are never taken and every texture reads set 0 as is.
 override HAS_UV_TRANSFORMS: bool = true;
 

@@ -541,7 +541,7 @@ fn upload_equirect(device: &wgpu::Device, queue: &wgpu::Queue, image: &oxygen_co
     let bytes: Vec<u8> = texels
         .iter()
         .flat_map(|t| [t.x, t.y, t.z, 1.0])
-        .flat_map(|v| crate::half::f32_to_f16(v).to_le_bytes())
+        .flat_map(|v| crate::lighting::ibl::half::f32_to_f16(v).to_le_bytes())
         .collect();
     queue.write_texture(
         wgpu::TexelCopyTextureInfo {

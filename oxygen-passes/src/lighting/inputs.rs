@@ -83,7 +83,7 @@ fn shared_numbers() -> [(&'static str, u32); 13] {
         ("ENVIRONMENT_BINDING", ENVIRONMENT_BINDING),
         ("ENVIRONMENT_SAMPLER_BINDING", ENVIRONMENT_SAMPLER_BINDING),
         ("SPLIT_SUM_BINDING", SPLIT_SUM_BINDING),
-        ("SPLIT_SUM_LUT_SIZE", crate::split_sum::SPLIT_SUM_LUT_SIZE),
+        ("SPLIT_SUM_LUT_SIZE", crate::lighting::split_sum::SPLIT_SUM_LUT_SIZE),
     ]
 }
 
@@ -208,7 +208,7 @@ impl LightingInputResources {
             ty: wgpu::BindingType::Buffer {
                 ty: wgpu::BufferBindingType::Uniform,
                 has_dynamic_offset: false,
-                min_binding_size: wgpu::BufferSize::new(crate::split_sum::SPLIT_SUM_LUT_BYTES),
+                min_binding_size: wgpu::BufferSize::new(crate::lighting::split_sum::SPLIT_SUM_LUT_BYTES),
             },
             count: None,
         });
@@ -297,13 +297,13 @@ impl LightingInputResources {
             mip_level_count: 1,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
-            format: crate::shadow_atlas::SHADOW_ATLAS_FORMAT,
+            format: crate::lighting::shadow_atlas::SHADOW_ATLAS_FORMAT,
             usage: wgpu::TextureUsages::TEXTURE_BINDING,
             view_formats: &[],
         });
-        let placeholder_atlas = crate::shadow_atlas::atlas_view(&placeholder_atlas);
+        let placeholder_atlas = crate::lighting::shadow_atlas::atlas_view(&placeholder_atlas);
         let uniform = uniform_buffer(device, &LightingInputs::zeroed());
-        let (split_sum_lut, split_sum_buffer) = crate::split_sum::build_lut(device, queue);
+        let (split_sum_lut, split_sum_buffer) = crate::lighting::split_sum::build_lut(device, queue);
         let shared = SharedInputs {
             sampler: &sampler,
             probe_sampler: &probe_sampler,

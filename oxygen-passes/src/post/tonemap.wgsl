@@ -1,4 +1,4 @@
-// Tone map pass: the HDR target through `tone_map` (tonemap.wgsl, prepended
+// Tone map pass: the HDR target through `tone_map` (tonemap_operator.wgsl, prepended
 // by the Rust side) into the sRGB target. A full-screen triangle; no
 // bindless state.
 

@@ -2,7 +2,7 @@
 //!
 //! [`ReferenceTracer`] holds the ray-tracing scene on the GPU (uploaded from
 //! ScenePrep's [`oxygen_sceneprep::RayScene`] whenever it was rebuilt), the
-//! tracing pipeline (`reference_trace.wgsl`, which reads the same bindless
+//! tracing pipeline (`trace.wgsl`, which reads the same bindless
 //! domains, camera constants and textures as the raster passes) and, per
 //! view, the running sum of the samples taken so far. [`ReferencePass`]
 //! adds a frame's samples and writes the mean into the view's HDR target, so
@@ -24,8 +24,8 @@ use oxygen_core::ViewId;
 use oxygen_sceneprep::{GPU_RECORDS_WGSL, RayInstance, RayScene, ray_scene::POSED};
 use tracing::info_span;
 
-use crate::render_context::{CommandRecorder, PassError, RenderContext};
-use crate::render_pass::RenderPass;
+use crate::context::RenderPass;
+use crate::context::{CommandRecorder, PassError, RenderContext};
 
 /// How a reference view traces.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -175,10 +175,10 @@ pub fn reference_shader_source(textures: oxygen_bindless::TexturePath) -> String
         "{enables}{constants}{cube}{SCENE_CONSTANTS_WGSL}\n{GPU_RECORDS_WGSL}\n{}\n{}\n{}\n{}\n{}\n{}",
         DomainKind::wgsl_bindings(),
         textures.wgsl(),
-        crate::pipelines::BRDF_WGSL,
-        crate::pipelines::CUBE_FACES_WGSL,
-        crate::pipelines::ENVIRONMENT_WGSL,
-        include_str!("reference_trace.wgsl"),
+        crate::shaders::BRDF_WGSL,
+        crate::lighting::ibl::CUBE_FACES_WGSL,
+        crate::lighting::ibl::ENVIRONMENT_WGSL,
+        include_str!("trace.wgsl"),
     )
 }
 
@@ -248,7 +248,7 @@ impl ReferenceTracer {
                     ty: wgpu::BindingType::Buffer {
                         ty: wgpu::BufferBindingType::Uniform,
                         has_dynamic_offset: false,
-                        min_binding_size: wgpu::BufferSize::new(crate::split_sum::SPLIT_SUM_LUT_BYTES),
+                        min_binding_size: wgpu::BufferSize::new(crate::lighting::split_sum::SPLIT_SUM_LUT_BYTES),
                     },
                     count: None,
                 },

@@ -7,7 +7,7 @@
 
 // Coefficient `i` of the environment's irradiance harmonics: the 3 x 3
 // corner of the layer after the faces, stored divided by 16
-// (cube_filter.rs HARMONICS_SCALE). Signed coordinates: GLSL's texelFetch
+// (lighting/ibl/cube_filter.rs HARMONICS_SCALE). Signed coordinates: GLSL's texelFetch
 // takes ints.
 fn harmonic(i: u32) -> vec3<f32> {
     return textureLoad(environment_faces, vec2<i32>(i32(i % 3u), i32(i / 3u)), i32(PROBE_FACES), 0).rgb * 16.0;
@@ -58,7 +58,7 @@ fn split_sum_texel(x: u32, y: u32) -> vec2<f32> {
     return vec2<f32>(half_to_f32(rg & 0xffffu), half_to_f32(rg >> 16u));
 }
 
-// The split-sum scale and bias for F0 (split_sum.rs), interpolated
+// The split-sum scale and bias for F0 (lighting/split_sum.rs), interpolated
 // bilinearly: texel i of the table is n·v (or roughness) i / (N - 1).
 fn split_sum_brdf(f0: vec3<f32>, roughness: f32, n_dot_v: f32) -> vec3<f32> {
     let last = f32(SPLIT_SUM_LUT_SIZE - 1u);

@@ -26,7 +26,7 @@ use oxygen_sceneprep::gpu_scene::GpuSceneChanges;
 use oxygen_sceneprep::{GPU_RECORDS_WGSL, GpuScene, PreparedSceneFrame, Visibility};
 use tracing::info_span;
 
-use crate::hiz::{HIZ_TEST_WGSL, HizPipelines, HizPyramid};
+use super::hiz::{HIZ_TEST_WGSL, HizPipelines, HizPyramid};
 
 /// `CullParams::flags`: the view takes shadow casters only.
 const CULL_CASTERS_ONLY: u32 = 1;
@@ -189,7 +189,7 @@ pub fn cull_shader_source() -> String {
         oxygen_sceneprep::gpu_scene::GpuInstance::CASTS_SHADOWS
     );
     // The pyramid test reads `hiz_pyramid`, which the cull shader declares.
-    [GPU_RECORDS_WGSL, &constants, include_str!("visibility_cull.wgsl"), HIZ_TEST_WGSL].join("\n")
+    [GPU_RECORDS_WGSL, &constants, include_str!("cull.wgsl"), HIZ_TEST_WGSL].join("\n")
 }
 
 impl GpuVisibility {

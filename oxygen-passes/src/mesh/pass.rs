@@ -373,7 +373,7 @@ impl MeshPass {
         // that they compile while the views producing the inputs record.
         let lighting = async {
             match &self.lighting {
-                Some(config) => crate::forward_lighting::bind_group(ctx, config).await,
+                Some(config) => super::forward_lighting::bind_group(ctx, config).await,
                 None => Ok(None),
             }
         };

@@ -5,15 +5,15 @@
 //! [`crate::Pipelines`] because they are inputs of the lighting, not
 //! pipeline state.
 
-use crate::cube_filter::{CubeFilter, EnvironmentQuality, HARMONICS_LAYER};
-use crate::lighting_inputs::LightingInputResources;
+use crate::lighting::ibl::cube_filter::{CubeFilter, EnvironmentQuality, HARMONICS_LAYER};
+use crate::lighting::inputs::LightingInputResources;
 use crate::{LightingInputs, MAX_CASCADES, MAX_PROBES};
 
 /// Group 3's layout and placeholders, the local shadow atlas, the
 /// environment and the cube filter.
 pub struct LightingResources {
     inputs: LightingInputResources,
-    shadow_atlas: crate::shadow_atlas::ShadowAtlas,
+    shadow_atlas: crate::lighting::shadow_atlas::ShadowAtlas,
     cube_filter: CubeFilter,
     environment: Option<EnvironmentTexture>,
     /// Counts environment changes (views that accumulate restart on one).
@@ -106,7 +106,7 @@ impl LightingResources {
             let bytes: Vec<u8> = texels
                 .iter()
                 .flat_map(|t| [t.x, t.y, t.z, 1.0])
-                .flat_map(|v| crate::half::f32_to_f16(v).to_le_bytes())
+                .flat_map(|v| crate::lighting::ibl::half::f32_to_f16(v).to_le_bytes())
                 .collect();
             let rows = (texels.len() as u32).div_ceil(side);
             // `side` texels per row (the harmonics: three rows of three).
@@ -132,7 +132,7 @@ impl LightingResources {
                 }
             }
         }
-        let scaled = env.irradiance_sh.map(|c| c / crate::cube_filter::HARMONICS_SCALE);
+        let scaled = env.irradiance_sh.map(|c| c / crate::lighting::ibl::cube_filter::HARMONICS_SCALE);
         write(0, HARMONICS_LAYER, 3, &scaled);
         self.install_environment(device, texture);
     }
@@ -142,8 +142,8 @@ impl LightingResources {
         let mut uniform = <LightingInputs as bytemuck::Zeroable>::zeroed();
         uniform.environment_levels = texture.mip_level_count();
         let inputs = &self.inputs;
-        let buffer = crate::lighting_inputs::uniform_buffer(device, &uniform);
-        let no_inputs = crate::lighting_inputs::bind_group(
+        let buffer = crate::lighting::inputs::uniform_buffer(device, &uniform);
+        let no_inputs = crate::lighting::inputs::bind_group(
             device,
             &inputs.layout,
             inputs.shared(),
@@ -223,13 +223,13 @@ impl LightingResources {
         if let Some(env) = &self.environment {
             uniform.environment_levels = env.texture.mip_level_count();
         }
-        let buffer = crate::lighting_inputs::uniform_buffer(device, &uniform);
+        let buffer = crate::lighting::inputs::uniform_buffer(device, &uniform);
         // Unused slots are never sampled (the uniform's counts say so) but must be bound.
         let maps = maps.map(|m| m.unwrap_or(&inputs.placeholder_map));
         let shadow_atlas = shadow_atlas.unwrap_or(&inputs.placeholder_atlas);
         let probes = probes.map(|p| p.unwrap_or(&inputs.placeholder_probe));
         let environment = self.environment.as_ref().map_or(&inputs.placeholder_probe, |e| &e.view);
-        crate::lighting_inputs::bind_group(
+        crate::lighting::inputs::bind_group(
             device,
             &inputs.layout,
             inputs.shared(),

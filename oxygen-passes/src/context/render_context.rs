@@ -1,0 +1,161 @@
+//! `RenderContext`: everything a pass may read for one view this frame.
+
+use oxygen_bindless::{BindlessHeap, SceneConstantsBuffer};
+use oxygen_core::{Output, ResolvedView};
+use oxygen_gpu::{ColorTargets, GpuContext, ViewTargets};
+use oxygen_sceneprep::{PassMask, PreparedSceneFrame};
+
+use super::{CommandRecorder, DrawPath, FrameProgress, OutputKind, PassError, ViewInputs};
+use crate::{LightingResources, Pipelines};
+
+/// Everything a pass may read for one view in one frame. Immutable: passes
+/// communicate through the textures they write, never by changing this.
+pub struct RenderContext<'a> {
+    /// Device and queue.
+    pub gpu: &'a GpuContext,
+    /// The resolved view, relative to [`RenderContext::origin`]
+    /// ([`ResolvedView::relative_to`]).
+    pub view: &'a ResolvedView,
+    /// ScenePrep's result for this view.
+    pub prepared: &'a PreparedSceneFrame,
+    /// This view's uniform block (bind group 1).
+    pub scene_constants: &'a SceneConstantsBuffer,
+    /// The bindless heap (bind group 0, shared index buffer).
+    pub heap: &'a BindlessHeap,
+    /// Colour and depth targets of the view.
+    pub targets: &'a ViewTargets,
+    /// Shared pipelines.
+    pub pipelines: &'a Pipelines,
+    /// Shared lighting resources (group 3 layout, shadow atlas, probe mips).
+    pub lighting: &'a LightingResources,
+    /// How partitions are drawn.
+    pub draw_path: DrawPath,
+    /// What this view may read from other views: its own sun cascades, the
+    /// frame's local shadow maps, and the outputs it is linked to.
+    pub inputs: ViewInputs<'a>,
+    /// Which views of the frame have finished recording; inputs are awaited
+    /// through it.
+    pub progress: &'a FrameProgress,
+    /// The render origin: every matrix and position the GPU sees this frame
+    /// (`view`, `inputs`, world matrices, lights) is relative to it. A pass
+    /// that uploads a world position of its own subtracts it.
+    pub origin: glam::DVec3,
+    /// Whether another view of the frame reads this view's HDR image (it is
+    /// linked to this view's output; links do not say which output, so a
+    /// link counts as reading the HDR), or the renderer was asked to keep
+    /// every HDR image (`RendererOptions::keep_hdr`). Not part of
+    /// [`ViewInputs`], which says what this view reads, not who reads it.
+    /// [`RenderContext::hdr_read_after_shading`] uses it.
+    pub hdr_read_by_others: bool,
+    /// Whether any material of the scene has a texture: shading pipelines
+    /// leave texture sampling out otherwise ([`crate::ShaderFeatures`]).
+    pub textured_materials: bool,
+    /// Whether any material of the scene reads a second UV set or a
+    /// texture transform: shading pipelines leave that path out otherwise.
+    pub uv_transforms: bool,
+    /// Specialise the shading pipelines to what the view has this frame
+    /// ([`crate::ShaderFeatures`]); `false` runs the fully featured shader
+    /// everywhere (for comparisons).
+    pub specialize_shaders: bool,
+    /// GPU visibility's per-view state, when the renderer has it: the count
+    /// buffers of GPU-written partitions, and phase 2 of occlusion culling.
+    pub visibility: Option<&'a crate::GpuVisibility>,
+    /// The path-traced reference's scene and samples, when a view of the
+    /// renderer is path traced ([`crate::ReferencePass`]).
+    pub reference: Option<&'a crate::ReferenceTracer>,
+}
+
+/// What an automatic depth pre-pass decides from, for one view and frame
+/// ([`RenderContext::pre_pass_estimate`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PrePassEstimate {
+    /// The times a forward pass without a pre-pass is expected to shade a
+    /// pixel; infinite when not known yet.
+    pub overdraw: f32,
+    /// The indices a pre-pass would draw (the opaque and masked draws').
+    pub indices: u64,
+    /// The view's pixels.
+    pub pixels: u64,
+}
+
+impl<'a> RenderContext<'a> {
+    /// The view's colour targets, or [`PassError::NoColorTarget`] naming
+    /// `pass` when the view is depth-only.
+    pub fn color_targets(&self, pass: &'static str) -> Result<&'a ColorTargets, PassError> {
+        self.targets.color.as_ref().ok_or(PassError::NoColorTarget { pass })
+    }
+
+    /// The depth complexity a forward pass without a depth pre-pass is
+    /// expected to shade, for an automatic pre-pass: on the CPU path
+    /// ScenePrep's estimate from this frame's draws
+    /// ([`oxygen_sceneprep::PreparedSceneFrame::estimated_overdraw`]); on a
+    /// GPU path the coverage the GPU summed over the draws it kept, read
+    /// back from an earlier frame, and infinite (so: pre-pass) until the
+    /// first readback arrives.
+    pub fn estimated_overdraw(&self) -> f32 {
+        match (self.prepared.gpu_plan(), self.visibility) {
+            (Some(_), Some(visibility)) => visibility.estimated_overdraw(self.view.view_id).unwrap_or(f32::INFINITY),
+            _ => self.prepared.estimated_overdraw(),
+        }
+    }
+
+    /// What an automatic depth pre-pass decides from: the expected
+    /// overdraw ([`RenderContext::estimated_overdraw`]), the indices a
+    /// pre-pass would draw (ScenePrep's count on the CPU path, the GPU's
+    /// read back with the overdraw on a GPU path, 0 until it arrives) and
+    /// the view's pixels.
+    pub fn pre_pass_estimate(&self) -> PrePassEstimate {
+        let indices = match (self.prepared.gpu_plan(), self.visibility) {
+            (Some(_), Some(visibility)) => visibility.depth_pass_indices(self.view.view_id).unwrap_or(0),
+            _ => 0,
+        } + self.prepared.depth_pass_indices();
+        PrePassEstimate {
+            overdraw: self.estimated_overdraw(),
+            indices,
+            pixels: u64::from(self.view.viewport.x) * u64::from(self.view.viewport.y),
+        }
+    }
+
+    /// Whether this view's visibility is GPU occlusion culling this frame:
+    /// its depth pre-pass then runs in two phases around
+    /// [`RenderContext::cull_occluded`].
+    pub fn occlusion_culling(&self) -> bool {
+        self.prepared.gpu_plan().is_some_and(|p| p.visibility == oxygen_sceneprep::Visibility::GpuOcclusion)
+    }
+
+    /// Occlusion culling's second phase, between the depth pre-pass's two
+    /// phases ([`crate::DrawList`]): builds the depth pyramid from what the
+    /// first phase drew and finds the draws it hid not. Does nothing for a
+    /// view without occlusion culling.
+    pub fn cull_occluded(&self, rec: &mut CommandRecorder) {
+        if let (true, Some(visibility)) = (self.occlusion_culling(), self.visibility) {
+            visibility.record_late(&self.gpu.device, rec.encoder(), self.view.view_id, &self.targets.depth_view);
+        }
+    }
+
+    /// Whether anything after the opaque shading reads the view's HDR
+    /// image this frame: its transparent partitions (blended over it) or
+    /// another view ([`RenderContext::hdr_read_by_others`]). When nothing
+    /// does, the standard graph tone-maps at the end of shading
+    /// ([`crate::MeshPass::tone_mapped`]) and skips the tone-map pass.
+    pub fn hdr_read_after_shading(&self) -> bool {
+        // With MSAA the shading pass resolves into the HDR target, which the
+        // tone-map pass then reads.
+        self.hdr_read_by_others
+            || self.targets.msaa.is_some()
+            || self.prepared.partitions_matching(PassMask::TRANSPARENT, PassMask::empty()).next().is_some()
+    }
+
+    /// Another view's output this view is linked to, once the views that
+    /// produce it have recorded their commands (their command buffers are
+    /// submitted before this view's). Fails with
+    /// [`PassError::UndeclaredInput`] for an output the view was not linked
+    /// to at registration: the renderer orders views by their links, so an
+    /// unlinked read could see last frame's image.
+    pub async fn input<K: OutputKind>(&self, output: Output<K>) -> Result<K::Value<'a>, PassError> {
+        let (value, producers) = K::find(&self.inputs, output.source)
+            .ok_or(PassError::UndeclaredInput { output: K::NAME, from: output.source.to_string() })?;
+        self.progress.recorded(&producers).await;
+        Ok(value)
+    }
+}

@@ -1,0 +1,279 @@
+//! The lazy pipeline cache whose misses are awaited.
+//!
+//! Pipelines are created the first time a partition needs one and cached by
+//! [`PipelineKey`] for the renderer's lifetime; the bind-group layouts they
+//! use never change (heap growth only replaces the bind group), so nothing is
+//! ever rebuilt per frame. [`Pipelines::pipelines_created`] proves it.
+
+use std::collections::{HashMap, HashSet, VecDeque};
+use std::future::Future;
+use std::pin::Pin;
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::task::{Context, Poll, Waker};
+
+use oxygen_bindless::{BindlessHeap, TexturePath};
+use tracing::debug;
+
+use super::{AlphaClass, PassKind, PipelineKey, shader_source};
+
+/// Lazily created, cached mesh pipelines shared by every view.
+///
+/// A pass asks for a pipeline with [`Pipelines::get`] and awaits it. A
+/// pipeline not yet created is queued, and the future stays pending while a
+/// recording thread with nothing else to do compiles it
+/// ([`Pipelines::compile_next`]); meanwhile that view's thread goes on with
+/// other views. So on a first frame, many views' pipelines compile side by
+/// side instead of one after another inside each view's graph. Without any
+/// recording thread attached (a pass driven by hand under `block_on`), the
+/// future compiles inline, so it can never wait forever.
+pub struct Pipelines {
+    pub(super) layout: wgpu::PipelineLayout,
+    texture_path: TexturePath,
+    modules: Mutex<HashMap<PassKind, wgpu::ShaderModule>>,
+    state: Mutex<CompileState>,
+    pub(super) tonemap: Mutex<Option<(wgpu::RenderPipeline, wgpu::BindGroupLayout)>>,
+    /// The environment's full-screen draw, per shading key (targets,
+    /// samples, tone map).
+    pub(super) sky: Mutex<HashMap<PipelineKey, wgpu::RenderPipeline>>,
+    pub(super) created: AtomicU64,
+    compilers: AtomicUsize,
+    /// Keys requested since [`Pipelines::begin_frame`].
+    used: Mutex<HashSet<PipelineKey>>,
+}
+
+#[derive(Default)]
+struct CompileState {
+    pipelines: HashMap<PipelineKey, Entry>,
+    queue: VecDeque<PipelineKey>,
+}
+
+enum Entry {
+    Ready(wgpu::RenderPipeline),
+    /// Queued or compiling; woken when ready.
+    Pending(Vec<Waker>),
+}
+
+impl Pipelines {
+    /// Pipelines over the heap's bind-group layouts and the lighting inputs'
+    /// (group 3).
+    pub fn new(device: &wgpu::Device, heap: &BindlessHeap, lighting: &crate::LightingResources) -> Self {
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("oxygen bindless pipeline layout"),
+            bind_group_layouts: &[
+                Some(heap.domain_layout()),
+                Some(heap.scene_constants_layout()),
+                Some(heap.texture_layout()),
+                Some(lighting.layout()),
+            ],
+            immediate_size: 0,
+        });
+        Pipelines {
+            layout,
+            texture_path: heap.texture_path(),
+            modules: Mutex::new(HashMap::new()),
+            state: Mutex::new(CompileState::default()),
+            tonemap: Mutex::new(None),
+            sky: Mutex::new(HashMap::new()),
+            created: AtomicU64::new(0),
+            compilers: AtomicUsize::new(0),
+            used: Mutex::new(HashSet::new()),
+        }
+    }
+
+    /// Pipelines created since this cache was made.
+    pub fn pipelines_created(&self) -> u64 {
+        self.created.load(Ordering::Relaxed)
+    }
+
+    /// The pipeline for `key`: ready at once when it exists, otherwise after
+    /// it has been compiled (see the type's docs).
+    pub fn get<'a>(&'a self, device: &'a wgpu::Device, key: PipelineKey) -> PipelineFuture<'a> {
+        let key = key.canonical();
+        self.used.lock().unwrap_or_else(|e| e.into_inner()).insert(key);
+        PipelineFuture { pipelines: self, device, key }
+    }
+
+    /// Starts counting the pipelines a frame uses ([`Pipelines::used_this_frame`]).
+    pub fn begin_frame(&self) {
+        self.used.lock().unwrap_or_else(|e| e.into_inner()).clear();
+    }
+
+    /// The distinct mesh pipelines requested since [`Pipelines::begin_frame`]
+    /// (the tone-map and probe-mip pipelines are not keyed, so not listed).
+    pub fn used_this_frame(&self) -> Vec<PipelineKey> {
+        self.used.lock().unwrap_or_else(|e| e.into_inner()).iter().copied().collect()
+    }
+
+    /// Marks the calling thread as one that runs [`Pipelines::compile_next`]
+    /// while its views wait, until the guard is dropped.
+    pub fn attach_compiler(&self) -> CompilerGuard<'_> {
+        self.compilers.fetch_add(1, Ordering::AcqRel);
+        CompilerGuard(self)
+    }
+
+    /// Compiles one queued pipeline, if any, and wakes the passes awaiting
+    /// it. Returns whether there was one.
+    pub fn compile_next(&self, device: &wgpu::Device) -> bool {
+        let Some(key) = self.lock_state().queue.pop_front() else { return false };
+        self.compile(device, key);
+        true
+    }
+
+    fn lock_state(&self) -> std::sync::MutexGuard<'_, CompileState> {
+        // A poisoned lock means a compile panicked; the map is still consistent.
+        self.state.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Compiles `key` (taken off the queue by the caller) and publishes it.
+    fn compile(&self, device: &wgpu::Device, key: PipelineKey) -> wgpu::RenderPipeline {
+        let _span =
+            tracing::info_span!("compile_pipeline", pass = ?key.pass, variant = ?key.variant, features = ?key.features)
+                .entered();
+        let module = self.module(device, key.pass);
+        let pipeline = self.create(device, &module, key);
+        self.created.fetch_add(1, Ordering::Relaxed);
+        debug!(?key, "pipeline created");
+        let previous = self.lock_state().pipelines.insert(key, Entry::Ready(pipeline.clone()));
+        if let Some(Entry::Pending(wakers)) = previous {
+            wakers.into_iter().for_each(Waker::wake);
+        }
+        pipeline
+    }
+}
+
+impl Pipelines {
+    pub(super) fn module(&self, device: &wgpu::Device, pass: PassKind) -> wgpu::ShaderModule {
+        let mut modules = self.modules.lock().unwrap_or_else(|e| e.into_inner());
+        modules
+            .entry(pass)
+            .or_insert_with(|| {
+                device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                    label: Some(&format!("{pass:?}")),
+                    source: wgpu::ShaderSource::Wgsl(shader_source(pass, self.texture_path).into()),
+                })
+            })
+            .clone()
+    }
+
+    fn create(&self, device: &wgpu::Device, module: &wgpu::ShaderModule, key: PipelineKey) -> wgpu::RenderPipeline {
+        let masked = key.variant.alpha == AlphaClass::Masked;
+        let (fragment_entry, depth_write, depth_compare) = match key.pass {
+            PassKind::DepthPrePass | PassKind::Shadow => {
+                (masked.then_some("fs_alpha_test"), true, wgpu::CompareFunction::Greater)
+            }
+            PassKind::ShadingAfterPrePass => {
+                (Some(if masked { "fs_masked" } else { "fs_opaque" }), false, wgpu::CompareFunction::GreaterEqual)
+            }
+            PassKind::Shading => {
+                (Some(if masked { "fs_masked" } else { "fs_opaque" }), true, wgpu::CompareFunction::Greater)
+            }
+            PassKind::Transparent => (Some("fs_blend"), false, wgpu::CompareFunction::GreaterEqual),
+        };
+        // Premultiplied alpha: the shader multiplies colour by alpha.
+        let blend = (key.pass == PassKind::Transparent).then_some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING);
+        let targets = [key.color_format.map(|format| wgpu::ColorTargetState {
+            format,
+            blend,
+            write_mask: wgpu::ColorWrites::ALL,
+        })];
+        // The same constants for both stages: wgpu rejects a constant the
+        // stage's shader does not declare, and both stages share one module.
+        let constants = key.override_constants();
+        let compilation_options = || wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() };
+        let fragment = fragment_entry.map(|entry| wgpu::FragmentState {
+            module,
+            entry_point: Some(entry),
+            compilation_options: compilation_options(),
+            targets: if key.color_format.is_some() { &targets } else { &[] },
+        });
+        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(&format!("{:?} {:?}", key.pass, key.variant)),
+            layout: Some(&self.layout),
+            vertex: wgpu::VertexState {
+                module,
+                entry_point: Some("vs_main"),
+                compilation_options: compilation_options(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::TriangleList,
+                front_face: if key.variant.mirrored { wgpu::FrontFace::Cw } else { wgpu::FrontFace::Ccw },
+                cull_mode: if key.variant.double_sided { None } else { Some(wgpu::Face::Back) },
+                ..Default::default()
+            },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: key.depth_format,
+                depth_write_enabled: Some(depth_write),
+                depth_compare: Some(depth_compare),
+                stencil: Default::default(),
+                // Reverse-Z: a negative bias moves depth towards the far plane,
+                // i.e. away from the light, more so on surfaces seen edge-on.
+                bias: wgpu::DepthBiasState {
+                    constant: key.depth_bias.constant,
+                    slope_scale: key.depth_bias.slope_scale,
+                    clamp: 0.0,
+                },
+            }),
+            // Alpha-tested variants discard per pixel, not per sample: their
+            // cut-out edges stay aliased (alpha to coverage is not used).
+            multisample: wgpu::MultisampleState { count: key.samples.max(1), ..Default::default() },
+            fragment,
+            multiview_mask: None,
+            cache: None,
+        })
+    }
+}
+
+/// Keeps a thread counted as a pipeline compiler ([`Pipelines::attach_compiler`]).
+pub struct CompilerGuard<'a>(&'a Pipelines);
+
+impl Drop for CompilerGuard<'_> {
+    fn drop(&mut self) {
+        self.0.compilers.fetch_sub(1, Ordering::AcqRel);
+    }
+}
+
+/// A pipeline being looked up or compiled ([`Pipelines::get`]).
+pub struct PipelineFuture<'a> {
+    pipelines: &'a Pipelines,
+    device: &'a wgpu::Device,
+    key: PipelineKey,
+}
+
+impl Future for PipelineFuture<'_> {
+    type Output = wgpu::RenderPipeline;
+
+    fn poll(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<wgpu::RenderPipeline> {
+        let this = self.get_mut();
+        let key = this.key;
+        let mut guard = this.pipelines.lock_state();
+        let inline = this.pipelines.compilers.load(Ordering::Acquire) == 0;
+        let queued_at = guard.queue.iter().position(|k| *k == key);
+        let state = &mut *guard;
+        match state.pipelines.get_mut(&key) {
+            Some(Entry::Ready(pipeline)) => return Poll::Ready(pipeline.clone()),
+            // Still queued and nobody to compile it: take it over.
+            Some(Entry::Pending(_)) if inline && queued_at.is_some() => {
+                state.queue.retain(|k| *k != key);
+            }
+            Some(Entry::Pending(wakers)) => {
+                if !wakers.iter().any(|w| w.will_wake(cx.waker())) {
+                    wakers.push(cx.waker().clone());
+                }
+                return Poll::Pending;
+            }
+            None if inline => {
+                state.pipelines.insert(key, Entry::Pending(Vec::new()));
+            }
+            None => {
+                state.pipelines.insert(key, Entry::Pending(vec![cx.waker().clone()]));
+                state.queue.push_back(key);
+                return Poll::Pending;
+            }
+        }
+        // `compile` publishes under the same lock.
+        drop(guard);
+        Poll::Ready(this.pipelines.compile(this.device, key))
+    }
+}

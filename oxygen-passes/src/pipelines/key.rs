@@ -1,0 +1,147 @@
+//! What makes two mesh pipelines different: the pass they belong to, the
+//! variant a partition selects (alpha × sidedness × winding), the targets,
+//! the depth bias and the optional shader code ([`PipelineKey`]).
+
+use oxygen_sceneprep::PassMask;
+
+use super::{Exposure, ShaderFeatures};
+
+/// Which pass a pipeline belongs to (decides shaders and depth state).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum PassKind {
+    /// Depth only; writes depth with `Greater`.
+    DepthPrePass,
+    /// A shadow map: as `DepthPrePass`, plus a slope-scaled depth bias
+    /// pushing stored depth away from the light (against shadow acne).
+    Shadow,
+    /// Shading after a depth pre-pass: `GreaterEqual`, no depth writes.
+    ShadingAfterPrePass,
+    /// Shading that writes its own depth (no pre-pass): `Greater`, writes.
+    Shading,
+    /// Blended surfaces: premultiplied alpha over the HDR target,
+    /// `GreaterEqual` against the opaque depth, no depth writes.
+    Transparent,
+}
+
+/// The rasterizer's depth bias of a shadow map: stored depth is pushed away
+/// from the light by `constant` depth units plus `slope_scale` times the
+/// surface's depth slope, against shadow acne. Reverse-Z: negative values
+/// push towards the far plane. A speed/accuracy knob with a measured error:
+/// `tests/shadow_quality.rs` shows acne without it and peter-panning grows
+/// with it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DepthBias {
+    /// Constant bias in depth-buffer units.
+    pub constant: i32,
+    /// Bias per unit of depth slope.
+    pub slope_scale: f32,
+}
+
+impl DepthBias {
+    /// No bias (the camera's own depth passes).
+    pub const NONE: DepthBias = DepthBias { constant: 0, slope_scale: 0.0 };
+    /// The shadow maps' default: 2 units plus 1.5 × slope, towards the far plane.
+    pub const SHADOW_DEFAULT: DepthBias = DepthBias { constant: -2, slope_scale: -1.5 };
+}
+
+impl Eq for DepthBias {}
+
+impl std::hash::Hash for DepthBias {
+    fn hash<H: std::hash::Hasher>(&self, state: &mut H) {
+        self.constant.hash(state);
+        self.slope_scale.to_bits().hash(state);
+    }
+}
+
+/// How alpha is treated by a variant.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum AlphaClass {
+    /// Alpha ignored.
+    Opaque,
+    /// Alpha-tested against the material cutoff.
+    Masked,
+    /// Alpha-blended.
+    Blend,
+}
+
+/// One of the pipeline variants a partition selects.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct PipelineVariant {
+    /// Alpha treatment.
+    pub alpha: AlphaClass,
+    /// No back-face culling.
+    pub double_sided: bool,
+    /// Clockwise front faces (mirroring transforms).
+    pub mirrored: bool,
+}
+
+impl PipelineVariant {
+    /// The variant a partition mask selects.
+    pub fn from_mask(mask: PassMask) -> Self {
+        let alpha = if mask.contains(PassMask::TRANSPARENT) {
+            AlphaClass::Blend
+        } else if mask.contains(PassMask::MASKED) {
+            AlphaClass::Masked
+        } else {
+            AlphaClass::Opaque
+        };
+        PipelineVariant {
+            alpha,
+            double_sided: mask.contains(PassMask::DOUBLE_SIDED),
+            mirrored: mask.contains(PassMask::MIRRORED),
+        }
+    }
+}
+
+/// Everything that makes two pipelines different.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct PipelineKey {
+    /// Pass.
+    pub pass: PassKind,
+    /// Variant.
+    pub variant: PipelineVariant,
+    /// Colour target format (`None` for depth-only).
+    pub color_format: Option<wgpu::TextureFormat>,
+    /// Depth target format.
+    pub depth_format: wgpu::TextureFormat,
+    /// Rasterizer depth bias ([`DepthBias::NONE`] except for shadow maps).
+    pub depth_bias: DepthBias,
+    /// Optional shading code the pipeline keeps (forward lit and
+    /// transparent passes; [`ShaderFeatures::ALL`] for depth-only passes,
+    /// whose shader has none).
+    pub features: ShaderFeatures,
+    /// Tone-map in the fragment shader with this exposure and write the
+    /// display colour directly (the forward lit pass of a view whose HDR
+    /// nothing reads); `None` writes linear radiance.
+    pub tone_map: Option<Exposure>,
+    /// Samples per pixel of the targets (1, or 2 and 4 with MSAA).
+    pub samples: u32,
+}
+
+impl PipelineKey {
+    /// The key with the fields its pass ignores set to one value, so that
+    /// two requests for the same pipeline share it: depth-only shaders have
+    /// no optional code and never tone-map.
+    pub(super) fn canonical(self) -> Self {
+        match self.pass {
+            PassKind::DepthPrePass | PassKind::Shadow => {
+                PipelineKey { features: ShaderFeatures::ALL, tone_map: None, ..self }
+            }
+            PassKind::ShadingAfterPrePass | PassKind::Shading | PassKind::Transparent => self,
+        }
+    }
+
+    /// The WGSL override constants the forward shader is specialised with
+    /// (empty for depth-only passes).
+    pub fn override_constants(&self) -> Vec<(&'static str, f64)> {
+        match self.pass {
+            PassKind::DepthPrePass | PassKind::Shadow => Vec::new(),
+            PassKind::ShadingAfterPrePass | PassKind::Shading | PassKind::Transparent => {
+                let mut constants = self.features.override_constants().to_vec();
+                constants.push(("TONE_MAP_OUTPUT", f64::from(u8::from(self.tone_map.is_some()))));
+                constants.push(("EXPOSURE", f64::from(self.tone_map.map_or(1.0, Exposure::get))));
+                constants
+            }
+        }
+    }
+}

@@ -1,0 +1,101 @@
+//! The cached pipelines that are not mesh variants: the tone map and the
+//! environment drawn behind the scene.
+
+use std::sync::atomic::Ordering;
+
+use super::{PassKind, PipelineKey, PipelineVariant, Pipelines, fullscreen_pipeline};
+use crate::post::TONEMAP_WGSL;
+
+impl Pipelines {
+    /// The tone-map pipeline (HDR texture + exposure uniform → `output`),
+    /// created on first use.
+    pub fn tonemap(
+        &self,
+        device: &wgpu::Device,
+        output: wgpu::TextureFormat,
+    ) -> (wgpu::RenderPipeline, wgpu::BindGroupLayout) {
+        let mut slot = self.tonemap.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(existing) = slot.as_ref() {
+            return existing.clone();
+        }
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("tonemap"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+            ],
+        });
+        let pipeline =
+            fullscreen_pipeline(device, "tonemap", &layout, TONEMAP_WGSL, ("vs_fullscreen", "fs_tonemap"), output);
+        self.created.fetch_add(1, Ordering::Relaxed);
+        *slot = Some((pipeline.clone(), layout.clone()));
+        (pipeline, layout)
+    }
+
+    /// The pipeline that draws the environment behind the scene for a
+    /// shading pass of `key` (its targets, samples and tone map): the
+    /// shading module's `vs_sky`/`fs_sky`, depth untouched and always
+    /// passing, drawn before the pass's meshes.
+    pub fn sky(&self, device: &wgpu::Device, key: PipelineKey) -> wgpu::RenderPipeline {
+        let key = PipelineKey { variant: PipelineVariant::from_mask(oxygen_sceneprep::PassMask::OPAQUE), ..key };
+        if let Some(p) = self.sky.lock().unwrap_or_else(|e| e.into_inner()).get(&key) {
+            return p.clone();
+        }
+        let module = self.module(device, PassKind::Shading);
+        let constants = PipelineKey { pass: PassKind::Shading, ..key }.override_constants();
+        let options = || wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() };
+        let targets = [key.color_format.map(|format| wgpu::ColorTargetState {
+            format,
+            blend: None,
+            write_mask: wgpu::ColorWrites::ALL,
+        })];
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("sky"),
+            layout: Some(&self.layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_sky"),
+                compilation_options: options(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: key.depth_format,
+                depth_write_enabled: Some(false),
+                depth_compare: Some(wgpu::CompareFunction::Always),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: wgpu::MultisampleState { count: key.samples.max(1), ..Default::default() },
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_sky"),
+                compilation_options: options(),
+                targets: &targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        self.created.fetch_add(1, Ordering::Relaxed);
+        self.sky.lock().unwrap_or_else(|e| e.into_inner()).insert(key, pipeline.clone());
+        pipeline
+    }
+}

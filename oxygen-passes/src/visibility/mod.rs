@@ -1,0 +1,10 @@
+//! GPU-driven visibility: the GPU scene's buffers and the compute passes that
+//! cull it per view (frustum, then occlusion against a depth pyramid) and
+//! write the view's draws and commands ([`GpuVisibility`]); the depth
+//! pyramid ([`hiz`]) and the box test against it that the cull shader
+//! includes.
+
+mod cull;
+pub mod hiz;
+
+pub use cull::{GPU_VISIBILITY_FEATURES, GpuViewRequest, GpuVisibility, cull_shader_source};
