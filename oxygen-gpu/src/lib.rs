@@ -3,7 +3,9 @@
 //! The GPU device every Oxygen renderer draws on: adapter and device
 //! selection ([`GpuContext`], shared wgpu instances per backend set), the
 //! offscreen targets of a view ([`ViewTargets`]: HDR colour, display colour,
-//! depth, MSAA) and readback into images ([`HdrImage`], RGBA8).
+//! depth, MSAA), readback into images ([`HdrImage`], RGBA8), and the
+//! declaration of structs shared with WGSL ([`gpu_struct!`], checked against
+//! naga's layout by [`check_layout`]).
 //!
 //! It sits beside `oxygen-core` rather than in it: the scene, assets and view
 //! contracts are plain data that ScenePrep and the snapshot tests use without
@@ -12,9 +14,11 @@
 #![warn(missing_docs)]
 
 mod context;
+pub mod gpu_struct;
 mod readback;
 mod target;
 
 pub use context::{GpuContext, GpuError, GpuOptions};
+pub use gpu_struct::{FieldLayout, GpuStruct, StructLayout, WgslType, check_layout};
 pub use readback::{HdrImage, f16_to_f32, unpack_rg11b10_ufloat};
 pub use target::{ColorTargets, HdrFormat, Msaa, MsaaTargets, ViewTargets};
