@@ -46,9 +46,8 @@ pub use lighting::ibl::cube_filter::{
     PROBE_FILTER_SAMPLES, prefiltered_levels,
 };
 pub use lighting::ibl::{CUBE_FACES_WGSL, ENVIRONMENT_WGSL};
-pub use lighting::inputs::{
-    LightingInputs, MAX_CASCADES, MAX_PROBES, MAX_SHADOW_TILES, PROBE_FACE_AXES, PROBE_FACES, probe_view,
-};
+pub use lighting::inputs::{PROBE_FACE_AXES, probe_view};
+pub use lighting::params::{LightingInputs, MAX_CASCADES, MAX_PROBES, MAX_SHADOW_TILES, PROBE_FACES};
 pub use lighting::shadow_atlas::{SHADOW_ATLAS_FORMAT, array_layer_count};
 pub use lighting::split_sum::{SPLIT_SUM_LUT_FORMAT, SPLIT_SUM_LUT_SIZE, SPLIT_SUM_WGSL, split_sum_shader_source};
 pub use mesh::{ColorOps, DrawList, ForwardLitConfig, MeshPass};

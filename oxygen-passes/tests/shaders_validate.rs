@@ -65,7 +65,7 @@ fn every_pass_shader_has_its_entry_points() {
 
 #[test]
 fn the_tonemap_shader_validates() {
-    let module = validate("tonemap", oxygen_passes::TONEMAP_WGSL, naga::valid::Capabilities::default());
+    let module = validate("tonemap", &oxygen_passes::TONEMAP_WGSL, naga::valid::Capabilities::default());
     for name in ["vs_fullscreen", "fs_tonemap"] {
         assert!(module.entry_points.iter().any(|e| e.name == name), "tonemap lacks {name}");
     }
@@ -76,7 +76,7 @@ fn the_tonemap_shader_validates() {
 /// them.
 #[test]
 fn the_cube_filter_and_split_sum_shaders_validate() {
-    let module = validate("cube filter", oxygen_passes::CUBE_FILTER_WGSL, naga::valid::Capabilities::default());
+    let module = validate("cube filter", &oxygen_passes::CUBE_FILTER_WGSL, naga::valid::Capabilities::default());
     for name in ["vs", "fs_downsample", "fs_sky", "fs_equirect", "fs_ggx", "fs_harmonics"] {
         assert!(module.entry_points.iter().any(|e| e.name == name), "cube filter lacks {name}");
     }
@@ -146,7 +146,7 @@ fn the_visibility_cull_shader_validates_and_matches_its_records() {
 #[test]
 fn the_depth_pyramid_shader_validates() {
     let module =
-        validate("depth pyramid", include_str!("../src/visibility/hiz.wgsl"), naga::valid::Capabilities::default());
+        validate("depth pyramid", &oxygen_passes::hiz::hiz_shader_source(), naga::valid::Capabilities::default());
     for name in ["copy_depth", "reduce"] {
         assert!(module.entry_points.iter().any(|e| e.name == name), "the depth pyramid shader lacks {name}");
     }

@@ -8,105 +8,13 @@
 //! bind [`crate::LightingResources::no_lighting_inputs`]: 1 × 1 placeholders, a
 //! cascade count of 0 and no probe.
 
-use bytemuck::{Pod, Zeroable};
+use bytemuck::Zeroable;
 
-/// Cascades the shading pass can sample.
-pub const MAX_CASCADES: usize = 4;
-
-/// The uniform block of group 3, twin of `LightingInputs` in `forward_lit.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct LightingInputs {
-    /// World → light clip space, per cascade.
-    pub light_view_projection: [[[f32; 4]; 4]; MAX_CASCADES],
-    /// World size of one map texel, per cascade.
-    pub texel_world_size: [f32; MAX_CASCADES],
-    /// One texel in UV (1 / map side), per cascade.
-    pub uv_texel: [f32; MAX_CASCADES],
-    /// Cascades in use (0 = no shadows).
-    pub count: u32,
-    /// PCF kernel radius in texels: (2r + 1)² comparison taps.
-    pub pcf_radius: u32,
-    /// Normal offset, in texels of the cascade.
-    pub normal_offset: f32,
-    /// Zero: explicit padding, so `probe_positions` starts on the 16-byte
-    /// boundary where WGSL's uniform layout puts an array of `vec4`.
-    pub padding: u32,
-    /// World positions of the reflection probes (`w` = 1).
-    pub probe_positions: [[f32; 4]; MAX_PROBES],
-    /// World → light clip space, per tile of the local-light shadow atlas
-    /// (a spot's map, or one cube face of a point light's).
-    pub tile_view_projection: [[[f32; 4]; 4]; MAX_SHADOW_TILES],
-    /// `2 tan(fov / 2) / resolution` per tile: a texel's world size per
-    /// unit of distance from the light (scales the normal offset).
-    pub tile_texel_angle: [f32; MAX_SHADOW_TILES],
-    /// One past the highest tile in use.
-    pub tile_count: u32,
-    /// Reflection probes in use; each surface samples the nearest.
-    pub probe_count: u32,
-    /// Mip levels of the prefiltered environment (0: none; the constant
-    /// ambient term lights the scene instead).
-    pub environment_levels: u32,
-    /// Zero.
-    pub reserved: u32,
-}
-
-/// Reflection probes the shading pass can choose from.
-pub const MAX_PROBES: usize = 4;
-
-/// Tiles of the local-light shadow atlas: one per shadow-casting spot, six
-/// per shadow-casting point light.
-pub const MAX_SHADOW_TILES: usize = 16;
-
-const _: () = assert!(std::mem::size_of::<LightingInputs>() == 1472);
-const _: () = assert!(MAX_SHADOW_TILES as u32 == oxygen_sceneprep::MAX_SHADOW_TILES);
-// The WGSL twin packs the per-cascade floats into one vec4 each and the
-// per-tile floats four to a vec4 (uniform arrays have a 16-byte stride), and
-// declares one texture per cascade and probe with a `switch` over them:
-// other counts need those declarations changed, not just the constants.
-const _: () = assert!(MAX_CASCADES == 4 && MAX_PROBES == 4);
-const _: () = assert!(MAX_SHADOW_TILES.is_multiple_of(4));
-
-/// The numbers of group 3 that the shading pass's WGSL reads, by their
-/// Rust names: [`wgsl_constants`] emits exactly these.
-fn shared_numbers() -> [(&'static str, u32); 13] {
-    [
-        ("MAX_CASCADES", MAX_CASCADES as u32),
-        ("MAX_SHADOW_TILES", MAX_SHADOW_TILES as u32),
-        ("MAX_PROBES", MAX_PROBES as u32),
-        ("PROBE_FACES", PROBE_FACES as u32),
-        ("COMPARISON_SAMPLER_BINDING", COMPARISON_SAMPLER_BINDING),
-        ("UNIFORM_BINDING", UNIFORM_BINDING),
-        ("PROBE_SAMPLER_BINDING", PROBE_SAMPLER_BINDING),
-        ("SHADOW_ATLAS_BINDING", SHADOW_ATLAS_BINDING),
-        ("FIRST_PROBE_BINDING", FIRST_PROBE_BINDING),
-        ("ENVIRONMENT_BINDING", ENVIRONMENT_BINDING),
-        ("ENVIRONMENT_SAMPLER_BINDING", ENVIRONMENT_SAMPLER_BINDING),
-        ("SPLIT_SUM_BINDING", SPLIT_SUM_BINDING),
-        ("SPLIT_SUM_LUT_SIZE", crate::lighting::split_sum::SPLIT_SUM_LUT_SIZE),
-    ]
-}
-
-/// WGSL `const` declarations of the sizes the shading pass shares with
-/// [`LightingInputs`] (`MAX_CASCADES`, `MAX_SHADOW_TILES`, `MAX_PROBES`,
-/// `PROBE_FACES`) and the bindings of group 3, under their Rust names.
-/// Prepended to every mesh shader by [`crate::shader_source`].
-pub(crate) fn wgsl_constants() -> String {
-    shared_numbers().iter().map(|(name, value)| format!("const {name}: u32 = {value:#x}u;\n")).collect()
-}
-
-// Bindings of group 3 after the cascade maps (0..MAX_CASCADES).
-const COMPARISON_SAMPLER_BINDING: u32 = MAX_CASCADES as u32;
-const UNIFORM_BINDING: u32 = MAX_CASCADES as u32 + 1;
-const PROBE_SAMPLER_BINDING: u32 = MAX_CASCADES as u32 + 2;
-const SHADOW_ATLAS_BINDING: u32 = MAX_CASCADES as u32 + 3;
-const FIRST_PROBE_BINDING: u32 = MAX_CASCADES as u32 + 4;
-const ENVIRONMENT_BINDING: u32 = FIRST_PROBE_BINDING + MAX_PROBES as u32;
-const ENVIRONMENT_SAMPLER_BINDING: u32 = ENVIRONMENT_BINDING + 1;
-const SPLIT_SUM_BINDING: u32 = ENVIRONMENT_SAMPLER_BINDING + 1;
-
-/// Layers of a probe texture: +X, −X, +Y, −Y, +Z, −Z.
-pub const PROBE_FACES: usize = 6;
+use super::params::{
+    COMPARISON_SAMPLER_BINDING, ENVIRONMENT_BINDING, ENVIRONMENT_SAMPLER_BINDING, FIRST_PROBE_BINDING, LightingInputs,
+    MAX_CASCADES, MAX_PROBES, PROBE_FACES, PROBE_SAMPLER_BINDING, SHADOW_ATLAS_BINDING, SPLIT_SUM_BINDING,
+    UNIFORM_BINDING,
+};
 
 /// (forward, up) of each probe face camera, in layer order; the shader's
 /// `sample_probe` uses the same table.
@@ -396,37 +304,4 @@ pub(crate) fn bind_group(
         resource: wgpu::BindingResource::TextureView(shadow_atlas),
     });
     device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("lighting inputs"), layout, entries: &entries })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn every_lighting_size_is_a_wgsl_constant_with_its_value() {
-        let wgsl = wgsl_constants();
-        for (name, value) in [
-            ("MAX_CASCADES", MAX_CASCADES),
-            ("MAX_SHADOW_TILES", MAX_SHADOW_TILES),
-            ("MAX_PROBES", MAX_PROBES),
-            ("PROBE_FACES", PROBE_FACES),
-        ] {
-            let line = format!("const {name}: u32 = {value:#x}u;");
-            assert!(wgsl.lines().any(|l| l == line), "{line} missing from\n{wgsl}");
-        }
-        for (name, binding) in [
-            ("COMPARISON_SAMPLER_BINDING", COMPARISON_SAMPLER_BINDING),
-            ("UNIFORM_BINDING", UNIFORM_BINDING),
-            ("PROBE_SAMPLER_BINDING", PROBE_SAMPLER_BINDING),
-            ("SHADOW_ATLAS_BINDING", SHADOW_ATLAS_BINDING),
-            ("FIRST_PROBE_BINDING", FIRST_PROBE_BINDING),
-            ("ENVIRONMENT_BINDING", ENVIRONMENT_BINDING),
-            ("ENVIRONMENT_SAMPLER_BINDING", ENVIRONMENT_SAMPLER_BINDING),
-            ("SPLIT_SUM_BINDING", SPLIT_SUM_BINDING),
-        ] {
-            let line = format!("const {name}: u32 = {binding:#x}u;");
-            assert!(wgsl.lines().any(|l| l == line), "{line} missing from\n{wgsl}");
-        }
-        assert_eq!(wgsl.lines().count(), shared_numbers().len());
-    }
 }

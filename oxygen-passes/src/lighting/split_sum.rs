@@ -12,23 +12,20 @@
 //! before; `tests/environment.rs` measures both against the CPU twin,
 //! `oxygen_core::split_sum_brdf`.
 
-/// Side of the table: texel `(i, j)` holds n·v = i / (N − 1), roughness
-/// j / (N − 1); the shader samples it bilinearly between those.
-pub const SPLIT_SUM_LUT_SIZE: u32 = 32;
+pub(crate) use super::params::SPLIT_SUM_LUT_BYTES;
+pub use super::params::SPLIT_SUM_LUT_SIZE;
 
 /// The table's format: A in red, B in green.
 pub const SPLIT_SUM_LUT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 
-/// The table-building shader, without its size constant.
+/// The table-building shader as written (its `#include` lines unresolved).
 pub const SPLIT_SUM_WGSL: &str = include_str!("split_sum.wgsl");
 
-/// The shader as compiled: [`SPLIT_SUM_WGSL`] with `LUT_SIZE` declared.
+/// The shader as compiled: [`SPLIT_SUM_WGSL`] with the lighting constants
+/// (`SPLIT_SUM_LUT_SIZE`) it includes.
 pub fn split_sum_shader_source() -> String {
-    format!("const LUT_SIZE: u32 = {SPLIT_SUM_LUT_SIZE}u;\n{SPLIT_SUM_WGSL}")
+    crate::shaders::SPLIT_SUM.source()
 }
-
-/// Bytes of the table: N² texels of four half floats.
-pub(crate) const SPLIT_SUM_LUT_BYTES: u64 = (SPLIT_SUM_LUT_SIZE * SPLIT_SUM_LUT_SIZE * 8) as u64;
 
 // One row is 256 bytes, the copy alignment: the texture copies into the
 // buffer tightly packed.

@@ -5,6 +5,8 @@
 // visibility, Schlick Fresnel) by GGX importance sampling. Twin of
 // `oxygen_core::split_sum_brdf`.
 
+#include "lighting/constants"
+
 const PI: f32 = 3.14159265358979;
 const SAMPLES: u32 = 1024u;
 
@@ -20,7 +22,7 @@ fn hammersley(i: u32, n: u32) -> vec2<f32> {
 
 @fragment
 fn fs(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
-    let last = f32(LUT_SIZE - 1u);
+    let last = f32(SPLIT_SUM_LUT_SIZE - 1u);
     let n_dot_v = max(floor(position.x) / last, 1e-3);
     let roughness = floor(position.y) / last;
     let a = clamp(roughness * roughness, 0.002, 1.0);

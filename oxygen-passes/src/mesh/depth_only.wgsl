@@ -1,6 +1,8 @@
 // Depth pre-pass. The opaque variants have no fragment stage; the masked
 // variants discard fragments whose alpha is below the material's cutoff.
 
+#include "mesh/mesh_vertex.wgsl"
+
 @fragment
 fn fs_alpha_test(mesh: MeshVarying) {
     // Derivatives first, in uniform control flow, as in the shading pass so

@@ -12,6 +12,11 @@
 // the view along the light, roughness 0 — shade to a finite colour.
 // `tests/shading_finite.rs` runs these functions over such inputs.
 
+#include "mesh/mesh_vertex.wgsl"
+#include "post/tonemap_operator.wgsl"
+#include "shaders/brdf.wgsl"
+#include "lighting/ibl/environment.wgsl"
+
 // Pipeline-overridable constants (pipelines/features.rs `ShaderFeatures`, set when
 // a pipeline is created): each leaves out code the view does not need this
 // frame. The defaults keep everything, so the shader as written is right for
@@ -50,30 +55,11 @@ fn fit_hdr(color: vec3<f32>) -> vec3<f32> {
     return color;
 }
 
-// Group 3: what this view reads from other views (see lighting/inputs.rs):
+// Group 3: what this view reads from other views (see lighting/inputs.rs and lighting/params.rs):
 // cascade shadow maps (bindings 0 to MAX_CASCADES - 1, one per cascade),
 // the local-light shadow atlas and the reflection probes. The sizes and
-// bindings are constants generated from lighting/inputs.rs.
-struct LightingInputs {
-    light_view_projection: array<mat4x4<f32>, MAX_CASCADES>,
-    texel_world_size: vec4<f32>,
-    uv_texel: vec4<f32>,
-    count: u32,
-    pcf_radius: u32,
-    normal_offset: f32,
-    // Explicit padding (the Rust `padding`): probe_positions is 16-byte
-    // aligned either way, so the Rust twin spells it out.
-    padding: u32,
-    probe_positions: array<vec4<f32>, MAX_PROBES>,
-    tile_view_projection: array<mat4x4<f32>, MAX_SHADOW_TILES>,
-    // MAX_SHADOW_TILES floats packed four to a vec4 (uniform arrays have a
-    // 16-byte stride).
-    tile_texel_angle: array<vec4<f32>, MAX_SHADOW_TILES / 4u>,
-    tile_count: u32,
-    probe_count: u32,
-    environment_levels: u32,
-    reserved: u32,
-}
+// bindings are constants generated from lighting/params.rs.
+#include "lighting/LightingInputs"
 @group(3) @binding(0) var shadow_map_0: texture_depth_2d;
 @group(3) @binding(1) var shadow_map_1: texture_depth_2d;
 @group(3) @binding(2) var shadow_map_2: texture_depth_2d;

@@ -3,6 +3,14 @@
 // renderer passes the draw's position in the view's array as first_instance),
 // and vertex_index already includes the geometry's base vertex.
 
+#include "bindless/constants"
+#include "sceneprep/constants"
+#include "lighting/constants"
+#include "bindless/scene_constants.wgsl"
+#include "sceneprep/gpu_records.wgsl"
+#include "bindless/domains"
+#include "bindless/textures"
+
 struct MeshVarying {
     // Invariant so that the shading pass reproduces the pre-pass depth bit
     // for bit and its GreaterEqual test passes exactly on the visible surface.

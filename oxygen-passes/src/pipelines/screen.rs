@@ -44,7 +44,7 @@ impl Pipelines {
             ],
         });
         let pipeline =
-            fullscreen_pipeline(device, "tonemap", &layout, TONEMAP_WGSL, ("vs_fullscreen", "fs_tonemap"), output);
+            fullscreen_pipeline(device, "tonemap", &layout, &TONEMAP_WGSL, ("vs_fullscreen", "fs_tonemap"), output);
         self.created.fetch_add(1, Ordering::Relaxed);
         *slot = Some((pipeline.clone(), layout.clone()));
         (pipeline, layout)

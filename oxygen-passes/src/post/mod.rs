@@ -1,7 +1,10 @@
 //! Post-processing after shading: the tone map from the HDR target to the
 //! displayable sRGB target, and the operator it shares with the forward
 //! pass's in-pass tone map.
+//! `params` holds the pass's parameter block, declared once for Rust and
+//! WGSL.
 
+pub(crate) mod params;
 mod tonemap;
 
 pub use tonemap::{TonemapPass, pbr_neutral};
@@ -10,5 +13,5 @@ pub use tonemap::{TonemapPass, pbr_neutral};
 /// pass and the forward lit pass's in-pass tone map.
 pub const TONEMAP_OPERATOR_WGSL: &str = include_str!("tonemap_operator.wgsl");
 /// The tone-map shader (self-contained: no bindless declarations): the
-/// operator followed by the pass.
-pub const TONEMAP_WGSL: &str = concat!(include_str!("tonemap_operator.wgsl"), "\n", include_str!("tonemap.wgsl"));
+/// pass with the operator and its parameter block.
+pub static TONEMAP_WGSL: std::sync::LazyLock<String> = std::sync::LazyLock::new(|| crate::shaders::TONEMAP.source());

@@ -6,18 +6,11 @@
 //! light looks like itself) and rolls highlights off towards white.
 //! [`pbr_neutral`] is the CPU twin of the shader's operator, for tests.
 
-use bytemuck::{Pod, Zeroable};
 use oxygen_gpu::ViewTargets;
 use tracing::info_span;
 
+use super::params::TonemapParams;
 use crate::{CommandRecorder, PassError, RenderContext, RenderPass};
-
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct TonemapParams {
-    exposure: f32,
-    pad: [f32; 3],
-}
 
 /// The tone-map pass.
 pub struct TonemapPass {
@@ -75,7 +68,7 @@ impl RenderPass for TonemapPass {
         ctx.gpu.queue.write_buffer(
             &params,
             0,
-            bytemuck::bytes_of(&TonemapParams { exposure: self.exposure, pad: [0.0; 3] }),
+            bytemuck::bytes_of(&TonemapParams { exposure: self.exposure, pad0: 0.0, pad1: 0.0, pad2: 0.0 }),
         );
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("tonemap"),

@@ -1,13 +1,9 @@
-// Tone map pass: the HDR target through `tone_map` (tonemap_operator.wgsl, prepended
-// by the Rust side) into the sRGB target. A full-screen triangle; no
+// Tone map pass: the HDR target through `tone_map` (tonemap_operator.wgsl)
+// into the sRGB target. A full-screen triangle; no
 // bindless state.
 
-struct TonemapParams {
-    exposure: f32,
-    pad0: f32,
-    pad1: f32,
-    pad2: f32,
-}
+#include "post/tonemap_operator.wgsl"
+#include "post/TonemapParams"
 
 @group(0) @binding(0) var hdr_texture: texture_2d<f32>;
 @group(0) @binding(1) var<uniform> params: TonemapParams;

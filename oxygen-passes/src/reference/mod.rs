@@ -1,7 +1,10 @@
 //! The path-traced reference: the ground truth raster shading is compared
 //! with. [`ReferenceTracer`] holds the ray scene on the GPU and the compute
 //! pipeline; [`ReferencePass`] accumulates a view's samples.
+//! `params` holds the parameter block and flag bits the shader shares with
+//! Rust, declared once.
 
+pub(crate) mod params;
 mod tracer;
 
 pub use tracer::{ReferencePass, ReferenceSettings, ReferenceTracer, reference_shader_source};

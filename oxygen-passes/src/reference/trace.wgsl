@@ -22,31 +22,21 @@
 // reflection): the same light transport as the raster path, shadows traced
 // exactly, for comparing the two.
 
-struct TraceParams {
-    width: u32,
-    height: u32,
-    // Samples already in the running sum (0: start over).
-    samples_done: u32,
-    samples_this_frame: u32,
-    max_bounces: u32,
-    flags: u32,
-    // INVALID_SLOT when the scene has nothing to hit.
-    tlas_root: u32,
-    seed: u32,
-    // Where the ray scene's ranges start in the heap's domains; the
-    // scene's indices are relative to them.
-    node_base: u32,
-    word_base: u32,
-    instance_base: u32,
-    reserved: u32,
-    environment: vec4<f32>,
-}
+#include "bindless/constants"
+#include "sceneprep/constants"
+#include "lighting/constants"
+#include "bindless/scene_constants.wgsl"
+#include "sceneprep/gpu_records.wgsl"
+#include "bindless/domains"
+#include "bindless/textures"
+#include "shaders/brdf.wgsl"
+#include "lighting/ibl/environment.wgsl"
+#include "reference/constants"
+#include "reference/TraceParams"
 
-const RASTER_MODEL: u32 = 1u;
-// With RASTER_MODEL: also the probe's term, exactly (see radiance()).
-const RASTER_REFLECTIONS: u32 = 2u;
-// The renderer has an environment: bindings 7-9 hold it.
-const ENVIRONMENT_MAP: u32 = 4u;
+// Flags (reference/params.rs): RASTER_MODEL; RASTER_REFLECTIONS, with
+// RASTER_MODEL also the probe's term, exactly (see radiance());
+// ENVIRONMENT_MAP, the renderer has an environment: bindings 7-9 hold it.
 const STACK_SIZE: u32 = 48u;
 const NO_HIT: u32 = 0xFFFFFFFFu;
 // The raster pass's constant ambient (forward_lit.wgsl's AMBIENT).

@@ -18,11 +18,12 @@
 use std::collections::HashMap;
 use std::sync::Mutex;
 
-use bytemuck::{Pod, Zeroable};
-use oxygen_bindless::{Allocation, BindlessError, BindlessHeap, DomainKind, INVALID_SLOT, SCENE_CONSTANTS_WGSL};
+use oxygen_bindless::{Allocation, BindlessError, BindlessHeap, DomainKind, INVALID_SLOT};
 use oxygen_core::ViewId;
-use oxygen_sceneprep::{GPU_RECORDS_WGSL, RayInstance, RayScene, ray_scene::POSED};
+use oxygen_sceneprep::{RayInstance, RayScene, ray_scene::POSED};
 use tracing::info_span;
+
+use super::params::{ENVIRONMENT_MAP, RASTER_MODEL, RASTER_REFLECTIONS, TraceParams};
 
 use crate::context::RenderPass;
 use crate::context::{CommandRecorder, PassError, RenderContext};
@@ -95,36 +96,14 @@ impl ReferenceSettings {
     /// renderer's to add).
     fn flags(&self) -> u32 {
         let reflections = self.raster_model && self.raster_reflections;
-        u32::from(self.raster_model) | (u32::from(reflections) << 1)
+        (if self.raster_model { RASTER_MODEL } else { 0 }) | if reflections { RASTER_REFLECTIONS } else { 0 }
     }
 }
-
-/// Flag: escaping paths (and the raster model's ambient) read the
-/// renderer's environment.
-const ENVIRONMENT_MAP: u32 = 4;
 
 impl Default for ReferenceSettings {
     fn default() -> Self {
         Self::DEFAULT
     }
-}
-
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct TraceParams {
-    width: u32,
-    height: u32,
-    samples_done: u32,
-    samples_this_frame: u32,
-    max_bounces: u32,
-    flags: u32,
-    tlas_root: u32,
-    seed: u32,
-    node_base: u32,
-    word_base: u32,
-    instance_base: u32,
-    reserved: u32,
-    environment: [f32; 4],
 }
 
 /// One view's accumulation.
@@ -152,34 +131,11 @@ pub struct ReferenceTracer {
     views: Mutex<HashMap<ViewId, ViewSamples>>,
 }
 
-/// The tracer's full WGSL: the heap's declarations, the shared reflectance
-/// model, cube layout and environment reads, the tracer.
+/// The tracer's full WGSL: `reference/trace.wgsl` with the heap's
+/// declarations, the shared reflectance model, cube layout and environment
+/// reads, on the texture path `textures`.
 pub fn reference_shader_source(textures: oxygen_bindless::TexturePath) -> String {
-    let enables = match textures {
-        oxygen_bindless::TexturePath::BindingArray => "enable wgpu_binding_array;\n",
-        oxygen_bindless::TexturePath::GroupedArrays => "",
-    };
-    let constants = [
-        oxygen_bindless::wgsl_constants(),
-        oxygen_sceneprep::PassMask::wgsl_constants(),
-        oxygen_sceneprep::MaterialRecord::wgsl_constants(),
-        oxygen_sceneprep::PositionalLightRecord::wgsl_constants(),
-    ]
-    .concat();
-    let cube = format!(
-        "const PROBE_FACES: u32 = {}u;\nconst SPLIT_SUM_LUT_SIZE: u32 = {}u;\n",
-        crate::PROBE_FACES,
-        crate::SPLIT_SUM_LUT_SIZE
-    );
-    format!(
-        "{enables}{constants}{cube}{SCENE_CONSTANTS_WGSL}\n{GPU_RECORDS_WGSL}\n{}\n{}\n{}\n{}\n{}\n{}",
-        DomainKind::wgsl_bindings(),
-        textures.wgsl(),
-        crate::shaders::BRDF_WGSL,
-        crate::lighting::ibl::CUBE_FACES_WGSL,
-        crate::lighting::ibl::ENVIRONMENT_WGSL,
-        include_str!("trace.wgsl"),
-    )
+    crate::shaders::REFERENCE.textured_source(textures)
 }
 
 fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {

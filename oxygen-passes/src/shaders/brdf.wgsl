@@ -1,7 +1,9 @@
 // The reflectance model and light falloff shared by the raster shading
 // pass (forward_lit.wgsl) and the path-traced reference (reference/trace.wgsl),
 // so that both model the same surfaces and lights with the same numbers.
-// Needs the GPU records (PositionalLightRecord, LIGHT_SPOT) before it.
+
+#include "sceneprep/gpu_records.wgsl"
+#include "sceneprep/constants"
 
 const PI: f32 = 3.14159265;
 

@@ -1,7 +1,21 @@
-//! WGSL shared by the shaders of several folders: the reflectance model and
-//! light falloff ([`BRDF_WGSL`]) that raster shading and the path-traced
-//! reference both evaluate, so both model the same surfaces.
+//! How WGSL becomes a shader module: one composer ([`compose`]) resolving
+//! `#include "name"` lines against one registry of named sources
+//! ([`registry`]: every WGSL file of the crate, the WGSL of `oxygen-bindless`
+//! and `oxygen-sceneprep`, constants and GPU structs written from their Rust
+//! declarations), and the list of every module and entry point the crate
+//! compiles, which the validation test walks. Also here: WGSL shared by
+//! several folders ([`BRDF_WGSL`]).
+
+pub(crate) mod compose;
+pub(crate) mod registry;
+
+pub(crate) use registry::{CUBE_FILTER, CULL, DEPTH_ONLY, FORWARD_LIT, HIZ, REFERENCE, SPLIT_SUM, TONEMAP};
 
 /// The reflectance model and light falloff shared by raster shading and the
-/// path-traced reference.
+/// path-traced reference (as written: its `#include` lines unresolved).
 pub const BRDF_WGSL: &str = include_str!("brdf.wgsl");
+
+#[cfg(test)]
+mod layout_tests;
+#[cfg(test)]
+mod validate_tests;

@@ -19,19 +19,14 @@
 
 use std::collections::HashMap;
 
-use bytemuck::{Pod, Zeroable};
 use oxygen_bindless::{BindlessHeap, DomainKind};
 use oxygen_core::{ResolvedView, ViewId};
 use oxygen_sceneprep::gpu_scene::GpuSceneChanges;
-use oxygen_sceneprep::{GPU_RECORDS_WGSL, GpuScene, PreparedSceneFrame, Visibility};
+use oxygen_sceneprep::{GpuScene, PreparedSceneFrame, Visibility};
 use tracing::info_span;
 
-use super::hiz::{HIZ_TEST_WGSL, HizPipelines, HizPyramid};
-
-/// `CullParams::flags`: the view takes shadow casters only.
-const CULL_CASTERS_ONLY: u32 = 1;
-/// `CullParams::flags`: two-phase occlusion culling.
-const CULL_OCCLUSION: u32 = 2;
+use super::hiz::{HizPipelines, HizPyramid};
+use super::params::{CULL_CASTERS_ONLY, CULL_OCCLUSION, CullParams};
 
 /// Workgroups per dimension every adapter allows.
 const MAX_WORKGROUPS: u32 = 65_535;
@@ -40,32 +35,6 @@ const MAX_WORKGROUPS: u32 = 65_535;
 /// indirect path: counts written by the GPU.
 pub const GPU_VISIBILITY_FEATURES: wgpu::Features =
     wgpu::Features::MULTI_DRAW_INDIRECT_COUNT.union(wgpu::Features::INDIRECT_FIRST_INSTANCE);
-
-/// The cull shader's per-view parameters (240 bytes, WGSL `CullParams`).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-struct CullParams {
-    planes: [[f32; 4]; 6],
-    view_row_z: [f32; 4],
-    view_projection: [[f32; 4]; 4],
-    lod_scale: f32,
-    perspective: u32,
-    near: f32,
-    lod_bias: f32,
-    instance_count: u32,
-    group_count: u32,
-    partition_count: u32,
-    flags: u32,
-    draw_slot: u32,
-    command_slot: u32,
-    generation: u32,
-    hiz_levels: u32,
-    hiz_size: [u32; 2],
-    group_counters: u32,
-    disc: f32,
-}
-
-const _: () = assert!(std::mem::size_of::<CullParams>() == 240);
 
 /// Where a view's coverage readback stands (see [`GpuVisibility::record_readback`]).
 const READBACK_IDLE: u8 = 0;
@@ -181,15 +150,10 @@ fn storage(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
-/// The cull shader's full source: records, the pyramid test, the flags.
+/// The cull shader's full source: `visibility/cull.wgsl` with the GPU
+/// records, its parameter block and flags, and the pyramid test.
 pub fn cull_shader_source() -> String {
-    let constants = format!(
-        "const CULL_CASTERS_ONLY: u32 = {CULL_CASTERS_ONLY}u;\nconst CULL_OCCLUSION: u32 = {CULL_OCCLUSION}u;\n\
-         const INSTANCE_CASTS_SHADOWS: u32 = {}u;\n",
-        oxygen_sceneprep::gpu_scene::GpuInstance::CASTS_SHADOWS
-    );
-    // The pyramid test reads `hiz_pyramid`, which the cull shader declares.
-    [GPU_RECORDS_WGSL, &constants, include_str!("cull.wgsl"), HIZ_TEST_WGSL].join("\n")
+    crate::shaders::CULL.source()
 }
 
 impl GpuVisibility {

@@ -1,8 +1,12 @@
 // GPU-driven visibility: frustum and occlusion culling of the GPU scene's
 // instances, compacted into the view's DrawMetadata range and its instanced
 // commands. The layout of the ranges and counters is drawn in
-// oxygen-sceneprep's gpu_scene module. Prepended: DrawMetadata (gpu_records),
-// hiz_visible (hiz_test), and the CULL_* flag constants.
+// oxygen-sceneprep's gpu_scene module.
+
+#include "sceneprep/gpu_records.wgsl"
+#include "visibility/constants"
+#include "visibility/CullParams"
+#include "visibility/hiz_test.wgsl"
 
 struct GpuInstance {
     aabb_min: vec3<f32>,
@@ -46,29 +50,6 @@ struct Command {
     first_index: u32,
     base_vertex: i32,
     first_instance: u32,
-}
-
-struct CullParams {
-    planes: array<vec4<f32>, 6>,
-    view_row_z: vec4<f32>,
-    view_projection: mat4x4<f32>,
-    lod_scale: f32,
-    perspective: u32,
-    near: f32,
-    lod_bias: f32,
-    instance_count: u32,
-    group_count: u32,
-    partition_count: u32,
-    flags: u32,
-    draw_slot: u32,
-    command_slot: u32,
-    generation: u32,
-    hiz_levels: u32,
-    hiz_size: vec2<u32>,
-    group_counters: u32,
-    // Viewport area of a disc one viewport height across, as a fraction of
-    // the viewport (pi / 4 / aspect): the overdraw estimate's unit.
-    disc: f32,
 }
 
 @group(0) @binding(0) var<uniform> params: CullParams;

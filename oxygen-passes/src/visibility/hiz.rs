@@ -17,23 +17,18 @@
 
 use tracing::info_span;
 
+use super::params::LevelParams;
+
 /// WGSL of `fn hiz_visible(levels, size, view_projection, box_min, box_max)
 /// -> bool`, for shaders that test boxes against a pyramid; the including
 /// shader declares the pyramid's buffer as `hiz_pyramid: array<f32>` (the
 /// visibility cull shader includes it).
 pub const HIZ_TEST_WGSL: &str = include_str!("hiz_test.wgsl");
 
-/// One reduction step as the shader reads it (WGSL `Level`, 32 bytes).
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct LevelParams {
-    src_offset: u32,
-    src_width: u32,
-    src_height: u32,
-    dst_offset: u32,
-    dst_width: u32,
-    dst_height: u32,
-    reserved: [u32; 2],
+/// The pyramid's shader as compiled: `hiz.wgsl`'s copy and reduction
+/// entry points with their parameter block.
+pub fn hiz_shader_source() -> String {
+    crate::shaders::HIZ.source()
 }
 
 /// The two compute pipelines every pyramid shares.
@@ -66,7 +61,7 @@ impl HizPipelines {
         let _span = info_span!("hiz_pipelines").entered();
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("depth pyramid"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("hiz.wgsl").into()),
+            source: wgpu::ShaderSource::Wgsl(hiz_shader_source().into()),
         });
         let depth = wgpu::BindingType::Texture {
             sample_type: wgpu::TextureSampleType::Depth,

@@ -10,20 +10,11 @@
 // wrong level when neighbouring invocations of one dispatch load different
 // mip levels of a texture, which is exactly what occlusion tests do.
 
-struct Level {
-    src_offset: u32,
-    src_width: u32,
-    src_height: u32,
-    dst_offset: u32,
-    dst_width: u32,
-    dst_height: u32,
-    reserved0: u32,
-    reserved1: u32,
-}
+#include "visibility/LevelParams"
 
 @group(0) @binding(0) var depth: texture_depth_2d;
 @group(0) @binding(1) var<storage, read_write> pyramid: array<f32>;
-@group(0) @binding(2) var<uniform> level: Level;
+@group(0) @binding(2) var<uniform> level: LevelParams;
 
 @compute @workgroup_size(8, 8)
 fn copy_depth(@builtin(global_invocation_id) id: vec3<u32>) {

@@ -3,8 +3,11 @@
 //! write the view's draws and commands ([`GpuVisibility`]); the depth
 //! pyramid ([`hiz`]) and the box test against it that the cull shader
 //! includes.
+//! `params` holds what the shaders share with Rust (parameter blocks, flag
+//! bits), declared once.
 
 mod cull;
 pub mod hiz;
+pub(crate) mod params;
 
 pub use cull::{GPU_VISIBILITY_FEATURES, GpuViewRequest, GpuVisibility, cull_shader_source};

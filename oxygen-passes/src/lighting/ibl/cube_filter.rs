@@ -28,11 +28,14 @@ use std::collections::HashMap;
 use std::sync::Mutex;
 
 use oxygen_core::{Environment, Sky};
+
+use super::params::CubeFilterParams;
 use oxygen_gpu::ViewTargets;
 
-/// The cube-building shader (self-contained: the cube layout, then the
-/// filter's passes).
-pub const CUBE_FILTER_WGSL: &str = concat!(include_str!("cube_faces.wgsl"), "\n", include_str!("cube_filter.wgsl"));
+/// The cube-building shader (self-contained: the cube layout, the
+/// filter's parameter block, then its passes).
+pub static CUBE_FILTER_WGSL: std::sync::LazyLock<String> =
+    std::sync::LazyLock::new(|| crate::shaders::CUBE_FILTER.source());
 
 /// Faces of a cube, in layer order +X, −X, +Y, −Y, +Z, −Z.
 const FACES: u32 = 6;
@@ -88,24 +91,8 @@ pub fn prefiltered_levels(size: u32) -> u32 {
     (u32::BITS - size.max(1).leading_zeros()).saturating_sub(2).max(1)
 }
 
-/// The uniform block of `cube_filter.wgsl`, at 256-byte strides (dynamic
-/// offsets), one per pass that needs different values.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
-struct Params {
-    zenith: [f32; 4],
-    horizon: [f32; 4],
-    ground: [f32; 4],
-    glow: [f32; 4],
-    sun_direction: [f32; 4],
-    roughness: f32,
-    samples: u32,
-    target_size: u32,
-    harmonics_level: u32,
-}
-
 const PARAMS_STRIDE: u64 = 256;
-const _: () = assert!(std::mem::size_of::<Params>() as u64 <= PARAMS_STRIDE);
+const _: () = assert!(std::mem::size_of::<CubeFilterParams>() as u64 <= PARAMS_STRIDE);
 
 /// The pipelines, samplers and scratch cubes (cached per size: probes
 /// re-filter every update).
@@ -171,7 +158,7 @@ impl CubeFilter {
                     ty: wgpu::BindingType::Buffer {
                         ty: wgpu::BufferBindingType::Uniform,
                         has_dynamic_offset: true,
-                        min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<Params>() as u64),
+                        min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<CubeFilterParams>() as u64),
                     },
                     count: None,
                 },
@@ -182,7 +169,7 @@ impl CubeFilter {
                 device,
                 "cube filter",
                 &layout,
-                CUBE_FILTER_WGSL,
+                &CUBE_FILTER_WGSL,
                 ("vs", fragment),
                 ViewTargets::HDR_FORMAT,
             )
@@ -249,7 +236,7 @@ impl CubeFilter {
             v.extend(1.0).to_array()
         };
         let sun = sky.sun_direction.try_normalize().unwrap_or(glam::Vec3::NEG_Y);
-        let base = Params {
+        let base = CubeFilterParams {
             zenith: clean(sky.zenith),
             horizon: clean(sky.horizon),
             ground: clean(sky.ground),
@@ -359,12 +346,13 @@ impl CubeFilter {
             let mut cache = self.probe_scratch.lock().unwrap_or_else(|e| e.into_inner());
             cache.entry(size).or_insert_with(|| scratch_cube(device, size)).clone()
         };
-        let mut params = vec![Params { samples: samples.max(1), target_size: size, ..Params::default() }];
-        params.extend((1..=roughest).map(|level| Params {
+        let mut params =
+            vec![CubeFilterParams { samples: samples.max(1), target_size: size, ..CubeFilterParams::default() }];
+        params.extend((1..=roughest).map(|level| CubeFilterParams {
             roughness: level as f32 / roughest as f32,
             samples: samples.max(1),
             target_size: (size >> level).max(1),
-            ..Params::default()
+            ..CubeFilterParams::default()
         }));
         let params = params_buffer(device, &params);
         let source = single_level_view(texture, 0);
@@ -405,7 +393,7 @@ impl CubeFilter {
                     resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
                         buffer: step.params,
                         offset: 0,
-                        size: wgpu::BufferSize::new(std::mem::size_of::<Params>() as u64),
+                        size: wgpu::BufferSize::new(std::mem::size_of::<CubeFilterParams>() as u64),
                     }),
                 },
             ],
@@ -481,10 +469,10 @@ fn scratch_cube(device: &wgpu::Device, size: u32) -> wgpu::Texture {
     })
 }
 
-fn params_buffer(device: &wgpu::Device, params: &[Params]) -> wgpu::Buffer {
+fn params_buffer(device: &wgpu::Device, params: &[CubeFilterParams]) -> wgpu::Buffer {
     let mut bytes = vec![0u8; params.len() * PARAMS_STRIDE as usize];
     for (chunk, p) in bytes.chunks_mut(PARAMS_STRIDE as usize).zip(params) {
-        chunk[..std::mem::size_of::<Params>()].copy_from_slice(bytemuck::bytes_of(p));
+        chunk[..std::mem::size_of::<CubeFilterParams>()].copy_from_slice(bytemuck::bytes_of(p));
     }
     let buffer = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("cube filter params"),

@@ -1,28 +1,13 @@
 // Building prefiltered cubes (environments and reflection probes) on the
 // GPU, one full-screen triangle per face and level (see cube_filter.rs).
-// The cube layout (cube_face_uv, cube_face_point) is cube_faces.wgsl's.
+
+#include "lighting/ibl/cube_faces.wgsl"
+#include "lighting/ibl/CubeFilterParams"
 
 @group(0) @binding(0) var source: texture_2d_array<f32>;
 @group(0) @binding(1) var source_sampler: sampler;
-@group(0) @binding(2) var<uniform> params: Params;
+@group(0) @binding(2) var<uniform> params: CubeFilterParams;
 
-struct Params {
-    // Procedural sky (a uniform environment is a sky of one colour).
-    zenith: vec4<f32>,
-    horizon: vec4<f32>,
-    ground: vec4<f32>,
-    glow: vec4<f32>,
-    // Direction the sunlight travels.
-    sun_direction: vec4<f32>,
-    // GGX roughness of the level being written.
-    roughness: f32,
-    // GGX samples per texel.
-    samples: u32,
-    // Side of the level being written.
-    target_size: u32,
-    // Source level the harmonics read (a box-filtered copy of level 0).
-    harmonics_level: u32,
-}
 
 const PI: f32 = 3.14159265358979;
 

@@ -2,8 +2,10 @@
 // shading pass and the path-traced reference. The including shader
 // declares `environment_faces` (the prefiltered cube, texture_2d_array),
 // `environment_sampler` (trilinear), `split_sum` (the table's uniform
-// array) and the constants PROBE_FACES and SPLIT_SUM_LUT_SIZE; the cube
-// layout comes from cube_faces.wgsl.
+// array).
+
+#include "lighting/constants"
+#include "lighting/ibl/cube_faces.wgsl"
 
 // Coefficient `i` of the environment's irradiance harmonics: the 3 x 3
 // corner of the layer after the faces, stored divided by 16

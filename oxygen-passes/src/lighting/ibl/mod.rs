@@ -2,9 +2,12 @@
 //! The cube filter builds both on the GPU (level 0, box mips, GGX levels,
 //! irradiance harmonics); the WGSL here is the cube layout every cube shares
 //! and the reading of the environment that shading and the reference share.
+//! `params` holds the cube filter's parameter block, declared once for Rust
+//! and WGSL.
 
 pub(crate) mod cube_filter;
 pub(crate) mod half;
+pub(crate) mod params;
 
 /// The cube layout every cube shares (probes, the environment, point-light
 /// shadow faces): `cube_face`, `cube_face_uv`, `cube_face_point`.

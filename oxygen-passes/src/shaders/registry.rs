@@ -1,0 +1,191 @@
+//! The registry: every named WGSL source a shader may include, and every
+//! shader module the crate compiles with its entry points.
+//!
+//! WGSL files are named by their path below `oxygen-passes/src`; generated
+//! sources by the folder or crate that owns their Rust values
+//! (`lighting/constants`, `bindless/domains`); the WGSL twin of a
+//! [`oxygen_gpu::GpuStruct`] by its folder and name
+//! (`lighting/LightingInputs`). Generated text comes from leaf modules (each
+//! folder's `params.rs`, other crates), never from the code that composes
+//! shaders, so the registry depends on no pipeline-building module.
+
+use oxygen_bindless::{DomainKind, TexturePath};
+use oxygen_sceneprep::PassMask;
+
+use super::compose::{ComposeError, Composer, Source};
+
+/// Every source a shader may include.
+pub(crate) static SOURCES: &[Source] = &[
+    // Shared by several folders.
+    Source::wgsl("shaders/brdf.wgsl", include_str!("brdf.wgsl")),
+    // Mesh passes.
+    Source::wgsl("mesh/mesh_vertex.wgsl", include_str!("../mesh/mesh_vertex.wgsl")),
+    Source::wgsl("mesh/depth_only.wgsl", include_str!("../mesh/depth_only.wgsl")),
+    Source::wgsl("mesh/forward_lit.wgsl", include_str!("../mesh/forward_lit.wgsl")),
+    // Lighting: group 3, the split-sum table, image-based lighting.
+    Source::generated("lighting/constants", crate::lighting::params::wgsl_constants),
+    Source::gpu_struct::<crate::lighting::params::LightingInputs>("lighting/LightingInputs"),
+    Source::wgsl("lighting/split_sum.wgsl", include_str!("../lighting/split_sum.wgsl")),
+    Source::wgsl("lighting/ibl/cube_faces.wgsl", include_str!("../lighting/ibl/cube_faces.wgsl")),
+    Source::wgsl("lighting/ibl/environment.wgsl", include_str!("../lighting/ibl/environment.wgsl")),
+    Source::wgsl("lighting/ibl/cube_filter.wgsl", include_str!("../lighting/ibl/cube_filter.wgsl")),
+    Source::gpu_struct::<crate::lighting::ibl::params::CubeFilterParams>("lighting/ibl/CubeFilterParams"),
+    // GPU visibility and the depth pyramid.
+    Source::generated("visibility/constants", crate::visibility::params::wgsl_constants),
+    Source::gpu_struct::<crate::visibility::params::CullParams>("visibility/CullParams"),
+    Source::gpu_struct::<crate::visibility::params::LevelParams>("visibility/LevelParams"),
+    Source::wgsl("visibility/cull.wgsl", include_str!("../visibility/cull.wgsl")),
+    Source::wgsl("visibility/hiz.wgsl", include_str!("../visibility/hiz.wgsl")),
+    Source::wgsl("visibility/hiz_test.wgsl", include_str!("../visibility/hiz_test.wgsl")),
+    // The path-traced reference.
+    Source::generated("reference/constants", crate::reference::params::wgsl_constants),
+    Source::gpu_struct::<crate::reference::params::TraceParams>("reference/TraceParams"),
+    Source::wgsl("reference/trace.wgsl", include_str!("../reference/trace.wgsl")),
+    // Post-processing.
+    Source::gpu_struct::<crate::post::params::TonemapParams>("post/TonemapParams"),
+    Source::wgsl("post/tonemap_operator.wgsl", include_str!("../post/tonemap_operator.wgsl")),
+    Source::wgsl("post/tonemap.wgsl", include_str!("../post/tonemap.wgsl")),
+    // oxygen-bindless: the heap's declarations.
+    Source::generated("bindless/constants", oxygen_bindless::wgsl_constants),
+    Source::wgsl("bindless/scene_constants.wgsl", oxygen_bindless::SCENE_CONSTANTS_WGSL),
+    Source::generated("bindless/domains", DomainKind::wgsl_bindings),
+    Source::generated(BINDING_ARRAY, || format!("enable wgpu_binding_array;\n{}", TexturePath::BindingArray.wgsl())),
+    Source::generated(GROUPED_ARRAYS, || TexturePath::GroupedArrays.wgsl()),
+    // oxygen-sceneprep: the GPU records and their numbers.
+    Source::wgsl("sceneprep/gpu_records.wgsl", oxygen_sceneprep::GPU_RECORDS_WGSL),
+    Source::generated("sceneprep/constants", || {
+        [
+            PassMask::wgsl_constants(),
+            oxygen_sceneprep::MaterialRecord::wgsl_constants(),
+            oxygen_sceneprep::PositionalLightRecord::wgsl_constants(),
+        ]
+        .concat()
+    }),
+];
+
+/// What a shader includes for the texture path's bindings; each
+/// composition of a textured module resolves it to one of the two below.
+const TEXTURES: &str = "bindless/textures";
+const BINDING_ARRAY: &str = "bindless/textures/binding_array";
+const GROUPED_ARRAYS: &str = "bindless/textures/grouped_arrays";
+
+/// A shader module the crate compiles: a root source, composed with the
+/// texture path's bindings when it reads textures.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct ShaderModule {
+    /// The root source.
+    pub(crate) root: &'static str,
+    /// Whether it includes the texture path's bindings (and so is composed
+    /// once per path).
+    pub(crate) textured: bool,
+}
+
+impl ShaderModule {
+    const fn plain(root: &'static str) -> Self {
+        ShaderModule { root, textured: false }
+    }
+
+    const fn textured(root: &'static str) -> Self {
+        ShaderModule { root, textured: true }
+    }
+
+    /// The module's WGSL, with the bindings of `textures` (`None` for a
+    /// module that reads no texture).
+    pub(crate) fn compose(self, textures: Option<TexturePath>) -> Result<String, ComposeError> {
+        let aliases: &[(&str, &str)] = match textures {
+            Some(TexturePath::BindingArray) => &[(TEXTURES, BINDING_ARRAY)],
+            Some(TexturePath::GroupedArrays) => &[(TEXTURES, GROUPED_ARRAYS)],
+            None => &[],
+        };
+        Composer::new(SOURCES).with_aliases(aliases).compose(self.root)
+    }
+
+    /// The WGSL of a module that reads no texture. The registry is static:
+    /// it composes every time or never, and the tests compose every module,
+    /// so a failure here is a bug in the registry, reported with the
+    /// composer's message.
+    pub(crate) fn source(self) -> String {
+        self.compose(None).unwrap_or_else(|e| panic!("shader {}: {e}", self.root))
+    }
+
+    /// The WGSL of a module that reads textures, on `textures` (fails as
+    /// [`ShaderModule::source`] does).
+    pub(crate) fn textured_source(self, textures: TexturePath) -> String {
+        self.compose(Some(textures)).unwrap_or_else(|e| panic!("shader {} on {textures:?}: {e}", self.root))
+    }
+}
+
+/// The depth pre-pass and shadow maps.
+pub(crate) const DEPTH_ONLY: ShaderModule = ShaderModule::textured("mesh/depth_only.wgsl");
+/// Forward lit and transparent shading, and the sky behind them.
+pub(crate) const FORWARD_LIT: ShaderModule = ShaderModule::textured("mesh/forward_lit.wgsl");
+/// The path-traced reference.
+pub(crate) const REFERENCE: ShaderModule = ShaderModule::textured("reference/trace.wgsl");
+/// The tone map.
+pub(crate) const TONEMAP: ShaderModule = ShaderModule::plain("post/tonemap.wgsl");
+/// The cube filter (environment and probe prefiltering).
+pub(crate) const CUBE_FILTER: ShaderModule = ShaderModule::plain("lighting/ibl/cube_filter.wgsl");
+/// The split-sum table.
+pub(crate) const SPLIT_SUM: ShaderModule = ShaderModule::plain("lighting/split_sum.wgsl");
+/// GPU visibility's cull and command passes.
+pub(crate) const CULL: ShaderModule = ShaderModule::plain("visibility/cull.wgsl");
+/// The depth pyramid's copy and reduction.
+pub(crate) const HIZ: ShaderModule = ShaderModule::plain("visibility/hiz.wgsl");
+
+/// A pipeline stage.
+#[cfg(test)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Stage {
+    Vertex,
+    Fragment,
+    Compute,
+}
+
+/// One entry point a pipeline of the crate is created with.
+#[cfg(test)]
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct EntryPoint {
+    /// The module holding it.
+    pub(crate) module: ShaderModule,
+    /// Its name.
+    pub(crate) name: &'static str,
+    /// Its stage.
+    pub(crate) stage: Stage,
+}
+
+#[cfg(test)]
+const fn entry(module: ShaderModule, name: &'static str, stage: Stage) -> EntryPoint {
+    EntryPoint { module, name, stage }
+}
+
+/// Every entry point of every shader module the crate compiles: the list
+/// the validation test walks (`validate_tests.rs`; the pipelines name the
+/// same entry points where they are created).
+#[cfg(test)]
+pub(crate) const ENTRY_POINTS: &[EntryPoint] = &[
+    entry(DEPTH_ONLY, "vs_main", Stage::Vertex),
+    entry(DEPTH_ONLY, "fs_alpha_test", Stage::Fragment),
+    entry(FORWARD_LIT, "vs_main", Stage::Vertex),
+    entry(FORWARD_LIT, "fs_opaque", Stage::Fragment),
+    entry(FORWARD_LIT, "fs_masked", Stage::Fragment),
+    entry(FORWARD_LIT, "fs_blend", Stage::Fragment),
+    entry(FORWARD_LIT, "vs_sky", Stage::Vertex),
+    entry(FORWARD_LIT, "fs_sky", Stage::Fragment),
+    entry(REFERENCE, "trace_paths", Stage::Compute),
+    entry(TONEMAP, "vs_fullscreen", Stage::Vertex),
+    entry(TONEMAP, "fs_tonemap", Stage::Fragment),
+    entry(CUBE_FILTER, "vs", Stage::Vertex),
+    entry(CUBE_FILTER, "fs_downsample", Stage::Fragment),
+    entry(CUBE_FILTER, "fs_sky", Stage::Fragment),
+    entry(CUBE_FILTER, "fs_equirect", Stage::Fragment),
+    entry(CUBE_FILTER, "fs_ggx", Stage::Fragment),
+    entry(CUBE_FILTER, "fs_harmonics", Stage::Fragment),
+    entry(SPLIT_SUM, "vs", Stage::Vertex),
+    entry(SPLIT_SUM, "fs", Stage::Fragment),
+    entry(CULL, "cull_early", Stage::Compute),
+    entry(CULL, "commands_early", Stage::Compute),
+    entry(CULL, "cull_late", Stage::Compute),
+    entry(CULL, "commands_late", Stage::Compute),
+    entry(HIZ, "copy_depth", Stage::Compute),
+    entry(HIZ, "reduce", Stage::Compute),
+];

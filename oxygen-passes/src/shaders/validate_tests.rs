@@ -1,0 +1,141 @@
+//! Every shader module the crate compiles composes, parses and validates
+//! with naga on every texture path it is built for, and holds each of its
+//! entry points at its stage: one walk over [`ENTRY_POINTS`]. A WGSL mistake
+//! fails here with a readable message rather than at pipeline creation on
+//! some device.
+
+use std::collections::HashMap;
+
+use oxygen_bindless::TexturePath;
+
+use super::compose::{Composer, SourceText};
+use super::registry::{ENTRY_POINTS, SOURCES, ShaderModule, Stage};
+
+/// The texture paths a module is composed for (`None`: it reads none).
+pub(super) fn paths(module: ShaderModule) -> Vec<Option<TexturePath>> {
+    if module.textured {
+        // Exhaustive: a new path does not compile until it is listed.
+        [TexturePath::BindingArray, TexturePath::GroupedArrays]
+            .into_iter()
+            .map(|path| match path {
+                TexturePath::BindingArray | TexturePath::GroupedArrays => Some(path),
+            })
+            .collect()
+    } else {
+        vec![None]
+    }
+}
+
+/// What a device on `path` grants: the binding-array path needs exactly
+/// what its device features enable, the others nothing.
+fn capabilities(path: Option<TexturePath>) -> naga::valid::Capabilities {
+    match path {
+        Some(TexturePath::BindingArray) => {
+            naga::valid::Capabilities::TEXTURE_AND_SAMPLER_BINDING_ARRAY
+                | naga::valid::Capabilities::TEXTURE_AND_SAMPLER_BINDING_ARRAY_NON_UNIFORM_INDEXING
+        }
+        Some(TexturePath::GroupedArrays) | None => naga::valid::Capabilities::default(),
+    }
+}
+
+/// Every module of [`ENTRY_POINTS`] on every path, composed, parsed and
+/// validated: (module, path) → (source, module).
+pub(super) fn composed_modules() -> HashMap<(&'static str, Option<TexturePath>), (String, naga::Module)> {
+    let mut modules = HashMap::new();
+    for entry in ENTRY_POINTS {
+        for path in paths(entry.module) {
+            modules.entry((entry.module.root, path)).or_insert_with(|| {
+                let what = format!("{} / {path:?}", entry.module.root);
+                let source = entry.module.compose(path).unwrap_or_else(|e| panic!("{what} does not compose: {e}"));
+                let module = naga::front::wgsl::parse_str(&source)
+                    .unwrap_or_else(|e| panic!("{what} does not parse:\n{}", e.emit_to_string(&source)));
+                naga::valid::Validator::new(naga::valid::ValidationFlags::all(), capabilities(path))
+                    .validate(&module)
+                    .unwrap_or_else(|e| panic!("{what} does not validate: {e:?}"));
+                (source, module)
+            });
+        }
+    }
+    modules
+}
+
+#[test]
+fn every_entry_point_validates_at_its_stage_on_every_texture_path() {
+    let modules = composed_modules();
+    for entry in ENTRY_POINTS {
+        for path in paths(entry.module) {
+            let (_, module) = &modules[&(entry.module.root, path)];
+            let found = module.entry_points.iter().find(|e| e.name == entry.name);
+            let stage = found.map(|e| match e.stage {
+                naga::ShaderStage::Vertex => Stage::Vertex,
+                naga::ShaderStage::Fragment => Stage::Fragment,
+                naga::ShaderStage::Compute => Stage::Compute,
+                other => panic!("{}: unexpected stage {other:?}", entry.name),
+            });
+            assert_eq!(stage, Some(entry.stage), "{} / {path:?}: entry point {}", entry.module.root, entry.name);
+        }
+    }
+    // And nothing else: every entry point of a module is listed.
+    for ((root, path), (_, module)) in &modules {
+        for e in &module.entry_points {
+            assert!(
+                ENTRY_POINTS.iter().any(|l| l.module.root == *root && l.name == e.name),
+                "{root} / {path:?}: entry point {} is not in ENTRY_POINTS",
+                e.name
+            );
+        }
+    }
+}
+
+/// Every source of the registry is part of some module: the registry holds
+/// no dead WGSL.
+#[test]
+fn every_registered_source_is_included_by_some_module() {
+    let modules = composed_modules();
+    for source in SOURCES {
+        let marker = format!("// ---- {}\n", source.name);
+        assert!(
+            modules.values().any(|(text, _)| text.contains(&marker)),
+            "{} is in the registry but no shader includes it",
+            source.name
+        );
+    }
+}
+
+/// The registry's names are unique (a second source of a name would never
+/// be found), and every WGSL file of the crate is registered.
+#[test]
+fn every_wgsl_file_is_registered_once() {
+    for (i, source) in SOURCES.iter().enumerate() {
+        assert!(SOURCES[..i].iter().all(|s| s.name != source.name), "{} registered twice", source.name);
+    }
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/src");
+    let mut files = Vec::new();
+    let mut dirs = vec![std::path::PathBuf::from(root)];
+    while let Some(dir) = dirs.pop() {
+        for entry in std::fs::read_dir(&dir).expect("src is readable") {
+            let path = entry.expect("entry").path();
+            if path.is_dir() {
+                dirs.push(path);
+            } else if path.extension().is_some_and(|e| e == "wgsl") {
+                let name = path.strip_prefix(root).expect("below src").to_string_lossy().replace('\\', "/");
+                files.push(name);
+            }
+        }
+    }
+    for file in files {
+        let registered = SOURCES.iter().find(|s| s.name == file);
+        assert!(registered.is_some(), "{file} is not in the shader registry");
+        assert!(matches!(registered.map(|s| s.text), Some(SourceText::Wgsl(_))), "{file} is not registered as WGSL");
+    }
+}
+
+/// A root that is not registered, and a registered module on a path it
+/// was not built for, fail with the composer's error instead of a partial
+/// shader.
+#[test]
+fn composing_outside_the_registry_is_an_error() {
+    assert!(Composer::new(SOURCES).compose("mesh/nowhere.wgsl").is_err());
+    let error = super::FORWARD_LIT.compose(None).expect_err("the texture path is chosen per device");
+    assert!(error.to_string().contains("bindless/textures"), "{error}");
+}
