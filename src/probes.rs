@@ -19,7 +19,7 @@ use oxygen_gpu::ViewTargets;
 use oxygen_passes::{PROBE_FACE_AXES, PROBE_FACES};
 
 use crate::views::{TargetKind, ViewDesc};
-use crate::{ProbeFaceGraph, RenderError, Renderer};
+use crate::{RenderError, Renderer};
 
 /// When a probe re-renders its faces.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -102,13 +102,12 @@ impl ReflectionProbe {
             view_formats: &[],
         });
         let id = renderer.views.allocate_probe();
-        let mut faces = [ViewId(u32::MAX); PROBE_FACES];
-        for (face, slot) in faces.iter_mut().enumerate() {
+        let faces: [ViewId; PROBE_FACES] = std::array::from_fn(|face| {
             let resolver = ProbeFaceResolver { position, face, resolution, near: depth_range.0, far: depth_range.1 };
             let mut desc = ViewDesc::new(resolver);
             desc.target = TargetKind::ProbeFace { probe: id, face: face as u32 };
-            *slot = renderer.register_view(desc, ProbeFaceGraph)?;
-        }
+            renderer.register_probe_face(desc)
+        });
         renderer.add_probe(id, faces, texture, position);
         Ok(ReflectionProbe { id, faces, update, frames_seen: 0, update_requested: true })
     }

@@ -20,7 +20,8 @@
 use std::collections::BTreeMap;
 
 use oxygen_core::{
-    CascadeSettings, LightKind, NodeKey, ResolvedView, Scene, ViewError, ViewId, ViewResolver, fit_cascade,
+    CascadeSettings, LightKind, NodeKey, ResolvedView, Scene, ViewContext, ViewError, ViewId, ViewIdRange, ViewIds,
+    ViewResolver, fit_cascade,
 };
 use oxygen_sceneprep::{FrameCollection, LocalShadowKind, ViewFilter, ViewPrepOptions};
 
@@ -172,30 +173,44 @@ pub(crate) struct PlannedShadow {
     pub(crate) resolved: Result<ResolvedView, ViewError>,
 }
 
-/// The shadow views the renderer owns, by what they are for. Ids are kept
-/// while their owner and light exist, so a view's slots and targets are
-/// reused frame after frame.
-#[derive(Default)]
+/// The shadow views the renderer owns, by what they are for. Their ids come
+/// from the renderer's own range ([`ViewIdRange::Shadow`]), never from the
+/// application's registry, and are kept while their owner and light exist,
+/// so a view's slots and targets are reused frame after frame.
 pub(crate) struct ShadowViews {
+    ids: ViewIds,
     cascades: BTreeMap<(ViewId, u32), ViewId>,
     local: BTreeMap<(NodeKey, u32), ViewId>,
     pub(crate) local_settings: Option<LocalShadowSettings>,
 }
 
 impl ShadowViews {
-    /// Plans this frame's shadow views: cascades of every resolved view
-    /// that asked for sun shadows (`owners`: id, resolved camera in world
-    /// space, settings) when the frame has a shadow sun, and one view per
-    /// local shadow tile. Ids of views no longer needed are returned in the
-    /// second list, for the renderer to release.
+    /// No shadow views; local shadows as `local_settings` says.
+    pub(crate) fn new(local_settings: Option<LocalShadowSettings>) -> Self {
+        ShadowViews {
+            ids: ViewIds::new(ViewIdRange::Shadow),
+            cascades: BTreeMap::new(),
+            local: BTreeMap::new(),
+            local_settings,
+        }
+    }
+
+    /// Plans this frame's shadow views (frame `frame_index`, at
+    /// `time_seconds`): cascades of every resolved view that asked for sun
+    /// shadows (`owners`: id, resolved camera in world space, settings) when
+    /// the frame has a shadow sun, and one view per local shadow tile. Ids of
+    /// views no longer needed are returned in the second list, for the
+    /// renderer to release.
     pub(crate) fn plan(
         &mut self,
         owners: &[(ViewId, ResolvedView, CascadeSettings)],
         frame: &FrameCollection,
         scene: &Scene,
-        ctx: oxygen_core::ViewContext,
-        mut allocate: impl FnMut() -> ViewId,
+        frame_index: u64,
+        time_seconds: f32,
     ) -> (Vec<PlannedShadow>, Vec<ViewId>) {
+        let ids = &mut self.ids;
+        let mut allocate = || ids.allocate();
         let mut planned = Vec::new();
         let mut wanted_cascades = BTreeMap::new();
         let sun = frame.shadow_sun.and_then(|node| scene.world_transform(node));
@@ -218,7 +233,7 @@ impl ShadowViews {
                     let key = (caster.node, face as u32);
                     let id = self.local.get(&key).copied().unwrap_or_else(&mut allocate);
                     wanted_local.insert(key, id);
-                    let ctx = oxygen_core::ViewContext { view_id: id, ..ctx };
+                    let ctx = ViewContext { view_id: id, frame_index, time_seconds };
                     let resolved = match caster.kind {
                         LocalShadowKind::Spot => SpotShadowResolver {
                             light: caster.node,

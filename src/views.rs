@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use oxygen_bindless::SlotAllocators;
-use oxygen_core::{CascadeSettings, Scene, ViewContext, ViewId, ViewResolver};
+use oxygen_core::{CascadeSettings, Scene, ViewContext, ViewId, ViewIds, ViewResolver};
 use oxygen_core::{Output, OutputSource, ProbeId};
 use oxygen_sceneprep::{PreparedSceneFrame, ScenePrep, ViewPrepOptions, ViewRequest, Visibility};
 
@@ -149,7 +149,9 @@ pub struct Views {
     pub(crate) entries: BTreeMap<ViewId, ViewEntry>,
     /// Face views of each registered probe.
     pub(crate) probes: BTreeMap<ProbeId, [ViewId; oxygen_passes::PROBE_FACES]>,
-    next_view: u32,
+    /// The application's ids; the renderer's own views take theirs from
+    /// ranges of its own.
+    ids: ViewIds,
     next_probe: u32,
     cpu: Option<CpuPrep>,
 }
@@ -170,7 +172,7 @@ impl Default for Views {
 impl Views {
     /// No views.
     pub fn new() -> Self {
-        Views { entries: BTreeMap::new(), probes: BTreeMap::new(), next_view: 0, next_probe: 0, cpu: None }
+        Views { entries: BTreeMap::new(), probes: BTreeMap::new(), ids: ViewIds::default(), next_probe: 0, cpu: None }
     }
 
     /// Registers a view (a resolver, or a [`ViewDesc`] with links and
@@ -181,7 +183,19 @@ impl Views {
         for link in &desc.links {
             self.check_source(*link)?;
         }
-        let id = self.allocate_id();
+        let id = self.ids.allocate();
+        self.insert(id, desc, graph);
+        Ok(id)
+    }
+
+    /// Registers a view under an id the renderer allocated from a range of
+    /// its own (a reflection probe's face), so that it is resolved,
+    /// prepared and recorded like the application's views.
+    pub(crate) fn register_owned(&mut self, id: ViewId, desc: ViewDesc, graph: impl RenderGraph) {
+        self.insert(id, desc, graph);
+    }
+
+    fn insert(&mut self, id: ViewId, desc: ViewDesc, graph: impl RenderGraph) {
         self.entries.insert(
             id,
             ViewEntry {
@@ -198,15 +212,6 @@ impl Views {
             },
         );
         tracing::info!(view = %id, "view registered");
-        Ok(id)
-    }
-
-    /// A fresh view id (also used for the views the renderer creates itself:
-    /// sun cascades, local-light shadows).
-    pub(crate) fn allocate_id(&mut self) -> ViewId {
-        let id = ViewId(self.next_view);
-        self.next_view += 1;
-        id
     }
 
     pub(crate) fn allocate_probe(&mut self) -> ProbeId {

@@ -299,8 +299,16 @@ fn a_metal_reflects_a_uniform_environment_by_the_split_sum() {
         let node = scene.add_node("sphere", Transform::IDENTITY);
         scene.set_renderable(node, Renderable { geometry, materials: vec![material] }).unwrap();
         let image = render(&scene, Some(&Environment::Uniform(radiance)), Msaa::Off);
-        let resolved =
-            camera().resolve(&ViewContext { view_id: ViewId(0), frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
+        let resolved = camera()
+            .resolve(
+                &ViewContext {
+                    view_id: oxygen::core::ViewIds::default().allocate(),
+                    frame_index: 1,
+                    time_seconds: 0.0,
+                },
+                &scene,
+            )
+            .unwrap();
         for degrees in [0.0f32, 35.0, 55.0] {
             let t = degrees.to_radians();
             let p = Vec3::new(t.sin(), 0.0, t.cos());

@@ -6,7 +6,7 @@ mod support;
 use std::path::PathBuf;
 
 use oxygen::bindless::SlotAllocators;
-use oxygen::core::{AlphaMode, Scene, ViewContext, ViewId, ViewResolver};
+use oxygen::core::{AlphaMode, Scene, ViewContext, ViewIds, ViewResolver};
 use oxygen::prelude::*;
 use oxygen::sceneprep::{ScenePrep, ViewRequest};
 use oxygen::{GltfError, import_gltf};
@@ -40,7 +40,7 @@ fn cubes_brings_its_punctual_light_and_cameras_become_resolvers() {
     let cameras = import_gltf(&mut scene, asset("Cameras/Cameras.gltf"), &SceneChoice::Default).unwrap();
     assert_eq!(cameras.cameras.len(), 2);
     for camera in &cameras.cameras {
-        let ctx = ViewContext { view_id: ViewId(0), frame_index: 1, time_seconds: 0.0 };
+        let ctx = ViewContext { view_id: ViewIds::default().allocate(), frame_index: 1, time_seconds: 0.0 };
         let view = camera.resolver(UVec2::new(64, 48)).resolve(&ctx, &scene).unwrap();
         assert!(view.view_projection.is_finite());
     }
@@ -119,7 +119,9 @@ fn alpha_blend_mode_test_prepared_frame_dump() {
         up: Vec3::Y,
         viewport: UVec2::new(320, 240),
     };
-    let view = camera.resolve(&ViewContext { view_id: ViewId(0), frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
+    let view = camera
+        .resolve(&ViewContext { view_id: ViewIds::default().allocate(), frame_index: 1, time_seconds: 0.0 }, &scene)
+        .unwrap();
     let mut prep = ScenePrep::new();
     let frames = prep
         .prepare(&scene, &[ViewRequest { view: &view, options: Default::default() }], &mut SlotAllocators::default())

@@ -40,8 +40,12 @@ fn a_stale_draw_range_is_painted_magenta() {
     let pipelines = Pipelines::new(&gpu.device, &heap, &lighting);
     let demo = multi_view_scene();
     let resolver = main_camera(UVec2::new(96, 64));
-    let view =
-        resolver.resolve(&ViewContext { view_id: ViewId(0), frame_index: 1, time_seconds: 0.0 }, &demo.scene).unwrap();
+    let view = resolver
+        .resolve(
+            &ViewContext { view_id: oxygen::core::ViewIds::default().allocate(), frame_index: 1, time_seconds: 0.0 },
+            &demo.scene,
+        )
+        .unwrap();
 
     let mut prep = ScenePrep::new();
     prep.set_debug_generations(true);

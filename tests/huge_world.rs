@@ -103,7 +103,10 @@ fn a_scene_a_million_units_out_renders_like_the_same_scene_at_the_origin() {
 #[test]
 fn the_default_origin_follows_the_first_view_in_grid_steps() {
     let view = camera_at(FAR_AWAY)
-        .resolve(&ViewContext { view_id: ViewId(0), frame_index: 1, time_seconds: 0.0 }, &Scene::new())
+        .resolve(
+            &ViewContext { view_id: oxygen::core::ViewIds::default().allocate(), frame_index: 1, time_seconds: 0.0 },
+            &Scene::new(),
+        )
         .unwrap();
     let origin = RenderOrigin::default().resolve(Some(&view));
     assert_eq!(origin % 1024.0, DVec3::ZERO, "snapped to the 1024-unit grid: {origin}");

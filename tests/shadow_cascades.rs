@@ -51,8 +51,9 @@ fn cascade_view_prepared_frame_dump() {
     let settings = CascadeSettings { count: 2, resolution: 512, max_distance: 30.0, ..Default::default() };
     // Cascade 1 of 2 covers the grid (cascade 0 ends a few metres from the camera).
     let cascade = CascadeResolver { main, light: demo.sun, settings, index: 1 };
-    let view =
-        cascade.resolve(&ViewContext { view_id: ViewId(7), frame_index: 1, time_seconds: 0.0 }, &demo.scene).unwrap();
+    let view = cascade
+        .resolve(&ViewContext { view_id: oxygen_demo::view_id(7), frame_index: 1, time_seconds: 0.0 }, &demo.scene)
+        .unwrap();
     let mut prep = ScenePrep::new();
     let frames = prep
         .prepare(&demo.scene, &[ViewRequest { view: &view, options: shadow_options() }], &mut SlotAllocators::default())
@@ -275,8 +276,12 @@ fn a_point_light_casts_shadows_through_its_cube_faces() {
     };
     let shadowed_image = render(true);
     let unshadowed_image = render(false);
-    let resolved =
-        camera.resolve(&ViewContext { view_id: ViewId(0), frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
+    let resolved = camera
+        .resolve(
+            &ViewContext { view_id: oxygen::core::ViewIds::default().allocate(), frame_index: 1, time_seconds: 0.0 },
+            &scene,
+        )
+        .unwrap();
     let at = |image: &image::RgbaImage, p: Vec3| region_mean(image, pixel_of(&resolved, p), 1);
     // Ground in the lower cube's shadow, and wall in the side cube's shadow.
     for (what, p) in [("ground", Vec3::new(0.0, 0.0, 0.9)), ("wall", Vec3::new(3.99, 2.5, 0.8))] {
@@ -359,8 +364,12 @@ fn shadow_map_resolution_trades_edge_error() {
         renderer.render_frame(&scene).unwrap();
         support::read_lit_color(&renderer, view)
     };
-    let resolved =
-        camera.resolve(&ViewContext { view_id: ViewId(0), frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
+    let resolved = camera
+        .resolve(
+            &ViewContext { view_id: oxygen::core::ViewIds::default().allocate(), frame_index: 1, time_seconds: 0.0 },
+            &scene,
+        )
+        .unwrap();
     // The exact answer per pixel: None where the pixel does not show the ground.
     let (w, h) = (camera.viewport.x, camera.viewport.y);
     let exact: Vec<Option<bool>> = (0..w * h)

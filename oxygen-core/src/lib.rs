@@ -49,7 +49,9 @@ pub use scene::{
 };
 pub use shadow::{Cascade, CascadeResolver, CascadeSettings, cascade_splits, fit_cascade};
 pub use texture::{ColorSpace, Filter, Sampling, TextureError, TextureImage, Wrap};
-pub use view::{DLookAtResolver, LookAtResolver, ResolvedView, ViewContext, ViewError, ViewId, ViewResolver};
+pub use view::{
+    DLookAtResolver, LookAtResolver, ResolvedView, ViewContext, ViewError, ViewId, ViewIdRange, ViewIds, ViewResolver,
+};
 
 /// Re-exported so that users name the same `glam` types Oxygen uses.
 pub use glam;

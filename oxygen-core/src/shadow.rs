@@ -177,7 +177,7 @@ impl ViewResolver for CascadeResolver {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{Camera, LookAtResolver, ViewId};
+    use crate::{Camera, LookAtResolver, ViewIds};
     use glam::Vec4Swizzles;
 
     fn camera_at(eye: Vec3) -> ResolvedView {
@@ -188,7 +188,12 @@ mod tests {
             up: Vec3::Y,
             viewport: UVec2::new(1280, 720),
         };
-        resolver.resolve(&ViewContext { view_id: ViewId(0), frame_index: 1, time_seconds: 0.0 }, &Scene::new()).unwrap()
+        resolver
+            .resolve(
+                &ViewContext { view_id: ViewIds::default().allocate(), frame_index: 1, time_seconds: 0.0 },
+                &Scene::new(),
+            )
+            .unwrap()
     }
 
     #[test]

@@ -13,14 +13,87 @@ use thiserror::Error;
 
 use crate::{Camera, CameraError, Frustum, Scene};
 
-/// Identifies a registered view. Views are prepared and submitted in
-/// ascending id order, which is registration order.
+/// Identifies a view: one an application registered, or one a renderer
+/// made for itself (a light's shadow view, a reflection probe's face).
+///
+/// Opaque: an id comes from a [`ViewIds`] allocator (the registry of views
+/// holds one, the renderer one per range of its own), never from a number,
+/// so it always names a view somebody allocated. Ids of different
+/// [`ViewIdRange`]s never meet, so the renderer's views cannot take an id
+/// the application will be handed later. Ordered by range (the
+/// application's first), then by allocation order.
+#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct ViewId {
+    range: ViewIdRange,
+    index: u32,
+}
+
+/// Who hands out a [`ViewId`]: each range has its own allocator, so ids of
+/// different ranges never collide.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub struct ViewId(pub u32);
+#[non_exhaustive]
+pub enum ViewIdRange {
+    /// Views an application registers (`view#N`).
+    Application,
+    /// Shadow views a renderer makes for its lights: sun cascades and
+    /// local-light faces (`shadow-view#N`).
+    Shadow,
+    /// Face views of reflection probes (`probe-face#N`).
+    ProbeFace,
+}
+
+impl ViewId {
+    /// The range the id was allocated from.
+    pub fn range(self) -> ViewIdRange {
+        self.range
+    }
+}
 
 impl fmt::Display for ViewId {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "view#{}", self.0)
+        let prefix = match self.range {
+            ViewIdRange::Application => "view",
+            ViewIdRange::Shadow => "shadow-view",
+            ViewIdRange::ProbeFace => "probe-face",
+        };
+        write!(f, "{prefix}#{}", self.index)
+    }
+}
+
+// The Display form says all there is (range and number) and keeps
+// `{:?}` of lists of ids short.
+impl fmt::Debug for ViewId {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        fmt::Display::fmt(self, f)
+    }
+}
+
+/// Hands out the ids of one [`ViewIdRange`], each once, in order.
+#[derive(Clone, Debug)]
+pub struct ViewIds {
+    range: ViewIdRange,
+    next: u32,
+}
+
+/// An allocator of the application's ids ([`ViewIdRange::Application`]).
+impl Default for ViewIds {
+    fn default() -> Self {
+        ViewIds::new(ViewIdRange::Application)
+    }
+}
+
+impl ViewIds {
+    /// An allocator of `range`'s ids, starting at its first.
+    pub fn new(range: ViewIdRange) -> Self {
+        ViewIds { range, next: 0 }
+    }
+
+    /// A fresh id. After 2³² ids of one allocator the numbers start over (a
+    /// registry would have to outlive billions of registrations first).
+    pub fn allocate(&mut self) -> ViewId {
+        let id = ViewId { range: self.range, index: self.next };
+        self.next = self.next.wrapping_add(1);
+        id
     }
 }
 
@@ -411,8 +484,36 @@ mod tests {
         assert!((eye(&near, glam::DVec3::ZERO) - eye(&far, glam::DVec3::new(3e7, -1e6, 3e7))).length() < 1e-6);
     }
 
+    /// The fourth id a registry hands out (`view#3`).
+    fn fourth_id() -> ViewId {
+        let mut ids = ViewIds::new(ViewIdRange::Application);
+        for _ in 0..3 {
+            ids.allocate();
+        }
+        ids.allocate()
+    }
+
+    #[test]
+    fn ids_of_different_ranges_never_meet_and_say_whose_they_are() {
+        let mut application = ViewIds::new(ViewIdRange::Application);
+        let mut shadows = ViewIds::new(ViewIdRange::Shadow);
+        let mut faces = ViewIds::new(ViewIdRange::ProbeFace);
+        let ids = [application.allocate(), shadows.allocate(), faces.allocate(), application.allocate()];
+        for (i, a) in ids.iter().enumerate() {
+            for b in &ids[i + 1..] {
+                assert_ne!(a, b);
+            }
+        }
+        let names: Vec<String> = ids.iter().map(ToString::to_string).collect();
+        assert_eq!(names, ["view#0", "shadow-view#0", "probe-face#0", "view#1"]);
+        assert_eq!(format!("{:?}", ids[1]), "shadow-view#0");
+        assert_eq!(ids[1].range(), ViewIdRange::Shadow);
+        // The application's views sort first, then by allocation.
+        assert!(ids[0] < ids[3] && ids[3] < ids[1] && ids[1] < ids[2]);
+    }
+
     fn ctx() -> ViewContext {
-        ViewContext { view_id: ViewId(3), frame_index: 1, time_seconds: 0.0 }
+        ViewContext { view_id: fourth_id(), frame_index: 1, time_seconds: 0.0 }
     }
 
     #[test]

@@ -2,10 +2,10 @@
 //! it is made, and a good one resolves exactly like the struct literal.
 
 use oxygen_core::glam::{UVec2, Vec3};
-use oxygen_core::{Camera, CameraError, LookAtResolver, Scene, ViewContext, ViewId, ViewResolver};
+use oxygen_core::{Camera, CameraError, LookAtResolver, Scene, ViewContext, ViewIds, ViewResolver};
 
 fn ctx() -> ViewContext {
-    ViewContext { view_id: ViewId(0), frame_index: 1, time_seconds: 0.0 }
+    ViewContext { view_id: ViewIds::default().allocate(), frame_index: 1, time_seconds: 0.0 }
 }
 
 fn camera() -> Camera {

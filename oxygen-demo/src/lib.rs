@@ -280,3 +280,14 @@ pub fn viewer_environment(scene: &Scene) -> oxygen_core::Environment {
 pub fn viewer_cascades() -> oxygen_core::CascadeSettings {
     oxygen_core::CascadeSettings { count: 4, resolution: 1024, ..Default::default() }
 }
+
+/// The id the view registered `index`-th (from 0) gets from a fresh registry
+/// (`view#{index}`), for tests and benchmarks that drive ScenePrep without
+/// a renderer and name their views by position.
+pub fn view_id(index: u32) -> oxygen_core::ViewId {
+    let mut ids = oxygen_core::ViewIds::default();
+    for _ in 0..index {
+        ids.allocate();
+    }
+    ids.allocate()
+}

@@ -30,7 +30,7 @@ use std::time::{Duration, Instant};
 use glam::{UVec2, Vec3, Vec4};
 use oxygen_bindless::SlotAllocators;
 use oxygen_core::{AlphaMode, Camera, Geometry, LookAtResolver, Material, Renderable, ResolvedView, Scene, Transform};
-use oxygen_core::{ViewContext, ViewId, ViewResolver};
+use oxygen_core::{ViewContext, ViewResolver};
 use oxygen_demo::record::{Record, Row};
 use oxygen_sceneprep::finalize::radix_sort::radix_sort_by_key;
 use oxygen_sceneprep::{
@@ -88,7 +88,7 @@ fn views(scene: &Scene, extent: f32, v: usize) -> Vec<ResolvedView> {
                 up: Vec3::Y,
                 viewport: UVec2::new(1920, 1080),
             };
-            let ctx = ViewContext { view_id: ViewId(i as u32), frame_index: 1, time_seconds: 0.0 };
+            let ctx = ViewContext { view_id: oxygen_demo::view_id(i as u32), frame_index: 1, time_seconds: 0.0 };
             resolver.resolve(&ctx, scene).expect("bench cameras are valid")
         })
         .collect()

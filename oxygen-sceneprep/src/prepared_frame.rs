@@ -124,10 +124,11 @@ fn slot(a: &Allocation) -> String {
 }
 
 impl PreparedSceneFrame {
-    /// An empty frame whose buffers ScenePrep fills and reuses.
-    pub(crate) fn empty(transforms: Arc<FrameTransforms>) -> Self {
+    /// An empty frame of `view_id` whose buffers ScenePrep fills and
+    /// reuses (for whichever view takes its place in later frames).
+    pub(crate) fn empty(view_id: ViewId, transforms: Arc<FrameTransforms>) -> Self {
         PreparedSceneFrame {
-            view_id: ViewId(u32::MAX),
+            view_id,
             frame_index: 0,
             draws: Vec::new(),
             indirect_args: Vec::new(),

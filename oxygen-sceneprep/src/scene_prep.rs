@@ -125,7 +125,7 @@ struct ViewWork {
 }
 
 impl ViewWork {
-    fn new(transforms: Arc<FrameTransforms>) -> Self {
+    fn new(view_id: ViewId, transforms: Arc<FrameTransforms>) -> Self {
         ViewWork {
             items: Vec::new(),
             keyed: Vec::new(),
@@ -135,7 +135,7 @@ impl ViewWork {
             coverage: Vec::new(),
             draw_allocation: Allocation::empty(DomainKind::DrawMetadata),
             indirect_allocation: Allocation::empty(DomainKind::IndirectArgs),
-            frame: PreparedSceneFrame::empty(transforms),
+            frame: PreparedSceneFrame::empty(view_id, transforms),
         }
     }
 }
@@ -317,6 +317,13 @@ impl ScenePrep {
         self.stats
     }
 
+    /// What the materials of the frame begun last need of a shading
+    /// pipeline (textures, UV transforms), found by the frame phase's sync
+    /// of the material table.
+    pub fn material_features(&self) -> crate::finalize::materials::MaterialFeatures {
+        self.materials.features()
+    }
+
     /// The prepared frames of the last `prepare` or `prepare_views`, in
     /// request order; empty between `begin_frame` and `prepare_views`.
     pub fn frames(&self) -> &[PreparedSceneFrame] {
@@ -446,8 +453,9 @@ impl ScenePrep {
         self.frame_begun = false;
 
         while self.work.len() < views.len() {
-            self.work.push(Mutex::new(ViewWork::new(Arc::clone(&self.released_transforms))));
-            self.frames.push(PreparedSceneFrame::empty(Arc::clone(&self.released_transforms)));
+            let view_id = views[self.work.len()].view.view_id;
+            self.work.push(Mutex::new(ViewWork::new(view_id, Arc::clone(&self.released_transforms))));
+            self.frames.push(PreparedSceneFrame::empty(view_id, Arc::clone(&self.released_transforms)));
         }
 
         if views.iter().any(|v| v.options.visibility.on_gpu()) {

@@ -5,7 +5,7 @@ use glam::{UVec2, Vec3, Vec4};
 use oxygen_bindless::SlotAllocators;
 use oxygen_core::scene::node_index;
 use oxygen_core::{
-    Camera, Geometry, LookAtResolver, Material, Renderable, Scene, Transform, ViewContext, ViewId, ViewResolver,
+    Camera, Geometry, LookAtResolver, Material, Renderable, Scene, Transform, ViewContext, ViewIds, ViewResolver,
 };
 use oxygen_sceneprep::{CullBound, ScenePrep, ViewPrepOptions, ViewRequest};
 
@@ -39,7 +39,9 @@ fn cubes_at(centres: &[Vec3]) -> (Scene, Vec<u32>) {
 }
 
 fn visible_nodes(scene: &Scene, cull: CullBound) -> Vec<u32> {
-    let view = camera().resolve(&ViewContext { view_id: ViewId(0), frame_index: 1, time_seconds: 0.0 }, scene).unwrap();
+    let view = camera()
+        .resolve(&ViewContext { view_id: ViewIds::default().allocate(), frame_index: 1, time_seconds: 0.0 }, scene)
+        .unwrap();
     let mut prep = ScenePrep::new();
     let frames = prep
         .prepare(
@@ -126,8 +128,9 @@ fn culling_never_drops_a_visible_cube_ten_million_units_out() {
             up: Vec3::Y,
             viewport: UVec2::new(64, 64),
         };
-        let view =
-            resolver.resolve(&ViewContext { view_id: ViewId(0), frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
+        let view = resolver
+            .resolve(&ViewContext { view_id: ViewIds::default().allocate(), frame_index: 1, time_seconds: 0.0 }, &scene)
+            .unwrap();
         let mut prep = ScenePrep::new();
         let frames = prep
             .prepare(

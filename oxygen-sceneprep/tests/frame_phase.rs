@@ -6,7 +6,7 @@ use oxygen_bindless::SlotAllocators;
 use oxygen_core::scene::node_index;
 use oxygen_core::{
     Camera, Geometry, LookAtResolver, Material, NodeFlags, NodeKey, Renderable, ResolvedView, Scene, Transform,
-    ViewContext, ViewId, ViewResolver,
+    ViewContext, ViewIds, ViewResolver,
 };
 use oxygen_sceneprep::{ScenePrep, ViewFilter, ViewPrepOptions, ViewRequest};
 
@@ -18,7 +18,9 @@ fn view(scene: &Scene) -> ResolvedView {
         up: Vec3::Y,
         viewport: UVec2::new(64, 64),
     };
-    camera.resolve(&ViewContext { view_id: ViewId(0), frame_index: 1, time_seconds: 0.0 }, scene).unwrap()
+    camera
+        .resolve(&ViewContext { view_id: ViewIds::default().allocate(), frame_index: 1, time_seconds: 0.0 }, scene)
+        .unwrap()
 }
 
 fn cube_node(scene: &mut Scene, name: &str, t: Transform) -> NodeKey {

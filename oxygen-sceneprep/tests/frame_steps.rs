@@ -6,11 +6,11 @@
 use glam::{UVec2, Vec3};
 use oxygen_bindless::SlotAllocators;
 use oxygen_core::{Camera, Light, LookAtResolver, ResolvedView, Scene, Transform, ViewContext, ViewId, ViewResolver};
-use oxygen_demo::{main_camera, multi_view_scene, side_camera};
+use oxygen_demo::{main_camera, multi_view_scene, side_camera, view_id};
 use oxygen_sceneprep::{PrepError, ScenePrep, ViewFilter, ViewPrepOptions, ViewRequest};
 
 fn ctx(id: u32) -> ViewContext {
-    ViewContext { view_id: ViewId(id), frame_index: 1, time_seconds: 0.0 }
+    ViewContext { view_id: view_id(id), frame_index: 1, time_seconds: 0.0 }
 }
 
 /// The demo's main and side cameras as views 0 and 1.
@@ -83,7 +83,7 @@ fn a_duplicate_view_leaves_the_frame_begun_for_a_corrected_retry() {
     prep.begin_frame(&demo.scene, &mut slots).expect("begin_frame");
     let twice = [ViewRequest { view: &views[1], options: Default::default() }; 2];
     let refused = prep.prepare_views(&demo.scene, &twice, &mut slots).map(<[_]>::len);
-    assert_eq!(refused, Err(PrepError::DuplicateView(ViewId(1))));
+    assert_eq!(refused, Err(PrepError::DuplicateView(view_id(1))));
     let frames = prep.prepare_views(&demo.scene, &requests(&views), &mut slots).expect("the corrected retry");
     assert_eq!(frames.len(), 2);
 }
@@ -98,7 +98,7 @@ fn prepare_refuses_a_duplicate_view_before_the_frame_phase_runs() {
     let before = (prep.stats(), dumps(&prep));
     let twice = [ViewRequest { view: &views[0], options: Default::default() }; 2];
     let refused = prep.prepare(&demo.scene, &twice, &mut slots).map(<[_]>::len);
-    assert_eq!(refused, Err(PrepError::DuplicateView(ViewId(0))));
+    assert_eq!(refused, Err(PrepError::DuplicateView(view_id(0))));
     assert_eq!((prep.stats(), dumps(&prep)), before, "nothing ran, last frame's views are still there");
 }
 
@@ -147,7 +147,7 @@ fn the_views_of_a_frame_can_be_chosen_from_its_frame_collection() {
     requests.extend(shadow_views.iter().map(|view| ViewRequest { view, options: shadow }));
     let frames = prep.prepare_views(&demo.scene, &requests, &mut slots).expect("prepare_views");
     let ids: Vec<ViewId> = frames.iter().map(|f| f.view_id()).collect();
-    assert_eq!(ids, vec![ViewId(0), ViewId(1), ViewId(2)]);
+    assert_eq!(ids, vec![view_id(0), view_id(1), view_id(2)]);
     assert!(frames.iter().all(|f| !f.draws().is_empty()));
     assert!(frames.iter().all(|f| f.slots().world_transforms == frames[0].slots().world_transforms), "shared");
 }

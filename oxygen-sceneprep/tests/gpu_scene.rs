@@ -7,7 +7,7 @@ use glam::{Quat, UVec2, Vec3, Vec4};
 use oxygen_bindless::SlotAllocators;
 use oxygen_core::{
     AlphaMode, Camera, Geometry, LodLevel, LookAtResolver, Material, NodeFlags, Renderable, ResolvedView, Scene,
-    Transform, ViewContext, ViewId, ViewResolver,
+    Transform, ViewContext, ViewResolver,
 };
 use oxygen_sceneprep::{PassMask, ScenePrep, ViewFilter, ViewPrepOptions, ViewRequest, Visibility};
 
@@ -71,7 +71,7 @@ fn view(scene: &Scene) -> ResolvedView {
         up: Vec3::Y,
         viewport: UVec2::new(320, 200),
     };
-    camera.resolve(&ViewContext { view_id: ViewId(1), frame_index: 1, time_seconds: 0.0 }, scene).unwrap()
+    camera.resolve(&ViewContext { view_id: oxygen_demo::view_id(1), frame_index: 1, time_seconds: 0.0 }, scene).unwrap()
 }
 
 fn gpu_options() -> ViewPrepOptions {

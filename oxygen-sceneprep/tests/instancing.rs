@@ -6,7 +6,7 @@
 use glam::{UVec2, Vec3, Vec4};
 use oxygen_bindless::SlotAllocators;
 use oxygen_core::{
-    Camera, Geometry, LookAtResolver, Material, Renderable, ResolvedView, Scene, Transform, ViewContext, ViewId,
+    Camera, Geometry, LookAtResolver, Material, Renderable, ResolvedView, Scene, Transform, ViewContext, ViewIds,
     ViewResolver,
 };
 use oxygen_sceneprep::{Instancing, PreparedSceneFrame, ScenePrep, ViewPrepOptions, ViewRequest};
@@ -34,7 +34,9 @@ fn mixed_grid(n: usize) -> (Scene, ResolvedView) {
         up: Vec3::Y,
         viewport: UVec2::new(256, 256),
     };
-    let view = camera.resolve(&ViewContext { view_id: ViewId(0), frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
+    let view = camera
+        .resolve(&ViewContext { view_id: ViewIds::default().allocate(), frame_index: 1, time_seconds: 0.0 }, &scene)
+        .unwrap();
     (scene, view)
 }
 
@@ -107,8 +109,12 @@ fn grouping_by_geometry_gives_one_command_per_mesh_and_material() {
 fn a_single_mesh_scene_draws_each_partition_with_one_command() {
     let demo = oxygen_demo::multi_view_scene();
     let camera = oxygen_demo::main_camera(UVec2::new(320, 240));
-    let view =
-        camera.resolve(&ViewContext { view_id: ViewId(0), frame_index: 1, time_seconds: 0.0 }, &demo.scene).unwrap();
+    let view = camera
+        .resolve(
+            &ViewContext { view_id: ViewIds::default().allocate(), frame_index: 1, time_seconds: 0.0 },
+            &demo.scene,
+        )
+        .unwrap();
     let (prep, _) = prepare(&demo.scene, &view, Instancing::ByGeometry);
     let frame = &prep.frames()[0];
     assert_commands_cover_draws(frame);

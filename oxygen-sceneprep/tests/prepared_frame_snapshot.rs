@@ -4,12 +4,12 @@
 
 use glam::UVec2;
 use oxygen_bindless::SlotAllocators;
-use oxygen_core::{ViewContext, ViewId, ViewResolver};
-use oxygen_demo::{main_camera, multi_view_scene, side_camera};
+use oxygen_core::{ViewContext, ViewResolver};
+use oxygen_demo::{main_camera, multi_view_scene, side_camera, view_id};
 use oxygen_sceneprep::{ScenePrep, ViewPrepOptions, ViewRequest};
 
 fn resolve(resolver: &dyn ViewResolver, id: u32, scene: &oxygen_core::Scene) -> oxygen_core::ResolvedView {
-    let ctx = ViewContext { view_id: ViewId(id), frame_index: 1, time_seconds: 0.0 };
+    let ctx = ViewContext { view_id: view_id(id), frame_index: 1, time_seconds: 0.0 };
     resolver.resolve(&ctx, scene).expect("demo cameras resolve")
 }
 

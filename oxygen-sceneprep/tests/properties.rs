@@ -7,7 +7,7 @@ use oxygen_bindless::SlotAllocators;
 use oxygen_core::scene::node_index;
 use oxygen_core::{
     AlphaMode, Camera, Geometry, LookAtResolver, Material, Renderable, ResolvedView, Scene, Transform, ViewContext,
-    ViewId, ViewResolver,
+    ViewResolver,
 };
 use oxygen_sceneprep::finalize::sort_key::sort_key;
 use oxygen_sceneprep::{CullBound, PassMask, PreparedSceneFrame, ScenePrep, ViewPrepOptions, ViewRequest};
@@ -75,7 +75,7 @@ fn random_view(rng: &mut Rng, scene: &Scene, id: u32) -> ResolvedView {
         };
         let viewport = UVec2::new(1 + rng.below(1920) as u32, 1 + rng.below(1080) as u32);
         let resolver = LookAtResolver { camera, eye, target, up: Vec3::Y, viewport };
-        let ctx = ViewContext { view_id: ViewId(id), frame_index: 1, time_seconds: 0.0 };
+        let ctx = ViewContext { view_id: oxygen_demo::view_id(id), frame_index: 1, time_seconds: 0.0 };
         if let Ok(v) = resolver.resolve(&ctx, scene) {
             return v;
         }

@@ -6,7 +6,7 @@ use oxygen_bindless::SlotAllocators;
 use oxygen_core::light::Mobility;
 use oxygen_core::{
     AlphaMode, Camera, Geometry, Light, LookAtResolver, Material, NodeFlags, Renderable, Scene, Transform, ViewContext,
-    ViewId, ViewResolver,
+    ViewIds, ViewResolver,
 };
 use oxygen_sceneprep::{ScenePrep, ViewRequest};
 
@@ -18,7 +18,9 @@ fn view_of(scene: &Scene) -> oxygen_core::ResolvedView {
         up: Vec3::Y,
         viewport: UVec2::new(320, 200),
     };
-    camera.resolve(&ViewContext { view_id: ViewId(0), frame_index: 1, time_seconds: 0.0 }, scene).unwrap()
+    camera
+        .resolve(&ViewContext { view_id: ViewIds::default().allocate(), frame_index: 1, time_seconds: 0.0 }, scene)
+        .unwrap()
 }
 
 #[test]

@@ -5,8 +5,7 @@
 use glam::{UVec2, Vec3, Vec4};
 use oxygen_bindless::{DomainKind, SlotAllocators};
 use oxygen_core::{
-    Camera, Geometry, LookAtResolver, Material, NodeKey, Renderable, Scene, Transform, ViewContext, ViewId,
-    ViewResolver,
+    Camera, Geometry, LookAtResolver, Material, NodeKey, Renderable, Scene, Transform, ViewContext, ViewResolver,
 };
 use oxygen_sceneprep::{ScenePrep, ViewRequest};
 
@@ -49,7 +48,7 @@ fn ten_thousand_frames_of_churn_leak_no_slots_and_stay_bounded() {
             next_view += 1;
         } else if next() % 8 == 0 {
             let gone = live_views.remove((next() % live_views.len() as u64) as usize);
-            prep.forget_view(ViewId(gone), &mut slots).unwrap();
+            prep.forget_view(oxygen_demo::view_id(gone), &mut slots).unwrap();
         }
 
         let views: Vec<_> = live_views
@@ -62,7 +61,8 @@ fn ten_thousand_frames_of_churn_leak_no_slots_and_stay_bounded() {
                     up: Vec3::Y,
                     viewport: UVec2::new(64, 64),
                 };
-                let ctx = ViewContext { view_id: ViewId(*id), frame_index: frame as u64, time_seconds: 0.0 };
+                let ctx =
+                    ViewContext { view_id: oxygen_demo::view_id(*id), frame_index: frame as u64, time_seconds: 0.0 };
                 resolver.resolve(&ctx, &scene).unwrap()
             })
             .collect();
@@ -79,7 +79,7 @@ fn ten_thousand_frames_of_churn_leak_no_slots_and_stay_bounded() {
     // Per-view domains: only the live views' ranges remain; after forgetting
     // them, nothing.
     for id in live_views.drain(..) {
-        prep.forget_view(ViewId(id), &mut slots).unwrap();
+        prep.forget_view(oxygen_demo::view_id(id), &mut slots).unwrap();
     }
     for kind in [DomainKind::DrawMetadata, DomainKind::IndirectArgs] {
         assert_eq!(slots.get(kind).live_allocations(), 0, "{kind:?} leaked");

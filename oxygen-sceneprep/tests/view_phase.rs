@@ -4,7 +4,7 @@ use glam::{UVec2, Vec3, Vec4};
 use oxygen_bindless::SlotAllocators;
 use oxygen_core::{
     AlphaMode, Camera, Geometry, LodLevel, LookAtResolver, Material, Renderable, ResolvedView, Scene, Transform,
-    ViewContext, ViewId, ViewResolver,
+    ViewContext, ViewIds, ViewResolver,
 };
 use oxygen_sceneprep::{PassMask, ScenePrep, ViewPrepOptions, ViewRequest};
 
@@ -16,7 +16,9 @@ fn view_from(scene: &Scene, distance: f32) -> ResolvedView {
         up: Vec3::Y,
         viewport: UVec2::new(100, 100),
     };
-    camera.resolve(&ViewContext { view_id: ViewId(0), frame_index: 1, time_seconds: 0.0 }, scene).unwrap()
+    camera
+        .resolve(&ViewContext { view_id: ViewIds::default().allocate(), frame_index: 1, time_seconds: 0.0 }, scene)
+        .unwrap()
 }
 
 /// A unit cube (36 indices) with a 2-triangle LOD below 40 % of the screen

@@ -8,7 +8,7 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 use glam::{UVec2, Vec3};
 use oxygen_bindless::SlotAllocators;
-use oxygen_core::{LookAtResolver, Transform, ViewContext, ViewId, ViewResolver};
+use oxygen_core::{LookAtResolver, Transform, ViewContext, ViewResolver};
 use oxygen_demo::{main_camera, multi_view_scene, side_camera};
 use oxygen_sceneprep::{CullBound, ScenePrep, ViewFilter, ViewPrepOptions, ViewRequest};
 
@@ -46,7 +46,7 @@ static GLOBAL: CountingAllocator = CountingAllocator;
 #[test]
 fn steady_state_prepare_makes_no_heap_allocation() {
     let mut demo = multi_view_scene();
-    let ctx = |id| ViewContext { view_id: ViewId(id), frame_index: 1, time_seconds: 0.0 };
+    let ctx = |id| ViewContext { view_id: oxygen_demo::view_id(id), frame_index: 1, time_seconds: 0.0 };
     let cameras: [LookAtResolver; 3] =
         [main_camera(UVec2::new(640, 480)), side_camera(UVec2::new(320, 240)), side_camera(UVec2::new(100, 300))];
     let views: Vec<_> =

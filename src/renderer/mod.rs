@@ -111,6 +111,27 @@ pub enum RenderError {
         /// What other views' targets take already.
         taken: u64,
     },
+    /// Entry `index` of the sizes given to [`Renderer::check_target_budget`]
+    /// would pass the target memory budget (with the entries before it).
+    #[error(
+        "entry {index}: targets of {width}x{height} would take {} MiB; the target budget is {} MiB, of which {} MiB \
+         are taken by the entries before it (RendererOptions::target_budget_bytes)",
+        bytes >> 20, budget >> 20, taken >> 20
+    )]
+    TargetBudgetEntry {
+        /// Its position in the list.
+        index: usize,
+        /// Width.
+        width: u32,
+        /// Height.
+        height: u32,
+        /// What its targets would take.
+        bytes: u64,
+        /// The budget.
+        budget: u64,
+        /// What the entries before it take.
+        taken: u64,
+    },
     /// A resolved viewport exceeds the device's texture size limit.
     #[error("{view}: viewport {width}x{height} exceeds the device limit of {limit}")]
     ViewportTooLarge {
@@ -343,6 +364,23 @@ impl Default for RendererOptions {
     }
 }
 
+/// Targets that would pass the target budget; the caller names whose.
+struct OverBudget {
+    width: u32,
+    height: u32,
+    bytes: u64,
+    budget: u64,
+    taken: u64,
+}
+
+impl OverBudget {
+    /// The error for `view`'s targets.
+    fn for_view(self, view: ViewId) -> RenderError {
+        let OverBudget { width, height, bytes, budget, taken } = self;
+        RenderError::TargetBudget { view, width, height, bytes, budget, taken }
+    }
+}
+
 /// A probe's cube and position, kept by the renderer.
 pub(crate) struct ProbeResources {
     pub(crate) texture: wgpu::Texture,
@@ -406,6 +444,8 @@ pub struct Renderer {
     /// Views shown with `show_in_window` (no resizing).
     shown_views: BTreeMap<ViewId, (crate::WindowId, crate::WindowRect)>,
     compositor: present::Compositor,
+    /// Ids of reflection probes' face views: a range of the renderer's own.
+    probe_face_ids: oxygen_core::ViewIds,
 }
 
 impl Renderer {
@@ -498,8 +538,7 @@ impl Renderer {
             None => ScenePrep::new(),
         };
         prep.set_debug_generations(options.debug_generations);
-        let mut shadows = ShadowViews::default();
-        shadows.local_settings = options.local_shadows;
+        let shadows = ShadowViews::new(options.local_shadows);
         Ok(Renderer {
             origin: options.origin,
             target_budget_bytes: options.target_budget_bytes,
@@ -531,6 +570,7 @@ impl Renderer {
             next_window: 0,
             gpu_timer,
             compositor,
+            probe_face_ids: oxygen_core::ViewIds::new(oxygen_core::ViewIdRange::ProbeFace),
         })
     }
 
@@ -785,6 +825,14 @@ impl Renderer {
         &self.last_frame
     }
 
+    /// Registers a probe's face view under an id of the renderer's own
+    /// range ([`ViewIdRange::ProbeFace`](oxygen_core::ViewIdRange)).
+    pub(crate) fn register_probe_face(&mut self, desc: ViewDesc) -> ViewId {
+        let id = self.probe_face_ids.allocate();
+        self.views.register_owned(id, desc, crate::ProbeFaceGraph);
+        id
+    }
+
     pub(crate) fn add_probe(
         &mut self,
         id: ProbeId,
@@ -814,11 +862,19 @@ impl Renderer {
 
     /// Checks, before anything is allocated, that views of these sizes
     /// (`(viewport, depth_only)`) fit the target budget together; returns
-    /// their total. `view` numbers the first that does not fit in the error.
+    /// their total. The error ([`RenderError::TargetBudgetEntry`]) names
+    /// the first entry that does not fit by its position.
     pub fn check_target_budget(&self, views: &[(glam::UVec2, bool)]) -> Result<u64, RenderError> {
         let mut taken = 0u64;
-        for (i, (viewport, depth_only)) in views.iter().enumerate() {
-            self.admit_targets(ViewId(i as u32), *viewport, !depth_only, 1, &mut taken)?;
+        for (index, (viewport, depth_only)) in views.iter().enumerate() {
+            self.admit_targets(*viewport, !depth_only, 1, &mut taken).map_err(|e| RenderError::TargetBudgetEntry {
+                index,
+                width: e.width,
+                height: e.height,
+                bytes: e.bytes,
+                budget: e.budget,
+                taken: e.taken,
+            })?;
         }
         Ok(taken)
     }
@@ -827,16 +883,15 @@ impl Renderer {
     /// pass the target budget (leaving `taken` as it was).
     fn admit_targets(
         &self,
-        view: ViewId,
         viewport: glam::UVec2,
         with_color: bool,
         samples: u32,
         taken: &mut u64,
-    ) -> Result<(), RenderError> {
+    ) -> Result<(), OverBudget> {
         let bytes = ViewTargets::bytes_for_msaa(viewport.x, viewport.y, with_color.then_some(self.hdr_format), samples);
         if taken.saturating_add(bytes) > self.target_budget_bytes {
             let (width, height, budget) = (viewport.x, viewport.y, self.target_budget_bytes);
-            return Err(RenderError::TargetBudget { view, width, height, bytes, budget, taken: *taken });
+            return Err(OverBudget { width, height, bytes, budget, taken: *taken });
         }
         *taken += bytes;
         Ok(())
@@ -865,21 +920,10 @@ impl Renderer {
         let uploaded_bytes = self.heap.bytes_written() - heap_bytes_before
             + constants_bytes
             + self.visibility.as_ref().map_or(0, GpuVisibility::uploaded_last_frame);
-        // What the shading pipelines must carry, from one walk over the
-        // materials: texture sampling, and the second UV set or transforms.
-        (self.textured_materials, self.uv_transforms) = (false, false);
-        for (_, m) in scene.materials() {
-            self.textured_materials |= [
-                m.base_color_texture,
-                m.metallic_roughness_texture,
-                m.normal_texture,
-                m.emissive_texture,
-                m.occlusion_texture,
-            ]
-            .iter()
-            .any(Option::is_some);
-            self.uv_transforms |= !m.uvs.is_identity();
-        }
+        // What the shading pipelines must carry, as ScenePrep's material
+        // table found it: texture sampling, the second UV set or transforms.
+        let materials = self.prep.material_features();
+        (self.textured_materials, self.uv_transforms) = (materials.textures, materials.uv_transforms);
         let record_start = Instant::now();
         let created_before = self.pipelines.pipelines_created();
         self.pipelines.begin_frame();

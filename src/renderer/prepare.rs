@@ -4,7 +4,7 @@
 
 use std::sync::Arc;
 
-use oxygen_core::{Scene, ViewContext};
+use oxygen_core::Scene;
 use oxygen_sceneprep::{ViewPrepOptions, ViewRequest};
 use tracing::{info_span, warn};
 
@@ -35,9 +35,7 @@ impl Renderer {
             .iter()
             .filter_map(|v| Some((v.id, v.world, self.views.entries.get(&v.id)?.sun_shadows?)))
             .collect();
-        let ctx = ViewContext { view_id: oxygen_core::ViewId(u32::MAX), frame_index, time_seconds };
-        let views = &mut self.views;
-        let (planned, released) = self.shadows.plan(&owners, frame, scene, ctx, || views.allocate_id());
+        let (planned, released) = self.shadows.plan(&owners, frame, scene, frame_index, time_seconds);
         for id in released {
             self.release_view(id)?;
         }
@@ -46,7 +44,7 @@ impl Renderer {
         for shadow in planned {
             let resolved = shadow.resolved.map_err(RenderError::from).and_then(|view| {
                 if let ShadowRole::Cascade { .. } = shadow.role {
-                    self.admit_targets(shadow.id, view.viewport, false, 1, &mut taken)?;
+                    self.admit_targets(view.viewport, false, 1, &mut taken).map_err(|e| e.for_view(shadow.id))?;
                 }
                 Ok(view)
             });

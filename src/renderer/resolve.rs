@@ -92,7 +92,7 @@ impl Renderer {
                     return Err(RenderError::ViewportTooLarge { view: *id, width, height, limit });
                 }
                 if let TargetPlan::Own { with_color, samples } = target {
-                    self.admit_targets(*id, view.viewport, with_color, samples, &mut taken)?;
+                    self.admit_targets(view.viewport, with_color, samples, &mut taken).map_err(|e| e.for_view(*id))?;
                 }
                 Ok(view)
             });

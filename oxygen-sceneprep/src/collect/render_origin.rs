@@ -74,7 +74,7 @@ impl RenderOrigin {
 #[cfg(test)]
 mod tests {
     use glam::{DMat4, UVec2, Vec3};
-    use oxygen_core::{Camera, LookAtResolver, Scene, ViewContext, ViewId, ViewResolver};
+    use oxygen_core::{Camera, LookAtResolver, Scene, ViewContext, ViewIds, ViewResolver};
 
     use super::*;
 
@@ -86,7 +86,10 @@ mod tests {
             up: Vec3::Y,
             viewport: UVec2::new(8, 8),
         }
-        .resolve(&ViewContext { view_id: ViewId(0), frame_index: 1, time_seconds: 0.0 }, &Scene::new())
+        .resolve(
+            &ViewContext { view_id: ViewIds::default().allocate(), frame_index: 1, time_seconds: 0.0 },
+            &Scene::new(),
+        )
         .expect("a valid camera")
     }
 

@@ -10,9 +10,51 @@ use oxygen_core::scene::material_index;
 use crate::MaterialRecord;
 use crate::finalize::texture_cache::TextureCache;
 
+/// What the scene's materials need of a shading pipeline, found while the
+/// table is synced (the one walk over the materials a frame makes), so that
+/// shaders can leave out what no material uses.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct MaterialFeatures {
+    /// Some material names a texture (whether or not the scene holds it:
+    /// the pipeline keeps the sampling path and reads the absent slot).
+    pub textures: bool,
+    /// Some material reads a second UV set or has a texture transform.
+    pub uv_transforms: bool,
+}
+
+impl MaterialFeatures {
+    /// Every feature: what a pipeline must carry before the scene is known.
+    pub const ALL: MaterialFeatures = MaterialFeatures { textures: true, uv_transforms: true };
+
+    /// The features `material` needs.
+    pub fn of(material: &oxygen_core::Material) -> Self {
+        MaterialFeatures {
+            textures: [
+                material.base_color_texture,
+                material.metallic_roughness_texture,
+                material.normal_texture,
+                material.emissive_texture,
+                material.occlusion_texture,
+            ]
+            .iter()
+            .any(Option::is_some),
+            uv_transforms: !material.uvs.is_identity(),
+        }
+    }
+
+    /// What either needs.
+    pub fn union(self, other: MaterialFeatures) -> Self {
+        MaterialFeatures {
+            textures: self.textures || other.textures,
+            uv_transforms: self.uv_transforms || other.uv_transforms,
+        }
+    }
+}
+
 /// The CPU copy of the material domain range and whether the GPU is behind.
 pub struct MaterialTable {
     records: Vec<MaterialRecord>,
+    features: MaterialFeatures,
     scratch: Vec<MaterialRecord>,
     allocation: Allocation,
     dirty: bool,
@@ -23,6 +65,7 @@ impl Default for MaterialTable {
     fn default() -> Self {
         MaterialTable {
             records: Vec::new(),
+            features: MaterialFeatures::default(),
             scratch: Vec::new(),
             allocation: Allocation::empty(DomainKind::Materials),
             dirty: false,
@@ -45,7 +88,9 @@ impl MaterialTable {
         textures: &mut TextureCache,
     ) -> Result<(), SlotError> {
         self.scratch.clear();
+        let mut features = MaterialFeatures::default();
         for (handle, material) in scene.materials() {
+            features = features.union(MaterialFeatures::of(material));
             let i = material_index(handle) as usize;
             if self.scratch.len() <= i {
                 self.scratch.resize(i + 1, placeholder());
@@ -68,6 +113,7 @@ impl MaterialTable {
             record.occlusion_texture = resolve(material.occlusion_texture, "occlusion")?;
             self.scratch[i] = record;
         }
+        self.features = features;
         if self.scratch != self.records {
             std::mem::swap(&mut self.scratch, &mut self.records);
             self.dirty = true;
@@ -84,6 +130,12 @@ impl MaterialTable {
     /// The records, indexed by material id.
     pub fn records(&self) -> &[MaterialRecord] {
         &self.records
+    }
+
+    /// What the scene's materials need of a shading pipeline, as of the
+    /// last sync.
+    pub fn features(&self) -> MaterialFeatures {
+        self.features
     }
 
     /// Where the table lives.
