@@ -22,7 +22,6 @@
 // rewriting it with `partial_cmp` would hide that intent.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-pub mod bvh;
 pub mod collect;
 mod draw_metadata;
 pub mod finalize;
@@ -31,7 +30,7 @@ pub mod gpu_scene;
 pub mod overdraw;
 mod pass_mask;
 mod prepared_frame;
-pub mod ray_scene;
+pub mod ray;
 mod scene_prep;
 pub mod worker_pool;
 
@@ -48,5 +47,5 @@ pub use gpu_scene::{GpuScene, Visibility};
 pub use overdraw::expected_shaded_layers;
 pub use pass_mask::PassMask;
 pub use prepared_frame::{GpuViewPlan, Partition, PreparedSceneFrame, PreparedSlots, canonical_draws, canonical_dump};
-pub use ray_scene::{RayInstance, RayScene};
+pub use ray::{RayInstance, RayScene};
 pub use scene_prep::{PrepError, PrepStats, ScenePrep, ViewRequest};

@@ -20,7 +20,7 @@ use std::sync::Mutex;
 
 use oxygen_bindless::{Allocation, BindlessError, BindlessHeap, DomainKind, INVALID_SLOT};
 use oxygen_core::ViewId;
-use oxygen_sceneprep::{RayInstance, RayScene, ray_scene::POSED};
+use oxygen_sceneprep::{RayInstance, RayScene, ray::POSED};
 use tracing::info_span;
 
 use super::params::{ENVIRONMENT_MAP, RASTER_MODEL, RASTER_REFLECTIONS, TraceParams};

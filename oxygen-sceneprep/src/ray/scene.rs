@@ -35,8 +35,8 @@ use glam::{Mat3, Mat4, Vec3};
 use oxygen_core::{Aabb, Geometry, Scene, Vertex};
 use tracing::info_span;
 
+use super::bvh::{Bvh, BvhNode, triangle_boxes};
 use crate::FrameCollection;
-use crate::bvh::{Bvh, BvhNode, triangle_boxes};
 use crate::finalize::geometry_cache::GeometryCache;
 
 /// Triangles per bottom-level leaf; instances per top-level leaf.
