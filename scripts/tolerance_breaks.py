@@ -37,7 +37,7 @@ import sys
 import time
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
-LIT = "oxygen-passes/src/forward_lit.wgsl"
+LIT = "oxygen-passes/src/mesh/forward_lit.wgsl"
 
 # (name, file, old, new, test binary, test name, what the break does)
 BREAKS = [
@@ -49,17 +49,17 @@ BREAKS = [
      "environment_irradiance(n) * (occlusion / PI)", "environment_irradiance(n) * (1.05 * occlusion / PI)",
      "environment", "multisampled_views_draw_the_environment_too",
      "as above, on the multisampled view"),
-    ("split-sum-256-samples", "oxygen-passes/src/split_sum.wgsl",
+    ("split-sum-256-samples", "oxygen-passes/src/lighting/split_sum.wgsl",
      "const SAMPLES: u32 = 1024u;", "const SAMPLES: u32 = 256u;",
      "environment", "the_split_sum_table_matches_its_cpu_twin",
      "the split-sum table integrated with a quarter of its samples"),
-    ("rg11b10-exposure-4pc", "oxygen-passes/src/tonemap_pass.rs",
-     "bytemuck::bytes_of(&TonemapParams { exposure: self.exposure, pad: [0.0; 3] }),",
+    ("rg11b10-exposure-4pc", "oxygen-passes/src/post/tonemap.rs",
+     "bytemuck::bytes_of(&TonemapParams { exposure: self.exposure, pad0: 0.0, pad1: 0.0, pad2: 0.0 }),",
      "bytemuck::bytes_of(&TonemapParams { exposure: self.exposure * if color.hdr.format() == "
-     "wgpu::TextureFormat::Rg11b10Ufloat { 1.04 } else { 1.0 }, pad: [0.0; 3] }),",
+     "wgpu::TextureFormat::Rg11b10Ufloat { 1.04 } else { 1.0 }, pad0: 0.0, pad1: 0.0, pad2: 0.0 }),",
      "frame_economy", "rg11b10_hdr_stays_within_its_documented_error_and_shows_coarser_steps",
      "the packed HDR format's tone map 4 % off (a format-dependent bug)"),
-    ("msaa-one-sample-written", "oxygen-passes/src/pipelines.rs",
+    ("msaa-one-sample-written", "oxygen-passes/src/pipelines/cache.rs",
      "            // cut-out edges stay aliased (alpha to coverage is not used).\n"
      "            multisample: wgpu::MultisampleState { count: key.samples.max(1), ..Default::default() },",
      "            // cut-out edges stay aliased (alpha to coverage is not used).\n"

@@ -20,8 +20,9 @@ edits meanwhile keeps their edit: only the mutation is undone.
 
 A mutant whose old text does not occur exactly once in its file fails the
 script (naming it) before anything runs: the denominator is every mutant.
-`--check` validates with oxygen-passes' naga test (tests/shaders_validate.rs,
-every pass shader on every texture path with its entry points): first the
+`--check` validates with oxygen-passes' naga test (shaders::validate_tests:
+every shader module of the registry, src/shaders/registry.rs, composed on
+every texture path, each entry point at its stage): first the
 unmutated shaders, then rounds of mutants whose edits do not overlap,
 applied together (a failing round is retried mutant by mutant to name the
 culprit). A mutated file that test does not validate (the composition
@@ -74,19 +75,19 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 
 PASSES = "oxygen-passes/src/"
-BRDF = PASSES + "brdf.wgsl"
-SHADER = PASSES + "forward_lit.wgsl"
-ENVIRONMENT = PASSES + "environment.wgsl"
-VERTEX = PASSES + "mesh_vertex.wgsl"
-DEPTH = PASSES + "depth_only.wgsl"
-TONEMAP = PASSES + "tonemap.wgsl"
-TONEMAP_PASS = PASSES + "tonemap_pass.wgsl"
-CUBE_FILTER = PASSES + "cube_filter.wgsl"
-SPLIT_SUM = PASSES + "split_sum.wgsl"
-HIZ = PASSES + "hiz.wgsl"
-HIZ_TEST = PASSES + "hiz_test.wgsl"
-CULL = PASSES + "visibility_cull.wgsl"
-TRACE = PASSES + "reference_trace.wgsl"
+BRDF = PASSES + "shaders/brdf.wgsl"
+SHADER = PASSES + "mesh/forward_lit.wgsl"
+ENVIRONMENT = PASSES + "lighting/ibl/environment.wgsl"
+VERTEX = PASSES + "mesh/mesh_vertex.wgsl"
+DEPTH = PASSES + "mesh/depth_only.wgsl"
+TONEMAP = PASSES + "post/tonemap_operator.wgsl"
+TONEMAP_PASS = PASSES + "post/tonemap.wgsl"
+CUBE_FILTER = PASSES + "lighting/ibl/cube_filter.wgsl"
+SPLIT_SUM = PASSES + "lighting/split_sum.wgsl"
+HIZ = PASSES + "visibility/hiz.wgsl"
+HIZ_TEST = PASSES + "visibility/hiz_test.wgsl"
+CULL = PASSES + "visibility/cull.wgsl"
+TRACE = PASSES + "reference/trace.wgsl"
 # WGSL embedded in Rust: the window composition shader (COMPOSE_WGSL).
 WINDOWS = "src/windows.rs"
 
@@ -451,25 +452,18 @@ SUBJECTS = [
 
 MUTANTS = [m for _, _, mutants, _ in SUBJECTS for m in mutants]
 
-# The naga validation test of oxygen-passes: it validates every pass
-# shader, on every texture path, with its entry points.
+# The naga validation test of oxygen-passes: it composes every shader module
+# of one list (src/shaders/registry.rs) on every texture path and validates
+# each entry point at its stage.
 VALIDATION_PACKAGE = "oxygen-passes"
-VALIDATION_TEST = "shaders_validate"
-# What each call in that test validates: (text in the test, files it
-# assembles). A file counts as validated while one of its texts is still in
-# the test.
-BINDLESS = ["oxygen-bindless/src/scene_constants.wgsl", "oxygen-bindless/src/textures/binding_array.wgsl",
-            "oxygen-bindless/src/textures/grouped_arrays.wgsl", "oxygen-sceneprep/src/gpu_records.wgsl"]
-VALIDATED_BY = [
-    ("oxygen_passes::shader_source(", BINDLESS + [VERTEX, DEPTH, SHADER, BRDF, PASSES + "cube_faces.wgsl",
-                                                  ENVIRONMENT, TONEMAP]),
-    ("oxygen_passes::TONEMAP_WGSL", [TONEMAP, TONEMAP_PASS]),
-    ("oxygen_passes::CUBE_FILTER_WGSL", [PASSES + "cube_faces.wgsl", CUBE_FILTER]),
-    ("oxygen_passes::split_sum_shader_source(", [SPLIT_SUM]),
-    ("oxygen_passes::cull_shader_source(", ["oxygen-sceneprep/src/gpu_records.wgsl", CULL, HIZ_TEST]),
-    ('include_str!("../src/hiz.wgsl")', [HIZ]),
-    ("oxygen_passes::reference_shader_source(", BINDLESS + [BRDF, PASSES + "cube_faces.wgsl", ENVIRONMENT, TRACE]),
-]
+VALIDATION_TEST = "shaders::validate_tests"
+VALIDATION_COMMAND = ["cargo", "test", "-p", VALIDATION_PACKAGE, "--lib", VALIDATION_TEST]
+# The registry names its WGSL files with include_str! (paths relative to
+# it); the WGSL of oxygen-bindless and oxygen-sceneprep comes in through
+# their constants.
+REGISTRY = ROOT / VALIDATION_PACKAGE / "src" / "shaders" / "registry.rs"
+REGISTERED_ELSEWHERE = ["oxygen-bindless/src/scene_constants.wgsl", "oxygen-bindless/src/textures/binding_array.wgsl",
+                        "oxygen-bindless/src/textures/grouped_arrays.wgsl", "oxygen-sceneprep/src/gpu_records.wgsl"]
 
 # Prints the binaries that render, one a line (shared with scripts/test.sh).
 GPU_TEST_BINARIES = ROOT / "scripts" / "gpu-test-binaries"
@@ -778,18 +772,21 @@ def run_binaries(binaries, log, env, timeout, keep_going):
 # ---- --check ----
 
 def covered_files():
-    source = read(ROOT / VALIDATION_PACKAGE / "tests" / f"{VALIDATION_TEST}.rs")
-    return {f for text, files in VALIDATED_BY if text in source for f in files}
+    """The WGSL files the validation test composes: the registry's."""
+    registry = read(REGISTRY)
+    files = set(REGISTERED_ELSEWHERE)
+    for included in re.findall(r'include_str!\("([^"]+)"\)', registry):
+        files.add(shown((REGISTRY.parent / included).resolve()))
+    return files
 
 
 def validate(log):
     """None when the naga validation passes, else its failure."""
-    command = ["cargo", "test", "-p", VALIDATION_PACKAGE, "--test", VALIDATION_TEST]
-    status, output = run(command, log=log)
+    status, output = run(VALIDATION_COMMAND, log=log)
     if status == 0:
         return None
-    if "does not parse" in output or "does not validate" in output or is_test_failure(output):
-        lines = [l for l in output.splitlines() if "does not" in l or "error:" in l or "panicked" in l]
+    if is_test_failure(output):
+        lines = [l for l in output.splitlines() if "error" in l.lower() or "panicked" in l or "does not" in l]
         return "\n".join(lines[:12]) or "validation failed"
     tail = "\n".join(output.splitlines()[-25:])
     raise Failure(f"{VALIDATION_PACKAGE}'s {VALIDATION_TEST} does not build (someone's work in progress?):\n{tail}")
@@ -846,7 +843,7 @@ def check(chosen, one_by_one):
             if failure:
                 failed[m[0]] = failure
                 say(f"  {m[0]}: does not validate:\n    " + failure.replace("\n", "\n    "))
-    print(f"| mutant | file | applies once | validates ({VALIDATION_PACKAGE} --test {VALIDATION_TEST}) |")
+    print(f"| mutant | file | applies once | validates ({VALIDATION_PACKAGE} {VALIDATION_TEST}) |")
     print("|---|---|---|---|")
     for m in chosen:
         if m in uncovered:
