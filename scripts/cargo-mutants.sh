@@ -53,7 +53,7 @@ case "$scope" in
     args=(-p oxygen-sceneprep --test-package oxygen-sceneprep --test-package oxygen-bindless)
     ;;
   passes)
-    args=(-p oxygen-passes --test-package oxygen-passes --file oxygen-passes/src/half.rs)
+    args=(-p oxygen-passes --test-package oxygen-passes --file oxygen-passes/src/lighting/ibl/half.rs)
     ;;
   importer)
     args=(-p oxygen --file 'src/gltf_import/**' --file src/environment_file.rs
