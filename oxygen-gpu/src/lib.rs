@@ -13,11 +13,13 @@
 
 #![warn(missing_docs)]
 
+pub mod bindings;
 mod context;
 pub mod gpu_struct;
 mod readback;
 mod target;
 
+pub use bindings::LayoutEntries;
 pub use context::{GpuContext, GpuError, GpuOptions};
 pub use gpu_struct::{FieldLayout, GpuStruct, StructLayout, WgslType, check_layout};
 pub use readback::{HdrImage, f16_to_f32, unpack_rg11b10_ufloat};
