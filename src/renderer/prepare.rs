@@ -1,54 +1,136 @@
-//! Step 2 of a frame: pick the render origin, run ScenePrep's frame phase,
-//! plan this frame's shadow views from the lights it found (the owners' sun
-//! cascades, one view per local shadow tile), prepare every view and upload.
+//! Step 2 of a frame, prepare: pick the render origin, run ScenePrep's
+//! frame phase, plan this frame's shadow views from the lights it found
+//! (the owners' sun cascades, one view per local shadow tile), prepare
+//! every view and upload; then give every view its targets and constants,
+//! and hand GPU visibility and the reference tracer what they need. Its
+//! output, [`PreparedFrame`], is every view of the frame complete: nothing
+//! after it changes a view.
 
 use std::sync::Arc;
+use std::time::Instant;
 
-use oxygen_core::Scene;
+use oxygen_core::{ResolvedView, Scene, ViewId};
+use oxygen_passes::{OutputSource, ProbeId};
+use oxygen_sceneprep::finalize::materials::MaterialFeatures;
 use oxygen_sceneprep::{ViewPrepOptions, ViewRequest};
 use tracing::{info_span, warn};
 
-use super::resolve::{FramePlan, FrameView, TargetPlan};
+use super::resolve::{FrameClock, ResolvedFrame, ResolvedFrameView};
+use super::targets::atlas_layers;
 use super::{FrameWarning, RenderError, Renderer, ViewRole};
 use crate::graph::ErasedGraph;
 use crate::shadows::{ShadowRole, shadow_view_options};
 
+/// Where a view of this frame renders.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum TargetPlan {
+    /// Targets of its own, with colour or depth only, and samples per pixel.
+    Own { with_color: bool, samples: u32 },
+    /// Layer `tile` of the local shadow atlas.
+    AtlasLayer { tile: u32 },
+    /// Layer `face` of probe `probe`'s cube.
+    ProbeFace { probe: ProbeId, face: u32 },
+}
+
+/// One view of this frame, registered or the renderer's own.
+pub(crate) struct FrameView {
+    pub(crate) id: ViewId,
+    pub(crate) role: ViewRole,
+    /// The view in world space (what ScenePrep culls against).
+    pub(crate) world: ResolvedView,
+    /// The view relative to the render origin (what the GPU sees).
+    pub(crate) gpu: ResolvedView,
+    pub(crate) options: ViewPrepOptions,
+    pub(crate) graph: Arc<dyn ErasedGraph>,
+    pub(crate) links: Vec<OutputSource>,
+    pub(crate) target: TargetPlan,
+}
+
+/// The output of the prepare step. View `i`'s prepared scene frame is
+/// `ScenePrep::frames()[i]` (ScenePrep keeps them, reused frame to frame),
+/// its targets and constants the renderer's targets of its id.
+pub(crate) struct PreparedFrame {
+    pub(crate) clock: FrameClock,
+    /// Where the GPU's coordinates are centred this frame.
+    pub(crate) origin: glam::DVec3,
+    /// The registered views in id order, then the shadow views.
+    pub(crate) views: Vec<FrameView>,
+    /// The local shadow atlas, when a view renders into it.
+    pub(crate) atlas: Option<wgpu::Texture>,
+    /// What the scene's materials need of the shading pipelines.
+    pub(crate) materials: MaterialFeatures,
+    /// The views left out, and why.
+    pub(crate) warnings: Vec<FrameWarning>,
+    /// The nodes ScenePrep left out, and why.
+    pub(crate) skipped_nodes: Vec<FrameWarning>,
+    /// Seconds from the start of the frame to the end of the upload.
+    pub(crate) seconds: f64,
+    /// Bytes written into GPU buffers.
+    pub(crate) uploaded_bytes: u64,
+}
+
+impl FrameView {
+    /// `view` as the frame renders it: the passes see every view relative
+    /// to the render origin, as the world matrices and lights are uploaded.
+    fn at_origin(view: ResolvedFrameView, origin: glam::DVec3) -> Self {
+        let ResolvedFrameView { id, role, world, options, graph, links, target } = view;
+        FrameView { id, role, world, gpu: world.relative_to(origin), options, graph, links, target }
+    }
+}
+
 impl Renderer {
+    /// Step 2: prepares the views `resolved` of `scene` (and the shadow views
+    /// they need) and everything the GPU reads of them; `started` is when
+    /// the frame began.
     pub(super) fn prepare(
         &mut self,
         scene: &Scene,
-        plan: &mut FramePlan,
-        warnings: &mut Vec<FrameWarning>,
-        frame_index: u64,
-        time_seconds: f32,
-    ) -> Result<(), RenderError> {
-        let _span = info_span!("prepare", views = plan.views.len()).entered();
+        resolved: ResolvedFrame,
+        started: Instant,
+    ) -> Result<PreparedFrame, RenderError> {
+        let _span = info_span!("prepare", views = resolved.views.len()).entered();
+        let ResolvedFrame { clock, views: registered, mut warnings } = resolved;
+        let heap_bytes_before = self.heap.bytes_written();
         // The origin follows the first colour view (shadow views are passed
         // over when there is another).
-        let followed = plan.views.iter().find(|v| !v.options.depth_only).or(plan.views.first()).map(|v| &v.world);
-        plan.origin = self.origin.resolve(followed);
-        self.prep.set_render_origin(plan.origin);
+        let followed = registered.iter().find(|v| !v.options.depth_only).or(registered.first()).map(|v| &v.world);
+        let origin = self.settings.origin.resolve(followed);
+        self.prep.set_render_origin(origin);
         let frame = self.prep.begin_frame(scene, &mut self.heap.slots)?;
 
-        let owners: Vec<_> = plan
-            .views
+        let owners: Vec<_> = registered
             .iter()
             .filter_map(|v| Some((v.id, v.world, self.views.entries.get(&v.id)?.sun_shadows?)))
             .collect();
-        let (planned, released) = self.shadows.plan(&owners, frame, scene, frame_index, time_seconds);
+        let (planned, released) = self.shadows.views.plan(&owners, frame, scene, clock.index, clock.time_seconds);
+        // Shadow views no light needs any more: their targets and slots go.
         for id in released {
-            self.release_view(id)?;
+            self.targets.release(id);
+            self.prep.forget_view(id, &mut self.heap.slots)?;
         }
-        let shadow_graph: Arc<dyn ErasedGraph> = Arc::clone(&self.shadow_graph);
-        let mut taken = self.planned_target_bytes(plan);
+        // Shadow cascades are admitted after the registered views' targets.
+        let mut taken = self.targets.paused_bytes(&self.views)
+            + registered
+                .iter()
+                .filter_map(|v| match v.target {
+                    TargetPlan::Own { with_color, samples } => {
+                        Some(self.targets.bytes_for(v.world.viewport, with_color, samples))
+                    }
+                    _ => None,
+                })
+                .sum::<u64>();
+        let mut views: Vec<FrameView> = Vec::with_capacity(registered.len() + planned.len());
+        for v in registered {
+            views.push(FrameView::at_origin(v, origin));
+        }
         for shadow in planned {
             let resolved = shadow.resolved.map_err(RenderError::from).and_then(|view| {
                 if let ShadowRole::Cascade { .. } = shadow.role {
-                    self.admit_targets(view.viewport, false, 1, &mut taken).map_err(|e| e.for_view(shadow.id))?;
+                    self.targets.admit(view.viewport, false, 1, &mut taken).map_err(|e| e.for_view(shadow.id))?;
                 }
                 Ok(view)
             });
-            let view = match resolved {
+            let world = match resolved {
                 Ok(view) => view,
                 Err(e) => {
                     warn!(view = %shadow.id, "shadow view skipped this frame: {e}");
@@ -60,12 +142,10 @@ impl Renderer {
             // for an owner with occlusion culling: a shadow map has no
             // pre-pass to build a pyramid from); local shadows the default way.
             let owner_visibility = match shadow.role {
-                ShadowRole::Cascade { owner, .. } => {
-                    plan.views.iter().find(|v| v.id == owner).map(|v| v.options.visibility)
-                }
+                ShadowRole::Cascade { owner, .. } => views.iter().find(|v| v.id == owner).map(|v| v.options.visibility),
                 ShadowRole::Local { .. } => None,
             };
-            let visibility = self.view_visibility(owner_visibility, true, false);
+            let visibility = self.visibility.for_view(owner_visibility, true, false);
             let (role, target) = match shadow.role {
                 ShadowRole::Cascade { owner, index } => {
                     (ViewRole::SunCascade { owner, index }, TargetPlan::Own { with_color: false, samples: 1 })
@@ -74,27 +154,54 @@ impl Renderer {
                     (ViewRole::LocalShadow { light, face, tile }, TargetPlan::AtlasLayer { tile })
                 }
             };
-            plan.views.push(FrameView {
-                id: shadow.id,
-                role,
-                world: view,
-                gpu: view,
-                options: ViewPrepOptions { visibility, ..shadow_view_options() },
-                graph: Arc::clone(&shadow_graph),
-                links: Vec::new(),
-                target,
-            });
+            let options = ViewPrepOptions { visibility, ..shadow_view_options() };
+            let graph = Arc::clone(&self.shadows.graph);
+            let view = ResolvedFrameView { id: shadow.id, role, world, options, graph, links: Vec::new(), target };
+            views.push(FrameView::at_origin(view, origin));
         }
 
         let requests: Vec<ViewRequest<'_>> =
-            plan.views.iter().map(|v| ViewRequest { view: &v.world, options: v.options }).collect();
+            views.iter().map(|v| ViewRequest { view: &v.world, options: v.options }).collect();
         self.prep.prepare_views(scene, &requests, &mut self.heap.slots)?;
         self.prep.upload(&mut self.heap, &self.gpu.device, &self.gpu.queue)?;
-        // The passes see every view relative to the render origin, as the
-        // world matrices and lights were uploaded.
-        for view in &mut plan.views {
-            view.gpu = view.world.relative_to(plan.origin);
-        }
-        Ok(())
+        let seconds = started.elapsed().as_secs_f64();
+
+        let layers = atlas_layers(&views);
+        let atlas = (layers > 0).then(|| {
+            let resolution = self.shadows.views.local_settings.map_or(1024, |s| s.resolution).max(1);
+            self.lighting.local_shadow_atlas(&self.gpu.device, resolution, layers)
+        });
+        let _targets = info_span!("targets", views = views.len()).entered();
+        let frames = self.prep.frames();
+        let constants_bytes = self.targets.allocate(
+            &self.gpu,
+            &self.heap,
+            &self.probes,
+            &views,
+            frames,
+            atlas.as_ref(),
+            clock.time_seconds,
+        );
+        drop(_targets);
+        self.visibility.prepare(&self.gpu, &self.heap, &self.prep, &views, frames);
+        self.reference.prepare(&self.gpu, &mut self.heap, &self.prep, &views)?;
+        let uploaded_bytes =
+            self.heap.bytes_written() - heap_bytes_before + constants_bytes + self.visibility.uploaded_last_frame();
+        let skipped_nodes = self.prep.frame_collection().skipped.iter().map(|s| FrameWarning::NodeSkipped {
+            node: s.node,
+            name: s.name.clone(),
+            reason: s.reason,
+        });
+        Ok(PreparedFrame {
+            clock,
+            origin,
+            views,
+            atlas,
+            materials: self.prep.material_features(),
+            warnings,
+            skipped_nodes: skipped_nodes.collect(),
+            seconds,
+            uploaded_bytes,
+        })
     }
 }

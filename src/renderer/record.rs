@@ -1,5 +1,6 @@
-//! Step 4 of a frame: order the views by their links, then record every
-//! view's graph concurrently and submit the command buffers in that order.
+//! Step 3 of a frame, record: order the views by their links, then record
+//! every view's graph concurrently and submit the command buffers in that
+//! order. Its output is [`RecordedFrame`].
 //!
 //! Each worker thread of ScenePrep's pool runs a small executor: it takes
 //! the first view not yet started whose inputs have all recorded (or, when
@@ -19,15 +20,44 @@ use std::sync::{Arc, Mutex};
 use std::task::{Context, Poll, Wake, Waker};
 use std::time::{Duration, Instant};
 
-use oxygen_core::ViewId;
+use oxygen_core::{ResolvedView, ViewId};
 use oxygen_passes::{
-    CommandRecorder, FrameProgress, LinkedView, LocalShadowsInput, OutputSource, PassError, Pipelines, ProbeCubeInput,
-    ProbeId, RecordStats, RenderContext, ShadowMapInput, ViewInputs,
+    CommandRecorder, FrameProgress, LinkedView, LocalShadowsInput, OutputSource, PassError, Pipelines, ProbeId,
+    RecordStats, RenderContext, ShadowMapInput, ViewInputs,
 };
 use tracing::{Instrument, info_span};
 
-use super::resolve::{FramePlan, FrameView, TargetPlan};
+use super::prepare::{FrameView, PreparedFrame, TargetPlan};
 use super::{RenderError, Renderer, ViewReport, ViewRole};
+
+/// What a view's targets hold once the frame that rendered it is
+/// submitted.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct RenderedView {
+    pub(crate) id: ViewId,
+    /// The view it was rendered as (relative to that frame's origin).
+    pub(crate) view: ResolvedView,
+    /// Whether its HDR target holds the image (false when shading
+    /// tone-mapped in place and wrote only the display colour).
+    pub(crate) hdr_written: bool,
+}
+
+/// The output of the record step: the frame's command buffers are
+/// submitted.
+pub(crate) struct RecordedFrame {
+    /// Per view, in submission order.
+    pub(crate) reports: Vec<ViewReport>,
+    /// What each view recorded left in its targets, in submission order.
+    pub(crate) rendered: Vec<RenderedView>,
+    /// Threads the views were recorded on.
+    pub(crate) threads: usize,
+    /// Seconds spent recording (wall clock).
+    pub(crate) seconds: f64,
+    /// Distinct mesh pipelines the frame's passes used.
+    pub(crate) pipelines_used: usize,
+    /// Pipelines created while recording.
+    pub(crate) pipelines_created: u64,
+}
 
 /// What one view's recording produced.
 struct Recorded {
@@ -42,7 +72,7 @@ impl Renderer {
     /// the views it reads (its links, its sun cascades, and for colour views
     /// the local shadow views), ties broken by id. Links were checked for
     /// cycles at registration.
-    fn link_order(&self, plan: &FramePlan) -> (Vec<usize>, Vec<Vec<ViewId>>) {
+    fn link_order(&self, plan: &PreparedFrame) -> (Vec<usize>, Vec<Vec<ViewId>>) {
         let index: BTreeMap<ViewId, usize> = plan.views.iter().enumerate().map(|(i, v)| (v.id, i)).collect();
         let local: Vec<usize> =
             (0..plan.views.len()).filter(|i| matches!(plan.views[*i].target, TargetPlan::AtlasLayer { .. })).collect();
@@ -51,7 +81,7 @@ impl Renderer {
                 .links
                 .iter()
                 .flat_map(|source| self.views.producers(*source))
-                .chain(self.shadows.cascades_of(view.id))
+                .chain(self.shadows.views.cascades_of(view.id))
                 .filter_map(|id| index.get(&id).copied())
                 .collect();
             if !view.options.depth_only {
@@ -77,21 +107,20 @@ impl Renderer {
         (order, producers)
     }
 
-    /// What `view` may read this frame.
     /// The shadow map `v` rendered this frame, as another view reads it.
     fn shadow_map_input<'a>(&'a self, v: &'a FrameView) -> Option<ShadowMapInput<'a>> {
-        let t = self.gpu_views.get(&v.id)?.targets.as_ref()?;
+        let t = self.targets.get(v.id)?.targets.as_ref()?;
         Some(ShadowMapInput { producer: v.id, view: &v.gpu, depth: &t.depth_view, resolution: t.width })
     }
 
     /// The frame's local shadow maps by tile, once for every view that reads them.
     fn local_shadows<'a>(
         &'a self,
-        plan: &'a FramePlan,
+        plan: &'a PreparedFrame,
         atlas: Option<&'a wgpu::TextureView>,
     ) -> Option<LocalShadowsInput<'a>> {
         let atlas = atlas?;
-        let mut tiles = vec![None; Self::atlas_layers(plan) as usize];
+        let mut tiles = vec![None; super::targets::atlas_layers(&plan.views) as usize];
         for v in &plan.views {
             if let TargetPlan::AtlasLayer { tile } = v.target {
                 tiles[tile as usize] = self.shadow_map_input(v);
@@ -100,35 +129,37 @@ impl Renderer {
         Some(LocalShadowsInput { atlas, tiles })
     }
 
+    /// What `view` may read this frame.
     fn inputs<'a>(
         &'a self,
-        plan: &'a FramePlan,
+        plan: &'a PreparedFrame,
         view: &FrameView,
         local: Option<&LocalShadowsInput<'a>>,
     ) -> ViewInputs<'a> {
         let in_frame = |id: ViewId| plan.views.iter().find(|v| v.id == id);
-        let cascades =
-            self.shadows.cascades_of(view.id).filter_map(in_frame).filter_map(|v| self.shadow_map_input(v)).collect();
+        let cascades = self
+            .shadows
+            .views
+            .cascades_of(view.id)
+            .filter_map(in_frame)
+            .filter_map(|v| self.shadow_map_input(v))
+            .collect();
         let local_shadows = local.filter(|_| !view.options.depth_only).cloned();
         let mut probes = Vec::new();
         let mut views = Vec::new();
         for source in &view.links {
             match *source {
                 OutputSource::Probe(probe) => {
-                    let (Some(faces), Some(resources)) = (self.views.probes.get(&probe), self.probes.get(&probe))
+                    let Some(input) = self.views.probes.get(&probe).and_then(|faces| self.probes.input(probe, *faces))
                     else {
                         continue;
                     };
-                    probes.push(ProbeCubeInput {
-                        probe,
-                        faces: *faces,
-                        texture: &resources.texture,
-                        position: resources.position,
-                    });
+                    probes.push(input);
                 }
                 OutputSource::View(id) => {
-                    let Some(gpu) = self.gpu_views.get(&id) else { continue };
-                    let resolved = in_frame(id).map(|v| &v.gpu).or(gpu.last_view.as_ref());
+                    let Some(gpu) = self.targets.get(id) else { continue };
+                    // A paused view is read as it was last rendered.
+                    let resolved = in_frame(id).map(|v| &v.gpu).or(self.targets.last_view(id));
                     if let (Some(resolved), Some(targets)) = (resolved, gpu.targets.as_ref()) {
                         views.push(LinkedView { id, view: resolved, targets });
                     }
@@ -138,17 +169,14 @@ impl Renderer {
         ViewInputs { cascades, local_shadows, probes, views }
     }
 
-    /// Records every view of `plan` and submits them in link order.
-    pub(super) fn record(&self, plan: &FramePlan) -> Result<(Vec<ViewReport>, usize), RenderError> {
+    /// Step 3: records every view of `plan` and submits them in link order.
+    pub(super) fn record(&self, plan: &PreparedFrame) -> Result<RecordedFrame, RenderError> {
+        let started = Instant::now();
+        let created_before = self.pipelines.pipelines_created();
+        self.pipelines.begin_frame();
         let (order, producers) = self.link_order(plan);
         let _span = info_span!("record", views = order.len()).entered();
-        let atlas_texture = (Self::atlas_layers(plan) > 0).then(|| {
-            plan.views.iter().find_map(|v| match v.target {
-                TargetPlan::AtlasLayer { .. } => self.gpu_views.get(&v.id)?.targets.as_ref().map(|t| t.depth.clone()),
-                _ => None,
-            })
-        });
-        let atlas = atlas_texture.flatten().map(|t| {
+        let atlas = plan.atlas.as_ref().map(|t| {
             t.create_view(&wgpu::TextureViewDescriptor {
                 dimension: Some(wgpu::TextureViewDimension::D2Array),
                 ..Default::default()
@@ -173,7 +201,7 @@ impl Renderer {
         let mut contexts = Vec::with_capacity(order.len());
         for &i in &order {
             let view = &plan.views[i];
-            let Some(gpu) = self.gpu_views.get(&view.id) else { continue };
+            let Some(gpu) = self.targets.get(view.id) else { continue };
             let Some(targets) = gpu.targets.as_ref() else {
                 // No target this frame (e.g. a probe face whose probe is gone).
                 progress.complete(view.id);
@@ -190,16 +218,16 @@ impl Renderer {
                     targets,
                     pipelines: &self.pipelines,
                     lighting: &self.lighting,
-                    draw_path: self.draw_path,
+                    draw_path: self.settings.draw_path,
                     inputs: self.inputs(plan, view, local_shadows.as_ref()),
                     progress: &progress,
                     origin: plan.origin,
-                    hdr_read_by_others: self.keep_hdr || hdr_readers.contains(&view.id),
-                    textured_materials: self.textured_materials,
-                    uv_transforms: self.uv_transforms,
-                    specialize_shaders: self.specialize_shaders,
-                    visibility: self.visibility.as_ref(),
-                    reference: self.reference.as_ref(),
+                    hdr_read_by_others: self.settings.keep_hdr || hdr_readers.contains(&view.id),
+                    textured_materials: plan.materials.textures,
+                    uv_transforms: plan.materials.uv_transforms,
+                    specialize_shaders: self.settings.specialize_shaders,
+                    visibility: self.visibility.gpu.as_ref(),
+                    reference: self.reference.tracer.as_ref(),
                 },
             ));
         }
@@ -219,6 +247,7 @@ impl Renderer {
 
         let mut buffers = Vec::with_capacity(contexts.len());
         let mut reports = Vec::with_capacity(contexts.len());
+        let mut rendered = Vec::with_capacity(contexts.len());
         // Per probe whose faces rendered: how many buffers precede its
         // prefilter (one past its last face's).
         let mut probe_filters: BTreeMap<ProbeId, usize> = BTreeMap::new();
@@ -232,6 +261,11 @@ impl Renderer {
             if let ViewRole::ProbeFace { probe, .. } = view.role {
                 probe_filters.insert(probe, buffers.len());
             }
+            rendered.push(RenderedView {
+                id: view.id,
+                view: view.gpu,
+                hdr_written: !recorded.stats.tone_mapped_in_pass,
+            });
             reports.push(ViewReport {
                 view: view.id,
                 role: view.role,
@@ -250,18 +284,8 @@ impl Renderer {
         let mut filters: Vec<(ProbeId, usize)> = probe_filters.into_iter().collect();
         filters.sort_by_key(|(_, at)| std::cmp::Reverse(*at));
         for (probe, at) in filters {
-            let Some(resources) = self.probes.get(&probe) else { continue };
-            let mut encoder = self
-                .gpu
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("probe prefilter") });
-            self.lighting.prefilter_probe(
-                &self.gpu.device,
-                &mut encoder,
-                &resources.texture,
-                self.probe_filter_samples,
-            );
-            buffers.insert(at, encoder.finish());
+            let Some(prefilter) = self.probes.prefilter(&self.lighting, &self.gpu.device, probe) else { continue };
+            buffers.insert(at, prefilter);
         }
         // The frame's GPU time, when the last one has been read back.
         let timer = self.gpu_timer.as_ref().filter(|t| t.ready());
@@ -273,10 +297,17 @@ impl Renderer {
         if let Some(timer) = timer {
             timer.submitted();
         }
-        if let Some(visibility) = &self.visibility {
+        if let Some(visibility) = &self.visibility.gpu {
             visibility.after_submit();
         }
-        Ok((reports, threads))
+        Ok(RecordedFrame {
+            reports,
+            rendered,
+            threads,
+            seconds: started.elapsed().as_secs_f64(),
+            pipelines_used: self.pipelines.used_this_frame().len(),
+            pipelines_created: self.pipelines.pipelines_created() - created_before,
+        })
     }
 }
 
@@ -370,7 +401,7 @@ struct Task<'a> {
 /// One thread's executor (see the module docs).
 fn run_executor<'a>(
     contexts: &'a [(usize, RenderContext<'a>)],
-    plan: &'a FramePlan,
+    plan: &'a PreparedFrame,
     queue: &ViewQueue<'_>,
     results: &[Mutex<Option<Recorded>>],
     pipelines: &Pipelines,

@@ -1,50 +1,138 @@
-//! Step 3 of a frame: every view's targets (its own, reallocated when its
-//! size changes; a layer of the local shadow atlas; a face of its probe's
-//! cube) and its scene constants.
+//! The views' targets, a subsystem of the renderer: per view its colour and
+//! depth targets (its own, reallocated when its size changes; a layer of
+//! the local shadow atlas; a face of its probe's cube), its `SceneConstants`
+//! buffer and what the targets hold now; the target memory budget; and the
+//! `Renderer` methods about target memory.
 
-use oxygen_bindless::{CameraConstants, SceneConstantsBuffer};
-use oxygen_gpu::ViewTargets;
-use oxygen_passes::{GpuViewRequest, ReferenceTracer};
-use oxygen_sceneprep::ViewFilter;
-use tracing::info_span;
+use std::collections::HashMap;
 
-use super::resolve::{FramePlan, TargetPlan};
-use super::{RenderError, Renderer, ViewGpu};
+use oxygen_bindless::{BindlessHeap, CameraConstants, SceneConstantsBuffer};
+use oxygen_core::{ResolvedView, ViewId};
+use oxygen_gpu::{ColorTargets, GpuContext, HdrFormat, Msaa, ViewTargets};
+use oxygen_sceneprep::PreparedSceneFrame;
 
-impl Renderer {
-    /// Tiles of the local shadow atlas this frame (one past the highest).
-    pub(super) fn atlas_layers(plan: &FramePlan) -> u32 {
-        plan.views
-            .iter()
-            .filter_map(|v| match v.target {
-                TargetPlan::AtlasLayer { tile } => Some(tile + 1),
-                _ => None,
-            })
-            .max()
-            .unwrap_or(0)
+use super::prepare::{FrameView, TargetPlan};
+use super::probes::Probes;
+use super::record::RenderedView;
+use super::{RenderError, Renderer};
+use crate::views::Views;
+
+/// What the renderer keeps per view on the GPU.
+pub(crate) struct ViewGpu {
+    pub(crate) targets: Option<ViewTargets>,
+    pub(crate) constants: SceneConstantsBuffer,
+    /// What the targets hold: the last frame that rendered into them, so
+    /// that a view reading a paused view knows its pose, and a readback
+    /// knows whether the HDR image was written.
+    pub(crate) holds: Option<RenderedView>,
+}
+
+/// Targets that would pass the target budget; the caller names whose.
+pub(crate) struct OverBudget {
+    width: u32,
+    height: u32,
+    bytes: u64,
+    budget: u64,
+    taken: u64,
+}
+
+impl OverBudget {
+    /// The error for `view`'s targets.
+    pub(crate) fn for_view(self, view: ViewId) -> RenderError {
+        let OverBudget { width, height, bytes, budget, taken } = self;
+        RenderError::TargetBudget { view, width, height, bytes, budget, taken }
+    }
+}
+
+/// Every view's targets and constants, and the budget they share.
+pub(crate) struct Targets {
+    views: HashMap<ViewId, ViewGpu>,
+    /// The HDR format in use (the option, or its fallback).
+    pub(crate) hdr_format: HdrFormat,
+    pub(crate) budget: u64,
+}
+
+impl Targets {
+    pub(crate) fn new(hdr_format: HdrFormat, budget: u64) -> Self {
+        Targets { views: HashMap::new(), hdr_format, budget }
     }
 
-    pub(super) fn allocate_targets(&mut self, plan: &FramePlan, time_seconds: f32) -> u64 {
-        let _span = info_span!("targets", views = plan.views.len()).entered();
-        let layers = Self::atlas_layers(plan);
-        let atlas = (layers > 0).then(|| {
-            let resolution = self.shadows.local_settings.map_or(1024, |s| s.resolution).max(1);
-            self.lighting.local_shadow_atlas(&self.gpu.device, resolution, layers)
-        });
-        let frames = self.prep.frames();
+    /// What the renderer keeps for `view`, once a frame has prepared it.
+    pub(crate) fn get(&self, view: ViewId) -> Option<&ViewGpu> {
+        self.views.get(&view)
+    }
+
+    /// Forgets a view's targets and constants.
+    pub(crate) fn release(&mut self, view: ViewId) {
+        self.views.remove(&view);
+    }
+
+    /// Bytes the views' targets take now.
+    pub(crate) fn memory(&self) -> u64 {
+        self.views.values().filter_map(|v| v.targets.as_ref()).map(ViewTargets::bytes).sum()
+    }
+
+    /// What targets of a `viewport`-sized view take with the HDR format in use.
+    pub(crate) fn bytes_for(&self, viewport: glam::UVec2, with_color: bool, samples: u32) -> u64 {
+        ViewTargets::bytes_for_msaa(viewport.x, viewport.y, with_color.then_some(self.hdr_format), samples)
+    }
+
+    /// Adds a `viewport`-sized view's targets to `taken`, or says they would
+    /// pass the target budget (leaving `taken` as it was).
+    pub(crate) fn admit(
+        &self,
+        viewport: glam::UVec2,
+        with_color: bool,
+        samples: u32,
+        taken: &mut u64,
+    ) -> Result<(), OverBudget> {
+        let bytes = self.bytes_for(viewport, with_color, samples);
+        if taken.saturating_add(bytes) > self.budget {
+            let (width, height, budget) = (viewport.x, viewport.y, self.budget);
+            return Err(OverBudget { width, height, bytes, budget, taken: *taken });
+        }
+        *taken += bytes;
+        Ok(())
+    }
+
+    /// Target bytes of paused views: they keep their targets, so their
+    /// memory stays taken.
+    pub(crate) fn paused_bytes(&self, views: &Views) -> u64 {
+        views
+            .entries
+            .iter()
+            .filter(|(_, v)| !v.active)
+            .filter_map(|(id, _)| self.views.get(id)?.targets.as_ref())
+            .map(ViewTargets::bytes)
+            .sum()
+    }
+
+    /// Gives every view of the frame its targets (`atlas`: the local
+    /// shadow atlas, when a view renders into it) and writes its constants
+    /// (`frames[i]` is `views[i]`'s prepared frame); returns the bytes the
+    /// constants wrote.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn allocate(
+        &mut self,
+        gpu: &GpuContext,
+        heap: &BindlessHeap,
+        probes: &Probes,
+        views: &[FrameView],
+        frames: &[PreparedSceneFrame],
+        atlas: Option<&wgpu::Texture>,
+        time_seconds: f32,
+    ) -> u64 {
+        let device = &gpu.device;
         let mut written = 0;
-        for (view, frame) in plan.views.iter().zip(frames) {
-            let device = &self.gpu.device;
-            let heap = &self.heap;
-            let entry = self.gpu_views.entry(view.id).or_insert_with(|| ViewGpu {
+        for (view, frame) in views.iter().zip(frames) {
+            let entry = self.views.entry(view.id).or_insert_with(|| ViewGpu {
                 targets: None,
                 constants: SceneConstantsBuffer::new(
                     device,
                     heap.scene_constants_layout(),
                     &format!("{} scene constants", view.id),
                 ),
-                last_view: None,
-                hdr_written: false,
+                holds: None,
             });
             let (width, height, label) = (view.gpu.viewport.x, view.gpu.viewport.y, view.id.to_string());
             match view.target {
@@ -59,13 +147,13 @@ impl Renderer {
                     }
                 }
                 TargetPlan::AtlasLayer { tile } => {
-                    // Resolved above whenever a view renders into the atlas.
-                    if let Some(atlas) = &atlas {
+                    // Made by the prepare step whenever a view renders into it.
+                    if let Some(atlas) = atlas {
                         entry.targets = Some(ViewTargets::atlas_layer(atlas, tile));
                     }
                 }
                 TargetPlan::ProbeFace { probe, face } => {
-                    if let Some(cube) = self.probes.get(&probe).map(|p| &p.texture) {
+                    if let Some(cube) = probes.cube(probe) {
                         let current = entry
                             .targets
                             .as_ref()
@@ -79,7 +167,7 @@ impl Renderer {
             }
             let v = &view.gpu;
             written += entry.constants.set_camera(
-                &self.gpu.queue,
+                &gpu.queue,
                 &CameraConstants::new(
                     v.view,
                     v.projection,
@@ -88,43 +176,109 @@ impl Renderer {
                     v.camera_position,
                 ),
             );
-            written += entry.constants.set_renderer(&self.gpu.queue, &frame.renderer_constants(time_seconds));
-            entry.last_view = Some(view.gpu);
+            written += entry.constants.set_renderer(&gpu.queue, &frame.renderer_constants(time_seconds));
         }
         written
     }
 
-    /// Uploads the GPU scene's changes and the GPU views' cull parameters
-    /// (after the targets, whose sizes the depth pyramids follow).
-    pub(super) fn prepare_gpu_visibility(&mut self, plan: &FramePlan) {
-        let Some(visibility) = self.visibility.as_mut() else { return };
-        let frames = self.prep.frames();
-        let requests: Vec<GpuViewRequest<'_>> = plan
-            .views
-            .iter()
-            .zip(frames)
-            .filter(|(_, frame)| frame.gpu_plan().is_some())
-            .map(|(view, frame)| GpuViewRequest {
-                view: &view.world,
-                prepared: frame,
-                lod_bias: view.options.lod_bias,
-                casters_only: view.options.filter == ViewFilter::ShadowCastersOnly,
-            })
-            .collect();
-        let scene = self.prep.gpu_scene();
-        visibility.prepare(&self.gpu.device, &self.gpu.queue, &self.heap, scene, &requests);
+    /// Records what the targets of the views a frame rendered hold now.
+    pub(crate) fn hold(&mut self, rendered: &[RenderedView]) {
+        for view in rendered {
+            if let Some(gpu) = self.views.get_mut(&view.id) {
+                gpu.holds = Some(*view);
+            }
+        }
     }
 
-    /// Creates the path-traced reference's tracer when a view of the frame
-    /// is path traced, and uploads ScenePrep's ray-tracing scene to it.
-    pub(super) fn prepare_reference(&mut self, plan: &FramePlan) -> Result<(), RenderError> {
-        let traced: Vec<_> = plan.views.iter().filter(|v| v.options.ray_scene).map(|v| v.id).collect();
-        if traced.is_empty() && self.reference.is_none() {
-            return Ok(());
-        }
-        let tracer = self.reference.get_or_insert_with(|| ReferenceTracer::new(&self.gpu.device, &self.heap));
-        tracer
-            .prepare(&self.gpu.device, &self.gpu.queue, &mut self.heap, self.prep.ray_scene(), &traced)
-            .map_err(|e| RenderError::Prep(oxygen_sceneprep::PrepError::from(e)))
+    /// The pose `view`'s targets were last rendered with (relative to that
+    /// frame's origin).
+    pub(crate) fn last_view(&self, view: ViewId) -> Option<&ResolvedView> {
+        self.views.get(&view)?.holds.as_ref().map(|h| &h.view)
     }
+}
+
+impl Renderer {
+    /// What the targets of a `viewport`-sized view take, bytes (colour and
+    /// depth, or depth only), with the default HDR format.
+    pub fn target_bytes(viewport: glam::UVec2, depth_only: bool) -> u64 {
+        ViewTargets::bytes_for(viewport.x, viewport.y, !depth_only)
+    }
+
+    /// Bytes the views' targets take now.
+    pub fn target_memory(&self) -> u64 {
+        self.targets.memory()
+    }
+
+    /// The target budget ([`RendererOptions::target_budget_bytes`](crate::RendererOptions::target_budget_bytes)).
+    pub fn target_budget(&self) -> u64 {
+        self.targets.budget
+    }
+
+    /// Checks, before anything is allocated, that views of these sizes
+    /// (`(viewport, depth_only)`) fit the target budget together; returns
+    /// their total. The error ([`RenderError::TargetBudgetEntry`]) names
+    /// the first entry that does not fit by its position.
+    pub fn check_target_budget(&self, views: &[(glam::UVec2, bool)]) -> Result<u64, RenderError> {
+        let mut taken = 0u64;
+        for (index, (viewport, depth_only)) in views.iter().enumerate() {
+            self.targets.admit(*viewport, !depth_only, 1, &mut taken).map_err(|e| RenderError::TargetBudgetEntry {
+                index,
+                width: e.width,
+                height: e.height,
+                bytes: e.bytes,
+                budget: e.budget,
+                taken: e.taken,
+            })?;
+        }
+        Ok(taken)
+    }
+
+    /// The format of the views' HDR targets ([`RendererOptions::hdr_format`](crate::RendererOptions::hdr_format),
+    /// or `Rgba16Float` where the adapter cannot render the one asked for).
+    pub fn hdr_format(&self) -> HdrFormat {
+        self.targets.hdr_format
+    }
+
+    /// Samples per pixel a view asking for `msaa` gets: what it asks
+    /// where the adapter can multisample the HDR and depth formats at that
+    /// count, else the largest count below it that it can (1 at least).
+    pub fn msaa_samples(&self, msaa: Msaa) -> u32 {
+        let asked = msaa.samples();
+        // The adapter's own counts only count once the device has enabled
+        // them; without the feature, WebGPU guarantees 1 and 4.
+        let adapter_specific = self.gpu.features.contains(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES);
+        let supports = |samples: u32| {
+            [self.targets.hdr_format.texture_format(), ViewTargets::DEPTH_FORMAT].iter().all(|f| {
+                if adapter_specific {
+                    self.gpu.adapter.get_texture_format_features(*f).flags.sample_count_supported(samples)
+                } else {
+                    f.guaranteed_format_features(self.gpu.features).flags.sample_count_supported(samples)
+                }
+            })
+        };
+        [4, 2, 1].into_iter().find(|s| *s <= asked && (*s == 1 || supports(*s))).unwrap_or(1)
+    }
+
+    /// A view's colour targets, for reading its image.
+    pub(crate) fn color_targets(&self, id: ViewId) -> Result<&ColorTargets, RenderError> {
+        let known = self.views.entries.contains_key(&id) || self.shadows.views.all().any(|v| v == id);
+        if !known {
+            return Err(RenderError::NoSuchView(id));
+        }
+        let targets = self.targets.get(id).and_then(|v| v.targets.as_ref()).ok_or(RenderError::NotRendered(id))?;
+        targets.color.as_ref().ok_or(RenderError::DepthOnly(id))
+    }
+}
+
+/// Layers of the local shadow atlas the frame's views render into (one past
+/// the highest tile; 0 when none does).
+pub(crate) fn atlas_layers(views: &[FrameView]) -> u32 {
+    views
+        .iter()
+        .filter_map(|v| match v.target {
+            TargetPlan::AtlasLayer { tile } => Some(tile + 1),
+            _ => None,
+        })
+        .max()
+        .unwrap_or(0)
 }

@@ -1,0 +1,86 @@
+//! Registering views: the `Renderer` methods that add, link, pause and
+//! remove views (the registry itself is [`Views`], which needs no GPU).
+
+use oxygen_core::ViewId;
+use oxygen_passes::Output;
+use oxygen_sceneprep::ViewPrepOptions;
+use tracing::warn;
+
+use super::{RenderError, Renderer, ViewRole};
+use crate::graph::RenderGraph;
+use crate::views::{ViewDesc, Views};
+
+impl Renderer {
+    /// Registers a view: a resolver (camera → matrices, each frame) or a
+    /// [`ViewDesc`] (resolver plus ScenePrep options, links to other views'
+    /// outputs, sun shadows), and the [`RenderGraph`] it records each frame
+    /// ([`standard_render_graph`](crate::standard_render_graph) is the
+    /// default). The renderer records views after the views whose outputs
+    /// they read, whatever the registration order.
+    pub fn register_view(&mut self, desc: impl Into<ViewDesc>, graph: impl RenderGraph) -> Result<ViewId, RenderError> {
+        let desc = desc.into();
+        let (asked, samples) = (desc.msaa.samples(), self.msaa_samples(desc.msaa));
+        let id = self.views.register(desc, graph)?;
+        if samples != asked {
+            warn!(view = %id, asked, samples, "the adapter cannot multisample the view's targets as asked");
+        }
+        Ok(id)
+    }
+
+    /// Registers a view with explicit ScenePrep options (filter, cull bound).
+    pub fn register_view_with_options(
+        &mut self,
+        resolver: impl oxygen_core::ViewResolver + 'static,
+        options: ViewPrepOptions,
+        graph: impl RenderGraph,
+    ) -> Result<ViewId, RenderError> {
+        self.views.register(ViewDesc::new(resolver).with_options(options), graph)
+    }
+
+    /// Links `view` to `output` after registration ([`Views::link`]).
+    pub fn link<K>(&mut self, view: impl Into<ViewId>, output: Output<K>) -> Result<(), RenderError> {
+        self.views.link(view, output)
+    }
+
+    /// Removes a view, the shadow cascades it owns, and frees their slots.
+    pub fn unregister_view(&mut self, id: impl Into<ViewId>) -> Result<(), RenderError> {
+        let id = id.into();
+        self.views.unregister(id)?;
+        let owned: Vec<ViewId> = self.shadows.views.cascades_of(id).collect();
+        self.shadows.views.forget_owner(id);
+        for view in std::iter::once(id).chain(owned) {
+            self.release_view(view)?;
+        }
+        Ok(())
+    }
+
+    /// Frees a view's slots, targets and constants.
+    pub(crate) fn release_view(&mut self, id: ViewId) -> Result<(), RenderError> {
+        self.targets.release(id);
+        self.prep.forget_view(id, &mut self.heap.slots)?;
+        Ok(())
+    }
+
+    /// Pauses (`false`) or resumes a view: a paused view is neither resolved,
+    /// prepared nor rendered, and keeps its last image (e.g. a reflection
+    /// probe updated every N frames).
+    pub fn set_view_active(&mut self, id: impl Into<ViewId>, active: bool) -> Result<(), RenderError> {
+        self.views.set_active(id, active)
+    }
+
+    /// Registered views, in id order (not the views the renderer creates
+    /// itself for shadows).
+    pub fn views(&self) -> impl Iterator<Item = ViewId> + '_ {
+        self.views.ids()
+    }
+
+    /// The registry of views.
+    pub fn view_registry(&mut self) -> &mut Views {
+        &mut self.views
+    }
+
+    /// What the views of the last frame were for, in submission order.
+    pub fn last_frame_views(&self) -> &[(ViewId, ViewRole)] {
+        &self.last_frame
+    }
+}

@@ -1,0 +1,178 @@
+//! What a frame did: per view ([`ViewReport`], [`ViewRole`]), what it left
+//! out ([`FrameWarning`]) and the whole ([`FrameReport`]), put together from
+//! the outputs of the frame's steps.
+
+use oxygen_core::{NodeKey, ViewId};
+#[cfg(doc)]
+use oxygen_passes::Pipelines;
+use oxygen_passes::{ProbeId, RecordStats};
+use oxygen_sceneprep::Visibility;
+
+use super::prepare::PreparedFrame;
+use super::present::PresentedFrame;
+use super::record::RecordedFrame;
+
+/// What a view of the frame is for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ViewRole {
+    /// A view the application registered.
+    Registered,
+    /// Cascade `index` of the sun shadows `owner` asked for.
+    SunCascade {
+        /// The view that owns the cascade.
+        owner: ViewId,
+        /// Which cascade, nearest first.
+        index: u32,
+    },
+    /// Face `face` of the shadow of the local light on `light`, rendered
+    /// into layer `tile` of the local shadow atlas.
+    LocalShadow {
+        /// The light's node.
+        light: NodeKey,
+        /// 0 for a spot light, 0..6 for a point light's cube faces.
+        face: u32,
+        /// The atlas layer.
+        tile: u32,
+    },
+    /// Face `face` of reflection probe `probe`.
+    ProbeFace {
+        /// The probe.
+        probe: ProbeId,
+        /// Which face (+X, −X, +Y, −Y, +Z, −Z).
+        face: u32,
+    },
+}
+
+/// What one view did in a frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ViewReport {
+    /// The view.
+    pub view: ViewId,
+    /// What it is for.
+    pub role: ViewRole,
+    /// Draws after culling on the CPU (on a GPU path only the transparent
+    /// ones: the GPU's count stays on the GPU).
+    pub draws: usize,
+    /// Where its visibility was decided.
+    pub visibility: Visibility,
+    /// Partitions.
+    pub partitions: usize,
+    /// What its passes recorded.
+    pub recorded: RecordStats,
+    /// Seconds of its own ScenePrep work (view phase and finalization).
+    pub prep_seconds: f64,
+    /// Seconds its graph's future spent being polled (recording), not
+    /// counting the time it waited for pipelines or other views.
+    pub record_seconds: f64,
+}
+
+/// Something a frame left out. One bad object or view costs only itself: the
+/// frame goes on without it and says so here (and in a `tracing` warning).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum FrameWarning {
+    /// A view was not rendered this frame (its resolver failed, or its
+    /// targets would pass the device limit or the target budget); it keeps
+    /// its last image, and every other view rendered.
+    ViewSkipped {
+        /// The view.
+        view: ViewId,
+        /// Why, as the error would have said it.
+        reason: String,
+    },
+    /// A window was not presented this frame (its surface was lost,
+    /// outdated, occluded or timed out; it was reconfigured).
+    WindowSkipped {
+        /// The window.
+        window: crate::WindowId,
+        /// Why.
+        reason: String,
+    },
+    /// A node (or its light) was left out by ScenePrep: a non-finite or
+    /// singular transform, non-finite bounds, a light with non-finite values.
+    NodeSkipped {
+        /// The node.
+        node: oxygen_core::NodeKey,
+        /// Its name.
+        name: String,
+        /// Why.
+        reason: &'static str,
+    },
+}
+
+impl std::fmt::Display for FrameWarning {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FrameWarning::ViewSkipped { view, reason } => write!(f, "{view} skipped: {reason}"),
+            FrameWarning::NodeSkipped { name, reason, .. } => write!(f, "node '{name}' skipped: {reason}"),
+            FrameWarning::WindowSkipped { window, reason } => write!(f, "{window} not presented: {reason}"),
+        }
+    }
+}
+
+/// What a frame did.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameReport {
+    /// Frame sequence number.
+    pub frame_index: u64,
+    /// Per view, in submission order (producers before the views that read
+    /// them).
+    pub views: Vec<ViewReport>,
+    /// Seconds spent in PreRender (resolve + ScenePrep + upload).
+    pub prepare_seconds: f64,
+    /// Seconds spent recording every view's graph (wall clock, all threads).
+    pub record_seconds: f64,
+    /// Threads the views were recorded on.
+    pub record_threads: usize,
+    /// What the frame left out (views and nodes), in view then node order.
+    pub warnings: Vec<FrameWarning>,
+    /// Distinct mesh pipelines the frame's passes used (pass, variant,
+    /// formats, shader features): what specialising shaders to the scene
+    /// costs in pipeline state ([`Pipelines::used_this_frame`] lists them).
+    pub pipelines_used: usize,
+    /// Pipelines created during this frame (zero once every combination
+    /// the scene needs exists).
+    pub pipelines_created: u64,
+    /// Bytes this frame wrote into GPU buffers: the bindless heap's records
+    /// (matrices, lights, materials, meshes, CPU-path draws), the GPU
+    /// scene's changed records, and per-view constants and cull parameters
+    /// that changed. Textures are not counted. A static scene seen by a
+    /// still camera on a GPU visibility path uploads next to nothing.
+    pub uploaded_bytes: u64,
+    /// Windows composed and presented (offscreen ones composed).
+    pub windows_presented: usize,
+    /// GPU time of a recent frame's views (from a timestamp before its
+    /// first command buffer to one after its last), read back without
+    /// waiting, so one or two frames old; `None` before the first readback
+    /// and on devices without timestamps inside encoders.
+    pub gpu_seconds: Option<f64>,
+}
+
+impl FrameReport {
+    /// The report of a frame, from what its steps made: its views and
+    /// nodes left out by resolve and prepare, then the windows present
+    /// skipped, then the nodes ScenePrep skipped (`gpu_seconds`: a recent
+    /// frame's GPU time, when read back).
+    pub(crate) fn new(
+        prepared: PreparedFrame,
+        recorded: RecordedFrame,
+        presented: PresentedFrame,
+        gpu_seconds: Option<f64>,
+    ) -> Self {
+        let mut warnings = prepared.warnings;
+        warnings.extend(presented.warnings);
+        warnings.extend(prepared.skipped_nodes);
+        FrameReport {
+            frame_index: prepared.clock.index,
+            views: recorded.reports,
+            prepare_seconds: prepared.seconds,
+            record_seconds: recorded.seconds,
+            record_threads: recorded.threads,
+            warnings,
+            pipelines_used: recorded.pipelines_used,
+            pipelines_created: recorded.pipelines_created,
+            uploaded_bytes: prepared.uploaded_bytes,
+            windows_presented: presented.windows_presented,
+            gpu_seconds,
+        }
+    }
+}
