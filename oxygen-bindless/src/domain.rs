@@ -182,4 +182,24 @@ mod tests {
             assert_eq!(kind.usages(), wgpu::BufferUsages::STORAGE, "{kind:?}");
         }
     }
+
+    /// The vertex shader reads draws, transforms and vertices; only the
+    /// tracer's compute shader reads the ray scene; and no stage sees more
+    /// storage buffers than the limits `visibility` is kept tight for.
+    #[test]
+    fn each_stage_sees_the_domains_it_reads_within_the_storage_limits() {
+        use wgpu::ShaderStages;
+        for kind in
+            [DomainKind::DrawMetadata, DomainKind::WorldTransforms, DomainKind::NormalTransforms, DomainKind::Vertices]
+        {
+            assert!(kind.visibility().contains(ShaderStages::VERTEX | ShaderStages::COMPUTE), "{kind:?}");
+        }
+        for kind in [DomainKind::BvhNodes, DomainKind::RayWords, DomainKind::RayInstances] {
+            assert_eq!(kind.visibility(), ShaderStages::COMPUTE, "{kind:?}");
+        }
+        let bound = || DomainKind::ALL.into_iter().filter(|k| k.binding().is_some());
+        let seen_by = |stage: ShaderStages| bound().filter(|k| k.visibility().contains(stage)).count();
+        assert!(seen_by(ShaderStages::VERTEX) <= 4, "{} vertex", seen_by(ShaderStages::VERTEX));
+        assert!(seen_by(ShaderStages::FRAGMENT) <= 6, "{} fragment", seen_by(ShaderStages::FRAGMENT));
+    }
 }

@@ -140,6 +140,8 @@ mod tests {
             assert_eq!(record & BITS.nearest_bit != 0, nearest);
         }
         let record = binding_array_record(17, 5, 1);
+        // The slot is for debugging only, and it must still read back.
+        assert_eq!(record & BITS.layer_mask, 17);
         assert_eq!(record >> BITS.sampler_shift, 5);
         assert_eq!((record >> BITS.wrap_v_shift) & BITS.wrap_v_mask, 1);
         // Every slot the binding-array path can have fits its field.
