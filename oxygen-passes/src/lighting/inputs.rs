@@ -9,6 +9,7 @@
 //! cascade count of 0 and no probe.
 
 use bytemuck::Zeroable;
+use oxygen_gpu::bindings::{self, LayoutEntries};
 
 use super::params::{
     COMPARISON_SAMPLER_BINDING, ENVIRONMENT_BINDING, ENVIRONMENT_SAMPLER_BINDING, FIRST_PROBE_BINDING, LightingInputs,
@@ -59,93 +60,27 @@ impl LightingInputResources {
     }
 
     pub(crate) fn new(device: &wgpu::Device, queue: &wgpu::Queue) -> Self {
-        let map_entry = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::FRAGMENT,
-            ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Depth,
-                view_dimension: wgpu::TextureViewDimension::D2,
-                multisampled: false,
-            },
-            count: None,
-        };
-        let mut entries: Vec<_> = (0..MAX_CASCADES as u32).map(map_entry).collect();
-        entries.push(wgpu::BindGroupLayoutEntry {
-            binding: COMPARISON_SAMPLER_BINDING,
-            visibility: wgpu::ShaderStages::FRAGMENT,
-            ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
-            count: None,
-        });
-        entries.push(wgpu::BindGroupLayoutEntry {
-            binding: UNIFORM_BINDING,
-            visibility: wgpu::ShaderStages::FRAGMENT,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Uniform,
-                has_dynamic_offset: false,
-                min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<LightingInputs>() as u64),
-            },
-            count: None,
-        });
-        for probe in 0..MAX_PROBES as u32 {
-            entries.push(wgpu::BindGroupLayoutEntry {
-                binding: FIRST_PROBE_BINDING + probe,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                    view_dimension: wgpu::TextureViewDimension::D2Array,
-                    multisampled: false,
-                },
-                count: None,
-            });
-        }
-        // The prefiltered environment: six faces with their mip chain (the
-        // probes' layout), sampled with the probe sampler.
-        entries.push(wgpu::BindGroupLayoutEntry {
-            binding: ENVIRONMENT_BINDING,
-            visibility: wgpu::ShaderStages::FRAGMENT,
-            ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                view_dimension: wgpu::TextureViewDimension::D2Array,
-                multisampled: false,
-            },
-            count: None,
-        });
-        entries.push(wgpu::BindGroupLayoutEntry {
-            binding: SPLIT_SUM_BINDING,
-            visibility: wgpu::ShaderStages::FRAGMENT,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Uniform,
-                has_dynamic_offset: false,
-                min_binding_size: wgpu::BufferSize::new(crate::lighting::split_sum::SPLIT_SUM_LUT_BYTES),
-            },
-            count: None,
-        });
-        entries.push(wgpu::BindGroupLayoutEntry {
-            binding: PROBE_SAMPLER_BINDING,
-            visibility: wgpu::ShaderStages::FRAGMENT,
-            ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-            count: None,
-        });
-        entries.push(wgpu::BindGroupLayoutEntry {
-            binding: ENVIRONMENT_SAMPLER_BINDING,
-            visibility: wgpu::ShaderStages::FRAGMENT,
-            ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-            count: None,
-        });
-        entries.push(wgpu::BindGroupLayoutEntry {
-            binding: SHADOW_ATLAS_BINDING,
-            visibility: wgpu::ShaderStages::FRAGMENT,
-            ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Depth,
-                view_dimension: wgpu::TextureViewDimension::D2Array,
-                multisampled: false,
-            },
-            count: None,
-        });
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("lighting inputs"),
-            entries: &entries,
-        });
+        let layout = LayoutEntries::new(wgpu::ShaderStages::FRAGMENT)
+            .repeat(MAX_CASCADES as u32, bindings::depth_2d())
+            .at(COMPARISON_SAMPLER_BINDING)
+            .push(bindings::sampler_comparison())
+            .at(UNIFORM_BINDING)
+            .push(bindings::uniform_of::<LightingInputs>())
+            .at(FIRST_PROBE_BINDING)
+            .repeat(MAX_PROBES as u32, bindings::texture_2d_array(bindings::FILTERABLE_FLOAT))
+            // The prefiltered environment: six faces with their mip chain
+            // (the probes' layout), sampled with the probe sampler.
+            .at(ENVIRONMENT_BINDING)
+            .push(bindings::texture_2d_array(bindings::FILTERABLE_FLOAT))
+            .at(SPLIT_SUM_BINDING)
+            .push(bindings::uniform_sized(crate::lighting::split_sum::SPLIT_SUM_LUT_BYTES))
+            .at(PROBE_SAMPLER_BINDING)
+            .push(bindings::sampler_filtering())
+            .at(ENVIRONMENT_SAMPLER_BINDING)
+            .push(bindings::sampler_filtering())
+            .at(SHADOW_ATLAS_BINDING)
+            .push(bindings::depth_2d_array())
+            .create_layout(device, "lighting inputs");
         // Reverse-Z: a fragment is lit when it is at least as close to the
         // light as the stored depth, i.e. its depth is greater or equal.
         let sampler = device.create_sampler(&wgpu::SamplerDescriptor {

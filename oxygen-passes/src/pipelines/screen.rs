@@ -3,6 +3,8 @@
 
 use std::sync::atomic::Ordering;
 
+use oxygen_gpu::bindings::{self, LayoutEntries};
+
 use super::{PassKind, PipelineKey, PipelineVariant, Pipelines, fullscreen_pipeline};
 use crate::post::TONEMAP_WGSL;
 
@@ -18,31 +20,10 @@ impl Pipelines {
         if let Some(existing) = slot.as_ref() {
             return existing.clone();
         }
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("tonemap"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
-            ],
-        });
+        let layout = LayoutEntries::new(wgpu::ShaderStages::FRAGMENT)
+            .push(bindings::texture_2d(bindings::UNFILTERABLE_FLOAT))
+            .push(bindings::uniform())
+            .create_layout(device, "tonemap");
         let pipeline =
             fullscreen_pipeline(device, "tonemap", &layout, &TONEMAP_WGSL, ("vs_fullscreen", "fs_tonemap"), output);
         self.created.fetch_add(1, Ordering::Relaxed);

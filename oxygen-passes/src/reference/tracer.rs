@@ -20,6 +20,7 @@ use std::sync::Mutex;
 
 use oxygen_bindless::{Allocation, BindlessError, BindlessHeap, DomainKind, INVALID_SLOT};
 use oxygen_core::ViewId;
+use oxygen_gpu::bindings::{self, LayoutEntries};
 use oxygen_sceneprep::{RayInstance, RayScene, ray::POSED};
 use tracing::info_span;
 
@@ -138,78 +139,22 @@ pub fn reference_shader_source(textures: oxygen_bindless::TexturePath) -> String
     crate::shaders::REFERENCE.textured_source(textures)
 }
 
-fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
-
 impl ReferenceTracer {
     /// The pipeline over the heap's layouts, and empty scene buffers.
     pub fn new(device: &wgpu::Device, heap: &BindlessHeap) -> Self {
         let _span = info_span!("reference_tracer_new").entered();
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("reference tracer"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
-                storage_entry(4, true),
-                storage_entry(5, false),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 6,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::StorageTexture {
-                        access: wgpu::StorageTextureAccess::WriteOnly,
-                        format: wgpu::TextureFormat::Rgba16Float,
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                    },
-                    count: None,
-                },
-                // The renderer's environment (a placeholder without one),
-                // its sampler and the split-sum table: what the shading reads.
-                wgpu::BindGroupLayoutEntry {
-                    binding: 7,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                        view_dimension: wgpu::TextureViewDimension::D2Array,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 8,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 9,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: wgpu::BufferSize::new(crate::lighting::split_sum::SPLIT_SUM_LUT_BYTES),
-                    },
-                    count: None,
-                },
-            ],
-        });
+        let layout = LayoutEntries::new(wgpu::ShaderStages::COMPUTE)
+            .push(bindings::uniform())
+            .at(4)
+            .push(bindings::storage_read_only())
+            .push(bindings::storage_read_write())
+            .push(bindings::storage_texture_2d(wgpu::TextureFormat::Rgba16Float, wgpu::StorageTextureAccess::WriteOnly))
+            // The renderer's environment (a placeholder without one), its
+            // sampler and the split-sum table: what the shading reads.
+            .push(bindings::texture_2d_array(bindings::FILTERABLE_FLOAT))
+            .push(bindings::sampler_filtering())
+            .push(bindings::uniform_sized(crate::lighting::split_sum::SPLIT_SUM_LUT_BYTES))
+            .create_layout(device, "reference tracer");
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("reference tracer"),
             bind_group_layouts: &[

@@ -21,6 +21,7 @@ use std::collections::HashMap;
 
 use oxygen_bindless::{BindlessHeap, DomainKind};
 use oxygen_core::{ResolvedView, ViewId};
+use oxygen_gpu::bindings::{self, LayoutEntries};
 use oxygen_sceneprep::gpu_scene::GpuSceneChanges;
 use oxygen_sceneprep::{GpuScene, PreparedSceneFrame, Visibility};
 use tracing::info_span;
@@ -137,19 +138,6 @@ pub struct GpuVisibility {
     uploaded_rebuild: Option<u64>,
 }
 
-fn storage(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
-
 /// The cull shader's full source: `visibility/cull.wgsl` with the GPU
 /// records, its parameter block and flags, and the pyramid test.
 pub fn cull_shader_source() -> String {
@@ -167,29 +155,14 @@ impl GpuVisibility {
     /// Pipelines and empty buffers.
     pub fn new(device: &wgpu::Device) -> Self {
         let _span = info_span!("gpu_visibility_new").entered();
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("gpu visibility"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
-                storage(1, true),
-                storage(2, true),
-                storage(3, true),
-                storage(4, false),
-                storage(5, false),
-                storage(6, false),
-                storage(7, false),
-                storage(8, true),
-            ],
-        });
+        let layout = LayoutEntries::new(wgpu::ShaderStages::COMPUTE)
+            // `CullParams`; instances, groups, LODs; counts, history, draws,
+            // commands; the depth pyramid (cull.wgsl's group 0).
+            .push(bindings::uniform())
+            .repeat(3, bindings::storage_read_only())
+            .repeat(4, bindings::storage_read_write())
+            .push(bindings::storage_read_only())
+            .create_layout(device, "gpu visibility");
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("visibility cull"),
             source: wgpu::ShaderSource::Wgsl(cull_shader_source().into()),

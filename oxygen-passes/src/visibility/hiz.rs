@@ -15,6 +15,7 @@
 //! wrong level (tests/hiz_pyramid.rs shows it), and an occlusion test picks
 //! its level per box.
 
+use oxygen_gpu::bindings::{self, LayoutEntries};
 use tracing::info_span;
 
 use super::params::LevelParams;
@@ -39,22 +40,6 @@ pub struct HizPipelines {
     reduce: wgpu::ComputePipeline,
 }
 
-fn entry(binding: u32, ty: wgpu::BindingType) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry { binding, visibility: wgpu::ShaderStages::COMPUTE, ty, count: None }
-}
-
-const PYRAMID: wgpu::BindingType = wgpu::BindingType::Buffer {
-    ty: wgpu::BufferBindingType::Storage { read_only: false },
-    has_dynamic_offset: false,
-    min_binding_size: None,
-};
-
-const LEVEL: wgpu::BindingType = wgpu::BindingType::Buffer {
-    ty: wgpu::BufferBindingType::Uniform,
-    has_dynamic_offset: false,
-    min_binding_size: None,
-};
-
 impl HizPipelines {
     /// Compiles the copy and reduction pipelines.
     pub fn new(device: &wgpu::Device) -> Self {
@@ -63,16 +48,18 @@ impl HizPipelines {
             label: Some("depth pyramid"),
             source: wgpu::ShaderSource::Wgsl(hiz_shader_source().into()),
         });
-        let depth = wgpu::BindingType::Texture {
-            sample_type: wgpu::TextureSampleType::Depth,
-            view_dimension: wgpu::TextureViewDimension::D2,
-            multisampled: false,
-        };
-        let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
-            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries })
-        };
-        let copy_layout = layout("depth pyramid copy", &[entry(0, depth), entry(1, PYRAMID), entry(2, LEVEL)]);
-        let reduce_layout = layout("depth pyramid reduce", &[entry(1, PYRAMID), entry(2, LEVEL)]);
+        // The depth texture (the copy's alone), the pyramid, the level's
+        // `LevelParams`.
+        let copy_layout = LayoutEntries::new(wgpu::ShaderStages::COMPUTE)
+            .push(bindings::depth_2d())
+            .push(bindings::storage_read_write())
+            .push(bindings::uniform())
+            .create_layout(device, "depth pyramid copy");
+        let reduce_layout = LayoutEntries::new(wgpu::ShaderStages::COMPUTE)
+            .skip(1)
+            .push(bindings::storage_read_write())
+            .push(bindings::uniform())
+            .create_layout(device, "depth pyramid reduce");
         let pipeline = |entry: &'static str, group: &wgpu::BindGroupLayout| {
             let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some(entry),

@@ -31,6 +31,7 @@ use oxygen_core::{Environment, Sky};
 
 use super::params::CubeFilterParams;
 use oxygen_gpu::ViewTargets;
+use oxygen_gpu::bindings::{self, LayoutEntries};
 
 /// The cube-building shader (self-contained: the cube layout, the
 /// filter's parameter block, then its passes).
@@ -133,37 +134,11 @@ impl<'a> Step<'a> {
 
 impl CubeFilter {
     pub(crate) fn new(device: &wgpu::Device) -> Self {
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("cube filter"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                        view_dimension: wgpu::TextureViewDimension::D2Array,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 2,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: true,
-                        min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<CubeFilterParams>() as u64),
-                    },
-                    count: None,
-                },
-            ],
-        });
+        let layout = LayoutEntries::new(wgpu::ShaderStages::FRAGMENT)
+            .push(bindings::texture_2d_array(bindings::FILTERABLE_FLOAT))
+            .push(bindings::sampler_filtering())
+            .push(bindings::dynamic_uniform_of::<CubeFilterParams>())
+            .create_layout(device, "cube filter");
         let pipeline = |fragment| {
             crate::pipelines::fullscreen_pipeline(
                 device,
