@@ -10,6 +10,7 @@
 //! cached pipelines stay valid across growth.
 
 use bytemuck::Pod;
+use oxygen_gpu::bindings::{self, LayoutEntries};
 use thiserror::Error;
 use tracing::{debug, info_span};
 
@@ -82,38 +83,18 @@ impl BindlessHeap {
     /// bound the way `texture_path` says.
     pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, texture_path: TexturePath) -> Self {
         let max_binding_bytes = device.limits().max_storage_buffer_binding_size;
-        let storage_entry = |(binding, visibility)| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only: true },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
-        let entries: Vec<_> = DomainKind::ALL
+        // Indices and indirect arguments have no binding in group 0: gaps.
+        let domain_layout = DomainKind::ALL
             .iter()
             .filter_map(|k| k.binding().map(|b| (b, k.visibility())))
-            .map(storage_entry)
-            .collect();
-        let domain_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("bindless domains"),
-            entries: &entries,
-        });
-        let scene_constants_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("scene constants"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<crate::SceneConstants>() as u64),
-                },
-                count: None,
-            }],
-        });
+            .fold(LayoutEntries::new(wgpu::ShaderStages::NONE), |entries, (binding, visibility)| {
+                entries.at(binding).visibility(visibility).push(bindings::storage_read_only())
+            })
+            .create_layout(device, "bindless domains");
+        let scene_constants_layout =
+            LayoutEntries::new(wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE)
+                .push(bindings::uniform_of::<crate::SceneConstants>())
+                .create_layout(device, "scene constants");
         let capacities: Vec<u64> = DomainKind::ALL.iter().map(|_| MIN_RECORDS).collect();
         let buffers: Vec<_> =
             DomainKind::ALL.iter().zip(&capacities).map(|(k, c)| create_domain_buffer(device, *k, *c)).collect();

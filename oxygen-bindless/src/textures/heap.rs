@@ -6,7 +6,7 @@
 //! (that is [`TexturePath::best_for`]) nor computes mip levels or resampled
 //! texels itself (`mip_chain`, `resample`).
 
-use std::num::NonZeroU32;
+use oxygen_gpu::bindings::{self, LayoutEntries};
 
 use super::location::{binding_array_record, grouped_record};
 use super::mip_chain::{MipLevel, mip_chain, mip_level_count};
@@ -176,38 +176,17 @@ fn levels_for(pixels: &[u8], width: u32, height: u32, srgb: bool, nearest: bool)
 
 impl TextureHeap {
     pub(crate) fn new(device: &wgpu::Device, queue: &wgpu::Queue, path: TexturePath) -> Self {
-        let texture_entry = |binding, dimension, count| wgpu::BindGroupLayoutEntry {
-            binding,
-            // Compute too: the path-traced reference samples materials.
-            visibility: wgpu::ShaderStages::FRAGMENT.union(wgpu::ShaderStages::COMPUTE),
-            ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                view_dimension: dimension,
-                multisampled: false,
-            },
-            count,
-        };
-        let sampler_entry = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::FRAGMENT.union(wgpu::ShaderStages::COMPUTE),
-            ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-            count: None,
-        };
-        let entries: Vec<_> = match path {
-            TexturePath::BindingArray => {
-                std::iter::once(texture_entry(0, wgpu::TextureViewDimension::D2, NonZeroU32::new(MAX_TEXTURES)))
-                    .chain((0..SAMPLERS).map(|k| sampler_entry(1 + k)))
-                    .collect()
-            }
-            TexturePath::GroupedArrays => (0..GROUPS as u32)
-                .map(|g| texture_entry(g, wgpu::TextureViewDimension::D2Array, None))
-                .chain((0..GROUPED_SAMPLERS).map(|k| sampler_entry(GROUPS as u32 + k)))
-                .collect(),
-        };
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("bindless textures"),
-            entries: &entries,
-        });
+        // Compute too: the path-traced reference samples materials.
+        let entries = LayoutEntries::new(wgpu::ShaderStages::FRAGMENT.union(wgpu::ShaderStages::COMPUTE));
+        let layout = match path {
+            TexturePath::BindingArray => entries
+                .push_array(bindings::texture_2d(bindings::FILTERABLE_FLOAT), MAX_TEXTURES)
+                .repeat(SAMPLERS, bindings::sampler_filtering()),
+            TexturePath::GroupedArrays => entries
+                .repeat(GROUPS as u32, bindings::texture_2d_array(bindings::FILTERABLE_FLOAT))
+                .repeat(GROUPED_SAMPLERS, bindings::sampler_filtering()),
+        }
+        .create_layout(device, "bindless textures");
         let samplers: Vec<_> = (0..SAMPLERS).map(|k| create_sampler(device, k)).collect();
         let white = [255u8; 4];
         let (views, groups) = match path {
