@@ -36,6 +36,7 @@
 use std::time::Instant;
 
 use oxygen_demo::record::{Record, Row};
+use oxygen_gpu::bindings::{self, LayoutEntries};
 use wgpu::util::DeviceExt;
 
 const SIZE: (u32, u32) = (960, 540);
@@ -192,33 +193,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         source: wgpu::ShaderSource::Wgsl(SHADER.into()),
     });
     let visible = wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT;
-    let storage = |binding| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: visible,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only: true },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    };
-    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: None,
-        entries: &[
-            wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: visible,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            },
-            storage(1),
-            storage(2),
-        ],
-    });
+    // The camera, the pulled positions, the matrices.
+    let entries = LayoutEntries::new(visible).push(bindings::uniform()).repeat(2, bindings::storage_read_only());
+    let layout =
+        device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: None, entries: entries.entries() });
     let bind_groups = camera.each_ref().map(|camera| {
         device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: None,
