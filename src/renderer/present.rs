@@ -8,6 +8,7 @@ use std::collections::HashMap;
 use glam::UVec2;
 use oxygen_core::ViewId;
 use oxygen_gpu::GpuContext;
+use oxygen_gpu::bindings::{self, LayoutEntries};
 use tracing::{info_span, warn};
 
 use super::record::RecordedFrame;
@@ -36,46 +37,19 @@ pub(crate) struct Compositor {
 
 impl Compositor {
     pub(crate) fn new(device: &wgpu::Device) -> Self {
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("compose"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                    count: None,
-                },
-            ],
-        });
+        let layout = LayoutEntries::new(wgpu::ShaderStages::FRAGMENT)
+            .push(bindings::texture_2d(bindings::FILTERABLE_FLOAT))
+            .push(bindings::sampler_filtering())
+            .create_layout(device, "compose");
         let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("compose"),
             mag_filter: wgpu::FilterMode::Linear,
             min_filter: wgpu::FilterMode::Linear,
             ..Default::default()
         });
-        let depth_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("compose depth"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                    view_dimension: wgpu::TextureViewDimension::D2,
-                    multisampled: false,
-                },
-                count: None,
-            }],
-        });
+        let depth_layout = LayoutEntries::new(wgpu::ShaderStages::FRAGMENT)
+            .push(bindings::texture_2d(bindings::UNFILTERABLE_FLOAT))
+            .create_layout(device, "compose depth");
         Compositor { layout, depth_layout, sampler, pipelines: HashMap::new() }
     }
 
