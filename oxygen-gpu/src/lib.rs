@@ -3,9 +3,11 @@
 //! The GPU device every Oxygen renderer draws on: adapter and device
 //! selection ([`GpuContext`], shared wgpu instances per backend set), the
 //! offscreen targets of a view ([`ViewTargets`]: HDR colour, display colour,
-//! depth, MSAA), readback into images ([`HdrImage`], RGBA8), and the
-//! declaration of structs shared with WGSL ([`gpu_struct!`], checked against
-//! naga's layout by [`check_layout`]).
+//! depth, MSAA), readback into images ([`HdrImage`], RGBA8), and the two
+//! declarations every pass shares with its shaders: bind-group layouts
+//! ([`bindings`]: typed entries numbered in order, instead of hand-written
+//! `BindGroupLayoutEntry` literals) and structs shared with WGSL
+//! ([`gpu_struct!`], checked against naga's layout by [`check_layout`]).
 //!
 //! It sits beside `oxygen-core` rather than in it: the scene, assets and view
 //! contracts are plain data that ScenePrep and the snapshot tests use without
