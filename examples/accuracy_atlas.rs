@@ -43,8 +43,16 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use oxygen::RenderOrigin;
+use oxygen::bindless::TexturePath;
 use oxygen::core::LodLevel;
+use oxygen::core::NodeKey;
+use oxygen::glam::{Quat, Vec4};
+use oxygen::graph::{ReferenceGraph, lit_render_graph};
+use oxygen::lighting::{CascadeSettings, ProbeUpdate, ReflectionProbe};
+use oxygen::passes::ReferenceSettings;
 use oxygen::prelude::*;
+use oxygen::sceneprep::{ViewPrepOptions, Visibility};
 use oxygen_demo::record::{Record, Row as RecordRow};
 use plotters::prelude::*;
 

@@ -39,7 +39,10 @@
 
 use std::time::Instant;
 
+use oxygen::glam::{Quat, Vec4};
+use oxygen::graph::PrePass;
 use oxygen::prelude::*;
+use oxygen::sceneprep::Visibility;
 use oxygen_demo::record::Record;
 
 const WARM_UP: usize = 5;

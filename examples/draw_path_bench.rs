@@ -24,10 +24,12 @@
 use std::sync::{Arc, Mutex};
 
 use oxygen::core::{AlphaMode, Projection};
+use oxygen::glam::Vec4;
 use oxygen::gpu::{GpuContext, GpuOptions};
+use oxygen::graph::standard_render_graph;
+use oxygen::passes::DrawPath;
 use oxygen::prelude::*;
-use oxygen::sceneprep::Instancing;
-use oxygen::standard_render_graph;
+use oxygen::sceneprep::{Instancing, ViewPrepOptions};
 use oxygen_demo::record::{Record, Row};
 
 const WARM_UP: usize = 5;

@@ -24,7 +24,9 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
+use oxygen::glam::{DVec3, Quat};
 use oxygen::prelude::*;
+use oxygen::views::DLookAtResolver;
 
 const USAGE: &str = "\
 usage: gltf_viewer [FILE] [OUTPUT_DIR] [--scene N|NAME] [--size WxH]
@@ -214,7 +216,7 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
     let environment = match environment.as_str() {
         "none" => None,
         "sky" => Some(oxygen_demo::viewer_environment(&scene)),
-        file => Some(oxygen::load_hdr_environment(file)?),
+        file => Some(oxygen::lighting::load_hdr_environment(file)?),
     };
     let mut renderer = Renderer::new_headless()?;
     if let Some(e) = &environment {

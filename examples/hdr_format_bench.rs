@@ -18,6 +18,7 @@
 
 use std::time::Instant;
 
+use oxygen::gpu::HdrFormat;
 use oxygen::prelude::*;
 use oxygen_demo::record::{Record, Row};
 

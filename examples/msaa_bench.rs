@@ -31,6 +31,9 @@
 
 use std::time::Instant;
 
+use oxygen::glam::Vec4;
+use oxygen::gpu::Msaa;
+use oxygen::graph::PrePass;
 use oxygen::prelude::*;
 use oxygen_demo::record::{Record, Row};
 

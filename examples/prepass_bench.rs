@@ -24,7 +24,9 @@
 use std::sync::Arc;
 use std::time::Instant;
 
+use oxygen::glam::{Quat, Vec4};
 use oxygen::gpu::{GpuContext, GpuOptions};
+use oxygen::graph::PrePass;
 use oxygen::prelude::*;
 use oxygen_demo::record::{Record, Row};
 

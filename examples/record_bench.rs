@@ -25,6 +25,9 @@
 use std::time::Instant;
 
 use oxygen::core::CascadeSettings;
+use oxygen::glam::{Quat, Vec4};
+use oxygen::lighting::LocalShadowSettings;
+use oxygen::passes::DrawPath;
 use oxygen::prelude::*;
 use oxygen_demo::record::{Record, Row};
 

@@ -19,6 +19,7 @@
 use std::time::Instant;
 
 use oxygen::core::CascadeSettings;
+use oxygen::glam::Vec4;
 use oxygen::prelude::*;
 use oxygen_demo::record::{Record, Row};
 

@@ -8,9 +8,11 @@
 //! cargo run --release --example shadows_and_probes [OUTPUT_DIR]   # default: out/
 //! ```
 
+use oxygen::ViewRole;
 use oxygen::core::CascadeSettings;
+use oxygen::glam::{Quat, Vec4};
+use oxygen::lighting::{LocalShadowSettings, ProbeUpdate, ReflectionProbe};
 use oxygen::prelude::*;
-use oxygen::{ProbeUpdate, ReflectionProbe, ViewRole};
 use std::path::PathBuf;
 
 fn scene() -> Result<Scene, Box<dyn std::error::Error>> {

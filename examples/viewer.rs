@@ -46,7 +46,16 @@ use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
+use oxygen::core::DAabb;
+use oxygen::glam::DVec3;
+use oxygen::gpu::Msaa;
+use oxygen::graph::PrePass;
+use oxygen::import::GltfCamera;
+use oxygen::lighting::CascadeSettings;
 use oxygen::prelude::*;
+use oxygen::sceneprep::Visibility;
+use oxygen::views::{DLookAtResolver, ResolvedView, ViewContext, ViewError};
+use oxygen::windows::{PresentMode, WindowId, WindowRect};
 use oxygen_demo::OrbitCamera;
 use winit::application::ApplicationHandler;
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
@@ -627,7 +636,7 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
     let environment = match args.environment.as_str() {
         "none" => None,
         "sky" => Some(oxygen_demo::viewer_environment(&scene)),
-        file => Some(oxygen::load_hdr_environment(file)?),
+        file => Some(oxygen::lighting::load_hdr_environment(file)?),
     };
     let orbit = OrbitCamera::framing(&bounds);
     let camera = CameraState { orbit, fly: false, eye: orbit.eye() };

@@ -45,7 +45,10 @@ use oxygen_demo::record::{Record, Row};
 
 #[path = "support/gpu_spin.rs"]
 mod gpu_spin;
+use oxygen::glam::{Quat, Vec4};
+use oxygen::passes::PassError;
 use oxygen::prelude::*;
+use oxygen::sceneprep::Visibility;
 
 const WARM_UP: usize = 3;
 const VIEWPORT: UVec2 = UVec2::new(640, 360);

@@ -257,7 +257,7 @@ pub fn lit_render_graph(config: ForwardLitConfig) -> StandardGraph {
 /// The graph of a shadow view: the depth of its casters with a rasterizer
 /// depth bias, nothing else.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ShadowGraph {
+pub(crate) struct ShadowGraph {
     /// The shadow map's rasterizer bias.
     pub bias: DepthBias,
 }
@@ -280,7 +280,7 @@ impl RenderGraph for ShadowGraph {
 /// renderer prefilters the cube's levels across them (GGX, as the
 /// environment's), which rough surfaces reflect.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct ProbeFaceGraph;
+pub(crate) struct ProbeFaceGraph;
 
 impl RenderGraph for ProbeFaceGraph {
     async fn record(&self, ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError> {

@@ -38,29 +38,48 @@
 
 #![warn(missing_docs)]
 mod environment_file;
-pub mod gltf_import;
-mod graph;
-pub mod probes;
+mod gltf_import;
+pub mod graph;
+mod probes;
 mod renderer;
-pub mod shadows;
-mod views;
+mod shadows;
+pub mod views;
 pub mod windows;
 
-pub use environment_file::{EnvironmentFileError, MAX_ENVIRONMENT_SIDE, load_hdr_environment};
-pub use gltf_import::{
-    GltfCamera, GltfError, GltfImport, ImportLimits, ImportOptions, NodeCameraResolver, SceneChoice, import_gltf,
-    import_gltf_slice, import_gltf_with,
-};
-pub use graph::{
-    PrePass, ProbeFaceGraph, ReferenceGraph, RenderGraph, ShadowGraph, StandardGraph, lit_render_graph,
-    reference_render_graph, standard_render_graph,
-};
 pub use oxygen_sceneprep::RenderOrigin;
-pub use probes::{ProbeUpdate, ReflectionProbe};
 pub use renderer::{FrameReport, FrameWarning, RenderError, Renderer, RendererOptions, ViewReport, ViewRole};
-pub use shadows::{LocalShadowSettings, PointShadowFaceResolver, SpotShadowResolver};
-pub use views::{ViewDesc, Views};
-pub use windows::{PresentMode, WindowId, WindowRect};
+
+// Root paths the renderer's code and doc links name (`crate::WindowId`,
+// `crate::ViewDesc::shown_in`, …); doc links alone do not count as uses.
+#[allow(unused_imports)]
+pub(crate) use {
+    graph::{ProbeFaceGraph, ShadowGraph},
+    probes::ReflectionProbe,
+    views::ViewDesc,
+    windows::{WindowId, WindowRect},
+};
+
+/// Importing glTF 2.0 files into a [`Scene`](oxygen_core::Scene): nodes,
+/// meshes, materials, lights, cameras and animations, under
+/// [`ImportLimits`](import::ImportLimits) when the file is untrusted.
+pub mod import {
+    pub use crate::gltf_import::{
+        GltfCamera, GltfError, GltfImport, GraphError, ImportLimits, ImportOptions, LimitExceeded, MeshError,
+        NodeCameraResolver, SUPPORTED_REQUIRED_EXTENSIONS, SceneChoice, UriError, import_gltf, import_gltf_slice,
+        import_gltf_with,
+    };
+}
+
+/// Lights and what they light: shadow settings and the shadow views'
+/// resolvers, reflection probes, and environments (the sky, HDR panoramas).
+pub mod lighting {
+    pub use crate::environment_file::{EnvironmentFileError, MAX_ENVIRONMENT_SIDE, load_hdr_environment};
+    pub use crate::probes::{ProbeFaceResolver, ProbeUpdate, ReflectionProbe};
+    pub use crate::shadows::{LocalShadowSettings, PointShadowFaceResolver, SpotShadowResolver};
+    pub use oxygen_core::{
+        CascadeSettings, Environment, EnvironmentError, EquirectImage, Light, LightKind, Mobility, Sky,
+    };
+}
 
 /// The bindless heap.
 pub use oxygen_bindless as bindless;
@@ -89,29 +108,22 @@ pub use wgpu;
 #[cfg(doctest)]
 pub struct ReadmeDoctests;
 
-/// The names most applications use.
+/// The names most applications use: the renderer, the scene, glTF import,
+/// views, the standard graph, the passes a custom graph awaits and the
+/// typed outputs views read. Everything else lives in a named module
+/// ([`views`], [`graph`], [`import`], [`lighting`], [`windows`]) or in the
+/// crate that owns it ([`core`], [`gpu`], [`bindless`], [`sceneprep`],
+/// [`passes`]).
 pub mod prelude {
-    pub use crate::{
-        FrameReport, FrameWarning, LocalShadowSettings, PrePass, ReferenceGraph, RenderError, RenderGraph,
-        RenderOrigin, Renderer, RendererOptions, StandardGraph, ViewDesc, Views, lit_render_graph,
-        reference_render_graph, standard_render_graph,
-    };
-    pub use crate::{
-        GltfCamera, GltfError, GltfImport, ImportLimits, ImportOptions, SceneChoice, import_gltf, import_gltf_with,
-    };
-    pub use crate::{PresentMode, WindowId, WindowRect};
-    pub use crate::{ProbeUpdate, ReflectionProbe, ViewRole};
-    pub use oxygen_bindless::TexturePath;
-    pub use oxygen_core::glam::{DVec3, Mat4, Quat, UVec2, Vec2, Vec3, Vec4};
+    pub use crate::graph::{RenderGraph, StandardGraph, standard_render_graph};
+    pub use crate::import::{SceneChoice, import_gltf};
+    pub use crate::views::ViewDesc;
+    pub use crate::{RenderError, Renderer, RendererOptions};
+    pub use oxygen_core::glam::{UVec2, Vec3};
     pub use oxygen_core::{
-        AlphaMode, Camera, CameraError, CascadeSettings, DAabb, DLookAtResolver, Geometry, GeometryHandle, Light,
-        LightKind, LookAtResolver, Material, MaterialHandle, NodeFlags, NodeKey, Projection, Renderable, ResolvedView,
-        Scene, Transform, ViewContext, ViewError, ViewId, ViewResolver,
+        Camera, Geometry, Light, LookAtResolver, Material, Renderable, Scene, Transform, ViewId, ViewResolver,
     };
-    pub use oxygen_gpu::{HdrFormat, Msaa};
     pub use oxygen_passes::{
-        CommandRecorder, DrawPath, ForwardLitConfig, MeshPass, Output, PassError, PrePassEstimate, ReferenceSettings,
-        RenderContext, RenderPass, TonemapPass,
+        CommandRecorder, ForwardLitConfig, MeshPass, Output, RenderContext, RenderPass, TonemapPass,
     };
-    pub use oxygen_sceneprep::{PassMask, PreparedSceneFrame, ViewPrepOptions, Visibility};
 }

@@ -4,7 +4,7 @@
 //! Each face view (90° perspective, one per axis direction, as in
 //! [`oxygen_passes::PROBE_FACE_AXES`]) runs a depth
 //! pre-pass and forward lit shading into its layer of the cube
-//! ([`crate::ProbeFaceGraph`]); once all six have recorded, the renderer
+//! (the probe-face graph); once all six have recorded, the renderer
 //! GGX-prefilters the cube's levels across its faces, as the environment's
 //! (`Renderer::set_probe_filter_samples`). A view
 //! linked to the probe's [`ReflectionProbe::cube`] records after the faces

@@ -2,17 +2,27 @@
 //! others, and in which order they must record. It needs no GPU, so a test
 //! can register views and prepare their [`PreparedSceneFrame`]s without one
 //! ([`Views::prepare`]); a [`crate::Renderer`] owns one and renders it.
+//!
+//! The view vocabulary of `oxygen-core` is re-exported here, so that one
+//! module names all of it: [`ViewId`], the [`ViewResolver`] contract and its
+//! [`ViewContext`] and [`ResolvedView`], the look-at resolvers and the
+//! [`Camera`].
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use oxygen_bindless::SlotAllocators;
-use oxygen_core::{CascadeSettings, Scene, ViewContext, ViewId, ViewIds, ViewResolver};
+use oxygen_core::{CascadeSettings, Scene};
 use oxygen_core::{Output, OutputSource, ProbeId};
 use oxygen_sceneprep::{PreparedSceneFrame, ScenePrep, ViewPrepOptions, ViewRequest, Visibility};
 
 use crate::RenderError;
 use crate::graph::{ErasedGraph, RenderGraph};
+
+pub use oxygen_core::{
+    Camera, CameraError, DLookAtResolver, LookAtResolver, Projection, ResolvedView, ViewContext, ViewError, ViewId,
+    ViewIds, ViewResolver,
+};
 
 /// How a view is registered: its resolver, its ScenePrep options, the
 /// outputs of other views it reads, and the shadows it owns.

@@ -4,8 +4,11 @@
 
 mod support;
 
+use oxygen::core::AlphaMode;
 use oxygen::core::{MaterialHandle, NodeKey, Scene};
+use oxygen::glam::{Quat, Vec4};
 use oxygen::prelude::*;
+use oxygen::views::ViewContext;
 use support::{gpu_renderer, pixel_of};
 
 /// A sun shining straight along −Z, onto quads that face +Z.

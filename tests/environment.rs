@@ -11,7 +11,10 @@
 mod support;
 
 use oxygen::core::Environment;
+use oxygen::glam::{Quat, Vec4};
+use oxygen::gpu::Msaa;
 use oxygen::prelude::*;
+use oxygen::views::ViewContext;
 
 fn sphere_scene(metallic: f32, roughness: f32, sun: bool) -> Scene {
     let mut scene = Scene::new();
@@ -139,13 +142,13 @@ fn an_hdr_file_loads_as_an_equirectangular_environment() {
     image::codecs::hdr::HdrEncoder::new(std::io::BufWriter::new(file))
         .encode(&texels, width as usize, height as usize)
         .unwrap();
-    let environment = oxygen::load_hdr_environment(&path).unwrap();
+    let environment = oxygen::lighting::load_hdr_environment(&path).unwrap();
     let forward = environment.radiance(Vec3::NEG_Z);
     let back = environment.radiance(Vec3::Z);
     let up = environment.radiance(Vec3::Y);
     assert!(forward.x > 3.0 && back.x < 0.5, "−Z {forward}, +Z {back}");
     assert!(up.z > 2.0, "up {up}");
-    let missing = oxygen::load_hdr_environment("/nonexistent/sky.hdr").unwrap_err().to_string();
+    let missing = oxygen::lighting::load_hdr_environment("/nonexistent/sky.hdr").unwrap_err().to_string();
     assert!(missing.contains("/nonexistent/sky.hdr"), "{missing}");
 }
 
@@ -155,7 +158,7 @@ fn an_hdr_file_loads_as_an_equirectangular_environment() {
 fn an_8_bit_panorama_is_decoded_from_srgb() {
     let path = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("environment_test.png");
     image::RgbImage::from_pixel(8, 4, image::Rgb([128, 128, 128])).save(&path).unwrap();
-    let environment = oxygen::load_hdr_environment(&path).unwrap();
+    let environment = oxygen::lighting::load_hdr_environment(&path).unwrap();
     let r = environment.radiance(Vec3::NEG_Z);
     assert!((r.x - 0.2158).abs() < 0.002, "{r}");
 }

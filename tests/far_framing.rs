@@ -8,7 +8,10 @@
 
 mod support;
 
-use oxygen::import_gltf_slice;
+use oxygen::core::DAabb;
+use oxygen::glam::DVec3;
+use oxygen::import::ImportOptions;
+use oxygen::import::import_gltf_slice;
 use oxygen::prelude::*;
 use oxygen_demo::OrbitCamera;
 use support::far::{assert_framed_alike, wrapped_glb};

@@ -6,6 +6,10 @@
 mod support;
 
 use image::RgbaImage;
+use oxygen::FrameReport;
+use oxygen::glam::Quat;
+use oxygen::gpu::HdrFormat;
+use oxygen::lighting::LocalShadowSettings;
 use oxygen::passes::{PassKind, PipelineKey};
 use oxygen::prelude::*;
 use oxygen_demo::record::Row;

@@ -6,9 +6,11 @@
 
 mod support;
 
+use oxygen::FrameWarning;
 use oxygen::core::{Projection, Scene};
+use oxygen::glam::{Quat, Vec4};
+use oxygen::import::NodeCameraResolver;
 use oxygen::prelude::*;
-use oxygen::{FrameWarning, NodeCameraResolver};
 use support::{gpu_renderer, gpu_renderer_with};
 
 /// A lit red cube at the origin, and a camera node looking at it.

@@ -10,6 +10,8 @@ mod support;
 use std::path::PathBuf;
 
 use oxygen::core::Animation;
+use oxygen::glam::Quat;
+use oxygen::import::{GltfImport, ImportOptions};
 use oxygen::prelude::*;
 use support::encode::data_uri;
 use support::golden::{Tolerance, assert_golden, compare};
@@ -165,7 +167,7 @@ fn channel_file(times: &[f32], ys: &[f32], target_node: usize) -> Vec<u8> {
 fn malformed_channels_fail_the_import_naming_the_animation_and_channel() {
     let import = |bytes: &[u8]| {
         let mut scene = Scene::new();
-        oxygen::import_gltf_slice(&mut scene, bytes, "anim.gltf", &ImportOptions::default())
+        oxygen::import::import_gltf_slice(&mut scene, bytes, "anim.gltf", &ImportOptions::default())
     };
     assert!(import(&channel_file(&[0.0, 1.0], &[0.0, 2.0], 0)).is_ok());
     for (what, file) in [
@@ -208,7 +210,7 @@ fn golden_rigged_simple_bends_with_its_bones() {
 fn absurd_keyframe_counts_and_repeated_joints_are_refused_not_a_panic() {
     let import = |json: &str| {
         let mut scene = Scene::new();
-        oxygen::import_gltf_slice(&mut scene, json.as_bytes(), "hostile.gltf", &ImportOptions::default())
+        oxygen::import::import_gltf_slice(&mut scene, json.as_bytes(), "hostile.gltf", &ImportOptions::default())
     };
     let huge = r#"{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{}],
         "animations":[{"channels":[{"sampler":0,"target":{"node":0,"path":"translation"}}],

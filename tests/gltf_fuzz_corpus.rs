@@ -39,7 +39,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 use oxygen::core::Scene;
-use oxygen::{GltfError, ImportLimits, ImportOptions, import_gltf_slice, import_gltf_with};
+use oxygen::import::{GltfError, ImportLimits, ImportOptions, import_gltf_slice, import_gltf_with};
 use oxygen_demo::record::Row;
 use serde_json::{Value, json};
 use support::encode::{base64_encode, data_uri, png_chunk};

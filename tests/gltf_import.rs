@@ -6,10 +6,10 @@ mod support;
 use std::path::PathBuf;
 
 use oxygen::bindless::SlotAllocators;
-use oxygen::core::{AlphaMode, Scene, ViewContext, ViewIds, ViewResolver};
+use oxygen::core::{AlphaMode, NodeKey, Scene, ViewContext, ViewIds, ViewResolver};
+use oxygen::import::{GltfError, ImportOptions, import_gltf};
 use oxygen::prelude::*;
 use oxygen::sceneprep::{ScenePrep, ViewRequest};
-use oxygen::{GltfError, import_gltf};
 use support::encode::base64_encode;
 
 fn asset(relative: &str) -> PathBuf {
@@ -152,7 +152,8 @@ fn duplicate_node_names_resolve_to_the_first_in_the_file_not_the_first_walked() 
         "nodes":[{"name":"Lamp"},{"name":"Lamp"},{"name":"Rig","children":[1]},{}]}"#;
     let mut scene = Scene::new();
     let import =
-        oxygen::import_gltf_slice(&mut scene, json.as_bytes(), "lamps.gltf", &ImportOptions::default()).unwrap();
+        oxygen::import::import_gltf_slice(&mut scene, json.as_bytes(), "lamps.gltf", &ImportOptions::default())
+            .unwrap();
     let lamps: Vec<NodeKey> = import.nodes_named("Lamp").collect();
     assert_eq!(lamps.len(), 2);
     assert_eq!(import.node("Lamp"), Some(lamps[0]));
@@ -169,7 +170,8 @@ fn cameras_are_found_by_name() {
                    {"type":"orthographic","orthographic":{"xmag":2,"ymag":1,"znear":0,"zfar":10}}]}"#;
     let mut scene = Scene::new();
     let import =
-        oxygen::import_gltf_slice(&mut scene, json.as_bytes(), "cameras.gltf", &ImportOptions::default()).unwrap();
+        oxygen::import::import_gltf_slice(&mut scene, json.as_bytes(), "cameras.gltf", &ImportOptions::default())
+            .unwrap();
     let wide = import.camera("Wide").expect("the camera's own name");
     assert_eq!(Some(wide.node), import.node("Tripod"));
     let crane = import.camera("Crane").expect("an unnamed camera answers to its node's name");

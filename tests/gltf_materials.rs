@@ -14,7 +14,10 @@ mod support;
 
 use std::path::PathBuf;
 
+use oxygen::bindless::TexturePath;
 use oxygen::core::{Material, UvTransform};
+use oxygen::glam::{Quat, Vec2};
+use oxygen::import::ImportOptions;
 use oxygen::prelude::*;
 use support::encode::data_uri;
 use support::golden::{Tolerance, assert_golden, compare};
@@ -246,7 +249,8 @@ fn pixel(x: f32, y: f32) -> (u32, u32) {
 /// Imports `bytes` and adds a sun of `sun` lux shining at the quads' fronts.
 fn scene_of(bytes: &[u8], sun: f32) -> Scene {
     let mut scene = Scene::new();
-    oxygen::import_gltf_slice(&mut scene, bytes, "quads.gltf", &ImportOptions::default()).expect("the file imports");
+    oxygen::import::import_gltf_slice(&mut scene, bytes, "quads.gltf", &ImportOptions::default())
+        .expect("the file imports");
     let light = scene.add_node(
         "sun",
         Transform::IDENTITY
@@ -375,8 +379,9 @@ fn quantized_attributes_without_the_extension_are_refused_naming_the_accessor() 
     let mut q = Quad::new([0.0, 0.0]);
     q.quantized = true;
     let mut scene = Scene::new();
-    let err = oxygen::import_gltf_slice(&mut scene, &quads_file(&[q], false), "q.gltf", &ImportOptions::default())
-        .expect_err("i16 positions need KHR_mesh_quantization");
+    let err =
+        oxygen::import::import_gltf_slice(&mut scene, &quads_file(&[q], false), "q.gltf", &ImportOptions::default())
+            .expect_err("i16 positions need KHR_mesh_quantization");
     let text = err.to_string();
     assert!(text.contains("accessor") && text.contains("Position"), "{text}");
 }
@@ -541,7 +546,7 @@ fn material_extensions_are_read_into_the_material() {
         data_uri("application/octet-stream", &b.bin)
     );
     let mut scene = Scene::new();
-    oxygen::import_gltf_slice(&mut scene, file.as_bytes(), "m.gltf", &ImportOptions::default()).unwrap();
+    oxygen::import::import_gltf_slice(&mut scene, file.as_bytes(), "m.gltf", &ImportOptions::default()).unwrap();
     let materials: Vec<Material> = scene.materials().map(|(_, m)| m.clone()).collect();
     let emissive = materials.iter().find(|m| m.emissive != Vec3::ZERO).expect("the emissive material");
     assert_eq!(emissive.emissive, Vec3::new(4.0, 2.0, 0.0));

@@ -5,8 +5,10 @@
 mod support;
 
 use oxygen::core::Scene;
+use oxygen::import::{ImportOptions, import_gltf_slice};
 use oxygen::prelude::*;
-use oxygen::{ImportOptions, import_gltf_slice};
+use oxygen::sceneprep::PassMask;
+use oxygen::views::ViewContext;
 use support::encode::base64_encode;
 use support::{gpu_renderer, pixel_of};
 

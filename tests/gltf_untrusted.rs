@@ -12,8 +12,10 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use oxygen::core::Scene;
-use oxygen::gltf_import::{GraphError, LimitExceeded, UriError};
-use oxygen::{GltfError, GltfImport, ImportLimits, ImportOptions, import_gltf_slice, import_gltf_with};
+use oxygen::import::{
+    GltfError, GltfImport, GraphError, ImportLimits, ImportOptions, LimitExceeded, UriError, import_gltf_slice,
+    import_gltf_with,
+};
 use serde_json::{Value, json};
 use support::encode::{data_uri, png_chunk};
 
@@ -755,7 +757,7 @@ fn every_shipped_scene_still_imports() {
 /// data then fails as a read error).
 #[test]
 fn an_hdr_panorama_past_the_size_limit_is_refused_before_decoding() {
-    use oxygen::{EnvironmentFileError, MAX_ENVIRONMENT_SIDE, load_hdr_environment};
+    use oxygen::lighting::{EnvironmentFileError, MAX_ENVIRONMENT_SIDE, load_hdr_environment};
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("hdr_limits");
     std::fs::create_dir_all(&dir).unwrap();
     let panorama = |width: u32, height: u32| {

@@ -6,6 +6,7 @@ mod support;
 use std::path::PathBuf;
 
 use oxygen::core::Aabb;
+use oxygen::glam::Quat;
 use oxygen::prelude::*;
 use support::golden::{Tolerance, assert_golden};
 

@@ -67,6 +67,7 @@ fn a_domain_grows_and_keeps_its_live_records() {
 
 #[test]
 fn a_long_run_of_view_and_node_churn_keeps_gpu_memory_bounded() {
+    use oxygen::glam::Vec4;
     use oxygen::prelude::*;
     // keep_hdr: the churn reads every HDR target to check it is finite.
     let mut renderer =

@@ -4,7 +4,13 @@
 
 mod support;
 
+use oxygen::core::AlphaMode;
+use oxygen::glam::{Quat, Vec4};
+use oxygen::graph::{PrePass, lit_render_graph};
+use oxygen::passes::{DrawPath, PassError};
 use oxygen::prelude::*;
+use oxygen::sceneprep::{PassMask, ViewPrepOptions};
+use oxygen::views::ViewContext;
 use support::{Rgb, assert_region, gpu_renderer, linear_to_srgb8, pixel_of, region_mean};
 
 /// A distinctive clear colour, so "background" cannot be confused with shading.

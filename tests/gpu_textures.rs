@@ -3,8 +3,11 @@
 
 mod support;
 
+use oxygen::bindless::TexturePath;
 use oxygen::core::{Filter, Sampling, TextureImage, Wrap};
+use oxygen::glam::{Quat, Vec4};
 use oxygen::prelude::*;
+use oxygen::views::{ResolvedView, ViewContext};
 use support::{Rgb, assert_region, pixel_of, texture_paths};
 
 const RED: [u8; 4] = [230, 20, 20, 255];

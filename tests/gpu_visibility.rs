@@ -16,9 +16,14 @@
 
 mod support;
 
+use oxygen::FrameReport;
 use oxygen::core::LodLevel;
+use oxygen::core::{AlphaMode, NodeFlags};
+use oxygen::glam::{Quat, Vec4};
+use oxygen::lighting::CascadeSettings;
 use oxygen::prelude::*;
-use oxygen::sceneprep::{DrawMetadata, canonical_dump};
+use oxygen::sceneprep::{DrawMetadata, PassMask, Visibility, canonical_dump};
+use oxygen::views::{ResolvedView, ViewContext, ViewError, ViewResolver};
 use support::golden::compare;
 use support::gpu_renderer_with;
 

@@ -11,8 +11,11 @@
 
 mod support;
 
+use oxygen::RenderOrigin;
 use oxygen::core::glam::DVec3;
+use oxygen::glam::{Quat, Vec4};
 use oxygen::prelude::*;
+use oxygen::views::ViewContext;
 use support::golden::compare;
 use support::{gpu_renderer_with, region_mean};
 
@@ -64,7 +67,7 @@ fn camera_at(offset: Vec3) -> LookAtResolver {
 
 fn render(offset: Vec3, origin: RenderOrigin) -> image::RgbaImage {
     let mut renderer = gpu_renderer_with(RendererOptions { origin, ..Default::default() });
-    let view = renderer.register_view(camera_at(offset), oxygen::standard_render_graph).unwrap();
+    let view = renderer.register_view(camera_at(offset), oxygen::graph::standard_render_graph).unwrap();
     renderer.render_frame(&scene_at(offset)).unwrap();
     support::read_lit_color(&renderer, view)
 }

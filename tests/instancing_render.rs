@@ -3,8 +3,10 @@
 
 mod support;
 
+use oxygen::glam::{Quat, Vec4};
+use oxygen::passes::DrawPath;
 use oxygen::prelude::*;
-use oxygen::sceneprep::Instancing;
+use oxygen::sceneprep::{Instancing, ViewPrepOptions};
 
 /// Rows of cubes and spheres in two materials under a sun.
 fn scene() -> Scene {

@@ -4,6 +4,7 @@
 mod support;
 
 use oxygen::core::{Mobility, Scene};
+use oxygen::glam::{Quat, Vec4};
 use oxygen::prelude::*;
 use support::gpu_renderer;
 

@@ -8,7 +8,9 @@ mod support;
 
 use std::path::PathBuf;
 
+use oxygen::core::{MaterialHandle, NodeKey};
 use oxygen::core::{MorphTarget, Skin, SkinWeights};
+use oxygen::glam::{Mat4, Quat, Vec4};
 use oxygen::prelude::*;
 use support::deform::{assert_same, camera, with_sun};
 use support::golden::{Tolerance, assert_golden, compare};

@@ -6,8 +6,13 @@
 
 mod support;
 
+use oxygen::FrameWarning;
+use oxygen::glam::{Quat, Vec4};
 use oxygen::gpu::HdrImage;
+use oxygen::gpu::{HdrFormat, Msaa};
+use oxygen::graph::PrePass;
 use oxygen::prelude::*;
+use oxygen::sceneprep::Visibility;
 use oxygen_demo::record::Row;
 use support::golden::compare;
 

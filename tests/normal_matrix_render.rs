@@ -5,7 +5,9 @@
 mod support;
 
 use oxygen::core::Scene;
+use oxygen::glam::{Quat, Vec4};
 use oxygen::prelude::*;
+use oxygen::views::ViewContext;
 use support::{gpu_renderer, pixel_of};
 
 const TURN_DEGREES: f32 = 30.0;

@@ -3,8 +3,12 @@
 
 mod support;
 
+use oxygen::glam::{Quat, Vec4};
+use oxygen::graph::ReferenceGraph;
+use oxygen::lighting::{ProbeUpdate, ReflectionProbe};
+use oxygen::passes::ReferenceSettings;
 use oxygen::prelude::*;
-use oxygen::{ProbeUpdate, ReflectionProbe};
+use oxygen::views::ViewContext;
 use support::{Rgb, pixel_of, region_mean};
 
 /// A mirror sphere at the origin, a red box to its right (+X), a sun.

@@ -12,7 +12,11 @@
 mod support;
 
 use glam::DVec3;
+use oxygen::glam::{Quat, Vec4};
+use oxygen::graph::ReferenceGraph;
+use oxygen::passes::ReferenceSettings;
 use oxygen::prelude::*;
+use oxygen::views::ViewContext;
 use oxygen_demo::record::Row;
 use support::gpu_renderer;
 

@@ -13,8 +13,11 @@ mod support;
 
 use std::path::PathBuf;
 
+use oxygen::bindless::TexturePath;
 use oxygen::core::CascadeSettings;
+use oxygen::glam::{Quat, Vec4};
 use oxygen::prelude::*;
+use oxygen::views::ViewContext;
 
 /// The scene: `Cubes.glb`, a 40 × 0.5 × 40 grey ground box whose
 /// top is the floor of the file's bounds, and a sun; and its camera, from

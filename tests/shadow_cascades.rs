@@ -8,8 +8,11 @@ use std::sync::Arc;
 use oxygen::bindless::SlotAllocators;
 use oxygen::core::glam::Vec2;
 use oxygen::core::{CascadeResolver, CascadeSettings, NodeFlags};
+use oxygen::glam::{Quat, Vec4};
+use oxygen::lighting::LocalShadowSettings;
 use oxygen::prelude::*;
-use oxygen::sceneprep::{ScenePrep, ViewFilter, ViewRequest};
+use oxygen::sceneprep::{PassMask, ScenePrep, ViewFilter, ViewPrepOptions, ViewRequest};
+use oxygen::views::{ViewContext, ViewResolver};
 use oxygen_demo::record::Row;
 use oxygen_demo::{main_camera, multi_view_scene};
 
@@ -267,7 +270,7 @@ fn a_point_light_casts_shadows_through_its_cube_faces() {
         let mut renderer = support::gpu_renderer();
         renderer.set_local_shadows(Some(LocalShadowSettings { resolution: 256, ..Default::default() }));
         let config = ForwardLitConfig { local_shadows: with_shadows, ..Default::default() };
-        let view = renderer.register_view(camera, oxygen::lit_render_graph(config)).unwrap();
+        let view = renderer.register_view(camera, oxygen::graph::lit_render_graph(config)).unwrap();
         renderer.render_frame(&scene).unwrap();
         assert_eq!(renderer.shadow_views().len(), 7, "six faces and one spot");
         let lights = renderer.scene_prep().frame_collection().positional_lights.clone();

@@ -10,8 +10,11 @@
 mod support;
 
 use oxygen::core::{NodeKey, Scene};
+use oxygen::glam::{Quat, Vec4};
+use oxygen::lighting::{CascadeSettings, LocalShadowSettings};
 use oxygen::passes::DepthBias;
 use oxygen::prelude::*;
+use oxygen::views::ViewContext;
 use support::{gpu_renderer, gpu_renderer_with, read_lit_color};
 
 /// The two guards against acne, together.
@@ -114,7 +117,7 @@ fn grazing_plane(light: Grazing, guards: Option<Guards>) -> image::RgbaImage {
         scene.set_light(lamp, Some(l)).unwrap();
     }
     let mut renderer = gpu_renderer_with(options);
-    let view = renderer.register_view(desc, oxygen::lit_render_graph(config)).unwrap();
+    let view = renderer.register_view(desc, oxygen::graph::lit_render_graph(config)).unwrap();
     renderer.render_frame(&scene).unwrap();
     read_lit_color(&renderer, view)
 }
@@ -188,7 +191,7 @@ fn penumbra(pcf_radius: u32) -> (usize, f32, f32) {
     let settings = CascadeSettings { count: 1, resolution: 256, max_distance: 20.0, ..Default::default() };
     let config = ForwardLitConfig { shadow_pcf_radius: pcf_radius, ..Default::default() };
     let desc = ViewDesc::new(camera).with_sun_shadows(settings);
-    let view = renderer.register_view(desc, oxygen::lit_render_graph(config)).unwrap();
+    let view = renderer.register_view(desc, oxygen::graph::lit_render_graph(config)).unwrap();
     renderer.render_frame(&scene).unwrap();
     let image = read_lit_color(&renderer, view);
     // The shadow falls at +X (the sun travels towards +X and down); the box

@@ -6,7 +6,9 @@
 
 mod support;
 
+use oxygen::core::NodeKey;
 use oxygen::core::{SceneError, Skin, SkinWeights};
+use oxygen::glam::{Mat4, Quat, Vec4};
 use oxygen::prelude::*;
 use support::deform::{assert_same, camera, with_sun};
 

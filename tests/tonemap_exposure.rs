@@ -4,6 +4,7 @@
 mod support;
 
 use oxygen::core::Scene;
+use oxygen::glam::Vec4;
 use oxygen::prelude::*;
 use support::{gpu_renderer, read_lit_color};
 

@@ -6,8 +6,13 @@
 
 mod support;
 
+use oxygen::ViewRole;
+use oxygen::core::NodeKey;
+use oxygen::glam::{Quat, Vec4};
+use oxygen::lighting::{CascadeSettings, LocalShadowSettings, ProbeUpdate, ReflectionProbe};
+use oxygen::passes::PassError;
 use oxygen::prelude::*;
-use oxygen::{ProbeUpdate, ReflectionProbe, ViewRole};
+use oxygen::views::Views;
 
 /// A sun, a spot and a point light (all casting shadows), a mirror ball, a
 /// red box and a ground plane.

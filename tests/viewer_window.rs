@@ -13,7 +13,11 @@ mod support;
 use std::path::PathBuf;
 use std::process::Command;
 
+use oxygen::core::DAabb;
+use oxygen::gpu::Msaa;
 use oxygen::prelude::*;
+use oxygen::views::DLookAtResolver;
+use oxygen::windows::WindowRect;
 use oxygen_demo::OrbitCamera;
 use support::golden::compare;
 use support::gpu_renderer_with;

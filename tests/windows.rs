@@ -5,7 +5,10 @@
 
 mod support;
 
+use oxygen::glam::{Quat, Vec4};
+use oxygen::lighting::CascadeSettings;
 use oxygen::prelude::*;
+use oxygen::windows::WindowRect;
 use support::golden::compare;
 use support::gpu_renderer;
 

@@ -12,7 +12,7 @@
 
 use libfuzzer_sys::fuzz_target;
 use oxygen::core::Scene;
-use oxygen::{ImportLimits, ImportOptions, import_gltf_slice};
+use oxygen::import::{ImportLimits, ImportOptions, import_gltf_slice};
 
 fuzz_target!(|data: &[u8]| {
     let options = ImportOptions { limits: ImportLimits::default(), ..ImportOptions::default() };

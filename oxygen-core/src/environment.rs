@@ -4,7 +4,7 @@
 //!
 //! An [`Environment`] is a radiance function over directions: a uniform
 //! colour, a procedural sky matched to the sun, or an equirectangular image
-//! (from a Radiance `.hdr` file, `oxygen::load_hdr_environment`).
+//! (from a Radiance `.hdr` file, `oxygen::lighting::load_hdr_environment`).
 //! [`Environment::prefilter`] turns it into a [`PrefilteredEnvironment`]:
 //!
 //! * a cube of six square faces (the reflection probes' face layout: each

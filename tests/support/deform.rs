@@ -3,6 +3,7 @@
 //! it, from the same camera under the same sun.
 
 use image::RgbaImage;
+use oxygen::glam::Quat;
 use oxygen::prelude::*;
 
 use super::golden::compare;

@@ -15,8 +15,10 @@ pub mod skip;
 use std::sync::Once;
 
 use image::RgbaImage;
+use oxygen::bindless::TexturePath;
 use oxygen::gpu::HdrImage;
 use oxygen::prelude::*;
+use oxygen::views::ResolvedView;
 
 /// A pixel's colour.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
