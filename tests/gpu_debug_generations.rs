@@ -6,10 +6,9 @@ mod support;
 use futures::executor::block_on;
 use oxygen::bindless::{BindlessHeap, CameraConstants, SceneConstantsBuffer, TexturePath};
 use oxygen::gpu::{GpuContext, GpuOptions, ViewTargets};
-use oxygen::passes::{DrawPath, FrameProgress, LightingResources, Pipelines, ViewInputs};
+use oxygen::passes::{FrameProgress, LightingResources, Pipelines, Shading, ViewInputs};
 use oxygen::prelude::*;
 use oxygen::sceneprep::{ScenePrep, ViewRequest};
-use oxygen::views::ViewContext;
 use oxygen_demo::{main_camera, multi_view_scene};
 
 fn magenta_pixels(image: &image::RgbaImage) -> usize {
@@ -86,10 +85,7 @@ fn a_stale_draw_range_is_painted_magenta() {
         progress: &FrameProgress::new([]),
         origin: glam::DVec3::ZERO,
         hdr_read_by_others: false,
-        textured_materials: true,
-        uv_transforms: true,
-        specialize_shaders: true,
-        visibility: None,
+        shading: Shading::ALL,
         reference: None,
     };
     let mut recorder = CommandRecorder::new(&gpu.device, "stale view");

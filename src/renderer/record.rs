@@ -23,7 +23,7 @@ use std::time::{Duration, Instant};
 use oxygen_core::{ResolvedView, ViewId};
 use oxygen_passes::{
     CommandRecorder, FrameProgress, LinkedView, LocalShadowsInput, OutputSource, PassError, Pipelines, ProbeId,
-    RecordStats, RenderContext, ShadowMapInput, ViewInputs,
+    RecordStats, RenderContext, Shading, ShadowMapInput, ViewInputs,
 };
 use tracing::{Instrument, info_span};
 
@@ -166,7 +166,7 @@ impl Renderer {
                 }
             }
         }
-        ViewInputs { cascades, local_shadows, probes, views }
+        ViewInputs { cascades, local_shadows, probes, views, visibility: self.visibility.gpu.as_ref() }
     }
 
     /// Step 3: records every view of `plan` and submits them in link order.
@@ -223,10 +223,7 @@ impl Renderer {
                     progress: &progress,
                     origin: plan.origin,
                     hdr_read_by_others: self.settings.keep_hdr || hdr_readers.contains(&view.id),
-                    textured_materials: plan.materials.textures,
-                    uv_transforms: plan.materials.uv_transforms,
-                    specialize_shaders: self.settings.specialize_shaders,
-                    visibility: self.visibility.gpu.as_ref(),
+                    shading: Shading { materials: plan.materials, specialize: self.settings.specialize_shaders },
                     reference: self.reference.tracer.as_ref(),
                 },
             ));
@@ -452,11 +449,11 @@ fn run_executor<'a>(
             let future = async move {
                 let mut rec = CommandRecorder::new(&ctx.gpu.device, &view.id.to_string());
                 // GPU visibility's first phase, before any pass reads its draws.
-                if let Some(visibility) = ctx.visibility {
+                if let Some(visibility) = ctx.inputs.visibility {
                     visibility.record_early(rec.encoder(), view.id);
                 }
                 let result = graph.record_boxed(ctx, &mut rec).await;
-                if let Some(visibility) = ctx.visibility {
+                if let Some(visibility) = ctx.inputs.visibility {
                     visibility.record_readback(rec.encoder(), view.id);
                 }
                 let (buffer, stats) = rec.finish();

@@ -116,7 +116,11 @@ pub struct LinkedView<'a> {
     pub targets: &'a ViewTargets,
 }
 
-/// What one view may read from the others this frame.
+/// What the renderer's features hand one view this frame: what it may read
+/// from the other views (its cascades, the local shadow atlas, its linked
+/// probes and views) and GPU visibility's state for it. A feature that
+/// gives views something adds it here, typed, not to
+/// [`crate::RenderContext`].
 #[derive(Clone, Default)]
 pub struct ViewInputs<'a> {
     /// The view's own sun-shadow cascades, nearest first (empty when it
@@ -128,4 +132,7 @@ pub struct ViewInputs<'a> {
     pub probes: Vec<ProbeCubeInput<'a>>,
     /// The views the view is linked to.
     pub views: Vec<LinkedView<'a>>,
+    /// GPU visibility, when the renderer has it: the view's count buffers
+    /// of GPU-written partitions, and phase 2 of occlusion culling.
+    pub visibility: Option<&'a crate::GpuVisibility>,
 }

@@ -19,5 +19,5 @@ pub use error::PassError;
 pub use inputs::{LinkedView, LocalShadowsInput, OutputKind, ProbeCubeInput, ShadowMapInput, ViewInputs};
 pub use progress::FrameProgress;
 pub use recorder::{CommandRecorder, RecordStats};
-pub use render_context::{PrePassEstimate, RenderContext};
+pub use render_context::{PrePassEstimate, RenderContext, Shading};
 pub use render_pass::RenderPass;

@@ -3,6 +3,7 @@
 use oxygen_bindless::{BindlessHeap, SceneConstantsBuffer};
 use oxygen_core::{Output, ResolvedView};
 use oxygen_gpu::{ColorTargets, GpuContext, ViewTargets};
+use oxygen_sceneprep::finalize::materials::MaterialFeatures;
 use oxygen_sceneprep::{PassMask, PreparedSceneFrame};
 
 use super::{CommandRecorder, DrawPath, FrameProgress, OutputKind, PassError, ViewInputs};
@@ -47,22 +48,30 @@ pub struct RenderContext<'a> {
     /// [`ViewInputs`], which says what this view reads, not who reads it.
     /// [`RenderContext::hdr_read_after_shading`] uses it.
     pub hdr_read_by_others: bool,
-    /// Whether any material of the scene has a texture: shading pipelines
-    /// leave texture sampling out otherwise ([`crate::ShaderFeatures`]).
-    pub textured_materials: bool,
-    /// Whether any material of the scene reads a second UV set or a
-    /// texture transform: shading pipelines leave that path out otherwise.
-    pub uv_transforms: bool,
-    /// Specialise the shading pipelines to what the view has this frame
-    /// ([`crate::ShaderFeatures`]); `false` runs the fully featured shader
-    /// everywhere (for comparisons).
-    pub specialize_shaders: bool,
-    /// GPU visibility's per-view state, when the renderer has it: the count
-    /// buffers of GPU-written partitions, and phase 2 of occlusion culling.
-    pub visibility: Option<&'a crate::GpuVisibility>,
+    /// What the frame's shading pipelines carry.
+    pub shading: Shading,
     /// The path-traced reference's scene and samples, when a view of the
     /// renderer is path traced ([`crate::ReferencePass`]).
     pub reference: Option<&'a crate::ReferenceTracer>,
+}
+
+/// What the frame's shading pipelines carry, the same for every view of the
+/// frame ([`crate::ShaderFeatures`] adds what each view has).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shading {
+    /// What the scene's materials need, as ScenePrep's material table found
+    /// it: pipelines leave texture sampling and the UV-transform path out
+    /// when no material needs them.
+    pub materials: MaterialFeatures,
+    /// Specialise the shading pipelines to what the view has this frame;
+    /// `false` runs the fully featured shader everywhere (for comparisons).
+    pub specialize: bool,
+}
+
+impl Shading {
+    /// Every feature in every pipeline: what a context made without a scene
+    /// in view uses.
+    pub const ALL: Shading = Shading { materials: MaterialFeatures::ALL, specialize: true };
 }
 
 /// What an automatic depth pre-pass decides from, for one view and frame
@@ -93,7 +102,7 @@ impl<'a> RenderContext<'a> {
     /// back from an earlier frame, and infinite (so: pre-pass) until the
     /// first readback arrives.
     pub fn estimated_overdraw(&self) -> f32 {
-        match (self.prepared.gpu_plan(), self.visibility) {
+        match (self.prepared.gpu_plan(), self.inputs.visibility) {
             (Some(_), Some(visibility)) => visibility.estimated_overdraw(self.view.view_id).unwrap_or(f32::INFINITY),
             _ => self.prepared.estimated_overdraw(),
         }
@@ -105,7 +114,7 @@ impl<'a> RenderContext<'a> {
     /// read back with the overdraw on a GPU path, 0 until it arrives) and
     /// the view's pixels.
     pub fn pre_pass_estimate(&self) -> PrePassEstimate {
-        let indices = match (self.prepared.gpu_plan(), self.visibility) {
+        let indices = match (self.prepared.gpu_plan(), self.inputs.visibility) {
             (Some(_), Some(visibility)) => visibility.depth_pass_indices(self.view.view_id).unwrap_or(0),
             _ => 0,
         } + self.prepared.depth_pass_indices();
@@ -128,7 +137,7 @@ impl<'a> RenderContext<'a> {
     /// first phase drew and finds the draws it hid not. Does nothing for a
     /// view without occlusion culling.
     pub fn cull_occluded(&self, rec: &mut CommandRecorder) {
-        if let (true, Some(visibility)) = (self.occlusion_culling(), self.visibility) {
+        if let (true, Some(visibility)) = (self.occlusion_culling(), self.inputs.visibility) {
             visibility.record_late(&self.gpu.device, rec.encoder(), self.view.view_id, &self.targets.depth_view);
         }
     }

@@ -319,7 +319,7 @@ impl MeshPass {
     /// only what it will bind (the same choices as
     /// `forward_lighting::bind_group`) and what the frame holds.
     fn shader_features(&self, ctx: &RenderContext<'_>) -> crate::ShaderFeatures {
-        if !ctx.specialize_shaders {
+        if !ctx.shading.specialize {
             return crate::ShaderFeatures::ALL;
         }
         let inputs = &ctx.inputs;
@@ -329,8 +329,8 @@ impl MeshPass {
             local_lights: ctx.prepared.slots().positional_lights.count > 0,
             local_shadows: config.is_some_and(|c| c.local_shadows) && inputs.local_shadows.is_some(),
             probes: config.is_some_and(|c| c.reflections) && !inputs.probes.is_empty(),
-            textures: ctx.textured_materials,
-            uv_transforms: ctx.uv_transforms,
+            textures: ctx.shading.materials.textures,
+            uv_transforms: ctx.shading.materials.uv_transforms,
         }
     }
 
@@ -495,7 +495,7 @@ fn draw_partition(
         // Written by GPU visibility: as many commands as its counter says,
         // at most one per group. The renderer only puts a view on a GPU
         // path where the device counts draws.
-        if let Some(counts) = ctx.visibility.and_then(|v| v.count_buffer(ctx.view.view_id)) {
+        if let Some(counts) = ctx.inputs.visibility.and_then(|v| v.count_buffer(ctx.view.view_id)) {
             pass.multi_draw_indexed_indirect_count(
                 buffer,
                 first * stride,
