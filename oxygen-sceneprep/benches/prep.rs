@@ -32,7 +32,7 @@ use oxygen_bindless::SlotAllocators;
 use oxygen_core::{AlphaMode, Camera, Geometry, LookAtResolver, Material, Renderable, ResolvedView, Scene, Transform};
 use oxygen_core::{ViewContext, ViewResolver};
 use oxygen_demo::record::{Record, Row};
-use oxygen_sceneprep::finalize::radix_sort::radix_sort_by_key;
+use oxygen_sceneprep::testing::radix_sort_by_key;
 use oxygen_sceneprep::{
     CullBound, DrawMetadata, NormalMatrix, RenderableEntry, ScenePrep, SubmeshEntry, ViewPrepOptions, ViewRequest,
 };

@@ -410,7 +410,7 @@ fn partition_rank(mask: PassMask) -> u64 {
 /// Runs of indices where `old` and `new` differ (same lengths), with runs
 /// closer than a few records joined: one write of a short unchanged gap
 /// costs less than two writes.
-pub fn changed_ranges<T: PartialEq>(old: &[T], new: &[T]) -> Vec<Range<u32>> {
+pub(crate) fn changed_ranges<T: PartialEq>(old: &[T], new: &[T]) -> Vec<Range<u32>> {
     const JOIN_GAP: usize = 4;
     let mut out: Vec<Range<u32>> = Vec::new();
     for (i, (a, b)) in old.iter().zip(new).enumerate() {

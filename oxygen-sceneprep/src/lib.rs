@@ -16,23 +16,30 @@
 //! everything up to the prepared frame runs and is tested without a GPU;
 //! [`ScenePrep::upload`] then writes the frame's data into the bindless heap.
 //! This crate knows nothing of passes.
+//!
+//! Its internals (the worker pool behind [`WorkerPool`], finalization's sort
+//! keys, radix sort and caches, the BVH builder) are crate-private; the
+//! `testing` feature, which only the crate's own tests and benchmarks turn
+//! on, exposes what they need in a `testing` module.
 
 #![warn(missing_docs)]
 // `!(x > 0.0)` is how this crate rejects NaN along with the out-of-range values;
 // rewriting it with `partial_cmp` would hide that intent.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-pub mod collect;
+mod collect;
 mod draw_metadata;
 pub mod finalize;
 mod gpu_records;
 pub mod gpu_scene;
-pub mod overdraw;
+mod overdraw;
 mod pass_mask;
 mod prepared_frame;
 pub mod ray;
 mod scene_prep;
-pub mod worker_pool;
+#[cfg(feature = "testing")]
+pub mod testing;
+mod worker_pool;
 
 pub use collect::{
     CullBound, FrameCollection, Instancing, LocalShadowCaster, LocalShadowKind, RenderItem, RenderOrigin,
@@ -48,4 +55,6 @@ pub use overdraw::expected_shaded_layers;
 pub use pass_mask::PassMask;
 pub use prepared_frame::{GpuViewPlan, Partition, PreparedSceneFrame, PreparedSlots, canonical_draws, canonical_dump};
 pub use ray::{RayInstance, RayScene};
+pub use finalize::materials::MaterialFeatures;
 pub use scene_prep::{PrepError, PrepStats, ScenePrep, ViewRequest};
+pub use worker_pool::WorkerPool;

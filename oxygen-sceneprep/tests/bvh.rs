@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 use oxygen_core::Aabb;
-use oxygen_sceneprep::ray::bvh::{Bvh, BvhNode, ray_triangle, triangle_boxes};
+use oxygen_sceneprep::testing::{Bvh, BvhNode, ray_triangle, triangle_boxes};
 
 /// SplitMix64: a seeded generator small enough to live in the test, as the
 /// workspace has no `rand`.

@@ -9,7 +9,7 @@ use oxygen_core::{
     AlphaMode, Camera, Geometry, LookAtResolver, Material, Renderable, ResolvedView, Scene, Transform, ViewContext,
     ViewResolver,
 };
-use oxygen_sceneprep::finalize::sort_key::sort_key;
+use oxygen_sceneprep::testing::sort_key;
 use oxygen_sceneprep::{CullBound, PassMask, PreparedSceneFrame, ScenePrep, ViewPrepOptions, ViewRequest};
 
 struct Rng(u64);

@@ -93,7 +93,7 @@ fn gpu_records_wgsl_matches_rust_layouts() {
     assert_eq!(offset(&members, "nx") as usize, offset_of!(Vertex, normal));
     assert_eq!(offset(&members, "u") as usize, offset_of!(Vertex, uv));
     // The path-traced reference's ray scene.
-    check!(module, oxygen_sceneprep::ray::bvh::BvhNode, "BvhNode", [min, first, max, count]);
+    check!(module, oxygen_sceneprep::ray::BvhNode, "BvhNode", [min, first, max, count]);
     check!(
         module,
         oxygen_sceneprep::RayInstance,

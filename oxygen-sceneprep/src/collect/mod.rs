@@ -17,4 +17,4 @@ pub use frame_phase::{
     FrameCollection, LocalShadowCaster, LocalShadowKind, RenderableEntry, SkippedNode, SubmeshEntry,
 };
 pub use render_origin::RenderOrigin;
-pub use view_phase::{CullBound, Instancing, RenderItem, ViewFilter, ViewPrepOptions, collect_view_subset};
+pub use view_phase::{CullBound, Instancing, RenderItem, ViewFilter, ViewPrepOptions};

@@ -136,19 +136,9 @@ pub struct RenderItem {
     pub morph_base: u32,
 }
 
-/// Runs the view phase for one view, appending to `items` (cleared first).
-pub fn collect_view(
-    scene: &Scene,
-    frame: &FrameCollection,
-    view: &ResolvedView,
-    options: &ViewPrepOptions,
-    items: &mut Vec<RenderItem>,
-) {
-    collect_view_subset(scene, frame, view, options, None, items)
-}
-
-/// [`collect_view`] over the renderables `subset` names (indices into
-/// [`FrameCollection::renderables`], ascending) instead of all; with a GPU
+/// Runs the view phase for one view, appending to `items` (cleared first):
+/// over the renderables `subset` names (indices into
+/// [`FrameCollection::renderables`], ascending), or all of them when `None`; with a GPU
 /// [`crate::Visibility`] only transparent submeshes become items.
 pub fn collect_view_subset(
     scene: &Scene,

@@ -117,13 +117,4 @@ impl GeometryCache {
         self.resident = 0;
         Ok(())
     }
-
-    /// Frees a mesh's slots (e.g. when the asset is removed).
-    pub fn evict(&mut self, handle: GeometryHandle, slots: &mut SlotAllocators) -> Result<(), SlotError> {
-        if let Some(s) = self.get(handle) {
-            self.entries[geometry_index(handle) as usize] = None;
-            self.free_slots(s, slots)?;
-        }
-        Ok(())
-    }
 }
