@@ -6,9 +6,10 @@ mod support;
 use futures::executor::block_on;
 use oxygen::bindless::{BindlessHeap, CameraConstants, SceneConstantsBuffer, TexturePath};
 use oxygen::gpu::{GpuContext, GpuOptions, ViewTargets};
-use oxygen::passes::{FrameProgress, LightingResources, Pipelines, Shading, ViewInputs};
+use oxygen::passes::{DrawPath, FrameProgress, LightingResources, Pipelines, Shading, ViewInputs};
 use oxygen::prelude::*;
 use oxygen::sceneprep::{ScenePrep, ViewRequest};
+use oxygen::views::ViewContext;
 use oxygen_demo::{main_camera, multi_view_scene};
 
 fn magenta_pixels(image: &image::RgbaImage) -> usize {

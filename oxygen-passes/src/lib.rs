@@ -38,7 +38,7 @@ mod visibility;
 
 pub use context::{
     CommandRecorder, DrawPath, FrameProgress, LinkedView, LocalShadowsInput, OutputKind, PassError, PrePassEstimate,
-    ProbeCubeInput, RecordStats, RenderContext, RenderPass, ShadowMapInput, Shading, ViewInputs,
+    ProbeCubeInput, RecordStats, RenderContext, RenderPass, Shading, ShadowMapInput, ViewInputs,
 };
 pub use lighting::LightingResources;
 pub use lighting::ibl::cube_filter::{
