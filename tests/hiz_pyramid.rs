@@ -7,7 +7,7 @@
 mod support;
 
 use oxygen::gpu::{GpuContext, GpuOptions};
-use oxygen::passes::hiz::{HizPipelines, HizPyramid};
+use oxygen::passes::testing::{HizPipelines, HizPyramid};
 
 /// Fills a depth target with a per-pixel hash through `frag_depth` (depth
 /// textures cannot be copy destinations).
@@ -147,7 +147,7 @@ fn hiz_visible_never_hides_a_box_that_some_covered_pixel_shows() {
         .collect();
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("hiz_visible test"),
-        source: wgpu::ShaderSource::Wgsl(format!("{VISIBLE}\n{}", oxygen::passes::hiz::HIZ_TEST_WGSL).into()),
+        source: wgpu::ShaderSource::Wgsl(format!("{VISIBLE}\n{}", oxygen::passes::testing::HIZ_TEST_WGSL).into()),
     });
     let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: None,

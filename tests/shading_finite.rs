@@ -323,7 +323,7 @@ fn run_shading_functions(cases: &[Case]) -> Vec<[f32; 4]> {
     let gpu = renderer.gpu();
     let source = format!(
         "{}\n{PROPERTY_WGSL}",
-        oxygen::passes::shader_source(oxygen::passes::PassKind::Shading, TexturePath::GroupedArrays)
+        oxygen::passes::testing::shader_source(oxygen::passes::PassKind::Shading, TexturePath::GroupedArrays)
     );
     let module = gpu.device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("shading properties"),

@@ -21,6 +21,11 @@
 //! Shaders read every per-draw datum through bindless slots: the draw's
 //! `DrawMetadata` (found by `instance_index`), its world and normal matrix,
 //! its material and its vertices. No per-draw bind group exists.
+//!
+//! The WGSL sources and their assembly, the lighting group's parameter
+//! block and the HiZ pyramid are crate-private; the `testing` feature, which
+//! only this crate's tests and the root crate's GPU tests turn on, exposes
+//! what they validate in a `testing` module.
 
 #![warn(missing_docs)]
 // `!(x > 0.0)` is how this crate rejects NaN along with the out-of-range values;
@@ -42,22 +47,42 @@ pub use context::{
 };
 pub use lighting::LightingResources;
 pub use lighting::ibl::cube_filter::{
-    CUBE_FILTER_WGSL, EnvironmentQuality, HARMONICS_LAYER, HARMONICS_SCALE, MAX_ENVIRONMENT_SIZE, MAX_FILTER_SAMPLES,
-    PROBE_FILTER_SAMPLES, prefiltered_levels,
+    EnvironmentQuality, HARMONICS_LAYER, HARMONICS_SCALE, MAX_FILTER_SAMPLES, PROBE_FILTER_SAMPLES, prefiltered_levels,
 };
-pub use lighting::ibl::{CUBE_FACES_WGSL, ENVIRONMENT_WGSL};
-pub use lighting::inputs::{PROBE_FACE_AXES, probe_view};
-pub use lighting::params::{LightingInputs, MAX_CASCADES, MAX_PROBES, MAX_SHADOW_TILES, PROBE_FACES};
-pub use lighting::shadow_atlas::{SHADOW_ATLAS_FORMAT, array_layer_count};
-pub use lighting::split_sum::{SPLIT_SUM_LUT_FORMAT, SPLIT_SUM_LUT_SIZE, SPLIT_SUM_WGSL, split_sum_shader_source};
+pub use lighting::inputs::PROBE_FACE_AXES;
+pub use lighting::params::{MAX_CASCADES, PROBE_FACES};
+pub use lighting::shadow_atlas::array_layer_count;
+pub use lighting::split_sum::SPLIT_SUM_LUT_SIZE;
 pub use mesh::{ColorOps, DrawList, ForwardLitConfig, MeshPass};
 pub use oxygen_core::{Depth, HdrColor, Output, OutputSource, ProbeCube, ProbeId, ShadowMap};
 pub use pipelines::{
     AlphaClass, CompilerGuard, DepthBias, Exposure, PassKind, PipelineFuture, PipelineKey, PipelineVariant, Pipelines,
-    ShaderFeatures, fullscreen_pass, fullscreen_pipeline, shader_source,
+    ShaderFeatures, fullscreen_pass, fullscreen_pipeline,
 };
-pub use post::{TONEMAP_OPERATOR_WGSL, TONEMAP_WGSL, TonemapPass, pbr_neutral};
-pub use reference::{ReferencePass, ReferenceSettings, ReferenceTracer, reference_shader_source};
-pub use shaders::BRDF_WGSL;
-pub use visibility::hiz;
-pub use visibility::{GPU_VISIBILITY_FEATURES, GpuViewRequest, GpuVisibility, cull_shader_source};
+pub use post::TonemapPass;
+pub use reference::{ReferencePass, ReferenceSettings, ReferenceTracer};
+pub use visibility::{GPU_VISIBILITY_FEATURES, GpuViewRequest, GpuVisibility};
+
+// Crate-private, for the crate's own `crate::` paths: the lighting group's
+// parameter block and probe limit, the probe cube view, the CPU twin of the
+// tone-map operator.
+pub(crate) use lighting::inputs::probe_view;
+pub(crate) use lighting::params::{LightingInputs, MAX_PROBES};
+pub(crate) use post::pbr_neutral;
+
+/// What the crate's own tests and the root crate's GPU tests reach below the
+/// public API, behind the `testing` feature (turned on by those tests'
+/// dev-dependencies): the shader sources as the pipelines assemble them, the
+/// lighting group's parameter block and limits, and the HiZ pyramid. Not part
+/// of the public surface.
+#[cfg(feature = "testing")]
+pub mod testing {
+    pub use crate::lighting::ibl::cube_filter::CUBE_FILTER_WGSL;
+    pub use crate::lighting::params::{LightingInputs, MAX_PROBES, MAX_SHADOW_TILES};
+    pub use crate::lighting::split_sum::split_sum_shader_source;
+    pub use crate::pipelines::shader_source;
+    pub use crate::post::TONEMAP_WGSL;
+    pub use crate::reference::reference_shader_source;
+    pub use crate::visibility::cull_shader_source;
+    pub use crate::visibility::hiz::{HIZ_TEST_WGSL, HizPipelines, HizPyramid, hiz_shader_source};
+}

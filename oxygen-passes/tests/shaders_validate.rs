@@ -37,7 +37,7 @@ fn validate(what: &str, source: &str, capabilities: naga::valid::Capabilities) -
 fn every_pass_shader_validates_on_every_texture_path() {
     for pass in all_kinds() {
         for textures in all_paths() {
-            let source = oxygen_passes::shader_source(pass, textures);
+            let source = oxygen_passes::testing::shader_source(pass, textures);
             validate(&format!("{pass:?} / {textures:?}"), &source, capabilities(textures));
         }
     }
@@ -54,7 +54,7 @@ fn every_pass_shader_has_its_entry_points() {
             }
         };
         for textures in all_paths() {
-            let source = oxygen_passes::shader_source(pass, textures);
+            let source = oxygen_passes::testing::shader_source(pass, textures);
             let module = validate(&format!("{pass:?} / {textures:?}"), &source, capabilities(textures));
             for name in expected {
                 assert!(module.entry_points.iter().any(|e| e.name == *name), "{pass:?} / {textures:?} lacks {name}");
@@ -65,7 +65,7 @@ fn every_pass_shader_has_its_entry_points() {
 
 #[test]
 fn the_tonemap_shader_validates() {
-    let module = validate("tonemap", &oxygen_passes::TONEMAP_WGSL, naga::valid::Capabilities::default());
+    let module = validate("tonemap", &oxygen_passes::testing::TONEMAP_WGSL, naga::valid::Capabilities::default());
     for name in ["vs_fullscreen", "fs_tonemap"] {
         assert!(module.entry_points.iter().any(|e| e.name == name), "tonemap lacks {name}");
     }
@@ -76,11 +76,12 @@ fn the_tonemap_shader_validates() {
 /// them.
 #[test]
 fn the_cube_filter_and_split_sum_shaders_validate() {
-    let module = validate("cube filter", &oxygen_passes::CUBE_FILTER_WGSL, naga::valid::Capabilities::default());
+    let module =
+        validate("cube filter", &oxygen_passes::testing::CUBE_FILTER_WGSL, naga::valid::Capabilities::default());
     for name in ["vs", "fs_downsample", "fs_sky", "fs_equirect", "fs_ggx", "fs_harmonics"] {
         assert!(module.entry_points.iter().any(|e| e.name == name), "cube filter lacks {name}");
     }
-    let source = oxygen_passes::split_sum_shader_source();
+    let source = oxygen_passes::testing::split_sum_shader_source();
     let module = validate("split sum", &source, naga::valid::Capabilities::default());
     for name in ["vs", "fs"] {
         assert!(module.entry_points.iter().any(|e| e.name == name), "split sum lacks {name}");
@@ -104,7 +105,7 @@ fn every_shading_override_constant_is_declared() {
         samples: 1,
     };
     for textures in all_paths() {
-        let source = oxygen_passes::shader_source(PassKind::ShadingAfterPrePass, textures);
+        let source = oxygen_passes::testing::shader_source(PassKind::ShadingAfterPrePass, textures);
         let module = validate("shading", &source, capabilities(textures));
         let declared: Vec<_> = module.overrides.iter().filter_map(|(_, o)| o.name.clone()).collect();
         for (name, _) in key.override_constants() {
@@ -122,7 +123,7 @@ fn every_shading_override_constant_is_declared() {
 /// same numbers at compile time).
 #[test]
 fn the_visibility_cull_shader_validates_and_matches_its_records() {
-    let source = oxygen_passes::cull_shader_source();
+    let source = oxygen_passes::testing::cull_shader_source();
     let module = validate("visibility cull", &source, naga::valid::Capabilities::default());
     for name in ["cull_early", "commands_early", "cull_late", "commands_late"] {
         assert!(module.entry_points.iter().any(|e| e.name == name), "the cull shader lacks {name}");
@@ -146,7 +147,7 @@ fn the_visibility_cull_shader_validates_and_matches_its_records() {
 #[test]
 fn the_depth_pyramid_shader_validates() {
     let module =
-        validate("depth pyramid", &oxygen_passes::hiz::hiz_shader_source(), naga::valid::Capabilities::default());
+        validate("depth pyramid", &oxygen_passes::testing::hiz_shader_source(), naga::valid::Capabilities::default());
     for name in ["copy_depth", "reduce"] {
         assert!(module.entry_points.iter().any(|e| e.name == name), "the depth pyramid shader lacks {name}");
     }
@@ -156,7 +157,7 @@ fn the_depth_pyramid_shader_validates() {
 #[test]
 fn the_reference_tracer_validates_on_every_texture_path() {
     for textures in all_paths() {
-        let source = oxygen_passes::reference_shader_source(textures);
+        let source = oxygen_passes::testing::reference_shader_source(textures);
         let module = validate(&format!("reference / {textures:?}"), &source, capabilities(textures));
         assert!(module.entry_points.iter().any(|e| e.name == "trace_paths"), "{textures:?} lacks trace_paths");
     }

@@ -7,7 +7,8 @@
 mod support;
 
 use oxygen_bindless::{INVALID_SLOT, MAX_TEXTURES};
-use oxygen_passes::{MAX_CASCADES, MAX_PROBES, MAX_SHADOW_TILES, PROBE_FACES};
+use oxygen_passes::testing::{MAX_PROBES, MAX_SHADOW_TILES};
+use oxygen_passes::{MAX_CASCADES, PROBE_FACES};
 use oxygen_sceneprep::{DirectionalLightRecord, PassMask, PositionalLightRecord};
 use support::{all_kinds, all_paths};
 
@@ -15,7 +16,7 @@ fn sources() -> Vec<(String, String)> {
     all_kinds()
         .into_iter()
         .flat_map(|kind| {
-            all_paths().map(|path| (format!("{kind:?} / {path:?}"), oxygen_passes::shader_source(kind, path)))
+            all_paths().map(|path| (format!("{kind:?} / {path:?}"), oxygen_passes::testing::shader_source(kind, path)))
         })
         .collect()
 }

@@ -5,7 +5,8 @@
 use std::mem::{offset_of, size_of};
 
 use oxygen_bindless::TexturePath;
-use oxygen_passes::{LightingInputs, MAX_CASCADES, MAX_PROBES, MAX_SHADOW_TILES, PassKind};
+use oxygen_passes::testing::{LightingInputs, MAX_PROBES, MAX_SHADOW_TILES};
+use oxygen_passes::{MAX_CASCADES, PassKind};
 
 /// (name, offset) of each member of struct `name`, and its size.
 fn layout(module: &naga::Module, name: &str) -> (Vec<(String, u32)>, u32) {
@@ -35,7 +36,7 @@ fn array_shape(module: &naga::Module, name: &str, member: &str) -> (u32, u32) {
 
 #[test]
 fn lighting_inputs_wgsl_matches_rust_layout() {
-    let source = oxygen_passes::shader_source(PassKind::Shading, TexturePath::GroupedArrays);
+    let source = oxygen_passes::testing::shader_source(PassKind::Shading, TexturePath::GroupedArrays);
     let module = naga::front::wgsl::parse_str(&source)
         .unwrap_or_else(|e| panic!("the shading WGSL does not parse:\n{}", e.emit_to_string(&source)));
     let (members, span) = layout(&module, "LightingInputs");

@@ -177,7 +177,7 @@ impl LightingInputResources {
 }
 
 /// A six-layer array view of a probe texture.
-pub fn probe_view(texture: &wgpu::Texture) -> wgpu::TextureView {
+pub(crate) fn probe_view(texture: &wgpu::Texture) -> wgpu::TextureView {
     texture.create_view(&wgpu::TextureViewDescriptor {
         dimension: Some(wgpu::TextureViewDimension::D2Array),
         ..Default::default()

@@ -12,7 +12,7 @@
 use std::sync::Mutex;
 
 /// Format of the atlas layers: the shadow views' depth format.
-pub const SHADOW_ATLAS_FORMAT: wgpu::TextureFormat = oxygen_gpu::ViewTargets::DEPTH_FORMAT;
+pub(crate) const SHADOW_ATLAS_FORMAT: wgpu::TextureFormat = oxygen_gpu::ViewTargets::DEPTH_FORMAT;
 
 /// The atlas texture, kept across frames and regrown when the tile count or
 /// resolution grows.

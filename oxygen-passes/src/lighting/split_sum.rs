@@ -16,10 +16,7 @@ pub(crate) use super::params::SPLIT_SUM_LUT_BYTES;
 pub use super::params::SPLIT_SUM_LUT_SIZE;
 
 /// The table's format: A in red, B in green.
-pub const SPLIT_SUM_LUT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
-
-/// The table-building shader as written (its `#include` lines unresolved).
-pub const SPLIT_SUM_WGSL: &str = include_str!("split_sum.wgsl");
+pub(crate) const SPLIT_SUM_LUT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 
 /// The shader as compiled: [`SPLIT_SUM_WGSL`] with the lighting constants
 /// (`SPLIT_SUM_LUT_SIZE`) it includes.

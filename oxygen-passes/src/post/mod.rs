@@ -7,11 +7,8 @@
 pub(crate) mod params;
 mod tonemap;
 
-pub use tonemap::{TonemapPass, pbr_neutral};
-
-/// The tone-map operator (`tone_map`, `pbr_neutral`), shared by the tone-map
-/// pass and the forward lit pass's in-pass tone map.
-pub const TONEMAP_OPERATOR_WGSL: &str = include_str!("tonemap_operator.wgsl");
+pub use tonemap::TonemapPass;
+pub(crate) use tonemap::pbr_neutral;
 /// The tone-map shader (self-contained: no bindless declarations): the
 /// pass with the operator and its parameter block.
 pub static TONEMAP_WGSL: std::sync::LazyLock<String> = std::sync::LazyLock::new(|| crate::shaders::TONEMAP.source());

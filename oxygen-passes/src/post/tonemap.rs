@@ -32,7 +32,7 @@ impl Default for TonemapPass {
 }
 
 /// Khronos PBR Neutral on linear RGB (the shader's twin).
-pub fn pbr_neutral(rgb: [f32; 3]) -> [f32; 3] {
+pub(crate) fn pbr_neutral(rgb: [f32; 3]) -> [f32; 3] {
     const START: f32 = 0.8 - 0.04;
     const DESATURATION: f32 = 0.15;
     let x = rgb[0].min(rgb[1]).min(rgb[2]);

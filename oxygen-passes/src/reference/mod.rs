@@ -7,4 +7,6 @@
 pub(crate) mod params;
 mod tracer;
 
-pub use tracer::{ReferencePass, ReferenceSettings, ReferenceTracer, reference_shader_source};
+#[cfg(feature = "testing")]
+pub use tracer::reference_shader_source;
+pub use tracer::{ReferencePass, ReferenceSettings, ReferenceTracer};

@@ -11,10 +11,6 @@ pub(crate) mod registry;
 
 pub(crate) use registry::{CUBE_FILTER, CULL, DEPTH_ONLY, FORWARD_LIT, HIZ, REFERENCE, SPLIT_SUM, TONEMAP};
 
-/// The reflectance model and light falloff shared by raster shading and the
-/// path-traced reference (as written: its `#include` lines unresolved).
-pub const BRDF_WGSL: &str = include_str!("brdf.wgsl");
-
 #[cfg(test)]
 mod layout_tests;
 #[cfg(test)]

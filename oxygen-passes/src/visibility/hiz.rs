@@ -23,7 +23,9 @@ use super::params::LevelParams;
 /// WGSL of `fn hiz_visible(levels, size, view_projection, box_min, box_max)
 /// -> bool`, for shaders that test boxes against a pyramid; the including
 /// shader declares the pyramid's buffer as `hiz_pyramid: array<f32>` (the
-/// visibility cull shader includes it).
+/// visibility cull shader includes it through the shader registry; this
+/// copy is for tests).
+#[cfg(any(test, feature = "testing"))]
 pub const HIZ_TEST_WGSL: &str = include_str!("hiz_test.wgsl");
 
 /// The pyramid's shader as compiled: `hiz.wgsl`'s copy and reduction
@@ -160,7 +162,8 @@ impl HizPyramid {
     }
 
     /// Where level `k` starts in [`HizPyramid::buffer`] (in texels) and its
-    /// size.
+    /// size (for tests).
+    #[cfg(any(test, feature = "testing"))]
     pub fn level(&self, k: u32) -> Option<(u32, u32, u32)> {
         self.levels.get(k as usize).copied()
     }

@@ -10,4 +10,6 @@ mod cull;
 pub mod hiz;
 pub(crate) mod params;
 
-pub use cull::{GPU_VISIBILITY_FEATURES, GpuViewRequest, GpuVisibility, cull_shader_source};
+#[cfg(feature = "testing")]
+pub use cull::cull_shader_source;
+pub use cull::{GPU_VISIBILITY_FEATURES, GpuViewRequest, GpuVisibility};

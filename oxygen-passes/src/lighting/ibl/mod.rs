@@ -8,10 +8,3 @@
 pub(crate) mod cube_filter;
 pub(crate) mod half;
 pub(crate) mod params;
-
-/// The cube layout every cube shares (probes, the environment, point-light
-/// shadow faces): `cube_face`, `cube_face_uv`, `cube_face_point`.
-pub const CUBE_FACES_WGSL: &str = include_str!("cube_faces.wgsl");
-/// Reading the environment (irradiance harmonics, prefiltered levels) and
-/// the split-sum table; shared by shading and the path-traced reference.
-pub const ENVIRONMENT_WGSL: &str = include_str!("environment.wgsl");
