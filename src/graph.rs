@@ -134,7 +134,7 @@ pub enum PrePass {
     /// Never: the forward pass writes depth itself.
     Off,
     /// Decided per view and per frame from the view's
-    /// [`PrePassEstimate`](oxygen_passes::PrePassEstimate): the pre-pass
+    /// [`PrePassEstimate`]: the pre-pass
     /// runs when the expected overdraw reaches `min_overdraw` and the
     /// fragments it spares shading, `(overdraw − 1) × pixels`, are at least
     /// `fragments_per_index` times the indices it draws.

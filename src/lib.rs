@@ -4,9 +4,10 @@
 //!
 //! An application registers *views* with a [`Renderer`]: each brings a
 //! [`ViewResolver`](oxygen_core::ViewResolver) (camera → matrices and frustum)
-//! and a [`RenderGraph`] (an async closure, or a named graph such as
-//! [`StandardGraph`], whose future awaits its passes). A view may read what
-//! other views render through typed links ([`ViewDesc::reads`],
+//! and a [`RenderGraph`](graph::RenderGraph) (an async closure, or a named
+//! graph such as [`StandardGraph`](graph::StandardGraph), whose future awaits
+//! its passes). A view may read what other views render through typed links
+//! ([`ViewDesc::reads`],
 //! [`Renderer::link`]): another view's depth or HDR colour, a reflection
 //! probe's cube; a view registered with [`ViewDesc::with_sun_shadows`] owns
 //! its shadow cascades. Every [`Renderer::render_frame`] then:
@@ -53,7 +54,7 @@ pub use renderer::{FrameReport, FrameWarning, RenderError, Renderer, RendererOpt
 // `crate::ViewDesc::shown_in`, …); doc links alone do not count as uses.
 #[allow(unused_imports)]
 pub(crate) use {
-    graph::{ProbeFaceGraph, ShadowGraph},
+    graph::{ProbeFaceGraph, ShadowGraph, standard_render_graph},
     probes::ReflectionProbe,
     views::ViewDesc,
     windows::{WindowId, WindowRect},

@@ -99,8 +99,8 @@ impl ViewDesc {
 
     /// Makes the view a path-traced reference: ScenePrep keeps the
     /// ray-tracing scene for it and the renderer's tracer accumulates its
-    /// samples. Register it with a [`ReferenceGraph`](crate::ReferenceGraph)
-    /// (e.g. [`reference_render_graph`](crate::reference_render_graph)); its
+    /// samples. Register it with a [`ReferenceGraph`](crate::graph::ReferenceGraph)
+    /// (e.g. [`reference_render_graph`](crate::graph::reference_render_graph)); its
     /// raster draws are still prepared on the CPU path, unused.
     pub fn path_traced(mut self) -> Self {
         self.options.ray_scene = true;

@@ -47,7 +47,8 @@ pub use context::{
 };
 pub use lighting::LightingResources;
 pub use lighting::ibl::cube_filter::{
-    EnvironmentQuality, HARMONICS_LAYER, HARMONICS_SCALE, MAX_FILTER_SAMPLES, PROBE_FILTER_SAMPLES, prefiltered_levels,
+    EnvironmentQuality, HARMONICS_LAYER, HARMONICS_SCALE, MAX_ENVIRONMENT_SIZE, MAX_FILTER_SAMPLES,
+    PROBE_FILTER_SAMPLES, prefiltered_levels,
 };
 pub use lighting::inputs::PROBE_FACE_AXES;
 pub use lighting::params::{MAX_CASCADES, PROBE_FACES};

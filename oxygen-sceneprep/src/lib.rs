@@ -46,6 +46,7 @@ pub use collect::{
     RenderableEntry, SkippedNode, SubmeshEntry, ViewFilter, ViewPrepOptions,
 };
 pub use draw_metadata::{DrawIndexedIndirect, DrawMetadata};
+pub use finalize::materials::MaterialFeatures;
 pub use gpu_records::{
     DirectionalLightRecord, GPU_RECORDS_WGSL, MAX_SHADOW_TILES, MaterialRecord, NormalMatrix, PositionalLightRecord,
     UvTransformRecord, material_flags, shadow_tiles_for,
@@ -55,6 +56,5 @@ pub use overdraw::expected_shaded_layers;
 pub use pass_mask::PassMask;
 pub use prepared_frame::{GpuViewPlan, Partition, PreparedSceneFrame, PreparedSlots, canonical_draws, canonical_dump};
 pub use ray::{RayInstance, RayScene};
-pub use finalize::materials::MaterialFeatures;
 pub use scene_prep::{PrepError, PrepStats, ScenePrep, ViewRequest};
 pub use worker_pool::WorkerPool;

@@ -34,7 +34,7 @@ impl Partition {
         self.end - self.begin
     }
 
-    /// True for an empty range (never produced by [`build_partitions`]).
+    /// True for an empty range (never produced by finalization).
     pub fn is_empty(&self) -> bool {
         self.begin == self.end
     }

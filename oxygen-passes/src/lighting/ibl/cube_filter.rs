@@ -52,7 +52,7 @@ pub const HARMONICS_LAYER: u32 = FACES;
 pub const HARMONICS_SCALE: f32 = 16.0;
 
 /// Largest face side an environment is built at.
-pub(crate) const MAX_ENVIRONMENT_SIZE: u32 = 4096;
+pub const MAX_ENVIRONMENT_SIZE: u32 = 4096;
 
 /// Most GGX samples per texel (more would keep one draw long enough for a
 /// GPU watchdog to reset the device).
