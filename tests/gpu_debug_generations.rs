@@ -87,7 +87,6 @@ fn a_stale_draw_range_is_painted_magenta() {
         origin: glam::DVec3::ZERO,
         hdr_read_by_others: false,
         shading: Shading::ALL,
-        reference: None,
     };
     let mut recorder = CommandRecorder::new(&gpu.device, "stale view");
     // Driven by hand under `block_on`: with no recording thread attached,

@@ -166,7 +166,14 @@ impl Renderer {
                 }
             }
         }
-        ViewInputs { cascades, local_shadows, probes, views, visibility: self.visibility.gpu.as_ref() }
+        ViewInputs {
+            cascades,
+            local_shadows,
+            probes,
+            views,
+            visibility: self.visibility.gpu.as_ref(),
+            reference: self.reference.tracer.as_ref(),
+        }
     }
 
     /// Step 3: records every view of `plan` and submits them in link order.
@@ -224,7 +231,6 @@ impl Renderer {
                     origin: plan.origin,
                     hdr_read_by_others: self.settings.keep_hdr || hdr_readers.contains(&view.id),
                     shading: Shading { materials: plan.materials, specialize: self.settings.specialize_shaders },
-                    reference: self.reference.tracer.as_ref(),
                 },
             ));
         }

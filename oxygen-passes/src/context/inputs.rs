@@ -118,7 +118,8 @@ pub struct LinkedView<'a> {
 
 /// What the renderer's features hand one view this frame: what it may read
 /// from the other views (its cascades, the local shadow atlas, its linked
-/// probes and views) and GPU visibility's state for it. A feature that
+/// probes and views), GPU visibility's state for it and the reference
+/// tracer. A feature that
 /// gives views something adds it here, typed, not to
 /// [`crate::RenderContext`].
 #[derive(Clone, Default)]
@@ -135,4 +136,7 @@ pub struct ViewInputs<'a> {
     /// GPU visibility, when the renderer has it: the view's count buffers
     /// of GPU-written partitions, and phase 2 of occlusion culling.
     pub visibility: Option<&'a crate::GpuVisibility>,
+    /// The path-traced reference's scene and samples, when a view of the
+    /// renderer is path traced ([`crate::ReferencePass`]).
+    pub reference: Option<&'a crate::ReferenceTracer>,
 }

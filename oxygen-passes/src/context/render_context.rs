@@ -50,9 +50,6 @@ pub struct RenderContext<'a> {
     pub hdr_read_by_others: bool,
     /// What the frame's shading pipelines carry.
     pub shading: Shading,
-    /// The path-traced reference's scene and samples, when a view of the
-    /// renderer is path traced ([`crate::ReferencePass`]).
-    pub reference: Option<&'a crate::ReferenceTracer>,
 }
 
 /// What the frame's shading pipelines carry, the same for every view of the

@@ -424,7 +424,7 @@ impl RenderPass for ReferencePass {
 
     async fn run(&mut self, ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError> {
         let _span = info_span!("reference_trace", view = %ctx.view.view_id).entered();
-        let Some(tracer) = ctx.reference else {
+        let Some(tracer) = ctx.inputs.reference else {
             return Err(PassError::MissingInput {
                 pass: self.name(),
                 input: "ReferenceTracer (register the view as path traced)",
