@@ -13,7 +13,7 @@ use std::sync::Arc;
 
 use oxygen_bindless::SlotAllocators;
 use oxygen_core::{CascadeSettings, Scene};
-use oxygen_core::{Output, OutputSource, ProbeId};
+use oxygen_core::{Output, OutputSource, ProbeId, ProbeIds};
 use oxygen_sceneprep::{PreparedSceneFrame, ScenePrep, ViewPrepOptions, ViewRequest, Visibility};
 
 use crate::RenderError;
@@ -162,7 +162,7 @@ pub struct Views {
     /// The application's ids; the renderer's own views take theirs from
     /// ranges of its own.
     ids: ViewIds,
-    next_probe: u32,
+    probe_ids: ProbeIds,
     cpu: Option<CpuPrep>,
 }
 
@@ -182,7 +182,13 @@ impl Default for Views {
 impl Views {
     /// No views.
     pub fn new() -> Self {
-        Views { entries: BTreeMap::new(), probes: BTreeMap::new(), ids: ViewIds::default(), next_probe: 0, cpu: None }
+        Views {
+            entries: BTreeMap::new(),
+            probes: BTreeMap::new(),
+            ids: ViewIds::default(),
+            probe_ids: ProbeIds::default(),
+            cpu: None,
+        }
     }
 
     /// Registers a view (a resolver, or a [`ViewDesc`] with links and
@@ -225,9 +231,7 @@ impl Views {
     }
 
     pub(crate) fn allocate_probe(&mut self) -> ProbeId {
-        let id = ProbeId(self.next_probe);
-        self.next_probe += 1;
-        id
+        self.probe_ids.allocate()
     }
 
     fn check_source(&self, source: OutputSource) -> Result<(), RenderError> {

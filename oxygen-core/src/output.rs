@@ -5,13 +5,37 @@
 
 use crate::ViewId;
 
-/// Identifies a reflection probe registered with a renderer.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub struct ProbeId(pub u32);
+/// Identifies a reflection probe registered with a renderer. Opaque, like
+/// [`ViewId`]: ids come from a [`ProbeIds`] allocator (the registry of views
+/// holds one), never from a number.
+#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct ProbeId(u32);
 
 impl std::fmt::Display for ProbeId {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(f, "probe#{}", self.0)
+    }
+}
+
+// As for view ids: the Display form says it all, and keeps lists short.
+impl std::fmt::Debug for ProbeId {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        std::fmt::Display::fmt(self, f)
+    }
+}
+
+/// Hands out probe ids, each once, in order.
+#[derive(Clone, Debug, Default)]
+pub struct ProbeIds {
+    next: u32,
+}
+
+impl ProbeIds {
+    /// A fresh id. After 2³² ids the numbers start over.
+    pub fn allocate(&mut self) -> ProbeId {
+        let id = ProbeId(self.next);
+        self.next = self.next.wrapping_add(1);
+        id
     }
 }
 
