@@ -135,7 +135,7 @@ fn the_visibility_cull_shader_validates_and_matches_its_records() {
             ref other => panic!("{name} is not a struct: {other:?}"),
         }
     };
-    use oxygen_sceneprep::gpu_scene::{GpuGroup, GpuInstance, GpuLod};
+    use oxygen_sceneprep::{GpuGroup, GpuInstance, GpuLod};
     assert_eq!(size_of("GpuInstance") as usize, std::mem::size_of::<GpuInstance>());
     assert_eq!(size_of("GpuGroup") as usize, std::mem::size_of::<GpuGroup>());
     assert_eq!(size_of("GpuLod") as usize, std::mem::size_of::<GpuLod>());

@@ -220,7 +220,7 @@ pub struct PositionalLightRecord {
 pub const MAX_SHADOW_TILES: u32 = 16;
 
 /// Atlas tiles a positional light of `kind` needs for its shadow.
-pub fn shadow_tiles_for(kind: u32) -> u32 {
+pub(crate) fn shadow_tiles_for(kind: u32) -> u32 {
     if kind == PositionalLightRecord::POINT { 6 } else { 1 }
 }
 

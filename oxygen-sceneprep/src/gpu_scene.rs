@@ -1,34 +1,6 @@
 //! The persistent GPU scene: what GPU-driven visibility culls and compacts.
 //!
-//! The CPU path ([`Visibility::Cpu`]) culls, sorts and emits every view's
-//! draws each frame. The GPU paths keep the scene's opaque and masked
-//! submeshes on the GPU instead, as [`GpuInstance`] records grouped into
-//! [`GpuGroup`]s (one mesh range, material and pass mask each), and a compute
-//! shader per view writes the surviving draws and their instanced commands
-//! straight into the view's bindless ranges. This module builds those records
-//! on the CPU and says which of them changed, so that a static frame uploads
-//! nothing; `oxygen-passes` (`visibility`) owns the buffers and shaders.
-//!
-//! Layout of one view's ranges on a GPU path (`C` = [`GpuScene::capacity`],
-//! `G` = groups, `L` = command lists: 1 for frustum culling, 3 with
-//! occlusion):
-//!
-//! ```text
-//! draw metadata:  [ group 0's room | group 1's room | … (C) ][ transparent draws (CPU) ]
-//! indirect args:  [ list A (G) | list B (G) | list C (G) ][ transparent commands (CPU) ]
-//! counters:       [ A per partition | B | C ][ early count per group | late count per group ]
-//! ```
-//!
-//! Each group has room for every instance that may select it (an instance
-//! with LODs may select one of several), so the compute shader never
-//! overflows; a partition is a run of groups with one pass class and
-//! variant, and its commands are compacted at the run's start, counted by
-//! its counter, and drawn with `multi_draw_indexed_indirect_count`.
-//!
-//! Transparent draws stay on the CPU path in every mode: blending needs them
-//! back to front across the whole view, and the CPU sorts the (usually few)
-//! transparent draws exactly; sorting them on the GPU would cost a sort
-//! every frame to get what the CPU already has.
+//! The records and their layout are described on [`GpuScene`].
 
 use std::collections::HashMap;
 use std::ops::Range;
@@ -183,6 +155,36 @@ type GroupKey = (u64, u32, u32, u32, u32, u32, i32, u32);
 /// The opaque and masked part of the scene as GPU records, rebuilt when the
 /// frame phase recollected the scene, with what changed since the last
 /// upload.
+///
+/// The CPU path ([`Visibility::Cpu`]) culls, sorts and emits every view's
+/// draws each frame. The GPU paths keep the scene's opaque and masked
+/// submeshes on the GPU instead, as [`GpuInstance`] records grouped into
+/// [`GpuGroup`]s (one mesh range, material and pass mask each), and a compute
+/// shader per view writes the surviving draws and their instanced commands
+/// straight into the view's bindless ranges. `GpuScene` builds those records
+/// on the CPU and says which of them changed, so that a static frame uploads
+/// nothing; `oxygen-passes` (`visibility`) owns the buffers and shaders.
+///
+/// Layout of one view's ranges on a GPU path (`C` = [`GpuScene::capacity`],
+/// `G` = groups, `L` = command lists: 1 for frustum culling, 3 with
+/// occlusion):
+///
+/// ```text
+/// draw metadata:  [ group 0's room | group 1's room | … (C) ][ transparent draws (CPU) ]
+/// indirect args:  [ list A (G) | list B (G) | list C (G) ][ transparent commands (CPU) ]
+/// counters:       [ A per partition | B | C ][ early count per group | late count per group ]
+/// ```
+///
+/// Each group has room for every instance that may select it (an instance
+/// with LODs may select one of several), so the compute shader never
+/// overflows; a partition is a run of groups with one pass class and
+/// variant, and its commands are compacted at the run's start, counted by
+/// its counter, and drawn with `multi_draw_indexed_indirect_count`.
+///
+/// Transparent draws stay on the CPU path in every mode: blending needs them
+/// back to front across the whole view, and the CPU sorts the (usually few)
+/// transparent draws exactly; sorting them on the GPU would cost a sort
+/// every frame to get what the CPU already has.
 #[derive(Debug, Default)]
 pub struct GpuScene {
     instances: Vec<GpuInstance>,

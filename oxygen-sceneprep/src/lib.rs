@@ -31,7 +31,7 @@ mod collect;
 mod draw_metadata;
 pub mod finalize;
 mod gpu_records;
-pub mod gpu_scene;
+mod gpu_scene;
 mod overdraw;
 mod pass_mask;
 mod prepared_frame;
@@ -42,19 +42,23 @@ pub mod testing;
 mod worker_pool;
 
 pub use collect::{
-    CullBound, FrameCollection, Instancing, LocalShadowCaster, LocalShadowKind, RenderItem, RenderOrigin,
-    RenderableEntry, SkippedNode, SubmeshEntry, ViewFilter, ViewPrepOptions,
+    CullBound, FrameCollection, Instancing, LocalShadowCaster, LocalShadowKind, RenderOrigin, RenderableEntry,
+    SkippedNode, SubmeshEntry, ViewFilter, ViewPrepOptions,
 };
 pub use draw_metadata::{DrawIndexedIndirect, DrawMetadata};
 pub use finalize::materials::MaterialFeatures;
 pub use gpu_records::{
     DirectionalLightRecord, GPU_RECORDS_WGSL, MAX_SHADOW_TILES, MaterialRecord, NormalMatrix, PositionalLightRecord,
-    UvTransformRecord, material_flags, shadow_tiles_for,
+    UvTransformRecord, material_flags,
 };
-pub use gpu_scene::{GpuScene, Visibility};
+pub use gpu_scene::{GpuGroup, GpuInstance, GpuLod, GpuPartition, GpuScene, GpuSceneChanges, Visibility};
 pub use overdraw::expected_shaded_layers;
 pub use pass_mask::PassMask;
 pub use prepared_frame::{GpuViewPlan, Partition, PreparedSceneFrame, PreparedSlots, canonical_draws, canonical_dump};
 pub use ray::{RayInstance, RayScene};
 pub use scene_prep::{PrepError, PrepStats, ScenePrep, ViewRequest};
 pub use worker_pool::WorkerPool;
+
+// Crate-private names the crate reaches by `crate::` paths.
+pub(crate) use collect::RenderItem;
+pub(crate) use gpu_records::shadow_tiles_for;

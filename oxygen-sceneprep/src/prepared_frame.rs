@@ -59,7 +59,7 @@ pub struct FrameTransforms {
 }
 
 /// How a view on a GPU visibility path lays out its ranges (the layout is
-/// drawn in [`crate::gpu_scene`]'s module docs).
+/// drawn in [`GpuScene`](crate::GpuScene)'s docs).
 #[derive(Clone, Debug, PartialEq)]
 pub struct GpuViewPlan {
     /// The path.

@@ -8,7 +8,7 @@
 
 use oxygen_gpu::{StructLayout, check_layout, gpu_layout};
 use oxygen_sceneprep::DrawIndexedIndirect;
-use oxygen_sceneprep::gpu_scene::{GpuGroup, GpuInstance, GpuLod};
+use oxygen_sceneprep::{GpuGroup, GpuInstance, GpuLod};
 
 use super::compose::SourceText;
 use super::registry::SOURCES;

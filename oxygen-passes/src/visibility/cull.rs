@@ -22,8 +22,7 @@ use std::collections::HashMap;
 use oxygen_bindless::{BindlessHeap, DomainKind};
 use oxygen_core::{ResolvedView, ViewId};
 use oxygen_gpu::bindings::{self, LayoutEntries};
-use oxygen_sceneprep::gpu_scene::GpuSceneChanges;
-use oxygen_sceneprep::{GpuScene, PreparedSceneFrame, Visibility};
+use oxygen_sceneprep::{GpuScene, GpuSceneChanges, PreparedSceneFrame, Visibility};
 use tracing::info_span;
 
 use super::hiz::{HizPipelines, HizPyramid};
@@ -236,7 +235,7 @@ impl GpuVisibility {
         };
         self.uploaded_rebuild = Some(scene.rebuilds());
         let bytes = |n: usize, size: usize| (n * size) as u64;
-        let instance_size = std::mem::size_of::<oxygen_sceneprep::gpu_scene::GpuInstance>();
+        let instance_size = std::mem::size_of::<oxygen_sceneprep::GpuInstance>();
         let mut replaced = self.instances.reserve(device, bytes(scene.instances().len(), instance_size));
         replaced |= self.groups.reserve(device, bytes(scene.groups().len(), 48));
         replaced |= self.lods.reserve(device, bytes(scene.lods().len(), 8));

@@ -54,6 +54,6 @@ pub(crate) fn wgsl_constants() -> String {
     crate::shaders::compose::u32_constants(&[
         ("CULL_CASTERS_ONLY", CULL_CASTERS_ONLY),
         ("CULL_OCCLUSION", CULL_OCCLUSION),
-        ("INSTANCE_CASTS_SHADOWS", oxygen_sceneprep::gpu_scene::GpuInstance::CASTS_SHADOWS),
+        ("INSTANCE_CASTS_SHADOWS", oxygen_sceneprep::GpuInstance::CASTS_SHADOWS),
     ])
 }

@@ -117,7 +117,7 @@ pub struct SubmeshEntry {
 }
 
 /// How a local light's shadow is stored in the atlas, which decides how many
-/// tiles it takes ([`shadow_tiles_for`]).
+/// tiles it takes ([`LocalShadowKind::tile_count`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum LocalShadowKind {
     /// A spot light: one perspective map, one tile.

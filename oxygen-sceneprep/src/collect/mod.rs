@@ -17,4 +17,5 @@ pub use frame_phase::{
     FrameCollection, LocalShadowCaster, LocalShadowKind, RenderableEntry, SkippedNode, SubmeshEntry,
 };
 pub use render_origin::RenderOrigin;
-pub use view_phase::{CullBound, Instancing, RenderItem, ViewFilter, ViewPrepOptions};
+pub(crate) use view_phase::RenderItem;
+pub use view_phase::{CullBound, Instancing, ViewFilter, ViewPrepOptions};
