@@ -5,8 +5,7 @@
 use glam::Vec4;
 use oxygen_bindless::SlotAllocators;
 use oxygen_core::{Material, Scene, TextureImage};
-use oxygen_sceneprep::ScenePrep;
-use oxygen_sceneprep::finalize::materials::MaterialFeatures;
+use oxygen_sceneprep::{MaterialFeatures, ScenePrep};
 
 fn features(scene: &Scene) -> MaterialFeatures {
     let mut prep = ScenePrep::with_threads(1);

@@ -3,8 +3,7 @@
 use oxygen_bindless::{BindlessHeap, SceneConstantsBuffer};
 use oxygen_core::{Output, ResolvedView};
 use oxygen_gpu::{ColorTargets, GpuContext, ViewTargets};
-use oxygen_sceneprep::finalize::materials::MaterialFeatures;
-use oxygen_sceneprep::{PassMask, PreparedSceneFrame};
+use oxygen_sceneprep::{MaterialFeatures, PassMask, PreparedSceneFrame};
 
 use super::{CommandRecorder, DrawPath, FrameProgress, OutputKind, PassError, ViewInputs};
 use crate::{LightingResources, Pipelines};
