@@ -29,7 +29,7 @@
 
 mod collect;
 mod draw_metadata;
-pub mod finalize;
+mod finalize;
 mod gpu_records;
 mod gpu_scene;
 mod overdraw;

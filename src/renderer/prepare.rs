@@ -11,7 +11,7 @@ use std::time::Instant;
 
 use oxygen_core::{ResolvedView, Scene, ViewId};
 use oxygen_passes::{OutputSource, ProbeId};
-use oxygen_sceneprep::finalize::materials::MaterialFeatures;
+use oxygen_sceneprep::MaterialFeatures;
 use oxygen_sceneprep::{ViewPrepOptions, ViewRequest};
 use tracing::{info_span, warn};
 

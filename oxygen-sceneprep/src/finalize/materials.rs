@@ -58,7 +58,6 @@ pub struct MaterialTable {
     scratch: Vec<MaterialRecord>,
     allocation: Allocation,
     dirty: bool,
-    uploads: u64,
 }
 
 impl Default for MaterialTable {
@@ -69,7 +68,6 @@ impl Default for MaterialTable {
             scratch: Vec::new(),
             allocation: Allocation::empty(DomainKind::Materials),
             dirty: false,
-            uploads: 0,
         }
     }
 }
@@ -151,11 +149,5 @@ impl MaterialTable {
     /// Marks the GPU copy current.
     pub fn mark_uploaded(&mut self) {
         self.dirty = false;
-        self.uploads += 1;
-    }
-
-    /// How many times the table was uploaded (a counter for tests).
-    pub fn upload_count(&self) -> u64 {
-        self.uploads
     }
 }

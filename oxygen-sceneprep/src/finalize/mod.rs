@@ -1,7 +1,7 @@
 //! Finalization: from render items to sorted, partitioned draws.
 //!
-//! Only [`materials`] is public, for the [`MaterialFeatures`](materials::MaterialFeatures)
-//! the material table reports; the rest is ScenePrep's own:
+//! ScenePrep's own (the crate re-exports the [`MaterialFeatures`](materials::MaterialFeatures)
+//! the material table reports):
 //!
 //! * `sort_key`: the 64-bit key (pass class, variant, material, depth);
 //! * `radix_sort`: the stable sort of draws by key;
