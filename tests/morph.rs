@@ -12,7 +12,7 @@ use oxygen::core::{MaterialHandle, NodeKey};
 use oxygen::core::{MorphTarget, Skin, SkinWeights};
 use oxygen::glam::{Mat4, Quat, Vec4};
 use oxygen::prelude::*;
-use support::deform::{assert_same, camera, with_sun};
+use support::deform::{assert_same, render, with_sun};
 use support::golden::{Tolerance, assert_golden, compare};
 
 fn material(scene: &mut Scene) -> MaterialHandle {
@@ -43,14 +43,6 @@ fn morphed(displacements: &[Vec3], weights: Vec<f32>) -> (Scene, NodeKey) {
     scene.set_morph_weights(node, weights).unwrap();
     with_sun(&mut scene);
     (scene, node)
-}
-
-fn render(scene: &Scene, target: Vec3) -> (image::RgbaImage, usize) {
-    let mut renderer = support::gpu_renderer();
-    let view = renderer.register_view(camera(target), standard_render_graph).unwrap();
-    let report = renderer.render_frame(scene).unwrap();
-    let draws = report.views.iter().find(|v| v.view == view).map_or(0, |v| v.draws);
-    (support::read_lit_color(&renderer, view), draws)
 }
 
 #[test]
@@ -118,13 +110,13 @@ fn golden_simple_morph_at_two_times() {
     assert!(!import.warnings.iter().any(|w| w.contains("morph")), "{:?}", import.warnings);
     with_sun(&mut scene);
     let animation = &import.animations[0];
-    let resolver = LookAtResolver {
-        camera: Camera::perspective(45f32.to_radians(), 0.05, None),
-        eye: Vec3::new(0.5, 0.6, 3.2),
-        target: Vec3::new(0.5, 0.5, 0.0),
-        up: Vec3::Y,
-        viewport: UVec2::new(160, 120),
-    };
+    let resolver = LookAtResolver::new(
+        Camera::perspective(45f32.to_radians(), 0.05, None),
+        Vec3::new(0.5, 0.6, 3.2),
+        Vec3::new(0.5, 0.5, 0.0),
+        UVec2::new(160, 120),
+    )
+    .unwrap();
     let images: Vec<_> = [0.5f32, 1.5]
         .iter()
         .map(|t| {

@@ -10,7 +10,7 @@ use oxygen::core::NodeKey;
 use oxygen::core::{SceneError, Skin, SkinWeights};
 use oxygen::glam::{Mat4, Quat, Vec4};
 use oxygen::prelude::*;
-use support::deform::{assert_same, camera, with_sun};
+use support::deform::{assert_same, camera, render, with_sun};
 
 /// A cube drawn rigidly at `transform`.
 fn rigid(transform: Transform) -> Scene {
@@ -40,14 +40,6 @@ fn skinned(a: Transform, b: Transform, weight_b: f32, node_at: Vec3) -> (Scene, 
     scene.set_skin(node, Some(skin)).unwrap();
     with_sun(&mut scene);
     (scene, joint_b)
-}
-
-fn render(scene: &Scene, target: Vec3) -> (image::RgbaImage, usize) {
-    let mut renderer = support::gpu_renderer();
-    let view = renderer.register_view(camera(target), standard_render_graph).unwrap();
-    let report = renderer.render_frame(scene).unwrap();
-    let draws = report.views.iter().find(|v| v.view == view).map_or(0, |v| v.draws);
-    (support::read_lit_color(&renderer, view), draws)
 }
 
 #[test]

@@ -38,3 +38,13 @@ pub fn assert_same(a: &RgbaImage, b: &RgbaImage, what: &str) {
     let c = compare(a, b, 3);
     assert!(c.differing <= c.total / 500, "{what}: {} of {} pixels differ (worst {})", c.differing, c.total, c.worst);
 }
+
+/// Renders `scene` from [`camera`] at `target` on a fresh renderer: the
+/// lit picture and how many draws the view recorded.
+pub fn render(scene: &Scene, target: Vec3) -> (RgbaImage, usize) {
+    let mut renderer = super::gpu_renderer();
+    let view = renderer.register_view(camera(target), standard_render_graph).unwrap();
+    let report = renderer.render_frame(scene).unwrap();
+    let draws = report.views.iter().find(|v| v.view == view).map_or(0, |v| v.draws);
+    (super::read_lit_color(&renderer, view), draws)
+}
