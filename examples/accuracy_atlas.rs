@@ -240,13 +240,13 @@ fn stages(viewport: UVec2) -> Result<Vec<Stage>, Box<dyn std::error::Error>> {
     let shadows = Stage {
         name: "box on a floor",
         scene: oxygen_demo::floor_with_box(0.6),
-        camera: LookAtResolver {
-            camera: Camera::perspective(60f32.to_radians(), 0.1, None),
-            eye: Vec3::new(0.0, 3.0, 5.0),
-            target: Vec3::new(0.0, 0.0, -1.0),
-            up: Vec3::Y,
+        camera: LookAtResolver::new(
+            Camera::perspective(60f32.to_radians(), 0.1, None),
+            Vec3::new(0.0, 3.0, 5.0),
+            Vec3::new(0.0, 0.0, -1.0),
             viewport,
-        },
+        )
+        .unwrap(),
         cascades: CascadeSettings { count: 1, resolution: 1024, ..Default::default() },
         moving: None,
         reference: ReferenceSettings::RASTER_MODEL,
@@ -271,13 +271,13 @@ fn stages(viewport: UVec2) -> Result<Vec<Stage>, Box<dyn std::error::Error>> {
         Ok(Stage {
             name,
             scene,
-            camera: LookAtResolver {
-                camera: Camera::perspective(50f32.to_radians(), 0.05, None),
-                eye: offset + Vec3::new(1.6, 1.2, 2.0),
-                target: offset,
-                up: Vec3::Y,
+            camera: LookAtResolver::new(
+                Camera::perspective(50f32.to_radians(), 0.05, None),
+                offset + Vec3::new(1.6, 1.2, 2.0),
+                offset,
                 viewport,
-            },
+            )
+            .unwrap(),
             cascades: CascadeSettings { count: 1, resolution: 2048, ..Default::default() },
             moving: None,
             reference: ReferenceSettings::RASTER_MODEL,
@@ -300,13 +300,13 @@ fn stages(viewport: UVec2) -> Result<Vec<Stage>, Box<dyn std::error::Error>> {
         Stage {
             name: "mirror ball and moving box",
             scene,
-            camera: LookAtResolver {
-                camera: Camera::perspective(40f32.to_radians(), 0.1, None),
-                eye: Vec3::new(0.0, 0.5, 4.5),
-                target: Vec3::ZERO,
-                up: Vec3::Y,
+            camera: LookAtResolver::new(
+                Camera::perspective(40f32.to_radians(), 0.1, None),
+                Vec3::new(0.0, 0.5, 4.5),
+                Vec3::ZERO,
                 viewport,
-            },
+            )
+            .unwrap(),
             cascades: CascadeSettings { count: 1, resolution: 1024, ..Default::default() },
             moving: Some(box_node),
             // The raster model with exact reflections: what a perfect
@@ -339,13 +339,13 @@ fn stages(viewport: UVec2) -> Result<Vec<Stage>, Box<dyn std::error::Error>> {
         Stage {
             name: "spheres with LODs",
             scene,
-            camera: LookAtResolver {
-                camera: Camera::perspective(55f32.to_radians(), 0.1, None),
-                eye: Vec3::new(0.0, 1.5, 3.0),
-                target: Vec3::new(0.0, 0.0, -5.0),
-                up: Vec3::Y,
+            camera: LookAtResolver::new(
+                Camera::perspective(55f32.to_radians(), 0.1, None),
+                Vec3::new(0.0, 1.5, 3.0),
+                Vec3::new(0.0, 0.0, -5.0),
                 viewport,
-            },
+            )
+            .unwrap(),
             cascades: CascadeSettings { count: 2, resolution: 1024, ..Default::default() },
             moving: None,
             reference: ReferenceSettings::RASTER_MODEL,
@@ -377,13 +377,13 @@ fn stages(viewport: UVec2) -> Result<Vec<Stage>, Box<dyn std::error::Error>> {
         Stage {
             name: "extremes 1e6 out",
             scene,
-            camera: LookAtResolver {
-                camera: Camera::perspective(60f32.to_radians(), 1.0e-4, None),
-                eye: far + Vec3::new(0.0, 2.0, 0.0),
-                target: far + Vec3::new(0.0, 2.0, -1.0),
-                up: Vec3::Y,
+            camera: LookAtResolver::new(
+                Camera::perspective(60f32.to_radians(), 1.0e-4, None),
+                far + Vec3::new(0.0, 2.0, 0.0),
+                far + Vec3::new(0.0, 2.0, -1.0),
                 viewport,
-            },
+            )
+            .unwrap(),
             cascades: CascadeSettings { count: 4, resolution: 2048, ..Default::default() },
             moving: None,
             reference: ReferenceSettings::RASTER_MODEL,

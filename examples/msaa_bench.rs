@@ -125,13 +125,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // is drawn, which leaves the targets' clear, store and resolve.
     let (scene, side) = oxygen_demo::field_of_boxes(boxes, &colors);
     let side = side.max(20.0);
-    let camera = LookAtResolver {
-        camera: Camera::perspective(50f32.to_radians(), 0.1, None),
-        eye: Vec3::new(-side * 0.2, side * 0.35, -side * 0.2),
-        target: Vec3::new(side * 0.5, 0.0, side * 0.5),
-        up: Vec3::Y,
-        viewport: UVec2::new(width, height),
-    };
+    let camera = LookAtResolver::new(
+        Camera::perspective(50f32.to_radians(), 0.1, None),
+        Vec3::new(-side * 0.2, side * 0.35, -side * 0.2),
+        Vec3::new(side * 0.5, 0.0, side * 0.5),
+        UVec2::new(width, height),
+    )
+    .unwrap();
     println!("{width}x{height}, {boxes} boxes, {frames} frames each");
     let mut baseline = None;
     let mut record = Record::new("msaa_bench")

@@ -48,13 +48,13 @@ fn grid(count: usize) -> (Scene, LookAtResolver) {
     sun(&mut scene);
     let extent = side as f32 * 2.0;
     let centre = Vec3::new(extent * 0.5, 0.0, extent * 0.5);
-    let camera = LookAtResolver {
-        camera: Camera::perspective(60f32.to_radians(), 0.5, Some(extent * 4.0)),
-        eye: centre + Vec3::new(0.0, extent * 0.5, extent * 0.75),
-        target: centre,
-        up: Vec3::Y,
-        viewport: UVec2::new(960, 540),
-    };
+    let camera = LookAtResolver::new(
+        Camera::perspective(60f32.to_radians(), 0.5, Some(extent * 4.0)),
+        centre + Vec3::new(0.0, extent * 0.5, extent * 0.75),
+        centre,
+        UVec2::new(960, 540),
+    )
+    .unwrap();
     (scene, camera)
 }
 
@@ -77,13 +77,13 @@ fn walls(far_first: bool) -> (Scene, LookAtResolver) {
         scene.set_renderable(node, Renderable { geometry: wall, materials: vec![materials[material]] }).ok();
     }
     sun(&mut scene);
-    let camera = LookAtResolver {
-        camera: Camera::perspective(60f32.to_radians(), 0.1, Some(100.0)),
-        eye: Vec3::new(0.0, 0.0, 2.0),
-        target: Vec3::new(0.0, 0.0, -10.0),
-        up: Vec3::Y,
-        viewport: UVec2::new(960, 540),
-    };
+    let camera = LookAtResolver::new(
+        Camera::perspective(60f32.to_radians(), 0.1, Some(100.0)),
+        Vec3::new(0.0, 0.0, 2.0),
+        Vec3::new(0.0, 0.0, -10.0),
+        UVec2::new(960, 540),
+    )
+    .unwrap();
     (scene, camera)
 }
 

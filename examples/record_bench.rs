@@ -68,13 +68,13 @@ fn renderer(setup: &Setup<'_>, views: usize, threads: usize) -> Result<Renderer,
     for v in 0..views {
         let angle = v as f32 / views as f32 * std::f32::consts::TAU;
         let eye = centre + Vec3::new(angle.cos(), 0.0, angle.sin()) * setup.extent * 0.8 + Vec3::Y * setup.extent * 0.4;
-        let camera = LookAtResolver {
-            camera: Camera::perspective(60f32.to_radians(), 0.5, Some(setup.extent * 3.0)),
+        let camera = LookAtResolver::new(
+            Camera::perspective(60f32.to_radians(), 0.5, Some(setup.extent * 3.0)),
             eye,
-            target: centre,
-            up: Vec3::Y,
-            viewport: UVec2::new(480, 270),
-        };
+            centre,
+            UVec2::new(480, 270),
+        )
+        .unwrap();
         renderer.register_view(ViewDesc::new(camera).with_sun_shadows(settings), standard_render_graph)?;
     }
     Ok(renderer)

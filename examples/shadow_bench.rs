@@ -29,13 +29,13 @@ const MEASURED: usize = 10;
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let count: usize = std::env::args().nth(1).map(|a| a.parse()).transpose()?.unwrap_or(10_000);
     let (scene, extent) = oxygen_demo::field_of_boxes(count, &[Vec4::new(0.8, 0.7, 0.6, 1.0)]);
-    let camera = LookAtResolver {
-        camera: Camera::perspective(60f32.to_radians(), 0.1, Some(extent * 1.5)),
-        eye: Vec3::new(-5.0, 12.0, -5.0),
-        target: Vec3::new(extent * 0.4, 0.0, extent * 0.4),
-        up: Vec3::Y,
-        viewport: UVec2::new(960, 540),
-    };
+    let camera = LookAtResolver::new(
+        Camera::perspective(60f32.to_radians(), 0.1, Some(extent * 1.5)),
+        Vec3::new(-5.0, 12.0, -5.0),
+        Vec3::new(extent * 0.4, 0.0, extent * 0.4),
+        UVec2::new(960, 540),
+    )
+    .unwrap();
     let mut configs = vec![None];
     for cascades in [1, 2, 4] {
         for resolution in [512, 1024, 2048] {

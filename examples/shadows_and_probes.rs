@@ -62,13 +62,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut renderer = Renderer::new_headless()?;
     println!("adapter: {}", renderer.gpu().describe());
 
-    let camera = LookAtResolver {
-        camera: Camera::perspective(50f32.to_radians(), 0.1, Some(80.0)),
-        eye: Vec3::new(0.5, 4.0, 8.0),
-        target: Vec3::new(-0.3, 0.6, 0.0),
-        up: Vec3::Y,
-        viewport: UVec2::new(960, 540),
-    };
+    let camera = LookAtResolver::new(
+        Camera::perspective(50f32.to_radians(), 0.1, Some(80.0)),
+        Vec3::new(0.5, 4.0, 8.0),
+        Vec3::new(-0.3, 0.6, 0.0),
+        UVec2::new(960, 540),
+    )
+    .unwrap();
     // The main view comes first: the renderer records it after what it reads
     // (its own sun cascades, the spot and point shadow views, the probe's
     // faces), whatever the registration order.

@@ -99,13 +99,7 @@ fn cameras(scene_kind: &str, side: f32, views: usize) -> Vec<LookAtResolver> {
                 let center = Vec3::new(side * 0.5, 0.0, side * 0.5);
                 (center + Vec3::new(angle.cos() * 0.65 * side, 0.35 * side, angle.sin() * 0.65 * side), center)
             };
-            LookAtResolver {
-                camera: Camera::perspective(60f32.to_radians(), 0.1, None),
-                eye,
-                target,
-                up: Vec3::Y,
-                viewport: VIEWPORT,
-            }
+            LookAtResolver::new(Camera::perspective(60f32.to_radians(), 0.1, None), eye, target, VIEWPORT).unwrap()
         })
         .collect()
 }

@@ -25,13 +25,8 @@ fn add_quad(scene: &mut Scene, name: &str, at: Vec3, rotation: Quat, material: M
 }
 
 fn front_camera() -> LookAtResolver {
-    LookAtResolver {
-        camera: Camera::orthographic(2.0, 0.1, 50.0),
-        eye: Vec3::new(0.0, 0.0, 10.0),
-        target: Vec3::ZERO,
-        up: Vec3::Y,
-        viewport: UVec2::new(96, 96),
-    }
+    LookAtResolver::new(Camera::orthographic(2.0, 0.1, 50.0), Vec3::new(0.0, 0.0, 10.0), Vec3::ZERO, UVec2::new(96, 96))
+        .unwrap()
 }
 
 fn glass(scene: &mut Scene, name: &str, rgb: Vec3) -> MaterialHandle {

@@ -27,13 +27,13 @@ fn gradient_scene() -> Scene {
 }
 
 fn camera() -> LookAtResolver {
-    LookAtResolver {
-        camera: Camera::perspective(60f32.to_radians(), 0.1, None),
-        eye: Vec3::new(0.0, 3.0, 5.0),
-        target: Vec3::new(0.0, 0.0, -1.0),
-        up: Vec3::Y,
-        viewport: UVec2::splat(SIZE),
-    }
+    LookAtResolver::new(
+        Camera::perspective(60f32.to_radians(), 0.1, None),
+        Vec3::new(0.0, 3.0, 5.0),
+        Vec3::new(0.0, 0.0, -1.0),
+        UVec2::splat(SIZE),
+    )
+    .unwrap()
 }
 
 fn renderer(options: RendererOptions) -> Renderer {

@@ -31,13 +31,13 @@ fn lit_cube_scene() -> (Scene, oxygen::core::NodeKey) {
 }
 
 fn front_view(size: u32) -> LookAtResolver {
-    LookAtResolver {
-        camera: Camera::perspective(50f32.to_radians(), 0.1, None),
-        eye: Vec3::new(0.0, 0.0, 4.0),
-        target: Vec3::ZERO,
-        up: Vec3::Y,
-        viewport: UVec2::splat(size),
-    }
+    LookAtResolver::new(
+        Camera::perspective(50f32.to_radians(), 0.1, None),
+        Vec3::new(0.0, 0.0, 4.0),
+        Vec3::ZERO,
+        UVec2::splat(size),
+    )
+    .unwrap()
 }
 
 fn centre_is_lit_red(renderer: &Renderer, view: ViewId) {

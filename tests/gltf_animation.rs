@@ -70,13 +70,13 @@ fn sampling_gives_the_keyframes_and_blends_between_them() {
 /// A view on `eye_direction` framing a sphere of `radius` around `center`
 /// (what the animation sweeps, not only the rest pose's bounds).
 fn camera(center: Vec3, radius: f32, eye_direction: Vec3) -> LookAtResolver {
-    LookAtResolver {
-        camera: Camera::perspective(45f32.to_radians(), radius * 0.01, None),
-        eye: center + eye_direction.normalize() * radius * 2.8,
-        target: center,
-        up: Vec3::Y,
-        viewport: UVec2::new(200, 150),
-    }
+    LookAtResolver::new(
+        Camera::perspective(45f32.to_radians(), radius * 0.01, None),
+        center + eye_direction.normalize() * radius * 2.8,
+        center,
+        UVec2::new(200, 150),
+    )
+    .unwrap()
 }
 
 fn with_sun(scene: &mut Scene) {

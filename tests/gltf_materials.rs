@@ -229,13 +229,8 @@ const HALF_HEIGHT: f32 = 2.5;
 
 /// Looking down -Z at the quads, orthographic, so every quad is seen alike.
 fn front_view() -> LookAtResolver {
-    LookAtResolver {
-        camera: Camera::orthographic(HALF_HEIGHT, 0.1, 20.0),
-        eye: Vec3::new(0.0, 0.0, 5.0),
-        target: Vec3::ZERO,
-        up: Vec3::Y,
-        viewport: VIEWPORT,
-    }
+    LookAtResolver::new(Camera::orthographic(HALF_HEIGHT, 0.1, 20.0), Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, VIEWPORT)
+        .unwrap()
 }
 
 /// The pixel a point of the z = 0 plane lands on in [`front_view`].
@@ -422,13 +417,13 @@ fn shipped(file: &str) -> (Scene, LookAtResolver) {
     );
     scene.set_light(sun, Some(Light::directional(2.5))).unwrap();
     let radius = bounds.half_extents().length();
-    let resolver = LookAtResolver {
-        camera: Camera::perspective(45f32.to_radians(), radius * 0.01, None),
-        eye: bounds.center() + Vec3::new(0.0, 0.0, 1.0) * radius * 2.2,
-        target: bounds.center(),
-        up: Vec3::Y,
-        viewport: UVec2::new(240, 180),
-    };
+    let resolver = LookAtResolver::new(
+        Camera::perspective(45f32.to_radians(), radius * 0.01, None),
+        bounds.center() + Vec3::new(0.0, 0.0, 1.0) * radius * 2.2,
+        bounds.center(),
+        UVec2::new(240, 180),
+    )
+    .unwrap();
     (scene, resolver)
 }
 

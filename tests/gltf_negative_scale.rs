@@ -49,13 +49,13 @@ fn a_negatively_scaled_gltf_node_is_imported_mirrored_and_lit_like_the_original(
     let sun = scene.add_node("sun", Transform::IDENTITY);
     scene.set_light(sun, Some(Light::directional(3.0))).unwrap();
 
-    let camera = LookAtResolver {
-        camera: Camera::orthographic(2.5, 0.1, 50.0),
-        eye: Vec3::new(0.0, 0.0, 10.0),
-        target: Vec3::ZERO,
-        up: Vec3::Y,
-        viewport: UVec2::new(96, 96),
-    };
+    let camera = LookAtResolver::new(
+        Camera::orthographic(2.5, 0.1, 50.0),
+        Vec3::new(0.0, 0.0, 10.0),
+        Vec3::ZERO,
+        UVec2::new(96, 96),
+    )
+    .unwrap();
     let mut renderer = gpu_renderer();
     let view = renderer.register_view(camera, standard_render_graph).unwrap();
     renderer.render_frame(&scene).unwrap();

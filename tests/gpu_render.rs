@@ -46,13 +46,7 @@ fn add_sun(scene: &mut Scene, travelling: Vec3, intensity: f32) {
 }
 
 fn camera(eye: Vec3, target: Vec3, size: u32) -> LookAtResolver {
-    LookAtResolver {
-        camera: Camera::perspective(60f32.to_radians(), 0.1, None),
-        eye,
-        target,
-        up: Vec3::Y,
-        viewport: UVec2::splat(size),
-    }
+    LookAtResolver::new(Camera::perspective(60f32.to_radians(), 0.1, None), eye, target, UVec2::splat(size)).unwrap()
 }
 
 #[test]

@@ -106,13 +106,7 @@ fn random_scene(seed: u64, count: usize) -> Scene {
 }
 
 fn look_at(eye: Vec3, target: Vec3, viewport: UVec2) -> LookAtResolver {
-    LookAtResolver {
-        camera: Camera::perspective(60f32.to_radians(), 0.1, Some(200.0)),
-        eye,
-        target,
-        up: Vec3::Y,
-        viewport,
-    }
+    LookAtResolver::new(Camera::perspective(60f32.to_radians(), 0.1, Some(200.0)), eye, target, viewport).unwrap()
 }
 
 /// Draws with their slots, without the fields that only say which range

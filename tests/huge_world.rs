@@ -56,13 +56,13 @@ fn scene_at(offset: Vec3) -> Scene {
 }
 
 fn camera_at(offset: Vec3) -> LookAtResolver {
-    LookAtResolver {
-        camera: Camera::perspective(50f32.to_radians(), 1e-3, None),
-        eye: offset + Vec3::new(0.5, 0.625, 1.25),
-        target: offset + Vec3::new(0.0, 0.0625, 0.0),
-        up: Vec3::Y,
-        viewport: UVec2::splat(SIZE),
-    }
+    LookAtResolver::new(
+        Camera::perspective(50f32.to_radians(), 1e-3, None),
+        offset + Vec3::new(0.5, 0.625, 1.25),
+        offset + Vec3::new(0.0, 0.0625, 0.0),
+        UVec2::splat(SIZE),
+    )
+    .unwrap()
 }
 
 fn render(offset: Vec3, origin: RenderOrigin) -> image::RgbaImage {

@@ -32,13 +32,13 @@ fn scene() -> Scene {
 fn render(path: DrawPath, instancing: Instancing) -> (image::RgbaImage, u32) {
     let options = RendererOptions { draw_path: Some(path), ..Default::default() };
     let mut renderer = support::gpu_renderer_with(options);
-    let camera = LookAtResolver {
-        camera: Camera::perspective(55f32.to_radians(), 0.1, Some(100.0)),
-        eye: Vec3::new(0.0, 9.0, 6.0),
-        target: Vec3::new(0.0, 0.0, -7.0),
-        up: Vec3::Y,
-        viewport: UVec2::new(160, 120),
-    };
+    let camera = LookAtResolver::new(
+        Camera::perspective(55f32.to_radians(), 0.1, Some(100.0)),
+        Vec3::new(0.0, 9.0, 6.0),
+        Vec3::new(0.0, 0.0, -7.0),
+        UVec2::new(160, 120),
+    )
+    .unwrap();
     let desc = ViewDesc::new(camera).with_options(ViewPrepOptions { instancing, ..Default::default() });
     let view = renderer.register_view(desc, standard_render_graph).unwrap();
     let report = renderer.render_frame(&scene()).unwrap();

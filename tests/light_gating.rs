@@ -28,13 +28,9 @@ fn render_with_camera(lamp: Option<Light>, eye: Vec3) -> image::RgbaImage {
         let lamp = scene.add_node("lamp", Transform::from_translation(Vec3::new(0.0, 1.0, 0.0)));
         scene.set_light(lamp, Some(light)).unwrap();
     }
-    let camera = LookAtResolver {
-        camera: Camera::perspective(60f32.to_radians(), 0.1, None),
-        eye,
-        target: Vec3::ZERO,
-        up: Vec3::Y,
-        viewport: UVec2::new(64, 64),
-    };
+    let camera =
+        LookAtResolver::new(Camera::perspective(60f32.to_radians(), 0.1, None), eye, Vec3::ZERO, UVec2::new(64, 64))
+            .unwrap();
     let mut renderer = gpu_renderer();
     let view = renderer.register_view(camera, standard_render_graph).unwrap();
     renderer.render_frame(&scene).unwrap();

@@ -35,13 +35,13 @@ fn cube_scene() -> Scene {
 }
 
 fn camera(size: u32) -> LookAtResolver {
-    LookAtResolver {
-        camera: Camera::perspective(40f32.to_radians(), 0.1, None),
-        eye: Vec3::new(0.0, 0.4, 3.0),
-        target: Vec3::ZERO,
-        up: Vec3::Y,
-        viewport: UVec2::splat(size),
-    }
+    LookAtResolver::new(
+        Camera::perspective(40f32.to_radians(), 0.1, None),
+        Vec3::new(0.0, 0.4, 3.0),
+        Vec3::ZERO,
+        UVec2::splat(size),
+    )
+    .unwrap()
 }
 
 /// The view's linear HDR image, rendered with `msaa`.
@@ -160,13 +160,13 @@ fn every_pass_and_variant_renders_multisampled() {
     let sun = scene.add_node("sun", Transform::IDENTITY.with_rotation(Quat::from_rotation_x(-0.7)));
     scene.set_light(sun, Some(Light::directional(2.5))).unwrap();
     let bounds = import.bounds.unwrap();
-    let resolver = LookAtResolver {
-        camera: Camera::perspective(45f32.to_radians(), 0.05, None),
-        eye: bounds.center() + Vec3::new(0.2, 0.25, 1.0).normalize() * bounds.half_extents().length() * 2.0,
-        target: bounds.center(),
-        up: Vec3::Y,
-        viewport: UVec2::new(200, 150),
-    };
+    let resolver = LookAtResolver::new(
+        Camera::perspective(45f32.to_radians(), 0.05, None),
+        bounds.center() + Vec3::new(0.2, 0.25, 1.0).normalize() * bounds.half_extents().length() * 2.0,
+        bounds.center(),
+        UVec2::new(200, 150),
+    )
+    .unwrap();
     let render = |msaa| {
         let mut renderer = support::gpu_renderer();
         let graph = standard_render_graph.with_pre_pass(PrePass::On);

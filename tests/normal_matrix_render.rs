@@ -67,13 +67,13 @@ fn a_face_under_a_rotated_non_uniform_scale_is_lit_by_its_analytic_normal() {
 
     // An orthographic camera looking against the analytic normal: the same
     // view direction for every pixel, so only N·L differs.
-    let camera = LookAtResolver {
-        camera: Camera::orthographic(2.5, 0.1, 50.0),
-        eye: face_centre + n * 10.0,
-        target: face_centre,
-        up: Vec3::Y,
-        viewport: UVec2::new(128, 128),
-    };
+    let camera = LookAtResolver::new(
+        Camera::orthographic(2.5, 0.1, 50.0),
+        face_centre + n * 10.0,
+        face_centre,
+        UVec2::new(128, 128),
+    )
+    .unwrap();
     let mut renderer = gpu_renderer();
     let view = renderer.register_view(camera, standard_render_graph).unwrap();
     renderer.render_frame(&scene).unwrap();

@@ -36,13 +36,13 @@ fn metal_sphere_scene(roughness: f32) -> Scene {
 }
 
 fn camera() -> LookAtResolver {
-    LookAtResolver {
-        camera: Camera::perspective(40f32.to_radians(), 0.1, None),
-        eye: Vec3::new(0.0, 0.0, 4.0),
-        target: Vec3::ZERO,
-        up: Vec3::Y,
-        viewport: UVec2::new(128, 128),
-    }
+    LookAtResolver::new(
+        Camera::perspective(40f32.to_radians(), 0.1, None),
+        Vec3::new(0.0, 0.0, 4.0),
+        Vec3::ZERO,
+        UVec2::new(128, 128),
+    )
+    .unwrap()
 }
 
 #[test]
@@ -187,13 +187,13 @@ fn each_surface_reflects_its_nearest_probe() {
     scene.set_light(sun, Some(Light::directional(3.0))).unwrap();
     let mut views = Vec::new();
     for x in [-10.0f32, 10.0] {
-        let camera = LookAtResolver {
-            camera: Camera::perspective(40f32.to_radians(), 0.1, None),
-            eye: Vec3::new(x, 0.0, 4.0),
-            target: Vec3::new(x, 0.0, 0.0),
-            up: Vec3::Y,
-            viewport: UVec2::new(96, 96),
-        };
+        let camera = LookAtResolver::new(
+            Camera::perspective(40f32.to_radians(), 0.1, None),
+            Vec3::new(x, 0.0, 4.0),
+            Vec3::new(x, 0.0, 0.0),
+            UVec2::new(96, 96),
+        )
+        .unwrap();
         let desc = probes.iter().fold(ViewDesc::new(camera), |desc, probe| desc.reads(probe.cube()));
         views.push((x, camera, renderer.register_view(desc, standard_render_graph).unwrap()));
     }

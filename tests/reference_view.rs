@@ -115,13 +115,8 @@ fn albedo_at_normal_incidence(albedo: f64, metallic: f64, roughness: f64) -> f64
 }
 
 fn look_at(eye: Vec3, target: Vec3, size: u32, fov_degrees: f32) -> LookAtResolver {
-    LookAtResolver {
-        camera: Camera::perspective(fov_degrees.to_radians(), 0.05, None),
-        eye,
-        target,
-        up: Vec3::Y,
-        viewport: UVec2::splat(size),
-    }
+    LookAtResolver::new(Camera::perspective(fov_degrees.to_radians(), 0.05, None), eye, target, UVec2::splat(size))
+        .unwrap()
 }
 
 fn sphere_scene(material: Material) -> Scene {
@@ -734,20 +729,20 @@ fn skinned_and_morphed_meshes_are_traced_in_their_pose() {
         scene.set_light(sun, Some(Light::directional(2.5))).unwrap();
         (scene, import)
     };
-    let rigged_camera = LookAtResolver {
-        camera: Camera::perspective(45f32.to_radians(), 0.05, None),
-        eye: Vec3::new(14.0, 1.4, 0.0),
-        target: Vec3::ZERO,
-        up: Vec3::Y,
-        viewport: UVec2::new(64, 64),
-    };
-    let morph_camera = LookAtResolver {
-        camera: Camera::perspective(45f32.to_radians(), 0.05, None),
-        eye: Vec3::new(0.5, 0.6, 3.2),
-        target: Vec3::new(0.5, 0.5, 0.0),
-        up: Vec3::Y,
-        viewport: UVec2::new(64, 48),
-    };
+    let rigged_camera = LookAtResolver::new(
+        Camera::perspective(45f32.to_radians(), 0.05, None),
+        Vec3::new(14.0, 1.4, 0.0),
+        Vec3::ZERO,
+        UVec2::new(64, 64),
+    )
+    .unwrap();
+    let morph_camera = LookAtResolver::new(
+        Camera::perspective(45f32.to_radians(), 0.05, None),
+        Vec3::new(0.5, 0.6, 3.2),
+        Vec3::new(0.5, 0.5, 0.0),
+        UVec2::new(64, 48),
+    )
+    .unwrap();
     let mut rows = Vec::new();
     for (file, time, camera) in
         [("RiggedSimple/RiggedSimple.glb", 1.05, rigged_camera), ("SimpleMorph/SimpleMorph.gltf", 1.5, morph_camera)]

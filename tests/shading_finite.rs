@@ -44,13 +44,13 @@ fn cubes_on_lit_ground() -> (Scene, LookAtResolver, Vec3) {
         scene.add_node("sun", Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, travelling)));
     scene.set_light(sun, Some(Light::directional(3.0))).unwrap();
 
-    let camera = LookAtResolver {
-        camera: Camera::perspective(50f32.to_radians(), 0.1, Some(100.0)),
-        eye: center + Vec3::new(0.0, 12.0, 0.5),
-        target: center,
-        up: Vec3::Y,
-        viewport: UVec2::new(640, 360),
-    };
+    let camera = LookAtResolver::new(
+        Camera::perspective(50f32.to_radians(), 0.1, Some(100.0)),
+        center + Vec3::new(0.0, 12.0, 0.5),
+        center,
+        UVec2::new(640, 360),
+    )
+    .unwrap();
     let hot_spot = camera.eye + travelling * (top - camera.eye.y) / travelling.y;
     (scene, camera, hot_spot)
 }

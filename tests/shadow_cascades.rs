@@ -89,13 +89,13 @@ fn a_cube_casts_a_shadow_on_the_ground() {
     );
     scene.set_light(sun, Some(Light::directional(3.0))).unwrap();
 
-    let camera = LookAtResolver {
-        camera: Camera::perspective(50f32.to_radians(), 0.1, Some(60.0)),
-        eye: Vec3::new(0.0, 6.0, 6.0),
-        target: Vec3::ZERO,
-        up: Vec3::Y,
-        viewport: UVec2::new(160, 120),
-    };
+    let camera = LookAtResolver::new(
+        Camera::perspective(50f32.to_radians(), 0.1, Some(60.0)),
+        Vec3::new(0.0, 6.0, 6.0),
+        Vec3::ZERO,
+        UVec2::new(160, 120),
+    )
+    .unwrap();
     let settings =
         CascadeSettings { count: 2, resolution: 512, max_distance: 30.0, caster_margin: 20.0, ..Default::default() };
     let mut renderer = support::gpu_renderer();
@@ -164,13 +164,13 @@ fn a_spot_light_casts_a_shadow_through_its_shadow_view() {
 
     let mut renderer = support::gpu_renderer();
     renderer.set_local_shadows(Some(LocalShadowSettings { resolution: 512, ..Default::default() }));
-    let camera = LookAtResolver {
-        camera: Camera::perspective(50f32.to_radians(), 0.1, Some(60.0)),
-        eye: Vec3::new(1.0, 7.0, 7.0),
-        target: Vec3::new(1.0, 0.0, 0.0),
-        up: Vec3::Y,
-        viewport: UVec2::new(160, 120),
-    };
+    let camera = LookAtResolver::new(
+        Camera::perspective(50f32.to_radians(), 0.1, Some(60.0)),
+        Vec3::new(1.0, 7.0, 7.0),
+        Vec3::new(1.0, 0.0, 0.0),
+        UVec2::new(160, 120),
+    )
+    .unwrap();
     let view = renderer.register_view(camera, standard_render_graph).unwrap();
     renderer.render_frame(&scene).unwrap();
     assert_eq!(renderer.shadow_views().len(), 1, "one shadow view for the one spot");
@@ -208,13 +208,13 @@ fn two_spot_shadows_share_the_atlas() {
     }
     let mut renderer = support::gpu_renderer();
     renderer.set_local_shadows(Some(LocalShadowSettings { resolution: 256, ..Default::default() }));
-    let camera = LookAtResolver {
-        camera: Camera::perspective(60f32.to_radians(), 0.1, Some(60.0)),
-        eye: Vec3::new(0.0, 14.0, 12.0),
-        target: Vec3::ZERO,
-        up: Vec3::Y,
-        viewport: UVec2::new(240, 140),
-    };
+    let camera = LookAtResolver::new(
+        Camera::perspective(60f32.to_radians(), 0.1, Some(60.0)),
+        Vec3::new(0.0, 14.0, 12.0),
+        Vec3::ZERO,
+        UVec2::new(240, 140),
+    )
+    .unwrap();
     let view = renderer.register_view(camera, standard_render_graph).unwrap();
     renderer.render_frame(&scene).unwrap();
     assert_eq!(renderer.shadow_views().len(), 2);
@@ -259,13 +259,13 @@ fn a_point_light_casts_shadows_through_its_cube_faces() {
     let spot = scene.add_node("spot", Transform::from_translation(Vec3::new(-3.0, 3.0, -3.0)));
     scene.set_light(spot, Some(Light::spot(1.0, Some(5.0), 0.2, 0.3))).unwrap();
 
-    let camera = LookAtResolver {
-        camera: Camera::perspective(60f32.to_radians(), 0.1, Some(60.0)),
-        eye: Vec3::new(0.5, 4.0, 7.0),
-        target: Vec3::new(1.5, 1.5, 0.0),
-        up: Vec3::Y,
-        viewport: UVec2::new(200, 150),
-    };
+    let camera = LookAtResolver::new(
+        Camera::perspective(60f32.to_radians(), 0.1, Some(60.0)),
+        Vec3::new(0.5, 4.0, 7.0),
+        Vec3::new(1.5, 1.5, 0.0),
+        UVec2::new(200, 150),
+    )
+    .unwrap();
     let render = |with_shadows: bool| {
         let mut renderer = support::gpu_renderer();
         renderer.set_local_shadows(Some(LocalShadowSettings { resolution: 256, ..Default::default() }));
@@ -348,13 +348,13 @@ fn shadow_map_resolution_trades_edge_error() {
     let sun =
         scene.add_node("sun", Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, travelling)));
     scene.set_light(sun, Some(Light::directional(3.0))).unwrap();
-    let camera = LookAtResolver {
-        camera: Camera::perspective(50f32.to_radians(), 0.1, Some(40.0)),
-        eye: Vec3::new(0.5, 9.0, 5.0),
-        target: Vec3::new(1.5, 0.0, 0.0),
-        up: Vec3::Y,
-        viewport: UVec2::new(192, 192),
-    };
+    let camera = LookAtResolver::new(
+        Camera::perspective(50f32.to_radians(), 0.1, Some(40.0)),
+        Vec3::new(0.5, 9.0, 5.0),
+        Vec3::new(1.5, 0.0, 0.0),
+        UVec2::new(192, 192),
+    )
+    .unwrap();
     let render = |resolution: Option<u32>| {
         let mut renderer = support::gpu_renderer();
         let mut desc = ViewDesc::new(camera);

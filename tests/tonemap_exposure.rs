@@ -16,13 +16,13 @@ fn render(exposure: f32) -> image::RgbaImage {
     scene.set_renderable(node, Renderable { geometry: quad, materials: vec![grey] }).unwrap();
     let sun = scene.add_node("sun", Transform::IDENTITY);
     scene.set_light(sun, Some(Light::directional(2.0))).unwrap();
-    let camera = LookAtResolver {
-        camera: Camera::orthographic(1.0, 0.1, 20.0),
-        eye: Vec3::new(0.0, 0.0, 5.0),
-        target: Vec3::ZERO,
-        up: Vec3::Y,
-        viewport: UVec2::splat(32),
-    };
+    let camera = LookAtResolver::new(
+        Camera::orthographic(1.0, 0.1, 20.0),
+        Vec3::new(0.0, 0.0, 5.0),
+        Vec3::ZERO,
+        UVec2::splat(32),
+    )
+    .unwrap();
     let mut renderer = gpu_renderer();
     let graph = async move |ctx: &RenderContext<'_>, rec: &mut CommandRecorder| {
         let config =

@@ -48,13 +48,13 @@ fn lit_scene() -> (Scene, NodeKey, NodeKey, NodeKey) {
 }
 
 fn camera() -> LookAtResolver {
-    LookAtResolver {
-        camera: Camera::perspective(50f32.to_radians(), 0.1, Some(60.0)),
-        eye: Vec3::new(0.5, 4.0, 7.0),
-        target: Vec3::new(0.0, 0.6, 0.0),
-        up: Vec3::Y,
-        viewport: UVec2::new(128, 96),
-    }
+    LookAtResolver::new(
+        Camera::perspective(50f32.to_radians(), 0.1, Some(60.0)),
+        Vec3::new(0.5, 4.0, 7.0),
+        Vec3::new(0.0, 0.6, 0.0),
+        UVec2::new(128, 96),
+    )
+    .unwrap()
 }
 
 fn cascades() -> CascadeSettings {
