@@ -68,21 +68,19 @@ impl Frustum {
     /// view-projection matrix.
     pub fn from_view_projection(view_projection: &Mat4) -> Self {
         let m = view_projection.transpose(); // rows of the original as columns
-        let (r0, r1, r2, r3) = (m.x_axis, m.y_axis, m.z_axis, m.w_axis);
-        let z_ge_0 = Plane::from_row(r2);
-        let z_le_w = Plane::from_row(r3 - r2);
-        // Reverse-Z maps the near plane to z = w, the far plane to z = 0; which
-        // is which only matters for naming, since both are tested.
-        Frustum {
-            planes: [
-                Plane::from_row(r3 + r0),
-                Plane::from_row(r3 - r0),
-                Plane::from_row(r3 + r1),
-                Plane::from_row(r3 - r1),
-                z_le_w,
-                z_ge_0,
-            ],
-        }
+        Self::from_rows([m.x_axis, m.y_axis, m.z_axis, m.w_axis], Plane::from_row)
+    }
+
+    /// The six planes of the rows `r` of a view-projection matrix, each made
+    /// a [`Plane`] by `plane`: −w ≤ x ≤ w, −w ≤ y ≤ w, 0 ≤ z ≤ w. Reverse-Z
+    /// maps the near plane to z = w, the far plane to z = 0; which is which
+    /// only matters for naming, since both are tested.
+    fn from_rows<R>(r: [R; 4], plane: impl Fn(R) -> Plane) -> Self
+    where
+        R: Copy + std::ops::Add<Output = R> + std::ops::Sub<Output = R>,
+    {
+        let [r0, r1, r2, r3] = r;
+        Frustum { planes: [plane(r3 + r0), plane(r3 - r0), plane(r3 + r1), plane(r3 - r1), plane(r3 - r2), plane(r2)] }
     }
 
     /// Conservative box test by the p-vertex method: for each plane, the box
@@ -102,17 +100,7 @@ impl Frustum {
     /// more off.
     pub fn from_view_projection_f64(view_projection: &DMat4) -> Self {
         let m = view_projection.transpose();
-        let (r0, r1, r2, r3) = (m.x_axis, m.y_axis, m.z_axis, m.w_axis);
-        Frustum {
-            planes: [
-                Plane::from_row_f64(r3 + r0),
-                Plane::from_row_f64(r3 - r0),
-                Plane::from_row_f64(r3 + r1),
-                Plane::from_row_f64(r3 - r1),
-                Plane::from_row_f64(r3 - r2),
-                Plane::from_row_f64(r2),
-            ],
-        }
+        Self::from_rows([m.x_axis, m.y_axis, m.z_axis, m.w_axis], Plane::from_row_f64)
     }
 
     /// Conservative sphere test: cheaper and looser than [`Self::intersects_aabb`].
