@@ -330,11 +330,7 @@ impl GpuScene {
                     joint_base: entry.joint_base,
                     // A skinned renderable has no LODs (the frame phase drops
                     // them): its one group is its base mesh's.
-                    skin_slot: if entry.joint_base == oxygen_bindless::INVALID_SLOT {
-                        oxygen_bindless::INVALID_SLOT
-                    } else {
-                        base.skin
-                    },
+                    skin_slot: skin_slot(entry.joint_base, base.skin),
                     morph_base: entry.morph_base,
                 });
             }
@@ -426,6 +422,12 @@ pub(crate) fn changed_ranges<T: PartialEq>(old: &[T], new: &[T]) -> Vec<Range<u3
         }
     }
     out
+}
+
+/// The skin slot a draw or instance reads: `skin` (its geometry's skin
+/// weights) when it has joints (`joint_base` valid), else none.
+pub(crate) fn skin_slot(joint_base: u32, skin: u32) -> u32 {
+    if joint_base == oxygen_bindless::INVALID_SLOT { oxygen_bindless::INVALID_SLOT } else { skin }
 }
 
 const _: () = {

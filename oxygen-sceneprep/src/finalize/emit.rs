@@ -87,11 +87,7 @@ pub(crate) fn emit_view(frame: &FrameEmit<'_>, view: &ViewEmit<'_>, out: &mut Pr
             submesh: item.submesh,
             generation: generation_tag,
             attributes_slot: g.attributes,
-            skin_slot: if item.joint_base == oxygen_bindless::INVALID_SLOT {
-                oxygen_bindless::INVALID_SLOT
-            } else {
-                g.skin
-            },
+            skin_slot: crate::gpu_scene::skin_slot(item.joint_base, g.skin),
             joint_base: item.joint_base,
             morph_base: item.morph_base,
         });
