@@ -83,24 +83,22 @@ impl ReflectionProbe {
         update: ProbeUpdate,
     ) -> Result<Self, RenderError> {
         let resolution = resolution.clamp(1, renderer.gpu().device.limits().max_texture_dimension_2d);
-        let texture = renderer.gpu().device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("reflection probe"),
+        let texture = oxygen_gpu::texture_2d(
+            &renderer.gpu().device,
+            "reflection probe",
             // One spare layer on GL's account (see `array_layer_count`).
-            size: wgpu::Extent3d {
+            wgpu::Extent3d {
                 width: resolution,
                 height: resolution,
                 depth_or_array_layers: oxygen_passes::array_layer_count(PROBE_FACES as u32, true),
             },
             // A full chain: rough surfaces reflect blurrier levels.
-            mip_level_count: u32::BITS - resolution.leading_zeros(),
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: ViewTargets::HDR_FORMAT,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING
+            u32::BITS - resolution.leading_zeros(),
+            ViewTargets::HDR_FORMAT,
+            wgpu::TextureUsages::TEXTURE_BINDING
                 | wgpu::TextureUsages::COPY_SRC
                 | wgpu::TextureUsages::RENDER_ATTACHMENT,
-            view_formats: &[],
-        });
+        );
         let id = renderer.views.allocate_probe();
         let faces: [ViewId; PROBE_FACES] = std::array::from_fn(|face| {
             let resolver = ProbeFaceResolver { position, face, resolution, near: depth_range.0, far: depth_range.1 };

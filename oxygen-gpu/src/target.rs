@@ -299,18 +299,8 @@ impl ViewTargets {
 
     fn create(device: &wgpu::Device, width: u32, height: u32, label: &str, hdr_format: Option<HdrFormat>) -> Self {
         let size = wgpu::Extent3d { width, height, depth_or_array_layers: 1 };
-        let make = |format, usage, suffix: &str| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(&format!("{label} {suffix}")),
-                size,
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage,
-                view_formats: &[],
-            })
-        };
+        let make =
+            |format, usage, suffix: &str| texture_2d(device, &format!("{label} {suffix}"), size, 1, format, usage);
         let color = hdr_format.map(|hdr_format| {
             let color = make(
                 Self::COLOR_FORMAT,
@@ -367,5 +357,28 @@ fn single_layer_view(texture: &wgpu::Texture, layer: u32, label: &str) -> wgpu::
         base_array_layer: layer,
         array_layer_count: Some(1),
         ..Default::default()
+    })
+}
+
+/// A single-sampled 2D texture (a 2D array when `size` has several layers)
+/// with `mip_level_count` levels: the one descriptor every sampled, stored
+/// or rendered-to texture outside the multisampled targets shares.
+pub fn texture_2d(
+    device: &wgpu::Device,
+    label: &str,
+    size: wgpu::Extent3d,
+    mip_level_count: u32,
+    format: wgpu::TextureFormat,
+    usage: wgpu::TextureUsages,
+) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size,
+        mip_level_count,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage,
+        view_formats: &[],
     })
 }

@@ -105,16 +105,14 @@ impl Windows {
             let format = window.format;
             let stale = window.image.as_ref().is_none_or(|i| i.width() != size.x || i.height() != size.y);
             if stale {
-                let image = device.create_texture(&wgpu::TextureDescriptor {
-                    label: Some("window image"),
-                    size: wgpu::Extent3d { width: size.x, height: size.y, depth_or_array_layers: 1 },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
+                let image = oxygen_gpu::texture_2d(
+                    &device,
+                    "window image",
+                    wgpu::Extent3d { width: size.x, height: size.y, depth_or_array_layers: 1 },
+                    1,
                     format,
-                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-                    view_formats: &[],
-                });
+                    wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                );
                 if let Some(window) = self.windows.get_mut(&id) {
                     window.image = Some(image);
                 }

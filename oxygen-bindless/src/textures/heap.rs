@@ -117,16 +117,14 @@ fn create_texture(
     srgb: bool,
     label: &str,
 ) -> wgpu::Texture {
-    device.create_texture(&wgpu::TextureDescriptor {
-        label: Some(label),
-        size: wgpu::Extent3d { width: side.0, height: side.1, depth_or_array_layers: layers },
-        mip_level_count: mip_levels,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: format_for(srgb),
-        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    })
+    oxygen_gpu::texture_2d(
+        device,
+        label,
+        wgpu::Extent3d { width: side.0, height: side.1, depth_or_array_layers: layers },
+        mip_levels,
+        format_for(srgb),
+        wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::COPY_SRC,
+    )
 }
 
 /// Writes one mip level of one layer.

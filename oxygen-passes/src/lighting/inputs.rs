@@ -90,16 +90,14 @@ impl LightingInputResources {
             compare: Some(wgpu::CompareFunction::GreaterEqual),
             ..Default::default()
         });
-        let dummy = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("no shadow map"),
-            size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: oxygen_gpu::ViewTargets::DEPTH_FORMAT,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        });
+        let dummy = oxygen_gpu::texture_2d(
+            device,
+            "no shadow map",
+            wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
+            1,
+            oxygen_gpu::ViewTargets::DEPTH_FORMAT,
+            wgpu::TextureUsages::TEXTURE_BINDING,
+        );
         let dummy_view = dummy.create_view(&Default::default());
         // Trilinear, as the environment's: probes are prefiltered alike.
         let probe_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
@@ -117,33 +115,26 @@ impl LightingInputResources {
             mipmap_filter: wgpu::MipmapFilterMode::Linear,
             ..Default::default()
         });
-        let dummy_probe = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("no probe"),
-            // A spare layer, as probes have: see `array_layer_count`.
-            size: wgpu::Extent3d {
-                width: 1,
-                height: 1,
-                depth_or_array_layers: crate::array_layer_count(PROBE_FACES as u32, true),
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: oxygen_gpu::ViewTargets::HDR_FORMAT,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        });
+        // A spare layer, as probes have: see `array_layer_count`.
+        let probe_layers = crate::array_layer_count(PROBE_FACES as u32, true);
+        let dummy_probe = oxygen_gpu::texture_2d(
+            device,
+            "no probe",
+            wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: probe_layers },
+            1,
+            oxygen_gpu::ViewTargets::HDR_FORMAT,
+            wgpu::TextureUsages::TEXTURE_BINDING,
+        );
         let dummy_probe_view = probe_view(&dummy_probe);
-        let placeholder_atlas = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("no shadow atlas"),
+        let placeholder_atlas = oxygen_gpu::texture_2d(
+            device,
+            "no shadow atlas",
             // Two layers: a one-layer array is a plain 2D texture on GL.
-            size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: crate::array_layer_count(1, true) },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: crate::lighting::shadow_atlas::SHADOW_ATLAS_FORMAT,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        });
+            wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: crate::array_layer_count(1, true) },
+            1,
+            crate::lighting::shadow_atlas::SHADOW_ATLAS_FORMAT,
+            wgpu::TextureUsages::TEXTURE_BINDING,
+        );
         let placeholder_atlas = crate::lighting::shadow_atlas::atlas_view(&placeholder_atlas);
         let uniform = uniform_buffer(device, &LightingInputs::zeroed());
         let (split_sum_lut, split_sum_buffer) = crate::lighting::split_sum::build_lut(device, queue);

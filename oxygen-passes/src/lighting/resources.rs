@@ -92,16 +92,14 @@ impl LightingResources {
             );
         }
         let levels = env.levels.len().max(1) as u32;
-        let texture = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("environment"),
-            size: wgpu::Extent3d { width: size, height: size, depth_or_array_layers: HARMONICS_LAYER + 1 },
-            mip_level_count: levels.min(u32::BITS - size.leading_zeros()),
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: oxygen_gpu::ViewTargets::HDR_FORMAT,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
+        let texture = oxygen_gpu::texture_2d(
+            device,
+            "environment",
+            wgpu::Extent3d { width: size, height: size, depth_or_array_layers: HARMONICS_LAYER + 1 },
+            levels.min(u32::BITS - size.leading_zeros()),
+            oxygen_gpu::ViewTargets::HDR_FORMAT,
+            wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::COPY_SRC,
+        );
         let write = |level: u32, layer: u32, side: u32, texels: &[glam::Vec3]| {
             let bytes: Vec<u8> = texels
                 .iter()

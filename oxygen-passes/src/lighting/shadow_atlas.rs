@@ -29,18 +29,16 @@ impl ShadowAtlas {
         let fits = slot.as_ref().is_some_and(|t| t.width() == resolution && t.depth_or_array_layers() >= layers);
         if !fits {
             let layers = atlas_layer_count(layers, true);
-            *slot = Some(device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("local shadow atlas"),
-                size: wgpu::Extent3d { width: resolution, height: resolution, depth_or_array_layers: layers },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: SHADOW_ATLAS_FORMAT,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+            *slot = Some(oxygen_gpu::texture_2d(
+                device,
+                "local shadow atlas",
+                wgpu::Extent3d { width: resolution, height: resolution, depth_or_array_layers: layers },
+                1,
+                SHADOW_ATLAS_FORMAT,
+                wgpu::TextureUsages::RENDER_ATTACHMENT
                     | wgpu::TextureUsages::TEXTURE_BINDING
                     | wgpu::TextureUsages::COPY_SRC,
-                view_formats: &[],
-            }));
+            ));
         }
         // Either it fitted or it was just replaced.
         slot.clone().expect("atlas exists")

@@ -33,18 +33,14 @@ const _: () = assert!(SPLIT_SUM_LUT_SIZE * 8 == wgpu::COPY_BYTES_PER_ROW_ALIGNME
 /// shaders read.
 pub(crate) fn build_lut(device: &wgpu::Device, queue: &wgpu::Queue) -> (wgpu::Texture, wgpu::Buffer) {
     let _span = tracing::info_span!("split_sum_lut", size = SPLIT_SUM_LUT_SIZE).entered();
-    let texture = device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("split-sum BRDF"),
-        size: wgpu::Extent3d { width: SPLIT_SUM_LUT_SIZE, height: SPLIT_SUM_LUT_SIZE, depth_or_array_layers: 1 },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: SPLIT_SUM_LUT_FORMAT,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING
-            | wgpu::TextureUsages::RENDER_ATTACHMENT
-            | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    });
+    let texture = oxygen_gpu::texture_2d(
+        device,
+        "split-sum BRDF",
+        wgpu::Extent3d { width: SPLIT_SUM_LUT_SIZE, height: SPLIT_SUM_LUT_SIZE, depth_or_array_layers: 1 },
+        1,
+        SPLIT_SUM_LUT_FORMAT,
+        wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+    );
     let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: None, entries: &[] });
     let pipeline = crate::pipelines::fullscreen_pipeline(
         device,

@@ -257,19 +257,17 @@ impl CubeFilter {
         // 2. Box mips.
         self.box_mips(device, encoder, &scratch, &params);
 
-        let target = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("environment"),
-            size: wgpu::Extent3d { width: size, height: size, depth_or_array_layers: ENVIRONMENT_LAYERS },
-            mip_level_count: levels,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: ViewTargets::HDR_FORMAT,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING
+        let target = oxygen_gpu::texture_2d(
+            device,
+            "environment",
+            wgpu::Extent3d { width: size, height: size, depth_or_array_layers: ENVIRONMENT_LAYERS },
+            levels,
+            ViewTargets::HDR_FORMAT,
+            wgpu::TextureUsages::TEXTURE_BINDING
                 | wgpu::TextureUsages::RENDER_ATTACHMENT
                 | wgpu::TextureUsages::COPY_SRC
                 | wgpu::TextureUsages::COPY_DST,
-            view_formats: &[],
-        });
+        );
         // 3. Level 0 is the radiance itself; the rest GGX-filtered.
         let source = scratch_level(0);
         let step = Step::new(&self.downsample, &source, &self.cube_sampler, &params, 0);
@@ -428,20 +426,14 @@ fn layer_view(texture: &wgpu::Texture, level: u32, layer: u32) -> wgpu::TextureV
 
 /// A six-face cube with a full box-filtered mip chain.
 fn scratch_cube(device: &wgpu::Device, size: u32) -> wgpu::Texture {
-    device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("cube filter scratch"),
-        size: wgpu::Extent3d {
-            width: size,
-            height: size,
-            depth_or_array_layers: crate::array_layer_count(FACES, true),
-        },
-        mip_level_count: u32::BITS - size.leading_zeros(),
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: ViewTargets::HDR_FORMAT,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::RENDER_ATTACHMENT,
-        view_formats: &[],
-    })
+    oxygen_gpu::texture_2d(
+        device,
+        "cube filter scratch",
+        wgpu::Extent3d { width: size, height: size, depth_or_array_layers: crate::array_layer_count(FACES, true) },
+        u32::BITS - size.leading_zeros(),
+        ViewTargets::HDR_FORMAT,
+        wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::RENDER_ATTACHMENT,
+    )
 }
 
 fn params_buffer(device: &wgpu::Device, params: &[CubeFilterParams]) -> wgpu::Buffer {
@@ -489,18 +481,14 @@ fn upload_equirect(device: &wgpu::Device, queue: &wgpu::Queue, image: &oxygen_co
         }
         (width, height, texels) = (w, h, std::borrow::Cow::Owned(half));
     }
-    let texture = device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("equirectangular environment"),
-        size: wgpu::Extent3d { width, height, depth_or_array_layers: crate::array_layer_count(1, false) },
-        mip_level_count: u32::BITS - width.max(height).leading_zeros(),
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: ViewTargets::HDR_FORMAT,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING
-            | wgpu::TextureUsages::RENDER_ATTACHMENT
-            | wgpu::TextureUsages::COPY_DST,
-        view_formats: &[],
-    });
+    let texture = oxygen_gpu::texture_2d(
+        device,
+        "equirectangular environment",
+        wgpu::Extent3d { width, height, depth_or_array_layers: crate::array_layer_count(1, false) },
+        u32::BITS - width.max(height).leading_zeros(),
+        ViewTargets::HDR_FORMAT,
+        wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_DST,
+    );
     let bytes: Vec<u8> = texels
         .iter()
         .flat_map(|t| [t.x, t.y, t.z, 1.0])
