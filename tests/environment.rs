@@ -34,13 +34,7 @@ fn sphere_scene(metallic: f32, roughness: f32, sun: bool) -> Scene {
 }
 
 fn camera() -> LookAtResolver {
-    LookAtResolver::new(
-        Camera::perspective(40f32.to_radians(), 0.1, None),
-        Vec3::new(0.0, 0.0, 4.0),
-        Vec3::ZERO,
-        UVec2::new(96, 96),
-    )
-    .unwrap()
+    support::looking_at_origin(40.0, Vec3::new(0.0, 0.0, 4.0), 96)
 }
 
 /// The HDR image of `scene` lit by `environment`, with `msaa`.

@@ -31,13 +31,7 @@ fn lit_cube_scene() -> (Scene, oxygen::core::NodeKey) {
 }
 
 fn front_view(size: u32) -> LookAtResolver {
-    LookAtResolver::new(
-        Camera::perspective(50f32.to_radians(), 0.1, None),
-        Vec3::new(0.0, 0.0, 4.0),
-        Vec3::ZERO,
-        UVec2::splat(size),
-    )
-    .unwrap()
+    support::looking_at_origin(50.0, Vec3::new(0.0, 0.0, 4.0), size)
 }
 
 fn centre_is_lit_red(renderer: &Renderer, view: ViewId) {

@@ -45,12 +45,9 @@ fn add_sun(scene: &mut Scene, travelling: Vec3, intensity: f32) {
     scene.set_light(sun, Some(Light::directional(intensity))).unwrap();
 }
 
-fn camera(eye: Vec3, target: Vec3, size: u32) -> LookAtResolver {
-    LookAtResolver::new(Camera::perspective(60f32.to_radians(), 0.1, None), eye, target, UVec2::splat(size)).unwrap()
-}
-
-#[test]
-fn near_object_occludes_far_one_and_background_keeps_the_clear_colour() {
+/// A small green cube 3 units down −Z in front of a large red one 10 units
+/// down, lit head-on by a sun travelling along −Z.
+fn near_and_far_cubes() -> Scene {
     let mut scene = Scene::new();
     // The near cube's material is created first, so its partition is drawn
     // first: only a working reverse-Z depth test keeps the far cube from
@@ -60,6 +57,16 @@ fn near_object_occludes_far_one_and_background_keeps_the_clear_colour() {
     add_cube(&mut scene, "near", Vec3::new(0.0, 0.0, -3.0), 0.5, green);
     add_cube(&mut scene, "far", Vec3::new(0.0, 0.0, -10.0), 4.0, red);
     add_sun(&mut scene, Vec3::new(0.0, 0.0, -1.0), 3.0);
+    scene
+}
+
+fn camera(eye: Vec3, target: Vec3, size: u32) -> LookAtResolver {
+    LookAtResolver::new(Camera::perspective(60f32.to_radians(), 0.1, None), eye, target, UVec2::splat(size)).unwrap()
+}
+
+#[test]
+fn near_object_occludes_far_one_and_background_keeps_the_clear_colour() {
+    let scene = near_and_far_cubes();
 
     let mut renderer = gpu_renderer();
     let cam = camera(Vec3::ZERO, Vec3::NEG_Z, 96);
@@ -185,12 +192,7 @@ fn views_render_in_registration_order_and_can_be_unregistered() {
 
 #[test]
 fn a_closure_factory_can_render_without_a_depth_pre_pass() {
-    let mut scene = Scene::new();
-    let green = scene.add_material(Material::opaque("near green", Vec4::new(0.0, 1.0, 0.0, 1.0)));
-    let red = scene.add_material(Material::opaque("far red", Vec4::new(1.0, 0.0, 0.0, 1.0)));
-    add_cube(&mut scene, "near", Vec3::new(0.0, 0.0, -3.0), 0.5, green);
-    add_cube(&mut scene, "far", Vec3::new(0.0, 0.0, -10.0), 4.0, red);
-    add_sun(&mut scene, Vec3::new(0.0, 0.0, -1.0), 3.0);
+    let scene = near_and_far_cubes();
 
     let mut renderer = gpu_renderer();
     let cam = camera(Vec3::ZERO, Vec3::NEG_Z, 64);

@@ -35,13 +35,7 @@ fn cube_scene() -> Scene {
 }
 
 fn camera(size: u32) -> LookAtResolver {
-    LookAtResolver::new(
-        Camera::perspective(40f32.to_radians(), 0.1, None),
-        Vec3::new(0.0, 0.4, 3.0),
-        Vec3::ZERO,
-        UVec2::splat(size),
-    )
-    .unwrap()
+    support::looking_at_origin(40.0, Vec3::new(0.0, 0.4, 3.0), size)
 }
 
 /// The view's linear HDR image, rendered with `msaa`.

@@ -36,13 +36,7 @@ fn metal_sphere_scene(roughness: f32) -> Scene {
 }
 
 fn camera() -> LookAtResolver {
-    LookAtResolver::new(
-        Camera::perspective(40f32.to_radians(), 0.1, None),
-        Vec3::new(0.0, 0.0, 4.0),
-        Vec3::ZERO,
-        UVec2::new(128, 128),
-    )
-    .unwrap()
+    support::looking_at_origin(40.0, Vec3::new(0.0, 0.0, 4.0), 128)
 }
 
 #[test]

@@ -107,6 +107,13 @@ pub fn read_lit_color(renderer: &Renderer, view: ViewId) -> RgbaImage {
     renderer.read_color(view).unwrap_or_else(|e| panic!("reading the colour target of {view:?}: {e}"))
 }
 
+/// A perspective camera of `fov_degrees` (near plane 0.1, no far plane) at
+/// `eye` looking at the origin, rendering `size`² pixels.
+pub fn looking_at_origin(fov_degrees: f32, eye: Vec3, size: u32) -> LookAtResolver {
+    LookAtResolver::new(Camera::perspective(fov_degrees.to_radians(), 0.1, None), eye, Vec3::ZERO, UVec2::splat(size))
+        .unwrap()
+}
+
 /// The pixel a world point lands on.
 pub fn pixel_of(view: &ResolvedView, world: Vec3) -> (u32, u32) {
     let clip = view.view_projection * world.extend(1.0);
