@@ -17,11 +17,9 @@
 # prints the table and appends one record to RECORD_DIR/ab_bench.jsonl.
 # Each run's output goes to RECORD_DIR/logs/.
 set -uo pipefail
+. "$(dirname "$0")/usage.sh"
 
-if [ $# -ne 3 ]; then
-  awk 'NR > 1 && !/^#/ { exit } NR > 1' "$0" >&2
-  exit 2
-fi
+[ $# -eq 3 ] || usage
 root=$(cd "$(dirname "$0")/.." && pwd -P)
 before=$(cd "$1" && pwd -P)
 after=$(cd "$2" && pwd -P)

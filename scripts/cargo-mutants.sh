@@ -29,15 +29,11 @@
 # two cores): use it only in a checkout of its own (`git worktree add`),
 # never in one you are editing.
 set -euo pipefail
+. "$(dirname "$0")/usage.sh"
 cd "$(dirname "$0")/.."
 
 say() { printf '[mutants] %s\n' "$*" >&2; }
-if [ $# -lt 2 ]; then
-  # The whole header comment: every line after the first up to the first
-  # that is not a comment.
-  awk 'NR > 1 && !/^#/ { exit } NR > 1' "$0" >&2
-  exit 2
-fi
+[ $# -ge 2 ] || usage
 scope=$1
 
 case "$scope" in

@@ -30,13 +30,9 @@
 # Each run's stdout/stderr goes to RECORD_DIR/<n>-<bench>.log; a failing run
 # is reported and the others go on; the exit status is non-zero if any failed.
 set -uo pipefail
+. "$(dirname "$0")/usage.sh"
 
-if [ $# -lt 2 ]; then
-  # The whole header comment: every line after the first up to the first
-  # that is not a comment.
-  awk 'NR > 1 && !/^#/ { exit } NR > 1' "$0" >&2
-  exit 2
-fi
+[ $# -ge 2 ] || usage
 root=$(cd "$(dirname "$0")/.." && pwd -P)
 bin=$(cd "$1" && pwd -P)
 out=$2
