@@ -34,7 +34,7 @@ fn sphere_scene(metallic: f32, roughness: f32, sun: bool) -> Scene {
 }
 
 fn camera() -> LookAtResolver {
-    support::looking_at_origin(40.0, Vec3::new(0.0, 0.0, 4.0), 96)
+    support::looking_at_origin(40.0, Vec3::new(0.0, 0.0, 4.0), UVec2::splat(96))
 }
 
 /// The HDR image of `scene` lit by `environment`, with `msaa`.

@@ -31,7 +31,7 @@ fn lit_cube_scene() -> (Scene, oxygen::core::NodeKey) {
 }
 
 fn front_view(size: u32) -> LookAtResolver {
-    support::looking_at_origin(50.0, Vec3::new(0.0, 0.0, 4.0), size)
+    support::looking_at_origin(50.0, Vec3::new(0.0, 0.0, 4.0), UVec2::splat(size))
 }
 
 fn centre_is_lit_red(renderer: &Renderer, view: ViewId) {

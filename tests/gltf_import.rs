@@ -112,13 +112,7 @@ fn a_scene_that_does_not_exist_lists_the_ones_that_do() {
 fn alpha_blend_mode_test_prepared_frame_dump() {
     let mut scene = Scene::new();
     import_gltf(&mut scene, asset("AlphaBlendModeTest/AlphaBlendModeTest.glb"), &SceneChoice::Default).unwrap();
-    let camera = LookAtResolver::new(
-        Camera::perspective(45f32.to_radians(), 0.05, None),
-        Vec3::new(0.0, 2.0, 9.0),
-        Vec3::new(0.0, 1.0, 0.0),
-        UVec2::new(320, 240),
-    )
-    .unwrap();
+    let camera = support::model_camera(Vec3::new(0.0, 2.0, 9.0), Vec3::new(0.0, 1.0, 0.0), UVec2::new(320, 240));
     let view = camera
         .resolve(&ViewContext { view_id: ViewIds::default().allocate(), frame_index: 1, time_seconds: 0.0 }, &scene)
         .unwrap();

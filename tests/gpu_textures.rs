@@ -41,13 +41,7 @@ fn render(scene: &Scene, path: TexturePath) -> (image::RgbaImage, ResolvedView) 
     let options = RendererOptions { texture_path: Some(path), keep_hdr: true, ..Default::default() };
     let mut renderer = Renderer::new_headless_with(options).unwrap_or_else(|e| panic!("{path:?}: {e}"));
     assert_eq!(renderer.texture_path(), path);
-    let camera = LookAtResolver::new(
-        Camera::perspective(60f32.to_radians(), 0.1, None),
-        Vec3::new(0.0, 0.0, 2.0),
-        Vec3::ZERO,
-        UVec2::new(96, 96),
-    )
-    .unwrap();
+    let camera = support::looking_at_origin(60.0, Vec3::new(0.0, 0.0, 2.0), UVec2::new(96, 96));
     let view = renderer.register_view(camera, standard_render_graph).unwrap();
     renderer.render_frame(scene).unwrap();
     let ctx = ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 };
@@ -215,13 +209,7 @@ fn each_axis_wraps_its_own_way() {
 fn minified_textures_are_filtered_through_their_mip_chain() {
     let linear = Sampling::new(Wrap::Repeat, Filter::Linear);
     let nearest = Sampling::new(Wrap::Repeat, Filter::Nearest);
-    let camera = LookAtResolver::new(
-        Camera::perspective(60f32.to_radians(), 0.1, None),
-        Vec3::new(0.0, 0.0, 6.9),
-        Vec3::ZERO,
-        UVec2::new(96, 96),
-    )
-    .unwrap();
+    let camera = support::looking_at_origin(60.0, Vec3::new(0.0, 0.0, 6.9), UVec2::new(96, 96));
     // The quad covers about 24 × 24 pixels: 256 texels, 64 cells across it.
     let centre = |image: &image::RgbaImage| -> Vec<Rgb> {
         let rgb = |x, y| {
@@ -288,13 +276,7 @@ fn occlusion_textures_dim_ambient_light_but_not_direct_light() {
         );
         scene.set_light(sun, Some(Light::directional(2.0))).unwrap();
         let mut renderer = support::gpu_renderer();
-        let camera = LookAtResolver::new(
-            Camera::perspective(60f32.to_radians(), 0.1, None),
-            Vec3::new(0.0, 0.0, 2.5),
-            Vec3::ZERO,
-            UVec2::new(120, 60),
-        )
-        .unwrap();
+        let camera = support::looking_at_origin(60.0, Vec3::new(0.0, 0.0, 2.5), UVec2::new(120, 60));
         let view = renderer.register_view(camera, standard_render_graph).unwrap();
         renderer.render_frame(&scene).unwrap();
         let image = support::read_lit_color(&renderer, view);

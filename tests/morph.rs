@@ -110,13 +110,7 @@ fn golden_simple_morph_at_two_times() {
     assert!(!import.warnings.iter().any(|w| w.contains("morph")), "{:?}", import.warnings);
     with_sun(&mut scene);
     let animation = &import.animations[0];
-    let resolver = LookAtResolver::new(
-        Camera::perspective(45f32.to_radians(), 0.05, None),
-        Vec3::new(0.5, 0.6, 3.2),
-        Vec3::new(0.5, 0.5, 0.0),
-        UVec2::new(160, 120),
-    )
-    .unwrap();
+    let resolver = support::model_camera(Vec3::new(0.5, 0.6, 3.2), Vec3::new(0.5, 0.5, 0.0), UVec2::new(160, 120));
     let images: Vec<_> = [0.5f32, 1.5]
         .iter()
         .map(|t| {

@@ -35,7 +35,7 @@ fn cube_scene() -> Scene {
 }
 
 fn camera(size: u32) -> LookAtResolver {
-    support::looking_at_origin(40.0, Vec3::new(0.0, 0.4, 3.0), size)
+    support::looking_at_origin(40.0, Vec3::new(0.0, 0.4, 3.0), UVec2::splat(size))
 }
 
 /// The view's linear HDR image, rendered with `msaa`.

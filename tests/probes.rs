@@ -36,7 +36,7 @@ fn metal_sphere_scene(roughness: f32) -> Scene {
 }
 
 fn camera() -> LookAtResolver {
-    support::looking_at_origin(40.0, Vec3::new(0.0, 0.0, 4.0), 128)
+    support::looking_at_origin(40.0, Vec3::new(0.0, 0.0, 4.0), UVec2::splat(128))
 }
 
 #[test]

@@ -729,20 +729,8 @@ fn skinned_and_morphed_meshes_are_traced_in_their_pose() {
         scene.set_light(sun, Some(Light::directional(2.5))).unwrap();
         (scene, import)
     };
-    let rigged_camera = LookAtResolver::new(
-        Camera::perspective(45f32.to_radians(), 0.05, None),
-        Vec3::new(14.0, 1.4, 0.0),
-        Vec3::ZERO,
-        UVec2::new(64, 64),
-    )
-    .unwrap();
-    let morph_camera = LookAtResolver::new(
-        Camera::perspective(45f32.to_radians(), 0.05, None),
-        Vec3::new(0.5, 0.6, 3.2),
-        Vec3::new(0.5, 0.5, 0.0),
-        UVec2::new(64, 48),
-    )
-    .unwrap();
+    let rigged_camera = support::model_camera(Vec3::new(14.0, 1.4, 0.0), Vec3::ZERO, UVec2::new(64, 64));
+    let morph_camera = support::model_camera(Vec3::new(0.5, 0.6, 3.2), Vec3::new(0.5, 0.5, 0.0), UVec2::new(64, 48));
     let mut rows = Vec::new();
     for (file, time, camera) in
         [("RiggedSimple/RiggedSimple.glb", 1.05, rigged_camera), ("SimpleMorph/SimpleMorph.gltf", 1.5, morph_camera)]

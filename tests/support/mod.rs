@@ -108,10 +108,15 @@ pub fn read_lit_color(renderer: &Renderer, view: ViewId) -> RgbaImage {
 }
 
 /// A perspective camera of `fov_degrees` (near plane 0.1, no far plane) at
-/// `eye` looking at the origin, rendering `size`² pixels.
-pub fn looking_at_origin(fov_degrees: f32, eye: Vec3, size: u32) -> LookAtResolver {
-    LookAtResolver::new(Camera::perspective(fov_degrees.to_radians(), 0.1, None), eye, Vec3::ZERO, UVec2::splat(size))
-        .unwrap()
+/// `eye` looking at the origin, rendering `viewport` pixels.
+pub fn looking_at_origin(fov_degrees: f32, eye: Vec3, viewport: UVec2) -> LookAtResolver {
+    LookAtResolver::new(Camera::perspective(fov_degrees.to_radians(), 0.1, None), eye, Vec3::ZERO, viewport).unwrap()
+}
+
+/// The camera the glTF sample models are looked at with: 45°, a near plane
+/// of 0.05 (they are a few units across), no far plane.
+pub fn model_camera(eye: Vec3, target: Vec3, viewport: UVec2) -> LookAtResolver {
+    LookAtResolver::new(Camera::perspective(45f32.to_radians(), 0.05, None), eye, target, viewport).unwrap()
 }
 
 /// The pixel a world point lands on.
