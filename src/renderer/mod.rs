@@ -93,12 +93,27 @@ pub struct Renderer {
     reference: Reference,
     windows: Windows,
     settings: FrameSettings,
-    frame_index: u64,
+    frames: Frames,
+}
+
+/// The frames so far: how many, the clock they are timed by, their GPU
+/// timestamps and what the last one rendered. Only `render_frame` moves it
+/// on; the steps read the `FrameClock` it hands out.
+struct Frames {
+    count: u64,
     started: Instant,
     /// Frame timestamps, where the device has them.
     gpu_timer: Option<gpu_timer::GpuTimer>,
     /// The last frame's views in submission order, with their roles.
-    last_frame: Vec<(ViewId, ViewRole)>,
+    last: Vec<(ViewId, ViewRole)>,
+}
+
+impl Frames {
+    /// The next frame's clock.
+    fn next(&mut self) -> FrameClock {
+        self.count += 1;
+        FrameClock { index: self.count, time_seconds: self.started.elapsed().as_secs_f32() }
+    }
 }
 
 impl Renderer {
@@ -196,10 +211,7 @@ impl Renderer {
                 keep_hdr: options.keep_hdr,
                 specialize_shaders: options.specialize_shaders,
             },
-            frame_index: 0,
-            started: Instant::now(),
-            gpu_timer,
-            last_frame: Vec::new(),
+            frames: Frames { count: 0, started: Instant::now(), gpu_timer, last: Vec::new() },
             gpu,
         })
     }
@@ -208,21 +220,20 @@ impl Renderer {
     /// prepare (ScenePrep, upload, targets), record every view's graph
     /// concurrently and submit in link order, present the windows.
     pub fn render_frame(&mut self, scene: &Scene) -> Result<FrameReport, RenderError> {
-        self.frame_index += 1;
-        let clock = FrameClock { index: self.frame_index, time_seconds: self.started.elapsed().as_secs_f32() };
+        let clock = self.frames.next();
         let _span = info_span!("render_frame", frame = clock.index).entered();
         let started = Instant::now();
         // Lets finished readbacks (frame times, GPU overdraw estimates)
         // report in; never waits.
         let _ = self.gpu.device.poll(wgpu::PollType::Poll);
-        let gpu_seconds = self.gpu_timer.as_mut().and_then(gpu_timer::GpuTimer::collect);
+        let gpu_seconds = self.frames.gpu_timer.as_mut().and_then(gpu_timer::GpuTimer::collect);
         let resolved = self.resolve(scene, clock);
         let prepared = self.prepare(scene, resolved, started)?;
         let recorded = self.record(&prepared)?;
         self.targets.hold(&recorded.rendered);
         let presented = self.present(&recorded);
         let report = FrameReport::new(prepared, recorded, presented, gpu_seconds);
-        self.last_frame = report.views.iter().map(|r| (r.view, r.role)).collect();
+        self.frames.last = report.views.iter().map(|r| (r.view, r.role)).collect();
         Ok(report)
     }
 

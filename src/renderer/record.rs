@@ -291,7 +291,7 @@ impl Renderer {
             buffers.insert(at, prefilter);
         }
         // The frame's GPU time, when the last one has been read back.
-        let timer = self.gpu_timer.as_ref().filter(|t| t.ready());
+        let timer = self.frames.gpu_timer.as_ref().filter(|t| t.ready());
         if let Some(timer) = timer {
             buffers.insert(0, timer.start(&self.gpu.device));
             buffers.push(timer.end(&self.gpu.device));

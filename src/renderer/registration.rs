@@ -81,6 +81,6 @@ impl Renderer {
 
     /// What the views of the last frame were for, in submission order.
     pub fn last_frame_views(&self) -> &[(ViewId, ViewRole)] {
-        &self.last_frame
+        &self.frames.last
     }
 }
