@@ -7,7 +7,7 @@
 
 use std::fmt::Write;
 
-use crate::textures::{heap::WRAP_MODES, location};
+use crate::textures::{location, tables::WRAP_MODES};
 use crate::{INVALID_SLOT, MAX_TEXTURES, RendererConstants};
 
 /// WGSL `const` declarations of [`INVALID_SLOT`], the debug bits of

@@ -12,13 +12,8 @@ use super::location::{binding_array_record, grouped_record};
 use super::mip_chain::{MipLevel, mip_chain, mip_level_count};
 use super::path::{MAX_TEXTURES, TexturePath};
 use super::resample::resample_rgba8;
+use super::tables::{GROUPED_SAMPLERS, GROUPS, SAMPLERS, SIZE_CLASSES, WRAP_MODES};
 use crate::{Allocation, BindlessError, DomainKind, SlotAllocators};
-
-const SIZE_CLASSES: [u32; 3] = [64, 512, 2048];
-/// Grouped path: one array per size class × colour space.
-pub(crate) const GROUPS: usize = SIZE_CLASSES.len() * 2;
-/// Grouped path: the repeat-linear sampler (table entry 0).
-pub(crate) const GROUPED_SAMPLERS: u32 = 1;
 
 fn group_of(class: usize, srgb: bool) -> usize {
     class * 2 + usize::from(!srgb)
@@ -33,19 +28,6 @@ fn group_is_srgb(g: usize) -> bool {
 fn group_mip_levels(g: usize) -> u32 {
     mip_level_count(group_side(g), group_side(g))
 }
-
-/// Wrap modes of the sampler table with their WGSL names, in table order:
-/// entry `index` wraps with `WRAP_MODES[index / 2]`. The grouped path's
-/// shader applies the mode to the coordinate, so its index is emitted into
-/// WGSL (`TEXTURE_WRAP_*`).
-pub(crate) const WRAP_MODES: [(&str, wgpu::AddressMode); 3] = [
-    ("REPEAT", wgpu::AddressMode::Repeat),
-    ("CLAMP", wgpu::AddressMode::ClampToEdge),
-    ("MIRROR", wgpu::AddressMode::MirrorRepeat),
-];
-
-/// Samplers in the table: wrap (repeat, clamp, mirror) × filter (linear, nearest).
-pub const SAMPLERS: u32 = WRAP_MODES.len() as u32 * 2;
 
 /// The sampler of table entry `index` (see [`SAMPLERS`]).
 fn create_sampler(device: &wgpu::Device, index: u32) -> wgpu::Sampler {

@@ -33,8 +33,10 @@ pub(crate) mod location;
 pub(crate) mod mip_chain;
 pub(crate) mod path;
 pub(crate) mod resample;
+pub(crate) mod tables;
 
 pub(crate) use heap::TextureHeap;
-pub use heap::{SAMPLERS, TextureUpload, allocate_texture_slot};
+pub use heap::{TextureUpload, allocate_texture_slot};
 pub use path::{MAX_TEXTURES, TexturePath};
 pub use resample::resample_rgba8;
+pub use tables::SAMPLERS;

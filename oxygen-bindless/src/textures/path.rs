@@ -5,7 +5,7 @@
 //! the heap builds its bind group for it and every mesh shader includes its
 //! [`TexturePath::wgsl`].
 
-use super::heap::{GROUPED_SAMPLERS, GROUPS, SAMPLERS};
+use super::tables::{GROUPED_SAMPLERS, GROUPS, SAMPLERS};
 
 /// Texture slots a binding array holds.
 pub const MAX_TEXTURES: u32 = 256;
