@@ -112,8 +112,15 @@ wgsl_types! {
 /// Declares a struct shared with WGSL once: the Rust struct
 /// (`#[repr(C)]`, `Clone`, `Copy`, `bytemuck::Pod`, `bytemuck::Zeroable`;
 /// add other derives as attributes), a compile-time check of its size, and
-/// its [`GpuStruct`] implementation (WGSL text and layout). Each field's
-/// WGSL type is its Rust type's [`WgslType`], or the literal after `=>`:
+/// its [`GpuStruct`] implementation (WGSL text and layout), and a
+/// [`WgslType`] naming the struct, so another `gpu_struct!` may hold it as
+/// a member (its WGSL declares both: include each struct's text). Each
+/// field's WGSL type is its Rust type's [`WgslType`], or the literal after
+/// `=>` (arrays: `array<vec4<f32>, 2>`, `array<Inner, 5>`; padding
+/// `[u32; N]` as `array<u32, N>` in a storage record, since the Rust array
+/// would otherwise read as a `vecN<u32>` with its 8- or 16-byte alignment;
+/// a uniform block, whose arrays have a 16-byte stride, spells padding as
+/// separate `u32` fields):
 ///
 /// ```
 /// oxygen_gpu::gpu_struct! {
@@ -158,6 +165,11 @@ macro_rules! gpu_struct {
             ::core::mem::size_of::<$name>() == $size,
             concat!("the size of ", stringify!($name), " is not the declared ", stringify!($size), " bytes")
         );
+
+        // A member of another struct's type names the struct in WGSL.
+        impl $crate::WgslType for $name {
+            const WGSL: &'static str = stringify!($name);
+        }
 
         impl $crate::GpuStruct for $name {
             const NAME: &'static str = stringify!($name);
@@ -295,6 +307,17 @@ mod tests {
         }
     }
 
+    crate::gpu_struct! {
+        /// A struct holding another, once and in an array.
+        struct Outer: 240 bytes {
+            first: Sample,
+            flags: u32,
+            /// Padding of a storage record.
+            reserved: [u32; 3] => "array<u32, 3>",
+            rest: [Sample; 1] => "array<Sample, 1>",
+        }
+    }
+
     fn parse(source: &str) -> naga::Module {
         naga::front::wgsl::parse_str(source).unwrap_or_else(|e| panic!("{}", e.emit_to_string(source)))
     }
@@ -308,6 +331,13 @@ mod tests {
         );
         let module = parse(&Sample::wgsl());
         check_layout(&module, &Sample::layout()).expect("same layout");
+    }
+
+    #[test]
+    fn a_struct_member_names_the_struct() {
+        assert!(Outer::wgsl().contains("    first: Sample,\n"), "{}", Outer::wgsl());
+        let module = parse(&(Sample::wgsl() + &Outer::wgsl()));
+        check_layout(&module, &Outer::layout()).expect("same layout");
     }
 
     #[test]
