@@ -13,8 +13,9 @@
 //!   every pass sets once;
 //! * [`TexturePath`]: textures addressed by slot through a binding array
 //!   or, where the device has none, through texture arrays grouped by size;
-//! * [`SceneConstants`]: the per-view uniform block, declared once in Rust
-//!   and once in WGSL ([`SCENE_CONSTANTS_WGSL`]) with the same layout;
+//! * [`SceneConstants`]: the per-view uniform block, declared once
+//!   (`gpu_struct!`: the Rust structs and their generated WGSL twins),
+//!   bound by [`SCENE_CONSTANTS_WGSL`];
 //! * [`wgsl_constants`]: the numbers shaders share with this crate
 //!   (`INVALID_SLOT`, texture-location bit fields, …), generated from their
 //!   Rust definitions rather than copied.

@@ -1,6 +1,7 @@
-//! `SceneConstants`: the per-view uniform block, declared here in Rust and
-//! in [`SCENE_CONSTANTS_WGSL`] for shaders, with the same layout (asserted at
-//! compile time here and by a naga reflection test).
+//! `SceneConstants`: the per-view uniform block, declared once here with
+//! `gpu_struct!`: the Rust structs and their WGSL twins (`GpuStruct::wgsl`),
+//! which shaders include, with [`SCENE_CONSTANTS_WGSL`]'s binding (the shader
+//! registry's layout test compares the two with naga).
 //!
 //! The block has two owners. [`CameraConstants`] belong to the application's
 //! view (matrices, eye); [`RendererConstants`] belong to the renderer (frame
@@ -9,25 +10,26 @@
 
 use std::mem::{offset_of, size_of};
 
-use bytemuck::{Pod, Zeroable};
+use bytemuck::Zeroable;
 use glam::{Mat4, Vec3};
 
 use crate::INVALID_SLOT;
 
-/// The view-owned half: matrices and eye position.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct CameraConstants {
-    /// World → view.
-    pub view: [[f32; 4]; 4],
-    /// View → clip (reverse-Z).
-    pub projection: [[f32; 4]; 4],
-    /// World → clip.
-    pub view_projection: [[f32; 4]; 4],
-    /// Clip → world.
-    pub inverse_view_projection: [[f32; 4]; 4],
-    /// Eye position; `w` is 1.
-    pub camera_position: [f32; 4],
+oxygen_gpu::gpu_struct! {
+    /// The view-owned half: matrices and eye position.
+    #[derive(Debug, PartialEq)]
+    pub struct CameraConstants: 272 bytes {
+        /// World → view.
+        pub view: [[f32; 4]; 4],
+        /// View → clip (reverse-Z).
+        pub projection: [[f32; 4]; 4],
+        /// World → clip.
+        pub view_projection: [[f32; 4]; 4],
+        /// Clip → world.
+        pub inverse_view_projection: [[f32; 4]; 4],
+        /// Eye position; `w` is 1.
+        pub camera_position: [f32; 4],
+    }
 }
 
 impl CameraConstants {
@@ -43,42 +45,48 @@ impl CameraConstants {
     }
 }
 
-/// The renderer-owned half: frame counters and every slot a shader needs.
-/// A slot of [`INVALID_SLOT`] means "absent".
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Pod, Zeroable)]
-pub struct RendererConstants {
-    /// Frame sequence number.
-    pub frame_sequence: u32,
-    /// Application time in seconds, as `f32` bits (kept `u32` so the struct is `Eq`).
-    pub time_seconds_bits: u32,
-    /// First `DrawMetadata` of this view.
-    pub draw_metadata_slot: u32,
-    /// Number of draws of this view.
-    pub draw_count: u32,
-    /// First world matrix of this frame.
-    pub world_transforms_slot: u32,
-    /// First normal matrix of this frame.
-    pub normal_transforms_slot: u32,
-    /// Base of the material domain (material handles index from here).
-    pub materials_slot: u32,
-    /// First directional light of this frame.
-    pub directional_lights_slot: u32,
-    /// Number of directional lights.
-    pub directional_light_count: u32,
-    /// First positional (point/spot) light of this frame.
-    pub positional_lights_slot: u32,
-    /// Number of positional lights.
-    pub positional_light_count: u32,
-    /// Bit 0: the shader checks `DrawMetadata.generation` against
-    /// `draw_metadata_generation` and paints mismatching draws magenta.
-    pub debug_flags: u32,
-    /// Generation of this view's draw-metadata range (debug mode).
-    pub draw_metadata_generation: u32,
-    /// Zero: explicit padding to 64 bytes. WGSL's uniform layout rounds the
-    /// block up to a multiple of 16 (336 bytes) whatever the Rust size, so
-    /// the padding is spelled out here to keep the two layouts equal.
-    pub reserved: [u32; 3],
+oxygen_gpu::gpu_struct! {
+    /// The renderer-owned half: frame counters and every slot a shader needs.
+    /// A slot of [`INVALID_SLOT`] means "absent".
+    #[derive(Debug, PartialEq, Eq)]
+    pub struct RendererConstants: 64 bytes {
+        /// Frame sequence number.
+        pub frame_sequence: u32,
+        /// Application time in seconds, as `f32` bits (kept `u32` so the struct is `Eq`).
+        pub time_seconds_bits: u32,
+        /// First `DrawMetadata` of this view.
+        pub draw_metadata_slot: u32,
+        /// Number of draws of this view.
+        pub draw_count: u32,
+        /// First world matrix of this frame.
+        pub world_transforms_slot: u32,
+        /// First normal matrix of this frame.
+        pub normal_transforms_slot: u32,
+        /// Base of the material domain (material handles index from here).
+        pub materials_slot: u32,
+        /// First directional light of this frame.
+        pub directional_lights_slot: u32,
+        /// Number of directional lights.
+        pub directional_light_count: u32,
+        /// First positional (point/spot) light of this frame.
+        pub positional_lights_slot: u32,
+        /// Number of positional lights.
+        pub positional_light_count: u32,
+        /// Bit 0: the shader checks `DrawMetadata.generation` against
+        /// `draw_metadata_generation` and paints mismatching draws magenta.
+        pub debug_flags: u32,
+        /// Generation of this view's draw-metadata range (debug mode).
+        pub draw_metadata_generation: u32,
+        /// Zero: explicit padding to 64 bytes. WGSL's uniform layout rounds the
+        /// block up to a multiple of 16 (336 bytes) whatever the Rust size, so
+        /// the padding is spelled out to keep the two layouts equal, as three
+        /// `u32`s (a uniform array's stride is 16 bytes).
+        pub reserved0: u32,
+        /// Zero.
+        pub reserved1: u32,
+        /// Zero.
+        pub reserved2: u32,
+    }
 }
 
 impl RendererConstants {
@@ -102,34 +110,37 @@ impl Default for RendererConstants {
             positional_light_count: 0,
             debug_flags: 0,
             draw_metadata_generation: 0,
-            reserved: [0; 3],
+            reserved0: 0,
+            reserved1: 0,
+            reserved2: 0,
         }
     }
 }
 
-/// The whole uniform block (336 bytes).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct SceneConstants {
-    /// View-owned half.
-    pub camera: CameraConstants,
-    /// Renderer-owned half.
-    pub renderer: RendererConstants,
+oxygen_gpu::gpu_struct! {
+    /// The whole uniform block.
+    #[derive(Debug, PartialEq)]
+    pub struct SceneConstants: 336 bytes {
+        /// View-owned half.
+        pub camera: CameraConstants,
+        /// Renderer-owned half.
+        pub renderer: RendererConstants,
+    }
 }
 
 const _: () = {
-    assert!(size_of::<CameraConstants>() == 272);
-    assert!(size_of::<RendererConstants>() == 64);
-    assert!(size_of::<SceneConstants>() == 336);
     assert!(offset_of!(SceneConstants, renderer) == 272);
     assert!(offset_of!(CameraConstants, camera_position) == 256);
     assert!(offset_of!(RendererConstants, draw_metadata_slot) == 8);
     assert!(offset_of!(RendererConstants, debug_flags) == 44);
     assert!(offset_of!(RendererConstants, draw_metadata_generation) == 48);
-    assert!(offset_of!(RendererConstants, reserved) == 52);
+    assert!(offset_of!(RendererConstants, reserved0) == 52);
 };
 
-/// The WGSL twin of [`SceneConstants`] and its binding (group 1, binding 0).
+/// The binding of [`SceneConstants`] (group 1, binding 0), including the
+/// WGSL twins of the three structs generated from their Rust declarations
+/// (the shader registry names them `bindless/CameraConstants`,
+/// `bindless/RendererConstants` and `bindless/SceneConstants`).
 pub const SCENE_CONSTANTS_WGSL: &str = include_str!("scene_constants.wgsl");
 
 /// A view's uniform buffer holding [`SceneConstants`], with its bind group.

@@ -254,7 +254,9 @@ impl PreparedSceneFrame {
             positional_light_count: s.positional_lights.count,
             debug_flags: if self.debug_generations { RendererConstants::DEBUG_GENERATIONS } else { 0 },
             draw_metadata_generation: s.draw_metadata.generation(),
-            reserved: [0; 3],
+            reserved0: 0,
+            reserved1: 0,
+            reserved2: 0,
         }
     }
 

@@ -47,6 +47,9 @@ pub(crate) static SOURCES: &[Source] = &[
     Source::wgsl("post/tonemap.wgsl", include_str!("../post/tonemap.wgsl")),
     // oxygen-bindless: the heap's declarations.
     Source::generated("bindless/constants", oxygen_bindless::wgsl_constants),
+    Source::gpu_struct::<oxygen_bindless::CameraConstants>("bindless/CameraConstants"),
+    Source::gpu_struct::<oxygen_bindless::RendererConstants>("bindless/RendererConstants"),
+    Source::gpu_struct::<oxygen_bindless::SceneConstants>("bindless/SceneConstants"),
     Source::wgsl("bindless/scene_constants.wgsl", oxygen_bindless::SCENE_CONSTANTS_WGSL),
     Source::generated("bindless/domains", DomainKind::wgsl_bindings),
     Source::generated(BINDING_ARRAY, || format!("enable wgpu_binding_array;\n{}", TexturePath::BindingArray.wgsl())),
