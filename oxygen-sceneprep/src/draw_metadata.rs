@@ -2,55 +2,55 @@
 
 use std::mem::{offset_of, size_of};
 
-use bytemuck::{Pod, Zeroable};
 use oxygen_bindless::DomainKind;
 
-/// One draw, as stored in the draw-metadata domain and read by the vertex
-/// shader through `draw_metadata_domain[scene.renderer.draw_metadata_slot + instance_index]`.
-///
-/// Exactly 64 bytes (asserted at compile time, and against its WGSL twin in
-/// `gpu_records.wgsl` by a naga test).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
-pub struct DrawMetadata {
-    /// First vertex of the geometry in the vertex domain.
-    pub vertex_slot: u32,
-    /// First index of the geometry in the index domain.
-    pub index_slot: u32,
-    /// First index of the submesh, relative to `index_slot`.
-    pub first_index: u32,
-    /// Number of indices drawn.
-    pub index_count: u32,
-    /// Added to every index value, relative to `vertex_slot`.
-    pub base_vertex: i32,
-    /// Instances drawn (1 until instancing lands).
-    pub instance_count: u32,
-    /// World/normal matrix, relative to the frame's transform slots.
-    pub transform_index: u32,
-    /// Material, relative to the material domain base.
-    pub material_handle: u32,
-    /// [`crate::PassMask`] bits.
-    pub pass_mask: u32,
-    /// Stable node id (slot index), for debugging and picking.
-    pub node_id: u32,
-    /// Submesh number within the geometry.
-    pub submesh: u32,
-    /// The draw-metadata range's generation when the renderer checks
-    /// generations (debug mode), else zero.
-    pub generation: u32,
-    /// First attribute record (colour, second UV set) of the geometry in
-    /// the vertex domain, parallel to its vertices; [`oxygen_bindless::INVALID_SLOT`]
-    /// when the geometry has none.
-    pub attributes_slot: u32,
-    /// First skin record (joints, weights) of the geometry in the vertex
-    /// domain, parallel to its vertices; `INVALID_SLOT` for a rigid draw.
-    pub skin_slot: u32,
-    /// A skinned draw's first joint matrix, relative to the frame's
-    /// transform slots (joint `i` at `joint_base + i`).
-    pub joint_base: u32,
-    /// A morphed draw's morph header (weights) relative to the frame's
-    /// transform slots; `INVALID_SLOT` without morph targets.
-    pub morph_base: u32,
+oxygen_gpu::gpu_struct! {
+    /// One draw, as stored in the draw-metadata domain and read by the vertex
+    /// shader through `draw_metadata_domain[scene.renderer.draw_metadata_slot + instance_index]`.
+    ///
+    /// Exactly 64 bytes (asserted at compile time); its WGSL twin is
+    /// generated from this declaration.
+    #[derive(Debug, Default, PartialEq, Eq)]
+    pub struct DrawMetadata: 64 bytes {
+        /// First vertex of the geometry in the vertex domain.
+        pub vertex_slot: u32,
+        /// First index of the geometry in the index domain.
+        pub index_slot: u32,
+        /// First index of the submesh, relative to `index_slot`.
+        pub first_index: u32,
+        /// Number of indices drawn.
+        pub index_count: u32,
+        /// Added to every index value, relative to `vertex_slot`.
+        pub base_vertex: i32,
+        /// Instances drawn (1 until instancing lands).
+        pub instance_count: u32,
+        /// World/normal matrix, relative to the frame's transform slots.
+        pub transform_index: u32,
+        /// Material, relative to the material domain base.
+        pub material_handle: u32,
+        /// [`crate::PassMask`] bits.
+        pub pass_mask: u32,
+        /// Stable node id (slot index), for debugging and picking.
+        pub node_id: u32,
+        /// Submesh number within the geometry.
+        pub submesh: u32,
+        /// The draw-metadata range's generation when the renderer checks
+        /// generations (debug mode), else zero.
+        pub generation: u32,
+        /// First attribute record (colour, second UV set) of the geometry in
+        /// the vertex domain, parallel to its vertices; [`oxygen_bindless::INVALID_SLOT`]
+        /// when the geometry has none.
+        pub attributes_slot: u32,
+        /// First skin record (joints, weights) of the geometry in the vertex
+        /// domain, parallel to its vertices; `INVALID_SLOT` for a rigid draw.
+        pub skin_slot: u32,
+        /// A skinned draw's first joint matrix, relative to the frame's
+        /// transform slots (joint `i` at `joint_base + i`).
+        pub joint_base: u32,
+        /// A morphed draw's morph header (weights) relative to the frame's
+        /// transform slots; `INVALID_SLOT` without morph targets.
+        pub morph_base: u32,
+    }
 }
 
 const _: () = {
@@ -92,23 +92,24 @@ impl DrawMetadata {
     }
 }
 
-/// The arguments of one indexed draw as `multi_draw_indexed_indirect` reads
-/// them (wgpu's `DrawIndexedIndirectArgs` layout), written by the CPU in
-/// finalization, parallel to the view's [`DrawMetadata`].
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
-pub struct DrawIndexedIndirect {
-    /// Indices drawn.
-    pub index_count: u32,
-    /// Instances drawn.
-    pub instance_count: u32,
-    /// Absolute first index in the shared index buffer.
-    pub first_index: u32,
-    /// Absolute base vertex.
-    pub base_vertex: i32,
-    /// The draw's position in the view's array: how the shader finds its
-    /// `DrawMetadata` (needs `INDIRECT_FIRST_INSTANCE`).
-    pub first_instance: u32,
+oxygen_gpu::gpu_struct! {
+    /// The arguments of one indexed draw as `multi_draw_indexed_indirect` reads
+    /// them (wgpu's `DrawIndexedIndirectArgs` layout), written by the CPU in
+    /// finalization, parallel to the view's [`DrawMetadata`].
+    #[derive(Debug, Default, PartialEq, Eq)]
+    pub struct DrawIndexedIndirect: 20 bytes {
+        /// Indices drawn.
+        pub index_count: u32,
+        /// Instances drawn.
+        pub instance_count: u32,
+        /// Absolute first index in the shared index buffer.
+        pub first_index: u32,
+        /// Absolute base vertex.
+        pub base_vertex: i32,
+        /// The draw's position in the view's array: how the shader finds its
+        /// `DrawMetadata` (needs `INDIRECT_FIRST_INSTANCE`).
+        pub first_instance: u32,
+    }
 }
 
 const _: () = assert!(size_of::<DrawIndexedIndirect>() as u64 == DomainKind::IndirectArgs.record_size());

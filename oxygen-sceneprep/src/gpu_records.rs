@@ -1,5 +1,7 @@
-//! GPU records of the material, light and transform domains, with their WGSL
-//! twins in `gpu_records.wgsl` (checked by a naga reflection test).
+//! GPU records of the material, light and transform domains, each declared
+//! once with `gpu_struct!`: its WGSL twin is generated from the Rust struct
+//! (`gpu_records.wgsl` includes them; the shader registry's layout test
+//! compares the two through naga).
 
 use std::mem::{offset_of, size_of};
 
@@ -8,8 +10,9 @@ use glam::Mat3;
 use oxygen_bindless::{DomainKind, INVALID_SLOT};
 use oxygen_core::{AlphaMode, Material, Vertex};
 
-/// WGSL declarations of `DrawMetadata`, `MaterialRecord`, the light records
-/// and `VertexRecord`.
+/// The WGSL the scene's records share: the include lines of the generated
+/// records (`DrawMetadata`, `MaterialRecord`, the light records, the ray
+/// scene's), `apply_uv_transform` and `VertexRecord`.
 pub const GPU_RECORDS_WGSL: &str = include_str!("gpu_records.wgsl");
 
 /// A normal matrix as WGSL `mat3x3<f32>` stores it: three columns padded to 16 bytes.
@@ -63,19 +66,20 @@ fn wgsl_constant(name: &str, value: u32) -> String {
     format!("const {name}: u32 = {value:#x}u;\n")
 }
 
-/// A texture's coordinate set and transform as shaders read it (32 bytes):
-/// `uv' = (dot(row0, (u, v, 1)), dot(row1, (u, v, 1)))` of set `uv_set`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct UvTransformRecord {
-    /// First row of the affine map.
-    pub row0: [f32; 3],
-    /// Texture coordinate set, 0 or 1.
-    pub uv_set: u32,
-    /// Second row of the affine map.
-    pub row1: [f32; 3],
-    /// Zero.
-    pub reserved: u32,
+oxygen_gpu::gpu_struct! {
+    /// A texture's coordinate set and transform as shaders read it (32 bytes):
+    /// `uv' = (dot(row0, (u, v, 1)), dot(row1, (u, v, 1)))` of set `uv_set`.
+    #[derive(Debug, PartialEq)]
+    pub struct UvTransformRecord: 32 bytes {
+        /// First row of the affine map.
+        pub row0: [f32; 3],
+        /// Texture coordinate set, 0 or 1.
+        pub uv_set: u32,
+        /// Second row of the affine map.
+        pub row1: [f32; 3],
+        /// Zero.
+        pub reserved: u32,
+    }
 }
 
 impl UvTransformRecord {
@@ -86,43 +90,44 @@ impl UvTransformRecord {
     }
 }
 
-/// A material as shaders read it (240 bytes). Texture fields are slots in
-/// the texture-locations domain, [`INVALID_SLOT`] when absent.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct MaterialRecord {
-    /// Linear RGBA base colour factor.
-    pub base_color: [f32; 4],
-    /// Linear emissive factor.
-    pub emissive: [f32; 3],
-    /// Normal-map XY scale.
-    pub normal_scale: f32,
-    /// Metallic factor.
-    pub metallic: f32,
-    /// Roughness factor.
-    pub roughness: f32,
-    /// Alpha cutoff (only read when masked).
-    pub alpha_cutoff: f32,
-    /// [`material_flags`] bits.
-    pub flags: u32,
-    /// Base-colour texture slot.
-    pub base_color_texture: u32,
-    /// Metallic-roughness texture slot.
-    pub metallic_roughness_texture: u32,
-    /// Normal-map slot.
-    pub normal_texture: u32,
-    /// Emissive texture slot.
-    pub emissive_texture: u32,
-    /// Ambient-occlusion texture slot.
-    pub occlusion_texture: u32,
-    /// Ambient-occlusion strength in `[0, 1]`.
-    pub occlusion_strength: f32,
-    /// Zero.
-    pub reserved: [u32; 2],
-    /// Coordinate set and transform of each texture, in the order base
-    /// colour, metallic-roughness, normal, emissive, occlusion; read only
-    /// when `flags` has [`material_flags::UV_TRANSFORMS`].
-    pub uv_transforms: [UvTransformRecord; 5],
+oxygen_gpu::gpu_struct! {
+    /// A material as shaders read it (240 bytes). Texture fields are slots in
+    /// the texture-locations domain, [`INVALID_SLOT`] when absent.
+    #[derive(Debug, PartialEq)]
+    pub struct MaterialRecord: 240 bytes {
+        /// Linear RGBA base colour factor.
+        pub base_color: [f32; 4],
+        /// Linear emissive factor.
+        pub emissive: [f32; 3],
+        /// Normal-map XY scale.
+        pub normal_scale: f32,
+        /// Metallic factor.
+        pub metallic: f32,
+        /// Roughness factor.
+        pub roughness: f32,
+        /// Alpha cutoff (only read when masked).
+        pub alpha_cutoff: f32,
+        /// [`material_flags`] bits.
+        pub flags: u32,
+        /// Base-colour texture slot.
+        pub base_color_texture: u32,
+        /// Metallic-roughness texture slot.
+        pub metallic_roughness_texture: u32,
+        /// Normal-map slot.
+        pub normal_texture: u32,
+        /// Emissive texture slot.
+        pub emissive_texture: u32,
+        /// Ambient-occlusion texture slot.
+        pub occlusion_texture: u32,
+        /// Ambient-occlusion strength in `[0, 1]`.
+        pub occlusion_strength: f32,
+        /// Zero.
+        pub reserved: [u32; 2] => "array<u32, 2>",
+        /// Coordinate set and transform of each texture, in the order base
+        /// colour, metallic-roughness, normal, emissive, occlusion; read only
+        /// when `flags` has [`material_flags::UV_TRANSFORMS`].
+        pub uv_transforms: [UvTransformRecord; 5] => "array<UvTransformRecord, 5>",
+    }
 }
 
 impl MaterialRecord {
@@ -169,50 +174,52 @@ impl MaterialRecord {
     }
 }
 
-/// A directional light as shaders read it (48 bytes).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct DirectionalLightRecord {
-    /// Unit direction the light travels (world space).
-    pub direction: [f32; 3],
-    /// Illuminance in lux.
-    pub intensity: f32,
-    /// Linear RGB colour.
-    pub color: [f32; 3],
-    /// Bit 0: casts shadows.
-    pub flags: u32,
-    /// Shadow data slot, [`INVALID_SLOT`] when none.
-    pub shadow_slot: u32,
-    /// Zero.
-    pub reserved: [u32; 3],
+oxygen_gpu::gpu_struct! {
+    /// A directional light as shaders read it (48 bytes).
+    #[derive(Debug, PartialEq)]
+    pub struct DirectionalLightRecord: 48 bytes {
+        /// Unit direction the light travels (world space).
+        pub direction: [f32; 3],
+        /// Illuminance in lux.
+        pub intensity: f32,
+        /// Linear RGB colour.
+        pub color: [f32; 3],
+        /// Bit 0: casts shadows.
+        pub flags: u32,
+        /// Shadow data slot, [`INVALID_SLOT`] when none.
+        pub shadow_slot: u32,
+        /// Zero.
+        pub reserved: [u32; 3] => "array<u32, 3>",
+    }
 }
 
-/// A point or spot light as shaders read it (64 bytes).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct PositionalLightRecord {
-    /// World position.
-    pub position: [f32; 3],
-    /// Cut-off range; 0 means unbounded.
-    pub range: f32,
-    /// Unit direction of a spot's axis (world space).
-    pub direction: [f32; 3],
-    /// Luminous intensity in candela.
-    pub intensity: f32,
-    /// Linear RGB colour.
-    pub color: [f32; 3],
-    /// 0 point, 1 spot.
-    pub kind: u32,
-    /// Cosine of the inner cone angle (spot).
-    pub cos_inner: f32,
-    /// Cosine of the outer cone angle (spot).
-    pub cos_outer: f32,
-    /// Bit 0: casts shadows.
-    pub flags: u32,
-    /// First tile of the light's shadow maps in the local-light shadow
-    /// atlas (a spot has one tile, a point light six, one per cube face in
-    /// `PROBE_FACE_AXES` order); [`INVALID_SLOT`] when it casts none.
-    pub shadow_slot: u32,
+oxygen_gpu::gpu_struct! {
+    /// A point or spot light as shaders read it (64 bytes).
+    #[derive(Debug, PartialEq)]
+    pub struct PositionalLightRecord: 64 bytes {
+        /// World position.
+        pub position: [f32; 3],
+        /// Cut-off range; 0 means unbounded.
+        pub range: f32,
+        /// Unit direction of a spot's axis (world space).
+        pub direction: [f32; 3],
+        /// Luminous intensity in candela.
+        pub intensity: f32,
+        /// Linear RGB colour.
+        pub color: [f32; 3],
+        /// 0 point, 1 spot.
+        pub kind: u32,
+        /// Cosine of the inner cone angle (spot).
+        pub cos_inner: f32,
+        /// Cosine of the outer cone angle (spot).
+        pub cos_outer: f32,
+        /// Bit 0: casts shadows.
+        pub flags: u32,
+        /// First tile of the light's shadow maps in the local-light shadow
+        /// atlas (a spot has one tile, a point light six, one per cube face in
+        /// `PROBE_FACE_AXES` order); [`INVALID_SLOT`] when it casts none.
+        pub shadow_slot: u32,
+    }
 }
 
 /// Tiles of the local-light shadow atlas: a shadow-casting spot takes one, a

@@ -5,7 +5,6 @@
 use std::collections::HashMap;
 use std::ops::Range;
 
-use bytemuck::{Pod, Zeroable};
 use oxygen_core::{NodeFlags, Scene};
 use tracing::info_span;
 
@@ -49,37 +48,38 @@ impl Visibility {
     }
 }
 
-/// One opaque or masked submesh of one renderable, as the cull shader reads
-/// it (80 bytes).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct GpuInstance {
-    /// World AABB minimum (absolute world space, as the CPU culls).
-    pub aabb_min: [f32; 3],
-    /// Group drawn at full detail.
-    pub group: u32,
-    /// World AABB maximum.
-    pub aabb_max: [f32; 3],
-    /// [`GpuInstance::CASTS_SHADOWS`].
-    pub flags: u32,
-    /// Bounding sphere: centre and radius (LOD selection).
-    pub sphere: [f32; 4],
-    /// Transform index (relative to the frame's transform slots).
-    pub transform_index: u32,
-    /// Stable node id.
-    pub node_id: u32,
-    /// Submesh number.
-    pub submesh: u32,
-    /// First LOD of the instance in [`GpuScene::lods`].
-    pub lod_first: u32,
-    /// Its LOD count (0: none).
-    pub lod_count: u32,
-    /// A skinned instance's first joint matrix, `INVALID_SLOT` when rigid.
-    pub joint_base: u32,
-    /// Its mesh's skin records, `INVALID_SLOT` when rigid.
-    pub skin_slot: u32,
-    /// Its morph header, `INVALID_SLOT` without morph targets.
-    pub morph_base: u32,
+oxygen_gpu::gpu_struct! {
+    /// One opaque or masked submesh of one renderable, as the cull shader reads
+    /// it (80 bytes).
+    #[derive(Debug, Default, PartialEq)]
+    pub struct GpuInstance: 80 bytes {
+        /// World AABB minimum (absolute world space, as the CPU culls).
+        pub aabb_min: [f32; 3],
+        /// Group drawn at full detail.
+        pub group: u32,
+        /// World AABB maximum.
+        pub aabb_max: [f32; 3],
+        /// [`GpuInstance::CASTS_SHADOWS`].
+        pub flags: u32,
+        /// Bounding sphere: centre and radius (LOD selection).
+        pub sphere: [f32; 4],
+        /// Transform index (relative to the frame's transform slots).
+        pub transform_index: u32,
+        /// Stable node id.
+        pub node_id: u32,
+        /// Submesh number.
+        pub submesh: u32,
+        /// First LOD of the instance in [`GpuScene::lods`].
+        pub lod_first: u32,
+        /// Its LOD count (0: none).
+        pub lod_count: u32,
+        /// A skinned instance's first joint matrix, `INVALID_SLOT` when rigid.
+        pub joint_base: u32,
+        /// Its mesh's skin records, `INVALID_SLOT` when rigid.
+        pub skin_slot: u32,
+        /// Its morph header, `INVALID_SLOT` without morph targets.
+        pub morph_base: u32,
+    }
 }
 
 impl GpuInstance {
@@ -87,47 +87,49 @@ impl GpuInstance {
     pub const CASTS_SHADOWS: u32 = 1;
 }
 
-/// Draws that share a mesh range, material and pass mask: one instanced
-/// command per command list (48 bytes).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
-pub struct GpuGroup {
-    /// First vertex of the mesh in the vertex domain.
-    pub vertex_slot: u32,
-    /// First index of the mesh in the index domain.
-    pub index_slot: u32,
-    /// First index of the submesh, relative to `index_slot`.
-    pub first_index: u32,
-    /// Indices drawn.
-    pub index_count: u32,
-    /// Added to every index (relative to `vertex_slot`).
-    pub base_vertex: i32,
-    /// Material handle.
-    pub material: u32,
-    /// Pass mask of its draws.
-    pub pass_mask: u32,
-    /// Its partition's first command (relative to a command list).
-    pub command_base: u32,
-    /// Its first draw (relative to the view's draw range).
-    pub draw_base: u32,
-    /// Its partition.
-    pub partition: u32,
-    /// Instances that may select it: its room in the draw range.
-    pub capacity: u32,
-    /// The mesh's attribute records in the vertex domain (colour, second
-    /// UV set), [`oxygen_bindless::INVALID_SLOT`] when it has none.
-    pub attributes_slot: u32,
+oxygen_gpu::gpu_struct! {
+    /// Draws that share a mesh range, material and pass mask: one instanced
+    /// command per command list (48 bytes).
+    #[derive(Debug, Default, PartialEq, Eq)]
+    pub struct GpuGroup: 48 bytes {
+        /// First vertex of the mesh in the vertex domain.
+        pub vertex_slot: u32,
+        /// First index of the mesh in the index domain.
+        pub index_slot: u32,
+        /// First index of the submesh, relative to `index_slot`.
+        pub first_index: u32,
+        /// Indices drawn.
+        pub index_count: u32,
+        /// Added to every index (relative to `vertex_slot`).
+        pub base_vertex: i32,
+        /// Material handle.
+        pub material: u32,
+        /// Pass mask of its draws.
+        pub pass_mask: u32,
+        /// Its partition's first command (relative to a command list).
+        pub command_base: u32,
+        /// Its first draw (relative to the view's draw range).
+        pub draw_base: u32,
+        /// Its partition.
+        pub partition_index: u32,
+        /// Instances that may select it: its room in the draw range.
+        pub capacity: u32,
+        /// The mesh's attribute records in the vertex domain (colour, second
+        /// UV set), [`oxygen_bindless::INVALID_SLOT`] when it has none.
+        pub attributes_slot: u32,
+    }
 }
 
-/// One LOD level of an instance: used below a projected size (8 bytes).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct GpuLod {
-    /// Used when the sphere's projected diameter (× LOD bias) is below this
-    /// fraction of the viewport height.
-    pub below_screen_fraction: f32,
-    /// The group drawn at this level.
-    pub group: u32,
+oxygen_gpu::gpu_struct! {
+    /// One LOD level of an instance: used below a projected size (8 bytes).
+    #[derive(Debug, Default, PartialEq)]
+    pub struct GpuLod: 8 bytes {
+        /// Used when the sphere's projected diameter (× LOD bias) is below this
+        /// fraction of the viewport height.
+        pub below_screen_fraction: f32,
+        /// The group drawn at this level.
+        pub group: u32,
+    }
 }
 
 /// A run of groups with one pass class and variant.
@@ -371,7 +373,7 @@ impl GpuScene {
                 pass_mask: mask,
                 command_base: self.partitions[partition as usize].groups.start,
                 draw_base,
-                partition,
+                partition_index: partition,
                 capacity,
                 attributes_slot: attributes_of.get(&vertex_slot).copied().unwrap_or(oxygen_bindless::INVALID_SLOT),
             });

@@ -249,8 +249,8 @@ fn trace(ray: Ray, t_max: f32, any: bool, salt: u32) -> Hit {
             let instance_index = ray_word_domain[params.word_base + node.first + k];
             let instance = ray_instance_domain[params.instance_base + instance_index];
             // The ray in the instance's own space: an affine map keeps t.
-            let m = mat3x3<f32>(instance.inverse_row0.xyz, instance.inverse_row1.xyz, instance.inverse_row2.xyz);
-            let translation = vec3<f32>(instance.inverse_row0.w, instance.inverse_row1.w, instance.inverse_row2.w);
+            let m = mat3x3<f32>(instance.inverse_rows[0].xyz, instance.inverse_rows[1].xyz, instance.inverse_rows[2].xyz);
+            let translation = vec3<f32>(instance.inverse_rows[0].w, instance.inverse_rows[1].w, instance.inverse_rows[2].w);
             let origin = ray.origin * m + translation;
             let dir = ray.dir * m;
             let local_inv = safe_inverse(dir);

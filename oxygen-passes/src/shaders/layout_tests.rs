@@ -1,61 +1,38 @@
 //! Every struct shared with WGSL has its Rust layout in the shaders that
 //! read it: each composed module parsed with naga, each member's offset and
 //! size and the struct's size compared with the Rust declaration. The
-//! crate's structs are the registry's `gpu_struct!` sources, walked here
-//! (one the shaders never include fails too); ScenePrep's GPU scene
-//! records, which the cull shader declares by hand, are compared through
-//! layouts written beside them.
+//! structs are the registry's `gpu_struct!` sources, walked here (one the
+//! shaders never include fails too): this crate's, oxygen-bindless' scene
+//! constants, ScenePrep's records. The one record still written by hand,
+//! `VertexRecord` (oxygen-core's `Vertex` as scalars), is compared through
+//! a layout written beside it.
 
-use oxygen_gpu::{StructLayout, check_layout, gpu_layout};
-use oxygen_sceneprep::DrawIndexedIndirect;
-use oxygen_sceneprep::{GpuGroup, GpuInstance, GpuLod};
+use std::mem::{offset_of, size_of};
+
+use oxygen_core::Vertex;
+use oxygen_gpu::{FieldLayout, StructLayout, check_layout};
 
 use super::compose::SourceText;
 use super::registry::SOURCES;
 use super::validate_tests::composed_modules;
 
-/// The records the cull shader declares by hand, with the Rust structs
-/// ScenePrep fills.
+/// The records the shaders declare by hand, with the Rust structs they
+/// mirror: `VertexRecord` spells `Vertex`'s vectors as scalars (a `vec3`
+/// member would be 16-byte aligned and break the 32-byte stride).
 fn hand_written_twins() -> Vec<StructLayout> {
-    vec![
-        gpu_layout!(GpuInstance {
-            aabb_min,
-            group,
-            aabb_max,
-            flags,
-            sphere,
-            transform_index,
-            node_id,
-            submesh,
-            lod_first,
-            lod_count,
-            joint_base,
-            skin_slot,
-            morph_base
-        }),
-        gpu_layout!(GpuGroup {
-            vertex_slot,
-            index_slot,
-            first_index,
-            index_count,
-            base_vertex,
-            material,
-            pass_mask,
-            command_base,
-            draw_base,
-            partition => "partition_index",
-            capacity,
-            attributes_slot
-        }),
-        gpu_layout!(GpuLod { below_screen_fraction, group }),
-        gpu_layout!(DrawIndexedIndirect as "Command" {
-            index_count,
-            instance_count,
-            first_index,
-            base_vertex,
-            first_instance
-        }),
-    ]
+    let scalars = |names: [&'static str; 3], offset: usize| {
+        names.into_iter().enumerate().map(move |(i, name)| FieldLayout {
+            name,
+            offset: offset + 4 * i,
+            size: 4,
+            wgsl_type: "",
+        })
+    };
+    let fields = scalars(["px", "py", "pz"], offset_of!(Vertex, position))
+        .chain(scalars(["nx", "ny", "nz"], offset_of!(Vertex, normal)))
+        .chain(scalars(["u", "v", ""], offset_of!(Vertex, uv)).take(2))
+        .collect();
+    vec![StructLayout { name: "VertexRecord", size: size_of::<Vertex>(), fields }]
 }
 
 #[test]

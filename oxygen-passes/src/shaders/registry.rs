@@ -54,7 +54,19 @@ pub(crate) static SOURCES: &[Source] = &[
     Source::generated("bindless/domains", DomainKind::wgsl_bindings),
     Source::generated(BINDING_ARRAY, || format!("enable wgpu_binding_array;\n{}", TexturePath::BindingArray.wgsl())),
     Source::generated(GROUPED_ARRAYS, || TexturePath::GroupedArrays.wgsl()),
-    // oxygen-sceneprep: the GPU records and their numbers.
+    // oxygen-sceneprep: the GPU records (the scene's, the GPU scene's, the
+    // ray scene's) and their numbers.
+    Source::gpu_struct::<oxygen_sceneprep::DrawMetadata>("sceneprep/DrawMetadata"),
+    Source::gpu_struct::<oxygen_sceneprep::UvTransformRecord>("sceneprep/UvTransformRecord"),
+    Source::gpu_struct::<oxygen_sceneprep::MaterialRecord>("sceneprep/MaterialRecord"),
+    Source::gpu_struct::<oxygen_sceneprep::DirectionalLightRecord>("sceneprep/DirectionalLightRecord"),
+    Source::gpu_struct::<oxygen_sceneprep::PositionalLightRecord>("sceneprep/PositionalLightRecord"),
+    Source::gpu_struct::<oxygen_sceneprep::GpuInstance>("sceneprep/GpuInstance"),
+    Source::gpu_struct::<oxygen_sceneprep::GpuGroup>("sceneprep/GpuGroup"),
+    Source::gpu_struct::<oxygen_sceneprep::GpuLod>("sceneprep/GpuLod"),
+    Source::gpu_struct::<oxygen_sceneprep::DrawIndexedIndirect>("sceneprep/DrawIndexedIndirect"),
+    Source::gpu_struct::<oxygen_sceneprep::ray::BvhNode>("sceneprep/BvhNode"),
+    Source::gpu_struct::<oxygen_sceneprep::RayInstance>("sceneprep/RayInstance"),
     Source::wgsl("sceneprep/gpu_records.wgsl", oxygen_sceneprep::GPU_RECORDS_WGSL),
     Source::generated("sceneprep/constants", || {
         [

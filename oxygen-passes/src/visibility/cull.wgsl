@@ -7,50 +7,12 @@
 #include "visibility/constants"
 #include "visibility/CullParams"
 #include "visibility/hiz_test.wgsl"
-
-struct GpuInstance {
-    aabb_min: vec3<f32>,
-    group: u32,
-    aabb_max: vec3<f32>,
-    flags: u32,
-    sphere: vec4<f32>,
-    transform_index: u32,
-    node_id: u32,
-    submesh: u32,
-    lod_first: u32,
-    lod_count: u32,
-    joint_base: u32,
-    skin_slot: u32,
-    morph_base: u32,
-}
-
-struct GpuGroup {
-    vertex_slot: u32,
-    index_slot: u32,
-    first_index: u32,
-    index_count: u32,
-    base_vertex: i32,
-    material: u32,
-    pass_mask: u32,
-    command_base: u32,
-    draw_base: u32,
-    partition_index: u32,
-    capacity: u32,
-    attributes_slot: u32,
-}
-
-struct GpuLod {
-    below_screen_fraction: f32,
-    group: u32,
-}
-
-struct Command {
-    index_count: u32,
-    instance_count: u32,
-    first_index: u32,
-    base_vertex: i32,
-    first_instance: u32,
-}
+// The GPU scene's records and the indirect commands, generated from their
+// Rust declarations in oxygen-sceneprep.
+#include "sceneprep/GpuInstance"
+#include "sceneprep/GpuGroup"
+#include "sceneprep/GpuLod"
+#include "sceneprep/DrawIndexedIndirect"
 
 @group(0) @binding(0) var<uniform> params: CullParams;
 @group(0) @binding(1) var<storage, read> instances: array<GpuInstance>;
@@ -59,7 +21,7 @@ struct Command {
 @group(0) @binding(4) var<storage, read_write> counts: array<atomic<u32>>;
 @group(0) @binding(5) var<storage, read_write> history: array<u32>;
 @group(0) @binding(6) var<storage, read_write> draws: array<DrawMetadata>;
-@group(0) @binding(7) var<storage, read_write> commands: array<Command>;
+@group(0) @binding(7) var<storage, read_write> commands: array<DrawIndexedIndirect>;
 @group(0) @binding(8) var<storage, read> hiz_pyramid: array<f32>;
 
 // The CPU path's test (Frustum::intersects_aabb): the box's corner farthest
@@ -172,8 +134,8 @@ fn emit(group_index: u32, slot: u32, instance: GpuInstance) {
     draws[params.draw_slot + group.draw_base + slot] = draw;
 }
 
-fn command(group: GpuGroup, instances: u32, first: u32) -> Command {
-    return Command(group.index_count, instances, group.index_slot + group.first_index,
+fn command(group: GpuGroup, instances: u32, first: u32) -> DrawIndexedIndirect {
+    return DrawIndexedIndirect(group.index_count, instances, group.index_slot + group.first_index,
         i32(group.vertex_slot) + group.base_vertex, group.draw_base + first);
 }
 

@@ -25,7 +25,7 @@
 //! depends on anything but the input: the same boxes give bit-identical
 //! nodes and order.
 
-use bytemuck::{Pod, Zeroable};
+use bytemuck::Zeroable;
 use glam::Vec3;
 use oxygen_core::Aabb;
 
@@ -46,23 +46,24 @@ const INTERSECTION_COST: f64 = 1.0;
 /// extra visit.
 const SLAB_PAD: f32 = 4.0 * f32::EPSILON;
 
-/// One node as the GPU reads it: 32 bytes.
-///
-/// The layout matches a WGSL `struct { min: vec3<f32>, first: u32, max:
-/// vec3<f32>, count: u32 }`, where each `vec3` takes the 12 bytes before the
-/// `u32` that fills its 16-byte slot.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct BvhNode {
-    /// Smallest corner of the node's box.
-    pub min: [f32; 3],
-    /// Interior (count == 0): index of the first child; the second is first + 1.
-    /// Leaf (count > 0): first index into `Bvh::order`.
-    pub first: u32,
-    /// Largest corner of the node's box.
-    pub max: [f32; 3],
-    /// Primitives in a leaf; 0 for an interior node.
-    pub count: u32,
+oxygen_gpu::gpu_struct! {
+    /// One node as the GPU reads it: 32 bytes.
+    ///
+    /// Its WGSL twin, generated from this declaration, is `struct { min:
+    /// vec3<f32>, first: u32, max: vec3<f32>, count: u32 }`: each `vec3`
+    /// takes the 12 bytes before the `u32` that fills its 16-byte slot.
+    #[derive(Debug, PartialEq)]
+    pub struct BvhNode: 32 bytes {
+        /// Smallest corner of the node's box.
+        pub min: [f32; 3],
+        /// Interior (count == 0): index of the first child; the second is first + 1.
+        /// Leaf (count > 0): first index into `Bvh::order`.
+        pub first: u32,
+        /// Largest corner of the node's box.
+        pub max: [f32; 3],
+        /// Primitives in a leaf; 0 for an interior node.
+        pub count: u32,
+    }
 }
 
 impl BvhNode {

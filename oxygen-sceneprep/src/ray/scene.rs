@@ -30,7 +30,6 @@
 
 use std::collections::HashMap;
 
-use bytemuck::{Pod, Zeroable};
 use glam::{Mat3, Mat4, Vec3};
 use oxygen_core::{Aabb, Geometry, Scene, Vertex};
 use tracing::info_span;
@@ -42,30 +41,31 @@ use crate::finalize::geometry_cache::GeometryCache;
 /// Triangles per bottom-level leaf; instances per top-level leaf.
 const MAX_LEAF: u32 = 4;
 
-/// One instance as the tracer reads it (80 bytes).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct RayInstance {
-    /// Rows of the inverse world matrix (world → the mesh's own space).
-    pub inverse_rows: [[f32; 4]; 3],
-    /// Index into the frame's world and normal matrices.
-    pub transform_index: u32,
-    /// The mesh's tree's root in `nodes`.
-    pub blas_root: u32,
-    /// The mesh's first vertex in the vertex domain.
-    pub vertex_slot: u32,
-    /// The mesh's first index in the index domain.
-    pub index_slot: u32,
-    /// First word of its submesh table in `words` (3 words per submesh).
-    pub submesh_first: u32,
-    /// Submeshes in the table.
-    pub submesh_count: u32,
-    /// The mesh's attribute records (colour, second UV set) in the vertex
-    /// domain, [`oxygen_bindless::INVALID_SLOT`] when it has none.
-    pub attributes_slot: u32,
-    /// [`POSED`] when `vertex_slot` is an offset into
-    /// [`RayScene::posed_vertices`] (the tracer rebases it on upload), else 0.
-    pub flags: u32,
+oxygen_gpu::gpu_struct! {
+    /// One instance as the tracer reads it (80 bytes).
+    #[derive(Debug, Default, PartialEq)]
+    pub struct RayInstance: 80 bytes {
+        /// Rows of the inverse world matrix (world → the mesh's own space).
+        pub inverse_rows: [[f32; 4]; 3] => "array<vec4<f32>, 3>",
+        /// Index into the frame's world and normal matrices.
+        pub transform_index: u32,
+        /// The mesh's tree's root in `nodes`.
+        pub blas_root: u32,
+        /// The mesh's first vertex in the vertex domain.
+        pub vertex_slot: u32,
+        /// The mesh's first index in the index domain.
+        pub index_slot: u32,
+        /// First word of its submesh table in `words` (3 words per submesh).
+        pub submesh_first: u32,
+        /// Submeshes in the table.
+        pub submesh_count: u32,
+        /// The mesh's attribute records (colour, second UV set) in the vertex
+        /// domain, [`oxygen_bindless::INVALID_SLOT`] when it has none.
+        pub attributes_slot: u32,
+        /// [`POSED`] when `vertex_slot` is an offset into
+        /// [`RayScene::posed_vertices`] (the tracer rebases it on upload), else 0.
+        pub flags: u32,
+    }
 }
 
 /// [`RayInstance::flags`]: a skinned or morphed instance, posed on the CPU.
