@@ -137,4 +137,21 @@ mod tests {
             }
         }
     }
+
+    /// Each of the four texels of a block counts once: a single bright
+    /// texel at each position of a 2 × 2 block, in turn, gives a quarter of
+    /// its value to that block's texel below and nothing to the others.
+    #[test]
+    fn each_corner_of_a_block_counts_once() {
+        for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+            // 4 × 4, so an index off by a row or column lands in another block.
+            let mut pixels = [0u8, 0, 0, 0].repeat(16);
+            let (x, y) = (2 + dx, dy);
+            pixels[(y * 4 + x) * 4] = 200;
+            pixels[(y * 4 + x) * 4 + 3] = 200;
+            let level = &mip_chain(&pixels, 4, 4, false)[1];
+            let expected = [0, 0, 0, 0, 50, 0, 0, 50, 0, 0, 0, 0, 0, 0, 0, 0];
+            assert_eq!(level.pixels, expected, "bright texel at ({x}, {y})");
+        }
+    }
 }

@@ -60,4 +60,83 @@ mod tests {
         assert_eq!(&hard[31 * 4..32 * 4], &[255, 0, 0, 255]);
         assert_eq!(&hard[32 * 4..33 * 4], &[0, 0, 255, 255]);
     }
+
+    /// Red channels of RGBA8 texels (green, blue and alpha fixed), row by row.
+    fn red_image(reds: &[u8]) -> Vec<u8> {
+        reds.iter().flat_map(|&r| [r, 7, 9, 255]).collect()
+    }
+
+    fn reds(texels: &[u8]) -> Vec<u8> {
+        texels.chunks(4).map(|t| t[0]).collect()
+    }
+
+    /// Bilinear 2 × 2 → 4 × 4: output centres fall at a quarter and three
+    /// quarters between the source centres (weights exact in `f32`), and
+    /// the outer rows and columns copy the edge texels.
+    #[test]
+    fn bilinear_upsample_weights_by_distance_to_texel_centres() {
+        let src = red_image(&[0, 200, 100, 40]);
+        let out = resample_rgba8(&src, 2, 2, 4, 4, false);
+        #[rustfmt::skip]
+        let expected = [
+            0, 50, 150, 200,
+            25, 59, 126, 160,
+            75, 76, 79, 80,
+            100, 85, 55, 40,
+        ];
+        assert_eq!(reds(&out), expected);
+        assert!(out.chunks(4).all(|t| t[1..] == [7, 9, 255]));
+    }
+
+    /// Bilinear and nearest 4 × 4 → 2 × 2: each bilinear output centre lies
+    /// in the middle of a 2 × 2 block (the block's mean); nearest takes the
+    /// block's first texel.
+    #[test]
+    fn downsampling_reads_each_output_texels_own_block() {
+        let src = red_image(&(0..16u8).map(|i| 10 * (i % 4) + 60 * (i / 4)).collect::<Vec<_>>());
+        assert_eq!(reds(&resample_rgba8(&src, 4, 4, 2, 2, false)), [35, 55, 155, 175]);
+        assert_eq!(reds(&resample_rgba8(&src, 4, 4, 2, 2, true)), [0, 20, 120, 140]);
+        // Nearest upsampling repeats texels, rows as well as columns.
+        let small = red_image(&[1, 2, 3, 4]);
+        assert_eq!(reds(&resample_rgba8(&small, 2, 2, 4, 4, true)), [1, 1, 2, 2, 1, 1, 2, 2, 3, 3, 4, 4, 3, 3, 4, 4]);
+        let row = red_image(&[10, 20, 30]);
+        assert_eq!(reds(&resample_rgba8(&row, 3, 1, 5, 1, true)), [10, 10, 20, 20, 30]);
+    }
+
+    /// Against an independent formulation, a tent filter over every source
+    /// texel in `f64`, on sizes that shrink along one axis and grow along
+    /// the other (within 1 for `f32` rounding at the halves).
+    #[test]
+    fn bilinear_matches_a_tent_filter_reference() {
+        let tent = |size: u32, new_size: u32, i: u32| -> Vec<f64> {
+            let s = ((i as f64 + 0.5) * size as f64 / new_size as f64 - 0.5).clamp(0.0, (size - 1) as f64);
+            (0..size).map(|k| (1.0 - (s - k as f64).abs()).max(0.0)).collect()
+        };
+        for (w, h, nw, nh) in [(3, 2, 5, 7), (5, 3, 2, 4), (1, 4, 3, 2), (4, 1, 6, 3), (7, 5, 3, 3)] {
+            let src: Vec<u8> = (0..w * h)
+                .flat_map(|i| [(i * 37 % 251) as u8, (i * 91 % 256) as u8, (255 - i * 13 % 256) as u8, 255])
+                .collect();
+            let out = resample_rgba8(&src, w, h, nw, nh, false);
+            assert_eq!(out.len(), (nw * nh * 4) as usize);
+            for y in 0..nh {
+                let wy = tent(h, nh, y);
+                for x in 0..nw {
+                    let wx = tent(w, nw, x);
+                    for c in 0..4 {
+                        let mut sum = 0.0;
+                        for (sy, wy) in wy.iter().enumerate() {
+                            for (sx, wx) in wx.iter().enumerate() {
+                                sum += wy * wx * src[(sy * w as usize + sx) * 4 + c] as f64;
+                            }
+                        }
+                        let got = out[((y * nw + x) * 4) as usize + c];
+                        assert!(
+                            (got as f64 - sum).abs() <= 0.5 + 1e-3,
+                            "{w}x{h} -> {nw}x{nh} ({x}, {y}) channel {c}: {got}, reference {sum}"
+                        );
+                    }
+                }
+            }
+        }
+    }
 }
