@@ -7,7 +7,7 @@ pub enum DomainKind {
     DrawMetadata,
     /// World matrices (`mat4x4<f32>`, 64 B), one range per frame shared by views.
     WorldTransforms,
-    /// Normal matrices (`mat3x3<f32>`, 48 B), parallel to the world matrices.
+    /// `NormalMatrix` records (a `mat3x3<f32>`, 48 B), parallel to the world matrices.
     NormalTransforms,
     /// `MaterialRecord`s (240 B), persistent per material.
     Materials,
@@ -96,7 +96,7 @@ impl DomainKind {
         match self {
             DomainKind::DrawMetadata => ("draw_metadata_domain", "DrawMetadata"),
             DomainKind::WorldTransforms => ("world_transform_domain", "mat4x4<f32>"),
-            DomainKind::NormalTransforms => ("normal_transform_domain", "mat3x3<f32>"),
+            DomainKind::NormalTransforms => ("normal_transform_domain", "NormalMatrix"),
             DomainKind::Materials => ("material_domain", "MaterialRecord"),
             DomainKind::DirectionalLights => ("directional_light_domain", "DirectionalLightRecord"),
             DomainKind::PositionalLights => ("positional_light_domain", "PositionalLightRecord"),

@@ -8,7 +8,7 @@ use oxygen_bindless::DomainKind;
 const EXPECTED: &[(DomainKind, Option<u32>, &str, &str)] = &[
     (DomainKind::DrawMetadata, Some(0), "draw_metadata_domain", "DrawMetadata"),
     (DomainKind::WorldTransforms, Some(1), "world_transform_domain", "mat4x4<f32>"),
-    (DomainKind::NormalTransforms, Some(2), "normal_transform_domain", "mat3x3<f32>"),
+    (DomainKind::NormalTransforms, Some(2), "normal_transform_domain", "NormalMatrix"),
     (DomainKind::Materials, Some(3), "material_domain", "MaterialRecord"),
     (DomainKind::DirectionalLights, Some(4), "directional_light_domain", "DirectionalLightRecord"),
     (DomainKind::PositionalLights, Some(5), "positional_light_domain", "PositionalLightRecord"),
@@ -35,6 +35,7 @@ fn the_generated_declarations_parse_and_declare_each_bound_domain() {
     // The record structs are declared by the including shader; stand-ins do here.
     let stand_ins: String = [
         "DrawMetadata",
+        "NormalMatrix",
         "MaterialRecord",
         "DirectionalLightRecord",
         "PositionalLightRecord",

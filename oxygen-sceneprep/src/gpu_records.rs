@@ -5,22 +5,22 @@
 
 use std::mem::{offset_of, size_of};
 
-use bytemuck::{Pod, Zeroable};
 use glam::Mat3;
 use oxygen_bindless::{DomainKind, INVALID_SLOT};
 use oxygen_core::{AlphaMode, Material, Vertex};
 
 /// The WGSL the scene's records share: the include lines of the generated
-/// records (`DrawMetadata`, `MaterialRecord`, the light records, the ray
+/// records (`NormalMatrix`, `DrawMetadata`, `MaterialRecord`, the light records, the ray
 /// scene's), `apply_uv_transform` and `VertexRecord`.
 pub const GPU_RECORDS_WGSL: &str = include_str!("gpu_records.wgsl");
 
-/// A normal matrix as WGSL `mat3x3<f32>` stores it: three columns padded to 16 bytes.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct NormalMatrix {
-    /// Columns; `w` is padding.
-    pub columns: [[f32; 4]; 3],
+oxygen_gpu::gpu_struct! {
+    /// A normal matrix as WGSL `mat3x3<f32>` stores it: three columns padded to 16 bytes.
+    #[derive(Debug, Default, PartialEq)]
+    pub struct NormalMatrix: 48 bytes {
+        /// Columns; `w` is padding.
+        pub columns: [[f32; 4]; 3] => "mat3x3<f32>",
+    }
 }
 
 impl From<Mat3> for NormalMatrix {

@@ -1,5 +1,5 @@
 // GPU records read through bindless slots. Their structs are generated from
-// the Rust declarations in oxygen-sceneprep (gpu_struct!: DrawMetadata,
+// the Rust declarations in oxygen-sceneprep (gpu_struct!: NormalMatrix, DrawMetadata,
 // UvTransformRecord, MaterialRecord, the light records, the ray scene's
 // records) and included here; VertexRecord, oxygen-core's Vertex, is written
 // out. The shader registry's layout test compares each with its Rust layout.
@@ -7,6 +7,7 @@
 // are generated: PassMask::wgsl_constants, MaterialRecord::wgsl_constants,
 // PositionalLightRecord::wgsl_constants.
 
+#include "sceneprep/NormalMatrix"
 #include "sceneprep/DrawMetadata"
 #include "sceneprep/UvTransformRecord"
 #include "sceneprep/MaterialRecord"

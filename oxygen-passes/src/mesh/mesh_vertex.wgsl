@@ -65,14 +65,14 @@ fn vs_main(@builtin(vertex_index) vertex_index: u32, @builtin(instance_index) dr
         for (var k = 0u; k < 4u; k++) {
             if weights[k] > 0.0 {
                 skinned_position += weights[k] * (world_transform_domain[base + joints[k]] * vec4<f32>(position, 1.0));
-                skinned_normal += weights[k] * (normal_transform_domain[normal_base + joints[k]] * normal);
+                skinned_normal += weights[k] * (normal_transform_domain[normal_base + joints[k]].columns * normal);
             }
         }
         world_position = vec4<f32>(skinned_position.xyz, 1.0);
         world_normal = skinned_normal;
     } else {
         let world = world_transform_domain[scene.renderer.world_transforms_slot + draw.transform_index];
-        let normal_matrix = normal_transform_domain[scene.renderer.normal_transforms_slot + draw.transform_index];
+        let normal_matrix = normal_transform_domain[scene.renderer.normal_transforms_slot + draw.transform_index].columns;
         world_position = world * vec4<f32>(position, 1.0);
         world_normal = normal_matrix * normal;
     }

@@ -56,6 +56,7 @@ pub(crate) static SOURCES: &[Source] = &[
     Source::generated(GROUPED_ARRAYS, || TexturePath::GroupedArrays.wgsl()),
     // oxygen-sceneprep: the GPU records (the scene's, the GPU scene's, the
     // ray scene's) and their numbers.
+    Source::gpu_struct::<oxygen_sceneprep::NormalMatrix>("sceneprep/NormalMatrix"),
     Source::gpu_struct::<oxygen_sceneprep::DrawMetadata>("sceneprep/DrawMetadata"),
     Source::gpu_struct::<oxygen_sceneprep::UvTransformRecord>("sceneprep/UvTransformRecord"),
     Source::gpu_struct::<oxygen_sceneprep::MaterialRecord>("sceneprep/MaterialRecord"),
