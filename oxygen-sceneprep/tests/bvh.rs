@@ -441,3 +441,170 @@ fn bvh_two_million_boxes() {
     println!("2M boxes built in {:?}, {} nodes, depth {}", start.elapsed(), bvh.nodes.len(), bvh.depth());
     validate(&bvh, &boxes, 4);
 }
+
+/// The build's and the walks' finer promises, one test per promise (each
+/// kills survivors of the sceneprep mutant shards; see
+/// docs/records/mutants/SURVIVORS.md).
+mod contracts {
+    use super::*;
+
+    fn cube_at(x: f32) -> Aabb {
+        Aabb::new(Vec3::new(x, 0.0, 0.0), Vec3::new(x + 1.0, 1.0, 1.0))
+    }
+
+    fn along_x(lo: f32, hi: f32) -> Aabb {
+        Aabb::new(Vec3::new(lo, 0.0, 0.0), Vec3::new(hi, 1.0, 1.0))
+    }
+
+    fn interior(first: u32) -> BvhNode {
+        BvhNode { min: [0.0; 3], first, max: [1.0; 3], count: 0 }
+    }
+
+    fn leaf() -> BvhNode {
+        BvhNode { min: [0.0; 3], first: 0, max: [1.0; 3], count: 1 }
+    }
+
+    /// Appends `levels` pairs of interior nodes, both of each pair pointing
+    /// at the next pair (so the paths through them double per level), and a
+    /// last pair of leaves.
+    fn push_shared_levels(nodes: &mut Vec<BvhNode>, levels: u32) {
+        for _ in 0..levels {
+            let next = nodes.len() as u32 + 2;
+            nodes.extend([interior(next), interior(next)]);
+        }
+        nodes.extend([leaf(), leaf()]);
+    }
+
+    /// The child with the lower box centre comes first, the centre being
+    /// the midpoint (not a corner, nor weighted towards either).
+    #[test]
+    fn lower_box_centre_comes_first() {
+        let long = along_x(0.0, 10.0);
+        // Centres 5 (long) and 4.5: the short box first; 5 and 5.75: the long one.
+        for (short, long_first) in [(along_x(4.0, 5.0), false), (along_x(5.5, 6.0), true)] {
+            for (boxes, long_index) in [([long, short], 0), ([short, long], 1)] {
+                let bvh = Bvh::build(&boxes, 1);
+                validate(&bvh, &boxes, 1);
+                assert_eq!(bvh.nodes.len(), 3);
+                assert_eq!(bvh.order[0] == long_index, long_first, "{boxes:?}: order {:?}", bvh.order);
+            }
+        }
+    }
+
+    /// Points 2^5 apart: every one but the farthest falls in the first bin,
+    /// so SAH peels one point off per level and would make a list 48 deep;
+    /// the depth the builder tracks switches it to medians in time.
+    #[test]
+    fn depth_bounded_when_sah_peels_one_box_per_level() {
+        let boxes: Vec<Aabb> = (-24..=24)
+            .map(|i| {
+                let p = Vec3::new(2f32.powi(5 * i), 0.0, 0.0);
+                Aabb::new(p, p)
+            })
+            .collect();
+        let bvh = Bvh::build(&boxes, 1);
+        let depth = validate(&bvh, &boxes, 1);
+        assert!(depth <= Bvh::MAX_DEPTH, "depth {depth}");
+    }
+
+    /// The SAH weighs children by surface area: two unit cubes a unit apart
+    /// are split even with room for both in one leaf (half areas: parent 7,
+    /// children 3 each, 7 + 3 + 3 < 2 · 7), where half-perimeters would keep
+    /// the leaf (5 + 3 + 3 > 2 · 5).
+    #[test]
+    fn sah_weighs_children_by_area() {
+        let boxes = [cube_at(0.0), cube_at(2.0)];
+        let bvh = Bvh::build(&boxes, 2);
+        validate(&bvh, &boxes, 2);
+        assert_eq!(bvh.nodes.len(), 3, "{:?}", bvh.nodes);
+    }
+
+    /// `depth` ignores a child index outside `nodes` and still counts its
+    /// sibling, even when that sibling is the last node it visits.
+    #[test]
+    fn depth_counts_a_child_whose_sibling_is_out_of_range() {
+        let bvh = Bvh { nodes: vec![interior(2), leaf(), leaf()], order: vec![0] };
+        assert_eq!(bvh.depth(), 1);
+    }
+
+    /// On a malformed tree whose nodes share children (paths doubling per
+    /// level), `depth` stops after `nodes.len()` visits: inside the shared
+    /// subtree (whose leaves are at depth 10), which it walks first as the
+    /// second child, before the chain under the first child (18 deep).
+    #[test]
+    fn depth_stops_after_as_many_visits_as_nodes() {
+        let mut nodes = vec![interior(1), interior(0), interior(3)];
+        push_shared_levels(&mut nodes, 8);
+        nodes[1] = interior(nodes.len() as u32);
+        for _ in 0..16 {
+            let next = nodes.len() as u32 + 2;
+            nodes.extend([interior(next), leaf()]);
+        }
+        nodes.extend([leaf(), leaf()]);
+        assert_eq!(Bvh { nodes, order: vec![0] }.depth(), 10);
+    }
+
+    /// The same bound for `closest_hit`: at most `nodes.len()` visits, so at
+    /// most that many `hit` calls, where the shared children hold 2048 leaf
+    /// visits.
+    #[test]
+    fn closest_hit_stops_after_as_many_visits_as_nodes() {
+        let mut nodes = vec![interior(1)];
+        push_shared_levels(&mut nodes, 10);
+        let bvh = Bvh { nodes, order: vec![0] };
+        let mut calls = 0;
+        let hit = bvh.closest_hit(Vec3::new(-1.0, 0.5, 0.5), Vec3::X, 0.0, 10.0, |_| {
+            calls += 1;
+            None
+        });
+        assert_eq!(hit, None);
+        assert!(calls <= bvh.nodes.len(), "{calls} hit calls for {} nodes", bvh.nodes.len());
+    }
+
+    /// The interval `(t_min, t_max)` is open: a hit exactly at either end
+    /// is no hit, and an empty interval calls `hit` for nothing. On a tie
+    /// the first primitive found is kept.
+    #[test]
+    fn closest_hit_interval_is_open_and_ties_keep_the_first() {
+        let bvh = Bvh::build(&[cube_at(0.0), cube_at(0.0)], 2);
+        assert_eq!(bvh.nodes.len(), 1);
+        let (o, d) = (Vec3::new(-1.0, 0.5, 0.5), Vec3::X);
+        assert_eq!(bvh.closest_hit(o, d, 0.0, 10.0, |_| Some(1.5)), Some((bvh.order[0], 1.5)));
+        assert_eq!(bvh.closest_hit(o, d, 1.5, 10.0, |_| Some(1.5)), None);
+        assert_eq!(bvh.closest_hit(o, d, 0.0, 1.5, |_| Some(1.5)), None);
+        let mut calls = 0;
+        let empty = bvh.closest_hit(o, d, 1.5, 1.5, |_| {
+            calls += 1;
+            Some(1.5)
+        });
+        assert_eq!((empty, calls), (None, 0));
+    }
+
+    /// The nearer child is visited first, and a hit there drops the farther
+    /// child without calling `hit` for it, from either side.
+    #[test]
+    fn closest_hit_visits_the_nearer_child_and_drops_the_farther() {
+        let boxes = [cube_at(0.0), cube_at(5.0)];
+        let bvh = Bvh::build(&boxes, 1);
+        assert_eq!(bvh.nodes.len(), 3);
+        for (origin, dir, near) in [(Vec3::new(-1.0, 0.5, 0.5), Vec3::X, 0), (Vec3::new(7.0, 0.5, 0.5), -Vec3::X, 1)] {
+            let mut calls = Vec::new();
+            let hit = bvh.closest_hit(origin, dir, 0.0, 100.0, |p| {
+                calls.push(p);
+                Some(if p == near { 1.0 } else { 6.0 })
+            });
+            assert_eq!(hit, Some((near, 1.0)));
+            assert_eq!(calls, [near], "from {origin}");
+        }
+    }
+
+    /// The slab interval is widened by a few ulps, so a ray whose slab
+    /// intervals miss each other by one ulp (a graze) still enters the box.
+    #[test]
+    fn a_graze_one_ulp_wide_still_enters() {
+        let node = BvhNode { min: [1.0 + f32::EPSILON, -1.0, -1.0], first: 0, max: [2.0, 1.0, 1.0], count: 1 };
+        let bvh = Bvh { nodes: vec![node], order: vec![0] };
+        // The ray leaves the y slab at t = 1 and enters the x slab one ulp later.
+        assert_eq!(bvh.closest_hit(Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0), 0.0, 10.0, |_| Some(1.0)), Some((0, 1.0)));
+    }
+}
