@@ -129,14 +129,18 @@ wgsl_types! {
 ///     pub struct BlurParams: 48 bytes {
 ///         /// Texels to each side.
 ///         pub radius: u32,
-///         /// Zero.
-///         pub reserved: [u32; 3],
+///         /// Weights used.
+///         pub count: u32,
+///         /// Zero (a `vec2<u32>`, 8-byte aligned at offset 8).
+///         pub reserved: [u32; 2],
 ///         /// Weights, packed four to a `vec4` (uniform arrays have a 16-byte stride).
 ///         pub weights: [f32; 8] => "array<vec4<f32>, 2>",
 ///     }
 /// }
 /// use oxygen_gpu::GpuStruct;
 /// assert!(BlurParams::wgsl().contains("weights: array<vec4<f32>, 2>,"));
+/// let module = naga::front::wgsl::parse_str(&BlurParams::wgsl()).unwrap();
+/// oxygen_gpu::check_layout(&module, &BlurParams::layout()).unwrap();
 /// ```
 ///
 /// The crate using it depends on `bytemuck` (with its `derive` feature).
