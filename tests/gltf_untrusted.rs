@@ -784,4 +784,14 @@ fn an_hdr_panorama_past_the_size_limit_is_refused_before_decoding() {
             other => panic!("{width} × {height}: expected the short data to fail decoding, got {other:?}"),
         }
     }
+    // A panorama with one empty side has no texel to light with.
+    for (width, height) in [(0, 4), (4, 0)] {
+        let path = panorama(width, height);
+        match load_hdr_environment(&path) {
+            Err(EnvironmentFileError::Size { path: named, width: w, height: h }) => {
+                assert_eq!((named, w, h), (path.clone(), width, height));
+            }
+            other => panic!("{width} × {height}: expected a size error, got {other:?}"),
+        }
+    }
 }
