@@ -726,6 +726,22 @@ mod tests {
         assert!(triangle_boxes(&[], &[0, 1, 2])[0].is_empty());
     }
 
+    /// The SAH's measures: half the surface area and the sum of the
+    /// extents (of a 2 × 3 × 5 box off the origin here), both zero for a box
+    /// empty along any one axis; a flat box has no area but a perimeter.
+    #[test]
+    fn bvh_half_area_and_half_perimeter() {
+        let b = Aabb { min: Vec3::new(1.0, 1.0, 1.0), max: Vec3::new(3.0, 4.0, 6.0) };
+        assert_eq!((half_area(&b), half_perimeter(&b)), (31.0, 10.0));
+        for axis in 0..3 {
+            let mut empty = b;
+            empty.max[axis] = 0.0;
+            assert_eq!((half_area(&empty), half_perimeter(&empty)), (0.0, 0.0), "empty along {axis}");
+        }
+        let flat = Aabb { min: b.min, max: Vec3::new(3.0, 4.0, 1.0) };
+        assert_eq!((half_area(&flat), half_perimeter(&flat)), (6.0, 5.0));
+    }
+
     #[test]
     fn bvh_halvings_needed() {
         assert_eq!(halvings_needed(1, 1), 0);
