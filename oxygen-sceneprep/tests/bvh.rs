@@ -492,8 +492,9 @@ mod contracts {
     }
 
     /// Points 2^5 apart: every one but the farthest falls in the first bin,
-    /// so SAH peels one point off per level and would make a list 48 deep;
-    /// the depth the builder tracks switches it to medians in time.
+    /// so SAH peels one point off per level and would make a list 48 deep.
+    /// At depth 32 (`MAX_DEPTH - 8`) splits switch to medians, and the 17
+    /// points left there take five more levels: 37, each leaf one point.
     #[test]
     fn depth_bounded_when_sah_peels_one_box_per_level() {
         let boxes: Vec<Aabb> = (-24..=24)
@@ -503,8 +504,8 @@ mod contracts {
             })
             .collect();
         let bvh = Bvh::build(&boxes, 1);
-        let depth = validate(&bvh, &boxes, 1);
-        assert!(depth <= Bvh::MAX_DEPTH, "depth {depth}");
+        assert_eq!(validate(&bvh, &boxes, 1), 37);
+        assert!(bvh.nodes.iter().all(|n| n.count <= 1));
     }
 
     /// The SAH weighs children by surface area: two unit cubes a unit apart
@@ -516,6 +517,96 @@ mod contracts {
         let boxes = [cube_at(0.0), cube_at(2.0)];
         let bvh = Bvh::build(&boxes, 2);
         validate(&bvh, &boxes, 2);
+        assert_eq!(bvh.nodes.len(), 3, "{:?}", bvh.nodes);
+    }
+
+    /// Four unit cubes in two clusters ten apart along `axis`, given
+    /// interleaved; `jitter` moves two of them a unit along the next axis.
+    fn two_clusters(axis: usize, base: f32, offset: f32, jitter: bool) -> Vec<Aabb> {
+        [(0.0, 0.0), (10.0, 1.0), (1.0, 1.0), (11.0, 0.0)]
+            .into_iter()
+            .map(|(along, across)| {
+                let mut p = Vec3::splat(offset);
+                p[axis] = base + along;
+                if jitter {
+                    p[(axis + 1) % 3] += across;
+                }
+                Aabb::new(p, p + Vec3::ONE)
+            })
+            .collect()
+    }
+
+    /// The split axis is the one along which the centres spread most (by
+    /// their extent, not their values): the root separates two clusters
+    /// along any axis, off the origin, and when another axis spreads less
+    /// but in a larger ratio.
+    #[test]
+    fn the_root_splits_along_the_widest_spread_of_centres() {
+        for axis in 0..3 {
+            for (base, offset, jitter) in [(0.0, 100.0, false), (100.0, 1.0, true), (0.0, 0.0, false)] {
+                let boxes = two_clusters(axis, base, offset, jitter);
+                let bvh = Bvh::build(&boxes, 1);
+                validate(&bvh, &boxes, 1);
+                let first = bvh.nodes[0].first as usize;
+                let (a, b) = (node_box(&bvh.nodes[first]), node_box(&bvh.nodes[first + 1]));
+                assert!(
+                    a.max[axis] < b.min[axis] || b.max[axis] < a.min[axis],
+                    "axis {axis}, base {base}, offset {offset}, jitter {jitter}: children {a:?} and {b:?} overlap"
+                );
+            }
+        }
+    }
+
+    /// Sixteen evenly spaced boxes (cubes, then points, whose every area is
+    /// zero so the SAH measures lengths) split eight and eight at the root:
+    /// binning spreads them one to a bin, and the cheapest cut is the middle.
+    #[test]
+    fn evenly_spaced_boxes_split_in_the_middle() {
+        let cubes: Vec<Aabb> = (0..16).map(|i| cube_at(10.0 * i as f32)).collect();
+        let points: Vec<Aabb> = (0..16)
+            .map(|i| {
+                let p = Vec3::new(10.0 * i as f32, 0.0, 0.0);
+                Aabb::new(p, p)
+            })
+            .collect();
+        for boxes in [cubes, points] {
+            let bvh = Bvh::build(&boxes, 1);
+            validate(&bvh, &boxes, 1);
+            let first = bvh.nodes[0].first as usize;
+            let under = |node: usize| {
+                let mut stack = vec![node];
+                let mut count = 0;
+                while let Some(n) = stack.pop() {
+                    let node = bvh.nodes[n];
+                    if node.count > 0 {
+                        count += node.count;
+                    } else {
+                        stack.extend([node.first as usize, node.first as usize + 1]);
+                    }
+                }
+                count
+            };
+            assert_eq!((under(first), under(first + 1)), (8, 8), "{:?}", boxes[1]);
+        }
+    }
+
+    /// With room for both in one leaf, two heavily overlapping cubes stay
+    /// one leaf (a split would cost more than the leaf), while collinear
+    /// points, whose SAH is by length, are split.
+    #[test]
+    fn a_leaf_is_kept_when_splitting_costs_more() {
+        let overlapping = [cube_at(0.0), cube_at(0.1)];
+        let bvh = Bvh::build(&overlapping, 2);
+        assert_eq!(bvh.nodes.len(), 1, "{:?}", bvh.nodes);
+        let points: Vec<Aabb> = [0.0, 10.0]
+            .into_iter()
+            .map(|x| {
+                let p = Vec3::new(x, 0.0, 0.0);
+                Aabb::new(p, p)
+            })
+            .collect();
+        let bvh = Bvh::build(&points, 2);
+        validate(&bvh, &points, 2);
         assert_eq!(bvh.nodes.len(), 3, "{:?}", bvh.nodes);
     }
 
