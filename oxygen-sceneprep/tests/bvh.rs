@@ -622,23 +622,30 @@ mod contracts {
     }
 
     /// With room for both in one leaf, two heavily overlapping cubes stay
-    /// one leaf (a split would cost more than the leaf), while collinear
-    /// points, whose SAH is by length, are split.
+    /// one leaf (a split would cost more than the leaf), and so do two cubes
+    /// whose split costs exactly as much (half areas 6 for the pair, 3 each:
+    /// 6 + 3 + 3 = 2 · 6), while collinear points, whose SAH is by length,
+    /// are split; at any scale (powers of two keep the tie exact), as the
+    /// SAH has no unit.
     #[test]
     fn a_leaf_is_kept_when_splitting_costs_more() {
-        let overlapping = [cube_at(0.0), cube_at(0.1)];
-        let bvh = Bvh::build(&overlapping, 2);
-        assert_eq!(bvh.nodes.len(), 1, "{:?}", bvh.nodes);
-        let points: Vec<Aabb> = [0.0, 10.0]
-            .into_iter()
-            .map(|x| {
-                let p = Vec3::new(x, 0.0, 0.0);
-                Aabb::new(p, p)
-            })
-            .collect();
-        let bvh = Bvh::build(&points, 2);
-        validate(&bvh, &points, 2);
-        assert_eq!(bvh.nodes.len(), 3, "{:?}", bvh.nodes);
+        let points = |x: f32| {
+            let p = Vec3::new(x, 0.0, 0.0);
+            Aabb::new(p, p)
+        };
+        for scale in [1.0 / 1024.0, 1.0, 1024.0] {
+            let scaled =
+                |boxes: &[Aabb]| boxes.iter().map(|b| Aabb::new(b.min * scale, b.max * scale)).collect::<Vec<_>>();
+            for (boxes, nodes) in [
+                (scaled(&[cube_at(0.0), cube_at(0.1)]), 1),
+                (scaled(&[cube_at(0.0), cube_at(1.5)]), 1),
+                (scaled(&[points(0.0), points(10.0)]), 3),
+            ] {
+                let bvh = Bvh::build(&boxes, 2);
+                validate(&bvh, &boxes, 2);
+                assert_eq!(bvh.nodes.len(), nodes, "scale {scale}: {boxes:?}");
+            }
+        }
     }
 
     /// `depth` ignores a child index outside `nodes` and still counts its
