@@ -648,6 +648,18 @@ mod contracts {
         }
     }
 
+    /// A triangle whose determinant overflows `f32` is a miss, as a
+    /// degenerate one is, even for a ray exactly through its corner; the
+    /// same triangle at a billionth of the size is hit there.
+    #[test]
+    fn ray_triangle_misses_when_the_determinant_overflows() {
+        let a = Vec3::new(1.0, 2.0, 3.0);
+        for (size, hit) in [(1.0e20, None), (1.0e11, Some((5.0, 0.0, 0.0)))] {
+            let (b, c) = (a + Vec3::X * size, a + Vec3::Y * size);
+            assert_eq!(ray_triangle(a - Vec3::Z * 5.0, Vec3::Z, a, b, c, 0.0, f32::INFINITY), hit, "size {size}");
+        }
+    }
+
     /// `depth` ignores a child index outside `nodes` and still counts its
     /// sibling, even when that sibling is the last node it visits.
     #[test]
