@@ -141,7 +141,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         for _ in 0..repeats.max(3) * 4 {
             let mut encoder = device.create_command_encoder(&Default::default());
             if let Some(samples) = samples {
-                renderer.lighting().prefilter_probe(device, &mut encoder, &probe, samples);
+                renderer.internals().lighting.prefilter_probe(device, &mut encoder, &probe, samples);
             }
             let started = Instant::now();
             renderer.gpu().queue.submit([encoder.finish()]);

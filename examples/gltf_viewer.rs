@@ -288,7 +288,7 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
             report.frame_index,
             report.prepare_seconds * 1e3,
             report.record_seconds * 1e3,
-            renderer.pipelines().pipelines_created()
+            renderer.internals().pipelines.pipelines_created()
         );
         for (tag, name, id) in &views {
             let Some(view_report) = report.views.iter().find(|r| r.view == *id) else {

@@ -34,7 +34,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         report.frame_index,
         report.prepare_seconds * 1e3,
         report.record_seconds * 1e3,
-        renderer.pipelines().pipelines_created()
+        renderer.internals().pipelines.pipelines_created()
     );
     for (name, id) in views {
         let path = out_dir.join(format!("multi_view_{name}.png"));

@@ -172,7 +172,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         renderer.gpu().device.poll(wgpu::PollType::wait_indefinitely())?;
         let ms = started.elapsed().as_secs_f64() * 1e3;
         let record_ms = report.record_seconds * 1e3;
-        let pipelines = renderer.pipelines().pipelines_created();
+        let pipelines = renderer.internals().pipelines.pipelines_created();
         println!("| | {threads} | {record_ms:.1} | {ms:.1} | {pipelines} |");
         record.push_row_to(
             "first_frame_rows",

@@ -114,7 +114,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         report.prepare_seconds * 1e3,
         report.record_seconds * 1e3,
         report.record_threads,
-        renderer.pipelines().pipelines_created()
+        renderer.internals().pipelines.pipelines_created()
     );
     let path = out_dir.join("shadows_and_probes.png");
     renderer.read_color(main)?.save(&path)?;

@@ -48,7 +48,9 @@ pub mod views;
 pub mod windows;
 
 pub use oxygen_sceneprep::RenderOrigin;
-pub use renderer::{FrameReport, FrameWarning, RenderError, Renderer, RendererOptions, ViewReport, ViewRole};
+pub use renderer::{
+    FrameReport, FrameWarning, RenderError, Renderer, RendererInternals, RendererOptions, ViewReport, ViewRole,
+};
 
 // Root paths the renderer's code and doc links name (`crate::WindowId`,
 // `crate::ViewDesc::shown_in`, …); doc links alone do not count as uses.

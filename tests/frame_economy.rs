@@ -169,7 +169,8 @@ fn rg11b10_hdr_stays_within_its_documented_error_and_shows_coarser_steps() {
 
 fn forward_keys(renderer: &Renderer) -> Vec<PipelineKey> {
     renderer
-        .pipelines()
+        .internals()
+        .pipelines
         .used_this_frame()
         .into_iter()
         .filter(|k| matches!(k.pass, PassKind::ShadingAfterPrePass | PassKind::Shading))
@@ -201,7 +202,7 @@ fn shading_pipelines_follow_the_lights_of_each_frame() {
     assert!(!first.is_empty());
     assert!(first.iter().all(|k| !k.features.local_lights && !k.features.local_shadows && !k.features.textures));
     compare(&special, &full, "sun only");
-    let created = special.pipelines().pipelines_created();
+    let created = special.internals().pipelines.pipelines_created();
 
     // A shadow-casting spot: pipelines with the positional-light loop and
     // the atlas lookups.
@@ -230,11 +231,11 @@ fn shading_pipelines_follow_the_lights_of_each_frame() {
     first_sorted.sort_by_key(order);
     assert_eq!(third, first_sorted);
     assert_eq!(report.pipelines_created, 0);
-    assert!(special.pipelines().pipelines_created() > created);
+    assert!(special.internals().pipelines.pipelines_created() > created);
     compare(&special, &full, "the spot removed");
     eprintln!(
         "pipelines: {} created in all, {} used by the last frame",
-        special.pipelines().pipelines_created(),
+        special.internals().pipelines.pipelines_created(),
         report.pipelines_used
     );
 }

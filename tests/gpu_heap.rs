@@ -103,15 +103,15 @@ fn a_long_run_of_view_and_node_churn_keeps_gpu_memory_bounded() {
             }
         }
         if frame == 100 {
-            bytes_after_warm_up = renderer.heap().gpu_bytes();
+            bytes_after_warm_up = renderer.internals().heap.gpu_bytes();
         }
     }
     assert!(bytes_after_warm_up > 0);
-    assert_eq!(renderer.heap().gpu_bytes(), bytes_after_warm_up, "the heap kept growing under steady churn");
+    assert_eq!(renderer.internals().heap.gpu_bytes(), bytes_after_warm_up, "the heap kept growing under steady churn");
     for view in views {
         renderer.unregister_view(view).unwrap();
     }
     for kind in [DomainKind::DrawMetadata, DomainKind::IndirectArgs] {
-        assert_eq!(renderer.heap().slots.get(kind).live_allocations(), 0, "{kind:?} leaked");
+        assert_eq!(renderer.internals().heap.slots.get(kind).live_allocations(), 0, "{kind:?} leaked");
     }
 }

@@ -163,13 +163,13 @@ fn pipelines_are_created_once_and_reused_across_frames() {
     renderer.render_frame(&demo.scene).unwrap();
     support::assert_hdr_finite(&renderer, main);
     support::assert_hdr_finite(&renderer, side);
-    let after_first = renderer.pipelines().pipelines_created();
+    let after_first = renderer.internals().pipelines.pipelines_created();
     // Opaque + masked-double-sided partitions × (depth pre-pass, shading), plus the tone map.
     assert_eq!(after_first, 5);
     for _ in 0..3 {
         renderer.render_frame(&demo.scene).unwrap();
     }
-    assert_eq!(renderer.pipelines().pipelines_created(), after_first);
+    assert_eq!(renderer.internals().pipelines.pipelines_created(), after_first);
 }
 
 #[test]
@@ -268,7 +268,7 @@ fn materials_and_geometry_upload_only_when_new_or_changed() {
         renderer.render_frame(&demo.scene).unwrap();
     }
     support::assert_hdr_finite(&renderer, view);
-    let stats = renderer.scene_prep().stats();
+    let stats = renderer.internals().scene_prep.stats();
     assert_eq!(stats.material_uploads, 1, "static materials are uploaded once");
     // Plane, cube and quad: three meshes, each uploaded once.
     assert_eq!(stats.geometry_uploads, 3);
@@ -277,10 +277,10 @@ fn materials_and_geometry_upload_only_when_new_or_changed() {
     demo.scene.add_material(Material::opaque("new", Vec4::ONE));
     demo.scene.add_geometry(Geometry::cube(3.0));
     renderer.render_frame(&demo.scene).unwrap();
-    let stats = renderer.scene_prep().stats();
+    let stats = renderer.internals().scene_prep.stats();
     assert_eq!(stats.material_uploads, 2);
     assert_eq!(stats.geometry_uploads, 3, "an undrawn mesh is never uploaded");
-    assert_eq!(renderer.scene_prep().resident_geometry(), 3);
+    assert_eq!(renderer.internals().scene_prep.resident_geometry(), 3);
 }
 
 #[test]

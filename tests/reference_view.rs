@@ -549,7 +549,7 @@ fn raster_and_reference(
     for _ in 0..frames {
         renderer.render_frame(scene).unwrap();
     }
-    assert_eq!(renderer.scene_prep().ray_scene().skipped(), 0);
+    assert_eq!(renderer.internals().scene_prep.ray_scene().skipped(), 0);
     let (a, b) = (renderer.read_hdr(raster).unwrap(), renderer.read_hdr(traced).unwrap());
     support::assert_hdr_image_finite(&b, "reference");
     (a, b, renderer.reference_samples(traced))

@@ -39,7 +39,7 @@ fn four_cascade_views_share_the_frame_phase() {
         // The nearest slices end before the grid starts; the farther ones hold it.
         assert!(report.views[..4].iter().any(|v| v.draws > 0), "some cascade sees the casters");
     }
-    let stats = renderer.scene_prep().stats();
+    let stats = renderer.internals().scene_prep.stats();
     assert_eq!(stats.frame_phase_runs, 3, "one frame phase per frame, not per view");
     assert_eq!(stats.frame_phase_reuses, 2, "the static scene is collected once");
     assert_eq!(stats.views_prepared, 15);
@@ -131,7 +131,7 @@ fn a_scene_without_shadow_casters_gets_no_shadow_views() {
     support::assert_hdr_finite(&renderer, view);
     assert_eq!(renderer.sun_cascades(view), Vec::<ViewId>::new());
     assert_eq!(renderer.views().count(), 1);
-    assert_eq!(renderer.scene_prep().stats().views_prepared, 1, "nothing prepared for shadows");
+    assert_eq!(renderer.internals().scene_prep.stats().views_prepared, 1, "nothing prepared for shadows");
 
     // With the caster back, the next frame has the cascades, without any call.
     demo.scene.set_light(demo.sun, Some(Light { casts_shadows: true, ..sun_light })).unwrap();
@@ -273,7 +273,7 @@ fn a_point_light_casts_shadows_through_its_cube_faces() {
         let view = renderer.register_view(camera, oxygen::graph::lit_render_graph(config)).unwrap();
         renderer.render_frame(&scene).unwrap();
         assert_eq!(renderer.shadow_views().len(), 7, "six faces and one spot");
-        let lights = renderer.scene_prep().frame_collection().positional_lights.clone();
+        let lights = renderer.internals().scene_prep.frame_collection().positional_lights.clone();
         assert_eq!(lights.iter().map(|l| l.shadow_slot).collect::<Vec<_>>(), vec![0, 6], "point then spot tiles");
         support::read_lit_color(&renderer, view)
     };

@@ -232,9 +232,9 @@ fn concurrent_recording_draws_what_one_thread_draws() {
             .collect();
         let report = renderer.render_frame(&scene).unwrap();
         assert_eq!(report.record_threads, threads.min(report.views.len()));
-        let created = renderer.pipelines().pipelines_created();
+        let created = renderer.internals().pipelines.pipelines_created();
         renderer.render_frame(&scene).unwrap();
-        assert_eq!(renderer.pipelines().pipelines_created(), created, "no pipeline created after frame 1");
+        assert_eq!(renderer.internals().pipelines.pipelines_created(), created, "no pipeline created after frame 1");
         views.iter().map(|v| support::read_lit_color(&renderer, *v)).collect::<Vec<_>>()
     };
     let one = render(1);

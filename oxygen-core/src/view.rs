@@ -68,8 +68,9 @@ impl fmt::Debug for ViewId {
     }
 }
 
-/// Hands out the ids of one [`ViewIdRange`], each once, in order.
-#[derive(Clone, Debug)]
+/// Hands out the ids of one [`ViewIdRange`], each once, in order. Not
+/// `Clone`: a copy would hand out the same ids again.
+#[derive(Debug)]
 pub struct ViewIds {
     range: ViewIdRange,
     next: u32,

@@ -330,6 +330,27 @@ impl ScenePrep {
         &self.frames[..self.active_frames]
     }
 
+    /// Moves the prepared frames of the last `prepare` or `prepare_views`
+    /// out, in request order, for a caller whose later steps take them as
+    /// their input (the renderer's record step); [`ScenePrep::frames`] is
+    /// empty until they come back through [`ScenePrep::return_frames`].
+    /// Frames not returned are only a lost reuse of their buffers: the
+    /// next `prepare_views` makes new ones.
+    pub fn take_frames(&mut self) -> Vec<PreparedSceneFrame> {
+        let rest = self.frames.split_off(self.active_frames);
+        self.active_frames = 0;
+        std::mem::replace(&mut self.frames, rest)
+    }
+
+    /// Gives back frames taken by [`ScenePrep::take_frames`]: they are
+    /// [`ScenePrep::frames`] again until the next frame begins, and their
+    /// buffers are reused by the next `prepare_views`.
+    pub fn return_frames(&mut self, mut frames: Vec<PreparedSceneFrame>) {
+        self.active_frames = frames.len();
+        frames.append(&mut self.frames);
+        self.frames = frames;
+    }
+
     /// Forgets the cached frame phase (world transforms, renderables,
     /// lights), so the next frame phase collects the scene from scratch, as
     /// for a scene where everything moved. For benchmarks and tests.
@@ -455,6 +476,11 @@ impl ScenePrep {
         while self.work.len() < views.len() {
             let view_id = views[self.work.len()].view.view_id;
             self.work.push(Mutex::new(ViewWork::new(view_id, Arc::clone(&self.released_transforms))));
+        }
+        // A pooled frame per view; frames taken and never returned
+        // (`take_frames`) are made anew.
+        while self.frames.len() < views.len() {
+            let view_id = views[self.frames.len()].view.view_id;
             self.frames.push(PreparedSceneFrame::empty(view_id, Arc::clone(&self.released_transforms)));
         }
 

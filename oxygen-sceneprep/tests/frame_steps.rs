@@ -151,3 +151,36 @@ fn the_views_of_a_frame_can_be_chosen_from_its_frame_collection() {
     assert!(frames.iter().all(|f| !f.draws().is_empty()));
     assert!(frames.iter().all(|f| f.slots().world_transforms == frames[0].slots().world_transforms), "shared");
 }
+
+/// The renderer takes the prepared frames for its later steps and gives
+/// them back: while taken, `frames` is empty; once back, they are the same
+/// frames; frames never given back are made anew, so the next frame's
+/// dumps are what a fresh ScenePrep gives.
+#[test]
+fn taken_frames_come_back_or_are_made_anew() {
+    let demo = multi_view_scene();
+    let views = demo_views(&demo.scene);
+    let requests = requests(&views);
+    let mut prep = ScenePrep::with_threads(1);
+    let mut slots = SlotAllocators::default();
+    prep.prepare(&demo.scene, &requests, &mut slots).expect("prepare");
+    let expected = dumps(&prep);
+
+    let taken = prep.take_frames();
+    assert_eq!(taken.len(), 2);
+    assert!(prep.frames().is_empty(), "taken frames are not ScenePrep's until they come back");
+    assert_eq!(taken.iter().map(|f| f.dump()).collect::<Vec<_>>(), expected);
+    prep.return_frames(taken);
+    assert_eq!(dumps(&prep), expected, "the same frames, in request order");
+
+    // Taken and dropped: the next frame makes new ones, as a fresh prep does.
+    drop(prep.take_frames());
+    prep.prepare(&demo.scene, &requests, &mut slots).expect("prepare after frames were lost");
+    let mut fresh = ScenePrep::with_threads(1);
+    fresh.prepare(&demo.scene, &requests, &mut SlotAllocators::default()).expect("prepare");
+    let strip_frame_index = |d: Vec<String>| -> Vec<String> {
+        d.into_iter().map(|s| s.lines().filter(|l| !l.contains("frame")).collect::<Vec<_>>().join("\n")).collect()
+    };
+    assert_eq!(strip_frame_index(dumps(&prep)), strip_frame_index(dumps(&fresh)));
+    assert_eq!(prep.frames().len(), 2);
+}

@@ -116,6 +116,21 @@ impl Frames {
     }
 }
 
+/// The renderer's parts ([`Renderer::internals`]): for tests, benchmarks
+/// and tools that count what frames did. Not the way to render: every
+/// frame goes through [`Renderer::render_frame`].
+#[derive(Clone, Copy)]
+pub struct RendererInternals<'a> {
+    /// The shared pipelines (how many exist, how many a frame created).
+    pub pipelines: &'a Pipelines,
+    /// The shared lighting resources (the environment, the probes' filter).
+    pub lighting: &'a LightingResources,
+    /// ScenePrep (its counters, the last frame collection, the ray scene).
+    pub scene_prep: &'a ScenePrep,
+    /// The bindless heap (its GPU bytes and slot allocators).
+    pub heap: &'a BindlessHeap,
+}
+
 impl Renderer {
     /// The device features Oxygen uses when the adapter has them.
     pub const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::INDIRECT_FIRST_INSTANCE
@@ -228,8 +243,12 @@ impl Renderer {
         let _ = self.gpu.device.poll(wgpu::PollType::Poll);
         let gpu_seconds = self.frames.gpu_timer.as_mut().and_then(gpu_timer::GpuTimer::collect);
         let resolved = self.resolve(scene, clock);
-        let prepared = self.prepare(scene, resolved, started)?;
-        let recorded = self.record(&prepared)?;
+        let mut prepared = self.prepare(scene, resolved, started)?;
+        let recorded = self.record(&prepared);
+        // Back to ScenePrep, which reuses their buffers next frame and
+        // answers `prepared_frame` until then; a failed recording too.
+        self.prep.return_frames(std::mem::take(&mut prepared.frames));
+        let recorded = recorded?;
         self.targets.hold(&recorded.rendered);
         let presented = self.present(&recorded);
         let report = FrameReport::new(prepared, recorded, presented, gpu_seconds);
@@ -252,23 +271,15 @@ impl Renderer {
         &self.gpu
     }
 
-    /// The shared pipelines (e.g. to check how many exist).
-    pub fn pipelines(&self) -> &Pipelines {
-        &self.pipelines
-    }
-
-    /// The shared lighting resources.
-    pub fn lighting(&self) -> &LightingResources {
-        &self.lighting
-    }
-
-    /// ScenePrep (counters, the last frame collection).
-    pub fn scene_prep(&self) -> &ScenePrep {
-        &self.prep
-    }
-
-    /// The bindless heap.
-    pub fn heap(&self) -> &BindlessHeap {
-        &self.heap
+    /// The renderer's parts, for tests, benchmarks and tools that count
+    /// what frames did (pipelines created, ScenePrep's counters, heap
+    /// bytes); what they expose may change with the renderer's design.
+    pub fn internals(&self) -> RendererInternals<'_> {
+        RendererInternals {
+            pipelines: &self.pipelines,
+            lighting: &self.lighting,
+            scene_prep: &self.prep,
+            heap: &self.heap,
+        }
     }
 }

@@ -11,7 +11,7 @@ use std::time::Instant;
 
 use oxygen_core::{ResolvedView, Scene, ViewId};
 use oxygen_passes::{OutputSource, ProbeId};
-use oxygen_sceneprep::MaterialFeatures;
+use oxygen_sceneprep::{MaterialFeatures, PreparedSceneFrame};
 use oxygen_sceneprep::{ViewPrepOptions, ViewRequest};
 use tracing::{info_span, warn};
 
@@ -46,15 +46,20 @@ pub(crate) struct FrameView {
     pub(crate) target: TargetPlan,
 }
 
-/// The output of the prepare step. View `i`'s prepared scene frame is
-/// `ScenePrep::frames()[i]` (ScenePrep keeps them, reused frame to frame),
-/// its targets and constants the renderer's targets of its id.
+/// The output of the prepare step: every view of the frame with its
+/// prepared scene frame. A view's targets and constants are the `Targets`
+/// subsystem's, allocated here for the view's id (they outlive the frame:
+/// a view keeps its image between frames).
 pub(crate) struct PreparedFrame {
     pub(crate) clock: FrameClock,
     /// Where the GPU's coordinates are centred this frame.
     pub(crate) origin: glam::DVec3,
     /// The registered views in id order, then the shadow views.
     pub(crate) views: Vec<FrameView>,
+    /// ScenePrep's result for `views[i]` is `frames[i]`; taken from
+    /// ScenePrep for the frame and returned to it after recording
+    /// (`ScenePrep::return_frames`), so their buffers are reused.
+    pub(crate) frames: Vec<PreparedSceneFrame>,
     /// The local shadow atlas, when a view renders into it.
     pub(crate) atlas: Option<wgpu::Texture>,
     /// What the scene's materials need of the shading pipelines.
@@ -192,14 +197,16 @@ impl Renderer {
             name: s.name.clone(),
             reason: s.reason,
         });
+        let skipped_nodes = skipped_nodes.collect();
         Ok(PreparedFrame {
             clock,
             origin,
             views,
+            frames: self.prep.take_frames(),
             atlas,
             materials: self.prep.material_features(),
             warnings,
-            skipped_nodes: skipped_nodes.collect(),
+            skipped_nodes,
             seconds,
             uploaded_bytes,
         })

@@ -190,7 +190,7 @@ impl Renderer {
             })
         });
         let local_shadows = self.local_shadows(plan, atlas.as_ref());
-        let frames = self.prep.frames();
+        let frames = &plan.frames;
         // Views whose targets another view of the frame is linked to. A link
         // names the view, not which of its outputs, so any link counts as
         // reading the HDR image: the cautious answer keeps it written.

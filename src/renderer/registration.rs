@@ -1,5 +1,5 @@
 //! Registering views: the `Renderer` methods that add, link, pause and
-//! remove views (the registry itself is [`Views`], which needs no GPU).
+//! remove views (the registry itself is [`Views`](crate::views::Views), which needs no GPU).
 
 use oxygen_core::ViewId;
 use oxygen_passes::Output;
@@ -8,7 +8,7 @@ use tracing::warn;
 
 use super::{RenderError, Renderer, ViewRole};
 use crate::graph::RenderGraph;
-use crate::views::{ViewDesc, Views};
+use crate::views::ViewDesc;
 
 impl Renderer {
     /// Registers a view: a resolver (camera → matrices, each frame) or a
@@ -72,11 +72,6 @@ impl Renderer {
     /// itself for shadows).
     pub fn views(&self) -> impl Iterator<Item = ViewId> + '_ {
         self.views.ids()
-    }
-
-    /// The registry of views.
-    pub fn view_registry(&mut self) -> &mut Views {
-        &mut self.views
     }
 
     /// What the views of the last frame were for, in submission order.
