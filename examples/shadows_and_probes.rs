@@ -94,6 +94,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ViewRole::SunCascade { .. } => "sun cascade",
         ViewRole::LocalShadow { .. } => "local-light shadow",
         ViewRole::ProbeFace { .. } => "probe face",
+        ViewRole::BatchCamera { .. } => "batch camera",
     };
     println!("| view | kind | draws | partitions | prep ms | record ms |");
     println!("|---|---|---:|---:|---:|---:|");

@@ -248,6 +248,74 @@ impl RenderGraph for ReferenceGraph {
 pub const reference_render_graph: ReferenceGraph =
     ReferenceGraph { settings: ReferenceSettings::DEFAULT, exposure: 1.0 };
 
+/// The graph every camera of a batch records ([`crate::batch`]): each pass
+/// once for the whole batch ([`MeshPass::run_batch`]: one render pass per
+/// page of the batch's atlas, per camera only its viewport, constants and
+/// draws). Forward lit shading of the opaque and masked partitions,
+/// tone-mapped while shading into the display atlas when nothing blends
+/// and nobody reads the HDR image; otherwise into the HDR atlas, then the
+/// blended partitions, then one tone map per page.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BatchGraph {
+    /// The forward lit pass's configuration; `depth_from_pre_pass` lays
+    /// down depth first (off by default: small cameras are bound by their
+    /// vertices, which a pre-pass draws twice).
+    pub lit: ForwardLitConfig,
+    /// Exposure of the tone map.
+    pub exposure: f32,
+}
+
+/// The default batch graph: no depth pre-pass, no sun cascades (batch
+/// cameras own none), exposure 1.
+#[allow(non_upper_case_globals)] // Reads like `standard_render_graph`.
+pub const standard_batch_graph: BatchGraph = BatchGraph {
+    lit: ForwardLitConfig { depth_from_pre_pass: false, sun_shadows: false, ..ForwardLitConfig::DEFAULT },
+    exposure: 1.0,
+};
+
+impl Default for BatchGraph {
+    fn default() -> Self {
+        standard_batch_graph
+    }
+}
+
+impl BatchGraph {
+    /// Records the batch's cameras `views` (their contexts in tile order).
+    pub async fn record_batch(&self, views: &[&RenderContext<'_>], rec: &mut CommandRecorder) -> Result<(), PassError> {
+        if views.is_empty() {
+            return Ok(());
+        }
+        let exposure = if self.exposure == 0.0 { 1.0 } else { self.exposure };
+        let lit = self.lit.clone();
+        if lit.depth_from_pre_pass {
+            MeshPass::depth_pre_pass().run_batch(views, rec).await?;
+        }
+        if !views.iter().any(|ctx| ctx.hdr_read_after_shading()) {
+            return MeshPass::forward_lit(lit).tone_mapped(exposure).run_batch(views, rec).await;
+        }
+        MeshPass::forward_lit(lit).run_batch(views, rec).await?;
+        MeshPass::transparent().run_batch(views, rec).await?;
+        // The tone map covers its whole target: once per page of the atlas
+        // (per view for views with targets of their own).
+        let mut toned: Vec<(Option<u32>, &wgpu::Texture)> = Vec::new();
+        for ctx in views {
+            let page = (ctx.targets.tile.map(|t| t.page), &ctx.targets.depth);
+            if ctx.targets.tile.is_some() && toned.iter().any(|(p, d)| *p == page.0 && *d == page.1) {
+                continue;
+            }
+            toned.push(page);
+            TonemapPass::new(exposure).run(ctx, rec).await?;
+        }
+        Ok(())
+    }
+}
+
+impl RenderGraph for BatchGraph {
+    async fn record(&self, ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError> {
+        self.record_batch(&[ctx], rec).await
+    }
+}
+
 /// The standard graph with a chosen forward configuration; the pre-pass as
 /// `config.depth_from_pre_pass` says.
 pub fn lit_render_graph(config: ForwardLitConfig) -> StandardGraph {

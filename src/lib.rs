@@ -38,6 +38,7 @@
 //! ```
 
 #![warn(missing_docs)]
+pub mod batch;
 mod environment_file;
 mod gltf_import;
 pub mod graph;
@@ -49,7 +50,8 @@ pub mod windows;
 
 pub use oxygen_sceneprep::RenderOrigin;
 pub use renderer::{
-    FrameReport, FrameWarning, RenderError, Renderer, RendererInternals, RendererOptions, ViewReport, ViewRole,
+    DepthImage, FrameReport, FrameWarning, RenderError, Renderer, RendererInternals, RendererOptions, ViewReport,
+    ViewRole,
 };
 
 // Root paths the renderer's code and doc links name (`crate::WindowId`,

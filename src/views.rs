@@ -17,6 +17,7 @@ use oxygen_core::{Output, OutputSource, ProbeId, ProbeIds};
 use oxygen_sceneprep::{PreparedSceneFrame, ScenePrep, ViewPrepOptions, ViewRequest, Visibility};
 
 use crate::RenderError;
+use crate::batch::{BatchDesc, BatchEntry, BatchId, BatchIds};
 use crate::graph::{ErasedGraph, RenderGraph};
 
 pub use oxygen_core::{
@@ -44,6 +45,8 @@ pub(crate) enum TargetKind {
     Own,
     /// Face `face` of probe `probe`: that layer of the probe's cube.
     ProbeFace { probe: ProbeId, face: u32 },
+    /// Tile `slot` of batch `batch`'s atlas.
+    Tile { batch: BatchId, slot: u32 },
 }
 
 impl ViewDesc {
@@ -157,6 +160,9 @@ pub(crate) struct ViewEntry {
 /// The registered views and the links between them; no GPU needed.
 pub struct Views {
     pub(crate) entries: BTreeMap<ViewId, ViewEntry>,
+    /// Registered batches and their cameras' tiles.
+    pub(crate) batches: BTreeMap<BatchId, BatchEntry>,
+    batch_ids: BatchIds,
     /// Face views of each registered probe.
     pub(crate) probes: BTreeMap<ProbeId, [ViewId; oxygen_passes::PROBE_FACES]>,
     /// The application's ids; the renderer's own views take theirs from
@@ -184,6 +190,8 @@ impl Views {
     pub fn new() -> Self {
         Views {
             entries: BTreeMap::new(),
+            batches: BTreeMap::new(),
+            batch_ids: BatchIds::default(),
             probes: BTreeMap::new(),
             ids: ViewIds::default(),
             probe_ids: ProbeIds::default(),
@@ -212,11 +220,15 @@ impl Views {
     }
 
     fn insert(&mut self, id: ViewId, desc: ViewDesc, graph: impl RenderGraph) {
+        self.insert_erased(id, desc, Arc::new(graph));
+    }
+
+    fn insert_erased(&mut self, id: ViewId, desc: ViewDesc, graph: Arc<dyn ErasedGraph>) {
         self.entries.insert(
             id,
             ViewEntry {
                 resolver: desc.resolver,
-                graph: Arc::new(graph),
+                graph,
                 options: desc.options,
                 links: desc.links,
                 sun_shadows: desc.sun_shadows,
@@ -293,10 +305,104 @@ impl Views {
         false
     }
 
-    /// Removes a view; links to it from other views are dropped.
+    /// Registers a batch of cameras ([`crate::batch`]); it has no camera
+    /// until [`Views::add_camera`] adds one. Fails when the cameras' size
+    /// is empty.
+    pub fn register_batch(&mut self, desc: BatchDesc) -> Result<BatchId, RenderError> {
+        let BatchDesc { name, size, graph, max_page_side } = desc;
+        if size.x == 0 || size.y == 0 {
+            return Err(RenderError::InvalidBatch { name, reason: format!("its cameras' size {size} is empty") });
+        }
+        if max_page_side.is_some_and(|side| side < size.x.max(size.y)) {
+            let reason = format!("its pages ({max_page_side:?} pixels a side) cannot hold one {size} camera");
+            return Err(RenderError::InvalidBatch { name, reason });
+        }
+        let id = self.batch_ids.allocate();
+        let graph = Arc::new(graph);
+        self.batches.insert(id, BatchEntry { name, size, graph, max_page_side, slots: Vec::new() });
+        tracing::info!(batch = %id, "batch registered");
+        Ok(id)
+    }
+
+    /// Adds a camera to `batch`: a view (its own id, resolver, prepared
+    /// frame and outputs) that renders into a tile of the batch's atlas
+    /// at the batch's size, with the batch's graph, its visibility decided
+    /// on the CPU. Links (`ViewDesc::reads`) are kept; what a batch
+    /// camera cannot have is refused: anti-aliasing, sun cascades of its
+    /// own, a window rectangle, a path-traced reference, a GPU visibility
+    /// path. Remove it with [`Views::unregister`].
+    pub fn add_camera(&mut self, batch: BatchId, desc: impl Into<ViewDesc>) -> Result<ViewId, RenderError> {
+        let desc = desc.into();
+        let entry = self.batches.get(&batch).ok_or(RenderError::NoSuchBatch(batch))?;
+        let refused = if desc.msaa != oxygen_gpu::Msaa::Off {
+            Some("anti-aliasing (MSAA)")
+        } else if desc.sun_shadows.is_some() {
+            Some("sun cascades of its own")
+        } else if desc.shown.is_some() {
+            Some("a window rectangle")
+        } else if desc.options.ray_scene {
+            Some("a path-traced reference")
+        } else if desc.visibility.is_some_and(|v| v != Visibility::Cpu) {
+            Some("GPU visibility (batch cameras are culled on the CPU)")
+        } else {
+            None
+        };
+        if let Some(what) = refused {
+            return Err(RenderError::InvalidBatch {
+                name: entry.name.clone(),
+                reason: format!("a batch camera cannot have {what}"),
+            });
+        }
+        for link in &desc.links {
+            self.check_source(*link)?;
+        }
+        let graph = Arc::clone(&entry.graph);
+        let id = self.ids.allocate();
+        let slot = self.batches.get_mut(&batch).ok_or(RenderError::NoSuchBatch(batch))?.take_slot(id);
+        let desc = ViewDesc { target: TargetKind::Tile { batch, slot }, visibility: Some(Visibility::Cpu), ..desc };
+        self.insert_erased(id, desc, graph);
+        Ok(id)
+    }
+
+    /// Removes a batch and its cameras.
+    pub fn unregister_batch(&mut self, batch: BatchId) -> Result<(), RenderError> {
+        let entry = self.batches.get(&batch).ok_or(RenderError::NoSuchBatch(batch))?;
+        let cameras: Vec<ViewId> = entry.cameras().collect();
+        for camera in cameras {
+            self.unregister(camera)?;
+        }
+        self.batches.remove(&batch);
+        Ok(())
+    }
+
+    /// The cameras of `batch`, in tile order.
+    pub fn batch_cameras(&self, batch: BatchId) -> Result<Vec<ViewId>, RenderError> {
+        Ok(self.batches.get(&batch).ok_or(RenderError::NoSuchBatch(batch))?.cameras().collect())
+    }
+
+    /// The batch `view` is a camera of, if any.
+    pub fn batch_of(&self, view: ViewId) -> Option<BatchId> {
+        match self.entries.get(&view)?.target {
+            TargetKind::Tile { batch, .. } => Some(batch),
+            _ => None,
+        }
+    }
+
+    /// The name of `batch`.
+    pub fn batch_name(&self, batch: BatchId) -> Option<&str> {
+        self.batches.get(&batch).map(|b| b.name.as_str())
+    }
+
+    /// Removes a view (a batch camera frees its tile); links to it from
+    /// other views are dropped.
     pub fn unregister(&mut self, id: impl Into<ViewId>) -> Result<(), RenderError> {
         let id = id.into();
-        self.entries.remove(&id).ok_or(RenderError::NoSuchView(id))?;
+        let entry = self.entries.remove(&id).ok_or(RenderError::NoSuchView(id))?;
+        if let TargetKind::Tile { batch, .. } = entry.target
+            && let Some(batch) = self.batches.get_mut(&batch)
+        {
+            batch.free_slot(id);
+        }
         for entry in self.entries.values_mut() {
             entry.links.retain(|l| *l != OutputSource::View(id));
         }
@@ -334,6 +440,13 @@ impl Views {
         let ctx = ViewContext { view_id: id, frame_index: cpu.frame_index, time_seconds: 0.0 };
         let mut resolved = entry.resolver.resolve(&ctx, scene)?;
         resolved.view_id = id;
+        // A batch camera renders at its batch's size, as the renderer resolves it.
+        if let TargetKind::Tile { batch, .. } = entry.target
+            && let Some(size) = self.batches.get(&batch).map(|b| b.size)
+            && size != resolved.viewport
+        {
+            resolved = resolved.with_viewport(size)?;
+        }
         let origin = crate::RenderOrigin::default().resolve(Some(&resolved));
         cpu.prep.set_render_origin(origin);
         let request = ViewRequest { view: &resolved, options: entry.options };

@@ -57,6 +57,16 @@ pub enum GpuError {
         /// Layers the texture has.
         layers: u32,
     },
+    /// A rectangle that is empty or reaches past the texture's edge.
+    #[error("the {size:?} rectangle at {origin:?} is empty or outside the {texture_size:?} texture")]
+    RegionOutside {
+        /// Its top-left corner.
+        origin: (u32, u32),
+        /// Its size.
+        size: (u32, u32),
+        /// The texture's size (at the level asked for).
+        texture_size: (u32, u32),
+    },
 }
 
 /// What the application needs from the device.

@@ -172,8 +172,97 @@ impl GpuContext {
         level: u32,
         layer: u32,
     ) -> Result<Vec<u8>, GpuError> {
-        let _span = tracing::info_span!("readback").entered();
         let (width, height) = ((texture.width() >> level).max(1), (texture.height() >> level).max(1));
+        let region = TexelRegion { level, layer, origin: (0, 0), size: (width, height) };
+        self.read_region(texture, bytes_per_texel, region, wgpu::TextureAspect::All)
+    }
+
+    /// Reads the `size` rectangle at `origin` of layer `layer` of a 2D
+    /// RGBA8 texture (a view's tile of a batch's colour atlas) into an
+    /// image. Blocks until the GPU has finished all submitted work.
+    pub fn read_rgba8_region(
+        &self,
+        texture: &wgpu::Texture,
+        layer: u32,
+        origin: (u32, u32),
+        size: (u32, u32),
+    ) -> Result<image::RgbaImage, GpuError> {
+        use wgpu::TextureFormat as F;
+        let format = texture.format();
+        if !matches!(format, F::Rgba8Unorm | F::Rgba8UnormSrgb) {
+            return Err(GpuError::UnsupportedReadbackFormat(format));
+        }
+        let region = TexelRegion { level: 0, layer, origin, size };
+        let pixels = self.read_region(texture, 4, region, wgpu::TextureAspect::All)?;
+        // Length is exactly width * height * 4 by construction.
+        Ok(image::RgbaImage::from_raw(size.0, size.1, pixels).expect("readback size matches the region"))
+    }
+
+    /// Reads the `size` rectangle at `origin` of layer `layer` of a
+    /// `Depth32Float` texture: device depth (reverse-Z: 1 at the near
+    /// plane, 0 at the far plane or nothing drawn), row by row. Depth
+    /// cannot be copied in part, so the whole layer is copied and the
+    /// rectangle cut from it. Blocks until the GPU has finished all
+    /// submitted work.
+    pub fn read_depth_region(
+        &self,
+        texture: &wgpu::Texture,
+        layer: u32,
+        origin: (u32, u32),
+        size: (u32, u32),
+    ) -> Result<Vec<f32>, GpuError> {
+        let format = texture.format();
+        if format != wgpu::TextureFormat::Depth32Float {
+            return Err(GpuError::UnsupportedReadbackFormat(format));
+        }
+        let full = (texture.width(), texture.height());
+        let inside = size.0 > 0
+            && size.1 > 0
+            && origin.0.checked_add(size.0).is_some_and(|r| r <= full.0)
+            && origin.1.checked_add(size.1).is_some_and(|b| b <= full.1);
+        if !inside {
+            return Err(GpuError::RegionOutside { origin, size, texture_size: full });
+        }
+        let region = TexelRegion { level: 0, layer, origin: (0, 0), size: full };
+        let bytes = self.read_region(texture, 4, region, wgpu::TextureAspect::DepthOnly)?;
+        let row = full.0 as usize * 4;
+        let mut depth = Vec::with_capacity(size.0 as usize * size.1 as usize);
+        for y in origin.1..origin.1 + size.1 {
+            let start = y as usize * row + origin.0 as usize * 4;
+            let texels = &bytes[start..start + size.0 as usize * 4];
+            depth.extend(texels.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])));
+        }
+        Ok(depth)
+    }
+
+    /// The bytes of `region` of a 2D texture of `bytes_per_texel`, tightly
+    /// packed row by row. Fails when the region lies outside the texture.
+    fn read_region(
+        &self,
+        texture: &wgpu::Texture,
+        bytes_per_texel: u32,
+        region: TexelRegion,
+        aspect: wgpu::TextureAspect,
+    ) -> Result<Vec<u8>, GpuError> {
+        let _span = tracing::info_span!("readback").entered();
+        let TexelRegion { level, layer, origin, size: (width, height) } = region;
+        let (level_width, level_height) = ((texture.width() >> level).max(1), (texture.height() >> level).max(1));
+        if level >= texture.mip_level_count() || layer >= texture.depth_or_array_layers() {
+            return Err(GpuError::NoSuchSubresource {
+                level,
+                layer,
+                levels: texture.mip_level_count(),
+                layers: texture.depth_or_array_layers(),
+            });
+        }
+        let inside = width > 0
+            && height > 0
+            && origin.0.checked_add(width).is_some_and(|r| r <= level_width)
+            && origin.1.checked_add(height).is_some_and(|b| b <= level_height);
+        if !inside {
+            let texture_size = (level_width, level_height);
+            return Err(GpuError::RegionOutside { origin, size: (width, height), texture_size });
+        }
         let unpadded = width * bytes_per_texel;
         // Buffer rows must be 256-byte aligned for texture copies.
         let padded = unpadded.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
@@ -188,8 +277,8 @@ impl GpuContext {
             wgpu::TexelCopyTextureInfo {
                 texture,
                 mip_level: level,
-                origin: wgpu::Origin3d { x: 0, y: 0, z: layer },
-                aspect: wgpu::TextureAspect::All,
+                origin: wgpu::Origin3d { x: origin.0, y: origin.1, z: layer },
+                aspect,
             },
             wgpu::TexelCopyBufferInfo {
                 buffer: &buffer,
@@ -218,6 +307,15 @@ impl GpuContext {
         buffer.unmap();
         Ok(bytes)
     }
+}
+
+/// A rectangle of one mip level of one layer of a texture.
+#[derive(Clone, Copy, Debug)]
+struct TexelRegion {
+    level: u32,
+    layer: u32,
+    origin: (u32, u32),
+    size: (u32, u32),
 }
 
 /// One `Rg11b10Ufloat` texel as linear RGBA (alpha 1): red in bits 0–10,

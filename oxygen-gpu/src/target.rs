@@ -29,6 +29,182 @@ pub struct ViewTargets {
     /// view asks for anti-aliasing ([`Msaa`]); the colour resolves into
     /// `color.hdr` at the end of each pass. `depth` is then not written.
     pub msaa: Option<MsaaTargets>,
+    /// Where the view's rectangle lies when it is a tile of a
+    /// [`TileAtlas`] (its textures are the atlas's, shared with the other
+    /// cameras of its batch); `None` when the view covers its textures.
+    pub tile: Option<Tile>,
+}
+
+/// A view's rectangle in a [`TileAtlas`]: `width × height` pixels of
+/// [`ViewTargets`] starting at (`x`, `y`) of layer `page`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Tile {
+    /// Left edge in pixels.
+    pub x: u32,
+    /// Top edge in pixels.
+    pub y: u32,
+    /// The atlas layer (page) the tile is on.
+    pub page: u32,
+    /// The tile's index in the atlas (page by page, row by row).
+    pub index: u32,
+}
+
+/// The shared targets of a batch of equally sized views: pages (layers of
+/// 2D array textures) of tiles, one tile per view, so that every view of a
+/// batch draws into one render pass per page instead of targets of its
+/// own. Display colour (`Rgba8UnormSrgb`) and depth (`Depth32Float`,
+/// reverse-Z) always; the HDR colour only when [`TileAtlas::new`] is asked
+/// for it (a frame with blended draws, or a batch that keeps HDR).
+pub struct TileAtlas {
+    /// Pixels of one tile.
+    pub tile_size: (u32, u32),
+    /// The largest page side asked for ([`TileAtlas::new`]), if any.
+    pub max_side: Option<u32>,
+    /// Tiles across one page.
+    pub columns: u32,
+    /// Tiles down one page.
+    pub rows: u32,
+    /// Pages (array layers).
+    pub pages: u32,
+    /// Display colour, one layer per page.
+    pub color: wgpu::Texture,
+    /// Linear HDR colour, one layer per page, when asked for.
+    pub hdr: Option<wgpu::Texture>,
+    /// Depth, one layer per page.
+    pub depth: wgpu::Texture,
+    /// Per page: its layer of `color`, `hdr` (when present) and `depth`.
+    page_views: Vec<PageViews>,
+}
+
+struct PageViews {
+    color: wgpu::TextureView,
+    hdr: Option<wgpu::TextureView>,
+    depth: wgpu::TextureView,
+}
+
+impl TileAtlas {
+    /// The layout of `tiles` tiles of `tile_size` pixels on pages at most
+    /// `max_side` pixels square: (columns, rows, pages). `None` when a tile
+    /// is empty or larger than `max_side`, or when there are no tiles.
+    pub fn layout(tile_size: (u32, u32), tiles: u32, max_side: u32) -> Option<(u32, u32, u32)> {
+        let (w, h) = tile_size;
+        if w == 0 || h == 0 || w > max_side || h > max_side || tiles == 0 {
+            return None;
+        }
+        let (max_columns, max_rows) = (max_side / w, max_side / h);
+        // As square a page as the tiles need (columns first), no larger
+        // than the limit allows: a batch smaller than a page takes one page
+        // just big enough.
+        let columns = (tiles as f64).sqrt().ceil().min(f64::from(max_columns)).max(1.0) as u32;
+        let rows = tiles.div_ceil(columns).min(max_rows).max(1);
+        let pages = tiles.div_ceil(columns * rows);
+        Some((columns, rows, pages))
+    }
+
+    /// Bytes the atlas of [`TileAtlas::layout`] takes: 4 (depth) + 4
+    /// (colour) bytes a pixel, plus `hdr_bytes_per_pixel` with HDR. Known
+    /// before anything is allocated, so a renderer can refuse a batch that
+    /// does not fit its target budget.
+    pub fn bytes_for(tile_size: (u32, u32), layout: (u32, u32, u32), hdr_bytes_per_pixel: Option<u64>) -> u64 {
+        let (columns, rows, pages) = layout;
+        let pixels = u64::from(columns * tile_size.0) * u64::from(rows * tile_size.1) * u64::from(pages);
+        pixels * (8 + hdr_bytes_per_pixel.unwrap_or(0))
+    }
+
+    /// Allocates the atlas for `tiles` tiles of `tile_size` on pages no
+    /// larger than `max_side` (and the device's limit; see
+    /// [`TileAtlas::layout`]), with an HDR colour texture of `hdr_format`
+    /// when given. `None` when the tiles do not fit the device.
+    pub fn new(
+        device: &wgpu::Device,
+        tile_size: (u32, u32),
+        tiles: u32,
+        hdr_format: Option<HdrFormat>,
+        max_side: Option<u32>,
+        label: &str,
+    ) -> Option<Self> {
+        let limit = device.limits().max_texture_dimension_2d;
+        let side = max_side.map_or(limit, |s| s.min(limit));
+        let (columns, rows, pages) = Self::layout(tile_size, tiles, side)?;
+        if pages > device.limits().max_texture_array_layers {
+            return None;
+        }
+        let size =
+            wgpu::Extent3d { width: columns * tile_size.0, height: rows * tile_size.1, depth_or_array_layers: pages };
+        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_SRC;
+        let color = texture_2d(device, &format!("{label} colour atlas"), size, 1, ViewTargets::COLOR_FORMAT, usage);
+        let hdr =
+            hdr_format.map(|f| texture_2d(device, &format!("{label} hdr atlas"), size, 1, f.texture_format(), usage));
+        let depth = texture_2d(device, &format!("{label} depth atlas"), size, 1, ViewTargets::DEPTH_FORMAT, usage);
+        let page_views = (0..pages)
+            .map(|page| PageViews {
+                color: single_layer_view(&color, page, "colour page"),
+                hdr: hdr.as_ref().map(|t| single_layer_view(t, page, "hdr page")),
+                depth: single_layer_view(&depth, page, "depth page"),
+            })
+            .collect();
+        Some(TileAtlas { tile_size, max_side, columns, rows, pages, color, hdr, depth, page_views })
+    }
+
+    /// Tiles the atlas holds.
+    pub fn capacity(&self) -> u32 {
+        self.columns * self.rows * self.pages
+    }
+
+    /// Bytes the atlas takes.
+    pub fn bytes(&self) -> u64 {
+        let hdr = self.hdr.as_ref().map(|t| u64::from(t.format().block_copy_size(None).unwrap_or(8)));
+        Self::bytes_for(self.tile_size, (self.columns, self.rows, self.pages), hdr)
+    }
+
+    /// Where tile `index` lies, or `None` past the capacity.
+    pub fn tile(&self, index: u32) -> Option<Tile> {
+        if index >= self.capacity() {
+            return None;
+        }
+        let per_page = self.columns * self.rows;
+        let (page, within) = (index / per_page, index % per_page);
+        Some(Tile {
+            x: (within % self.columns) * self.tile_size.0,
+            y: (within / self.columns) * self.tile_size.1,
+            page,
+            index,
+        })
+    }
+
+    /// The targets of the view drawn into tile `index`: the atlas's
+    /// textures (owned by the atlas, so they count nothing in
+    /// [`ViewTargets::bytes`]), the tile's page as render views, and the
+    /// tile's rectangle; `None` past the capacity.
+    pub fn view_targets(&self, index: u32) -> Option<ViewTargets> {
+        let tile = self.tile(index)?;
+        let page = &self.page_views[tile.page as usize];
+        // Without an HDR texture the display colour stands in for it: only
+        // passes that tone-map in place write colour then.
+        let (hdr, hdr_view) = match (&self.hdr, &page.hdr) {
+            (Some(t), Some(v)) => (t.clone(), v.clone()),
+            _ => (self.color.clone(), page.color.clone()),
+        };
+        Some(ViewTargets {
+            color: Some(ColorTargets {
+                hdr,
+                hdr_view,
+                hdr_layer: tile.page,
+                color: Some(self.color.clone()),
+                color_view: Some(page.color.clone()),
+            }),
+            depth: self.depth.clone(),
+            depth_view: page.depth.clone(),
+            depth_layer: tile.page,
+            owns_depth: false,
+            width: self.tile_size.0,
+            height: self.tile_size.1,
+            msaa: None,
+            tile: Some(tile),
+        })
+    }
 }
 
 /// Samples per pixel of a view's mesh passes: the anti-aliasing knob
@@ -197,8 +373,13 @@ impl ViewTargets {
     }
 
     /// Bytes of the textures these targets own: a shadow view's atlas
-    /// layer and a probe face's cube are counted by their owners.
+    /// layer, a probe face's cube and a batch camera's tile are counted by
+    /// their owners.
     pub fn bytes(&self) -> u64 {
+        // A tile's textures are its atlas's, counted there.
+        if self.tile.is_some() {
+            return 0;
+        }
         let pixels = u64::from(self.width) * u64::from(self.height);
         let depth = if self.owns_depth { 4 } else { 0 };
         let hdr_bytes = |c: &ColorTargets| u64::from(c.hdr.format().block_copy_size(None).unwrap_or(8));
@@ -279,6 +460,7 @@ impl ViewTargets {
             width: atlas.width(),
             height: atlas.height(),
             msaa: None,
+            tile: None,
         }
     }
 
@@ -343,6 +525,7 @@ impl ViewTargets {
             width,
             height,
             msaa: None,
+            tile: None,
         }
     }
 }
@@ -381,4 +564,40 @@ pub fn texture_2d(
         usage,
         view_formats: &[],
     })
+}
+
+#[cfg(test)]
+mod tile_tests {
+    use super::TileAtlas;
+
+    #[test]
+    fn tiles_fill_a_square_page_then_more_pages() {
+        // One tile: a page of one.
+        assert_eq!(TileAtlas::layout((128, 128), 1, 8192), Some((1, 1, 1)));
+        // 5 tiles: 3 columns, 2 rows.
+        assert_eq!(TileAtlas::layout((128, 128), 5, 8192), Some((3, 2, 1)));
+        // 1 024 cameras of 128²: 32 × 32 on one 4 096² page.
+        assert_eq!(TileAtlas::layout((128, 128), 1024, 8192), Some((32, 32, 1)));
+        // 256 views of 640 × 360 under an 8 192 limit: 12 columns (7 680
+        // pixels), 16 rows would be 5 760 pixels high: fits 22 rows, so
+        // 256 / 12 = 22 rows on one page.
+        assert_eq!(TileAtlas::layout((640, 360), 256, 8192), Some((12, 22, 1)));
+        // 1 024 of them need pages: 12 × 22 = 264 a page.
+        assert_eq!(TileAtlas::layout((640, 360), 1024, 8192), Some((12, 22, 4)));
+    }
+
+    #[test]
+    fn empty_or_oversized_tiles_have_no_layout() {
+        assert_eq!(TileAtlas::layout((0, 128), 4, 8192), None);
+        assert_eq!(TileAtlas::layout((128, 0), 4, 8192), None);
+        assert_eq!(TileAtlas::layout((8193, 16), 4, 8192), None);
+        assert_eq!(TileAtlas::layout((16, 16), 0, 8192), None);
+    }
+
+    #[test]
+    fn bytes_count_depth_colour_and_hdr() {
+        // 2 × 1 tiles of 4 × 4 on one page: 32 pixels.
+        assert_eq!(TileAtlas::bytes_for((4, 4), (2, 1, 1), None), 32 * 8);
+        assert_eq!(TileAtlas::bytes_for((4, 4), (2, 1, 3), Some(8)), 3 * 32 * 16);
+    }
 }

@@ -117,6 +117,35 @@ pub enum RenderError {
         /// `max_texture_dimension_2d`.
         limit: u32,
     },
+    /// A batch or one of its cameras cannot be registered as asked.
+    #[error("batch {name:?}: {reason}")]
+    InvalidBatch {
+        /// The batch's name.
+        name: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A batch's atlas would pass the renderer's target memory budget.
+    #[error(
+        "batch {name:?}: the atlas of {cameras} cameras would take {} MiB; the target budget is {} MiB, of which {} MiB \
+         are taken (RendererOptions::target_budget_bytes)",
+        bytes >> 20, budget >> 20, taken >> 20
+    )]
+    BatchBudget {
+        /// The batch's name.
+        name: String,
+        /// Its cameras (tiles).
+        cameras: u32,
+        /// What its atlas would take.
+        bytes: u64,
+        /// The budget.
+        budget: u64,
+        /// What other views' targets take already.
+        taken: u64,
+    },
+    /// No batch with this id.
+    #[error("{0} is not registered")]
+    NoSuchBatch(crate::batch::BatchId),
     /// No window with this id.
     #[error("{0} does not exist")]
     NoSuchWindow(crate::WindowId),

@@ -55,6 +55,7 @@ use tracing::{info, info_span, warn};
 
 pub use error::RenderError;
 pub use options::RendererOptions;
+pub use readback::DepthImage;
 pub use report::{FrameReport, FrameWarning, ViewReport, ViewRole};
 
 use crate::views::Views;

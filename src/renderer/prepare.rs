@@ -6,18 +6,20 @@
 //! output, [`PreparedFrame`], is every view of the frame complete: nothing
 //! after it changes a view.
 
+use std::collections::{BTreeMap, BTreeSet};
 use std::sync::Arc;
 use std::time::Instant;
 
 use oxygen_core::{ResolvedView, Scene, ViewId};
 use oxygen_passes::{OutputSource, ProbeId};
-use oxygen_sceneprep::{MaterialFeatures, PreparedSceneFrame};
+use oxygen_sceneprep::{MaterialFeatures, PassMask, PreparedSceneFrame};
 use oxygen_sceneprep::{ViewPrepOptions, ViewRequest};
 use tracing::{info_span, warn};
 
 use super::resolve::{FrameClock, ResolvedFrame, ResolvedFrameView};
-use super::targets::atlas_layers;
+use super::targets::{BatchPlan, atlas_layers};
 use super::{FrameWarning, RenderError, Renderer, ViewRole};
+use crate::batch::BatchId;
 use crate::graph::ErasedGraph;
 use crate::shadows::{ShadowRole, shadow_view_options};
 
@@ -30,6 +32,8 @@ pub(crate) enum TargetPlan {
     AtlasLayer { tile: u32 },
     /// Layer `face` of probe `probe`'s cube.
     ProbeFace { probe: ProbeId, face: u32 },
+    /// Tile `slot` of batch `batch`'s atlas.
+    Tile { batch: crate::batch::BatchId, slot: u32 },
 }
 
 /// One view of this frame, registered or the renderer's own.
@@ -84,6 +88,35 @@ impl FrameView {
 }
 
 impl Renderer {
+    /// What each batch's atlas must hold this frame: its cameras' size,
+    /// its tiles, and HDR colour when some camera has blended draws, is
+    /// read by another view, or the renderer keeps every HDR image.
+    fn batch_plans(&self, views: &[FrameView], frames: &[PreparedSceneFrame]) -> BTreeMap<BatchId, BatchPlan> {
+        let readers: BTreeSet<ViewId> = views
+            .iter()
+            .flat_map(|v| {
+                v.links.iter().filter_map(move |l| match l {
+                    OutputSource::View(id) if *id != v.id => Some(*id),
+                    _ => None,
+                })
+            })
+            .collect();
+        let mut plans: BTreeMap<BatchId, BatchPlan> = BTreeMap::new();
+        for (view, frame) in views.iter().zip(frames) {
+            let TargetPlan::Tile { batch, .. } = view.target else { continue };
+            let Some(entry) = self.views.batches.get(&batch) else { continue };
+            let plan = plans.entry(batch).or_insert(BatchPlan {
+                size: entry.size,
+                tiles: entry.slots.len() as u32,
+                hdr: self.settings.keep_hdr,
+                max_page_side: entry.max_page_side,
+            });
+            plan.hdr |= readers.contains(&view.id)
+                || frame.partitions_matching(PassMask::TRANSPARENT, PassMask::empty()).next().is_some();
+        }
+        plans
+    }
+
     /// Step 2: prepares the views `resolved` of `scene` (and the shadow views
     /// they need) and everything the GPU reads of them; `started` is when
     /// the frame began.
@@ -94,7 +127,7 @@ impl Renderer {
         started: Instant,
     ) -> Result<PreparedFrame, RenderError> {
         let _span = info_span!("prepare", views = resolved.views.len()).entered();
-        let ResolvedFrame { clock, views: registered, mut warnings } = resolved;
+        let ResolvedFrame { clock, views: registered, mut warnings, taken } = resolved;
         let heap_bytes_before = self.heap.bytes_written();
         // The origin follows the first colour view (shadow views are passed
         // over when there is another).
@@ -113,17 +146,9 @@ impl Renderer {
             self.targets.release(id);
             self.prep.forget_view(id, &mut self.heap.slots)?;
         }
-        // Shadow cascades are admitted after the registered views' targets.
-        let mut taken = self.targets.paused_bytes(&self.views)
-            + registered
-                .iter()
-                .filter_map(|v| match v.target {
-                    TargetPlan::Own { with_color, samples } => {
-                        Some(self.targets.bytes_for(v.world.viewport, with_color, samples))
-                    }
-                    _ => None,
-                })
-                .sum::<u64>();
+        // Shadow cascades are admitted after the registered views' targets
+        // and the batches' atlases.
+        let mut taken = taken;
         let mut views: Vec<FrameView> = Vec::with_capacity(registered.len() + planned.len());
         for v in registered {
             views.push(FrameView::at_origin(v, origin));
@@ -178,6 +203,14 @@ impl Renderer {
         });
         let _targets = info_span!("targets", views = views.len()).entered();
         let frames = self.prep.frames();
+        let batches = self.batch_plans(&views, frames);
+        let registry = &self.views;
+        self.targets.allocate_atlases(
+            &self.gpu.device,
+            &batches,
+            |b| registry.batches.contains_key(&b),
+            |b| registry.batch_name(b).unwrap_or("batch").to_string(),
+        );
         let constants_bytes = self.targets.allocate(
             &self.gpu,
             &self.heap,

@@ -25,12 +25,37 @@ impl Renderer {
         Ok(oxygen_sceneprep::canonical_draws(all))
     }
 
-    /// The view's colour target as an image (waits for the GPU).
+    /// The view's colour target as an image (a batch camera's tile of its
+    /// batch's atlas; waits for the GPU).
     pub fn read_color(&self, id: impl Into<ViewId>) -> Result<image::RgbaImage, RenderError> {
         let id = id.into();
-        let color = self.color_targets(id)?;
+        let targets = self.view_targets(id)?;
+        let color = targets.color.as_ref().ok_or(RenderError::DepthOnly(id))?;
         let display = color.color.as_ref().ok_or(RenderError::NoDisplayTarget(id))?;
-        Ok(self.gpu.read_rgba8(display)?)
+        Ok(match targets.tile {
+            Some(tile) => {
+                self.gpu.read_rgba8_region(display, tile.page, (tile.x, tile.y), (targets.width, targets.height))?
+            }
+            None => self.gpu.read_rgba8(display)?,
+        })
+    }
+
+    /// The view's depth as the GPU wrote it (reverse-Z device depth, and
+    /// the pose it was rendered with, for [`DepthImage::linear`]); waits
+    /// for the GPU. A multisampled view has no single-sampled depth to
+    /// read ([`RenderError::Unsupported`]).
+    pub fn read_depth(&self, id: impl Into<ViewId>) -> Result<DepthImage, RenderError> {
+        let id = id.into();
+        let targets = self.view_targets(id)?;
+        if targets.msaa.is_some() {
+            return Err(RenderError::Unsupported(format!("{id} is multisampled: its depth is never resolved")));
+        }
+        let view = *self.targets.last_view(id).ok_or(RenderError::NotRendered(id))?;
+        let (x, y) = targets.tile.map_or((0, 0), |t| (t.x, t.y));
+        let layer = targets.tile.map_or(targets.depth_layer, |t| t.page);
+        let (width, height) = (targets.width, targets.height);
+        let depth = self.gpu.read_depth_region(&targets.depth, layer, (x, y), (width, height))?;
+        Ok(DepthImage { width, height, depth, view })
     }
 
     /// Reads back a rendered view's linear HDR target (what shading wrote,
@@ -39,19 +64,85 @@ impl Renderer {
     /// in the shading pass (see [`RendererOptions::keep_hdr`]).
     pub fn read_hdr(&self, id: impl Into<ViewId>) -> Result<oxygen_gpu::HdrImage, RenderError> {
         let id = id.into();
-        let color = self.color_targets(id)?;
-        if color.hdr_layer != 0 {
-            return Err(RenderError::NoDisplayTarget(id));
-        }
+        let targets = self.view_targets(id)?;
+        let color = targets.color.as_ref().ok_or(RenderError::DepthOnly(id))?;
         if !self.targets.get(id).and_then(|v| v.holds).is_some_and(|h| h.hdr_written) {
             return Err(RenderError::HdrNotWritten(id));
         }
+        if let Some(tile) = targets.tile {
+            // The tile cut from its page of the HDR atlas.
+            let page = self.gpu.read_rgba16_float_layer(&color.hdr, 0, tile.page)?;
+            let (width, height) = (targets.width, targets.height);
+            let mut pixels = Vec::with_capacity((width * height) as usize);
+            for y in tile.y..tile.y + height {
+                let row = (y * page.width + tile.x) as usize;
+                pixels.extend_from_slice(&page.pixels[row..row + width as usize]);
+            }
+            return Ok(oxygen_gpu::HdrImage { width, height, pixels });
+        }
+        if color.hdr_layer != 0 {
+            return Err(RenderError::NoDisplayTarget(id));
+        }
         Ok(self.gpu.read_hdr_texels(&color.hdr)?)
+    }
+
+    /// A view's targets, for reading its images.
+    pub(crate) fn view_targets(&self, id: ViewId) -> Result<&oxygen_gpu::ViewTargets, RenderError> {
+        let known = self.views.entries.contains_key(&id) || self.shadows.views.all().any(|v| v == id);
+        if !known {
+            return Err(RenderError::NoSuchView(id));
+        }
+        self.targets.get(id).and_then(|v| v.targets.as_ref()).ok_or(RenderError::NotRendered(id))
     }
 
     /// The view's prepared frame from the last `render_frame`.
     pub fn prepared_frame(&self, id: impl Into<ViewId>) -> Option<&PreparedSceneFrame> {
         let id = id.into();
         self.prep.frames().iter().find(|f| f.view_id() == id)
+    }
+}
+
+/// A view's depth as read back ([`Renderer::read_depth`]): reverse-Z device
+/// depth per pixel, row by row (1 at the near plane, falling towards 0 with
+/// distance; 0 where nothing was drawn), with the pose it was rendered from.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DepthImage {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Device depth, `width × height`, row by row from the top.
+    pub depth: Vec<f32>,
+    /// The view as it was rendered (its projection turns device depth into
+    /// distance).
+    pub view: oxygen_core::ResolvedView,
+}
+
+impl DepthImage {
+    /// Device depth at pixel (`x`, `y`).
+    pub fn get(&self, x: u32, y: u32) -> f32 {
+        self.depth[(y * self.width + x) as usize]
+    }
+
+    /// Linear depth in world units (metres for a scene in metres) at each
+    /// pixel: the distance from the camera's plane along its view
+    /// direction, found by unprojecting the pixel's centre through the
+    /// view's projection (so any projection, perspective or orthographic,
+    /// finite or infinite far plane). Pixels where nothing was drawn (depth
+    /// 0 under an infinite far plane) are `f32::INFINITY`.
+    pub fn linear(&self) -> Vec<f32> {
+        let inverse = self.view.projection.inverse();
+        let (w, h) = (self.width.max(1) as f32, self.height.max(1) as f32);
+        self.depth
+            .iter()
+            .enumerate()
+            .map(|(i, d)| {
+                let (x, y) = ((i as u32 % self.width) as f32, (i as u32 / self.width) as f32);
+                let ndc = glam::Vec4::new((x + 0.5) / w * 2.0 - 1.0, 1.0 - (y + 0.5) / h * 2.0, *d, 1.0);
+                let p = inverse * ndc;
+                let z = -p.z / p.w;
+                if z.is_finite() && z >= 0.0 { z } else { f32::INFINITY }
+            })
+            .collect()
     }
 }

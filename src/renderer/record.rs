@@ -59,6 +59,21 @@ pub(crate) struct RecordedFrame {
     pub(crate) pipelines_created: u64,
 }
 
+/// One unit of recording: a view, or every camera of a batch (with the
+/// batch's graph and name).
+struct Job {
+    /// Indices into the frame's contexts.
+    members: Vec<usize>,
+    batch: Option<(Arc<crate::graph::BatchGraph>, String)>,
+}
+
+/// What the executors share.
+struct Work<'a> {
+    contexts: &'a [(usize, RenderContext<'a>)],
+    jobs: &'a [Job],
+    plan: &'a PreparedFrame,
+}
+
 /// What one view's recording produced.
 struct Recorded {
     result: Result<(), PassError>,
@@ -89,7 +104,31 @@ impl Renderer {
             }
             deps
         };
-        let deps: Vec<BTreeSet<usize>> = plan.views.iter().map(dependencies).collect();
+        let mut deps: Vec<BTreeSet<usize>> = plan.views.iter().map(dependencies).collect();
+        // A batch records as one: every camera waits for what any of them
+        // reads, and a view reading any camera waits for all of them.
+        let mut batches: BTreeMap<crate::batch::BatchId, Vec<usize>> = BTreeMap::new();
+        for (i, view) in plan.views.iter().enumerate() {
+            if let TargetPlan::Tile { batch, .. } = view.target {
+                batches.entry(batch).or_default().push(i);
+            }
+        }
+        for members in batches.values() {
+            let inside: BTreeSet<usize> = members.iter().copied().collect();
+            let union: BTreeSet<usize> =
+                members.iter().flat_map(|m| deps[*m].iter().copied()).filter(|d| !inside.contains(d)).collect();
+            for m in members {
+                deps[*m] = union.clone();
+            }
+            for d in deps.iter_mut() {
+                if !d.is_disjoint(&inside) {
+                    d.extend(inside.iter().copied());
+                }
+            }
+            for m in members {
+                deps[*m].retain(|d| !inside.contains(d));
+            }
+        }
         // Kahn's algorithm over views ordered by id.
         let mut by_id: Vec<usize> = (0..plan.views.len()).collect();
         by_id.sort_by_key(|i| plan.views[*i].id);
@@ -176,6 +215,41 @@ impl Renderer {
         }
     }
 
+    /// What the threads record, in submission order: a view alone, or a
+    /// batch's cameras together (in tile order, at the place of the last
+    /// of them in link order, which follows everything any of them reads
+    /// and precedes everything reading one of them).
+    fn jobs(&self, plan: &PreparedFrame, contexts: &[(usize, RenderContext<'_>)]) -> Vec<Job> {
+        let batch_of = |c: usize| match plan.views[contexts[c].0].target {
+            TargetPlan::Tile { batch, slot } => Some((batch, slot)),
+            _ => None,
+        };
+        let mut last: BTreeMap<crate::batch::BatchId, usize> = BTreeMap::new();
+        for c in 0..contexts.len() {
+            if let Some((batch, _)) = batch_of(c) {
+                last.insert(batch, c);
+            }
+        }
+        let mut jobs = Vec::with_capacity(contexts.len());
+        for c in 0..contexts.len() {
+            let Some((batch, _)) = batch_of(c) else {
+                jobs.push(Job { members: vec![c], batch: None });
+                continue;
+            };
+            if last.get(&batch) != Some(&c) {
+                continue;
+            }
+            let mut members: Vec<(u32, usize)> = (0..contexts.len())
+                .filter_map(|m| batch_of(m).filter(|(b, _)| *b == batch).map(|(_, slot)| (slot, m)))
+                .collect();
+            members.sort_unstable();
+            let members = members.into_iter().map(|(_, m)| m).collect();
+            let graph = self.views.batches.get(&batch).map(|b| (Arc::clone(&b.graph), b.name.clone()));
+            jobs.push(Job { members, batch: graph });
+        }
+        jobs
+    }
+
     /// Step 3: records every view of `plan` and submits them in link order.
     pub(super) fn record(&self, plan: &PreparedFrame) -> Result<RecordedFrame, RenderError> {
         let started = Instant::now();
@@ -235,16 +309,18 @@ impl Renderer {
             ));
         }
 
-        let threads = self.prep.worker_pool().threads().min(contexts.len()).max(1);
-        let results: Vec<Mutex<Option<Recorded>>> = contexts.iter().map(|_| Mutex::new(None)).collect();
+        let jobs = self.jobs(plan, &contexts);
+        let threads = self.prep.worker_pool().threads().min(jobs.len()).max(1);
+        let results: Vec<Mutex<Option<Recorded>>> = jobs.iter().map(|_| Mutex::new(None)).collect();
         let queue = ViewQueue {
-            started: Mutex::new(vec![false; contexts.len()]),
-            producers: contexts.iter().map(|(i, _)| producers[*i].as_slice()).collect(),
+            started: Mutex::new(vec![false; jobs.len()]),
+            producers: jobs.iter().map(|j| producers[contexts[j.members[0]].0].as_slice()).collect(),
             idle: Mutex::new(Vec::new()),
         };
+        let work = Work { contexts: &contexts, jobs: &jobs, plan };
         let job = |_thread: usize| {
             let _compiler = self.pipelines.attach_compiler();
-            run_executor(&contexts, plan, &queue, &results, &self.pipelines, &self.gpu.device, &progress);
+            run_executor(&work, &queue, &results, &self.pipelines, &self.gpu.device, &progress);
         };
         self.prep.worker_pool().run(threads, &job);
 
@@ -254,31 +330,37 @@ impl Renderer {
         // Per probe whose faces rendered: how many buffers precede its
         // prefilter (one past its last face's).
         let mut probe_filters: BTreeMap<ProbeId, usize> = BTreeMap::new();
-        for ((i, _), slot) in contexts.iter().zip(results) {
-            let view = &plan.views[*i];
+        for (job, slot) in jobs.iter().zip(results) {
             let recorded = slot.into_inner().unwrap_or_else(|e| e.into_inner());
-            // Every context was taken and finished by some thread before `run` returned.
+            // Every job was taken and finished by some thread before `run` returned.
             let Some(recorded) = recorded else { continue };
-            recorded.result.map_err(|source| RenderError::Pass { view: view.id, source })?;
+            let first = &plan.views[contexts[job.members[0]].0];
+            recorded.result.map_err(|source| RenderError::Pass { view: first.id, source })?;
             buffers.push(recorded.buffer);
-            if let ViewRole::ProbeFace { probe, .. } = view.role {
-                probe_filters.insert(probe, buffers.len());
+            for (k, member) in job.members.iter().enumerate() {
+                let i = contexts[*member].0;
+                let view = &plan.views[i];
+                if let ViewRole::ProbeFace { probe, .. } = view.role {
+                    probe_filters.insert(probe, buffers.len());
+                }
+                rendered.push(RenderedView {
+                    id: view.id,
+                    view: view.gpu,
+                    hdr_written: !recorded.stats.tone_mapped_in_pass,
+                });
+                // A batch's recording is counted once, at its first camera.
+                let (stats, busy) = if k == 0 { (recorded.stats, recorded.busy) } else { Default::default() };
+                reports.push(ViewReport {
+                    view: view.id,
+                    role: view.role,
+                    draws: frames[i].draws().len(),
+                    visibility: view.options.visibility,
+                    partitions: frames[i].partitions().len(),
+                    recorded: stats,
+                    prep_seconds: frames[i].prep_seconds() as f64,
+                    record_seconds: busy.as_secs_f64(),
+                });
             }
-            rendered.push(RenderedView {
-                id: view.id,
-                view: view.gpu,
-                hdr_written: !recorded.stats.tone_mapped_in_pass,
-            });
-            reports.push(ViewReport {
-                view: view.id,
-                role: view.role,
-                draws: frames[*i].draws().len(),
-                visibility: view.options.visibility,
-                partitions: frames[*i].partitions().len(),
-                recorded: recorded.stats,
-                prep_seconds: frames[*i].prep_seconds() as f64,
-                record_seconds: recorded.busy.as_secs_f64(),
-            });
         }
         // A probe's levels are prefiltered across its faces, so after all
         // six have rendered and before any view reads it (link order puts
@@ -403,8 +485,7 @@ struct Task<'a> {
 
 /// One thread's executor (see the module docs).
 fn run_executor<'a>(
-    contexts: &'a [(usize, RenderContext<'a>)],
-    plan: &'a PreparedFrame,
+    work: &Work<'a>,
     queue: &ViewQueue<'_>,
     results: &[Mutex<Option<Recorded>>],
     pipelines: &Pipelines,
@@ -430,9 +511,10 @@ fn run_executor<'a>(
                 Poll::Ready(mut recorded) => {
                     let task = tasks.swap_remove(t);
                     recorded.busy = task.busy;
-                    let view = plan.views[contexts[task.index].0].id;
                     *results[task.index].lock().unwrap_or_else(|e| e.into_inner()) = Some(recorded);
-                    progress.complete(view);
+                    for member in &work.jobs[task.index].members {
+                        progress.complete(work.plan.views[work.contexts[*member].0].id);
+                    }
                     queue.view_finished();
                 }
             }
@@ -449,8 +531,24 @@ fn run_executor<'a>(
         }
         let next = queue.take(progress, tasks.is_empty());
         if let Next::Start(index) = next {
-            let (i, ctx) = &contexts[index];
-            let view = &plan.views[*i];
+            let job = &work.jobs[index];
+            if let Some((graph, name)) = &job.batch {
+                let views: Vec<&RenderContext<'a>> = job.members.iter().map(|m| &work.contexts[*m].1).collect();
+                let device = &views[0].gpu.device;
+                let span = info_span!("render_batch", batch = %name, cameras = views.len());
+                let future = async move {
+                    let mut rec = CommandRecorder::new(device, name);
+                    let result = graph.record_batch(&views, &mut rec).await;
+                    let (buffer, stats) = rec.finish();
+                    Recorded { result, buffer, stats, busy: Duration::ZERO }
+                }
+                .instrument(span);
+                let waker = Arc::new(TaskWaker { woken: AtomicBool::new(true), thread: std::thread::current() });
+                tasks.push(Task { index, future: Box::pin(future), waker, busy: Duration::ZERO });
+                continue;
+            }
+            let (i, ctx) = &work.contexts[job.members[0]];
+            let view = &work.plan.views[*i];
             let graph = &*view.graph;
             let future = async move {
                 let mut rec = CommandRecorder::new(&ctx.gpu.device, &view.id.to_string());

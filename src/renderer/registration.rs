@@ -7,6 +7,7 @@ use oxygen_sceneprep::ViewPrepOptions;
 use tracing::warn;
 
 use super::{RenderError, Renderer, ViewRole};
+use crate::batch::{BatchDesc, BatchId};
 use crate::graph::RenderGraph;
 use crate::views::ViewDesc;
 
@@ -40,6 +41,35 @@ impl Renderer {
     /// Links `view` to `output` after registration ([`Views::link`]).
     pub fn link<K>(&mut self, view: impl Into<ViewId>, output: Output<K>) -> Result<(), RenderError> {
         self.views.link(view, output)
+    }
+
+    /// Registers a batch of cameras ([`crate::batch`]): one graph, one
+    /// size, one atlas of tiles for all of them; cameras come with
+    /// [`Renderer::add_camera`].
+    pub fn register_batch(&mut self, desc: BatchDesc) -> Result<BatchId, RenderError> {
+        self.views.register_batch(desc)
+    }
+
+    /// Adds a camera to `batch` ([`Views::add_camera`](crate::views::Views::add_camera)):
+    /// a view of its own id that renders into a tile of the batch's atlas
+    /// from the next frame on. Remove it with [`Renderer::unregister_view`].
+    pub fn add_camera(&mut self, batch: BatchId, desc: impl Into<ViewDesc>) -> Result<ViewId, RenderError> {
+        self.views.add_camera(batch, desc)
+    }
+
+    /// Removes a batch, its cameras and its atlas.
+    pub fn unregister_batch(&mut self, batch: BatchId) -> Result<(), RenderError> {
+        let cameras = self.views.batch_cameras(batch)?;
+        self.views.unregister_batch(batch)?;
+        for camera in cameras {
+            self.release_view(camera)?;
+        }
+        Ok(())
+    }
+
+    /// The cameras of `batch`, in tile order.
+    pub fn batch_cameras(&self, batch: BatchId) -> Result<Vec<ViewId>, RenderError> {
+        self.views.batch_cameras(batch)
     }
 
     /// Removes a view, the shadow cascades it owns, and frees their slots.

@@ -34,6 +34,11 @@ pub enum ViewRole {
         /// The atlas layer.
         tile: u32,
     },
+    /// A camera of batch `batch`, recorded with the rest of its batch.
+    BatchCamera {
+        /// The batch.
+        batch: crate::batch::BatchId,
+    },
     /// Face `face` of reflection probe `probe`.
     ProbeFace {
         /// The probe.

@@ -51,6 +51,10 @@ pub(crate) struct ResolvedFrame {
     pub(crate) views: Vec<ResolvedFrameView>,
     /// The views left out, and why.
     pub(crate) warnings: Vec<FrameWarning>,
+    /// Target bytes admitted to the budget: paused views', the views' own
+    /// and the batches' atlases (the prepare step admits shadow cascades
+    /// after them).
+    pub(crate) taken: u64,
 }
 
 impl Renderer {
@@ -72,6 +76,12 @@ impl Renderer {
                 TargetKind::ProbeFace { probe, face } => {
                     (ViewRole::ProbeFace { probe, face }, TargetPlan::ProbeFace { probe, face })
                 }
+                TargetKind::Tile { batch, slot } => (ViewRole::BatchCamera { batch }, TargetPlan::Tile { batch, slot }),
+            };
+            // A batch camera renders at its batch's size.
+            let batch_size = match entry.target {
+                TargetKind::Tile { batch, .. } => self.views.batches.get(&batch).map(|b| b.size),
+                _ => None,
             };
             // A view shown in a minimised window is not rendered.
             let shown_size = self.windows.shown_size(entry.shown);
@@ -83,7 +93,7 @@ impl Renderer {
                     // The id is the renderer's, whatever the resolver wrote.
                     view.view_id = *id;
                     // A view shown in a window takes its rectangle's size.
-                    if let Some(Some(size)) = shown_size
+                    if let Some(size) = shown_size.flatten().or(batch_size)
                         && size != view.viewport
                     {
                         view = view.with_viewport(size)?;
@@ -124,6 +134,58 @@ impl Renderer {
                 }
             }
         }
-        ResolvedFrame { clock, views, warnings }
+        self.admit_batches(&mut views, &mut warnings, &mut taken);
+        ResolvedFrame { clock, views, warnings, taken }
+    }
+
+    /// Admits each batch's atlas (counted with an HDR layer, the most it
+    /// can take) to the target budget after the other views' targets; the
+    /// cameras of a batch that does not fit, or whose atlas the device
+    /// cannot hold, are left out with a warning naming the reason.
+    fn admit_batches(&self, views: &mut Vec<ResolvedFrameView>, warnings: &mut Vec<FrameWarning>, taken: &mut u64) {
+        let limits = self.gpu.device.limits();
+        let mut refused: Vec<(crate::batch::BatchId, RenderError)> = Vec::new();
+        for (batch, entry) in &self.views.batches {
+            if !views.iter().any(|v| matches!(v.target, TargetPlan::Tile { batch: b, .. } if b == *batch)) {
+                continue;
+            }
+            let size = (entry.size.x, entry.size.y);
+            let tiles = entry.slots.len() as u32;
+            let layout = oxygen_gpu::TileAtlas::layout(size, tiles, entry.page_side(limits.max_texture_dimension_2d))
+                .filter(|(_, _, pages)| *pages <= limits.max_texture_array_layers);
+            let Some(layout) = layout else {
+                let reason = format!(
+                    "{tiles} cameras of {}x{} do not fit the device's {} pixels and {} layers",
+                    size.0, size.1, limits.max_texture_dimension_2d, limits.max_texture_array_layers
+                );
+                refused.push((*batch, RenderError::InvalidBatch { name: entry.name.clone(), reason }));
+                continue;
+            };
+            let bytes = oxygen_gpu::TileAtlas::bytes_for(size, layout, Some(self.targets.hdr_format.bytes_per_pixel()));
+            if taken.saturating_add(bytes) > self.targets.budget {
+                refused.push((
+                    *batch,
+                    RenderError::BatchBudget {
+                        name: entry.name.clone(),
+                        cameras: tiles,
+                        bytes,
+                        budget: self.targets.budget,
+                        taken: *taken,
+                    },
+                ));
+                continue;
+            }
+            *taken += bytes;
+        }
+        for (batch, error) in refused {
+            views.retain(|v| {
+                let keep = !matches!(v.target, TargetPlan::Tile { batch: b, .. } if b == batch);
+                if !keep {
+                    warn!(view = %v.id, "view skipped this frame: {error}");
+                    warnings.push(FrameWarning::ViewSkipped { view: v.id, reason: error.to_string() });
+                }
+                keep
+            });
+        }
     }
 }

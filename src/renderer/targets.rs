@@ -8,13 +8,14 @@ use std::collections::HashMap;
 
 use oxygen_bindless::{BindlessHeap, CameraConstants, SceneConstantsBuffer};
 use oxygen_core::{ResolvedView, ViewId};
-use oxygen_gpu::{ColorTargets, GpuContext, HdrFormat, Msaa, ViewTargets};
+use oxygen_gpu::{GpuContext, HdrFormat, Msaa, TileAtlas, ViewTargets};
 use oxygen_sceneprep::PreparedSceneFrame;
 
 use super::prepare::{FrameView, TargetPlan};
 use super::probes::Probes;
 use super::record::RenderedView;
 use super::{RenderError, Renderer};
+use crate::batch::BatchId;
 use crate::views::Views;
 
 /// What the renderer keeps per view on the GPU.
@@ -44,9 +45,26 @@ impl OverBudget {
     }
 }
 
+/// What a batch's atlas must hold this frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct BatchPlan {
+    /// Every camera's size.
+    pub(crate) size: glam::UVec2,
+    /// Tiles (one past the highest a camera holds).
+    pub(crate) tiles: u32,
+    /// Whether the frame writes HDR colour (blended draws, a reader of a
+    /// camera's HDR image, `keep_hdr`).
+    pub(crate) hdr: bool,
+    /// The largest page side asked for (the device's limit otherwise).
+    pub(crate) max_page_side: Option<u32>,
+}
+
 /// Every view's targets and constants, and the budget they share.
 pub(crate) struct Targets {
     views: HashMap<ViewId, ViewGpu>,
+    /// Each batch's atlas, kept between frames (its cameras' images stay
+    /// readable) and reallocated when the batch outgrows it.
+    atlases: HashMap<BatchId, TileAtlas>,
     /// The HDR format in use (the option, or its fallback).
     pub(crate) hdr_format: HdrFormat,
     pub(crate) budget: u64,
@@ -54,7 +72,7 @@ pub(crate) struct Targets {
 
 impl Targets {
     pub(crate) fn new(hdr_format: HdrFormat, budget: u64) -> Self {
-        Targets { views: HashMap::new(), hdr_format, budget }
+        Targets { views: HashMap::new(), atlases: HashMap::new(), hdr_format, budget }
     }
 
     /// What the renderer keeps for `view`, once a frame has prepared it.
@@ -67,9 +85,43 @@ impl Targets {
         self.views.remove(&view);
     }
 
-    /// Bytes the views' targets take now.
+    /// Bytes the views' targets and the batches' atlases take now.
     pub(crate) fn memory(&self) -> u64 {
-        self.views.values().filter_map(|v| v.targets.as_ref()).map(ViewTargets::bytes).sum()
+        let views: u64 = self.views.values().filter_map(|v| v.targets.as_ref()).map(ViewTargets::bytes).sum();
+        views + self.atlases.values().map(TileAtlas::bytes).sum::<u64>()
+    }
+
+    /// Gives each batch of `plans` an atlas that holds what it needs this
+    /// frame (allocated anew when the batch outgrew it, changed size or
+    /// needs HDR colour it lacks) and forgets the atlases of batches that
+    /// are no longer registered (`registered`).
+    pub(crate) fn allocate_atlases(
+        &mut self,
+        device: &wgpu::Device,
+        plans: &std::collections::BTreeMap<BatchId, BatchPlan>,
+        registered: impl Fn(BatchId) -> bool,
+        name: impl Fn(BatchId) -> String,
+    ) {
+        self.atlases.retain(|batch, _| registered(*batch));
+        for (batch, plan) in plans {
+            let size = (plan.size.x, plan.size.y);
+            let fits = self.atlases.get(batch).is_some_and(|a| {
+                a.tile_size == size
+                    && a.capacity() >= plan.tiles
+                    && (a.hdr.is_some() || !plan.hdr)
+                    && a.max_side == plan.max_page_side
+            });
+            if fits {
+                continue;
+            }
+            let hdr = plan.hdr.then_some(self.hdr_format);
+            let _span = tracing::info_span!("batch_atlas", batch = %batch, tiles = plan.tiles).entered();
+            // The resolve step refused batches whose atlas the device cannot hold.
+            if let Some(atlas) = TileAtlas::new(device, size, plan.tiles, hdr, plan.max_page_side, &name(*batch)) {
+                tracing::info!(batch = %batch, pages = atlas.pages, columns = atlas.columns, rows = atlas.rows, "batch atlas allocated");
+                self.atlases.insert(*batch, atlas);
+            }
+        }
     }
 
     /// What targets of a `viewport`-sized view take with the HDR format in use.
@@ -150,6 +202,19 @@ impl Targets {
                     // Made by the prepare step whenever a view renders into it.
                     if let Some(atlas) = atlas {
                         entry.targets = Some(ViewTargets::atlas_layer(atlas, tile));
+                    }
+                }
+                TargetPlan::Tile { batch, slot } => {
+                    // New targets only when the camera moved to another
+                    // tile or its batch to another atlas.
+                    if let Some(atlas) = self.atlases.get(&batch) {
+                        let current = entry
+                            .targets
+                            .as_ref()
+                            .is_some_and(|t| t.tile.is_some_and(|tile| tile.index == slot) && t.depth == atlas.depth);
+                        if !current {
+                            entry.targets = atlas.view_targets(slot);
+                        }
                     }
                 }
                 TargetPlan::ProbeFace { probe, face } => {
@@ -257,16 +322,6 @@ impl Renderer {
             })
         };
         [4, 2, 1].into_iter().find(|s| *s <= asked && (*s == 1 || supports(*s))).unwrap_or(1)
-    }
-
-    /// A view's colour targets, for reading its image.
-    pub(crate) fn color_targets(&self, id: ViewId) -> Result<&ColorTargets, RenderError> {
-        let known = self.views.entries.contains_key(&id) || self.shadows.views.all().any(|v| v == id);
-        if !known {
-            return Err(RenderError::NoSuchView(id));
-        }
-        let targets = self.targets.get(id).and_then(|v| v.targets.as_ref()).ok_or(RenderError::NotRendered(id))?;
-        targets.color.as_ref().ok_or(RenderError::DepthOnly(id))
     }
 }
 

@@ -353,31 +353,30 @@ impl RenderPass for MeshPass {
 }
 
 impl MeshPass {
+    /// Records the pass for every view of a batch ([`crate::TileAtlas`]
+    /// tiles, see [`oxygen_gpu::ViewTargets::tile`]) with one render pass
+    /// per atlas page: per view only its viewport, its scene constants,
+    /// its lighting inputs and its draws. Views that are not tiles get a
+    /// render pass each, as [`RenderPass::run`] records them.
+    pub async fn run_batch(
+        &mut self,
+        views: &[&RenderContext<'_>],
+        rec: &mut CommandRecorder,
+    ) -> Result<(), PassError> {
+        let first = views.first().map(|ctx| ctx.view.view_id);
+        self.record_views(views, rec)
+            .instrument(info_span!("mesh_pass_batch", pass = self.name, views = views.len(), first = ?first))
+            .await
+    }
+
     async fn record(&self, ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError> {
-        // The transparent pass alone skips an empty frame: the others clear
-        // their targets, which later passes rely on.
-        if (self.kind == PassKind::Transparent || self.list == DrawList::Late) && self.partitions(ctx).next().is_none()
-        {
-            return Ok(());
-        }
-        if self.tone_map().is_some() && ctx.targets.msaa.is_some() {
-            return Err(PassError::BadInput {
-                pass: self.name,
-                what: "tone-mapping while shading needs a single-sampled view (MSAA resolves into the HDR target, \
-                       which the tone-map pass reads)"
-                    .into(),
-            });
-        }
-        let color = self.color_view(ctx)?.map(|view| (view, self.color));
-        // The pipelines are requested before the inputs are awaited, so
-        // that they compile while the views producing the inputs record.
-        let lighting = async {
-            match &self.lighting {
-                Some(config) => super::forward_lighting::bind_group(ctx, config).await,
-                None => Ok(None),
-            }
-        };
-        let shading = crate::PipelineKey {
+        self.record_views(&[ctx], rec).await
+    }
+
+    /// The pipeline key of this pass for `ctx` (the variant is each
+    /// partition's).
+    fn shading_key(&self, ctx: &RenderContext<'_>) -> crate::PipelineKey {
+        crate::PipelineKey {
             pass: self.kind,
             variant: crate::PipelineVariant::from_mask(PassMask::empty()),
             color_format: self.color_format(ctx),
@@ -386,17 +385,69 @@ impl MeshPass {
             features: self.shader_features(ctx),
             tone_map: self.tone_map(),
             samples: ctx.targets.samples(),
-        };
-        let pipelines = partition_pipelines(ctx, shading, self.partitions(ctx));
-        let (lighting, pipelines) = futures::future::join(lighting, pipelines).await;
-        let lighting = lighting?;
+        }
+    }
+
+    async fn record_views(&self, views: &[&RenderContext<'_>], rec: &mut CommandRecorder) -> Result<(), PassError> {
+        // The transparent pass alone skips an empty frame: the others clear
+        // their targets, which later passes rely on.
+        let skippable = self.kind == PassKind::Transparent || self.list == DrawList::Late;
+        if skippable && views.iter().all(|ctx| self.partitions(ctx).next().is_none()) {
+            return Ok(());
+        }
+        if self.tone_map().is_some() && views.iter().any(|ctx| ctx.targets.msaa.is_some()) {
+            return Err(PassError::BadInput {
+                pass: self.name,
+                what: "tone-mapping while shading needs a single-sampled view (MSAA resolves into the HDR target, \
+                       which the tone-map pass reads)"
+                    .into(),
+            });
+        }
+        // Per view, its lighting inputs and its pipelines; the pipelines
+        // are requested before the inputs are awaited, so that they compile
+        // while the views producing the inputs record.
+        let per_view = views.iter().map(|ctx| async move {
+            let lighting = async {
+                match &self.lighting {
+                    Some(config) => super::forward_lighting::bind_group(ctx, config).await,
+                    None => Ok(None),
+                }
+            };
+            let shading = self.shading_key(ctx);
+            let pipelines = partition_pipelines(ctx, shading, self.partitions(ctx));
+            let (lighting, pipelines) = futures::future::join(lighting, pipelines).await;
+            Ok::<_, PassError>((lighting?, pipelines, shading))
+        });
+        let prepared = futures::future::try_join_all(per_view).await?;
+
+        // Views sharing a page of an atlas share its render pass; any other
+        // view has one of its own.
+        let mut passes: Vec<(Option<u32>, Vec<usize>)> = Vec::new();
+        for (i, ctx) in views.iter().enumerate() {
+            let page = ctx.targets.tile.map(|t| t.page);
+            let same_page = |(p, members): &&mut (Option<u32>, Vec<usize>)| {
+                page.is_some() && *p == page && views[members[0]].targets.depth == ctx.targets.depth
+            };
+            match passes.iter_mut().find(same_page) {
+                Some((_, members)) => members.push(i),
+                None => passes.push((page, vec![i])),
+            }
+        }
+        if self.statistics.is_some() && passes.len() > 1 {
+            return Err(PassError::BadInput {
+                pass: self.name,
+                what: "pipeline statistics are counted in one render pass; this batch needs several".into(),
+            });
+        }
 
         let mut stats = rec.stats;
-        {
+        for (_, members) in &passes {
+            let lead = views[members[0]];
+            let color = self.color_view(lead)?.map(|view| (view, self.color));
             // With MSAA the pass draws into the multisampled HDR target and
             // resolves it into the view's HDR target at its end (every
             // colour pass: a later one loads the samples, not the resolve).
-            let msaa = ctx.targets.msaa.as_ref();
+            let msaa = lead.targets.msaa.as_ref();
             let store =
                 if msaa.is_some() && !self.keep_samples { wgpu::StoreOp::Discard } else { wgpu::StoreOp::Store };
             let color_attachment = color.map(|(view, ops)| wgpu::RenderPassColorAttachment {
@@ -415,7 +466,7 @@ impl MeshPass {
                     &[]
                 },
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: ctx.targets.render_depth_view(),
+                    view: lead.targets.render_depth_view(),
                     depth_ops: Some(wgpu::Operations { load: depth_load, store: wgpu::StoreOp::Store }),
                     stencil_ops: None,
                 }),
@@ -427,22 +478,31 @@ impl MeshPass {
             if let Some((set, index)) = &self.statistics {
                 pass.begin_pipeline_statistics_query(set, *index);
             }
-            stats.tone_mapped_in_pass |= shading.tone_map.is_some();
-            let group3 = lighting.as_ref().unwrap_or(ctx.lighting.no_lighting_inputs());
-            bind_view_resources(&mut pass, ctx, group3);
-            // The environment behind the scene: drawn first by the pass that
-            // clears the colour target, meshes then draw over it.
-            let clears_color = matches!(self.color, ColorOps::Clear(_) | ColorOps::ClearToneMapped(..));
-            let is_shading = matches!(self.kind, PassKind::Shading | PassKind::ShadingAfterPrePass);
-            if clears_color && is_shading && ctx.lighting.has_environment() {
-                pass.set_pipeline(&ctx.pipelines.sky(&ctx.gpu.device, shading));
-                pass.draw(0..3, 0..1);
-                stats.draw_calls += 1;
-            }
-            for (partition, pipeline) in self.partitions(ctx).zip(&pipelines) {
-                pass.set_pipeline(pipeline);
-                stats.pipeline_binds += 1;
-                draw_partition(&mut pass, ctx, partition, &mut stats);
+            for &i in members {
+                let ctx = views[i];
+                let (lighting, pipelines, shading) = &prepared[i];
+                if let Some(tile) = ctx.targets.tile {
+                    let (w, h) = (ctx.targets.width, ctx.targets.height);
+                    pass.set_viewport(tile.x as f32, tile.y as f32, w as f32, h as f32, 0.0, 1.0);
+                    pass.set_scissor_rect(tile.x, tile.y, w, h);
+                }
+                stats.tone_mapped_in_pass |= shading.tone_map.is_some();
+                let group3 = lighting.as_ref().unwrap_or(ctx.lighting.no_lighting_inputs());
+                bind_view_resources(&mut pass, ctx, group3);
+                // The environment behind the scene: drawn first by the pass
+                // that clears the colour target, meshes then draw over it.
+                let clears_color = matches!(self.color, ColorOps::Clear(_) | ColorOps::ClearToneMapped(..));
+                let is_shading = matches!(self.kind, PassKind::Shading | PassKind::ShadingAfterPrePass);
+                if clears_color && is_shading && ctx.lighting.has_environment() {
+                    pass.set_pipeline(&ctx.pipelines.sky(&ctx.gpu.device, *shading));
+                    pass.draw(0..3, 0..1);
+                    stats.draw_calls += 1;
+                }
+                for (partition, pipeline) in self.partitions(ctx).zip(pipelines) {
+                    pass.set_pipeline(pipeline);
+                    stats.pipeline_binds += 1;
+                    draw_partition(&mut pass, ctx, partition, &mut stats);
+                }
             }
             if self.statistics.is_some() {
                 pass.end_pipeline_statistics_query();

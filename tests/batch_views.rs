@@ -1,0 +1,229 @@
+//! Batches of cameras ([`oxygen::batch`]): every camera of a batch renders
+//! the image the same camera renders registered alone, its depth reads
+//! back as the distance of what it sees, cameras come and go between
+//! frames without disturbing the others, and what a batch cannot hold is
+//! refused with a reason.
+
+mod support;
+
+use oxygen::batch::{BatchDesc, standard_batch_graph};
+use oxygen::glam::Vec4;
+use oxygen::graph::StandardGraph;
+use oxygen::image::RgbaImage;
+use oxygen::prelude::*;
+use oxygen::{FrameWarning, RenderError, ViewRole};
+use support::golden::compare;
+
+/// The standard graph as a lone view records what the batch graph records
+/// for each camera: no pre-pass, no sun cascades.
+fn lone_graph() -> StandardGraph {
+    StandardGraph::new(standard_batch_graph.lit.clone())
+}
+
+/// A ring of `n` cameras of `size` around the demo's cubes, each at its own
+/// angle and height.
+fn ring(n: usize, size: UVec2) -> Vec<LookAtResolver> {
+    (0..n)
+        .map(|i| {
+            let angle = i as f32 / n as f32 * std::f32::consts::TAU;
+            let eye = Vec3::new(7.0 * angle.cos(), 2.0 + i as f32 * 0.5, 7.0 * angle.sin());
+            LookAtResolver::new(Camera::perspective(55f32.to_radians(), 0.1, None), eye, Vec3::ZERO, size)
+                .expect("ring cameras are valid")
+        })
+        .collect()
+}
+
+/// The largest channel error and the pixels differing by more than 2
+/// levels between a batch camera's image and the lone view's.
+fn difference(a: &RgbaImage, b: &RgbaImage) -> (u8, usize) {
+    let c = compare(a, b, 2);
+    (c.worst, c.differing)
+}
+
+/// Renders `cameras` registered alone, one renderer each, with `options`.
+fn alone(scene: &Scene, cameras: &[LookAtResolver], options: RendererOptions) -> Vec<RgbaImage> {
+    cameras
+        .iter()
+        .map(|camera| {
+            let mut renderer = support::gpu_renderer_with(options);
+            let view = renderer.register_view(*camera, lone_graph()).unwrap();
+            renderer.render_frame(scene).unwrap();
+            renderer.read_color(view).unwrap()
+        })
+        .collect()
+}
+
+fn assert_same_pictures(batch: &[RgbaImage], lone: &[RgbaImage], what: &str) {
+    for (i, (a, b)) in batch.iter().zip(lone).enumerate() {
+        let (worst, differing) = difference(a, b);
+        // Same draws, same shaders, same pixels: only the viewport's offset
+        // in the atlas differs, which moves no sample. Measured: 0 and 0.
+        assert!(
+            differing == 0 && worst <= 2,
+            "{what}: camera {i} differs from its lone render: {differing} pixels, worst {worst}"
+        );
+        // And the picture is not empty: the cubes are in every camera.
+        assert!(a.pixels().any(|p| p.0 != b.get_pixel(0, 0).0), "{what}: camera {i} shows nothing");
+    }
+}
+
+#[test]
+fn every_camera_of_a_batch_renders_what_it_renders_alone() {
+    let demo = oxygen_demo::multi_view_scene();
+    let size = UVec2::new(64, 48);
+    let cameras = ring(5, size);
+    for keep_hdr in [true, false] {
+        let options = RendererOptions { keep_hdr, ..Default::default() };
+        let mut renderer = support::gpu_renderer_with(options);
+        let batch = renderer.register_batch(BatchDesc::new("ring", size)).unwrap();
+        let ids: Vec<ViewId> = cameras.iter().map(|c| renderer.add_camera(batch, *c).unwrap()).collect();
+        let report = renderer.render_frame(&demo.scene).unwrap();
+        // The five cameras record the render passes one camera alone
+        // records (their atlas is one page), not five times as many.
+        let passes: u32 = report.views.iter().map(|v| v.recorded.render_passes).sum();
+        let mut one = support::gpu_renderer_with(options);
+        one.register_view(cameras[0], lone_graph()).unwrap();
+        let one_passes = one.render_frame(&demo.scene).unwrap().views[0].recorded.render_passes;
+        assert_eq!(passes, one_passes, "keep_hdr {keep_hdr}: render passes of the batch");
+        assert!(report.views.iter().all(|v| v.role == ViewRole::BatchCamera { batch }));
+        let batch_images: Vec<RgbaImage> = ids.iter().map(|id| renderer.read_color(*id).unwrap()).collect();
+        assert_same_pictures(&batch_images, &alone(&demo.scene, &cameras, options), &format!("keep_hdr {keep_hdr}"));
+    }
+}
+
+#[test]
+fn a_batch_of_many_pages_renders_every_camera() {
+    // Pages of 100 pixels hold one column of two 64 × 48 cameras: five
+    // cameras take three pages, each recording the passes of one camera.
+    let demo = oxygen_demo::multi_view_scene();
+    let size = UVec2::new(64, 48);
+    let cameras = ring(5, size);
+    let options = RendererOptions::default();
+    let mut renderer = support::gpu_renderer_with(options);
+    let desc = BatchDesc::new("pages", size).with_max_page_side(100);
+    let batch = renderer.register_batch(desc).unwrap();
+    let ids: Vec<ViewId> = cameras.iter().map(|c| renderer.add_camera(batch, *c).unwrap()).collect();
+    let report = renderer.render_frame(&demo.scene).unwrap();
+    assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+    let passes: u32 = report.views.iter().map(|v| v.recorded.render_passes).sum();
+    let mut one = support::gpu_renderer_with(options);
+    one.register_view(cameras[0], lone_graph()).unwrap();
+    let one_passes = one.render_frame(&demo.scene).unwrap().views[0].recorded.render_passes;
+    assert_eq!(passes, 3 * one_passes, "three pages, each with the passes of one camera");
+    let images: Vec<RgbaImage> = ids.iter().map(|id| renderer.read_color(*id).unwrap()).collect();
+    assert_same_pictures(&images, &alone(&demo.scene, &cameras, options), "pages");
+    let refused = renderer.register_batch(BatchDesc::new("tiny pages", size).with_max_page_side(50));
+    assert!(matches!(refused, Err(RenderError::InvalidBatch { .. })), "{refused:?}");
+}
+
+#[test]
+fn depth_reads_back_as_the_distance_of_a_plane() {
+    // Cameras 6 units above a ground plane look straight down: the plane's
+    // linear depth is 6 at every pixel, for batch cameras and a lone view
+    // alike; under the camera at x = 3 stands a unit box whose top is 4
+    // units away, so a tile read from the wrong place of the atlas shows.
+    let mut scene = Scene::new();
+    let grey = scene.add_material(Material::opaque("ground", Vec4::splat(0.5)));
+    let plane = scene.add_geometry(Geometry::plane(100.0));
+    let ground = scene.add_node("ground", Transform::IDENTITY);
+    scene.set_renderable(ground, Renderable { geometry: plane, materials: vec![grey] }).unwrap();
+    let cube = scene.add_geometry(Geometry::cube(1.0));
+    let post = scene.add_node("box", Transform::from_translation(Vec3::new(3.0, 1.5, 0.0)));
+    scene.set_renderable(post, Renderable { geometry: cube, materials: vec![grey] }).unwrap();
+    let sun = scene.add_node("sun", Transform::IDENTITY);
+    scene.set_light(sun, Some(Light::directional(1.0))).unwrap();
+    let size = UVec2::new(40, 30);
+    let down = |x: f32| {
+        LookAtResolver::new(
+            Camera::perspective(50f32.to_radians(), 0.1, None),
+            Vec3::new(x, 6.0, 0.0),
+            Vec3::new(x, 0.0, 0.0),
+            size,
+        )
+        .unwrap()
+        .with_up(Vec3::Z)
+        .unwrap()
+    };
+    let mut renderer = support::gpu_renderer();
+    let batch = renderer.register_batch(BatchDesc::new("down", size)).unwrap();
+    let over_ground = renderer.add_camera(batch, down(-2.0)).unwrap();
+    let over_box = renderer.add_camera(batch, down(3.0)).unwrap();
+    let lone = renderer.register_view(down(-4.0), lone_graph()).unwrap();
+    renderer.render_frame(&scene).unwrap();
+    for view in [over_ground, lone] {
+        let depth = renderer.read_depth(view).unwrap();
+        assert_eq!((depth.width, depth.height), (40, 30));
+        let worst = depth.linear().iter().map(|d| (d - 6.0).abs()).fold(0.0f32, f32::max);
+        // Depth32Float at 6 units under reverse-Z keeps about 7 digits:
+        // measured worst 4e-6 (lavapipe and GL); bound 1e-4.
+        assert!(worst < 1e-4, "{view}: linear depth strays {worst} from 6");
+        // Device depth: near / distance for an infinite reverse-Z projection.
+        let device = depth.get(20, 15);
+        assert!((device - 0.1 / 6.0).abs() < 1e-6, "{view}: device depth {device}");
+    }
+    let depth = renderer.read_depth(over_box).unwrap();
+    let linear = depth.linear();
+    let at = |x: u32, y: u32| linear[(y * depth.width + x) as usize];
+    assert!((at(20, 15) - 4.0).abs() < 1e-4, "the box top is 4 units away, read {}", at(20, 15));
+    assert!((at(0, 0) - 6.0).abs() < 1e-4, "the ground is 6 units away at the corner, read {}", at(0, 0));
+}
+
+#[test]
+fn cameras_come_and_go_between_frames() {
+    let demo = oxygen_demo::multi_view_scene();
+    let size = UVec2::new(48, 36);
+    let cameras = ring(4, size);
+    let options = RendererOptions::default();
+    let lone = alone(&demo.scene, &cameras, options);
+    let mut renderer = support::gpu_renderer_with(options);
+    let batch = renderer.register_batch(BatchDesc::new("changing", size)).unwrap();
+    let a = renderer.add_camera(batch, cameras[0]).unwrap();
+    let b = renderer.add_camera(batch, cameras[1]).unwrap();
+    let c = renderer.add_camera(batch, cameras[2]).unwrap();
+    renderer.render_frame(&demo.scene).unwrap();
+    assert_same_pictures(&[renderer.read_color(b).unwrap()], &lone[1..2], "b, frame 1");
+
+    // b goes, d comes (into b's tile); a and c keep their tiles and images.
+    renderer.unregister_view(b).unwrap();
+    let d = renderer.add_camera(batch, cameras[3]).unwrap();
+    assert_eq!(renderer.batch_cameras(batch).unwrap(), vec![a, d, c]);
+    let report = renderer.render_frame(&demo.scene).unwrap();
+    assert_eq!(report.views.len(), 3);
+    assert!(matches!(renderer.read_color(b), Err(RenderError::NoSuchView(_))));
+    let images: Vec<RgbaImage> = [a, c, d].iter().map(|v| renderer.read_color(*v).unwrap()).collect();
+    assert_same_pictures(&images, &[lone[0].clone(), lone[2].clone(), lone[3].clone()], "frame 2");
+
+    // The whole batch goes.
+    renderer.unregister_batch(batch).unwrap();
+    assert!(renderer.render_frame(&demo.scene).unwrap().views.is_empty());
+    assert!(matches!(renderer.add_camera(batch, cameras[0]), Err(RenderError::NoSuchBatch(_))));
+}
+
+#[test]
+fn what_a_batch_cannot_hold_is_refused_with_a_reason() {
+    let demo = oxygen_demo::multi_view_scene();
+    let size = UVec2::new(32, 32);
+    let camera = ring(1, size).remove(0);
+    let mut renderer = support::gpu_renderer();
+    let empty = renderer.register_batch(BatchDesc::new("empty", UVec2::new(0, 32)));
+    assert!(matches!(empty, Err(RenderError::InvalidBatch { .. })), "{empty:?}");
+    let batch = renderer.register_batch(BatchDesc::new("rig", size)).unwrap();
+    let msaa = renderer.add_camera(batch, ViewDesc::new(camera).with_msaa(oxygen::gpu::Msaa::X4));
+    let message = msaa.expect_err("MSAA is refused").to_string();
+    assert!(message.contains("rig") && message.contains("MSAA"), "{message}");
+    let shadows = renderer.add_camera(batch, ViewDesc::new(camera).with_sun_shadows(Default::default()));
+    assert!(matches!(shadows, Err(RenderError::InvalidBatch { .. })));
+
+    // An atlas past the target budget: the batch's cameras are skipped
+    // with the reason, the frame goes on.
+    let mut small = support::gpu_renderer_with(RendererOptions { target_budget_bytes: 4096, ..Default::default() });
+    let batch = small.register_batch(BatchDesc::new("too big", size)).unwrap();
+    let view = small.add_camera(batch, camera).unwrap();
+    let report = small.render_frame(&demo.scene).unwrap();
+    let reason = report.warnings.iter().find_map(|w| match w {
+        FrameWarning::ViewSkipped { view: v, reason } if *v == view => Some(reason.clone()),
+        _ => None,
+    });
+    let reason = reason.expect("the camera is skipped");
+    assert!(reason.contains("too big") && reason.contains("budget"), "{reason}");
+}
