@@ -27,6 +27,7 @@ use glam::UVec2;
 use oxygen_core::ViewId;
 
 pub use crate::graph::{BatchGraph, standard_batch_graph};
+pub use crate::renderer::{StreamOptions, StreamedCamera, StreamedFrame};
 
 /// Names a registered batch; handed out by [`crate::views::Views::register_batch`],
 /// never made from a number.

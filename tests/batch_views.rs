@@ -227,3 +227,56 @@ fn what_a_batch_cannot_hold_is_refused_with_a_reason() {
     let reason = reason.expect("the camera is skipped");
     assert!(reason.contains("too big") && reason.contains("budget"), "{reason}");
 }
+
+/// A batch streamed back: every frame arrives once, in order, tagged with
+/// its number; each camera's images are what `read_color` and `read_depth`
+/// read after that frame; a change made before frame k shows in frame k's
+/// images and not in frame k − 1's; frames not taken wait, none is lost.
+#[test]
+fn streamed_frames_arrive_tagged_in_order_without_an_off_by_one() {
+    use oxygen::batch::StreamOptions;
+    let mut demo = oxygen_demo::multi_view_scene();
+    let size = UVec2::new(48, 36);
+    let cameras = ring(3, size);
+    let mut renderer = support::gpu_renderer_with(RendererOptions::default());
+    let batch = renderer.register_batch(BatchDesc::new("streamed", size)).unwrap();
+    let ids: Vec<ViewId> = cameras.iter().map(|c| renderer.add_camera(batch, *c).unwrap()).collect();
+    let options = StreamOptions { frames_in_flight: 1, ..Default::default() };
+    renderer.stream_batch(batch, Some(options)).unwrap();
+
+    // Frames 1 and 2 as they are; frame 3 after a cube moved away.
+    let mut expected = Vec::new();
+    for frame in 1..=3u64 {
+        if frame == 3 {
+            let moved = Transform::from_translation(Vec3::new(0.0, 40.0, 0.0));
+            for cube in &demo.cubes {
+                demo.scene.set_local_transform(*cube, moved).unwrap();
+            }
+        }
+        let report = renderer.render_frame(&demo.scene).unwrap();
+        assert_eq!(report.frame_index, frame);
+        let images: Vec<(RgbaImage, Vec<f32>)> =
+            ids.iter().map(|id| (renderer.read_color(*id).unwrap(), renderer.read_depth(*id).unwrap().depth)).collect();
+        expected.push(images);
+    }
+    // One buffer, three frames, nothing taken until now: none is lost.
+    let streamed = renderer.wait_streamed().unwrap();
+    assert_eq!(streamed.iter().map(|f| f.frame).collect::<Vec<_>>(), [1, 2, 3]);
+    for (frame, want) in streamed.iter().zip(&expected) {
+        assert_eq!(frame.batch, batch);
+        assert_eq!(frame.size, (48, 36));
+        assert_eq!(frame.cameras.iter().map(|c| c.view).collect::<Vec<_>>(), ids);
+        for (camera, (color, depth)) in frame.cameras.iter().zip(want) {
+            assert_eq!(camera.color.as_ref(), Some(color), "frame {}: {} colour", frame.frame, camera.view);
+            assert_eq!(camera.depth.as_ref(), Some(depth), "frame {}: {} depth", frame.frame, camera.view);
+        }
+    }
+    // The move shows in frame 3 and not in frame 2.
+    let moved = |f: usize| streamed[f].cameras[0].color.clone().unwrap();
+    assert_eq!(moved(0), moved(1), "nothing moved between frames 1 and 2");
+    assert_ne!(moved(1), moved(2), "the cubes moved before frame 3");
+    assert!(renderer.take_streamed().unwrap().is_empty(), "each frame arrives once");
+    renderer.stream_batch(batch, None).unwrap();
+    renderer.render_frame(&demo.scene).unwrap();
+    assert!(renderer.wait_streamed().unwrap().is_empty(), "stopped");
+}

@@ -40,6 +40,7 @@ mod registration;
 mod report;
 mod resolve;
 mod shadows;
+mod streams;
 mod targets;
 mod visibility;
 mod windows;
@@ -57,6 +58,7 @@ pub use error::RenderError;
 pub use options::RendererOptions;
 pub use readback::DepthImage;
 pub use report::{FrameReport, FrameWarning, ViewReport, ViewRole};
+pub use streams::{StreamOptions, StreamedCamera, StreamedFrame};
 
 use crate::views::Views;
 use probes::Probes;
@@ -93,6 +95,7 @@ pub struct Renderer {
     visibility: Visibilities,
     reference: Reference,
     windows: Windows,
+    streams: streams::Streams,
     settings: FrameSettings,
     frames: Frames,
 }
@@ -221,6 +224,7 @@ impl Renderer {
             visibility,
             reference: Reference::default(),
             windows: Windows::new(&gpu.device),
+            streams: streams::Streams::default(),
             settings: FrameSettings {
                 draw_path,
                 origin: options.origin,
@@ -250,11 +254,32 @@ impl Renderer {
         // answers `prepared_frame` until then; a failed recording too.
         self.prep.return_frames(std::mem::take(&mut prepared.frames));
         let recorded = recorded?;
+        self.stream(&recorded, clock)?;
         self.targets.hold(&recorded.rendered);
         let presented = self.present(&recorded);
         let report = FrameReport::new(prepared, recorded, presented, gpu_seconds);
         self.frames.last = report.views.iter().map(|r| (r.view, r.role)).collect();
         Ok(report)
+    }
+
+    /// Starts copying the streaming batches' images of the frame just
+    /// submitted (see `streams.rs`).
+    fn stream(&mut self, recorded: &record::RecordedFrame, clock: FrameClock) -> Result<(), RenderError> {
+        let mut rendered = streams::RenderedBatches::default();
+        for view in &recorded.rendered {
+            let Some(batch) = self.views.batch_of(view.id) else { continue };
+            let (Some(atlas), Some(tile)) = (
+                self.targets.atlas(batch),
+                self.targets.get(view.id).and_then(|g| g.targets.as_ref()).and_then(|t| t.tile),
+            ) else {
+                continue;
+            };
+            rendered.entry(batch).or_insert_with(|| (atlas, Vec::new())).1.push((view.id, tile));
+        }
+        for (_, cameras) in rendered.values_mut() {
+            cameras.sort_by_key(|(_, tile)| tile.index);
+        }
+        self.streams.after_submit(&self.gpu, &rendered, clock)
     }
 
     /// How textures are bound on this device.

@@ -80,6 +80,11 @@ impl Targets {
         self.views.get(&view)
     }
 
+    /// `batch`'s atlas, once a frame has allocated it.
+    pub(crate) fn atlas(&self, batch: BatchId) -> Option<&TileAtlas> {
+        self.atlases.get(&batch)
+    }
+
     /// Forgets a view's targets and constants.
     pub(crate) fn release(&mut self, view: ViewId) {
         self.views.remove(&view);

@@ -1,0 +1,395 @@
+//! Streams: a batch's images copied back to the CPU every frame without
+//! waiting for them, a subsystem of the renderer.
+//!
+//! After a frame's command buffers are submitted, each streaming batch
+//! gets one copy of its atlas pages (colour and/or depth, whole pages: one
+//! copy a page and output for every camera, not one per camera) into the
+//! next free staging buffer of its ring, which is then mapped
+//! asynchronously. [`Renderer::take_streamed`] hands over what has arrived,
+//! oldest first, cut into per-camera images and tagged with the frame
+//! number, the frame's time and each camera's view id; it never waits.
+//! With `frames_in_flight` buffers a result arrives at most that many
+//! frames after its frame (one on an idle GPU); when every buffer is still
+//! in flight, the next frame waits for the oldest one and moves its images
+//! into memory (the ring's back-pressure), so nothing is dropped: what the
+//! application has not taken waits for it there.
+
+use std::collections::{BTreeMap, VecDeque};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU8, Ordering};
+
+use oxygen_core::ViewId;
+use oxygen_gpu::{Tile, TileAtlas};
+use tracing::info_span;
+
+use super::resolve::FrameClock;
+use super::{RenderError, Renderer};
+use crate::batch::BatchId;
+
+/// Which of a batch's images are streamed back.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StreamOptions {
+    /// Display colour (sRGB, 8 bits a channel).
+    pub color: bool,
+    /// Device depth (reverse-Z, `f32`).
+    pub depth: bool,
+    /// Staging buffers in the ring: how many frames' images may be on
+    /// their way at once. At least 1; 2 (the default) lets a frame render
+    /// while the last one's images are copied and mapped.
+    pub frames_in_flight: u32,
+}
+
+impl Default for StreamOptions {
+    fn default() -> Self {
+        StreamOptions { color: true, depth: true, frames_in_flight: 2 }
+    }
+}
+
+/// One camera's images of a streamed frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StreamedCamera {
+    /// The camera.
+    pub view: ViewId,
+    /// Its colour, when streamed.
+    pub color: Option<image::RgbaImage>,
+    /// Its device depth (reverse-Z, row by row), when streamed.
+    pub depth: Option<Vec<f32>>,
+}
+
+/// A batch's images of one frame, as they arrived.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StreamedFrame {
+    /// The batch.
+    pub batch: BatchId,
+    /// The frame's number ([`crate::FrameReport::frame_index`]).
+    pub frame: u64,
+    /// The frame's time, seconds since the renderer started (what the
+    /// resolvers were told).
+    pub time_seconds: f32,
+    /// Width and height of every camera's images.
+    pub size: (u32, u32),
+    /// The cameras that rendered that frame, in tile order.
+    pub cameras: Vec<StreamedCamera>,
+}
+
+/// Per batch that rendered this frame: its atlas and the cameras that
+/// rendered, with their tiles.
+pub(crate) type RenderedBatches<'a> = BTreeMap<BatchId, (&'a TileAtlas, Vec<(ViewId, Tile)>)>;
+
+/// Where a staging buffer stands.
+const FREE: u8 = 0;
+const MAPPING: u8 = 1;
+const MAPPED: u8 = 2;
+const FAILED: u8 = 3;
+
+/// One staging buffer of a ring and the frame it holds.
+struct Slot {
+    buffer: wgpu::Buffer,
+    state: Arc<AtomicU8>,
+    /// What the buffer holds once mapped.
+    content: Option<SlotContent>,
+}
+
+struct SlotContent {
+    frame: u64,
+    time_seconds: f32,
+    layout: PageLayout,
+    cameras: Vec<(ViewId, Tile)>,
+}
+
+/// Where each page's images lie in a staging buffer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct PageLayout {
+    /// Page size in pixels.
+    width: u32,
+    height: u32,
+    pages: u32,
+    tile: (u32, u32),
+    /// Bytes of a row (4-byte texels, padded to the copy alignment).
+    row_bytes: u32,
+    color: bool,
+    depth: bool,
+}
+
+impl PageLayout {
+    fn of(atlas: &TileAtlas, options: &StreamOptions) -> Self {
+        let width = atlas.columns * atlas.tile_size.0;
+        let height = atlas.rows * atlas.tile_size.1;
+        let row_bytes = (width * 4).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        PageLayout {
+            width,
+            height,
+            pages: atlas.pages,
+            tile: atlas.tile_size,
+            row_bytes,
+            color: options.color,
+            depth: options.depth,
+        }
+    }
+
+    fn page_bytes(&self) -> u64 {
+        u64::from(self.row_bytes) * u64::from(self.height)
+    }
+
+    /// Byte offset of page `page`'s colour (depth: `depth` true).
+    fn offset(&self, page: u32, depth: bool) -> u64 {
+        let outputs = u64::from(self.color) + u64::from(self.depth);
+        let within = if depth && self.color { self.page_bytes() } else { 0 };
+        u64::from(page) * outputs * self.page_bytes() + within
+    }
+
+    fn bytes(&self) -> u64 {
+        u64::from(self.pages) * (u64::from(self.color) + u64::from(self.depth)) * self.page_bytes()
+    }
+}
+
+/// One batch's ring.
+struct Ring {
+    options: StreamOptions,
+    slots: Vec<Slot>,
+    /// Slot indices in the order their frames were submitted.
+    in_flight: VecDeque<usize>,
+}
+
+/// The streams of every streaming batch.
+#[derive(Default)]
+pub(crate) struct Streams {
+    rings: BTreeMap<BatchId, Ring>,
+    /// Frames moved out of a full ring, not taken yet.
+    pending: Vec<StreamedFrame>,
+}
+
+impl Streams {
+    /// Copies each streaming batch's pages of the frame just submitted
+    /// into a free staging buffer and starts mapping it. `rendered` holds,
+    /// per batch, its atlas and the cameras that rendered with their tiles.
+    pub(crate) fn after_submit(
+        &mut self,
+        gpu: &oxygen_gpu::GpuContext,
+        rendered: &RenderedBatches<'_>,
+        clock: FrameClock,
+    ) -> Result<(), RenderError> {
+        for (batch, ring) in &mut self.rings {
+            let Some((atlas, cameras)) = rendered.get(batch) else { continue };
+            if cameras.is_empty() {
+                continue;
+            }
+            let _span = info_span!("stream_copy", batch = %batch, cameras = cameras.len()).entered();
+            let layout = PageLayout::of(atlas, &ring.options);
+            let slot = ring.free_slot(gpu, *batch, layout.bytes(), &mut self.pending)?;
+            let buffer = &ring.slots[slot].buffer;
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            let size = wgpu::Extent3d { width: layout.width, height: layout.height, depth_or_array_layers: 1 };
+            for page in 0..layout.pages {
+                for (texture, depth) in [(&atlas.color, false), (&atlas.depth, true)] {
+                    if (depth && !layout.depth) || (!depth && !layout.color) {
+                        continue;
+                    }
+                    let aspect = if depth { wgpu::TextureAspect::DepthOnly } else { wgpu::TextureAspect::All };
+                    encoder.copy_texture_to_buffer(
+                        wgpu::TexelCopyTextureInfo {
+                            texture,
+                            mip_level: 0,
+                            origin: wgpu::Origin3d { x: 0, y: 0, z: page },
+                            aspect,
+                        },
+                        wgpu::TexelCopyBufferInfo {
+                            buffer,
+                            layout: wgpu::TexelCopyBufferLayout {
+                                offset: layout.offset(page, depth),
+                                bytes_per_row: Some(layout.row_bytes),
+                                rows_per_image: Some(layout.height),
+                            },
+                        },
+                        size,
+                    );
+                }
+            }
+            gpu.queue.submit([encoder.finish()]);
+            let state = Arc::clone(&ring.slots[slot].state);
+            state.store(MAPPING, Ordering::Release);
+            buffer.slice(..layout.bytes()).map_async(wgpu::MapMode::Read, move |result| {
+                state.store(if result.is_ok() { MAPPED } else { FAILED }, Ordering::Release);
+            });
+            let cameras = cameras.clone();
+            ring.slots[slot].content =
+                Some(SlotContent { frame: clock.index, time_seconds: clock.time_seconds, layout, cameras });
+            ring.in_flight.push_back(slot);
+        }
+        Ok(())
+    }
+
+    /// The frames that have arrived, oldest first (per batch in frame
+    /// order); `wait` waits for every frame in flight first.
+    pub(crate) fn take(&mut self, gpu: &oxygen_gpu::GpuContext, wait: bool) -> Result<Vec<StreamedFrame>, RenderError> {
+        let poll = if wait { wgpu::PollType::wait_indefinitely() } else { wgpu::PollType::Poll };
+        gpu.device.poll(poll).map_err(oxygen_gpu::GpuError::from)?;
+        let mut arrived = std::mem::take(&mut self.pending);
+        for (batch, ring) in &mut self.rings {
+            while ring.oldest_arrived()? {
+                arrived.push(ring.read_oldest(*batch)?);
+            }
+        }
+        arrived.sort_by_key(|f| (f.frame, f.batch));
+        Ok(arrived)
+    }
+}
+
+impl Ring {
+    fn new(options: StreamOptions) -> Self {
+        Ring { options, slots: Vec::new(), in_flight: VecDeque::new() }
+    }
+
+    /// Whether the oldest frame in flight has arrived (a failed mapping
+    /// is an error, its buffer freed).
+    fn oldest_arrived(&mut self) -> Result<bool, RenderError> {
+        let Some(&slot) = self.in_flight.front() else { return Ok(false) };
+        match self.slots[slot].state.load(Ordering::Acquire) {
+            MAPPED => Ok(true),
+            FAILED => {
+                self.in_flight.pop_front();
+                self.slots[slot].content = None;
+                self.slots[slot].state.store(FREE, Ordering::Release);
+                Err(RenderError::Gpu(oxygen_gpu::GpuError::from(wgpu::BufferAsyncError)))
+            }
+            _ => Ok(false),
+        }
+    }
+
+    /// Reads the oldest frame in flight (it has arrived) and frees its buffer.
+    fn read_oldest(&mut self, batch: BatchId) -> Result<StreamedFrame, RenderError> {
+        let slot = self.in_flight.pop_front().ok_or(RenderError::Gpu(wgpu::BufferAsyncError.into()))?;
+        let frame = self.slots[slot].read(batch);
+        self.slots[slot].state.store(FREE, Ordering::Release);
+        frame
+    }
+
+    /// A slot free to take a frame of `bytes`: an unused one, a new one
+    /// while the ring has room, or else the oldest in flight, waited for
+    /// and moved into `pending`. Its buffer grows when the batch did.
+    fn free_slot(
+        &mut self,
+        gpu: &oxygen_gpu::GpuContext,
+        batch: BatchId,
+        bytes: u64,
+        pending: &mut Vec<StreamedFrame>,
+    ) -> Result<usize, RenderError> {
+        let free = self.slots.iter().position(|s| s.state.load(Ordering::Acquire) == FREE && s.content.is_none());
+        let slot = match free {
+            Some(slot) => slot,
+            None if (self.slots.len() as u32) < self.options.frames_in_flight.max(1) => {
+                self.slots.push(Slot::new(gpu, bytes));
+                self.slots.len() - 1
+            }
+            None => {
+                let _span = info_span!("stream_wait", batch = %batch).entered();
+                let oldest = *self.in_flight.front().ok_or(RenderError::Gpu(wgpu::BufferAsyncError.into()))?;
+                while !self.oldest_arrived()? {
+                    gpu.device.poll(wgpu::PollType::wait_indefinitely()).map_err(oxygen_gpu::GpuError::from)?;
+                }
+                pending.push(self.read_oldest(batch)?);
+                oldest
+            }
+        };
+        if self.slots[slot].buffer.size() < bytes {
+            self.slots[slot] = Slot::new(gpu, bytes);
+        }
+        Ok(slot)
+    }
+}
+
+impl Slot {
+    fn new(gpu: &oxygen_gpu::GpuContext, bytes: u64) -> Self {
+        let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("stream staging"),
+            size: bytes,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        Slot { buffer, state: Arc::new(AtomicU8::new(FREE)), content: None }
+    }
+
+    /// Cuts the mapped pages into the cameras' images and unmaps.
+    fn read(&mut self, batch: BatchId) -> Result<StreamedFrame, RenderError> {
+        let content = self.content.take().ok_or(RenderError::Gpu(wgpu::BufferAsyncError.into()))?;
+        let layout = content.layout;
+        let (w, h) = layout.tile;
+        let cameras = {
+            let mapped = self.buffer.slice(..layout.bytes()).get_mapped_range().map_err(oxygen_gpu::GpuError::from)?;
+            let texels = |tile: &Tile, depth: bool| -> Vec<u8> {
+                let base = layout.offset(tile.page, depth) as usize;
+                let mut bytes = Vec::with_capacity((w * h * 4) as usize);
+                for y in tile.y..tile.y + h {
+                    let start = base + y as usize * layout.row_bytes as usize + tile.x as usize * 4;
+                    bytes.extend_from_slice(&mapped[start..start + w as usize * 4]);
+                }
+                bytes
+            };
+            content
+                .cameras
+                .iter()
+                .map(|(view, tile)| StreamedCamera {
+                    view: *view,
+                    // Exactly w × h × 4 bytes by construction.
+                    color: layout.color.then(|| image::RgbaImage::from_raw(w, h, texels(tile, false))).flatten(),
+                    depth: layout.depth.then(|| {
+                        texels(tile, true)
+                            .chunks_exact(4)
+                            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                            .collect()
+                    }),
+                })
+                .collect()
+        };
+        self.buffer.unmap();
+        Ok(StreamedFrame { batch, frame: content.frame, time_seconds: content.time_seconds, size: (w, h), cameras })
+    }
+}
+
+impl Renderer {
+    /// Streams `batch`'s images back every frame from now on (`None`:
+    /// stops, dropping what has not been taken): one copy of its atlas
+    /// per frame and output, mapped without waiting; take them with
+    /// [`Renderer::take_streamed`]. Fails for an unknown batch or a ring of
+    /// no buffers.
+    pub fn stream_batch(&mut self, batch: BatchId, options: Option<StreamOptions>) -> Result<(), RenderError> {
+        self.views.batch_cameras(batch)?;
+        match options {
+            Some(options) if options.frames_in_flight == 0 || !(options.color || options.depth) => {
+                Err(RenderError::Unsupported(format!("streaming {batch} with {options:?}: no buffer or no image")))
+            }
+            Some(options) => {
+                self.streams.rings.insert(batch, Ring::new(options));
+                Ok(())
+            }
+            None => {
+                self.streams.rings.remove(&batch);
+                Ok(())
+            }
+        }
+    }
+
+    /// The streamed frames that have arrived since the last call, oldest
+    /// first; never waits. Frames not taken stay (in memory once their ring
+    /// needed the buffer), so an application that takes them less often
+    /// than every frame loses none.
+    pub fn take_streamed(&mut self) -> Result<Vec<StreamedFrame>, RenderError> {
+        self.streams.take(&self.gpu, false)
+    }
+
+    /// [`Renderer::take_streamed`] after waiting for every frame in flight.
+    pub fn wait_streamed(&mut self) -> Result<Vec<StreamedFrame>, RenderError> {
+        self.streams.take(&self.gpu, true)
+    }
+
+    /// The GPU textures a batch renders into, for interop: its atlas
+    /// (colour, depth, HDR when written) and each camera's tile, valid
+    /// until the batch's next frame reallocates it (cameras added past its
+    /// capacity). `None` before its first frame.
+    pub fn batch_atlas(&self, batch: BatchId) -> Option<(&TileAtlas, Vec<(ViewId, Tile)>)> {
+        let atlas = self.targets.atlas(batch)?;
+        let entry = self.views.batches.get(&batch)?;
+        let tiles = entry.slots.iter().enumerate().filter_map(|(i, v)| Some(((*v)?, atlas.tile(i as u32)?))).collect();
+        Some((atlas, tiles))
+    }
+}
