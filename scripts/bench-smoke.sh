@@ -40,6 +40,7 @@ fi
 # through `cargo test`, unoptimised), cpu or gpu (a GPU bench's record must
 # name its adapter), and its arguments (@OUT@: a directory of its own).
 runs=(
+  "batch_bench|example|gpu|16 32x32 1,2 1"
   "cubes_bench|example|gpu|16 2 2"
   "draw_path_bench|example|gpu|16"
   "environment_bench|example|gpu|1 --smoke"

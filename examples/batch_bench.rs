@@ -1,0 +1,266 @@
+//! What a view costs, one view at a time against one batch: a ring of V
+//! cameras around a grid of boxes, each camera registered as a view of its
+//! own (`standard_render_graph`, today's path) or as a camera of one batch
+//! (`oxygen::batch`), with and without reading every camera's colour and
+//! depth back each frame.
+//!
+//! ```text
+//! cargo run --release --example batch_bench BOXES WxH V[,V..] [frames]
+//! cargo run --release --example batch_bench 1000 128x128 1,16,64,256,1024 20
+//! ```
+//!
+//! The scene: BOXES unit boxes on a square grid (spacing 2, four colours),
+//! one sun without shadows. Camera `i` of V sits on a circle around the
+//! grid (radius 0.65, height 0.35 of the grid's side, as `cubes_bench`) at
+//! angle i / V of a turn, looking at the centre, 60° vertical field of
+//! view, W × H pixels. Both paths cull on the CPU (batch cameras always
+//! do; the lone views are forced to, so that the two differ only in what a
+//! view costs to record and draw).
+//!
+//! For each V the two paths run one after the other, in alternating order
+//! from one V to the next (`BATCH_BENCH_MODES=views` or `batch` runs one):
+//! WARM_UP frames, then the measured frames, each `render_frame` (its
+//! wall-clock time is the CPU figure) then a wait for the GPU (the whole
+//! frame); the GPU's own time comes from timestamps where the adapter has
+//! them. With `BATCH_BENCH_READBACK=1` every camera's colour and depth is
+//! read back each frame: the lone views with `read_color` and `read_depth`
+//! (a blocking copy each), the batch by streaming (one copy of its atlas a
+//! frame, taken each frame, waited for at the end of the frame).
+//!
+//! Each line gives view-frames per second (V ÷ the median frame time); at
+//! the end the slope of the median times against V (least squares over the
+//! V list) is the per-view cost, CPU and whole frame, per path. With
+//! `OXYGEN_RECORD_DIR` set, everything is appended to
+//! `$OXYGEN_RECORD_DIR/batch_bench.jsonl` (`oxygen_demo::record`).
+
+use std::time::Instant;
+
+use oxygen::batch::{BatchDesc, StreamOptions};
+use oxygen::glam::{Quat, Vec4};
+use oxygen::prelude::*;
+use oxygen::sceneprep::Visibility;
+use oxygen_demo::record::{Record, Row};
+
+const WARM_UP: usize = 3;
+const DEFAULT_MEASURED: usize = 10;
+
+/// The grid of `count` boxes and its side length.
+fn box_grid(count: usize) -> (Scene, f32) {
+    let mut scene = Scene::new();
+    let per_row = (count as f32).sqrt().ceil().max(1.0) as usize;
+    let half = (per_row - 1) as f32;
+    let cube = scene.add_geometry(Geometry::cube(1.0));
+    let colors = [[0.8, 0.2, 0.2], [0.2, 0.7, 0.3], [0.2, 0.3, 0.8], [0.8, 0.7, 0.2]];
+    let materials: Vec<_> =
+        colors.iter().map(|&[r, g, b]| scene.add_material(Material::opaque("box", Vec4::new(r, g, b, 1.0)))).collect();
+    for i in 0..count {
+        let (x, z) = ((i % per_row) as f32 * 2.0 - half, (i / per_row) as f32 * 2.0 - half);
+        let node = scene.add_node("box", Transform::from_translation(Vec3::new(x, 0.5, z)));
+        scene.set_renderable(node, Renderable { geometry: cube, materials: vec![materials[i % 4]] }).ok();
+    }
+    let sun_direction = Vec3::new(0.6, -0.5, 0.4).normalize();
+    let sun =
+        scene.add_node("sun", Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, sun_direction)));
+    scene.set_light(sun, Some(Light { casts_shadows: false, ..Light::directional(3.0) })).ok();
+    (scene, per_row as f32 * 2.0)
+}
+
+/// Camera `i` of `n` on the ring.
+fn ring_camera(i: usize, n: usize, side: f32, size: UVec2) -> Result<LookAtResolver, Box<dyn std::error::Error>> {
+    let angle = i as f32 / n as f32 * std::f32::consts::TAU;
+    let eye = Vec3::new(angle.cos() * 0.65 * side, 0.35 * side, angle.sin() * 0.65 * side);
+    Ok(LookAtResolver::new(Camera::try_perspective(60f32.to_radians(), 0.1, None)?, eye, Vec3::ZERO, size)?)
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Mode {
+    Views,
+    Batch,
+}
+
+/// One measured configuration.
+struct Run {
+    cpu_ms: Vec<f64>,
+    frame_ms: Vec<f64>,
+    gpu_ms: Vec<f64>,
+    read_bytes: u64,
+}
+
+fn median(values: &[f64]) -> f64 {
+    if values.is_empty() {
+        return f64::NAN;
+    }
+    let mut sorted = values.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    sorted[sorted.len() / 2]
+}
+
+/// Renders `frames` measured frames of V cameras in `mode`.
+fn run(
+    scene: &Scene,
+    side: f32,
+    size: UVec2,
+    views: usize,
+    mode: Mode,
+    readback: bool,
+    frames: usize,
+) -> Result<Run, Box<dyn std::error::Error>> {
+    let mut renderer = Renderer::new_headless_with(RendererOptions::default())?;
+    let mut ids = Vec::with_capacity(views);
+    let batch = match mode {
+        Mode::Batch => Some(renderer.register_batch(BatchDesc::new("ring", size))?),
+        Mode::Views => None,
+    };
+    for i in 0..views {
+        let camera = ring_camera(i, views, side, size)?;
+        ids.push(match batch {
+            Some(batch) => renderer.add_camera(batch, camera)?,
+            None => {
+                renderer.register_view(ViewDesc::new(camera).with_visibility(Visibility::Cpu), standard_render_graph)?
+            }
+        });
+    }
+    if let (Some(batch), true) = (batch, readback) {
+        renderer.stream_batch(batch, Some(StreamOptions::default()))?;
+    }
+    let mut result = Run { cpu_ms: Vec::new(), frame_ms: Vec::new(), gpu_ms: Vec::new(), read_bytes: 0 };
+    for frame in 0..WARM_UP + frames {
+        let start = Instant::now();
+        let report = renderer.render_frame(scene)?;
+        let cpu = start.elapsed().as_secs_f64() * 1e3;
+        if let Some(warning) = report.warnings.first() {
+            return Err(format!("frame {frame}: {warning}").into());
+        }
+        let mut bytes = 0u64;
+        if readback {
+            match batch {
+                Some(_) => {
+                    for streamed in renderer.wait_streamed()? {
+                        for camera in &streamed.cameras {
+                            bytes += camera.color.as_ref().map_or(0, |c| c.len() as u64);
+                            bytes += camera.depth.as_ref().map_or(0, |d| 4 * d.len() as u64);
+                        }
+                    }
+                }
+                None => {
+                    for id in &ids {
+                        bytes += renderer.read_color(*id)?.len() as u64;
+                        bytes += 4 * renderer.read_depth(*id)?.depth.len() as u64;
+                    }
+                }
+            }
+        }
+        renderer.gpu().device.poll(wgpu::PollType::wait_indefinitely())?;
+        let whole = start.elapsed().as_secs_f64() * 1e3;
+        if frame >= WARM_UP {
+            result.cpu_ms.push(cpu);
+            result.frame_ms.push(whole);
+            if let Some(gpu) = report.gpu_seconds {
+                result.gpu_ms.push(gpu * 1e3);
+            }
+            result.read_bytes += bytes;
+        }
+    }
+    Ok(result)
+}
+
+/// Least-squares slope and intercept of `y` against `x`.
+fn fit(points: &[(f64, f64)]) -> (f64, f64) {
+    let n = points.len() as f64;
+    let (sx, sy) = points.iter().fold((0.0, 0.0), |(a, b), (x, y)| (a + x, b + y));
+    let (mx, my) = (sx / n, sy / n);
+    let sxx: f64 = points.iter().map(|(x, _)| (x - mx) * (x - mx)).sum();
+    let sxy: f64 = points.iter().map(|(x, y)| (x - mx) * (y - my)).sum();
+    let slope = if sxx > 0.0 { sxy / sxx } else { f64::NAN };
+    (slope, my - slope * mx)
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let usage = "usage: batch_bench BOXES WxH V[,V..] [frames]";
+    let mut args = std::env::args().skip(1);
+    let boxes: usize = args.next().ok_or(usage)?.parse()?;
+    let (w, h) = args.next().ok_or(usage)?.split_once('x').ok_or(usage).map(|(w, h)| (w.to_owned(), h.to_owned()))?;
+    let size = UVec2::new(w.parse()?, h.parse()?);
+    let counts: Vec<usize> = args.next().ok_or(usage)?.split(',').map(str::parse).collect::<Result<_, _>>()?;
+    let frames: usize = args.next().map(|a| a.parse()).transpose()?.unwrap_or(DEFAULT_MEASURED);
+    if boxes == 0 || size.x == 0 || size.y == 0 || frames == 0 || counts.contains(&0) || counts.is_empty() {
+        return Err(usage.into());
+    }
+    let readback = match std::env::var("BATCH_BENCH_READBACK").as_deref() {
+        Ok("1") => true,
+        Ok("0") | Err(_) => false,
+        Ok(other) => return Err(format!("BATCH_BENCH_READBACK={other}: use 0 or 1").into()),
+    };
+    let modes = match std::env::var("BATCH_BENCH_MODES").as_deref() {
+        Ok("views") => vec![Mode::Views],
+        Ok("batch") => vec![Mode::Batch],
+        Ok("both") | Err(_) => vec![Mode::Views, Mode::Batch],
+        Ok(other) => return Err(format!("BATCH_BENCH_MODES={other}: use views, batch or both").into()),
+    };
+
+    let (scene, side) = box_grid(boxes);
+    let adapter = Renderer::new_headless()?.gpu().adapter_info.clone();
+    let mut record = Record::new("batch_bench")
+        .adapter(&adapter)
+        .value("boxes", boxes)
+        .value("size_px", [size.x, size.y])
+        .value("warm_up_frames", WARM_UP)
+        .value("measured_frames", frames)
+        .value("readback", readback);
+    println!("adapter: {} {}", adapter.name, adapter.driver_info);
+    println!("| path | V | CPU ms | frame ms | GPU ms | view-frames/s | read MB/s |");
+    println!("|---|---:|---:|---:|---:|---:|---:|");
+    let mut points: Vec<(Mode, f64, f64, f64)> = Vec::new();
+    for (k, views) in counts.iter().enumerate() {
+        let mut order = modes.clone();
+        if k % 2 == 1 {
+            order.reverse();
+        }
+        for mode in order {
+            let r = run(&scene, side, size, *views, mode, readback, frames)?;
+            let (cpu, whole, gpu) = (median(&r.cpu_ms), median(&r.frame_ms), median(&r.gpu_ms));
+            let per_second = *views as f64 / (whole / 1e3);
+            let seconds: f64 = r.frame_ms.iter().sum::<f64>() / 1e3;
+            let read_mb_s = r.read_bytes as f64 / 1e6 / seconds;
+            println!("| {mode:?} | {views} | {cpu:.3} | {whole:.3} | {gpu:.3} | {per_second:.0} | {read_mb_s:.1} |");
+            points.push((mode, *views as f64, cpu, whole));
+            record.push_row(
+                Row::new()
+                    .value("path", format!("{mode:?}"))
+                    .value("views", *views)
+                    .value("cpu_ms_median", cpu)
+                    .value("frame_ms_median", whole)
+                    .value("gpu_ms_median", gpu.is_finite().then_some(gpu))
+                    .value("view_frames_per_second", per_second)
+                    .value("read_bytes", r.read_bytes)
+                    .value("read_mb_per_second", read_mb_s)
+                    .value("cpu_ms_samples", r.cpu_ms)
+                    .value("frame_ms_samples", r.frame_ms)
+                    .value("gpu_ms_samples", r.gpu_ms),
+            );
+        }
+    }
+    if counts.len() > 1 {
+        for mode in &modes {
+            let of = |pick: fn(&(Mode, f64, f64, f64)) -> f64| -> Vec<(f64, f64)> {
+                points.iter().filter(|p| p.0 == *mode).map(|p| (p.1, pick(p))).collect()
+            };
+            let (cpu_slope, _) = fit(&of(|p| p.2));
+            let (frame_slope, frame_intercept) = fit(&of(|p| p.3));
+            println!(
+                "{mode:?}: per view {:.1} µs CPU, {:.1} µs whole frame (intercept {frame_intercept:.3} ms)",
+                cpu_slope * 1e3,
+                frame_slope * 1e3
+            );
+            record.push_row(
+                Row::new()
+                    .value("path", format!("{mode:?}"))
+                    .value("per_view_cpu_us", cpu_slope * 1e3)
+                    .value("per_view_frame_us", frame_slope * 1e3)
+                    .value("frame_intercept_ms", frame_intercept),
+            );
+        }
+    }
+    record.write()?;
+    Ok(())
+}
