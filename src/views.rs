@@ -36,6 +36,7 @@ pub struct ViewDesc {
     pub(crate) visibility: Option<Visibility>,
     pub(crate) shown: Option<(crate::WindowId, crate::WindowRect)>,
     pub(crate) msaa: oxygen_gpu::Msaa,
+    pub(crate) name: Option<String>,
 }
 
 /// Where a view renders.
@@ -61,7 +62,15 @@ impl ViewDesc {
             visibility: None,
             shown: None,
             msaa: oxygen_gpu::Msaa::Off,
+            name: None,
         }
+    }
+
+    /// Names the view: reports ([`crate::ViewReport::name`]), warnings and
+    /// logs use the name beside its id, and tools name its files after it.
+    pub fn named(mut self, name: impl Into<String>) -> Self {
+        self.name = Some(name.into());
+        self
     }
 
     /// Anti-aliases the view's mesh passes with `msaa` samples per pixel
@@ -138,6 +147,11 @@ impl ViewDesc {
     }
 }
 
+/// The name of a registered batch (empty when it is not).
+fn entry_name(batches: &BTreeMap<BatchId, BatchEntry>, batch: BatchId) -> &str {
+    batches.get(&batch).map_or("", |b| b.name.as_str())
+}
+
 impl<R: ViewResolver + 'static> From<R> for ViewDesc {
     fn from(resolver: R) -> Self {
         ViewDesc::new(resolver)
@@ -155,6 +169,7 @@ pub(crate) struct ViewEntry {
     pub(crate) visibility: Option<Visibility>,
     pub(crate) shown: Option<(crate::WindowId, crate::WindowRect)>,
     pub(crate) msaa: oxygen_gpu::Msaa,
+    pub(crate) name: Option<String>,
 }
 
 /// The registered views and the links between them; no GPU needed.
@@ -237,9 +252,10 @@ impl Views {
                 visibility: desc.visibility,
                 shown: desc.shown,
                 msaa: desc.msaa,
+                name: desc.name,
             },
         );
-        tracing::info!(view = %id, "view registered");
+        tracing::info!(view = %id, name = ?self.name(id), "view registered");
     }
 
     pub(crate) fn allocate_probe(&mut self) -> ProbeId {
@@ -359,7 +375,10 @@ impl Views {
         let graph = Arc::clone(&entry.graph);
         let id = self.ids.allocate();
         let slot = self.batches.get_mut(&batch).ok_or(RenderError::NoSuchBatch(batch))?.take_slot(id);
-        let desc = ViewDesc { target: TargetKind::Tile { batch, slot }, visibility: Some(Visibility::Cpu), ..desc };
+        // A camera without a name of its own is named after its batch and tile.
+        let name = desc.name.clone().or_else(|| Some(format!("{}[{slot}]", entry_name(&self.batches, batch))));
+        let desc =
+            ViewDesc { target: TargetKind::Tile { batch, slot }, visibility: Some(Visibility::Cpu), name, ..desc };
         self.insert_erased(id, desc, graph);
         Ok(id)
     }
@@ -386,6 +405,17 @@ impl Views {
             TargetKind::Tile { batch, .. } => Some(batch),
             _ => None,
         }
+    }
+
+    /// The name a view was registered with ([`ViewDesc::named`]), if any.
+    pub fn name(&self, view: ViewId) -> Option<&str> {
+        self.entries.get(&view)?.name.as_deref()
+    }
+
+    /// The view called `name`, if one is (the first registered, when
+    /// several share it).
+    pub fn find(&self, name: &str) -> Option<ViewId> {
+        self.entries.iter().find(|(_, e)| e.name.as_deref() == Some(name)).map(|(id, _)| *id)
     }
 
     /// The name of `batch`.

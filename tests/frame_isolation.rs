@@ -64,7 +64,47 @@ fn a_camera_that_cannot_be_resolved_skips_its_view_and_the_others_render() {
     );
     centre_is_lit_red(&renderer, good_before);
     centre_is_lit_red(&renderer, good_after);
-    assert!(renderer.read_color(bad).is_err(), "the skipped view has no image");
+    // Reading the skipped view says why it has no image.
+    let reason = match &report.warnings[0] {
+        FrameWarning::ViewSkipped { reason, .. } => reason.clone(),
+        other => panic!("{other:?}"),
+    };
+    match renderer.read_color(bad) {
+        Err(oxygen::RenderError::Skipped { view, reason: why }) => assert_eq!((view, why), (bad, reason)),
+        other => panic!("reading the skipped view: {other:?}"),
+    }
+}
+
+#[test]
+fn views_carry_their_names_and_sun_shadows_without_a_sun_are_a_warning() {
+    let (mut scene, _) = lit_cube_scene();
+    // The sun lights the cube but casts no shadow.
+    let sun = scene.nodes().find(|(_, n)| n.name == "sun").map(|(key, _)| key).expect("the sun");
+    scene.set_light(sun, Some(Light { casts_shadows: false, ..Light::directional(3.0) })).unwrap();
+    let mut renderer = gpu_renderer();
+    let front = renderer
+        .register_view(
+            ViewDesc::new(front_view(32)).named("front").with_sun_shadows(Default::default()),
+            standard_render_graph,
+        )
+        .unwrap();
+    let side = renderer.register_view(front_view(32), standard_render_graph).unwrap();
+    assert_eq!(renderer.view_name(front), Some("front"));
+    assert_eq!(renderer.find_view("front"), Some(front));
+    let report = renderer.render_frame(&scene).unwrap();
+    let names: Vec<_> = report.views.iter().map(|v| (v.view, v.name.as_deref())).collect();
+    assert_eq!(names, vec![(front, Some("front")), (side, None)]);
+    // No light casts a sun shadow: the view that asked
+    // for sun shadows is told, the other is not.
+    let warned: Vec<_> = report
+        .warnings
+        .iter()
+        .filter_map(|w| match w {
+            FrameWarning::NoSunForShadows { view } => Some(*view),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(warned, vec![front]);
 }
 
 #[test]

@@ -64,6 +64,15 @@ pub enum RenderError {
     /// The view has not been rendered yet, so it has no image.
     #[error("{0} has not been rendered yet")]
     NotRendered(ViewId),
+    /// The view has no image: the frames so far skipped it, and this is
+    /// why the last one did.
+    #[error("{view} has no image: it was skipped ({reason})")]
+    Skipped {
+        /// The view.
+        view: ViewId,
+        /// The reason its last frame gave.
+        reason: String,
+    },
     /// A view's targets would pass the renderer's target memory budget.
     #[error(
         "{view}: targets of {width}x{height} would take {} MiB; the target budget is {} MiB, of which {} MiB are taken \

@@ -110,6 +110,9 @@ struct Frames {
     gpu_timer: Option<gpu_timer::GpuTimer>,
     /// The last frame's views in submission order, with their roles.
     last: Vec<(ViewId, ViewRole)>,
+    /// Why each view the last frame skipped was skipped, kept until it
+    /// renders again: a readback of it says so.
+    skipped: std::collections::HashMap<ViewId, String>,
 }
 
 impl Frames {
@@ -231,7 +234,13 @@ impl Renderer {
                 keep_hdr: options.keep_hdr,
                 specialize_shaders: options.specialize_shaders,
             },
-            frames: Frames { count: 0, started: Instant::now(), gpu_timer, last: Vec::new() },
+            frames: Frames {
+                count: 0,
+                started: Instant::now(),
+                gpu_timer,
+                last: Vec::new(),
+                skipped: Default::default(),
+            },
             gpu,
         })
     }
@@ -259,6 +268,14 @@ impl Renderer {
         let presented = self.present(&recorded);
         let report = FrameReport::new(prepared, recorded, presented, gpu_seconds);
         self.frames.last = report.views.iter().map(|r| (r.view, r.role)).collect();
+        for view in &report.views {
+            self.frames.skipped.remove(&view.view);
+        }
+        for warning in &report.warnings {
+            if let FrameWarning::ViewSkipped { view, reason } = warning {
+                self.frames.skipped.insert(*view, reason.clone());
+            }
+        }
         Ok(report)
     }
 

@@ -140,6 +140,12 @@ impl Renderer {
             .iter()
             .filter_map(|v| Some((v.id, v.world, self.views.entries.get(&v.id)?.sun_shadows?)))
             .collect();
+        if frame.shadow_sun.is_none() {
+            for (view, _, _) in &owners {
+                tracing::debug!(view = %view, "sun shadows asked for, no shadow-casting sun");
+                warnings.push(FrameWarning::NoSunForShadows { view: *view });
+            }
+        }
         let (planned, released) = self.shadows.views.plan(&owners, frame, scene, clock.index, clock.time_seconds);
         // Shadow views no light needs any more: their targets and slots go.
         for id in released {

@@ -50,7 +50,7 @@ impl Renderer {
         if targets.msaa.is_some() {
             return Err(RenderError::Unsupported(format!("{id} is multisampled: its depth is never resolved")));
         }
-        let view = *self.targets.last_view(id).ok_or(RenderError::NotRendered(id))?;
+        let view = *self.targets.last_view(id).ok_or_else(|| self.not_rendered(id))?;
         let (x, y) = targets.tile.map_or((0, 0), |t| (t.x, t.y));
         let layer = targets.tile.map_or(targets.depth_layer, |t| t.page);
         let (width, height) = (targets.width, targets.height);
@@ -92,7 +92,16 @@ impl Renderer {
         if !known {
             return Err(RenderError::NoSuchView(id));
         }
-        self.targets.get(id).and_then(|v| v.targets.as_ref()).ok_or(RenderError::NotRendered(id))
+        self.targets.get(id).and_then(|v| v.targets.as_ref()).ok_or_else(|| self.not_rendered(id))
+    }
+
+    /// Why `id` has no image: the reason its last frame skipped it, or
+    /// that no frame has rendered it yet.
+    pub(crate) fn not_rendered(&self, id: ViewId) -> RenderError {
+        match self.frames.skipped.get(&id) {
+            Some(reason) => RenderError::Skipped { view: id, reason: reason.clone() },
+            None => RenderError::NotRendered(id),
+        }
     }
 
     /// The view's prepared frame from the last `render_frame`.

@@ -352,6 +352,7 @@ impl Renderer {
                 let (stats, busy) = if k == 0 { (recorded.stats, recorded.busy) } else { Default::default() };
                 reports.push(ViewReport {
                     view: view.id,
+                    name: self.views.name(view.id).map(str::to_owned),
                     role: view.role,
                     draws: frames[i].draws().len(),
                     visibility: view.options.visibility,

@@ -72,6 +72,16 @@ impl Renderer {
         self.views.batch_cameras(batch)
     }
 
+    /// The name `view` was registered with ([`ViewDesc::named`]), if any.
+    pub fn view_name(&self, view: ViewId) -> Option<&str> {
+        self.views.name(view)
+    }
+
+    /// The registered view called `name`, if one is.
+    pub fn find_view(&self, name: &str) -> Option<ViewId> {
+        self.views.find(name)
+    }
+
     /// Removes a view, the shadow cascades it owns, and frees their slots.
     pub fn unregister_view(&mut self, id: impl Into<ViewId>) -> Result<(), RenderError> {
         let id = id.into();

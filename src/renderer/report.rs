@@ -53,6 +53,9 @@ pub enum ViewRole {
 pub struct ViewReport {
     /// The view.
     pub view: ViewId,
+    /// Its name ([`crate::ViewDesc::named`]; a batch camera's defaults to
+    /// its batch's name and tile), if it has one.
+    pub name: Option<String>,
     /// What it is for.
     pub role: ViewRole,
     /// Draws after culling on the CPU (on a GPU path only the transparent
@@ -84,6 +87,13 @@ pub enum FrameWarning {
         /// Why, as the error would have said it.
         reason: String,
     },
+    /// A view asks for sun shadows ([`crate::ViewDesc::with_sun_shadows`])
+    /// but the frame has no directional light that casts shadows: it is
+    /// lit without them.
+    NoSunForShadows {
+        /// The view.
+        view: ViewId,
+    },
     /// A window was not presented this frame (its surface was lost,
     /// outdated, occluded or timed out; it was reconfigured).
     WindowSkipped {
@@ -108,6 +118,10 @@ impl std::fmt::Display for FrameWarning {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             FrameWarning::ViewSkipped { view, reason } => write!(f, "{view} skipped: {reason}"),
+            FrameWarning::NoSunForShadows { view } => write!(
+                f,
+                "{view} asks for sun shadows, but no directional light of the scene casts shadows: it has no cascades"
+            ),
             FrameWarning::NodeSkipped { name, reason, .. } => write!(f, "node '{name}' skipped: {reason}"),
             FrameWarning::WindowSkipped { window, reason } => write!(f, "{window} not presented: {reason}"),
         }
