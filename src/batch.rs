@@ -57,13 +57,14 @@ pub struct BatchDesc {
     pub(crate) size: UVec2,
     pub(crate) graph: BatchGraph,
     pub(crate) max_page_side: Option<u32>,
+    pub(crate) labels: bool,
 }
 
 impl BatchDesc {
     /// A batch called `name` whose cameras render `size` pixels each with
     /// the standard batch graph ([`standard_batch_graph`]).
     pub fn new(name: impl Into<String>, size: UVec2) -> Self {
-        BatchDesc { name: name.into(), size, graph: standard_batch_graph, max_page_side: None }
+        BatchDesc { name: name.into(), size, graph: standard_batch_graph, max_page_side: None, labels: false }
     }
 
     /// Pages of the batch's atlas no wider or taller than `side` pixels
@@ -71,6 +72,12 @@ impl BatchDesc {
     /// pass of its own, but less memory left unused in the last page.
     pub fn with_max_page_side(self, side: u32) -> Self {
         BatchDesc { max_page_side: Some(side), ..self }
+    }
+
+    /// Every camera draws labels (instance ids and world normals; see
+    /// [`crate::ViewDesc::with_labels`]) into label pages of the atlas.
+    pub fn with_labels(self) -> Self {
+        BatchDesc { labels: true, ..self }
     }
 
     /// The same batch with another graph.
@@ -85,6 +92,8 @@ pub(crate) struct BatchEntry {
     pub(crate) size: UVec2,
     pub(crate) graph: Arc<BatchGraph>,
     pub(crate) max_page_side: Option<u32>,
+    /// Whether the cameras draw labels.
+    pub(crate) labels: bool,
     /// Tile `i` of the batch's atlas belongs to `slots[i]`; a removed
     /// camera's tile is free for the next one added, so the others keep
     /// theirs (and their targets) when cameras come and go.
@@ -152,6 +161,7 @@ mod tests {
             size: UVec2::new(8, 8),
             graph: Arc::new(standard_batch_graph),
             max_page_side: None,
+            labels: false,
             slots: Vec::new(),
         }
     }

@@ -197,7 +197,8 @@ impl RenderGraph for StandardGraph {
         // shading tone-maps in place and the frame skips the HDR write and
         // the full-screen tone-map pass.
         if !ctx.hdr_read_after_shading() {
-            return MeshPass::forward_lit(lit).tone_mapped(exposure).run(ctx, rec).await;
+            MeshPass::forward_lit(lit).tone_mapped(exposure).run(ctx, rec).await?;
+            return labels_if_asked(&[ctx], rec).await;
         }
         let mut transparent = MeshPass::transparent();
         let mut shading = MeshPass::forward_lit(lit);
@@ -209,7 +210,8 @@ impl RenderGraph for StandardGraph {
         shading.run(ctx, rec).await?;
         // Records nothing on a frame without blended draws.
         transparent.run(ctx, rec).await?;
-        TonemapPass::new(exposure).run(ctx, rec).await
+        TonemapPass::new(exposure).run(ctx, rec).await?;
+        labels_if_asked(&[ctx], rec).await
     }
 
     fn runs_occlusion_phases(&self) -> bool {
@@ -291,7 +293,8 @@ impl BatchGraph {
             MeshPass::depth_pre_pass().run_batch(views, rec).await?;
         }
         if !views.iter().any(|ctx| ctx.hdr_read_after_shading()) {
-            return MeshPass::forward_lit(lit).tone_mapped(exposure).run_batch(views, rec).await;
+            MeshPass::forward_lit(lit).tone_mapped(exposure).run_batch(views, rec).await?;
+            return labels_if_asked(views, rec).await;
         }
         MeshPass::forward_lit(lit).run_batch(views, rec).await?;
         MeshPass::transparent().run_batch(views, rec).await?;
@@ -306,8 +309,18 @@ impl BatchGraph {
             toned.push(page);
             TonemapPass::new(exposure).run(ctx, rec).await?;
         }
-        Ok(())
+        labels_if_asked(views, rec).await
     }
+}
+
+/// The labels pass ([`MeshPass::labels`]) over the views that asked for
+/// labels (they have label targets); nothing when none did.
+async fn labels_if_asked(views: &[&RenderContext<'_>], rec: &mut CommandRecorder) -> Result<(), PassError> {
+    let asked: Vec<&RenderContext<'_>> = views.iter().copied().filter(|ctx| ctx.targets.labels.is_some()).collect();
+    if asked.is_empty() {
+        return Ok(());
+    }
+    MeshPass::labels().run_batch(&asked, rec).await
 }
 
 impl RenderGraph for BatchGraph {

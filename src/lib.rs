@@ -50,8 +50,8 @@ pub mod windows;
 
 pub use oxygen_sceneprep::RenderOrigin;
 pub use renderer::{
-    DepthImage, FrameReport, FrameWarning, RenderError, Renderer, RendererInternals, RendererOptions, ViewReport,
-    ViewRole,
+    DepthImage, FrameReport, FrameWarning, LabelImage, RenderError, Renderer, RendererInternals, RendererOptions,
+    ViewReport, ViewRole,
 };
 
 // Root paths the renderer's code and doc links name (`crate::WindowId`,

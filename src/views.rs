@@ -37,6 +37,7 @@ pub struct ViewDesc {
     pub(crate) shown: Option<(crate::WindowId, crate::WindowRect)>,
     pub(crate) msaa: oxygen_gpu::Msaa,
     pub(crate) name: Option<String>,
+    pub(crate) labels: bool,
 }
 
 /// Where a view renders.
@@ -63,7 +64,20 @@ impl ViewDesc {
             shown: None,
             msaa: oxygen_gpu::Msaa::Off,
             name: None,
+            labels: false,
         }
+    }
+
+    /// Draws per-pixel labels after shading: the node that drew each pixel
+    /// (its instance id) and the surface's world-space normal, readable
+    /// with [`crate::Renderer::read_labels`] and linkable
+    /// ([`ViewId::instance_ids`], [`ViewId::normals`]). Costs one more
+    /// geometry pass over the opaque draws and 12 bytes a pixel of
+    /// targets. Single-sampled colour views only: with MSAA, or on a
+    /// depth-only view, registration refuses it.
+    pub fn with_labels(mut self) -> Self {
+        self.labels = true;
+        self
     }
 
     /// Names the view: reports ([`crate::ViewReport::name`]), warnings and
@@ -170,6 +184,7 @@ pub(crate) struct ViewEntry {
     pub(crate) shown: Option<(crate::WindowId, crate::WindowRect)>,
     pub(crate) msaa: oxygen_gpu::Msaa,
     pub(crate) name: Option<String>,
+    pub(crate) labels: bool,
 }
 
 /// The registered views and the links between them; no GPU needed.
@@ -219,6 +234,11 @@ impl Views {
     /// names a view or probe that is not registered.
     pub fn register(&mut self, desc: impl Into<ViewDesc>, graph: impl RenderGraph) -> Result<ViewId, RenderError> {
         let desc = desc.into();
+        if desc.labels && (desc.msaa != oxygen_gpu::Msaa::Off || desc.options.depth_only) {
+            return Err(RenderError::Unsupported(
+                "labels (ViewDesc::with_labels) on a multisampled or depth-only view".into(),
+            ));
+        }
         for link in &desc.links {
             self.check_source(*link)?;
         }
@@ -253,6 +273,7 @@ impl Views {
                 shown: desc.shown,
                 msaa: desc.msaa,
                 name: desc.name,
+                labels: desc.labels,
             },
         );
         tracing::info!(view = %id, name = ?self.name(id), "view registered");
@@ -325,7 +346,7 @@ impl Views {
     /// until [`Views::add_camera`] adds one. Fails when the cameras' size
     /// is empty.
     pub fn register_batch(&mut self, desc: BatchDesc) -> Result<BatchId, RenderError> {
-        let BatchDesc { name, size, graph, max_page_side } = desc;
+        let BatchDesc { name, size, graph, max_page_side, labels } = desc;
         if size.x == 0 || size.y == 0 {
             return Err(RenderError::InvalidBatch { name, reason: format!("its cameras' size {size} is empty") });
         }
@@ -335,7 +356,7 @@ impl Views {
         }
         let id = self.batch_ids.allocate();
         let graph = Arc::new(graph);
-        self.batches.insert(id, BatchEntry { name, size, graph, max_page_side, slots: Vec::new() });
+        self.batches.insert(id, BatchEntry { name, size, graph, max_page_side, labels, slots: Vec::new() });
         tracing::info!(batch = %id, "batch registered");
         Ok(id)
     }
@@ -373,12 +394,13 @@ impl Views {
             self.check_source(*link)?;
         }
         let graph = Arc::clone(&entry.graph);
+        let labels = desc.labels || entry.labels;
         let id = self.ids.allocate();
         let slot = self.batches.get_mut(&batch).ok_or(RenderError::NoSuchBatch(batch))?.take_slot(id);
         // A camera without a name of its own is named after its batch and tile.
         let name = desc.name.clone().or_else(|| Some(format!("{}[{slot}]", entry_name(&self.batches, batch))));
-        let desc =
-            ViewDesc { target: TargetKind::Tile { batch, slot }, visibility: Some(Visibility::Cpu), name, ..desc };
+        let target = TargetKind::Tile { batch, slot };
+        let desc = ViewDesc { target, visibility: Some(Visibility::Cpu), name, labels, ..desc };
         self.insert_erased(id, desc, graph);
         Ok(id)
     }

@@ -155,8 +155,9 @@ fn depth_reads_back_as_the_distance_of_a_plane() {
         assert_eq!((depth.width, depth.height), (40, 30));
         let worst = depth.linear().iter().map(|d| (d - 6.0).abs()).fold(0.0f32, f32::max);
         // Depth32Float at 6 units under reverse-Z keeps about 7 digits:
-        // measured worst 4e-6 (lavapipe and GL); bound 1e-4.
-        assert!(worst < 1e-4, "{view}: linear depth strays {worst} from 6");
+        // measured worst 0 (lavapipe) and 5.7e-6 (GL, through its depth
+        // copy pass); bound 1.5 × that.
+        assert!(worst < 8.5e-6, "{view}: linear depth strays {worst} from 6");
         // Device depth: near / distance for an infinite reverse-Z projection.
         let device = depth.get(20, 15);
         assert!((device - 0.1 / 6.0).abs() < 1e-6, "{view}: device depth {device}");
@@ -164,8 +165,8 @@ fn depth_reads_back_as_the_distance_of_a_plane() {
     let depth = renderer.read_depth(over_box).unwrap();
     let linear = depth.linear();
     let at = |x: u32, y: u32| linear[(y * depth.width + x) as usize];
-    assert!((at(20, 15) - 4.0).abs() < 1e-4, "the box top is 4 units away, read {}", at(20, 15));
-    assert!((at(0, 0) - 6.0).abs() < 1e-4, "the ground is 6 units away at the corner, read {}", at(0, 0));
+    assert!((at(20, 15) - 4.0).abs() < 8.5e-6, "the box top is 4 units away, read {}", at(20, 15));
+    assert!((at(0, 0) - 6.0).abs() < 8.5e-6, "the ground is 6 units away at the corner, read {}", at(0, 0));
 }
 
 #[test]
@@ -279,4 +280,119 @@ fn streamed_frames_arrive_tagged_in_order_without_an_off_by_one() {
     renderer.stream_batch(batch, None).unwrap();
     renderer.render_frame(&demo.scene).unwrap();
     assert!(renderer.wait_streamed().unwrap().is_empty(), "stopped");
+}
+
+/// Three rows of three boxes seen from above, each box's semantic class
+/// its row, with labels: a batch camera and a lone view.
+fn labelled_boxes() -> (Scene, Vec<(oxygen::core::NodeKey, Vec3)>) {
+    let mut scene = Scene::new();
+    let grey = scene.add_material(Material::opaque("grey", Vec4::splat(0.6)));
+    let cube = scene.add_geometry(Geometry::cube(1.0));
+    let mut boxes = Vec::new();
+    for row in 0..3 {
+        for column in 0..3 {
+            let at = Vec3::new(column as f32 * 2.0 - 2.0, 0.5, row as f32 * 2.0 - 2.0);
+            let node = scene.add_node("box", Transform::from_translation(at));
+            scene.set_renderable(node, Renderable { geometry: cube, materials: vec![grey] }).unwrap();
+            scene.set_semantic_class(node, row + 1).unwrap();
+            boxes.push((node, at));
+        }
+    }
+    let sun = scene.add_node("sun", Transform::IDENTITY);
+    scene.set_light(sun, Some(Light::directional(1.0))).unwrap();
+    (scene, boxes)
+}
+
+fn looking_down(size: UVec2) -> LookAtResolver {
+    LookAtResolver::new(Camera::perspective(60f32.to_radians(), 0.1, None), Vec3::new(0.0, 9.0, 0.0), Vec3::ZERO, size)
+        .unwrap()
+        .with_up(Vec3::NEG_Z)
+        .unwrap()
+}
+
+#[test]
+fn instance_labels_name_the_drawn_objects_and_their_classes() {
+    let (scene, boxes) = labelled_boxes();
+    let size = UVec2::new(64, 64);
+    let mut renderer = support::gpu_renderer();
+    let batch = renderer.register_batch(BatchDesc::new("labelled", size).with_labels()).unwrap();
+    let camera = renderer.add_camera(batch, looking_down(size)).unwrap();
+    let lone = renderer.register_view(ViewDesc::new(looking_down(size)).with_labels(), standard_render_graph).unwrap();
+    renderer.render_frame(&scene).unwrap();
+    for view in [camera, lone] {
+        let labels = renderer.read_labels(view).unwrap();
+        assert_eq!((labels.width, labels.height), (64, 64));
+        // Every label names a node the view's prepared frame draws.
+        let drawn: std::collections::BTreeSet<u32> =
+            renderer.prepared_frame(view).unwrap().draws().iter().map(|d| d.node_id + 1).collect();
+        let seen: std::collections::BTreeSet<u32> = labels.instances.iter().copied().filter(|l| *l != 0).collect();
+        assert!(seen.is_subset(&drawn), "{view}: labels {seen:?} outside the drawn {drawn:?}");
+        assert!(labels.instances.contains(&0), "{view}: the background is 0");
+        // Every box covers the pixel its top's centre projects to, and is
+        // named there, with its class in the segmentation image.
+        let context = oxygen::views::ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 };
+        let resolved = looking_down(size).resolve(&context, &scene).unwrap();
+        let semantic = labels.semantic(&scene);
+        for (i, (node, at)) in boxes.iter().enumerate() {
+            let (x, y) = support::pixel_of(&resolved, *at + Vec3::new(0.0, 0.5, 0.0));
+            assert_eq!(labels.node(&scene, x, y), Some(*node), "{view}: box {i} at pixel ({x}, {y})");
+            assert_eq!(semantic[(y * 64 + x) as usize], i as u32 / 3 + 1, "{view}: class of box {i}");
+            // Its top faces up.
+            let n = labels.normals[(y * 64 + x) as usize];
+            assert!((n[1] - 1.0).abs() < 1e-3 && n[0].abs() < 1e-3 && n[2].abs() < 1e-3, "{view}: normal {n:?}");
+        }
+    }
+    let unlabelled = renderer.register_view(looking_down(size), standard_render_graph).unwrap();
+    renderer.render_frame(&scene).unwrap();
+    assert!(matches!(renderer.read_labels(unlabelled), Err(RenderError::Unsupported(_))));
+}
+
+#[test]
+fn normal_labels_of_a_sphere_match_its_analytic_normals() {
+    // A unit sphere at the origin seen from 4 units away: at every pixel
+    // labelled with it, the normal is the direction from the centre to the
+    // point the depth puts there.
+    let mut scene = Scene::new();
+    let white = scene.add_material(Material::opaque("white", Vec4::ONE));
+    let mesh = scene.add_geometry(Geometry::uv_sphere(1.0, 48, 24));
+    let sphere = scene.add_node("sphere", Transform::IDENTITY);
+    scene.set_renderable(sphere, Renderable { geometry: mesh, materials: vec![white] }).unwrap();
+    let sun = scene.add_node("sun", Transform::IDENTITY);
+    scene.set_light(sun, Some(Light::directional(1.0))).unwrap();
+    let size = UVec2::new(48, 48);
+    let eye = Vec3::new(1.0, 1.5, 3.5);
+    let camera =
+        LookAtResolver::new(Camera::perspective(40f32.to_radians(), 0.1, None), eye, Vec3::ZERO, size).unwrap();
+    let mut renderer = support::gpu_renderer();
+    let batch = renderer.register_batch(BatchDesc::new("sphere", size).with_labels()).unwrap();
+    let view = renderer.add_camera(batch, camera).unwrap();
+    renderer.render_frame(&scene).unwrap();
+    let labels = renderer.read_labels(view).unwrap();
+    let depth = renderer.read_depth(view).unwrap();
+    let inverse = depth.view.inverse_view_projection;
+    let mut worst = 0.0f32;
+    let mut counted = 0;
+    for y in 0..48 {
+        for x in 0..48 {
+            let i = (y * 48 + x) as usize;
+            if labels.instances[i] == 0 {
+                continue;
+            }
+            assert_eq!(labels.node(&scene, x, y), Some(sphere));
+            let ndc = Vec4::new((x as f32 + 0.5) / 24.0 - 1.0, 1.0 - (y as f32 + 0.5) / 24.0, depth.depth[i], 1.0);
+            let p = inverse * ndc;
+            // Relative to the render origin, which the camera's grid cell puts at the world origin.
+            let point = p.truncate() / p.w;
+            let analytic = point.normalize();
+            let n = Vec3::from(labels.normals[i]);
+            worst = worst.max(n.angle_between(analytic).to_degrees());
+            counted += 1;
+        }
+    }
+    assert!(counted > 300, "the sphere covers {counted} pixels");
+    // The normal is interpolated between vertex normals that are exact,
+    // and the point unprojected from depth lies on the facet between them:
+    // measured worst 0.028° on lavapipe and on GL; bound 1.5 × that. (A
+    // flat-shaded normal would stray up to half a facet, 3.75°.)
+    assert!(worst < 0.042, "normals stray up to {worst}° from the analytic ones");
 }

@@ -198,6 +198,48 @@ impl GpuContext {
         Ok(image::RgbaImage::from_raw(size.0, size.1, pixels).expect("readback size matches the region"))
     }
 
+    /// Reads the `size` rectangle at `origin` of layer `layer` of an
+    /// `R32Uint` texture (instance labels), row by row. Blocks until the
+    /// GPU has finished all submitted work.
+    pub fn read_u32_region(
+        &self,
+        texture: &wgpu::Texture,
+        layer: u32,
+        origin: (u32, u32),
+        size: (u32, u32),
+    ) -> Result<Vec<u32>, GpuError> {
+        let format = texture.format();
+        if format != wgpu::TextureFormat::R32Uint {
+            return Err(GpuError::UnsupportedReadbackFormat(format));
+        }
+        let region = TexelRegion { level: 0, layer, origin, size };
+        let bytes = self.read_region(texture, 4, region, wgpu::TextureAspect::All)?;
+        Ok(bytes.chunks_exact(4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect())
+    }
+
+    /// Reads the `size` rectangle at `origin` of layer `layer` of an
+    /// `Rgba16Float` texture (normal labels, a tile of an HDR atlas) as
+    /// `f32` texels. Blocks until the GPU has finished all submitted work.
+    pub fn read_rgba16_float_region(
+        &self,
+        texture: &wgpu::Texture,
+        layer: u32,
+        origin: (u32, u32),
+        size: (u32, u32),
+    ) -> Result<HdrImage, GpuError> {
+        let format = texture.format();
+        if format != wgpu::TextureFormat::Rgba16Float {
+            return Err(GpuError::UnsupportedReadbackFormat(format));
+        }
+        let region = TexelRegion { level: 0, layer, origin, size };
+        let bytes = self.read_region(texture, 8, region, wgpu::TextureAspect::All)?;
+        let pixels = bytes
+            .chunks_exact(8)
+            .map(|texel| std::array::from_fn(|c| f16_to_f32(u16::from_le_bytes([texel[2 * c], texel[2 * c + 1]]))))
+            .collect();
+        Ok(HdrImage { width: size.0, height: size.1, pixels })
+    }
+
     /// Reads the `size` rectangle at `origin` of layer `layer` of a
     /// `Depth32Float` texture: device depth (reverse-Z: 1 at the near
     /// plane, 0 at the far plane or nothing drawn), row by row. Depth

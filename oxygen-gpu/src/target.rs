@@ -33,28 +33,86 @@ pub struct ViewTargets {
     /// [`TileAtlas`] (its textures are the atlas's, shared with the other
     /// cameras of its batch); `None` when the view covers its textures.
     pub tile: Option<Tile>,
+    /// The per-pixel labels (instance ids, normals) the labels pass
+    /// writes, when the view asked for them.
+    pub labels: Option<LabelTargets>,
+}
+
+/// Format of the instance-label target: the stable id of the node that
+/// drew the pixel plus one, 0 where nothing opaque was drawn.
+pub const LABEL_INSTANCE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+/// Format of the normal-label target: the world-space unit normal in
+/// `xyz`, `w` 1 where a surface was drawn and 0 elsewhere.
+pub const LABEL_NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+
+/// The targets of the labels pass: instance ids and world normals.
+#[derive(Clone)]
+pub struct LabelTargets {
+    /// Instance ids ([`LABEL_INSTANCE_FORMAT`]); for a tile, its atlas's
+    /// whole texture.
+    pub instances: wgpu::Texture,
+    /// The view of `instances` the labels pass renders into.
+    pub instances_view: wgpu::TextureView,
+    /// World normals ([`LABEL_NORMAL_FORMAT`]).
+    pub normals: wgpu::Texture,
+    /// The view of `normals` the labels pass renders into.
+    pub normals_view: wgpu::TextureView,
+}
+
+impl LabelTargets {
+    /// Bytes a pixel of labels takes (4 for the id, 8 for the normal).
+    pub const BYTES_PER_PIXEL: u64 = 12;
+
+    /// Label textures of `width × height` with `layers` layers (pages of a
+    /// [`TileAtlas`]), render views of layer 0.
+    pub fn new(device: &wgpu::Device, width: u32, height: u32, layers: u32, label: &str) -> Self {
+        let size = wgpu::Extent3d { width, height, depth_or_array_layers: layers };
+        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_SRC;
+        let instances = texture_2d(device, &format!("{label} instances"), size, 1, LABEL_INSTANCE_FORMAT, usage);
+        let normals = texture_2d(device, &format!("{label} normals"), size, 1, LABEL_NORMAL_FORMAT, usage);
+        LabelTargets {
+            instances_view: single_layer_view(&instances, 0, "instances"),
+            normals_view: single_layer_view(&normals, 0, "normals"),
+            instances,
+            normals,
+        }
+    }
+
+    /// The same textures with render views of layer `layer`.
+    pub fn layer(&self, layer: u32) -> Self {
+        LabelTargets {
+            instances_view: single_layer_view(&self.instances, layer, "instances page"),
+            normals_view: single_layer_view(&self.normals, layer, "normals page"),
+            instances: self.instances.clone(),
+            normals: self.normals.clone(),
+        }
+    }
 }
 
 /// A view's rectangle in a [`TileAtlas`]: `width × height` pixels of
-/// [`ViewTargets`] starting at (`x`, `y`) of layer `page`.
+/// [`ViewTargets`] starting at (`x`, `y`) of page `page`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Tile {
     /// Left edge in pixels.
     pub x: u32,
     /// Top edge in pixels.
     pub y: u32,
-    /// The atlas layer (page) the tile is on.
+    /// The page the tile is on.
     pub page: u32,
     /// The tile's index in the atlas (page by page, row by row).
     pub index: u32,
 }
 
-/// The shared targets of a batch of equally sized views: pages (layers of
-/// 2D array textures) of tiles, one tile per view, so that every view of a
-/// batch draws into one render pass per page instead of targets of its
-/// own. Display colour (`Rgba8UnormSrgb`) and depth (`Depth32Float`,
-/// reverse-Z) always; the HDR colour only when [`TileAtlas::new`] is asked
-/// for it (a frame with blended draws, or a batch that keeps HDR).
+/// The shared targets of a batch of equally sized views: pages of tiles,
+/// one tile per view, so that every view of a batch draws into one render
+/// pass per page instead of targets of its own. Each page is a set of 2D
+/// textures of its own (not a layer of an array: GL can sample and render
+/// a 2D texture, not a single layer of an array as one): display colour
+/// (`Rgba8UnormSrgb`) and depth (`Depth32Float`, reverse-Z) always, the
+/// HDR colour and the labels only when [`TileAtlas::new`] is asked for
+/// them.
 pub struct TileAtlas {
     /// Pixels of one tile.
     pub tile_size: (u32, u32),
@@ -64,22 +122,23 @@ pub struct TileAtlas {
     pub columns: u32,
     /// Tiles down one page.
     pub rows: u32,
-    /// Pages (array layers).
-    pub pages: u32,
-    /// Display colour, one layer per page.
-    pub color: wgpu::Texture,
-    /// Linear HDR colour, one layer per page, when asked for.
-    pub hdr: Option<wgpu::Texture>,
-    /// Depth, one layer per page.
-    pub depth: wgpu::Texture,
-    /// Per page: its layer of `color`, `hdr` (when present) and `depth`.
-    page_views: Vec<PageViews>,
+    /// The pages, in tile order.
+    pub pages: Vec<AtlasPage>,
 }
 
-struct PageViews {
-    color: wgpu::TextureView,
-    hdr: Option<wgpu::TextureView>,
-    depth: wgpu::TextureView,
+/// One page of a [`TileAtlas`]: its textures and their render views.
+pub struct AtlasPage {
+    /// Display colour.
+    pub color: wgpu::Texture,
+    /// Linear HDR colour, when asked for.
+    pub hdr: Option<wgpu::Texture>,
+    /// Depth.
+    pub depth: wgpu::Texture,
+    /// Instance ids and normals, when asked for.
+    pub labels: Option<LabelTargets>,
+    color_view: wgpu::TextureView,
+    hdr_view: Option<wgpu::TextureView>,
+    depth_view: wgpu::TextureView,
 }
 
 impl TileAtlas {
@@ -102,61 +161,94 @@ impl TileAtlas {
     }
 
     /// Bytes the atlas of [`TileAtlas::layout`] takes: 4 (depth) + 4
-    /// (colour) bytes a pixel, plus `hdr_bytes_per_pixel` with HDR. Known
-    /// before anything is allocated, so a renderer can refuse a batch that
-    /// does not fit its target budget.
-    pub fn bytes_for(tile_size: (u32, u32), layout: (u32, u32, u32), hdr_bytes_per_pixel: Option<u64>) -> u64 {
+    /// (colour) bytes a pixel, plus `hdr_bytes_per_pixel` with HDR and
+    /// [`LabelTargets::BYTES_PER_PIXEL`] with labels. Known before anything
+    /// is allocated, so a renderer can refuse a batch that does not fit its
+    /// target budget.
+    pub fn bytes_for(
+        tile_size: (u32, u32),
+        layout: (u32, u32, u32),
+        hdr_bytes_per_pixel: Option<u64>,
+        labels: bool,
+    ) -> u64 {
         let (columns, rows, pages) = layout;
         let pixels = u64::from(columns * tile_size.0) * u64::from(rows * tile_size.1) * u64::from(pages);
-        pixels * (8 + hdr_bytes_per_pixel.unwrap_or(0))
+        let labels = if labels { LabelTargets::BYTES_PER_PIXEL } else { 0 };
+        pixels * (8 + hdr_bytes_per_pixel.unwrap_or(0) + labels)
     }
 
     /// Allocates the atlas for `tiles` tiles of `tile_size` on pages no
     /// larger than `max_side` (and the device's limit; see
     /// [`TileAtlas::layout`]), with an HDR colour texture of `hdr_format`
-    /// when given. `None` when the tiles do not fit the device.
+    /// when given and label textures when `labels`. `None` when the tiles
+    /// do not fit the device.
     pub fn new(
         device: &wgpu::Device,
         tile_size: (u32, u32),
         tiles: u32,
         hdr_format: Option<HdrFormat>,
+        labels: bool,
         max_side: Option<u32>,
         label: &str,
     ) -> Option<Self> {
         let limit = device.limits().max_texture_dimension_2d;
         let side = max_side.map_or(limit, |s| s.min(limit));
         let (columns, rows, pages) = Self::layout(tile_size, tiles, side)?;
-        if pages > device.limits().max_texture_array_layers {
-            return None;
-        }
         let size =
-            wgpu::Extent3d { width: columns * tile_size.0, height: rows * tile_size.1, depth_or_array_layers: pages };
+            wgpu::Extent3d { width: columns * tile_size.0, height: rows * tile_size.1, depth_or_array_layers: 1 };
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
             | wgpu::TextureUsages::TEXTURE_BINDING
             | wgpu::TextureUsages::COPY_SRC;
-        let color = texture_2d(device, &format!("{label} colour atlas"), size, 1, ViewTargets::COLOR_FORMAT, usage);
-        let hdr =
-            hdr_format.map(|f| texture_2d(device, &format!("{label} hdr atlas"), size, 1, f.texture_format(), usage));
-        let depth = texture_2d(device, &format!("{label} depth atlas"), size, 1, ViewTargets::DEPTH_FORMAT, usage);
-        let page_views = (0..pages)
-            .map(|page| PageViews {
-                color: single_layer_view(&color, page, "colour page"),
-                hdr: hdr.as_ref().map(|t| single_layer_view(t, page, "hdr page")),
-                depth: single_layer_view(&depth, page, "depth page"),
+        let pages = (0..pages)
+            .map(|page| {
+                let name = |what: &str| format!("{label} {what} page {page}");
+                let color = texture_2d(device, &name("colour"), size, 1, ViewTargets::COLOR_FORMAT, usage);
+                let hdr = hdr_format.map(|f| texture_2d(device, &name("hdr"), size, 1, f.texture_format(), usage));
+                let depth = texture_2d(device, &name("depth"), size, 1, ViewTargets::DEPTH_FORMAT, usage);
+                let labels = labels.then(|| LabelTargets::new(device, size.width, size.height, 1, &name("labels")));
+                AtlasPage {
+                    color_view: color.create_view(&Default::default()),
+                    hdr_view: hdr.as_ref().map(|t| t.create_view(&Default::default())),
+                    depth_view: depth.create_view(&Default::default()),
+                    color,
+                    hdr,
+                    depth,
+                    labels,
+                }
             })
             .collect();
-        Some(TileAtlas { tile_size, max_side, columns, rows, pages, color, hdr, depth, page_views })
+        Some(TileAtlas { tile_size, max_side, columns, rows, pages })
+    }
+
+    /// Page size in pixels.
+    pub fn page_size(&self) -> (u32, u32) {
+        (self.columns * self.tile_size.0, self.rows * self.tile_size.1)
+    }
+
+    /// Whether the pages have HDR colour.
+    pub fn has_hdr(&self) -> bool {
+        self.pages.first().is_some_and(|p| p.hdr.is_some())
+    }
+
+    /// Whether the pages have label textures.
+    pub fn has_labels(&self) -> bool {
+        self.pages.first().is_some_and(|p| p.labels.is_some())
     }
 
     /// Tiles the atlas holds.
     pub fn capacity(&self) -> u32 {
-        self.columns * self.rows * self.pages
+        self.columns * self.rows * self.pages.len() as u32
     }
 
     /// Bytes the atlas takes.
     pub fn bytes(&self) -> u64 {
-        let hdr = self.hdr.as_ref().map(|t| u64::from(t.format().block_copy_size(None).unwrap_or(8)));
-        Self::bytes_for(self.tile_size, (self.columns, self.rows, self.pages), hdr)
+        let hdr = self
+            .pages
+            .first()
+            .and_then(|p| p.hdr.as_ref())
+            .map(|t| u64::from(t.format().block_copy_size(None).unwrap_or(8)));
+        let layout = (self.columns, self.rows, self.pages.len() as u32);
+        Self::bytes_for(self.tile_size, layout, hdr, self.has_labels())
     }
 
     /// Where tile `index` lies, or `None` past the capacity.
@@ -174,35 +266,36 @@ impl TileAtlas {
         })
     }
 
-    /// The targets of the view drawn into tile `index`: the atlas's
-    /// textures (owned by the atlas, so they count nothing in
-    /// [`ViewTargets::bytes`]), the tile's page as render views, and the
-    /// tile's rectangle; `None` past the capacity.
+    /// The targets of the view drawn into tile `index`: its page's textures
+    /// (owned by the atlas, so they count nothing in
+    /// [`ViewTargets::bytes`]) and the tile's rectangle; `None` past the
+    /// capacity.
     pub fn view_targets(&self, index: u32) -> Option<ViewTargets> {
         let tile = self.tile(index)?;
-        let page = &self.page_views[tile.page as usize];
+        let page = &self.pages[tile.page as usize];
         // Without an HDR texture the display colour stands in for it: only
         // passes that tone-map in place write colour then.
-        let (hdr, hdr_view) = match (&self.hdr, &page.hdr) {
+        let (hdr, hdr_view) = match (&page.hdr, &page.hdr_view) {
             (Some(t), Some(v)) => (t.clone(), v.clone()),
-            _ => (self.color.clone(), page.color.clone()),
+            _ => (page.color.clone(), page.color_view.clone()),
         };
         Some(ViewTargets {
             color: Some(ColorTargets {
                 hdr,
                 hdr_view,
-                hdr_layer: tile.page,
-                color: Some(self.color.clone()),
-                color_view: Some(page.color.clone()),
+                hdr_layer: 0,
+                color: Some(page.color.clone()),
+                color_view: Some(page.color_view.clone()),
             }),
-            depth: self.depth.clone(),
-            depth_view: page.depth.clone(),
-            depth_layer: tile.page,
+            depth: page.depth.clone(),
+            depth_view: page.depth_view.clone(),
+            depth_layer: 0,
             owns_depth: false,
             width: self.tile_size.0,
             height: self.tile_size.1,
             msaa: None,
             tile: Some(tile),
+            labels: page.labels.clone(),
         })
     }
 }
@@ -391,7 +484,8 @@ impl ViewTargets {
             (Some(m), Some(c)) => u64::from(m.samples) * (hdr_bytes(c) + 4),
             _ => 0,
         };
-        pixels * (depth + color + msaa)
+        let labels = if self.labels.is_some() { LabelTargets::BYTES_PER_PIXEL } else { 0 };
+        pixels * (depth + color + msaa + labels)
     }
 
     /// Samples per pixel of the mesh passes (1 without MSAA).
@@ -448,6 +542,13 @@ impl ViewTargets {
         self
     }
 
+    /// These targets with label textures of their own (instance ids and
+    /// world normals, [`LabelTargets`]), for the labels pass.
+    pub fn with_labels(mut self, device: &wgpu::Device, label: &str) -> Self {
+        self.labels = Some(LabelTargets::new(device, self.width, self.height, 1, label));
+        self
+    }
+
     /// Targets of a shadow view that renders into `layer` of a depth array
     /// (`atlas`, `Depth32Float`, square): no texture of its own.
     pub fn atlas_layer(atlas: &wgpu::Texture, layer: u32) -> Self {
@@ -461,6 +562,7 @@ impl ViewTargets {
             height: atlas.height(),
             msaa: None,
             tile: None,
+            labels: None,
         }
     }
 
@@ -526,6 +628,7 @@ impl ViewTargets {
             height,
             msaa: None,
             tile: None,
+            labels: None,
         }
     }
 }
@@ -597,7 +700,8 @@ mod tile_tests {
     #[test]
     fn bytes_count_depth_colour_and_hdr() {
         // 2 × 1 tiles of 4 × 4 on one page: 32 pixels.
-        assert_eq!(TileAtlas::bytes_for((4, 4), (2, 1, 1), None), 32 * 8);
-        assert_eq!(TileAtlas::bytes_for((4, 4), (2, 1, 3), Some(8)), 3 * 32 * 16);
+        assert_eq!(TileAtlas::bytes_for((4, 4), (2, 1, 1), None, false), 32 * 8);
+        assert_eq!(TileAtlas::bytes_for((4, 4), (2, 1, 3), Some(8), false), 3 * 32 * 16);
+        assert_eq!(TileAtlas::bytes_for((4, 4), (2, 1, 1), None, true), 32 * 20);
     }
 }

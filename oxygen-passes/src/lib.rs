@@ -60,7 +60,7 @@ pub use pipelines::{
     AlphaClass, CompilerGuard, DepthBias, Exposure, PassKind, PipelineFuture, PipelineKey, PipelineVariant, Pipelines,
     ShaderFeatures, fullscreen_pass, fullscreen_pipeline,
 };
-pub use post::TonemapPass;
+pub use post::{DepthCopy, TonemapPass};
 pub use reference::{ReferencePass, ReferenceSettings, ReferenceTracer};
 pub use visibility::{GPU_VISIBILITY_FEATURES, GpuViewRequest, GpuVisibility};
 

@@ -52,6 +52,7 @@ fn every_pass_shader_has_its_entry_points() {
             PassKind::ShadingAfterPrePass | PassKind::Shading | PassKind::Transparent => {
                 &["vs_main", "fs_opaque", "fs_masked", "fs_blend"]
             }
+            PassKind::Labels => &["vs_main", "fs_labels", "fs_labels_masked"],
         };
         for textures in all_paths() {
             let source = oxygen_passes::testing::shader_source(pass, textures);

@@ -56,7 +56,7 @@ use tracing::{info, info_span, warn};
 
 pub use error::RenderError;
 pub use options::RendererOptions;
-pub use readback::DepthImage;
+pub use readback::{DepthImage, LabelImage};
 pub use report::{FrameReport, FrameWarning, ViewReport, ViewRole};
 pub use streams::{StreamOptions, StreamedCamera, StreamedFrame};
 
@@ -227,7 +227,7 @@ impl Renderer {
             visibility,
             reference: Reference::default(),
             windows: Windows::new(&gpu.device),
-            streams: streams::Streams::default(),
+            streams: streams::Streams::new(&downlevel),
             settings: FrameSettings {
                 draw_path,
                 origin: options.origin,

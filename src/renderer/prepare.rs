@@ -26,8 +26,9 @@ use crate::shadows::{ShadowRole, shadow_view_options};
 /// Where a view of this frame renders.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum TargetPlan {
-    /// Targets of its own, with colour or depth only, and samples per pixel.
-    Own { with_color: bool, samples: u32 },
+    /// Targets of its own, with colour or depth only, samples per pixel,
+    /// and label targets when the view asked for labels.
+    Own { with_color: bool, samples: u32, labels: bool },
     /// Layer `tile` of the local shadow atlas.
     AtlasLayer { tile: u32 },
     /// Layer `face` of probe `probe`'s cube.
@@ -109,8 +110,10 @@ impl Renderer {
                 size: entry.size,
                 tiles: entry.slots.len() as u32,
                 hdr: self.settings.keep_hdr,
+                labels: entry.labels,
                 max_page_side: entry.max_page_side,
             });
+            plan.labels |= self.views.entries.get(&view.id).is_some_and(|e| e.labels);
             plan.hdr |= readers.contains(&view.id)
                 || frame.partitions_matching(PassMask::TRANSPARENT, PassMask::empty()).next().is_some();
         }
@@ -162,7 +165,9 @@ impl Renderer {
         for shadow in planned {
             let resolved = shadow.resolved.map_err(RenderError::from).and_then(|view| {
                 if let ShadowRole::Cascade { .. } = shadow.role {
-                    self.targets.admit(view.viewport, false, 1, &mut taken).map_err(|e| e.for_view(shadow.id))?;
+                    self.targets
+                        .admit(view.viewport, false, 1, false, &mut taken)
+                        .map_err(|e| e.for_view(shadow.id))?;
                 }
                 Ok(view)
             });
@@ -183,9 +188,10 @@ impl Renderer {
             };
             let visibility = self.visibility.for_view(owner_visibility, true, false);
             let (role, target) = match shadow.role {
-                ShadowRole::Cascade { owner, index } => {
-                    (ViewRole::SunCascade { owner, index }, TargetPlan::Own { with_color: false, samples: 1 })
-                }
+                ShadowRole::Cascade { owner, index } => (
+                    ViewRole::SunCascade { owner, index },
+                    TargetPlan::Own { with_color: false, samples: 1, labels: false },
+                ),
                 ShadowRole::Local { light, face, tile } => {
                     (ViewRole::LocalShadow { light, face, tile }, TargetPlan::AtlasLayer { tile })
                 }

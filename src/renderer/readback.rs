@@ -33,11 +33,26 @@ impl Renderer {
         let color = targets.color.as_ref().ok_or(RenderError::DepthOnly(id))?;
         let display = color.color.as_ref().ok_or(RenderError::NoDisplayTarget(id))?;
         Ok(match targets.tile {
-            Some(tile) => {
-                self.gpu.read_rgba8_region(display, tile.page, (tile.x, tile.y), (targets.width, targets.height))?
-            }
+            Some(tile) => self.gpu.read_rgba8_region(display, 0, (tile.x, tile.y), (targets.width, targets.height))?,
             None => self.gpu.read_rgba8(display)?,
         })
+    }
+
+    /// The view's labels ([`crate::ViewDesc::with_labels`]): the node that
+    /// drew each pixel and the surface's world normal (waits for the GPU).
+    /// Fails for a view that did not ask for labels.
+    pub fn read_labels(&self, id: impl Into<ViewId>) -> Result<LabelImage, RenderError> {
+        let id = id.into();
+        let targets = self.view_targets(id)?;
+        let labels = targets.labels.as_ref().ok_or_else(|| {
+            RenderError::Unsupported(format!("{id} draws no labels (register it with ViewDesc::with_labels)"))
+        })?;
+        let (x, y) = targets.tile.map_or((0, 0), |t| (t.x, t.y));
+        let (layer, size) = (0, (targets.width, targets.height));
+        let instances = self.gpu.read_u32_region(&labels.instances, layer, (x, y), size)?;
+        let normals = self.gpu.read_rgba16_float_region(&labels.normals, layer, (x, y), size)?;
+        let normals = normals.pixels.iter().map(|p| [p[0], p[1], p[2]]).collect();
+        Ok(LabelImage { width: size.0, height: size.1, instances, normals })
     }
 
     /// The view's depth as the GPU wrote it (reverse-Z device depth, and
@@ -52,9 +67,18 @@ impl Renderer {
         }
         let view = *self.targets.last_view(id).ok_or_else(|| self.not_rendered(id))?;
         let (x, y) = targets.tile.map_or((0, 0), |t| (t.x, t.y));
-        let layer = targets.tile.map_or(targets.depth_layer, |t| t.page);
+        let layer = targets.depth_layer;
         let (width, height) = (targets.width, targets.height);
-        let depth = self.gpu.read_depth_region(&targets.depth, layer, (x, y), (width, height))?;
+        let depth = if self.streams.depth_copy_needed {
+            // The adapter cannot copy depth into a buffer: through a float texture.
+            let full = (targets.depth.width(), targets.depth.height());
+            let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+            let float = self.streams.depth_copy.record(&self.gpu.device, &mut encoder, &targets.depth_view, full);
+            self.gpu.queue.submit([encoder.finish()]);
+            self.gpu.read_u32_region(&float, 0, (x, y), (width, height))?.into_iter().map(f32::from_bits).collect()
+        } else {
+            self.gpu.read_depth_region(&targets.depth, layer, (x, y), (width, height))?
+        };
         Ok(DepthImage { width, height, depth, view })
     }
 
@@ -71,7 +95,7 @@ impl Renderer {
         }
         if let Some(tile) = targets.tile {
             // The tile cut from its page of the HDR atlas.
-            let page = self.gpu.read_rgba16_float_layer(&color.hdr, 0, tile.page)?;
+            let page = self.gpu.read_rgba16_float_layer(&color.hdr, 0, 0)?;
             let (width, height) = (targets.width, targets.height);
             let mut pixels = Vec::with_capacity((width * height) as usize);
             for y in tile.y..tile.y + height {
@@ -153,5 +177,40 @@ impl DepthImage {
                 if z.is_finite() && z >= 0.0 { z } else { f32::INFINITY }
             })
             .collect()
+    }
+}
+
+/// A view's labels as read back ([`Renderer::read_labels`]), row by row
+/// from the top.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LabelImage {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Per pixel: the stable id ([`oxygen_core::scene::node_index`]) of the node
+    /// whose opaque or masked surface is seen there, plus one; 0 where none
+    /// is (the background, or only blended surfaces).
+    pub instances: Vec<u32>,
+    /// Per pixel: the seen surface's world-space unit normal (facing the
+    /// camera for the back of a double-sided surface); zero where nothing is.
+    pub normals: Vec<[f32; 3]>,
+}
+
+impl LabelImage {
+    /// The node seen at pixel (`x`, `y`) of `scene` (the scene rendered),
+    /// if any.
+    pub fn node(&self, scene: &oxygen_core::Scene, x: u32, y: u32) -> Option<oxygen_core::NodeKey> {
+        let label = *self.instances.get((y * self.width + x) as usize)?;
+        scene.node_at_index(label.checked_sub(1)?)
+    }
+
+    /// The segmentation image: each pixel's node's semantic class
+    /// ([`oxygen_core::Scene::set_semantic_class`]), 0 where no node is
+    /// seen or the node is gone from `scene`.
+    pub fn semantic(&self, scene: &oxygen_core::Scene) -> Vec<u32> {
+        let classes: std::collections::HashMap<u32, u32> =
+            scene.nodes().map(|(key, node)| (oxygen_core::scene::node_index(key) + 1, node.semantic_class)).collect();
+        self.instances.iter().map(|label| classes.get(label).copied().unwrap_or(0)).collect()
     }
 }

@@ -71,7 +71,8 @@ impl Renderer {
                 TargetKind::Own => {
                     let with_color = !entry.options.depth_only;
                     let samples = if with_color { self.msaa_samples(entry.msaa) } else { 1 };
-                    (ViewRole::Registered, TargetPlan::Own { with_color, samples })
+                    let labels = entry.labels && with_color;
+                    (ViewRole::Registered, TargetPlan::Own { with_color, samples, labels })
                 }
                 TargetKind::ProbeFace { probe, face } => {
                     (ViewRole::ProbeFace { probe, face }, TargetPlan::ProbeFace { probe, face })
@@ -102,9 +103,9 @@ impl Renderer {
                     if width > limit || height > limit {
                         return Err(RenderError::ViewportTooLarge { view: *id, width, height, limit });
                     }
-                    if let TargetPlan::Own { with_color, samples } = target {
+                    if let TargetPlan::Own { with_color, samples, labels } = target {
                         self.targets
-                            .admit(view.viewport, with_color, samples, &mut taken)
+                            .admit(view.viewport, with_color, samples, labels, &mut taken)
                             .map_err(|e| e.for_view(*id))?;
                     }
                     Ok(view)
@@ -161,7 +162,9 @@ impl Renderer {
                 refused.push((*batch, RenderError::InvalidBatch { name: entry.name.clone(), reason }));
                 continue;
             };
-            let bytes = oxygen_gpu::TileAtlas::bytes_for(size, layout, Some(self.targets.hdr_format.bytes_per_pixel()));
+            let hdr = Some(self.targets.hdr_format.bytes_per_pixel());
+            let labels = entry.labels || entry.cameras().any(|c| self.views.entries.get(&c).is_some_and(|e| e.labels));
+            let bytes = oxygen_gpu::TileAtlas::bytes_for(size, layout, hdr, labels);
             if taken.saturating_add(bytes) > self.targets.budget {
                 refused.push((
                     *batch,

@@ -113,13 +113,12 @@ struct PageLayout {
 
 impl PageLayout {
     fn of(atlas: &TileAtlas, options: &StreamOptions) -> Self {
-        let width = atlas.columns * atlas.tile_size.0;
-        let height = atlas.rows * atlas.tile_size.1;
+        let (width, height) = atlas.page_size();
         let row_bytes = (width * 4).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
         PageLayout {
             width,
             height,
-            pages: atlas.pages,
+            pages: atlas.pages.len() as u32,
             tile: atlas.tile_size,
             row_bytes,
             color: options.color,
@@ -152,14 +151,27 @@ struct Ring {
 }
 
 /// The streams of every streaming batch.
-#[derive(Default)]
 pub(crate) struct Streams {
     rings: BTreeMap<BatchId, Ring>,
     /// Frames moved out of a full ring, not taken yet.
     pending: Vec<StreamedFrame>,
+    /// Whether depth reaches a buffer only through a float texture (GL).
+    pub(crate) depth_copy_needed: bool,
+    /// The pass that makes that float texture.
+    pub(crate) depth_copy: oxygen_passes::DepthCopy,
 }
 
 impl Streams {
+    /// No streams yet, on an adapter with these capabilities.
+    pub(crate) fn new(downlevel: &wgpu::DownlevelCapabilities) -> Self {
+        Streams {
+            rings: BTreeMap::new(),
+            pending: Vec::new(),
+            depth_copy_needed: oxygen_passes::DepthCopy::needed(downlevel),
+            depth_copy: Default::default(),
+        }
+    }
+
     /// Copies each streaming batch's pages of the frame just submitted
     /// into a free staging buffer and starts mapping it. `rendered` holds,
     /// per batch, its atlas and the cameras that rendered with their tiles.
@@ -180,19 +192,24 @@ impl Streams {
             let buffer = &ring.slots[slot].buffer;
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
             let size = wgpu::Extent3d { width: layout.width, height: layout.height, depth_or_array_layers: 1 };
-            for page in 0..layout.pages {
-                for (texture, depth) in [(&atlas.color, false), (&atlas.depth, true)] {
+            for (page, textures) in (0..layout.pages).zip(&atlas.pages) {
+                // Where depth cannot be copied into a buffer, its float copy is.
+                let depth_as_float = (layout.depth && self.depth_copy_needed).then(|| {
+                    let view = textures.depth.create_view(&Default::default());
+                    self.depth_copy.record(&gpu.device, &mut encoder, &view, (layout.width, layout.height))
+                });
+                let depth_source = depth_as_float.as_ref().unwrap_or(&textures.depth);
+                for (texture, depth) in [(&textures.color, false), (depth_source, true)] {
                     if (depth && !layout.depth) || (!depth && !layout.color) {
                         continue;
                     }
-                    let aspect = if depth { wgpu::TextureAspect::DepthOnly } else { wgpu::TextureAspect::All };
+                    let aspect = if depth && depth_as_float.is_none() {
+                        wgpu::TextureAspect::DepthOnly
+                    } else {
+                        wgpu::TextureAspect::All
+                    };
                     encoder.copy_texture_to_buffer(
-                        wgpu::TexelCopyTextureInfo {
-                            texture,
-                            mip_level: 0,
-                            origin: wgpu::Origin3d { x: 0, y: 0, z: page },
-                            aspect,
-                        },
+                        wgpu::TexelCopyTextureInfo { texture, mip_level: 0, origin: wgpu::Origin3d::ZERO, aspect },
                         wgpu::TexelCopyBufferInfo {
                             buffer,
                             layout: wgpu::TexelCopyBufferLayout {

@@ -57,6 +57,8 @@ pub(crate) struct BatchPlan {
     pub(crate) hdr: bool,
     /// The largest page side asked for (the device's limit otherwise).
     pub(crate) max_page_side: Option<u32>,
+    /// Whether the cameras draw labels (instance ids, normals).
+    pub(crate) labels: bool,
 }
 
 /// Every view's targets and constants, and the budget they share.
@@ -113,8 +115,9 @@ impl Targets {
             let fits = self.atlases.get(batch).is_some_and(|a| {
                 a.tile_size == size
                     && a.capacity() >= plan.tiles
-                    && (a.hdr.is_some() || !plan.hdr)
+                    && (a.has_hdr() || !plan.hdr)
                     && a.max_side == plan.max_page_side
+                    && a.has_labels() == plan.labels
             });
             if fits {
                 continue;
@@ -122,16 +125,20 @@ impl Targets {
             let hdr = plan.hdr.then_some(self.hdr_format);
             let _span = tracing::info_span!("batch_atlas", batch = %batch, tiles = plan.tiles).entered();
             // The resolve step refused batches whose atlas the device cannot hold.
-            if let Some(atlas) = TileAtlas::new(device, size, plan.tiles, hdr, plan.max_page_side, &name(*batch)) {
-                tracing::info!(batch = %batch, pages = atlas.pages, columns = atlas.columns, rows = atlas.rows, "batch atlas allocated");
+            if let Some(atlas) =
+                TileAtlas::new(device, size, plan.tiles, hdr, plan.labels, plan.max_page_side, &name(*batch))
+            {
+                tracing::info!(batch = %batch, pages = atlas.pages.len(), columns = atlas.columns, rows = atlas.rows, "batch atlas allocated");
                 self.atlases.insert(*batch, atlas);
             }
         }
     }
 
     /// What targets of a `viewport`-sized view take with the HDR format in use.
-    pub(crate) fn bytes_for(&self, viewport: glam::UVec2, with_color: bool, samples: u32) -> u64 {
+    pub(crate) fn bytes_for(&self, viewport: glam::UVec2, with_color: bool, samples: u32, labels: bool) -> u64 {
+        let labels = if labels { oxygen_gpu::LabelTargets::BYTES_PER_PIXEL } else { 0 };
         ViewTargets::bytes_for_msaa(viewport.x, viewport.y, with_color.then_some(self.hdr_format), samples)
+            + u64::from(viewport.x) * u64::from(viewport.y) * labels
     }
 
     /// Adds a `viewport`-sized view's targets to `taken`, or says they would
@@ -141,9 +148,10 @@ impl Targets {
         viewport: glam::UVec2,
         with_color: bool,
         samples: u32,
+        labels: bool,
         taken: &mut u64,
     ) -> Result<(), OverBudget> {
-        let bytes = self.bytes_for(viewport, with_color, samples);
+        let bytes = self.bytes_for(viewport, with_color, samples, labels);
         if taken.saturating_add(bytes) > self.budget {
             let (width, height, budget) = (viewport.x, viewport.y, self.budget);
             return Err(OverBudget { width, height, bytes, budget, taken: *taken });
@@ -193,14 +201,19 @@ impl Targets {
             });
             let (width, height, label) = (view.gpu.viewport.x, view.gpu.viewport.y, view.id.to_string());
             match view.target {
-                TargetPlan::Own { with_color, samples } => {
-                    if !entry.targets.as_ref().is_some_and(|t| t.fits(width, height, with_color, samples)) {
-                        entry.targets = Some(if with_color {
+                TargetPlan::Own { with_color, samples, labels } => {
+                    let fits = entry
+                        .targets
+                        .as_ref()
+                        .is_some_and(|t| t.fits(width, height, with_color, samples) && t.labels.is_some() == labels);
+                    if !fits {
+                        let targets = if with_color {
                             ViewTargets::with_hdr_format(device, width, height, &label, self.hdr_format)
                                 .with_msaa(device, samples, &label)
                         } else {
                             ViewTargets::depth_only(device, width, height, &label)
-                        });
+                        };
+                        entry.targets = Some(if labels { targets.with_labels(device, &label) } else { targets });
                     }
                 }
                 TargetPlan::AtlasLayer { tile } => {
@@ -213,10 +226,10 @@ impl Targets {
                     // New targets only when the camera moved to another
                     // tile or its batch to another atlas.
                     if let Some(atlas) = self.atlases.get(&batch) {
-                        let current = entry
-                            .targets
-                            .as_ref()
-                            .is_some_and(|t| t.tile.is_some_and(|tile| tile.index == slot) && t.depth == atlas.depth);
+                        let current = entry.targets.as_ref().is_some_and(|t| {
+                            t.tile.is_some_and(|tile| tile.index == slot)
+                                && atlas.pages.get(tile_page(t)).is_some_and(|p| p.depth == t.depth)
+                        });
                         if !current {
                             entry.targets = atlas.view_targets(slot);
                         }
@@ -291,13 +304,15 @@ impl Renderer {
     pub fn check_target_budget(&self, views: &[(glam::UVec2, bool)]) -> Result<u64, RenderError> {
         let mut taken = 0u64;
         for (index, (viewport, depth_only)) in views.iter().enumerate() {
-            self.targets.admit(*viewport, !depth_only, 1, &mut taken).map_err(|e| RenderError::TargetBudgetEntry {
-                index,
-                width: e.width,
-                height: e.height,
-                bytes: e.bytes,
-                budget: e.budget,
-                taken: e.taken,
+            self.targets.admit(*viewport, !depth_only, 1, false, &mut taken).map_err(|e| {
+                RenderError::TargetBudgetEntry {
+                    index,
+                    width: e.width,
+                    height: e.height,
+                    bytes: e.bytes,
+                    budget: e.budget,
+                    taken: e.taken,
+                }
             })?;
         }
         Ok(taken)
@@ -341,4 +356,9 @@ pub(crate) fn atlas_layers(views: &[FrameView]) -> u32 {
         })
         .max()
         .unwrap_or(0)
+}
+
+/// The page of a batch camera's targets.
+fn tile_page(targets: &ViewTargets) -> usize {
+    targets.tile.map_or(0, |t| t.page as usize)
 }

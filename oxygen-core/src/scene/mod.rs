@@ -388,6 +388,20 @@ impl Scene {
         Ok(())
     }
 
+    /// Sets the node's semantic class, the value segmentation images show
+    /// for the pixels it draws (0, the default, is the class of nothing in
+    /// particular). Changes no picture, so no frame is recollected for it.
+    pub fn set_semantic_class(&mut self, key: NodeKey, class: u32) -> Result<(), SceneError> {
+        self.node_mut(key)?.semantic_class = class;
+        Ok(())
+    }
+
+    /// The node with stable id `index` ([`node_index`]): what an instance
+    /// label names.
+    pub fn node_at_index(&self, index: u32) -> Option<NodeKey> {
+        self.nodes.keys().find(|k| node_index(*k) == index)
+    }
+
     /// Gives a renderable node coarser meshes for when it is small on screen
     /// (sorted by decreasing `below_screen_fraction`; empty removes them).
     pub fn set_lods(&mut self, key: NodeKey, mut lods: Vec<LodLevel>) -> Result<(), SceneError> {

@@ -131,6 +131,9 @@ pub struct Node {
     /// Weights of its geometry's morph targets, in target order (missing
     /// ones are 0; [`Scene::set_morph_weights`](super::Scene::set_morph_weights)).
     pub morph_weights: Vec<f32>,
+    /// The application's class of the node for segmentation images (0
+    /// unless set; [`Scene::set_semantic_class`](super::Scene::set_semantic_class)).
+    pub semantic_class: u32,
     /// Scene revision of this node's last own edit.
     pub(crate) revision: u64,
     /// Newest revision of any edit in this node's subtree.
@@ -151,6 +154,7 @@ impl Node {
             lods: Vec::new(),
             skin: None,
             morph_weights: Vec::new(),
+            semantic_class: 0,
             revision: 0,
             subtree_revision: 0,
         }

@@ -22,6 +22,8 @@ struct MeshVarying {
     // Vertex colour (white without COLOR_0) and the second UV set.
     @location(4) color: vec4<f32>,
     @location(5) uv1: vec2<f32>,
+    // The node that drew it (DrawMetadata.node_id), for the labels pass.
+    @location(6) @interpolate(flat) node: u32,
 }
 
 @vertex
@@ -82,6 +84,7 @@ fn vs_main(@builtin(vertex_index) vertex_index: u32, @builtin(instance_index) dr
     out.world_normal = world_normal;
     out.uv = vec2<f32>(v.u, v.v);
     out.material = draw.material_handle;
+    out.node = draw.node_id;
     // Attribute records run parallel to the geometry's vertices (stored as
     // VertexRecords: colour in px..nx, the second UV set in ny, nz).
     out.color = vec4<f32>(1.0);

@@ -212,6 +212,28 @@ impl MeshPass {
         }
     }
 
+    /// Per-pixel labels of the opaque and masked partitions into the
+    /// view's label targets ([`oxygen_gpu::LabelTargets`], cleared to 0):
+    /// the stable id of the node that drew each pixel plus one, and its
+    /// world-space normal, tested against the depth shading left
+    /// (`GreaterEqual`, no writes), so the labels are those of the visible
+    /// surface. For single-sampled views that asked for labels.
+    pub fn labels() -> Self {
+        MeshPass {
+            list: DrawList::All,
+            name: "labels",
+            include: PassMask::OPAQUE | PassMask::MASKED,
+            exclude: PassMask::TRANSPARENT,
+            kind: PassKind::Labels,
+            color: ColorOps::None,
+            clear_depth: false,
+            depth_bias: DepthBias::NONE,
+            lighting: None,
+            statistics: None,
+            keep_samples: true,
+        }
+    }
+
     /// The same pass, on a multisampled view, dropping the multisampled
     /// colour once it is resolved into the view's HDR target: for the last
     /// pass that draws colour (no later pass may load the samples). A tiled
@@ -376,10 +398,14 @@ impl MeshPass {
     /// The pipeline key of this pass for `ctx` (the variant is each
     /// partition's).
     fn shading_key(&self, ctx: &RenderContext<'_>) -> crate::PipelineKey {
+        let color_format = match self.kind {
+            PassKind::Labels => Some(oxygen_gpu::LABEL_INSTANCE_FORMAT),
+            _ => self.color_format(ctx),
+        };
         crate::PipelineKey {
             pass: self.kind,
             variant: crate::PipelineVariant::from_mask(PassMask::empty()),
-            color_format: self.color_format(ctx),
+            color_format,
             depth_format: ViewTargets::DEPTH_FORMAT,
             depth_bias: self.depth_bias,
             features: self.shader_features(ctx),
@@ -394,6 +420,17 @@ impl MeshPass {
         let skippable = self.kind == PassKind::Transparent || self.list == DrawList::Late;
         if skippable && views.iter().all(|ctx| self.partitions(ctx).next().is_none()) {
             return Ok(());
+        }
+        if self.kind == PassKind::Labels
+            && let Some(ctx) = views.iter().find(|ctx| ctx.targets.labels.is_none() || ctx.targets.msaa.is_some())
+        {
+            return Err(PassError::BadInput {
+                pass: self.name,
+                what: format!(
+                    "{} has no label targets: labels are drawn for single-sampled views that ask for them",
+                    ctx.view.view_id
+                ),
+            });
         }
         if self.tone_map().is_some() && views.iter().any(|ctx| ctx.targets.msaa.is_some()) {
             return Err(PassError::BadInput {
@@ -457,10 +494,30 @@ impl MeshPass {
                 ops: wgpu::Operations { load: ops.load(), store },
             });
             let depth_load = if self.clear_depth { wgpu::LoadOp::Clear(0.0) } else { wgpu::LoadOp::Load };
+            // The labels pass writes its two label targets instead.
+            let cleared = |view| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })
+            };
+            let label_attachments = match (&lead.targets.labels, self.kind) {
+                (Some(labels), PassKind::Labels) => {
+                    vec![cleared(&labels.instances_view), cleared(&labels.normals_view)]
+                }
+                _ => Vec::new(),
+            };
             let mut pass = rec.encoder().begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some(self.name),
                 // A depth-only pass has no colour slot at all (not an empty one).
-                color_attachments: if color_attachment.is_some() {
+                color_attachments: if !label_attachments.is_empty() {
+                    &label_attachments
+                } else if color_attachment.is_some() {
                     std::slice::from_ref(&color_attachment)
                 } else {
                     &[]

@@ -15,6 +15,8 @@ use std::task::{Context, Poll, Waker};
 use oxygen_bindless::{BindlessHeap, TexturePath};
 use tracing::debug;
 
+use oxygen_gpu::{LABEL_INSTANCE_FORMAT, LABEL_NORMAL_FORMAT};
+
 use super::{AlphaClass, PassKind, PipelineKey, shader_source};
 
 /// Lazily created, cached mesh pipelines shared by every view.
@@ -169,14 +171,19 @@ impl Pipelines {
                 (Some(if masked { "fs_masked" } else { "fs_opaque" }), true, wgpu::CompareFunction::Greater)
             }
             PassKind::Transparent => (Some("fs_blend"), false, wgpu::CompareFunction::GreaterEqual),
+            PassKind::Labels => (
+                Some(if masked { "fs_labels_masked" } else { "fs_labels" }),
+                false,
+                wgpu::CompareFunction::GreaterEqual,
+            ),
         };
         // Premultiplied alpha: the shader multiplies colour by alpha.
         let blend = (key.pass == PassKind::Transparent).then_some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING);
-        let targets = [key.color_format.map(|format| wgpu::ColorTargetState {
-            format,
-            blend,
-            write_mask: wgpu::ColorWrites::ALL,
-        })];
+        let target = |format| Some(wgpu::ColorTargetState { format, blend, write_mask: wgpu::ColorWrites::ALL });
+        let targets: Vec<Option<wgpu::ColorTargetState>> = match key.pass {
+            PassKind::Labels => vec![target(LABEL_INSTANCE_FORMAT), target(LABEL_NORMAL_FORMAT)],
+            _ => vec![key.color_format.and_then(target)],
+        };
         // The same constants for both stages: wgpu rejects a constant the
         // stage's shader does not declare, and both stages share one module.
         let constants = key.override_constants();
@@ -185,7 +192,7 @@ impl Pipelines {
             module,
             entry_point: Some(entry),
             compilation_options: compilation_options(),
-            targets: if key.color_format.is_some() { &targets } else { &[] },
+            targets: if key.color_format.is_some() || key.pass == PassKind::Labels { &targets } else { &[] },
         });
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(&format!("{:?} {:?}", key.pass, key.variant)),

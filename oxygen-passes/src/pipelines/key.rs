@@ -21,6 +21,10 @@ pub enum PassKind {
     /// Blended surfaces: premultiplied alpha over the HDR target,
     /// `GreaterEqual` against the opaque depth, no depth writes.
     Transparent,
+    /// Labels after shading: the instance id (`R32Uint`) and world normal
+    /// (`Rgba16Float`) of each opaque or masked fragment on the shaded
+    /// depth (`GreaterEqual`, no depth writes).
+    Labels,
 }
 
 /// The rasterizer's depth bias of a shadow map: stored depth is pushed away
@@ -124,7 +128,7 @@ impl PipelineKey {
     /// no optional code and never tone-map.
     pub(super) fn canonical(self) -> Self {
         match self.pass {
-            PassKind::DepthPrePass | PassKind::Shadow => {
+            PassKind::DepthPrePass | PassKind::Shadow | PassKind::Labels => {
                 PipelineKey { features: ShaderFeatures::ALL, tone_map: None, ..self }
             }
             PassKind::ShadingAfterPrePass | PassKind::Shading | PassKind::Transparent => self,
@@ -135,7 +139,7 @@ impl PipelineKey {
     /// (empty for depth-only passes).
     pub fn override_constants(&self) -> Vec<(&'static str, f64)> {
         match self.pass {
-            PassKind::DepthPrePass | PassKind::Shadow => Vec::new(),
+            PassKind::DepthPrePass | PassKind::Shadow | PassKind::Labels => Vec::new(),
             PassKind::ShadingAfterPrePass | PassKind::Shading | PassKind::Transparent => {
                 let mut constants = self.features.override_constants().to_vec();
                 constants.push(("TONE_MAP_OUTPUT", f64::from(u8::from(self.tone_map.is_some()))));

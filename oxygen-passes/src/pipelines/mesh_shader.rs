@@ -5,7 +5,7 @@
 use oxygen_bindless::TexturePath;
 
 use super::PassKind;
-use crate::shaders::{DEPTH_ONLY, FORWARD_LIT};
+use crate::shaders::{DEPTH_ONLY, FORWARD_LIT, LABELS};
 
 /// The full WGSL of a pass, composed from `mesh/depth_only.wgsl` or
 /// `mesh/forward_lit.wgsl` and what they include (the heap's declarations,
@@ -14,6 +14,7 @@ pub fn shader_source(pass: PassKind, textures: TexturePath) -> String {
     let module = match pass {
         PassKind::DepthPrePass | PassKind::Shadow => DEPTH_ONLY,
         PassKind::Shading | PassKind::ShadingAfterPrePass | PassKind::Transparent => FORWARD_LIT,
+        PassKind::Labels => LABELS,
     };
     module.textured_source(textures)
 }

@@ -4,9 +4,11 @@
 //! `params` holds the pass's parameter block, declared once for Rust and
 //! WGSL.
 
+mod depth_copy;
 pub(crate) mod params;
 mod tonemap;
 
+pub use depth_copy::DepthCopy;
 pub use tonemap::TonemapPass;
 pub(crate) use tonemap::pbr_neutral;
 /// The tone-map shader (self-contained: no bindless declarations): the

@@ -9,7 +9,9 @@
 pub(crate) mod compose;
 pub(crate) mod registry;
 
-pub(crate) use registry::{CUBE_FILTER, CULL, DEPTH_ONLY, FORWARD_LIT, HIZ, REFERENCE, SPLIT_SUM, TONEMAP};
+pub(crate) use registry::{
+    CUBE_FILTER, CULL, DEPTH_COPY, DEPTH_ONLY, FORWARD_LIT, HIZ, LABELS, REFERENCE, SPLIT_SUM, TONEMAP,
+};
 
 #[cfg(test)]
 mod layout_tests;

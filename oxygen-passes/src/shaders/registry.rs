@@ -22,6 +22,7 @@ pub(crate) static SOURCES: &[Source] = &[
     Source::wgsl("mesh/mesh_vertex.wgsl", include_str!("../mesh/mesh_vertex.wgsl")),
     Source::wgsl("mesh/depth_only.wgsl", include_str!("../mesh/depth_only.wgsl")),
     Source::wgsl("mesh/forward_lit.wgsl", include_str!("../mesh/forward_lit.wgsl")),
+    Source::wgsl("mesh/labels.wgsl", include_str!("../mesh/labels.wgsl")),
     // Lighting: group 3, the split-sum table, image-based lighting.
     Source::generated("lighting/constants", crate::lighting::params::wgsl_constants),
     Source::gpu_struct::<crate::lighting::params::LightingInputs>("lighting/LightingInputs"),
@@ -45,6 +46,7 @@ pub(crate) static SOURCES: &[Source] = &[
     Source::gpu_struct::<crate::post::params::TonemapParams>("post/TonemapParams"),
     Source::wgsl("post/tonemap_operator.wgsl", include_str!("../post/tonemap_operator.wgsl")),
     Source::wgsl("post/tonemap.wgsl", include_str!("../post/tonemap.wgsl")),
+    Source::wgsl("post/depth_copy.wgsl", include_str!("../post/depth_copy.wgsl")),
     // oxygen-bindless: the heap's declarations.
     Source::generated("bindless/constants", oxygen_bindless::wgsl_constants),
     Source::gpu_struct::<oxygen_bindless::CameraConstants>("bindless/CameraConstants"),
@@ -135,10 +137,14 @@ impl ShaderModule {
 pub(crate) const DEPTH_ONLY: ShaderModule = ShaderModule::textured("mesh/depth_only.wgsl");
 /// Forward lit and transparent shading, and the sky behind them.
 pub(crate) const FORWARD_LIT: ShaderModule = ShaderModule::textured("mesh/forward_lit.wgsl");
+/// The labels pass (instance ids and normals).
+pub(crate) const LABELS: ShaderModule = ShaderModule::textured("mesh/labels.wgsl");
 /// The path-traced reference.
 pub(crate) const REFERENCE: ShaderModule = ShaderModule::textured("reference/trace.wgsl");
 /// The tone map.
 pub(crate) const TONEMAP: ShaderModule = ShaderModule::plain("post/tonemap.wgsl");
+/// Depth into a float texture, for depth readback on GL.
+pub(crate) const DEPTH_COPY: ShaderModule = ShaderModule::plain("post/depth_copy.wgsl");
 /// The cube filter (environment and probe prefiltering).
 pub(crate) const CUBE_FILTER: ShaderModule = ShaderModule::plain("lighting/ibl/cube_filter.wgsl");
 /// The split-sum table.
@@ -187,9 +193,14 @@ pub(crate) const ENTRY_POINTS: &[EntryPoint] = &[
     entry(FORWARD_LIT, "fs_blend", Stage::Fragment),
     entry(FORWARD_LIT, "vs_sky", Stage::Vertex),
     entry(FORWARD_LIT, "fs_sky", Stage::Fragment),
+    entry(LABELS, "vs_main", Stage::Vertex),
+    entry(LABELS, "fs_labels", Stage::Fragment),
+    entry(LABELS, "fs_labels_masked", Stage::Fragment),
     entry(REFERENCE, "trace_paths", Stage::Compute),
     entry(TONEMAP, "vs_fullscreen", Stage::Vertex),
     entry(TONEMAP, "fs_tonemap", Stage::Fragment),
+    entry(DEPTH_COPY, "vs", Stage::Vertex),
+    entry(DEPTH_COPY, "fs", Stage::Fragment),
     entry(CUBE_FILTER, "vs", Stage::Vertex),
     entry(CUBE_FILTER, "fs_downsample", Stage::Fragment),
     entry(CUBE_FILTER, "fs_sky", Stage::Fragment),

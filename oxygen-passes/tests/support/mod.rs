@@ -5,13 +5,14 @@ use oxygen_passes::PassKind;
 
 /// Every pass kind. The match has no wildcard: a new kind is a compile
 /// error here until it is added to the array.
-pub fn all_kinds() -> [PassKind; 5] {
+pub fn all_kinds() -> [PassKind; 6] {
     let kinds = [
         PassKind::DepthPrePass,
         PassKind::Shadow,
         PassKind::ShadingAfterPrePass,
         PassKind::Shading,
         PassKind::Transparent,
+        PassKind::Labels,
     ];
     for kind in kinds {
         match kind {
@@ -19,7 +20,8 @@ pub fn all_kinds() -> [PassKind; 5] {
             | PassKind::Shadow
             | PassKind::ShadingAfterPrePass
             | PassKind::Shading
-            | PassKind::Transparent => {}
+            | PassKind::Transparent
+            | PassKind::Labels => {}
         }
     }
     kinds
