@@ -17,7 +17,7 @@ use tracing::debug;
 
 use oxygen_gpu::{LABEL_INSTANCE_FORMAT, LABEL_NORMAL_FORMAT};
 
-use super::{AlphaClass, PassKind, PipelineKey, shader_source};
+use super::{AlphaClass, PassKind, PipelineKey, mesh_entry_points, shader_source};
 
 /// Lazily created, cached mesh pipelines shared by every view.
 ///
@@ -160,22 +160,12 @@ impl Pipelines {
 
     fn create(&self, device: &wgpu::Device, module: &wgpu::ShaderModule, key: PipelineKey) -> wgpu::RenderPipeline {
         let masked = key.variant.alpha == AlphaClass::Masked;
-        let (fragment_entry, depth_write, depth_compare) = match key.pass {
-            PassKind::DepthPrePass | PassKind::Shadow => {
-                (masked.then_some("fs_alpha_test"), true, wgpu::CompareFunction::Greater)
+        let (vertex_entry, fragment_entry) = mesh_entry_points(key.pass, masked);
+        let (depth_write, depth_compare) = match key.pass {
+            PassKind::DepthPrePass | PassKind::Shadow | PassKind::Shading => (true, wgpu::CompareFunction::Greater),
+            PassKind::ShadingAfterPrePass | PassKind::Transparent | PassKind::Labels => {
+                (false, wgpu::CompareFunction::GreaterEqual)
             }
-            PassKind::ShadingAfterPrePass => {
-                (Some(if masked { "fs_masked" } else { "fs_opaque" }), false, wgpu::CompareFunction::GreaterEqual)
-            }
-            PassKind::Shading => {
-                (Some(if masked { "fs_masked" } else { "fs_opaque" }), true, wgpu::CompareFunction::Greater)
-            }
-            PassKind::Transparent => (Some("fs_blend"), false, wgpu::CompareFunction::GreaterEqual),
-            PassKind::Labels => (
-                Some(if masked { "fs_labels_masked" } else { "fs_labels" }),
-                false,
-                wgpu::CompareFunction::GreaterEqual,
-            ),
         };
         // Premultiplied alpha: the shader multiplies colour by alpha.
         let blend = (key.pass == PassKind::Transparent).then_some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING);
@@ -199,7 +189,7 @@ impl Pipelines {
             layout: Some(&self.layout),
             vertex: wgpu::VertexState {
                 module,
-                entry_point: Some("vs_main"),
+                entry_point: Some(vertex_entry),
                 compilation_options: compilation_options(),
                 buffers: &[],
             },

@@ -1,20 +1,39 @@
 //! Which WGSL a mesh pipeline compiles: the depth-only module for depth
 //! passes, the forward lit module for shading; both on the device's texture
-//! path.
+//! path. Also which of the module's entry points a pipeline uses, so that
+//! the pipeline cache and the registry's validation test read one answer.
 
 use oxygen_bindless::TexturePath;
 
 use super::PassKind;
-use crate::shaders::{DEPTH_ONLY, FORWARD_LIT, LABELS};
+use crate::shaders::{DEPTH_ONLY, FORWARD_LIT, LABELS, ShaderModule};
+
+/// The registry's module a pass's pipelines are made from.
+pub(crate) fn mesh_module(pass: PassKind) -> ShaderModule {
+    match pass {
+        PassKind::DepthPrePass | PassKind::Shadow => DEPTH_ONLY,
+        PassKind::Shading | PassKind::ShadingAfterPrePass | PassKind::Transparent => FORWARD_LIT,
+        PassKind::Labels => LABELS,
+    }
+}
+
+/// The vertex and fragment entry points of a pipeline of `pass`, for an
+/// alpha-tested (`masked`) variant or not; no fragment stage for an opaque
+/// depth-only variant, which only writes depth.
+pub(crate) fn mesh_entry_points(pass: PassKind, masked: bool) -> (&'static str, Option<&'static str>) {
+    let fragment = match pass {
+        PassKind::DepthPrePass | PassKind::Shadow => masked.then_some("fs_alpha_test"),
+        PassKind::ShadingAfterPrePass | PassKind::Shading => Some(if masked { "fs_masked" } else { "fs_opaque" }),
+        // Blended surfaces have their own stage whatever their alpha class.
+        PassKind::Transparent => Some("fs_blend"),
+        PassKind::Labels => Some(if masked { "fs_labels_masked" } else { "fs_labels" }),
+    };
+    ("vs_main", fragment)
+}
 
 /// The full WGSL of a pass, composed from `mesh/depth_only.wgsl` or
 /// `mesh/forward_lit.wgsl` and what they include (the heap's declarations,
 /// the GPU records, the generated constants, the shared vertex stage).
 pub fn shader_source(pass: PassKind, textures: TexturePath) -> String {
-    let module = match pass {
-        PassKind::DepthPrePass | PassKind::Shadow => DEPTH_ONLY,
-        PassKind::Shading | PassKind::ShadingAfterPrePass | PassKind::Transparent => FORWARD_LIT,
-        PassKind::Labels => LABELS,
-    };
-    module.textured_source(textures)
+    mesh_module(pass).textured_source(textures)
 }

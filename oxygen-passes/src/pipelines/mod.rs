@@ -18,4 +18,7 @@ pub use cache::{CompilerGuard, PipelineFuture, Pipelines};
 pub use features::{Exposure, ShaderFeatures};
 pub use fullscreen::{fullscreen_pass, fullscreen_pipeline};
 pub use key::{AlphaClass, DepthBias, PassKind, PipelineKey, PipelineVariant};
+pub(crate) use mesh_shader::mesh_entry_points;
+#[cfg(test)]
+pub(crate) use mesh_shader::mesh_module;
 pub use mesh_shader::shader_source;

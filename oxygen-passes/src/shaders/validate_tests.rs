@@ -2,14 +2,19 @@
 //! with naga on every texture path it is built for, and holds each of its
 //! entry points at its stage: one walk over [`ENTRY_POINTS`]. A WGSL mistake
 //! fails here with a readable message rather than at pipeline creation on
-//! some device.
+//! some device. The mesh pipelines' choices (which entry points and which
+//! override constants each [`PassKind`] uses) are checked against the same
+//! composed modules.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 use oxygen_bindless::TexturePath;
 
 use super::compose::{Composer, SourceText};
 use super::registry::{ENTRY_POINTS, SOURCES, ShaderModule, Stage};
+use crate::pipelines::{
+    DepthBias, Exposure, PassKind, PipelineKey, PipelineVariant, ShaderFeatures, mesh_entry_points, mesh_module,
+};
 
 /// The texture paths a module is composed for (`None`: it reads none).
 pub(super) fn paths(module: ShaderModule) -> Vec<Option<TexturePath>> {
@@ -38,6 +43,17 @@ fn capabilities(path: Option<TexturePath>) -> naga::valid::Capabilities {
     }
 }
 
+/// `source` parsed and validated with what a device on `path` grants;
+/// panics naming `what` with naga's message.
+fn validate(what: &str, source: &str, path: Option<TexturePath>) -> naga::Module {
+    let module = naga::front::wgsl::parse_str(source)
+        .unwrap_or_else(|e| panic!("{what} does not parse:\n{}", e.emit_to_string(source)));
+    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), capabilities(path))
+        .validate(&module)
+        .unwrap_or_else(|e| panic!("{what} does not validate: {e:?}"));
+    module
+}
+
 /// Every module of [`ENTRY_POINTS`] on every path, composed, parsed and
 /// validated: (module, path) → (source, module).
 pub(super) fn composed_modules() -> HashMap<(&'static str, Option<TexturePath>), (String, naga::Module)> {
@@ -47,11 +63,7 @@ pub(super) fn composed_modules() -> HashMap<(&'static str, Option<TexturePath>),
             modules.entry((entry.module.root, path)).or_insert_with(|| {
                 let what = format!("{} / {path:?}", entry.module.root);
                 let source = entry.module.compose(path).unwrap_or_else(|e| panic!("{what} does not compose: {e}"));
-                let module = naga::front::wgsl::parse_str(&source)
-                    .unwrap_or_else(|e| panic!("{what} does not parse:\n{}", e.emit_to_string(&source)));
-                naga::valid::Validator::new(naga::valid::ValidationFlags::all(), capabilities(path))
-                    .validate(&module)
-                    .unwrap_or_else(|e| panic!("{what} does not validate: {e:?}"));
+                let module = validate(&what, &source, path);
                 (source, module)
             });
         }
@@ -138,4 +150,91 @@ fn composing_outside_the_registry_is_an_error() {
     assert!(Composer::new(SOURCES).compose("mesh/nowhere.wgsl").is_err());
     let error = super::FORWARD_LIT.compose(None).expect_err("the texture path is chosen per device");
     assert!(error.to_string().contains("bindless/textures"), "{error}");
+}
+
+/// Every pass kind. The match has no wildcard: a new kind does not compile
+/// until it is listed here, and so is checked below.
+fn pass_kinds() -> [PassKind; 6] {
+    let kinds = [
+        PassKind::DepthPrePass,
+        PassKind::Shadow,
+        PassKind::ShadingAfterPrePass,
+        PassKind::Shading,
+        PassKind::Transparent,
+        PassKind::Labels,
+    ];
+    for kind in kinds {
+        match kind {
+            PassKind::DepthPrePass
+            | PassKind::Shadow
+            | PassKind::ShadingAfterPrePass
+            | PassKind::Shading
+            | PassKind::Transparent
+            | PassKind::Labels => {}
+        }
+    }
+    kinds
+}
+
+/// The entry points every pass kind's pipelines are created with (what
+/// `mesh_entry_points` answers the pipeline cache, masked or not) are
+/// listed in [`ENTRY_POINTS`] for the module the kind compiles, at their
+/// stage, so the walk above validated them.
+#[test]
+fn every_pass_kind_uses_listed_entry_points_of_its_module() {
+    for pass in pass_kinds() {
+        let module = mesh_module(pass);
+        for masked in [false, true] {
+            let (vertex, fragment) = mesh_entry_points(pass, masked);
+            for (name, stage) in [(Some(vertex), Stage::Vertex), (fragment, Stage::Fragment)] {
+                let Some(name) = name else { continue };
+                assert!(
+                    ENTRY_POINTS.iter().any(|e| e.module == module && e.name == name && e.stage == stage),
+                    "{pass:?} (masked: {masked}) uses {name}, not a {stage:?} entry point of {} in ENTRY_POINTS",
+                    module.root
+                );
+            }
+        }
+    }
+}
+
+/// Every override constant a mesh pipeline is created with is declared by
+/// the module its kind compiles, on every texture path (wgpu rejects an
+/// unknown one at pipeline creation), and the module validates with each
+/// boolean's default flipped, as a pipeline may set it.
+#[test]
+fn every_override_constant_of_a_mesh_pipeline_is_declared() {
+    let modules = composed_modules();
+    let mut flipped_already = HashSet::new();
+    for pass in pass_kinds() {
+        let key = PipelineKey {
+            pass,
+            variant: PipelineVariant::from_mask(oxygen_sceneprep::PassMask::OPAQUE),
+            color_format: None,
+            depth_format: wgpu::TextureFormat::Depth32Float,
+            depth_bias: DepthBias::NONE,
+            features: ShaderFeatures::NONE,
+            tone_map: Some(Exposure::new(1.0)),
+            samples: 1,
+        };
+        let module = mesh_module(pass);
+        for path in paths(module) {
+            let (source, parsed) = &modules[&(module.root, path)];
+            let declared: Vec<_> = parsed.overrides.iter().filter_map(|(_, o)| o.name.clone()).collect();
+            for (name, _) in key.override_constants() {
+                assert!(
+                    declared.iter().any(|d| d == name),
+                    "{pass:?} / {path:?}: {name} is not declared by {}; declared: {declared:?}",
+                    module.root
+                );
+                // Several kinds share a module: flip each of its constants once.
+                if !flipped_already.insert((module.root, path, name)) {
+                    continue;
+                }
+                let (on, off) = (format!("override {name}: bool = true;"), format!("override {name}: bool = false;"));
+                let flipped = if source.contains(&on) { source.replace(&on, &off) } else { source.replace(&off, &on) };
+                validate(&format!("{} / {path:?} with {name} flipped", module.root), &flipped, path);
+            }
+        }
+    }
 }
