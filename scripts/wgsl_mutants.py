@@ -25,8 +25,10 @@ every shader module of the registry, src/shaders/registry.rs, composed on
 every texture path, each entry point at its stage): first the
 unmutated shaders, then rounds of mutants whose edits do not overlap,
 applied together (a failing round is retried mutant by mutant to name the
-culprit). A mutated file that test does not validate (the composition
-shader embedded in src/windows.rs) is named in the output.
+culprit). A mutated file that test does not validate (none today: the
+window composition shader, once embedded in src/windows.rs, is
+oxygen-passes/src/present/compose_window.wgsl in the registry) is named in
+the output.
 
 The rendering test binaries are derived, never listed here: they are what
 scripts/gpu-test-binaries prints (every tests/*.rs that renders; the list
@@ -88,8 +90,8 @@ HIZ = PASSES + "visibility/hiz.wgsl"
 HIZ_TEST = PASSES + "visibility/hiz_test.wgsl"
 CULL = PASSES + "visibility/cull.wgsl"
 TRACE = PASSES + "reference/trace.wgsl"
-# WGSL embedded in Rust: the window composition shader (COMPOSE_WGSL).
-WINDOWS = "src/windows.rs"
+# The renderer's window composition (the root crate's compositor draws with it).
+WINDOWS = PASSES + "present/compose_window.wgsl"
 
 # (name, file, old text, new text, what the mutant breaks), one list per
 # subject; a mutant's name starts with its subject's prefix (SUBJECTS).
@@ -447,7 +449,7 @@ SUBJECTS = [
     ("alpha", "masked alpha cutoff", ALPHA_MUTANTS, ["gpu_render", "gltf_materials", "reference_view"]),
     ("double-sided", "double-sided normals", DOUBLE_SIDED_MUTANTS, ["draw_order", "reference_view"]),
     ("generation", "generation check", GENERATION_MUTANTS, ["gpu_debug_generations", "gpu_visibility"]),
-    ("compose", "window composition (WGSL in src/windows.rs)", COMPOSE_MUTANTS, ["windows", "viewer_window"]),
+    ("compose", "window composition", COMPOSE_MUTANTS, ["windows", "viewer_window"]),
 ]
 
 MUTANTS = [m for _, _, mutants, _ in SUBJECTS for m in mutants]

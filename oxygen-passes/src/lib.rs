@@ -37,6 +37,7 @@ mod lighting;
 mod mesh;
 mod pipelines;
 mod post;
+mod present;
 mod reference;
 mod shaders;
 mod visibility;
@@ -61,6 +62,7 @@ pub use pipelines::{
     ShaderFeatures, fullscreen_pass, fullscreen_pipeline,
 };
 pub use post::{DepthCopy, TonemapPass};
+pub use present::compose_window_wgsl;
 pub use reference::{ReferencePass, ReferenceSettings, ReferenceTracer};
 pub use visibility::{GPU_VISIBILITY_FEATURES, GpuViewRequest, GpuVisibility};
 

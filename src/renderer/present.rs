@@ -16,7 +16,7 @@ use super::targets::Targets;
 use super::windows::Windows;
 use super::{FrameWarning, Renderer};
 use crate::views::Views;
-use crate::windows::{COMPOSE_WGSL, WindowId, WindowRect};
+use crate::windows::{WindowId, WindowRect};
 
 /// What the present step did.
 pub(crate) struct PresentedFrame {
@@ -31,6 +31,9 @@ pub(crate) struct Compositor {
     layout: wgpu::BindGroupLayout,
     depth_layout: wgpu::BindGroupLayout,
     sampler: wgpu::Sampler,
+    /// The composition shader's WGSL (oxygen-passes' registry composes
+    /// it), kept for the pipelines of window formats seen later.
+    wgsl: String,
     /// By window format and whether the view shown is depth only.
     pipelines: HashMap<(wgpu::TextureFormat, bool), wgpu::RenderPipeline>,
 }
@@ -50,13 +53,19 @@ impl Compositor {
         let depth_layout = LayoutEntries::new(wgpu::ShaderStages::FRAGMENT)
             .push(bindings::texture_2d(bindings::UNFILTERABLE_FLOAT))
             .create_layout(device, "compose depth");
-        Compositor { layout, depth_layout, sampler, pipelines: HashMap::new() }
+        Compositor {
+            layout,
+            depth_layout,
+            sampler,
+            wgsl: oxygen_passes::compose_window_wgsl(),
+            pipelines: HashMap::new(),
+        }
     }
 
     fn pipeline(&mut self, device: &wgpu::Device, format: wgpu::TextureFormat, depth: bool) -> &wgpu::RenderPipeline {
         let (layout, fragment) = if depth { (&self.depth_layout, "fs_depth") } else { (&self.layout, "fs_color") };
         self.pipelines.entry((format, depth)).or_insert_with(|| {
-            oxygen_passes::fullscreen_pipeline(device, "compose", layout, COMPOSE_WGSL, ("vs", fragment), format)
+            oxygen_passes::fullscreen_pipeline(device, "compose", layout, &self.wgsl, ("vs", fragment), format)
         })
     }
 }

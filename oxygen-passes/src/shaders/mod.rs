@@ -10,7 +10,8 @@ pub(crate) mod compose;
 pub(crate) mod registry;
 
 pub(crate) use registry::{
-    CUBE_FILTER, CULL, DEPTH_COPY, DEPTH_ONLY, FORWARD_LIT, HIZ, LABELS, REFERENCE, SPLIT_SUM, ShaderModule, TONEMAP,
+    COMPOSE_WINDOW, CUBE_FILTER, CULL, DEPTH_COPY, DEPTH_ONLY, FORWARD_LIT, HIZ, LABELS, REFERENCE, SPLIT_SUM,
+    ShaderModule, TONEMAP,
 };
 
 #[cfg(test)]

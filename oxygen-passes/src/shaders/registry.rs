@@ -47,6 +47,8 @@ pub(crate) static SOURCES: &[Source] = &[
     Source::wgsl("post/tonemap_operator.wgsl", include_str!("../post/tonemap_operator.wgsl")),
     Source::wgsl("post/tonemap.wgsl", include_str!("../post/tonemap.wgsl")),
     Source::wgsl("post/depth_copy.wgsl", include_str!("../post/depth_copy.wgsl")),
+    // Presenting: the renderer's window composition.
+    Source::wgsl("present/compose_window.wgsl", include_str!("../present/compose_window.wgsl")),
     // oxygen-bindless: the heap's declarations.
     Source::generated("bindless/constants", oxygen_bindless::wgsl_constants),
     Source::gpu_struct::<oxygen_bindless::CameraConstants>("bindless/CameraConstants"),
@@ -153,6 +155,8 @@ pub(crate) const SPLIT_SUM: ShaderModule = ShaderModule::plain("lighting/split_s
 pub(crate) const CULL: ShaderModule = ShaderModule::plain("visibility/cull.wgsl");
 /// The depth pyramid's copy and reduction.
 pub(crate) const HIZ: ShaderModule = ShaderModule::plain("visibility/hiz.wgsl");
+/// The renderer's window composition (the root crate's compositor).
+pub(crate) const COMPOSE_WINDOW: ShaderModule = ShaderModule::plain("present/compose_window.wgsl");
 
 /// A pipeline stage.
 #[cfg(test)]
@@ -215,4 +219,7 @@ pub(crate) const ENTRY_POINTS: &[EntryPoint] = &[
     entry(CULL, "commands_late", Stage::Compute),
     entry(HIZ, "copy_depth", Stage::Compute),
     entry(HIZ, "reduce", Stage::Compute),
+    entry(COMPOSE_WINDOW, "vs", Stage::Vertex),
+    entry(COMPOSE_WINDOW, "fs_color", Stage::Fragment),
+    entry(COMPOSE_WINDOW, "fs_depth", Stage::Fragment),
 ];
