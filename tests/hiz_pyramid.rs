@@ -95,23 +95,6 @@ fn every_level_is_the_minimum_of_the_depth_pixels_it_covers() {
     assert_eq!((w, h), (1, 1), "the pyramid ends at 1×1");
 }
 
-/// Calls `hiz_visible` for every box.
-const VISIBLE: &str = r#"
-struct Params { view_projection: mat4x4<f32>, size: vec2<u32>, levels: u32, count: u32 }
-struct Box { lo: vec4<f32>, hi: vec4<f32> }
-@group(0) @binding(0) var<uniform> params: Params;
-@group(0) @binding(1) var<storage, read> boxes: array<Box>;
-@group(0) @binding(2) var<storage, read_write> out: array<u32>;
-@group(0) @binding(3) var<storage, read> hiz_pyramid: array<f32>;
-
-@compute @workgroup_size(64)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= params.count { return; }
-    let b = boxes[id.x];
-    out[id.x] = select(0u, 1u, hiz_visible(params.levels, params.size, params.view_projection, b.lo.xyz, b.hi.xyz));
-}
-"#;
-
 /// `hiz_visible` never hides a box some pixel of its (pixel-widened)
 /// screen rectangle shows nearer than the depth there: thousands of random
 /// boxes of every size against the random depth image.
@@ -146,14 +129,16 @@ fn hiz_visible_never_hides_a_box_that_some_covered_pixel_shows() {
         })
         .collect();
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        // The registry's harness (`visibility/hiz_visible_boxes.wgsl`): one
+        // invocation per box, calling `hiz_visible`.
         label: Some("hiz_visible test"),
-        source: wgpu::ShaderSource::Wgsl(format!("{VISIBLE}\n{}", oxygen::passes::testing::HIZ_TEST_WGSL).into()),
+        source: wgpu::ShaderSource::Wgsl(oxygen::passes::testing::hiz_visible_boxes_wgsl().into()),
     });
     let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: None,
         layout: None,
         module: &module,
-        entry_point: Some("main"),
+        entry_point: Some("visible_boxes"),
         compilation_options: Default::default(),
         cache: None,
     });

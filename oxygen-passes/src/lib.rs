@@ -87,5 +87,5 @@ pub mod testing {
     pub use crate::post::TONEMAP_WGSL;
     pub use crate::reference::reference_shader_source;
     pub use crate::visibility::cull_shader_source;
-    pub use crate::visibility::hiz::{HIZ_TEST_WGSL, HizPipelines, HizPyramid, hiz_shader_source};
+    pub use crate::visibility::hiz::{HizPipelines, HizPyramid, hiz_shader_source, hiz_visible_boxes_wgsl};
 }

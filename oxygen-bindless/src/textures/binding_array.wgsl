@@ -1,8 +1,12 @@
 // `sample_texture` on the binding-array path: the slot indexes
 // `texture_array` itself, and the location record's sampler field picks an
-// entry of the sampler table. The group-2 declarations before this file are
-// generated in path.rs (from MAX_TEXTURES and SAMPLERS), the constants in
-// location.rs and wgsl_constants.rs.
+// entry of the sampler table. The group-2 declarations are generated in
+// path.rs (from MAX_TEXTURES and SAMPLERS), the constants in location.rs and
+// wgsl_constants.rs; oxygen-passes' shader registry resolves the includes.
+
+#include "bindless/constants"
+#include "bindless/domains"
+#include "bindless/textures/binding_array/bindings"
 
 // `v` moved into [0, 1] the way `wrap` wants, for a texture whose v axis
 // wraps unlike its u axis (the table sampler wraps both like u; on [0, 1]

@@ -3,8 +3,12 @@
 // filter. Every array has one repeat-linear sampler (GL pairs a texture
 // with one sampler), so the other wrap modes are applied to the coordinate
 // here, and nearest filtering loads the texel under it. The group-2
-// declarations before this file are generated in path.rs; the constants in
-// location.rs and wgsl_constants.rs.
+// declarations are generated in path.rs, the constants in location.rs and
+// wgsl_constants.rs; oxygen-passes' shader registry resolves the includes.
+
+#include "bindless/constants"
+#include "bindless/domains"
+#include "bindless/textures/grouped_arrays/bindings"
 
 // One coordinate moved the way `wrap` wants (into [0, 1] for clamp and
 // mirror; repeat is the sampler's own). Clamping stops half a texel of the

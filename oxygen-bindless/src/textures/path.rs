@@ -3,7 +3,7 @@
 //!
 //! The path is chosen once, at device creation ([`TexturePath::best_for`]);
 //! the heap builds its bind group for it and every mesh shader includes its
-//! [`TexturePath::wgsl`].
+//! [`TexturePath::wgsl_sampling`] and [`TexturePath::wgsl_bindings`].
 
 use super::tables::{GROUPED_SAMPLERS, GROUPS, SAMPLERS};
 
@@ -47,25 +47,51 @@ impl TexturePath {
         }
     }
 
-    /// WGSL declarations of group 2 and `sample_texture(slot, uv, duv_dx,
-    /// duv_dy)`, which returns opaque white for [`crate::INVALID_SLOT`]. The
-    /// caller passes the UV's screen derivatives (taken in uniform control
-    /// flow), which pick the mip level. It reads the constants of
-    /// [`crate::wgsl_constants`] and the `texture_location_domain` of
-    /// [`crate::DomainKind::wgsl_bindings`], which must come before it.
-    pub fn wgsl(self) -> String {
-        // The declarations are generated because their bindings follow the
-        // heap's layout; the functions live in .wgsl files.
+    /// The WGSL of `sample_texture(slot, uv, duv_dx, duv_dy)` on this path,
+    /// which returns opaque white for [`crate::INVALID_SLOT`]. The caller
+    /// passes the UV's screen derivatives (taken in uniform control flow),
+    /// which pick the mip level. A `.wgsl` file whose `#include` lines name
+    /// what it reads, for oxygen-passes' shader composer to resolve (this
+    /// crate sits below the composer, so it writes the names, not the
+    /// text): `bindless/constants` ([`crate::wgsl_constants`]),
+    /// `bindless/domains` ([`crate::DomainKind::wgsl_bindings`], for
+    /// `texture_location_domain`) and its group-2 declarations,
+    /// [`TexturePath::wgsl_bindings`], under
+    /// [`TexturePath::wgsl_bindings_name`].
+    pub const fn wgsl_sampling(self) -> &'static str {
         match self {
-            TexturePath::BindingArray => format!(
-                "@group(2) @binding(0) var texture_array: binding_array<texture_2d<f32>, {MAX_TEXTURES}>;\n{}{BINDING_ARRAY_WGSL}",
-                sampler_declarations(1, SAMPLERS)
-            ),
+            TexturePath::BindingArray => BINDING_ARRAY_WGSL,
+            TexturePath::GroupedArrays => GROUPED_ARRAYS_WGSL,
+        }
+    }
+
+    /// The name [`TexturePath::wgsl_sampling`] includes
+    /// [`TexturePath::wgsl_bindings`] by.
+    pub const fn wgsl_bindings_name(self) -> &'static str {
+        match self {
+            TexturePath::BindingArray => "bindless/textures/binding_array/bindings",
+            TexturePath::GroupedArrays => "bindless/textures/grouped_arrays/bindings",
+        }
+    }
+
+    /// WGSL declarations of group 2 on this path: generated, because their
+    /// count and bindings follow the heap's layout (`MAX_TEXTURES`, the
+    /// sampler tables), which the heap builds its bind group from. The
+    /// binding array's come with the `enable` directive they need.
+    pub fn wgsl_bindings(self) -> String {
+        match self {
+            TexturePath::BindingArray => {
+                let array = format!(
+                    "enable wgpu_binding_array;\n\
+                     @group(2) @binding(0) var texture_array: binding_array<texture_2d<f32>, {MAX_TEXTURES}>;\n"
+                );
+                array + &sampler_declarations(1, SAMPLERS)
+            }
             TexturePath::GroupedArrays => {
                 let arrays: String = (0..GROUPS)
                     .map(|g| format!("@group(2) @binding({g}) var texture_group_{g}: texture_2d_array<f32>;\n"))
                     .collect();
-                format!("{arrays}{}{GROUPED_ARRAYS_WGSL}", sampler_declarations(GROUPS as u32, GROUPED_SAMPLERS))
+                arrays + &sampler_declarations(GROUPS as u32, GROUPED_SAMPLERS)
             }
         }
     }
@@ -85,7 +111,7 @@ mod tests {
     /// shift or mask (the constants' values are tested in `location`).
     #[test]
     fn the_grouped_wgsl_reads_the_location_bits_rust_writes() {
-        let wgsl = TexturePath::GroupedArrays.wgsl();
+        let wgsl = TexturePath::GroupedArrays.wgsl_bindings() + TexturePath::GroupedArrays.wgsl_sampling();
         assert!(wgsl.contains("(location & TEXTURE_LOCATION_NEAREST_BIT)"), "nearest bit");
         assert!(wgsl.contains("location >> TEXTURE_LOCATION_SAMPLER_SHIFT"), "wrap bits");
         assert!(wgsl.contains("location & TEXTURE_LOCATION_LAYER_MASK"), "layer");
@@ -130,7 +156,7 @@ mod tests {
             declared,
             "@group(2) @binding(3) var texture_sampler_0: sampler;\n@group(2) @binding(4) var texture_sampler_1: sampler;\n"
         );
-        let binding_array = TexturePath::BindingArray.wgsl();
+        let binding_array = TexturePath::BindingArray.wgsl_bindings() + TexturePath::BindingArray.wgsl_sampling();
         for k in 0..SAMPLERS {
             assert!(binding_array.contains(&format!("@binding({}) var texture_sampler_{k}: sampler;", 1 + k)));
             assert!(binding_array.contains(&format!(
@@ -143,9 +169,12 @@ mod tests {
     #[test]
     fn both_paths_declare_sample_texture() {
         for path in [TexturePath::BindingArray, TexturePath::GroupedArrays] {
-            assert!(path.wgsl().contains(
+            assert!(path.wgsl_sampling().contains(
                 "fn sample_texture(slot: u32, uv: vec2<f32>, duv_dx: vec2<f32>, duv_dy: vec2<f32>) -> vec4<f32>"
             ));
+            // The composer finds the declarations by the name this crate gives them.
+            let include = format!("#include \"{}\"", path.wgsl_bindings_name());
+            assert!(path.wgsl_sampling().lines().any(|l| l == include), "{path:?} includes its bindings");
         }
     }
 }

@@ -38,6 +38,7 @@ pub(crate) static SOURCES: &[Source] = &[
     Source::wgsl("visibility/cull.wgsl", include_str!("../visibility/cull.wgsl")),
     Source::wgsl("visibility/hiz.wgsl", include_str!("../visibility/hiz.wgsl")),
     Source::wgsl("visibility/hiz_test.wgsl", include_str!("../visibility/hiz_test.wgsl")),
+    Source::wgsl("visibility/hiz_visible_boxes.wgsl", include_str!("../visibility/hiz_visible_boxes.wgsl")),
     // The path-traced reference.
     Source::generated("reference/constants", crate::reference::params::wgsl_constants),
     Source::gpu_struct::<crate::reference::params::TraceParams>("reference/TraceParams"),
@@ -56,8 +57,12 @@ pub(crate) static SOURCES: &[Source] = &[
     Source::gpu_struct::<oxygen_bindless::SceneConstants>("bindless/SceneConstants"),
     Source::wgsl("bindless/scene_constants.wgsl", oxygen_bindless::SCENE_CONSTANTS_WGSL),
     Source::generated("bindless/domains", DomainKind::wgsl_bindings),
-    Source::generated(BINDING_ARRAY, || format!("enable wgpu_binding_array;\n{}", TexturePath::BindingArray.wgsl())),
-    Source::generated(GROUPED_ARRAYS, || TexturePath::GroupedArrays.wgsl()),
+    // Each texture path's sampling functions and the group-2 declarations
+    // they include (generated from the heap's layout).
+    Source::wgsl(BINDING_ARRAY, TexturePath::BindingArray.wgsl_sampling()),
+    Source::generated(TexturePath::BindingArray.wgsl_bindings_name(), || TexturePath::BindingArray.wgsl_bindings()),
+    Source::wgsl(GROUPED_ARRAYS, TexturePath::GroupedArrays.wgsl_sampling()),
+    Source::generated(TexturePath::GroupedArrays.wgsl_bindings_name(), || TexturePath::GroupedArrays.wgsl_bindings()),
     // oxygen-sceneprep: the GPU records (the scene's, the GPU scene's, the
     // ray scene's) and their numbers.
     Source::gpu_struct::<oxygen_sceneprep::NormalMatrix>("sceneprep/NormalMatrix"),
@@ -155,6 +160,10 @@ pub(crate) const SPLIT_SUM: ShaderModule = ShaderModule::plain("lighting/split_s
 pub(crate) const CULL: ShaderModule = ShaderModule::plain("visibility/cull.wgsl");
 /// The depth pyramid's copy and reduction.
 pub(crate) const HIZ: ShaderModule = ShaderModule::plain("visibility/hiz.wgsl");
+/// The test harness of the depth pyramid's visibility test (the root
+/// crate's `tests/hiz_pyramid.rs`).
+#[cfg(any(test, feature = "testing"))]
+pub(crate) const HIZ_VISIBLE_BOXES: ShaderModule = ShaderModule::plain("visibility/hiz_visible_boxes.wgsl");
 /// The renderer's window composition (the root crate's compositor).
 pub(crate) const COMPOSE_WINDOW: ShaderModule = ShaderModule::plain("present/compose_window.wgsl");
 
@@ -219,6 +228,7 @@ pub(crate) const ENTRY_POINTS: &[EntryPoint] = &[
     entry(CULL, "commands_late", Stage::Compute),
     entry(HIZ, "copy_depth", Stage::Compute),
     entry(HIZ, "reduce", Stage::Compute),
+    entry(HIZ_VISIBLE_BOXES, "visible_boxes", Stage::Compute),
     entry(COMPOSE_WINDOW, "vs", Stage::Vertex),
     entry(COMPOSE_WINDOW, "fs_color", Stage::Fragment),
     entry(COMPOSE_WINDOW, "fs_depth", Stage::Fragment),

@@ -4,7 +4,7 @@
 //! mip sizes (halved, rounded down): the 2×2 texels below, and for the last
 //! texel of a row or column also the odd one left over. A texel of level k
 //! therefore covers the depth pixels `[x·2^k, (x+1)·2^k)` on each axis, the
-//! last one up to the edge, and [`HIZ_TEST_WGSL`]'s `hiz_visible` reads at
+//! last one up to the edge, and `hiz_test.wgsl`'s `hiz_visible` reads at
 //! most 3×3 texels of a level at which a box's screen rectangle spans no
 //! more, so the test is conservative: a box is hidden only when every pixel
 //! it could cover is nearer than it.
@@ -20,13 +20,17 @@ use tracing::info_span;
 
 use super::params::LevelParams;
 
-/// WGSL of `fn hiz_visible(levels, size, view_projection, box_min, box_max)
-/// -> bool`, for shaders that test boxes against a pyramid; the including
-/// shader declares the pyramid's buffer as `hiz_pyramid: array<f32>` (the
-/// visibility cull shader includes it through the shader registry; this
-/// copy is for tests).
+/// A test shader for `hiz_test.wgsl`'s `fn hiz_visible(levels, size,
+/// view_projection, box_min, box_max) -> bool` (which the visibility cull
+/// shader includes): its compute entry point `visible_boxes` writes, per
+/// box of binding 1 (`array<{ lo: vec4<f32>, hi: vec4<f32> }>`), 1 to
+/// binding 2 where the box may be visible against the pyramid of binding
+/// 3, with the view-projection, level-0 size, level count and box count of
+/// the uniform at binding 0; composed by the shader registry.
 #[cfg(any(test, feature = "testing"))]
-pub const HIZ_TEST_WGSL: &str = include_str!("hiz_test.wgsl");
+pub fn hiz_visible_boxes_wgsl() -> String {
+    crate::shaders::HIZ_VISIBLE_BOXES.source()
+}
 
 /// The pyramid's shader as compiled: `hiz.wgsl`'s copy and reduction
 /// entry points with their parameter block.
