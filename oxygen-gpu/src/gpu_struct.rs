@@ -18,7 +18,9 @@
 //!   whether the Rust struct needs explicit padding.
 //!
 //! A struct declared elsewhere (another crate's record) is checked the same
-//! way through a layout written with [`gpu_layout!`].
+//! way through a layout written with [`gpu_layout!`], or, when it is stored
+//! in the place of a record and read through that record's members, with
+//! [`check_overlay`].
 
 use std::fmt::Write;
 
@@ -293,6 +295,52 @@ pub fn check_layout(module: &naga::Module, expected: &StructLayout) -> Result<()
     if problems.is_empty() { Ok(()) } else { Err(format!("{name}: {}", problems.join("; "))) }
 }
 
+/// Compares a Rust struct stored in a record's place with the record's
+/// layout: `overlay` (the struct's [`gpu_layout!`], each field named by the
+/// first member of `record` it lies on) must have `record`'s size, and each
+/// field must start where its named member starts and run over whole
+/// members, the fields one after the other without gaps. A shader reading
+/// the record's members then reads the struct's bytes: what lets one
+/// storage array hold several 32-byte records (a vertex, its attributes,
+/// its skin) declared once in Rust and once, as the record, in WGSL. The
+/// error lists every difference.
+pub fn check_overlay(record: &StructLayout, overlay: &StructLayout) -> Result<(), String> {
+    let mut problems = Vec::new();
+    if overlay.size != record.size {
+        problems.push(format!("size {}, {} has {}", overlay.size, record.name, record.size));
+    }
+    let mut expected_offset = 0;
+    for field in &overlay.fields {
+        let Some(first) = record.fields.iter().position(|m| m.name == field.name) else {
+            problems.push(format!("`{}`: {} has no member of that name", field.name, record.name));
+            continue;
+        };
+        let start = record.fields[first].offset;
+        if field.offset != start {
+            problems.push(format!("`{}` at offset {}, the member at {start}", field.name, field.offset));
+        }
+        if field.offset != expected_offset {
+            problems.push(format!(
+                "`{}` at offset {}, the field before ends at {expected_offset}",
+                field.name, field.offset
+            ));
+        }
+        let end = field.offset + field.size;
+        if !record.fields.iter().any(|m| m.offset + m.size == end) {
+            problems.push(format!("`{}` ends at {end}, inside a member of {}", field.name, record.name));
+        }
+        expected_offset = end;
+    }
+    if expected_offset != overlay.size {
+        problems.push(format!("the fields end at {expected_offset}, the struct at {}", overlay.size));
+    }
+    if problems.is_empty() {
+        Ok(())
+    } else {
+        Err(format!("{} over {}: {}", overlay.name, record.name, problems.join("; ")))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -374,5 +422,34 @@ mod tests {
         let module = parse("struct Pair { first: u32, second: vec3<f32> }");
         let error = check_layout(&module, &layout).expect_err("vec3 alignment");
         assert!(error.contains("second: WGSL offset 16 size 12, Rust offset 4 size 12"), "{error}");
+    }
+
+    #[test]
+    fn an_overlay_lies_over_whole_members_of_its_record() {
+        crate::gpu_struct! {
+            /// Four scalars.
+            struct Quad: 16 bytes { a: f32, b: f32, c: f32, d: f32 }
+        }
+        #[repr(C)]
+        struct Split {
+            head: [f32; 3],
+            tail: f32,
+        }
+        let record = Quad::layout();
+        check_overlay(&record, &crate::gpu_layout!(Split { head => "a", tail => "d" })).expect("lies over a..c, d");
+        // Named after the wrong member, or ending inside one.
+        let error = check_overlay(&record, &crate::gpu_layout!(Split { head => "a", tail => "c" })).expect_err("c");
+        assert!(error.contains("`c` at offset 12, the member at 8"), "{error}");
+        #[repr(C)]
+        struct Halves {
+            first: [u16; 3],
+            rest: [u16; 5],
+        }
+        let error = check_overlay(&record, &crate::gpu_layout!(Halves { first => "a", rest => "b" })).expect_err("odd");
+        assert!(error.contains("`a` ends at 6, inside a member of Quad"), "{error}");
+        assert!(error.contains("`b` at offset 6, the member at 4"), "{error}");
+        // A field left out of the overlay leaves a gap.
+        let error = check_overlay(&record, &crate::gpu_layout!(Split { tail => "d" })).expect_err("gap");
+        assert!(error.contains("the field before ends at 0"), "{error}");
     }
 }

@@ -23,7 +23,7 @@ mod target;
 
 pub use bindings::LayoutEntries;
 pub use context::{GpuContext, GpuError, GpuOptions};
-pub use gpu_struct::{FieldLayout, GpuStruct, StructLayout, WgslType, check_layout};
+pub use gpu_struct::{FieldLayout, GpuStruct, StructLayout, WgslType, check_layout, check_overlay};
 pub use readback::{HdrImage, f16_to_f32, unpack_rg11b10_ufloat};
 pub use target::{
     AtlasPage, ColorTargets, HdrFormat, LABEL_INSTANCE_FORMAT, LABEL_NORMAL_FORMAT, LabelTargets, Msaa, MsaaTargets,

@@ -7,12 +7,57 @@ use std::mem::{offset_of, size_of};
 
 use glam::Mat3;
 use oxygen_bindless::{DomainKind, INVALID_SLOT};
-use oxygen_core::{AlphaMode, Material, Vertex};
+use oxygen_core::{AlphaMode, Material, SkinWeights, Vertex, VertexAttributes};
+use oxygen_gpu::StructLayout;
 
 /// The WGSL the scene's records share: the include lines of the generated
-/// records (`NormalMatrix`, `DrawMetadata`, `MaterialRecord`, the light records, the ray
-/// scene's), `apply_uv_transform` and `VertexRecord`.
+/// records (`NormalMatrix`, `DrawMetadata`, `MaterialRecord`, the light
+/// records, the ray scene's, `VertexRecord`) and `apply_uv_transform`.
 pub const GPU_RECORDS_WGSL: &str = include_str!("gpu_records.wgsl");
+
+oxygen_gpu::gpu_struct! {
+    /// One record of the vertex domain as shaders read it: eight floats
+    /// named for a vertex's position (`px`..`pz`), normal (`nx`..`nz`) and
+    /// texture coordinate (`u`, `v`). Scalars, because a `vec3` member would
+    /// be 16-byte aligned and break the 32-byte stride. The domain holds
+    /// oxygen-core's 32-byte records in this place, which shaders read
+    /// through these members: see [`vertex_record_overlays`].
+    #[derive(Debug, Default, PartialEq)]
+    pub struct VertexRecord: 32 bytes {
+        /// Position x.
+        pub px: f32,
+        /// Position y.
+        pub py: f32,
+        /// Position z.
+        pub pz: f32,
+        /// Normal x.
+        pub nx: f32,
+        /// Normal y.
+        pub ny: f32,
+        /// Normal z.
+        pub nz: f32,
+        /// Texture coordinate u.
+        pub u: f32,
+        /// Texture coordinate v.
+        pub v: f32,
+    }
+}
+
+/// oxygen-core's records of the vertex domain as they lie over
+/// [`VertexRecord`]'s members, each Rust field named by the first member it
+/// covers, for [`oxygen_gpu::check_overlay`]. The shaders read them through
+/// those members (`mesh/mesh_vertex.wgsl`, `reference/trace.wgsl`): a
+/// [`Vertex`] (and a morph target's displacement, written as one) as it is
+/// named; a [`VertexAttributes`] record's colour as `px`..`nx`, its second
+/// UV set as `ny`, `nz`; a [`SkinWeights`] record's joints as `px`..`nx`
+/// and its weights as `ny`..`v`.
+pub fn vertex_record_overlays() -> [StructLayout; 3] {
+    [
+        oxygen_gpu::gpu_layout!(Vertex { position => "px", normal => "nx", uv => "u" }),
+        oxygen_gpu::gpu_layout!(VertexAttributes { color => "px", uv1 => "ny", reserved => "u" }),
+        oxygen_gpu::gpu_layout!(SkinWeights { joints => "px", weights => "ny" }),
+    ]
+}
 
 oxygen_gpu::gpu_struct! {
     /// A normal matrix as WGSL `mat3x3<f32>` stores it: three columns padded to 16 bytes.
@@ -262,6 +307,7 @@ const _: () = {
     assert!(size_of::<DirectionalLightRecord>() as u64 == DomainKind::DirectionalLights.record_size());
     assert!(size_of::<PositionalLightRecord>() as u64 == DomainKind::PositionalLights.record_size());
     assert!(size_of::<Vertex>() as u64 == DomainKind::Vertices.record_size());
+    assert!(size_of::<VertexRecord>() as u64 == DomainKind::Vertices.record_size());
     assert!(offset_of!(MaterialRecord, emissive) == 16);
     assert!(offset_of!(MaterialRecord, metallic) == 32);
     assert!(offset_of!(MaterialRecord, base_color_texture) == 48);

@@ -49,7 +49,7 @@ pub use draw_metadata::{DrawIndexedIndirect, DrawMetadata};
 pub use finalize::materials::MaterialFeatures;
 pub use gpu_records::{
     DirectionalLightRecord, GPU_RECORDS_WGSL, MAX_SHADOW_TILES, MaterialRecord, NormalMatrix, PositionalLightRecord,
-    UvTransformRecord, material_flags,
+    UvTransformRecord, VertexRecord, material_flags, vertex_record_overlays,
 };
 pub use gpu_scene::{GpuGroup, GpuInstance, GpuLod, GpuPartition, GpuScene, GpuSceneChanges, Visibility};
 pub use overdraw::expected_shaded_layers;

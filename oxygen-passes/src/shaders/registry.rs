@@ -77,6 +77,7 @@ pub(crate) static SOURCES: &[Source] = &[
     Source::gpu_struct::<oxygen_sceneprep::DrawIndexedIndirect>("sceneprep/DrawIndexedIndirect"),
     Source::gpu_struct::<oxygen_sceneprep::ray::BvhNode>("sceneprep/BvhNode"),
     Source::gpu_struct::<oxygen_sceneprep::RayInstance>("sceneprep/RayInstance"),
+    Source::gpu_struct::<oxygen_sceneprep::VertexRecord>("sceneprep/VertexRecord"),
     Source::wgsl("sceneprep/gpu_records.wgsl", oxygen_sceneprep::GPU_RECORDS_WGSL),
     Source::generated("sceneprep/constants", || {
         [
