@@ -54,6 +54,7 @@ runs=(
   "visibility_bench|example|gpu|field 16 1 1"
   "visibility_bench|example|gpu|city 16 1 1"
   "accuracy_atlas|example|gpu|@OUT@ 16 16"
+  "sensor_rig|example|gpu|assets/AlphaBlendModeTest/AlphaBlendModeTest.glb @OUT@ --cameras 2 --size 32x32 --frames 1"
   "prep|sceneprep|cpu|--smoke"
 )
 
