@@ -471,7 +471,7 @@ REGISTERED_ELSEWHERE = ["oxygen-bindless/src/scene_constants.wgsl", "oxygen-bind
 GPU_TEST_BINARIES = ROOT / "scripts" / "gpu-test-binaries"
 # What oxygen-demo/src/record.rs keeps in a record's command.env
 # (RECORDED_ENV_PREFIXES), less the record's own directory and commit.
-RECORDED_ENV_PREFIXES = ("OXYGEN_", "WGPU_", "MSAA_BENCH_", "VISIBILITY_", "CUBES_BENCH_", "ATLAS_", "MESA_", "__GL_")
+RECORDED_ENV_PREFIXES = ("OXYGEN_", "WGPU_", "MSAA_BENCH_", "VISIBILITY_", "CUBES_BENCH_", "BATCH_BENCH_", "ATLAS_", "MESA_", "__GL_")
 UNRECORDED_ENV = ("OXYGEN_RECORD_DIR", "OXYGEN_COMMIT")
 
 WORK = ROOT / "target" / "wgsl-mutants"

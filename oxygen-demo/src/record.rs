@@ -49,7 +49,7 @@ pub const COMMIT_VAR: &str = "OXYGEN_COMMIT";
 /// record goes and what it belongs to). `MESA_` and `__GL_` are the
 /// drivers' knobs (their shader caches, for first-frame runs).
 pub const RECORDED_ENV_PREFIXES: &[&str] =
-    &["OXYGEN_", "WGPU_", "MSAA_BENCH_", "VISIBILITY_", "CUBES_BENCH_", "ATLAS_", "MESA_", "__GL_"];
+    &["OXYGEN_", "WGPU_", "MSAA_BENCH_", "VISIBILITY_", "CUBES_BENCH_", "BATCH_BENCH_", "ATLAS_", "MESA_", "__GL_"];
 
 /// Why a record was not written.
 #[derive(Debug)]

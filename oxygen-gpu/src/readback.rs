@@ -188,12 +188,8 @@ impl GpuContext {
         size: (u32, u32),
     ) -> Result<image::RgbaImage, GpuError> {
         use wgpu::TextureFormat as F;
-        let format = texture.format();
-        if !matches!(format, F::Rgba8Unorm | F::Rgba8UnormSrgb) {
-            return Err(GpuError::UnsupportedReadbackFormat(format));
-        }
-        let region = TexelRegion { level: 0, layer, origin, size };
-        let pixels = self.read_region(texture, 4, region, wgpu::TextureAspect::All)?;
+        let formats = [F::Rgba8Unorm, F::Rgba8UnormSrgb];
+        let pixels = self.read_region_of(texture, &formats, 4, TexelRegion { level: 0, layer, origin, size })?;
         // Length is exactly width * height * 4 by construction.
         Ok(image::RgbaImage::from_raw(size.0, size.1, pixels).expect("readback size matches the region"))
     }
@@ -208,12 +204,8 @@ impl GpuContext {
         origin: (u32, u32),
         size: (u32, u32),
     ) -> Result<Vec<u32>, GpuError> {
-        let format = texture.format();
-        if format != wgpu::TextureFormat::R32Uint {
-            return Err(GpuError::UnsupportedReadbackFormat(format));
-        }
         let region = TexelRegion { level: 0, layer, origin, size };
-        let bytes = self.read_region(texture, 4, region, wgpu::TextureAspect::All)?;
+        let bytes = self.read_region_of(texture, &[wgpu::TextureFormat::R32Uint], 4, region)?;
         Ok(bytes.chunks_exact(4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect())
     }
 
@@ -227,17 +219,29 @@ impl GpuContext {
         origin: (u32, u32),
         size: (u32, u32),
     ) -> Result<HdrImage, GpuError> {
-        let format = texture.format();
-        if format != wgpu::TextureFormat::Rgba16Float {
-            return Err(GpuError::UnsupportedReadbackFormat(format));
-        }
         let region = TexelRegion { level: 0, layer, origin, size };
-        let bytes = self.read_region(texture, 8, region, wgpu::TextureAspect::All)?;
+        let bytes = self.read_region_of(texture, &[wgpu::TextureFormat::Rgba16Float], 8, region)?;
         let pixels = bytes
             .chunks_exact(8)
             .map(|texel| std::array::from_fn(|c| f16_to_f32(u16::from_le_bytes([texel[2 * c], texel[2 * c + 1]]))))
             .collect();
         Ok(HdrImage { width: size.0, height: size.1, pixels })
+    }
+
+    /// [`GpuContext::read_region`] of a colour texture whose format is one
+    /// of `formats` (else [`GpuError::UnsupportedReadbackFormat`]).
+    fn read_region_of(
+        &self,
+        texture: &wgpu::Texture,
+        formats: &[wgpu::TextureFormat],
+        bytes_per_texel: u32,
+        region: TexelRegion,
+    ) -> Result<Vec<u8>, GpuError> {
+        let format = texture.format();
+        if !formats.contains(&format) {
+            return Err(GpuError::UnsupportedReadbackFormat(format));
+        }
+        self.read_region(texture, bytes_per_texel, region, wgpu::TextureAspect::All)
     }
 
     /// Reads the `size` rectangle at `origin` of layer `layer` of a

@@ -88,20 +88,27 @@ impl FrameView {
     }
 }
 
+/// Views whose targets another view of the frame is linked to. A link
+/// names the view, not which of its outputs, so any link counts as reading
+/// the HDR image: the cautious answer keeps it written.
+pub(crate) fn hdr_readers(views: &[FrameView]) -> BTreeSet<ViewId> {
+    views
+        .iter()
+        .flat_map(|v| {
+            v.links.iter().filter_map(move |l| match l {
+                OutputSource::View(id) if *id != v.id => Some(*id),
+                _ => None,
+            })
+        })
+        .collect()
+}
+
 impl Renderer {
     /// What each batch's atlas must hold this frame: its cameras' size,
     /// its tiles, and HDR colour when some camera has blended draws, is
     /// read by another view, or the renderer keeps every HDR image.
     fn batch_plans(&self, views: &[FrameView], frames: &[PreparedSceneFrame]) -> BTreeMap<BatchId, BatchPlan> {
-        let readers: BTreeSet<ViewId> = views
-            .iter()
-            .flat_map(|v| {
-                v.links.iter().filter_map(move |l| match l {
-                    OutputSource::View(id) if *id != v.id => Some(*id),
-                    _ => None,
-                })
-            })
-            .collect();
+        let readers = hdr_readers(views);
         let mut plans: BTreeMap<BatchId, BatchPlan> = BTreeMap::new();
         for (view, frame) in views.iter().zip(frames) {
             let TargetPlan::Tile { batch, .. } = view.target else { continue };

@@ -265,19 +265,7 @@ impl Renderer {
         });
         let local_shadows = self.local_shadows(plan, atlas.as_ref());
         let frames = &plan.frames;
-        // Views whose targets another view of the frame is linked to. A link
-        // names the view, not which of its outputs, so any link counts as
-        // reading the HDR image: the cautious answer keeps it written.
-        let hdr_readers: BTreeSet<ViewId> = plan
-            .views
-            .iter()
-            .flat_map(|v| {
-                v.links.iter().filter_map(move |l| match l {
-                    OutputSource::View(id) if *id != v.id => Some(*id),
-                    _ => None,
-                })
-            })
-            .collect();
+        let hdr_readers = super::prepare::hdr_readers(&plan.views);
         let progress = FrameProgress::new(order.iter().map(|i| plan.views[*i].id));
         let mut contexts = Vec::with_capacity(order.len());
         for &i in &order {
