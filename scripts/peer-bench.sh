@@ -133,7 +133,7 @@ if record_dir:
                if m else {"name": bevy, "backend": "", "device_type": "", "driver": "", "driver_info": ""})
     # What oxygen-demo/src/record.rs keeps (RECORDED_ENV_PREFIXES), less the
     # record's own directory and commit.
-    prefixes = ("OXYGEN_", "WGPU_", "MSAA_BENCH_", "VISIBILITY_", "CUBES_BENCH_", "ATLAS_", "MESA_", "__GL_")
+    prefixes = ("OXYGEN_", "WGPU_", "MSAA_BENCH_", "VISIBILITY_", "CUBES_BENCH_", "BATCH_BENCH_", "ATLAS_", "MESA_", "__GL_")
     env = {k: v for k, v in sorted(os.environ.items())
            if k.startswith(prefixes) and k not in ("OXYGEN_RECORD_DIR", "OXYGEN_COMMIT")}
     rows = []
