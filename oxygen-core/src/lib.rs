@@ -42,7 +42,9 @@ pub use geometry::{
 pub use light::{Light, LightKind, Mobility};
 pub use material::{AlphaMode, Material, MaterialUvs, UvTransform};
 pub use math::{Aabb, DAabb, Frustum, Plane, Sphere};
-pub use output::{Depth, HdrColor, Output, OutputSource, ProbeCube, ProbeId, ProbeIds, ShadowMap};
+pub use output::{
+    Color, Depth, HdrColor, InstanceIds, Normals, Output, OutputSource, ProbeCube, ProbeId, ProbeIds, ShadowMap,
+};
 pub use scene::{
     GeometryHandle, LodLevel, MaterialHandle, Node, NodeFlags, NodeKey, Renderable, Scene, SceneError, Skin,
     TextureHandle, Transform, WorldTransforms,

@@ -99,6 +99,14 @@ pub enum HdrColor {}
 pub enum ShadowMap {}
 /// A reflection probe's six-layer cube with its mip chain.
 pub enum ProbeCube {}
+/// The displayable (tone-mapped, sRGB) colour of a view: its final image.
+pub enum Color {}
+/// The instance labels of a view that draws labels: the node seen at each
+/// pixel (its stable id plus one, 0 for none).
+pub enum InstanceIds {}
+/// The normal labels of a view that draws labels: the world-space normal
+/// seen at each pixel.
+pub enum Normals {}
 
 impl ViewId {
     /// This view's depth target.
@@ -108,6 +116,23 @@ impl ViewId {
 
     /// This view's linear HDR colour target.
     pub fn hdr(self) -> Output<HdrColor> {
+        Output::new(OutputSource::View(self))
+    }
+
+    /// This view's final, displayable colour (what `read_color` reads):
+    /// for insets and picture-in-picture (a composition pass draws it into
+    /// a rectangle of another view).
+    pub fn color(self) -> Output<Color> {
+        Output::new(OutputSource::View(self))
+    }
+
+    /// This view's instance labels (a view registered with labels).
+    pub fn instance_ids(self) -> Output<InstanceIds> {
+        Output::new(OutputSource::View(self))
+    }
+
+    /// This view's normal labels (a view registered with labels).
+    pub fn normals(self) -> Output<Normals> {
         Output::new(OutputSource::View(self))
     }
 

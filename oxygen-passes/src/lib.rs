@@ -15,7 +15,8 @@
 //! * [`MeshPass`]: the one pass that draws partitions, configured as depth
 //!   pre-pass, shadow map, forward lit (metallic-roughness) or transparent
 //!   (premultiplied alpha); [`TonemapPass`] (HDR → sRGB);
-//! * typed [`Output`]s ([`Depth`], [`HdrColor`], [`ShadowMap`], [`ProbeCube`])
+//! * typed [`Output`]s ([`Depth`], [`HdrColor`], [`Color`], [`InstanceIds`],
+//!   [`Normals`], [`ShadowMap`], [`ProbeCube`])
 //!   through which a view reads what the views it is linked to rendered.
 //!
 //! Shaders read every per-draw datum through bindless slots: the draw's
@@ -43,8 +44,8 @@ mod shaders;
 mod visibility;
 
 pub use context::{
-    CommandRecorder, DrawPath, FrameProgress, LinkedView, LocalShadowsInput, OutputKind, PassError, PrePassEstimate,
-    ProbeCubeInput, RecordStats, RenderContext, RenderPass, Shading, ShadowMapInput, ViewInputs,
+    CommandRecorder, DrawPath, FrameProgress, LinkedImage, LinkedView, LocalShadowsInput, OutputKind, PassError,
+    PrePassEstimate, ProbeCubeInput, RecordStats, RenderContext, RenderPass, Shading, ShadowMapInput, ViewInputs,
 };
 pub use lighting::LightingResources;
 pub use lighting::ibl::cube_filter::{
@@ -56,12 +57,14 @@ pub use lighting::params::{MAX_CASCADES, PROBE_FACES};
 pub use lighting::shadow_atlas::array_layer_count;
 pub use lighting::split_sum::SPLIT_SUM_LUT_SIZE;
 pub use mesh::{ColorOps, DrawList, ForwardLitConfig, MeshPass};
-pub use oxygen_core::{Depth, HdrColor, Output, OutputSource, ProbeCube, ProbeId, ShadowMap};
+pub use oxygen_core::{
+    Color, Depth, HdrColor, InstanceIds, Normals, Output, OutputSource, ProbeCube, ProbeId, ShadowMap,
+};
 pub use pipelines::{
     AlphaClass, CompilerGuard, DepthBias, Exposure, PassKind, PipelineFuture, PipelineKey, PipelineVariant, Pipelines,
     ShaderFeatures, fullscreen_pass, fullscreen_pipeline,
 };
-pub use post::{DepthCopy, TonemapPass};
+pub use post::{CompositePass, DepthCopy, TonemapPass};
 pub use present::compose_window_wgsl;
 pub use reference::{ReferencePass, ReferenceSettings, ReferenceTracer};
 pub use visibility::{GPU_VISIBILITY_FEATURES, GpuViewRequest, GpuVisibility};

@@ -3,7 +3,9 @@
 //! and the per-view inputs the renderer hands each view (its cascades, the
 //! local shadow atlas, its linked probes and views).
 
-use oxygen_core::{Depth, HdrColor, OutputSource, ProbeCube, ProbeId, ResolvedView, ShadowMap, ViewId};
+use oxygen_core::{
+    Color, Depth, HdrColor, InstanceIds, Normals, OutputSource, ProbeCube, ProbeId, ResolvedView, ShadowMap, ViewId,
+};
 use oxygen_gpu::ViewTargets;
 
 /// What kinds of output exist and how a view's inputs find them.
@@ -41,6 +43,62 @@ impl OutputKind for HdrColor {
     fn find<'a>(inputs: &ViewInputs<'a>, source: OutputSource) -> Option<(Self::Value<'a>, Vec<ViewId>)> {
         let v = linked_view(inputs, source)?;
         Some(((v.view, &v.targets.color.as_ref()?.hdr_view), vec![v.id]))
+    }
+}
+
+/// An image another view rendered, where it lies: a texture (a whole
+/// page for a camera of a batch) and the view's rectangle in it.
+#[derive(Clone, Debug)]
+pub struct LinkedImage<'a> {
+    /// The view that rendered it (relative to the render origin).
+    pub view: &'a ResolvedView,
+    /// The texture view holding it.
+    pub image: &'a wgpu::TextureView,
+    /// The view's rectangle in it, in pixels: `[x, y, width, height]`.
+    pub rect: [u32; 4],
+    /// The size of the whole texture, in pixels.
+    pub size: [u32; 2],
+}
+
+impl<'a> LinkedImage<'a> {
+    fn of(v: &LinkedView<'a>, image: &'a wgpu::TextureView, texture: &wgpu::Texture) -> Self {
+        let (x, y) = v.targets.tile.map_or((0, 0), |t| (t.x, t.y));
+        LinkedImage {
+            view: v.view,
+            image,
+            rect: [x, y, v.targets.width, v.targets.height],
+            size: [texture.width(), texture.height()],
+        }
+    }
+}
+
+impl OutputKind for Color {
+    type Value<'a> = LinkedImage<'a>;
+    const NAME: &'static str = "colour";
+    fn find<'a>(inputs: &ViewInputs<'a>, source: OutputSource) -> Option<(Self::Value<'a>, Vec<ViewId>)> {
+        let v = linked_view(inputs, source)?;
+        let color = v.targets.color.as_ref()?;
+        Some((LinkedImage::of(v, color.color_view.as_ref()?, color.color.as_ref()?), vec![v.id]))
+    }
+}
+
+impl OutputKind for InstanceIds {
+    type Value<'a> = LinkedImage<'a>;
+    const NAME: &'static str = "instance labels";
+    fn find<'a>(inputs: &ViewInputs<'a>, source: OutputSource) -> Option<(Self::Value<'a>, Vec<ViewId>)> {
+        let v = linked_view(inputs, source)?;
+        let labels = v.targets.labels.as_ref()?;
+        Some((LinkedImage::of(v, &labels.instances_view, &labels.instances), vec![v.id]))
+    }
+}
+
+impl OutputKind for Normals {
+    type Value<'a> = LinkedImage<'a>;
+    const NAME: &'static str = "normal labels";
+    fn find<'a>(inputs: &ViewInputs<'a>, source: OutputSource) -> Option<(Self::Value<'a>, Vec<ViewId>)> {
+        let v = linked_view(inputs, source)?;
+        let labels = v.targets.labels.as_ref()?;
+        Some((LinkedImage::of(v, &labels.normals_view, &labels.normals), vec![v.id]))
     }
 }
 

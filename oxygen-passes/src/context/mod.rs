@@ -16,7 +16,7 @@ mod render_pass;
 
 pub use draw_path::DrawPath;
 pub use error::PassError;
-pub use inputs::{LinkedView, LocalShadowsInput, OutputKind, ProbeCubeInput, ShadowMapInput, ViewInputs};
+pub use inputs::{LinkedImage, LinkedView, LocalShadowsInput, OutputKind, ProbeCubeInput, ShadowMapInput, ViewInputs};
 pub use progress::FrameProgress;
 pub use recorder::{CommandRecorder, RecordStats};
 pub use render_context::{PrePassEstimate, RenderContext, Shading};

@@ -4,10 +4,12 @@
 //! `params` holds the pass's parameter block, declared once for Rust and
 //! WGSL.
 
+mod composite;
 mod depth_copy;
 pub(crate) mod params;
 mod tonemap;
 
+pub use composite::CompositePass;
 pub use depth_copy::DepthCopy;
 pub use tonemap::TonemapPass;
 pub(crate) use tonemap::pbr_neutral;

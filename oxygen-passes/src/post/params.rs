@@ -11,3 +11,15 @@ oxygen_gpu::gpu_struct! {
         pub(crate) pad2: f32,
     }
 }
+
+oxygen_gpu::gpu_struct! {
+    /// The composition shader's uniform block: which part of the source
+    /// texture (in its normalised coordinates) fills the destination
+    /// rectangle (its WGSL twin is generated).
+    pub(crate) struct CompositeParams: 16 bytes {
+        /// Top-left corner of the source rectangle, in texture coordinates.
+        pub(crate) uv_offset: [f32; 2] => "vec2<f32>",
+        /// Size of the source rectangle, in texture coordinates.
+        pub(crate) uv_scale: [f32; 2] => "vec2<f32>",
+    }
+}

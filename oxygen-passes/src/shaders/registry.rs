@@ -48,6 +48,8 @@ pub(crate) static SOURCES: &[Source] = &[
     Source::wgsl("post/tonemap_operator.wgsl", include_str!("../post/tonemap_operator.wgsl")),
     Source::wgsl("post/tonemap.wgsl", include_str!("../post/tonemap.wgsl")),
     Source::wgsl("post/depth_copy.wgsl", include_str!("../post/depth_copy.wgsl")),
+    Source::gpu_struct::<crate::post::params::CompositeParams>("post/CompositeParams"),
+    Source::wgsl("post/composite.wgsl", include_str!("../post/composite.wgsl")),
     // Presenting: the renderer's window composition.
     Source::wgsl("present/compose_window.wgsl", include_str!("../present/compose_window.wgsl")),
     // oxygen-bindless: the heap's declarations.
@@ -151,6 +153,8 @@ pub(crate) const LABELS: ShaderModule = ShaderModule::textured("mesh/labels.wgsl
 pub(crate) const REFERENCE: ShaderModule = ShaderModule::textured("reference/trace.wgsl");
 /// The tone map.
 pub(crate) const TONEMAP: ShaderModule = ShaderModule::plain("post/tonemap.wgsl");
+/// Another view's image drawn into a rectangle (insets).
+pub(crate) const COMPOSITE: ShaderModule = ShaderModule::plain("post/composite.wgsl");
 /// Depth into a float texture, for depth readback on GL.
 pub(crate) const DEPTH_COPY: ShaderModule = ShaderModule::plain("post/depth_copy.wgsl");
 /// The cube filter (environment and probe prefiltering).
@@ -213,6 +217,8 @@ pub(crate) const ENTRY_POINTS: &[EntryPoint] = &[
     entry(REFERENCE, "trace_paths", Stage::Compute),
     entry(TONEMAP, "vs_fullscreen", Stage::Vertex),
     entry(TONEMAP, "fs_tonemap", Stage::Fragment),
+    entry(COMPOSITE, "vs", Stage::Vertex),
+    entry(COMPOSITE, "fs", Stage::Fragment),
     entry(DEPTH_COPY, "vs", Stage::Vertex),
     entry(DEPTH_COPY, "fs", Stage::Fragment),
     entry(CUBE_FILTER, "vs", Stage::Vertex),
