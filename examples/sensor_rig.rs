@@ -17,7 +17,9 @@
 //! the file's node order + 1, so every object has its own value). The
 //! images arrive through the batch's stream (`Renderer::stream_batch`): one
 //! copy of the atlas a frame, tagged with the frame number, and the
-//! segmentation from the labels (`BatchDesc::with_labels`).
+//! segmentation from the labels (`BatchDesc::with_labels`). With
+//! `OXYGEN_RECORD_DIR` set, the run's rate is appended to
+//! `$OXYGEN_RECORD_DIR/sensor_rig.jsonl` (`oxygen_demo::record`).
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -204,5 +206,16 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
         );
     }
     println!("wrote {written} files to {}", out.display());
+    let seconds = started.elapsed().as_secs_f64();
+    oxygen_demo::record::Record::new("sensor_rig")
+        .adapter(&renderer.gpu().adapter_info)
+        .value("file", file.display().to_string())
+        .value("cameras", cameras)
+        .value("size_px", [size.x, size.y])
+        .value("frames", frames)
+        .value("seconds", seconds)
+        .value("view_frames_per_second", (frames as usize * cameras) as f64 / seconds)
+        .value("files_written", written)
+        .write()?;
     Ok(())
 }
