@@ -126,3 +126,55 @@ impl DrawIndexedIndirect {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A submesh that starts inside its geometry, which starts inside the
+    /// shared buffers: every offset non-zero, so a slot added the wrong way
+    /// lands somewhere else.
+    fn submesh_draw() -> DrawMetadata {
+        DrawMetadata {
+            vertex_slot: 1000,
+            index_slot: 100,
+            first_index: 6,
+            index_count: 12,
+            base_vertex: 24,
+            instance_count: 1,
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn index_range_spans_the_submesh_from_the_geometry_slot() {
+        assert_eq!(submesh_draw().index_range(), 106..118);
+    }
+
+    #[test]
+    fn absolute_base_vertex_offsets_the_geometry_slot() {
+        assert_eq!(submesh_draw().absolute_base_vertex(), 1024);
+        // `base_vertex` is signed, as `draw_indexed`'s is: a negative one
+        // must reach below the slot, not above it.
+        let below = DrawMetadata { base_vertex: -8, ..submesh_draw() };
+        assert_eq!(below.absolute_base_vertex(), 992);
+    }
+
+    #[test]
+    fn indirect_arguments_address_the_submesh_in_the_shared_buffers() {
+        let draw = submesh_draw();
+        assert_eq!(
+            DrawIndexedIndirect::for_draw(&draw, 7),
+            DrawIndexedIndirect {
+                index_count: 12,
+                instance_count: 1,
+                first_index: 106,
+                base_vertex: 1024,
+                first_instance: 7,
+            }
+        );
+        // What the CPU path draws directly, the indirect path draws too.
+        let args = DrawIndexedIndirect::for_draw(&draw, 7);
+        assert_eq!(args.first_index..args.first_index + args.index_count, draw.index_range());
+    }
+}

@@ -359,6 +359,30 @@ mod tests {
         }
     }
 
+    /// Each flag is set by its own property and only by it, and adds to the
+    /// alpha mode's bit rather than replacing it.
+    #[test]
+    fn each_material_flag_follows_its_property() {
+        use material_flags::*;
+        let flags = |m: Material| MaterialRecord::from_material(&m).flags;
+        let plain = || Material::opaque("flags", glam::Vec4::ONE);
+        let transformed = oxygen_core::MaterialUvs {
+            normal: oxygen_core::UvTransform { uv_set: 1, ..oxygen_core::UvTransform::IDENTITY },
+            ..Default::default()
+        };
+        assert_eq!(flags(plain()), 0, "identity UVs need no transform");
+        assert_eq!(flags(Material { double_sided: true, ..plain() }), DOUBLE_SIDED);
+        assert_eq!(flags(Material { unlit: true, ..plain() }), UNLIT);
+        assert_eq!(flags(Material { uvs: transformed, ..plain() }), UV_TRANSFORMS);
+        let masked = AlphaMode::Mask { cutoff: 0.5 };
+        assert_eq!(flags(Material { alpha_mode: masked, double_sided: true, ..plain() }), MASKED | DOUBLE_SIDED);
+        assert_eq!(flags(Material { alpha_mode: masked, unlit: true, ..plain() }), MASKED | UNLIT);
+        assert_eq!(flags(Material { alpha_mode: masked, uvs: transformed, ..plain() }), MASKED | UV_TRANSFORMS);
+        let everything =
+            Material { alpha_mode: AlphaMode::Blend, double_sided: true, unlit: true, uvs: transformed, ..plain() };
+        assert_eq!(flags(everything), BLEND | DOUBLE_SIDED | UNLIT | UV_TRANSFORMS);
+    }
+
     #[test]
     fn light_kinds_and_flags_are_wgsl_constants_with_their_values() {
         let wgsl = PositionalLightRecord::wgsl_constants();

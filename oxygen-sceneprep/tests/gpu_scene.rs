@@ -9,7 +9,7 @@ use oxygen_core::{
     AlphaMode, Camera, Geometry, LodLevel, LookAtResolver, Material, NodeFlags, Renderable, ResolvedView, Scene,
     Transform, ViewContext, ViewResolver,
 };
-use oxygen_sceneprep::{PassMask, ScenePrep, ViewFilter, ViewPrepOptions, ViewRequest, Visibility};
+use oxygen_sceneprep::{GpuInstance, PassMask, ScenePrep, ViewFilter, ViewPrepOptions, ViewRequest, Visibility};
 
 /// 40 opaque cubes in two materials, 10 of them with a LOD, 6 masked
 /// double-sided quads, 4 blended cubes, 3 mirrored cubes.
@@ -208,4 +208,85 @@ fn shadow_views_on_the_gpu_path_have_no_cpu_draws() {
     let frames = prep.prepare(&scene, &[ViewRequest { view: &view, options }], &mut slots).unwrap();
     assert!(frames[0].draws().is_empty(), "a depth-only view drops the transparent draws the CPU would keep");
     assert!(frames[0].partitions().iter().all(|p| p.gpu_count.is_some()));
+}
+
+/// An uploader compares `rebuilds()` with the rebuild it holds to know
+/// whether `last_changes` is enough, so it must count every rebuild and
+/// only rebuilds.
+#[test]
+fn the_gpu_scene_counts_its_rebuilds() {
+    let mut scene = scene();
+    let view = view(&scene);
+    let mut prep = ScenePrep::with_threads(1);
+    let mut slots = SlotAllocators::default();
+    let request = |view| [ViewRequest { view, options: gpu_options() }];
+    assert_eq!(prep.gpu_scene().rebuilds(), 0);
+    prep.prepare(&scene, &request(&view), &mut slots).unwrap();
+    assert_eq!(prep.gpu_scene().rebuilds(), 1);
+    prep.prepare(&scene, &request(&view), &mut slots).unwrap();
+    assert_eq!(prep.gpu_scene().rebuilds(), 1, "an unchanged scene is not rebuilt");
+    let (node, _) = scene.nodes().find(|(_, n)| n.name == "cube").unwrap();
+    scene.set_local_transform(node, Transform::from_translation(Vec3::new(0.0, 1.0, 0.5))).unwrap();
+    prep.prepare(&scene, &request(&view), &mut slots).unwrap();
+    assert_eq!(prep.gpu_scene().rebuilds(), 2);
+    assert_eq!(prep.gpu_scene().rebuilds(), prep.stats().gpu_scene_rebuilds);
+}
+
+/// The counters of the three occlusion lists lie one list after another:
+/// partition `i` of list `l` is counted by counter `l × partitions + i`, so
+/// no two lists share one.
+#[test]
+fn each_command_list_counts_its_partitions_after_the_previous_lists() {
+    let scene = scene();
+    let view = view(&scene);
+    let mut prep = ScenePrep::with_threads(1);
+    let mut slots = SlotAllocators::default();
+    let options = ViewPrepOptions { visibility: Visibility::GpuOcclusion, ..Default::default() };
+    let frames = prep.prepare(&scene, &[ViewRequest { view: &view, options }], &mut slots).unwrap();
+    let plan = frames[0].gpu_plan().unwrap();
+    // One partition would hide a `/` for the `×` (l / 1 = l × 1).
+    assert!(plan.partitions > 1, "the scene has {} partitions", plan.partitions);
+    let shading: Vec<_> = frames[0].partitions().iter().filter(|p| p.gpu_count.is_some()).copied().collect();
+    for (list, parts) in [&plan.early_partitions, &plan.late_partitions, &shading].into_iter().enumerate() {
+        let counters: Vec<Option<u32>> = parts.iter().map(|p| p.gpu_count).collect();
+        let expected: Vec<Option<u32>> =
+            (0..plan.partitions).map(|i| Some(list as u32 * plan.partitions + i)).collect();
+        assert_eq!(counters, expected, "list {list}");
+    }
+}
+
+/// A GPU instance reads skin weights only when its renderable has joints:
+/// the same skinned mesh without a skin is drawn rigid.
+#[test]
+fn a_gpu_instance_reads_its_skin_only_with_joints() {
+    use glam::Mat4;
+    use oxygen_core::{Skin, SkinWeights};
+    let mut scene = Scene::new();
+    let material = scene.add_material(Material::opaque("grey", Vec4::splat(0.5)));
+    let quad = Geometry::quad(1.0);
+    let n = quad.vertices().len();
+    let weights = vec![SkinWeights::new([0, 1, 0, 0], [0.5, 0.5, 0.0, 0.0]); n];
+    let skinned = scene.add_geometry(quad.with_skin_weights(weights).unwrap());
+    let add = |scene: &mut Scene, name: &str, x: f32| {
+        let node = scene.add_node(name, Transform::from_translation(Vec3::new(x, 0.0, 0.0)));
+        scene.set_renderable(node, Renderable { geometry: skinned, materials: vec![material] }).unwrap();
+        node
+    };
+    let with_joints = add(&mut scene, "with joints", 0.0);
+    add(&mut scene, "without", 2.0);
+    let joints = vec![
+        scene.add_node("joint 0", Transform::from_translation(Vec3::ZERO)),
+        scene.add_node("joint 1", Transform::from_translation(Vec3::new(0.5, 0.0, 0.0))),
+    ];
+    scene.set_skin(with_joints, Some(Skin { joints, inverse_bind_matrices: vec![Mat4::IDENTITY; 2] })).unwrap();
+    let view = view(&scene);
+    let mut prep = ScenePrep::with_threads(1);
+    prep.prepare(&scene, &[ViewRequest { view: &view, options: gpu_options() }], &mut SlotAllocators::default())
+        .unwrap();
+    let invalid = oxygen_bindless::INVALID_SLOT;
+    let instances = prep.gpu_scene().instances();
+    let (rigid, skinned): (Vec<&GpuInstance>, Vec<_>) = instances.iter().partition(|i| i.joint_base == invalid);
+    assert_eq!((rigid.len(), skinned.len()), (1, 1), "{instances:#?}");
+    assert_eq!(rigid[0].skin_slot, invalid, "no joints, no skin");
+    assert_ne!(skinned[0].skin_slot, invalid, "joints read the mesh's skin weights");
 }
