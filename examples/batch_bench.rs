@@ -27,6 +27,8 @@
 //! (a blocking copy each), the batch by streaming (one copy of its atlas a
 //! frame, taken each frame, waited for at the end of the frame).
 //!
+//! Each line also splits the CPU time into the frame's prepare step
+//! (ScenePrep, uploads, targets and constants) and record step (`FrameReport`).
 //! Each line gives view-frames per second (V ÷ the median frame time); at
 //! the end the slope of the median times against V (least squares over the
 //! V list) is the per-view cost, CPU and whole frame, per path. With
@@ -81,6 +83,9 @@ enum Mode {
 /// One measured configuration.
 struct Run {
     cpu_ms: Vec<f64>,
+    /// The frame's prepare and record steps (`FrameReport`), CPU.
+    prepare_ms: Vec<f64>,
+    record_ms: Vec<f64>,
     frame_ms: Vec<f64>,
     gpu_ms: Vec<f64>,
     read_bytes: u64,
@@ -123,7 +128,14 @@ fn run(
     if let (Some(batch), true) = (batch, readback) {
         renderer.stream_batch(batch, Some(StreamOptions::default()))?;
     }
-    let mut result = Run { cpu_ms: Vec::new(), frame_ms: Vec::new(), gpu_ms: Vec::new(), read_bytes: 0 };
+    let mut result = Run {
+        cpu_ms: Vec::new(),
+        prepare_ms: Vec::new(),
+        record_ms: Vec::new(),
+        frame_ms: Vec::new(),
+        gpu_ms: Vec::new(),
+        read_bytes: 0,
+    };
     for frame in 0..WARM_UP + frames {
         let start = Instant::now();
         let report = renderer.render_frame(scene)?;
@@ -154,6 +166,8 @@ fn run(
         let whole = start.elapsed().as_secs_f64() * 1e3;
         if frame >= WARM_UP {
             result.cpu_ms.push(cpu);
+            result.prepare_ms.push(report.prepare_seconds * 1e3);
+            result.record_ms.push(report.record_seconds * 1e3);
             result.frame_ms.push(whole);
             if let Some(gpu) = report.gpu_seconds {
                 result.gpu_ms.push(gpu * 1e3);
@@ -208,8 +222,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .value("measured_frames", frames)
         .value("readback", readback);
     println!("adapter: {} {}", adapter.name, adapter.driver_info);
-    println!("| path | V | CPU ms | frame ms | GPU ms | view-frames/s | read MB/s |");
-    println!("|---|---:|---:|---:|---:|---:|---:|");
+    println!("| path | V | CPU ms | prepare ms | record ms | frame ms | GPU ms | view-frames/s | read MB/s |");
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|");
     let mut points: Vec<(Mode, f64, f64, f64)> = Vec::new();
     for (k, views) in counts.iter().enumerate() {
         let mut order = modes.clone();
@@ -222,19 +236,26 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let per_second = *views as f64 / (whole / 1e3);
             let seconds: f64 = r.frame_ms.iter().sum::<f64>() / 1e3;
             let read_mb_s = r.read_bytes as f64 / 1e6 / seconds;
-            println!("| {mode:?} | {views} | {cpu:.3} | {whole:.3} | {gpu:.3} | {per_second:.0} | {read_mb_s:.1} |");
+            let (prepare, recording) = (median(&r.prepare_ms), median(&r.record_ms));
+            println!(
+                "| {mode:?} | {views} | {cpu:.3} | {prepare:.3} | {recording:.3} | {whole:.3} | {gpu:.3} | {per_second:.0} | {read_mb_s:.1} |"
+            );
             points.push((mode, *views as f64, cpu, whole));
             record.push_row(
                 Row::new()
                     .value("path", format!("{mode:?}"))
                     .value("views", *views)
                     .value("cpu_ms_median", cpu)
+                    .value("prepare_ms_median", prepare)
+                    .value("record_ms_median", recording)
                     .value("frame_ms_median", whole)
                     .value("gpu_ms_median", gpu.is_finite().then_some(gpu))
                     .value("view_frames_per_second", per_second)
                     .value("read_bytes", r.read_bytes)
                     .value("read_mb_per_second", read_mb_s)
                     .value("cpu_ms_samples", r.cpu_ms)
+                    .value("prepare_ms_samples", r.prepare_ms)
+                    .value("record_ms_samples", r.record_ms)
                     .value("frame_ms_samples", r.frame_ms)
                     .value("gpu_ms_samples", r.gpu_ms),
             );
