@@ -13,9 +13,10 @@
 //! one sun without shadows. Camera `i` of V sits on a circle around the
 //! grid (radius 0.65, height 0.35 of the grid's side, as `cubes_bench`) at
 //! angle i / V of a turn, looking at the centre, 60° vertical field of
-//! view, W × H pixels. Both paths cull on the CPU (batch cameras always
-//! do; the lone views are forced to, so that the two differ only in what a
-//! view costs to record and draw).
+//! view, W × H pixels. Both paths decide visibility the same way:
+//! `BATCH_BENCH_VISIBILITY=cpu` (the default: ScenePrep culls and emits
+//! every camera's draws) or `gpu` (GPU frustum culling, a dispatch per
+//! camera; where the adapter cannot, the bench refuses).
 //!
 //! For each V the two paths run one after the other, in alternating order
 //! from one V to the next (`BATCH_BENCH_MODES=views` or `batch` runs one):
@@ -101,6 +102,7 @@ fn median(values: &[f64]) -> f64 {
 }
 
 /// Renders `frames` measured frames of V cameras in `mode`.
+#[allow(clippy::too_many_arguments)]
 fn run(
     scene: &Scene,
     side: f32,
@@ -108,9 +110,13 @@ fn run(
     views: usize,
     mode: Mode,
     readback: bool,
+    visibility: Visibility,
     frames: usize,
 ) -> Result<Run, Box<dyn std::error::Error>> {
     let mut renderer = Renderer::new_headless_with(RendererOptions::default())?;
+    if visibility.on_gpu() && !renderer.gpu_visibility_supported() {
+        return Err(format!("{} cannot run GPU visibility", renderer.gpu().describe()).into());
+    }
     let mut ids = Vec::with_capacity(views);
     let batch = match mode {
         Mode::Batch => Some(renderer.register_batch(BatchDesc::new("ring", size))?),
@@ -118,11 +124,10 @@ fn run(
     };
     for i in 0..views {
         let camera = ring_camera(i, views, side, size)?;
+        let desc = ViewDesc::new(camera).with_visibility(visibility);
         ids.push(match batch {
-            Some(batch) => renderer.add_camera(batch, camera)?,
-            None => {
-                renderer.register_view(ViewDesc::new(camera).with_visibility(Visibility::Cpu), standard_render_graph)?
-            }
+            Some(batch) => renderer.add_camera(batch, desc)?,
+            None => renderer.register_view(desc, standard_render_graph)?,
         });
     }
     if let (Some(batch), true) = (batch, readback) {
@@ -205,6 +210,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Ok("0") | Err(_) => false,
         Ok(other) => return Err(format!("BATCH_BENCH_READBACK={other}: use 0 or 1").into()),
     };
+    let visibility = match std::env::var("BATCH_BENCH_VISIBILITY").as_deref() {
+        Ok("cpu") | Err(_) => Visibility::Cpu,
+        Ok("gpu") => Visibility::GpuFrustum,
+        Ok(other) => return Err(format!("BATCH_BENCH_VISIBILITY={other}: use cpu or gpu").into()),
+    };
     let modes = match std::env::var("BATCH_BENCH_MODES").as_deref() {
         Ok("views") => vec![Mode::Views],
         Ok("batch") => vec![Mode::Batch],
@@ -220,7 +230,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .value("size_px", [size.x, size.y])
         .value("warm_up_frames", WARM_UP)
         .value("measured_frames", frames)
-        .value("readback", readback);
+        .value("readback", readback)
+        .value("visibility", format!("{visibility:?}"));
     println!("adapter: {} {}", adapter.name, adapter.driver_info);
     println!("| path | V | CPU ms | prepare ms | record ms | frame ms | GPU ms | view-frames/s | read MB/s |");
     println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|");
@@ -231,7 +242,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             order.reverse();
         }
         for mode in order {
-            let r = run(&scene, side, size, *views, mode, readback, frames)?;
+            let r = run(&scene, side, size, *views, mode, readback, visibility, frames)?;
             let (cpu, whole, gpu) = (median(&r.cpu_ms), median(&r.frame_ms), median(&r.gpu_ms));
             let per_second = *views as f64 / (whole / 1e3);
             let seconds: f64 = r.frame_ms.iter().sum::<f64>() / 1e3;

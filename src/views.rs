@@ -364,10 +364,13 @@ impl Views {
     /// Adds a camera to `batch`: a view (its own id, resolver, prepared
     /// frame and outputs) that renders into a tile of the batch's atlas
     /// at the batch's size, with the batch's graph, its visibility decided
-    /// on the CPU. Links (`ViewDesc::reads`) are kept; what a batch
-    /// camera cannot have is refused: anti-aliasing, sun cascades of its
-    /// own, a window rectangle, a path-traced reference, a GPU visibility
-    /// path. Remove it with [`Views::unregister`].
+    /// as the view asks (`ViewDesc::with_visibility`; by default the
+    /// renderer's default for the adapter; occlusion culling falls back to
+    /// frustum culling, the batch graph having no depth pre-pass phases).
+    /// Links (`ViewDesc::reads`) are kept; what a batch camera cannot have
+    /// is refused: anti-aliasing, sun cascades of its own, a window
+    /// rectangle, a path-traced reference. Remove it with
+    /// [`Views::unregister`].
     pub fn add_camera(&mut self, batch: BatchId, desc: impl Into<ViewDesc>) -> Result<ViewId, RenderError> {
         let desc = desc.into();
         let entry = self.batches.get(&batch).ok_or(RenderError::NoSuchBatch(batch))?;
@@ -379,8 +382,6 @@ impl Views {
             Some("a window rectangle")
         } else if desc.options.ray_scene {
             Some("a path-traced reference")
-        } else if desc.visibility.is_some_and(|v| v != Visibility::Cpu) {
-            Some("GPU visibility (batch cameras are culled on the CPU)")
         } else {
             None
         };
@@ -400,7 +401,7 @@ impl Views {
         // A camera without a name of its own is named after its batch and tile.
         let name = desc.name.clone().or_else(|| Some(format!("{}[{slot}]", entry_name(&self.batches, batch))));
         let target = TargetKind::Tile { batch, slot };
-        let desc = ViewDesc { target, visibility: Some(Visibility::Cpu), name, labels, ..desc };
+        let desc = ViewDesc { target, name, labels, ..desc };
         self.insert_erased(id, desc, graph);
         Ok(id)
     }

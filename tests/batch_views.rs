@@ -467,3 +467,46 @@ fn a_linked_final_image_is_composed_into_a_rectangle_of_another_view() {
     // worst on lavapipe and on GL.
     assert!(worst <= 1, "the inset strays {worst} levels from the halved source");
 }
+
+/// Batch cameras on the GPU frustum path: each camera's culling
+/// dispatches into the batch's command buffer, and it draws what the same
+/// camera on the CPU path (the exact reference) draws: the same draws, the
+/// same picture.
+#[test]
+fn batch_cameras_on_the_gpu_path_draw_what_the_cpu_path_draws() {
+    use oxygen::sceneprep::Visibility;
+    let demo = oxygen_demo::multi_view_scene();
+    let size = UVec2::new(64, 48);
+    let cameras = ring(4, size);
+    let mut renderer = support::gpu_renderer_with(RendererOptions::default());
+    if !renderer.gpu_visibility_supported() {
+        support::skip::skip(format_args!(
+            "{} cannot run GPU visibility (needs multi-draw-indirect with counts)",
+            renderer.gpu().describe()
+        ));
+        return;
+    }
+    let cpu = renderer.register_batch(BatchDesc::new("cpu", size)).unwrap();
+    let gpu = renderer.register_batch(BatchDesc::new("gpu", size)).unwrap();
+    let mut pairs = Vec::new();
+    for camera in &cameras {
+        let on_cpu = renderer.add_camera(cpu, ViewDesc::new(*camera).with_visibility(Visibility::Cpu)).unwrap();
+        let on_gpu = renderer.add_camera(gpu, ViewDesc::new(*camera).with_visibility(Visibility::GpuFrustum)).unwrap();
+        pairs.push((on_cpu, on_gpu));
+    }
+    for frame in 0..2 {
+        let report = renderer.render_frame(&demo.scene).unwrap();
+        for (on_cpu, on_gpu) in &pairs {
+            let of = |view: ViewId| report.views.iter().find(|v| v.view == view).map(|v| v.visibility);
+            assert_eq!((of(*on_cpu), of(*on_gpu)), (Some(Visibility::Cpu), Some(Visibility::GpuFrustum)));
+            assert_eq!(
+                renderer.view_draws(*on_gpu).unwrap(),
+                renderer.view_draws(*on_cpu).unwrap(),
+                "frame {frame}: {on_gpu} draws what {on_cpu} draws"
+            );
+            let (worst, differing) =
+                difference(&renderer.read_color(*on_gpu).unwrap(), &renderer.read_color(*on_cpu).unwrap());
+            assert!(differing == 0, "frame {frame}: {differing} pixels differ (worst {worst})");
+        }
+    }
+}

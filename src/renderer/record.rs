@@ -527,7 +527,19 @@ fn run_executor<'a>(
                 let span = info_span!("render_batch", batch = %name, cameras = views.len());
                 let future = async move {
                     let mut rec = CommandRecorder::new(device, name);
+                    // GPU visibility's first phase for every camera on a GPU
+                    // path, before any pass reads their draws.
+                    for ctx in &views {
+                        if let Some(visibility) = ctx.inputs.visibility {
+                            visibility.record_early(rec.encoder(), ctx.view.view_id);
+                        }
+                    }
                     let result = graph.record_batch(&views, &mut rec).await;
+                    for ctx in &views {
+                        if let Some(visibility) = ctx.inputs.visibility {
+                            visibility.record_readback(rec.encoder(), ctx.view.view_id);
+                        }
+                    }
                     let (buffer, stats) = rec.finish();
                     Recorded { result, buffer, stats, busy: Duration::ZERO }
                 }
