@@ -440,22 +440,46 @@ impl MeshPass {
                     .into(),
             });
         }
-        // Per view, its lighting inputs and its pipelines; the pipelines
-        // are requested before the inputs are awaited, so that they compile
-        // while the views producing the inputs record.
-        let per_view = views.iter().map(|ctx| async move {
-            let lighting = async {
-                match &self.lighting {
-                    Some(config) => super::forward_lighting::bind_group(ctx, config).await,
-                    None => Ok(None),
-                }
-            };
-            let shading = self.shading_key(ctx);
-            let pipelines = partition_pipelines(ctx, shading, self.partitions(ctx));
-            let (lighting, pipelines) = futures::future::join(lighting, pipelines).await;
-            Ok::<_, PassError>((lighting?, pipelines, shading))
-        });
-        let prepared = futures::future::try_join_all(per_view).await?;
+        // Per view, its pipeline keys (one per partition); each distinct key
+        // is requested once, however many views of a batch share it, and
+        // before the views' lighting inputs are awaited, so that the
+        // pipelines compile while the views producing the inputs record.
+        let keys: Vec<(crate::PipelineKey, Vec<crate::PipelineKey>)> = views
+            .iter()
+            .map(|ctx| {
+                let shading = self.shading_key(ctx);
+                let variant = |p: &Partition| crate::PipelineVariant::from_mask(p.mask);
+                (shading, self.partitions(ctx).map(|p| crate::PipelineKey { variant: variant(p), ..shading }).collect())
+            })
+            .collect();
+        let mut distinct: Vec<crate::PipelineKey> = Vec::new();
+        for key in keys.iter().flat_map(|(_, partitions)| partitions) {
+            if !distinct.contains(key) {
+                distinct.push(*key);
+            }
+        }
+        let pipelines = futures::future::join_all(distinct.iter().map(|key| {
+            let ctx = views[0];
+            ctx.pipelines.get(&ctx.gpu.device, *key)
+        }));
+        let lighting = futures::future::try_join_all(views.iter().map(|ctx| async move {
+            match &self.lighting {
+                Some(config) => super::forward_lighting::bind_group(ctx, config).await,
+                None => Ok(None),
+            }
+        }));
+        let (pipelines, lighting) = futures::future::join(pipelines, lighting).await;
+        let lighting = lighting?;
+        let pipeline_of = |key: &crate::PipelineKey| -> wgpu::RenderPipeline {
+            // Every key of `keys` is in `distinct`, in the same order as `pipelines`.
+            let at = distinct.iter().position(|k| k == key).unwrap_or(0);
+            pipelines[at].clone()
+        };
+        let prepared: Vec<(Option<wgpu::BindGroup>, Vec<wgpu::RenderPipeline>, crate::PipelineKey)> = lighting
+            .into_iter()
+            .zip(&keys)
+            .map(|(lighting, (shading, partitions))| (lighting, partitions.iter().map(pipeline_of).collect(), *shading))
+            .collect();
 
         // Views sharing a page of an atlas share its render pass; any other
         // view has one of its own.
@@ -535,6 +559,11 @@ impl MeshPass {
             if let Some((set, index)) = &self.statistics {
                 pass.begin_pipeline_statistics_query(set, *index);
             }
+            // What the views of one render pass share (the heap's groups, the
+            // index buffer, often the lighting group and the pipelines) is set
+            // when it changes, not once per view: a batch of a thousand
+            // cameras records a thousand views into one pass.
+            let mut bound = Bound::default();
             for &i in members {
                 let ctx = views[i];
                 let (lighting, pipelines, shading) = &prepared[i];
@@ -545,19 +574,20 @@ impl MeshPass {
                 }
                 stats.tone_mapped_in_pass |= shading.tone_map.is_some();
                 let group3 = lighting.as_ref().unwrap_or(ctx.lighting.no_lighting_inputs());
-                bind_view_resources(&mut pass, ctx, group3);
+                bound.view_resources(&mut pass, ctx, group3);
                 // The environment behind the scene: drawn first by the pass
                 // that clears the colour target, meshes then draw over it.
                 let clears_color = matches!(self.color, ColorOps::Clear(_) | ColorOps::ClearToneMapped(..));
                 let is_shading = matches!(self.kind, PassKind::Shading | PassKind::ShadingAfterPrePass);
                 if clears_color && is_shading && ctx.lighting.has_environment() {
-                    pass.set_pipeline(&ctx.pipelines.sky(&ctx.gpu.device, *shading));
+                    bound.pipeline(&mut pass, &ctx.pipelines.sky(&ctx.gpu.device, *shading));
                     pass.draw(0..3, 0..1);
                     stats.draw_calls += 1;
                 }
                 for (partition, pipeline) in self.partitions(ctx).zip(pipelines) {
-                    pass.set_pipeline(pipeline);
-                    stats.pipeline_binds += 1;
+                    if bound.pipeline(&mut pass, pipeline) {
+                        stats.pipeline_binds += 1;
+                    }
                     draw_partition(&mut pass, ctx, partition, &mut stats);
                 }
             }
@@ -570,29 +600,47 @@ impl MeshPass {
     }
 }
 
-/// The pipeline of every partition in `partitions`: `shading` with each
-/// partition's variant, all requested at once, so the missing ones compile
-/// side by side, then awaited.
-async fn partition_pipelines<'a>(
-    ctx: &RenderContext<'_>,
-    shading: crate::PipelineKey,
-    partitions: impl Iterator<Item = &'a Partition>,
-) -> Vec<wgpu::RenderPipeline> {
-    let requests = partitions.map(|p| {
-        ctx.pipelines
-            .get(&ctx.gpu.device, crate::PipelineKey { variant: crate::PipelineVariant::from_mask(p.mask), ..shading })
-    });
-    futures::future::join_all(requests).await
+/// What a render pass has bound so far, so that the views recorded into it
+/// one after another set only what differs from the view before.
+#[derive(Default)]
+struct Bound {
+    heap: Option<(wgpu::BindGroup, wgpu::BindGroup, wgpu::Buffer)>,
+    constants: Option<wgpu::BindGroup>,
+    lighting: Option<wgpu::BindGroup>,
+    pipeline: Option<wgpu::RenderPipeline>,
 }
 
-/// Sets the bindless and scene-constant bind groups, group 3 and the shared
-/// index buffer.
-fn bind_view_resources(pass: &mut wgpu::RenderPass<'_>, ctx: &RenderContext<'_>, lighting: &wgpu::BindGroup) {
-    pass.set_bind_group(0, ctx.heap.bind_group(), &[]);
-    pass.set_bind_group(1, ctx.scene_constants.bind_group(), &[]);
-    pass.set_bind_group(2, ctx.heap.texture_bind_group(), &[]);
-    pass.set_bind_group(3, lighting, &[]);
-    pass.set_index_buffer(ctx.heap.index_buffer().slice(..), wgpu::IndexFormat::Uint32);
+impl Bound {
+    /// Sets the bindless and scene-constant bind groups, group 3 and the
+    /// shared index buffer of `ctx`, each unless already bound.
+    fn view_resources(&mut self, pass: &mut wgpu::RenderPass<'_>, ctx: &RenderContext<'_>, lighting: &wgpu::BindGroup) {
+        let heap = (ctx.heap.bind_group(), ctx.heap.texture_bind_group(), ctx.heap.index_buffer());
+        if self.heap.as_ref().is_none_or(|(a, b, c)| (a, b, c) != heap) {
+            pass.set_bind_group(0, heap.0, &[]);
+            pass.set_bind_group(2, heap.1, &[]);
+            pass.set_index_buffer(heap.2.slice(..), wgpu::IndexFormat::Uint32);
+            self.heap = Some((heap.0.clone(), heap.1.clone(), heap.2.clone()));
+        }
+        let constants = ctx.scene_constants.bind_group();
+        if self.constants.as_ref() != Some(constants) {
+            pass.set_bind_group(1, constants, &[]);
+            self.constants = Some(constants.clone());
+        }
+        if self.lighting.as_ref() != Some(lighting) {
+            pass.set_bind_group(3, lighting, &[]);
+            self.lighting = Some(lighting.clone());
+        }
+    }
+
+    /// Sets `pipeline` unless it is bound; says whether it set it.
+    fn pipeline(&mut self, pass: &mut wgpu::RenderPass<'_>, pipeline: &wgpu::RenderPipeline) -> bool {
+        if self.pipeline.as_ref() == Some(pipeline) {
+            return false;
+        }
+        pass.set_pipeline(pipeline);
+        self.pipeline = Some(pipeline.clone());
+        true
+    }
 }
 
 /// Draws every draw of `partition` through its commands (one per draw, or
