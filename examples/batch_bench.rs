@@ -23,10 +23,11 @@
 //! WARM_UP frames, then the measured frames, each `render_frame` (its
 //! wall-clock time is the CPU figure) then a wait for the GPU (the whole
 //! frame); the GPU's own time comes from timestamps where the adapter has
-//! them. With `BATCH_BENCH_READBACK=1` every camera's colour and depth is
-//! read back each frame: the lone views with `read_color` and `read_depth`
-//! (a blocking copy each), the batch by streaming (one copy of its atlas a
-//! frame, taken each frame, waited for at the end of the frame).
+//! them. With `BATCH_BENCH_READBACK=1` every camera's colour, depth and
+//! instance labels are read back each frame (the cameras then draw labels
+//! too): the lone views with `read_color`, `read_depth` and `read_labels`
+//! (blocking copies each), the batch by streaming (one copy of its atlas'
+//! pages a frame, taken each frame, waited for at the end of the frame).
 //!
 //! Each line also splits the CPU time into the frame's prepare step
 //! (ScenePrep, uploads, targets and constants) and record step (`FrameReport`).
@@ -118,20 +119,24 @@ fn run(
         return Err(format!("{} cannot run GPU visibility", renderer.gpu().describe()).into());
     }
     let mut ids = Vec::with_capacity(views);
+    // With readback every camera also draws labels, whose instance ids
+    // are read back with its colour and depth.
     let batch = match mode {
+        Mode::Batch if readback => Some(renderer.register_batch(BatchDesc::new("ring", size).with_labels())?),
         Mode::Batch => Some(renderer.register_batch(BatchDesc::new("ring", size))?),
         Mode::Views => None,
     };
     for i in 0..views {
         let camera = ring_camera(i, views, side, size)?;
         let desc = ViewDesc::new(camera).with_visibility(visibility);
+        let desc = if readback && batch.is_none() { desc.with_labels() } else { desc };
         ids.push(match batch {
             Some(batch) => renderer.add_camera(batch, desc)?,
             None => renderer.register_view(desc, standard_render_graph)?,
         });
     }
     if let (Some(batch), true) = (batch, readback) {
-        renderer.stream_batch(batch, Some(StreamOptions::default()))?;
+        renderer.stream_batch(batch, Some(StreamOptions { instances: true, ..Default::default() }))?;
     }
     let mut result = Run {
         cpu_ms: Vec::new(),
@@ -156,6 +161,7 @@ fn run(
                         for camera in &streamed.cameras {
                             bytes += camera.color.as_ref().map_or(0, |c| c.len() as u64);
                             bytes += camera.depth.as_ref().map_or(0, |d| 4 * d.len() as u64);
+                            bytes += camera.instances.as_ref().map_or(0, |i| 4 * i.len() as u64);
                         }
                     }
                 }
@@ -163,6 +169,7 @@ fn run(
                     for id in &ids {
                         bytes += renderer.read_color(*id)?.len() as u64;
                         bytes += 4 * renderer.read_depth(*id)?.depth.len() as u64;
+                        bytes += 4 * renderer.read_labels(*id)?.instances.len() as u64;
                     }
                 }
             }

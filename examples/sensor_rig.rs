@@ -16,8 +16,9 @@
 //! (16-bit grey: the semantic class, here each glTF node's position in
 //! the file's node order + 1, so every object has its own value). The
 //! images arrive through the batch's stream (`Renderer::stream_batch`): one
-//! copy of the atlas a frame, tagged with the frame number, and the
-//! segmentation from the labels (`BatchDesc::with_labels`). With
+//! copy of the atlas a frame of colour, depth and instance labels
+//! (`BatchDesc::with_labels`), tagged with the frame number; the
+//! segmentation maps each label to its node's class. With
 //! `OXYGEN_RECORD_DIR` set, the run's rate is appended to
 //! `$OXYGEN_RECORD_DIR/sensor_rig.jsonl` (`oxygen_demo::record`).
 
@@ -144,7 +145,10 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
         let camera = RingCamera { center, radius, index, count: cameras, size };
         renderer.add_camera(rig, ViewDesc::new(camera).named(format!("cam{index:03}")))?;
     }
-    renderer.stream_batch(rig, Some(StreamOptions::default()))?;
+    renderer.stream_batch(rig, Some(StreamOptions { instances: true, ..Default::default() }))?;
+    // Segmentation: each instance label's node's class.
+    let classes: std::collections::HashMap<u32, u32> =
+        scene.nodes().map(|(key, node)| (oxygen::core::scene::node_index(key) + 1, node.semantic_class)).collect();
     println!(
         "{}: {} cameras of {}x{} in one batch on {}",
         file.display(),
@@ -160,12 +164,6 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
         let report = renderer.render_frame(&scene)?;
         for warning in &report.warnings {
             println!("  frame {frame}: {warning}");
-        }
-        // Segmentation: the labels of this frame, read per camera (the
-        // stream carries colour and depth).
-        let mut classes = Vec::with_capacity(cameras);
-        for view in renderer.batch_cameras(rig)? {
-            classes.push((view, renderer.read_labels(view)?.semantic(&scene)));
         }
         for streamed in renderer.wait_streamed()? {
             for camera in &streamed.cameras {
@@ -187,8 +185,9 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
                     .ok_or("depth image size")?;
                     image.save(stem.with_extension("depth.png"))?;
                 }
-                if let Some((_, semantic)) = classes.iter().find(|(v, _)| *v == camera.view) {
-                    let values: Vec<u16> = semantic.iter().map(|c| (*c).min(u32::from(u16::MAX)) as u16).collect();
+                if let Some(instances) = &camera.instances {
+                    let class = |label: &u32| classes.get(label).copied().unwrap_or(0).min(u32::from(u16::MAX)) as u16;
+                    let values: Vec<u16> = instances.iter().map(class).collect();
                     let image =
                         oxygen::image::ImageBuffer::<oxygen::image::Luma<u16>, _>::from_raw(size.x, size.y, values)
                             .ok_or("segmentation image size")?;

@@ -240,9 +240,9 @@ fn streamed_frames_arrive_tagged_in_order_without_an_off_by_one() {
     let size = UVec2::new(48, 36);
     let cameras = ring(3, size);
     let mut renderer = support::gpu_renderer_with(RendererOptions::default());
-    let batch = renderer.register_batch(BatchDesc::new("streamed", size)).unwrap();
+    let batch = renderer.register_batch(BatchDesc::new("streamed", size).with_labels()).unwrap();
     let ids: Vec<ViewId> = cameras.iter().map(|c| renderer.add_camera(batch, *c).unwrap()).collect();
-    let options = StreamOptions { frames_in_flight: 1, ..Default::default() };
+    let options = StreamOptions { frames_in_flight: 1, instances: true, ..Default::default() };
     renderer.stream_batch(batch, Some(options)).unwrap();
 
     // Frames 1 and 2 as they are; frame 3 after a cube moved away.
@@ -256,8 +256,13 @@ fn streamed_frames_arrive_tagged_in_order_without_an_off_by_one() {
         }
         let report = renderer.render_frame(&demo.scene).unwrap();
         assert_eq!(report.frame_index, frame);
-        let images: Vec<(RgbaImage, Vec<f32>)> =
-            ids.iter().map(|id| (renderer.read_color(*id).unwrap(), renderer.read_depth(*id).unwrap().depth)).collect();
+        let images: Vec<(RgbaImage, Vec<f32>, Vec<u32>)> = ids
+            .iter()
+            .map(|id| {
+                let color = renderer.read_color(*id).unwrap();
+                (color, renderer.read_depth(*id).unwrap().depth, renderer.read_labels(*id).unwrap().instances)
+            })
+            .collect();
         expected.push(images);
     }
     // One buffer, three frames, nothing taken until now: none is lost.
@@ -267,9 +272,10 @@ fn streamed_frames_arrive_tagged_in_order_without_an_off_by_one() {
         assert_eq!(frame.batch, batch);
         assert_eq!(frame.size, (48, 36));
         assert_eq!(frame.cameras.iter().map(|c| c.view).collect::<Vec<_>>(), ids);
-        for (camera, (color, depth)) in frame.cameras.iter().zip(want) {
+        for (camera, (color, depth, instances)) in frame.cameras.iter().zip(want) {
             assert_eq!(camera.color.as_ref(), Some(color), "frame {}: {} colour", frame.frame, camera.view);
             assert_eq!(camera.depth.as_ref(), Some(depth), "frame {}: {} depth", frame.frame, camera.view);
+            assert_eq!(camera.instances.as_ref(), Some(instances), "frame {}: {} labels", frame.frame, camera.view);
         }
     }
     // The move shows in frame 3 and not in frame 2.
@@ -277,6 +283,10 @@ fn streamed_frames_arrive_tagged_in_order_without_an_off_by_one() {
     assert_eq!(moved(0), moved(1), "nothing moved between frames 1 and 2");
     assert_ne!(moved(1), moved(2), "the cubes moved before frame 3");
     assert!(renderer.take_streamed().unwrap().is_empty(), "each frame arrives once");
+    // A batch without labels has none to stream.
+    let plain = renderer.register_batch(BatchDesc::new("plain", size)).unwrap();
+    let refused = renderer.stream_batch(plain, Some(StreamOptions { instances: true, ..Default::default() }));
+    assert!(matches!(refused, Err(RenderError::Unsupported(_))), "{refused:?}");
     renderer.stream_batch(batch, None).unwrap();
     renderer.render_frame(&demo.scene).unwrap();
     assert!(renderer.wait_streamed().unwrap().is_empty(), "stopped");

@@ -33,6 +33,9 @@ pub struct StreamOptions {
     pub color: bool,
     /// Device depth (reverse-Z, `f32`).
     pub depth: bool,
+    /// Instance labels (the node seen at each pixel, id + 1; 0 for
+    /// none): a batch with labels only ([`crate::batch::BatchDesc::with_labels`]).
+    pub instances: bool,
     /// Staging buffers in the ring: how many frames' images may be on
     /// their way at once. At least 1; 2 (the default) lets a frame render
     /// while the last one's images are copied and mapped.
@@ -41,7 +44,7 @@ pub struct StreamOptions {
 
 impl Default for StreamOptions {
     fn default() -> Self {
-        StreamOptions { color: true, depth: true, frames_in_flight: 2 }
+        StreamOptions { color: true, depth: true, instances: false, frames_in_flight: 2 }
     }
 }
 
@@ -54,6 +57,8 @@ pub struct StreamedCamera {
     pub color: Option<image::RgbaImage>,
     /// Its device depth (reverse-Z, row by row), when streamed.
     pub depth: Option<Vec<f32>>,
+    /// Its instance labels (row by row), when streamed.
+    pub instances: Option<Vec<u32>>,
 }
 
 /// A batch's images of one frame, as they arrived.
@@ -97,7 +102,16 @@ struct SlotContent {
     cameras: Vec<(ViewId, Tile)>,
 }
 
-/// Where each page's images lie in a staging buffer.
+/// One image of a page in a staging buffer; every plane has 4-byte texels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Plane {
+    Color,
+    Depth,
+    Instances,
+}
+
+/// Where each page's images lie in a staging buffer: page after page, each
+/// page's planes after one another in [`Plane`] order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct PageLayout {
     /// Page size in pixels.
@@ -109,6 +123,7 @@ struct PageLayout {
     row_bytes: u32,
     color: bool,
     depth: bool,
+    instances: bool,
 }
 
 impl PageLayout {
@@ -123,22 +138,29 @@ impl PageLayout {
             row_bytes,
             color: options.color,
             depth: options.depth,
+            instances: options.instances && atlas.has_labels(),
         }
+    }
+
+    /// The planes streamed, in their order within a page.
+    fn planes(&self) -> impl Iterator<Item = Plane> + '_ {
+        [(Plane::Color, self.color), (Plane::Depth, self.depth), (Plane::Instances, self.instances)]
+            .into_iter()
+            .filter_map(|(plane, on)| on.then_some(plane))
     }
 
     fn page_bytes(&self) -> u64 {
         u64::from(self.row_bytes) * u64::from(self.height)
     }
 
-    /// Byte offset of page `page`'s colour (depth: `depth` true).
-    fn offset(&self, page: u32, depth: bool) -> u64 {
-        let outputs = u64::from(self.color) + u64::from(self.depth);
-        let within = if depth && self.color { self.page_bytes() } else { 0 };
-        u64::from(page) * outputs * self.page_bytes() + within
+    /// Byte offset of `plane` of page `page` (a plane that is streamed).
+    fn offset(&self, page: u32, plane: Plane) -> u64 {
+        let within = self.planes().position(|p| p == plane).unwrap_or(0) as u64;
+        (u64::from(page) * self.planes().count() as u64 + within) * self.page_bytes()
     }
 
     fn bytes(&self) -> u64 {
-        u64::from(self.pages) * (u64::from(self.color) + u64::from(self.depth)) * self.page_bytes()
+        u64::from(self.pages) * self.planes().count() as u64 * self.page_bytes()
     }
 }
 
@@ -199,21 +221,22 @@ impl Streams {
                     self.depth_copy.record(&gpu.device, &mut encoder, &view, (layout.width, layout.height))
                 });
                 let depth_source = depth_as_float.as_ref().unwrap_or(&textures.depth);
-                for (texture, depth) in [(&textures.color, false), (depth_source, true)] {
-                    if (depth && !layout.depth) || (!depth && !layout.color) {
-                        continue;
-                    }
-                    let aspect = if depth && depth_as_float.is_none() {
-                        wgpu::TextureAspect::DepthOnly
-                    } else {
-                        wgpu::TextureAspect::All
+                for plane in layout.planes() {
+                    let (texture, aspect) = match plane {
+                        Plane::Color => (&textures.color, wgpu::TextureAspect::All),
+                        Plane::Depth if depth_as_float.is_some() => (depth_source, wgpu::TextureAspect::All),
+                        Plane::Depth => (depth_source, wgpu::TextureAspect::DepthOnly),
+                        Plane::Instances => match &textures.labels {
+                            Some(labels) => (&labels.instances, wgpu::TextureAspect::All),
+                            None => continue,
+                        },
                     };
                     encoder.copy_texture_to_buffer(
                         wgpu::TexelCopyTextureInfo { texture, mip_level: 0, origin: wgpu::Origin3d::ZERO, aspect },
                         wgpu::TexelCopyBufferInfo {
                             buffer,
                             layout: wgpu::TexelCopyBufferLayout {
-                                offset: layout.offset(page, depth),
+                                offset: layout.offset(page, plane),
                                 bytes_per_row: Some(layout.row_bytes),
                                 rows_per_image: Some(layout.height),
                             },
@@ -333,8 +356,9 @@ impl Slot {
         let (w, h) = layout.tile;
         let cameras = {
             let mapped = self.buffer.slice(..layout.bytes()).get_mapped_range().map_err(oxygen_gpu::GpuError::from)?;
-            let texels = |tile: &Tile, depth: bool| -> Vec<u8> {
-                let base = layout.offset(tile.page, depth) as usize;
+            let mapped: &[u8] = &mapped;
+            let texels = |tile: &Tile, plane: Plane| -> Vec<u8> {
+                let base = layout.offset(tile.page, plane) as usize;
                 let mut bytes = Vec::with_capacity((w * h * 4) as usize);
                 for y in tile.y..tile.y + h {
                     let start = base + y as usize * layout.row_bytes as usize + tile.x as usize * 4;
@@ -342,21 +366,37 @@ impl Slot {
                 }
                 bytes
             };
-            content
-                .cameras
-                .iter()
-                .map(|(view, tile)| StreamedCamera {
-                    view: *view,
-                    // Exactly w × h × 4 bytes by construction.
-                    color: layout.color.then(|| image::RgbaImage::from_raw(w, h, texels(tile, false))).flatten(),
-                    depth: layout.depth.then(|| {
-                        texels(tile, true)
-                            .chunks_exact(4)
-                            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-                            .collect()
-                    }),
+            let words =
+                |bytes: Vec<u8>| -> Vec<[u8; 4]> { bytes.chunks_exact(4).map(|b| [b[0], b[1], b[2], b[3]]).collect() };
+            let cut = |(view, tile): &(ViewId, Tile)| StreamedCamera {
+                view: *view,
+                // Exactly w × h × 4 bytes by construction.
+                color: layout.color.then(|| image::RgbaImage::from_raw(w, h, texels(tile, Plane::Color))).flatten(),
+                depth: layout
+                    .depth
+                    .then(|| words(texels(tile, Plane::Depth)).into_iter().map(f32::from_le_bytes).collect()),
+                instances: layout
+                    .instances
+                    .then(|| words(texels(tile, Plane::Instances)).into_iter().map(u32::from_le_bytes).collect()),
+            };
+            // Many cameras: cut on every core (the pages are large, each
+            // camera's rows are copied out on their own).
+            let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(content.cameras.len()).max(1);
+            let chunk = content.cameras.len().div_ceil(threads).max(1);
+            if threads == 1 {
+                content.cameras.iter().map(cut).collect()
+            } else {
+                std::thread::scope(|scope| {
+                    let parts: Vec<_> = content
+                        .cameras
+                        .chunks(chunk)
+                        .map(|part| scope.spawn(move || part.iter().map(cut).collect::<Vec<_>>()))
+                        .collect();
+                    // A cut cannot panic (its ranges are inside the mapped
+                    // pages by construction); a panicking one is re-raised.
+                    parts.into_iter().flat_map(|p| p.join().unwrap_or_else(|e| std::panic::resume_unwind(e))).collect()
                 })
-                .collect()
+            }
         };
         self.buffer.unmap();
         Ok(StreamedFrame { batch, frame: content.frame, time_seconds: content.time_seconds, size: (w, h), cameras })
@@ -372,8 +412,15 @@ impl Renderer {
     pub fn stream_batch(&mut self, batch: BatchId, options: Option<StreamOptions>) -> Result<(), RenderError> {
         self.views.batch_cameras(batch)?;
         match options {
-            Some(options) if options.frames_in_flight == 0 || !(options.color || options.depth) => {
+            Some(options)
+                if options.frames_in_flight == 0 || !(options.color || options.depth || options.instances) =>
+            {
                 Err(RenderError::Unsupported(format!("streaming {batch} with {options:?}: no buffer or no image")))
+            }
+            Some(options) if options.instances && !self.views.batches.get(&batch).is_some_and(|b| b.labels) => {
+                Err(RenderError::Unsupported(format!(
+                    "streaming {batch}'s instance labels: the batch draws none (BatchDesc::with_labels)"
+                )))
             }
             Some(options) => {
                 self.streams.rings.insert(batch, Ring::new(options));
