@@ -528,11 +528,11 @@ fn run_executor<'a>(
                 let future = async move {
                     let mut rec = CommandRecorder::new(device, name);
                     // GPU visibility's first phase for every camera on a GPU
-                    // path, before any pass reads their draws.
-                    for ctx in &views {
-                        if let Some(visibility) = ctx.inputs.visibility {
-                            visibility.record_early(rec.encoder(), ctx.view.view_id);
-                        }
+                    // path (one compute pass for the batch), before any pass
+                    // reads their draws.
+                    if let Some(visibility) = views.first().and_then(|ctx| ctx.inputs.visibility) {
+                        let ids: Vec<ViewId> = views.iter().map(|ctx| ctx.view.view_id).collect();
+                        visibility.record_early_batch(rec.encoder(), &ids);
                     }
                     let result = graph.record_batch(&views, &mut rec).await;
                     for ctx in &views {

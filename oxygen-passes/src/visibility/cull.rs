@@ -466,6 +466,43 @@ impl GpuVisibility {
         self.dispatch(encoder, state, &[(&self.cull_early, state.instances), (&self.commands_early, state.groups)]);
     }
 
+    /// Phase 1 for every view of `views` (a batch's cameras) in one
+    /// compute pass: their counters cleared first, then each view's cull
+    /// and command steps, one after the other. What [`GpuVisibility::record_early`]
+    /// does view by view, without a compute pass per view.
+    pub fn record_early_batch(&self, encoder: &mut wgpu::CommandEncoder, views: &[ViewId]) {
+        let states: Vec<&ViewCull> = views.iter().filter_map(|v| self.views.get(v)).collect();
+        if states.is_empty() {
+            return;
+        }
+        let _span = info_span!("cull_early_batch", views = states.len()).entered();
+        for state in &states {
+            encoder.clear_buffer(&state.counts.buffer, 0, None);
+        }
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("visibility cull (batch)"),
+            timestamp_writes: None,
+        });
+        let mut bound: Option<&wgpu::ComputePipeline> = None;
+        for state in states {
+            let Some(bind_group) = &state.bind_group else { continue };
+            pass.set_bind_group(0, bind_group, &[]);
+            for (pipeline, threads) in [(&self.cull_early, state.instances), (&self.commands_early, state.groups)] {
+                if threads == 0 {
+                    continue;
+                }
+                if bound != Some(pipeline) {
+                    pass.set_pipeline(pipeline);
+                    bound = Some(pipeline);
+                }
+                // As `dispatch`: past 65 535 workgroups the rest go into y.
+                let groups = threads.div_ceil(64);
+                let x = groups.min(MAX_WORKGROUPS);
+                pass.dispatch_workgroups(x, groups.div_ceil(x), 1);
+            }
+        }
+    }
+
     /// Phase 2 for `view` (occlusion culling): builds the depth pyramid from
     /// `depth` (what phase 1's draws left), tests the instances phase 1 did
     /// not draw, writes lists B and C. Nothing for other views.
