@@ -2,7 +2,7 @@
 //!
 //! A struct that a shader reads (a uniform block, a storage record) has two
 //! declarations that must agree byte for byte: the Rust `#[repr(C)]` struct
-//! the CPU fills, and the WGSL `struct` the shader reads. [`gpu_struct!`]
+//! the CPU fills, and the WGSL `struct` the shader reads. [`gpu_struct!`](macro@crate::gpu_struct)
 //! takes the Rust declaration, with a WGSL type beside each field whose
 //! Rust type does not name one by itself ([`WgslType`]), and yields:
 //!
@@ -18,7 +18,7 @@
 //!   whether the Rust struct needs explicit padding.
 //!
 //! A struct declared elsewhere (another crate's record) is checked the same
-//! way through a layout written with [`gpu_layout!`], or, when it is stored
+//! way through a layout written with [`gpu_layout!`](macro@crate::gpu_layout), or, when it is stored
 //! in the place of a record and read through that record's members, with
 //! [`check_overlay`].
 
@@ -34,7 +34,7 @@ pub struct FieldLayout {
     /// Bytes of the Rust field.
     pub size: usize,
     /// The WGSL type the member is declared with (empty for a layout
-    /// written by hand with [`gpu_layout!`], which generates no WGSL).
+    /// written by hand with [`gpu_layout!`](macro@crate::gpu_layout), which generates no WGSL).
     pub wgsl_type: &'static str,
 }
 
@@ -63,7 +63,7 @@ impl StructLayout {
     }
 }
 
-/// A Rust struct with a WGSL twin, declared with [`gpu_struct!`].
+/// A Rust struct with a WGSL twin, declared with [`gpu_struct!`](macro@crate::gpu_struct).
 pub trait GpuStruct: bytemuck::Pod {
     /// The struct's name in both languages.
     const NAME: &'static str;
@@ -296,7 +296,7 @@ pub fn check_layout(module: &naga::Module, expected: &StructLayout) -> Result<()
 }
 
 /// Compares a Rust struct stored in a record's place with the record's
-/// layout: `overlay` (the struct's [`gpu_layout!`], each field named by the
+/// layout: `overlay` (the struct's [`gpu_layout!`](macro@crate::gpu_layout), each field named by the
 /// first member of `record` it lies on) must have `record`'s size, and each
 /// field must start where its named member starts and run over whole
 /// members, the fields one after the other without gaps. A shader reading

@@ -38,7 +38,7 @@ impl Renderer {
         self.views.register(ViewDesc::new(resolver).with_options(options), graph)
     }
 
-    /// Links `view` to `output` after registration ([`Views::link`]).
+    /// Links `view` to `output` after registration ([`Views::link`](crate::views::Views::link)).
     pub fn link<K>(&mut self, view: impl Into<ViewId>, output: Output<K>) -> Result<(), RenderError> {
         self.views.link(view, output)
     }

@@ -375,7 +375,7 @@ impl RenderPass for MeshPass {
 }
 
 impl MeshPass {
-    /// Records the pass for every view of a batch ([`crate::TileAtlas`]
+    /// Records the pass for every view of a batch ([`oxygen_gpu::TileAtlas`]
     /// tiles, see [`oxygen_gpu::ViewTargets::tile`]) with one render pass
     /// per atlas page: per view only its viewport, its scene constants,
     /// its lighting inputs and its draws. Views that are not tiles get a

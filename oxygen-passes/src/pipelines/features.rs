@@ -66,7 +66,7 @@ impl ShaderFeatures {
 
 /// The exposure a tone-mapping pipeline multiplies radiance by: finite and
 /// non-negative (anything else becomes 1), compared and hashed by its bits
-/// so it can be part of a [`PipelineKey`].
+/// so it can be part of a [`PipelineKey`](crate::PipelineKey).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Exposure(f32);
 
