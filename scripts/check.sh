@@ -5,7 +5,9 @@
 # 2. clippy over every target of the workspace (library, tests, examples,
 #    benches) with warnings as errors: clippy type-checks everything
 #    `cargo check --all-targets` would;
-# 3. `cargo check` of the two projects outside the workspace: the fuzz
+# 3. the API docs of every workspace crate with rustdoc's warnings as
+#    errors (a broken link in a doc comment fails);
+# 4. `cargo check` of the two projects outside the workspace: the fuzz
 #    target (fuzz/, its own workspace for cargo-fuzz) and the Bevy peer
 #    bench (benches/peer-bevy, its own workspace and target folder; the
 #    first check downloads and compiles Bevy's crates, a few minutes).
@@ -32,6 +34,8 @@ step() {
 step "cargo fmt --check" cargo fmt --all -- --check
 step "clippy -D warnings (every target)" \
   cargo clippy --locked --workspace --all-targets -- -D warnings
+step "cargo doc -D warnings (the workspace's API docs)" \
+  env RUSTDOCFLAGS="-D warnings" cargo doc --locked --no-deps --workspace
 # The workspace's target folder: the fuzz crate's dependencies are the
 # workspace's, already checked by clippy above.
 step "cargo check of the fuzz target" \
