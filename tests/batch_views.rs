@@ -520,3 +520,30 @@ fn batch_cameras_on_the_gpu_path_draw_what_the_cpu_path_draws() {
         }
     }
 }
+
+/// A batch camera is a view for the snapshot tools too: `Views::prepare`
+/// gives, without a GPU, the prepared frame the renderer prepares for it
+/// (at the batch's size, whatever its resolver's viewport says), and the
+/// same draws a lone view of that camera at that size gets.
+#[test]
+fn a_batch_camera_prepares_without_a_gpu_as_the_renderer_does() {
+    use oxygen::views::Views;
+    let demo = oxygen_demo::multi_view_scene();
+    let size = UVec2::new(48, 32);
+    // The resolver asks for another size: the batch's wins.
+    let camera = ring(1, UVec2::new(300, 200)).remove(0);
+    let mut views = Views::new();
+    let batch = views.register_batch(BatchDesc::new("snapshots", size)).unwrap();
+    let id = views.add_camera(batch, camera).unwrap();
+    let cpu = views.prepare(&demo.scene, id).unwrap();
+    let (cpu_dump, cpu_draws) = (cpu.dump(), cpu.canonical_draws());
+    let options = oxygen::gpu::GpuOptions { optional_features: Renderer::OPTIONAL_FEATURES, ..Default::default() };
+    let gpu = oxygen::gpu::GpuContext::new_headless(&options).unwrap();
+    let mut renderer = Renderer::with_views(gpu, RendererOptions::default(), views).unwrap();
+    renderer.render_frame(&demo.scene).unwrap();
+    assert_eq!(renderer.prepared_frame(id).unwrap().dump(), cpu_dump);
+    assert_eq!(renderer.read_color(id).unwrap().dimensions(), (48, 32));
+    let mut lone = Views::new();
+    let alone = lone.register(ring(1, size).remove(0), standard_render_graph).unwrap();
+    assert_eq!(lone.prepare(&demo.scene, alone).unwrap().canonical_draws(), cpu_draws);
+}
