@@ -528,22 +528,25 @@ fn batch_cameras_on_the_gpu_path_draw_what_the_cpu_path_draws() {
 #[test]
 fn a_batch_camera_prepares_without_a_gpu_as_the_renderer_does() {
     use oxygen::views::Views;
-    let demo = oxygen_demo::multi_view_scene();
-    let size = UVec2::new(48, 32);
-    // The resolver asks for another size: the batch's wins.
-    let camera = ring(1, UVec2::new(300, 200)).remove(0);
+    // The boxes seen from above: a camera wide enough sees all nine, one
+    // as narrow as the batch's cameras (16 × 64) loses the outer columns.
+    let (scene, _) = labelled_boxes();
+    let size = UVec2::new(16, 64);
+    // The resolver asks for a wide image: the batch's size wins.
     let mut views = Views::new();
     let batch = views.register_batch(BatchDesc::new("snapshots", size)).unwrap();
-    let id = views.add_camera(batch, camera).unwrap();
-    let cpu = views.prepare(&demo.scene, id).unwrap();
+    let id = views.add_camera(batch, looking_down(UVec2::new(480, 100))).unwrap();
+    let cpu = views.prepare(&scene, id).unwrap();
     let (cpu_dump, cpu_draws) = (cpu.dump(), cpu.canonical_draws());
     let options = oxygen::gpu::GpuOptions { optional_features: Renderer::OPTIONAL_FEATURES, ..Default::default() };
     let gpu = oxygen::gpu::GpuContext::new_headless(&options).unwrap();
     let mut renderer = Renderer::with_views(gpu, RendererOptions::default(), views).unwrap();
-    renderer.render_frame(&demo.scene).unwrap();
+    renderer.render_frame(&scene).unwrap();
     assert_eq!(renderer.prepared_frame(id).unwrap().dump(), cpu_dump);
-    assert_eq!(renderer.read_color(id).unwrap().dimensions(), (48, 32));
+    assert_eq!(renderer.read_color(id).unwrap().dimensions(), (16, 64));
     let mut lone = Views::new();
-    let alone = lone.register(ring(1, size).remove(0), standard_render_graph).unwrap();
-    assert_eq!(lone.prepare(&demo.scene, alone).unwrap().canonical_draws(), cpu_draws);
+    let alone = lone.register(looking_down(size), standard_render_graph).unwrap();
+    assert_eq!(lone.prepare(&scene, alone).unwrap().canonical_draws(), cpu_draws);
+    let drawn: usize = cpu_draws.iter().map(|(_, d)| d.len()).sum();
+    assert!(drawn < 9, "the narrow camera draws {drawn} of the nine boxes");
 }
