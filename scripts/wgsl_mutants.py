@@ -92,6 +92,10 @@ CULL = PASSES + "visibility/cull.wgsl"
 TRACE = PASSES + "reference/trace.wgsl"
 # The renderer's window composition (the root crate's compositor draws with it).
 WINDOWS = PASSES + "present/compose_window.wgsl"
+# Per-pixel labels and insets (issue 29). The depth copy runs on GL only,
+# which this script's runs do not use.
+LABELS = PASSES + "mesh/labels.wgsl"
+COMPOSITE = PASSES + "post/composite.wgsl"
 
 # (name, file, old text, new text, what the mutant breaks), one list per
 # subject; a mutant's name starts with its subject's prefix (SUBJECTS).
@@ -430,6 +434,21 @@ COMPOSE_MUTANTS = [
      "depth-only views composed as inverted grey (far white)"),
 ]
 
+OUTPUT_MUTANTS = [
+    ("output-label-not-offset", LABELS,
+     "return Labels(mesh.node + 1u, vec4<f32>(n, 1.0));",
+     "return Labels(mesh.node, vec4<f32>(n, 1.0));",
+     "instance labels name the node before the one drawn (and 0 is a node)"),
+    ("output-normal-back-face-kept", LABELS,
+     "        n = -n;",
+     "        n = n;",
+     "back faces of double-sided surfaces labelled with the front normal"),
+    ("output-composite-offset-ignored", COMPOSITE,
+     "params.uv_offset + in.uv * params.uv_scale",
+     "in.uv * params.uv_scale",
+     "an inset shows the corner of the source's texture, not its view's tile"),
+]
+
 # (name prefix, subject, its mutants, test binaries likely to catch them).
 # The hints only order the binaries (likely catchers first, so a caught
 # mutant stops sooner); they never add or remove one.
@@ -450,6 +469,7 @@ SUBJECTS = [
     ("double-sided", "double-sided normals", DOUBLE_SIDED_MUTANTS, ["draw_order", "reference_view"]),
     ("generation", "generation check", GENERATION_MUTANTS, ["gpu_debug_generations", "gpu_visibility"]),
     ("compose", "window composition", COMPOSE_MUTANTS, ["windows", "viewer_window"]),
+    ("output", "typed outputs: labels and insets", OUTPUT_MUTANTS, ["batch_views"]),
 ]
 
 MUTANTS = [m for _, _, mutants, _ in SUBJECTS for m in mutants]

@@ -550,3 +550,38 @@ fn a_batch_camera_prepares_without_a_gpu_as_the_renderer_does() {
     let drawn: usize = cpu_draws.iter().map(|(_, d)| d.len()).sum();
     assert!(drawn < 9, "the narrow camera draws {drawn} of the nine boxes");
 }
+
+/// The back of a double-sided surface is labelled with the normal that
+/// faces the camera (as shading lights it), the front with its own.
+#[test]
+fn normal_labels_of_a_double_sided_surface_face_the_camera() {
+    let mut scene = Scene::new();
+    let card = scene.add_material(Material { double_sided: true, ..Material::opaque("card", Vec4::ONE) });
+    let plane = scene.add_geometry(Geometry::plane(20.0));
+    let node = scene.add_node("card", Transform::IDENTITY);
+    scene.set_renderable(node, Renderable { geometry: plane, materials: vec![card] }).unwrap();
+    let sun = scene.add_node("sun", Transform::IDENTITY);
+    scene.set_light(sun, Some(Light::directional(1.0))).unwrap();
+    let size = UVec2::new(16, 16);
+    let at = |y: f32| {
+        LookAtResolver::new(
+            Camera::perspective(40f32.to_radians(), 0.1, None),
+            Vec3::new(0.0, y, 0.0),
+            Vec3::ZERO,
+            size,
+        )
+        .unwrap()
+        .with_up(Vec3::Z)
+        .unwrap()
+    };
+    let mut renderer = support::gpu_renderer();
+    let above = renderer.register_view(ViewDesc::new(at(3.0)).with_labels(), standard_render_graph).unwrap();
+    let below = renderer.register_view(ViewDesc::new(at(-3.0)).with_labels(), standard_render_graph).unwrap();
+    renderer.render_frame(&scene).unwrap();
+    for (view, up) in [(above, 1.0), (below, -1.0)] {
+        let labels = renderer.read_labels(view).unwrap();
+        assert_eq!(labels.node(&scene, 8, 8), Some(node));
+        let n = labels.normals[8 * 16 + 8];
+        assert!((n[1] - up).abs() < 1e-3, "{view}: normal {n:?}, expected y = {up}");
+    }
+}
