@@ -205,4 +205,26 @@ mod tests {
         });
         assert_eq!(total.load(Ordering::Relaxed), 28);
     }
+
+    /// A job that panics only on the pool's worker threads (never on the
+    /// caller's, which reports its own panic whatever the workers did):
+    /// `run` still fails, so a worker's panic is never lost.
+    #[test]
+    fn a_panic_on_a_worker_thread_alone_is_reported() {
+        let pool = WorkerPool::new(3);
+        let caller = std::thread::current().id();
+        let on_workers = AtomicU64::new(0);
+        let result = catch_unwind(AssertUnwindSafe(|| {
+            pool.run(64, &|_| {
+                // Slow enough that the workers take some of the 64.
+                std::thread::sleep(std::time::Duration::from_millis(2));
+                if std::thread::current().id() != caller {
+                    on_workers.fetch_add(1, Ordering::Relaxed);
+                    panic!("a job fails on a worker");
+                }
+            })
+        }));
+        assert!(on_workers.load(Ordering::Relaxed) > 0, "no job ran on a worker");
+        assert!(result.is_err(), "a worker's panic was lost");
+    }
 }
