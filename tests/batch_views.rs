@@ -88,6 +88,15 @@ fn every_camera_of_a_batch_renders_what_it_renders_alone() {
         assert!(report.views.iter().all(|v| v.role == ViewRole::BatchCamera { batch }));
         let batch_images: Vec<RgbaImage> = ids.iter().map(|id| renderer.read_color(*id).unwrap()).collect();
         assert_same_pictures(&batch_images, &alone(&demo.scene, &cameras, options), &format!("keep_hdr {keep_hdr}"));
+        // The HDR image (written: the demo scene blends) is each camera's
+        // own tile of the HDR page: the radiance the lone camera's holds.
+        let hdr = renderer.read_hdr(ids[4]).unwrap();
+        support::assert_hdr_image_finite(&hdr, "a batch camera's HDR tile");
+        let lone = one.register_view(cameras[4], lone_graph()).unwrap();
+        one.render_frame(&demo.scene).unwrap();
+        let lone_hdr = one.read_hdr(lone).unwrap();
+        assert_eq!((hdr.width, hdr.height), (64, 48));
+        assert_eq!(hdr.pixels, lone_hdr.pixels, "keep_hdr {keep_hdr}: the tile's HDR radiance is the lone camera's");
     }
 }
 
