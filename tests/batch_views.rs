@@ -231,7 +231,7 @@ fn what_a_batch_cannot_hold_is_refused_with_a_reason() {
     let view = small.add_camera(batch, camera).unwrap();
     let report = small.render_frame(&demo.scene).unwrap();
     let reason = report.warnings.iter().find_map(|w| match w {
-        FrameWarning::ViewSkipped { view: v, reason } if *v == view => Some(reason.clone()),
+        FrameWarning::ViewSkipped { view: v, reason, .. } if *v == view => Some(reason.clone()),
         _ => None,
     });
     let reason = reason.expect("the camera is skipped");

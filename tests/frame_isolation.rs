@@ -141,7 +141,7 @@ fn an_oversized_target_request_is_refused_before_anything_is_allocated() {
     assert_eq!(budget, 64 * 64 * 16);
     let mut renderer = gpu_renderer_with(RendererOptions { target_budget_bytes: budget, ..Default::default() });
     let first = renderer.register_view(front_view(64), standard_render_graph).unwrap();
-    let second = renderer.register_view(front_view(64), standard_render_graph).unwrap();
+    let second = renderer.register_view(ViewDesc::new(front_view(64)).named("second"), standard_render_graph).unwrap();
     let err = renderer.check_target_budget(&[(UVec2::splat(64), false), (UVec2::splat(64), false)]).unwrap_err();
     assert!(err.to_string().contains("target budget"), "{err}");
     renderer.check_target_budget(&[(UVec2::splat(64), false)]).unwrap();
@@ -149,9 +149,11 @@ fn an_oversized_target_request_is_refused_before_anything_is_allocated() {
     let report = renderer.render_frame(&scene).unwrap();
     assert_eq!(report.views.iter().map(|v| v.view).collect::<Vec<_>>(), vec![first]);
     match &report.warnings[..] {
-        [FrameWarning::ViewSkipped { view, reason }] => {
-            assert_eq!(*view, second);
+        [warning @ FrameWarning::ViewSkipped { view, name, reason }] => {
+            assert_eq!((*view, name.as_deref()), (second, Some("second")));
             assert!(reason.contains("64x64") && reason.contains("budget"), "{reason}");
+            // The warning names the view by its name too.
+            assert!(warning.to_string().contains("(second) skipped"), "{warning}");
         }
         other => panic!("expected one skipped view, got {other:?}"),
     }

@@ -160,7 +160,7 @@ fn a_graph_reads_a_linked_output_and_fails_clearly_on_an_unlinked_one() {
         })
         .unwrap();
     match renderer.render_frame(&scene) {
-        Err(oxygen::RenderError::Pass { view, source: PassError::UndeclaredInput { output, from } }) => {
+        Err(oxygen::RenderError::Pass { view, source: PassError::UndeclaredInput { output, from }, .. }) => {
             assert_eq!(view, unlinked);
             assert_eq!((output, from), ("depth", other.to_string()));
         }

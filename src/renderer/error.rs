@@ -24,10 +24,12 @@ pub enum RenderError {
     #[error(transparent)]
     Prep(#[from] PrepError),
     /// A pass failed while recording.
-    #[error("{view}: {source}")]
+    #[error("{view}{}: {source}", name.as_ref().map(|n| format!(" ({n})")).unwrap_or_default())]
     Pass {
         /// The view whose graph failed.
         view: ViewId,
+        /// Its name, if it has one.
+        name: Option<String>,
         /// The pass error.
         source: PassError,
     },

@@ -272,7 +272,7 @@ impl Renderer {
             self.frames.skipped.remove(&view.view);
         }
         for warning in &report.warnings {
-            if let FrameWarning::ViewSkipped { view, reason } = warning {
+            if let FrameWarning::ViewSkipped { view, reason, .. } = warning {
                 self.frames.skipped.insert(*view, reason.clone());
             }
         }

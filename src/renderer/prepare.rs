@@ -182,7 +182,7 @@ impl Renderer {
                 Ok(view) => view,
                 Err(e) => {
                     warn!(view = %shadow.id, "shadow view skipped this frame: {e}");
-                    warnings.push(FrameWarning::ViewSkipped { view: shadow.id, reason: e.to_string() });
+                    warnings.push(FrameWarning::ViewSkipped { view: shadow.id, name: None, reason: e.to_string() });
                     continue;
                 }
             };

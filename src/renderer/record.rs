@@ -323,7 +323,11 @@ impl Renderer {
             // Every job was taken and finished by some thread before `run` returned.
             let Some(recorded) = recorded else { continue };
             let first = &plan.views[contexts[job.members[0]].0];
-            recorded.result.map_err(|source| RenderError::Pass { view: first.id, source })?;
+            recorded.result.map_err(|source| RenderError::Pass {
+                view: first.id,
+                name: self.views.name(first.id).map(str::to_owned),
+                source,
+            })?;
             buffers.push(recorded.buffer);
             for (k, member) in job.members.iter().enumerate() {
                 let i = contexts[*member].0;

@@ -84,6 +84,8 @@ pub enum FrameWarning {
     ViewSkipped {
         /// The view.
         view: ViewId,
+        /// Its name, if it has one.
+        name: Option<String>,
         /// Why, as the error would have said it.
         reason: String,
     },
@@ -117,7 +119,10 @@ pub enum FrameWarning {
 impl std::fmt::Display for FrameWarning {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            FrameWarning::ViewSkipped { view, reason } => write!(f, "{view} skipped: {reason}"),
+            FrameWarning::ViewSkipped { view, name: Some(name), reason } => {
+                write!(f, "{view} ({name}) skipped: {reason}")
+            }
+            FrameWarning::ViewSkipped { view, name: None, reason } => write!(f, "{view} skipped: {reason}"),
             FrameWarning::NoSunForShadows { view } => write!(
                 f,
                 "{view} asks for sun shadows, but no directional light of the scene casts shadows: it has no cascades"

@@ -131,7 +131,8 @@ impl Renderer {
                 }),
                 Err(e) => {
                     warn!(view = %id, "view skipped this frame: {e}");
-                    warnings.push(FrameWarning::ViewSkipped { view: *id, reason: e.to_string() });
+                    let name = entry.name.clone();
+                    warnings.push(FrameWarning::ViewSkipped { view: *id, name, reason: e.to_string() });
                 }
             }
         }
@@ -185,7 +186,8 @@ impl Renderer {
                 let keep = !matches!(v.target, TargetPlan::Tile { batch: b, .. } if b == batch);
                 if !keep {
                     warn!(view = %v.id, "view skipped this frame: {error}");
-                    warnings.push(FrameWarning::ViewSkipped { view: v.id, reason: error.to_string() });
+                    let name = self.views.name(v.id).map(str::to_owned);
+                    warnings.push(FrameWarning::ViewSkipped { view: v.id, name, reason: error.to_string() });
                 }
                 keep
             });
