@@ -317,6 +317,56 @@ mod tests {
         Channel::new(key, interpolation, times, ChannelValues::Translation(values)).unwrap()
     }
 
+    fn weights(interpolation: Interpolation, times: Vec<f32>, values: Vec<f32>, count: usize) -> Channel {
+        let (_, key) = node();
+        Channel::new(key, interpolation, times, ChannelValues::Weights { values, count }).unwrap()
+    }
+
+    /// Morph weights, two targets, keyframes at 1 and 3 (dt 2, off zero so
+    /// that times and segments are not confused): step holds, linear
+    /// blends each target on its own, the cubic spline is the Hermite
+    /// basis of its values and dt-scaled tangents, checked at s = 1/4
+    /// against the basis worked out by hand.
+    #[test]
+    fn morph_weights_follow_each_interpolation_target_by_target() {
+        let step = weights(Interpolation::Step, vec![1.0, 3.0], vec![0.2, 0.8, 0.6, 0.0], 2);
+        assert_eq!(step.sample_weights(2.9), Some(vec![0.2, 0.8]));
+        assert_eq!(step.sample_weights(3.0), Some(vec![0.6, 0.0]));
+
+        let linear = weights(Interpolation::Linear, vec![1.0, 3.0], vec![0.2, 0.8, 0.6, 0.0], 2);
+        let at = |t: f32| linear.sample_weights(t).unwrap();
+        let close = |got: Vec<f32>, want: [f32; 2]| got.iter().zip(want).all(|(g, w)| (g - w).abs() < 1e-6);
+        // s = (1.5 - 1) / 2 = 1/4.
+        assert!(close(at(1.5), [0.2 + 0.4 * 0.25, 0.8 - 0.8 * 0.25]), "{:?}", at(1.5));
+        assert!(close(at(0.0), [0.2, 0.8]) && close(at(5.0), [0.6, 0.0]), "the ends hold");
+
+        // Cubic spline: per keyframe (in-tangent, value, out-tangent), each
+        // two weights. Keyframe 0: value (0.1, 0.9), out-tangent (0.5, -1);
+        // keyframe 1: in-tangent (2, 0.25), value (0.7, 0.3).
+        let values = vec![9.0, 9.0, 0.1, 0.9, 0.5, -1.0, 2.0, 0.25, 0.7, 0.3, 9.0, 9.0];
+        let cubic = weights(Interpolation::CubicSpline, vec![1.0, 3.0], values, 2);
+        let s: f32 = 0.25;
+        let (s2, s3) = (s * s, s * s * s);
+        let hermite = |p0: f32, m0: f32, p1: f32, m1: f32| {
+            p0 * (2.0 * s3 - 3.0 * s2 + 1.0) + m0 * (s3 - 2.0 * s2 + s) + p1 * (-2.0 * s3 + 3.0 * s2) + m1 * (s3 - s2)
+        };
+        // Tangents are per second: times dt = 2.
+        let want = [hermite(0.1, 0.5 * 2.0, 0.7, 2.0 * 2.0), hermite(0.9, -1.0 * 2.0, 0.3, 0.25 * 2.0)];
+        // The same numbers written out: basis (0.84375, 0.140625, 0.15625, -0.046875).
+        assert!((want[0] - (0.1 * 0.84375 + 1.0 * 0.140625 + 0.7 * 0.15625 + 4.0 * -0.046875)).abs() < 1e-6);
+        let got = cubic.sample_weights(1.5).unwrap();
+        assert!(close(got.clone(), want), "{got:?} against {want:?}");
+        // At the keyframes the spline passes through the values.
+        assert!(close(cubic.sample_weights(1.0).unwrap(), [0.1, 0.9]));
+        assert!(close(cubic.sample_weights(3.0).unwrap(), [0.7, 0.3]));
+        // Three keyframes: the segment after the first is found by time.
+        let three = weights(Interpolation::Linear, vec![1.0, 3.0, 4.0], vec![0.0, 1.0, 2.0], 1);
+        assert!(close(three.sample_weights(3.5).unwrap().into_iter().chain([0.0]).collect(), [1.5, 0.0]));
+        // Not a weights channel: none.
+        let moving = translation(Interpolation::Linear, vec![0.0, 1.0], vec![Vec3::ZERO, Vec3::X]);
+        assert_eq!(moving.sample_weights(0.5), None);
+    }
+
     #[test]
     fn step_holds_the_earlier_keyframe_and_linear_blends() {
         let values = vec![Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0), Vec3::new(2.0, 4.0, 0.0)];
