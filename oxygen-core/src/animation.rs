@@ -351,7 +351,7 @@ mod tests {
             p0 * (2.0 * s3 - 3.0 * s2 + 1.0) + m0 * (s3 - 2.0 * s2 + s) + p1 * (-2.0 * s3 + 3.0 * s2) + m1 * (s3 - s2)
         };
         // Tangents are per second: times dt = 2.
-        let want = [hermite(0.1, 0.5 * 2.0, 0.7, 2.0 * 2.0), hermite(0.9, -1.0 * 2.0, 0.3, 0.25 * 2.0)];
+        let want = [hermite(0.1, 0.5 * 2.0, 0.7, 2.0 * 2.0), hermite(0.9, -2.0, 0.3, 0.25 * 2.0)];
         // The same numbers written out: basis (0.84375, 0.140625, 0.15625, -0.046875).
         assert!((want[0] - (0.1 * 0.84375 + 1.0 * 0.140625 + 0.7 * 0.15625 + 4.0 * -0.046875)).abs() < 1e-6);
         let got = cubic.sample_weights(1.5).unwrap();
