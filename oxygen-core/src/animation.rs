@@ -367,6 +367,31 @@ mod tests {
         assert_eq!(moving.sample_weights(0.5), None);
     }
 
+    /// A cubic-spline translation follows the Hermite basis of its values
+    /// and dt-scaled tangents, on each axis (keyframes at 1 and 3, s = 1/4),
+    /// and passes through its keyframes.
+    #[test]
+    fn cubic_spline_translations_follow_the_hermite_basis() {
+        let values = vec![
+            Vec3::splat(9.0),          // keyframe 0: in-tangent (unused)
+            Vec3::new(0.1, 0.9, -2.0), // value
+            Vec3::new(0.5, -1.0, 0.0), // out-tangent
+            Vec3::new(2.0, 0.25, 1.0), // keyframe 1: in-tangent
+            Vec3::new(0.7, 0.3, 4.0),  // value
+            Vec3::splat(9.0),          // out-tangent (unused)
+        ];
+        let cubic = translation(Interpolation::CubicSpline, vec![1.0, 3.0], values);
+        // Basis at s = 1/4: (0.84375, 0.140625, 0.15625, -0.046875); dt = 2.
+        let hermite = |p0: f32, m0: f32, p1: f32, m1: f32| {
+            p0 * 0.84375 + 2.0 * m0 * 0.140625 + p1 * 0.15625 + 2.0 * m1 * -0.046875
+        };
+        let want = Vec3::new(hermite(0.1, 0.5, 0.7, 2.0), hermite(0.9, -1.0, 0.3, 0.25), hermite(-2.0, 0.0, 4.0, 1.0));
+        let got = cubic.sample_vec3(1.5).unwrap();
+        assert!((got - want).abs().max_element() < 1e-6, "{got} against {want}");
+        assert!((cubic.sample_vec3(1.0).unwrap() - Vec3::new(0.1, 0.9, -2.0)).abs().max_element() < 1e-6);
+        assert!((cubic.sample_vec3(3.0).unwrap() - Vec3::new(0.7, 0.3, 4.0)).abs().max_element() < 1e-6);
+    }
+
     #[test]
     fn step_holds_the_earlier_keyframe_and_linear_blends() {
         let values = vec![Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0), Vec3::new(2.0, 4.0, 0.0)];
