@@ -198,6 +198,15 @@ impl Camera {
 
 #[cfg(test)]
 mod tests {
+
+    /// A far plane on the near plane holds no depth: refused, as one before it.
+    #[test]
+    fn a_far_plane_on_the_near_plane_is_refused() {
+        let camera = |far| Camera { projection: Projection::Perspective { fov_y: 1.0, near: 0.5, far: Some(far) } };
+        assert!(matches!(camera(0.5).validate(), Err(CameraError::BadDepthRange { .. })));
+        assert!(matches!(camera(0.25).validate(), Err(CameraError::BadDepthRange { .. })));
+        assert!(camera(0.5001).validate().is_ok());
+    }
     use super::*;
 
     #[test]
