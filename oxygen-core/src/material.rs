@@ -202,3 +202,31 @@ impl Material {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// KHR_texture_transform's order, worked out without `rows`: scale,
+    /// then rotate (the glTF matrix `[[cos, sin], [-sin, cos]]`), then
+    /// offset; the rows are that map.
+    #[test]
+    fn a_uv_transform_scales_then_rotates_then_offsets() {
+        let t = UvTransform { uv_set: 1, offset: Vec2::new(0.25, -0.5), rotation: 0.5, scale: Vec2::new(2.0, 3.0) };
+        let (sin, cos) = 0.5f32.sin_cos();
+        let scaled = Vec2::new(0.4 * 2.0, 0.7 * 3.0);
+        let rotated = Vec2::new(cos * scaled.x + sin * scaled.y, -sin * scaled.x + cos * scaled.y);
+        let want = rotated + Vec2::new(0.25, -0.5);
+        let got = t.apply(Vec2::new(0.4, 0.7));
+        assert!((got - want).abs().max_element() < 1e-6, "{got} against {want}");
+        let rows = t.rows();
+        let expected = [[cos * 2.0, sin * 3.0, 0.25], [-sin * 2.0, cos * 3.0, -0.5]];
+        for (row, want) in rows.iter().zip(expected) {
+            for (a, b) in row.iter().zip(want) {
+                assert!((a - b).abs() < 1e-6, "{rows:?} against {expected:?}");
+            }
+        }
+        // The identity leaves coordinates where they are.
+        assert_eq!(UvTransform::IDENTITY.apply(Vec2::new(0.4, 0.7)), Vec2::new(0.4, 0.7));
+    }
+}
