@@ -94,15 +94,8 @@ impl Renderer {
             return Err(RenderError::HdrNotWritten(id));
         }
         if let Some(tile) = targets.tile {
-            // The tile cut from its page of the HDR atlas.
-            let page = self.gpu.read_rgba16_float_layer(&color.hdr, 0, 0)?;
-            let (width, height) = (targets.width, targets.height);
-            let mut pixels = Vec::with_capacity((width * height) as usize);
-            for y in tile.y..tile.y + height {
-                let row = (y * page.width + tile.x) as usize;
-                pixels.extend_from_slice(&page.pixels[row..row + width as usize]);
-            }
-            return Ok(oxygen_gpu::HdrImage { width, height, pixels });
+            let size = (targets.width, targets.height);
+            return Ok(self.gpu.read_rgba16_float_region(&color.hdr, 0, (tile.x, tile.y), size)?);
         }
         if color.hdr_layer != 0 {
             return Err(RenderError::NoDisplayTarget(id));

@@ -448,11 +448,7 @@ impl GpuVisibility {
         for (pipeline, threads) in steps {
             if *threads > 0 {
                 pass.set_pipeline(pipeline);
-                // Past 65 535 workgroups the rest go into y; the shader
-                // rebuilds the linear index and skips the overshoot.
-                let groups = threads.div_ceil(64);
-                let x = groups.min(MAX_WORKGROUPS);
-                pass.dispatch_workgroups(x, groups.div_ceil(x), 1);
+                dispatch_threads(&mut pass, *threads);
             }
         }
     }
@@ -495,10 +491,7 @@ impl GpuVisibility {
                     pass.set_pipeline(pipeline);
                     bound = Some(pipeline);
                 }
-                // As `dispatch`: past 65 535 workgroups the rest go into y.
-                let groups = threads.div_ceil(64);
-                let x = groups.min(MAX_WORKGROUPS);
-                pass.dispatch_workgroups(x, groups.div_ceil(x), 1);
+                dispatch_threads(&mut pass, threads);
             }
         }
     }
@@ -642,4 +635,12 @@ fn cull_params(
         group_counters: plan.group_counters(),
         disc: std::f32::consts::FRAC_PI_4 / view.aspect().max(f32::MIN_POSITIVE),
     }
+}
+
+/// Dispatches `threads` invocations of 64: past 65 535 workgroups the rest
+/// go into y; the shader rebuilds the linear index and skips the overshoot.
+fn dispatch_threads(pass: &mut wgpu::ComputePass<'_>, threads: u32) {
+    let groups = threads.div_ceil(64);
+    let x = groups.min(MAX_WORKGROUPS);
+    pass.dispatch_workgroups(x, groups.div_ceil(x), 1);
 }
