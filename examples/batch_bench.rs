@@ -31,6 +31,18 @@
 //!
 //! Each line also splits the CPU time into the frame's prepare step
 //! (ScenePrep, uploads, targets and constants) and record step (`FrameReport`).
+//!
+//! Then the same number of frames runs again back to back, as a stream
+//! would: no wait between frames (the batch's streamed images taken as
+//! they arrive, the rest waited for after the last frame; lone views with
+//! readback wait as before, their reads block), so the CPU of one frame
+//! overlaps the GPU of the last. Its view-frames per second (V × frames ÷
+//! the whole stretch) is the throughput column.
+//! `BATCH_BENCH_SPANS=1` also adds up the time inside each of Oxygen's
+//! `tracing` spans over the measured frames (`oxygen_demo::span_times`)
+//! and prints the largest per frame: where the CPU time goes, on any
+//! machine. The spans cost time of their own: compare figures of runs
+//! with spans only with each other.
 //! Each line gives view-frames per second (V ÷ the median frame time); at
 //! the end the slope of the median times against V (least squares over the
 //! V list) is the per-view cost, CPU and whole frame, per path. With
@@ -39,14 +51,17 @@
 
 use std::time::Instant;
 
-use oxygen::batch::{BatchDesc, StreamOptions};
+use oxygen::batch::{BatchDesc, StreamOptions, StreamedFrame};
 use oxygen::glam::{Quat, Vec4};
 use oxygen::prelude::*;
 use oxygen::sceneprep::Visibility;
 use oxygen_demo::record::{Record, Row};
+use oxygen_demo::span_times::SpanTimes;
 
 const WARM_UP: usize = 3;
 const DEFAULT_MEASURED: usize = 10;
+/// Spans printed per line with `BATCH_BENCH_SPANS=1` (all are recorded).
+const SPANS_SHOWN: usize = 24;
 
 /// The grid of `count` boxes and its side length.
 fn box_grid(count: usize) -> (Scene, f32) {
@@ -91,6 +106,21 @@ struct Run {
     frame_ms: Vec<f64>,
     gpu_ms: Vec<f64>,
     read_bytes: u64,
+    /// View-frames per second of the frames run back to back.
+    pipelined_per_second: f64,
+    /// Milliseconds per measured frame inside each span, largest first
+    /// (`BATCH_BENCH_SPANS=1`).
+    spans: Vec<(&'static str, f64)>,
+}
+
+/// Bytes of every camera image of `frames`.
+fn streamed_bytes(frames: &[StreamedFrame]) -> u64 {
+    let camera_bytes = |camera: &oxygen::batch::StreamedCamera| {
+        camera.color.as_ref().map_or(0, |c| c.len() as u64)
+            + camera.depth.as_ref().map_or(0, |d| 4 * d.len() as u64)
+            + camera.instances.as_ref().map_or(0, |i| 4 * i.len() as u64)
+    };
+    frames.iter().flat_map(|f| &f.cameras).map(camera_bytes).sum()
 }
 
 fn median(values: &[f64]) -> f64 {
@@ -113,6 +143,7 @@ fn run(
     readback: bool,
     visibility: Visibility,
     frames: usize,
+    spans: Option<&SpanTimes>,
 ) -> Result<Run, Box<dyn std::error::Error>> {
     let mut renderer = Renderer::new_headless_with(RendererOptions::default())?;
     if visibility.on_gpu() && !renderer.gpu_visibility_supported() {
@@ -145,8 +176,15 @@ fn run(
         frame_ms: Vec::new(),
         gpu_ms: Vec::new(),
         read_bytes: 0,
+        pipelined_per_second: f64::NAN,
+        spans: Vec::new(),
     };
     for frame in 0..WARM_UP + frames {
+        if frame == WARM_UP
+            && let Some(spans) = spans
+        {
+            spans.take();
+        }
         let start = Instant::now();
         let report = renderer.render_frame(scene)?;
         let cpu = start.elapsed().as_secs_f64() * 1e3;
@@ -156,15 +194,7 @@ fn run(
         let mut bytes = 0u64;
         if readback {
             match batch {
-                Some(_) => {
-                    for streamed in renderer.wait_streamed()? {
-                        for camera in &streamed.cameras {
-                            bytes += camera.color.as_ref().map_or(0, |c| c.len() as u64);
-                            bytes += camera.depth.as_ref().map_or(0, |d| 4 * d.len() as u64);
-                            bytes += camera.instances.as_ref().map_or(0, |i| 4 * i.len() as u64);
-                        }
-                    }
-                }
+                Some(_) => bytes += streamed_bytes(&renderer.wait_streamed()?),
                 None => {
                     for id in &ids {
                         bytes += renderer.read_color(*id)?.len() as u64;
@@ -186,6 +216,26 @@ fn run(
             }
             result.read_bytes += bytes;
         }
+    }
+    if let Some(spans) = spans {
+        let per_frame = |d: std::time::Duration| d.as_secs_f64() * 1e3 / frames as f64;
+        result.spans = spans.take().into_iter().map(|(name, time, _)| (name, per_frame(time))).collect();
+    }
+    // Back to back: the lone views' reads block, so only the batch (or
+    // no readback) runs without waiting between frames.
+    if !readback || batch.is_some() {
+        let start = Instant::now();
+        for _ in 0..frames {
+            renderer.render_frame(scene)?;
+            if readback {
+                streamed_bytes(&renderer.take_streamed()?);
+            }
+        }
+        if readback {
+            streamed_bytes(&renderer.wait_streamed()?);
+        }
+        renderer.gpu().device.poll(wgpu::PollType::wait_indefinitely())?;
+        result.pipelined_per_second = (views * frames) as f64 / start.elapsed().as_secs_f64();
     }
     Ok(result)
 }
@@ -229,6 +279,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Ok(other) => return Err(format!("BATCH_BENCH_MODES={other}: use views, batch or both").into()),
     };
 
+    let spans = match std::env::var("BATCH_BENCH_SPANS").as_deref() {
+        Ok("1") => Some(SpanTimes::install().ok_or("BATCH_BENCH_SPANS=1: a tracing subscriber is already set")?),
+        Ok("0") | Err(_) => None,
+        Ok(other) => return Err(format!("BATCH_BENCH_SPANS={other}: use 0 or 1").into()),
+    };
     let (scene, side) = box_grid(boxes);
     let adapter = Renderer::new_headless()?.gpu().adapter_info.clone();
     let mut record = Record::new("batch_bench")
@@ -238,10 +293,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .value("warm_up_frames", WARM_UP)
         .value("measured_frames", frames)
         .value("readback", readback)
-        .value("visibility", format!("{visibility:?}"));
+        .value("visibility", format!("{visibility:?}"))
+        .value("spans", spans.is_some());
     println!("adapter: {} {}", adapter.name, adapter.driver_info);
-    println!("| path | V | CPU ms | prepare ms | record ms | frame ms | GPU ms | view-frames/s | read MB/s |");
-    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+    println!(
+        "| path | V | CPU ms | prepare ms | record ms | frame ms | GPU ms | view-frames/s | back to back vf/s | read MB/s |"
+    );
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     let mut points: Vec<(Mode, f64, f64, f64)> = Vec::new();
     for (k, views) in counts.iter().enumerate() {
         let mut order = modes.clone();
@@ -249,15 +307,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             order.reverse();
         }
         for mode in order {
-            let r = run(&scene, side, size, *views, mode, readback, visibility, frames)?;
+            let r = run(&scene, side, size, *views, mode, readback, visibility, frames, spans.as_ref())?;
             let (cpu, whole, gpu) = (median(&r.cpu_ms), median(&r.frame_ms), median(&r.gpu_ms));
             let per_second = *views as f64 / (whole / 1e3);
             let seconds: f64 = r.frame_ms.iter().sum::<f64>() / 1e3;
             let read_mb_s = r.read_bytes as f64 / 1e6 / seconds;
             let (prepare, recording) = (median(&r.prepare_ms), median(&r.record_ms));
+            let pipelined = r.pipelined_per_second;
             println!(
-                "| {mode:?} | {views} | {cpu:.3} | {prepare:.3} | {recording:.3} | {whole:.3} | {gpu:.3} | {per_second:.0} | {read_mb_s:.1} |"
+                "| {mode:?} | {views} | {cpu:.3} | {prepare:.3} | {recording:.3} | {whole:.3} | {gpu:.3} | {per_second:.0} | {pipelined:.0} | {read_mb_s:.1} |"
             );
+            for (name, ms) in r.spans.iter().take(SPANS_SHOWN) {
+                println!("    span {name}: {ms:.3} ms a frame");
+            }
             points.push((mode, *views as f64, cpu, whole));
             record.push_row(
                 Row::new()
@@ -269,6 +331,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     .value("frame_ms_median", whole)
                     .value("gpu_ms_median", gpu.is_finite().then_some(gpu))
                     .value("view_frames_per_second", per_second)
+                    .value("back_to_back_view_frames_per_second", pipelined.is_finite().then_some(pipelined))
+                    .value("span_ms_per_frame", r.spans.iter().fold(Row::new(), |row, (name, ms)| row.value(name, *ms)))
                     .value("read_bytes", r.read_bytes)
                     .value("read_mb_per_second", read_mb_s)
                     .value("cpu_ms_samples", r.cpu_ms)

@@ -6,6 +6,7 @@
 #![warn(missing_docs)]
 
 pub mod record;
+pub mod span_times;
 
 use glam::{DVec3, Quat, UVec2, Vec3, Vec4};
 
