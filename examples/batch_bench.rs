@@ -42,7 +42,8 @@
 //! `tracing` spans over the measured frames (`oxygen_demo::span_times`)
 //! and prints the largest per frame: where the CPU time goes, on any
 //! machine. The spans cost time of their own: compare figures of runs
-//! with spans only with each other.
+//! with spans only with each other. `BATCH_BENCH_TRUST_INDIRECT=1` turns
+//! wgpu's validation of indirect draws off (`RendererOptions::trust_indirect_args`).
 //! Each line gives view-frames per second (V ÷ the median frame time); at
 //! the end the slope of the median times against V (least squares over the
 //! V list) is the per-view cost, CPU and whole frame, per path. With
@@ -144,8 +145,9 @@ fn run(
     visibility: Visibility,
     frames: usize,
     spans: Option<&SpanTimes>,
+    options: &RendererOptions,
 ) -> Result<Run, Box<dyn std::error::Error>> {
-    let mut renderer = Renderer::new_headless_with(RendererOptions::default())?;
+    let mut renderer = Renderer::new_headless_with(*options)?;
     if visibility.on_gpu() && !renderer.gpu_visibility_supported() {
         return Err(format!("{} cannot run GPU visibility", renderer.gpu().describe()).into());
     }
@@ -284,6 +286,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Ok("0") | Err(_) => None,
         Ok(other) => return Err(format!("BATCH_BENCH_SPANS={other}: use 0 or 1").into()),
     };
+    // wgpu's check of every indirect draw's arguments (a compute pass of
+    // its own, recorded per indirect draw), on by default.
+    let trust_indirect_args = match std::env::var("BATCH_BENCH_TRUST_INDIRECT").as_deref() {
+        Ok("1") => true,
+        Ok("0") | Err(_) => false,
+        Ok(other) => return Err(format!("BATCH_BENCH_TRUST_INDIRECT={other}: use 0 or 1").into()),
+    };
+    let options = RendererOptions { trust_indirect_args, ..RendererOptions::default() };
     let (scene, side) = box_grid(boxes);
     let adapter = Renderer::new_headless()?.gpu().adapter_info.clone();
     let mut record = Record::new("batch_bench")
@@ -294,7 +304,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .value("measured_frames", frames)
         .value("readback", readback)
         .value("visibility", format!("{visibility:?}"))
-        .value("spans", spans.is_some());
+        .value("spans", spans.is_some())
+        .value("trust_indirect_args", trust_indirect_args);
     println!("adapter: {} {}", adapter.name, adapter.driver_info);
     println!(
         "| path | V | CPU ms | prepare ms | record ms | frame ms | GPU ms | view-frames/s | back to back vf/s | read MB/s |"
@@ -307,7 +318,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             order.reverse();
         }
         for mode in order {
-            let r = run(&scene, side, size, *views, mode, readback, visibility, frames, spans.as_ref())?;
+            let r = run(&scene, side, size, *views, mode, readback, visibility, frames, spans.as_ref(), &options)?;
             let (cpu, whole, gpu) = (median(&r.cpu_ms), median(&r.frame_ms), median(&r.gpu_ms));
             let per_second = *views as f64 / (whole / 1e3);
             let seconds: f64 = r.frame_ms.iter().sum::<f64>() / 1e3;

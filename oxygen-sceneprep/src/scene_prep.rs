@@ -768,11 +768,14 @@ impl ScenePrep {
             heap.write(queue, &slots.indices, 0, geometry.indices())?;
             self.stats.geometry_uploads += 1;
         }
-        for frame in frames {
-            let (draws, commands) = frame.cpu_offsets();
-            heap.write(queue, &frame.slots.draw_metadata, draws, &frame.draws)?;
-            heap.write(queue, &frame.slots.indirect_args, commands, &frame.indirect_args)?;
-        }
+        // Every view's draws, then every view's commands, as few writes as
+        // their slots allow (adjacent views' ranges are one write).
+        let draws: Vec<_> =
+            frames.iter().map(|f| (&f.slots.draw_metadata, f.cpu_offsets().0, f.draws.as_slice())).collect();
+        heap.write_runs(queue, &draws)?;
+        let commands: Vec<_> =
+            frames.iter().map(|f| (&f.slots.indirect_args, f.cpu_offsets().1, f.indirect_args.as_slice())).collect();
+        heap.write_runs(queue, &commands)?;
         Ok(())
     }
 }
