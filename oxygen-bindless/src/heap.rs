@@ -212,7 +212,8 @@ impl BindlessHeap {
             // Runs of `Pod` records of a domain's size: whole multiples of
             // 4 bytes at 4-byte offsets, as wgpu asks; a refused view falls
             // back to one write per run.
-            let view = wgpu::BufferSize::new(bytes).and_then(|size| queue.write_buffer_with(buffer, first * record_size, size));
+            let view = wgpu::BufferSize::new(bytes)
+                .and_then(|size| queue.write_buffer_with(buffer, first * record_size, size));
             match view {
                 Some(mut view) => {
                     for (start, _, records) in &ranges[at..next] {
@@ -331,7 +332,7 @@ impl BindlessHeap {
         &self.domain_layout
     }
 
-    /// Layout of group 1 (a view's `SceneConstants`).
+    /// Layout of group 3 (a view's `SceneConstants`).
     pub fn scene_constants_layout(&self) -> &wgpu::BindGroupLayout {
         &self.scene_constants_layout
     }

@@ -137,7 +137,7 @@ const _: () = {
     assert!(offset_of!(RendererConstants, reserved0) == 52);
 };
 
-/// The binding of [`SceneConstants`] (group 1, binding 0), including the
+/// The binding of [`SceneConstants`] (group 3, binding 0), including the
 /// WGSL twins of the three structs generated from their Rust declarations
 /// (the shader registry names them `bindless/CameraConstants`,
 /// `bindless/RendererConstants` and `bindless/SceneConstants`).
@@ -201,7 +201,7 @@ impl SceneConstantsBuffer {
         &self.current
     }
 
-    /// The bind group for group 1.
+    /// The bind group for group 3.
     pub fn bind_group(&self) -> &wgpu::BindGroup {
         &self.bind_group
     }

@@ -6,4 +6,6 @@
 #include "bindless/RendererConstants"
 #include "bindless/SceneConstants"
 
-@group(1) @binding(0) var<uniform> scene: SceneConstants;
+// Group 3, the last: a batch's cameras each bind their own, and wgpu
+// rebinds every group from the one that changed to the last.
+@group(3) @binding(0) var<uniform> scene: SceneConstants;

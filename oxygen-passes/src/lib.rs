@@ -11,7 +11,7 @@
 //! * [`Pipelines`]: pipelines created lazily the first time a partition needs
 //!   a variant, compiled by whichever recording thread is idle, then cached
 //!   for the renderer's lifetime; [`LightingResources`]: what the forward
-//!   pass's group 3 binds (shadow atlas, probes, placeholders);
+//!   pass's group 1 binds (shadow atlas, probes, placeholders);
 //! * [`MeshPass`]: the one pass that draws partitions, configured as depth
 //!   pre-pass, shadow map, forward lit (metallic-roughness) or transparent
 //!   (premultiplied alpha); [`TonemapPass`] (HDR → sRGB);

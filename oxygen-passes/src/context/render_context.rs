@@ -18,7 +18,7 @@ pub struct RenderContext<'a> {
     pub view: &'a ResolvedView,
     /// ScenePrep's result for this view.
     pub prepared: &'a PreparedSceneFrame,
-    /// This view's uniform block (bind group 1).
+    /// This view's uniform block (bind group 3).
     pub scene_constants: &'a SceneConstantsBuffer,
     /// The bindless heap (bind group 0, shared index buffer).
     pub heap: &'a BindlessHeap,
@@ -26,7 +26,7 @@ pub struct RenderContext<'a> {
     pub targets: &'a ViewTargets,
     /// Shared pipelines.
     pub pipelines: &'a Pipelines,
-    /// Shared lighting resources (group 3 layout, shadow atlas, probe mips).
+    /// Shared lighting resources (group 1 layout, shadow atlas, probe mips).
     pub lighting: &'a LightingResources,
     /// How partitions are drawn.
     pub draw_path: DrawPath,

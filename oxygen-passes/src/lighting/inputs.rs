@@ -1,10 +1,10 @@
-//! What the shading pass reads from other views (bind group 3): up to four
+//! What the shading pass reads from other views (bind group 1): up to four
 //! cascade depth maps rendered by earlier shadow views of the frame (with a
 //! comparison sampler and the cascades' light view-projections), the atlas of
 //! spot and point-light shadow maps, and up to four reflection probes' six
 //! faces each.
 //!
-//! Every mesh pipeline's layout has group 3, so passes that read none of this
+//! Every mesh pipeline's layout has group 1, so passes that read none of this
 //! bind [`crate::LightingResources::no_lighting_inputs`]: 1 × 1 placeholders, a
 //! cascade count of 0 and no probe.
 
@@ -41,7 +41,7 @@ pub(crate) struct LightingInputResources {
     pub(crate) placeholder_atlas: wgpu::TextureView,
 }
 
-/// What every group 3 binds alike: the samplers and the split-sum table.
+/// What every group 1 binds alike: the samplers and the split-sum table.
 pub(crate) struct SharedInputs<'a> {
     sampler: &'a wgpu::Sampler,
     probe_sampler: &'a wgpu::Sampler,

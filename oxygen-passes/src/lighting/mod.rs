@@ -5,8 +5,8 @@
 //! resources every view shares ([`LightingResources`]), the local shadow
 //! atlas, the split-sum table and image-based lighting (`ibl`). Data flows
 //! one way: `params` is a leaf (the shader registry reads it too), the
-//! split-sum table and the shadow atlas are built from it, group 3 binds
-//! them, the resources hold group 3; the pipelines read its layout, never
+//! split-sum table and the shadow atlas are built from it, group 1 binds
+//! them, the resources hold group 1; the pipelines read its layout, never
 //! the other way round.
 
 pub(crate) mod ibl;

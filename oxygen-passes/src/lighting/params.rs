@@ -1,14 +1,14 @@
-//! Bind group 3's layout as its WGSL reads it: the uniform block
+//! Bind group 1's layout as its WGSL reads it: the uniform block
 //! ([`LightingInputs`]), the sizes and binding numbers, and the split-sum
 //! table's size, written into the shaders as generated constants
 //! ([`wgsl_constants`]). A leaf: the shader registry reads it, and so does
-//! every module of the folder that builds group 3.
+//! every module of the folder that builds group 1.
 
 /// Cascades the shading pass can sample.
 pub const MAX_CASCADES: usize = 4;
 
 oxygen_gpu::gpu_struct! {
-    /// The uniform block of group 3; its WGSL twin is generated from this
+    /// The uniform block of group 1; its WGSL twin is generated from this
     /// declaration ([`oxygen_gpu::GpuStruct::wgsl`]) and included by
     /// `forward_lit.wgsl`.
     #[derive(Debug, PartialEq)]
@@ -64,7 +64,7 @@ const _: () = assert!(MAX_SHADOW_TILES as u32 == oxygen_sceneprep::MAX_SHADOW_TI
 const _: () = assert!(MAX_CASCADES == 4 && MAX_PROBES == 4);
 const _: () = assert!(MAX_SHADOW_TILES.is_multiple_of(4));
 
-/// The numbers of group 3 that the shading pass's WGSL reads, by their
+/// The numbers of group 1 that the shading pass's WGSL reads, by their
 /// Rust names: [`wgsl_constants`] emits exactly these.
 fn shared_numbers() -> [(&'static str, u32); 13] {
     [
@@ -86,14 +86,14 @@ fn shared_numbers() -> [(&'static str, u32); 13] {
 
 /// WGSL `const` declarations of the sizes the shading pass shares with
 /// [`LightingInputs`] (`MAX_CASCADES`, `MAX_SHADOW_TILES`, `MAX_PROBES`,
-/// `PROBE_FACES`) and the bindings of group 3, under their Rust names.
+/// `PROBE_FACES`) and the bindings of group 1, under their Rust names.
 /// Included by every mesh shader (through `mesh/mesh_vertex.wgsl`) and the
 /// reference tracer.
 pub(crate) fn wgsl_constants() -> String {
     crate::shaders::compose::u32_constants(&shared_numbers())
 }
 
-// Bindings of group 3 after the cascade maps (0..MAX_CASCADES).
+// Bindings of group 1 after the cascade maps (0..MAX_CASCADES).
 pub(crate) const COMPARISON_SAMPLER_BINDING: u32 = MAX_CASCADES as u32;
 pub(crate) const UNIFORM_BINDING: u32 = MAX_CASCADES as u32 + 1;
 pub(crate) const PROBE_SAMPLER_BINDING: u32 = MAX_CASCADES as u32 + 2;

@@ -1,5 +1,5 @@
 //! The lighting resources every view shares: the layout and placeholders of
-//! bind group 3 (what the forward pass reads from other views), the local
+//! bind group 1 (what the forward pass reads from other views), the local
 //! shadow atlas, the split-sum table, the prefiltered environment and the
 //! cube filter that builds it and re-filters probes. Split from
 //! [`crate::Pipelines`] because they are inputs of the lighting, not
@@ -9,7 +9,7 @@ use crate::lighting::ibl::cube_filter::{CubeFilter, EnvironmentQuality, HARMONIC
 use crate::lighting::inputs::LightingInputResources;
 use crate::{LightingInputs, MAX_CASCADES, MAX_PROBES};
 
-/// Group 3's layout and placeholders, the local shadow atlas, the
+/// Group 1's layout and placeholders, the local shadow atlas, the
 /// environment and the cube filter.
 pub struct LightingResources {
     inputs: LightingInputResources,
@@ -21,7 +21,7 @@ pub struct LightingResources {
 }
 
 /// The prefiltered environment on the GPU (faces and levels, the
-/// harmonics in layer 6), and the group 3 that binds it for passes without
+/// harmonics in layer 6), and the group 1 that binds it for passes without
 /// other lighting inputs.
 struct EnvironmentTexture {
     texture: wgpu::Texture,
@@ -194,18 +194,18 @@ impl LightingResources {
         self.environment.is_some()
     }
 
-    /// The layout of bind group 3.
+    /// The layout of bind group 1.
     pub fn layout(&self) -> &wgpu::BindGroupLayout {
         &self.inputs.layout
     }
 
-    /// Group 3 for passes that read no shadow maps and no probe (with the
+    /// Group 1 for passes that read no shadow maps and no probe (with the
     /// environment, when there is one).
     pub fn no_lighting_inputs(&self) -> &wgpu::BindGroup {
         self.environment.as_ref().map_or(&self.inputs.no_inputs, |e| &e.no_inputs)
     }
 
-    /// A group 3 with these cascade maps (unused slots `None`), local shadow
+    /// A group 1 with these cascade maps (unused slots `None`), local shadow
     /// atlas, probes (six-layer array views, or `None`) and their uniform
     /// block.
     pub fn bind_group(

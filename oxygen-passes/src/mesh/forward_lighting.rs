@@ -1,4 +1,4 @@
-//! What the forward lit pass reads from other views, as bind group 3: the
+//! What the forward lit pass reads from other views, as bind group 1: the
 //! view's own sun cascades, the frame's local-light shadow atlas and the
 //! reflection probes the view is linked to. Every input is awaited: the pass
 //! goes on once the views that render it have recorded.
@@ -7,7 +7,7 @@ use bytemuck::Zeroable;
 
 use crate::{ForwardLitConfig, LightingInputs, MAX_CASCADES, MAX_PROBES, PassError, RenderContext};
 
-/// Group 3 for this view, or `None` when it reads no shadow map and no probe
+/// Group 1 for this view, or `None` when it reads no shadow map and no probe
 /// (the shared empty group is bound then).
 pub(crate) async fn bind_group(
     ctx: &RenderContext<'_>,

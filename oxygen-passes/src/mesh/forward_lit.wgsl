@@ -55,27 +55,27 @@ fn fit_hdr(color: vec3<f32>) -> vec3<f32> {
     return color;
 }
 
-// Group 3: what this view reads from other views (see lighting/inputs.rs and lighting/params.rs):
+// Group 1: what this view reads from other views (see lighting/inputs.rs and lighting/params.rs):
 // cascade shadow maps (bindings 0 to MAX_CASCADES - 1, one per cascade),
 // the local-light shadow atlas and the reflection probes. The sizes and
 // bindings are constants generated from lighting/params.rs.
 #include "lighting/LightingInputs"
-@group(3) @binding(0) var shadow_map_0: texture_depth_2d;
-@group(3) @binding(1) var shadow_map_1: texture_depth_2d;
-@group(3) @binding(2) var shadow_map_2: texture_depth_2d;
-@group(3) @binding(3) var shadow_map_3: texture_depth_2d;
-@group(3) @binding(COMPARISON_SAMPLER_BINDING) var shadow_sampler: sampler_comparison;
-@group(3) @binding(UNIFORM_BINDING) var<uniform> shadows: LightingInputs;
-@group(3) @binding(PROBE_SAMPLER_BINDING) var probe_sampler: sampler;
-@group(3) @binding(FIRST_PROBE_BINDING) var probe_faces_0: texture_2d_array<f32>;
-@group(3) @binding(FIRST_PROBE_BINDING + 1u) var probe_faces_1: texture_2d_array<f32>;
-@group(3) @binding(FIRST_PROBE_BINDING + 2u) var probe_faces_2: texture_2d_array<f32>;
-@group(3) @binding(FIRST_PROBE_BINDING + 3u) var probe_faces_3: texture_2d_array<f32>;
-@group(3) @binding(ENVIRONMENT_BINDING) var environment_faces: texture_2d_array<f32>;
-@group(3) @binding(ENVIRONMENT_SAMPLER_BINDING) var environment_sampler: sampler;
+@group(1) @binding(0) var shadow_map_0: texture_depth_2d;
+@group(1) @binding(1) var shadow_map_1: texture_depth_2d;
+@group(1) @binding(2) var shadow_map_2: texture_depth_2d;
+@group(1) @binding(3) var shadow_map_3: texture_depth_2d;
+@group(1) @binding(COMPARISON_SAMPLER_BINDING) var shadow_sampler: sampler_comparison;
+@group(1) @binding(UNIFORM_BINDING) var<uniform> shadows: LightingInputs;
+@group(1) @binding(PROBE_SAMPLER_BINDING) var probe_sampler: sampler;
+@group(1) @binding(FIRST_PROBE_BINDING) var probe_faces_0: texture_2d_array<f32>;
+@group(1) @binding(FIRST_PROBE_BINDING + 1u) var probe_faces_1: texture_2d_array<f32>;
+@group(1) @binding(FIRST_PROBE_BINDING + 2u) var probe_faces_2: texture_2d_array<f32>;
+@group(1) @binding(FIRST_PROBE_BINDING + 3u) var probe_faces_3: texture_2d_array<f32>;
+@group(1) @binding(ENVIRONMENT_BINDING) var environment_faces: texture_2d_array<f32>;
+@group(1) @binding(ENVIRONMENT_SAMPLER_BINDING) var environment_sampler: sampler;
 // The split-sum table's half floats, two texels (RGBA16F) per vec4<u32>
 // (environment.wgsl reads it, the environment and the cube layout).
-@group(3) @binding(SPLIT_SUM_BINDING) var<uniform> split_sum: array<vec4<u32>, SPLIT_SUM_LUT_SIZE * SPLIT_SUM_LUT_SIZE / 2u>;
+@group(1) @binding(SPLIT_SUM_BINDING) var<uniform> split_sum: array<vec4<u32>, SPLIT_SUM_LUT_SIZE * SPLIT_SUM_LUT_SIZE / 2u>;
 
 // The probe nearest to `position` (the surface reflects what that probe saw).
 fn nearest_probe(position: vec3<f32>) -> u32 {
@@ -109,7 +109,7 @@ fn probe_lod(levels: u32, roughness: f32) -> f32 {
     let usable = max(f32(levels) - 3.0, 0.0);
     return clamp(roughness, 0.0, 1.0) * usable;
 }
-@group(3) @binding(SHADOW_ATLAS_BINDING) var shadow_atlas: texture_depth_2d_array;
+@group(1) @binding(SHADOW_ATLAS_BINDING) var shadow_atlas: texture_depth_2d_array;
 
 // Fraction of a shadow-casting local light's light reaching `world_position`
 // through atlas tile `slot` (a spot's map, or one cube face of a point

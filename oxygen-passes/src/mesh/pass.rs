@@ -611,8 +611,10 @@ struct Bound {
 }
 
 impl Bound {
-    /// Sets the bindless and scene-constant bind groups, group 3 and the
-    /// shared index buffer of `ctx`, each unless already bound.
+    /// Sets the bindless groups (0, 2), the lighting inputs (1), the scene
+    /// constants (3) and the shared index buffer of `ctx`, each unless
+    /// already bound. Only the constants differ from camera to camera of a
+    /// batch: as the last group, a change rebinds nothing else.
     fn view_resources(&mut self, pass: &mut wgpu::RenderPass<'_>, ctx: &RenderContext<'_>, lighting: &wgpu::BindGroup) {
         let heap = (ctx.heap.bind_group(), ctx.heap.texture_bind_group(), ctx.heap.index_buffer());
         if self.heap.as_ref().is_none_or(|(a, b, c)| (a, b, c) != heap) {
@@ -621,14 +623,14 @@ impl Bound {
             pass.set_index_buffer(heap.2.slice(..), wgpu::IndexFormat::Uint32);
             self.heap = Some((heap.0.clone(), heap.1.clone(), heap.2.clone()));
         }
+        if self.lighting.as_ref() != Some(lighting) {
+            pass.set_bind_group(1, lighting, &[]);
+            self.lighting = Some(lighting.clone());
+        }
         let constants = ctx.scene_constants.bind_group();
         if self.constants.as_ref() != Some(constants) {
-            pass.set_bind_group(1, constants, &[]);
+            pass.set_bind_group(3, constants, &[]);
             self.constants = Some(constants.clone());
-        }
-        if self.lighting.as_ref() != Some(lighting) {
-            pass.set_bind_group(3, lighting, &[]);
-            self.lighting = Some(lighting.clone());
         }
     }
 

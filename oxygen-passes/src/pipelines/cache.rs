@@ -58,15 +58,18 @@ enum Entry {
 
 impl Pipelines {
     /// Pipelines over the heap's bind-group layouts and the lighting inputs'
-    /// (group 3).
+    /// (group 1). The view's scene constants are the last group (3): the
+    /// one a batch's cameras change from camera to camera, and wgpu rebinds
+    /// every group from the one set to the last (the bindless textures of
+    /// group 2 each time, were the constants group 1).
     pub fn new(device: &wgpu::Device, heap: &BindlessHeap, lighting: &crate::LightingResources) -> Self {
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("oxygen bindless pipeline layout"),
             bind_group_layouts: &[
                 Some(heap.domain_layout()),
-                Some(heap.scene_constants_layout()),
-                Some(heap.texture_layout()),
                 Some(lighting.layout()),
+                Some(heap.texture_layout()),
+                Some(heap.scene_constants_layout()),
             ],
             immediate_size: 0,
         });

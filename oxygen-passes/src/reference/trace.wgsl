@@ -1,14 +1,14 @@
 // The path-traced reference: one compute invocation per pixel traces
 // `samples_this_frame` paths through the same bindless geometry, transforms,
 // materials and lights the raster passes read (group 0), with the view's
-// camera (group 1) and textures (group 2), and adds them to the view's
+// camera (group 3) and textures (group 2), and adds them to the view's
 // running sum; the HDR target gets the mean, for the same tone map.
 //
 // The ray scene lives in three compute-only domains of the heap (group 0):
 // a two-level bounding volume hierarchy (instances on top, one tree per
 // mesh below, all nodes in one range with indices relative to its start),
 // the instance records, and a word range (leaf orders, then each instance's
-// submesh table). Group 3 holds the tracer's parameters (with the ranges'
+// submesh table). Group 1 holds the tracer's parameters (with the ranges'
 // starts), the heap's index buffer, the view's running sum and the output.
 //
 // Light transport: next-event estimation towards every directional and
@@ -42,15 +42,15 @@ const NO_HIT: u32 = 0xFFFFFFFFu;
 // The raster pass's constant ambient (forward_lit.wgsl's AMBIENT).
 const RASTER_AMBIENT: f32 = 0.03;
 
-@group(3) @binding(0) var<uniform> params: TraceParams;
-@group(3) @binding(4) var<storage, read> index_words: array<u32>;
-@group(3) @binding(5) var<storage, read_write> running_sum: array<vec4<f32>>;
-@group(3) @binding(6) var output: texture_storage_2d<rgba16float, write>;
+@group(1) @binding(0) var<uniform> params: TraceParams;
+@group(1) @binding(4) var<storage, read> index_words: array<u32>;
+@group(1) @binding(5) var<storage, read_write> running_sum: array<vec4<f32>>;
+@group(1) @binding(6) var output: texture_storage_2d<rgba16float, write>;
 // What the shading pass reads (environment.wgsl): the renderer's
 // environment (a placeholder without one) and the split-sum table.
-@group(3) @binding(7) var environment_faces: texture_2d_array<f32>;
-@group(3) @binding(8) var environment_sampler: sampler;
-@group(3) @binding(9) var<uniform> split_sum: array<vec4<u32>, SPLIT_SUM_LUT_SIZE * SPLIT_SUM_LUT_SIZE / 2u>;
+@group(1) @binding(7) var environment_faces: texture_2d_array<f32>;
+@group(1) @binding(8) var environment_sampler: sampler;
+@group(1) @binding(9) var<uniform> split_sum: array<vec4<u32>, SPLIT_SUM_LUT_SIZE * SPLIT_SUM_LUT_SIZE / 2u>;
 
 fn has_environment_map() -> bool {
     return (params.flags & ENVIRONMENT_MAP) != 0u;

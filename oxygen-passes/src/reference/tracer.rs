@@ -159,9 +159,9 @@ impl ReferenceTracer {
             label: Some("reference tracer"),
             bind_group_layouts: &[
                 Some(heap.domain_layout()),
-                Some(heap.scene_constants_layout()),
-                Some(heap.texture_layout()),
                 Some(&layout),
+                Some(heap.texture_layout()),
+                Some(heap.scene_constants_layout()),
             ],
             immediate_size: 0,
         });
@@ -358,9 +358,9 @@ impl ReferenceTracer {
             });
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, ctx.heap.bind_group(), &[]);
-            pass.set_bind_group(1, ctx.scene_constants.bind_group(), &[]);
+            pass.set_bind_group(1, &bind_group, &[]);
             pass.set_bind_group(2, ctx.heap.texture_bind_group(), &[]);
-            pass.set_bind_group(3, &bind_group, &[]);
+            pass.set_bind_group(3, ctx.scene_constants.bind_group(), &[]);
             pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
             drop(pass);
             state.samples += this_frame;

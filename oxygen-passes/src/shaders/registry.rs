@@ -23,7 +23,7 @@ pub(crate) static SOURCES: &[Source] = &[
     Source::wgsl("mesh/depth_only.wgsl", include_str!("../mesh/depth_only.wgsl")),
     Source::wgsl("mesh/forward_lit.wgsl", include_str!("../mesh/forward_lit.wgsl")),
     Source::wgsl("mesh/labels.wgsl", include_str!("../mesh/labels.wgsl")),
-    // Lighting: group 3, the split-sum table, image-based lighting.
+    // Lighting: group 1, the split-sum table, image-based lighting.
     Source::generated("lighting/constants", crate::lighting::params::wgsl_constants),
     Source::gpu_struct::<crate::lighting::params::LightingInputs>("lighting/LightingInputs"),
     Source::wgsl("lighting/split_sum.wgsl", include_str!("../lighting/split_sum.wgsl")),
