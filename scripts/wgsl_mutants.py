@@ -92,9 +92,10 @@ CULL = PASSES + "visibility/cull.wgsl"
 TRACE = PASSES + "reference/trace.wgsl"
 # The renderer's window composition (the root crate's compositor draws with it).
 WINDOWS = PASSES + "present/compose_window.wgsl"
-# Per-pixel labels and insets (issue 29). The depth copy runs on GL only,
+# Per-pixel labels (written by the shading pass or the labels pass, one
+# function) and insets (issue 29). The depth copy runs on GL only,
 # which this script's runs do not use.
-LABELS = PASSES + "mesh/labels.wgsl"
+LABELS = PASSES + "mesh/label_values.wgsl"
 COMPOSITE = PASSES + "post/composite.wgsl"
 
 # (name, file, old text, new text, what the mutant breaks), one list per

@@ -197,11 +197,11 @@ impl RenderGraph for StandardGraph {
         // shading tone-maps in place and the frame skips the HDR write and
         // the full-screen tone-map pass.
         if !ctx.hdr_read_after_shading() {
-            MeshPass::forward_lit(lit).tone_mapped(exposure).run(ctx, rec).await?;
+            MeshPass::forward_lit(lit).with_labels().tone_mapped(exposure).run(ctx, rec).await?;
             return labels_if_asked(&[ctx], rec).await;
         }
         let mut transparent = MeshPass::transparent();
-        let mut shading = MeshPass::forward_lit(lit);
+        let mut shading = MeshPass::forward_lit(lit).with_labels();
         if !transparent.has_draws(ctx) {
             // Shading is the last colour pass: a multisampled view keeps
             // only the resolve.
@@ -293,10 +293,10 @@ impl BatchGraph {
             MeshPass::depth_pre_pass().run_batch(views, rec).await?;
         }
         if !views.iter().any(|ctx| ctx.hdr_read_after_shading()) {
-            MeshPass::forward_lit(lit).tone_mapped(exposure).run_batch(views, rec).await?;
+            MeshPass::forward_lit(lit).with_labels().tone_mapped(exposure).run_batch(views, rec).await?;
             return labels_if_asked(views, rec).await;
         }
-        MeshPass::forward_lit(lit).run_batch(views, rec).await?;
+        MeshPass::forward_lit(lit).with_labels().run_batch(views, rec).await?;
         MeshPass::transparent().run_batch(views, rec).await?;
         // The tone map covers its whole target: once per page of the atlas
         // (per view for views with targets of their own).
@@ -313,10 +313,13 @@ impl BatchGraph {
     }
 }
 
-/// The labels pass ([`MeshPass::labels`]) over the views that asked for
-/// labels (they have label targets); nothing when none did.
+/// The labels the shading pass could not write ([`MeshPass::with_labels`]
+/// writes those of single-sampled views): the labels pass
+/// ([`MeshPass::labels`]) over the multisampled views that asked for
+/// labels, which it refuses with a clear error; nothing when none did.
 async fn labels_if_asked(views: &[&RenderContext<'_>], rec: &mut CommandRecorder) -> Result<(), PassError> {
-    let asked: Vec<&RenderContext<'_>> = views.iter().copied().filter(|ctx| ctx.targets.labels.is_some()).collect();
+    let asked: Vec<&RenderContext<'_>> =
+        views.iter().copied().filter(|ctx| ctx.targets.labels.is_some() && ctx.targets.msaa.is_some()).collect();
     if asked.is_empty() {
         return Ok(());
     }

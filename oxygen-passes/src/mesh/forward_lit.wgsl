@@ -13,6 +13,7 @@
 // `tests/shading_finite.rs` runs these functions over such inputs.
 
 #include "mesh/mesh_vertex.wgsl"
+#include "mesh/label_values.wgsl"
 #include "post/tonemap_operator.wgsl"
 #include "shaders/brdf.wgsl"
 #include "lighting/ibl/environment.wgsl"
@@ -362,8 +363,9 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Der
     return vec4<f32>(color, base.a);
 }
 
-@fragment
-fn fs_opaque(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> @location(0) vec4<f32> {
+// An opaque surface's colour (the stale-draw colour for a draw read
+// through a stale range).
+fn opaque_color(mesh: MeshVarying, front_facing: bool) -> vec4<f32> {
     let d = derivatives_of(mesh);
     if mesh.material == INVALID_SLOT {
         return output_color(STALE_DRAW_COLOR.rgb);
@@ -372,8 +374,9 @@ fn fs_opaque(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> @l
     return output_color(fit_hdr(shaded.rgb));
 }
 
-@fragment
-fn fs_masked(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> @location(0) vec4<f32> {
+// An alpha-tested surface's colour; discards what its cutoff cuts out.
+// Called first thing by its entry points: derivatives in uniform control flow.
+fn masked_color(mesh: MeshVarying, front_facing: bool) -> vec4<f32> {
     let d = derivatives_of(mesh);
     if mesh.material == INVALID_SLOT {
         return output_color(STALE_DRAW_COLOR.rgb);
@@ -384,6 +387,40 @@ fn fs_masked(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> @l
         discard;
     }
     return output_color(fit_hdr(shaded.rgb));
+}
+
+@fragment
+fn fs_opaque(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> @location(0) vec4<f32> {
+    return opaque_color(mesh, front_facing);
+}
+
+@fragment
+fn fs_masked(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> @location(0) vec4<f32> {
+    return masked_color(mesh, front_facing);
+}
+
+// The shading pass of a view that asked for labels writes them with the
+// colour (one geometry pass, not two): the colour of fs_opaque and
+// fs_masked, the labels of mesh/labels.wgsl at locations 1 and 2.
+struct Labelled {
+    @location(0) color: vec4<f32>,
+    @location(1) instance: u32,
+    @location(2) normal: vec4<f32>,
+}
+
+fn labelled(color: vec4<f32>, mesh: MeshVarying, front_facing: bool) -> Labelled {
+    let labels = labels_of(mesh, front_facing);
+    return Labelled(color, labels.instance, labels.normal);
+}
+
+@fragment
+fn fs_opaque_labelled(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> Labelled {
+    return labelled(opaque_color(mesh, front_facing), mesh, front_facing);
+}
+
+@fragment
+fn fs_masked_labelled(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> Labelled {
+    return labelled(masked_color(mesh, front_facing), mesh, front_facing);
 }
 
 // Transparent surfaces: premultiplied alpha (blend One, OneMinusSrcAlpha).

@@ -5,21 +5,7 @@
 // cuts out, as shading did.
 
 #include "mesh/mesh_vertex.wgsl"
-
-struct Labels {
-    @location(0) instance: u32,
-    @location(1) normal: vec4<f32>,
-}
-
-fn labels_of(mesh: MeshVarying, front_facing: bool) -> Labels {
-    // Only double-sided surfaces show back faces (the others are culled):
-    // their normal faces the camera, as shading lights them.
-    var n = normalize(mesh.world_normal);
-    if !front_facing {
-        n = -n;
-    }
-    return Labels(mesh.node + 1u, vec4<f32>(n, 1.0));
-}
+#include "mesh/label_values.wgsl"
 
 @fragment
 fn fs_labels(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> Labels {

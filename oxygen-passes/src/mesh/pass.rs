@@ -134,6 +134,9 @@ pub struct MeshPass {
     /// With MSAA: whether the multisampled colour is stored after the
     /// resolve (for a later pass that loads it).
     keep_samples: bool,
+    /// A shading pass that writes the pixel labels of the views that have
+    /// label targets with their colour ([`MeshPass::with_labels`]).
+    write_labels: bool,
 }
 
 impl MeshPass {
@@ -153,6 +156,7 @@ impl MeshPass {
             lighting: None,
             statistics: None,
             keep_samples: true,
+            write_labels: false,
         }
     }
 
@@ -188,6 +192,7 @@ impl MeshPass {
             lighting: Some(config),
             statistics: None,
             keep_samples: true,
+            write_labels: false,
         }
     }
 
@@ -209,6 +214,7 @@ impl MeshPass {
             lighting: None,
             statistics: None,
             keep_samples: true,
+            write_labels: false,
         }
     }
 
@@ -231,6 +237,7 @@ impl MeshPass {
             lighting: None,
             statistics: None,
             keep_samples: true,
+            write_labels: false,
         }
     }
 
@@ -262,6 +269,20 @@ impl MeshPass {
     /// fragments a pass shades.
     pub fn with_statistics(self, set: wgpu::QuerySet, index: u32) -> Self {
         MeshPass { statistics: Some((set, index)), ..self }
+    }
+
+    /// The same shading pass also writing the pixel labels (the node that
+    /// drew each pixel and its world normal, what [`MeshPass::labels`]
+    /// draws in a pass of its own) into the label targets of every view
+    /// that has them and is single-sampled: one geometry pass for colour
+    /// and labels. Other passes and views are unchanged.
+    pub fn with_labels(self) -> Self {
+        MeshPass { write_labels: matches!(self.kind, PassKind::Shading | PassKind::ShadingAfterPrePass), ..self }
+    }
+
+    /// Whether this pass writes `ctx`'s labels with its colour.
+    fn labels_in_pass(&self, ctx: &RenderContext<'_>) -> bool {
+        self.write_labels && ctx.targets.labels.is_some() && ctx.targets.msaa.is_none()
     }
 
     /// The same pass tone-mapping at the end of its fragment shader (the
@@ -411,6 +432,7 @@ impl MeshPass {
             features: self.shader_features(ctx),
             tone_map: self.tone_map(),
             samples: ctx.targets.samples(),
+            labels: self.labels_in_pass(ctx),
         }
     }
 
@@ -533,6 +555,10 @@ impl MeshPass {
             let label_attachments = match (&lead.targets.labels, self.kind) {
                 (Some(labels), PassKind::Labels) => {
                     vec![cleared(&labels.instances_view), cleared(&labels.normals_view)]
+                }
+                // Shading that writes the labels too: colour, then labels.
+                (Some(labels), _) if self.labels_in_pass(lead) => {
+                    vec![color_attachment.clone(), cleared(&labels.instances_view), cleared(&labels.normals_view)]
                 }
                 _ => Vec::new(),
             };

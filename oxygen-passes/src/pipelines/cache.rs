@@ -163,7 +163,8 @@ impl Pipelines {
 
     fn create(&self, device: &wgpu::Device, module: &wgpu::ShaderModule, key: PipelineKey) -> wgpu::RenderPipeline {
         let masked = key.variant.alpha == AlphaClass::Masked;
-        let (vertex_entry, fragment_entry) = mesh_entry_points(key.pass, masked);
+        let labels = key.labels && matches!(key.pass, PassKind::Shading | PassKind::ShadingAfterPrePass);
+        let (vertex_entry, fragment_entry) = mesh_entry_points(key.pass, masked, labels);
         let (depth_write, depth_compare) = match key.pass {
             PassKind::DepthPrePass | PassKind::Shadow | PassKind::Shading => (true, wgpu::CompareFunction::Greater),
             PassKind::ShadingAfterPrePass | PassKind::Transparent | PassKind::Labels => {
@@ -175,6 +176,9 @@ impl Pipelines {
         let target = |format| Some(wgpu::ColorTargetState { format, blend, write_mask: wgpu::ColorWrites::ALL });
         let targets: Vec<Option<wgpu::ColorTargetState>> = match key.pass {
             PassKind::Labels => vec![target(LABEL_INSTANCE_FORMAT), target(LABEL_NORMAL_FORMAT)],
+            _ if labels => {
+                vec![key.color_format.and_then(target), target(LABEL_INSTANCE_FORMAT), target(LABEL_NORMAL_FORMAT)]
+            }
             _ => vec![key.color_format.and_then(target)],
         };
         // The same constants for both stages: wgpu rejects a constant the
@@ -185,7 +189,7 @@ impl Pipelines {
             module,
             entry_point: Some(entry),
             compilation_options: compilation_options(),
-            targets: if key.color_format.is_some() || key.pass == PassKind::Labels { &targets } else { &[] },
+            targets: if key.color_format.is_some() || key.pass == PassKind::Labels || labels { &targets } else { &[] },
         });
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(&format!("{:?} {:?}", key.pass, key.variant)),

@@ -120,6 +120,11 @@ pub struct PipelineKey {
     pub tone_map: Option<Exposure>,
     /// Samples per pixel of the targets (1, or 2 and 4 with MSAA).
     pub samples: u32,
+    /// A shading pass that also writes the pixel labels (instance id and
+    /// world normal, colour targets 1 and 2 in the formats of
+    /// [`oxygen_gpu::LABEL_INSTANCE_FORMAT`] and [`oxygen_gpu::LABEL_NORMAL_FORMAT`]):
+    /// one geometry pass for colour and labels. Other passes ignore it.
+    pub labels: bool,
 }
 
 impl PipelineKey {
@@ -129,9 +134,10 @@ impl PipelineKey {
     pub(super) fn canonical(self) -> Self {
         match self.pass {
             PassKind::DepthPrePass | PassKind::Shadow | PassKind::Labels => {
-                PipelineKey { features: ShaderFeatures::ALL, tone_map: None, ..self }
+                PipelineKey { features: ShaderFeatures::ALL, tone_map: None, labels: false, ..self }
             }
-            PassKind::ShadingAfterPrePass | PassKind::Shading | PassKind::Transparent => self,
+            PassKind::Transparent => PipelineKey { labels: false, ..self },
+            PassKind::ShadingAfterPrePass | PassKind::Shading => self,
         }
     }
 

@@ -19,11 +19,17 @@ pub(crate) fn mesh_module(pass: PassKind) -> ShaderModule {
 
 /// The vertex and fragment entry points of a pipeline of `pass`, for an
 /// alpha-tested (`masked`) variant or not; no fragment stage for an opaque
-/// depth-only variant, which only writes depth.
-pub(crate) fn mesh_entry_points(pass: PassKind, masked: bool) -> (&'static str, Option<&'static str>) {
+/// depth-only variant, which only writes depth. A shading pass with
+/// `labels` writes the pixel labels with its colour.
+pub(crate) fn mesh_entry_points(pass: PassKind, masked: bool, labels: bool) -> (&'static str, Option<&'static str>) {
     let fragment = match pass {
         PassKind::DepthPrePass | PassKind::Shadow => masked.then_some("fs_alpha_test"),
-        PassKind::ShadingAfterPrePass | PassKind::Shading => Some(if masked { "fs_masked" } else { "fs_opaque" }),
+        PassKind::ShadingAfterPrePass | PassKind::Shading => Some(match (masked, labels) {
+            (false, false) => "fs_opaque",
+            (true, false) => "fs_masked",
+            (false, true) => "fs_opaque_labelled",
+            (true, true) => "fs_masked_labelled",
+        }),
         // Blended surfaces have their own stage whatever their alpha class.
         PassKind::Transparent => Some("fs_blend"),
         PassKind::Labels => Some(if masked { "fs_labels_masked" } else { "fs_labels" }),

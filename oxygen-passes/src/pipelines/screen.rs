@@ -43,11 +43,14 @@ impl Pipelines {
         let module = self.module(device, PassKind::Shading);
         let constants = PipelineKey { pass: PassKind::Shading, ..key }.override_constants();
         let options = || wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() };
-        let targets = [key.color_format.map(|format| wgpu::ColorTargetState {
-            format,
-            blend: None,
-            write_mask: wgpu::ColorWrites::ALL,
-        })];
+        let target = |format, write_mask| Some(wgpu::ColorTargetState { format, blend: None, write_mask });
+        // A pass that writes labels has their targets too; the sky leaves
+        // them as cleared (no node: 0).
+        let mut targets = vec![key.color_format.and_then(|f| target(f, wgpu::ColorWrites::ALL))];
+        if key.labels && matches!(key.pass, PassKind::Shading | PassKind::ShadingAfterPrePass) {
+            targets.push(target(oxygen_gpu::LABEL_INSTANCE_FORMAT, wgpu::ColorWrites::empty()));
+            targets.push(target(oxygen_gpu::LABEL_NORMAL_FORMAT, wgpu::ColorWrites::empty()));
+        }
         let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("sky"),
             layout: Some(&self.layout),

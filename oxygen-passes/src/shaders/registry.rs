@@ -23,6 +23,7 @@ pub(crate) static SOURCES: &[Source] = &[
     Source::wgsl("mesh/depth_only.wgsl", include_str!("../mesh/depth_only.wgsl")),
     Source::wgsl("mesh/forward_lit.wgsl", include_str!("../mesh/forward_lit.wgsl")),
     Source::wgsl("mesh/labels.wgsl", include_str!("../mesh/labels.wgsl")),
+    Source::wgsl("mesh/label_values.wgsl", include_str!("../mesh/label_values.wgsl")),
     // Lighting: group 1, the split-sum table, image-based lighting.
     Source::generated("lighting/constants", crate::lighting::params::wgsl_constants),
     Source::gpu_struct::<crate::lighting::params::LightingInputs>("lighting/LightingInputs"),
@@ -208,6 +209,8 @@ pub(crate) const ENTRY_POINTS: &[EntryPoint] = &[
     entry(FORWARD_LIT, "vs_main", Stage::Vertex),
     entry(FORWARD_LIT, "fs_opaque", Stage::Fragment),
     entry(FORWARD_LIT, "fs_masked", Stage::Fragment),
+    entry(FORWARD_LIT, "fs_opaque_labelled", Stage::Fragment),
+    entry(FORWARD_LIT, "fs_masked_labelled", Stage::Fragment),
     entry(FORWARD_LIT, "fs_blend", Stage::Fragment),
     entry(FORWARD_LIT, "vs_sky", Stage::Vertex),
     entry(FORWARD_LIT, "fs_sky", Stage::Fragment),

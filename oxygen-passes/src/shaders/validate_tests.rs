@@ -184,13 +184,13 @@ fn pass_kinds() -> [PassKind; 6] {
 fn every_pass_kind_uses_listed_entry_points_of_its_module() {
     for pass in pass_kinds() {
         let module = mesh_module(pass);
-        for masked in [false, true] {
-            let (vertex, fragment) = mesh_entry_points(pass, masked);
+        for (masked, labels) in [(false, false), (true, false), (false, true), (true, true)] {
+            let (vertex, fragment) = mesh_entry_points(pass, masked, labels);
             for (name, stage) in [(Some(vertex), Stage::Vertex), (fragment, Stage::Fragment)] {
                 let Some(name) = name else { continue };
                 assert!(
                     ENTRY_POINTS.iter().any(|e| e.module == module && e.name == name && e.stage == stage),
-                    "{pass:?} (masked: {masked}) uses {name}, not a {stage:?} entry point of {} in ENTRY_POINTS",
+                    "{pass:?} (masked: {masked}, labels: {labels}) uses {name}, not a {stage:?} entry point of {} in ENTRY_POINTS",
                     module.root
                 );
             }
@@ -216,6 +216,7 @@ fn every_override_constant_of_a_mesh_pipeline_is_declared() {
             features: ShaderFeatures::NONE,
             tone_map: Some(Exposure::new(1.0)),
             samples: 1,
+            labels: true,
         };
         let module = mesh_module(pass);
         for path in paths(module) {
