@@ -262,8 +262,12 @@ impl Streams {
     /// The frames that have arrived, oldest first (per batch in frame
     /// order); `wait` waits for every frame in flight first.
     pub(crate) fn take(&mut self, gpu: &oxygen_gpu::GpuContext, wait: bool) -> Result<Vec<StreamedFrame>, RenderError> {
+        let _span = info_span!("stream_take", wait).entered();
         let poll = if wait { wgpu::PollType::wait_indefinitely() } else { wgpu::PollType::Poll };
-        gpu.device.poll(poll).map_err(oxygen_gpu::GpuError::from)?;
+        {
+            let _span = info_span!("stream_poll").entered();
+            gpu.device.poll(poll).map_err(oxygen_gpu::GpuError::from)?;
+        }
         let mut arrived = std::mem::take(&mut self.pending);
         for (batch, ring) in &mut self.rings {
             while ring.oldest_arrived()? {
@@ -351,6 +355,7 @@ impl Slot {
 
     /// Cuts the mapped pages into the cameras' images and unmaps.
     fn read(&mut self, batch: BatchId) -> Result<StreamedFrame, RenderError> {
+        let _span = info_span!("stream_cut", batch = %batch).entered();
         let content = self.content.take().ok_or(RenderError::Gpu(wgpu::BufferAsyncError.into()))?;
         let layout = content.layout;
         let (w, h) = layout.tile;
