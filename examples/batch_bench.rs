@@ -43,7 +43,9 @@
 //! and prints the largest per frame: where the CPU time goes, on any
 //! machine. The spans cost time of their own: compare figures of runs
 //! with spans only with each other. `BATCH_BENCH_TRUST_INDIRECT=1` turns
-//! wgpu's validation of indirect draws off (`RendererOptions::trust_indirect_args`).
+//! wgpu's validation of indirect draws off (`RendererOptions::trust_indirect_args`);
+//! `BATCH_BENCH_IN_FLIGHT=N` streams through a ring of N staging buffers
+//! (`StreamOptions::frames_in_flight`, default 2).
 //! Each line gives view-frames per second (V ÷ the median frame time); at
 //! the end the slope of the median times against V (least squares over the
 //! V list) is the per-view cost, CPU and whole frame, per path. With
@@ -146,6 +148,7 @@ fn run(
     frames: usize,
     spans: Option<&SpanTimes>,
     options: &RendererOptions,
+    in_flight: u32,
 ) -> Result<Run, Box<dyn std::error::Error>> {
     let mut renderer = Renderer::new_headless_with(*options)?;
     if visibility.on_gpu() && !renderer.gpu_visibility_supported() {
@@ -169,7 +172,9 @@ fn run(
         });
     }
     if let (Some(batch), true) = (batch, readback) {
-        renderer.stream_batch(batch, Some(StreamOptions { instances: true, ..Default::default() }))?;
+        let frames_in_flight = in_flight;
+        renderer
+            .stream_batch(batch, Some(StreamOptions { instances: true, frames_in_flight, ..Default::default() }))?;
     }
     let mut result = Run {
         cpu_ms: Vec::new(),
@@ -294,6 +299,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Ok(other) => return Err(format!("BATCH_BENCH_TRUST_INDIRECT={other}: use 0 or 1").into()),
     };
     let options = RendererOptions { trust_indirect_args, ..RendererOptions::default() };
+    let in_flight: u32 = match std::env::var("BATCH_BENCH_IN_FLIGHT") {
+        Ok(n) => n.parse().ok().filter(|n| *n > 0).ok_or(format!("BATCH_BENCH_IN_FLIGHT={n}: a count of 1 or more"))?,
+        Err(_) => StreamOptions::default().frames_in_flight,
+    };
     let (scene, side) = box_grid(boxes);
     let adapter = Renderer::new_headless()?.gpu().adapter_info.clone();
     let mut record = Record::new("batch_bench")
@@ -305,7 +314,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .value("readback", readback)
         .value("visibility", format!("{visibility:?}"))
         .value("spans", spans.is_some())
-        .value("trust_indirect_args", trust_indirect_args);
+        .value("trust_indirect_args", trust_indirect_args)
+        .value("frames_in_flight", in_flight);
     println!("adapter: {} {}", adapter.name, adapter.driver_info);
     println!(
         "| path | V | CPU ms | prepare ms | record ms | frame ms | GPU ms | view-frames/s | back to back vf/s | read MB/s |"
@@ -318,7 +328,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             order.reverse();
         }
         for mode in order {
-            let r = run(&scene, side, size, *views, mode, readback, visibility, frames, spans.as_ref(), &options)?;
+            let r = run(
+                &scene,
+                side,
+                size,
+                *views,
+                mode,
+                readback,
+                visibility,
+                frames,
+                spans.as_ref(),
+                &options,
+                in_flight,
+            )?;
             let (cpu, whole, gpu) = (median(&r.cpu_ms), median(&r.frame_ms), median(&r.gpu_ms));
             let per_second = *views as f64 / (whole / 1e3);
             let seconds: f64 = r.frame_ms.iter().sum::<f64>() / 1e3;

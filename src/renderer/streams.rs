@@ -100,6 +100,9 @@ struct SlotContent {
     time_seconds: f32,
     layout: PageLayout,
     cameras: Vec<(ViewId, Tile)>,
+    /// The submission of its copy: what waiting for this slot waits for
+    /// (not the frames submitted since, which keep the GPU busy meanwhile).
+    submission: wgpu::SubmissionIndex,
 }
 
 /// One image of a page in a staging buffer; every plane has 4-byte texels.
@@ -245,7 +248,7 @@ impl Streams {
                     );
                 }
             }
-            gpu.queue.submit([encoder.finish()]);
+            let submission = gpu.queue.submit([encoder.finish()]);
             let state = Arc::clone(&ring.slots[slot].state);
             state.store(MAPPING, Ordering::Release);
             buffer.slice(..layout.bytes()).map_async(wgpu::MapMode::Read, move |result| {
@@ -253,7 +256,7 @@ impl Streams {
             });
             let cameras = cameras.clone();
             ring.slots[slot].content =
-                Some(SlotContent { frame: clock.index, time_seconds: clock.time_seconds, layout, cameras });
+                Some(SlotContent { frame: clock.index, time_seconds: clock.time_seconds, layout, cameras, submission });
             ring.in_flight.push_back(slot);
         }
         Ok(())
@@ -328,8 +331,12 @@ impl Ring {
             None => {
                 let _span = info_span!("stream_wait", batch = %batch).entered();
                 let oldest = *self.in_flight.front().ok_or(RenderError::Gpu(wgpu::BufferAsyncError.into()))?;
+                // Waits for the oldest frame's copy alone: the frame just
+                // submitted keeps the GPU busy while its images are cut.
+                let submission = self.slots[oldest].content.as_ref().map(|c| c.submission.clone());
                 while !self.oldest_arrived()? {
-                    gpu.device.poll(wgpu::PollType::wait_indefinitely()).map_err(oxygen_gpu::GpuError::from)?;
+                    let wait = wgpu::PollType::Wait { submission_index: submission.clone(), timeout: None };
+                    gpu.device.poll(wait).map_err(oxygen_gpu::GpuError::from)?;
                 }
                 pending.push(self.read_oldest(batch)?);
                 oldest
