@@ -10,9 +10,13 @@
 //! number, the frame's time and each camera's view id; it never waits.
 //! With `frames_in_flight` buffers a result arrives at most that many
 //! frames after its frame (one on an idle GPU); when every buffer is still
-//! in flight, the next frame waits for the oldest one and moves its images
-//! into memory (the ring's back-pressure), so nothing is dropped: what the
-//! application has not taken waits for it there.
+//! in flight, the next frame waits for the oldest one (its copy alone, not
+//! the frames submitted since) and moves its images into memory (the
+//! ring's back-pressure), so nothing is dropped: what the application has
+//! not taken waits for it there. A frame that has arrived is cut on a
+//! thread of its own (itself cutting on every core), started as the next
+//! frame begins or when the application takes it: the cut of a
+//! thousand-camera frame overlaps the next frame's preparing and recording.
 
 use std::collections::{BTreeMap, VecDeque};
 use std::sync::Arc;
@@ -167,12 +171,19 @@ impl PageLayout {
     }
 }
 
+/// A frame's images being cut out of their staging buffer on a thread of
+/// their own (the buffer stays mapped, and its slot taken, until joined).
+type Cut = std::thread::JoinHandle<Result<StreamedFrame, RenderError>>;
+
 /// One batch's ring.
 struct Ring {
     options: StreamOptions,
     slots: Vec<Slot>,
-    /// Slot indices in the order their frames were submitted.
+    /// Slot indices in the order their frames were submitted, until their
+    /// images arrive.
     in_flight: VecDeque<usize>,
+    /// Arrived frames being cut, oldest first, with their slots.
+    cutting: VecDeque<(usize, Cut)>,
 }
 
 /// The streams of every streaming batch.
@@ -273,18 +284,27 @@ impl Streams {
         }
         let mut arrived = std::mem::take(&mut self.pending);
         for (batch, ring) in &mut self.rings {
-            while ring.oldest_arrived()? {
-                arrived.push(ring.read_oldest(*batch)?);
-            }
+            ring.start_cuts(*batch)?;
+            while ring.join_oldest_cut(&mut arrived)?.is_some() {}
         }
         arrived.sort_by_key(|f| (f.frame, f.batch));
         Ok(arrived)
+    }
+
+    /// Starts cutting every frame that has arrived, each on a thread of
+    /// its own, without waiting: the renderer calls it as a frame begins,
+    /// so the cutting overlaps the frame's CPU work.
+    pub(crate) fn start_cuts(&mut self) -> Result<(), RenderError> {
+        for (batch, ring) in &mut self.rings {
+            ring.start_cuts(*batch)?;
+        }
+        Ok(())
     }
 }
 
 impl Ring {
     fn new(options: StreamOptions) -> Self {
-        Ring { options, slots: Vec::new(), in_flight: VecDeque::new() }
+        Ring { options, slots: Vec::new(), in_flight: VecDeque::new(), cutting: VecDeque::new() }
     }
 
     /// Whether the oldest frame in flight has arrived (a failed mapping
@@ -303,12 +323,35 @@ impl Ring {
         }
     }
 
-    /// Reads the oldest frame in flight (it has arrived) and frees its buffer.
-    fn read_oldest(&mut self, batch: BatchId) -> Result<StreamedFrame, RenderError> {
-        let slot = self.in_flight.pop_front().ok_or(RenderError::Gpu(wgpu::BufferAsyncError.into()))?;
-        let frame = self.slots[slot].read(batch);
+    /// Starts cutting the frames that have arrived, oldest first, each on
+    /// a thread of its own (which cuts on every core and unmaps).
+    fn start_cuts(&mut self, batch: BatchId) -> Result<(), RenderError> {
+        while self.oldest_arrived()? {
+            let Some(slot) = self.in_flight.pop_front() else { break };
+            let Some(content) = self.slots[slot].content.take() else {
+                // An arrived slot always holds a frame; one that does not is freed.
+                self.slots[slot].state.store(FREE, Ordering::Release);
+                continue;
+            };
+            let buffer = self.slots[slot].buffer.clone();
+            let cut = std::thread::Builder::new()
+                .name("oxygen-stream-cut".into())
+                .spawn(move || cut(&buffer, content, batch))
+                .map_err(|e| RenderError::Unsupported(format!("starting a thread to cut {batch}'s images: {e}")))?;
+            self.cutting.push_back((slot, cut));
+        }
+        Ok(())
+    }
+
+    /// Waits for the oldest cut, adds its frame to `out` and frees its
+    /// slot (returned); `None` when nothing is being cut. A failed cut's
+    /// slot is freed too; a panicking cut is re-raised here.
+    fn join_oldest_cut(&mut self, out: &mut Vec<StreamedFrame>) -> Result<Option<usize>, RenderError> {
+        let Some((slot, cut)) = self.cutting.pop_front() else { return Ok(None) };
+        let frame = cut.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
         self.slots[slot].state.store(FREE, Ordering::Release);
-        frame
+        out.push(frame?);
+        Ok(Some(slot))
     }
 
     /// A slot free to take a frame of `bytes`: an unused one, a new one
@@ -321,7 +364,9 @@ impl Ring {
         bytes: u64,
         pending: &mut Vec<StreamedFrame>,
     ) -> Result<usize, RenderError> {
-        let free = self.slots.iter().position(|s| s.state.load(Ordering::Acquire) == FREE && s.content.is_none());
+        let free = self.slots.iter().enumerate().position(|(i, s)| {
+            s.state.load(Ordering::Acquire) == FREE && s.content.is_none() && !self.cutting.iter().any(|(c, _)| *c == i)
+        });
         let slot = match free {
             Some(slot) => slot,
             None if (self.slots.len() as u32) < self.options.frames_in_flight.max(1) => {
@@ -330,16 +375,19 @@ impl Ring {
             }
             None => {
                 let _span = info_span!("stream_wait", batch = %batch).entered();
-                let oldest = *self.in_flight.front().ok_or(RenderError::Gpu(wgpu::BufferAsyncError.into()))?;
-                // Waits for the oldest frame's copy alone: the frame just
-                // submitted keeps the GPU busy while its images are cut.
-                let submission = self.slots[oldest].content.as_ref().map(|c| c.submission.clone());
-                while !self.oldest_arrived()? {
-                    let wait = wgpu::PollType::Wait { submission_index: submission.clone(), timeout: None };
-                    gpu.device.poll(wait).map_err(oxygen_gpu::GpuError::from)?;
+                self.start_cuts(batch)?;
+                if self.cutting.is_empty() {
+                    // Waits for the oldest frame's copy alone: the frame
+                    // just submitted keeps the GPU busy meanwhile.
+                    let oldest = *self.in_flight.front().ok_or(RenderError::Gpu(wgpu::BufferAsyncError.into()))?;
+                    let submission = self.slots[oldest].content.as_ref().map(|c| c.submission.clone());
+                    while !self.oldest_arrived()? {
+                        let wait = wgpu::PollType::Wait { submission_index: submission.clone(), timeout: None };
+                        gpu.device.poll(wait).map_err(oxygen_gpu::GpuError::from)?;
+                    }
+                    self.start_cuts(batch)?;
                 }
-                pending.push(self.read_oldest(batch)?);
-                oldest
+                self.join_oldest_cut(pending)?.ok_or(RenderError::Gpu(wgpu::BufferAsyncError.into()))?
             }
         };
         if self.slots[slot].buffer.size() < bytes {
@@ -359,69 +407,69 @@ impl Slot {
         });
         Slot { buffer, state: Arc::new(AtomicU8::new(FREE)), content: None }
     }
+}
 
-    /// Cuts the mapped pages into the cameras' images and unmaps.
-    fn read(&mut self, batch: BatchId) -> Result<StreamedFrame, RenderError> {
-        let _span = info_span!("stream_cut", batch = %batch).entered();
-        let content = self.content.take().ok_or(RenderError::Gpu(wgpu::BufferAsyncError.into()))?;
-        let layout = content.layout;
-        let (w, h) = layout.tile;
-        let cameras = {
-            let mapped = self.buffer.slice(..layout.bytes()).get_mapped_range().map_err(oxygen_gpu::GpuError::from)?;
-            let mapped: &[u8] = &mapped;
-            // A tile's rows of one plane, each `w` texels of 4 bytes.
-            let rows = move |tile: Tile, plane: Plane| {
-                let base = layout.offset(tile.page, plane) as usize;
-                (tile.y..tile.y + h).map(move |y| {
-                    let start = base + y as usize * layout.row_bytes as usize + tile.x as usize * 4;
-                    &mapped[start..start + w as usize * 4]
-                })
-            };
-            // Each plane is converted in one pass over its rows (no
-            // intermediate copies: a 1 024-camera batch moves hundreds of
-            // megabytes a second through here).
-            let texels = |tile: &Tile, plane: Plane| -> Vec<u8> {
-                let mut bytes = Vec::with_capacity((w * h * 4) as usize);
-                rows(*tile, plane).for_each(|row| bytes.extend_from_slice(row));
-                bytes
-            };
-            let words = |tile: &Tile, plane: Plane| -> Vec<u32> {
-                let mut words = Vec::with_capacity((w * h) as usize);
-                for row in rows(*tile, plane) {
-                    words.extend(row.chunks_exact(4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]])));
-                }
-                words
-            };
-            let cut = |(view, tile): &(ViewId, Tile)| StreamedCamera {
-                view: *view,
-                // Exactly w × h × 4 bytes by construction.
-                color: layout.color.then(|| image::RgbaImage::from_raw(w, h, texels(tile, Plane::Color))).flatten(),
-                // `u32` to `f32` of the same size: collected in place.
-                depth: layout.depth.then(|| words(tile, Plane::Depth).into_iter().map(f32::from_bits).collect()),
-                instances: layout.instances.then(|| words(tile, Plane::Instances)),
-            };
-            // Many cameras: cut on every core (the pages are large, each
-            // camera's rows are copied out on their own).
-            let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(content.cameras.len()).max(1);
-            let chunk = content.cameras.len().div_ceil(threads).max(1);
-            if threads == 1 {
-                content.cameras.iter().map(cut).collect()
-            } else {
-                std::thread::scope(|scope| {
-                    let parts: Vec<_> = content
-                        .cameras
-                        .chunks(chunk)
-                        .map(|part| scope.spawn(move || part.iter().map(cut).collect::<Vec<_>>()))
-                        .collect();
-                    // A cut cannot panic (its ranges are inside the mapped
-                    // pages by construction); a panicking one is re-raised.
-                    parts.into_iter().flat_map(|p| p.join().unwrap_or_else(|e| std::panic::resume_unwind(e))).collect()
-                })
-            }
+/// Cuts `buffer`'s mapped pages into the cameras' images of `content` and
+/// unmaps it.
+fn cut(buffer: &wgpu::Buffer, content: SlotContent, batch: BatchId) -> Result<StreamedFrame, RenderError> {
+    let _span = info_span!("stream_cut", batch = %batch).entered();
+    let layout = content.layout;
+    let (w, h) = layout.tile;
+    let cameras = {
+        let mapped = buffer.slice(..layout.bytes()).get_mapped_range().map_err(oxygen_gpu::GpuError::from)?;
+        let mapped: &[u8] = &mapped;
+        // A tile's rows of one plane, each `w` texels of 4 bytes.
+        let rows = move |tile: Tile, plane: Plane| {
+            let base = layout.offset(tile.page, plane) as usize;
+            (tile.y..tile.y + h).map(move |y| {
+                let start = base + y as usize * layout.row_bytes as usize + tile.x as usize * 4;
+                &mapped[start..start + w as usize * 4]
+            })
         };
-        self.buffer.unmap();
-        Ok(StreamedFrame { batch, frame: content.frame, time_seconds: content.time_seconds, size: (w, h), cameras })
-    }
+        // Each plane is converted in one pass over its rows (no
+        // intermediate copies: a 1 024-camera batch moves hundreds of
+        // megabytes a second through here).
+        let texels = |tile: &Tile, plane: Plane| -> Vec<u8> {
+            let mut bytes = Vec::with_capacity((w * h * 4) as usize);
+            rows(*tile, plane).for_each(|row| bytes.extend_from_slice(row));
+            bytes
+        };
+        let words = |tile: &Tile, plane: Plane| -> Vec<u32> {
+            let mut words = Vec::with_capacity((w * h) as usize);
+            for row in rows(*tile, plane) {
+                words.extend(row.chunks_exact(4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]])));
+            }
+            words
+        };
+        let cut = |(view, tile): &(ViewId, Tile)| StreamedCamera {
+            view: *view,
+            // Exactly w × h × 4 bytes by construction.
+            color: layout.color.then(|| image::RgbaImage::from_raw(w, h, texels(tile, Plane::Color))).flatten(),
+            // `u32` to `f32` of the same size: collected in place.
+            depth: layout.depth.then(|| words(tile, Plane::Depth).into_iter().map(f32::from_bits).collect()),
+            instances: layout.instances.then(|| words(tile, Plane::Instances)),
+        };
+        // Many cameras: cut on every core (the pages are large, each
+        // camera's rows are copied out on their own).
+        let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(content.cameras.len()).max(1);
+        let chunk = content.cameras.len().div_ceil(threads).max(1);
+        if threads == 1 {
+            content.cameras.iter().map(cut).collect()
+        } else {
+            std::thread::scope(|scope| {
+                let parts: Vec<_> = content
+                    .cameras
+                    .chunks(chunk)
+                    .map(|part| scope.spawn(move || part.iter().map(cut).collect::<Vec<_>>()))
+                    .collect();
+                // A cut cannot panic (its ranges are inside the mapped
+                // pages by construction); a panicking one is re-raised.
+                parts.into_iter().flat_map(|p| p.join().unwrap_or_else(|e| std::panic::resume_unwind(e))).collect()
+            })
+        }
+    };
+    buffer.unmap();
+    Ok(StreamedFrame { batch, frame: content.frame, time_seconds: content.time_seconds, size: (w, h), cameras })
 }
 
 impl Renderer {
