@@ -45,7 +45,9 @@
 //! with spans only with each other. `BATCH_BENCH_TRUST_INDIRECT=1` turns
 //! wgpu's validation of indirect draws off (`RendererOptions::trust_indirect_args`);
 //! `BATCH_BENCH_IN_FLIGHT=N` streams through a ring of N staging buffers
-//! (`StreamOptions::frames_in_flight`, default 2).
+//! (`StreamOptions::frames_in_flight`, default 2);
+//! `BATCH_BENCH_PLANES=color,depth,instances` picks what the batch streams
+//! (all three by default).
 //! Each line gives view-frames per second (V ÷ the median frame time); at
 //! the end the slope of the median times against V (least squares over the
 //! V list) is the per-view cost, CPU and whole frame, per path. With
@@ -114,6 +116,8 @@ struct Run {
     /// Milliseconds per measured frame inside each span, largest first
     /// (`BATCH_BENCH_SPANS=1`).
     spans: Vec<(&'static str, f64)>,
+    /// The same for the frames run back to back.
+    back_to_back_spans: Vec<(&'static str, f64)>,
 }
 
 /// Bytes of every camera image of `frames`.
@@ -149,6 +153,7 @@ fn run(
     spans: Option<&SpanTimes>,
     options: &RendererOptions,
     in_flight: u32,
+    planes: StreamOptions,
 ) -> Result<Run, Box<dyn std::error::Error>> {
     let mut renderer = Renderer::new_headless_with(*options)?;
     if visibility.on_gpu() && !renderer.gpu_visibility_supported() {
@@ -172,9 +177,7 @@ fn run(
         });
     }
     if let (Some(batch), true) = (batch, readback) {
-        let frames_in_flight = in_flight;
-        renderer
-            .stream_batch(batch, Some(StreamOptions { instances: true, frames_in_flight, ..Default::default() }))?;
+        renderer.stream_batch(batch, Some(StreamOptions { frames_in_flight: in_flight, ..planes }))?;
     }
     let mut result = Run {
         cpu_ms: Vec::new(),
@@ -185,6 +188,7 @@ fn run(
         read_bytes: 0,
         pipelined_per_second: f64::NAN,
         spans: Vec::new(),
+        back_to_back_spans: Vec::new(),
     };
     for frame in 0..WARM_UP + frames {
         if frame == WARM_UP
@@ -243,6 +247,11 @@ fn run(
         }
         renderer.gpu().device.poll(wgpu::PollType::wait_indefinitely())?;
         result.pipelined_per_second = (views * frames) as f64 / start.elapsed().as_secs_f64();
+        if let Some(spans) = spans {
+            let per_frame = |d: std::time::Duration| d.as_secs_f64() * 1e3 / frames as f64;
+            result.back_to_back_spans =
+                spans.take().into_iter().map(|(name, time, _)| (name, per_frame(time))).collect();
+        }
     }
     Ok(result)
 }
@@ -303,6 +312,22 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Ok(n) => n.parse().ok().filter(|n| *n > 0).ok_or(format!("BATCH_BENCH_IN_FLIGHT={n}: a count of 1 or more"))?,
         Err(_) => StreamOptions::default().frames_in_flight,
     };
+    // The batch's streamed planes (the lone views read all three).
+    let planes = match std::env::var("BATCH_BENCH_PLANES") {
+        Ok(list) => {
+            let mut planes = StreamOptions { color: false, depth: false, instances: false, ..StreamOptions::default() };
+            for plane in list.split(',') {
+                match plane {
+                    "color" => planes.color = true,
+                    "depth" => planes.depth = true,
+                    "instances" => planes.instances = true,
+                    other => return Err(format!("BATCH_BENCH_PLANES: {other}? use color, depth, instances").into()),
+                }
+            }
+            planes
+        }
+        Err(_) => StreamOptions { instances: true, ..StreamOptions::default() },
+    };
     let (scene, side) = box_grid(boxes);
     let adapter = Renderer::new_headless()?.gpu().adapter_info.clone();
     let mut record = Record::new("batch_bench")
@@ -315,7 +340,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .value("visibility", format!("{visibility:?}"))
         .value("spans", spans.is_some())
         .value("trust_indirect_args", trust_indirect_args)
-        .value("frames_in_flight", in_flight);
+        .value("frames_in_flight", in_flight)
+        .value("streamed_planes", [planes.color, planes.depth, planes.instances].map(u8::from));
     println!("adapter: {} {}", adapter.name, adapter.driver_info);
     println!(
         "| path | V | CPU ms | prepare ms | record ms | frame ms | GPU ms | view-frames/s | back to back vf/s | read MB/s |"
@@ -340,6 +366,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 spans.as_ref(),
                 &options,
                 in_flight,
+                planes,
             )?;
             let (cpu, whole, gpu) = (median(&r.cpu_ms), median(&r.frame_ms), median(&r.gpu_ms));
             let per_second = *views as f64 / (whole / 1e3);
@@ -352,6 +379,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             );
             for (name, ms) in r.spans.iter().take(SPANS_SHOWN) {
                 println!("    span {name}: {ms:.3} ms a frame");
+            }
+            for (name, ms) in r.back_to_back_spans.iter().take(SPANS_SHOWN) {
+                println!("    back to back, span {name}: {ms:.3} ms a frame");
             }
             points.push((mode, *views as f64, cpu, whole));
             record.push_row(
@@ -366,6 +396,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     .value("view_frames_per_second", per_second)
                     .value("back_to_back_view_frames_per_second", pipelined.is_finite().then_some(pipelined))
                     .value("span_ms_per_frame", r.spans.iter().fold(Row::new(), |row, (name, ms)| row.value(name, *ms)))
+                    .value(
+                        "back_to_back_span_ms_per_frame",
+                        r.back_to_back_spans.iter().fold(Row::new(), |row, (name, ms)| row.value(name, *ms)),
+                    )
                     .value("read_bytes", r.read_bytes)
                     .value("read_mb_per_second", read_mb_s)
                     .value("cpu_ms_samples", r.cpu_ms)
