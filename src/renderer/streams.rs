@@ -273,8 +273,9 @@ impl Streams {
         Ok(())
     }
 
-    /// The frames that have arrived, oldest first (per batch in frame
-    /// order); `wait` waits for every frame in flight first.
+    /// The frames that have arrived and been cut, oldest first (per batch
+    /// in frame order); `wait` waits for every frame in flight and its cut
+    /// first.
     pub(crate) fn take(&mut self, gpu: &oxygen_gpu::GpuContext, wait: bool) -> Result<Vec<StreamedFrame>, RenderError> {
         let _span = info_span!("stream_take", wait).entered();
         let poll = if wait { wgpu::PollType::wait_indefinitely() } else { wgpu::PollType::Poll };
@@ -285,7 +286,11 @@ impl Streams {
         let mut arrived = std::mem::take(&mut self.pending);
         for (batch, ring) in &mut self.rings {
             ring.start_cuts(*batch)?;
-            while ring.join_oldest_cut(&mut arrived)?.is_some() {}
+            // Without waiting, only the cuts already done: one still
+            // running is taken next time.
+            while ring.cutting.front().is_some_and(|(_, cut)| wait || cut.is_finished()) {
+                ring.join_oldest_cut(&mut arrived)?;
+            }
         }
         arrived.sort_by_key(|f| (f.frame, f.batch));
         Ok(arrived)
@@ -502,10 +507,11 @@ impl Renderer {
         }
     }
 
-    /// The streamed frames that have arrived since the last call, oldest
-    /// first; never waits. Frames not taken stay (in memory once their ring
-    /// needed the buffer), so an application that takes them less often
-    /// than every frame loses none.
+    /// The streamed frames that have arrived and been cut into camera
+    /// images since the last call, oldest first; never waits (a frame
+    /// still being cut comes with a later call). Frames not taken stay (in
+    /// memory once their ring needed the buffer), so an application that
+    /// takes them less often than every frame loses none.
     pub fn take_streamed(&mut self) -> Result<Vec<StreamedFrame>, RenderError> {
         self.streams.take(&self.gpu, false)
     }
