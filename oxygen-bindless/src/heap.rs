@@ -20,12 +20,6 @@ use crate::{Allocation, DomainKind, SlotAllocators, SlotError, TexturePath};
 /// Smallest buffer, in records: a binding must never be empty.
 const MIN_RECORDS: u64 = 64;
 
-/// The most bytes [`BindlessHeap::write_runs`] stages in one write: wgpu
-/// gives each write a staging buffer of its own, and one of tens of
-/// megabytes is an allocation of its own each frame, where smaller ones
-/// come out of the allocator's reused blocks.
-const STAGING_STRETCH_BYTES: u64 = 4 << 20;
-
 /// A heap operation that cannot be done.
 #[derive(Debug, Error, PartialEq)]
 pub enum BindlessError {
@@ -208,13 +202,9 @@ impl BindlessHeap {
         let buffer = &self.buffers[kind.index()];
         let mut at = 0;
         while at < ranges.len() {
-            // The stretch [at, next): each run begins where the last ended,
-            // up to STAGING_STRETCH_BYTES (a run longer than that alone).
+            // The stretch [at, next): each run begins where the last ended.
             let mut next = at + 1;
-            while next < ranges.len()
-                && ranges[next].0 == ranges[next - 1].1
-                && (ranges[next].1 - ranges[at].0) * kind.record_size() <= STAGING_STRETCH_BYTES
-            {
+            while next < ranges.len() && ranges[next].0 == ranges[next - 1].1 {
                 next += 1;
             }
             let (first, end) = (ranges[at].0, ranges[next - 1].1);
