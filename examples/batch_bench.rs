@@ -47,7 +47,12 @@
 //! `BATCH_BENCH_IN_FLIGHT=N` streams through a ring of N staging buffers
 //! (`StreamOptions::frames_in_flight`, default 2);
 //! `BATCH_BENCH_PLANES=color,depth,instances` picks what the batch streams
-//! (all three by default).
+//! (all three by default). `BATCH_BENCH_FLOOR_RECORD=raster_floor.jsonl`
+//! compares each line's GPU time with the vertex floor of its draws (the
+//! frame's draws × the per-cube time of that file's last `raster_floor`
+//! run on this adapter, its storage-pulled line): run `raster_floor` on
+//! the same machine first. `BATCH_BENCH_TARGET_BUDGET_MIB` raises the
+//! targets' budget (`RendererOptions::target_budget_bytes`).
 //! Each line gives view-frames per second (V ÷ the median frame time); at
 //! the end the slope of the median times against V (least squares over the
 //! V list) is the per-view cost, CPU and whole frame, per path. With
@@ -111,6 +116,9 @@ struct Run {
     frame_ms: Vec<f64>,
     gpu_ms: Vec<f64>,
     read_bytes: u64,
+    /// Draws of every view of each measured frame (visible boxes, summed
+    /// over the cameras: the vertex work).
+    draws: Vec<f64>,
     /// View-frames per second of the frames run back to back.
     pipelined_per_second: f64,
     /// Milliseconds per measured frame inside each span, largest first
@@ -186,6 +194,7 @@ fn run(
         frame_ms: Vec::new(),
         gpu_ms: Vec::new(),
         read_bytes: 0,
+        draws: Vec::new(),
         pipelined_per_second: f64::NAN,
         spans: Vec::new(),
         back_to_back_spans: Vec::new(),
@@ -226,6 +235,7 @@ fn run(
                 result.gpu_ms.push(gpu * 1e3);
             }
             result.read_bytes += bytes;
+            result.draws.push(report.views.iter().map(|v| v.draws as f64).sum());
         }
     }
     if let Some(spans) = spans {
@@ -254,6 +264,28 @@ fn run(
         }
     }
     Ok(result)
+}
+
+/// The vertex floor of one cube on this adapter, milliseconds: the last
+/// `raster_floor` record in `path` from an adapter of this name, its
+/// `colour, pulled from storage` line (Oxygen's way of reading vertices)
+/// divided by its cubes.
+fn floor_ms_per_cube(path: &str, adapter: &str) -> Result<f64, Box<dyn std::error::Error>> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("BATCH_BENCH_FLOOR_RECORD={path}: {e}"))?;
+    let mut found = None;
+    for line in text.lines().filter(|l| !l.trim().is_empty()) {
+        let record: serde_json::Value = serde_json::from_str(line)?;
+        if record["bench"] != "raster_floor" || record["adapter"]["name"] != adapter {
+            continue;
+        }
+        let cubes = record["values"]["cubes"].as_f64().filter(|c| *c > 0.0);
+        let rows = record["values"]["rows"].as_array();
+        let pulled = rows.and_then(|rows| rows.iter().find(|r| r["way"] == "colour, pulled from storage"));
+        if let (Some(cubes), Some(ms)) = (cubes, pulled.and_then(|r| r["gpu_ms_median"].as_f64())) {
+            found = Some(ms / cubes);
+        }
+    }
+    found.ok_or_else(|| format!("{path} holds no raster_floor record of {adapter} with a pulled line").into())
 }
 
 /// Least-squares slope and intercept of `y` against `x`.
@@ -307,7 +339,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Ok("0") | Err(_) => false,
         Ok(other) => return Err(format!("BATCH_BENCH_TRUST_INDIRECT={other}: use 0 or 1").into()),
     };
-    let options = RendererOptions { trust_indirect_args, ..RendererOptions::default() };
+    let mut options = RendererOptions { trust_indirect_args, ..RendererOptions::default() };
+    // 1 024 cameras of 640 × 360 take more than the default target budget.
+    if let Ok(mib) = std::env::var("BATCH_BENCH_TARGET_BUDGET_MIB") {
+        let mib: u64 = mib.parse().map_err(|_| format!("BATCH_BENCH_TARGET_BUDGET_MIB={mib}: a count of MiB"))?;
+        options.target_budget_bytes = mib << 20;
+    }
     let in_flight: u32 = match std::env::var("BATCH_BENCH_IN_FLIGHT") {
         Ok(n) => n.parse().ok().filter(|n| *n > 0).ok_or(format!("BATCH_BENCH_IN_FLIGHT={n}: a count of 1 or more"))?,
         Err(_) => StreamOptions::default().frames_in_flight,
@@ -330,6 +367,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let (scene, side) = box_grid(boxes);
     let adapter = Renderer::new_headless()?.gpu().adapter_info.clone();
+    // The vertex floor of the same work, from a raster_floor run of this
+    // adapter: the GPU time is compared with draws × the floor per cube.
+    let floor = match std::env::var("BATCH_BENCH_FLOOR_RECORD") {
+        Ok(path) => Some((floor_ms_per_cube(&path, &adapter.name)?, path)),
+        Err(_) => None,
+    };
     let mut record = Record::new("batch_bench")
         .adapter(&adapter)
         .value("boxes", boxes)
@@ -340,6 +383,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .value("visibility", format!("{visibility:?}"))
         .value("spans", spans.is_some())
         .value("trust_indirect_args", trust_indirect_args)
+        .value("floor_ms_per_cube", floor.as_ref().map(|f| f.0))
+        .value("floor_record", floor.as_ref().map(|f| &f.1))
+        .value("target_budget_bytes", options.target_budget_bytes)
         .value("frames_in_flight", in_flight)
         .value("streamed_planes", [planes.color, planes.depth, planes.instances].map(u8::from));
     println!("adapter: {} {}", adapter.name, adapter.driver_info);
@@ -373,6 +419,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let seconds: f64 = r.frame_ms.iter().sum::<f64>() / 1e3;
             let read_mb_s = r.read_bytes as f64 / 1e6 / seconds;
             let (prepare, recording) = (median(&r.prepare_ms), median(&r.record_ms));
+            let draws = median(&r.draws);
+            let floor_ms = floor.as_ref().map(|(per_cube, _)| per_cube * draws);
+            let over_floor = floor_ms.filter(|f| *f > 0.0 && gpu.is_finite()).map(|f| gpu / f);
+            if let (Some(floor_ms), Some(over)) = (floor_ms, over_floor) {
+                println!("    vertex floor of its {draws:.0} draws: {floor_ms:.3} ms; GPU time {over:.2}× it");
+            }
             let pipelined = r.pipelined_per_second;
             println!(
                 "| {mode:?} | {views} | {cpu:.3} | {prepare:.3} | {recording:.3} | {whole:.3} | {gpu:.3} | {per_second:.0} | {pipelined:.0} | {read_mb_s:.1} |"
@@ -394,6 +446,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     .value("frame_ms_median", whole)
                     .value("gpu_ms_median", gpu.is_finite().then_some(gpu))
                     .value("view_frames_per_second", per_second)
+                    .value("draws_per_frame_median", draws)
+                    .value("vertex_floor_ms", floor_ms)
+                    .value("gpu_over_vertex_floor", over_floor)
                     .value("back_to_back_view_frames_per_second", pipelined.is_finite().then_some(pipelined))
                     .value("span_ms_per_frame", r.spans.iter().fold(Row::new(), |row, (name, ms)| row.value(name, *ms)))
                     .value(
