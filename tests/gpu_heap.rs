@@ -115,3 +115,55 @@ fn a_long_run_of_view_and_node_churn_keeps_gpu_memory_bounded() {
         assert_eq!(renderer.internals().heap.slots.get(kind).live_allocations(), 0, "{kind:?} leaked");
     }
 }
+
+/// `write_runs` writes what one `write` per run would, adjacent runs as
+/// one staging copy, gaps untouched; it checks every run before writing
+/// anything and refuses runs of two domains.
+#[test]
+fn runs_are_written_as_one_write_each_would_write_them() {
+    let gpu = GpuContext::new_headless(&GpuOptions::default()).expect("test adapter");
+    let mut heap = BindlessHeap::new(&gpu.device, &gpu.queue, TexturePath::GroupedArrays);
+    // Three adjacent ranges, then a gap (a range left unwritten), then one more.
+    let ranges: Vec<_> =
+        [4, 3, 5, 2, 6].iter().map(|n| heap.slots.allocate(DomainKind::Materials, *n).unwrap()).collect();
+    heap.ensure_capacity(&gpu.device, &gpu.queue);
+    let sentinel: Vec<_> = (0..2).map(|_| record(0xdead)).collect();
+    heap.write(&gpu.queue, &ranges[3], 0, &sentinel).unwrap();
+    let contents: Vec<Vec<[u32; WORDS]>> =
+        ranges.iter().enumerate().map(|(r, a)| (0..a.count).map(|i| record(100 * r as u32 + i)).collect()).collect();
+    // Run 1 skips its first record (an offset); the runs come out of order.
+    let runs = [
+        (&ranges[4], 0, &contents[4][..]),
+        (&ranges[0], 0, &contents[0][..]),
+        (&ranges[2], 0, &contents[2][..]),
+        (&ranges[1], 1, &contents[1][1..]),
+    ];
+    let before = heap.bytes_written();
+    heap.write_runs(&gpu.queue, &runs).unwrap();
+    let record_size = DomainKind::Materials.record_size();
+    assert_eq!(heap.bytes_written() - before, (4 + 2 + 5 + 6) * record_size, "the runs' records, no more");
+
+    let end = ranges.iter().map(|a| a.end()).max().unwrap() as u64;
+    let bytes = read_buffer(&gpu, heap.buffer(DomainKind::Materials), end * record_size);
+    let words: &[[u32; WORDS]] = bytemuck::cast_slice(&bytes);
+    let at = |a: &oxygen::bindless::Allocation| &words[a.start as usize..a.end() as usize];
+    assert_eq!(at(&ranges[0]), &contents[0][..]);
+    assert_eq!(&at(&ranges[1])[1..], &contents[1][1..], "written from its offset");
+    assert_eq!(at(&ranges[2]), &contents[2][..]);
+    assert_eq!(at(&ranges[3]), &sentinel[..], "a range no run names keeps what it held");
+    assert_eq!(at(&ranges[4]), &contents[4][..]);
+
+    // A run past its range is refused before anything is written.
+    let too_long: Vec<_> = (0..3).map(|_| record(7)).collect();
+    let refused = heap.write_runs(&gpu.queue, &[(&ranges[0], 0, &contents[0][..]), (&ranges[3], 0, &too_long[..])]);
+    assert!(matches!(refused, Err(BindlessError::Slot(SlotError::WriteTooLarge { .. }))), "{refused:?}");
+    // Runs of two domains are refused (one call writes one domain's buffer).
+    let transforms = heap.slots.allocate(DomainKind::WorldTransforms, 1).unwrap();
+    heap.ensure_capacity(&gpu.device, &gpu.queue);
+    let mixed = heap.write_runs(&gpu.queue, &[(&ranges[0], 0, &contents[0][..1]), (&transforms, 0, &contents[0][..1])]);
+    assert!(matches!(mixed, Err(BindlessError::MixedDomains { .. })), "{mixed:?}");
+    // Nothing of a refused call was written.
+    let bytes = read_buffer(&gpu, heap.buffer(DomainKind::Materials), end * record_size);
+    let words: &[[u32; WORDS]] = bytemuck::cast_slice(&bytes);
+    assert_eq!(&words[ranges[3].start as usize..ranges[3].end() as usize], &sentinel[..]);
+}
