@@ -178,6 +178,41 @@ fn depth_reads_back_as_the_distance_of_a_plane() {
     assert!((at(0, 0) - 6.0).abs() < 8.5e-6, "the ground is 6 units away at the corner, read {}", at(0, 0));
 }
 
+/// A batch's cameras keep their constants in one uniform buffer, each at
+/// its own offset (written with one upload a frame), and still render what
+/// they render alone, also after the batch grows past its buffer's slots;
+/// a lone view has a buffer of its own.
+#[test]
+fn a_batchs_cameras_share_one_constants_buffer() {
+    let demo = oxygen_demo::multi_view_scene();
+    let size = UVec2::new(40, 30);
+    let cameras = ring(6, size);
+    let options = RendererOptions::default();
+    let lone = alone(&demo.scene, &cameras, options);
+    let mut renderer = support::gpu_renderer_with(options);
+    let batch = renderer.register_batch(BatchDesc::new("shared", size)).unwrap();
+    let mut ids: Vec<ViewId> = cameras[..2].iter().map(|c| renderer.add_camera(batch, *c).unwrap()).collect();
+    let other = renderer.register_view(cameras[0], lone_graph()).unwrap();
+    for frame in 0..2 {
+        renderer.render_frame(&demo.scene).unwrap();
+        let homes: Vec<(wgpu::Buffer, u64)> =
+            ids.iter().map(|id| renderer.view_constants(*id).map(|(b, o)| (b.clone(), o)).unwrap()).collect();
+        assert!(homes.iter().all(|(buffer, _)| *buffer == homes[0].0), "frame {frame}: one buffer for the batch");
+        let mut offsets: Vec<u64> = homes.iter().map(|(_, offset)| *offset).collect();
+        offsets.sort_unstable();
+        offsets.dedup();
+        assert_eq!(offsets.len(), ids.len(), "frame {frame}: each camera at its own offset");
+        let (lone_buffer, lone_offset) = renderer.view_constants(other).unwrap();
+        assert!(*lone_buffer != homes[0].0 && lone_offset == 0, "a lone view's constants are its own");
+        let images: Vec<RgbaImage> = ids.iter().map(|id| renderer.read_color(*id).unwrap()).collect();
+        assert_same_pictures(&images, &lone[..ids.len()], &format!("frame {frame}"));
+        // More cameras than the first buffer had slots for.
+        for camera in &cameras[ids.len()..] {
+            ids.push(renderer.add_camera(batch, *camera).unwrap());
+        }
+    }
+}
+
 #[test]
 fn cameras_come_and_go_between_frames() {
     let demo = oxygen_demo::multi_view_scene();

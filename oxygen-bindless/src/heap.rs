@@ -101,7 +101,7 @@ impl BindlessHeap {
             .create_layout(device, "bindless domains");
         let scene_constants_layout =
             LayoutEntries::new(wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE)
-                .push(bindings::uniform_of::<crate::SceneConstants>())
+                .push(bindings::dynamic_uniform_of::<crate::SceneConstants>())
                 .create_layout(device, "scene constants");
         let capacities: Vec<u64> = DomainKind::ALL.iter().map(|_| MIN_RECORDS).collect();
         let buffers: Vec<_> =

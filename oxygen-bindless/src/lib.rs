@@ -38,7 +38,7 @@ mod wgsl_constants;
 pub use domain::DomainKind;
 pub use heap::{BindlessError, BindlessHeap};
 pub use scene_constants::{
-    CameraConstants, RendererConstants, SCENE_CONSTANTS_WGSL, SceneConstants, SceneConstantsBuffer,
+    CameraConstants, RendererConstants, SCENE_CONSTANTS_WGSL, SceneConstants, SceneConstantsBlock, SceneConstantsBuffer,
 };
 pub use slot::{Allocation, INVALID_SLOT, SlotAllocator, SlotAllocators, SlotError};
 pub use textures::{MAX_TEXTURES, SAMPLERS, TexturePath, TextureUpload, allocate_texture_slot, resample_rgba8};

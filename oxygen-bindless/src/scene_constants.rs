@@ -143,10 +143,16 @@ const _: () = {
 /// `bindless/RendererConstants` and `bindless/SceneConstants`).
 pub const SCENE_CONSTANTS_WGSL: &str = include_str!("scene_constants.wgsl");
 
-/// A view's uniform buffer holding [`SceneConstants`], with its bind group.
+/// A view's [`SceneConstants`] on the GPU, with the bind group that binds
+/// them: a uniform buffer of its own, or one slot of a
+/// [`SceneConstantsBlock`] shared by a batch's cameras. The binding has a
+/// dynamic offset ([`SceneConstantsBuffer::dynamic_offset`]), 0 for a
+/// buffer of its own.
 pub struct SceneConstantsBuffer {
     buffer: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
+    /// Where this view's constants start in `buffer`.
+    offset: u32,
     current: SceneConstants,
     /// Both halves have been written once (before, `current` is only a guess).
     written: bool,
@@ -170,7 +176,13 @@ impl SceneConstantsBuffer {
         let current = SceneConstants { camera: CameraConstants::zeroed(), renderer: RendererConstants::default() };
         // wgpu zero-initialises new buffers, so the GPU copy starts as zeroes
         // until both halves are written.
-        SceneConstantsBuffer { buffer, bind_group, current, written: false }
+        SceneConstantsBuffer { buffer, bind_group, offset: 0, current, written: false }
+    }
+
+    /// The offset to bind this view's constants with (`set_bind_group(3,
+    /// bind_group(), &[dynamic_offset()])`).
+    pub fn dynamic_offset(&self) -> u32 {
+        self.offset
     }
 
     /// Writes the view-owned half only, when it changed; returns the bytes
@@ -180,7 +192,8 @@ impl SceneConstantsBuffer {
             return 0;
         }
         self.current.camera = *camera;
-        queue.write_buffer(&self.buffer, offset_of!(SceneConstants, camera) as u64, bytemuck::bytes_of(camera));
+        let at = u64::from(self.offset) + offset_of!(SceneConstants, camera) as u64;
+        queue.write_buffer(&self.buffer, at, bytemuck::bytes_of(camera));
         size_of::<CameraConstants>() as u64
     }
 
@@ -192,7 +205,8 @@ impl SceneConstantsBuffer {
         }
         self.written = true;
         self.current.renderer = *renderer;
-        queue.write_buffer(&self.buffer, offset_of!(SceneConstants, renderer) as u64, bytemuck::bytes_of(renderer));
+        let at = u64::from(self.offset) + offset_of!(SceneConstants, renderer) as u64;
+        queue.write_buffer(&self.buffer, at, bytemuck::bytes_of(renderer));
         size_of::<RendererConstants>() as u64
     }
 
@@ -206,8 +220,112 @@ impl SceneConstantsBuffer {
         &self.bind_group
     }
 
-    /// The uniform buffer.
+    /// The uniform buffer (this view's constants start at
+    /// [`SceneConstantsBuffer::dynamic_offset`]).
     pub fn buffer(&self) -> &wgpu::Buffer {
         &self.buffer
+    }
+}
+
+/// The [`SceneConstants`] of many views in one uniform buffer with one bind
+/// group, each view's at its own dynamic offset: a batch's cameras are
+/// written with one upload a frame, not one or two writes a camera, and
+/// bound by changing the offset.
+pub struct SceneConstantsBlock {
+    buffer: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+    /// Bytes from one slot to the next (the constants rounded up to the
+    /// device's uniform offset alignment).
+    stride: u32,
+    capacity: u32,
+    /// What the buffer is to hold, written by [`SceneConstantsBlock::stage`].
+    staged: Vec<u8>,
+    /// The staged bytes that differ from the buffer's.
+    dirty: Option<std::ops::Range<usize>>,
+}
+
+impl SceneConstantsBlock {
+    /// A block of `capacity` slots (at least one) for `layout`.
+    pub fn new(device: &wgpu::Device, layout: &wgpu::BindGroupLayout, capacity: u32, label: &str) -> Self {
+        let alignment = device.limits().min_uniform_buffer_offset_alignment.max(1);
+        let stride = (size_of::<SceneConstants>() as u32).div_ceil(alignment) * alignment;
+        let capacity = capacity.max(1);
+        let bytes = u64::from(stride) * u64::from(capacity);
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: bytes,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(label),
+            layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &buffer,
+                    offset: 0,
+                    size: wgpu::BufferSize::new(size_of::<SceneConstants>() as u64),
+                }),
+            }],
+        });
+        SceneConstantsBlock { buffer, bind_group, stride, capacity, staged: vec![0; bytes as usize], dirty: None }
+    }
+
+    /// Slots the block holds.
+    pub fn capacity(&self) -> u32 {
+        self.capacity
+    }
+
+    /// The view of slot `slot` (`None` past the capacity), its constants
+    /// not written yet.
+    pub fn view(&self, slot: u32) -> Option<SceneConstantsBuffer> {
+        (slot < self.capacity).then(|| SceneConstantsBuffer {
+            buffer: self.buffer.clone(),
+            bind_group: self.bind_group.clone(),
+            offset: slot * self.stride,
+            current: SceneConstants { camera: CameraConstants::zeroed(), renderer: RendererConstants::default() },
+            written: false,
+        })
+    }
+
+    /// Stages `view`'s constants (a view of this block) for the next
+    /// [`SceneConstantsBlock::upload`], when they changed; returns the
+    /// bytes staged. A view of another buffer is written directly.
+    pub fn stage(
+        &mut self,
+        queue: &wgpu::Queue,
+        view: &mut SceneConstantsBuffer,
+        camera: &CameraConstants,
+        renderer: &RendererConstants,
+    ) -> u64 {
+        if view.buffer != self.buffer {
+            return view.set_camera(queue, camera) + view.set_renderer(queue, renderer);
+        }
+        let constants = SceneConstants { camera: *camera, renderer: *renderer };
+        if view.written && view.current == constants {
+            return 0;
+        }
+        view.current = constants;
+        view.written = true;
+        let at = view.offset as usize;
+        let bytes = bytemuck::bytes_of(&constants);
+        self.staged[at..at + bytes.len()].copy_from_slice(bytes);
+        let range = at..at + bytes.len();
+        self.dirty = Some(match self.dirty.take() {
+            Some(d) => d.start.min(range.start)..d.end.max(range.end),
+            None => range,
+        });
+        bytes.len() as u64
+    }
+
+    /// Writes what was staged since the last upload, in one write; returns
+    /// the bytes written.
+    pub fn upload(&mut self, queue: &wgpu::Queue) -> u64 {
+        let Some(range) = self.dirty.take() else { return 0 };
+        // Whole 4-byte words, as wgpu asks (slots and the constants are).
+        let range = range.start / 4 * 4..range.end.div_ceil(4) * 4;
+        queue.write_buffer(&self.buffer, range.start as u64, &self.staged[range.clone()]);
+        range.len() as u64
     }
 }

@@ -6,7 +6,7 @@
 
 use std::collections::HashMap;
 
-use oxygen_bindless::{BindlessHeap, CameraConstants, SceneConstantsBuffer};
+use oxygen_bindless::{BindlessHeap, CameraConstants, SceneConstantsBlock, SceneConstantsBuffer};
 use oxygen_core::{ResolvedView, ViewId};
 use oxygen_gpu::{GpuContext, HdrFormat, Msaa, TileAtlas, ViewTargets};
 use oxygen_sceneprep::PreparedSceneFrame;
@@ -22,6 +22,9 @@ use crate::views::Views;
 pub(crate) struct ViewGpu {
     pub(crate) targets: Option<ViewTargets>,
     pub(crate) constants: SceneConstantsBuffer,
+    /// For a batch camera: the block its constants live in (the batch and
+    /// the block's generation) and its slot; `None` for a buffer of its own.
+    constants_home: Option<(BatchId, u64, u32)>,
     /// What the targets hold: the last frame that rendered into them, so
     /// that a view reading a paused view knows its pose, and a readback
     /// knows whether the HDR image was written.
@@ -67,6 +70,10 @@ pub(crate) struct Targets {
     /// Each batch's atlas, kept between frames (its cameras' images stay
     /// readable) and reallocated when the batch outgrows it.
     atlases: HashMap<BatchId, TileAtlas>,
+    /// Each batch's cameras' constants, one buffer a batch (one upload a
+    /// frame), and how many blocks were made so far (a block's generation).
+    blocks: HashMap<BatchId, (SceneConstantsBlock, u64)>,
+    blocks_made: u64,
     /// The HDR format in use (the option, or its fallback).
     pub(crate) hdr_format: HdrFormat,
     pub(crate) budget: u64,
@@ -74,7 +81,14 @@ pub(crate) struct Targets {
 
 impl Targets {
     pub(crate) fn new(hdr_format: HdrFormat, budget: u64) -> Self {
-        Targets { views: HashMap::new(), atlases: HashMap::new(), hdr_format, budget }
+        Targets {
+            views: HashMap::new(),
+            atlases: HashMap::new(),
+            blocks: HashMap::new(),
+            blocks_made: 0,
+            hdr_format,
+            budget,
+        }
     }
 
     /// What the renderer keeps for `view`, once a frame has prepared it.
@@ -110,6 +124,7 @@ impl Targets {
         name: impl Fn(BatchId) -> String,
     ) {
         self.atlases.retain(|batch, _| registered(*batch));
+        self.blocks.retain(|batch, _| registered(*batch));
         for (batch, plan) in plans {
             let size = (plan.size.x, plan.size.y);
             let fits = self.atlases.get(batch).is_some_and(|a| {
@@ -189,6 +204,26 @@ impl Targets {
     ) -> u64 {
         let device = &gpu.device;
         let mut written = 0;
+        // Each batch's constants block holds a slot past the highest tile
+        // of its cameras this frame (grown to at least twice its size when
+        // it does not: the cameras move into the new block).
+        let mut slots: HashMap<BatchId, u32> = HashMap::new();
+        for view in views {
+            if let TargetPlan::Tile { batch, slot } = view.target {
+                let needed = slots.entry(batch).or_default();
+                *needed = (*needed).max(slot + 1);
+            }
+        }
+        for (batch, needed) in slots {
+            let capacity = self.blocks.get(&batch).map(|(block, _)| block.capacity());
+            if capacity.is_none_or(|c| c < needed) {
+                self.blocks_made += 1;
+                let slots = needed.max(2 * capacity.unwrap_or(0));
+                let label = format!("{batch} scene constants");
+                let block = SceneConstantsBlock::new(device, heap.scene_constants_layout(), slots, &label);
+                self.blocks.insert(batch, (block, self.blocks_made));
+            }
+        }
         for (view, frame) in views.iter().zip(frames) {
             let entry = self.views.entry(view.id).or_insert_with(|| ViewGpu {
                 targets: None,
@@ -197,6 +232,7 @@ impl Targets {
                     heap.scene_constants_layout(),
                     &format!("{} scene constants", view.id),
                 ),
+                constants_home: None,
                 holds: None,
             });
             let (width, height, label) = (view.gpu.viewport.x, view.gpu.viewport.y, view.id.to_string());
@@ -249,17 +285,43 @@ impl Targets {
                 }
             }
             let v = &view.gpu;
-            written += entry.constants.set_camera(
-                &gpu.queue,
-                &CameraConstants::new(
-                    v.view,
-                    v.projection,
-                    v.view_projection,
-                    v.inverse_view_projection,
-                    v.camera_position,
-                ),
+            let camera = CameraConstants::new(
+                v.view,
+                v.projection,
+                v.view_projection,
+                v.inverse_view_projection,
+                v.camera_position,
             );
-            written += entry.constants.set_renderer(&gpu.queue, &frame.renderer_constants(time_seconds));
+            let renderer = frame.renderer_constants(time_seconds);
+            match view.target {
+                // A batch's cameras: staged into the batch's block, which
+                // is written once below.
+                TargetPlan::Tile { batch, slot } => {
+                    let Some((block, generation)) = self.blocks.get_mut(&batch) else { continue };
+                    let home = Some((batch, *generation, slot));
+                    if entry.constants_home != home
+                        && let Some(constants) = block.view(slot)
+                    {
+                        entry.constants = constants;
+                        entry.constants_home = home;
+                    }
+                    // Counted when the block is written, below.
+                    block.stage(&gpu.queue, &mut entry.constants, &camera, &renderer);
+                }
+                _ => {
+                    if entry.constants_home.is_some() {
+                        // A camera that left its batch gets a buffer of its own again.
+                        let label = format!("{} scene constants", view.id);
+                        entry.constants = SceneConstantsBuffer::new(device, heap.scene_constants_layout(), &label);
+                        entry.constants_home = None;
+                    }
+                    written += entry.constants.set_camera(&gpu.queue, &camera);
+                    written += entry.constants.set_renderer(&gpu.queue, &renderer);
+                }
+            }
+        }
+        for (block, _) in self.blocks.values_mut() {
+            written += block.upload(&gpu.queue);
         }
         written
     }
@@ -281,6 +343,16 @@ impl Targets {
 }
 
 impl Renderer {
+    /// Where `view`'s scene constants are on the GPU, for interop: the
+    /// uniform buffer and the byte offset of the view's
+    /// [`oxygen_bindless::SceneConstants`] in it. A batch's cameras share
+    /// one buffer, each at its own offset (written with one upload a
+    /// frame). `None` before the view's first frame.
+    pub fn view_constants(&self, view: ViewId) -> Option<(&wgpu::Buffer, u64)> {
+        let constants = &self.targets.get(view)?.constants;
+        Some((constants.buffer(), u64::from(constants.dynamic_offset())))
+    }
+
     /// What the targets of a `viewport`-sized view take, bytes (colour and
     /// depth, or depth only), with the default HDR format.
     pub fn target_bytes(viewport: glam::UVec2, depth_only: bool) -> u64 {

@@ -631,7 +631,7 @@ impl MeshPass {
 #[derive(Default)]
 struct Bound {
     heap: Option<(wgpu::BindGroup, wgpu::BindGroup, wgpu::Buffer)>,
-    constants: Option<wgpu::BindGroup>,
+    constants: Option<(wgpu::BindGroup, u32)>,
     lighting: Option<wgpu::BindGroup>,
     pipeline: Option<wgpu::RenderPipeline>,
 }
@@ -653,10 +653,11 @@ impl Bound {
             pass.set_bind_group(1, lighting, &[]);
             self.lighting = Some(lighting.clone());
         }
-        let constants = ctx.scene_constants.bind_group();
-        if self.constants.as_ref() != Some(constants) {
-            pass.set_bind_group(3, constants, &[]);
-            self.constants = Some(constants.clone());
+        // A batch's cameras share one bind group at their own offsets.
+        let (constants, offset) = (ctx.scene_constants.bind_group(), ctx.scene_constants.dynamic_offset());
+        if self.constants.as_ref().is_none_or(|(group, at)| group != constants || *at != offset) {
+            pass.set_bind_group(3, constants, &[offset]);
+            self.constants = Some((constants.clone(), offset));
         }
     }
 

@@ -360,7 +360,7 @@ impl ReferenceTracer {
             pass.set_bind_group(0, ctx.heap.bind_group(), &[]);
             pass.set_bind_group(1, &bind_group, &[]);
             pass.set_bind_group(2, ctx.heap.texture_bind_group(), &[]);
-            pass.set_bind_group(3, ctx.scene_constants.bind_group(), &[]);
+            pass.set_bind_group(3, ctx.scene_constants.bind_group(), &[ctx.scene_constants.dynamic_offset()]);
             pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
             drop(pass);
             state.samples += this_frame;
