@@ -36,6 +36,13 @@ pub struct BatchId {
     index: u32,
 }
 
+impl BatchId {
+    /// The batch's number (unique among the renderer's batches).
+    pub(crate) fn index(self) -> u32 {
+        self.index
+    }
+}
+
 impl fmt::Display for BatchId {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "batch#{}", self.index)

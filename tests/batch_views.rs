@@ -522,10 +522,10 @@ fn a_linked_final_image_is_composed_into_a_rectangle_of_another_view() {
     assert!(worst <= 1, "the inset strays {worst} levels from the halved source");
 }
 
-/// Batch cameras on the GPU frustum path: each camera's culling
-/// dispatches into the batch's command buffer, and it draws what the same
-/// camera on the CPU path (the exact reference) draws: the same draws, the
-/// same picture.
+/// Batch cameras on the GPU frustum path: the batch's cameras are culled
+/// in one dispatch (each with its own parameters and counters, in the
+/// batch's command buffer), and each draws what the same camera on the CPU
+/// path (the exact reference) draws: the same draws, the same picture.
 #[test]
 fn batch_cameras_on_the_gpu_path_draw_what_the_cpu_path_draws() {
     use oxygen::sceneprep::Visibility;
@@ -553,6 +553,9 @@ fn batch_cameras_on_the_gpu_path_draw_what_the_cpu_path_draws() {
         for (on_cpu, on_gpu) in &pairs {
             let of = |view: ViewId| report.views.iter().find(|v| v.view == view).map(|v| v.visibility);
             assert_eq!((of(*on_cpu), of(*on_gpu)), (Some(Visibility::Cpu), Some(Visibility::GpuFrustum)));
+            // The batch's four cameras are culled in one dispatch.
+            let together = renderer.gpu_visibility().and_then(|v| v.culled_together(*on_gpu));
+            assert_eq!(together, Some(cameras.len()), "frame {frame}: {on_gpu} culled with its batch");
             assert_eq!(
                 renderer.view_draws(*on_gpu).unwrap(),
                 renderer.view_draws(*on_cpu).unwrap(),

@@ -10,7 +10,7 @@ use oxygen_sceneprep::{PreparedSceneFrame, ScenePrep, ViewFilter, Visibility};
 use tracing::warn;
 
 use super::Renderer;
-use super::prepare::FrameView;
+use super::prepare::{FrameView, TargetPlan};
 
 /// The views' visibility paths and GPU visibility's state.
 pub(crate) struct Visibilities {
@@ -73,6 +73,10 @@ impl Visibilities {
                 prepared: frame,
                 lod_bias: view.options.lod_bias,
                 casters_only: view.options.filter == ViewFilter::ShadowCastersOnly,
+                batch: match view.target {
+                    TargetPlan::Tile { batch, .. } => Some(u64::from(batch.index())),
+                    _ => None,
+                },
             })
             .collect();
         visibility.prepare(&gpu.device, &gpu.queue, heap, prep.gpu_scene(), &requests);

@@ -689,12 +689,12 @@ fn draw_partition(
         // Written by GPU visibility: as many commands as its counter says,
         // at most one per group. The renderer only puts a view on a GPU
         // path where the device counts draws.
-        if let Some(counts) = ctx.inputs.visibility.and_then(|v| v.count_buffer(ctx.view.view_id)) {
+        if let Some((counts, base)) = ctx.inputs.visibility.and_then(|v| v.count_buffer(ctx.view.view_id)) {
             pass.multi_draw_indexed_indirect_count(
                 buffer,
                 first * stride,
                 counts,
-                u64::from(counter) * 4,
+                base + u64::from(counter) * 4,
                 partition.command_count,
             );
             stats.draw_calls += 1;

@@ -54,6 +54,10 @@ pub struct GpuViewRequest<'a> {
     pub lod_bias: f32,
     /// Shadow casters only (shadow views).
     pub casters_only: bool,
+    /// The batch the view is a camera of (any number the caller picks per
+    /// batch): a batch's frustum-culled cameras are culled in one dispatch
+    /// ([`GpuVisibility::record_early_batch`]).
+    pub batch: Option<u64>,
 }
 
 /// A storage buffer that grows by doubling.
@@ -116,6 +120,29 @@ struct ViewCull {
     depth_pass_indices: Option<u64>,
 }
 
+/// A batch's frustum-culled cameras, culled together: every camera's
+/// parameters in one buffer, every camera's counters in one buffer (each
+/// from its own base), one bind group, one dispatch per step with the
+/// camera as its z.
+struct BatchCull {
+    params: GrowingBuffer,
+    /// What `params` holds.
+    written: Vec<CullParams>,
+    counts: GrowingBuffer,
+    /// Unused by frustum culling, bound because the layout has it.
+    history: GrowingBuffer,
+    bind_group: Option<wgpu::BindGroup>,
+    /// What `bind_group` was made from: scene generation, heap growths,
+    /// buffer generations.
+    bound: (u64, u64, u64),
+    buffers: u64,
+    /// The cameras in dispatch order, each with its first counter.
+    cameras: Vec<(ViewId, u32)>,
+    instances: u32,
+    groups: u32,
+    seen: bool,
+}
+
 /// The GPU scene's buffers, the cull pipelines and every GPU view's state.
 pub struct GpuVisibility {
     instances: GrowingBuffer,
@@ -132,6 +159,9 @@ pub struct GpuVisibility {
     no_hiz: wgpu::Buffer,
     hiz: HizPipelines,
     views: HashMap<ViewId, ViewCull>,
+    /// Batches whose cameras are culled in one dispatch, by the key their
+    /// requests carry.
+    batches: HashMap<u64, BatchCull>,
     uploaded_last_frame: u64,
     /// The GPU scene rebuild the buffers hold.
     uploaded_rebuild: Option<u64>,
@@ -155,10 +185,9 @@ impl GpuVisibility {
     pub fn new(device: &wgpu::Device) -> Self {
         let _span = info_span!("gpu_visibility_new").entered();
         let layout = LayoutEntries::new(wgpu::ShaderStages::COMPUTE)
-            // `CullParams`; instances, groups, LODs; counts, history, draws,
-            // commands; the depth pyramid (cull.wgsl's group 0).
-            .push(bindings::uniform())
-            .repeat(3, bindings::storage_read_only())
+            // Every view's `CullParams`; instances, groups, LODs; counts,
+            // history, draws, commands; the depth pyramid (cull.wgsl's group 0).
+            .repeat(4, bindings::storage_read_only())
             .repeat(4, bindings::storage_read_write())
             .push(bindings::storage_read_only())
             .create_layout(device, "gpu visibility");
@@ -201,6 +230,7 @@ impl GpuVisibility {
             no_hiz,
             hiz: HizPipelines::new(device),
             views: HashMap::new(),
+            batches: HashMap::new(),
             uploaded_last_frame: 0,
             uploaded_rebuild: None,
         }
@@ -267,7 +297,7 @@ impl GpuVisibility {
                 params: device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("cull params"),
                     size: std::mem::size_of::<CullParams>() as u64,
-                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
                     mapped_at_creation: false,
                 }),
                 written: None,
@@ -343,7 +373,127 @@ impl GpuVisibility {
             }
         }
         self.views.retain(|_, state| state.seen);
+        uploaded += self.prepare_batches(device, queue, heap, views);
         self.uploaded_last_frame = uploaded;
+    }
+
+    /// Gathers each batch's frustum-culled cameras (every camera of the
+    /// batch, or the batch is culled camera by camera) into one parameter
+    /// buffer and one counts buffer; returns the bytes uploaded.
+    fn prepare_batches(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        heap: &BindlessHeap,
+        views: &[GpuViewRequest<'_>],
+    ) -> u64 {
+        let mut uploaded = 0;
+        for batch in self.batches.values_mut() {
+            batch.seen = false;
+        }
+        let mut members: HashMap<u64, Vec<&GpuViewRequest<'_>>> = HashMap::new();
+        for request in views {
+            if let Some(key) = request.batch {
+                members.entry(key).or_default().push(request);
+            }
+        }
+        for (key, requests) in members {
+            let plans: Option<Vec<_>> = requests.iter().map(|r| r.prepared.gpu_plan()).collect();
+            let Some(plans) = plans else { continue };
+            let frustum_only = plans.iter().all(|p| p.visibility == Visibility::GpuFrustum);
+            let same_scene = plans.iter().all(|p| p.instances == plans[0].instances && p.groups == plans[0].groups);
+            // One dispatch holds at most MAX_WORKGROUPS cameras (its z).
+            if !frustum_only || !same_scene || requests.len() < 2 || requests.len() > MAX_WORKGROUPS as usize {
+                continue;
+            }
+            let batch = self.batches.entry(key).or_insert_with(|| BatchCull {
+                params: GrowingBuffer::new(device, "batch cull params", wgpu::BufferUsages::STORAGE, 0),
+                written: Vec::new(),
+                counts: GrowingBuffer::new(
+                    device,
+                    "batch cull counts",
+                    wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_SRC,
+                    0,
+                ),
+                history: GrowingBuffer::new(device, "batch cull history", wgpu::BufferUsages::STORAGE, 0),
+                bind_group: None,
+                bound: (u64::MAX, u64::MAX, u64::MAX),
+                buffers: 0,
+                cameras: Vec::new(),
+                instances: 0,
+                groups: 0,
+                seen: true,
+            });
+            batch.seen = true;
+            batch.cameras.clear();
+            let mut params = Vec::with_capacity(requests.len());
+            let mut base = 0u32;
+            for (request, plan) in requests.iter().zip(&plans) {
+                let id = request.view.view_id;
+                let hiz = self.views.get(&id).and_then(|s| s.hiz.as_ref());
+                params.push(CullParams { counter_base: base, ..cull_params(request, plan, hiz) });
+                batch.cameras.push((id, base));
+                // The plan's counters, then the coverage counters (see `prepare`).
+                base += plan.counters() + 3 + plan.groups;
+            }
+            (batch.instances, batch.groups) = (plans[0].instances, plans[0].groups);
+            let param_bytes = (params.len() * std::mem::size_of::<CullParams>()) as u64;
+            let mut replaced = batch.params.reserve(device, param_bytes);
+            replaced |= batch.counts.reserve(device, u64::from(base) * 4);
+            replaced |= batch.history.reserve(device, 4);
+            if replaced {
+                batch.buffers += 1;
+                batch.written.clear();
+            }
+            if batch.written != params {
+                queue.write_buffer(&batch.params.buffer, 0, bytemuck::cast_slice(&params));
+                uploaded += param_bytes;
+                batch.written = params;
+            }
+            let bound = (self.generation, heap.growth_count(), batch.buffers);
+            if batch.bind_group.is_none() || batch.bound != bound {
+                batch.bind_group = Some(device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("gpu visibility (batch)"),
+                    layout: &self.layout,
+                    entries: &[
+                        buffer(0, &batch.params.buffer),
+                        buffer(1, &self.instances.buffer),
+                        buffer(2, &self.groups.buffer),
+                        buffer(3, &self.lods.buffer),
+                        buffer(4, &batch.counts.buffer),
+                        buffer(5, &batch.history.buffer),
+                        buffer(6, heap.buffer(DomainKind::DrawMetadata)),
+                        buffer(7, heap.buffer(DomainKind::IndirectArgs)),
+                        buffer(8, &self.no_hiz),
+                    ],
+                }));
+                batch.bound = bound;
+            }
+        }
+        self.batches.retain(|_, batch| batch.seen);
+        uploaded
+    }
+
+    /// How many cameras `view` is culled with in one dispatch this frame
+    /// (its batch's frustum-culled cameras, itself included); `None` for a
+    /// view culled on its own.
+    pub fn culled_together(&self, view: ViewId) -> Option<usize> {
+        self.batch_of(view).map(|b| b.cameras.len())
+    }
+
+    /// The batch culling `view` with the others of its batch this frame.
+    fn batch_of(&self, view: ViewId) -> Option<&BatchCull> {
+        self.batches.values().find(|b| b.cameras.iter().any(|(id, _)| *id == view))
+    }
+
+    /// Where `view`'s counters are this frame: its buffer and the byte
+    /// offset of its first counter.
+    fn counters_of(&self, view: ViewId) -> Option<(&wgpu::Buffer, u64)> {
+        if let Some(batch) = self.batch_of(view) {
+            let base = batch.cameras.iter().find(|(id, _)| *id == view).map_or(0, |(_, base)| *base);
+            return Some((&batch.counts.buffer, u64::from(base) * 4));
+        }
+        self.views.get(&view).map(|s| (&s.counts.buffer, 0))
     }
 
     /// Collects the coverage counters the GPU has finished copying (never
@@ -405,10 +555,12 @@ impl GpuVisibility {
         let Some(state) = self.views.get(&view) else { return };
         let swapped =
             state.readback_state.compare_exchange(READBACK_IDLE, READBACK_COPIED, Ordering::AcqRel, Ordering::Acquire);
-        if swapped.is_ok() {
+        if swapped.is_ok()
+            && let Some((counts, base)) = self.counters_of(view)
+        {
             // The coverage counter is the one after the plan's counters.
-            let offset = u64::from(state.counters) * 4;
-            encoder.copy_buffer_to_buffer(&state.counts.buffer, offset, &state.readback, 0, 12);
+            let offset = base + u64::from(state.counters) * 4;
+            encoder.copy_buffer_to_buffer(counts, offset, &state.readback, 0, 12);
         }
     }
 
@@ -433,9 +585,10 @@ impl GpuVisibility {
     }
 
     /// The buffer whose counters a GPU-written partition's `gpu_count`
-    /// indexes, for `view` this frame.
-    pub fn count_buffer(&self, view: ViewId) -> Option<&wgpu::Buffer> {
-        self.views.get(&view).map(|s| &s.counts.buffer)
+    /// indexes, for `view` this frame, and the byte offset of its counter 0
+    /// (a batch's cameras share one buffer, each from its own offset).
+    pub fn count_buffer(&self, view: ViewId) -> Option<(&wgpu::Buffer, u64)> {
+        self.counters_of(view)
     }
 
     fn dispatch(&self, encoder: &mut wgpu::CommandEncoder, state: &ViewCull, steps: &[(&wgpu::ComputePipeline, u32)]) {
@@ -472,6 +625,27 @@ impl GpuVisibility {
             return;
         }
         let _span = info_span!("cull_early_batch", views = states.len()).entered();
+        // Every camera in one batch's buffers: one clear, one dispatch per step.
+        if let Some(batch) = views.first().and_then(|v| self.batch_of(*v))
+            && batch.cameras.len() == views.len()
+            && views.iter().all(|v| batch.cameras.iter().any(|(id, _)| id == v))
+            && let Some(bind_group) = &batch.bind_group
+        {
+            encoder.clear_buffer(&batch.counts.buffer, 0, None);
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("visibility cull (one dispatch for the batch)"),
+                timestamp_writes: None,
+            });
+            pass.set_bind_group(0, bind_group, &[]);
+            let cameras = batch.cameras.len() as u32;
+            for (pipeline, threads) in [(&self.cull_early, batch.instances), (&self.commands_early, batch.groups)] {
+                if threads > 0 {
+                    pass.set_pipeline(pipeline);
+                    dispatch_threads_for(&mut pass, threads, cameras);
+                }
+            }
+            return;
+        }
         for state in &states {
             encoder.clear_buffer(&state.counts.buffer, 0, None);
         }
@@ -564,7 +738,8 @@ impl GpuVisibility {
             return Ok(Vec::new());
         };
         let words = |bytes: Vec<u8>| -> Vec<u32> { bytemuck::pod_collect_to_vec(&bytes) };
-        let counts = words(gpu.read_buffer(&state.counts.buffer, 0, u64::from(plan.counters()) * 4)?);
+        let (counts, base) = self.counters_of(prepared.view_id()).unwrap_or((&state.counts.buffer, 0));
+        let counts = words(gpu.read_buffer(counts, base, u64::from(plan.counters()) * 4)?);
         let slots = prepared.slots();
         let command_size = std::mem::size_of::<oxygen_sceneprep::DrawIndexedIndirect>() as u64;
         let draw_size = std::mem::size_of::<oxygen_sceneprep::DrawMetadata>() as u64;
@@ -634,13 +809,22 @@ fn cull_params(
         hiz_size: hiz.map_or([1, 1], |h| [h.size().0, h.size().1]),
         group_counters: plan.group_counters(),
         disc: std::f32::consts::FRAC_PI_4 / view.aspect().max(f32::MIN_POSITIVE),
+        counter_base: 0,
+        history_base: 0,
+        reserved: [0; 2],
     }
 }
 
 /// Dispatches `threads` invocations of 64: past 65 535 workgroups the rest
 /// go into y; the shader rebuilds the linear index and skips the overshoot.
 fn dispatch_threads(pass: &mut wgpu::ComputePass<'_>, threads: u32) {
+    dispatch_threads_for(pass, threads, 1);
+}
+
+/// [`dispatch_threads`] for each of `views` views at once (the shader's
+/// `id.z` is the view).
+fn dispatch_threads_for(pass: &mut wgpu::ComputePass<'_>, threads: u32, views: u32) {
     let groups = threads.div_ceil(64);
     let x = groups.min(MAX_WORKGROUPS);
-    pass.dispatch_workgroups(x, groups.div_ceil(x), 1);
+    pass.dispatch_workgroups(x, groups.div_ceil(x), views.min(MAX_WORKGROUPS));
 }

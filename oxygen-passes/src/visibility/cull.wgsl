@@ -14,7 +14,11 @@
 #include "sceneprep/GpuLod"
 #include "sceneprep/DrawIndexedIndirect"
 
-@group(0) @binding(0) var<uniform> params: CullParams;
+// Every view's parameters: one for a view culled on its own, one per
+// camera for a batch culled in one dispatch (the camera is the dispatch's
+// z). Each invocation copies its view's into `params` first.
+@group(0) @binding(0) var<storage, read> views: array<CullParams>;
+var<private> params: CullParams;
 @group(0) @binding(1) var<storage, read> instances: array<GpuInstance>;
 @group(0) @binding(2) var<storage, read> groups: array<GpuGroup>;
 @group(0) @binding(3) var<storage, read> lods: array<GpuLod>;
@@ -64,6 +68,12 @@ fn select_group(instance: GpuInstance) -> u32 {
     return group;
 }
 
+// Where counter `index` of this view is in `counts` (a batch's cameras
+// share one buffer, each from its own base).
+fn counter(index: u32) -> u32 {
+    return params.counter_base + index;
+}
+
 // Coverage counters after the group counters, in 1/1024ths of the viewport:
 // [the sum over drawn instances][the sum over groups of each group's sum,
 // capped at one viewport][the indices of the drawn instances][one per
@@ -81,8 +91,8 @@ fn coverage_base() -> u32 {
 fn add_coverage(i: u32, instance: GpuInstance, group: u32) {
     // Saturating, and each add capped: a wrapped count would read as a
     // cheap pre-pass.
-    if atomicLoad(&counts[coverage_base() + 2u]) < 0x80000000u {
-        atomicAdd(&counts[coverage_base() + 2u], min(groups[group].index_count, 0x00FFFFFFu));
+    if atomicLoad(&counts[counter(coverage_base() + 2u)]) < 0x80000000u {
+        atomicAdd(&counts[counter(coverage_base() + 2u)], min(groups[group].index_count, 0x00FFFFFFu));
     }
     let depth = -(dot(params.view_row_z.xyz, instance.sphere.xyz) + params.view_row_z.w);
     var fraction = instance.sphere.w * params.lod_scale;
@@ -97,18 +107,18 @@ fn add_coverage(i: u32, instance: GpuInstance, group: u32) {
     let units = u32(coverage * 1024.0 + dither);
     // Saturating: a sum this large (a million viewports) already says
     // "pre-pass", and must not wrap around to a small one.
-    if units > 0u && atomicLoad(&counts[coverage_base()]) < 0x40000000u {
-        atomicAdd(&counts[coverage_base()], units);
-        atomicAdd(&counts[coverage_base() + 3u + group], units);
+    if units > 0u && atomicLoad(&counts[counter(coverage_base())]) < 0x40000000u {
+        atomicAdd(&counts[counter(coverage_base())], units);
+        atomicAdd(&counts[counter(coverage_base() + 3u + group)], units);
     }
 }
 
 // A group's coverage, capped at one viewport, into the capped sum (once per
 // group, after its draws are final).
 fn add_capped_coverage(g: u32) {
-    let units = atomicLoad(&counts[coverage_base() + 3u + g]);
-    if units > 0u && atomicLoad(&counts[coverage_base() + 1u]) < 0x40000000u {
-        atomicAdd(&counts[coverage_base() + 1u], min(units, 1024u));
+    let units = atomicLoad(&counts[counter(coverage_base() + 3u + g)]);
+    if units > 0u && atomicLoad(&counts[counter(coverage_base() + 1u)]) < 0x40000000u {
+        atomicAdd(&counts[counter(coverage_base() + 1u)], min(units, 1024u));
     }
 }
 
@@ -150,6 +160,7 @@ fn linear(id: vec3<u32>, workgroups: vec3<u32>) -> u32 {
 
 @compute @workgroup_size(64)
 fn cull_early(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) workgroups: vec3<u32>) {
+    params = views[id.z];
     let i = linear(id, workgroups);
     if i >= params.instance_count {
         return;
@@ -161,15 +172,15 @@ fn cull_early(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgro
     let occlusion = (params.flags & CULL_OCCLUSION) != 0u;
     if !in_frustum(instance) {
         if occlusion {
-            history[i] = 0u;
+            history[params.history_base + i] = 0u;
         }
         return;
     }
-    if occlusion && history[i] == 0u {
+    if occlusion && history[params.history_base + i] == 0u {
         return;
     }
     let group = select_group(instance);
-    let slot = atomicAdd(&counts[params.group_counters + group], 1u);
+    let slot = atomicAdd(&counts[counter(params.group_counters + group)], 1u);
     emit(group, slot, instance);
     add_coverage(i, instance, group);
 }
@@ -178,6 +189,7 @@ fn cull_early(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgro
 // compacted at its partition's start and counted by the partition's counter.
 @compute @workgroup_size(64)
 fn commands_early(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) workgroups: vec3<u32>) {
+    params = views[id.z];
     let g = linear(id, workgroups);
     if g >= params.group_count {
         return;
@@ -186,12 +198,12 @@ fn commands_early(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_wor
     if (params.flags & CULL_OCCLUSION) == 0u {
         add_capped_coverage(g);
     }
-    let drawn = atomicLoad(&counts[params.group_counters + g]);
+    let drawn = atomicLoad(&counts[counter(params.group_counters + g)]);
     if drawn == 0u {
         return;
     }
     let group = groups[g];
-    let c = atomicAdd(&counts[group.partition_index], 1u);
+    let c = atomicAdd(&counts[counter(group.partition_index)], 1u);
     commands[params.command_slot + group.command_base + c] = command(group, drawn, 0u);
 }
 
@@ -200,6 +212,7 @@ fn commands_early(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_wor
 // visible ones phase 1 did not draw are drawn now.
 @compute @workgroup_size(64)
 fn cull_late(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) workgroups: vec3<u32>) {
+    params = views[id.z];
     let i = linear(id, workgroups);
     if i >= params.instance_count {
         return;
@@ -208,19 +221,19 @@ fn cull_late(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgrou
     if !wanted(instance) || !in_frustum(instance) {
         return;
     }
-    let drawn_early = history[i] != 0u;
+    let drawn_early = history[params.history_base + i] != 0u;
     // The box is widened by its coordinates' rounding at this distance from
     // the world origin, so that f32 projection error never hides it.
     let slack = (abs(instance.aabb_min) + abs(instance.aabb_max)) * 1e-6 + vec3<f32>(1e-6);
     let visible = hiz_visible(params.hiz_levels, params.hiz_size, params.view_projection,
         instance.aabb_min - slack, instance.aabb_max + slack);
-    history[i] = select(0u, 1u, visible);
+    history[params.history_base + i] = select(0u, 1u, visible);
     if !visible || drawn_early {
         return;
     }
     let group = select_group(instance);
-    let early = atomicLoad(&counts[params.group_counters + group]);
-    let slot = early + atomicAdd(&counts[params.group_counters + params.group_count + group], 1u);
+    let early = atomicLoad(&counts[counter(params.group_counters + group)]);
+    let slot = early + atomicAdd(&counts[counter(params.group_counters + params.group_count + group)], 1u);
     emit(group, slot, instance);
     add_coverage(i, instance, group);
 }
@@ -229,20 +242,21 @@ fn cull_late(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgrou
 // pre-pass second) and list C (every draw, for shading).
 @compute @workgroup_size(64)
 fn commands_late(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) workgroups: vec3<u32>) {
+    params = views[id.z];
     let g = linear(id, workgroups);
     if g >= params.group_count {
         return;
     }
     add_capped_coverage(g);
-    let early = atomicLoad(&counts[params.group_counters + g]);
-    let late = atomicLoad(&counts[params.group_counters + params.group_count + g]);
+    let early = atomicLoad(&counts[counter(params.group_counters + g)]);
+    let late = atomicLoad(&counts[counter(params.group_counters + params.group_count + g)]);
     let group = groups[g];
     if late > 0u {
-        let c = atomicAdd(&counts[params.partition_count + group.partition_index], 1u);
+        let c = atomicAdd(&counts[counter(params.partition_count + group.partition_index)], 1u);
         commands[params.command_slot + params.group_count + group.command_base + c] = command(group, late, early);
     }
     if early + late > 0u {
-        let c = atomicAdd(&counts[2u * params.partition_count + group.partition_index], 1u);
+        let c = atomicAdd(&counts[counter(2u * params.partition_count + group.partition_index)], 1u);
         commands[params.command_slot + 2u * params.group_count + group.command_base + c] =
             command(group, early + late, 0u);
     }

@@ -11,7 +11,7 @@ pub(crate) const CULL_OCCLUSION: u32 = 2;
 oxygen_gpu::gpu_struct! {
     /// The cull shader's per-view parameters (its WGSL twin is generated).
     #[derive(Debug, Default, PartialEq)]
-    pub(crate) struct CullParams: 240 bytes {
+    pub(crate) struct CullParams: 256 bytes {
         pub(crate) planes: [[f32; 4]; 6] => "array<vec4<f32>, 6>",
         pub(crate) view_row_z: [f32; 4],
         pub(crate) view_projection: [[f32; 4]; 4],
@@ -32,6 +32,12 @@ oxygen_gpu::gpu_struct! {
         /// Viewport area of a disc one viewport height across, as a fraction
         /// of the viewport (pi / 4 / aspect): the overdraw estimate's unit.
         pub(crate) disc: f32,
+        /// Where the view's counters start in the counts buffer (0 for a
+        /// view of its own; a batch's cameras share one buffer).
+        pub(crate) counter_base: u32,
+        /// Where the view's history starts in the history buffer.
+        pub(crate) history_base: u32,
+        pub(crate) reserved: [u32; 2],
     }
 }
 
