@@ -18,7 +18,9 @@
 //! images arrive through the batch's stream (`Renderer::stream_batch`): one
 //! copy of the atlas a frame of colour, depth and instance labels
 //! (`BatchDesc::with_labels`), tagged with the frame number; the
-//! segmentation maps each label to its node's class. With
+//! segmentation maps each label to its node's class. Where the adapter
+//! runs GPU visibility the cameras cull on the GPU (the whole rig in one
+//! dispatch), else on the CPU; the first line says which. With
 //! `OXYGEN_RECORD_DIR` set, the run's rate is appended to
 //! `$OXYGEN_RECORD_DIR/sensor_rig.jsonl` (`oxygen_demo::record`).
 
@@ -141,9 +143,18 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
     let mut renderer = Renderer::new_headless()?;
     let rig = renderer.register_batch(BatchDesc::new("rig", size).with_labels())?;
     let (center, radius) = (bounds.center(), bounds.half_extents().length().max(1e-3) * 2.5);
+    // Where the adapter can, the cameras cull on the GPU: the whole rig in
+    // one dispatch, and nothing per camera for the CPU to emit.
+    let visibility = if renderer.gpu_visibility_supported() {
+        oxygen::sceneprep::Visibility::GpuFrustum
+    } else {
+        oxygen::sceneprep::Visibility::Cpu
+    };
+    println!("{}: culling on the {}", renderer.gpu().describe(), if visibility.on_gpu() { "GPU" } else { "CPU" });
     for index in 0..cameras {
         let camera = RingCamera { center, radius, index, count: cameras, size };
-        renderer.add_camera(rig, ViewDesc::new(camera).named(format!("cam{index:03}")))?;
+        let desc = ViewDesc::new(camera).named(format!("cam{index:03}")).with_visibility(visibility);
+        renderer.add_camera(rig, desc)?;
     }
     renderer.stream_batch(rig, Some(StreamOptions { instances: true, ..Default::default() }))?;
     // Segmentation: each instance label's node's class.
