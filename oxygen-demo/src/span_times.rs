@@ -9,9 +9,11 @@
 //! exclusive to".
 //!
 //! ```no_run
-//! let times = oxygen_demo::span_times::SpanTimes::install();
+//! let times = oxygen_demo::span_times::SpanTimes::install().expect("no other subscriber is set");
 //! // ... frames ...
-//! for (name, total) in times.take() { println!("{name}: {total:?}"); }
+//! for (name, total, entries) in times.take() {
+//!     println!("{name}: {total:?} in {entries} entries");
+//! }
 //! ```
 
 use std::collections::HashMap;
