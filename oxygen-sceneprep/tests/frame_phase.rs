@@ -280,21 +280,18 @@ fn a_spot_lights_inner_cone_is_kept_inside_its_outer_cone() {
 }
 
 /// A point or spot light's range bounds it only when positive and finite;
-/// a negative, zero, infinite or NaN range means unbounded, which the
-/// record writes as 0 (what the shader reads as "no cut-off").
+/// a negative, zero (of either sign), infinite or NaN range means
+/// unbounded, which the record writes as +0 (what the shader reads as "no
+/// cut-off"), bit for bit: `-0` would print as such in `dump_lights`, so
+/// two unbounded lights would not dump alike.
 #[test]
 fn only_a_positive_finite_range_bounds_a_light() {
-    let cases = [
-        (None, 0.0),
-        (Some(5.0), 5.0),
-        (Some(-5.0), 0.0),
-        (Some(0.0), 0.0),
-        (Some(f32::INFINITY), 0.0),
-        (Some(f32::NAN), 0.0),
-    ];
+    let unbounded = [None, Some(-5.0), Some(0.0), Some(-0.0), Some(f32::INFINITY), Some(f32::NAN)];
+    let cases = unbounded.map(|range| (range, 0.0)).into_iter().chain([(Some(5.0), 5.0)]);
     for (range, expected) in cases {
         for light in [oxygen_core::Light::point(1.0, range), oxygen_core::Light::spot(1.0, range, 0.2, 0.4)] {
-            assert_eq!(positional_record(light).range, expected, "range {range:?}");
+            let written = positional_record(light).range;
+            assert_eq!(written.to_bits(), f32::to_bits(expected), "range {range:?} written as {written}");
         }
     }
 }
