@@ -253,3 +253,45 @@ fn light_positions_are_rebased_on_the_render_origin_in_f64() {
     assert_eq!(glam::Vec3::from(lights[0].position), stored.as_vec3());
     assert!((glam::Vec3::from(lights[0].position) - Vec3::new(3.25, 2.5, 0.125)).length() < 0.07);
 }
+
+/// The positional light record of a scene holding `light` alone.
+fn positional_record(light: oxygen_core::Light) -> oxygen_sceneprep::PositionalLightRecord {
+    let mut scene = Scene::new();
+    let node = scene.add_node("light", Transform::IDENTITY);
+    scene.set_light(node, Some(light)).unwrap();
+    let prep = prepared_with_one_view(&scene);
+    let lights = &prep.frame_collection().positional_lights;
+    assert_eq!(lights.len(), 1);
+    lights[0]
+}
+
+/// A spot light whose inner cone is not inside its outer one (as wide, or
+/// wider) gets an inner cone 1e-4 rad inside the outer one, so its falloff
+/// band keeps a width (`cos_inner > cos_outer`): the shader's smooth edge
+/// never runs backwards or collapses.
+#[test]
+fn a_spot_lights_inner_cone_is_kept_inside_its_outer_cone() {
+    for inner in [0.5f32, 0.8] {
+        let p = positional_record(oxygen_core::Light::spot(1.0, None, inner, 0.5));
+        assert_eq!(p.cos_outer, 0.5f32.cos(), "inner cone {inner}");
+        assert_eq!(p.cos_inner, (0.5f32 - 1e-4).cos(), "inner cone {inner}");
+        assert!(p.cos_inner > p.cos_outer, "inner cone {inner}");
+    }
+}
+
+/// A point or spot light's range bounds it only when positive and finite;
+/// a negative, zero (of either sign), infinite or NaN range means
+/// unbounded, which the record writes as +0 (what the shader reads as "no
+/// cut-off"), bit for bit: `-0` would print as such in `dump_lights`, so
+/// two unbounded lights would not dump alike.
+#[test]
+fn only_a_positive_finite_range_bounds_a_light() {
+    let unbounded = [None, Some(-5.0), Some(0.0), Some(-0.0), Some(f32::INFINITY), Some(f32::NAN)];
+    let cases = unbounded.map(|range| (range, 0.0)).into_iter().chain([(Some(5.0), 5.0)]);
+    for (range, expected) in cases {
+        for light in [oxygen_core::Light::point(1.0, range), oxygen_core::Light::spot(1.0, range, 0.2, 0.4)] {
+            let written = positional_record(light).range;
+            assert_eq!(written.to_bits(), f32::to_bits(expected), "range {range:?} written as {written}");
+        }
+    }
+}

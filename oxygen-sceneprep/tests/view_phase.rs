@@ -119,3 +119,92 @@ fn a_depth_only_view_drops_transparency_and_sorts_by_depth_not_material() {
     // Front to back, although the far cube's material sorts first in a colour view.
     assert!(frame.draws()[0].material_handle > frame.draws()[1].material_handle);
 }
+
+/// A 6 × 8 rectangle at the origin, facing +Z: its bounding sphere's radius
+/// is exactly 5 (half the diagonal); with a 3-index LOD below `fraction`.
+fn rectangle_with_lod(fraction: f32) -> Scene {
+    let mut scene = Scene::new();
+    let corner = |x: f32, y: f32| oxygen_core::Vertex::new(Vec3::new(x, y, 0.0), Vec3::Z, glam::Vec2::ZERO);
+    let corners = vec![corner(-3.0, -4.0), corner(3.0, -4.0), corner(3.0, 4.0), corner(-3.0, 4.0)];
+    let submesh = |index_count| vec![oxygen_core::Submesh { first_index: 0, index_count }];
+    let rectangle = Geometry::new("rectangle", corners.clone(), vec![0, 1, 2, 0, 2, 3], submesh(6));
+    let triangle = Geometry::new("triangle", corners, vec![0, 1, 2], submesh(3));
+    let rectangle = scene.add_geometry(rectangle.unwrap());
+    let triangle = scene.add_geometry(triangle.unwrap());
+    let material = scene.add_material(Material::opaque("m", Vec4::ONE));
+    let node = scene.add_node("rectangle", Transform::IDENTITY);
+    scene.set_renderable(node, Renderable { geometry: rectangle, materials: vec![material] }).unwrap();
+    scene.set_lods(node, vec![LodLevel { geometry: triangle, below_screen_fraction: fraction }]).unwrap();
+    scene
+}
+
+/// Index count drawn through an orthographic view 16 units high on each
+/// side of its axis (32 in all), from `distance` along +Z.
+fn orthographic_index_count(scene: &Scene, distance: f32) -> u32 {
+    let camera = LookAtResolver {
+        camera: Camera::orthographic(16.0, 0.1, 1000.0),
+        eye: Vec3::new(0.0, 0.0, distance),
+        target: Vec3::ZERO,
+        up: Vec3::Y,
+        viewport: UVec2::new(100, 100),
+    };
+    let context = ViewContext { view_id: ViewIds::default().allocate(), frame_index: 1, time_seconds: 0.0 };
+    let view = camera.resolve(&context, scene).unwrap();
+    let mut prep = ScenePrep::new();
+    let request = ViewRequest { view: &view, options: ViewPrepOptions::default() };
+    let frames = prep.prepare(scene, &[request], &mut SlotAllocators::default()).unwrap();
+    frames[0].draws()[0].index_count
+}
+
+/// Through an orthographic view a renderable covers the same share of the
+/// view's height at every distance, so it picks the same LOD from near and
+/// from far. The quantity compared with `below_screen_fraction` is, on the
+/// CPU as in the GPU cull (`cull.wgsl`), twice the projected radius over
+/// the half-height: here 2 × 5 / 16 = 0.625 (that is the diameter over the
+/// half-height, twice the diameter's share of the whole height that
+/// `LodLevel` describes). A LOD below 1 is drawn, one below 0.5 is not.
+#[test]
+fn an_orthographic_view_picks_lods_by_size_not_distance() {
+    let coarse_below_one = rectangle_with_lod(1.0);
+    for distance in [10.0, 500.0] {
+        assert_eq!(orthographic_index_count(&coarse_below_one, distance), 3, "LOD at distance {distance}");
+    }
+    let coarse_below_half = rectangle_with_lod(0.5);
+    for distance in [10.0, 500.0] {
+        assert_eq!(orthographic_index_count(&coarse_below_half, distance), 6, "base mesh at distance {distance}");
+    }
+}
+
+/// A LOD is used only when the projected size is strictly below its
+/// screen fraction: at exactly the fraction (here 0.625, see
+/// [`an_orthographic_view_picks_lods_by_size_not_distance`], exact in
+/// `f32`) the finer mesh is kept, a hair above it the LOD is used.
+#[test]
+fn a_lod_at_exactly_its_screen_fraction_is_not_used() {
+    assert_eq!(orthographic_index_count(&rectangle_with_lod(0.625), 10.0), 6);
+    assert_eq!(orthographic_index_count(&rectangle_with_lod(0.6251), 10.0), 3);
+}
+
+/// A frame counts the indices a depth pre-pass would draw: those of its
+/// opaque and masked draws, none of its transparent ones (the automatic
+/// pre-pass weighs them against the shading it would spare).
+#[test]
+fn the_depth_pass_counts_opaque_and_masked_indices_only() {
+    let mut scene = Scene::new();
+    let cube = scene.add_geometry(Geometry::cube(1.0));
+    let quad = scene.add_geometry(Geometry::quad(1.0));
+    let mut add = |name: &str, geometry, alpha_mode, x: f32| {
+        let material = scene.add_material(Material { alpha_mode, ..Material::opaque(name, Vec4::ONE) });
+        let node = scene.add_node(name, Transform::from_translation(Vec3::new(x, 0.0, 0.0)));
+        scene.set_renderable(node, Renderable { geometry, materials: vec![material] }).unwrap();
+    };
+    add("opaque cube", cube, AlphaMode::Opaque, -1.0);
+    add("masked quad", quad, AlphaMode::Mask { cutoff: 0.5 }, 0.0);
+    add("glass cube", cube, AlphaMode::Blend, 1.0);
+    let view = view_from(&scene, 5.0);
+    let mut prep = ScenePrep::new();
+    let request = ViewRequest { view: &view, options: ViewPrepOptions::default() };
+    let frames = prep.prepare(&scene, &[request], &mut SlotAllocators::default()).unwrap();
+    assert_eq!(frames[0].draws().len(), 3);
+    assert_eq!(frames[0].depth_pass_indices(), 36 + 6, "the opaque cube and the masked quad");
+}

@@ -118,3 +118,135 @@ impl GeometryCache {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+    use oxygen_core::{MorphTarget, SkinWeights, VertexAttributes};
+    use slotmap::KeyData;
+
+    use super::*;
+
+    /// The handle of slot `index` at `version` (odd: occupied), as a scene
+    /// whose geometry slot was reused would hand out.
+    fn handle(index: u32, version: u32) -> GeometryHandle {
+        GeometryHandle::from(KeyData::from_ffi((u64::from(version) << 32) | u64::from(index)))
+    }
+
+    fn mesh(name: &str, size: f32) -> Arc<Geometry> {
+        let cube = Geometry::cube(size);
+        let geometry =
+            Geometry::new(name, cube.vertices().to_vec(), cube.indices().to_vec(), cube.submeshes().to_vec());
+        Arc::new(geometry.expect("a cube's arrays make a geometry"))
+    }
+
+    /// The names of the meshes whose uploads are owed, in order.
+    fn pending_names(cache: &mut GeometryCache) -> Vec<String> {
+        let mut pending = Vec::new();
+        cache.take_pending(&mut pending);
+        pending.iter().map(|(_, g)| g.name().to_owned()).collect()
+    }
+
+    /// The vertex range holds the vertices, one block per morph target, the
+    /// attribute records and the skin records, in that order and back to
+    /// back: the first attribute and skin records the shaders are given are
+    /// where the upload writes them.
+    #[test]
+    fn attribute_and_skin_records_follow_the_morph_blocks() -> Result<(), SlotError> {
+        let quad = Geometry::quad(1.0);
+        let n = quad.vertices().len() as u32;
+        let target = || MorphTarget { positions: vec![Vec3::X; n as usize], normals: None };
+        let full = quad
+            .clone()
+            .with_morph_targets(vec![target(), target()])
+            .and_then(|g| g.with_attributes(vec![VertexAttributes::default(); n as usize]))
+            .and_then(|g| g.with_skin_weights(vec![SkinWeights::new([0; 4], [1.0, 0.0, 0.0, 0.0]); n as usize]))
+            .expect("a quad with two morph targets, attributes and skin");
+        let skinned = quad
+            .with_morph_targets(vec![target()])
+            .and_then(|g| g.with_skin_weights(vec![SkinWeights::new([0; 4], [1.0, 0.0, 0.0, 0.0]); n as usize]))
+            .expect("a quad with a morph target and skin");
+        let mut slots = SlotAllocators::default();
+        let mut cache = GeometryCache::default();
+        // Something first, so the ranges do not start at slot 0.
+        cache.resolve(handle(1, 1), &mesh("first", 1.0), &mut slots)?;
+
+        let s = cache.resolve(handle(2, 1), &Arc::new(full), &mut slots)?;
+        assert_eq!(s.vertices.count, 5 * n, "vertices, two morph blocks, attributes, skin");
+        assert_eq!(s.attributes, s.vertices.start + 3 * n, "attributes after the vertices and two morph blocks");
+        assert_eq!(s.skin, s.vertices.start + 4 * n, "skin after the attributes");
+        assert_eq!(s.skin + n, s.vertices.end(), "the skin records end the range");
+
+        let s = cache.resolve(handle(3, 1), &Arc::new(skinned), &mut slots)?;
+        assert_eq!(s.attributes, oxygen_bindless::INVALID_SLOT, "no attributes");
+        assert_eq!(s.skin, s.vertices.start + 2 * n, "skin right after the one morph block");
+        assert_eq!(s.skin + n, s.vertices.end());
+        Ok(())
+    }
+
+    /// A mesh drawn again keeps its slots and is uploaded once; the count of
+    /// resident meshes grows by one per new mesh.
+    #[test]
+    fn a_mesh_is_allocated_and_uploaded_once() -> Result<(), SlotError> {
+        let mut slots = SlotAllocators::default();
+        let mut cache = GeometryCache::default();
+        assert_eq!(cache.resident(), 0);
+        let a = mesh("a", 1.0);
+        let first = cache.resolve(handle(1, 1), &a, &mut slots)?;
+        assert_eq!(cache.resolve(handle(1, 1), &a, &mut slots)?, first);
+        assert_eq!(cache.get(handle(1, 1)), Some(first));
+        cache.resolve(handle(2, 1), &mesh("b", 2.0), &mut slots)?;
+        assert_eq!(cache.resident(), 2);
+        assert_eq!(pending_names(&mut cache), ["a", "b"]);
+        assert!(pending_names(&mut cache).is_empty(), "each upload is handed out once");
+        cache.resolve(handle(1, 1), &a, &mut slots)?;
+        assert!(pending_names(&mut cache).is_empty(), "a resident mesh is not uploaded again");
+        Ok(())
+    }
+
+    /// A handle of another generation at a resident mesh's index names
+    /// another mesh: it does not find the old one's slots, and resolving it
+    /// frees them (and drops their upload, if still owed) before allocating
+    /// its own, leaving the other meshes and their uploads alone.
+    #[test]
+    fn a_new_generation_at_the_same_index_replaces_the_old_mesh() -> Result<(), SlotError> {
+        let mut slots = SlotAllocators::default();
+        let mut cache = GeometryCache::default();
+        cache.resolve(handle(1, 1), &mesh("old", 1.0), &mut slots)?;
+        cache.resolve(handle(2, 1), &mesh("other", 1.0), &mut slots)?;
+        let new = handle(1, 3);
+        assert_eq!(cache.get(new), None, "the old mesh's slots are not the new one's");
+
+        let replaced = cache.resolve(new, &mesh("new", 2.0), &mut slots)?;
+        assert_eq!(cache.get(new), Some(replaced));
+        assert_eq!(cache.get(handle(1, 1)), None, "the old handle is stale");
+        assert_eq!(cache.resident(), 2);
+        for domain in [DomainKind::Vertices, DomainKind::Indices] {
+            assert_eq!(slots.get(domain).live_allocations(), 2, "{domain:?}: the old mesh's range was freed");
+        }
+        assert_eq!(pending_names(&mut cache), ["other", "new"]);
+        Ok(())
+    }
+
+    /// Clearing (another scene's handles name other meshes) frees every
+    /// mesh's ranges and owed uploads; a mesh resolved afterwards is
+    /// allocated and uploaded anew.
+    #[test]
+    fn clear_frees_every_mesh() -> Result<(), SlotError> {
+        let mut slots = SlotAllocators::default();
+        let mut cache = GeometryCache::default();
+        let a = mesh("a", 1.0);
+        cache.resolve(handle(1, 1), &a, &mut slots)?;
+        cache.resolve(handle(2, 1), &mesh("b", 1.0), &mut slots)?;
+        cache.clear(&mut slots)?;
+        assert_eq!(cache.resident(), 0);
+        assert_eq!(cache.get(handle(1, 1)), None);
+        for domain in [DomainKind::Vertices, DomainKind::Indices] {
+            assert_eq!(slots.get(domain).live_allocations(), 0, "{domain:?}");
+        }
+        assert!(pending_names(&mut cache).is_empty(), "no upload owed for a freed range");
+        cache.resolve(handle(1, 1), &a, &mut slots)?;
+        assert_eq!((cache.resident(), pending_names(&mut cache)), (1, vec!["a".to_owned()]));
+        Ok(())
+    }
+}

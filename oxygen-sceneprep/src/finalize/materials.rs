@@ -151,3 +151,57 @@ impl MaterialTable {
         self.dirty = false;
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec4;
+    use oxygen_core::Material;
+
+    use super::*;
+
+    /// The table holds one record per material, at the material's id, built
+    /// from the material as the scene holds it: what the upload writes to
+    /// the material range.
+    #[test]
+    fn records_are_the_scenes_materials_by_id() -> Result<(), SlotError> {
+        let mut scene = Scene::new();
+        let red = scene.add_material(Material::opaque("red", Vec4::new(1.0, 0.0, 0.0, 1.0)));
+        let blue = scene.add_material(Material::opaque("blue", Vec4::new(0.0, 0.0, 1.0, 1.0)));
+        let mut table = MaterialTable::default();
+        table.sync(&scene, &mut SlotAllocators::default(), &mut TextureCache::default())?;
+        let records = table.records();
+        assert_eq!(records.len() as u32, table.allocation().count);
+        for handle in [red, blue] {
+            let expected = scene.material(handle).map(MaterialRecord::from_material);
+            assert_eq!(records.get(material_index(handle) as usize), expected.as_ref());
+        }
+        Ok(())
+    }
+
+    /// The table is dirty (its GPU copy out of date) after a sync that
+    /// found new or changed materials, and clean once uploaded until the
+    /// scene's materials change again: an unchanged scene is not uploaded
+    /// every frame, a changed one always is.
+    #[test]
+    fn the_table_is_dirty_exactly_until_uploaded_after_a_change() -> Result<(), Box<dyn std::error::Error>> {
+        let mut scene = Scene::new();
+        let material = scene.add_material(Material::opaque("m", Vec4::ONE));
+        let mut slots = SlotAllocators::default();
+        let mut textures = TextureCache::default();
+        let mut table = MaterialTable::default();
+        table.sync(&scene, &mut slots, &mut textures)?;
+        assert!(table.is_dirty(), "new materials");
+        table.mark_uploaded();
+        assert!(!table.is_dirty(), "uploaded");
+        table.sync(&scene, &mut slots, &mut textures)?;
+        assert!(!table.is_dirty(), "nothing changed");
+        scene.set_material(material, Material::opaque("m", Vec4::new(0.5, 0.5, 0.5, 1.0)))?;
+        table.sync(&scene, &mut slots, &mut textures)?;
+        assert!(table.is_dirty(), "a changed material");
+        table.mark_uploaded();
+        scene.add_material(Material::opaque("another", Vec4::ONE));
+        table.sync(&scene, &mut slots, &mut textures)?;
+        assert!(table.is_dirty(), "a new material");
+        Ok(())
+    }
+}

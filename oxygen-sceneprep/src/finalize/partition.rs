@@ -103,3 +103,55 @@ pub fn build_commands(
         partition.command_count = commands.len() as u32 - partition.first_command;
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A draw of one 36-index mesh at `vertex_slot` with `mask`.
+    fn draw(mask: PassMask, vertex_slot: u32) -> DrawMetadata {
+        DrawMetadata {
+            vertex_slot,
+            index_slot: 0,
+            first_index: 0,
+            index_count: 36,
+            instance_count: 1,
+            pass_mask: mask.bits(),
+            ..Default::default()
+        }
+    }
+
+    /// A partition's `len` is the number of draws it spans (also for one
+    /// that does not start at draw 0) and `is_empty` tells the empty range
+    /// apart: what a pass reads to size and skip its draws.
+    #[test]
+    fn a_partition_knows_how_many_draws_it_spans() {
+        let opaque = PassMask::OPAQUE;
+        let masked = PassMask::MASKED;
+        let draws = [draw(opaque, 0), draw(opaque, 0), draw(masked, 0), draw(masked, 0), draw(masked, 0)];
+        let mut partitions = Vec::new();
+        build_partitions(&draws, &mut partitions);
+        let spans: Vec<_> = partitions.iter().map(|p| (p.range(), p.len(), p.is_empty())).collect();
+        assert_eq!(spans, vec![(0..2, 2, false), (2..5, 3, false)]);
+        let empty = Partition { begin: 5, end: 5, ..partitions[1] };
+        assert_eq!((empty.len(), empty.is_empty()), (0, true));
+    }
+
+    /// Instancing merges runs of one mesh within a partition only: when the
+    /// last draw of a partition and the first of the next share their
+    /// geometry, the next partition still starts a command of its own, since
+    /// it is drawn with another pipeline (here double-sided).
+    #[test]
+    fn merged_commands_never_cross_a_partition_boundary() {
+        let single = PassMask::OPAQUE;
+        let double = PassMask::OPAQUE | PassMask::DOUBLE_SIDED;
+        let draws = [draw(single, 0), draw(single, 0), draw(double, 0), draw(double, 0)];
+        let mut partitions = Vec::new();
+        build_partitions(&draws, &mut partitions);
+        let mut commands = Vec::new();
+        build_commands(&draws, &mut partitions, true, &mut commands);
+        let runs: Vec<_> = commands.iter().map(|c| (c.first_instance, c.instance_count)).collect();
+        assert_eq!(runs, vec![(0, 2), (2, 2)], "one instanced command per partition");
+        assert_eq!(partitions.iter().map(Partition::commands).collect::<Vec<_>>(), vec![0..1, 1..2]);
+    }
+}

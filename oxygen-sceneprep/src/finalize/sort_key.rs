@@ -121,4 +121,68 @@ mod tests {
         let near_early_material = sort_key(PassMask::TRANSPARENT | PassMask::DOUBLE_SIDED, 0, 1.0);
         assert!(far_late_material < near_early_material);
     }
+
+    /// A bound whose centre lies exactly in the eye's plane has a view depth
+    /// of −0.0 (the negation of +0.0). It must quantize like 0: the sign
+    /// bit's pattern shifted down is 2^24, one past the depth field, which
+    /// would spill into the material bits of the key.
+    #[test]
+    fn negative_zero_depth_quantizes_like_zero() {
+        assert_eq!(quantize_depth(-0.0), 0);
+        for mask in [PassMask::OPAQUE, PassMask::TRANSPARENT] {
+            assert_eq!(sort_key(mask, 3, -0.0), sort_key(mask, 3, 0.0), "{mask:?}");
+        }
+        assert_eq!(sort_key_grouped(PassMask::OPAQUE, 3, 9, -0.0), sort_key_grouped(PassMask::OPAQUE, 3, 9, 0.0));
+    }
+
+    /// Material ids past the 20-bit field saturate to its largest value
+    /// (0xF_FFFF), in both layouts: such a draw sorts with the last
+    /// material and never spills into the variant bits above the field.
+    #[test]
+    fn material_ids_past_the_field_saturate() {
+        let largest = 0xF_FFFF;
+        for mask in [PassMask::OPAQUE, PassMask::MASKED, PassMask::TRANSPARENT] {
+            for id in [largest + 1, largest + 2, u32::MAX] {
+                assert_eq!(sort_key(mask, id, 2.0), sort_key(mask, largest, 2.0), "{mask:?}, material {id}");
+            }
+        }
+    }
+
+    /// Geometry ids past the 16-bit field of a grouped key saturate to its
+    /// largest value (0xFFFF) and never spill into the material above it.
+    #[test]
+    fn geometry_ids_past_the_field_saturate() {
+        let largest = 0xFFFF;
+        for id in [largest + 1, largest + 2, u32::MAX] {
+            assert_eq!(
+                sort_key_grouped(PassMask::OPAQUE, 5, id, 2.0),
+                sort_key_grouped(PassMask::OPAQUE, 5, largest, 2.0),
+                "geometry {id}"
+            );
+        }
+    }
+
+    /// Each variant has the bit the module's layout gives it (opaque and
+    /// masked: double-sided 61, mirrored 60; transparent: mirrored 37,
+    /// double-sided 36), so draws that differ only in a variant get
+    /// different keys and the sort keeps each variant together (one
+    /// partition, one pipeline) instead of interleaving them by node id.
+    #[test]
+    fn each_variant_sets_its_own_bit() {
+        let layouts = [
+            (PassMask::OPAQUE, 1u64 << 60, 1u64 << 61),
+            (PassMask::MASKED, 1 << 60, 1 << 61),
+            (PassMask::TRANSPARENT, 1 << 37, 1 << 36),
+        ];
+        for (class, mirrored_bit, double_sided_bit) in layouts {
+            let plain = sort_key(class, 7, 3.0);
+            assert_eq!(sort_key(class | PassMask::MIRRORED, 7, 3.0), plain | mirrored_bit, "{class:?} mirrored");
+            assert_eq!(
+                sort_key(class | PassMask::DOUBLE_SIDED, 7, 3.0),
+                plain | double_sided_bit,
+                "{class:?} double-sided"
+            );
+            assert_eq!(plain & (mirrored_bit | double_sided_bit), 0, "{class:?}");
+        }
+    }
 }
