@@ -62,18 +62,19 @@ fn index_count_at(scene: &Scene, distance: f32, lod_bias: f32) -> u32 {
 #[test]
 fn lod_follows_projected_size() {
     let scene = lod_scene();
-    // Sphere radius √3/2 ≈ 0.87, cot(30°) ≈ 1.73: the diameter covers
-    // 3/d of the viewport height at distance d.
-    assert_eq!(index_count_at(&scene, 3.0, 1.0), 36, "100 % of the screen: base mesh");
-    assert_eq!(index_count_at(&scene, 15.0, 1.0), 6, "20 %: first LOD");
-    assert_eq!(index_count_at(&scene, 100.0, 1.0), 3, "3 %: coarsest LOD");
+    // Sphere radius √3/2 ≈ 0.87, cot(30°) ≈ 1.73: the diameter (2 × 0.87
+    // at distance d, the viewport 2 × d / 1.73 high) covers 1.5 / d of the
+    // viewport height.
+    assert_eq!(index_count_at(&scene, 3.0, 1.0), 36, "50 % of the height: base mesh");
+    assert_eq!(index_count_at(&scene, 15.0, 1.0), 6, "10 %: first LOD (below 40 %)");
+    assert_eq!(index_count_at(&scene, 100.0, 1.0), 3, "1.5 %: coarsest LOD (below 5 %)");
 }
 
 #[test]
 fn lod_bias_trades_detail_for_speed_explicitly() {
     let scene = lod_scene();
-    assert_eq!(index_count_at(&scene, 15.0, 4.0), 36, "bias 4 keeps the base mesh at 20 %");
-    assert_eq!(index_count_at(&scene, 3.0, 0.1), 6, "bias 0.1 switches at 100 %");
+    assert_eq!(index_count_at(&scene, 15.0, 5.0), 36, "bias 5 keeps the base mesh at 10 %");
+    assert_eq!(index_count_at(&scene, 3.0, 0.2), 6, "bias 0.2 switches at 50 %");
 }
 
 #[test]
@@ -159,30 +160,30 @@ fn orthographic_index_count(scene: &Scene, distance: f32) -> u32 {
 /// Through an orthographic view a renderable covers the same share of the
 /// view's height at every distance, so it picks the same LOD from near and
 /// from far. The quantity compared with `below_screen_fraction` is, on the
-/// CPU as in the GPU cull (`cull.wgsl`), twice the projected radius over
-/// the half-height: here 2 × 5 / 16 = 0.625 (that is the diameter over the
-/// half-height, twice the diameter's share of the whole height that
-/// `LodLevel` describes). A LOD below 1 is drawn, one below 0.5 is not.
+/// CPU as in the GPU cull (`cull.wgsl`), the diameter's share of the
+/// view's height, as `LodLevel` describes it: here 10 / 32 = 0.3125 (it was
+/// twice that, the diameter over the half-height, until issue 27's
+/// mutation work found it). A LOD below 0.5 is drawn, one below 0.25 is not.
 #[test]
 fn an_orthographic_view_picks_lods_by_size_not_distance() {
-    let coarse_below_one = rectangle_with_lod(1.0);
-    for distance in [10.0, 500.0] {
-        assert_eq!(orthographic_index_count(&coarse_below_one, distance), 3, "LOD at distance {distance}");
-    }
     let coarse_below_half = rectangle_with_lod(0.5);
     for distance in [10.0, 500.0] {
-        assert_eq!(orthographic_index_count(&coarse_below_half, distance), 6, "base mesh at distance {distance}");
+        assert_eq!(orthographic_index_count(&coarse_below_half, distance), 3, "LOD at distance {distance}");
+    }
+    let coarse_below_quarter = rectangle_with_lod(0.25);
+    for distance in [10.0, 500.0] {
+        assert_eq!(orthographic_index_count(&coarse_below_quarter, distance), 6, "base mesh at distance {distance}");
     }
 }
 
 /// A LOD is used only when the projected size is strictly below its
-/// screen fraction: at exactly the fraction (here 0.625, see
+/// screen fraction: at exactly the fraction (here 0.3125, see
 /// [`an_orthographic_view_picks_lods_by_size_not_distance`], exact in
 /// `f32`) the finer mesh is kept, a hair above it the LOD is used.
 #[test]
 fn a_lod_at_exactly_its_screen_fraction_is_not_used() {
-    assert_eq!(orthographic_index_count(&rectangle_with_lod(0.625), 10.0), 6);
-    assert_eq!(orthographic_index_count(&rectangle_with_lod(0.6251), 10.0), 3);
+    assert_eq!(orthographic_index_count(&rectangle_with_lod(0.3125), 10.0), 6);
+    assert_eq!(orthographic_index_count(&rectangle_with_lod(0.3126), 10.0), 3);
 }
 
 /// A frame counts the indices a depth pre-pass would draw: those of its

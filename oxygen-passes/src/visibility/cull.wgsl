@@ -58,7 +58,9 @@ fn select_group(instance: GpuInstance) -> u32 {
     if params.perspective != 0u {
         fraction = instance.sphere.w * params.lod_scale / max(depth, params.near);
     }
-    let projected = 2.0 * fraction * params.lod_bias;
+    // The diameter's share of the viewport height (the CPU path's
+    // projected_screen_fraction): radius × cot(fov / 2) / depth.
+    let projected = fraction * params.lod_bias;
     for (var l = 0u; l < instance.lod_count; l++) {
         let lod = lods[instance.lod_first + l];
         if projected < lod.below_screen_fraction {

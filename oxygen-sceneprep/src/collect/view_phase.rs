@@ -175,8 +175,10 @@ pub fn collect_view_subset(
         let mut lod_geometry = None;
         let (lod_start, lod_count) = entry.lods;
         if lod_count > 0 {
-            let fraction =
-                2.0 * projected_screen_fraction(view, entry.world_sphere.radius, view_depth) * options.lod_bias;
+            // The projected diameter's share of the viewport height, as
+            // `LodLevel::below_screen_fraction` is documented (it was twice
+            // that until the mutation work of issue 27 found it).
+            let fraction = projected_screen_fraction(view, entry.world_sphere.radius, view_depth) * options.lod_bias;
             for lod in &frame.lod_levels[lod_start as usize..(lod_start + lod_count) as usize] {
                 if fraction < lod.below_screen_fraction {
                     lod_geometry = Some(lod.geometry);
