@@ -52,7 +52,11 @@
 //! frame's draws × the per-cube time of that file's last `raster_floor`
 //! run on this adapter, its storage-pulled line): run `raster_floor` on
 //! the same machine first. `BATCH_BENCH_TARGET_BUDGET_MIB` raises the
-//! targets' budget (`RendererOptions::target_budget_bytes`).
+//! targets' budget (`RendererOptions::target_budget_bytes`);
+//! `BATCH_BENCH_MAX_PAGE_SIDE=S` caps the atlas' pages at S pixels
+//! (`BatchDesc::with_max_page_side`): at the cameras' size, one camera a
+//! page and a render pass per camera, which is what array layers cost
+//! without multiview.
 //! Each line gives view-frames per second (V ÷ the median frame time); at
 //! the end the slope of the median times against V (least squares over the
 //! V list) is the per-view cost, CPU and whole frame, per path. With
@@ -162,6 +166,7 @@ fn run(
     options: &RendererOptions,
     in_flight: u32,
     planes: StreamOptions,
+    max_page_side: Option<u32>,
 ) -> Result<Run, Box<dyn std::error::Error>> {
     let mut renderer = Renderer::new_headless_with(*options)?;
     if visibility.on_gpu() && !renderer.gpu_visibility_supported() {
@@ -171,8 +176,15 @@ fn run(
     // With readback every camera also draws labels, whose instance ids
     // are read back with its colour and depth.
     let batch = match mode {
-        Mode::Batch if readback => Some(renderer.register_batch(BatchDesc::new("ring", size).with_labels())?),
-        Mode::Batch => Some(renderer.register_batch(BatchDesc::new("ring", size))?),
+        Mode::Batch => {
+            let desc = BatchDesc::new("ring", size);
+            let desc = if readback { desc.with_labels() } else { desc };
+            let desc = match max_page_side {
+                Some(side) => desc.with_max_page_side(side),
+                None => desc,
+            };
+            Some(renderer.register_batch(desc)?)
+        }
         Mode::Views => None,
     };
     for i in 0..views {
@@ -349,6 +361,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Ok(n) => n.parse().ok().filter(|n| *n > 0).ok_or(format!("BATCH_BENCH_IN_FLIGHT={n}: a count of 1 or more"))?,
         Err(_) => StreamOptions::default().frames_in_flight,
     };
+    // Pages no larger than this (one camera a page at the camera's size: a
+    // render pass per camera, what array layers would need without
+    // multiview).
+    let max_page_side = match std::env::var("BATCH_BENCH_MAX_PAGE_SIDE") {
+        Ok(side) => Some(side.parse::<u32>().map_err(|_| format!("BATCH_BENCH_MAX_PAGE_SIDE={side}: pixels"))?),
+        Err(_) => None,
+    };
     // The batch's streamed planes (the lone views read all three).
     let planes = match std::env::var("BATCH_BENCH_PLANES") {
         Ok(list) => {
@@ -386,6 +405,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .value("floor_ms_per_cube", floor.as_ref().map(|f| f.0))
         .value("floor_record", floor.as_ref().map(|f| &f.1))
         .value("target_budget_bytes", options.target_budget_bytes)
+        .value("max_page_side", max_page_side)
         .value("frames_in_flight", in_flight)
         .value("streamed_planes", [planes.color, planes.depth, planes.instances].map(u8::from));
     println!("adapter: {} {}", adapter.name, adapter.driver_info);
@@ -413,6 +433,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 &options,
                 in_flight,
                 planes,
+                max_page_side,
             )?;
             let (cpu, whole, gpu) = (median(&r.cpu_ms), median(&r.frame_ms), median(&r.gpu_ms));
             let per_second = *views as f64 / (whole / 1e3);
