@@ -162,6 +162,9 @@ pub struct GpuVisibility {
     /// Batches whose cameras are culled in one dispatch, by the key their
     /// requests carry.
     batches: HashMap<u64, BatchCull>,
+    /// Each batch camera's batch and first counter this frame (a lookup a
+    /// camera, not a search through its batch: a thousand cameras ask).
+    batch_members: HashMap<ViewId, (u64, u32)>,
     uploaded_last_frame: u64,
     /// The GPU scene rebuild the buffers hold.
     uploaded_rebuild: Option<u64>,
@@ -231,6 +234,7 @@ impl GpuVisibility {
             hiz: HizPipelines::new(device),
             views: HashMap::new(),
             batches: HashMap::new(),
+            batch_members: HashMap::new(),
             uploaded_last_frame: 0,
             uploaded_rebuild: None,
         }
@@ -391,6 +395,7 @@ impl GpuVisibility {
         for batch in self.batches.values_mut() {
             batch.seen = false;
         }
+        self.batch_members.clear();
         let mut members: HashMap<u64, Vec<&GpuViewRequest<'_>>> = HashMap::new();
         for request in views {
             if let Some(key) = request.batch {
@@ -433,6 +438,7 @@ impl GpuVisibility {
                 let hiz = self.views.get(&id).and_then(|s| s.hiz.as_ref());
                 params.push(CullParams { counter_base: base, ..cull_params(request, plan, hiz) });
                 batch.cameras.push((id, base));
+                self.batch_members.insert(id, (key, base));
                 // The plan's counters, then the coverage counters (see `prepare`).
                 base += plan.counters() + 3 + plan.groups;
             }
@@ -483,15 +489,16 @@ impl GpuVisibility {
 
     /// The batch culling `view` with the others of its batch this frame.
     fn batch_of(&self, view: ViewId) -> Option<&BatchCull> {
-        self.batches.values().find(|b| b.cameras.iter().any(|(id, _)| *id == view))
+        self.batches.get(&self.batch_members.get(&view)?.0)
     }
 
     /// Where `view`'s counters are this frame: its buffer and the byte
     /// offset of its first counter.
     fn counters_of(&self, view: ViewId) -> Option<(&wgpu::Buffer, u64)> {
-        if let Some(batch) = self.batch_of(view) {
-            let base = batch.cameras.iter().find(|(id, _)| *id == view).map_or(0, |(_, base)| *base);
-            return Some((&batch.counts.buffer, u64::from(base) * 4));
+        if let Some((key, base)) = self.batch_members.get(&view)
+            && let Some(batch) = self.batches.get(key)
+        {
+            return Some((&batch.counts.buffer, u64::from(*base) * 4));
         }
         self.views.get(&view).map(|s| (&s.counts.buffer, 0))
     }
@@ -626,9 +633,10 @@ impl GpuVisibility {
         }
         let _span = info_span!("cull_early_batch", views = states.len()).entered();
         // Every camera in one batch's buffers: one clear, one dispatch per step.
-        if let Some(batch) = views.first().and_then(|v| self.batch_of(*v))
+        let key = views.first().and_then(|v| self.batch_members.get(v)).map(|(key, _)| *key);
+        if let Some(batch) = key.and_then(|key| self.batches.get(&key))
             && batch.cameras.len() == views.len()
-            && views.iter().all(|v| batch.cameras.iter().any(|(id, _)| id == v))
+            && views.iter().all(|v| self.batch_members.get(v).is_some_and(|(k, _)| Some(*k) == key))
             && let Some(bind_group) = &batch.bind_group
         {
             encoder.clear_buffer(&batch.counts.buffer, 0, None);
