@@ -460,17 +460,21 @@ fn quad_vertices() -> Vec<oxygen_core::Vertex> {
 }
 
 /// Skinned and morphed renderables are posed on the CPU in their node's
-/// space, flagged [`POSED`] and traced through their posed vertices (each
-/// instance its own run of them and its own tree); a rigid one is not.
+/// space as the raster's vertex shader poses them (positions and normals:
+/// morph targets by their weights, then each joint's matrix by its
+/// weight; a zero weight's joint is ignored, even one past the skin's
+/// joints), flagged [`POSED`] and traced through their posed vertices
+/// (each instance its own run of them and its own tree); a rigid one is not.
 #[test]
 fn skinned_and_morphed_instances_are_traced_as_posed() {
     let mut scene = Scene::new();
     let material = scene.add_material(Material::opaque("m", Vec4::ONE));
     let quad = Geometry::quad(2.0);
-    let skinned = scene.add_geometry(
-        quad.clone().with_skin_weights(vec![SkinWeights::new([0, 0, 0, 0], [1.0, 0.0, 0.0, 0.0]); 4]).unwrap(),
-    );
-    let morph = MorphTarget { positions: vec![Vec3::new(0.0, 0.0, 2.0); 4], normals: None };
+    // A quarter on joint 0, three quarters on joint 1; joint 1000, weighed
+    // 0, is no joint of the skin.
+    let weights = vec![SkinWeights::new([0, 1, 1000, 0], [0.25, 0.75, 0.0, 0.0]); 4];
+    let skinned = scene.add_geometry(quad.clone().with_skin_weights(weights).unwrap());
+    let morph = MorphTarget { positions: vec![Vec3::new(0.0, 0.0, 2.0); 4], normals: Some(vec![Vec3::X; 4]) };
     let morphed = scene.add_geometry(quad.clone().with_morph_targets(vec![morph]).unwrap());
     let rigid_quad = scene.add_geometry(quad.clone());
     let add = |scene: &mut Scene, name: &str, at: Vec3, geometry| {
@@ -478,16 +482,30 @@ fn skinned_and_morphed_instances_are_traced_as_posed() {
         scene.set_renderable(node, Renderable { geometry, materials: vec![material] }).unwrap();
         node
     };
-    // The skinned quad's node sits at x = 5; its joint at y = 2 moves it
-    // there (the skin gives world space, the node's own place is ignored).
+    // Joint 0 at y = 2; joint 1 at z = 3, turned a quarter about X.
+    let joints = [
+        Transform::from_translation(Vec3::new(0.0, 2.0, 0.0)),
+        Transform {
+            rotation: Quat::from_rotation_x(std::f32::consts::FRAC_PI_2),
+            ..Transform::from_translation(Vec3::Z * 3.0)
+        },
+    ];
+    let joint_nodes: Vec<NodeKey> = joints.iter().map(|t| scene.add_node("joint", *t)).collect();
+    let joint_world: Vec<Mat4> =
+        joints.iter().map(|t| Mat4::from_scale_rotation_translation(t.scale, t.rotation, t.translation)).collect();
+    // The skin gives world space: the node's own place (x = 5) is ignored.
     let skin_node = add(&mut scene, "skinned", Vec3::new(5.0, 0.0, 0.0), skinned);
-    let joint = scene.add_node("joint", Transform::from_translation(Vec3::new(0.0, 2.0, 0.0)));
-    scene.set_skin(skin_node, Some(Skin { joints: vec![joint], inverse_bind_matrices: vec![Mat4::IDENTITY] })).unwrap();
-    // A second skinned quad, on the same joint, moved by its bind matrix.
+    let binds = [Mat4::IDENTITY, Mat4::IDENTITY];
+    scene
+        .set_skin(skin_node, Some(Skin { joints: joint_nodes.clone(), inverse_bind_matrices: binds.to_vec() }))
+        .unwrap();
+    // A second skinned quad, on the same joints, moved by its bind matrices.
     let skin_node_2 = add(&mut scene, "skinned 2", Vec3::new(-5.0, 0.0, 0.0), skinned);
-    let bind = Mat4::from_translation(Vec3::new(-4.0, 0.0, -1.0));
-    scene.set_skin(skin_node_2, Some(Skin { joints: vec![joint], inverse_bind_matrices: vec![bind] })).unwrap();
-    // The morphed quad at y = -4, pushed 1 towards +Z by half its target.
+    let binds_2 =
+        [Mat4::from_translation(Vec3::new(-4.0, 0.0, -1.0)), Mat4::from_translation(Vec3::new(0.0, 3.0, 0.0))];
+    scene.set_skin(skin_node_2, Some(Skin { joints: joint_nodes, inverse_bind_matrices: binds_2.to_vec() })).unwrap();
+    // The morphed quad at y = -4, pushed 1 towards +Z by half its target,
+    // its normals tilted towards +X by half the target's.
     let morph_node = add(&mut scene, "morphed", Vec3::new(0.0, -4.0, 0.0), morphed);
     scene.set_morph_weights(morph_node, vec![0.5]).unwrap();
     let rigid_node = add(&mut scene, "rigid", Vec3::new(4.0, -4.0, 0.0), rigid_quad);
@@ -497,19 +515,34 @@ fn skinned_and_morphed_instances_are_traced_as_posed() {
     let rs = prep.ray_scene();
     assert_eq!(rs.skipped(), 0);
     assert_eq!(rs.instances().len(), 4);
-    // Where each vertex should be in the world, and in its node's space.
-    let world_of = |d: &Drawn| -> Vec<Vec3> {
-        let shift = if d.node == skin_node {
-            Vec3::new(0.0, 2.0, 0.0)
-        } else if d.node == skin_node_2 {
-            Vec3::new(-4.0, 2.0, -1.0)
-        } else if d.node == morph_node {
-            d.world.transform_vector3(Vec3::new(0.0, 0.0, 1.0)) + d.world.w_axis.truncate()
-        } else {
-            d.world.w_axis.truncate()
+    // Where each vertex should be in the world, with its normal there.
+    let posed_world = |d: &Drawn| -> Vec<(Vec3, Vec3)> {
+        let skin = |binds: &[Mat4; 2], v: Vec3, n: Vec3| {
+            let mut out = (Vec3::ZERO, Vec3::ZERO);
+            for (k, weight) in [(0, 0.25), (1, 0.75)] {
+                let m = joint_world[k] * binds[k];
+                out.0 += weight * m.transform_point3(v);
+                out.1 += weight * (glam::Mat3::from_mat4(m).inverse().transpose() * n);
+            }
+            out
         };
-        quad_vertices().iter().map(|v| Vec3::from(v.position) + shift).collect()
+        quad_vertices()
+            .iter()
+            .map(|v| {
+                let (p, n) = (Vec3::from(v.position), Vec3::from(v.normal));
+                if d.node == skin_node {
+                    skin(&binds, p, n)
+                } else if d.node == skin_node_2 {
+                    skin(&binds_2, p, n)
+                } else if d.node == morph_node {
+                    (d.world.transform_point3(p + Vec3::Z), d.world.transform_vector3(n + 0.5 * Vec3::X))
+                } else {
+                    (d.world.transform_point3(p), n)
+                }
+            })
+            .collect()
     };
+    let world_of = |d: &Drawn| -> Vec<Vec3> { posed_world(d).into_iter().map(|(p, _)| p).collect() };
     let mut runs = Vec::new();
     for d in &drawn {
         let instance = rs.instances().iter().find(|i| i.transform_index == d.transform_index).unwrap();
@@ -521,23 +554,68 @@ fn skinned_and_morphed_instances_are_traced_as_posed() {
         let start = instance.vertex_slot as usize;
         runs.push(start);
         let posed = &rs.posed_vertices()[start..start + 4];
-        for (p, w) in posed.iter().zip(world_of(d)) {
-            let expected = d.world.inverse().transform_point3(w);
-            assert!(
-                Vec3::from(p.position).abs_diff_eq(expected, 1e-5),
-                "{}: {:?} != {expected}",
-                d.mesh.name(),
-                p.position
-            );
+        for (p, (position, normal)) in posed.iter().zip(posed_world(d)) {
+            let expected = d.world.inverse().transform_point3(position);
+            let name = d.mesh.name();
+            assert!(Vec3::from(p.position).abs_diff_eq(expected, 1e-5), "{name}: {:?} != {expected}", p.position);
+            // The normal's direction, as the node's normal matrix takes it
+            // back to the world.
+            let normal_matrix = glam::Mat3::from_mat4(d.world).inverse().transpose();
+            let back = (normal_matrix * Vec3::from(p.normal)).normalize();
+            assert!(back.abs_diff_eq(normal.normalize(), 1e-5), "{name}: normal {back} != {}", normal.normalize());
         }
     }
     runs.sort_unstable();
     assert_eq!(runs, [0, 4, 8], "one run of 4 vertices per posed instance");
     assert_eq!(rs.posed_vertices().len(), 12);
-    let hits = agree(rs, &drawn, &world_of, Vec3::new(7.0, 6.0, 1.0), 1500);
+    let hits = agree(rs, &drawn, &world_of, Vec3::new(7.0, 6.0, 3.0), 1500);
     for d in &drawn {
         assert!(hits.iter().any(|h| h.transform_index == d.transform_index), "{} never hit", d.mesh.name());
     }
+}
+
+/// A morph target past the fourteenth takes its weight from the second
+/// matrix of the frame's morph header (16 floats a matrix: the vertex and
+/// target counts, then 14 weights in the first).
+#[test]
+fn the_fifteenth_morph_targets_weight_poses_the_mesh() {
+    let mut scene = Scene::new();
+    let material = scene.add_material(Material::opaque("m", Vec4::ONE));
+    let targets =
+        (0..15).map(|t| MorphTarget { positions: vec![Vec3::Z * (t + 1) as f32; 4], normals: None }).collect();
+    let morphed = scene.add_geometry(Geometry::quad(2.0).with_morph_targets(targets).unwrap());
+    let node = scene.add_node("morphed", Transform::from_translation(Vec3::new(1.0, 2.0, 3.0)));
+    scene.set_renderable(node, Renderable { geometry: morphed, materials: vec![material] }).unwrap();
+    let mut weights = vec![0.0; 15];
+    weights[14] = 0.5;
+    scene.set_morph_weights(node, weights).unwrap();
+    let mut prep = ScenePrep::new();
+    frame(&mut prep, &scene, &mut SlotAllocators::default());
+    let rs = prep.ray_scene();
+    assert_eq!((rs.skipped(), rs.instances().len()), (0, 1));
+    for (posed, v) in rs.posed_vertices().iter().zip(quad_vertices()) {
+        let expected = Vec3::from(v.position) + Vec3::Z * 7.5;
+        assert!(Vec3::from(posed.position).abs_diff_eq(expected, 1e-5), "{:?} != {expected}", posed.position);
+    }
+}
+
+/// A morphed renderable whose posed normal is not finite (a finite target
+/// normal of 3e38 at weight 2) is left out and counted, though its
+/// positions are finite.
+#[test]
+fn a_morph_that_poses_a_normal_out_of_range_is_skipped_and_counted() {
+    let mut scene = Scene::new();
+    let material = scene.add_material(Material::opaque("m", Vec4::ONE));
+    let morph = MorphTarget { positions: vec![Vec3::Z; 4], normals: Some(vec![Vec3::X * 3e38; 4]) };
+    let morphed = scene.add_geometry(Geometry::quad(2.0).with_morph_targets(vec![morph]).unwrap());
+    let node = scene.add_node("morphed", Transform::IDENTITY);
+    scene.set_renderable(node, Renderable { geometry: morphed, materials: vec![material] }).unwrap();
+    scene.set_morph_weights(node, vec![2.0]).unwrap();
+    let mut prep = ScenePrep::new();
+    let drawn = frame(&mut prep, &scene, &mut SlotAllocators::default());
+    assert_eq!(drawn.len(), 1, "the frame draws it");
+    let rs = prep.ray_scene();
+    assert_eq!((rs.skipped(), rs.instances().len()), (1, 0));
 }
 
 /// A skinned renderable whose posed vertices are not finite (its joint
@@ -568,4 +646,32 @@ fn a_skinned_renderable_that_poses_out_of_range_is_skipped_and_counted() {
     assert_eq!(rs.instances().len(), 1);
     assert_eq!(rs.instances()[0].transform_index, tame.transform_index);
     assert_eq!(rs.posed_vertices().len(), 4);
+}
+
+/// The top level's root box is the union of the instances' world boxes
+/// (each mesh's box carried by its world matrix, every corner counted),
+/// widened by a few units in the last place only: rays are not sent into
+/// instances they cannot hit.
+#[test]
+fn the_top_level_box_is_the_instances_world_boxes_within_a_few_ulps() {
+    let scene = scattered_scene();
+    let mut prep = ScenePrep::new();
+    let drawn = frame(&mut prep, &scene, &mut SlotAllocators::default());
+    let rs = prep.ray_scene();
+    let (mut min, mut max) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    for instance in rs.instances() {
+        let world = drawn.iter().find(|d| d.transform_index == instance.transform_index).unwrap().world;
+        let local = rs.nodes()[instance.blas_root as usize];
+        for i in 0..8 {
+            let pick = |bit: usize, axis: usize| if i & bit == 0 { local.min[axis] } else { local.max[axis] };
+            let corner = world.transform_point3(Vec3::new(pick(1, 0), pick(2, 1), pick(4, 2)));
+            (min, max) = (min.min(corner), max.max(corner));
+        }
+    }
+    let root = rs.nodes()[rs.tlas_root().unwrap() as usize];
+    let slack = 16.0 * f32::EPSILON * min.abs().max(max.abs());
+    for axis in 0..3 {
+        assert!(root.min[axis] <= min[axis] && root.min[axis] >= min[axis] - slack[axis], "{:?} vs {min}", root.min);
+        assert!(root.max[axis] >= max[axis] && root.max[axis] <= max[axis] + slack[axis], "{:?} vs {max}", root.max);
+    }
 }
