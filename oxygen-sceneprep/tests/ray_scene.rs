@@ -679,7 +679,7 @@ fn the_top_level_box_is_the_instances_world_boxes_within_a_few_ulps() {
 
 /// A posed mesh of more triangles than a leaf holds (a morphed cube: its
 /// tree has interior nodes) is walked through its own tree, rebased into
-/// the shared arrays like a rigid mesh's, beside a rigid cube and a quad.
+/// the shared arrays like a rigid mesh's, beside a rigid cube and a triangle.
 #[test]
 fn a_posed_mesh_with_a_deep_tree_is_traced_through_it() {
     let mut scene = Scene::new();
@@ -693,16 +693,21 @@ fn a_posed_mesh_with_a_deep_tree_is_traced_through_it() {
     scene.set_morph_weights(morph_node, vec![1.0]).unwrap();
     let rigid_node = scene.add_node("rigid", Transform::from_translation(Vec3::new(2.0, 0.0, 0.0)));
     scene.set_renderable(rigid_node, Renderable { geometry: rigid_cube, materials: vec![material] }).unwrap();
-    // A quad too, so that the posed tree's first node and first word differ.
-    let quad = scene.add_geometry(Geometry::quad(2.0));
-    let quad_node = scene.add_node("quad", Transform::from_translation(Vec3::new(0.0, 3.0, 0.0)));
-    scene.set_renderable(quad_node, Renderable { geometry: quad, materials: vec![material] }).unwrap();
+    // A triangle too, so that the posed tree's first node (after the top
+    // level's, the cube's and the triangle's) and its first word differ.
+    let vertices = Geometry::quad(2.0).vertices()[..3].to_vec();
+    let triangle = Geometry::new("triangle", vertices, vec![0, 1, 2], vec![Submesh { first_index: 0, index_count: 3 }]);
+    let triangle = scene.add_geometry(triangle.unwrap());
+    let triangle_node = scene.add_node("triangle", Transform::from_translation(Vec3::new(0.0, 3.0, 0.0)));
+    scene.set_renderable(triangle_node, Renderable { geometry: triangle, materials: vec![material] }).unwrap();
     let mut prep = ScenePrep::new();
     let drawn = frame(&mut prep, &scene, &mut SlotAllocators::default());
     let rs = prep.ray_scene();
     assert_eq!(rs.instances().len(), 3);
     let posed = rs.instances().iter().find(|i| i.flags == POSED).unwrap();
     assert_eq!(rs.nodes()[posed.blas_root as usize].count, 0, "the posed tree's root is an interior node");
+    let first_word = rs.nodes()[posed.blas_root as usize..].iter().filter(|n| n.count > 0).map(|n| n.first).min();
+    assert_ne!(Some(posed.blas_root), first_word, "the posed tree's first node and first word differ");
     let world_of = |d: &Drawn| -> Vec<Vec3> {
         let shift = if d.node == morph_node { Vec3::Z } else { Vec3::ZERO };
         d.mesh.vertices().iter().map(|v| d.world.transform_point3(Vec3::from(v.position) + shift)).collect()
