@@ -660,6 +660,28 @@ mod contracts {
         }
     }
 
+    /// A ray from far away whose direction is not of unit length (here the
+    /// whole way to its target, so the target is at t = 1, or a power of
+    /// two of that) is as accurate as a unit one: it hits a unit triangle
+    /// near the point aimed at, a quarter along both edges. (Every
+    /// coordinate is exact in `f32`, so the ray passes through that point.)
+    #[test]
+    fn ray_triangle_is_accurate_from_far_away_along_a_long_direction() {
+        let a = Vec3::new(3.0, -2.0, 1.0);
+        let (b, c) = (a + Vec3::X, a + Vec3::Y);
+        let target = a + Vec3::new(0.25, 0.25, 0.0);
+        for away in [Vec3::new(1.0e6, 2.0e6, -1.5e6), Vec3::new(-3.0e5, 1.0e5, 4.0e5), Vec3::new(0.0, 0.0, 50.0)] {
+            let origin = target + away;
+            for length in [1.0, 2f32.powi(-10), 2f32.powi(8)] {
+                let dir = -away * length;
+                let hit = ray_triangle(origin, dir, a, b, c, 0.0, f32::INFINITY);
+                let (t, u, v) = hit.unwrap_or_else(|| panic!("from {origin} along {dir}: missed"));
+                assert!((t * length - 1.0).abs() < 1e-5, "from {origin} along {dir}: t = {t}");
+                assert!((u - 0.25).abs() < 0.2 && (v - 0.25).abs() < 0.2, "from {origin} along {dir}: ({u}, {v})");
+            }
+        }
+    }
+
     /// `depth` ignores a child index outside `nodes` and still counts its
     /// sibling, even when that sibling is the last node it visits.
     #[test]
