@@ -539,11 +539,10 @@ fn run_executor<'a>(
                         visibility.record_early_batch(rec.encoder(), &ids);
                     }
                     let result = graph.record_batch(&views, &mut rec).await;
-                    for ctx in &views {
-                        if let Some(visibility) = ctx.inputs.visibility {
-                            visibility.record_readback(rec.encoder(), ctx.view.view_id);
-                        }
-                    }
+                    // No coverage readback for a batch's cameras: it feeds
+                    // the automatic depth pre-pass, which a batch graph does
+                    // not choose per camera, and a copy and a mapping a
+                    // camera are a thousand of each a frame.
                     let (buffer, stats) = rec.finish();
                     Recorded { result, buffer, stats, busy: Duration::ZERO }
                 }
