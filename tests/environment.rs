@@ -157,6 +157,19 @@ fn an_8_bit_panorama_is_decoded_from_srgb() {
     assert!((r.x - 0.2158).abs() < 0.002, "{r}");
 }
 
+/// The darkest sRGB values lie on the encoding's linear segment: 10 of 255
+/// (0.0392, below 0.04045) decodes to 0.0392 / 12.92 = 0.003035, not the
+/// power curve's value and not the encoded value itself.
+#[test]
+fn an_8_bit_panorama_decodes_its_darkest_texels_on_the_linear_segment() {
+    let path = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("environment_dark_test.png");
+    image::RgbImage::from_pixel(8, 4, image::Rgb([10, 10, 10])).save(&path).unwrap();
+    let environment = oxygen::lighting::load_hdr_environment(&path).unwrap();
+    let r = environment.radiance(Vec3::NEG_Z);
+    let expected = 10.0 / 255.0 / 12.92;
+    assert!((r - Vec3::splat(expected)).abs().max_element() < 1e-5, "{r}, expected {expected}");
+}
+
 /// `oxygen_demo::structured_panorama` at 256 × 128.
 fn structured_environment() -> Environment {
     oxygen_demo::structured_panorama(256, 128)

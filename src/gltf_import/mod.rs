@@ -825,3 +825,21 @@ fn local_transform(node: &json::Node) -> Transform {
         scale,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::shorten;
+
+    /// A URI in an error message: a short one whole; a long one cut to its
+    /// first 64 bytes with its length, and never inside a character (a
+    /// two-byte `é` across byte 64 is cut before it).
+    #[test]
+    fn a_long_uri_is_cut_at_a_character_boundary_with_its_length() {
+        assert_eq!(shorten("textures/box.png"), "textures/box.png");
+        let long = format!("data:image/png;base64,{}", "A".repeat(100));
+        assert_eq!(shorten(&long), format!("{}… (122 bytes)", &long[..64]));
+        // 63 ASCII bytes, then `é` in bytes 63 and 64: the cut falls back to 63.
+        let straddling = format!("{}é{}", "a".repeat(63), "b".repeat(10));
+        assert_eq!(shorten(&straddling), format!("{}… (75 bytes)", "a".repeat(63)));
+    }
+}
