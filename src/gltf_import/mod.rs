@@ -828,7 +828,41 @@ fn local_transform(node: &json::Node) -> Transform {
 
 #[cfg(test)]
 mod tests {
-    use super::shorten;
+    use super::{GltfImport, NodeCameraResolver, shorten};
+    use oxygen_core::{Animation, Camera, Scene, Transform, ViewContext, ViewIds, ViewResolver};
+
+    /// An animation is found by its index or by its name, the first one
+    /// without either; an unknown one is an error listing them all.
+    #[test]
+    fn an_animation_is_found_by_index_or_name() {
+        let animation = |name: &str| Animation { name: name.to_owned(), channels: Vec::new() };
+        let import = GltfImport {
+            animations: vec![animation("walk"), animation("run"), animation("jump")],
+            ..Default::default()
+        };
+        assert_eq!(import.animation(None).map(|a| a.name.as_str()), Ok("walk"));
+        assert_eq!(import.animation(Some("2")).map(|a| a.name.as_str()), Ok("jump"));
+        assert_eq!(import.animation(Some("run")).map(|a| a.name.as_str()), Ok("run"));
+        let unknown = import.animation(Some("swim")).unwrap_err();
+        assert!(unknown.contains("0 ('walk'), 1 ('run'), 2 ('jump')"), "{unknown}");
+    }
+
+    /// A glTF camera renders at the viewport's aspect: through a 200 × 100
+    /// viewport its horizontal scale is half its vertical one.
+    #[test]
+    fn a_node_camera_projects_at_its_viewport_aspect() {
+        let mut scene = Scene::new();
+        let node = scene.add_node("camera", Transform::IDENTITY);
+        let resolver = NodeCameraResolver {
+            node,
+            camera: Camera::try_perspective(1.0, 0.1, Some(100.0)).unwrap(),
+            viewport: glam::UVec2::new(200, 100),
+        };
+        let context = ViewContext { view_id: ViewIds::default().allocate(), frame_index: 1, time_seconds: 0.0 };
+        let view = resolver.resolve(&context, &scene).unwrap();
+        let (x, y) = (view.projection.x_axis.x, view.projection.y_axis.y);
+        assert!((x * 2.0 - y).abs() < 1e-5 * y, "x scale {x}, y scale {y}");
+    }
 
     /// A URI in an error message: a short one whole; a long one cut to its
     /// first 64 bytes with its length, and never inside a character (a
