@@ -132,6 +132,12 @@ struct Run {
     back_to_back_spans: Vec<(&'static str, f64)>,
 }
 
+/// The span totals since the last take, in milliseconds per frame of
+/// `frames`, largest first.
+fn span_ms_per_frame(spans: &SpanTimes, frames: usize) -> Vec<(&'static str, f64)> {
+    spans.take().into_iter().map(|(name, time, _)| (name, time.as_secs_f64() * 1e3 / frames as f64)).collect()
+}
+
 /// Bytes of every camera image of `frames`.
 fn streamed_bytes(frames: &[StreamedFrame]) -> u64 {
     let camera_bytes = |camera: &oxygen::batch::StreamedCamera| {
@@ -251,8 +257,7 @@ fn run(
         }
     }
     if let Some(spans) = spans {
-        let per_frame = |d: std::time::Duration| d.as_secs_f64() * 1e3 / frames as f64;
-        result.spans = spans.take().into_iter().map(|(name, time, _)| (name, per_frame(time))).collect();
+        result.spans = span_ms_per_frame(spans, frames);
     }
     // Back to back: the lone views' reads block, so only the batch (or
     // no readback) runs without waiting between frames.
@@ -270,9 +275,7 @@ fn run(
         renderer.gpu().device.poll(wgpu::PollType::wait_indefinitely())?;
         result.pipelined_per_second = (views * frames) as f64 / start.elapsed().as_secs_f64();
         if let Some(spans) = spans {
-            let per_frame = |d: std::time::Duration| d.as_secs_f64() * 1e3 / frames as f64;
-            result.back_to_back_spans =
-                spans.take().into_iter().map(|(name, time, _)| (name, per_frame(time))).collect();
+            result.back_to_back_spans = span_ms_per_frame(spans, frames);
         }
     }
     Ok(result)

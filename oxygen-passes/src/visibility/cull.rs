@@ -365,7 +365,9 @@ impl GpuVisibility {
             let bound = (self.generation, heap.growth_count(), hiz_size);
             if stale || state.bind_group.is_none() || state.bound != bound {
                 let scene_buffers = [&self.instances.buffer, &self.groups.buffer, &self.lods.buffer];
-                state.bind_group = Some(bind_group(device, &self.layout, scene_buffers, &self.no_hiz, heap, state));
+                let hiz = state.hiz.as_ref().map_or(&self.no_hiz, |h| h.buffer());
+                let own = [&state.params, &state.counts.buffer, &state.history.buffer, hiz];
+                state.bind_group = Some(bind_group(device, &self.layout, scene_buffers, heap, own));
                 state.bound = bound;
             }
 
@@ -458,21 +460,9 @@ impl GpuVisibility {
             }
             let bound = (self.generation, heap.growth_count(), batch.buffers);
             if batch.bind_group.is_none() || batch.bound != bound {
-                batch.bind_group = Some(device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("gpu visibility (batch)"),
-                    layout: &self.layout,
-                    entries: &[
-                        buffer(0, &batch.params.buffer),
-                        buffer(1, &self.instances.buffer),
-                        buffer(2, &self.groups.buffer),
-                        buffer(3, &self.lods.buffer),
-                        buffer(4, &batch.counts.buffer),
-                        buffer(5, &batch.history.buffer),
-                        buffer(6, heap.buffer(DomainKind::DrawMetadata)),
-                        buffer(7, heap.buffer(DomainKind::IndirectArgs)),
-                        buffer(8, &self.no_hiz),
-                    ],
-                }));
+                let scene_buffers = [&self.instances.buffer, &self.groups.buffer, &self.lods.buffer];
+                let own = [&batch.params.buffer, &batch.counts.buffer, &batch.history.buffer, &self.no_hiz];
+                batch.bind_group = Some(bind_group(device, &self.layout, scene_buffers, heap, own));
                 batch.bound = bound;
             }
         }
@@ -598,8 +588,15 @@ impl GpuVisibility {
         self.counters_of(view)
     }
 
-    fn dispatch(&self, encoder: &mut wgpu::CommandEncoder, state: &ViewCull, steps: &[(&wgpu::ComputePipeline, u32)]) {
-        let Some(bind_group) = &state.bind_group else { return };
+    /// One compute pass over `bind_group`: each step with threads, for
+    /// each of `views` views (one, or a batch's cameras).
+    fn dispatch(
+        encoder: &mut wgpu::CommandEncoder,
+        bind_group: Option<&wgpu::BindGroup>,
+        steps: &[(&wgpu::ComputePipeline, u32)],
+        views: u32,
+    ) {
+        let Some(bind_group) = bind_group else { return };
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("visibility cull"),
             timestamp_writes: None,
@@ -608,7 +605,7 @@ impl GpuVisibility {
         for (pipeline, threads) in steps {
             if *threads > 0 {
                 pass.set_pipeline(pipeline);
-                dispatch_threads(&mut pass, *threads);
+                dispatch_threads_for(&mut pass, *threads, views);
             }
         }
     }
@@ -619,7 +616,8 @@ impl GpuVisibility {
         let Some(state) = self.views.get(&view) else { return };
         let _span = info_span!("cull_early", view = %view).entered();
         encoder.clear_buffer(&state.counts.buffer, 0, None);
-        self.dispatch(encoder, state, &[(&self.cull_early, state.instances), (&self.commands_early, state.groups)]);
+        let steps = [(&self.cull_early, state.instances), (&self.commands_early, state.groups)];
+        Self::dispatch(encoder, state.bind_group.as_ref(), &steps, 1);
     }
 
     /// Phase 1 for every view of `views` (a batch's cameras) in one
@@ -637,21 +635,11 @@ impl GpuVisibility {
         if let Some(batch) = key.and_then(|key| self.batches.get(&key))
             && batch.cameras.len() == views.len()
             && views.iter().all(|v| self.batch_members.get(v).is_some_and(|(k, _)| Some(*k) == key))
-            && let Some(bind_group) = &batch.bind_group
+            && batch.bind_group.is_some()
         {
             encoder.clear_buffer(&batch.counts.buffer, 0, None);
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("visibility cull (one dispatch for the batch)"),
-                timestamp_writes: None,
-            });
-            pass.set_bind_group(0, bind_group, &[]);
-            let cameras = batch.cameras.len() as u32;
-            for (pipeline, threads) in [(&self.cull_early, batch.instances), (&self.commands_early, batch.groups)] {
-                if threads > 0 {
-                    pass.set_pipeline(pipeline);
-                    dispatch_threads_for(&mut pass, threads, cameras);
-                }
-            }
+            let steps = [(&self.cull_early, batch.instances), (&self.commands_early, batch.groups)];
+            Self::dispatch(encoder, batch.bind_group.as_ref(), &steps, batch.cameras.len() as u32);
             return;
         }
         for state in &states {
@@ -696,32 +684,34 @@ impl GpuVisibility {
         if let Some(hiz) = &state.hiz {
             hiz.build(device, &self.hiz, encoder, depth);
         }
-        self.dispatch(encoder, state, &[(&self.cull_late, state.instances), (&self.commands_late, state.groups)]);
+        let steps = [(&self.cull_late, state.instances), (&self.commands_late, state.groups)];
+        Self::dispatch(encoder, state.bind_group.as_ref(), &steps, 1);
     }
 }
 
-/// One view's cull bind group.
+/// A cull bind group: the GPU scene's buffers, the heap's draws and
+/// commands, and the culled views' own parameters, counts, history and
+/// depth pyramid (one view's, or a batch's shared ones).
 fn bind_group(
     device: &wgpu::Device,
     layout: &wgpu::BindGroupLayout,
     [instances, groups, lods]: [&wgpu::Buffer; 3],
-    no_hiz: &wgpu::Buffer,
     heap: &BindlessHeap,
-    state: &ViewCull,
+    [params, counts, history, hiz]: [&wgpu::Buffer; 4],
 ) -> wgpu::BindGroup {
     device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("gpu visibility"),
         layout,
         entries: &[
-            buffer(0, &state.params),
+            buffer(0, params),
             buffer(1, instances),
             buffer(2, groups),
             buffer(3, lods),
-            buffer(4, &state.counts.buffer),
-            buffer(5, &state.history.buffer),
+            buffer(4, counts),
+            buffer(5, history),
             buffer(6, heap.buffer(DomainKind::DrawMetadata)),
             buffer(7, heap.buffer(DomainKind::IndirectArgs)),
-            buffer(8, state.hiz.as_ref().map_or(no_hiz, |h| h.buffer())),
+            buffer(8, hiz),
         ],
     })
 }
