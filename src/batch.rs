@@ -25,6 +25,7 @@ use std::sync::Arc;
 
 use glam::UVec2;
 use oxygen_core::ViewId;
+use oxygen_gpu::LabelSet;
 
 pub use crate::graph::{BatchGraph, standard_batch_graph};
 pub use crate::renderer::{StreamOptions, StreamedCamera, StreamedFrame};
@@ -64,14 +65,14 @@ pub struct BatchDesc {
     pub(crate) size: UVec2,
     pub(crate) graph: BatchGraph,
     pub(crate) max_page_side: Option<u32>,
-    pub(crate) labels: bool,
+    pub(crate) labels: LabelSet,
 }
 
 impl BatchDesc {
     /// A batch called `name` whose cameras render `size` pixels each with
     /// the standard batch graph ([`standard_batch_graph`]).
     pub fn new(name: impl Into<String>, size: UVec2) -> Self {
-        BatchDesc { name: name.into(), size, graph: standard_batch_graph, max_page_side: None, labels: false }
+        BatchDesc { name: name.into(), size, graph: standard_batch_graph, max_page_side: None, labels: LabelSet::NONE }
     }
 
     /// Pages of the batch's atlas no wider or taller than `side` pixels
@@ -81,10 +82,19 @@ impl BatchDesc {
         BatchDesc { max_page_side: Some(side), ..self }
     }
 
-    /// Every camera draws labels (instance ids and world normals; see
-    /// [`crate::ViewDesc::with_labels`]) into label pages of the atlas.
+    /// Every camera draws every label plane (instance ids, world normals,
+    /// semantic classes, linear depth; see [`crate::ViewDesc::with_labels`])
+    /// into label pages of the atlas.
     pub fn with_labels(self) -> Self {
-        BatchDesc { labels: true, ..self }
+        self.with_label_planes(LabelSet::ALL)
+    }
+
+    /// Every camera draws the label planes of `planes` (and no others)
+    /// into label pages of the atlas: a batch pays only for the planes it
+    /// reads ([`Label::bytes_per_pixel`](oxygen_gpu::Label::bytes_per_pixel)
+    /// a pixel each).
+    pub fn with_label_planes(self, planes: LabelSet) -> Self {
+        BatchDesc { labels: planes, ..self }
     }
 
     /// The same batch with another graph.
@@ -99,8 +109,8 @@ pub(crate) struct BatchEntry {
     pub(crate) size: UVec2,
     pub(crate) graph: Arc<BatchGraph>,
     pub(crate) max_page_side: Option<u32>,
-    /// Whether the cameras draw labels.
-    pub(crate) labels: bool,
+    /// The label planes every camera draws.
+    pub(crate) labels: LabelSet,
     /// Tile `i` of the batch's atlas belongs to `slots[i]`; a removed
     /// camera's tile is free for the next one added, so the others keep
     /// theirs (and their targets) when cameras come and go.
@@ -168,7 +178,7 @@ mod tests {
             size: UVec2::new(8, 8),
             graph: Arc::new(standard_batch_graph),
             max_page_side: None,
-            labels: false,
+            labels: LabelSet::NONE,
             slots: Vec::new(),
         }
     }

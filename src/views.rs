@@ -14,6 +14,7 @@ use std::sync::Arc;
 use oxygen_bindless::SlotAllocators;
 use oxygen_core::{CascadeSettings, Scene};
 use oxygen_core::{Output, OutputSource, ProbeId, ProbeIds};
+use oxygen_gpu::LabelSet;
 use oxygen_sceneprep::{PreparedSceneFrame, ScenePrep, ViewPrepOptions, ViewRequest, Visibility};
 
 use crate::RenderError;
@@ -37,7 +38,7 @@ pub struct ViewDesc {
     pub(crate) shown: Option<(crate::WindowId, crate::WindowRect)>,
     pub(crate) msaa: oxygen_gpu::Msaa,
     pub(crate) name: Option<String>,
-    pub(crate) labels: bool,
+    pub(crate) labels: LabelSet,
 }
 
 /// Where a view renders.
@@ -64,19 +65,27 @@ impl ViewDesc {
             shown: None,
             msaa: oxygen_gpu::Msaa::Off,
             name: None,
-            labels: false,
+            labels: LabelSet::NONE,
         }
     }
 
-    /// Draws per-pixel labels after shading: the node that drew each pixel
-    /// (its instance id) and the surface's world-space normal, readable
+    /// Draws every per-pixel label plane with the colour: the node that
+    /// drew each pixel (its instance id), the surface's world-space normal,
+    /// the node's semantic class and the surface's linear depth, readable
     /// with [`crate::Renderer::read_labels`] and linkable
-    /// ([`ViewId::instance_ids`], [`ViewId::normals`]). Costs one more
-    /// geometry pass over the opaque draws and 12 bytes a pixel of
-    /// targets. Single-sampled colour views only: with MSAA, or on a
-    /// depth-only view, registration refuses it.
-    pub fn with_labels(mut self) -> Self {
-        self.labels = true;
+    /// ([`ViewId::instance_ids`], [`ViewId::normals`],
+    /// [`ViewId::semantic_classes`], [`ViewId::linear_depth`]). The standard
+    /// graphs' shading pass writes them (no geometry pass of their own);
+    /// they cost 20 bytes a pixel of targets. Single-sampled colour views
+    /// only: with MSAA, or on a depth-only view, registration refuses it.
+    pub fn with_labels(self) -> Self {
+        self.with_label_planes(LabelSet::ALL)
+    }
+
+    /// Draws the label planes of `planes` only (see
+    /// [`ViewDesc::with_labels`]): a view pays only for what it reads.
+    pub fn with_label_planes(mut self, planes: LabelSet) -> Self {
+        self.labels = planes;
         self
     }
 
@@ -184,7 +193,7 @@ pub(crate) struct ViewEntry {
     pub(crate) shown: Option<(crate::WindowId, crate::WindowRect)>,
     pub(crate) msaa: oxygen_gpu::Msaa,
     pub(crate) name: Option<String>,
-    pub(crate) labels: bool,
+    pub(crate) labels: LabelSet,
 }
 
 /// The registered views and the links between them; no GPU needed.
@@ -234,7 +243,7 @@ impl Views {
     /// names a view or probe that is not registered.
     pub fn register(&mut self, desc: impl Into<ViewDesc>, graph: impl RenderGraph) -> Result<ViewId, RenderError> {
         let desc = desc.into();
-        if desc.labels && (desc.msaa != oxygen_gpu::Msaa::Off || desc.options.depth_only) {
+        if !desc.labels.is_empty() && (desc.msaa != oxygen_gpu::Msaa::Off || desc.options.depth_only) {
             return Err(RenderError::Unsupported(
                 "labels (ViewDesc::with_labels) on a multisampled or depth-only view".into(),
             ));
@@ -395,7 +404,7 @@ impl Views {
             self.check_source(*link)?;
         }
         let graph = Arc::clone(&entry.graph);
-        let labels = desc.labels || entry.labels;
+        let labels = desc.labels.union(entry.labels);
         let id = self.ids.allocate();
         let slot = self.batches.get_mut(&batch).ok_or(RenderError::NoSuchBatch(batch))?.take_slot(id);
         // A camera without a name of its own is named after its batch and tile.

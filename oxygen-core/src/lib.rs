@@ -43,7 +43,8 @@ pub use light::{Light, LightKind, Mobility};
 pub use material::{AlphaMode, Material, MaterialUvs, UvTransform};
 pub use math::{Aabb, DAabb, Frustum, Plane, Sphere};
 pub use output::{
-    Color, Depth, HdrColor, InstanceIds, Normals, Output, OutputSource, ProbeCube, ProbeId, ProbeIds, ShadowMap,
+    Color, Depth, HdrColor, InstanceIds, LinearDepth, Normals, Output, OutputSource, ProbeCube, ProbeId, ProbeIds,
+    SemanticClasses, ShadowMap,
 };
 pub use scene::{
     GeometryHandle, LodLevel, MaterialHandle, Node, NodeFlags, NodeKey, Renderable, Scene, SceneError, Skin,

@@ -107,6 +107,14 @@ pub enum InstanceIds {}
 /// The normal labels of a view that draws labels: the world-space normal
 /// seen at each pixel.
 pub enum Normals {}
+/// The semantic-class labels of a view that draws them: the class
+/// (`Scene::set_semantic_class`) of the node seen at each pixel, 0 for none.
+pub enum SemanticClasses {}
+/// The linear-depth labels of a view that draws them: each pixel's distance
+/// from the camera's plane along its view direction in world units, 0
+/// where nothing was drawn, as the bits of an `f32` in an `R32Uint`
+/// texture (`bitcast<f32>` in WGSL).
+pub enum LinearDepth {}
 
 impl ViewId {
     /// This view's depth target.
@@ -133,6 +141,16 @@ impl ViewId {
 
     /// This view's normal labels (a view registered with labels).
     pub fn normals(self) -> Output<Normals> {
+        Output::new(OutputSource::View(self))
+    }
+
+    /// This view's semantic-class labels (a view registered with them).
+    pub fn semantic_classes(self) -> Output<SemanticClasses> {
+        Output::new(OutputSource::View(self))
+    }
+
+    /// This view's linear-depth labels (a view registered with them).
+    pub fn linear_depth(self) -> Output<LinearDepth> {
         Output::new(OutputSource::View(self))
     }
 

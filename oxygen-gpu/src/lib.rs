@@ -18,14 +18,13 @@
 pub mod bindings;
 mod context;
 pub mod gpu_struct;
+mod labels;
 mod readback;
 mod target;
 
 pub use bindings::LayoutEntries;
 pub use context::{GpuContext, GpuError, GpuOptions};
 pub use gpu_struct::{FieldLayout, GpuStruct, StructLayout, WgslType, check_layout, check_overlay};
+pub use labels::{Label, LabelPlane, LabelSet, LabelTargets};
 pub use readback::{HdrImage, f16_to_f32, unpack_rg11b10_ufloat};
-pub use target::{
-    AtlasPage, ColorTargets, HdrFormat, LABEL_INSTANCE_FORMAT, LABEL_NORMAL_FORMAT, LabelTargets, Msaa, MsaaTargets,
-    Tile, TileAtlas, ViewTargets, texture_2d,
-};
+pub use target::{AtlasPage, ColorTargets, HdrFormat, Msaa, MsaaTargets, Tile, TileAtlas, ViewTargets, texture_2d};

@@ -195,8 +195,8 @@ impl GpuContext {
     }
 
     /// Reads the `size` rectangle at `origin` of layer `layer` of an
-    /// `R32Uint` texture (instance labels), row by row. Blocks until the
-    /// GPU has finished all submitted work.
+    /// `R32Uint` texture (instance, class and linear-depth labels), row by
+    /// row. Blocks until the GPU has finished all submitted work.
     pub fn read_u32_region(
         &self,
         texture: &wgpu::Texture,

@@ -1,5 +1,7 @@
 //! Offscreen colour and depth targets for one view.
 
+use crate::{LabelSet, LabelTargets};
+
 /// The textures a view renders into.
 ///
 /// Shading writes linear radiance into the HDR target (`Rgba16Float`); the
@@ -33,62 +35,9 @@ pub struct ViewTargets {
     /// [`TileAtlas`] (its textures are the atlas's, shared with the other
     /// cameras of its batch); `None` when the view covers its textures.
     pub tile: Option<Tile>,
-    /// The per-pixel labels (instance ids, normals) the labels pass
-    /// writes, when the view asked for them.
+    /// The per-pixel label planes the shading (or labels) pass writes,
+    /// when the view asked for labels.
     pub labels: Option<LabelTargets>,
-}
-
-/// Format of the instance-label target: the stable id of the node that
-/// drew the pixel plus one, 0 where nothing opaque was drawn.
-pub const LABEL_INSTANCE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
-/// Format of the normal-label target: the world-space unit normal in
-/// `xyz`, `w` 1 where a surface was drawn and 0 elsewhere.
-pub const LABEL_NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
-
-/// The targets of the labels pass: instance ids and world normals.
-#[derive(Clone)]
-pub struct LabelTargets {
-    /// Instance ids ([`LABEL_INSTANCE_FORMAT`]); for a tile, its atlas's
-    /// whole texture.
-    pub instances: wgpu::Texture,
-    /// The view of `instances` the labels pass renders into.
-    pub instances_view: wgpu::TextureView,
-    /// World normals ([`LABEL_NORMAL_FORMAT`]).
-    pub normals: wgpu::Texture,
-    /// The view of `normals` the labels pass renders into.
-    pub normals_view: wgpu::TextureView,
-}
-
-impl LabelTargets {
-    /// Bytes a pixel of labels takes (4 for the id, 8 for the normal).
-    pub const BYTES_PER_PIXEL: u64 = 12;
-
-    /// Label textures of `width × height` with `layers` layers (pages of a
-    /// [`TileAtlas`]), render views of layer 0.
-    pub fn new(device: &wgpu::Device, width: u32, height: u32, layers: u32, label: &str) -> Self {
-        let size = wgpu::Extent3d { width, height, depth_or_array_layers: layers };
-        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
-            | wgpu::TextureUsages::TEXTURE_BINDING
-            | wgpu::TextureUsages::COPY_SRC;
-        let instances = texture_2d(device, &format!("{label} instances"), size, 1, LABEL_INSTANCE_FORMAT, usage);
-        let normals = texture_2d(device, &format!("{label} normals"), size, 1, LABEL_NORMAL_FORMAT, usage);
-        LabelTargets {
-            instances_view: single_layer_view(&instances, 0, "instances"),
-            normals_view: single_layer_view(&normals, 0, "normals"),
-            instances,
-            normals,
-        }
-    }
-
-    /// The same textures with render views of layer `layer`.
-    pub fn layer(&self, layer: u32) -> Self {
-        LabelTargets {
-            instances_view: single_layer_view(&self.instances, layer, "instances page"),
-            normals_view: single_layer_view(&self.normals, layer, "normals page"),
-            instances: self.instances.clone(),
-            normals: self.normals.clone(),
-        }
-    }
 }
 
 /// A view's rectangle in a [`TileAtlas`]: `width × height` pixels of
@@ -162,32 +111,31 @@ impl TileAtlas {
 
     /// Bytes the atlas of [`TileAtlas::layout`] takes: 4 (depth) + 4
     /// (colour) bytes a pixel, plus `hdr_bytes_per_pixel` with HDR and
-    /// [`LabelTargets::BYTES_PER_PIXEL`] with labels. Known before anything
+    /// the label planes' bytes ([`LabelSet::bytes_per_pixel`]). Known before anything
     /// is allocated, so a renderer can refuse a batch that does not fit its
     /// target budget.
     pub fn bytes_for(
         tile_size: (u32, u32),
         layout: (u32, u32, u32),
         hdr_bytes_per_pixel: Option<u64>,
-        labels: bool,
+        labels: LabelSet,
     ) -> u64 {
         let (columns, rows, pages) = layout;
         let pixels = u64::from(columns * tile_size.0) * u64::from(rows * tile_size.1) * u64::from(pages);
-        let labels = if labels { LabelTargets::BYTES_PER_PIXEL } else { 0 };
-        pixels * (8 + hdr_bytes_per_pixel.unwrap_or(0) + labels)
+        pixels * (8 + hdr_bytes_per_pixel.unwrap_or(0) + labels.bytes_per_pixel())
     }
 
     /// Allocates the atlas for `tiles` tiles of `tile_size` on pages no
     /// larger than `max_side` (and the device's limit; see
     /// [`TileAtlas::layout`]), with an HDR colour texture of `hdr_format`
-    /// when given and label textures when `labels`. `None` when the tiles
+    /// when given and the label planes of `labels`. `None` when the tiles
     /// do not fit the device.
     pub fn new(
         device: &wgpu::Device,
         tile_size: (u32, u32),
         tiles: u32,
         hdr_format: Option<HdrFormat>,
-        labels: bool,
+        labels: LabelSet,
         max_side: Option<u32>,
         label: &str,
     ) -> Option<Self> {
@@ -205,7 +153,8 @@ impl TileAtlas {
                 let color = texture_2d(device, &name("colour"), size, 1, ViewTargets::COLOR_FORMAT, usage);
                 let hdr = hdr_format.map(|f| texture_2d(device, &name("hdr"), size, 1, f.texture_format(), usage));
                 let depth = texture_2d(device, &name("depth"), size, 1, ViewTargets::DEPTH_FORMAT, usage);
-                let labels = labels.then(|| LabelTargets::new(device, size.width, size.height, 1, &name("labels")));
+                let labels = (!labels.is_empty())
+                    .then(|| LabelTargets::new(device, size.width, size.height, labels, &name("labels")));
                 AtlasPage {
                     color_view: color.create_view(&Default::default()),
                     hdr_view: hdr.as_ref().map(|t| t.create_view(&Default::default())),
@@ -230,9 +179,9 @@ impl TileAtlas {
         self.pages.first().is_some_and(|p| p.hdr.is_some())
     }
 
-    /// Whether the pages have label textures.
-    pub fn has_labels(&self) -> bool {
-        self.pages.first().is_some_and(|p| p.labels.is_some())
+    /// The label planes the pages have.
+    pub fn labels(&self) -> LabelSet {
+        self.pages.first().and_then(|p| p.labels.as_ref()).map_or(LabelSet::NONE, LabelTargets::set)
     }
 
     /// Tiles the atlas holds.
@@ -248,7 +197,7 @@ impl TileAtlas {
             .and_then(|p| p.hdr.as_ref())
             .map(|t| u64::from(t.format().block_copy_size(None).unwrap_or(8)));
         let layout = (self.columns, self.rows, self.pages.len() as u32);
-        Self::bytes_for(self.tile_size, layout, hdr, self.has_labels())
+        Self::bytes_for(self.tile_size, layout, hdr, self.labels())
     }
 
     /// Where tile `index` lies, or `None` past the capacity.
@@ -484,7 +433,7 @@ impl ViewTargets {
             (Some(m), Some(c)) => u64::from(m.samples) * (hdr_bytes(c) + 4),
             _ => 0,
         };
-        let labels = if self.labels.is_some() { LabelTargets::BYTES_PER_PIXEL } else { 0 };
+        let labels = self.labels.as_ref().map_or(0, LabelTargets::bytes_per_pixel);
         pixels * (depth + color + msaa + labels)
     }
 
@@ -542,10 +491,10 @@ impl ViewTargets {
         self
     }
 
-    /// These targets with label textures of their own (instance ids and
-    /// world normals, [`LabelTargets`]), for the labels pass.
-    pub fn with_labels(mut self, device: &wgpu::Device, label: &str) -> Self {
-        self.labels = Some(LabelTargets::new(device, self.width, self.height, 1, label));
+    /// These targets with label planes of their own for the labels of
+    /// `set` ([`LabelTargets`]); none when `set` is empty.
+    pub fn with_labels(mut self, device: &wgpu::Device, set: LabelSet, label: &str) -> Self {
+        self.labels = (!set.is_empty()).then(|| LabelTargets::new(device, self.width, self.height, set, label));
         self
     }
 
@@ -671,7 +620,7 @@ pub fn texture_2d(
 
 #[cfg(test)]
 mod tile_tests {
-    use super::TileAtlas;
+    use super::{LabelSet, TileAtlas};
 
     #[test]
     fn tiles_fill_a_square_page_then_more_pages() {
@@ -700,8 +649,8 @@ mod tile_tests {
     #[test]
     fn bytes_count_depth_colour_and_hdr() {
         // 2 × 1 tiles of 4 × 4 on one page: 32 pixels.
-        assert_eq!(TileAtlas::bytes_for((4, 4), (2, 1, 1), None, false), 32 * 8);
-        assert_eq!(TileAtlas::bytes_for((4, 4), (2, 1, 3), Some(8), false), 3 * 32 * 16);
-        assert_eq!(TileAtlas::bytes_for((4, 4), (2, 1, 1), None, true), 32 * 20);
+        assert_eq!(TileAtlas::bytes_for((4, 4), (2, 1, 1), None, LabelSet::NONE), 32 * 8);
+        assert_eq!(TileAtlas::bytes_for((4, 4), (2, 1, 3), Some(8), LabelSet::NONE), 3 * 32 * 16);
+        assert_eq!(TileAtlas::bytes_for((4, 4), (2, 1, 1), None, LabelSet::ALL), 32 * 28);
     }
 }

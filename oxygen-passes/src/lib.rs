@@ -16,6 +16,7 @@
 //!   pre-pass, shadow map, forward lit (metallic-roughness) or transparent
 //!   (premultiplied alpha); [`TonemapPass`] (HDR → sRGB);
 //! * typed [`Output`]s ([`Depth`], [`HdrColor`], [`Color`], [`InstanceIds`],
+//!   [`SemanticClasses`], [`LinearDepth`],
 //!   [`Normals`], [`ShadowMap`], [`ProbeCube`])
 //!   through which a view reads what the views it is linked to rendered.
 //!
@@ -58,7 +59,8 @@ pub use lighting::shadow_atlas::array_layer_count;
 pub use lighting::split_sum::SPLIT_SUM_LUT_SIZE;
 pub use mesh::{ColorOps, DrawList, ForwardLitConfig, MeshPass};
 pub use oxygen_core::{
-    Color, Depth, HdrColor, InstanceIds, Normals, Output, OutputSource, ProbeCube, ProbeId, ShadowMap,
+    Color, Depth, HdrColor, InstanceIds, LinearDepth, Normals, Output, OutputSource, ProbeCube, ProbeId,
+    SemanticClasses, ShadowMap,
 };
 pub use pipelines::{
     AlphaClass, CompilerGuard, DepthBias, Exposure, PassKind, PipelineFuture, PipelineKey, PipelineVariant, Pipelines,

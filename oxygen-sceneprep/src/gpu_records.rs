@@ -60,22 +60,49 @@ pub fn vertex_record_overlays() -> [StructLayout; 3] {
 }
 
 oxygen_gpu::gpu_struct! {
-    /// A normal matrix as WGSL `mat3x3<f32>` stores it: three columns padded to 16 bytes.
+    /// A normal matrix as WGSL `mat3x3<f32>` stores it (three columns, each
+    /// padded to 16 bytes), with the node's semantic class in the first
+    /// column's padding: the labels' semantic plane reads it beside the
+    /// matrix the vertex shader reads anyway, at no extra byte.
     #[derive(Debug, Default, PartialEq)]
     pub struct NormalMatrix: 48 bytes {
-        /// Columns; `w` is padding.
-        pub columns: [[f32; 4]; 3] => "mat3x3<f32>",
+        /// First column.
+        pub x: [f32; 3] => "vec3<f32>",
+        /// The semantic class of the node drawn with this matrix
+        /// (`Scene::set_semantic_class`); 0 for a joint's matrix.
+        pub semantic_class: u32,
+        /// Second column.
+        pub y: [f32; 3] => "vec3<f32>",
+        /// Zero: the second column's padding.
+        pub reserved_y: u32,
+        /// Third column.
+        pub z: [f32; 3] => "vec3<f32>",
+        /// Zero: the third column's padding.
+        pub reserved_z: u32,
+    }
+}
+
+impl NormalMatrix {
+    /// The matrix of a node of semantic class `semantic_class`.
+    pub fn with_class(m: Mat3, semantic_class: u32) -> Self {
+        NormalMatrix { semantic_class, ..m.into() }
+    }
+
+    /// The matrix, without the class.
+    pub fn matrix(&self) -> Mat3 {
+        Mat3::from_cols(self.x.into(), self.y.into(), self.z.into())
     }
 }
 
 impl From<Mat3> for NormalMatrix {
     fn from(m: Mat3) -> Self {
         NormalMatrix {
-            columns: [
-                m.x_axis.extend(0.0).to_array(),
-                m.y_axis.extend(0.0).to_array(),
-                m.z_axis.extend(0.0).to_array(),
-            ],
+            x: m.x_axis.to_array(),
+            semantic_class: 0,
+            y: m.y_axis.to_array(),
+            reserved_y: 0,
+            z: m.z_axis.to_array(),
+            reserved_z: 0,
         }
     }
 }

@@ -23,6 +23,12 @@
 // SkinWeights are read through its members).
 #include "sceneprep/VertexRecord"
 
+// A NormalMatrix record's matrix (its first column's padding carries the
+// node's semantic class).
+fn normal_matrix_of(r: NormalMatrix) -> mat3x3<f32> {
+    return mat3x3<f32>(r.x, r.y, r.z);
+}
+
 // Texture coordinate `uv` through a texture's transform (its affine rows):
 // what the rasterizer and the path-traced reference both apply.
 fn apply_uv_transform(t: UvTransformRecord, uv: vec2<f32>) -> vec2<f32> {

@@ -77,7 +77,7 @@ fn singular_and_non_finite_transforms_are_skipped_and_never_drawn() {
     assert_eq!(prep.frame_collection().skipped_nodes, 3);
     let transforms = prep.frames()[0].transforms();
     assert!(transforms.world.iter().all(|m| m.is_finite()));
-    assert!(transforms.normal.iter().all(|n| n.columns.iter().flatten().all(|x| x.is_finite())));
+    assert!(transforms.normal.iter().all(|n| n.matrix().is_finite()));
 }
 
 #[test]
@@ -186,12 +186,7 @@ fn lights_with_non_finite_parameters_are_skipped_or_clamped() {
 fn transformed_pair(prep: &ScenePrep, transform_index: usize, normal: Vec3, tangent: Vec3) -> (Vec3, Vec3) {
     let transforms = prep.frames()[0].transforms();
     let world = transforms.world[transform_index];
-    let n = transforms.normal[transform_index].columns;
-    let normal_matrix = glam::Mat3::from_cols(
-        Vec3::new(n[0][0], n[0][1], n[0][2]),
-        Vec3::new(n[1][0], n[1][1], n[1][2]),
-        Vec3::new(n[2][0], n[2][1], n[2][2]),
-    );
+    let normal_matrix = transforms.normal[transform_index].matrix();
     ((normal_matrix * normal).normalize(), world.transform_vector3(tangent).normalize())
 }
 

@@ -11,6 +11,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use oxygen_core::{ResolvedView, Scene, ViewId};
+use oxygen_gpu::LabelSet;
 use oxygen_passes::{OutputSource, ProbeId};
 use oxygen_sceneprep::{MaterialFeatures, PassMask, PreparedSceneFrame};
 use oxygen_sceneprep::{ViewPrepOptions, ViewRequest};
@@ -27,8 +28,8 @@ use crate::shadows::{ShadowRole, shadow_view_options};
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum TargetPlan {
     /// Targets of its own, with colour or depth only, samples per pixel,
-    /// and label targets when the view asked for labels.
-    Own { with_color: bool, samples: u32, labels: bool },
+    /// and the label planes the view asked for.
+    Own { with_color: bool, samples: u32, labels: LabelSet },
     /// Layer `tile` of the local shadow atlas.
     AtlasLayer { tile: u32 },
     /// Layer `face` of probe `probe`'s cube.
@@ -120,7 +121,9 @@ impl Renderer {
                 labels: entry.labels,
                 max_page_side: entry.max_page_side,
             });
-            plan.labels |= self.views.entries.get(&view.id).is_some_and(|e| e.labels);
+            if let Some(e) = self.views.entries.get(&view.id) {
+                plan.labels = plan.labels.union(e.labels);
+            }
             plan.hdr |= readers.contains(&view.id)
                 || frame.partitions_matching(PassMask::TRANSPARENT, PassMask::empty()).next().is_some();
         }
@@ -173,7 +176,7 @@ impl Renderer {
             let resolved = shadow.resolved.map_err(RenderError::from).and_then(|view| {
                 if let ShadowRole::Cascade { .. } = shadow.role {
                     self.targets
-                        .admit(view.viewport, false, 1, false, &mut taken)
+                        .admit(view.viewport, false, 1, LabelSet::NONE, &mut taken)
                         .map_err(|e| e.for_view(shadow.id))?;
                 }
                 Ok(view)
@@ -197,7 +200,7 @@ impl Renderer {
             let (role, target) = match shadow.role {
                 ShadowRole::Cascade { owner, index } => (
                     ViewRole::SunCascade { owner, index },
-                    TargetPlan::Own { with_color: false, samples: 1, labels: false },
+                    TargetPlan::Own { with_color: false, samples: 1, labels: LabelSet::NONE },
                 ),
                 ShadowRole::Local { light, face, tile } => {
                     (ViewRole::LocalShadow { light, face, tile }, TargetPlan::AtlasLayer { tile })

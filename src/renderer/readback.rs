@@ -3,6 +3,7 @@
 //! with their subsystems).
 
 use oxygen_core::ViewId;
+use oxygen_gpu::Label;
 use oxygen_sceneprep::{DrawMetadata, PassMask, PreparedSceneFrame};
 
 use super::{RenderError, Renderer};
@@ -38,9 +39,11 @@ impl Renderer {
         })
     }
 
-    /// The view's labels ([`crate::ViewDesc::with_labels`]): the node that
-    /// drew each pixel and the surface's world normal (waits for the GPU).
-    /// Fails for a view that did not ask for labels.
+    /// The view's label planes ([`crate::ViewDesc::with_labels`]): the
+    /// node that drew each pixel, the surface's world normal, the node's
+    /// semantic class and the surface's linear depth, each where the view
+    /// draws it (waits for the GPU). Fails for a view that did not ask for
+    /// labels.
     pub fn read_labels(&self, id: impl Into<ViewId>) -> Result<LabelImage, RenderError> {
         let id = id.into();
         let targets = self.view_targets(id)?;
@@ -49,10 +52,26 @@ impl Renderer {
         })?;
         let (x, y) = targets.tile.map_or((0, 0), |t| (t.x, t.y));
         let (layer, size) = (0, (targets.width, targets.height));
-        let instances = self.gpu.read_u32_region(&labels.instances, layer, (x, y), size)?;
-        let normals = self.gpu.read_rgba16_float_region(&labels.normals, layer, (x, y), size)?;
-        let normals = normals.pixels.iter().map(|p| [p[0], p[1], p[2]]).collect();
-        Ok(LabelImage { width: size.0, height: size.1, instances, normals })
+        let words = |label| match labels.plane(label) {
+            Some(plane) => self.gpu.read_u32_region(&plane.texture, layer, (x, y), size),
+            None => Ok(Vec::new()),
+        };
+        let normals = match labels.plane(Label::Normal) {
+            Some(plane) => {
+                let normals = self.gpu.read_rgba16_float_region(&plane.texture, layer, (x, y), size)?;
+                normals.pixels.iter().map(|p| [p[0], p[1], p[2]]).collect()
+            }
+            None => Vec::new(),
+        };
+        Ok(LabelImage {
+            width: size.0,
+            height: size.1,
+            planes: labels.set(),
+            instances: words(Label::Instance)?,
+            normals,
+            classes: words(Label::Semantic)?,
+            linear_depth: words(Label::LinearDepth)?.into_iter().map(f32::from_bits).collect(),
+        })
     }
 
     /// The view's depth as the GPU wrote it (reverse-Z device depth, and
@@ -174,13 +193,15 @@ impl DepthImage {
 }
 
 /// A view's labels as read back ([`Renderer::read_labels`]), row by row
-/// from the top.
+/// from the top. A plane the view does not draw is empty.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LabelImage {
     /// Width in pixels.
     pub width: u32,
     /// Height in pixels.
     pub height: u32,
+    /// The planes the view draws (the others are empty here).
+    pub planes: oxygen_gpu::LabelSet,
     /// Per pixel: the stable id ([`oxygen_core::scene::node_index`]) of the node
     /// whose opaque or masked surface is seen there, plus one; 0 where none
     /// is (the background, or only blended surfaces).
@@ -188,6 +209,14 @@ pub struct LabelImage {
     /// Per pixel: the seen surface's world-space unit normal (facing the
     /// camera for the back of a double-sided surface); zero where nothing is.
     pub normals: Vec<[f32; 3]>,
+    /// Per pixel: the semantic class of the node seen there
+    /// ([`oxygen_core::Scene::set_semantic_class`]) as the GPU wrote it;
+    /// 0 where none is.
+    pub classes: Vec<u32>,
+    /// Per pixel: the seen surface's distance from the camera's plane along
+    /// its view direction, in world units, as the GPU wrote it; 0 where
+    /// none is (compare [`DepthImage::linear`], computed from device depth).
+    pub linear_depth: Vec<f32>,
 }
 
 impl LabelImage {
@@ -198,9 +227,11 @@ impl LabelImage {
         scene.node_at_index(label.checked_sub(1)?)
     }
 
-    /// The segmentation image: each pixel's node's semantic class
+    /// The segmentation image computed on the CPU from the instance plane
+    /// and `scene`'s classes now: each pixel's node's semantic class
     /// ([`oxygen_core::Scene::set_semantic_class`]), 0 where no node is
-    /// seen or the node is gone from `scene`.
+    /// seen or the node is gone from `scene`. [`LabelImage::classes`] is
+    /// the same image as the GPU wrote it, with the classes of the frame.
     pub fn semantic(&self, scene: &oxygen_core::Scene) -> Vec<u32> {
         let classes: std::collections::HashMap<u32, u32> =
             scene.nodes().map(|(key, node)| (oxygen_core::scene::node_index(key) + 1, node.semantic_class)).collect();

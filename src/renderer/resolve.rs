@@ -8,6 +8,7 @@
 use std::sync::Arc;
 
 use oxygen_core::{ResolvedView, Scene, ViewContext, ViewId};
+use oxygen_gpu::LabelSet;
 use oxygen_passes::OutputSource;
 use oxygen_sceneprep::ViewPrepOptions;
 use tracing::{info_span, warn};
@@ -71,7 +72,7 @@ impl Renderer {
                 TargetKind::Own => {
                     let with_color = !entry.options.depth_only;
                     let samples = if with_color { self.msaa_samples(entry.msaa) } else { 1 };
-                    let labels = entry.labels && with_color;
+                    let labels = if with_color { entry.labels } else { LabelSet::NONE };
                     (ViewRole::Registered, TargetPlan::Own { with_color, samples, labels })
                 }
                 TargetKind::ProbeFace { probe, face } => {
@@ -164,7 +165,10 @@ impl Renderer {
                 continue;
             };
             let hdr = Some(self.targets.hdr_format.bytes_per_pixel());
-            let labels = entry.labels || entry.cameras().any(|c| self.views.entries.get(&c).is_some_and(|e| e.labels));
+            let labels = entry
+                .cameras()
+                .filter_map(|c| self.views.entries.get(&c))
+                .fold(entry.labels, |set, camera| set.union(camera.labels));
             let bytes = oxygen_gpu::TileAtlas::bytes_for(size, layout, hdr, labels);
             if taken.saturating_add(bytes) > self.targets.budget {
                 refused.push((

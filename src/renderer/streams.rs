@@ -23,7 +23,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicU8, Ordering};
 
 use oxygen_core::ViewId;
-use oxygen_gpu::{Tile, TileAtlas};
+use oxygen_gpu::{Label, LabelSet, Tile, TileAtlas};
 use tracing::info_span;
 
 use super::resolve::FrameClock;
@@ -38,8 +38,15 @@ pub struct StreamOptions {
     /// Device depth (reverse-Z, `f32`).
     pub depth: bool,
     /// Instance labels (the node seen at each pixel, id + 1; 0 for
-    /// none): a batch with labels only ([`crate::batch::BatchDesc::with_labels`]).
+    /// none): a batch that draws them only ([`crate::batch::BatchDesc::with_labels`]).
     pub instances: bool,
+    /// Semantic classes (the class of the node seen at each pixel; 0 for
+    /// none), written by the GPU: a batch that draws them only.
+    pub semantic: bool,
+    /// Linear depth (each pixel's distance from the camera's plane in world
+    /// units; 0 where nothing was drawn), written by the GPU: a batch that
+    /// draws it only.
+    pub linear_depth: bool,
     /// Staging buffers in the ring: how many frames' images may be on
     /// their way at once. At least 1; 2 (the default) lets a frame render
     /// while the last one's images are copied and mapped.
@@ -48,7 +55,31 @@ pub struct StreamOptions {
 
 impl Default for StreamOptions {
     fn default() -> Self {
-        StreamOptions { color: true, depth: true, instances: false, frames_in_flight: 2 }
+        StreamOptions {
+            color: true,
+            depth: true,
+            instances: false,
+            semantic: false,
+            linear_depth: false,
+            frames_in_flight: 2,
+        }
+    }
+}
+
+impl StreamOptions {
+    /// The label planes these options stream.
+    fn label_planes(&self) -> LabelSet {
+        let mut set = LabelSet::NONE;
+        for (on, label) in [
+            (self.instances, Label::Instance),
+            (self.semantic, Label::Semantic),
+            (self.linear_depth, Label::LinearDepth),
+        ] {
+            if on {
+                set = set.with(label);
+            }
+        }
+        set
     }
 }
 
@@ -63,6 +94,10 @@ pub struct StreamedCamera {
     pub depth: Option<Vec<f32>>,
     /// Its instance labels (row by row), when streamed.
     pub instances: Option<Vec<u32>>,
+    /// Its semantic classes (row by row), when streamed.
+    pub semantic: Option<Vec<u32>>,
+    /// Its linear depth (row by row, 0 where nothing was drawn), when streamed.
+    pub linear_depth: Option<Vec<f32>>,
 }
 
 /// A batch's images of one frame, as they arrived.
@@ -114,7 +149,7 @@ struct SlotContent {
 enum Plane {
     Color,
     Depth,
-    Instances,
+    Label(Label),
 }
 
 /// Where each page's images lie in a staging buffer: page after page, each
@@ -130,7 +165,8 @@ struct PageLayout {
     row_bytes: u32,
     color: bool,
     depth: bool,
-    instances: bool,
+    /// The label planes streamed (those asked for that the atlas has).
+    labels: LabelSet,
 }
 
 impl PageLayout {
@@ -145,15 +181,16 @@ impl PageLayout {
             row_bytes,
             color: options.color,
             depth: options.depth,
-            instances: options.instances && atlas.has_labels(),
+            labels: LabelSet::of(
+                &options.label_planes().iter().filter(|l| atlas.labels().contains(*l)).collect::<Vec<_>>(),
+            ),
         }
     }
 
     /// The planes streamed, in their order within a page.
     fn planes(&self) -> impl Iterator<Item = Plane> + '_ {
-        [(Plane::Color, self.color), (Plane::Depth, self.depth), (Plane::Instances, self.instances)]
-            .into_iter()
-            .filter_map(|(plane, on)| on.then_some(plane))
+        let images = [(Plane::Color, self.color), (Plane::Depth, self.depth)];
+        images.into_iter().filter_map(|(plane, on)| on.then_some(plane)).chain(self.labels.iter().map(Plane::Label))
     }
 
     fn page_bytes(&self) -> u64 {
@@ -240,8 +277,8 @@ impl Streams {
                         Plane::Color => (&textures.color, wgpu::TextureAspect::All),
                         Plane::Depth if depth_as_float.is_some() => (depth_source, wgpu::TextureAspect::All),
                         Plane::Depth => (depth_source, wgpu::TextureAspect::DepthOnly),
-                        Plane::Instances => match &textures.labels {
-                            Some(labels) => (&labels.instances, wgpu::TextureAspect::All),
+                        Plane::Label(label) => match textures.labels.as_ref().and_then(|l| l.plane(label)) {
+                            Some(plane) => (&plane.texture, wgpu::TextureAspect::All),
                             None => continue,
                         },
                     };
@@ -452,7 +489,12 @@ fn cut(buffer: &wgpu::Buffer, content: SlotContent, batch: BatchId) -> Result<St
             color: layout.color.then(|| image::RgbaImage::from_raw(w, h, texels(tile, Plane::Color))).flatten(),
             // `u32` to `f32` of the same size: collected in place.
             depth: layout.depth.then(|| words(tile, Plane::Depth).into_iter().map(f32::from_bits).collect()),
-            instances: layout.instances.then(|| words(tile, Plane::Instances)),
+            instances: layout.labels.contains(Label::Instance).then(|| words(tile, Plane::Label(Label::Instance))),
+            semantic: layout.labels.contains(Label::Semantic).then(|| words(tile, Plane::Label(Label::Semantic))),
+            linear_depth: layout
+                .labels
+                .contains(Label::LinearDepth)
+                .then(|| words(tile, Plane::Label(Label::LinearDepth)).into_iter().map(f32::from_bits).collect()),
         };
         // Many cameras: cut on every core (the pages are large, each
         // camera's rows are copied out on their own).
@@ -487,13 +529,20 @@ impl Renderer {
         self.views.batch_cameras(batch)?;
         match options {
             Some(options)
-                if options.frames_in_flight == 0 || !(options.color || options.depth || options.instances) =>
+                if options.frames_in_flight == 0
+                    || !(options.color || options.depth || !options.label_planes().is_empty()) =>
             {
                 Err(RenderError::Unsupported(format!("streaming {batch} with {options:?}: no buffer or no image")))
             }
-            Some(options) if options.instances && !self.views.batches.get(&batch).is_some_and(|b| b.labels) => {
+            Some(options)
+                if let Some(missing) = {
+                    let drawn = self.views.batches.get(&batch).map_or(LabelSet::NONE, |b| b.labels);
+                    options.label_planes().iter().find(|l| !drawn.contains(*l))
+                } =>
+            {
                 Err(RenderError::Unsupported(format!(
-                    "streaming {batch}'s instance labels: the batch draws none (BatchDesc::with_labels)"
+                    "streaming {batch}'s {} labels: the batch draws none (BatchDesc::with_label_planes)",
+                    missing.name()
                 )))
             }
             Some(options) => {

@@ -8,7 +8,7 @@ use std::collections::HashMap;
 
 use oxygen_bindless::{BindlessHeap, CameraConstants, SceneConstantsBlock, SceneConstantsBuffer};
 use oxygen_core::{ResolvedView, ViewId};
-use oxygen_gpu::{GpuContext, HdrFormat, Msaa, TileAtlas, ViewTargets};
+use oxygen_gpu::{GpuContext, HdrFormat, LabelSet, Msaa, TileAtlas, ViewTargets};
 use oxygen_sceneprep::PreparedSceneFrame;
 
 use super::prepare::{FrameView, TargetPlan};
@@ -60,8 +60,8 @@ pub(crate) struct BatchPlan {
     pub(crate) hdr: bool,
     /// The largest page side asked for (the device's limit otherwise).
     pub(crate) max_page_side: Option<u32>,
-    /// Whether the cameras draw labels (instance ids, normals).
-    pub(crate) labels: bool,
+    /// The label planes the cameras draw.
+    pub(crate) labels: LabelSet,
 }
 
 /// Every view's targets and constants, and the budget they share.
@@ -132,7 +132,7 @@ impl Targets {
                     && a.capacity() >= plan.tiles
                     && (a.has_hdr() || !plan.hdr)
                     && a.max_side == plan.max_page_side
-                    && a.has_labels() == plan.labels
+                    && a.labels() == plan.labels
             });
             if fits {
                 continue;
@@ -150,10 +150,9 @@ impl Targets {
     }
 
     /// What targets of a `viewport`-sized view take with the HDR format in use.
-    pub(crate) fn bytes_for(&self, viewport: glam::UVec2, with_color: bool, samples: u32, labels: bool) -> u64 {
-        let labels = if labels { oxygen_gpu::LabelTargets::BYTES_PER_PIXEL } else { 0 };
+    pub(crate) fn bytes_for(&self, viewport: glam::UVec2, with_color: bool, samples: u32, labels: LabelSet) -> u64 {
         ViewTargets::bytes_for_msaa(viewport.x, viewport.y, with_color.then_some(self.hdr_format), samples)
-            + u64::from(viewport.x) * u64::from(viewport.y) * labels
+            + u64::from(viewport.x) * u64::from(viewport.y) * labels.bytes_per_pixel()
     }
 
     /// Adds a `viewport`-sized view's targets to `taken`, or says they would
@@ -163,7 +162,7 @@ impl Targets {
         viewport: glam::UVec2,
         with_color: bool,
         samples: u32,
-        labels: bool,
+        labels: LabelSet,
         taken: &mut u64,
     ) -> Result<(), OverBudget> {
         let bytes = self.bytes_for(viewport, with_color, samples, labels);
@@ -238,10 +237,10 @@ impl Targets {
             let (width, height, label) = (view.gpu.viewport.x, view.gpu.viewport.y, view.id.to_string());
             match view.target {
                 TargetPlan::Own { with_color, samples, labels } => {
-                    let fits = entry
-                        .targets
-                        .as_ref()
-                        .is_some_and(|t| t.fits(width, height, with_color, samples) && t.labels.is_some() == labels);
+                    let fits = entry.targets.as_ref().is_some_and(|t| {
+                        t.fits(width, height, with_color, samples)
+                            && t.labels.as_ref().map_or(LabelSet::NONE, |l| l.set()) == labels
+                    });
                     if !fits {
                         let targets = if with_color {
                             ViewTargets::with_hdr_format(device, width, height, &label, self.hdr_format)
@@ -249,7 +248,7 @@ impl Targets {
                         } else {
                             ViewTargets::depth_only(device, width, height, &label)
                         };
-                        entry.targets = Some(if labels { targets.with_labels(device, &label) } else { targets });
+                        entry.targets = Some(targets.with_labels(device, labels, &label));
                     }
                 }
                 TargetPlan::AtlasLayer { tile } => {
@@ -376,7 +375,7 @@ impl Renderer {
     pub fn check_target_budget(&self, views: &[(glam::UVec2, bool)]) -> Result<u64, RenderError> {
         let mut taken = 0u64;
         for (index, (viewport, depth_only)) in views.iter().enumerate() {
-            self.targets.admit(*viewport, !depth_only, 1, false, &mut taken).map_err(|e| {
+            self.targets.admit(*viewport, !depth_only, 1, LabelSet::NONE, &mut taken).map_err(|e| {
                 RenderError::TargetBudgetEntry {
                     index,
                     width: e.width,

@@ -390,9 +390,14 @@ impl Scene {
 
     /// Sets the node's semantic class, the value segmentation images show
     /// for the pixels it draws (0, the default, is the class of nothing in
-    /// particular). Changes no picture, so no frame is recollected for it.
+    /// particular). The GPU's semantic label plane carries it, so this is
+    /// an edit like any other: the next frame recollects the node.
     pub fn set_semantic_class(&mut self, key: NodeKey, class: u32) -> Result<(), SceneError> {
-        self.node_mut(key)?.semantic_class = class;
+        let node = self.node_mut(key)?;
+        if node.semantic_class != class {
+            node.semantic_class = class;
+            self.touch(key);
+        }
         Ok(())
     }
 

@@ -4,9 +4,10 @@
 //! local shadow atlas, its linked probes and views).
 
 use oxygen_core::{
-    Color, Depth, HdrColor, InstanceIds, Normals, OutputSource, ProbeCube, ProbeId, ResolvedView, ShadowMap, ViewId,
+    Color, Depth, HdrColor, InstanceIds, LinearDepth, Normals, OutputSource, ProbeCube, ProbeId, ResolvedView,
+    SemanticClasses, ShadowMap, ViewId,
 };
-use oxygen_gpu::ViewTargets;
+use oxygen_gpu::{Label, ViewTargets};
 
 /// What kinds of output exist and how a view's inputs find them.
 pub trait OutputKind: 'static {
@@ -82,13 +83,22 @@ impl OutputKind for Color {
     }
 }
 
+/// A label plane of a linked view, when it draws that plane.
+fn label_plane<'a>(
+    inputs: &ViewInputs<'a>,
+    source: OutputSource,
+    label: Label,
+) -> Option<(LinkedImage<'a>, Vec<ViewId>)> {
+    let v = linked_view(inputs, source)?;
+    let plane = v.targets.labels.as_ref()?.plane(label)?;
+    Some((LinkedImage::of(v, &plane.view, &plane.texture), vec![v.id]))
+}
+
 impl OutputKind for InstanceIds {
     type Value<'a> = LinkedImage<'a>;
     const NAME: &'static str = "instance labels";
     fn find<'a>(inputs: &ViewInputs<'a>, source: OutputSource) -> Option<(Self::Value<'a>, Vec<ViewId>)> {
-        let v = linked_view(inputs, source)?;
-        let labels = v.targets.labels.as_ref()?;
-        Some((LinkedImage::of(v, &labels.instances_view, &labels.instances), vec![v.id]))
+        label_plane(inputs, source, Label::Instance)
     }
 }
 
@@ -96,9 +106,23 @@ impl OutputKind for Normals {
     type Value<'a> = LinkedImage<'a>;
     const NAME: &'static str = "normal labels";
     fn find<'a>(inputs: &ViewInputs<'a>, source: OutputSource) -> Option<(Self::Value<'a>, Vec<ViewId>)> {
-        let v = linked_view(inputs, source)?;
-        let labels = v.targets.labels.as_ref()?;
-        Some((LinkedImage::of(v, &labels.normals_view, &labels.normals), vec![v.id]))
+        label_plane(inputs, source, Label::Normal)
+    }
+}
+
+impl OutputKind for SemanticClasses {
+    type Value<'a> = LinkedImage<'a>;
+    const NAME: &'static str = "semantic-class labels";
+    fn find<'a>(inputs: &ViewInputs<'a>, source: OutputSource) -> Option<(Self::Value<'a>, Vec<ViewId>)> {
+        label_plane(inputs, source, Label::Semantic)
+    }
+}
+
+impl OutputKind for LinearDepth {
+    type Value<'a> = LinkedImage<'a>;
+    const NAME: &'static str = "linear-depth labels";
+    fn find<'a>(inputs: &ViewInputs<'a>, source: OutputSource) -> Option<(Self::Value<'a>, Vec<ViewId>)> {
+        label_plane(inputs, source, Label::LinearDepth)
     }
 }
 

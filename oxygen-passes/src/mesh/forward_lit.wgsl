@@ -401,16 +401,18 @@ fn fs_masked(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> @l
 
 // The shading pass of a view that asked for labels writes them with the
 // colour (one geometry pass, not two): the colour of fs_opaque and
-// fs_masked, the labels of mesh/labels.wgsl at locations 1 and 2.
+// fs_masked, the labels of mesh/labels.wgsl one location further on.
 struct Labelled {
     @location(0) color: vec4<f32>,
     @location(1) instance: u32,
     @location(2) normal: vec4<f32>,
+    @location(3) semantic_class: u32,
+    @location(4) linear_depth: u32,
 }
 
 fn labelled(color: vec4<f32>, mesh: MeshVarying, front_facing: bool) -> Labelled {
-    let labels = labels_of(mesh, front_facing);
-    return Labelled(color, labels.instance, labels.normal);
+    let l = labels_of(mesh, front_facing);
+    return Labelled(color, l.instance, l.normal, l.semantic_class, l.linear_depth);
 }
 
 @fragment

@@ -1,20 +1,28 @@
 // What a pixel's labels hold, shared by the labels pass (mesh/labels.wgsl)
 // and the shading pass that writes them alongside the colour
-// (fs_opaque_labelled, fs_masked_labelled in mesh/forward_lit.wgsl).
+// (fs_opaque_labelled, fs_masked_labelled in mesh/forward_lit.wgsl). Every
+// plane is always written; a pipeline whose view asked for fewer planes has
+// no target at the others' locations, and their values go nowhere.
 
 struct Labels {
     @location(0) instance: u32,
     @location(1) normal: vec4<f32>,
+    @location(2) semantic_class: u32,
+    // The bits of an f32 (the plane is R32Uint: renderable on every backend).
+    @location(3) linear_depth: u32,
 }
 
-// The node that drew the pixel (its stable id plus one: 0 is nothing) and
-// the surface's world-space normal. Only double-sided surfaces show back
-// faces (the others are culled): their normal faces the camera, as
-// shading lights them.
+// The node that drew the pixel (its stable id plus one: 0 is nothing), the
+// surface's world-space normal, the node's semantic class and the
+// surface's distance from the camera's plane along its view direction.
+// Only double-sided surfaces show back faces (the others are culled):
+// their normal faces the camera, as shading lights them.
 fn labels_of(mesh: MeshVarying, front_facing: bool) -> Labels {
     var n = normalize(mesh.world_normal);
     if !front_facing {
         n = -n;
     }
-    return Labels(mesh.node + 1u, vec4<f32>(n, 1.0));
+    // The camera looks down its view space's −z.
+    let linear_depth = -(scene.camera.view * vec4<f32>(mesh.world_position, 1.0)).z;
+    return Labels(mesh.node + 1u, vec4<f32>(n, 1.0), mesh.semantic_class, bitcast<u32>(linear_depth));
 }

@@ -24,6 +24,9 @@ struct MeshVarying {
     @location(5) uv1: vec2<f32>,
     // The node that drew it (DrawMetadata.node_id), for the labels pass.
     @location(6) @interpolate(flat) node: u32,
+    // Its semantic class (the padding lane of its normal record), for the
+    // labels' semantic plane.
+    @location(7) @interpolate(flat) semantic_class: u32,
 }
 
 @vertex
@@ -67,14 +70,15 @@ fn vs_main(@builtin(vertex_index) vertex_index: u32, @builtin(instance_index) dr
         for (var k = 0u; k < 4u; k++) {
             if weights[k] > 0.0 {
                 skinned_position += weights[k] * (world_transform_domain[base + joints[k]] * vec4<f32>(position, 1.0));
-                skinned_normal += weights[k] * (normal_transform_domain[normal_base + joints[k]].columns * normal);
+                skinned_normal += weights[k] * (normal_matrix_of(normal_transform_domain[normal_base + joints[k]]) * normal);
             }
         }
         world_position = vec4<f32>(skinned_position.xyz, 1.0);
         world_normal = skinned_normal;
     } else {
         let world = world_transform_domain[scene.renderer.world_transforms_slot + draw.transform_index];
-        let normal_matrix = normal_transform_domain[scene.renderer.normal_transforms_slot + draw.transform_index].columns;
+        let normal_matrix =
+            normal_matrix_of(normal_transform_domain[scene.renderer.normal_transforms_slot + draw.transform_index]);
         world_position = world * vec4<f32>(position, 1.0);
         world_normal = normal_matrix * normal;
     }
@@ -85,6 +89,7 @@ fn vs_main(@builtin(vertex_index) vertex_index: u32, @builtin(instance_index) dr
     out.uv = vec2<f32>(v.u, v.v);
     out.material = draw.material_handle;
     out.node = draw.node_id;
+    out.semantic_class = normal_transform_domain[scene.renderer.normal_transforms_slot + draw.transform_index].semantic_class;
     // Attribute records run parallel to the geometry's vertices (stored as
     // VertexRecords: colour in px..nx, the second UV set in ny, nz).
     out.color = vec4<f32>(1.0);

@@ -11,7 +11,7 @@
 //! per draw. Shaders find each draw's `DrawMetadata` through
 //! `first_instance`.
 
-use oxygen_gpu::ViewTargets;
+use oxygen_gpu::{LabelSet, LabelTargets, ViewTargets};
 use oxygen_sceneprep::{Partition, PassMask};
 use tracing::{Instrument, info_span};
 
@@ -280,9 +280,13 @@ impl MeshPass {
         MeshPass { write_labels: matches!(self.kind, PassKind::Shading | PassKind::ShadingAfterPrePass), ..self }
     }
 
-    /// Whether this pass writes `ctx`'s labels with its colour.
-    fn labels_in_pass(&self, ctx: &RenderContext<'_>) -> bool {
-        self.write_labels && ctx.targets.labels.is_some() && ctx.targets.msaa.is_none()
+    /// The labels this pass writes with `ctx`'s colour: the view's label
+    /// planes when the pass writes labels and the view is single-sampled.
+    fn labels_in_pass(&self, ctx: &RenderContext<'_>) -> LabelSet {
+        match &ctx.targets.labels {
+            Some(labels) if self.write_labels && ctx.targets.msaa.is_none() => labels.set(),
+            _ => LabelSet::NONE,
+        }
     }
 
     /// The same pass tone-mapping at the end of its fragment shader (the
@@ -420,7 +424,7 @@ impl MeshPass {
     /// partition's).
     fn shading_key(&self, ctx: &RenderContext<'_>) -> crate::PipelineKey {
         let color_format = match self.kind {
-            PassKind::Labels => Some(oxygen_gpu::LABEL_INSTANCE_FORMAT),
+            PassKind::Labels => None,
             _ => self.color_format(ctx),
         };
         crate::PipelineKey {
@@ -432,7 +436,10 @@ impl MeshPass {
             features: self.shader_features(ctx),
             tone_map: self.tone_map(),
             samples: ctx.targets.samples(),
-            labels: self.labels_in_pass(ctx),
+            labels: match self.kind {
+                PassKind::Labels => ctx.targets.labels.as_ref().map_or(LabelSet::NONE, LabelTargets::set),
+                _ => self.labels_in_pass(ctx),
+            },
         }
     }
 
@@ -540,25 +547,14 @@ impl MeshPass {
                 ops: wgpu::Operations { load: ops.load(), store },
             });
             let depth_load = if self.clear_depth { wgpu::LoadOp::Clear(0.0) } else { wgpu::LoadOp::Load };
-            // The labels pass writes its two label targets instead.
-            let cleared = |view| {
-                Some(wgpu::RenderPassColorAttachment {
-                    view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })
-            };
+            // The labels pass writes its label planes instead.
             let label_attachments = match (&lead.targets.labels, self.kind) {
-                (Some(labels), PassKind::Labels) => {
-                    vec![cleared(&labels.instances_view), cleared(&labels.normals_view)]
-                }
+                (Some(labels), PassKind::Labels) => label_attachments(labels),
                 // Shading that writes the labels too: colour, then labels.
-                (Some(labels), _) if self.labels_in_pass(lead) => {
-                    vec![color_attachment.clone(), cleared(&labels.instances_view), cleared(&labels.normals_view)]
+                (Some(labels), _) if !self.labels_in_pass(lead).is_empty() => {
+                    let mut attachments = vec![color_attachment.clone()];
+                    attachments.extend(label_attachments(labels));
+                    attachments
                 }
                 _ => Vec::new(),
             };
@@ -715,4 +711,28 @@ fn draw_partition(
         stats.draw_calls += 1;
         stats.draw_commands += 1;
     }
+}
+
+/// The label planes as colour attachments, cleared to 0 (no node, no
+/// class, no surface), in [`oxygen_gpu::Label::ALL`] order with none for a
+/// plane the view lacks (as the pipelines' targets), trimmed after the last.
+fn label_attachments(labels: &LabelTargets) -> Vec<Option<wgpu::RenderPassColorAttachment<'_>>> {
+    let mut attachments: Vec<_> = oxygen_gpu::Label::ALL
+        .into_iter()
+        .map(|label| {
+            labels.plane(label).map(|plane| wgpu::RenderPassColorAttachment {
+                view: &plane.view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })
+        })
+        .collect();
+    while attachments.last().is_some_and(Option::is_none) {
+        attachments.pop();
+    }
+    attachments
 }

@@ -15,8 +15,6 @@ use std::task::{Context, Poll, Waker};
 use oxygen_bindless::{BindlessHeap, TexturePath};
 use tracing::debug;
 
-use oxygen_gpu::{LABEL_INSTANCE_FORMAT, LABEL_NORMAL_FORMAT};
-
 use super::{AlphaClass, PassKind, PipelineKey, mesh_entry_points, shader_source};
 
 /// Lazily created, cached mesh pipelines shared by every view.
@@ -163,7 +161,7 @@ impl Pipelines {
 
     fn create(&self, device: &wgpu::Device, module: &wgpu::ShaderModule, key: PipelineKey) -> wgpu::RenderPipeline {
         let masked = key.variant.alpha == AlphaClass::Masked;
-        let labels = key.labels && matches!(key.pass, PassKind::Shading | PassKind::ShadingAfterPrePass);
+        let labels = !key.labels.is_empty() && matches!(key.pass, PassKind::Shading | PassKind::ShadingAfterPrePass);
         let (vertex_entry, fragment_entry) = mesh_entry_points(key.pass, masked, labels);
         let (depth_write, depth_compare) = match key.pass {
             PassKind::DepthPrePass | PassKind::Shadow | PassKind::Shading => (true, wgpu::CompareFunction::Greater),
@@ -175,9 +173,11 @@ impl Pipelines {
         let blend = (key.pass == PassKind::Transparent).then_some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING);
         let target = |format| Some(wgpu::ColorTargetState { format, blend, write_mask: wgpu::ColorWrites::ALL });
         let targets: Vec<Option<wgpu::ColorTargetState>> = match key.pass {
-            PassKind::Labels => vec![target(LABEL_INSTANCE_FORMAT), target(LABEL_NORMAL_FORMAT)],
+            PassKind::Labels => label_targets(key.labels, wgpu::ColorWrites::ALL),
             _ if labels => {
-                vec![key.color_format.and_then(target), target(LABEL_INSTANCE_FORMAT), target(LABEL_NORMAL_FORMAT)]
+                let mut targets = vec![key.color_format.and_then(target)];
+                targets.extend(label_targets(key.labels, wgpu::ColorWrites::ALL));
+                targets
             }
             _ => vec![key.color_format.and_then(target)],
         };
@@ -280,4 +280,23 @@ impl Future for PipelineFuture<'_> {
         drop(guard);
         Poll::Ready(this.pipelines.compile(this.device, key))
     }
+}
+
+/// The colour targets of the label planes of `set`, in [`oxygen_gpu::Label::ALL`]
+/// order, none where a label is not in the set (its shader output goes
+/// nowhere), trimmed after the last plane.
+pub(crate) fn label_targets(
+    set: oxygen_gpu::LabelSet,
+    write_mask: wgpu::ColorWrites,
+) -> Vec<Option<wgpu::ColorTargetState>> {
+    let mut targets: Vec<_> = oxygen_gpu::Label::ALL
+        .into_iter()
+        .map(|label| {
+            set.contains(label).then_some(wgpu::ColorTargetState { format: label.format(), blend: None, write_mask })
+        })
+        .collect();
+    while targets.last().is_some_and(Option::is_none) {
+        targets.pop();
+    }
+    targets
 }

@@ -2,6 +2,7 @@
 //! variant a partition selects (alpha × sidedness × winding), the targets,
 //! the depth bias and the optional shader code ([`PipelineKey`]).
 
+use oxygen_gpu::LabelSet;
 use oxygen_sceneprep::PassMask;
 
 use super::{Exposure, ShaderFeatures};
@@ -120,11 +121,11 @@ pub struct PipelineKey {
     pub tone_map: Option<Exposure>,
     /// Samples per pixel of the targets (1, or 2 and 4 with MSAA).
     pub samples: u32,
-    /// A shading pass that also writes the pixel labels (instance id and
-    /// world normal, colour targets 1 and 2 in the formats of
-    /// [`oxygen_gpu::LABEL_INSTANCE_FORMAT`] and [`oxygen_gpu::LABEL_NORMAL_FORMAT`]):
-    /// one geometry pass for colour and labels. Other passes ignore it.
-    pub labels: bool,
+    /// The label planes a shading pass writes with its colour (colour
+    /// targets 1 to 4 in [`oxygen_gpu::Label::ALL`] order, no target where a
+    /// label is not in the set): one geometry pass for colour and labels.
+    /// The labels pass writes them from target 0; other passes ignore it.
+    pub labels: LabelSet,
 }
 
 impl PipelineKey {
@@ -133,10 +134,11 @@ impl PipelineKey {
     /// no optional code and never tone-map.
     pub(super) fn canonical(self) -> Self {
         match self.pass {
-            PassKind::DepthPrePass | PassKind::Shadow | PassKind::Labels => {
-                PipelineKey { features: ShaderFeatures::ALL, tone_map: None, labels: false, ..self }
+            PassKind::DepthPrePass | PassKind::Shadow => {
+                PipelineKey { features: ShaderFeatures::ALL, tone_map: None, labels: LabelSet::NONE, ..self }
             }
-            PassKind::Transparent => PipelineKey { labels: false, ..self },
+            PassKind::Labels => PipelineKey { features: ShaderFeatures::ALL, tone_map: None, ..self },
+            PassKind::Transparent => PipelineKey { labels: LabelSet::NONE, ..self },
             PassKind::ShadingAfterPrePass | PassKind::Shading => self,
         }
     }

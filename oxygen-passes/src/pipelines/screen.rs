@@ -47,9 +47,8 @@ impl Pipelines {
         // A pass that writes labels has their targets too; the sky leaves
         // them as cleared (no node: 0).
         let mut targets = vec![key.color_format.and_then(|f| target(f, wgpu::ColorWrites::ALL))];
-        if key.labels && matches!(key.pass, PassKind::Shading | PassKind::ShadingAfterPrePass) {
-            targets.push(target(oxygen_gpu::LABEL_INSTANCE_FORMAT, wgpu::ColorWrites::empty()));
-            targets.push(target(oxygen_gpu::LABEL_NORMAL_FORMAT, wgpu::ColorWrites::empty()));
+        if matches!(key.pass, PassKind::Shading | PassKind::ShadingAfterPrePass) {
+            targets.extend(super::cache::label_targets(key.labels, wgpu::ColorWrites::empty()));
         }
         let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("sky"),

@@ -324,7 +324,8 @@ fn surface_at(ray: Ray, hit: Hit) -> Surface {
     let v2 = vertex_domain[instance.vertex_slot + index_words[base + 2u]];
     let w = vec3<f32>(1.0 - hit.u - hit.v, hit.u, hit.v);
     let world = world_transform_domain[scene.renderer.world_transforms_slot + instance.transform_index];
-    let normal_matrix = normal_transform_domain[scene.renderer.normal_transforms_slot + instance.transform_index].columns;
+    let normal_matrix =
+        normal_matrix_of(normal_transform_domain[scene.renderer.normal_transforms_slot + instance.transform_index]);
     let p0 = (world * vec4<f32>(v0.px, v0.py, v0.pz, 1.0)).xyz;
     let p1 = (world * vec4<f32>(v1.px, v1.py, v1.pz, 1.0)).xyz;
     let p2 = (world * vec4<f32>(v2.px, v2.py, v2.pz, 1.0)).xyz;

@@ -216,7 +216,7 @@ fn every_override_constant_of_a_mesh_pipeline_is_declared() {
             features: ShaderFeatures::NONE,
             tone_map: Some(Exposure::new(1.0)),
             samples: 1,
-            labels: true,
+            labels: oxygen_gpu::LabelSet::ALL,
         };
         let module = mesh_module(pass);
         for path in paths(module) {

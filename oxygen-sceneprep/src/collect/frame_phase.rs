@@ -380,7 +380,7 @@ impl FrameCollection {
             let transforms = Arc::make_mut(&mut self.transforms);
             let transform_index = transforms.world.len() as u32;
             transforms.world.push(relative_to_origin(&world64, origin));
-            transforms.normal.push(normal.into());
+            transforms.normal.push(crate::NormalMatrix::with_class(normal, node.semantic_class));
             self.renderables.push(RenderableEntry {
                 node: key,
                 node_id: node_index(key),

@@ -298,11 +298,7 @@ fn pose(mesh: &Geometry, entry: &crate::RenderableEntry, frame: &FrameCollection
                     let joint = entry.joint_base as usize + s.joints[k] as usize;
                     let m = matrices.world.get(joint)?;
                     let n = matrices.normal.get(joint)?;
-                    let n = Mat3::from_cols(
-                        Vec3::from_slice(&n.columns[0]),
-                        Vec3::from_slice(&n.columns[1]),
-                        Vec3::from_slice(&n.columns[2]),
-                    );
+                    let n = n.matrix();
                     position += weight * m.transform_point3(Vec3::from(v.position));
                     normal += weight * (n * Vec3::from(v.normal));
                 }
