@@ -522,7 +522,7 @@ fn a_linked_view_reads_semantic_classes_and_linear_depth() {
         words
     };
     assert_eq!(read(&classes), want.classes, "the linked semantic classes");
-    assert!(want.classes.iter().any(|c| *c == 3), "the source sees the third row");
+    assert!(want.classes.contains(&3), "the source sees the third row");
     let linked: Vec<f32> = read(&depths).into_iter().map(f32::from_bits).collect();
     assert_eq!(linked, want.linear_depth, "the linked linear depth");
     // A view that does not draw a plane has no such output to link.
