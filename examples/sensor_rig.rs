@@ -16,9 +16,9 @@
 //! (16-bit grey: the semantic class, here each glTF node's position in
 //! the file's node order + 1, so every object has its own value). The
 //! images arrive through the batch's stream (`Renderer::stream_batch`): one
-//! copy of the atlas a frame of colour, depth and instance labels
-//! (`BatchDesc::with_labels`), tagged with the frame number; the
-//! segmentation maps each label to its node's class. Where the adapter
+//! copy of the atlas a frame of colour and of the label planes the GPU
+//! wrote with it, linear depth and semantic classes
+//! (`BatchDesc::with_label_planes`), tagged with the frame number. Where the adapter
 //! runs GPU visibility the cameras cull on the GPU (the whole rig in one
 //! dispatch), else on the CPU; the first line says which. With
 //! `OXYGEN_RECORD_DIR` set, the run's rate is appended to
@@ -28,6 +28,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use oxygen::batch::{BatchDesc, StreamOptions};
+use oxygen::gpu::{Label, LabelSet};
 use oxygen::glam::{DVec3, Quat};
 use oxygen::prelude::*;
 use oxygen::views::{DLookAtResolver, ViewContext, ViewError, ViewResolver};
@@ -141,7 +142,9 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
     }
 
     let mut renderer = Renderer::new_headless()?;
-    let rig = renderer.register_batch(BatchDesc::new("rig", size).with_labels())?;
+    // The planes the files need, written by the shading pass with the colour.
+    let planes = LabelSet::of(&[Label::Semantic, Label::LinearDepth]);
+    let rig = renderer.register_batch(BatchDesc::new("rig", size).with_label_planes(planes))?;
     let (center, radius) = (bounds.center(), bounds.half_extents().length().max(1e-3) * 2.5);
     // Where the adapter can, the cameras cull on the GPU: the whole rig in
     // one dispatch, and nothing per camera for the CPU to emit.
@@ -156,10 +159,8 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
         let desc = ViewDesc::new(camera).named(format!("cam{index:03}")).with_visibility(visibility);
         renderer.add_camera(rig, desc)?;
     }
-    renderer.stream_batch(rig, Some(StreamOptions { instances: true, ..Default::default() }))?;
-    // Segmentation: each instance label's node's class.
-    let classes: std::collections::HashMap<u32, u32> =
-        scene.nodes().map(|(key, node)| (oxygen::core::scene::node_index(key) + 1, node.semantic_class)).collect();
+    let stream = StreamOptions { depth: false, semantic: true, linear_depth: true, ..Default::default() };
+    renderer.stream_batch(rig, Some(stream))?;
     println!(
         "{}: {} cameras of {}x{} in one batch on {}",
         file.display(),
@@ -183,11 +184,9 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
                 if let Some(color) = &camera.color {
                     color.save(stem.with_extension("color.png"))?;
                 }
-                if let (Some(depth), Ok(view)) = (&camera.depth, renderer.read_depth(camera.view)) {
-                    // Linear metres from the device depth of the stream.
-                    let linear = oxygen::DepthImage { depth: depth.clone(), ..view }.linear();
-                    let mm =
-                        linear.iter().map(|d| if d.is_finite() { (d * 1000.0).clamp(0.0, 65535.0) as u16 } else { 0 });
+                if let Some(linear) = &camera.linear_depth {
+                    // Metres to millimetres; 0 (nothing drawn) stays 0.
+                    let mm = linear.iter().map(|d| (d * 1000.0).clamp(0.0, 65535.0) as u16);
                     let image = oxygen::image::ImageBuffer::<oxygen::image::Luma<u16>, _>::from_raw(
                         size.x,
                         size.y,
@@ -196,9 +195,8 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
                     .ok_or("depth image size")?;
                     image.save(stem.with_extension("depth.png"))?;
                 }
-                if let Some(instances) = &camera.instances {
-                    let class = |label: &u32| classes.get(label).copied().unwrap_or(0).min(u32::from(u16::MAX)) as u16;
-                    let values: Vec<u16> = instances.iter().map(class).collect();
+                if let Some(classes) = &camera.semantic {
+                    let values: Vec<u16> = classes.iter().map(|c| (*c).min(u32::from(u16::MAX)) as u16).collect();
                     let image =
                         oxygen::image::ImageBuffer::<oxygen::image::Luma<u16>, _>::from_raw(size.x, size.y, values)
                             .ok_or("segmentation image size")?;
