@@ -47,7 +47,9 @@
 //! `BATCH_BENCH_IN_FLIGHT=N` streams through a ring of N staging buffers
 //! (`StreamOptions::frames_in_flight`, default 2);
 //! `BATCH_BENCH_PLANES=color,depth,instances` picks what the batch streams
-//! (all three by default). `BATCH_BENCH_FLOOR_RECORD=raster_floor.jsonl`
+//! (those three by default; `semantic` and `linear_depth` are the GPU's
+//! class and distance planes), and the batch draws only the label planes
+//! it streams. `BATCH_BENCH_FLOOR_RECORD=raster_floor.jsonl`
 //! compares each line's GPU time with the vertex floor of its draws (the
 //! frame's draws × the per-cube time of that file's last `raster_floor`
 //! run on this adapter, its storage-pulled line): run `raster_floor` on
@@ -67,6 +69,7 @@ use std::time::Instant;
 
 use oxygen::batch::{BatchDesc, StreamOptions, StreamedFrame};
 use oxygen::glam::{Quat, Vec4};
+use oxygen::gpu::{Label, LabelSet};
 use oxygen::prelude::*;
 use oxygen::sceneprep::Visibility;
 use oxygen_demo::record::{Record, Row};
@@ -144,6 +147,8 @@ fn streamed_bytes(frames: &[StreamedFrame]) -> u64 {
         camera.color.as_ref().map_or(0, |c| c.len() as u64)
             + camera.depth.as_ref().map_or(0, |d| 4 * d.len() as u64)
             + camera.instances.as_ref().map_or(0, |i| 4 * i.len() as u64)
+            + camera.semantic.as_ref().map_or(0, |i| 4 * i.len() as u64)
+            + camera.linear_depth.as_ref().map_or(0, |i| 4 * i.len() as u64)
     };
     frames.iter().flat_map(|f| &f.cameras).map(camera_bytes).sum()
 }
@@ -179,12 +184,12 @@ fn run(
         return Err(format!("{} cannot run GPU visibility", renderer.gpu().describe()).into());
     }
     let mut ids = Vec::with_capacity(views);
-    // With readback every camera also draws labels, whose instance ids
-    // are read back with its colour and depth.
+    // With readback every camera also draws the label planes streamed
+    // (the lone views: instance ids), read back with its colour and depth.
     let batch = match mode {
         Mode::Batch => {
             let desc = BatchDesc::new("ring", size);
-            let desc = if readback { desc.with_labels() } else { desc };
+            let desc = if readback { desc.with_label_planes(streamed_labels(&planes)) } else { desc };
             let desc = match max_page_side {
                 Some(side) => desc.with_max_page_side(side),
                 None => desc,
@@ -196,7 +201,8 @@ fn run(
     for i in 0..views {
         let camera = ring_camera(i, views, side, size)?;
         let desc = ViewDesc::new(camera).with_visibility(visibility);
-        let desc = if readback && batch.is_none() { desc.with_labels() } else { desc };
+        let desc =
+            if readback && batch.is_none() { desc.with_label_planes(LabelSet::of(&[Label::Instance])) } else { desc };
         ids.push(match batch {
             Some(batch) => renderer.add_camera(batch, desc)?,
             None => renderer.register_view(desc, standard_render_graph)?,
@@ -380,7 +386,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     "color" => planes.color = true,
                     "depth" => planes.depth = true,
                     "instances" => planes.instances = true,
-                    other => return Err(format!("BATCH_BENCH_PLANES: {other}? use color, depth, instances").into()),
+                    "semantic" => planes.semantic = true,
+                    "linear_depth" => planes.linear_depth = true,
+                    other => {
+                        return Err(format!(
+                            "BATCH_BENCH_PLANES: {other}? use color, depth, instances, semantic, linear_depth"
+                        )
+                        .into());
+                    }
                 }
             }
             planes
@@ -410,7 +423,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .value("target_budget_bytes", options.target_budget_bytes)
         .value("max_page_side", max_page_side)
         .value("frames_in_flight", in_flight)
-        .value("streamed_planes", [planes.color, planes.depth, planes.instances].map(u8::from));
+        .value(
+            "streamed_planes",
+            [planes.color, planes.depth, planes.instances, planes.semantic, planes.linear_depth].map(u8::from),
+        );
     println!("adapter: {} {}", adapter.name, adapter.driver_info);
     println!(
         "| path | V | CPU ms | prepare ms | record ms | frame ms | GPU ms | view-frames/s | back to back vf/s | read MB/s |"
@@ -512,4 +528,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     record.write()?;
     Ok(())
+}
+
+/// The label planes a batch draws to stream `planes`: only those.
+fn streamed_labels(planes: &StreamOptions) -> LabelSet {
+    let wanted = [
+        (planes.instances, Label::Instance),
+        (planes.semantic, Label::Semantic),
+        (planes.linear_depth, Label::LinearDepth),
+    ];
+    wanted.into_iter().filter(|(on, _)| *on).fold(LabelSet::NONE, |set, (_, label)| set.with(label))
 }

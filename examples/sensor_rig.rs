@@ -28,8 +28,8 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use oxygen::batch::{BatchDesc, StreamOptions};
-use oxygen::gpu::{Label, LabelSet};
 use oxygen::glam::{DVec3, Quat};
+use oxygen::gpu::{Label, LabelSet};
 use oxygen::prelude::*;
 use oxygen::views::{DLookAtResolver, ViewContext, ViewError, ViewResolver};
 
