@@ -15,11 +15,15 @@ fn main() {
                 ("multi-draw-indirect count", wgpu::Features::MULTI_DRAW_INDIRECT_COUNT),
                 ("indirect first instance", wgpu::Features::INDIRECT_FIRST_INSTANCE),
                 ("timestamp queries", wgpu::Features::TIMESTAMP_QUERY),
+                ("multiview", wgpu::Features::MULTIVIEW),
             ];
             for (name, feature) in wanted {
                 println!("  {name:<28} {}", if f.contains(feature) { "yes" } else { "no" });
             }
             println!("  max storage buffer binding   {} bytes", gpu.device.limits().max_storage_buffer_binding_size);
+            // Why a batch is an atlas and not multiview (docs/performance.md):
+            // the views one multiview pass can draw.
+            println!("  max multiview views          {}", gpu.adapter.limits().max_multiview_view_count);
         }
         Err(e) => {
             eprintln!("{e}");
