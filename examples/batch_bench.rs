@@ -142,15 +142,15 @@ fn span_ms_per_frame(spans: &SpanTimes, frames: usize) -> Vec<(&'static str, f64
 }
 
 /// Bytes of every camera image of `frames`.
-fn streamed_bytes(frames: &[StreamedFrame]) -> u64 {
-    let camera_bytes = |camera: &oxygen::batch::StreamedCamera| {
-        camera.color.as_ref().map_or(0, |c| c.len() as u64)
-            + camera.depth.as_ref().map_or(0, |d| 4 * d.len() as u64)
-            + camera.instances.as_ref().map_or(0, |i| 4 * i.len() as u64)
-            + camera.semantic.as_ref().map_or(0, |i| 4 * i.len() as u64)
-            + camera.linear_depth.as_ref().map_or(0, |i| 4 * i.len() as u64)
-    };
-    frames.iter().flat_map(|f| &f.cameras).map(camera_bytes).sum()
+/// Bytes of `frames`' images, handing each back to `renderer` (its buffers
+/// take a later frame, as a stream reader should).
+fn streamed_bytes(renderer: &mut Renderer, frames: Vec<StreamedFrame>) -> u64 {
+    let mut bytes = 0;
+    for frame in frames {
+        bytes += frame.bytes();
+        renderer.recycle_streamed(frame);
+    }
+    bytes
 }
 
 fn median(values: &[f64]) -> f64 {
@@ -238,7 +238,10 @@ fn run(
         let mut bytes = 0u64;
         if readback {
             match batch {
-                Some(_) => bytes += streamed_bytes(&renderer.wait_streamed()?),
+                Some(_) => {
+                    let frames = renderer.wait_streamed()?;
+                    bytes += streamed_bytes(&mut renderer, frames);
+                }
                 None => {
                     for id in &ids {
                         bytes += renderer.read_color(*id)?.len() as u64;
@@ -272,11 +275,13 @@ fn run(
         for _ in 0..frames {
             renderer.render_frame(scene)?;
             if readback {
-                streamed_bytes(&renderer.take_streamed()?);
+                let frames = renderer.take_streamed()?;
+                streamed_bytes(&mut renderer, frames);
             }
         }
         if readback {
-            streamed_bytes(&renderer.wait_streamed()?);
+            let frames = renderer.wait_streamed()?;
+            streamed_bytes(&mut renderer, frames);
         }
         renderer.gpu().device.poll(wgpu::PollType::wait_indefinitely())?;
         result.pipelined_per_second = (views * frames) as f64 / start.elapsed().as_secs_f64();

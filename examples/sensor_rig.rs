@@ -178,13 +178,13 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
             println!("  frame {frame}: {warning}");
         }
         for streamed in renderer.wait_streamed()? {
-            for camera in &streamed.cameras {
+            for camera in streamed.cameras() {
                 let name = renderer.view_name(camera.view).unwrap_or("camera").to_owned();
                 let stem = out.join(format!("{name}_f{:04}", streamed.frame));
-                if let Some(color) = &camera.color {
+                if let Some(color) = camera.color_image() {
                     color.save(stem.with_extension("color.png"))?;
                 }
-                if let Some(linear) = &camera.linear_depth {
+                if let Some(linear) = camera.linear_depth {
                     // Metres to millimetres; 0 (nothing drawn) stays 0.
                     let mm = linear.iter().map(|d| (d * 1000.0).clamp(0.0, 65535.0) as u16);
                     let image = oxygen::image::ImageBuffer::<oxygen::image::Luma<u16>, _>::from_raw(
@@ -195,7 +195,7 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
                     .ok_or("depth image size")?;
                     image.save(stem.with_extension("depth.png"))?;
                 }
-                if let Some(classes) = &camera.semantic {
+                if let Some(classes) = camera.semantic {
                     let values: Vec<u16> = classes.iter().map(|c| (*c).min(u32::from(u16::MAX)) as u16).collect();
                     let image =
                         oxygen::image::ImageBuffer::<oxygen::image::Luma<u16>, _>::from_raw(size.x, size.y, values)
@@ -204,6 +204,8 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
                 }
                 written += 3;
             }
+            // Its buffers take a later frame: no fresh memory per frame.
+            renderer.recycle_streamed(streamed);
         }
         let seconds = started.elapsed().as_secs_f64();
         println!(
