@@ -255,9 +255,6 @@ impl Renderer {
         // Lets finished readbacks (frame times, GPU overdraw estimates)
         // report in; never waits.
         let _ = self.gpu.device.poll(wgpu::PollType::Poll);
-        // Streamed frames that arrived are cut on threads of their own
-        // while this frame prepares and records.
-        self.streams.start_cuts()?;
         let gpu_seconds = self.frames.gpu_timer.as_mut().and_then(gpu_timer::GpuTimer::collect);
         let resolved = self.resolve(scene, clock);
         let mut prepared = self.prepare(scene, resolved, started)?;

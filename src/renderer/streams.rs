@@ -12,13 +12,13 @@
 //! ([`Renderer::recycle_streamed`]) lend their buffers to later frames.
 //! With `frames_in_flight` buffers a result arrives at most that many
 //! frames after its frame (one on an idle GPU); when every buffer is still
-//! in flight, the next frame waits for the oldest one (its copy alone, not
-//! the frames submitted since) and moves its images into memory (the
-//! ring's back-pressure), so nothing is dropped: what the application has
-//! not taken waits for it there. A frame that has arrived is cut on a
-//! thread of its own (itself cutting on every core), started as the next
-//! frame begins or when the application takes it: the cut of a
-//! thousand-camera frame overlaps the next frame's preparing and recording.
+//! taken, the next frame waits for the oldest one and moves its images into
+//! memory (the ring's back-pressure), so nothing is dropped: what the
+//! application has not taken waits for it there. Each frame on its way has
+//! a thread of its own that polls the device (without blocking it) until
+//! its copy lands, then cuts it on every core: the cut of a
+//! thousand-camera frame starts the moment its copy is done and overlaps
+//! the next frames' preparing and recording.
 
 use std::collections::{BTreeMap, VecDeque};
 use std::sync::Arc;
@@ -193,28 +193,24 @@ impl StreamedFrame {
 /// rendered, with their tiles.
 pub(crate) type RenderedBatches<'a> = BTreeMap<BatchId, (&'a TileAtlas, Vec<(ViewId, Tile)>)>;
 
-/// Where a staging buffer stands.
-const FREE: u8 = 0;
+/// Where a staging buffer's mapping stands.
 const MAPPING: u8 = 1;
 const MAPPED: u8 = 2;
 const FAILED: u8 = 3;
 
-/// One staging buffer of a ring and the frame it holds.
+/// One staging buffer of a ring.
 struct Slot {
     buffer: wgpu::Buffer,
-    state: Arc<AtomicU8>,
-    /// What the buffer holds once mapped.
-    content: Option<SlotContent>,
+    /// It holds a frame on its way (or not yet taken from its arrival).
+    busy: bool,
 }
 
+/// What a staging buffer holds: a frame's pages, and whose they are.
 struct SlotContent {
     frame: u64,
     time_seconds: f32,
     layout: PageLayout,
     cameras: Vec<(ViewId, Tile)>,
-    /// The submission of its copy: what waiting for this slot waits for
-    /// (not the frames submitted since, which keep the GPU busy meanwhile).
-    submission: wgpu::SubmissionIndex,
 }
 
 /// One image of a page in a staging buffer; every plane has 4-byte texels.
@@ -281,19 +277,17 @@ impl PageLayout {
     }
 }
 
-/// A frame's images being cut out of their staging buffer on a thread of
-/// their own (the buffer stays mapped, and its slot taken, until joined).
-type Cut = std::thread::JoinHandle<Result<StreamedFrame, RenderError>>;
+/// A frame on its way: a thread that waits for its copy to land, then cuts
+/// it (the buffer stays mapped, and its slot taken, until joined).
+type Arrival = std::thread::JoinHandle<Result<StreamedFrame, RenderError>>;
 
 /// One batch's ring.
 struct Ring {
     options: StreamOptions,
+    /// Staging buffers, each free or holding one frame's arrival.
     slots: Vec<Slot>,
-    /// Slot indices in the order their frames were submitted, until their
-    /// images arrive.
-    in_flight: VecDeque<usize>,
-    /// Arrived frames being cut, oldest first, with their slots.
-    cutting: VecDeque<(usize, Cut)>,
+    /// The slots' arrivals, oldest first.
+    arriving: VecDeque<(usize, Arrival)>,
     /// Plane buffers of frames handed back, to cut later frames into.
     spare: Spare,
 }
@@ -321,8 +315,9 @@ impl Streams {
     }
 
     /// Copies each streaming batch's pages of the frame just submitted
-    /// into a free staging buffer and starts mapping it. `rendered` holds,
-    /// per batch, its atlas and the cameras that rendered with their tiles.
+    /// into a free staging buffer, starts mapping it and starts the thread
+    /// that cuts it as soon as it lands. `rendered` holds, per batch, its
+    /// atlas and the cameras that rendered with their tiles.
     pub(crate) fn after_submit(
         &mut self,
         gpu: &oxygen_gpu::GpuContext,
@@ -336,7 +331,7 @@ impl Streams {
             }
             let _span = info_span!("stream_copy", batch = %batch, cameras = cameras.len()).entered();
             let layout = PageLayout::of(atlas, &ring.options);
-            let slot = ring.free_slot(gpu, *batch, layout.bytes(), &mut self.pending)?;
+            let slot = ring.free_slot(gpu, layout.bytes(), &mut self.pending)?;
             let buffer = &ring.slots[slot].buffer;
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
             let size = wgpu::Extent3d { width: layout.width, height: layout.height, depth_or_array_layers: 1 };
@@ -371,152 +366,119 @@ impl Streams {
                     );
                 }
             }
-            let submission = gpu.queue.submit([encoder.finish()]);
-            let state = Arc::clone(&ring.slots[slot].state);
-            state.store(MAPPING, Ordering::Release);
+            gpu.queue.submit([encoder.finish()]);
+            let state = Arc::new(AtomicU8::new(MAPPING));
+            let mapped = Arc::clone(&state);
             buffer.slice(..layout.bytes()).map_async(wgpu::MapMode::Read, move |result| {
-                state.store(if result.is_ok() { MAPPED } else { FAILED }, Ordering::Release);
+                mapped.store(if result.is_ok() { MAPPED } else { FAILED }, Ordering::Release);
             });
-            let cameras = cameras.clone();
-            ring.slots[slot].content =
-                Some(SlotContent { frame: clock.index, time_seconds: clock.time_seconds, layout, cameras, submission });
-            ring.in_flight.push_back(slot);
+            let content =
+                SlotContent { frame: clock.index, time_seconds: clock.time_seconds, layout, cameras: cameras.clone() };
+            let planes = Planes::for_layout(&layout, cameras.len(), &mut ring.spare);
+            let (device, buffer, batch) = (gpu.device.clone(), buffer.clone(), *batch);
+            let arrival = std::thread::Builder::new()
+                .name("oxygen-stream".into())
+                .spawn(move || arrive(&device, &state, &buffer, content, planes, batch))
+                .map_err(|e| RenderError::Unsupported(format!("starting a thread to stream {batch}'s images: {e}")))?;
+            ring.arriving.push_back((slot, arrival));
         }
         Ok(())
     }
 
     /// The frames that have arrived and been cut, oldest first (per batch
-    /// in frame order); `wait` waits for every frame in flight and its cut
-    /// first.
+    /// in frame order); `wait` waits for every frame on its way first.
     pub(crate) fn take(&mut self, gpu: &oxygen_gpu::GpuContext, wait: bool) -> Result<Vec<StreamedFrame>, RenderError> {
         let _span = info_span!("stream_take", wait).entered();
-        let poll = if wait { wgpu::PollType::wait_indefinitely() } else { wgpu::PollType::Poll };
         {
+            // The arrivals poll for themselves; this delivers any mapping
+            // whose callback is due on this thread too.
             let _span = info_span!("stream_poll").entered();
-            gpu.device.poll(poll).map_err(oxygen_gpu::GpuError::from)?;
+            gpu.device.poll(wgpu::PollType::Poll).map_err(oxygen_gpu::GpuError::from)?;
         }
         let mut arrived = std::mem::take(&mut self.pending);
-        for (batch, ring) in &mut self.rings {
-            ring.start_cuts(*batch)?;
-            // Without waiting, only the cuts already done: one still
-            // running is taken next time.
-            while ring.cutting.front().is_some_and(|(_, cut)| wait || cut.is_finished()) {
-                ring.join_oldest_cut(&mut arrived)?;
+        for ring in self.rings.values_mut() {
+            // Without waiting, only the frames already cut: one still on
+            // its way is taken next time.
+            while ring.arriving.front().is_some_and(|(_, a)| wait || a.is_finished()) {
+                ring.join_oldest(&mut arrived)?;
             }
         }
         arrived.sort_by_key(|f| (f.frame, f.batch));
         Ok(arrived)
     }
+}
 
-    /// Starts cutting every frame that has arrived, each on a thread of
-    /// its own, without waiting: the renderer calls it as a frame begins,
-    /// so the cutting overlaps the frame's CPU work.
-    pub(crate) fn start_cuts(&mut self) -> Result<(), RenderError> {
-        for (batch, ring) in &mut self.rings {
-            ring.start_cuts(*batch)?;
+/// How often an arrival looks whether its copy has landed.
+const ARRIVAL_POLL: std::time::Duration = std::time::Duration::from_micros(200);
+
+/// Waits for `buffer`'s mapping (`state`), polling `device` without
+/// blocking it (a blocking poll could hold the device from the thread that
+/// records the next frame), then cuts the frame.
+fn arrive(
+    device: &wgpu::Device,
+    state: &AtomicU8,
+    buffer: &wgpu::Buffer,
+    content: SlotContent,
+    planes: Planes,
+    batch: BatchId,
+) -> Result<StreamedFrame, RenderError> {
+    {
+        let _span = info_span!("stream_wait_copy", batch = %batch, frame = content.frame).entered();
+        loop {
+            match state.load(Ordering::Acquire) {
+                MAPPED => break,
+                FAILED => return Err(RenderError::Gpu(oxygen_gpu::GpuError::from(wgpu::BufferAsyncError))),
+                _ => {}
+            }
+            device.poll(wgpu::PollType::Poll).map_err(oxygen_gpu::GpuError::from)?;
+            if state.load(Ordering::Acquire) == MAPPING {
+                std::thread::sleep(ARRIVAL_POLL);
+            }
         }
-        Ok(())
     }
+    cut(buffer, content, planes, batch)
 }
 
 impl Ring {
     fn new(options: StreamOptions) -> Self {
-        Ring {
-            options,
-            slots: Vec::new(),
-            in_flight: VecDeque::new(),
-            cutting: VecDeque::new(),
-            spare: Spare::default(),
-        }
+        Ring { options, slots: Vec::new(), arriving: VecDeque::new(), spare: Spare::default() }
     }
 
-    /// Whether the oldest frame in flight has arrived (a failed mapping
-    /// is an error, its buffer freed).
-    fn oldest_arrived(&mut self) -> Result<bool, RenderError> {
-        let Some(&slot) = self.in_flight.front() else { return Ok(false) };
-        match self.slots[slot].state.load(Ordering::Acquire) {
-            MAPPED => Ok(true),
-            FAILED => {
-                self.in_flight.pop_front();
-                self.slots[slot].content = None;
-                self.slots[slot].state.store(FREE, Ordering::Release);
-                Err(RenderError::Gpu(oxygen_gpu::GpuError::from(wgpu::BufferAsyncError)))
-            }
-            _ => Ok(false),
-        }
-    }
-
-    /// Starts cutting the frames that have arrived, oldest first, each on
-    /// a thread of its own (which cuts on every core and unmaps).
-    fn start_cuts(&mut self, batch: BatchId) -> Result<(), RenderError> {
-        while self.oldest_arrived()? {
-            let Some(slot) = self.in_flight.pop_front() else { break };
-            let Some(content) = self.slots[slot].content.take() else {
-                // An arrived slot always holds a frame; one that does not is freed.
-                self.slots[slot].state.store(FREE, Ordering::Release);
-                continue;
-            };
-            let buffer = self.slots[slot].buffer.clone();
-            let planes = Planes::for_layout(&content.layout, content.cameras.len(), &mut self.spare);
-            let cut = std::thread::Builder::new()
-                .name("oxygen-stream-cut".into())
-                .spawn(move || cut(&buffer, content, planes, batch))
-                .map_err(|e| RenderError::Unsupported(format!("starting a thread to cut {batch}'s images: {e}")))?;
-            self.cutting.push_back((slot, cut));
-        }
-        Ok(())
-    }
-
-    /// Waits for the oldest cut, adds its frame to `out` and frees its
-    /// slot (returned); `None` when nothing is being cut. A failed cut's
-    /// slot is freed too; a panicking cut is re-raised here.
-    fn join_oldest_cut(&mut self, out: &mut Vec<StreamedFrame>) -> Result<Option<usize>, RenderError> {
-        let Some((slot, cut)) = self.cutting.pop_front() else { return Ok(None) };
-        let frame = cut.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
-        self.slots[slot].state.store(FREE, Ordering::Release);
+    /// Waits for the oldest arrival, adds its frame to `out` and frees its
+    /// slot (returned); `None` when nothing is on its way. A failed
+    /// arrival's slot is freed too; a panicking one is re-raised here.
+    fn join_oldest(&mut self, out: &mut Vec<StreamedFrame>) -> Result<Option<usize>, RenderError> {
+        let Some((slot, arrival)) = self.arriving.pop_front() else { return Ok(None) };
+        let frame = arrival.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+        self.slots[slot].busy = false;
         out.push(frame?);
         Ok(Some(slot))
     }
 
     /// A slot free to take a frame of `bytes`: an unused one, a new one
-    /// while the ring has room, or else the oldest in flight, waited for
+    /// while the ring has room, or else the oldest on its way, waited for
     /// and moved into `pending`. Its buffer grows when the batch did.
     fn free_slot(
         &mut self,
         gpu: &oxygen_gpu::GpuContext,
-        batch: BatchId,
         bytes: u64,
         pending: &mut Vec<StreamedFrame>,
     ) -> Result<usize, RenderError> {
-        let free = self.slots.iter().enumerate().position(|(i, s)| {
-            s.state.load(Ordering::Acquire) == FREE && s.content.is_none() && !self.cutting.iter().any(|(c, _)| *c == i)
-        });
-        let slot = match free {
+        let slot = match self.slots.iter().position(|s| !s.busy) {
             Some(slot) => slot,
             None if (self.slots.len() as u32) < self.options.frames_in_flight.max(1) => {
                 self.slots.push(Slot::new(gpu, bytes));
                 self.slots.len() - 1
             }
             None => {
-                let _span = info_span!("stream_wait", batch = %batch).entered();
-                self.start_cuts(batch)?;
-                if self.cutting.is_empty() {
-                    // Waits for the oldest frame's copy alone: the frame
-                    // just submitted keeps the GPU busy meanwhile.
-                    let oldest = *self.in_flight.front().ok_or(RenderError::Gpu(wgpu::BufferAsyncError.into()))?;
-                    let submission = self.slots[oldest].content.as_ref().map(|c| c.submission.clone());
-                    while !self.oldest_arrived()? {
-                        let wait = wgpu::PollType::Wait { submission_index: submission.clone(), timeout: None };
-                        gpu.device.poll(wait).map_err(oxygen_gpu::GpuError::from)?;
-                    }
-                    self.start_cuts(batch)?;
-                }
-                self.join_oldest_cut(pending)?.ok_or(RenderError::Gpu(wgpu::BufferAsyncError.into()))?
+                let _span = info_span!("stream_wait").entered();
+                self.join_oldest(pending)?.ok_or(RenderError::Gpu(wgpu::BufferAsyncError.into()))?
             }
         };
         if self.slots[slot].buffer.size() < bytes {
             self.slots[slot] = Slot::new(gpu, bytes);
         }
+        self.slots[slot].busy = true;
         Ok(slot)
     }
 }
@@ -529,7 +491,7 @@ impl Slot {
             usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
             mapped_at_creation: false,
         });
-        Slot { buffer, state: Arc::new(AtomicU8::new(FREE)), content: None }
+        Slot { buffer, busy: false }
     }
 }
 
