@@ -15,8 +15,8 @@
 //! taken, the next frame waits for the oldest one and moves its images into
 //! memory (the ring's back-pressure), so nothing is dropped: what the
 //! application has not taken waits for it there. Each frame on its way has
-//! a thread of its own that polls the device (without blocking it) until
-//! its copy lands, then cuts it on every core: the cut of a
+//! a thread of its own that waits for its copy to land, then cuts it on
+//! every core: the cut of a
 //! thousand-camera frame starts the moment its copy is done and overlaps
 //! the next frames' preparing and recording.
 
@@ -366,7 +366,7 @@ impl Streams {
                     );
                 }
             }
-            gpu.queue.submit([encoder.finish()]);
+            let submission = gpu.queue.submit([encoder.finish()]);
             let state = Arc::new(AtomicU8::new(MAPPING));
             let mapped = Arc::clone(&state);
             buffer.slice(..layout.bytes()).map_async(wgpu::MapMode::Read, move |result| {
@@ -378,7 +378,7 @@ impl Streams {
             let (device, buffer, batch) = (gpu.device.clone(), buffer.clone(), *batch);
             let arrival = std::thread::Builder::new()
                 .name("oxygen-stream".into())
-                .spawn(move || arrive(&device, &state, &buffer, content, planes, batch))
+                .spawn(move || arrive(&device, submission, &state, &buffer, content, planes, batch))
                 .map_err(|e| RenderError::Unsupported(format!("starting a thread to stream {batch}'s images: {e}")))?;
             ring.arriving.push_back((slot, arrival));
         }
@@ -408,14 +408,13 @@ impl Streams {
     }
 }
 
-/// How often an arrival looks whether its copy has landed.
-const ARRIVAL_POLL: std::time::Duration = std::time::Duration::from_micros(200);
-
-/// Waits for `buffer`'s mapping (`state`), polling `device` without
-/// blocking it (a blocking poll could hold the device from the thread that
-/// records the next frame), then cuts the frame.
+/// Waits for the copy (`submission`) and `buffer`'s mapping (`state`),
+/// then cuts the frame. The wait blocks this thread only: wgpu's wait holds
+/// no lock that the thread recording the next frame needs (its submissions
+/// share the device's resource lock for reading).
 fn arrive(
     device: &wgpu::Device,
+    submission: wgpu::SubmissionIndex,
     state: &AtomicU8,
     buffer: &wgpu::Buffer,
     content: SlotContent,
@@ -430,10 +429,10 @@ fn arrive(
                 FAILED => return Err(RenderError::Gpu(oxygen_gpu::GpuError::from(wgpu::BufferAsyncError))),
                 _ => {}
             }
-            device.poll(wgpu::PollType::Poll).map_err(oxygen_gpu::GpuError::from)?;
-            if state.load(Ordering::Acquire) == MAPPING {
-                std::thread::sleep(ARRIVAL_POLL);
-            }
+            // Delivers the mapping once the copy is done (the callback may
+            // also run in another thread's poll: the loop then ends too).
+            let wait = wgpu::PollType::Wait { submission_index: Some(submission.clone()), timeout: None };
+            device.poll(wait).map_err(oxygen_gpu::GpuError::from)?;
         }
     }
     cut(buffer, content, planes, batch)
