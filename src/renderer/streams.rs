@@ -288,8 +288,9 @@ struct Ring {
     slots: Vec<Slot>,
     /// The slots' arrivals, oldest first.
     arriving: VecDeque<(usize, Arrival)>,
-    /// Plane buffers of frames handed back, to cut later frames into.
-    spare: Spare,
+    /// Plane buffers of frames handed back, to cut later frames into
+    /// (shared with the arrivals, which take them).
+    spare: Arc<std::sync::Mutex<Spare>>,
 }
 
 /// The streams of every streaming batch.
@@ -374,11 +375,10 @@ impl Streams {
             });
             let content =
                 SlotContent { frame: clock.index, time_seconds: clock.time_seconds, layout, cameras: cameras.clone() };
-            let planes = Planes::for_layout(&layout, cameras.len(), &mut ring.spare);
-            let (device, buffer, batch) = (gpu.device.clone(), buffer.clone(), *batch);
+            let (device, buffer, batch, spare) = (gpu.device.clone(), buffer.clone(), *batch, Arc::clone(&ring.spare));
             let arrival = std::thread::Builder::new()
                 .name("oxygen-stream".into())
-                .spawn(move || arrive(&device, submission, &state, &buffer, content, planes, batch))
+                .spawn(move || arrive(&device, submission, &state, &buffer, content, &spare, batch))
                 .map_err(|e| RenderError::Unsupported(format!("starting a thread to stream {batch}'s images: {e}")))?;
             ring.arriving.push_back((slot, arrival));
         }
@@ -418,7 +418,7 @@ fn arrive(
     state: &AtomicU8,
     buffer: &wgpu::Buffer,
     content: SlotContent,
-    planes: Planes,
+    spare: &std::sync::Mutex<Spare>,
     batch: BatchId,
 ) -> Result<StreamedFrame, RenderError> {
     {
@@ -435,12 +435,19 @@ fn arrive(
             device.poll(wait).map_err(oxygen_gpu::GpuError::from)?;
         }
     }
+    // The planes are taken now, not when the copy was recorded: frames
+    // handed back meanwhile lend their buffers, and a fresh one's pages
+    // are touched here, off the recording thread.
+    let planes = {
+        let mut spare = spare.lock().unwrap_or_else(|e| e.into_inner());
+        Planes::for_layout(&content.layout, content.cameras.len(), &mut spare)
+    };
     cut(buffer, content, planes, batch)
 }
 
 impl Ring {
     fn new(options: StreamOptions) -> Self {
-        Ring { options, slots: Vec::new(), arriving: VecDeque::new(), spare: Spare::default() }
+        Ring { options, slots: Vec::new(), arriving: VecDeque::new(), spare: Arc::default() }
     }
 
     /// Waits for the oldest arrival, adds its frame to `out` and frees its
@@ -528,12 +535,17 @@ impl Spare {
 }
 
 /// A buffer of `len` elements for a plane: a spare one when there is (its
-/// old contents are overwritten), else a new one.
+/// old contents are overwritten), else a new one, zeroed by the allocator
+/// (`vec!` of zeros asks for zeroed memory: fresh pages, not a fill).
 fn plane_buffer<T: Copy + Default>(pile: &mut Vec<Vec<T>>, len: usize) -> Vec<T> {
-    let mut buffer = pile.pop().unwrap_or_default();
-    buffer.resize(len, T::default());
-    buffer.truncate(len);
-    buffer
+    match pile.pop() {
+        Some(mut buffer) => {
+            buffer.resize(len, T::default());
+            buffer.truncate(len);
+            buffer
+        }
+        None => vec![T::default(); len],
+    }
 }
 
 /// The buffers one frame is cut into, taken from the spares.
@@ -714,7 +726,7 @@ impl Renderer {
     /// Frames of a batch no longer streamed are dropped.
     pub fn recycle_streamed(&mut self, frame: StreamedFrame) {
         if let Some(ring) = self.streams.rings.get_mut(&frame.batch) {
-            ring.spare.keep(frame);
+            ring.spare.lock().unwrap_or_else(|e| e.into_inner()).keep(frame);
         }
     }
 
