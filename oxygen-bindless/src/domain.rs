@@ -112,12 +112,17 @@ impl DomainKind {
 
     /// The shader stages that read the domain. Kept tight so each stage stays
     /// within `max_storage_buffers_per_shader_stage` (4 vertex, 6 fragment).
+    /// The fragment stage reads a draw's record (its material and node) and
+    /// its normal record (the node's semantic class) through the draw's index,
+    /// the one flat varying the vertex stage passes on.
     pub const fn visibility(self) -> wgpu::ShaderStages {
         match self {
-            DomainKind::DrawMetadata
-            | DomainKind::WorldTransforms
-            | DomainKind::NormalTransforms
-            | DomainKind::Vertices => wgpu::ShaderStages::VERTEX.union(wgpu::ShaderStages::COMPUTE),
+            DomainKind::DrawMetadata | DomainKind::NormalTransforms => {
+                wgpu::ShaderStages::VERTEX.union(wgpu::ShaderStages::FRAGMENT).union(wgpu::ShaderStages::COMPUTE)
+            }
+            DomainKind::WorldTransforms | DomainKind::Vertices => {
+                wgpu::ShaderStages::VERTEX.union(wgpu::ShaderStages::COMPUTE)
+            }
             // Only the reference tracer (a compute shader) reads the ray scene.
             DomainKind::BvhNodes | DomainKind::RayWords | DomainKind::RayInstances => wgpu::ShaderStages::COMPUTE,
             _ => wgpu::ShaderStages::FRAGMENT.union(wgpu::ShaderStages::COMPUTE),

@@ -367,10 +367,11 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Der
 // through a stale range).
 fn opaque_color(mesh: MeshVarying, front_facing: bool) -> vec4<f32> {
     let d = derivatives_of(mesh);
-    if mesh.material == INVALID_SLOT {
+    let handle = material_handle_of(mesh);
+    if handle == INVALID_SLOT {
         return output_color(STALE_DRAW_COLOR.rgb);
     }
-    let shaded = shade(mesh, front_facing, material_of(mesh), d);
+    let shaded = shade(mesh, front_facing, material_at(handle), d);
     return output_color(fit_hdr(shaded.rgb));
 }
 
@@ -378,10 +379,11 @@ fn opaque_color(mesh: MeshVarying, front_facing: bool) -> vec4<f32> {
 // Called first thing by its entry points: derivatives in uniform control flow.
 fn masked_color(mesh: MeshVarying, front_facing: bool) -> vec4<f32> {
     let d = derivatives_of(mesh);
-    if mesh.material == INVALID_SLOT {
+    let handle = material_handle_of(mesh);
+    if handle == INVALID_SLOT {
         return output_color(STALE_DRAW_COLOR.rgb);
     }
-    let material = material_of(mesh);
+    let material = material_at(handle);
     let shaded = shade(mesh, front_facing, material, d);
     if shaded.a < material.alpha_cutoff {
         discard;
@@ -429,10 +431,11 @@ fn fs_masked_labelled(mesh: MeshVarying, @builtin(front_facing) front_facing: bo
 @fragment
 fn fs_blend(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> @location(0) vec4<f32> {
     let d = derivatives_of(mesh);
-    if mesh.material == INVALID_SLOT {
+    let handle = material_handle_of(mesh);
+    if handle == INVALID_SLOT {
         return STALE_DRAW_COLOR;
     }
-    let shaded = shade(mesh, front_facing, material_of(mesh), d);
+    let shaded = shade(mesh, front_facing, material_at(handle), d);
     let alpha = clamp(shaded.a, 0.0, 1.0);
     // Premultiplied and at most HDR_MAX × alpha, so blending over a target
     // texel of at most HDR_MAX stays at most HDR_MAX.

@@ -24,5 +24,9 @@ fn labels_of(mesh: MeshVarying, front_facing: bool) -> Labels {
     }
     // The camera looks down its view space's −z.
     let linear_depth = -(scene.camera.view * vec4<f32>(mesh.world_position, 1.0)).z;
-    return Labels(mesh.node + 1u, vec4<f32>(n, 1.0), mesh.semantic_class, bitcast<u32>(linear_depth));
+    // The node and its class come from the draw (the class in the padding
+    // lane of the node's normal record), not from varyings: see MeshVarying.
+    let draw = draw_of(mesh);
+    let semantic = normal_transform_domain[scene.renderer.normal_transforms_slot + draw.transform_index].semantic_class;
+    return Labels(draw.node_id + 1u, vec4<f32>(n, 1.0), semantic, bitcast<u32>(linear_depth));
 }

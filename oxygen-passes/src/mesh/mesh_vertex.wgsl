@@ -18,15 +18,14 @@ struct MeshVarying {
     @location(0) world_position: vec3<f32>,
     @location(1) world_normal: vec3<f32>,
     @location(2) uv: vec2<f32>,
-    @location(3) @interpolate(flat) material: u32,
+    // The draw's index in the view's draws: the fragment stage reads its
+    // DrawMetadata again for the material and the labels. One flat varying
+    // for all of them, because in vertex-bound work every varying costs
+    // (two more for the labels cost an H200 a fifth of a batch's frame).
+    @location(3) @interpolate(flat) draw: u32,
     // Vertex colour (white without COLOR_0) and the second UV set.
     @location(4) color: vec4<f32>,
     @location(5) uv1: vec2<f32>,
-    // The node that drew it (DrawMetadata.node_id), for the labels pass.
-    @location(6) @interpolate(flat) node: u32,
-    // Its semantic class (the padding lane of its normal record), for the
-    // labels' semantic plane.
-    @location(7) @interpolate(flat) semantic_class: u32,
 }
 
 @vertex
@@ -87,9 +86,7 @@ fn vs_main(@builtin(vertex_index) vertex_index: u32, @builtin(instance_index) dr
     out.world_position = world_position.xyz;
     out.world_normal = world_normal;
     out.uv = vec2<f32>(v.u, v.v);
-    out.material = draw.material_handle;
-    out.node = draw.node_id;
-    out.semantic_class = normal_transform_domain[scene.renderer.normal_transforms_slot + draw.transform_index].semantic_class;
+    out.draw = draw_index;
     // Attribute records run parallel to the geometry's vertices (stored as
     // VertexRecords: colour in px..nx, the second UV set in ny, nz).
     out.color = vec4<f32>(1.0);
@@ -99,19 +96,35 @@ fn vs_main(@builtin(vertex_index) vertex_index: u32, @builtin(instance_index) dr
         out.color = vec4<f32>(a.px, a.py, a.pz, a.nx);
         out.uv1 = vec2<f32>(a.ny, a.nz);
     }
-    // Debug mode: a draw read through a stale or foreign range carries
-    // another generation; flag it (the fragment stages paint it magenta).
+    return out;
+}
+
+// The draw a fragment belongs to.
+fn draw_of(mesh: MeshVarying) -> DrawMetadata {
+    return draw_metadata_domain[scene.renderer.draw_metadata_slot + mesh.draw];
+}
+
+// The draw's material handle, or INVALID_SLOT in debug mode for a draw read
+// through a stale or foreign range (it carries another generation): the
+// fragment stages paint it magenta.
+fn material_handle_of(mesh: MeshVarying) -> u32 {
+    let draw = draw_of(mesh);
     let checking = (scene.renderer.debug_flags & DEBUG_GENERATIONS) != 0u;
     if checking && draw.generation != scene.renderer.draw_metadata_generation {
-        out.material = INVALID_SLOT;
+        return INVALID_SLOT;
     }
-    return out;
+    return draw.material_handle;
 }
 
 const STALE_DRAW_COLOR: vec4<f32> = vec4<f32>(1.0, 0.0, 1.0, 1.0);
 
 fn material_of(mesh: MeshVarying) -> MaterialRecord {
-    if mesh.material == INVALID_SLOT {
+    return material_at(material_handle_of(mesh));
+}
+
+// Material `handle`; INVALID_SLOT gives the stale-draw material.
+fn material_at(handle: u32) -> MaterialRecord {
+    if handle == INVALID_SLOT {
         // A flagged draw: an opaque, untextured, unlit magenta material.
         var stale: MaterialRecord;
         stale.base_color = STALE_DRAW_COLOR;
@@ -126,7 +139,7 @@ fn material_of(mesh: MeshVarying) -> MaterialRecord {
         stale.occlusion_strength = 1.0;
         return stale;
     }
-    return material_domain[scene.renderer.materials_slot + mesh.material];
+    return material_domain[scene.renderer.materials_slot + handle];
 }
 
 // Screen derivatives of both UV sets, taken by the caller in uniform
