@@ -153,7 +153,7 @@ impl LabelTargets {
 
     /// The labels these targets hold.
     pub fn set(&self) -> LabelSet {
-        LabelSet::of(&Label::ALL.into_iter().filter(|l| self.plane(*l).is_some()).collect::<Vec<_>>())
+        Label::ALL.into_iter().filter(|l| self.plane(*l).is_some()).fold(LabelSet::NONE, LabelSet::with)
     }
 
     /// Bytes a pixel of these planes takes.

@@ -250,9 +250,11 @@ impl PageLayout {
             row_bytes,
             color: options.color,
             depth: options.depth,
-            labels: LabelSet::of(
-                &options.label_planes().iter().filter(|l| atlas.labels().contains(*l)).collect::<Vec<_>>(),
-            ),
+            labels: options
+                .label_planes()
+                .iter()
+                .filter(|l| atlas.labels().contains(*l))
+                .fold(LabelSet::NONE, LabelSet::with),
         }
     }
 
