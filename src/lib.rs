@@ -44,6 +44,7 @@ mod gltf_import;
 pub mod graph;
 mod probes;
 mod renderer;
+pub mod schedule;
 mod shadows;
 pub mod views;
 pub mod windows;

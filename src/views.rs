@@ -15,6 +15,8 @@ use oxygen_bindless::SlotAllocators;
 use oxygen_core::{CascadeSettings, Scene};
 use oxygen_core::{Output, OutputSource, ProbeId, ProbeIds};
 use oxygen_gpu::LabelSet;
+
+use crate::schedule::Schedule;
 use oxygen_sceneprep::{PreparedSceneFrame, ScenePrep, ViewPrepOptions, ViewRequest, Visibility};
 
 use crate::RenderError;
@@ -39,6 +41,7 @@ pub struct ViewDesc {
     pub(crate) msaa: oxygen_gpu::Msaa,
     pub(crate) name: Option<String>,
     pub(crate) labels: LabelSet,
+    pub(crate) schedule: Schedule,
 }
 
 /// Where a view renders.
@@ -66,6 +69,7 @@ impl ViewDesc {
             msaa: oxygen_gpu::Msaa::Off,
             name: None,
             labels: LabelSet::NONE,
+            schedule: Schedule::EveryFrame,
         }
     }
 
@@ -86,6 +90,16 @@ impl ViewDesc {
     /// [`ViewDesc::with_labels`]): a view pays only for what it reads.
     pub fn with_label_planes(mut self, planes: LabelSet) -> Self {
         self.labels = planes;
+        self
+    }
+
+    /// When the view renders ([`Schedule`]; every frame by default). A
+    /// view that does not render in a frame keeps its last images, and the
+    /// views linked to it read them. Registration refuses a schedule that
+    /// cannot be kept (every 0th frame, a rate that is not a positive
+    /// number) and, for now, any but every frame on a batch camera.
+    pub fn with_schedule(mut self, schedule: Schedule) -> Self {
+        self.schedule = schedule;
         self
     }
 
@@ -194,6 +208,7 @@ pub(crate) struct ViewEntry {
     pub(crate) msaa: oxygen_gpu::Msaa,
     pub(crate) name: Option<String>,
     pub(crate) labels: LabelSet,
+    pub(crate) schedule: Schedule,
 }
 
 /// The registered views and the links between them; no GPU needed.
@@ -243,6 +258,9 @@ impl Views {
     /// names a view or probe that is not registered.
     pub fn register(&mut self, desc: impl Into<ViewDesc>, graph: impl RenderGraph) -> Result<ViewId, RenderError> {
         let desc = desc.into();
+        if let Some(reason) = desc.schedule.problem() {
+            return Err(RenderError::InvalidSchedule { view: None, reason });
+        }
         if !desc.labels.is_empty() && (desc.msaa != oxygen_gpu::Msaa::Off || desc.options.depth_only) {
             return Err(RenderError::Unsupported(
                 "labels (ViewDesc::with_labels) on a multisampled or depth-only view".into(),
@@ -283,6 +301,7 @@ impl Views {
                 msaa: desc.msaa,
                 name: desc.name,
                 labels: desc.labels,
+                schedule: desc.schedule,
             },
         );
         tracing::info!(view = %id, name = ?self.name(id), "view registered");
@@ -391,6 +410,10 @@ impl Views {
             Some("a window rectangle")
         } else if desc.options.ray_scene {
             Some("a path-traced reference")
+        } else if desc.schedule != Schedule::EveryFrame {
+            // Its page's render pass clears every tile it draws into: an
+            // idle camera's tile would not keep its image.
+            Some("a schedule other than every frame (not yet)")
         } else {
             None
         };
@@ -468,6 +491,24 @@ impl Views {
         for entry in self.entries.values_mut() {
             entry.links.retain(|l| *l != OutputSource::View(id));
         }
+        Ok(())
+    }
+
+    /// Changes when a view renders ([`ViewDesc::with_schedule`]); refuses
+    /// what registration would refuse.
+    pub fn set_schedule(&mut self, id: impl Into<ViewId>, schedule: Schedule) -> Result<(), RenderError> {
+        let id = id.into();
+        if let Some(reason) = schedule.problem() {
+            return Err(RenderError::InvalidSchedule { view: Some(id), reason });
+        }
+        let batches = &self.batches;
+        let entry = self.entries.get_mut(&id).ok_or(RenderError::NoSuchView(id))?;
+        if let (TargetKind::Tile { batch, .. }, false) = (entry.target, schedule == Schedule::EveryFrame) {
+            let name = batches.get(&batch).map_or_else(String::new, |b| b.name.clone());
+            let reason = "a batch camera cannot have a schedule other than every frame (not yet)".into();
+            return Err(RenderError::InvalidBatch { name, reason });
+        }
+        entry.schedule = schedule;
         Ok(())
     }
 

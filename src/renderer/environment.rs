@@ -33,6 +33,7 @@ impl Renderer {
         quality: EnvironmentQuality,
     ) {
         self.lighting.set_environment(&self.gpu.device, &self.gpu.queue, environment, quality);
+        self.schedules.environment_changed();
     }
 
     /// [`Renderer::set_environment`] with an environment prefiltered on
@@ -40,6 +41,7 @@ impl Renderer {
     /// the GPU's is tested against), uploaded as it is.
     pub fn set_prefiltered_environment(&mut self, environment: Option<&oxygen_core::PrefilteredEnvironment>) {
         self.lighting.set_prefiltered_environment(&self.gpu.device, &self.gpu.queue, environment);
+        self.schedules.environment_changed();
     }
 
     /// Reads the environment back as the GPU holds it (the prefiltered

@@ -128,6 +128,14 @@ pub enum RenderError {
         /// `max_texture_dimension_2d`.
         limit: u32,
     },
+    /// A view's schedule cannot be kept ([`crate::schedule::Schedule::problem`]).
+    #[error("the schedule of {}: {reason}", view.map_or_else(|| "a new view".to_string(), |v| v.to_string()))]
+    InvalidSchedule {
+        /// The view, when it was registered already.
+        view: Option<ViewId>,
+        /// What is wrong.
+        reason: String,
+    },
     /// A batch or one of its cameras cannot be registered as asked.
     #[error("batch {name:?}: {reason}")]
     InvalidBatch {

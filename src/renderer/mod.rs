@@ -39,6 +39,7 @@ mod reference;
 mod registration;
 mod report;
 mod resolve;
+mod schedules;
 mod shadows;
 mod streams;
 mod targets;
@@ -96,6 +97,7 @@ pub struct Renderer {
     reference: Reference,
     windows: Windows,
     streams: streams::Streams,
+    schedules: schedules::Schedules,
     settings: FrameSettings,
     frames: Frames,
 }
@@ -116,10 +118,12 @@ struct Frames {
 }
 
 impl Frames {
-    /// The next frame's clock.
-    fn next(&mut self) -> FrameClock {
+    /// The next frame's clock: at `time` seconds, or the wall-clock time
+    /// since the renderer started.
+    fn next(&mut self, time: Option<f64>) -> FrameClock {
         self.count += 1;
-        FrameClock { index: self.count, time_seconds: self.started.elapsed().as_secs_f32() }
+        let time_seconds = time.map_or_else(|| self.started.elapsed().as_secs_f32(), |t| t as f32);
+        FrameClock { index: self.count, time_seconds }
     }
 }
 
@@ -228,6 +232,7 @@ impl Renderer {
             reference: Reference::default(),
             windows: Windows::new(&gpu.device),
             streams: streams::Streams::new(&downlevel),
+            schedules: schedules::Schedules::default(),
             settings: FrameSettings {
                 draw_path,
                 origin: options.origin,
@@ -249,7 +254,26 @@ impl Renderer {
     /// prepare (ScenePrep, upload, targets), record every view's graph
     /// concurrently and submit in link order, present the windows.
     pub fn render_frame(&mut self, scene: &Scene) -> Result<FrameReport, RenderError> {
-        let clock = self.frames.next();
+        self.render_frame_timed(scene, None)
+    }
+
+    /// [`Renderer::render_frame`] at frame time `time_seconds` instead of
+    /// the wall clock: what resolvers are told and what
+    /// [`Schedule::Rate`](crate::schedule::Schedule::Rate) counts in (a
+    /// simulation's time, so that sensor rates and animations follow it,
+    /// not the machine's speed). Fails, rendering nothing, for a time that
+    /// is not finite.
+    pub fn render_frame_at(&mut self, scene: &Scene, time_seconds: f64) -> Result<FrameReport, RenderError> {
+        if !time_seconds.is_finite() {
+            return Err(RenderError::Unsupported(format!(
+                "a frame at {time_seconds} seconds: the time must be finite"
+            )));
+        }
+        self.render_frame_timed(scene, Some(time_seconds))
+    }
+
+    fn render_frame_timed(&mut self, scene: &Scene, time: Option<f64>) -> Result<FrameReport, RenderError> {
+        let clock = self.frames.next(time);
         let _span = info_span!("render_frame", frame = clock.index).entered();
         let started = Instant::now();
         // Lets finished readbacks (frame times, GPU overdraw estimates)
@@ -265,6 +289,11 @@ impl Renderer {
         let recorded = recorded?;
         self.stream(&recorded, clock)?;
         self.targets.hold(&recorded.rendered);
+        for view in &prepared.views {
+            if prepared.why.contains_key(&view.id) {
+                self.schedules.rendered(view.id, clock, &view.world);
+            }
+        }
         let presented = self.present(&recorded);
         let report = FrameReport::new(prepared, recorded, presented, gpu_seconds);
         self.frames.last = report.views.iter().map(|r| (r.view, r.role)).collect();

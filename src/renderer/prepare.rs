@@ -6,7 +6,7 @@
 //! output, [`PreparedFrame`], is every view of the frame complete: nothing
 //! after it changes a view.
 
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -22,6 +22,7 @@ use super::targets::{BatchPlan, atlas_layers};
 use super::{FrameWarning, RenderError, Renderer, ViewRole};
 use crate::batch::BatchId;
 use crate::graph::ErasedGraph;
+use crate::schedule::{IdleView, RenderReason, Schedule};
 use crate::shadows::{ShadowRole, shadow_view_options};
 
 /// Where a view of this frame renders.
@@ -78,6 +79,10 @@ pub(crate) struct PreparedFrame {
     pub(crate) seconds: f64,
     /// Bytes written into GPU buffers.
     pub(crate) uploaded_bytes: u64,
+    /// Why each registered view of the frame renders (its schedule).
+    pub(crate) why: HashMap<ViewId, RenderReason>,
+    /// The registered views the schedules left idle, and why.
+    pub(crate) idle: Vec<IdleView>,
 }
 
 impl FrameView {
@@ -148,6 +153,19 @@ impl Renderer {
         let origin = self.settings.origin.resolve(followed);
         self.prep.set_render_origin(origin);
         let frame = self.prep.begin_frame(scene, &mut self.heap.slots)?;
+        // Which views render (their schedules), before any is culled.
+        let entries = &self.views.entries;
+        let probes = &self.views.probes;
+        let (kept, idle) = self.schedules.decide(
+            clock,
+            scene,
+            frame,
+            registered,
+            |id| entries.get(&id).map_or((Schedule::EveryFrame, None), |e| (e.schedule, e.name.clone())),
+            |probe| probes.get(&probe).map(|faces| faces.to_vec()).unwrap_or_default(),
+        );
+        let why: HashMap<ViewId, RenderReason> = kept.iter().map(|(v, reason)| (v.id, *reason)).collect();
+        let registered: Vec<ResolvedFrameView> = kept.into_iter().map(|(v, _)| v).collect();
 
         let owners: Vec<_> = registered
             .iter()
@@ -264,6 +282,8 @@ impl Renderer {
             skipped_nodes,
             seconds,
             uploaded_bytes,
+            why,
+            idle,
         })
     }
 }

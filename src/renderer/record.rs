@@ -352,6 +352,8 @@ impl Renderer {
                     recorded: stats,
                     prep_seconds: frames[i].prep_seconds() as f64,
                     record_seconds: busy.as_secs_f64(),
+                    // Filled in from the schedules' decisions (FrameReport::new).
+                    why: None,
                 });
             }
         }

@@ -97,7 +97,31 @@ impl Renderer {
     /// Frees a view's slots, targets and constants.
     pub(crate) fn release_view(&mut self, id: ViewId) -> Result<(), RenderError> {
         self.targets.release(id);
+        self.schedules.forget(id);
         self.prep.forget_view(id, &mut self.heap.slots)?;
+        Ok(())
+    }
+
+    /// Changes when `id` renders ([`crate::ViewDesc::with_schedule`]), from
+    /// the next frame on. Refuses what registration would refuse.
+    pub fn set_schedule(
+        &mut self,
+        id: impl Into<ViewId>,
+        schedule: crate::schedule::Schedule,
+    ) -> Result<(), RenderError> {
+        self.views.set_schedule(id, schedule)
+    }
+
+    /// Asks `id` to render in the next frame whatever its schedule (how
+    /// [`Schedule::Once`](crate::schedule::Schedule::Once) and
+    /// [`Schedule::OnDemand`](crate::schedule::Schedule::OnDemand) views
+    /// render again). Fails for a view that is not registered.
+    pub fn request_render(&mut self, id: impl Into<ViewId>) -> Result<(), RenderError> {
+        let id = id.into();
+        if !self.views.entries.contains_key(&id) {
+            return Err(RenderError::NoSuchView(id));
+        }
+        self.schedules.request(id);
         Ok(())
     }
 

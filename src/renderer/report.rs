@@ -72,6 +72,10 @@ pub struct ViewReport {
     /// Seconds its graph's future spent being polled (recording), not
     /// counting the time it waited for pipelines or other views.
     pub record_seconds: f64,
+    /// Why it rendered this frame (its [`crate::schedule::Schedule`]); `None`
+    /// for the views the renderer makes itself (shadows, probe faces follow
+    /// their owners).
+    pub why: Option<crate::schedule::RenderReason>,
 }
 
 /// Something a frame left out. One bad object or view costs only itself: the
@@ -164,6 +168,9 @@ pub struct FrameReport {
     pub uploaded_bytes: u64,
     /// Windows composed and presented (offscreen ones composed).
     pub windows_presented: usize,
+    /// The registered views this frame left idle by their schedules, and
+    /// why ([`crate::schedule::IdleReason`]); each keeps its last images.
+    pub idle: Vec<crate::schedule::IdleView>,
     /// GPU time of a recent frame's views (from a timestamp before its
     /// first command buffer to one after its last), read back without
     /// waiting, so one or two frames old; `None` before the first readback
@@ -185,9 +192,14 @@ impl FrameReport {
         let mut warnings = prepared.warnings;
         warnings.extend(presented.warnings);
         warnings.extend(prepared.skipped_nodes);
+        let mut views = recorded.reports;
+        for view in &mut views {
+            view.why = prepared.why.get(&view.view).copied();
+        }
         FrameReport {
             frame_index: prepared.clock.index,
-            views: recorded.reports,
+            views,
+            idle: prepared.idle,
             prepare_seconds: prepared.seconds,
             record_seconds: recorded.seconds,
             record_threads: recorded.threads,

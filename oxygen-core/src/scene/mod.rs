@@ -117,6 +117,9 @@ pub enum SceneError {
 pub struct Scene {
     id: u64,
     revision: u64,
+    /// The revision of the newest edit of a scene-wide asset (a geometry,
+    /// material or texture), which no node's revision records.
+    assets_revision: u64,
     nodes: SlotMap<NodeKey, Node>,
     roots: Vec<NodeKey>,
     geometries: SlotMap<GeometryHandle, Arc<Geometry>>,
@@ -130,6 +133,7 @@ impl Default for Scene {
         Scene {
             id: NEXT_SCENE_ID.fetch_add(1, Ordering::Relaxed),
             revision: 1,
+            assets_revision: 1,
             nodes: SlotMap::with_key(),
             roots: Vec::new(),
             geometries: SlotMap::with_key(),
@@ -155,6 +159,19 @@ impl Scene {
         self.revision
     }
 
+    /// The revision of the newest edit of a scene-wide asset (a geometry,
+    /// material or texture added, a material replaced): what no node's own
+    /// revision ([`Node::revision`]) records.
+    pub fn assets_revision(&self) -> u64 {
+        self.assets_revision
+    }
+
+    /// Records an edit of a scene-wide asset.
+    fn touch_assets(&mut self) {
+        self.revision += 1;
+        self.assets_revision = self.revision;
+    }
+
     /// Records an edit of `key` (its transform, flags, parent or
     /// attachments): the node and every ancestor learn that their subtree changed.
     fn touch(&mut self, key: NodeKey) {
@@ -173,13 +190,13 @@ impl Scene {
 
     /// Adds a geometry asset.
     pub fn add_geometry(&mut self, geometry: Geometry) -> GeometryHandle {
-        self.revision += 1;
+        self.touch_assets();
         self.geometries.insert(Arc::new(geometry))
     }
 
     /// Adds a material asset (sanitized: NaN and out-of-range values fixed).
     pub fn add_material(&mut self, material: Material) -> MaterialHandle {
-        self.revision += 1;
+        self.touch_assets();
         self.materials.insert(material.sanitized())
     }
 
@@ -188,13 +205,13 @@ impl Scene {
     pub fn set_material(&mut self, handle: MaterialHandle, material: Material) -> Result<(), SceneError> {
         let slot = self.materials.get_mut(handle).ok_or(SceneError::NoSuchMaterial(handle))?;
         *slot = material.sanitized();
-        self.revision += 1;
+        self.touch_assets();
         Ok(())
     }
 
     /// Adds a texture asset.
     pub fn add_texture(&mut self, texture: TextureImage) -> TextureHandle {
-        self.revision += 1;
+        self.touch_assets();
         self.textures.insert(Arc::new(texture))
     }
 

@@ -141,6 +141,12 @@ pub struct Node {
 }
 
 impl Node {
+    /// The scene revision of this node's last own edit (its transform,
+    /// flags, parent, renderable, light, skin, morph weights, class).
+    pub fn revision(&self) -> u64 {
+        self.revision
+    }
+
     pub(super) fn new(name: String, parent: Option<NodeKey>, local: Transform) -> Self {
         Node {
             name,

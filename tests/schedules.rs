@@ -1,0 +1,251 @@
+//! Views on a schedule ([`oxygen::schedule`]): a view every Nth frame, at a
+//! rate, once, on demand or "when changed" renders exactly then, keeps its
+//! last image in between (and views linked to it read that image), and the
+//! frame report says why each view rendered or stayed idle.
+
+mod support;
+
+use oxygen::glam::Vec4;
+use oxygen::prelude::*;
+use oxygen::schedule::{Change, IdleReason, RenderReason, Schedule};
+use oxygen::{FrameReport, RenderError};
+
+/// Whether `view` rendered in the frame `report` describes, and why.
+fn why(report: &FrameReport, view: ViewId) -> Option<RenderReason> {
+    report.views.iter().find(|v| v.view == view).and_then(|v| v.why)
+}
+
+/// Why `view` stayed idle in that frame, if it did.
+fn idle(report: &FrameReport, view: ViewId) -> Option<IdleReason> {
+    report.idle.iter().find(|v| v.view == view).map(|v| v.reason)
+}
+
+/// Moves the demo's first cube to height `y` (it is in front of the main
+/// camera).
+fn lift(demo: &mut oxygen_demo::DemoScene, y: f32) {
+    let at = Transform::from_translation(Vec3::new(0.0, y, 0.0));
+    demo.scene.set_local_transform(demo.cubes[0], at).unwrap();
+}
+
+#[test]
+fn every_third_frame_renders_on_frames_one_four_seven_and_keeps_its_image_between() {
+    let mut demo = oxygen_demo::multi_view_scene();
+    let mut renderer = support::gpu_renderer();
+    let size = UVec2::new(64, 48);
+    let every = renderer.register_view(oxygen_demo::main_camera(size), standard_render_graph).unwrap();
+    let third = renderer
+        .register_view(
+            ViewDesc::new(oxygen_demo::main_camera(size)).with_schedule(Schedule::EveryNth(3)),
+            standard_render_graph,
+        )
+        .unwrap();
+    let mut rendered = Vec::new();
+    let mut last_image = None;
+    for frame in 1..=7u64 {
+        // Something moves every frame: an idle view would show it if it rendered.
+        lift(&mut demo, 0.5 + frame as f32 * 0.3);
+        let report = renderer.render_frame(&demo.scene).unwrap();
+        assert_eq!(why(&report, every), Some(RenderReason::EveryFrame));
+        let image = renderer.read_color(third).unwrap();
+        match why(&report, third) {
+            Some(reason) => {
+                rendered.push(frame);
+                let want = if frame == 1 { RenderReason::FirstFrame } else { RenderReason::Due };
+                assert_eq!(reason, want, "frame {frame}");
+                // It shows this frame's scene: the every-frame view's picture.
+                assert_eq!(image, renderer.read_color(every).unwrap(), "frame {frame}: rendered now");
+            }
+            None => {
+                let next = [4, 7, 10].into_iter().find(|f| *f > frame).unwrap();
+                assert_eq!(idle(&report, third), Some(IdleReason::NotDue { next_frame: next }), "frame {frame}");
+                assert_eq!(Some(&image), last_image.as_ref(), "frame {frame}: its last image, unchanged");
+                assert_ne!(image, renderer.read_color(every).unwrap(), "frame {frame}: the scene moved since");
+            }
+        }
+        last_image = Some(image);
+    }
+    assert_eq!(rendered, [1, 4, 7]);
+}
+
+#[test]
+fn a_rate_renders_at_its_rate_of_frame_time() {
+    let demo = oxygen_demo::multi_view_scene();
+    let mut renderer = support::gpu_renderer();
+    let sensor = ViewDesc::new(oxygen_demo::main_camera(UVec2::new(32, 24))).with_schedule(Schedule::Rate(30.0));
+    let sensor = renderer.register_view(sensor, standard_render_graph).unwrap();
+    // 100 frames a second for one second: a 30 Hz sensor renders 30 times,
+    // at the first frame at or after each thirtieth of a second.
+    let mut times = Vec::new();
+    for i in 0..100 {
+        let t = f64::from(i) * 0.01;
+        let report = renderer.render_frame_at(&demo.scene, t).unwrap();
+        if why(&report, sensor).is_some() {
+            times.push(t);
+        } else {
+            assert!(matches!(idle(&report, sensor), Some(IdleReason::RateNotDue { .. })), "{t}");
+        }
+    }
+    assert_eq!(times.len(), 30, "{times:?}");
+    for (k, t) in times.iter().enumerate() {
+        let due = k as f64 / 30.0;
+        assert!(*t >= due - 1e-6 && *t < due + 0.01 + 1e-6, "render {k} at {t}, due at {due}");
+    }
+    // A bad rate is refused, with the reason.
+    let bad = ViewDesc::new(oxygen_demo::main_camera(UVec2::new(8, 8))).with_schedule(Schedule::Rate(0.0));
+    let refused = renderer.register_view(bad, standard_render_graph);
+    assert!(
+        matches!(&refused, Err(RenderError::InvalidSchedule { reason, .. }) if reason.contains("rate")),
+        "{refused:?}"
+    );
+    assert!(renderer.set_schedule(sensor, Schedule::EveryNth(0)).is_err());
+}
+
+#[test]
+fn once_and_on_demand_render_when_asked() {
+    let mut demo = oxygen_demo::multi_view_scene();
+    let mut renderer = support::gpu_renderer();
+    let size = UVec2::new(32, 24);
+    let once = ViewDesc::new(oxygen_demo::main_camera(size)).with_schedule(Schedule::Once);
+    let once = renderer.register_view(once, standard_render_graph).unwrap();
+    let asked = ViewDesc::new(oxygen_demo::main_camera(size)).with_schedule(Schedule::OnDemand);
+    let asked = renderer.register_view(asked, standard_render_graph).unwrap();
+    let report = renderer.render_frame(&demo.scene).unwrap();
+    assert_eq!(why(&report, once), Some(RenderReason::FirstFrame));
+    assert_eq!(idle(&report, asked), Some(IdleReason::NotRequested));
+    // Never rendered: its readback says why.
+    assert!(matches!(renderer.read_color(asked), Err(RenderError::NotRendered(_))));
+    lift(&mut demo, 2.0);
+    let report = renderer.render_frame(&demo.scene).unwrap();
+    assert_eq!(idle(&report, once), Some(IdleReason::NotRequested));
+    renderer.request_render(asked).unwrap();
+    renderer.request_render(once).unwrap();
+    let report = renderer.render_frame(&demo.scene).unwrap();
+    assert_eq!(why(&report, asked), Some(RenderReason::Requested));
+    assert_eq!(why(&report, once), Some(RenderReason::Requested));
+    assert_eq!(renderer.read_color(asked).unwrap(), renderer.read_color(once).unwrap());
+    // Asked once, rendered once.
+    let report = renderer.render_frame(&demo.scene).unwrap();
+    assert_eq!(idle(&report, asked), Some(IdleReason::NotRequested));
+    renderer.unregister_view(asked).unwrap();
+    assert!(matches!(renderer.request_render(asked), Err(RenderError::NoSuchView(_))), "an unknown view");
+}
+
+#[test]
+fn when_changed_renders_for_changes_in_its_frustum_and_not_for_others() {
+    let mut demo = oxygen_demo::multi_view_scene();
+    // A box far behind the camera, outside its frustum.
+    let grey = demo.scene.add_material(Material::opaque("grey", Vec4::splat(0.5)));
+    let cube = demo.scene.add_geometry(Geometry::cube(1.0));
+    let behind = demo.scene.add_node("behind", Transform::from_translation(Vec3::new(30.0, 30.0, 60.0)));
+    demo.scene.set_renderable(behind, Renderable { geometry: cube, materials: vec![grey] }).unwrap();
+    let mut renderer = support::gpu_renderer();
+    let size = UVec2::new(48, 36);
+    let camera = oxygen_demo::main_camera(size);
+    let watcher = ViewDesc::new(camera).with_schedule(Schedule::WhenChanged);
+    let watcher = renderer.register_view(watcher, standard_render_graph).unwrap();
+    let report = renderer.render_frame(&demo.scene).unwrap();
+    assert_eq!(why(&report, watcher), Some(RenderReason::FirstFrame));
+    let report = renderer.render_frame(&demo.scene).unwrap();
+    assert_eq!(idle(&report, watcher), Some(IdleReason::Unchanged), "nothing changed");
+    // A node outside its frustum moves (and stays outside): still idle.
+    demo.scene.set_local_transform(behind, Transform::from_translation(Vec3::new(31.0, 30.0, 60.0))).unwrap();
+    let report = renderer.render_frame(&demo.scene).unwrap();
+    assert_eq!(idle(&report, watcher), Some(IdleReason::Unchanged), "a node outside moved");
+    // A node inside moves: it renders.
+    lift(&mut demo, 2.0);
+    let report = renderer.render_frame(&demo.scene).unwrap();
+    assert_eq!(why(&report, watcher), Some(RenderReason::Changed(Change::Node(demo.cubes[0]))));
+    // A node outside moves into view: it renders.
+    demo.scene.set_local_transform(behind, Transform::from_translation(Vec3::new(0.0, 0.5, 0.0))).unwrap();
+    let report = renderer.render_frame(&demo.scene).unwrap();
+    assert_eq!(why(&report, watcher), Some(RenderReason::Changed(Change::Node(behind))));
+    // A light changes: it renders.
+    demo.scene.set_light(demo.sun, Some(Light::directional(0.5))).unwrap();
+    let report = renderer.render_frame(&demo.scene).unwrap();
+    assert_eq!(why(&report, watcher), Some(RenderReason::Changed(Change::Light(demo.sun))));
+    // A material replaced: it renders.
+    demo.scene.set_material(grey, Material::opaque("red", Vec4::new(1.0, 0.0, 0.0, 1.0))).unwrap();
+    let report = renderer.render_frame(&demo.scene).unwrap();
+    assert_eq!(why(&report, watcher), Some(RenderReason::Changed(Change::Assets)));
+    let report = renderer.render_frame(&demo.scene).unwrap();
+    assert_eq!(idle(&report, watcher), Some(IdleReason::Unchanged), "settled again");
+    // Paused and resumed: the frames between were not watched.
+    renderer.set_view_active(watcher, false).unwrap();
+    renderer.render_frame(&demo.scene).unwrap();
+    renderer.set_view_active(watcher, true).unwrap();
+    let report = renderer.render_frame(&demo.scene).unwrap();
+    assert_eq!(why(&report, watcher), Some(RenderReason::Changed(Change::Unwatched)));
+    // Its camera moves (a resolver that follows a shared eye): it renders,
+    // and its picture is the moved camera's, rendered every frame.
+    renderer.unregister_view(watcher).unwrap();
+    let eye = std::sync::Arc::new(std::sync::Mutex::new(camera.eye));
+    let follows = {
+        let eye = std::sync::Arc::clone(&eye);
+        move |ctx: &oxygen::views::ViewContext, scene: &Scene| {
+            let at = *eye.lock().unwrap();
+            oxygen::views::ViewResolver::resolve(&LookAtResolver { eye: at, ..camera }, ctx, scene)
+        }
+    };
+    let watcher = renderer
+        .register_view(ViewDesc::new(follows).with_schedule(Schedule::WhenChanged), standard_render_graph)
+        .unwrap();
+    renderer.render_frame(&demo.scene).unwrap();
+    let report = renderer.render_frame(&demo.scene).unwrap();
+    assert_eq!(idle(&report, watcher), Some(IdleReason::Unchanged));
+    let moved = LookAtResolver { eye: Vec3::new(5.0, 7.0, 12.0), ..camera };
+    *eye.lock().unwrap() = moved.eye;
+    let plain = renderer.register_view(moved, standard_render_graph).unwrap();
+    let report = renderer.render_frame(&demo.scene).unwrap();
+    assert_eq!(why(&report, watcher), Some(RenderReason::Changed(Change::Camera)));
+    assert_eq!(renderer.read_color(watcher).unwrap(), renderer.read_color(plain).unwrap());
+}
+
+/// A picture-in-picture view reading an idle view sees its last image; a
+/// "when changed" reader renders when its source does.
+#[test]
+fn a_view_reading_an_idle_view_sees_its_last_image() {
+    use oxygen::passes::{CommandRecorder, CompositePass, PassError, RenderContext};
+    let demo = oxygen_demo::multi_view_scene();
+    let mut renderer = support::gpu_renderer();
+    let size = UVec2::new(48, 36);
+    let source = ViewDesc::new(oxygen_demo::main_camera(size)).with_schedule(Schedule::EveryNth(2));
+    let source = renderer.register_view(source, standard_render_graph).unwrap();
+    let graph = async move |ctx: &RenderContext<'_>, rec: &mut CommandRecorder| -> Result<(), PassError> {
+        oxygen::graph::RenderGraph::record(&standard_render_graph, ctx, rec).await?;
+        CompositePass::new(source.color(), [0.0, 0.0, 1.0, 1.0]).run(ctx, rec).await
+    };
+    let reader =
+        renderer.register_view(ViewDesc::new(oxygen_demo::side_camera(size)).reads(source.color()), graph).unwrap();
+    let watcher =
+        ViewDesc::new(oxygen_demo::side_camera(size)).reads(source.color()).with_schedule(Schedule::WhenChanged);
+    let watcher = renderer.register_view(watcher, graph).unwrap();
+    // Nothing else changes: the "when changed" reader wakes for its input alone.
+    for frame in 1..=4u64 {
+        let report = renderer.render_frame(&demo.scene).unwrap();
+        let source_rendered = why(&report, source).is_some();
+        assert_eq!(source_rendered, frame % 2 == 1, "frame {frame}");
+        // The reader composes the source's image, rendered now or kept.
+        assert_eq!(renderer.read_color(reader).unwrap(), renderer.read_color(source).unwrap(), "frame {frame}");
+        if frame > 1 {
+            if source_rendered {
+                assert_eq!(why(&report, watcher), Some(RenderReason::Changed(Change::Input(source))), "frame {frame}");
+            } else {
+                assert_eq!(idle(&report, watcher), Some(IdleReason::Unchanged), "frame {frame}");
+            }
+        }
+    }
+}
+
+#[test]
+fn a_batch_camera_refuses_a_schedule_for_now() {
+    let mut renderer = support::gpu_renderer();
+    let batch = renderer.register_batch(oxygen::batch::BatchDesc::new("wall", UVec2::new(16, 16))).unwrap();
+    let desc = ViewDesc::new(oxygen_demo::main_camera(UVec2::new(16, 16))).with_schedule(Schedule::EveryNth(2));
+    let refused = renderer.add_camera(batch, desc);
+    assert!(
+        matches!(&refused, Err(RenderError::InvalidBatch { reason, .. }) if reason.contains("schedule")),
+        "{refused:?}"
+    );
+    let camera = renderer.add_camera(batch, oxygen_demo::main_camera(UVec2::new(16, 16))).unwrap();
+    assert!(matches!(renderer.set_schedule(camera, Schedule::Once), Err(RenderError::InvalidBatch { .. })));
+}
