@@ -282,11 +282,17 @@ impl Renderer {
         let gpu_seconds = self.frames.gpu_timer.as_mut().and_then(gpu_timer::GpuTimer::collect);
         let resolved = self.resolve(scene, clock);
         let mut prepared = self.prepare(scene, resolved, started)?;
+        if let Some(timer) = &mut self.frames.gpu_timer {
+            timer.reserve_jobs(&self.gpu.device, prepared.views.len());
+        }
         let recorded = self.record(&prepared);
         // Back to ScenePrep, which reuses their buffers next frame and
         // answers `prepared_frame` until then; a failed recording too.
         self.prep.return_frames(std::mem::take(&mut prepared.frames));
         let recorded = recorded?;
+        if let (Some(timer), Some(jobs)) = (&mut self.frames.gpu_timer, recorded.timed_jobs.clone()) {
+            timer.time_jobs(jobs);
+        }
         self.stream(&recorded, clock)?;
         self.targets.hold(&recorded.rendered);
         for view in &prepared.views {
@@ -295,7 +301,12 @@ impl Renderer {
             }
         }
         let presented = self.present(&recorded);
-        let report = FrameReport::new(prepared, recorded, presented, gpu_seconds);
+        let mut report = FrameReport::new(prepared, recorded, presented, gpu_seconds);
+        if let Some(timer) = &self.frames.gpu_timer {
+            for view in &mut report.views {
+                view.gpu_seconds = timer.job_seconds(view.view);
+            }
+        }
         self.frames.last = report.views.iter().map(|r| (r.view, r.role)).collect();
         for view in &report.views {
             self.frames.skipped.remove(&view.view);

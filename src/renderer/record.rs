@@ -45,6 +45,9 @@ pub(crate) struct RenderedView {
 /// The output of the record step: the frame's command buffers are
 /// submitted.
 pub(crate) struct RecordedFrame {
+    /// The first view of each job, in job order, when the jobs wrote GPU
+    /// timestamps this frame.
+    pub(crate) timed_jobs: Option<Vec<ViewId>>,
     /// Per view, in submission order.
     pub(crate) reports: Vec<ViewReport>,
     /// What each view recorded left in its targets, in submission order.
@@ -72,6 +75,9 @@ struct Work<'a> {
     contexts: &'a [(usize, RenderContext<'a>)],
     jobs: &'a [Job],
     plan: &'a PreparedFrame,
+    /// When this frame times its jobs: job `j` writes timestamps `2j` at
+    /// its start and `2j + 1` at its end.
+    timestamps: Option<&'a wgpu::QuerySet>,
 }
 
 /// What one view's recording produced.
@@ -305,7 +311,11 @@ impl Renderer {
             producers: jobs.iter().map(|j| producers[contexts[j.members[0]].0].as_slice()).collect(),
             idle: Mutex::new(Vec::new()),
         };
-        let work = Work { contexts: &contexts, jobs: &jobs, plan };
+        // Times each job when the last frame's times have been read.
+        let timer = self.frames.gpu_timer.as_ref().filter(|t| t.ready());
+        let timestamps = timer.and_then(|t| t.job_queries(jobs.len()));
+        let work_timed = timestamps.is_some();
+        let work = Work { contexts: &contexts, jobs: &jobs, plan, timestamps };
         let job = |_thread: usize| {
             let _compiler = self.pipelines.attach_compiler();
             run_executor(&work, &queue, &results, &self.pipelines, &self.gpu.device, &progress);
@@ -354,6 +364,8 @@ impl Renderer {
                     record_seconds: busy.as_secs_f64(),
                     // Filled in from the schedules' decisions (FrameReport::new).
                     why: None,
+                    // Filled in from the timer's latest readback (render_frame).
+                    gpu_seconds: None,
                 });
             }
         }
@@ -367,20 +379,25 @@ impl Renderer {
             let Some(prefilter) = self.probes.prefilter(&self.lighting, &self.gpu.device, probe) else { continue };
             buffers.insert(at, prefilter);
         }
-        // The frame's GPU time, when the last one has been read back.
+        // The frame's GPU time, when the last one has been read back, and
+        // its jobs' when they wrote timestamps.
+        let timed_jobs: Option<Vec<ViewId>> =
+            work_timed.then(|| jobs.iter().map(|job| plan.views[contexts[job.members[0]].0].id).collect());
+        let job_count = timed_jobs.as_ref().map_or(0, Vec::len);
         let timer = self.frames.gpu_timer.as_ref().filter(|t| t.ready());
         if let Some(timer) = timer {
             buffers.insert(0, timer.start(&self.gpu.device));
-            buffers.push(timer.end(&self.gpu.device));
+            buffers.push(timer.end(&self.gpu.device, job_count));
         }
         self.gpu.queue.submit(buffers);
         if let Some(timer) = timer {
-            timer.submitted();
+            timer.submitted(job_count);
         }
         if let Some(visibility) = &self.visibility.gpu {
             visibility.after_submit();
         }
         Ok(RecordedFrame {
+            timed_jobs,
             reports,
             rendered,
             threads,
@@ -531,8 +548,12 @@ fn run_executor<'a>(
                 let views: Vec<&RenderContext<'a>> = job.members.iter().map(|m| &work.contexts[*m].1).collect();
                 let device = &views[0].gpu.device;
                 let span = info_span!("render_batch", batch = %name, cameras = views.len());
+                let timestamps = work.timestamps;
                 let future = async move {
                     let mut rec = CommandRecorder::new(device, name);
+                    if let Some(queries) = timestamps {
+                        rec.encoder().write_timestamp(queries, 2 * index as u32);
+                    }
                     // GPU visibility's first phase for every camera on a GPU
                     // path (one compute pass for the batch), before any pass
                     // reads their draws.
@@ -545,6 +566,9 @@ fn run_executor<'a>(
                     // the automatic depth pre-pass, which a batch graph does
                     // not choose per camera, and a copy and a mapping a
                     // camera are a thousand of each a frame.
+                    if let Some(queries) = timestamps {
+                        rec.encoder().write_timestamp(queries, 2 * index as u32 + 1);
+                    }
                     let (buffer, stats) = rec.finish();
                     Recorded { result, buffer, stats, busy: Duration::ZERO }
                 }
@@ -556,8 +580,12 @@ fn run_executor<'a>(
             let (i, ctx) = &work.contexts[job.members[0]];
             let view = &work.plan.views[*i];
             let graph = &*view.graph;
+            let timestamps = work.timestamps;
             let future = async move {
                 let mut rec = CommandRecorder::new(&ctx.gpu.device, &view.id.to_string());
+                if let Some(queries) = timestamps {
+                    rec.encoder().write_timestamp(queries, 2 * index as u32);
+                }
                 // GPU visibility's first phase, before any pass reads its draws.
                 if let Some(visibility) = ctx.inputs.visibility {
                     visibility.record_early(rec.encoder(), view.id);
@@ -565,6 +593,9 @@ fn run_executor<'a>(
                 let result = graph.record_boxed(ctx, &mut rec).await;
                 if let Some(visibility) = ctx.inputs.visibility {
                     visibility.record_readback(rec.encoder(), view.id);
+                }
+                if let Some(queries) = timestamps {
+                    rec.encoder().write_timestamp(queries, 2 * index as u32 + 1);
                 }
                 let (buffer, stats) = rec.finish();
                 Recorded { result, buffer, stats, busy: Duration::ZERO }

@@ -76,6 +76,13 @@ pub struct ViewReport {
     /// for the views the renderer makes itself (shadows, probe faces follow
     /// their owners).
     pub why: Option<crate::schedule::RenderReason>,
+    /// GPU time of its recording job in a recent frame (one or two frames
+    /// old, read back without waiting): its own command buffer's, from a
+    /// timestamp at its start to one at its end; for a batch's first
+    /// camera the whole batch's, `None` for its other cameras. `None` too
+    /// before the first readback and on devices without timestamps inside
+    /// encoders.
+    pub gpu_seconds: Option<f64>,
 }
 
 /// Something a frame left out. One bad object or view costs only itself: the
