@@ -108,6 +108,48 @@ fn a_scene_that_does_not_exist_lists_the_ones_that_do() {
     assert!(err.to_string().contains("Cubes.glb") && err.to_string().contains("0 ("), "{err}");
 }
 
+/// A scene is chosen by its index, the first as well as the last; an index
+/// one past the last is refused with the scenes listed, not read past the
+/// list.
+#[test]
+fn a_scene_is_chosen_by_index_and_one_past_the_last_is_refused() {
+    let json = r#"{"asset":{"version":"2.0"},"scenes":[{"name":"day","nodes":[0]},{"name":"night","nodes":[1]}],
+        "nodes":[{"name":"Sun"},{"name":"Moon"}]}"#;
+    let import = |index| {
+        let options = ImportOptions { scene: SceneChoice::Index(index), ..ImportOptions::default() };
+        oxygen::import::import_gltf_slice(&mut Scene::new(), json.as_bytes(), "sky.gltf", &options)
+    };
+    for (index, present, absent) in [(0, "Sun", "Moon"), (1, "Moon", "Sun")] {
+        let chosen = import(index).unwrap_or_else(|e| panic!("scene {index}: {e}"));
+        assert!(chosen.node(present).is_some() && chosen.node(absent).is_none(), "scene {index}");
+    }
+    let err = import(2).unwrap_err();
+    assert!(matches!(err, GltfError::NoSuchScene { .. }), "{err}");
+    assert!(err.to_string().contains("0 (day), 1 (night)"), "{err}");
+}
+
+/// KHR_lights_punctual: each light reaches its node with its own kind,
+/// colour and intensity (none of them the white directional light a
+/// `Light` starts from).
+#[test]
+fn punctual_lights_keep_their_kind_colour_and_intensity() {
+    let json = r#"{"asset":{"version":"2.0"},"extensionsUsed":["KHR_lights_punctual"],
+        "extensions":{"KHR_lights_punctual":{"lights":[
+            {"type":"point","color":[1,0.5,0.25],"intensity":3,"range":7},
+            {"type":"spot","color":[0,0.5,1],"intensity":40,"spot":{"innerConeAngle":0.25,"outerConeAngle":0.5}}]}},
+        "scene":0,"scenes":[{"nodes":[0,1]}],
+        "nodes":[{"name":"Bulb","extensions":{"KHR_lights_punctual":{"light":0}}},
+                 {"name":"Torch","extensions":{"KHR_lights_punctual":{"light":1}}}]}"#;
+    let mut scene = Scene::new();
+    let import =
+        oxygen::import::import_gltf_slice(&mut scene, json.as_bytes(), "lights.gltf", &ImportOptions::default())
+            .unwrap();
+    assert_eq!(import.lights, 2);
+    let light = |name| scene.node(import.node(name).unwrap()).unwrap().light.clone().unwrap();
+    assert_eq!(light("Bulb"), Light { color: Vec3::new(1.0, 0.5, 0.25), ..Light::point(3.0, Some(7.0)) });
+    assert_eq!(light("Torch"), Light { color: Vec3::new(0.0, 0.5, 1.0), ..Light::spot(40.0, None, 0.25, 0.5) });
+}
+
 #[test]
 fn alpha_blend_mode_test_prepared_frame_dump() {
     let mut scene = Scene::new();

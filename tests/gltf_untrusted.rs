@@ -707,6 +707,104 @@ fn max_total_bytes_bounds_the_sum() {
 }
 
 // ---------------------------------------------------------------------------
+// Transforms, bounds and skins.
+
+/// A translation or scale past `f32`'s range (1e39 reads as infinity) is
+/// imported with a warning naming its node, whichever of the two it is; a
+/// finite node gets none.
+#[test]
+fn a_non_finite_translation_or_scale_is_imported_with_a_warning_naming_its_node() {
+    let nodes = json!([
+        {"name": "far", "translation": [1e39, 0, 0]},
+        {"name": "huge", "scale": [1, 1e39, 1]},
+        {"name": "near", "translation": [1, 2, 3], "scale": [2, 2, 2]}
+    ]);
+    let (import, _) = import_memory(&with_nodes(nodes, json!([0, 1, 2]))).unwrap();
+    let warned: Vec<&str> = ["far", "huge", "near"]
+        .into_iter()
+        .filter(|n| import.warnings.iter().any(|w| w.contains(&format!("node '{n}': non-finite transform"))))
+        .collect();
+    assert_eq!(warned, ["far", "huge"], "{:?}", import.warnings);
+}
+
+/// A drawn node's bounds are its mesh's under its parent's transform, then
+/// its own: the triangle, moved up by 5, under a parent that scales by 2 and
+/// moves by 10 along x, spans (10, 10, 0) to (12, 12, 0).
+#[test]
+fn a_childs_bounds_are_its_mesh_under_its_parents_transform_then_its_own() {
+    let nodes = json!([
+        {"translation": [10, 0, 0], "scale": [2, 2, 2], "children": [1]},
+        {"translation": [0, 5, 0], "mesh": 0}
+    ]);
+    let (import, _) = import_memory(&with_nodes(nodes, json!([0]))).unwrap();
+    let bounds = import.precise_bounds.expect("the triangle is drawn");
+    let (min, max) = (bounds.min.to_array(), bounds.max.to_array());
+    assert!(min.iter().zip([10.0, 10.0, 0.0]).all(|(a, b)| (a - b).abs() < 1e-9), "{min:?}");
+    assert!(max.iter().zip([12.0, 12.0, 0.0]).all(|(a, b)| (a - b).abs() < 1e-9), "{max:?}");
+}
+
+/// The matrix that moves a point by `y` along y.
+fn lift(y: f32) -> oxygen::glam::Mat4 {
+    oxygen::glam::Mat4::from_translation(oxygen::glam::Vec3::new(0.0, y, 0.0))
+}
+
+/// The triangle drawn by node "body", skinned to "knee" then "hip" (joints
+/// listed in that order and after the mesh node). Buffer 1 holds two inverse
+/// bind matrices, `lift(-1)` and `lift(-2)` (accessor 4); the skin uses them
+/// when `matrices` is set, and the file is otherwise the same.
+fn skinned(matrices: bool) -> Value {
+    let nodes = json!([{"name": "body", "mesh": 0, "skin": 0}, {"name": "hip", "children": [2]}, {"name": "knee"}]);
+    let mut gltf = with_nodes(nodes, json!([0, 1]));
+    let bytes: Vec<u8> =
+        [lift(-1.0), lift(-2.0)].iter().flat_map(|m| m.to_cols_array()).flat_map(f32::to_le_bytes).collect();
+    let uri = data_uri("application/octet-stream", &bytes);
+    gltf["buffers"].as_array_mut().unwrap().push(json!({"byteLength": 128, "uri": uri}));
+    gltf["bufferViews"].as_array_mut().unwrap().push(json!({"buffer": 1, "byteLength": 128}));
+    let accessor = json!({"bufferView": 4, "componentType": 5126, "count": 2, "type": "MAT4"});
+    gltf["accessors"].as_array_mut().unwrap().push(accessor);
+    let mut skin = json!({"joints": [2, 1]});
+    if matrices {
+        skin["inverseBindMatrices"] = json!(4);
+    }
+    gltf["skins"] = json!([skin]);
+    gltf
+}
+
+/// A skinned node gets its skin once every node exists: the joints in the
+/// skin's order, each with its inverse bind matrix, the identity when the
+/// file gives none.
+#[test]
+fn a_skin_binds_its_joints_in_the_files_order_with_their_inverse_bind_matrices() {
+    let identity = oxygen::glam::Mat4::IDENTITY;
+    for (matrices, expected) in [(true, [lift(-1.0), lift(-2.0)]), (false, [identity, identity])] {
+        let (import, scene) = import_memory(&skinned(matrices)).unwrap();
+        let body = scene.node(import.node("body").unwrap()).unwrap();
+        let skin = body.skin.as_deref().expect("the body is skinned");
+        assert_eq!(skin.joints, [import.node("knee").unwrap(), import.node("hip").unwrap()]);
+        assert_eq!(skin.inverse_bind_matrices, expected, "matrices given: {matrices}");
+    }
+}
+
+/// Inverse bind matrices are charged to `max_total_bytes` before they are
+/// read, 64 bytes each: the skin with two costs 128 bytes more than the same
+/// skin without (the file's own bytes, charged too, aside), and a budget one
+/// byte short of the total is refused naming the skin.
+#[test]
+fn inverse_bind_matrices_are_charged_64_bytes_each_naming_the_skin() {
+    let total = |gltf: &Value| import_memory(gltf).unwrap().0.bytes_decoded;
+    let file = |gltf: &Value| serde_json::to_vec(gltf).unwrap().len() as u64;
+    let (with, without) = (skinned(true), skinned(false));
+    assert_eq!((total(&with) - file(&with)) - (total(&without) - file(&without)), 2 * 64);
+    let limits = ImportLimits { max_total_bytes: total(&with) - 1, ..Default::default() };
+    match import_memory_with(&with, limits) {
+        Err(GltfError::Limit { context, source: LimitExceeded { limit: "max_total_bytes", .. }, .. }) => {
+            assert_eq!(context, "skin 0");
+        }
+        other => panic!("expected the max_total_bytes limit, got {:?}", other.map(|(i, _)| i.bytes_decoded)),
+    }
+}
+
+// ---------------------------------------------------------------------------
 // The rest of the file.
 
 #[test]
