@@ -214,3 +214,42 @@ fn cameras_are_found_by_name() {
     assert_eq!(Some(crane.node), import.node("Crane"));
     assert!(import.camera("Tripod").is_none(), "a named camera does not answer to its node's name");
 }
+
+/// A camera's aspect ratio is a perspective camera's own, an orthographic
+/// one's `xmag / ymag` (3 / 2 here, where a product or a remainder differs).
+/// One that is zero, negative or not finite (1e39 reads as infinity) is
+/// dropped, so a view through the camera takes its viewport's, and the
+/// camera is imported without a warning: it renders.
+#[test]
+fn a_cameras_aspect_ratio_is_kept_when_positive_and_finite_and_dropped_quietly_otherwise() {
+    use serde_json::json;
+    let perspective =
+        |aspect: f64| json!({"type": "perspective", "perspective": {"yfov": 1, "znear": 0.1, "aspectRatio": aspect}});
+    let orthographic =
+        |xmag: f64| json!({"type": "orthographic", "orthographic": {"xmag": xmag, "ymag": 2, "znear": 0, "zfar": 10}});
+    let cases = [
+        (perspective(1.5), Some(1.5)),
+        (perspective(0.0), None),
+        (perspective(-2.0), None),
+        (perspective(1e39), None),
+        (orthographic(3.0), Some(1.5)),
+        (orthographic(0.0), None),
+        (orthographic(-3.0), None),
+    ];
+    let json = serde_json::to_vec(&json!({
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": (0..cases.len()).collect::<Vec<_>>()}],
+        "nodes": (0..cases.len()).map(|i| json!({"name": format!("c{i}"), "camera": i})).collect::<Vec<_>>(),
+        "cameras": cases.iter().map(|(c, _)| c.clone()).collect::<Vec<_>>(),
+    }))
+    .unwrap();
+    let mut scene = Scene::new();
+    let import =
+        oxygen::import::import_gltf_slice(&mut scene, &json, "aspects.gltf", &ImportOptions::default()).unwrap();
+    for (i, (camera, expected)) in cases.iter().enumerate() {
+        let imported = import.camera(&format!("c{i}")).expect("every camera is imported");
+        assert_eq!(imported.aspect_ratio, *expected, "{camera}");
+    }
+    assert!(import.warnings.is_empty(), "{:?}", import.warnings);
+}
