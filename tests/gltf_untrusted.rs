@@ -727,6 +727,23 @@ fn a_non_finite_translation_or_scale_is_imported_with_a_warning_naming_its_node(
     assert_eq!(warned, ["far", "huge"], "{:?}", import.warnings);
 }
 
+/// A rotation that is no usable quaternion (all zeros, or a component past
+/// `f32`'s range) becomes the identity; a usable one of another length than
+/// 1 is normalized.
+#[test]
+fn an_unusable_rotation_becomes_the_identity_and_a_long_one_is_normalized() {
+    let nodes = json!([
+        {"name": "zero", "rotation": [0, 0, 0, 0]},
+        {"name": "huge", "rotation": [1e39, 0, 0, 1]},
+        {"name": "long", "rotation": [0, 0, 2, 0]}
+    ]);
+    let (import, scene) = import_memory(&with_nodes(nodes, json!([0, 1, 2]))).unwrap();
+    let rotation = |name| scene.node(import.node(name).unwrap()).unwrap().local.rotation;
+    assert_eq!(rotation("zero"), oxygen::glam::Quat::IDENTITY);
+    assert_eq!(rotation("huge"), oxygen::glam::Quat::IDENTITY);
+    assert_eq!(rotation("long"), oxygen::glam::Quat::from_xyzw(0.0, 0.0, 1.0, 0.0));
+}
+
 /// A drawn node's bounds are its mesh's under its parent's transform, then
 /// its own: the triangle, moved up by 5, under a parent that scales by 2 and
 /// moves by 10 along x, spans (10, 10, 0) to (12, 12, 0).
