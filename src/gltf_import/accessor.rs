@@ -386,6 +386,20 @@ mod tests {
         assert!(!Semantic::Indices.allows(Type::Scalar, I16, false, true));
     }
 
+    /// Tangents are VEC4 (the fourth component is the handedness): floats,
+    /// or, with the extension only, signed normalized integers and no other.
+    #[test]
+    fn tangents_are_vec4_floats_or_quantized_signed_normalized_integers() {
+        use ComponentType::*;
+        assert!(Semantic::Tangent.allows(Type::Vec4, F32, false, false));
+        assert!(!Semantic::Tangent.allows(Type::Vec3, F32, false, false));
+        assert!(!Semantic::Tangent.allows(Type::Vec3, I16, true, true));
+        assert!(Semantic::Tangent.allows(Type::Vec4, I8, true, true));
+        assert!(!Semantic::Tangent.allows(Type::Vec4, I16, true, false), "signed normalized without the extension");
+        assert!(!Semantic::Tangent.allows(Type::Vec4, U16, true, true), "unsigned normalized");
+        assert!(!Semantic::Tangent.allows(Type::Vec4, I16, false, true), "not normalized");
+    }
+
     #[test]
     fn an_accessor_past_its_buffer_view_is_an_error_naming_it() {
         let r = root(&format!(
