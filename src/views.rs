@@ -97,7 +97,8 @@ impl ViewDesc {
     /// view that does not render in a frame keeps its last images, and the
     /// views linked to it read them. Registration refuses a schedule that
     /// cannot be kept (every 0th frame, a rate that is not a positive
-    /// number) and, for now, any but every frame on a batch camera.
+    /// number). A batch camera that does not render keeps its tile: its
+    /// page is then loaded and each rendering camera's tile cleared alone.
     pub fn with_schedule(mut self, schedule: Schedule) -> Self {
         self.schedule = schedule;
         self
@@ -410,10 +411,6 @@ impl Views {
             Some("a window rectangle")
         } else if desc.options.ray_scene {
             Some("a path-traced reference")
-        } else if desc.schedule != Schedule::EveryFrame {
-            // Its page's render pass clears every tile it draws into: an
-            // idle camera's tile would not keep its image.
-            Some("a schedule other than every frame (not yet)")
         } else {
             None
         };
@@ -501,14 +498,7 @@ impl Views {
         if let Some(reason) = schedule.problem() {
             return Err(RenderError::InvalidSchedule { view: Some(id), reason });
         }
-        let batches = &self.batches;
-        let entry = self.entries.get_mut(&id).ok_or(RenderError::NoSuchView(id))?;
-        if let (TargetKind::Tile { batch, .. }, false) = (entry.target, schedule == Schedule::EveryFrame) {
-            let name = batches.get(&batch).map_or_else(String::new, |b| b.name.clone());
-            let reason = "a batch camera cannot have a schedule other than every frame (not yet)".into();
-            return Err(RenderError::InvalidBatch { name, reason });
-        }
-        entry.schedule = schedule;
+        self.entries.get_mut(&id).ok_or(RenderError::NoSuchView(id))?.schedule = schedule;
         Ok(())
     }
 

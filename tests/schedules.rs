@@ -236,18 +236,60 @@ fn a_view_reading_an_idle_view_sees_its_last_image() {
     }
 }
 
+/// A batch camera on a schedule keeps its tile (colour and labels) while
+/// the other cameras of its page render over the moving scene; those, and
+/// it when it renders, draw exactly what the same batch draws with every
+/// camera every frame (their page cleared whole there, tile by tile here).
 #[test]
-fn a_batch_camera_refuses_a_schedule_for_now() {
-    let mut renderer = support::gpu_renderer();
-    let batch = renderer.register_batch(oxygen::batch::BatchDesc::new("wall", UVec2::new(16, 16))).unwrap();
-    let desc = ViewDesc::new(oxygen_demo::main_camera(UVec2::new(16, 16))).with_schedule(Schedule::EveryNth(2));
-    let refused = renderer.add_camera(batch, desc);
-    assert!(
-        matches!(&refused, Err(RenderError::InvalidBatch { reason, .. }) if reason.contains("schedule")),
-        "{refused:?}"
-    );
-    let camera = renderer.add_camera(batch, oxygen_demo::main_camera(UVec2::new(16, 16))).unwrap();
-    assert!(matches!(renderer.set_schedule(camera, Schedule::Once), Err(RenderError::InvalidBatch { .. })));
+fn an_idle_batch_camera_keeps_its_tile_while_the_others_render() {
+    let mut demo = oxygen_demo::multi_view_scene();
+    let size = UVec2::new(40, 30);
+    let cameras = [
+        support::looking_at_origin(50.0, Vec3::new(6.0, 7.0, 12.0), size),
+        support::looking_at_origin(50.0, Vec3::new(-9.0, 5.0, 8.0), size),
+        support::looking_at_origin(50.0, Vec3::new(10.0, 4.0, -6.0), size),
+    ];
+    // The wall under test (its second camera every other frame) and the
+    // same wall with every camera every frame.
+    let wall = |slow: Schedule| {
+        let mut renderer = support::gpu_renderer();
+        let batch = renderer.register_batch(oxygen::batch::BatchDesc::new("wall", size).with_labels()).unwrap();
+        let ids: Vec<ViewId> = cameras
+            .iter()
+            .enumerate()
+            .map(|(i, c)| {
+                let schedule = if i == 1 { slow } else { Schedule::EveryFrame };
+                renderer.add_camera(batch, ViewDesc::new(*c).with_schedule(schedule)).unwrap()
+            })
+            .collect();
+        (renderer, ids)
+    };
+    let (mut renderer, ids) = wall(Schedule::EveryNth(2));
+    let (mut reference, reference_ids) = wall(Schedule::EveryFrame);
+    let mut kept = None;
+    for frame in 1..=4u64 {
+        lift(&mut demo, 0.5 + frame as f32 * 0.4);
+        let report = renderer.render_frame(&demo.scene).unwrap();
+        reference.render_frame(&demo.scene).unwrap();
+        let images = |r: &Renderer, id: ViewId| (r.read_color(id).unwrap(), r.read_labels(id).unwrap());
+        for k in [0, 2] {
+            let same = images(&renderer, ids[k]) == images(&reference, reference_ids[k]);
+            assert!(same, "frame {frame}: camera {k} differs from the every-frame wall's");
+        }
+        let image = images(&renderer, ids[1]);
+        let now = images(&reference, reference_ids[1]);
+        if frame % 2 == 1 {
+            assert!(why(&report, ids[1]).is_some(), "frame {frame}");
+            assert!(image == now, "frame {frame}: rendered now, as the every-frame wall's");
+        } else {
+            assert_eq!(idle(&report, ids[1]), Some(IdleReason::NotDue { next_frame: frame + 1 }));
+            assert!(Some(&image) == kept.as_ref(), "frame {frame}: its tile (colour and labels) kept as it was");
+            assert!(image.0 != now.0, "frame {frame}: the scene moved since");
+        }
+        kept = Some(image);
+    }
+    // A bad schedule is refused for a batch camera as for any view.
+    assert!(matches!(renderer.set_schedule(ids[0], Schedule::EveryNth(0)), Err(RenderError::InvalidSchedule { .. })));
 }
 
 /// Each view's GPU time comes with its report (a frame or two late): a
@@ -285,10 +327,12 @@ fn each_view_reports_its_gpu_time() {
     assert_eq!(time(second), None, "a batch's time is its first camera's");
     let frame = report.gpu_seconds.expect("the frame's GPU time");
     let views: f64 = [main, side, first].into_iter().filter_map(time).sum();
-    // The views' and the frame's times come from one frame's timestamps:
-    // the jobs run one after another inside the frame, which also holds the
-    // shadow views and the timer's own work. Measured: the views 0.94 to
-    // 0.98 of the frame on lavapipe, 0.97 on GL; the lower bound is 1.5
-    // below the lowest.
-    assert!(views <= frame && views >= frame * 0.63, "views {views} s against the frame's {frame} s");
+    // The views' and the frame's times come from one frame's timestamps,
+    // and the jobs run one after another inside the frame (which also holds
+    // the shadow views and the timer's own work): together they never pass
+    // the frame's. No lower bound: on lavapipe the timestamps are the CPU's
+    // clock, and tests running beside this one stretch the frame between
+    // jobs (alone the views measured 0.94 to 0.98 of the frame, beside the
+    // other tests 0.35).
+    assert!(views <= frame, "views {views} s against the frame's {frame} s");
 }

@@ -38,6 +38,10 @@ pub struct ViewTargets {
     /// The per-pixel label planes the shading (or labels) pass writes,
     /// when the view asked for labels.
     pub labels: Option<LabelTargets>,
+    /// A tile whose page holds other tiles' images to keep this frame (a
+    /// camera of its batch that does not render): the page's passes load
+    /// it and clear this view's tile alone. Set by the renderer each frame.
+    pub page_kept: bool,
 }
 
 /// A view's rectangle in a [`TileAtlas`]: `width × height` pixels of
@@ -245,6 +249,7 @@ impl TileAtlas {
             msaa: None,
             tile: Some(tile),
             labels: page.labels.clone(),
+            page_kept: false,
         })
     }
 }
@@ -512,6 +517,7 @@ impl ViewTargets {
             msaa: None,
             tile: None,
             labels: None,
+            page_kept: false,
         }
     }
 
@@ -578,6 +584,7 @@ impl ViewTargets {
             msaa: None,
             tile: None,
             labels: None,
+            page_kept: false,
         }
     }
 }

@@ -6,7 +6,7 @@
 //! output, [`PreparedFrame`], is every view of the frame complete: nothing
 //! after it changes a view.
 
-use std::collections::{BTreeMap, BTreeSet, HashMap};
+use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -251,6 +251,15 @@ impl Renderer {
             |b| registry.batches.contains_key(&b),
             |b| registry.batch_name(b).unwrap_or("batch").to_string(),
         );
+        // Batches with a camera that does not render this frame (idle,
+        // paused or skipped): their pages keep that camera's tile.
+        let rendering: HashSet<ViewId> = views.iter().map(|v| v.id).collect();
+        let kept_batches: HashSet<BatchId> = registry
+            .batches
+            .iter()
+            .filter(|(_, entry)| entry.cameras().any(|c| !rendering.contains(&c)))
+            .map(|(batch, _)| *batch)
+            .collect();
         let constants_bytes = self.targets.allocate(
             &self.gpu,
             &self.heap,
@@ -259,6 +268,7 @@ impl Renderer {
             frames,
             atlas.as_ref(),
             clock.time_seconds,
+            &kept_batches,
         );
         drop(_targets);
         self.visibility.prepare(&self.gpu, &self.heap, &self.prep, &views, frames);

@@ -200,6 +200,7 @@ impl Targets {
         frames: &[PreparedSceneFrame],
         atlas: Option<&wgpu::Texture>,
         time_seconds: f32,
+        kept_batches: &std::collections::HashSet<BatchId>,
     ) -> u64 {
         let device = &gpu.device;
         let mut written = 0;
@@ -267,6 +268,9 @@ impl Targets {
                         });
                         if !current {
                             entry.targets = atlas.view_targets(slot);
+                        }
+                        if let Some(targets) = &mut entry.targets {
+                            targets.page_kept = kept_batches.contains(&batch);
                         }
                     }
                 }

@@ -471,3 +471,26 @@ fn fs_sky(v: SkyVarying) -> @location(0) vec4<f32> {
     let direction = normalize(unproject(v.ndc, 0.5) - unproject(v.ndc, 1.0));
     return output_color(fit_hdr(sample_environment(direction, 0.0)));
 }
+
+// A batch camera's tile cleared alone, when its atlas page keeps other
+// cameras' images this frame (the page is loaded, not cleared): a
+// full-screen triangle at the far plane (reverse-Z depth 0, written with an
+// always-passing test), scissored to the tile, writing the colour the pass
+// would have cleared to and zero labels. The colour comes in as override
+// constants (one pipeline per clear colour).
+override TILE_CLEAR_R: f32 = 0.0;
+override TILE_CLEAR_G: f32 = 0.0;
+override TILE_CLEAR_B: f32 = 0.0;
+override TILE_CLEAR_A: f32 = 0.0;
+
+@vertex
+fn vs_tile_clear(@builtin(vertex_index) index: u32) -> @builtin(position) vec4<f32> {
+    let corner = vec2<f32>(f32((index << 1u) & 2u), f32(index & 2u));
+    return vec4<f32>(corner * 2.0 - 1.0, 0.0, 1.0);
+}
+
+@fragment
+fn fs_tile_clear() -> Labelled {
+    let color = vec4<f32>(TILE_CLEAR_R, TILE_CLEAR_G, TILE_CLEAR_B, TILE_CLEAR_A);
+    return Labelled(color, 0u, vec4<f32>(0.0), 0u, 0u);
+}

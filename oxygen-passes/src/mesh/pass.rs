@@ -533,7 +533,18 @@ impl MeshPass {
         let mut stats = rec.stats;
         for (_, members) in &passes {
             let lead = views[members[0]];
-            let color = self.color_view(lead)?.map(|view| (view, self.color));
+            // A page that keeps other cameras' tiles this frame is loaded,
+            // and each camera's tile cleared alone (what the pass would
+            // clear: the colour when it clears it, depth and labels).
+            let clears = self.clear_depth || matches!(self.color, ColorOps::Clear(_) | ColorOps::ClearToneMapped(..));
+            let tile_clears = clears && lead.targets.tile.is_some() && lead.targets.page_kept;
+            let color_ops =
+                if tile_clears && !matches!(self.color, ColorOps::None) { ColorOps::Load } else { self.color };
+            let tile_clear_color = match self.color.load() {
+                wgpu::LoadOp::Clear(c) => Some([c.r, c.g, c.b, c.a].map(|v| v as f32)),
+                _ => None,
+            };
+            let color = self.color_view(lead)?.map(|view| (view, color_ops));
             // With MSAA the pass draws into the multisampled HDR target and
             // resolves it into the view's HDR target at its end (every
             // colour pass: a later one loads the samples, not the resolve).
@@ -546,14 +557,17 @@ impl MeshPass {
                 resolve_target: msaa.map(|_| view),
                 ops: wgpu::Operations { load: ops.load(), store },
             });
-            let depth_load = if self.clear_depth { wgpu::LoadOp::Clear(0.0) } else { wgpu::LoadOp::Load };
+            let depth_load =
+                if self.clear_depth && !tile_clears { wgpu::LoadOp::Clear(0.0) } else { wgpu::LoadOp::Load };
+            let labels_load =
+                if tile_clears { wgpu::LoadOp::Load } else { wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT) };
             // The labels pass writes its label planes instead.
             let label_attachments = match (&lead.targets.labels, self.kind) {
-                (Some(labels), PassKind::Labels) => label_attachments(labels),
+                (Some(labels), PassKind::Labels) => label_attachments(labels, labels_load),
                 // Shading that writes the labels too: colour, then labels.
                 (Some(labels), _) if !self.labels_in_pass(lead).is_empty() => {
                     let mut attachments = vec![color_attachment.clone()];
-                    attachments.extend(label_attachments(labels));
+                    attachments.extend(label_attachments(labels, labels_load));
                     attachments
                 }
                 _ => Vec::new(),
@@ -597,6 +611,11 @@ impl MeshPass {
                 stats.tone_mapped_in_pass |= shading.tone_map.is_some();
                 let group3 = lighting.as_ref().unwrap_or(ctx.lighting.no_lighting_inputs());
                 bound.view_resources(&mut pass, ctx, group3);
+                if tile_clears {
+                    bound.pipeline(&mut pass, &ctx.pipelines.tile_clear(&ctx.gpu.device, *shading, tile_clear_color));
+                    pass.draw(0..3, 0..1);
+                    stats.draw_calls += 1;
+                }
                 // The environment behind the scene: drawn first by the pass
                 // that clears the colour target, meshes then draw over it.
                 let clears_color = matches!(self.color, ColorOps::Clear(_) | ColorOps::ClearToneMapped(..));
@@ -714,9 +733,13 @@ fn draw_partition(
 }
 
 /// The label planes as colour attachments, cleared to 0 (no node, no
-/// class, no surface), in [`oxygen_gpu::Label::ALL`] order with none for a
-/// plane the view lacks (as the pipelines' targets), trimmed after the last.
-fn label_attachments(labels: &LabelTargets) -> Vec<Option<wgpu::RenderPassColorAttachment<'_>>> {
+/// class, no surface) or loaded (`load`), in [`oxygen_gpu::Label::ALL`]
+/// order with none for a plane the view lacks (as the pipelines' targets),
+/// trimmed after the last.
+fn label_attachments(
+    labels: &LabelTargets,
+    load: wgpu::LoadOp<wgpu::Color>,
+) -> Vec<Option<wgpu::RenderPassColorAttachment<'_>>> {
     let mut attachments: Vec<_> = oxygen_gpu::Label::ALL
         .into_iter()
         .map(|label| {
@@ -724,10 +747,7 @@ fn label_attachments(labels: &LabelTargets) -> Vec<Option<wgpu::RenderPassColorA
                 view: &plane.view,
                 depth_slice: None,
                 resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                    store: wgpu::StoreOp::Store,
-                },
+                ops: wgpu::Operations { load, store: wgpu::StoreOp::Store },
             })
         })
         .collect();

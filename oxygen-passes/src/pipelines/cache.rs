@@ -17,6 +17,10 @@ use tracing::debug;
 
 use super::{AlphaClass, PassKind, PipelineKey, mesh_entry_points, shader_source};
 
+/// A tile clear pipeline's key: the shading pass's key and the clear colour
+/// (its `f32` bits; `None` leaves the colour as it is).
+pub(super) type TileClearKey = (PipelineKey, Option<[u32; 4]>);
+
 /// Lazily created, cached mesh pipelines shared by every view.
 ///
 /// A pass asks for a pipeline with [`Pipelines::get`] and awaits it. A
@@ -36,6 +40,8 @@ pub struct Pipelines {
     /// The environment's full-screen draw, per shading key (targets,
     /// samples, tone map).
     pub(super) sky: Mutex<HashMap<PipelineKey, wgpu::RenderPipeline>>,
+    /// Tile clears by shading key and clear colour.
+    pub(super) tile_clear: Mutex<HashMap<TileClearKey, wgpu::RenderPipeline>>,
     pub(super) created: AtomicU64,
     compilers: AtomicUsize,
     /// Keys requested since [`Pipelines::begin_frame`].
@@ -78,6 +84,7 @@ impl Pipelines {
             state: Mutex::new(CompileState::default()),
             tonemap: Mutex::new(None),
             sky: Mutex::new(HashMap::new()),
+            tile_clear: Mutex::new(HashMap::new()),
             created: AtomicU64::new(0),
             compilers: AtomicUsize::new(0),
             used: Mutex::new(HashSet::new()),

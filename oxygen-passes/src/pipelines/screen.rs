@@ -81,4 +81,71 @@ impl Pipelines {
         self.sky.lock().unwrap_or_else(|e| e.into_inner()).insert(key, pipeline.clone());
         pipeline
     }
+
+    /// The pipeline that clears one batch camera's tile in a pass that
+    /// loads its atlas page (other tiles keep their images this frame): the
+    /// targets of the shading pass of `key`, `color` written where given
+    /// (left as it is otherwise), zero labels, depth 0 (reverse-Z far) with
+    /// an always-passing test. The shading module's `vs_tile_clear` and
+    /// `fs_tile_clear`, drawn scissored to the tile before its meshes.
+    pub fn tile_clear(&self, device: &wgpu::Device, key: PipelineKey, color: Option<[f32; 4]>) -> wgpu::RenderPipeline {
+        let key = PipelineKey { variant: PipelineVariant::from_mask(oxygen_sceneprep::PassMask::OPAQUE), ..key };
+        let cache_key = (key, color.map(|c| c.map(f32::to_bits)));
+        if let Some(p) = self.tile_clear.lock().unwrap_or_else(|e| e.into_inner()).get(&cache_key) {
+            return p.clone();
+        }
+        let module = self.module(device, PassKind::Shading);
+        let mut constants = PipelineKey { pass: PassKind::Shading, ..key }.override_constants();
+        let [r, g, b, a] = color.unwrap_or_default();
+        constants.extend(
+            [("TILE_CLEAR_R", r), ("TILE_CLEAR_G", g), ("TILE_CLEAR_B", b), ("TILE_CLEAR_A", a)]
+                .map(|(n, v)| (n, f64::from(v))),
+        );
+        let options = || wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() };
+        let color_writes = if color.is_some() { wgpu::ColorWrites::ALL } else { wgpu::ColorWrites::empty() };
+        // The pass's attachments: colour (none at all for a depth-only
+        // pass), then the label planes a shading pass writes.
+        let mut targets: Vec<Option<wgpu::ColorTargetState>> = key
+            .color_format
+            .map(|format| wgpu::ColorTargetState { format, blend: None, write_mask: color_writes })
+            .into_iter()
+            .map(Some)
+            .collect();
+        if matches!(key.pass, PassKind::Shading | PassKind::ShadingAfterPrePass) && !key.labels.is_empty() {
+            if targets.is_empty() {
+                targets.push(None);
+            }
+            targets.extend(super::cache::label_targets(key.labels, wgpu::ColorWrites::ALL));
+        }
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("tile clear"),
+            layout: Some(&self.layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_tile_clear"),
+                compilation_options: options(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: key.depth_format,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Always),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: wgpu::MultisampleState { count: key.samples.max(1), ..Default::default() },
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_tile_clear"),
+                compilation_options: options(),
+                targets: &targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        self.created.fetch_add(1, Ordering::Relaxed);
+        self.tile_clear.lock().unwrap_or_else(|e| e.into_inner()).insert(cache_key, pipeline.clone());
+        pipeline
+    }
 }
