@@ -214,6 +214,8 @@ pub(crate) const ENTRY_POINTS: &[EntryPoint] = &[
     entry(FORWARD_LIT, "fs_blend", Stage::Fragment),
     entry(FORWARD_LIT, "vs_sky", Stage::Vertex),
     entry(FORWARD_LIT, "fs_sky", Stage::Fragment),
+    entry(FORWARD_LIT, "vs_tile_clear", Stage::Vertex),
+    entry(FORWARD_LIT, "fs_tile_clear", Stage::Fragment),
     entry(LABELS, "vs_main", Stage::Vertex),
     entry(LABELS, "fs_labels", Stage::Fragment),
     entry(LABELS, "fs_labels_masked", Stage::Fragment),
