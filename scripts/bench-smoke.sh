@@ -51,6 +51,7 @@ runs=(
   "raster_floor|example|gpu|16 1"
   "record_bench|example|gpu|4 direct 1,2"
   "shadow_bench|example|gpu|16"
+  "schedule_bench|example|gpu|4 1 1"
   "visibility_bench|example|gpu|field 16 1 1"
   "visibility_bench|example|gpu|city 16 1 1"
   "accuracy_atlas|example|gpu|@OUT@ 16 16"
