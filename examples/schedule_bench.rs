@@ -24,7 +24,7 @@ use std::time::Instant;
 use oxygen::glam::Vec4;
 use oxygen::prelude::*;
 use oxygen::schedule::Schedule;
-use oxygen_demo::record::Record;
+use oxygen_demo::record::{Record, Row};
 
 const WARM_UP: usize = 3;
 const USAGE: &str = "usage: schedule_bench [V] [B] [frames]";
@@ -133,6 +133,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .value("busy", busy)
         .value("measured_frames", frames)
         .value("viewport", [VIEWPORT.x, VIEWPORT.y]);
+    let mut rows = Vec::new();
     for wall in &walls {
         let ms = median(&wall.times_ms);
         let per_frame = wall.rendered as f64 / frames as f64;
@@ -143,12 +144,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             per_frame,
             ms / busy_ms
         );
-        record = record
-            .value(&format!("{}_median_ms", wall.name), ms)
-            .value(&format!("{}_cameras_per_frame", wall.name), per_frame)
-            .value(&format!("{}_over_busy", wall.name), ms / busy_ms)
-            .value(&format!("{}_ms_samples", wall.name), wall.times_ms.clone());
+        rows.push(
+            Row::new()
+                .value("wall", wall.name)
+                .value("median_ms", ms)
+                .value("cameras_per_frame", per_frame)
+                .value("over_busy", ms / busy_ms)
+                .value("ms_samples", wall.times_ms.clone()),
+        );
     }
+    record = record.value("rows", rows);
     record.write()?;
     Ok(())
 }
