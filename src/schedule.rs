@@ -109,6 +109,48 @@ pub enum IdleReason {
     NotRequested,
     /// [`Schedule::WhenChanged`], and nothing it shows changed.
     Unchanged,
+    /// Due, but the frame budget ([`FrameBudget`]) went to views of higher
+    /// priority; deferred `frames` frames in a row so far (it renders, over
+    /// the budget if need be, once [`FrameBudget::max_deferral`] is reached).
+    Deferred {
+        /// Frames in a row it has been deferred, this one included.
+        frames: u32,
+    },
+}
+
+/// A budget of CPU and GPU time per frame for the registered views
+/// ([`crate::Renderer::set_frame_budget`]). The views due in a frame are
+/// taken in order of priority ([`crate::ViewDesc::with_priority`], highest
+/// first; among equals, the one deferred longest, then the lower id), each
+/// at its estimated cost (its own CPU prepare and record time plus GPU
+/// time, averaged over the frames it rendered), until the next would pass
+/// the budget; the rest are deferred to a later frame. The first view is
+/// always taken, and a view deferred `max_deferral` frames in a row is
+/// taken before all others, so every view renders within a bounded number
+/// of frames whatever the budget.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameBudget {
+    /// Seconds of CPU and GPU time a frame's views may take together.
+    pub seconds: f64,
+    /// Frames in a row a due view may be deferred before it renders over
+    /// the budget (at least 1).
+    pub max_deferral: u32,
+}
+
+impl FrameBudget {
+    /// A budget of `seconds` a frame, a view deferred at most 8 frames in a row.
+    pub fn new(seconds: f64) -> Self {
+        FrameBudget { seconds, max_deferral: 8 }
+    }
+
+    /// Why the budget cannot be used, if it cannot: seconds that are not a
+    /// finite number of at least 0, or a deferral bound of 0.
+    pub fn problem(&self) -> Option<String> {
+        if !(self.seconds.is_finite() && self.seconds >= 0.0) {
+            return Some(format!("a frame budget of {} s: it must be a finite number of at least 0", self.seconds));
+        }
+        (self.max_deferral == 0).then(|| "a frame budget deferring views at most 0 frames: use at least 1".into())
+    }
 }
 
 /// A view a frame left idle, and why ([`crate::FrameReport::idle`]).
@@ -134,6 +176,11 @@ mod tests {
             assert!(Schedule::Rate(hz).problem().is_some(), "{hz}");
         }
         assert!(Schedule::Rate(30.0).problem().is_none());
+        assert!(FrameBudget::new(0.004).problem().is_none());
+        assert!(FrameBudget::new(0.0).problem().is_none());
+        assert!(FrameBudget::new(-1.0).problem().is_some());
+        assert!(FrameBudget::new(f64::NAN).problem().is_some());
+        assert!(FrameBudget { max_deferral: 0, ..FrameBudget::new(1.0) }.problem().is_some());
         assert_eq!(Schedule::default(), Schedule::EveryFrame);
     }
 }

@@ -42,6 +42,7 @@ pub struct ViewDesc {
     pub(crate) name: Option<String>,
     pub(crate) labels: LabelSet,
     pub(crate) schedule: Schedule,
+    pub(crate) priority: u32,
 }
 
 /// Where a view renders.
@@ -70,6 +71,7 @@ impl ViewDesc {
             name: None,
             labels: LabelSet::NONE,
             schedule: Schedule::EveryFrame,
+            priority: 0,
         }
     }
 
@@ -101,6 +103,15 @@ impl ViewDesc {
     /// page is then loaded and each rendering camera's tile cleared alone.
     pub fn with_schedule(mut self, schedule: Schedule) -> Self {
         self.schedule = schedule;
+        self
+    }
+
+    /// The view's priority under a frame budget
+    /// ([`crate::Renderer::set_frame_budget`]): when the views due in a
+    /// frame would pass the budget, those of lower priority are deferred
+    /// first (0, the default, is the lowest).
+    pub fn with_priority(mut self, priority: u32) -> Self {
+        self.priority = priority;
         self
     }
 
@@ -210,6 +221,7 @@ pub(crate) struct ViewEntry {
     pub(crate) name: Option<String>,
     pub(crate) labels: LabelSet,
     pub(crate) schedule: Schedule,
+    pub(crate) priority: u32,
 }
 
 /// The registered views and the links between them; no GPU needed.
@@ -303,6 +315,7 @@ impl Views {
                 name: desc.name,
                 labels: desc.labels,
                 schedule: desc.schedule,
+                priority: desc.priority,
             },
         );
         tracing::info!(view = %id, name = ?self.name(id), "view registered");

@@ -336,3 +336,87 @@ fn each_view_reports_its_gpu_time() {
     // other tests 0.35).
     assert!(views <= frame, "views {views} s against the frame's {frame} s");
 }
+
+/// Under a frame budget the highest-priority due view renders and the
+/// others are deferred, lowest priority first, never more than the bound:
+/// with no budget at all (0 s) each frame renders its first view, and every
+/// view comes up within `max_deferral` + 1 frames.
+#[test]
+fn a_frame_budget_defers_the_lowest_priorities_and_starves_none() {
+    use oxygen::schedule::FrameBudget;
+    let demo = oxygen_demo::multi_view_scene();
+    let mut renderer = support::gpu_renderer();
+    let size = UVec2::new(16, 12);
+    // Priorities 3, 2, 1, 0.
+    let views: Vec<ViewId> = (0..4u32)
+        .map(|k| {
+            let desc = ViewDesc::new(oxygen_demo::main_camera(size)).with_priority(3 - k);
+            renderer.register_view(desc, standard_render_graph).unwrap()
+        })
+        .collect();
+    assert!(renderer.set_frame_budget(Some(FrameBudget::new(-1.0))).is_err());
+    let budget = FrameBudget { seconds: 0.0, max_deferral: 3 };
+    renderer.set_frame_budget(Some(budget)).unwrap();
+    // Frame 1: nothing measured yet, so nothing is known to cost: all render.
+    let report = renderer.render_frame(&demo.scene).unwrap();
+    assert!(views.iter().all(|v| why(&report, *v).is_some()), "frame 1: every view");
+    let mut last_rendered = [1u64; 4];
+    for frame in 2..=14u64 {
+        let report = renderer.render_frame(&demo.scene).unwrap();
+        let rendered: Vec<bool> = views.iter().map(|v| why(&report, *v).is_some()).collect();
+        let forced: Vec<usize> =
+            (0..4).filter(|k| frame - last_rendered[*k] > u64::from(budget.max_deferral)).collect();
+        if forced.is_empty() {
+            // Only the highest priority: the others deferred, lowest first.
+            assert_eq!(rendered, [true, false, false, false], "frame {frame}");
+        } else {
+            for k in &forced {
+                assert!(rendered[*k], "frame {frame}: view {k} deferred past the bound");
+            }
+        }
+        for (k, view) in views.iter().enumerate() {
+            if rendered[k] {
+                last_rendered[k] = frame;
+            } else {
+                let frames = (frame - last_rendered[k]) as u32;
+                assert_eq!(idle(&report, *view), Some(IdleReason::Deferred { frames }), "frame {frame}: view {k}");
+            }
+            assert!(frame - last_rendered[k] <= u64::from(budget.max_deferral), "frame {frame}: view {k} starved");
+        }
+    }
+    // Lifted: every view every frame again.
+    renderer.set_frame_budget(None).unwrap();
+    let report = renderer.render_frame(&demo.scene).unwrap();
+    assert!(views.iter().all(|v| why(&report, *v).is_some()));
+}
+
+/// The budget holds for a batch's cameras as for any view: with no budget
+/// at all only the highest-priority camera renders (the others keep their
+/// tiles) until the bound brings the others up.
+#[test]
+fn a_frame_budget_holds_for_a_batchs_cameras() {
+    use oxygen::schedule::FrameBudget;
+    let demo = oxygen_demo::multi_view_scene();
+    let mut renderer = support::gpu_renderer();
+    let size = UVec2::new(16, 12);
+    let batch = renderer.register_batch(oxygen::batch::BatchDesc::new("wall", size)).unwrap();
+    let cameras: Vec<ViewId> = (0..3u32)
+        .map(|k| {
+            let camera = support::looking_at_origin(50.0, Vec3::new(6.0 - 3.0 * k as f32, 7.0, 12.0), size);
+            renderer.add_camera(batch, ViewDesc::new(camera).with_priority(10 - k)).unwrap()
+        })
+        .collect();
+    renderer.set_frame_budget(Some(FrameBudget { seconds: 0.0, max_deferral: 2 })).unwrap();
+    renderer.render_frame(&demo.scene).unwrap();
+    let kept: Vec<_> = cameras.iter().map(|c| renderer.read_color(*c).unwrap()).collect();
+    let report = renderer.render_frame(&demo.scene).unwrap();
+    let rendered: Vec<bool> = cameras.iter().map(|c| why(&report, *c).is_some()).collect();
+    assert_eq!(rendered, [true, false, false]);
+    assert_eq!(idle(&report, cameras[2]), Some(IdleReason::Deferred { frames: 1 }));
+    for k in 1..3 {
+        assert!(renderer.read_color(cameras[k]).unwrap() == kept[k], "camera {k} keeps its tile");
+    }
+    renderer.render_frame(&demo.scene).unwrap();
+    let report = renderer.render_frame(&demo.scene).unwrap();
+    assert!(why(&report, cameras[1]).is_some() && why(&report, cameras[2]).is_some(), "brought up by the bound");
+}

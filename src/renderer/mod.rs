@@ -307,6 +307,11 @@ impl Renderer {
                 view.gpu_seconds = timer.job_seconds(view.view);
             }
         }
+        // What each registered view cost, for the frame budget's estimates.
+        for view in report.views.iter().filter(|v| v.why.is_some()) {
+            let seconds = view.prep_seconds + view.record_seconds + view.gpu_seconds.unwrap_or(0.0);
+            self.schedules.measured(view.view, seconds);
+        }
         self.frames.last = report.views.iter().map(|r| (r.view, r.role)).collect();
         for view in &report.views {
             self.frames.skipped.remove(&view.view);

@@ -18,6 +18,7 @@ use oxygen_sceneprep::{ViewPrepOptions, ViewRequest};
 use tracing::{info_span, warn};
 
 use super::resolve::{FrameClock, ResolvedFrame, ResolvedFrameView};
+use super::schedules::Scheduled;
 use super::targets::{BatchPlan, atlas_layers};
 use super::{FrameWarning, RenderError, Renderer, ViewRole};
 use crate::batch::BatchId;
@@ -161,7 +162,10 @@ impl Renderer {
             scene,
             frame,
             registered,
-            |id| entries.get(&id).map_or((Schedule::EveryFrame, None), |e| (e.schedule, e.name.clone())),
+            |id| match entries.get(&id) {
+                Some(e) => Scheduled { schedule: e.schedule, name: e.name.clone(), priority: e.priority },
+                None => Scheduled { schedule: Schedule::EveryFrame, name: None, priority: 0 },
+            },
             |probe| probes.get(&probe).map(|faces| faces.to_vec()).unwrap_or_default(),
         );
         let why: HashMap<ViewId, RenderReason> = kept.iter().map(|(v, reason)| (v.id, *reason)).collect();

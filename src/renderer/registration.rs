@@ -112,6 +112,18 @@ impl Renderer {
         self.views.set_schedule(id, schedule)
     }
 
+    /// Sets (`Some`) or lifts (`None`) the frame budget: the views due in a
+    /// frame render in order of priority while their estimated costs fit
+    /// it, the others later ([`crate::schedule::FrameBudget`]). Refuses a
+    /// budget that cannot be kept.
+    pub fn set_frame_budget(&mut self, budget: Option<crate::schedule::FrameBudget>) -> Result<(), RenderError> {
+        if let Some(reason) = budget.as_ref().and_then(crate::schedule::FrameBudget::problem) {
+            return Err(RenderError::InvalidSchedule { view: None, reason });
+        }
+        self.schedules.set_budget(budget);
+        Ok(())
+    }
+
     /// Asks `id` to render in the next frame whatever its schedule (how
     /// [`Schedule::Once`](crate::schedule::Schedule::Once) and
     /// [`Schedule::OnDemand`](crate::schedule::Schedule::OnDemand) views

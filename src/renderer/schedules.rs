@@ -20,7 +20,15 @@ use oxygen_passes::OutputSource;
 use oxygen_sceneprep::FrameCollection;
 
 use super::resolve::{FrameClock, ResolvedFrameView};
-use crate::schedule::{Change, IdleReason, IdleView, RenderReason, Schedule};
+use crate::schedule::{Change, FrameBudget, IdleReason, IdleView, RenderReason, Schedule};
+
+/// What the schedules know of a registered view: its schedule, name and
+/// priority.
+pub(crate) struct Scheduled {
+    pub(crate) schedule: Schedule,
+    pub(crate) name: Option<String>,
+    pub(crate) priority: u32,
+}
 
 /// What a renderable or light looked like in a frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -51,6 +59,14 @@ struct ViewState {
     pending: Option<Change>,
     /// The pose it last rendered with: world → clip and size.
     camera: Option<(oxygen_core::glam::Mat4, oxygen_core::glam::UVec2)>,
+    /// Came due ([`Schedule::EveryNth`], [`Schedule::Rate`]) but was
+    /// deferred by the budget: due until it renders.
+    owed: bool,
+    /// Frames in a row the budget deferred it.
+    deferred: u32,
+    /// Its estimated cost a frame (CPU and GPU seconds, averaged over the
+    /// frames it rendered); `None` before it was measured.
+    cost: Option<f64>,
 }
 
 /// The schedules of every registered view, and what the scene looked like
@@ -63,6 +79,8 @@ pub(crate) struct Schedules {
     scene: Option<(u64, u64)>,
     /// The renderer's environment changed since the last frame.
     environment_changed: bool,
+    /// The frame budget, if any.
+    budget: Option<FrameBudget>,
 }
 
 /// What changed in the scene since the last frame.
@@ -86,6 +104,23 @@ impl Schedules {
         self.environment_changed = true;
     }
 
+    /// Sets (or lifts) the frame budget.
+    pub(crate) fn set_budget(&mut self, budget: Option<FrameBudget>) {
+        self.budget = budget;
+    }
+
+    /// `view` rendered at `seconds` of CPU and GPU time (its share of the
+    /// last frames' measurements): its estimate follows, averaged.
+    pub(crate) fn measured(&mut self, view: ViewId, seconds: f64) {
+        if !seconds.is_finite() || seconds < 0.0 {
+            return;
+        }
+        let state = self.views.entry(view).or_default();
+        // An average over the last few frames: steady, yet following a
+        // view whose cost changes.
+        state.cost = Some(state.cost.map_or(seconds, |c| 0.75 * c + 0.25 * seconds));
+    }
+
     /// Forgets a view (unregistered).
     pub(crate) fn forget(&mut self, view: ViewId) {
         self.views.remove(&view);
@@ -100,11 +135,11 @@ impl Schedules {
         scene: &Scene,
         collection: &FrameCollection,
         views: Vec<ResolvedFrameView>,
-        schedule_of: impl Fn(ViewId) -> (Schedule, Option<String>),
+        schedule_of: impl Fn(ViewId) -> Scheduled,
         probe_faces: impl Fn(oxygen_passes::ProbeId) -> Vec<ViewId>,
     ) -> (Vec<(ResolvedFrameView, RenderReason)>, Vec<IdleView>) {
         let _span = tracing::info_span!("schedules", views = views.len()).entered();
-        let watching = views.iter().any(|v| schedule_of(v.id).0 == Schedule::WhenChanged);
+        let watching = views.iter().any(|v| schedule_of(v.id).schedule == Schedule::WhenChanged);
         let changes = if watching { Some(self.scene_changes(scene, collection)) } else { None };
         if !watching {
             // Nothing watches: what the scene looked like is not kept, and
@@ -115,7 +150,7 @@ impl Schedules {
         let now = f64::from(clock.time_seconds);
         let mut decided: Vec<Result<RenderReason, IdleReason>> = Vec::with_capacity(views.len());
         for view in &views {
-            let (schedule, _) = schedule_of(view.id);
+            let schedule = schedule_of(view.id).schedule;
             let state = self.views.entry(view.id).or_default();
             let missed_frames = state.checked.is_some_and(|c| c + 1 < clock.index);
             state.checked = Some(clock.index);
@@ -124,6 +159,7 @@ impl Schedules {
                 _ if state.requested => Ok(RenderReason::Requested),
                 Schedule::OnDemand => Err(IdleReason::NotRequested),
                 _ if state.first.is_none() => Ok(RenderReason::FirstFrame),
+                _ if state.owed => Ok(RenderReason::Due),
                 Schedule::EveryNth(n) => {
                     let n = u64::from(n.max(1));
                     let since = clock.index.saturating_sub(state.first.unwrap_or(clock.index)) % n;
@@ -148,12 +184,6 @@ impl Schedules {
                     change.map(RenderReason::Changed).ok_or(IdleReason::Unchanged)
                 }
             };
-            if let (Schedule::Rate(hz), Ok(_)) = (schedule, &decision) {
-                let period = 1.0 / hz;
-                let next = state.next_seconds.map_or(now, |n| n) + period;
-                // Far behind (a pause, a slow frame): count from now.
-                state.next_seconds = Some(if next <= now { now + period } else { next });
-            }
             if let Ok(RenderReason::Changed(change)) = decision {
                 state.pending = Some(change);
             }
@@ -166,7 +196,7 @@ impl Schedules {
                 views.iter().zip(&decided).filter(|(_, d)| d.is_ok()).map(|(v, _)| v.id).collect();
             let mut woke = false;
             for (view, decision) in views.iter().zip(decided.iter_mut()) {
-                if decision.is_ok() || schedule_of(view.id).0 != Schedule::WhenChanged {
+                if decision.is_ok() || schedule_of(view.id).schedule != Schedule::WhenChanged {
                     continue;
                 }
                 let input = view.links.iter().find_map(|link| match *link {
@@ -183,15 +213,77 @@ impl Schedules {
                 break;
             }
         }
+        if let Some(budget) = self.budget {
+            self.apply_budget(budget, &views, &mut decided, &schedule_of);
+        }
         let mut kept = Vec::with_capacity(views.len());
         let mut idle = Vec::new();
         for (view, decision) in views.into_iter().zip(decided) {
+            let state = self.views.entry(view.id).or_default();
             match decision {
-                Ok(reason) => kept.push((view, reason)),
-                Err(reason) => idle.push(IdleView { view: view.id, name: schedule_of(view.id).1, reason }),
+                Ok(reason) => {
+                    // A rate counts its periods from the first one, so the
+                    // average rate holds; far behind (a pause, a slow or
+                    // deferred frame) it counts from now.
+                    if let Schedule::Rate(hz) = schedule_of(view.id).schedule
+                        && matches!(reason, RenderReason::Due | RenderReason::FirstFrame)
+                    {
+                        let period = 1.0 / hz;
+                        let next = state.next_seconds.map_or(now, |n| n) + period;
+                        state.next_seconds = Some(if next <= now { now + period } else { next });
+                    }
+                    state.deferred = 0;
+                    kept.push((view, reason));
+                }
+                Err(reason) => idle.push(IdleView { view: view.id, name: schedule_of(view.id).name, reason }),
             }
         }
         (kept, idle)
+    }
+
+    /// Defers the due views of `decided` the budget has no room for (see
+    /// [`FrameBudget`]).
+    fn apply_budget(
+        &mut self,
+        budget: FrameBudget,
+        views: &[ResolvedFrameView],
+        decided: &mut [Result<RenderReason, IdleReason>],
+        schedule_of: &impl Fn(ViewId) -> Scheduled,
+    ) {
+        let state_of = |views: &HashMap<ViewId, ViewState>, id: ViewId| views.get(&id).cloned().unwrap_or_default();
+        let mut due: Vec<usize> = (0..views.len()).filter(|i| decided[*i].is_ok()).collect();
+        // Those deferred to the bound first, then by priority, then the
+        // longest deferred, then by id: the order they get the budget in.
+        due.sort_by_key(|i| {
+            let state = state_of(&self.views, views[*i].id);
+            let forced = state.deferred >= budget.max_deferral;
+            (
+                !forced,
+                std::cmp::Reverse(schedule_of(views[*i].id).priority),
+                std::cmp::Reverse(state.deferred),
+                views[*i].id,
+            )
+        });
+        // A view never measured is guessed at the mean of those that were.
+        let known: Vec<f64> = self.views.values().filter_map(|s| s.cost).collect();
+        let guess = if known.is_empty() { 0.0 } else { known.iter().sum::<f64>() / known.len() as f64 };
+        let mut spent = 0.0;
+        for (k, i) in due.into_iter().enumerate() {
+            let schedule = schedule_of(views[i].id).schedule;
+            let state = self.views.entry(views[i].id).or_default();
+            let cost = state.cost.unwrap_or(guess);
+            let forced = state.deferred >= budget.max_deferral;
+            if k == 0 || forced || spent + cost <= budget.seconds {
+                spent += cost;
+                continue;
+            }
+            state.deferred += 1;
+            // Due views stay due; a change or a request stays pending.
+            if matches!(schedule, Schedule::EveryNth(_) | Schedule::Rate(_)) {
+                state.owed = true;
+            }
+            decided[i] = Err(IdleReason::Deferred { frames: state.deferred });
+        }
     }
 
     /// `view` rendered in frame `clock` with `world` (its world-space pose).
@@ -200,6 +292,7 @@ impl Schedules {
         state.first.get_or_insert(clock.index);
         state.requested = false;
         state.pending = None;
+        state.owed = false;
         state.camera = Some((world.view_projection, world.viewport));
     }
 
