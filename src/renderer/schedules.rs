@@ -77,6 +77,10 @@ pub(crate) struct Schedules {
     seen: HashMap<NodeKey, Seen>,
     /// (scene id, assets revision) of the last frame that looked.
     scene: Option<(u64, u64)>,
+    /// (scene id, revision) `seen` reflects: an unchanged scene is not
+    /// looked at again (a frame of still cameras over a still scene costs
+    /// its watchers nothing).
+    looked_at: Option<(u64, u64)>,
     /// The renderer's environment changed since the last frame.
     environment_changed: bool,
     /// The frame budget, if any.
@@ -146,6 +150,7 @@ impl Schedules {
             // the next view that starts watching renders first.
             self.seen.clear();
             self.scene = None;
+            self.looked_at = None;
         }
         let now = f64::from(clock.time_seconds);
         let mut decided: Vec<Result<RenderReason, IdleReason>> = Vec::with_capacity(views.len());
@@ -302,6 +307,11 @@ impl Schedules {
         let assets = self.scene != Some((scene.id(), scene.assets_revision())) || self.environment_changed;
         self.scene = Some((scene.id(), scene.assets_revision()));
         self.environment_changed = false;
+        // No edit since the last look: nothing moved or changed.
+        if self.looked_at == Some((scene.id(), scene.revision())) {
+            return SceneChanges { nodes: Vec::new(), light: None, assets };
+        }
+        self.looked_at = Some((scene.id(), scene.revision()));
         let mut now: HashMap<NodeKey, Seen> = HashMap::with_capacity(self.seen.len());
         let joints_of = |node: &oxygen_core::Node| -> u64 {
             let Some(skin) = &node.skin else { return 0 };
