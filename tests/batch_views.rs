@@ -307,6 +307,13 @@ fn streamed_frames_arrive_tagged_in_order_without_an_off_by_one() {
         }
         let report = renderer.render_frame(&demo.scene).unwrap();
         assert_eq!(report.frame_index, frame);
+        // Each camera's report says what it streams back (five planes of
+        // 4 bytes a texel) and what its batch holds (at its first camera).
+        let camera_reports: Vec<_> =
+            ids.iter().map(|id| report.views.iter().find(|v| v.view == *id).unwrap()).collect();
+        assert!(camera_reports.iter().all(|v| v.streamed_bytes == 5 * 4 * 48 * 36), "streamed bytes a camera");
+        let atlas_bytes = renderer.batch_atlas(batch).map(|(atlas, _)| atlas.bytes()).unwrap();
+        assert_eq!(camera_reports.iter().map(|v| v.target_bytes).collect::<Vec<_>>(), [atlas_bytes, 0, 0]);
         let images: Vec<(RgbaImage, Vec<f32>, oxygen::LabelImage)> = ids
             .iter()
             .map(|id| {

@@ -307,6 +307,20 @@ impl Renderer {
                 view.gpu_seconds = timer.job_seconds(view.view);
             }
         }
+        // What each view holds and streams back.
+        let mut atlases_counted = std::collections::HashSet::new();
+        for view in &mut report.views {
+            let targets = self.targets.get(view.view).and_then(|g| g.targets.as_ref());
+            view.target_bytes = targets.map_or(0, oxygen_gpu::ViewTargets::bytes);
+            if let Some(batch) = self.views.batch_of(view.view) {
+                if atlases_counted.insert(batch) {
+                    view.target_bytes += self.targets.atlas(batch).map_or(0, oxygen_gpu::TileAtlas::bytes);
+                }
+                let labels = targets.and_then(|t| t.labels.as_ref()).map_or(oxygen_gpu::LabelSet::NONE, |l| l.set());
+                let size = targets.map_or((0, 0), |t| (t.width, t.height));
+                view.streamed_bytes = self.streams.camera_bytes(batch, size, labels);
+            }
+        }
         // What each registered view cost, for the frame budget's estimates.
         for view in report.views.iter().filter(|v| v.why.is_some()) {
             let seconds = view.prep_seconds + view.record_seconds + view.gpu_seconds.unwrap_or(0.0);

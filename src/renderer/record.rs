@@ -366,6 +366,9 @@ impl Renderer {
                     why: None,
                     // Filled in from the timer's latest readback (render_frame).
                     gpu_seconds: None,
+                    // Filled in from the targets and streams (render_frame).
+                    target_bytes: 0,
+                    streamed_bytes: 0,
                 });
             }
         }

@@ -83,6 +83,13 @@ pub struct ViewReport {
     /// before the first readback and on devices without timestamps inside
     /// encoders.
     pub gpu_seconds: Option<f64>,
+    /// Bytes of GPU targets it holds: its own targets' (colour, HDR, depth,
+    /// multisampled and label targets); for a batch's first camera its
+    /// batch's whole atlas, 0 for its other cameras.
+    pub target_bytes: u64,
+    /// Bytes of images its batch's stream copies back for it this frame
+    /// ([`crate::Renderer::stream_batch`]); 0 for a view no stream reads.
+    pub streamed_bytes: u64,
 }
 
 /// Something a frame left out. One bad object or view costs only itself: the

@@ -317,6 +317,16 @@ impl Streams {
         }
     }
 
+    /// Bytes a camera of `batch` streams back a frame at `size`: its planes
+    /// (each 4 bytes a texel), or 0 when the batch is not streamed.
+    pub(crate) fn camera_bytes(&self, batch: BatchId, size: (u32, u32), labels: LabelSet) -> u64 {
+        let Some(ring) = self.rings.get(&batch) else { return 0 };
+        let o = &ring.options;
+        let labels = o.label_planes().iter().filter(|l| labels.contains(*l)).count() as u64;
+        let planes = u64::from(o.color) + u64::from(o.depth) + labels;
+        planes * 4 * u64::from(size.0) * u64::from(size.1)
+    }
+
     /// Copies each streaming batch's pages of the frame just submitted
     /// into a free staging buffer, starts mapping it and starts the thread
     /// that cuts it as soon as it lands. `rendered` holds, per batch, its
