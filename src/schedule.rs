@@ -123,7 +123,9 @@ pub enum IdleReason {
 /// taken in order of priority ([`crate::ViewDesc::with_priority`], highest
 /// first; among equals, the one deferred longest, then the lower id), each
 /// at its estimated cost (its own CPU prepare and record time plus GPU
-/// time, averaged over the frames it rendered), until the next would pass
+/// time, averaged over the frames it rendered since the budget was set; a
+/// view not measured yet counts the mean of those that were), until the
+/// next would pass
 /// the budget; the rest are deferred to a later frame. The first view is
 /// always taken, and a view deferred `max_deferral` frames in a row is
 /// taken before all others, so every view renders within a bounded number

@@ -296,7 +296,8 @@ impl Renderer {
         self.stream(&recorded, clock)?;
         self.targets.hold(&recorded.rendered);
         for view in &prepared.views {
-            if prepared.why.contains_key(&view.id) {
+            // An every-frame view has no schedule state to keep.
+            if prepared.why.get(&view.id).is_some_and(|why| *why != crate::schedule::RenderReason::EveryFrame) {
                 self.schedules.rendered(view.id, clock, &view.world);
             }
         }
@@ -322,7 +323,8 @@ impl Renderer {
             }
         }
         // What each registered view cost, for the frame budget's estimates.
-        for view in report.views.iter().filter(|v| v.why.is_some()) {
+        let budgeted = self.schedules.budgeted();
+        for view in report.views.iter().filter(|v| v.why.is_some() && budgeted) {
             let seconds = view.prep_seconds + view.record_seconds + view.gpu_seconds.unwrap_or(0.0);
             self.schedules.measured(view.view, seconds);
         }

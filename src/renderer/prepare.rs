@@ -18,12 +18,11 @@ use oxygen_sceneprep::{ViewPrepOptions, ViewRequest};
 use tracing::{info_span, warn};
 
 use super::resolve::{FrameClock, ResolvedFrame, ResolvedFrameView};
-use super::schedules::Scheduled;
 use super::targets::{BatchPlan, atlas_layers};
 use super::{FrameWarning, RenderError, Renderer, ViewRole};
 use crate::batch::BatchId;
 use crate::graph::ErasedGraph;
-use crate::schedule::{IdleView, RenderReason, Schedule};
+use crate::schedule::{IdleView, RenderReason};
 use crate::shadows::{ShadowRole, shadow_view_options};
 
 /// Where a view of this frame renders.
@@ -155,19 +154,7 @@ impl Renderer {
         self.prep.set_render_origin(origin);
         let frame = self.prep.begin_frame(scene, &mut self.heap.slots)?;
         // Which views render (their schedules), before any is culled.
-        let entries = &self.views.entries;
-        let probes = &self.views.probes;
-        let (kept, idle) = self.schedules.decide(
-            clock,
-            scene,
-            frame,
-            registered,
-            |id| match entries.get(&id) {
-                Some(e) => Scheduled { schedule: e.schedule, name: e.name.clone(), priority: e.priority },
-                None => Scheduled { schedule: Schedule::EveryFrame, name: None, priority: 0 },
-            },
-            |probe| probes.get(&probe).map(|faces| faces.to_vec()).unwrap_or_default(),
-        );
+        let (kept, idle) = self.schedules.decide(clock, scene, frame, registered, &self.views);
         let why: HashMap<ViewId, RenderReason> = kept.iter().map(|(v, reason)| (v.id, *reason)).collect();
         let registered: Vec<ResolvedFrameView> = kept.into_iter().map(|(v, _)| v).collect();
 
@@ -257,11 +244,15 @@ impl Renderer {
         );
         // Batches with a camera that does not render this frame (idle,
         // paused or skipped): their pages keep that camera's tile.
-        let rendering: HashSet<ViewId> = views.iter().map(|v| v.id).collect();
-        let kept_batches: HashSet<BatchId> = registry
-            .batches
+        let mut rendering: HashMap<BatchId, usize> = HashMap::new();
+        for view in &views {
+            if let TargetPlan::Tile { batch, .. } = view.target {
+                *rendering.entry(batch).or_default() += 1;
+            }
+        }
+        let kept_batches: HashSet<BatchId> = rendering
             .iter()
-            .filter(|(_, entry)| entry.cameras().any(|c| !rendering.contains(&c)))
+            .filter(|(batch, n)| registry.batches.get(batch).is_some_and(|b| b.cameras().count() > **n))
             .map(|(batch, _)| *batch)
             .collect();
         let constants_bytes = self.targets.allocate(

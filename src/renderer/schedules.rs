@@ -22,11 +22,10 @@ use oxygen_sceneprep::FrameCollection;
 use super::resolve::{FrameClock, ResolvedFrameView};
 use crate::schedule::{Change, FrameBudget, IdleReason, IdleView, RenderReason, Schedule};
 
-/// What the schedules know of a registered view: its schedule, name and
+/// What the schedules know of a registered view: its schedule and
 /// priority.
 pub(crate) struct Scheduled {
     pub(crate) schedule: Schedule,
-    pub(crate) name: Option<String>,
     pub(crate) priority: u32,
 }
 
@@ -108,6 +107,11 @@ impl Schedules {
         self.environment_changed = true;
     }
 
+    /// Whether a frame budget is set (the views' costs are kept only then).
+    pub(crate) fn budgeted(&self) -> bool {
+        self.budget.is_some()
+    }
+
     /// Sets (or lifts) the frame budget.
     pub(crate) fn set_budget(&mut self, budget: Option<FrameBudget>) {
         self.budget = budget;
@@ -131,18 +135,32 @@ impl Schedules {
     }
 
     /// Decides which of `views` render this frame: the views kept, with why
-    /// (in their order), and the idle ones. `schedule_of` gives a view's
-    /// schedule; `probe_faces` a probe's face views.
+    /// (in their order), and the idle ones; `registry` holds their schedules,
+    /// priorities and names, and the probes' face views.
     pub(crate) fn decide(
         &mut self,
         clock: FrameClock,
         scene: &Scene,
         collection: &FrameCollection,
         views: Vec<ResolvedFrameView>,
-        schedule_of: impl Fn(ViewId) -> Scheduled,
-        probe_faces: impl Fn(oxygen_passes::ProbeId) -> Vec<ViewId>,
+        registry: &crate::views::Views,
     ) -> (Vec<(ResolvedFrameView, RenderReason)>, Vec<IdleView>) {
+        let schedule_of = |id: ViewId| match registry.entries.get(&id) {
+            Some(e) => Scheduled { schedule: e.schedule, priority: e.priority },
+            None => Scheduled { schedule: Schedule::EveryFrame, priority: 0 },
+        };
+        let name_of = |id: ViewId| registry.name(id).map(str::to_owned);
+        let probe_faces =
+            |probe: oxygen_passes::ProbeId| registry.probes.get(&probe).map(|faces| faces.to_vec()).unwrap_or_default();
         let _span = tracing::info_span!("schedules", views = views.len()).entered();
+        // Every view every frame and no budget: nothing to decide or keep
+        // (a thousand-camera batch pays nothing for schedules it lacks).
+        if self.budget.is_none() && views.iter().all(|v| schedule_of(v.id).schedule == Schedule::EveryFrame) {
+            self.seen.clear();
+            self.scene = None;
+            self.looked_at = None;
+            return (views.into_iter().map(|v| (v, RenderReason::EveryFrame)).collect(), Vec::new());
+        }
         let watching = views.iter().any(|v| schedule_of(v.id).schedule == Schedule::WhenChanged);
         let changes = if watching { Some(self.scene_changes(scene, collection)) } else { None };
         if !watching {
@@ -240,7 +258,7 @@ impl Schedules {
                     state.deferred = 0;
                     kept.push((view, reason));
                 }
-                Err(reason) => idle.push(IdleView { view: view.id, name: schedule_of(view.id).name, reason }),
+                Err(reason) => idle.push(IdleView { view: view.id, name: name_of(view.id), reason }),
             }
         }
         (kept, idle)
