@@ -29,8 +29,8 @@
 //!   `R` the shadow maps' resolution (512, 1024, 2048), `K` the shadow
 //!   filter's radius (PCF 0, 1, 2), `M` the main view's anti-aliasing
 //!   (MSAA 1, 2, 4 samples; `--msaa N` starts with N).
-//! * The title bar shows the frame's timings (prepare, record, whole frame)
-//!   and the knobs.
+//! * The title bar shows the frame's timings (prepare, record, GPU, each
+//!   view's own GPU time, whole frame) and the knobs.
 //! * `--frames N --screenshot PATH` renders N frames, saves what was
 //!   presented last as a PNG and exits: for tests and for people without a
 //!   desktop (run it under `xvfb-run`). `--resize WxH` asks for a new
@@ -392,8 +392,16 @@ impl Viewer {
         }
         if let Some(window) = &self.window {
             let pose = self.pose_time.map_or(String::new(), |t| format!(", t = {t:.2} s"));
+            // Each registered view's own GPU time (the report's per-view costs).
+            let per_view: Vec<String> = report
+                .views
+                .iter()
+                .filter(|v| v.why.is_some())
+                .filter_map(|v| Some(format!("{:.2}", v.gpu_seconds? * 1e3)))
+                .collect();
+            let per_view = if per_view.is_empty() { "n/a".to_owned() } else { per_view.join("/") };
             window.set_title(&format!(
-                "Oxygen — prepare {:.2} ms, record {:.2} ms, GPU {}, frame {:.2} ms — {:?}, pre-pass {:?}, {} cascades of {}, PCF {}, MSAA {}{pose} [1-5 layout, V P C R K M knobs, F fly]",
+                "Oxygen — prepare {:.2} ms, record {:.2} ms, GPU {} (views {per_view} ms), frame {:.2} ms — {:?}, pre-pass {:?}, {} cascades of {}, PCF {}, MSAA {}{pose} [1-5 layout, V P C R K M knobs, F fly]",
                 report.prepare_seconds * 1e3,
                 report.record_seconds * 1e3,
                 report.gpu_seconds.map_or("n/a".to_owned(), |s| format!("{:.2} ms", s * 1e3)),
