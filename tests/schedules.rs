@@ -420,3 +420,24 @@ fn a_frame_budget_holds_for_a_batchs_cameras() {
     let report = renderer.render_frame(&demo.scene).unwrap();
     assert!(why(&report, cameras[1]).is_some() && why(&report, cameras[2]).is_some(), "brought up by the bound");
 }
+
+/// A view's report counts the triangles it drew on the CPU path: one cube
+/// in view is 12, two are 24.
+#[test]
+fn a_views_report_counts_its_triangles() {
+    let mut scene = Scene::new();
+    let grey = scene.add_material(Material::opaque("grey", Vec4::splat(0.5)));
+    let cube = scene.add_geometry(Geometry::cube(1.0));
+    let first = scene.add_node("first", Transform::IDENTITY);
+    scene.set_renderable(first, Renderable { geometry: cube, materials: vec![grey] }).unwrap();
+    let mut renderer = support::gpu_renderer();
+    let camera = support::looking_at_origin(50.0, Vec3::new(0.0, 2.0, 6.0), UVec2::new(16, 12));
+    let view = renderer
+        .register_view(ViewDesc::new(camera).with_visibility(oxygen::sceneprep::Visibility::Cpu), standard_render_graph)
+        .unwrap();
+    let triangles = |report: &FrameReport| report.views.iter().find(|v| v.view == view).and_then(|v| v.triangles);
+    assert_eq!(triangles(&renderer.render_frame(&scene).unwrap()), Some(12));
+    let second = scene.add_node("second", Transform::from_translation(Vec3::new(1.5, 0.0, 0.0)));
+    scene.set_renderable(second, Renderable { geometry: cube, materials: vec![grey] }).unwrap();
+    assert_eq!(triangles(&renderer.render_frame(&scene).unwrap()), Some(24));
+}

@@ -366,6 +366,13 @@ impl Renderer {
                     why: None,
                     // Filled in from the timer's latest readback (render_frame).
                     gpu_seconds: None,
+                    triangles: frames[i].gpu_plan().is_none().then(|| {
+                        frames[i]
+                            .draws()
+                            .iter()
+                            .map(|d| u64::from(d.index_count / 3) * u64::from(d.instance_count))
+                            .sum()
+                    }),
                     // Filled in from the targets and streams (render_frame).
                     target_bytes: 0,
                     streamed_bytes: 0,

@@ -83,6 +83,9 @@ pub struct ViewReport {
     /// before the first readback and on devices without timestamps inside
     /// encoders.
     pub gpu_seconds: Option<f64>,
+    /// Triangles its draws drew (each draw's indices ÷ 3 × its instances);
+    /// `None` on a GPU visibility path, whose draws the CPU does not know.
+    pub triangles: Option<u64>,
     /// Bytes of GPU targets it holds: its own targets' (colour, HDR, depth,
     /// multisampled and label targets); for a batch's first camera its
     /// batch's whole atlas, 0 for its other cameras.
