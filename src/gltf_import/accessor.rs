@@ -400,6 +400,84 @@ mod tests {
         assert!(!Semantic::Tangent.allows(Type::Vec4, I16, false, true), "not normalized");
     }
 
+    /// The vertex-colour, joint and weight rows of the table: each needs
+    /// both its element type and its component type, so a right type of the
+    /// wrong shape, or the right shape of a wrong type, is refused.
+    #[test]
+    fn colours_joints_and_weights_need_both_their_shape_and_their_component_type() {
+        use ComponentType::*;
+        // Colours: RGB or RGBA, as floats or unsigned normalized integers.
+        assert!(Semantic::Color.allows(Type::Vec3, F32, false, false));
+        assert!(!Semantic::Color.allows(Type::Scalar, F32, false, false), "a scalar colour");
+        assert!(!Semantic::Color.allows(Type::Vec2, U8, true, false), "a two-channel colour");
+        assert!(!Semantic::Color.allows(Type::Vec4, I16, true, false), "signed normalized");
+        // Joints: four unsigned integers that index the skin, never normalized.
+        assert!(Semantic::Joints.allows(Type::Vec4, U8, false, false));
+        assert!(Semantic::Joints.allows(Type::Vec4, U16, false, false));
+        assert!(!Semantic::Joints.allows(Type::Vec4, F32, false, false), "float joints");
+        assert!(!Semantic::Joints.allows(Type::Vec4, U16, true, false), "normalized joints");
+        assert!(!Semantic::Joints.allows(Type::Vec3, U8, false, false), "three joints");
+        assert!(!Semantic::Joints.allows(Type::Scalar, U16, true, false));
+        // Weights: four, as floats or unsigned normalized integers.
+        assert!(Semantic::Weights.allows(Type::Vec4, U8, true, false));
+        assert!(!Semantic::Weights.allows(Type::Vec3, F32, false, false), "three weights");
+        assert!(!Semantic::Weights.allows(Type::Vec4, U8, false, false), "weights not normalized");
+    }
+
+    /// glTF 2.0 3.11's rows for keyframes and skins: times are float
+    /// scalars, translations and scales float VEC3, rotations VEC4 and
+    /// morph weights scalars (both floats or normalized integers of either
+    /// sign), inverse bind matrices float MAT4. A right shape of a wrong
+    /// type, or a right type of a wrong shape, is refused.
+    #[test]
+    fn keyframes_and_inverse_bind_matrices_need_both_their_shape_and_their_component_type() {
+        use ComponentType::*;
+        assert!(Semantic::AnimationInput.allows(Type::Scalar, F32, false, false));
+        assert!(!Semantic::AnimationInput.allows(Type::Vec2, F32, false, false), "two times per keyframe");
+        assert!(!Semantic::AnimationInput.allows(Type::Scalar, U16, true, false), "normalized times");
+
+        assert!(Semantic::AnimationVector.allows(Type::Vec3, F32, false, false));
+        assert!(!Semantic::AnimationVector.allows(Type::Vec4, F32, false, false), "a four-component translation");
+        assert!(!Semantic::AnimationVector.allows(Type::Vec3, I16, true, true), "quantized translations");
+
+        for (c, n) in [(F32, false), (U8, true), (I8, true), (U16, true), (I16, true)] {
+            assert!(Semantic::AnimationRotation.allows(Type::Vec4, c, n, false), "{c:?} {n} rotation");
+        }
+        assert!(!Semantic::AnimationRotation.allows(Type::Vec3, F32, false, false), "a three-component rotation");
+        assert!(!Semantic::AnimationRotation.allows(Type::Vec4, U32, false, false), "32-bit integer rotation");
+        assert!(!Semantic::AnimationRotation.allows(Type::Vec4, I16, false, false), "rotation not normalized");
+
+        assert!(Semantic::InverseBindMatrices.allows(Type::Mat4, F32, false, false));
+        assert!(!Semantic::InverseBindMatrices.allows(Type::Mat3, F32, false, false), "a 3 × 3 matrix");
+        assert!(!Semantic::InverseBindMatrices.allows(Type::Vec4, F32, false, false));
+        assert!(!Semantic::InverseBindMatrices.allows(Type::Mat4, U8, true, false), "normalized matrices");
+
+        for (c, n) in [(F32, false), (U8, true), (I8, true), (U16, true), (I16, true)] {
+            assert!(Semantic::AnimationWeights.allows(Type::Scalar, c, n, false), "{c:?} {n} weight");
+        }
+        assert!(!Semantic::AnimationWeights.allows(Type::Vec4, F32, false, false), "weights four to a value");
+        assert!(!Semantic::AnimationWeights.allows(Type::Scalar, U32, false, false), "32-bit integer weights");
+    }
+
+    /// glTF 2.0 3.6.2.4: each column of a matrix starts on a 4-byte
+    /// boundary, so a 2 × 2 or 3 × 3 matrix of 1- or 2-byte components
+    /// carries padding after each column; a 4 × 4 one never does (four
+    /// components of any size fill whole 4-byte words).
+    #[test]
+    fn matrix_columns_are_padded_to_four_bytes() {
+        use ComponentType::*;
+        assert_eq!(element_size(Type::Mat2, U8), 8, "two columns of 2 bytes + 2 padding");
+        assert_eq!(element_size(Type::Mat2, I16), 8);
+        assert_eq!(element_size(Type::Mat3, I8), 12, "three columns of 3 bytes + 1 padding");
+        assert_eq!(element_size(Type::Mat3, U16), 24, "three columns of 6 bytes + 2 padding");
+        assert_eq!(element_size(Type::Mat3, F32), 36);
+        assert_eq!(element_size(Type::Mat4, U8), 16);
+        assert_eq!(element_size(Type::Mat4, F32), 64);
+        // Vectors are never padded.
+        assert_eq!(element_size(Type::Vec3, U8), 3);
+        assert_eq!(element_size(Type::Vec3, I16), 6);
+    }
+
     #[test]
     fn an_accessor_past_its_buffer_view_is_an_error_naming_it() {
         let r = root(&format!(
