@@ -478,6 +478,32 @@ mod tests {
         assert_eq!(element_size(Type::Vec3, I16), 6);
     }
 
+    /// `KHR_mesh_quantization` is what admits 16-bit positions, whether the
+    /// file lists it as used or as required; another extension, listed the
+    /// same way, admits nothing.
+    #[test]
+    fn only_the_mesh_quantization_extension_admits_quantized_positions() {
+        let file = |extensions: &str| {
+            root(&format!(
+                r#"{{"asset":{{"version":"2.0"}},{extensions}{VIEW},"accessors":[{{"bufferView":0,"componentType":5122,"normalized":true,"count":4,"type":"VEC3"}}]}}"#
+            ))
+        };
+        let buffers = vec![Cow::Owned(vec![0u8; 24])];
+        for listed in [
+            r#""extensionsUsed":["KHR_mesh_quantization"],"#,
+            r#""extensionsRequired":["KHR_mesh_quantization"],"#,
+            r#""extensionsUsed":["KHR_materials_unlit","KHR_mesh_quantization"],"#,
+        ] {
+            let view = validate(&file(listed), &buffers, 0, Semantic::Position);
+            assert_eq!(view.map(|v| v.count), Ok(4), "{listed}");
+        }
+        let others = r#""extensionsUsed":["KHR_materials_unlit"],"extensionsRequired":["KHR_lights_punctual"],"#;
+        for listed in ["", others] {
+            let err = validate(&file(listed), &buffers, 0, Semantic::Position).map(|v| v.count).unwrap_err();
+            assert!(err.contains("not allowed for Position"), "{listed}: {err}");
+        }
+    }
+
     #[test]
     fn an_accessor_past_its_buffer_view_is_an_error_naming_it() {
         let r = root(&format!(
