@@ -504,6 +504,58 @@ mod tests {
         }
     }
 
+    /// Interleaved vertex data: a stride longer than an element skips the
+    /// bytes between (here 4 of other data after each 12-byte position); a
+    /// stride shorter than an element would make elements overlap, and is
+    /// refused.
+    #[test]
+    fn a_stride_may_be_longer_than_an_element_but_not_shorter() {
+        let file = |stride: u32| {
+            root(&format!(
+                r#"{{"asset":{{"version":"2.0"}},"buffers":[{{"byteLength":32}}],"bufferViews":[{{"buffer":0,"byteLength":32,"byteStride":{stride}}}],
+                "accessors":[{{"bufferView":0,"componentType":5126,"count":2,"type":"VEC3"}}]}}"#
+            ))
+        };
+        let mut bytes = Vec::new();
+        for v in [1.0f32, 2.0, 3.0, -1.0, 4.0, 5.0, 6.0, -1.0] {
+            bytes.extend(v.to_le_bytes());
+        }
+        let buffers = vec![Cow::Owned(bytes)];
+        let values = validate(&file(16), &buffers, 0, Semantic::Position).unwrap().read_floats::<3>().unwrap();
+        assert_eq!(values, vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]);
+        let err = validate(&file(8), &buffers, 0, Semantic::Position).map(|v| v.count).unwrap_err();
+        assert!(err.contains("byteStride 8 is smaller than an element (12 bytes)"), "{err}");
+    }
+
+    /// A sparse accessor substitutes from 1 up to every one of its elements;
+    /// none, or more than it has, is an error naming the counts (the views
+    /// here hold enough bytes for three, so only the count can refuse it).
+    #[test]
+    fn a_sparse_count_is_from_one_to_the_accessors_count() {
+        let file = |sparse: u32| {
+            root(&format!(
+                r#"{{"asset":{{"version":"2.0"}},"buffers":[{{"byteLength":44}}],"bufferViews":[{{"buffer":0,"byteLength":8}},{{"buffer":0,"byteOffset":8,"byteLength":36}}],
+                "accessors":[{{"componentType":5126,"count":2,"type":"VEC3","sparse":{{"count":{sparse},"indices":{{"bufferView":0,"componentType":5123}},"values":{{"bufferView":1}}}}}}]}}"#
+            ))
+        };
+        let mut bytes = Vec::new();
+        for i in [0u16, 1, 2, 0] {
+            bytes.extend(i.to_le_bytes());
+        }
+        for v in [1.0f32, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0] {
+            bytes.extend(v.to_le_bytes());
+        }
+        let buffers = vec![Cow::Owned(bytes)];
+        let every = validate(&file(2), &buffers, 0, Semantic::Position).unwrap().read_floats::<3>().unwrap();
+        assert_eq!(every, vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]);
+        let one = validate(&file(1), &buffers, 0, Semantic::Position).unwrap().read_floats::<3>().unwrap();
+        assert_eq!(one, vec![[1.0, 2.0, 3.0], [0.0; 3]]);
+        for sparse in [0, 3] {
+            let err = validate(&file(sparse), &buffers, 0, Semantic::Position).map(|v| v.count).unwrap_err();
+            assert!(err.contains(&format!("sparse count {sparse} is not in 1..=2")), "{err}");
+        }
+    }
+
     #[test]
     fn an_accessor_past_its_buffer_view_is_an_error_naming_it() {
         let r = root(&format!(
