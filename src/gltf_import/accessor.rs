@@ -556,6 +556,67 @@ mod tests {
         }
     }
 
+    /// Sparse indices or values that run past their buffer view are an
+    /// error naming which, not a read past the view (the buffer itself is
+    /// long enough, so only the view's length can refuse them).
+    #[test]
+    fn sparse_indices_or_values_past_their_view_are_an_error_naming_which() {
+        let file = |index_bytes: u32, value_bytes: u32| {
+            root(&format!(
+                r#"{{"asset":{{"version":"2.0"}},"buffers":[{{"byteLength":64}}],"bufferViews":[{{"buffer":0,"byteLength":{index_bytes}}},{{"buffer":0,"byteOffset":8,"byteLength":{value_bytes}}}],
+                "accessors":[{{"componentType":5126,"count":2,"type":"VEC3","sparse":{{"count":2,"indices":{{"bufferView":0,"componentType":5123}},"values":{{"bufferView":1}}}}}}]}}"#
+            ))
+        };
+        let mut bytes = vec![0u8; 64];
+        bytes[2] = 1; // indices 0 and 1
+        let buffers = vec![Cow::Owned(bytes)];
+        assert_eq!(validate(&file(4, 24), &buffers, 0, Semantic::Position).map(|v| v.count), Ok(2));
+        let err = validate(&file(3, 24), &buffers, 0, Semantic::Position).map(|v| v.count).unwrap_err();
+        assert!(err.contains("sparse indices do not fit"), "{err}");
+        let err = validate(&file(4, 23), &buffers, 0, Semantic::Position).map(|v| v.count).unwrap_err();
+        assert!(err.contains("sparse values do not fit"), "{err}");
+    }
+
+    /// The first element of a one-element accessor of `component_type`
+    /// (`ty`, `normalized`) holding `bytes`, read as `semantic` in a file
+    /// that uses `KHR_mesh_quantization`; missing components read 0.
+    fn first_element(component_type: u32, ty: &str, normalized: bool, bytes: &[u8], semantic: Semantic) -> [f32; 4] {
+        let n = bytes.len();
+        let r = root(&format!(
+            r#"{{"asset":{{"version":"2.0"}},"extensionsUsed":["KHR_mesh_quantization"],"buffers":[{{"byteLength":{n}}}],"bufferViews":[{{"buffer":0,"byteLength":{n}}}],
+            "accessors":[{{"bufferView":0,"componentType":{component_type},"normalized":{normalized},"count":1,"type":"{ty}"}}]}}"#
+        ));
+        let buffers = vec![Cow::Owned(bytes.to_vec())];
+        validate(&r, &buffers, 0, semantic).unwrap().read_floats::<4>().unwrap()[0]
+    }
+
+    /// glTF 2.0 3.11 (animation samplers), whose formulas the mesh
+    /// quantization extension reuses: an unsigned normalized integer is
+    /// `c / max`; a signed one is `max(c / max, -1)`, so both its most
+    /// negative values are -1. Integers that are not normalized read as
+    /// their value.
+    #[test]
+    fn integer_components_read_as_gltf_normalizes_them() {
+        let rotation = |component_type, bytes: &[u8]| {
+            first_element(component_type, "VEC4", true, bytes, Semantic::AnimationRotation)
+        };
+        assert_eq!(rotation(5121, &[0, 255, 51, 102]), [0.0, 1.0, 0.2, 0.4], "u8");
+        assert_eq!(rotation(5120, &[0x80, 0x81, 127, 64]), [-1.0, -1.0, 1.0, 64.0 / 127.0], "i8");
+        let u16s: Vec<u8> = [0u16, 65535, 13107, 32768].iter().flat_map(|v| v.to_le_bytes()).collect();
+        assert_eq!(rotation(5123, &u16s), [0.0, 1.0, 0.2, 32768.0 / 65535.0], "u16");
+        let i16s: Vec<u8> = [i16::MIN, -32767, 32767, 16384].iter().flat_map(|v| v.to_le_bytes()).collect();
+        assert_eq!(rotation(5122, &i16s), [-1.0, -1.0, 1.0, 16384.0 / 32767.0], "i16");
+
+        let position =
+            |component_type, bytes: &[u8]| first_element(component_type, "VEC3", false, bytes, Semantic::Position);
+        assert_eq!(position(5121, &[0, 255, 200]), [0.0, 255.0, 200.0, 0.0], "u8");
+        assert_eq!(position(5120, &[0x80, 127, 0xfb]), [-128.0, 127.0, -5.0, 0.0], "i8");
+        let u16s: Vec<u8> = [0u16, 65535, 40000].iter().flat_map(|v| v.to_le_bytes()).collect();
+        assert_eq!(position(5123, &u16s), [0.0, 65535.0, 40000.0, 0.0], "u16");
+        let i16s: Vec<u8> = [i16::MIN, 32767, -5].iter().flat_map(|v| v.to_le_bytes()).collect();
+        assert_eq!(position(5122, &i16s), [-32768.0, 32767.0, -5.0, 0.0], "i16");
+    }
+
     #[test]
     fn an_accessor_past_its_buffer_view_is_an_error_naming_it() {
         let r = root(&format!(
