@@ -400,6 +400,223 @@ mod tests {
         assert!(!Semantic::Tangent.allows(Type::Vec4, I16, false, true), "not normalized");
     }
 
+    /// The vertex-colour, joint and weight rows of the table: each needs
+    /// both its element type and its component type, so a right type of the
+    /// wrong shape, or the right shape of a wrong type, is refused.
+    #[test]
+    fn colours_joints_and_weights_need_both_their_shape_and_their_component_type() {
+        use ComponentType::*;
+        // Colours: RGB or RGBA, as floats or unsigned normalized integers.
+        assert!(Semantic::Color.allows(Type::Vec3, F32, false, false));
+        assert!(!Semantic::Color.allows(Type::Scalar, F32, false, false), "a scalar colour");
+        assert!(!Semantic::Color.allows(Type::Vec2, U8, true, false), "a two-channel colour");
+        assert!(!Semantic::Color.allows(Type::Vec4, I16, true, false), "signed normalized");
+        // Joints: four unsigned integers that index the skin, never normalized.
+        assert!(Semantic::Joints.allows(Type::Vec4, U8, false, false));
+        assert!(Semantic::Joints.allows(Type::Vec4, U16, false, false));
+        assert!(!Semantic::Joints.allows(Type::Vec4, F32, false, false), "float joints");
+        assert!(!Semantic::Joints.allows(Type::Vec4, U16, true, false), "normalized joints");
+        assert!(!Semantic::Joints.allows(Type::Vec3, U8, false, false), "three joints");
+        assert!(!Semantic::Joints.allows(Type::Scalar, U16, true, false));
+        // Weights: four, as floats or unsigned normalized integers.
+        assert!(Semantic::Weights.allows(Type::Vec4, U8, true, false));
+        assert!(!Semantic::Weights.allows(Type::Vec3, F32, false, false), "three weights");
+        assert!(!Semantic::Weights.allows(Type::Vec4, U8, false, false), "weights not normalized");
+    }
+
+    /// glTF 2.0 3.11's rows for keyframes and skins: times are float
+    /// scalars, translations and scales float VEC3, rotations VEC4 and
+    /// morph weights scalars (both floats or normalized integers of either
+    /// sign), inverse bind matrices float MAT4. A right shape of a wrong
+    /// type, or a right type of a wrong shape, is refused.
+    #[test]
+    fn keyframes_and_inverse_bind_matrices_need_both_their_shape_and_their_component_type() {
+        use ComponentType::*;
+        assert!(Semantic::AnimationInput.allows(Type::Scalar, F32, false, false));
+        assert!(!Semantic::AnimationInput.allows(Type::Vec2, F32, false, false), "two times per keyframe");
+        assert!(!Semantic::AnimationInput.allows(Type::Scalar, U16, true, false), "normalized times");
+
+        assert!(Semantic::AnimationVector.allows(Type::Vec3, F32, false, false));
+        assert!(!Semantic::AnimationVector.allows(Type::Vec4, F32, false, false), "a four-component translation");
+        assert!(!Semantic::AnimationVector.allows(Type::Vec3, I16, true, true), "quantized translations");
+
+        for (c, n) in [(F32, false), (U8, true), (I8, true), (U16, true), (I16, true)] {
+            assert!(Semantic::AnimationRotation.allows(Type::Vec4, c, n, false), "{c:?} {n} rotation");
+        }
+        assert!(!Semantic::AnimationRotation.allows(Type::Vec3, F32, false, false), "a three-component rotation");
+        assert!(!Semantic::AnimationRotation.allows(Type::Vec4, U32, false, false), "32-bit integer rotation");
+        assert!(!Semantic::AnimationRotation.allows(Type::Vec4, I16, false, false), "rotation not normalized");
+
+        assert!(Semantic::InverseBindMatrices.allows(Type::Mat4, F32, false, false));
+        assert!(!Semantic::InverseBindMatrices.allows(Type::Mat3, F32, false, false), "a 3 × 3 matrix");
+        assert!(!Semantic::InverseBindMatrices.allows(Type::Vec4, F32, false, false));
+        assert!(!Semantic::InverseBindMatrices.allows(Type::Mat4, U8, true, false), "normalized matrices");
+
+        for (c, n) in [(F32, false), (U8, true), (I8, true), (U16, true), (I16, true)] {
+            assert!(Semantic::AnimationWeights.allows(Type::Scalar, c, n, false), "{c:?} {n} weight");
+        }
+        assert!(!Semantic::AnimationWeights.allows(Type::Vec4, F32, false, false), "weights four to a value");
+        assert!(!Semantic::AnimationWeights.allows(Type::Scalar, U32, false, false), "32-bit integer weights");
+    }
+
+    /// glTF 2.0 3.6.2.4: each column of a matrix starts on a 4-byte
+    /// boundary, so a 2 × 2 or 3 × 3 matrix of 1- or 2-byte components
+    /// carries padding after each column; a 4 × 4 one never does (four
+    /// components of any size fill whole 4-byte words).
+    #[test]
+    fn matrix_columns_are_padded_to_four_bytes() {
+        use ComponentType::*;
+        assert_eq!(element_size(Type::Mat2, U8), 8, "two columns of 2 bytes + 2 padding");
+        assert_eq!(element_size(Type::Mat2, I16), 8);
+        assert_eq!(element_size(Type::Mat3, I8), 12, "three columns of 3 bytes + 1 padding");
+        assert_eq!(element_size(Type::Mat3, U16), 24, "three columns of 6 bytes + 2 padding");
+        assert_eq!(element_size(Type::Mat3, F32), 36);
+        assert_eq!(element_size(Type::Mat4, U8), 16);
+        assert_eq!(element_size(Type::Mat4, F32), 64);
+        // Vectors are never padded.
+        assert_eq!(element_size(Type::Vec3, U8), 3);
+        assert_eq!(element_size(Type::Vec3, I16), 6);
+    }
+
+    /// `KHR_mesh_quantization` is what admits 16-bit positions, whether the
+    /// file lists it as used or as required; another extension, listed the
+    /// same way, admits nothing.
+    #[test]
+    fn only_the_mesh_quantization_extension_admits_quantized_positions() {
+        let file = |extensions: &str| {
+            root(&format!(
+                r#"{{"asset":{{"version":"2.0"}},{extensions}{VIEW},"accessors":[{{"bufferView":0,"componentType":5122,"normalized":true,"count":4,"type":"VEC3"}}]}}"#
+            ))
+        };
+        let buffers = vec![Cow::Owned(vec![0u8; 24])];
+        for listed in [
+            r#""extensionsUsed":["KHR_mesh_quantization"],"#,
+            r#""extensionsRequired":["KHR_mesh_quantization"],"#,
+            r#""extensionsUsed":["KHR_materials_unlit","KHR_mesh_quantization"],"#,
+        ] {
+            let view = validate(&file(listed), &buffers, 0, Semantic::Position);
+            assert_eq!(view.map(|v| v.count), Ok(4), "{listed}");
+        }
+        let others = r#""extensionsUsed":["KHR_materials_unlit"],"extensionsRequired":["KHR_lights_punctual"],"#;
+        for listed in ["", others] {
+            let err = validate(&file(listed), &buffers, 0, Semantic::Position).map(|v| v.count).unwrap_err();
+            assert!(err.contains("not allowed for Position"), "{listed}: {err}");
+        }
+    }
+
+    /// Interleaved vertex data: a stride longer than an element skips the
+    /// bytes between (here 4 of other data after each 12-byte position); a
+    /// stride shorter than an element would make elements overlap, and is
+    /// refused.
+    #[test]
+    fn a_stride_may_be_longer_than_an_element_but_not_shorter() {
+        let file = |stride: u32| {
+            root(&format!(
+                r#"{{"asset":{{"version":"2.0"}},"buffers":[{{"byteLength":32}}],"bufferViews":[{{"buffer":0,"byteLength":32,"byteStride":{stride}}}],
+                "accessors":[{{"bufferView":0,"componentType":5126,"count":2,"type":"VEC3"}}]}}"#
+            ))
+        };
+        let mut bytes = Vec::new();
+        for v in [1.0f32, 2.0, 3.0, -1.0, 4.0, 5.0, 6.0, -1.0] {
+            bytes.extend(v.to_le_bytes());
+        }
+        let buffers = vec![Cow::Owned(bytes)];
+        let values = validate(&file(16), &buffers, 0, Semantic::Position).unwrap().read_floats::<3>().unwrap();
+        assert_eq!(values, vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]);
+        let err = validate(&file(8), &buffers, 0, Semantic::Position).map(|v| v.count).unwrap_err();
+        assert!(err.contains("byteStride 8 is smaller than an element (12 bytes)"), "{err}");
+    }
+
+    /// A sparse accessor substitutes from 1 up to every one of its elements;
+    /// none, or more than it has, is an error naming the counts (the views
+    /// here hold enough bytes for three, so only the count can refuse it).
+    #[test]
+    fn a_sparse_count_is_from_one_to_the_accessors_count() {
+        let file = |sparse: u32| {
+            root(&format!(
+                r#"{{"asset":{{"version":"2.0"}},"buffers":[{{"byteLength":44}}],"bufferViews":[{{"buffer":0,"byteLength":8}},{{"buffer":0,"byteOffset":8,"byteLength":36}}],
+                "accessors":[{{"componentType":5126,"count":2,"type":"VEC3","sparse":{{"count":{sparse},"indices":{{"bufferView":0,"componentType":5123}},"values":{{"bufferView":1}}}}}}]}}"#
+            ))
+        };
+        let mut bytes = Vec::new();
+        for i in [0u16, 1, 2, 0] {
+            bytes.extend(i.to_le_bytes());
+        }
+        for v in [1.0f32, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0] {
+            bytes.extend(v.to_le_bytes());
+        }
+        let buffers = vec![Cow::Owned(bytes)];
+        let every = validate(&file(2), &buffers, 0, Semantic::Position).unwrap().read_floats::<3>().unwrap();
+        assert_eq!(every, vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]);
+        let one = validate(&file(1), &buffers, 0, Semantic::Position).unwrap().read_floats::<3>().unwrap();
+        assert_eq!(one, vec![[1.0, 2.0, 3.0], [0.0; 3]]);
+        for sparse in [0, 3] {
+            let err = validate(&file(sparse), &buffers, 0, Semantic::Position).map(|v| v.count).unwrap_err();
+            assert!(err.contains(&format!("sparse count {sparse} is not in 1..=2")), "{err}");
+        }
+    }
+
+    /// Sparse indices or values that run past their buffer view are an
+    /// error naming which, not a read past the view (the buffer itself is
+    /// long enough, so only the view's length can refuse them).
+    #[test]
+    fn sparse_indices_or_values_past_their_view_are_an_error_naming_which() {
+        let file = |index_bytes: u32, value_bytes: u32| {
+            root(&format!(
+                r#"{{"asset":{{"version":"2.0"}},"buffers":[{{"byteLength":64}}],"bufferViews":[{{"buffer":0,"byteLength":{index_bytes}}},{{"buffer":0,"byteOffset":8,"byteLength":{value_bytes}}}],
+                "accessors":[{{"componentType":5126,"count":2,"type":"VEC3","sparse":{{"count":2,"indices":{{"bufferView":0,"componentType":5123}},"values":{{"bufferView":1}}}}}}]}}"#
+            ))
+        };
+        let mut bytes = vec![0u8; 64];
+        bytes[2] = 1; // indices 0 and 1
+        let buffers = vec![Cow::Owned(bytes)];
+        assert_eq!(validate(&file(4, 24), &buffers, 0, Semantic::Position).map(|v| v.count), Ok(2));
+        let err = validate(&file(3, 24), &buffers, 0, Semantic::Position).map(|v| v.count).unwrap_err();
+        assert!(err.contains("sparse indices do not fit"), "{err}");
+        let err = validate(&file(4, 23), &buffers, 0, Semantic::Position).map(|v| v.count).unwrap_err();
+        assert!(err.contains("sparse values do not fit"), "{err}");
+    }
+
+    /// The first element of a one-element accessor of `component_type`
+    /// (`ty`, `normalized`) holding `bytes`, read as `semantic` in a file
+    /// that uses `KHR_mesh_quantization`; missing components read 0.
+    fn first_element(component_type: u32, ty: &str, normalized: bool, bytes: &[u8], semantic: Semantic) -> [f32; 4] {
+        let n = bytes.len();
+        let r = root(&format!(
+            r#"{{"asset":{{"version":"2.0"}},"extensionsUsed":["KHR_mesh_quantization"],"buffers":[{{"byteLength":{n}}}],"bufferViews":[{{"buffer":0,"byteLength":{n}}}],
+            "accessors":[{{"bufferView":0,"componentType":{component_type},"normalized":{normalized},"count":1,"type":"{ty}"}}]}}"#
+        ));
+        let buffers = vec![Cow::Owned(bytes.to_vec())];
+        validate(&r, &buffers, 0, semantic).unwrap().read_floats::<4>().unwrap()[0]
+    }
+
+    /// glTF 2.0 3.11 (animation samplers), whose formulas the mesh
+    /// quantization extension reuses: an unsigned normalized integer is
+    /// `c / max`; a signed one is `max(c / max, -1)`, so both its most
+    /// negative values are -1. Integers that are not normalized read as
+    /// their value.
+    #[test]
+    fn integer_components_read_as_gltf_normalizes_them() {
+        let rotation = |component_type, bytes: &[u8]| {
+            first_element(component_type, "VEC4", true, bytes, Semantic::AnimationRotation)
+        };
+        assert_eq!(rotation(5121, &[0, 255, 51, 102]), [0.0, 1.0, 0.2, 0.4], "u8");
+        assert_eq!(rotation(5120, &[0x80, 0x81, 127, 64]), [-1.0, -1.0, 1.0, 64.0 / 127.0], "i8");
+        let u16s: Vec<u8> = [0u16, 65535, 13107, 32768].iter().flat_map(|v| v.to_le_bytes()).collect();
+        assert_eq!(rotation(5123, &u16s), [0.0, 1.0, 0.2, 32768.0 / 65535.0], "u16");
+        let i16s: Vec<u8> = [i16::MIN, -32767, 32767, 16384].iter().flat_map(|v| v.to_le_bytes()).collect();
+        assert_eq!(rotation(5122, &i16s), [-1.0, -1.0, 1.0, 16384.0 / 32767.0], "i16");
+
+        let position =
+            |component_type, bytes: &[u8]| first_element(component_type, "VEC3", false, bytes, Semantic::Position);
+        assert_eq!(position(5121, &[0, 255, 200]), [0.0, 255.0, 200.0, 0.0], "u8");
+        assert_eq!(position(5120, &[0x80, 127, 0xfb]), [-128.0, 127.0, -5.0, 0.0], "i8");
+        let u16s: Vec<u8> = [0u16, 65535, 40000].iter().flat_map(|v| v.to_le_bytes()).collect();
+        assert_eq!(position(5123, &u16s), [0.0, 65535.0, 40000.0, 0.0], "u16");
+        let i16s: Vec<u8> = [i16::MIN, 32767, -5].iter().flat_map(|v| v.to_le_bytes()).collect();
+        assert_eq!(position(5122, &i16s), [-32768.0, 32767.0, -5.0, 0.0], "i16");
+    }
+
     #[test]
     fn an_accessor_past_its_buffer_view_is_an_error_naming_it() {
         let r = root(&format!(
