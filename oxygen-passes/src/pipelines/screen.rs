@@ -42,7 +42,6 @@ impl Pipelines {
         }
         let module = self.module(device, PassKind::Shading);
         let constants = PipelineKey { pass: PassKind::Shading, ..key }.override_constants();
-        let options = || wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() };
         let target = |format, write_mask| Some(wgpu::ColorTargetState { format, blend: None, write_mask });
         // A pass that writes labels has their targets too; the sky leaves
         // them as cleared (no node: 0).
@@ -50,33 +49,9 @@ impl Pipelines {
         if matches!(key.pass, PassKind::Shading | PassKind::ShadingAfterPrePass) {
             targets.extend(super::cache::label_targets(key.labels, wgpu::ColorWrites::empty()));
         }
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("sky"),
-            layout: Some(&self.layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_sky"),
-                compilation_options: options(),
-                buffers: &[],
-            },
-            primitive: Default::default(),
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: key.depth_format,
-                depth_write_enabled: Some(false),
-                depth_compare: Some(wgpu::CompareFunction::Always),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: wgpu::MultisampleState { count: key.samples.max(1), ..Default::default() },
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_sky"),
-                compilation_options: options(),
-                targets: &targets,
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let entry_points = ("vs_sky", "fs_sky");
+        let pipeline =
+            self.full_screen_pipeline(device, "sky", &module, entry_points, &constants, &targets, key, false);
         self.created.fetch_add(1, Ordering::Relaxed);
         self.sky.lock().unwrap_or_else(|e| e.into_inner()).insert(key, pipeline.clone());
         pipeline
@@ -101,7 +76,6 @@ impl Pipelines {
             [("TILE_CLEAR_R", r), ("TILE_CLEAR_G", g), ("TILE_CLEAR_B", b), ("TILE_CLEAR_A", a)]
                 .map(|(n, v)| (n, f64::from(v))),
         );
-        let options = || wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() };
         let color_writes = if color.is_some() { wgpu::ColorWrites::ALL } else { wgpu::ColorWrites::empty() };
         // The pass's attachments: colour (none at all for a depth-only
         // pass), then the label planes a shading pass writes.
@@ -117,35 +91,56 @@ impl Pipelines {
             }
             targets.extend(super::cache::label_targets(key.labels, wgpu::ColorWrites::ALL));
         }
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("tile clear"),
+        let entry_points = ("vs_tile_clear", "fs_tile_clear");
+        let pipeline =
+            self.full_screen_pipeline(device, "tile clear", &module, entry_points, &constants, &targets, key, true);
+        self.created.fetch_add(1, Ordering::Relaxed);
+        self.tile_clear.lock().unwrap_or_else(|e| e.into_inner()).insert(cache_key, pipeline.clone());
+        pipeline
+    }
+
+    /// A full-screen triangle of the shading module in a mesh pass of
+    /// `key` (its depth format and samples): depth tested always, written
+    /// when `depth_write`; the sky's and the tile clear's.
+    #[allow(clippy::too_many_arguments)]
+    fn full_screen_pipeline(
+        &self,
+        device: &wgpu::Device,
+        label: &str,
+        module: &wgpu::ShaderModule,
+        (vertex, fragment): (&str, &str),
+        constants: &[(&str, f64)],
+        targets: &[Option<wgpu::ColorTargetState>],
+        key: PipelineKey,
+        depth_write: bool,
+    ) -> wgpu::RenderPipeline {
+        let options = || wgpu::PipelineCompilationOptions { constants, ..Default::default() };
+        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(label),
             layout: Some(&self.layout),
             vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_tile_clear"),
+                module,
+                entry_point: Some(vertex),
                 compilation_options: options(),
                 buffers: &[],
             },
             primitive: Default::default(),
             depth_stencil: Some(wgpu::DepthStencilState {
                 format: key.depth_format,
-                depth_write_enabled: Some(true),
+                depth_write_enabled: Some(depth_write),
                 depth_compare: Some(wgpu::CompareFunction::Always),
                 stencil: Default::default(),
                 bias: Default::default(),
             }),
             multisample: wgpu::MultisampleState { count: key.samples.max(1), ..Default::default() },
             fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_tile_clear"),
+                module,
+                entry_point: Some(fragment),
                 compilation_options: options(),
-                targets: &targets,
+                targets,
             }),
             multiview_mask: None,
             cache: None,
-        });
-        self.created.fetch_add(1, Ordering::Relaxed);
-        self.tile_clear.lock().unwrap_or_else(|e| e.into_inner()).insert(cache_key, pipeline.clone());
-        pipeline
+        })
     }
 }
