@@ -273,18 +273,17 @@ impl Schedules {
         decided: &mut [Result<RenderReason, IdleReason>],
         schedule_of: &impl Fn(ViewId) -> Scheduled,
     ) {
-        let state_of = |views: &HashMap<ViewId, ViewState>, id: ViewId| views.get(&id).cloned().unwrap_or_default();
         let mut due: Vec<usize> = (0..views.len()).filter(|i| decided[*i].is_ok()).collect();
         // Those deferred to the bound first, then by priority, then the
         // longest deferred, then by id: the order they get the budget in.
         due.sort_by_key(|i| {
-            let state = state_of(&self.views, views[*i].id);
-            let forced = state.deferred >= budget.max_deferral;
+            let id = views[*i].id;
+            let deferred = self.views.get(&id).map_or(0, |s| s.deferred);
             (
-                !forced,
-                std::cmp::Reverse(schedule_of(views[*i].id).priority),
-                std::cmp::Reverse(state.deferred),
-                views[*i].id,
+                deferred < budget.max_deferral,
+                std::cmp::Reverse(schedule_of(id).priority),
+                std::cmp::Reverse(deferred),
+                id,
             )
         });
         // A view never measured is guessed at the mean of those that were.

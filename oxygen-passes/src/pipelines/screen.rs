@@ -42,13 +42,9 @@ impl Pipelines {
         }
         let module = self.module(device, PassKind::Shading);
         let constants = PipelineKey { pass: PassKind::Shading, ..key }.override_constants();
-        let target = |format, write_mask| Some(wgpu::ColorTargetState { format, blend: None, write_mask });
         // A pass that writes labels has their targets too; the sky leaves
         // them as cleared (no node: 0).
-        let mut targets = vec![key.color_format.and_then(|f| target(f, wgpu::ColorWrites::ALL))];
-        if matches!(key.pass, PassKind::Shading | PassKind::ShadingAfterPrePass) {
-            targets.extend(super::cache::label_targets(key.labels, wgpu::ColorWrites::empty()));
-        }
+        let targets = pass_targets(key, wgpu::ColorWrites::ALL, wgpu::ColorWrites::empty());
         let entry_points = ("vs_sky", "fs_sky");
         let pipeline =
             self.full_screen_pipeline(device, "sky", &module, entry_points, &constants, &targets, key, false);
@@ -77,20 +73,7 @@ impl Pipelines {
                 .map(|(n, v)| (n, f64::from(v))),
         );
         let color_writes = if color.is_some() { wgpu::ColorWrites::ALL } else { wgpu::ColorWrites::empty() };
-        // The pass's attachments: colour (none at all for a depth-only
-        // pass), then the label planes a shading pass writes.
-        let mut targets: Vec<Option<wgpu::ColorTargetState>> = key
-            .color_format
-            .map(|format| wgpu::ColorTargetState { format, blend: None, write_mask: color_writes })
-            .into_iter()
-            .map(Some)
-            .collect();
-        if matches!(key.pass, PassKind::Shading | PassKind::ShadingAfterPrePass) && !key.labels.is_empty() {
-            if targets.is_empty() {
-                targets.push(None);
-            }
-            targets.extend(super::cache::label_targets(key.labels, wgpu::ColorWrites::ALL));
-        }
+        let targets = pass_targets(key, color_writes, wgpu::ColorWrites::ALL);
         let entry_points = ("vs_tile_clear", "fs_tile_clear");
         let pipeline =
             self.full_screen_pipeline(device, "tile clear", &module, entry_points, &constants, &targets, key, true);
@@ -143,4 +126,24 @@ impl Pipelines {
             cache: None,
         })
     }
+}
+
+/// The colour targets of a mesh pass of `key`, for a full-screen pipeline
+/// drawn inside it: its colour (none at all for a depth-only pass) written
+/// with `color_writes`, then the label planes a shading pass writes, with
+/// `label_writes`.
+fn pass_targets(
+    key: PipelineKey,
+    color_writes: wgpu::ColorWrites,
+    label_writes: wgpu::ColorWrites,
+) -> Vec<Option<wgpu::ColorTargetState>> {
+    let color = key.color_format.map(|format| wgpu::ColorTargetState { format, blend: None, write_mask: color_writes });
+    let mut targets: Vec<_> = color.into_iter().map(Some).collect();
+    if matches!(key.pass, PassKind::Shading | PassKind::ShadingAfterPrePass) && !key.labels.is_empty() {
+        if targets.is_empty() {
+            targets.push(None);
+        }
+        targets.extend(super::cache::label_targets(key.labels, label_writes));
+    }
+    targets
 }
