@@ -173,6 +173,22 @@ impl PrePass {
     }
 }
 
+impl PrePass {
+    /// Whether `ctx`'s view gets the pre-pass this frame: [`PrePass::wanted`]
+    /// of its estimate, except that in the deterministic mode
+    /// ([`RenderContext::deterministic`]) an automatic pre-pass is always
+    /// on. The pre-pass decides which of two surfaces at exactly the same
+    /// depth shows (the last drawn with it, the first without), and the
+    /// estimate differs between visibility paths and, on a GPU path, is
+    /// read back from an earlier frame.
+    pub fn resolved(self, ctx: &RenderContext<'_>) -> bool {
+        match self {
+            PrePass::Auto { .. } if ctx.deterministic() => true,
+            _ => self.wanted(ctx.pre_pass_estimate()),
+        }
+    }
+}
+
 impl Default for PrePass {
     fn default() -> Self {
         Self::DEFAULT
@@ -184,7 +200,7 @@ impl RenderGraph for StandardGraph {
         let mut lit = self.lit.clone();
         // Occlusion culling builds its pyramid from the pre-pass's depth.
         let occlusion = ctx.occlusion_culling();
-        lit.depth_from_pre_pass = occlusion || self.pre_pass.wanted(ctx.pre_pass_estimate());
+        lit.depth_from_pre_pass = occlusion || self.pre_pass.resolved(ctx);
         if lit.depth_from_pre_pass {
             MeshPass::depth_pre_pass().drawing(DrawList::Early).run(ctx, rec).await?;
         }

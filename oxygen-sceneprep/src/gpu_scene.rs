@@ -150,9 +150,14 @@ pub struct GpuSceneChanges {
     pub instances: Vec<Range<u32>>,
     /// Groups and LODs changed: upload both whole.
     pub layout: bool,
+    /// [`GpuScene::ranks`] changed: upload them whole.
+    pub ranks: bool,
 }
 
 type GroupKey = (u64, u32, u32, u32, u32, u32, i32, u32);
+/// A group's place in the order: partition rank, material, pass mask, the
+/// mesh's stable id, first index and index count.
+type GroupOrder = (u64, u32, u32, u32, u32, u32);
 
 /// The opaque and masked part of the scene as GPU records, rebuilt when the
 /// frame phase recollected the scene, with what changed since the last
@@ -200,6 +205,13 @@ pub struct GpuScene {
     rebuilds: u64,
     /// Scratch: group key → index, reused.
     group_index: HashMap<GroupKey, u32>,
+    /// Each instance's place in its full-detail group's room, then each LOD
+    /// entry's place in its group's room: see [`GpuScene::ranks`].
+    ranks: Vec<u32>,
+    /// The instance of each submesh of the frame collection (by its index
+    /// in `FrameCollection::submeshes`), `INVALID_SLOT` for a transparent
+    /// submesh or a renderable left out.
+    instance_of_submesh: Vec<u32>,
 }
 
 impl GpuScene {
@@ -227,6 +239,34 @@ impl GpuScene {
     /// transparent submesh, which the CPU path draws.
     pub fn transparent_renderables(&self) -> &[u32] {
         &self.transparent
+    }
+    /// Where each instance sits in the room of the group it selects, in
+    /// instance order: entry `i` (< instances) for instance `i` at full
+    /// detail, entry `instances + l` for LOD entry `l`. The deterministic
+    /// mode writes each surviving instance at its rank and compacts the
+    /// room in rank order, so that a group's draws come in instance order
+    /// whatever order the GPU's threads ran in.
+    pub fn ranks(&self) -> &[u32] {
+        &self.ranks
+    }
+    /// The canonical draw order of the deterministic mode for an opaque or
+    /// masked item: its group (groups are in partition, material, mesh
+    /// order), then its instance (renderable, then submesh order) — the
+    /// order the GPU path's compaction restores, so that both paths draw
+    /// the same sequence. `submesh_index` indexes
+    /// `FrameCollection::submeshes`; `lod` is the item's LOD level (`None`:
+    /// full detail). `None` when the GPU scene does not hold the submesh.
+    pub fn canonical_key(&self, submesh_index: usize, lod: Option<usize>) -> Option<u64> {
+        let instance = *self.instance_of_submesh.get(submesh_index)?;
+        let record = self.instances.get(instance as usize)?;
+        let group = match lod {
+            None => record.group,
+            Some(level) if (level as u32) < record.lod_count => {
+                self.lods.get((record.lod_first as usize) + level)?.group
+            }
+            Some(_) => return None,
+        };
+        Some((u64::from(group) << 32) | u64::from(instance))
     }
     /// Rebuilds so far (one per recollected frame that a GPU view needed).
     pub fn rebuilds(&self) -> u64 {
@@ -260,21 +300,33 @@ impl GpuScene {
     pub(crate) fn rebuild(&mut self, scene: &Scene, frame: &FrameCollection, geometry: &GeometryCache) {
         let _span = info_span!("gpu_scene_rebuild", renderables = frame.renderables.len()).entered();
         let previous = std::mem::take(&mut self.instances);
+        let old_ranks = std::mem::take(&mut self.ranks);
         let (old_groups, old_lods) = (std::mem::take(&mut self.groups), std::mem::take(&mut self.lods));
         self.transparent.clear();
         self.group_index.clear();
         // Groups are first numbered in discovery order with their capacity,
         // then sorted into partition order and renumbered.
-        let mut keys: Vec<(GroupKey, u32)> = Vec::new();
-        let mut group_of = |key: GroupKey, keys: &mut Vec<(GroupKey, u32)>| -> u32 {
+        // Each group's key, its capacity so far, and its sort order, which
+        // names the mesh by its stable id, not its slots: slots are handed
+        // out in the order views first drew each mesh, and the group order
+        // must not depend on the frame history (the deterministic mode).
+        let mut keys: Vec<(GroupKey, u32, GroupOrder)> = Vec::new();
+        // Returns the group and the caller's rank in its room (instances
+        // come in order, so ranks follow instance order).
+        let mut group_of = |key: GroupKey, order: GroupOrder, keys: &mut Vec<(GroupKey, u32, GroupOrder)>| {
             let next = keys.len() as u32;
             let index = *self.group_index.entry(key).or_insert(next);
             if index == next {
-                keys.push((key, 0));
+                keys.push((key, 0, order));
             }
+            let rank = keys[index as usize].1;
             keys[index as usize].1 += 1;
-            index
+            (index, rank)
         };
+        let mut ranks = Vec::with_capacity(previous.len());
+        let mut lod_ranks = Vec::new();
+        self.instance_of_submesh.clear();
+        self.instance_of_submesh.resize(frame.submeshes.len(), oxygen_bindless::INVALID_SLOT);
         let mut instances = Vec::with_capacity(previous.len());
         let mut lods = Vec::new();
         // A mesh's attribute records, by its first vertex (which names it).
@@ -293,15 +345,19 @@ impl GpuScene {
                 if cached.pass_mask.contains(PassMask::TRANSPARENT) {
                     continue;
                 }
+                let rank = partition_rank(cached.pass_mask);
+                let mask = cached.pass_mask.bits();
                 let key = |vertex_slot, index_slot, first_index, index_count| -> GroupKey {
-                    let rank = partition_rank(cached.pass_mask);
-                    let mask = cached.pass_mask.bits();
                     (rank, cached.material, mask, vertex_slot, index_slot, first_index, 0, index_count)
                 };
-                let group = group_of(
-                    key(base.vertices.start, base.indices.start, cached.first_index, cached.index_count),
-                    &mut keys,
-                );
+                let order = |geometry_id, first_index, index_count| -> GroupOrder {
+                    (rank, cached.material, mask, geometry_id, first_index, index_count)
+                };
+                let base_key = key(base.vertices.start, base.indices.start, cached.first_index, cached.index_count);
+                let base_order = order(entry.geometry_id, cached.first_index, cached.index_count);
+                let (group, base_rank) = group_of(base_key, base_order, &mut keys);
+                self.instance_of_submesh[start as usize + submesh] = instances.len() as u32;
+                ranks.push(base_rank);
                 let lod_first = lods.len() as u32;
                 for level in levels {
                     // As the view phase: a LOD replaces the mesh and takes
@@ -310,11 +366,17 @@ impl GpuScene {
                         let range = *mesh.submeshes().get(submesh)?;
                         let slots = geometry.get(level.geometry)?;
                         attributes_of.insert(slots.vertices.start, slots.attributes);
-                        Some(key(slots.vertices.start, slots.indices.start, range.first_index, range.index_count))
+                        let id = oxygen_core::scene::geometry_index(level.geometry);
+                        Some((
+                            key(slots.vertices.start, slots.indices.start, range.first_index, range.index_count),
+                            order(id, range.first_index, range.index_count),
+                        ))
                     });
                     // A level the CPU path could not draw either falls back
                     // to the base mesh, so both paths draw something.
-                    let group = lod.map_or(group, |k| group_of(k, &mut keys));
+                    let (lod_key, lod_order) = lod.unwrap_or((base_key, base_order));
+                    let (group, rank) = group_of(lod_key, lod_order, &mut keys);
+                    lod_ranks.push(rank);
                     lods.push(GpuLod { below_screen_fraction: level.below_screen_fraction, group });
                 }
                 let sphere = entry.world_sphere;
@@ -340,7 +402,8 @@ impl GpuScene {
 
         // Partition order, then material and mesh: the CPU key's order.
         let mut order: Vec<u32> = (0..keys.len() as u32).collect();
-        order.sort_unstable_by_key(|&g| keys[g as usize].0);
+        // Keys are unique, so an unstable sort is deterministic.
+        order.sort_unstable_by_key(|&g| (keys[g as usize].2, keys[g as usize].0));
         let mut renumber = vec![0u32; keys.len()];
         for (new, &old) in order.iter().enumerate() {
             renumber[old as usize] = new as u32;
@@ -348,7 +411,7 @@ impl GpuScene {
         self.partitions.clear();
         let mut draw_base = 0u32;
         for (new, &old) in order.iter().enumerate() {
-            let ((_, material, mask, vertex_slot, index_slot, first_index, base_vertex, index_count), capacity) =
+            let ((_, material, mask, vertex_slot, index_slot, first_index, base_vertex, index_count), capacity, _) =
                 keys[old as usize];
             let partition_mask = PassMask::from_bits_truncate(mask) & PassMask::PARTITION_BITS;
             match self.partitions.last_mut() {
@@ -388,8 +451,11 @@ impl GpuScene {
         }
         self.lods = lods;
         self.instances = instances;
+        ranks.extend_from_slice(&lod_ranks);
+        self.ranks = ranks;
 
         self.changes.layout = self.groups != old_groups || self.lods != old_lods;
+        self.changes.ranks = self.ranks != old_ranks;
         self.changes.instances = if self.changes.layout || previous.len() != self.instances.len() {
             std::iter::once(0..self.instances.len() as u32).collect()
         } else {

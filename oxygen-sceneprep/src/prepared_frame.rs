@@ -67,6 +67,17 @@ pub struct GpuViewPlan {
     /// Draw room of the GPU-written draws; the CPU's (transparent) draws
     /// follow it in the view's draw range.
     pub capacity: u32,
+    /// The deterministic mode ([`crate::ScenePrep::set_deterministic`]):
+    /// the cull shader writes each survivor at its rank
+    /// ([`crate::GpuScene::ranks`]) and a compaction pass restores instance
+    /// order within each group, every group writes its command in a fixed
+    /// place (empty ones too).
+    pub deterministic: bool,
+    /// Where list C's draws start in the room: 0, except for occlusion
+    /// culling in the deterministic mode, whose list C holds every drawn
+    /// instance in one order (early and late merged) in a second room
+    /// after the first.
+    pub shading_offset: u32,
     /// Groups of the GPU scene: the commands of one list.
     pub groups: u32,
     /// Partitions of one list.
@@ -117,6 +128,7 @@ pub struct PreparedSceneFrame {
     pub(crate) estimated_overdraw: f32,
     pub(crate) depth_pass_indices: u64,
     pub(crate) gpu: Option<GpuViewPlan>,
+    pub(crate) deterministic: bool,
 }
 
 fn slot(a: &Allocation) -> String {
@@ -140,6 +152,7 @@ impl PreparedSceneFrame {
             estimated_overdraw: 0.0,
             depth_pass_indices: 0,
             gpu: None,
+            deterministic: false,
             slots: PreparedSlots::unallocated(),
         }
     }
@@ -225,6 +238,14 @@ impl PreparedSceneFrame {
     /// automatic pre-pass weighs against the shading it would spare.
     pub fn depth_pass_indices(&self) -> u64 {
         self.depth_pass_indices
+    }
+    /// Whether the frame was prepared in the deterministic mode
+    /// ([`crate::ScenePrep::set_deterministic`]): its draws come in the
+    /// canonical order, and whatever reads it must not choose by estimates
+    /// that depend on the path or the frame history (the standard graph's
+    /// automatic pre-pass is then always on).
+    pub fn deterministic(&self) -> bool {
+        self.deterministic
     }
 
     /// Wall time this view's view phase and finalization took (the frame

@@ -161,6 +161,8 @@ pub struct ScenePrep {
     frame_index: u64,
     stats: PrepStats,
     debug_generations: bool,
+    /// The deterministic mode ([`ScenePrep::set_deterministic`]).
+    deterministic: bool,
     render_origin: DVec3,
     /// Frame-global slots of the frame begun (materials filled in at emit).
     frame_slots: PreparedSlots,
@@ -218,6 +220,24 @@ fn overdraw_in_draw_order(keyed: &[(u64, u32)], items: &[RenderItem], coverage: 
     crate::expected_shaded_layers((runs + run.min(1.0)).min(total))
 }
 
+/// The deterministic mode's key for an opaque or masked item
+/// ([`GpuScene::canonical_key`]): its group and instance, below every
+/// transparent key (whose class bits are set). An item the GPU scene does
+/// not hold (its mesh had no slots when the scene was built) goes after the
+/// others, in item order.
+fn canonical_key(scene: &GpuScene, frame: &FrameCollection, item: &RenderItem) -> u64 {
+    const UNHELD: u64 = 0x3FFF_FFFF << 32;
+    let Some(entry) = frame.renderables.get(item.renderable as usize) else { return UNHELD };
+    let (start, count) = entry.lods;
+    let lod = if item.geometry == entry.geometry {
+        None
+    } else {
+        frame.lod_levels[start as usize..(start + count) as usize].iter().position(|l| l.geometry == item.geometry)
+    };
+    let submesh = entry.submeshes.0 as usize + item.submesh as usize;
+    scene.canonical_key(submesh, lod).map_or(UNHELD, |key| key.min(UNHELD - 1))
+}
+
 /// Whether two frames' frame-global ranges are the same slots (handles
 /// differ, since each frame allocates anew).
 fn same_frame_ranges(a: &PreparedSlots, b: &PreparedSlots) -> bool {
@@ -260,6 +280,7 @@ impl ScenePrep {
             frame_index: 0,
             stats: PrepStats::default(),
             debug_generations: false,
+            deterministic: false,
             render_origin: DVec3::ZERO,
             frame_slots: PreparedSlots::unallocated(),
             frame_begun: false,
@@ -294,6 +315,27 @@ impl ScenePrep {
     /// `generation`, and the view's constants ask the shader to check it.
     pub fn set_debug_generations(&mut self, enabled: bool) {
         self.debug_generations = enabled;
+    }
+
+    /// The deterministic mode: every view's opaque and masked draws come
+    /// in one canonical order whatever the visibility path, the frame
+    /// history, the number of threads or the order views were registered
+    /// in — group by group of the GPU scene (partition, material, mesh),
+    /// then instance by instance (renderable, then submesh) — instead of
+    /// front to back. The GPU paths restore that order after culling
+    /// ([`GpuViewPlan::deterministic`]); the CPU path sorts by it, so it
+    /// builds the GPU scene even when no view is on a GPU path. Costs the
+    /// front-to-back order (more shading without a depth pre-pass) and, on
+    /// the GPU paths, a compaction pass per view. Transparent draws keep
+    /// their back-to-front order, which is already a function of the scene
+    /// and the camera.
+    pub fn set_deterministic(&mut self, enabled: bool) {
+        self.deterministic = enabled;
+    }
+
+    /// Whether the deterministic mode is on.
+    pub fn deterministic(&self) -> bool {
+        self.deterministic
     }
 
     /// Threads views are prepared on.
@@ -484,7 +526,7 @@ impl ScenePrep {
             self.frames.push(PreparedSceneFrame::empty(view_id, Arc::clone(&self.released_transforms)));
         }
 
-        if views.iter().any(|v| v.options.visibility.on_gpu()) {
+        if self.deterministic || views.iter().any(|v| v.options.visibility.on_gpu()) {
             self.sync_gpu_scene(scene, slots)?;
         }
         if views.iter().any(|v| v.options.ray_scene) && self.ray_scene_generation != Some(self.collection_generation) {
@@ -499,6 +541,7 @@ impl ScenePrep {
             let _span = info_span!("view_phases").entered();
             let (frame, geometry, work) = (&self.frame, &self.geometry, &self.work);
             let transparent = self.gpu_scene.transparent_renderables();
+            let canonical = self.deterministic.then_some(&self.gpu_scene);
             self.pool.run(views.len(), &|i| {
                 let started = std::time::Instant::now();
                 let mut w = lock(&work[i]);
@@ -529,7 +572,11 @@ impl ScenePrep {
                     };
                     w.coverage.push(if coverage.is_finite() { coverage } else { 0.0 });
                     let material_key = if depth_only { 0 } else { item.material };
-                    let key = if grouped {
+                    let key = if let Some(scene) = canonical
+                        && !item.pass_mask.contains(PassMask::TRANSPARENT)
+                    {
+                        canonical_key(scene, frame, item)
+                    } else if grouped {
                         let geometry = frame.renderables.get(item.renderable as usize).map_or(0, |r| r.geometry_id);
                         sort_key_grouped(item.pass_mask, material_key, geometry, item.view_depth)
                     } else {
@@ -566,7 +613,7 @@ impl ScenePrep {
                 frame_index: self.frame_index,
                 debug_generations: self.debug_generations,
             };
-            let (work, gpu_scene) = (&self.work, &self.gpu_scene);
+            let (work, gpu_scene, deterministic) = (&self.work, &self.gpu_scene, self.deterministic);
             self.pool.run(views.len(), &|i| {
                 let started = std::time::Instant::now();
                 let mut w = lock(&work[i]);
@@ -579,6 +626,7 @@ impl ScenePrep {
                     indirect_allocation: w.indirect_allocation,
                     instancing: views[i].options.instancing,
                     gpu: Some((gpu_scene, views[i].options.visibility)).filter(|(_, v)| v.on_gpu()),
+                    deterministic,
                 };
                 emit_view(&frame, &view, &mut w.frame);
                 w.frame.prep_seconds = w.seconds + started.elapsed().as_secs_f32();
@@ -617,7 +665,11 @@ impl ScenePrep {
             // A GPU path's room comes first (see `gpu_scene`'s layout).
             let (gpu_draws, gpu_commands) = match request.options.visibility {
                 Visibility::Cpu => (0, 0),
-                v => (self.gpu_scene.capacity(), v.command_lists() * self.gpu_scene.groups().len() as u32),
+                v => (
+                    self.gpu_scene.capacity()
+                        + crate::finalize::emit::shading_offset(&self.gpu_scene, v, self.deterministic),
+                    v.command_lists() * self.gpu_scene.groups().len() as u32,
+                ),
             };
             w.draw_allocation = slots.allocate(DomainKind::DrawMetadata, gpu_draws + w.keyed.len() as u32)?;
             w.indirect_allocation = slots.allocate(DomainKind::IndirectArgs, gpu_commands + w.keyed.len() as u32)?;

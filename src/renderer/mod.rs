@@ -219,6 +219,7 @@ impl Renderer {
             None => ScenePrep::new(),
         };
         prep.set_debug_generations(options.debug_generations);
+        prep.set_deterministic(options.deterministic);
         Ok(Renderer {
             heap,
             prep,

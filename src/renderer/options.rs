@@ -65,6 +65,15 @@ pub struct RendererOptions {
     /// docs/performance.md) and wherever the GPU paths cannot run.
     /// [`Renderer::visibility`] reports the choice.
     pub visibility: Option<Visibility>,
+    /// The deterministic mode: the same scene, cameras and options give
+    /// bit-identical outputs on one adapter and driver, whatever the number
+    /// of threads, the order views were registered in, the visibility path
+    /// and the frame history. Draws come in one canonical order on every
+    /// path ([`oxygen_sceneprep::ScenePrep::set_deterministic`]) and an
+    /// automatic depth pre-pass is always on ([`crate::PrePass::resolved`]).
+    /// What it costs and what it cannot promise across adapters:
+    /// docs/determinism.md. Off by default.
+    pub deterministic: bool,
 }
 
 impl Default for RendererOptions {
@@ -83,6 +92,7 @@ impl Default for RendererOptions {
             keep_hdr: false,
             specialize_shaders: true,
             visibility: None,
+            deterministic: false,
         }
     }
 }

@@ -26,6 +26,32 @@ impl Renderer {
         Ok(oxygen_sceneprep::canonical_draws(all))
     }
 
+    /// Every draw `id` drew last frame, in the order the GPU drew them
+    /// (partition by partition, each in its draw order): on a GPU path the
+    /// GPU's draws are read back (waits for the GPU). In the deterministic
+    /// mode ([`RendererOptions::deterministic`]) every path gives the same
+    /// sequence; otherwise a GPU path's order within a partition is the
+    /// order its threads won their slots in.
+    pub fn view_draws_in_draw_order(&self, id: impl Into<ViewId>) -> Result<Vec<DrawMetadata>, RenderError> {
+        let id = id.into();
+        let frame = self.prepared_frame(id).ok_or(RenderError::NoSuchView(id))?;
+        let gpu_written = match &self.visibility.gpu {
+            Some(visibility) => visibility.read_draws(&self.gpu, &self.heap, frame)?,
+            None => Vec::new(),
+        };
+        // One read-back entry per GPU-written partition, in partition order.
+        let mut gpu_written = gpu_written.into_iter();
+        let mut out = Vec::new();
+        for partition in frame.partitions() {
+            if partition.gpu_count.is_some() {
+                out.extend(gpu_written.next().map(|(_, draws)| draws).unwrap_or_default());
+            } else {
+                out.extend_from_slice(frame.draws_of(partition));
+            }
+        }
+        Ok(out)
+    }
+
     /// The view's colour target as an image (a batch camera's tile of its
     /// batch's atlas; waits for the GPU).
     pub fn read_color(&self, id: impl Into<ViewId>) -> Result<image::RgbaImage, RenderError> {

@@ -121,6 +121,14 @@ impl<'a> RenderContext<'a> {
         }
     }
 
+    /// Whether the view was prepared in the deterministic mode
+    /// ([`PreparedSceneFrame::deterministic`]): a graph must then not choose
+    /// passes from estimates (they differ between visibility paths and
+    /// depend on earlier frames).
+    pub fn deterministic(&self) -> bool {
+        self.prepared.deterministic()
+    }
+
     /// Whether this view's visibility is GPU occlusion culling this frame:
     /// its depth pre-pass then runs in two phases around
     /// [`RenderContext::cull_occluded`].

@@ -238,6 +238,8 @@ pub(crate) const ENTRY_POINTS: &[EntryPoint] = &[
     entry(CULL, "commands_early", Stage::Compute),
     entry(CULL, "cull_late", Stage::Compute),
     entry(CULL, "commands_late", Stage::Compute),
+    entry(CULL, "compact_early", Stage::Compute),
+    entry(CULL, "compact_late", Stage::Compute),
     entry(HIZ, "copy_depth", Stage::Compute),
     entry(HIZ, "reduce", Stage::Compute),
     entry(HIZ_VISIBLE_BOXES, "visible_boxes", Stage::Compute),

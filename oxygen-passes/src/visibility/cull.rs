@@ -26,7 +26,7 @@ use oxygen_sceneprep::{GpuScene, GpuSceneChanges, PreparedSceneFrame, Visibility
 use tracing::info_span;
 
 use super::hiz::{HizPipelines, HizPyramid};
-use super::params::{CULL_CASTERS_ONLY, CULL_OCCLUSION, CullParams};
+use super::params::{CULL_CASTERS_ONLY, CULL_DETERMINISTIC, CULL_OCCLUSION, CullParams};
 
 /// Workgroups per dimension every adapter allows.
 const MAX_WORKGROUPS: u32 = 65_535;
@@ -118,6 +118,11 @@ struct ViewCull {
     overdraw: Option<f32>,
     /// Indices of the opaque and masked draws, from the same readback.
     depth_pass_indices: Option<u64>,
+    /// The deterministic mode: its occupancy follows the history, one
+    /// entry per draw of the GPU scene's room.
+    deterministic: bool,
+    /// The GPU scene's room (one list's draws).
+    room: u32,
 }
 
 /// A batch's frustum-culled cameras, culled together: every camera's
@@ -140,6 +145,10 @@ struct BatchCull {
     cameras: Vec<(ViewId, u32)>,
     instances: u32,
     groups: u32,
+    /// The deterministic mode: `history` holds each camera's occupancy
+    /// (`room` entries each).
+    deterministic: bool,
+    room: u32,
     seen: bool,
 }
 
@@ -148,6 +157,8 @@ pub struct GpuVisibility {
     instances: GrowingBuffer,
     groups: GrowingBuffer,
     lods: GrowingBuffer,
+    /// [`GpuScene::ranks`], which the deterministic mode reads.
+    ranks: GrowingBuffer,
     /// Bumped whenever a scene buffer is replaced.
     generation: u64,
     layout: wgpu::BindGroupLayout,
@@ -155,6 +166,8 @@ pub struct GpuVisibility {
     commands_early: wgpu::ComputePipeline,
     cull_late: wgpu::ComputePipeline,
     commands_late: wgpu::ComputePipeline,
+    compact_early: wgpu::ComputePipeline,
+    compact_late: wgpu::ComputePipeline,
     /// Bound in place of a pyramid by views without occlusion culling.
     no_hiz: wgpu::Buffer,
     hiz: HizPipelines,
@@ -189,10 +202,11 @@ impl GpuVisibility {
         let _span = info_span!("gpu_visibility_new").entered();
         let layout = LayoutEntries::new(wgpu::ShaderStages::COMPUTE)
             // Every view's `CullParams`; instances, groups, LODs; counts,
-            // history, draws, commands; the depth pyramid (cull.wgsl's group 0).
+            // history, draws, commands; the depth pyramid; the ranks
+            // (cull.wgsl's group 0).
             .repeat(4, bindings::storage_read_only())
             .repeat(4, bindings::storage_read_write())
-            .push(bindings::storage_read_only())
+            .repeat(2, bindings::storage_read_only())
             .create_layout(device, "gpu visibility");
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("visibility cull"),
@@ -224,11 +238,14 @@ impl GpuVisibility {
             instances: GrowingBuffer::new(device, "gpu scene instances", read, 0),
             groups: GrowingBuffer::new(device, "gpu scene groups", read, 0),
             lods: GrowingBuffer::new(device, "gpu scene lods", read, 0),
+            ranks: GrowingBuffer::new(device, "gpu scene ranks", read, 0),
             generation: 0,
             cull_early: pipeline("cull_early"),
             commands_early: pipeline("commands_early"),
             cull_late: pipeline("cull_late"),
             commands_late: pipeline("commands_late"),
+            compact_early: pipeline("compact_early"),
+            compact_late: pipeline("compact_late"),
             layout,
             no_hiz,
             hiz: HizPipelines::new(device),
@@ -260,8 +277,11 @@ impl GpuVisibility {
         let _span = info_span!("gpu_visibility_prepare", views = views.len()).entered();
         self.collect_coverage(device);
         let mut uploaded = 0u64;
-        let everything =
-            GpuSceneChanges { instances: std::iter::once(0..scene.instances().len() as u32).collect(), layout: true };
+        let everything = GpuSceneChanges {
+            instances: std::iter::once(0..scene.instances().len() as u32).collect(),
+            layout: true,
+            ranks: true,
+        };
         let mut changes = match self.uploaded_rebuild {
             Some(held) if held == scene.rebuilds() => GpuSceneChanges::default(),
             Some(held) if held + 1 == scene.rebuilds() => scene.last_changes().clone(),
@@ -273,6 +293,7 @@ impl GpuVisibility {
         let mut replaced = self.instances.reserve(device, bytes(scene.instances().len(), instance_size));
         replaced |= self.groups.reserve(device, bytes(scene.groups().len(), 48));
         replaced |= self.lods.reserve(device, bytes(scene.lods().len(), 8));
+        replaced |= self.ranks.reserve(device, bytes(scene.ranks().len(), 4));
         if replaced {
             self.generation += 1;
             changes = everything;
@@ -281,6 +302,10 @@ impl GpuVisibility {
             queue.write_buffer(&self.groups.buffer, 0, bytemuck::cast_slice(scene.groups()));
             queue.write_buffer(&self.lods.buffer, 0, bytemuck::cast_slice(scene.lods()));
             uploaded += bytes(scene.groups().len(), 48) + bytes(scene.lods().len(), 8);
+        }
+        if changes.ranks {
+            queue.write_buffer(&self.ranks.buffer, 0, bytemuck::cast_slice(scene.ranks()));
+            uploaded += bytes(scene.ranks().len(), 4);
         }
         for range in &changes.instances {
             let records = &scene.instances()[range.start as usize..range.end as usize];
@@ -331,6 +356,8 @@ impl GpuVisibility {
                 readback_state: std::sync::Arc::new(std::sync::atomic::AtomicU8::new(READBACK_IDLE)),
                 overdraw: None,
                 depth_pass_indices: None,
+                deterministic: false,
+                room: 0,
             });
             state.seen = true;
             // After the plan's counters, the coverage counters: the sum, the
@@ -342,7 +369,10 @@ impl GpuVisibility {
             // means nothing, so start from "nothing was visible" (phase 2
             // then tests everything).
             let renumbered = state.instances != plan.instances || state.plan_visibility != plan.visibility;
-            stale |= state.history.reserve(device, u64::from(plan.instances) * 4);
+            let room = plan.capacity - plan.shading_offset;
+            let occupancy = if plan.deterministic { room } else { 0 };
+            stale |= state.history.reserve(device, (u64::from(plan.instances) + u64::from(occupancy)) * 4);
+            (state.deterministic, state.room) = (plan.deterministic, room);
             if renumbered || changes.layout {
                 queue.write_buffer(&state.history.buffer, 0, &vec![0u8; plan.instances as usize * 4]);
                 uploaded += u64::from(plan.instances) * 4;
@@ -364,7 +394,8 @@ impl GpuVisibility {
             let hiz_size = state.hiz.as_ref().map(HizPyramid::size);
             let bound = (self.generation, heap.growth_count(), hiz_size);
             if stale || state.bind_group.is_none() || state.bound != bound {
-                let scene_buffers = [&self.instances.buffer, &self.groups.buffer, &self.lods.buffer];
+                let scene_buffers =
+                    [&self.instances.buffer, &self.groups.buffer, &self.lods.buffer, &self.ranks.buffer];
                 let hiz = state.hiz.as_ref().map_or(&self.no_hiz, |h| h.buffer());
                 let own = [&state.params, &state.counts.buffer, &state.history.buffer, hiz];
                 state.bind_group = Some(bind_group(device, &self.layout, scene_buffers, heap, own));
@@ -429,26 +460,35 @@ impl GpuVisibility {
                 cameras: Vec::new(),
                 instances: 0,
                 groups: 0,
+                deterministic: false,
+                room: 0,
                 seen: true,
             });
             batch.seen = true;
             batch.cameras.clear();
             let mut params = Vec::with_capacity(requests.len());
             let mut base = 0u32;
-            for (request, plan) in requests.iter().zip(&plans) {
+            // Frustum culling: the room is the plan's whole GPU capacity.
+            let (deterministic, room) = (plans[0].deterministic, plans[0].capacity);
+            for (camera, (request, plan)) in requests.iter().zip(&plans).enumerate() {
                 let id = request.view.view_id;
                 let hiz = self.views.get(&id).and_then(|s| s.hiz.as_ref());
-                params.push(CullParams { counter_base: base, ..cull_params(request, plan, hiz) });
+                // Each camera's occupancy in the batch's history, one after
+                // the other.
+                let occupancy_base = camera as u32 * room;
+                params.push(CullParams { counter_base: base, occupancy_base, ..cull_params(request, plan, hiz) });
                 batch.cameras.push((id, base));
                 self.batch_members.insert(id, (key, base));
                 // The plan's counters, then the coverage counters (see `prepare`).
                 base += plan.counters() + 3 + plan.groups;
             }
             (batch.instances, batch.groups) = (plans[0].instances, plans[0].groups);
+            (batch.deterministic, batch.room) = (deterministic, room);
+            let occupancy = if deterministic { requests.len() as u64 * u64::from(room) } else { 1 };
             let param_bytes = (params.len() * std::mem::size_of::<CullParams>()) as u64;
             let mut replaced = batch.params.reserve(device, param_bytes);
             replaced |= batch.counts.reserve(device, u64::from(base) * 4);
-            replaced |= batch.history.reserve(device, 4);
+            replaced |= batch.history.reserve(device, occupancy * 4);
             if replaced {
                 batch.buffers += 1;
                 batch.written.clear();
@@ -460,7 +500,8 @@ impl GpuVisibility {
             }
             let bound = (self.generation, heap.growth_count(), batch.buffers);
             if batch.bind_group.is_none() || batch.bound != bound {
-                let scene_buffers = [&self.instances.buffer, &self.groups.buffer, &self.lods.buffer];
+                let scene_buffers =
+                    [&self.instances.buffer, &self.groups.buffer, &self.lods.buffer, &self.ranks.buffer];
                 let own = [&batch.params.buffer, &batch.counts.buffer, &batch.history.buffer, &self.no_hiz];
                 batch.bind_group = Some(bind_group(device, &self.layout, scene_buffers, heap, own));
                 batch.bound = bound;
@@ -616,8 +657,19 @@ impl GpuVisibility {
         let Some(state) = self.views.get(&view) else { return };
         let _span = info_span!("cull_early", view = %view).entered();
         encoder.clear_buffer(&state.counts.buffer, 0, None);
-        let steps = [(&self.cull_early, state.instances), (&self.commands_early, state.groups)];
+        if state.deterministic {
+            let occupancy = u64::from(state.instances) * 4;
+            encoder.clear_buffer(&state.history.buffer, occupancy, Some(u64::from(state.room) * 4));
+        }
+        let steps = self.early_steps(state.instances, state.groups, state.deterministic);
         Self::dispatch(encoder, state.bind_group.as_ref(), &steps, 1);
+    }
+
+    /// Phase 1's steps: cull, compact (the deterministic mode only: no
+    /// threads otherwise), commands.
+    fn early_steps(&self, instances: u32, groups: u32, deterministic: bool) -> [(&wgpu::ComputePipeline, u32); 3] {
+        let compact = if deterministic { workgroup_each(groups) } else { 0 };
+        [(&self.cull_early, instances), (&self.compact_early, compact), (&self.commands_early, groups)]
     }
 
     /// Phase 1 for every view of `views` (a batch's cameras) in one
@@ -638,12 +690,20 @@ impl GpuVisibility {
             && batch.bind_group.is_some()
         {
             encoder.clear_buffer(&batch.counts.buffer, 0, None);
-            let steps = [(&self.cull_early, batch.instances), (&self.commands_early, batch.groups)];
+            if batch.deterministic {
+                let occupancy = batch.cameras.len() as u64 * u64::from(batch.room) * 4;
+                encoder.clear_buffer(&batch.history.buffer, 0, Some(occupancy));
+            }
+            let steps = self.early_steps(batch.instances, batch.groups, batch.deterministic);
             Self::dispatch(encoder, batch.bind_group.as_ref(), &steps, batch.cameras.len() as u32);
             return;
         }
         for state in &states {
             encoder.clear_buffer(&state.counts.buffer, 0, None);
+            if state.deterministic {
+                let occupancy = u64::from(state.instances) * 4;
+                encoder.clear_buffer(&state.history.buffer, occupancy, Some(u64::from(state.room) * 4));
+            }
         }
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("visibility cull (batch)"),
@@ -653,7 +713,7 @@ impl GpuVisibility {
         for state in states {
             let Some(bind_group) = &state.bind_group else { continue };
             pass.set_bind_group(0, bind_group, &[]);
-            for (pipeline, threads) in [(&self.cull_early, state.instances), (&self.commands_early, state.groups)] {
+            for (pipeline, threads) in self.early_steps(state.instances, state.groups, state.deterministic) {
                 if threads == 0 {
                     continue;
                 }
@@ -684,7 +744,9 @@ impl GpuVisibility {
         if let Some(hiz) = &state.hiz {
             hiz.build(device, &self.hiz, encoder, depth);
         }
-        let steps = [(&self.cull_late, state.instances), (&self.commands_late, state.groups)];
+        let compact = if state.deterministic { workgroup_each(state.groups) } else { 0 };
+        let steps =
+            [(&self.cull_late, state.instances), (&self.compact_late, compact), (&self.commands_late, state.groups)];
         Self::dispatch(encoder, state.bind_group.as_ref(), &steps, 1);
     }
 }
@@ -695,7 +757,7 @@ impl GpuVisibility {
 fn bind_group(
     device: &wgpu::Device,
     layout: &wgpu::BindGroupLayout,
-    [instances, groups, lods]: [&wgpu::Buffer; 3],
+    [instances, groups, lods, ranks]: [&wgpu::Buffer; 4],
     heap: &BindlessHeap,
     [params, counts, history, hiz]: [&wgpu::Buffer; 4],
 ) -> wgpu::BindGroup {
@@ -712,6 +774,7 @@ fn bind_group(
             buffer(6, heap.buffer(DomainKind::DrawMetadata)),
             buffer(7, heap.buffer(DomainKind::IndirectArgs)),
             buffer(8, hiz),
+            buffer(9, ranks),
         ],
     })
 }
@@ -786,6 +849,9 @@ fn cull_params(
     if plan.visibility == Visibility::GpuOcclusion {
         flags |= CULL_OCCLUSION;
     }
+    if plan.deterministic {
+        flags |= CULL_DETERMINISTIC;
+    }
     let generation = request.prepared.renderer_constants(0.0).debug_flags;
     let generation = if generation != 0 { slots.draw_metadata.generation() } else { 0 };
     CullParams {
@@ -809,8 +875,17 @@ fn cull_params(
         disc: std::f32::consts::FRAC_PI_4 / view.aspect().max(f32::MIN_POSITIVE),
         counter_base: 0,
         history_base: 0,
-        reserved: [0; 2],
+        shading_offset: plan.shading_offset,
+        // A view of its own: after its history.
+        occupancy_base: plan.instances,
     }
+}
+
+/// The `threads` argument of a step that runs one workgroup per item (the
+/// compact steps): [`dispatch_threads_for`] makes one workgroup per 64
+/// threads.
+fn workgroup_each(items: u32) -> u32 {
+    items.saturating_mul(64)
 }
 
 /// Dispatches `threads` invocations of 64: past 65 535 workgroups the rest

@@ -27,6 +27,18 @@ var<private> params: CullParams;
 @group(0) @binding(6) var<storage, read_write> draws: array<DrawMetadata>;
 @group(0) @binding(7) var<storage, read_write> commands: array<DrawIndexedIndirect>;
 @group(0) @binding(8) var<storage, read> hiz_pyramid: array<f32>;
+// The GPU scene's ranks (GpuScene::ranks): each instance's place in its
+// full-detail group's room, then each LOD entry's place in its group's.
+@group(0) @binding(9) var<storage, read> ranks: array<u32>;
+
+// The deterministic mode (CULL_DETERMINISTIC): the cull steps do not race
+// for slots. Each survivor writes its instance number (+ 1, with
+// LATE_SURVIVOR in the late phase) at its rank in its group's room of the
+// view's occupancy (in `history`, from `occupancy_base`); the compact steps
+// then walk each room in rank order, which is instance order, and emit the
+// draws; every group writes its commands at a fixed place. What the GPU
+// draws is then the same sequence whatever order its threads ran in.
+const LATE_SURVIVOR: u32 = 0x80000000u;
 
 // The CPU path's test (Frustum::intersects_aabb): the box's corner farthest
 // along each plane's normal must not be behind it.
@@ -47,9 +59,10 @@ fn wanted(instance: GpuInstance) -> bool {
 }
 
 // The view phase's LOD choice: the last level whose threshold the sphere's
-// projected diameter is below.
-fn select_group(instance: GpuInstance) -> u32 {
-    var group = instance.group;
+// projected diameter is below, as (group, rank in the group's room) for
+// instance `i`.
+fn select_group(i: u32, instance: GpuInstance) -> vec2<u32> {
+    var group = vec2<u32>(instance.group, ranks[i]);
     if instance.lod_count == 0u {
         return group;
     }
@@ -64,7 +77,7 @@ fn select_group(instance: GpuInstance) -> u32 {
     for (var l = 0u; l < instance.lod_count; l++) {
         let lod = lods[instance.lod_first + l];
         if projected < lod.below_screen_fraction {
-            group = lod.group;
+            group = vec2<u32>(lod.group, ranks[params.instance_count + instance.lod_first + l]);
         }
     }
     return group;
@@ -146,6 +159,16 @@ fn emit(group_index: u32, slot: u32, instance: GpuInstance) {
     draws[params.draw_slot + group.draw_base + slot] = draw;
 }
 
+fn deterministic() -> bool {
+    return (params.flags & CULL_DETERMINISTIC) != 0u;
+}
+
+// Marks instance `i` as drawn by this phase (`tag`: 0 or LATE_SURVIVOR) at
+// its rank in its group's room, for the compact step.
+fn occupy(selected: vec2<u32>, i: u32, tag: u32) {
+    history[params.occupancy_base + groups[selected.x].draw_base + selected.y] = (i + 1u) | tag;
+}
+
 fn command(group: GpuGroup, instances: u32, first: u32) -> DrawIndexedIndirect {
     return DrawIndexedIndirect(group.index_count, instances, group.index_slot + group.first_index,
         i32(group.vertex_slot) + group.base_vertex, group.draw_base + first);
@@ -181,10 +204,14 @@ fn cull_early(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgro
     if occlusion && history[params.history_base + i] == 0u {
         return;
     }
-    let group = select_group(instance);
-    let slot = atomicAdd(&counts[counter(params.group_counters + group)], 1u);
-    emit(group, slot, instance);
-    add_coverage(i, instance, group);
+    let selected = select_group(i, instance);
+    if deterministic() {
+        occupy(selected, i, 0u);
+    } else {
+        let slot = atomicAdd(&counts[counter(params.group_counters + selected.x)], 1u);
+        emit(selected.x, slot, instance);
+    }
+    add_coverage(i, instance, selected.x);
 }
 
 // Phase 1's commands (list A): one instanced command per group with draws,
@@ -201,10 +228,17 @@ fn commands_early(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_wor
         add_capped_coverage(g);
     }
     let drawn = atomicLoad(&counts[counter(params.group_counters + g)]);
+    let group = groups[g];
+    if deterministic() {
+        // Every group of the partition in group order, empty ones too: the
+        // count is the partition's group count, whoever adds first.
+        atomicAdd(&counts[counter(group.partition_index)], 1u);
+        commands[params.command_slot + g] = command(group, drawn, 0u);
+        return;
+    }
     if drawn == 0u {
         return;
     }
-    let group = groups[g];
     let c = atomicAdd(&counts[counter(group.partition_index)], 1u);
     commands[params.command_slot + group.command_base + c] = command(group, drawn, 0u);
 }
@@ -233,11 +267,15 @@ fn cull_late(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgrou
     if !visible || drawn_early {
         return;
     }
-    let group = select_group(instance);
-    let early = atomicLoad(&counts[counter(params.group_counters + group)]);
-    let slot = early + atomicAdd(&counts[counter(params.group_counters + params.group_count + group)], 1u);
-    emit(group, slot, instance);
-    add_coverage(i, instance, group);
+    let selected = select_group(i, instance);
+    if deterministic() {
+        occupy(selected, i, LATE_SURVIVOR);
+    } else {
+        let early = atomicLoad(&counts[counter(params.group_counters + selected.x)]);
+        let slot = early + atomicAdd(&counts[counter(params.group_counters + params.group_count + selected.x)], 1u);
+        emit(selected.x, slot, instance);
+    }
+    add_coverage(i, instance, selected.x);
 }
 
 // Phase 2's commands: list B (the newly visible, drawn into the depth
@@ -253,6 +291,16 @@ fn commands_late(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_work
     let early = atomicLoad(&counts[counter(params.group_counters + g)]);
     let late = atomicLoad(&counts[counter(params.group_counters + params.group_count + g)]);
     let group = groups[g];
+    if deterministic() {
+        // As commands_early: every group at its fixed place. List C draws
+        // the merged room (compact_late), after the first.
+        atomicAdd(&counts[counter(params.partition_count + group.partition_index)], 1u);
+        commands[params.command_slot + params.group_count + g] = command(group, late, early);
+        atomicAdd(&counts[counter(2u * params.partition_count + group.partition_index)], 1u);
+        commands[params.command_slot + 2u * params.group_count + g] =
+            command(group, early + late, params.shading_offset);
+        return;
+    }
     if late > 0u {
         let c = atomicAdd(&counts[counter(params.partition_count + group.partition_index)], 1u);
         commands[params.command_slot + params.group_count + group.command_base + c] = command(group, late, early);
@@ -261,5 +309,107 @@ fn commands_late(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_work
         let c = atomicAdd(&counts[counter(2u * params.partition_count + group.partition_index)], 1u);
         commands[params.command_slot + 2u * params.group_count + group.command_base + c] =
             command(group, early + late, 0u);
+    }
+}
+
+// The deterministic mode's compact steps: one workgroup per group (the
+// dispatch's x and y; the view is its z) walks the group's room in rank
+// order, COMPACT_WIDTH entries at a time, and emits the marked instances
+// in that order.
+const COMPACT_WIDTH: u32 = 256u;
+var<workgroup> scan: array<u32, 256>;
+
+// The inclusive prefix sum of `value` over the workgroup (Hillis-Steele:
+// log2(256) steps). Every invocation must call it; leaves the total in
+// scan[COMPACT_WIDTH - 1].
+fn workgroup_scan(lid: u32, value: u32) -> u32 {
+    scan[lid] = value;
+    workgroupBarrier();
+    for (var offset = 1u; offset < COMPACT_WIDTH; offset = offset << 1u) {
+        var add = 0u;
+        if lid >= offset {
+            add = scan[lid - offset];
+        }
+        workgroupBarrier();
+        scan[lid] = scan[lid] + add;
+        workgroupBarrier();
+    }
+    return scan[lid];
+}
+
+// Phase 1: the instances cull_early marked, in rank order, at the start of
+// the group's room (list A); the group's early count.
+@compute @workgroup_size(256)
+fn compact_early(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) workgroups: vec3<u32>,
+                 @builtin(local_invocation_index) lid: u32) {
+    // Control flow reads only uniform values (read-only storage at
+    // workgroup-uniform indices), as the barriers require.
+    let view = views[wid.z];
+    params = view;
+    let g = wid.x + wid.y * workgroups.x;
+    if g >= view.group_count {
+        return;
+    }
+    let group = groups[g];
+    let room = view.occupancy_base + group.draw_base;
+    var written = 0u;
+    for (var start = 0u; start < group.capacity; start += COMPACT_WIDTH) {
+        var entry = 0u;
+        if start + lid < group.capacity {
+            entry = history[room + start + lid];
+        }
+        let keep = entry != 0u && (entry & LATE_SURVIVOR) == 0u;
+        let at = workgroup_scan(lid, select(0u, 1u, keep));
+        if keep {
+            emit(g, written + at - 1u, instances[entry - 1u]);
+        }
+        written += scan[COMPACT_WIDTH - 1u];
+        // Everyone has read the total before the next chunk overwrites it.
+        workgroupBarrier();
+    }
+    if lid == 0u {
+        atomicStore(&counts[counter(view.group_counters + g)], written);
+    }
+}
+
+// Phase 2: the instances cull_late marked after list A's (list B), and
+// every marked instance, early and late merged in rank order, in the second
+// room (list C); the group's late count.
+@compute @workgroup_size(256)
+fn compact_late(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) workgroups: vec3<u32>,
+                @builtin(local_invocation_index) lid: u32) {
+    let view = views[wid.z];
+    params = view;
+    let g = wid.x + wid.y * workgroups.x;
+    if g >= view.group_count {
+        return;
+    }
+    let group = groups[g];
+    let room = view.occupancy_base + group.draw_base;
+    let early = atomicLoad(&counts[counter(view.group_counters + g)]);
+    var late_written = 0u;
+    var all_written = 0u;
+    for (var start = 0u; start < group.capacity; start += COMPACT_WIDTH) {
+        var entry = 0u;
+        if start + lid < group.capacity {
+            entry = history[room + start + lid];
+        }
+        let late = (entry & LATE_SURVIVOR) != 0u;
+        // Two counts of at most 256 in one scan: late ones low, all high.
+        let at = workgroup_scan(lid, select(0u, 1u, late) | select(0u, 1u << 16u, entry != 0u));
+        if entry != 0u {
+            let instance = instances[(entry & ~LATE_SURVIVOR) - 1u];
+            if late {
+                emit(g, early + late_written + (at & 0xFFFFu) - 1u, instance);
+            }
+            emit(g, view.shading_offset + all_written + (at >> 16u) - 1u, instance);
+        }
+        let total = scan[COMPACT_WIDTH - 1u];
+        late_written += total & 0xFFFFu;
+        all_written += total >> 16u;
+        workgroupBarrier();
+    }
+    if lid == 0u {
+        atomicStore(&counts[counter(view.group_counters + view.group_count + g)], late_written);
     }
 }

@@ -7,6 +7,9 @@
 pub(crate) const CULL_CASTERS_ONLY: u32 = 1;
 /// `CullParams::flags`: two-phase occlusion culling.
 pub(crate) const CULL_OCCLUSION: u32 = 2;
+/// `CullParams::flags`: the deterministic mode (survivors marked at their
+/// rank, then compacted in rank order; commands at fixed places).
+pub(crate) const CULL_DETERMINISTIC: u32 = 4;
 
 oxygen_gpu::gpu_struct! {
     /// The cull shader's per-view parameters (its WGSL twin is generated).
@@ -37,7 +40,12 @@ oxygen_gpu::gpu_struct! {
         pub(crate) counter_base: u32,
         /// Where the view's history starts in the history buffer.
         pub(crate) history_base: u32,
-        pub(crate) reserved: [u32; 2],
+        /// Where list C's draws start in each group's room (see
+        /// `GpuViewPlan::shading_offset`).
+        pub(crate) shading_offset: u32,
+        /// Where the view's occupancy (the deterministic mode's marks, one
+        /// per draw of the room) starts in the history buffer.
+        pub(crate) occupancy_base: u32,
     }
 }
 
@@ -60,6 +68,7 @@ pub(crate) fn wgsl_constants() -> String {
     crate::shaders::compose::u32_constants(&[
         ("CULL_CASTERS_ONLY", CULL_CASTERS_ONLY),
         ("CULL_OCCLUSION", CULL_OCCLUSION),
+        ("CULL_DETERMINISTIC", CULL_DETERMINISTIC),
         ("INSTANCE_CASTS_SHADOWS", oxygen_sceneprep::GpuInstance::CASTS_SHADOWS),
     ])
 }

@@ -21,7 +21,8 @@ use crate::finalize::partition::{build_commands, build_partitions};
 use crate::gpu_scene::GpuScene;
 use crate::prepared_frame::FrameTransforms;
 use crate::{
-    DrawMetadata, GpuViewPlan, Instancing, PassMask, PreparedSceneFrame, PreparedSlots, RenderItem, Visibility,
+    DrawMetadata, GpuViewPlan, Instancing, Partition, PassMask, PreparedSceneFrame, PreparedSlots, RenderItem,
+    Visibility,
 };
 
 /// What every view of a frame emits against: shared, read-only.
@@ -55,6 +56,8 @@ pub(crate) struct ViewEmit<'a> {
     pub instancing: Instancing,
     /// A GPU visibility path: the GPU scene whose partitions come first.
     pub gpu: Option<(&'a GpuScene, Visibility)>,
+    /// The deterministic mode (see [`GpuViewPlan::deterministic`]).
+    pub deterministic: bool,
 }
 
 /// Fills `out` with the draws of `view`, reusing its buffers. Leaves
@@ -98,11 +101,12 @@ pub(crate) fn emit_view(frame: &FrameEmit<'_>, view: &ViewEmit<'_>, out: &mut Pr
     // Last frame's plan lends its vectors, so a steady frame allocates nothing.
     let previous = out.gpu.take();
     if let Some((scene, visibility)) = view.gpu {
-        out.gpu = Some(gpu_plan(scene, visibility, previous, out));
+        out.gpu = Some(gpu_plan(scene, visibility, view.deterministic, previous, out));
     }
     out.view_id = view.view_id;
     out.frame_index = frame.frame_index;
     out.debug_generations = frame.debug_generations;
+    out.deterministic = view.deterministic;
     out.transforms = Arc::clone(frame.transforms);
     out.slots = PreparedSlots {
         draw_metadata: view.draw_allocation,
@@ -116,15 +120,19 @@ pub(crate) fn emit_view(frame: &FrameEmit<'_>, view: &ViewEmit<'_>, out: &mut Pr
 fn gpu_plan(
     scene: &GpuScene,
     visibility: Visibility,
+    deterministic: bool,
     previous: Option<GpuViewPlan>,
     out: &mut PreparedSceneFrame,
 ) -> GpuViewPlan {
     let (mut early, mut late) = previous.map_or((Vec::new(), Vec::new()), |p| (p.early_partitions, p.late_partitions));
     early.clear();
     late.clear();
+    let shading_offset = shading_offset(scene, visibility, deterministic);
     let mut plan = GpuViewPlan {
         visibility,
-        capacity: scene.capacity(),
+        capacity: scene.capacity() + shading_offset,
+        deterministic,
+        shading_offset,
         groups: scene.groups().len() as u32,
         partitions: scene.partitions().len() as u32,
         instances: scene.instances().len() as u32,
@@ -149,6 +157,20 @@ fn gpu_plan(
     } else {
         0
     };
-    out.partitions.splice(0..0, scene.list_partitions(shading_list));
+    out.partitions.splice(
+        0..0,
+        scene.list_partitions(shading_list).map(|p| Partition {
+            begin: p.begin + shading_offset,
+            end: p.end + shading_offset,
+            ..p
+        }),
+    );
     plan
+}
+
+/// Where list C's draws start in a GPU view's room (see
+/// [`GpuViewPlan::shading_offset`]): a second room for occlusion culling in
+/// the deterministic mode, else none.
+pub(crate) fn shading_offset(scene: &GpuScene, visibility: Visibility, deterministic: bool) -> u32 {
+    if deterministic && visibility == Visibility::GpuOcclusion { scene.capacity() } else { 0 }
 }
