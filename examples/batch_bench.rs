@@ -16,7 +16,11 @@
 //! view, W × H pixels. Both paths decide visibility the same way:
 //! `BATCH_BENCH_VISIBILITY=cpu` (the default: ScenePrep culls and emits
 //! every camera's draws) or `gpu` (GPU frustum culling, a dispatch per
-//! camera; where the adapter cannot, the bench refuses).
+//! camera; where the adapter cannot, the bench refuses) or `occlusion`
+//! (two-phase GPU occlusion culling; a batch's cameras are then culled one
+//! by one). `BATCH_BENCH_DETERMINISTIC=1` turns the deterministic mode on
+//! (`RendererOptions::deterministic`): its cost is the difference between
+//! runs with and without it, made alternately.
 //!
 //! For each V the two paths run one after the other, in alternating order
 //! from one V to the next (`BATCH_BENCH_MODES=views` or `batch` runs one):
@@ -344,7 +348,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let visibility = match std::env::var("BATCH_BENCH_VISIBILITY").as_deref() {
         Ok("cpu") | Err(_) => Visibility::Cpu,
         Ok("gpu") => Visibility::GpuFrustum,
-        Ok(other) => return Err(format!("BATCH_BENCH_VISIBILITY={other}: use cpu or gpu").into()),
+        Ok("occlusion") => Visibility::GpuOcclusion,
+        Ok(other) => return Err(format!("BATCH_BENCH_VISIBILITY={other}: use cpu, gpu or occlusion").into()),
+    };
+    // The deterministic mode (`RendererOptions::deterministic`): run the
+    // bench once with it and once without, alternately, to see its cost.
+    let deterministic = match std::env::var("BATCH_BENCH_DETERMINISTIC").as_deref() {
+        Ok("1") => true,
+        Ok("0") | Err(_) => false,
+        Ok(other) => return Err(format!("BATCH_BENCH_DETERMINISTIC={other}: use 0 or 1").into()),
     };
     let modes = match std::env::var("BATCH_BENCH_MODES").as_deref() {
         Ok("views") => vec![Mode::Views],
@@ -365,7 +377,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Ok("0") | Err(_) => false,
         Ok(other) => return Err(format!("BATCH_BENCH_TRUST_INDIRECT={other}: use 0 or 1").into()),
     };
-    let mut options = RendererOptions { trust_indirect_args, ..RendererOptions::default() };
+    let mut options = RendererOptions { trust_indirect_args, deterministic, ..RendererOptions::default() };
     // 1 024 cameras of 640 × 360 take more than the default target budget.
     if let Ok(mib) = std::env::var("BATCH_BENCH_TARGET_BUDGET_MIB") {
         let mib: u64 = mib.parse().map_err(|_| format!("BATCH_BENCH_TARGET_BUDGET_MIB={mib}: a count of MiB"))?;
@@ -423,6 +435,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .value("visibility", format!("{visibility:?}"))
         .value("spans", spans.is_some())
         .value("trust_indirect_args", trust_indirect_args)
+        .value("deterministic", deterministic)
         .value("floor_ms_per_cube", floor.as_ref().map(|f| f.0))
         .value("floor_record", floor.as_ref().map(|f| &f.1))
         .value("target_budget_bytes", options.target_budget_bytes)

@@ -441,3 +441,71 @@ fn a_views_report_counts_its_triangles() {
     scene.set_renderable(second, Renderable { geometry: cube, materials: vec![grey] }).unwrap();
     assert_eq!(triangles(&renderer.render_frame(&scene).unwrap()), Some(24));
 }
+
+/// On a GPU visibility path the GPU counts the indices of the draws it
+/// keeps; the report reads the count back without waiting, so it arrives a
+/// frame or two late: one cube in view is 12 triangles, two are 24.
+#[test]
+fn a_gpu_views_report_counts_its_triangles_from_the_gpus_count() {
+    let mut scene = Scene::new();
+    let grey = scene.add_material(Material::opaque("grey", Vec4::splat(0.5)));
+    let cube = scene.add_geometry(Geometry::cube(1.0));
+    let first = scene.add_node("first", Transform::IDENTITY);
+    scene.set_renderable(first, Renderable { geometry: cube, materials: vec![grey] }).unwrap();
+    let mut renderer = support::gpu_renderer();
+    if !renderer.gpu_visibility_supported() {
+        support::skip::skip(format_args!("{} cannot run GPU visibility", renderer.gpu().describe()));
+        return;
+    }
+    let camera = support::looking_at_origin(50.0, Vec3::new(0.0, 2.0, 6.0), UVec2::new(16, 12));
+    let desc = ViewDesc::new(camera).with_visibility(oxygen::sceneprep::Visibility::GpuFrustum);
+    let view = renderer.register_view(desc, standard_render_graph).unwrap();
+    // The count of the latest frame read back, within a few frames.
+    let mut settled = |renderer: &mut Renderer, scene: &Scene, want: u64| {
+        let mut seen = Vec::new();
+        for _ in 0..6 {
+            let report = renderer.render_frame(scene).unwrap();
+            let triangles = report.views.iter().find(|v| v.view == view).and_then(|v| v.triangles);
+            seen.push(triangles);
+            if triangles == Some(want) {
+                return;
+            }
+            renderer.gpu().device.poll(oxygen::wgpu::PollType::wait_indefinitely()).unwrap();
+        }
+        panic!("the report never counted {want} triangles: {seen:?}");
+    };
+    settled(&mut renderer, &scene, 12);
+    let second = scene.add_node("second", Transform::from_translation(Vec3::new(1.5, 0.0, 0.0)));
+    scene.set_renderable(second, Renderable { geometry: cube, materials: vec![grey] }).unwrap();
+    settled(&mut renderer, &scene, 24);
+}
+
+/// A view's report counts the bytes written for it alone: its camera's
+/// constants once (while the camera stands still), its draws and commands
+/// every frame (64 and 20 bytes each).
+#[test]
+fn a_views_report_counts_the_bytes_written_for_it() {
+    let mut scene = Scene::new();
+    let grey = scene.add_material(Material::opaque("grey", Vec4::splat(0.5)));
+    let cube = scene.add_geometry(Geometry::cube(1.0));
+    let first = scene.add_node("first", Transform::IDENTITY);
+    scene.set_renderable(first, Renderable { geometry: cube, materials: vec![grey] }).unwrap();
+    let mut renderer = support::gpu_renderer();
+    let camera = support::looking_at_origin(50.0, Vec3::new(0.0, 2.0, 6.0), UVec2::new(16, 12));
+    // One command per draw, so that each draw adds exactly 64 + 20 bytes.
+    let options = oxygen::sceneprep::ViewPrepOptions {
+        instancing: oxygen::sceneprep::Instancing::Off,
+        visibility: oxygen::sceneprep::Visibility::Cpu,
+        ..Default::default()
+    };
+    let view = renderer.register_view(ViewDesc::new(camera).with_options(options), standard_render_graph).unwrap();
+    let uploaded = |report: &FrameReport| report.views.iter().find(|v| v.view == view).map(|v| v.uploaded_bytes);
+    let first_frame = uploaded(&renderer.render_frame(&scene).unwrap()).unwrap();
+    let still = uploaded(&renderer.render_frame(&scene).unwrap()).unwrap();
+    assert!(still >= 64 + 20, "{still} bytes: at least the draw and its command");
+    assert!(first_frame > still, "the camera's constants are written once: {first_frame} then {still}");
+    let second = scene.add_node("second", Transform::from_translation(Vec3::new(1.5, 0.0, 0.0)));
+    scene.set_renderable(second, Renderable { geometry: cube, materials: vec![grey] }).unwrap();
+    let two = uploaded(&renderer.render_frame(&scene).unwrap()).unwrap();
+    assert_eq!(two, still + 64 + 20, "one more draw and command");
+}

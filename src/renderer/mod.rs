@@ -314,6 +314,7 @@ impl Renderer {
         for view in &mut report.views {
             let targets = self.targets.get(view.view).and_then(|g| g.targets.as_ref());
             view.target_bytes = targets.map_or(0, oxygen_gpu::ViewTargets::bytes);
+            view.uploaded_bytes += self.targets.get(view.view).map_or(0, |g| g.constants_written);
             if let Some(batch) = self.views.batch_of(view.view) {
                 if atlases_counted.insert(batch) {
                     view.target_bytes += self.targets.atlas(batch).map_or(0, oxygen_gpu::TileAtlas::bytes);

@@ -366,13 +366,21 @@ impl Renderer {
                     why: None,
                     // Filled in from the timer's latest readback (render_frame).
                     gpu_seconds: None,
-                    triangles: frames[i].gpu_plan().is_none().then(|| {
-                        frames[i]
+                    triangles: {
+                        let cpu: u64 = frames[i]
                             .draws()
                             .iter()
                             .map(|d| u64::from(d.index_count / 3) * u64::from(d.instance_count))
-                            .sum()
-                    }),
+                            .sum();
+                        match (frames[i].gpu_plan(), &self.visibility.gpu) {
+                            (None, _) => Some(cpu),
+                            (Some(_), Some(gpu)) => gpu.depth_pass_indices(view.id).map(|indices| indices / 3 + cpu),
+                            (Some(_), None) => None,
+                        }
+                    },
+                    // Its constants are added from the targets (render_frame).
+                    uploaded_bytes: (std::mem::size_of_val(frames[i].draws())
+                        + std::mem::size_of_val(frames[i].indirect_args())) as u64,
                     // Filled in from the targets and streams (render_frame).
                     target_bytes: 0,
                     streamed_bytes: 0,

@@ -83,9 +83,18 @@ pub struct ViewReport {
     /// before the first readback and on devices without timestamps inside
     /// encoders.
     pub gpu_seconds: Option<f64>,
-    /// Triangles its draws drew (each draw's indices ÷ 3 × its instances);
-    /// `None` on a GPU visibility path, whose draws the CPU does not know.
+    /// Triangles its draws drew (each draw's indices ÷ 3 × its instances).
+    /// On a GPU visibility path the GPU counts the indices of the draws it
+    /// keeps and the count is read back without waiting, so it is one or
+    /// two frames old (plus this frame's CPU-written transparent draws);
+    /// `None` there before the first readback.
     pub triangles: Option<u64>,
+    /// Bytes written to the GPU for this view alone this frame: its draws
+    /// and commands (ScenePrep's CPU-written ranges) and its constants.
+    /// What views share — matrices, lights, materials, meshes, the GPU
+    /// scene, cull parameters and a batch's constants block — is counted in
+    /// [`FrameReport::uploaded_bytes`] only.
+    pub uploaded_bytes: u64,
     /// Bytes of GPU targets it holds: its own targets' (colour, HDR, depth,
     /// multisampled and label targets); for a batch's first camera its
     /// batch's whole atlas, 0 for its other cameras.

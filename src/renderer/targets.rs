@@ -29,6 +29,9 @@ pub(crate) struct ViewGpu {
     /// that a view reading a paused view knows its pose, and a readback
     /// knows whether the HDR image was written.
     pub(crate) holds: Option<RenderedView>,
+    /// Bytes of its own constants written this frame (a batch camera's
+    /// are staged into its batch's block, whose write the frame counts).
+    pub(crate) constants_written: u64,
 }
 
 /// Targets that would pass the target budget; the caller names whose.
@@ -234,6 +237,7 @@ impl Targets {
                 ),
                 constants_home: None,
                 holds: None,
+                constants_written: 0,
             });
             let (width, height, label) = (view.gpu.viewport.x, view.gpu.viewport.y, view.id.to_string());
             match view.target {
@@ -309,6 +313,7 @@ impl Targets {
                         entry.constants_home = home;
                     }
                     // Counted when the block is written, below.
+                    entry.constants_written = 0;
                     block.stage(&gpu.queue, &mut entry.constants, &camera, &renderer);
                 }
                 _ => {
@@ -318,8 +323,9 @@ impl Targets {
                         entry.constants = SceneConstantsBuffer::new(device, heap.scene_constants_layout(), &label);
                         entry.constants_home = None;
                     }
-                    written += entry.constants.set_camera(&gpu.queue, &camera);
-                    written += entry.constants.set_renderer(&gpu.queue, &renderer);
+                    entry.constants_written = entry.constants.set_camera(&gpu.queue, &camera)
+                        + entry.constants.set_renderer(&gpu.queue, &renderer);
+                    written += entry.constants_written;
                 }
             }
         }
