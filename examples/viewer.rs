@@ -4,7 +4,7 @@
 //! cargo run --release --example viewer -- [FILE] [--size WxH] [--present fifo|mailbox|immediate]
 //!                                         [--frames N --screenshot PATH]
 //!                                         [--time T] [--animation N|NAME] [--fps F]
-//!                                         [--msaa 1|2|4] [--environment sky|none|FILE.hdr]
+//!                                         [--msaa 1|2|4] [--environment sky|none|FILE.hdr] [--costs]
 //! ```
 //!
 //! The scene is lit by an environment (image-based lighting): by default a
@@ -30,7 +30,11 @@
 //!   filter's radius (PCF 0, 1, 2), `M` the main view's anti-aliasing
 //!   (MSAA 1, 2, 4 samples; `--msaa N` starts with N).
 //! * The title bar shows the frame's timings (prepare, record, GPU, each
-//!   view's own GPU time, whole frame) and the knobs.
+//!   view's own GPU time, whole frame) and the knobs. `--costs` also prints
+//!   every view's costs from the frame report (why it rendered, CPU
+//!   prepare and record time, GPU time, draws, triangles, bytes uploaded
+//!   and streamed back, target memory) as a table, every 60th frame and at
+//!   the last frame of a `--frames` run.
 //! * `--frames N --screenshot PATH` renders N frames, saves what was
 //!   presented last as a PNG and exits: for tests and for people without a
 //!   desktop (run it under `xvfb-run`). `--resize WxH` asks for a new
@@ -64,7 +68,7 @@ use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowAttributes};
 
 const USAGE: &str = "\
-usage: viewer [FILE] [--size WxH] [--present fifo|mailbox|immediate] [--layout 1|2|3|4|5] [--frames N --screenshot PATH [--resize WxH]] [--time T] [--animation N|NAME] [--fps F] [--msaa 1|2|4] [--environment sky|none|FILE.hdr]";
+usage: viewer [FILE] [--size WxH] [--present fifo|mailbox|immediate] [--layout 1|2|3|4|5] [--frames N --screenshot PATH [--resize WxH]] [--time T] [--animation N|NAME] [--fps F] [--msaa 1|2|4] [--environment sky|none|FILE.hdr] [--costs]";
 
 /// The parsed command line.
 struct Args {
@@ -86,6 +90,42 @@ struct Args {
     msaa: Msaa,
     /// `sky` (default), `none`, or an `.hdr` file.
     environment: String,
+    /// Print each view's costs (`--costs`).
+    costs: bool,
+}
+
+/// Every view's costs in `report` as a table (`--costs`): one line a view,
+/// then the frame's totals.
+fn print_costs(frame: u64, report: &oxygen::FrameReport) {
+    let ms = |s: Option<f64>| s.map_or("n/a".to_owned(), |s| format!("{:.3}", s * 1e3));
+    println!("costs of frame {frame}:");
+    println!(
+        "| view | role | why | prepare ms | record ms | GPU ms | draws | triangles | uploaded B | streamed B | targets MiB |"
+    );
+    println!("|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+    for v in &report.views {
+        println!(
+            "| {} | {:?} | {} | {:.3} | {:.3} | {} | {} | {} | {} | {} | {:.2} |",
+            v.name.clone().unwrap_or_else(|| v.view.to_string()),
+            v.role,
+            v.why.map_or("follows its owner".to_owned(), |w| format!("{w:?}")),
+            v.prep_seconds * 1e3,
+            v.record_seconds * 1e3,
+            ms(v.gpu_seconds),
+            v.draws,
+            v.triangles.map_or("n/a".to_owned(), |t| t.to_string()),
+            v.uploaded_bytes,
+            v.streamed_bytes,
+            v.target_bytes as f64 / f64::from(1 << 20),
+        );
+    }
+    println!(
+        "| frame | | | {:.3} | {:.3} | {} | | | {} | | |",
+        report.prepare_seconds * 1e3,
+        report.record_seconds * 1e3,
+        ms(report.gpu_seconds),
+        report.uploaded_bytes
+    );
 }
 
 fn parse_size(name: &str, v: &str) -> Result<UVec2, String> {
@@ -111,6 +151,7 @@ fn parse_args(mut args: impl Iterator<Item = String>) -> Result<Args, String> {
         fps: None,
         msaa: Msaa::Off,
         environment: "sky".to_owned(),
+        costs: false,
     };
     while let Some(arg) = args.next() {
         let mut value = |name: &str| args.next().ok_or(format!("{name} needs a value"));
@@ -148,6 +189,7 @@ fn parse_args(mut args: impl Iterator<Item = String>) -> Result<Args, String> {
                 let fps = v.parse::<f32>().ok().filter(|f| f.is_finite() && *f > 0.0);
                 parsed.fps = Some(fps.ok_or(format!("--fps needs a positive number (got '{v}')"))?);
             }
+            "--costs" => parsed.costs = true,
             "--frames" => parsed.frames = Some(value("--frames")?.parse().map_err(|_| "--frames needs a number")?),
             "--screenshot" => parsed.screenshot = Some(PathBuf::from(value("--screenshot")?)),
             "--layout" => {
@@ -413,6 +455,9 @@ impl Viewer {
                 self.pcf_radius,
                 renderer.msaa_samples(self.msaa),
             ));
+        }
+        if self.args.costs && (self.frames % 60 == 1 || self.args.frames == Some(self.frames)) {
+            print_costs(self.frames, &report);
         }
         if let (Some(_), Some(id), Some(path)) = (self.args.fps, self.window_id, &self.args.screenshot)
             && self.animation.is_some()

@@ -319,3 +319,46 @@ fn the_viewer_lights_its_scene_with_the_sky_by_default() {
     assert!(same.differing <= same.total / 1000, "{} of {} differ from the sky render", same.differing, same.total);
     assert!(other.differing > same.total / 4, "the sky must show behind the scene");
 }
+
+/// `--costs` prints every view's costs from the frame report at the last
+/// frame: a line a view (the picture-in-picture layout has two registered
+/// views, and the sun's cascades follow the main one) with its draws,
+/// triangles, bytes uploaded and target memory, then the frame's line.
+#[test]
+fn the_viewer_prints_each_views_costs() {
+    if let Some(reason) = cannot_run() {
+        support::skip::skip(reason);
+        return;
+    }
+    let screenshot = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("viewer_costs.png");
+    let output = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 1024x768x24"])
+        .arg(viewer_binary())
+        .arg(shipped_file())
+        .args(["--size", "200x150", "--layout", "4", "--frames", "3", "--costs", "--screenshot"])
+        .arg(&screenshot)
+        .output()
+        .expect("xvfb-run runs");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let log = format!("{stdout}{}", String::from_utf8_lossy(&output.stderr));
+    assert!(output.status.success(), "the viewer failed under Xvfb:\n{log}");
+    let table = stdout.rsplit("costs of frame 3:").next().filter(|_| stdout.contains("costs of frame 3:"));
+    let table = table.unwrap_or_else(|| panic!("no costs table for the last frame:\n{log}"));
+    let rows: Vec<Vec<&str>> = table
+        .lines()
+        .filter(|l| l.starts_with("| ") && !l.starts_with("| view |"))
+        .map(|l| l.trim_matches('|').split('|').map(str::trim).collect())
+        .collect();
+    let registered: Vec<&Vec<&str>> = rows.iter().filter(|r| r[1] == "Registered").collect();
+    let cascades = rows.iter().filter(|r| r[1].starts_with("SunCascade")).count();
+    assert_eq!(registered.len(), 2, "the main view and the picture-in-picture:\n{table}");
+    assert!(cascades >= 1, "the main view's cascades:\n{table}");
+    for row in &registered {
+        let number = |column: usize| row[column].parse::<f64>().unwrap_or_else(|_| panic!("{row:?}: column {column}"));
+        // draws, triangles, uploaded bytes, target MiB
+        assert!(number(6) >= 1.0 && number(7) >= 12.0, "{row:?}: draws and triangles");
+        assert!(number(8) >= 64.0, "{row:?}: at least one draw uploaded");
+        assert!(number(10) > 0.0, "{row:?}: its targets");
+    }
+    assert!(rows.last().is_some_and(|r| r[0] == "frame"), "the frame's line closes the table:\n{table}");
+}
