@@ -374,3 +374,44 @@ fn the_shipped_scenes_render_bit_identically_twice() {
         assert_eq!(first, second, "{}: two renders of the same frame differ", file.display());
     }
 }
+
+#[test]
+fn a_batchs_cameras_culled_in_one_dispatch_draw_the_cpu_paths_sequence_and_pixels() {
+    // A batch's cameras on the GPU path are culled in one dispatch (the
+    // camera is its z), each compacting its own occupancy: the same draw
+    // sequence and the same pixels, labels included, as the same batch
+    // culled on the CPU.
+    use oxygen::batch::BatchDesc;
+    let scene = tie_scene();
+    let mut renderer = support::gpu_renderer_with(RendererOptions { deterministic: true, ..Default::default() });
+    if !renderer.gpu_visibility_supported() {
+        support::skip::skip(format_args!(
+            "{} cannot run GPU visibility (needs multi-draw-indirect with counts)",
+            renderer.gpu().describe()
+        ));
+        return;
+    }
+    let size = UVec2::new(48, 40);
+    let cpu = renderer.register_batch(BatchDesc::new("cpu", size).with_labels()).unwrap();
+    let gpu = renderer.register_batch(BatchDesc::new("gpu", size).with_labels()).unwrap();
+    let mut pairs = Vec::new();
+    for (_, eye, target, _, _) in VIEWS {
+        let camera = Moving(Arc::new(Mutex::new((eye, target))), size);
+        let desc = |visibility| ViewDesc::new(camera.clone()).with_visibility(visibility);
+        let on_cpu = renderer.add_camera(cpu, desc(Visibility::Cpu)).unwrap();
+        let on_gpu = renderer.add_camera(gpu, desc(Visibility::GpuFrustum)).unwrap();
+        pairs.push((on_cpu, on_gpu));
+    }
+    renderer.render_frame(&scene).unwrap();
+    for (on_cpu, on_gpu) in pairs {
+        assert_eq!(renderer.gpu_visibility().and_then(|v| v.culled_together(on_gpu)), Some(VIEWS.len()));
+        let sequence = |view| -> Vec<_> {
+            let draws = renderer.view_draws_in_draw_order(view).unwrap();
+            draws.into_iter().map(|d| oxygen::sceneprep::DrawMetadata { generation: 0, ..d }).collect()
+        };
+        assert!(sequence(on_gpu) == sequence(on_cpu), "{on_gpu} drew another sequence than {on_cpu}");
+        assert!(renderer.read_color(on_gpu).unwrap() == renderer.read_color(on_cpu).unwrap(), "{on_gpu}: colour");
+        let (a, b) = (renderer.read_labels(on_gpu).unwrap(), renderer.read_labels(on_cpu).unwrap());
+        assert!(a.instances == b.instances && a.classes == b.classes, "{on_gpu}: labels");
+    }
+}
