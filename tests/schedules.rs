@@ -442,11 +442,12 @@ fn a_views_report_counts_its_triangles() {
     assert_eq!(triangles(&renderer.render_frame(&scene).unwrap()), Some(24));
 }
 
-/// On a GPU visibility path the GPU counts the indices of the draws it
-/// keeps; the report reads the count back without waiting, so it arrives a
-/// frame or two late: one cube in view is 12 triangles, two are 24.
+/// On a GPU visibility path the GPU counts the draws it keeps and their
+/// indices; the report reads the counts back without waiting, so they
+/// arrive a frame or two late: one cube in view is 1 draw of 12 triangles,
+/// two are 2 of 24.
 #[test]
-fn a_gpu_views_report_counts_its_triangles_from_the_gpus_count() {
+fn a_gpu_views_report_counts_its_draws_and_triangles_from_the_gpus_count() {
     let mut scene = Scene::new();
     let grey = scene.add_material(Material::opaque("grey", Vec4::splat(0.5)));
     let cube = scene.add_geometry(Geometry::cube(1.0));
@@ -460,24 +461,24 @@ fn a_gpu_views_report_counts_its_triangles_from_the_gpus_count() {
     let camera = support::looking_at_origin(50.0, Vec3::new(0.0, 2.0, 6.0), UVec2::new(16, 12));
     let desc = ViewDesc::new(camera).with_visibility(oxygen::sceneprep::Visibility::GpuFrustum);
     let view = renderer.register_view(desc, standard_render_graph).unwrap();
-    // The count of the latest frame read back, within a few frames.
-    let mut settled = |renderer: &mut Renderer, scene: &Scene, want: u64| {
+    // The counts of the latest frame read back, within a few frames.
+    let settled = |renderer: &mut Renderer, scene: &Scene, want: (usize, u64)| {
         let mut seen = Vec::new();
         for _ in 0..6 {
             let report = renderer.render_frame(scene).unwrap();
-            let triangles = report.views.iter().find(|v| v.view == view).and_then(|v| v.triangles);
-            seen.push(triangles);
-            if triangles == Some(want) {
+            let counts = report.views.iter().find(|v| v.view == view).map(|v| (v.draws, v.triangles));
+            seen.push(counts);
+            if counts == Some((want.0, Some(want.1))) {
                 return;
             }
             renderer.gpu().device.poll(oxygen::wgpu::PollType::wait_indefinitely()).unwrap();
         }
-        panic!("the report never counted {want} triangles: {seen:?}");
+        panic!("the report never counted {want:?} draws and triangles: {seen:?}");
     };
-    settled(&mut renderer, &scene, 12);
+    settled(&mut renderer, &scene, (1, 12));
     let second = scene.add_node("second", Transform::from_translation(Vec3::new(1.5, 0.0, 0.0)));
     scene.set_renderable(second, Renderable { geometry: cube, materials: vec![grey] }).unwrap();
-    settled(&mut renderer, &scene, 24);
+    settled(&mut renderer, &scene, (2, 24));
 }
 
 /// A view's report counts the bytes written for it alone: its camera's

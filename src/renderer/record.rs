@@ -356,7 +356,11 @@ impl Renderer {
                     view: view.id,
                     name: self.views.name(view.id).map(str::to_owned),
                     role: view.role,
-                    draws: frames[i].draws().len(),
+                    draws: frames[i].draws().len()
+                        + match (frames[i].gpu_plan(), &self.visibility.gpu) {
+                            (Some(_), Some(gpu)) => gpu.gpu_draws(view.id).unwrap_or(0) as usize,
+                            _ => 0,
+                        },
                     visibility: view.options.visibility,
                     partitions: frames[i].partitions().len(),
                     recorded: stats,

@@ -58,8 +58,10 @@ pub struct ViewReport {
     pub name: Option<String>,
     /// What it is for.
     pub role: ViewRole,
-    /// Draws after culling on the CPU (on a GPU path only the transparent
-    /// ones: the GPU's count stays on the GPU).
+    /// Draws after culling. On a GPU visibility path the GPU counts the
+    /// draws it keeps and the count is read back without waiting: one or
+    /// two frames old, plus this frame's CPU-written transparent draws
+    /// (only those before the first readback).
     pub draws: usize,
     /// Where its visibility was decided.
     pub visibility: Visibility,

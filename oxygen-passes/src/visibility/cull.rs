@@ -28,6 +28,10 @@ use tracing::info_span;
 use super::hiz::{HizPipelines, HizPyramid};
 use super::params::{CULL_CASTERS_ONLY, CULL_DETERMINISTIC, CULL_OCCLUSION, CullParams};
 
+/// Coverage counters before the per-group ones: the coverage sum, the
+/// capped sum, the indices drawn, the draws (see the cull shader).
+const COVERAGE_COUNTERS: u64 = 4;
+
 /// Workgroups per dimension every adapter allows.
 const MAX_WORKGROUPS: u32 = 65_535;
 
@@ -118,6 +122,8 @@ struct ViewCull {
     overdraw: Option<f32>,
     /// Indices of the opaque and masked draws, from the same readback.
     depth_pass_indices: Option<u64>,
+    /// The draws the GPU kept, from the same readback.
+    draws: Option<u64>,
     /// The deterministic mode: its occupancy follows the history, one
     /// entry per draw of the GPU scene's room.
     deterministic: bool,
@@ -356,14 +362,15 @@ impl GpuVisibility {
                 readback_state: std::sync::Arc::new(std::sync::atomic::AtomicU8::new(READBACK_IDLE)),
                 overdraw: None,
                 depth_pass_indices: None,
+                draws: None,
                 deterministic: false,
                 room: 0,
             });
             state.seen = true;
             // After the plan's counters, the coverage counters: the sum, the
-            // capped sum, the indices drawn, one per group (see the cull
-            // shader).
-            let coverage_counters = 3 + u64::from(plan.groups);
+            // capped sum, the indices drawn, the draws, one per group (see
+            // the cull shader).
+            let coverage_counters = COVERAGE_COUNTERS + u64::from(plan.groups);
             let mut stale = state.counts.reserve(device, (u64::from(plan.counters()) + coverage_counters) * 4);
             // New instance numbering or a new path: last frame's visibility
             // means nothing, so start from "nothing was visible" (phase 2
@@ -480,7 +487,7 @@ impl GpuVisibility {
                 batch.cameras.push((id, base));
                 self.batch_members.insert(id, (key, base));
                 // The plan's counters, then the coverage counters (see `prepare`).
-                base += plan.counters() + 3 + plan.groups;
+                base += plan.counters() + COVERAGE_COUNTERS as u32 + plan.groups;
             }
             (batch.instances, batch.groups) = (plans[0].instances, plans[0].groups);
             (batch.deterministic, batch.room) = (deterministic, room);
@@ -547,18 +554,19 @@ impl GpuVisibility {
                 READBACK_COPIED => state.readback_state.store(READBACK_IDLE, Ordering::Release),
                 READBACK_MAPPED => {
                     let counters = match state.readback.slice(..).get_mapped_range() {
-                        Ok(bytes) => bytes.get(..12).map(|b| {
+                        Ok(bytes) => bytes.get(..16).map(|b| {
                             let word =
                                 |i: usize| u32::from_le_bytes([b[4 * i], b[4 * i + 1], b[4 * i + 2], b[4 * i + 3]]);
-                            // The smaller of the sum and the capped sum; the indices.
-                            (word(0).min(word(1)), word(2))
+                            // The smaller of the sum and the capped sum; the indices; the draws.
+                            (word(0).min(word(1)), word(2), word(3))
                         }),
                         Err(_) => None,
                     };
                     state.readback.unmap();
-                    if let Some((units, indices)) = counters {
+                    if let Some((units, indices, draws)) = counters {
                         state.overdraw = Some(oxygen_sceneprep::expected_shaded_layers(units as f32 / 1024.0));
                         state.depth_pass_indices = Some(u64::from(indices));
+                        state.draws = Some(u64::from(draws));
                     }
                     state.readback_state.store(READBACK_IDLE, Ordering::Release);
                 }
@@ -586,6 +594,13 @@ impl GpuVisibility {
         self.views.get(&view)?.depth_pass_indices
     }
 
+    /// The draws (instances) `view`'s culling kept, from the same readback
+    /// as [`GpuVisibility::estimated_overdraw`]. `None` before the first
+    /// readback.
+    pub fn gpu_draws(&self, view: ViewId) -> Option<u64> {
+        self.views.get(&view)?.draws
+    }
+
     /// Copies `view`'s coverage counter for reading back, when its last
     /// copy has been read: call after the view's passes, in its encoder.
     pub fn record_readback(&self, encoder: &mut wgpu::CommandEncoder, view: ViewId) {
@@ -598,7 +613,7 @@ impl GpuVisibility {
         {
             // The coverage counter is the one after the plan's counters.
             let offset = base + u64::from(state.counters) * 4;
-            encoder.copy_buffer_to_buffer(counts, offset, &state.readback, 0, 12);
+            encoder.copy_buffer_to_buffer(counts, offset, &state.readback, 0, 4 * COVERAGE_COUNTERS);
         }
     }
 

@@ -91,11 +91,12 @@ fn counter(index: u32) -> u32 {
 
 // Coverage counters after the group counters, in 1/1024ths of the viewport:
 // [the sum over drawn instances][the sum over groups of each group's sum,
-// capped at one viewport][the indices of the drawn instances][one per
-// group]. The CPU reads the first three back a frame later: the smaller of
-// the first two is the layers a forward pass without a pre-pass would shade
-// (the CPU path's estimate, with groups for its runs of one material), the
-// third what a pre-pass would draw.
+// capped at one viewport][the indices of the drawn instances][the drawn
+// instances][one per group]. The CPU reads the first four back a frame
+// later: the smaller of the first two is the layers a forward pass without
+// a pre-pass would shade (the CPU path's estimate, with groups for its runs
+// of one material), the third what a pre-pass would draw, the fourth the
+// view's draws (its report).
 fn coverage_base() -> u32 {
     return params.group_counters + 2u * params.group_count;
 }
@@ -109,6 +110,7 @@ fn add_coverage(i: u32, instance: GpuInstance, group: u32) {
     if atomicLoad(&counts[counter(coverage_base() + 2u)]) < 0x80000000u {
         atomicAdd(&counts[counter(coverage_base() + 2u)], min(groups[group].index_count, 0x00FFFFFFu));
     }
+    atomicAdd(&counts[counter(coverage_base() + 3u)], 1u);
     let depth = -(dot(params.view_row_z.xyz, instance.sphere.xyz) + params.view_row_z.w);
     var fraction = instance.sphere.w * params.lod_scale;
     if params.perspective != 0u {
@@ -124,14 +126,14 @@ fn add_coverage(i: u32, instance: GpuInstance, group: u32) {
     // "pre-pass", and must not wrap around to a small one.
     if units > 0u && atomicLoad(&counts[counter(coverage_base())]) < 0x40000000u {
         atomicAdd(&counts[counter(coverage_base())], units);
-        atomicAdd(&counts[counter(coverage_base() + 3u + group)], units);
+        atomicAdd(&counts[counter(coverage_base() + 4u + group)], units);
     }
 }
 
 // A group's coverage, capped at one viewport, into the capped sum (once per
 // group, after its draws are final).
 fn add_capped_coverage(g: u32) {
-    let units = atomicLoad(&counts[counter(coverage_base() + 3u + g)]);
+    let units = atomicLoad(&counts[counter(coverage_base() + 4u + g)]);
     if units > 0u && atomicLoad(&counts[counter(coverage_base() + 1u)]) < 0x40000000u {
         atomicAdd(&counts[counter(coverage_base() + 1u)], min(units, 1024u));
     }
