@@ -175,17 +175,15 @@ impl PrePass {
 
 impl PrePass {
     /// Whether `ctx`'s view gets the pre-pass this frame: [`PrePass::wanted`]
-    /// of its estimate, except that in the deterministic mode
-    /// ([`RenderContext::deterministic`]) an automatic pre-pass is always
-    /// on. The pre-pass decides which of two surfaces at exactly the same
-    /// depth shows (the last drawn with it, the first without), and the
-    /// estimate differs between visibility paths and, on a GPU path, is
-    /// read back from an earlier frame.
+    /// of its estimate. The estimate differs between visibility paths and,
+    /// on a GPU path, is read back from an earlier frame; the deterministic
+    /// mode ([`RenderContext::deterministic`]) still follows it, because
+    /// there the shading pass without a pre-pass lets the last of two
+    /// surfaces at exactly the same depth show, as it does after one
+    /// ([`oxygen_passes::PipelineKey::last_tie_wins`]): the choice changes
+    /// the time, not the pixels.
     pub fn resolved(self, ctx: &RenderContext<'_>) -> bool {
-        match self {
-            PrePass::Auto { .. } if ctx.deterministic() => true,
-            _ => self.wanted(ctx.pre_pass_estimate()),
-        }
+        self.wanted(ctx.pre_pass_estimate())
     }
 }
 

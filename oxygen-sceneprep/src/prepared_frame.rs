@@ -241,9 +241,10 @@ impl PreparedSceneFrame {
     }
     /// Whether the frame was prepared in the deterministic mode
     /// ([`crate::ScenePrep::set_deterministic`]): its draws come in the
-    /// canonical order, and whatever reads it must not choose by estimates
-    /// that depend on the path or the frame history (the standard graph's
-    /// automatic pre-pass is then always on).
+    /// canonical order, and the shading pass resolves exact depth ties as a
+    /// depth pre-pass does (whatever reads it must not choose passes that
+    /// change pixels by estimates, which depend on the path and the frame
+    /// history).
     pub fn deterministic(&self) -> bool {
         self.deterministic
     }

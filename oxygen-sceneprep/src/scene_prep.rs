@@ -323,7 +323,7 @@ impl ScenePrep {
     /// in — group by group of the GPU scene (partition, material, mesh),
     /// then instance by instance (renderable, then submesh) — instead of
     /// front to back. The GPU paths restore that order after culling
-    /// ([`GpuViewPlan::deterministic`]); the CPU path sorts by it, so it
+    /// ([`crate::GpuViewPlan::deterministic`]); the CPU path sorts by it, so it
     /// builds the GPU scene even when no view is on a GPU path. Costs the
     /// front-to-back order (more shading without a depth pre-pass) and, on
     /// the GPU paths, a compaction pass per view. Transparent draws keep

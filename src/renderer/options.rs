@@ -69,8 +69,10 @@ pub struct RendererOptions {
     /// bit-identical outputs on one adapter and driver, whatever the number
     /// of threads, the order views were registered in, the visibility path
     /// and the frame history. Draws come in one canonical order on every
-    /// path ([`oxygen_sceneprep::ScenePrep::set_deterministic`]) and an
-    /// automatic depth pre-pass is always on ([`crate::PrePass::resolved`]).
+    /// path ([`oxygen_sceneprep::ScenePrep::set_deterministic`]) and the
+    /// shading pass resolves exact depth ties as a depth pre-pass does, so
+    /// that the automatic pre-pass changes no pixel
+    /// ([`oxygen_passes::PipelineKey::last_tie_wins`]).
     /// What it costs and what it cannot promise across adapters:
     /// docs/determinism.md. Off by default.
     pub deterministic: bool,

@@ -122,9 +122,10 @@ impl<'a> RenderContext<'a> {
     }
 
     /// Whether the view was prepared in the deterministic mode
-    /// ([`PreparedSceneFrame::deterministic`]): a graph must then not choose
-    /// passes from estimates (they differ between visibility paths and
-    /// depend on earlier frames).
+    /// ([`PreparedSceneFrame::deterministic`]): its shading pass lets the
+    /// last of two surfaces at one depth show, with or without a pre-pass,
+    /// and a graph must not choose passes that change pixels from estimates
+    /// (they differ between visibility paths and depend on earlier frames).
     pub fn deterministic(&self) -> bool {
         self.prepared.deterministic()
     }

@@ -440,6 +440,7 @@ impl MeshPass {
                 PassKind::Labels => ctx.targets.labels.as_ref().map_or(LabelSet::NONE, LabelTargets::set),
                 _ => self.labels_in_pass(ctx),
             },
+            last_tie_wins: ctx.deterministic(),
         }
     }
 

@@ -171,6 +171,7 @@ impl Pipelines {
         let labels = !key.labels.is_empty() && matches!(key.pass, PassKind::Shading | PassKind::ShadingAfterPrePass);
         let (vertex_entry, fragment_entry) = mesh_entry_points(key.pass, masked, labels);
         let (depth_write, depth_compare) = match key.pass {
+            PassKind::Shading if key.last_tie_wins => (true, wgpu::CompareFunction::GreaterEqual),
             PassKind::DepthPrePass | PassKind::Shadow | PassKind::Shading => (true, wgpu::CompareFunction::Greater),
             PassKind::ShadingAfterPrePass | PassKind::Transparent | PassKind::Labels => {
                 (false, wgpu::CompareFunction::GreaterEqual)

@@ -126,6 +126,12 @@ pub struct PipelineKey {
     /// label is not in the set): one geometry pass for colour and labels.
     /// The labels pass writes them from target 0; other passes ignore it.
     pub labels: LabelSet,
+    /// Of two surfaces at exactly the same depth, the one drawn last shows
+    /// (a depth test of "nearer or equal"), as it does after a depth
+    /// pre-pass, instead of the one drawn first: the deterministic mode's
+    /// shading pass without a pre-pass, so that whether a pre-pass ran
+    /// changes no pixel. Only [`PassKind::Shading`] reads it.
+    pub last_tie_wins: bool,
 }
 
 impl PipelineKey {
@@ -134,12 +140,19 @@ impl PipelineKey {
     /// no optional code and never tone-map.
     pub(super) fn canonical(self) -> Self {
         match self.pass {
-            PassKind::DepthPrePass | PassKind::Shadow => {
-                PipelineKey { features: ShaderFeatures::ALL, tone_map: None, labels: LabelSet::NONE, ..self }
+            PassKind::DepthPrePass | PassKind::Shadow => PipelineKey {
+                features: ShaderFeatures::ALL,
+                tone_map: None,
+                labels: LabelSet::NONE,
+                last_tie_wins: false,
+                ..self
+            },
+            PassKind::Labels => {
+                PipelineKey { features: ShaderFeatures::ALL, tone_map: None, last_tie_wins: false, ..self }
             }
-            PassKind::Labels => PipelineKey { features: ShaderFeatures::ALL, tone_map: None, ..self },
-            PassKind::Transparent => PipelineKey { labels: LabelSet::NONE, ..self },
-            PassKind::ShadingAfterPrePass | PassKind::Shading => self,
+            PassKind::Transparent => PipelineKey { labels: LabelSet::NONE, last_tie_wins: false, ..self },
+            PassKind::ShadingAfterPrePass => PipelineKey { last_tie_wins: false, ..self },
+            PassKind::Shading => self,
         }
     }
 

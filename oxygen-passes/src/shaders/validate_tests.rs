@@ -217,6 +217,7 @@ fn every_override_constant_of_a_mesh_pipeline_is_declared() {
             tone_map: Some(Exposure::new(1.0)),
             samples: 1,
             labels: oxygen_gpu::LabelSet::ALL,
+            last_tie_wins: false,
         };
         let module = mesh_module(pass);
         for path in paths(module) {
