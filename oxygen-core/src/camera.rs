@@ -9,7 +9,7 @@ use thiserror::Error;
 use crate::math::projection::{reverse_z_orthographic, reverse_z_perspective};
 
 /// A projection.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Projection {
     /// Reverse-Z perspective.
     Perspective {
@@ -103,7 +103,7 @@ impl fmt::Display for FarPlane {
 /// and [`Camera::orthographic`] (and the public field) accept anything; such
 /// a camera is checked when a view resolves it, and a bad one makes that view
 /// be skipped with a warning in the frame report.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Camera {
     /// The projection.
     pub projection: Projection,

@@ -11,7 +11,7 @@ use crate::math::Aabb;
 
 /// One vertex as it is stored in the bindless vertex domain (32 bytes).
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable, serde::Serialize, serde::Deserialize)]
 pub struct Vertex {
     /// Object-space position.
     pub position: [f32; 3],
@@ -35,7 +35,7 @@ impl Vertex {
 /// record per vertex, only for geometry that has them: a mesh without
 /// vertex colours or a second UV set pays nothing for them.
 #[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable, serde::Serialize, serde::Deserialize)]
 pub struct VertexAttributes {
     /// Linear RGBA vertex colour, multiplied into the base colour.
     pub color: [f32; 4],
@@ -76,7 +76,7 @@ impl VertexAttributes {
 /// the vertex domain after the geometry's vertices and attribute records
 /// (32 bytes; joints as floats, exact below 2^24).
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable, serde::Serialize, serde::Deserialize)]
 pub struct SkinWeights {
     /// Joint indices (whole numbers).
     pub joints: [f32; 4],
@@ -109,7 +109,7 @@ impl SkinWeights {
 /// in the vertex domain right after the vertices, one record per vertex per
 /// target (position delta in the position's place, normal delta in the
 /// normal's).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct MorphTarget {
     /// Position displacement per vertex.
     pub positions: Vec<Vec3>,
@@ -121,7 +121,7 @@ pub struct MorphTarget {
 pub const MAX_MORPH_TARGETS: usize = 64;
 
 /// A range of the index array drawn with one material.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct Submesh {
     /// First index, relative to the geometry's index array.
     pub first_index: u32,

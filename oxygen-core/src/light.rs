@@ -6,7 +6,7 @@
 use glam::Vec3;
 
 /// The shape of a light.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum LightKind {
     /// Parallel rays along the node's −Z; intensity in lux.
     Directional,
@@ -28,7 +28,7 @@ pub enum LightKind {
 
 /// Whether a light may change at run time; baked lights are already in
 /// lightmaps and are not collected for real-time shading.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Mobility {
     /// Fully dynamic.
     Realtime,
@@ -37,7 +37,7 @@ pub enum Mobility {
 }
 
 /// A light source.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Light {
     /// Shape and shape parameters.
     pub kind: LightKind,

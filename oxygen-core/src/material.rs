@@ -5,7 +5,7 @@ use glam::{Vec2, Vec3, Vec4};
 use crate::TextureHandle;
 
 /// How a material's alpha is interpreted; decides the pass class of a draw.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum AlphaMode {
     /// Alpha ignored; drawn in the opaque partitions.
     Opaque,
@@ -21,7 +21,7 @@ pub enum AlphaMode {
 /// Which texture coordinate set a texture reads and how the coordinates are
 /// transformed first (glTF `texCoord` and `KHR_texture_transform`):
 /// `uv' = translate(offset) · rotate(rotation) · scale(scale) · uv`.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct UvTransform {
     /// Texture coordinate set: 0 (`TEXCOORD_0`) or 1 (`TEXCOORD_1`).
     pub uv_set: u32,
@@ -72,7 +72,7 @@ impl UvTransform {
 }
 
 /// The [`UvTransform`] of each of a material's five textures.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct MaterialUvs {
     /// Of the base-colour texture.
     pub base_color: UvTransform,
@@ -111,7 +111,7 @@ impl MaterialUvs {
 }
 
 /// A metallic-roughness material.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Material {
     /// Name for logs and dumps.
     pub name: String,

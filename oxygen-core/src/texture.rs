@@ -3,7 +3,7 @@
 use thiserror::Error;
 
 /// How a texture's bytes encode colour.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum ColorSpace {
     /// sRGB-encoded colour (base colour, emissive): decoded when sampled.
     Srgb,
@@ -12,7 +12,7 @@ pub enum ColorSpace {
 }
 
 /// How texture coordinates outside `[0, 1]` are treated.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum Wrap {
     /// Tile.
     #[default]
@@ -24,7 +24,7 @@ pub enum Wrap {
 }
 
 /// How texels are filtered.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum Filter {
     /// Bilinear.
     #[default]
@@ -34,7 +34,7 @@ pub enum Filter {
 }
 
 /// How a texture is sampled: a wrap mode per axis and a filter.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub struct Sampling {
     /// Wrap mode along u (glTF `wrapS`).
     pub wrap_u: Wrap,

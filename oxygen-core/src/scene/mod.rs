@@ -10,6 +10,7 @@
 //! Geometry and materials are shared assets referenced by handle from any
 //! number of renderable nodes.
 
+pub mod delta;
 mod node;
 mod world;
 
@@ -125,6 +126,9 @@ pub struct Scene {
     geometries: SlotMap<GeometryHandle, Arc<Geometry>>,
     materials: SlotMap<MaterialHandle, Material>,
     textures: SlotMap<TextureHandle, Arc<TextureImage>>,
+    /// What a replica must replay to give its nodes and assets the same
+    /// slots: see [`delta`].
+    journal: delta::Journal,
 }
 
 impl Default for Scene {
@@ -139,6 +143,7 @@ impl Default for Scene {
             geometries: SlotMap::with_key(),
             materials: SlotMap::with_key(),
             textures: SlotMap::with_key(),
+            journal: delta::Journal::default(),
         }
     }
 }
@@ -191,13 +196,33 @@ impl Scene {
     /// Adds a geometry asset.
     pub fn add_geometry(&mut self, geometry: Geometry) -> GeometryHandle {
         self.touch_assets();
-        self.geometries.insert(Arc::new(geometry))
+        let handle = self.geometries.insert(Arc::new(geometry));
+        self.journal.record(self.revision, delta::Event::GeometryAdded(geometry_index(handle)));
+        handle
+    }
+
+    /// Adds a geometry a replica received (shared with its cache).
+    pub(crate) fn add_geometry_shared(&mut self, geometry: Arc<Geometry>) -> GeometryHandle {
+        self.touch_assets();
+        let handle = self.geometries.insert(geometry);
+        self.journal.record(self.revision, delta::Event::GeometryAdded(geometry_index(handle)));
+        handle
+    }
+
+    /// Adds a texture a replica received (shared with its cache).
+    pub(crate) fn add_texture_shared(&mut self, texture: Arc<TextureImage>) -> TextureHandle {
+        self.touch_assets();
+        let handle = self.textures.insert(texture);
+        self.journal.record(self.revision, delta::Event::TextureAdded(texture_index(handle)));
+        handle
     }
 
     /// Adds a material asset (sanitized: NaN and out-of-range values fixed).
     pub fn add_material(&mut self, material: Material) -> MaterialHandle {
         self.touch_assets();
-        self.materials.insert(material.sanitized())
+        let handle = self.materials.insert(material.sanitized());
+        self.journal.record(self.revision, delta::Event::MaterialAdded(material_index(handle)));
+        handle
     }
 
     /// Replaces a material (sanitized like [`Scene::add_material`]); every
@@ -206,13 +231,16 @@ impl Scene {
         let slot = self.materials.get_mut(handle).ok_or(SceneError::NoSuchMaterial(handle))?;
         *slot = material.sanitized();
         self.touch_assets();
+        self.journal.record(self.revision, delta::Event::MaterialSet(material_index(handle)));
         Ok(())
     }
 
     /// Adds a texture asset.
     pub fn add_texture(&mut self, texture: TextureImage) -> TextureHandle {
         self.touch_assets();
-        self.textures.insert(Arc::new(texture))
+        let handle = self.textures.insert(Arc::new(texture));
+        self.journal.record(self.revision, delta::Event::TextureAdded(texture_index(handle)));
+        handle
     }
 
     /// A texture by handle.
@@ -240,6 +268,7 @@ impl Scene {
         let key = self.nodes.insert(Node::new(name.into(), None, local));
         self.roots.push(key);
         self.touch(key);
+        self.journal.node_inserted(self.revision, node_index(key));
         key
     }
 
@@ -256,6 +285,7 @@ impl Scene {
         let key = self.nodes.insert(Node::new(name.into(), Some(parent), local));
         self.nodes[parent].children.push(key);
         self.touch(key);
+        self.journal.node_inserted(self.revision, node_index(key));
         Ok(key)
     }
 
@@ -274,6 +304,7 @@ impl Scene {
         let mut stack = vec![key];
         while let Some(k) = stack.pop() {
             if let Some(n) = self.nodes.remove(k) {
+                self.journal.node_removed(self.revision, node_index(k));
                 stack.extend(n.children);
             }
         }

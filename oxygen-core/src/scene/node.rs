@@ -8,7 +8,7 @@ use crate::{Camera, Light};
 
 bitflags! {
     /// Per-node switches read by ScenePrep.
-    #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
     pub struct NodeFlags: u32 {
         /// The node (and what it carries) takes part in rendering.
         const VISIBLE = 1 << 0;
@@ -19,7 +19,7 @@ bitflags! {
 }
 
 /// Translation, rotation, scale; composed as `T * R * S`.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Transform {
     /// Translation.
     pub translation: Vec3,
