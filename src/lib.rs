@@ -42,6 +42,7 @@ pub mod batch;
 mod environment_file;
 mod gltf_import;
 pub mod graph;
+pub mod group;
 mod probes;
 mod renderer;
 pub mod schedule;

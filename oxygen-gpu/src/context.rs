@@ -271,6 +271,60 @@ impl GpuContext {
         Ok(GpuContext { instance, adapter, device, queue, adapter_info, features })
     }
 
+    /// `count` contexts for a group of renderers ([`Self::new_headless`]
+    /// picks the first): one device on each adapter of the first's kind
+    /// (device type and backend: the machine's GPUs), then more devices on
+    /// the same adapters in turn when there are fewer adapters than
+    /// `count` (a machine with one GPU gets `count` devices of it). GL
+    /// adapters come from an instance of each context's own, as in
+    /// [`Self::new_headless`].
+    pub fn new_headless_many(options: &GpuOptions, count: usize) -> Result<Vec<Self>, GpuError> {
+        let _span = info_span!("gpu_contexts", count).entered();
+        let first = Self::new_headless(options)?;
+        if count <= 1 {
+            return Ok(vec![first]);
+        }
+        if first.adapter_info.backend == wgpu::Backend::Gl {
+            let mut contexts = vec![first];
+            for _ in 1..count {
+                contexts.push(Self::new_headless(options)?);
+            }
+            return Ok(contexts);
+        }
+        let wanted_name = std::env::var("OXYGEN_ADAPTER").ok().map(|s| s.to_lowercase());
+        let backends = wgpu::Backends::from(first.adapter_info.backend);
+        // Every adapter of the first's kind, the first's own first.
+        let mut adapters = vec![first.adapter.clone()];
+        for adapter in futures::executor::block_on(first.instance.enumerate_adapters(backends)) {
+            let info = adapter.get_info();
+            let same_kind = rank(&info) == rank(&first.adapter_info)
+                && wanted_name.as_deref().is_none_or(|w| info.name.to_lowercase().contains(w))
+                && (options.required_features - adapter.features()).is_empty();
+            let is_first =
+                info == first.adapter_info && (info.device_pci_bus_id == first.adapter_info.device_pci_bus_id);
+            if same_kind && !is_first {
+                adapters.push(adapter);
+            }
+        }
+        let mut contexts = vec![first];
+        for i in 1..count {
+            let adapter = adapters[i % adapters.len()].clone();
+            let adapter_info = adapter.get_info();
+            let features = options.required_features | (options.optional_features & adapter.features());
+            let (device, queue) = futures::executor::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+                label: Some("oxygen device"),
+                required_features: features,
+                required_limits: adapter.limits(),
+                ..Default::default()
+            }))
+            .map_err(|source| GpuError::RequestDevice { adapter: adapter_info.name.clone(), source })?;
+            info!(adapter = %adapter_info.name, device = i, "GPU device for a group member");
+            let instance = contexts[0].instance.clone();
+            contexts.push(GpuContext { instance, adapter, device, queue, adapter_info, features });
+        }
+        Ok(contexts)
+    }
+
     /// One line naming the adapter, backend and driver, for logs and test output.
     pub fn describe(&self) -> String {
         format!(
