@@ -41,9 +41,12 @@ impl ViewResolver for Moving {
     }
 }
 
-/// The views every configuration registers: a name, the camera pose, the
-/// viewport, whether it draws labels.
-const VIEWS: [(&str, Vec3, Vec3, (u32, u32), bool); 3] = [
+/// A view every configuration registers: a name, the camera's eye and
+/// target, the viewport, whether it draws labels.
+type ViewSpec = (&'static str, Vec3, Vec3, (u32, u32), bool);
+
+/// The views every configuration registers.
+const VIEWS: [ViewSpec; 3] = [
     ("main", Vec3::new(3.0, 9.0, 16.0), Vec3::new(0.0, 0.0, 0.0), (96, 64), true),
     ("side", Vec3::new(-14.0, 4.0, 2.0), Vec3::new(2.0, 0.5, 0.0), (80, 60), true),
     ("overhead", Vec3::new(0.5, 24.0, 0.5), Vec3::new(0.0, 0.0, 0.0), (64, 64), false),
@@ -97,7 +100,7 @@ fn tie_scene() -> Scene {
                 (meshes[(i / 2) % 2], materials[(i + 1) % 6]),
                 (meshes[0], materials[i % 4]),
             ];
-            for (m, &(geometry, material)) in members.iter().enumerate().take(2 + usize::from(i % 2 == 0)) {
+            for (m, &(geometry, material)) in members.iter().enumerate().take(2 + usize::from(i.is_multiple_of(2))) {
                 let node = scene.add_node(format!("cell {i} member {m}"), transform);
                 scene.set_renderable(node, Renderable { geometry, materials: vec![material] }).unwrap();
                 scene.set_semantic_class(node, class).unwrap();

@@ -200,7 +200,7 @@ fn new_world() -> World {
 
 #[test]
 fn a_replica_kept_in_step_by_deltas_holds_what_the_source_holds() {
-    let mut rng = Rng(0x5EED_0F_DE17A5);
+    let mut rng = Rng(0x5EED_0FDE_17A5);
     let mut world = new_world();
     let mut stream = DeltaStream::new();
     let mut replica = SceneReplica::new();
