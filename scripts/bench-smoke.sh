@@ -42,6 +42,7 @@ fi
 runs=(
   "batch_bench|example|gpu|16 32x32 1,2 1"
   "cubes_bench|example|gpu|16 2 2"
+  "group_bench|example|gpu|16 32x32 2 1,2 1"
   "draw_path_bench|example|gpu|16"
   "environment_bench|example|gpu|1 --smoke"
   "hdr_format_bench|example|gpu|64 1"
