@@ -19,7 +19,10 @@
 //! per view, from whichever device rendered it), timed on its own as the
 //! gather; the frame plus the gather is the latency from a scene change to
 //! every output in hand. `GROUP_BENCH_DETERMINISTIC=1` renders in the
-//! deterministic mode.
+//! deterministic mode. `GROUP_BENCH_ONE_GPU=1` puts every device on one GPU
+//! (`RendererGroup::new_headless_spread`): what the members' CPU threads
+//! alone gain, to tell from what more GPUs gain. Each line's adapters are
+//! the members' PCI bus ids.
 //!
 //! Each line: D, the median frame time, view-frames per second (V ÷ it),
 //! the speed-up over the first D of the list and its efficiency (speed-up ÷
@@ -98,6 +101,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let readback = flag("GROUP_BENCH_READBACK")?;
     let deterministic = flag("GROUP_BENCH_DETERMINISTIC")?;
+    let one_gpu = flag("GROUP_BENCH_ONE_GPU")?;
     let options = RendererOptions { deterministic, target_budget_bytes: 16 << 30, ..Default::default() };
     let (mut scene, side, mover) = box_grid(boxes);
 
@@ -108,14 +112,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .value("warm_up_frames", WARM_UP)
         .value("measured_frames", frames)
         .value("readback", readback)
-        .value("deterministic", deterministic);
+        .value("deterministic", deterministic)
+        .value("one_gpu", one_gpu);
     println!(
         "| devices | frame ms | view-frames/s | speed-up | efficiency | delta B | replicate ms | gather ms | views per device |"
     );
     println!("|---:|---:|---:|---:|---:|---:|---:|---:|---|");
     let mut base: Option<(usize, f64)> = None;
     for &d in &devices {
-        let mut group = RendererGroup::new_headless(d, options)?;
+        let mut group = RendererGroup::new_headless_spread(d, options, !one_gpu)?;
+        let buses: Vec<String> =
+            (0..d).filter_map(|m| group.renderer(m)).map(|r| r.gpu().adapter_info.device_pci_bus_id.clone()).collect();
         if let Some(renderer) = group.renderer(0) {
             record.set_adapter(&renderer.gpu().adapter_info);
         }
@@ -165,10 +172,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
         };
         println!(
-            "| {d} | {frame:.3} | {per_second:.0} | {speed_up:.2} | {efficiency:.2} | {:.0} | {:.3} | {:.3} | {per_device:?} |",
+            "| {d} | {frame:.3} | {per_second:.0} | {speed_up:.2} | {efficiency:.2} | {:.0} | {:.3} | {:.3} | {per_device:?} | {} |",
             median(&delta_bytes),
             median(&replicate_ms),
             median(&gather_ms),
+            buses.join(" "),
         );
         record.push_row(
             Row::new()
@@ -181,7 +189,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .value("delta_bytes_median", median(&delta_bytes))
                 .value("replicate_ms_median", median(&replicate_ms))
                 .value("gather_ms_median", median(&gather_ms))
-                .value("views_per_device", per_device),
+                .value("views_per_device", per_device)
+                .value("adapters", buses.join(" ")),
         );
     }
     record.write()?;

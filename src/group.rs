@@ -134,9 +134,18 @@ pub struct RendererGroup {
 const COST_SMOOTHING: f64 = 0.3;
 
 impl RendererGroup {
-    /// A group of `devices` headless renderers with `options` each.
+    /// A group of `devices` headless renderers with `options` each, one
+    /// device per GPU of the machine while there are GPUs
+    /// ([`GpuContext::new_headless_many`]).
     pub fn new_headless(devices: usize, options: RendererOptions) -> Result<Self, RenderError> {
-        let _span = info_span!("renderer_group", devices).entered();
+        Self::new_headless_spread(devices, options, true)
+    }
+
+    /// As [`RendererGroup::new_headless`], with `spread` false: every device
+    /// on one GPU, however many the machine has (to measure what the
+    /// members' own CPU threads gain apart from more GPUs).
+    pub fn new_headless_spread(devices: usize, options: RendererOptions, spread: bool) -> Result<Self, RenderError> {
+        let _span = info_span!("renderer_group", devices, spread).entered();
         if devices == 0 {
             return Err(RenderError::Unsupported("a renderer group needs at least one device".into()));
         }
@@ -145,7 +154,7 @@ impl RendererGroup {
             trust_indirect_args: options.trust_indirect_args,
             ..Default::default()
         };
-        let contexts = GpuContext::new_headless_many(&gpu_options, devices)?;
+        let contexts = GpuContext::new_headless_group(&gpu_options, devices, spread)?;
         let sequential = contexts.iter().any(|c| c.adapter_info.backend == wgpu::Backend::Gl);
         let mut members = Vec::with_capacity(devices);
         for (i, context) in contexts.into_iter().enumerate() {

@@ -279,7 +279,14 @@ impl GpuContext {
     /// adapters come from an instance of each context's own, as in
     /// [`Self::new_headless`].
     pub fn new_headless_many(options: &GpuOptions, count: usize) -> Result<Vec<Self>, GpuError> {
-        let _span = info_span!("gpu_contexts", count).entered();
+        Self::new_headless_group(options, count, true)
+    }
+
+    /// As [`Self::new_headless_many`], with `spread` false: every device on
+    /// the one adapter [`Self::new_headless`] picks, however many GPUs the
+    /// machine has (what a group gains from its CPU threads alone).
+    pub fn new_headless_group(options: &GpuOptions, count: usize, spread: bool) -> Result<Vec<Self>, GpuError> {
+        let _span = info_span!("gpu_contexts", count, spread).entered();
         let first = Self::new_headless(options)?;
         if count <= 1 {
             return Ok(vec![first]);
@@ -295,7 +302,9 @@ impl GpuContext {
         let backends = wgpu::Backends::from(first.adapter_info.backend);
         // Every adapter of the first's kind, the first's own first.
         let mut adapters = vec![first.adapter.clone()];
-        for adapter in futures::executor::block_on(first.instance.enumerate_adapters(backends)) {
+        let others =
+            if spread { futures::executor::block_on(first.instance.enumerate_adapters(backends)) } else { Vec::new() };
+        for adapter in others {
             let info = adapter.get_info();
             let same_kind = rank(&info) == rank(&first.adapter_info)
                 && wanted_name.as_deref().is_none_or(|w| info.name.to_lowercase().contains(w))
