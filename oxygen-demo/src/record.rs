@@ -48,8 +48,19 @@ pub const COMMIT_VAR: &str = "OXYGEN_COMMIT";
 /// (except [`RECORD_DIR_VAR`] and [`COMMIT_VAR`], which only say where the
 /// record goes and what it belongs to). `MESA_` and `__GL_` are the
 /// drivers' knobs (their shader caches, for first-frame runs).
-pub const RECORDED_ENV_PREFIXES: &[&str] =
-    &["OXYGEN_", "WGPU_", "MSAA_BENCH_", "VISIBILITY_", "CUBES_BENCH_", "BATCH_BENCH_", "ATLAS_", "MESA_", "__GL_"];
+pub const RECORDED_ENV_PREFIXES: &[&str] = &[
+    "OXYGEN_",
+    "WGPU_",
+    "MSAA_BENCH_",
+    "VISIBILITY_",
+    "CUBES_BENCH_",
+    "BATCH_BENCH_",
+    "GROUP_BENCH_",
+    "SCHEDULE_BENCH_",
+    "ATLAS_",
+    "MESA_",
+    "__GL_",
+];
 
 /// Why a record was not written.
 #[derive(Debug)]
