@@ -330,6 +330,33 @@ impl Renderer {
             let seconds = view.prep_seconds + view.record_seconds + view.gpu_seconds.unwrap_or(0.0);
             self.schedules.measured(view.view, seconds);
         }
+        // The costs as tracing data too: one event per view and one for
+        // the frame, under the `oxygen::cost` target.
+        for view in &report.views {
+            tracing::info!(
+                target: "oxygen::cost",
+                view = %view.view,
+                prep_ms = view.prep_seconds * 1e3,
+                record_ms = view.record_seconds * 1e3,
+                gpu_ms = view.gpu_seconds.map_or(f64::NAN, |s| s * 1e3),
+                draws = view.draws as u64,
+                triangles = view.triangles.unwrap_or(0),
+                uploaded_bytes = view.uploaded_bytes,
+                streamed_bytes = view.streamed_bytes,
+                target_bytes = view.target_bytes,
+                "view cost"
+            );
+        }
+        tracing::info!(
+            target: "oxygen::cost",
+            frame = report.frame_index,
+            prepare_ms = report.prepare_seconds * 1e3,
+            record_ms = report.record_seconds * 1e3,
+            gpu_ms = report.gpu_seconds.map_or(f64::NAN, |s| s * 1e3),
+            uploaded_bytes = report.uploaded_bytes,
+            views = report.views.len() as u64,
+            "frame cost"
+        );
         self.frames.last = report.views.iter().map(|r| (r.view, r.role)).collect();
         for view in &report.views {
             self.frames.skipped.remove(&view.view);
