@@ -312,9 +312,14 @@ impl RendererGroup {
                 // What crosses a wire, decoded as a receiver would.
                 let bytes = delta.encode();
                 delta_bytes = bytes.len();
-                let delta = SceneDelta::decode(&bytes).map_err(replica_error)?;
-                for replica in self.members.iter_mut().filter_map(|m| m.replica.as_mut()) {
-                    replica.apply(&delta).map_err(replica_error)?;
+                let applied = SceneDelta::decode(&bytes).and_then(|delta| {
+                    self.members.iter_mut().filter_map(|m| m.replica.as_mut()).try_for_each(|r| r.apply(&delta))
+                });
+                if let Err(e) = applied {
+                    // A replica that failed waits for a snapshot: the next
+                    // frame sends one.
+                    self.stream.restart();
+                    return Err(replica_error(e));
                 }
             }
         }
