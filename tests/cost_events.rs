@@ -16,9 +16,11 @@ fn each_views_costs_are_tracing_events_too() {
     use std::sync::{Arc, Mutex};
     use tracing_subscriber::layer::SubscriberExt;
 
-    /// Every `oxygen::cost` event's message and fields, as text.
+    /// One event's fields (the message among them), as text.
+    type Event = Vec<(String, String)>;
+    /// Every `oxygen::cost` event.
     #[derive(Clone, Default)]
-    struct Costs(Arc<Mutex<Vec<Vec<(String, String)>>>>);
+    struct Costs(Arc<Mutex<Vec<Event>>>);
     struct Fields<'a>(&'a mut Vec<(String, String)>);
     impl tracing::field::Visit for Fields<'_> {
         fn record_debug(&mut self, field: &tracing::field::Field, value: &dyn std::fmt::Debug) {
@@ -47,9 +49,8 @@ fn each_views_costs_are_tracing_events_too() {
         renderer.render_frame(&demo.scene).unwrap()
     });
     let events = costs.0.lock().unwrap().clone();
-    let field = |event: &Vec<(String, String)>, name: &str| {
-        event.iter().find(|(n, _)| n == name).map(|(_, v)| v.clone()).unwrap_or_default()
-    };
+    let field =
+        |event: &Event, name: &str| event.iter().find(|(n, _)| n == name).map(|(_, v)| v.clone()).unwrap_or_default();
     let views: Vec<_> = events.iter().filter(|e| field(e, "message") == "view cost").collect();
     let frames: Vec<_> = events.iter().filter(|e| field(e, "message") == "frame cost").collect();
     assert_eq!(views.len(), report.views.len(), "one event per view: {events:?}");
