@@ -97,9 +97,13 @@ impl Default for Journal {
 impl Journal {
     pub(crate) fn record(&mut self, revision: u64, event: Event) {
         if self.events.len() >= MAX_JOURNAL_EVENTS {
-            let half = self.events.len() / 2;
-            self.floor = self.events[half - 1].0;
-            self.events.drain(..half);
+            // Drop the older half, and with it every event of the last
+            // dropped revision (one edit may record several: a subtree's
+            // removals), so that a delta from the floor misses none.
+            let floor = self.events[self.events.len() / 2].0;
+            let dropped = self.events.partition_point(|(r, _)| *r <= floor);
+            self.floor = self.floor.max(floor);
+            self.events.drain(..dropped);
         }
         self.events.push((revision, event));
     }
