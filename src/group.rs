@@ -312,13 +312,17 @@ impl RendererGroup {
                 // What crosses a wire, decoded as a receiver would.
                 let bytes = delta.encode();
                 delta_bytes = bytes.len();
+                // Every replica gets the delta, even after one fails, so
+                // that none misses the asset bodies it carries.
                 let applied = SceneDelta::decode(&bytes).and_then(|delta| {
-                    self.members.iter_mut().filter_map(|m| m.replica.as_mut()).try_for_each(|r| r.apply(&delta))
+                    let results: Vec<_> =
+                        self.members.iter_mut().filter_map(|m| m.replica.as_mut()).map(|r| r.apply(&delta)).collect();
+                    results.into_iter().collect::<Result<(), _>>()
                 });
                 if let Err(e) = applied {
                     // A replica that failed waits for a snapshot: the next
-                    // frame sends one.
-                    self.stream.restart();
+                    // frame sends one, with every asset body again.
+                    self.stream = DeltaStream::new();
                     return Err(replica_error(e));
                 }
             }

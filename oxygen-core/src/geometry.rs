@@ -250,8 +250,14 @@ impl Geometry {
             if !Vec3::from(v.position).is_finite() {
                 return Err(GeometryError::NonFinitePosition { name, vertex: i });
             }
+            // A normal already of unit length (within rounding) is kept as
+            // given, so that building a geometry from another's vertices
+            // (a scene replica) gives the same bits: normalising twice
+            // moves some normals by an ulp.
             let n = Vec3::from(v.normal);
-            v.normal = n.try_normalize().unwrap_or(Vec3::Z).to_array();
+            if !(n.is_finite() && (n.length_squared() - 1.0).abs() <= 1e-6) {
+                v.normal = n.try_normalize().unwrap_or(Vec3::Z).to_array();
+            }
             if !Vec2::from(v.uv).is_finite() {
                 v.uv = [0.0, 0.0];
             }

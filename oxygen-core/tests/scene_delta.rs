@@ -314,3 +314,53 @@ fn bad_deltas_are_refused_with_a_reason() {
     replica.apply(&next).unwrap();
     assert_eq!(scene_difference(&world.scene, replica.scene()), None);
 }
+
+#[test]
+fn edge_cases_a_review_found_replicate() {
+    let mut scene = Scene::new();
+    let mut stream = DeltaStream::new();
+    let mut replica = SceneReplica::new();
+    replica.apply(&stream.next(&scene)).unwrap();
+    // A material added, then a texture, then the material set to it, all
+    // in one delta's window.
+    let material = scene.add_material(Material::opaque("m", Vec4::ONE));
+    let texture = TextureImage::new("t", 1, 1, ColorSpace::Srgb, vec![9, 9, 9, 255]).unwrap();
+    let texture = scene.add_texture(texture);
+    let textured = Material { base_color_texture: Some(texture), ..scene.material(material).unwrap().clone() };
+    scene.set_material(material, textured).unwrap();
+    // LODs set against one mesh stay when the renderable changes to a mesh
+    // of another submesh count (the scene allows it).
+    let one = scene.add_geometry(Geometry::cube(1.0));
+    let sphere = Geometry::uv_sphere(0.5, 9, 7);
+    let two = Geometry::new(
+        "two",
+        sphere.vertices().to_vec(),
+        [sphere.indices(), sphere.indices()].concat(),
+        vec![
+            oxygen_core::Submesh { first_index: 0, index_count: sphere.indices().len() as u32 },
+            oxygen_core::Submesh {
+                first_index: sphere.indices().len() as u32,
+                index_count: sphere.indices().len() as u32,
+            },
+        ],
+    )
+    .unwrap();
+    let two = scene.add_geometry(two);
+    let node = scene.add_node("n", Transform::IDENTITY);
+    scene.set_renderable(node, Renderable { geometry: one, materials: vec![material] }).unwrap();
+    scene.set_lods(node, vec![LodLevel { geometry: one, below_screen_fraction: 0.1 }]).unwrap();
+    scene.set_renderable(node, Renderable { geometry: two, materials: vec![material, material] }).unwrap();
+    replica.apply(&stream.next(&scene)).unwrap();
+    assert_eq!(scene_difference(&scene, replica.scene()), None);
+    // Geometry rebuilt from its record has the source's bits (normals not
+    // normalised a second time).
+    let (source, copy) = (scene.geometry(two).unwrap(), replica.scene().geometry(two).unwrap());
+    assert!(source.vertices() == copy.vertices(), "the replica's vertices differ from the source's");
+    // Another scene on the same stream: a snapshot, not a delta on top.
+    let mut other = Scene::new();
+    other.add_node("elsewhere", Transform::IDENTITY);
+    let delta = stream.next(&other);
+    assert!(delta.is_snapshot());
+    replica.apply(&delta).unwrap();
+    assert_eq!(scene_difference(&other, replica.scene()), None);
+}

@@ -462,6 +462,8 @@ impl SceneDelta {
 pub struct DeltaStream {
     revision: u64,
     sent: HashSet<AssetHash>,
+    /// The scene the last delta came from: another scene gets a snapshot.
+    scene: Option<u64>,
 }
 
 impl DeltaStream {
@@ -481,6 +483,10 @@ impl DeltaStream {
     /// back to the last one). Assets already sent on this stream travel by
     /// hash alone.
     pub fn next(&mut self, scene: &Scene) -> SceneDelta {
+        if self.scene != Some(scene.id()) {
+            self.revision = 0;
+            self.scene = Some(scene.id());
+        }
         let delta = scene.delta_since(self.revision, &mut self.sent);
         self.revision = delta.revision;
         delta
@@ -548,6 +554,16 @@ impl Scene {
             };
             delta.ops.push(op);
         }
+        // Slots are per table: only the order within one table matters.
+        // Nodes, geometries, textures, then materials, so that a material
+        // names only textures already there (one added after it in the
+        // window, and set into it, would otherwise come too late).
+        delta.ops.sort_by_key(|op| match op {
+            DeltaOp::AddNode { .. } | DeltaOp::RemoveNode { .. } => 0,
+            DeltaOp::AddGeometry { .. } => 1,
+            DeltaOp::AddTexture { .. } => 2,
+            DeltaOp::AddMaterial { .. } | DeltaOp::SetMaterial { .. } => 3,
+        });
         delta.nodes = self
             .nodes
             .iter()
@@ -861,12 +877,11 @@ impl SceneReplica {
                 }
             }
         }
-        if lods.is_empty() {
-            if let Some(node) = scene.nodes.get_mut(key) {
-                node.lods.clear();
-            }
-        } else {
-            scene.set_lods(key, lods)?;
+        // As the source holds them: the source checks LODs against the
+        // renderable when they are set, not when the renderable changes
+        // later, so a replica must not check them again.
+        if let Some(node) = scene.nodes.get_mut(key) {
+            node.lods = lods;
         }
         match skin {
             // The scene refuses a skin whose joints are not all there; one
