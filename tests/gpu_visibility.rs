@@ -26,6 +26,7 @@ use oxygen::sceneprep::{DrawMetadata, PassMask, Visibility, canonical_dump};
 use oxygen::views::{ResolvedView, ViewContext, ViewError, ViewResolver};
 use support::golden::compare;
 use support::gpu_renderer_with;
+use support::rng::Rng;
 
 /// A renderer whose default path is `visibility`, or `None` (with the
 /// reason printed) when the adapter cannot run the GPU paths.
@@ -39,28 +40,6 @@ fn renderer(visibility: Visibility) -> Option<Renderer> {
         return None;
     }
     Some(renderer)
-}
-
-/// A small deterministic generator (xorshift64*), so scenes are the same
-/// on every run.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-    fn unit(&mut self) -> f32 {
-        (self.next() >> 40) as f32 / (1u64 << 24) as f32
-    }
-    fn range(&mut self, low: f32, high: f32) -> f32 {
-        low + (high - low) * self.unit()
-    }
-    fn below(&mut self, n: u32) -> u32 {
-        (self.next() % u64::from(n)) as u32
-    }
 }
 
 /// Boxes of every pass class and variant scattered around the origin, some
@@ -89,8 +68,8 @@ fn random_scene(seed: u64, count: usize) -> Scene {
         }
         let rotation = Quat::from_rotation_y(rng.range(0.0, std::f32::consts::TAU));
         let node = scene.add_node(format!("box {i}"), Transform { translation: at, rotation, scale });
-        let geometry = meshes[rng.below(meshes.len() as u32) as usize];
-        let material = materials[rng.below(materials.len() as u32) as usize];
+        let geometry = meshes[rng.below(meshes.len())];
+        let material = materials[rng.below(materials.len())];
         scene.set_renderable(node, Renderable { geometry, materials: vec![material] }).unwrap();
         if rng.below(4) == 0 {
             scene.set_flags(node, NodeFlags::VISIBLE).unwrap();
@@ -240,7 +219,7 @@ fn city(blocks: u32, ids: bool) -> Scene {
                 format!("building {x} {z}"),
                 Transform { translation: at, rotation: Quat::IDENTITY, scale: Vec3::new(8.0, height, 8.0) },
             );
-            let mut material = materials[rng.below(materials.len() as u32) as usize];
+            let mut material = materials[rng.below(materials.len())];
             if ids {
                 let id = x * blocks + z;
                 let emissive = Vec3::new((id % 8 + 1) as f32, (id / 8 % 8 + 1) as f32, (id / 64 + 1) as f32) / 8.0;

@@ -18,23 +18,7 @@ use oxygen::core::{AlphaMode, ColorSpace, NodeFlags, TextureImage};
 use oxygen::glam::{Quat, Vec4};
 use oxygen::prelude::*;
 use oxygen::sceneprep::Visibility;
-
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-    fn unit(&mut self) -> f32 {
-        (self.next() >> 40) as f32 / (1u64 << 24) as f32
-    }
-}
+use support::rng::Rng;
 
 /// Every output of `view`, hashed bit for bit.
 fn fingerprint(renderer: &Renderer, view: ViewId) -> u64 {

@@ -421,15 +421,25 @@ fn a_frame_budget_holds_for_a_batchs_cameras() {
     assert!(why(&report, cameras[1]).is_some() && why(&report, cameras[2]).is_some(), "brought up by the bound");
 }
 
+/// A scene of one grey unit cube at the origin, and a function that adds
+/// another at a place.
+fn one_cube() -> (Scene, impl Fn(&mut Scene, Vec3)) {
+    let mut scene = Scene::new();
+    let grey = scene.add_material(Material::opaque("grey", Vec4::splat(0.5)));
+    let cube = scene.add_geometry(Geometry::cube(1.0));
+    let add = move |scene: &mut Scene, at: Vec3| {
+        let node = scene.add_node("cube", Transform::from_translation(at));
+        scene.set_renderable(node, Renderable { geometry: cube, materials: vec![grey] }).unwrap();
+    };
+    add(&mut scene, Vec3::ZERO);
+    (scene, add)
+}
+
 /// A view's report counts the triangles it drew on the CPU path: one cube
 /// in view is 12, two are 24.
 #[test]
 fn a_views_report_counts_its_triangles() {
-    let mut scene = Scene::new();
-    let grey = scene.add_material(Material::opaque("grey", Vec4::splat(0.5)));
-    let cube = scene.add_geometry(Geometry::cube(1.0));
-    let first = scene.add_node("first", Transform::IDENTITY);
-    scene.set_renderable(first, Renderable { geometry: cube, materials: vec![grey] }).unwrap();
+    let (mut scene, add_cube) = one_cube();
     let mut renderer = support::gpu_renderer();
     let camera = support::looking_at_origin(50.0, Vec3::new(0.0, 2.0, 6.0), UVec2::new(16, 12));
     let view = renderer
@@ -437,8 +447,7 @@ fn a_views_report_counts_its_triangles() {
         .unwrap();
     let triangles = |report: &FrameReport| report.views.iter().find(|v| v.view == view).and_then(|v| v.triangles);
     assert_eq!(triangles(&renderer.render_frame(&scene).unwrap()), Some(12));
-    let second = scene.add_node("second", Transform::from_translation(Vec3::new(1.5, 0.0, 0.0)));
-    scene.set_renderable(second, Renderable { geometry: cube, materials: vec![grey] }).unwrap();
+    add_cube(&mut scene, Vec3::new(1.5, 0.0, 0.0));
     assert_eq!(triangles(&renderer.render_frame(&scene).unwrap()), Some(24));
 }
 
@@ -448,11 +457,7 @@ fn a_views_report_counts_its_triangles() {
 /// two are 2 of 24.
 #[test]
 fn a_gpu_views_report_counts_its_draws_and_triangles_from_the_gpus_count() {
-    let mut scene = Scene::new();
-    let grey = scene.add_material(Material::opaque("grey", Vec4::splat(0.5)));
-    let cube = scene.add_geometry(Geometry::cube(1.0));
-    let first = scene.add_node("first", Transform::IDENTITY);
-    scene.set_renderable(first, Renderable { geometry: cube, materials: vec![grey] }).unwrap();
+    let (mut scene, add_cube) = one_cube();
     let mut renderer = support::gpu_renderer();
     if !renderer.gpu_visibility_supported() {
         support::skip::skip(format_args!("{} cannot run GPU visibility", renderer.gpu().describe()));
@@ -476,8 +481,7 @@ fn a_gpu_views_report_counts_its_draws_and_triangles_from_the_gpus_count() {
         panic!("the report never counted {want:?} draws and triangles: {seen:?}");
     };
     settled(&mut renderer, &scene, (1, 12));
-    let second = scene.add_node("second", Transform::from_translation(Vec3::new(1.5, 0.0, 0.0)));
-    scene.set_renderable(second, Renderable { geometry: cube, materials: vec![grey] }).unwrap();
+    add_cube(&mut scene, Vec3::new(1.5, 0.0, 0.0));
     settled(&mut renderer, &scene, (2, 24));
 }
 
@@ -486,11 +490,7 @@ fn a_gpu_views_report_counts_its_draws_and_triangles_from_the_gpus_count() {
 /// every frame (64 and 20 bytes each).
 #[test]
 fn a_views_report_counts_the_bytes_written_for_it() {
-    let mut scene = Scene::new();
-    let grey = scene.add_material(Material::opaque("grey", Vec4::splat(0.5)));
-    let cube = scene.add_geometry(Geometry::cube(1.0));
-    let first = scene.add_node("first", Transform::IDENTITY);
-    scene.set_renderable(first, Renderable { geometry: cube, materials: vec![grey] }).unwrap();
+    let (mut scene, add_cube) = one_cube();
     let mut renderer = support::gpu_renderer();
     let camera = support::looking_at_origin(50.0, Vec3::new(0.0, 2.0, 6.0), UVec2::new(16, 12));
     // One command per draw, so that each draw adds exactly 64 + 20 bytes.
@@ -505,8 +505,7 @@ fn a_views_report_counts_the_bytes_written_for_it() {
     let still = uploaded(&renderer.render_frame(&scene).unwrap()).unwrap();
     assert!(still >= 64 + 20, "{still} bytes: at least the draw and its command");
     assert!(first_frame > still, "the camera's constants are written once: {first_frame} then {still}");
-    let second = scene.add_node("second", Transform::from_translation(Vec3::new(1.5, 0.0, 0.0)));
-    scene.set_renderable(second, Renderable { geometry: cube, materials: vec![grey] }).unwrap();
+    add_cube(&mut scene, Vec3::new(1.5, 0.0, 0.0));
     let two = uploaded(&renderer.render_frame(&scene).unwrap()).unwrap();
     assert_eq!(two, still + 64 + 20, "one more draw and command");
 }

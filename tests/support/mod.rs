@@ -10,6 +10,7 @@ pub mod encode;
 pub mod far;
 pub mod golden;
 pub mod record;
+pub mod rng;
 pub mod skip;
 
 use std::sync::Once;

@@ -518,10 +518,8 @@ impl Scene {
         if snapshot {
             // Every slot ever made, then the vacant ones freed so that the
             // last freed is the free list's head, as here.
-            let vacant: HashSet<u32> = self.journal.free_nodes.iter().copied().collect();
             delta.ops.extend((1..self.journal.node_slots).map(|index| DeltaOp::AddNode { index }));
             delta.ops.extend(self.journal.free_nodes.iter().map(|&index| DeltaOp::RemoveNode { index }));
-            debug_assert!(vacant.len() == self.journal.free_nodes.len());
             for (handle, _) in self.geometries.iter() {
                 delta.ops.push(self.geometry_op(geometry_index(handle), sent, &mut delta.assets));
             }
