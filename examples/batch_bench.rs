@@ -86,29 +86,13 @@ const SPANS_SHOWN: usize = 24;
 
 /// The grid of `count` boxes and its side length.
 fn box_grid(count: usize) -> (Scene, f32) {
-    let mut scene = Scene::new();
-    let per_row = (count as f32).sqrt().ceil().max(1.0) as usize;
-    let half = (per_row - 1) as f32;
-    let cube = scene.add_geometry(Geometry::cube(1.0));
-    let colors = [[0.8, 0.2, 0.2], [0.2, 0.7, 0.3], [0.2, 0.3, 0.8], [0.8, 0.7, 0.2]];
-    let materials: Vec<_> =
-        colors.iter().map(|&[r, g, b]| scene.add_material(Material::opaque("box", Vec4::new(r, g, b, 1.0)))).collect();
-    for i in 0..count {
-        let (x, z) = ((i % per_row) as f32 * 2.0 - half, (i / per_row) as f32 * 2.0 - half);
-        let node = scene.add_node("box", Transform::from_translation(Vec3::new(x, 0.5, z)));
-        scene.set_renderable(node, Renderable { geometry: cube, materials: vec![materials[i % 4]] }).ok();
-    }
-    let sun_direction = Vec3::new(0.6, -0.5, 0.4).normalize();
-    let sun =
-        scene.add_node("sun", Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, sun_direction)));
-    scene.set_light(sun, Some(Light { casts_shadows: false, ..Light::directional(3.0) })).ok();
-    (scene, per_row as f32 * 2.0)
+    let grid = oxygen_demo::box_grid(count);
+    (grid.scene, grid.side)
 }
 
 /// Camera `i` of `n` on the ring.
 fn ring_camera(i: usize, n: usize, side: f32, size: UVec2) -> Result<LookAtResolver, Box<dyn std::error::Error>> {
-    let angle = i as f32 / n as f32 * std::f32::consts::TAU;
-    let eye = Vec3::new(angle.cos() * 0.65 * side, 0.35 * side, angle.sin() * 0.65 * side);
+    let eye = oxygen_demo::ring_eye(i, n, side);
     Ok(LookAtResolver::new(Camera::try_perspective(60f32.to_radians(), 0.1, None)?, eye, Vec3::ZERO, size)?)
 }
 

@@ -444,8 +444,10 @@ impl RendererGroup {
 /// each view's member and measured cost: when the most loaded member
 /// carries more than `margin` above the least loaded, the measured view of
 /// the first whose move to the second leaves the smallest gap, if that gap
-/// is smaller than the one it closes; otherwise none.
-fn best_move(
+/// is smaller than the one it closes; otherwise none. Returned as (view,
+/// from, to). The same rule places the views of render nodes
+/// (`oxygen-node`).
+pub fn best_move(
     loads: &[f64],
     views: &[(GroupViewId, usize, Option<f64>)],
     margin: f64,

@@ -292,3 +292,48 @@ pub fn view_id(index: u32) -> oxygen_core::ViewId {
     }
     ids.allocate()
 }
+
+/// The view benches' scene (`batch_bench`, `group_bench`, `node_bench`):
+/// `count` unit boxes on a square grid of spacing 2 centred on the origin
+/// (four colours in turn), one sun without shadows.
+pub struct BoxGrid {
+    /// The scene.
+    pub scene: Scene,
+    /// The grid's side length (rows × 2).
+    pub side: f32,
+    /// The first box (the one the benches move each frame), or the sun when
+    /// `count` is 0.
+    pub first_box: NodeKey,
+}
+
+/// The grid of `count` boxes ([`BoxGrid`]).
+pub fn box_grid(count: usize) -> BoxGrid {
+    let mut scene = Scene::new();
+    let per_row = (count as f32).sqrt().ceil().max(1.0) as usize;
+    let half = (per_row - 1) as f32;
+    let cube = scene.add_geometry(Geometry::cube(1.0));
+    let colors = [[0.8, 0.2, 0.2], [0.2, 0.7, 0.3], [0.2, 0.3, 0.8], [0.8, 0.7, 0.2]];
+    let materials: Vec<_> =
+        colors.iter().map(|&[r, g, b]| scene.add_material(Material::opaque("box", Vec4::new(r, g, b, 1.0)))).collect();
+    let mut first = None;
+    for i in 0..count {
+        let (x, z) = ((i % per_row) as f32 * 2.0 - half, (i / per_row) as f32 * 2.0 - half);
+        let node = scene.add_node("box", Transform::from_translation(Vec3::new(x, 0.5, z)));
+        scene.set_renderable(node, Renderable { geometry: cube, materials: vec![materials[i % 4]] }).ok();
+        first.get_or_insert(node);
+    }
+    let sun_direction = Vec3::new(0.6, -0.5, 0.4).normalize();
+    let sun =
+        scene.add_node("sun", Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, sun_direction)));
+    scene.set_light(sun, Some(Light { casts_shadows: false, ..Light::directional(3.0) })).ok();
+    BoxGrid { scene, side: per_row as f32 * 2.0, first_box: first.unwrap_or(sun) }
+}
+
+/// Where camera `i` of `n` of the benches' ring sits around a [`BoxGrid`]
+/// of side `side`: on a circle of radius 0.65 × side at height 0.35 ×
+/// side, at angle i / n of a turn (they look at the origin, 60° vertical
+/// field of view).
+pub fn ring_eye(i: usize, n: usize, side: f32) -> Vec3 {
+    let angle = i as f32 / n.max(1) as f32 * std::f32::consts::TAU;
+    Vec3::new(angle.cos() * 0.65 * side, 0.35 * side, angle.sin() * 0.65 * side)
+}

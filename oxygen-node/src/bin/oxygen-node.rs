@@ -1,0 +1,85 @@
+//! A render node: joins a rig and renders its share of the views until the
+//! rig's coordinator leaves.
+//!
+//! ```text
+//! oxygen-node --rig NAME --connect ENDPOINT [--name NAME] [--gpu N]
+//!             [--listen ENDPOINT] [--deterministic] [--wait SECONDS]
+//! ```
+//!
+//! `--connect` is the coordinator's Zenoh endpoint (`tcp/HOST:PORT`);
+//! `--name` must be unique in the rig (default `node-PID`); `--gpu N`
+//! renders on the machine's N-th GPU (default 0); `--deterministic`
+//! renders in the deterministic mode (the same pixels on any node of one
+//! kind of GPU and driver); `--wait` is how long to wait for the
+//! coordinator (default 60 s). Logs go to stderr (`RUST_LOG` filters them).
+
+use std::process::ExitCode;
+use std::time::Duration;
+
+use oxygen_node::{NodeOptions, run_node};
+
+const USAGE: &str = "usage: oxygen-node --rig NAME --connect ENDPOINT [--name NAME] [--gpu N] [--listen ENDPOINT] [--deterministic] [--wait SECONDS]";
+
+fn parse(mut args: impl Iterator<Item = String>) -> Result<NodeOptions, String> {
+    let mut options = NodeOptions::new("", format!("node-{}", std::process::id()), "");
+    options.net.connect.clear();
+    while let Some(arg) = args.next() {
+        let mut value = |name: &str| args.next().ok_or_else(|| format!("{name} needs a value\n{USAGE}"));
+        match arg.as_str() {
+            "--rig" => options.rig = value("--rig")?,
+            "--name" => options.name = value("--name")?,
+            "--connect" => options.net.connect.push(value("--connect")?),
+            "--listen" => options.net.listen.push(value("--listen")?),
+            "--gpu" => options.gpu = value("--gpu")?.parse().map_err(|e| format!("--gpu: {e}"))?,
+            "--wait" => {
+                let seconds: f64 = value("--wait")?.parse().map_err(|e| format!("--wait: {e}"))?;
+                if !(seconds.is_finite() && seconds > 0.0) {
+                    return Err("--wait: a number of seconds above 0".into());
+                }
+                options.coordinator_wait = Duration::from_secs_f64(seconds);
+            }
+            "--deterministic" => options.renderer.deterministic = true,
+            "-h" | "--help" => return Err(USAGE.into()),
+            other => return Err(format!("unknown argument {other:?}\n{USAGE}")),
+        }
+    }
+    if options.rig.is_empty() || options.net.connect.is_empty() && options.net.listen.is_empty() {
+        return Err(format!("--rig and --connect (or --listen) are needed\n{USAGE}"));
+    }
+    Ok(options)
+}
+
+fn main() -> ExitCode {
+    tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env()
+                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn,oxygen_node=info")),
+        )
+        .with_writer(std::io::stderr)
+        .init();
+    let options = match parse(std::env::args().skip(1)) {
+        Ok(options) => options,
+        Err(message) => {
+            eprintln!("{message}");
+            return ExitCode::from(2);
+        }
+    };
+    match run_node(&options) {
+        Ok(summary) => {
+            eprintln!(
+                "oxygen-node {}: {} frames, {} view-frames, {} MB of images sent, {} KB of scene received, on {}",
+                options.name,
+                summary.frames,
+                summary.view_frames,
+                summary.bytes_sent / 1_000_000,
+                summary.scene_bytes / 1000,
+                summary.adapter
+            );
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("oxygen-node {}: {e}", options.name);
+            ExitCode::FAILURE
+        }
+    }
+}

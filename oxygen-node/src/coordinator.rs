@@ -1,0 +1,660 @@
+//! The coordinator: the application's side of a rig. It holds the views,
+//! places them on the nodes that have joined, sends each frame's scene
+//! delta and gathers every view's images of the frame (see the crate docs).
+
+use std::collections::{BTreeMap, BTreeSet, HashSet};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+use glam::UVec2;
+use oxygen::group::{GroupViewId, best_move};
+use oxygen_core::Scene;
+use oxygen_core::scene::delta::DeltaStream;
+use tracing::{info, info_span, warn};
+use zenoh::Wait;
+use zenoh::qos::CongestionControl;
+use zenoh::sample::{Sample, SampleKind};
+
+use crate::error::{NodeError, check_name};
+use crate::net::NetConfig;
+use crate::spec::{Planes, RigViewId, ViewSpec};
+use crate::wire::{self, ImagePlanes, Keys, Order, Outcome, OutputTag, SceneUpdate, Status};
+
+/// How a coordinator runs a rig.
+#[derive(Clone, Debug)]
+pub struct RigOptions {
+    /// The images each view sends back.
+    pub planes: Planes,
+    /// How long a node may take over its share of a frame before it is
+    /// treated as fallen behind (its views rendered elsewhere).
+    pub stall_timeout: Duration,
+    /// How far (a fraction) the most loaded node may carry more than the
+    /// least loaded before a view moves; `f64::INFINITY` never moves one
+    /// (joins and leaves still do).
+    pub rebalance_margin: f64,
+}
+
+impl Default for RigOptions {
+    /// Colour only, 30 s to answer, a 25 % margin.
+    fn default() -> Self {
+        RigOptions { planes: Planes::default(), stall_timeout: Duration::from_secs(30), rebalance_margin: 0.25 }
+    }
+}
+
+/// One view's images of one frame, with their tags.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ViewOutput {
+    /// The view.
+    pub view: RigViewId,
+    /// The rig's frame.
+    pub frame: u64,
+    /// The node that rendered it.
+    pub node: String,
+    /// Width and height.
+    pub size: UVec2,
+    /// The images.
+    pub planes: ImagePlanes,
+    /// Seconds from the frame starting (the scene as changed) to these images arriving.
+    pub latency_seconds: f64,
+}
+
+/// What a rig's frame did.
+#[derive(Clone, Debug, Default)]
+pub struct RigFrame {
+    /// The frame (from 1).
+    pub frame: u64,
+    /// Every view's images, one per view, in view order.
+    pub outputs: Vec<ViewOutput>,
+    /// Bytes of the frame's scene delta as encoded (0 when the scene did
+    /// not change); it goes to every node in step.
+    pub delta_bytes: usize,
+    /// Bytes of scene on the wire this frame: the delta once per node in
+    /// step, plus each snapshot sent.
+    pub scene_wire_bytes: usize,
+    /// Bytes of images received (duplicates included).
+    pub image_bytes: usize,
+    /// Seconds from the frame starting (the scene as changed) to the last view's images in: the end-to-end latency.
+    pub latency_seconds: f64,
+    /// Seconds making and encoding the delta (and snapshots).
+    pub replicate_seconds: f64,
+    /// Nodes that joined before this frame.
+    pub joined: Vec<String>,
+    /// Nodes that left (or were found gone) before or during this frame.
+    pub left: Vec<String>,
+    /// Nodes that did not answer in time during this frame.
+    pub stalled: Vec<String>,
+    /// Views rendered again on another node during this frame (their
+    /// node left, failed or stalled).
+    pub taken_over: Vec<RigViewId>,
+    /// Views moved after this frame (from the next one): (view, from, to).
+    pub moved: Vec<(RigViewId, String, String)>,
+    /// Images received twice (a view rendered again whose first images
+    /// came after all) and ignored.
+    pub duplicates: usize,
+}
+
+enum Event {
+    Output(Sample),
+    Status(Sample),
+    Node(String, bool),
+}
+
+/// A node as the coordinator knows it.
+#[derive(Debug, Default)]
+struct NodeState {
+    /// Its replica holds the stream's revision (false: it gets a snapshot).
+    in_step: bool,
+    /// Views it will add and remove with its next order.
+    add: BTreeSet<RigViewId>,
+    remove: BTreeSet<RigViewId>,
+    /// Not answering: gets no views until it reports a frame again.
+    stalled: bool,
+}
+
+impl NodeState {
+    /// The node stops rendering `view`: not added after all, or removed
+    /// with its next order.
+    fn drop_view(&mut self, view: RigViewId) {
+        if !self.add.remove(&view) {
+            self.remove.insert(view);
+        }
+    }
+}
+
+struct RigView {
+    spec: ViewSpec,
+    node: Option<String>,
+    /// Smoothed seconds a frame (its node's time ÷ its views).
+    cost: Option<f64>,
+}
+
+/// The application's side of a rig (see the crate docs).
+pub struct Coordinator {
+    rig: String,
+    keys: Keys,
+    options: RigOptions,
+    session: zenoh::Session,
+    events: mpsc::Receiver<Event>,
+    // Kept alive: dropping them undeclares them.
+    _subscribers: Vec<zenoh::pubsub::Subscriber<()>>,
+    _token: zenoh::liveliness::LivelinessToken,
+    nodes: BTreeMap<String, NodeState>,
+    views: BTreeMap<RigViewId, RigView>,
+    next_view: u32,
+    stream: DeltaStream,
+    frame: u64,
+    /// Membership changes seen between frames, reported with the next.
+    joined: Vec<String>,
+    left: Vec<String>,
+}
+
+/// Weight of a new measurement in a view's smoothed cost.
+const COST_SMOOTHING: f64 = 0.3;
+
+impl Coordinator {
+    /// A coordinator of rig `rig` on `net` (typically listening where the
+    /// nodes connect).
+    pub fn new(rig: &str, net: &NetConfig, options: RigOptions) -> Result<Self, NodeError> {
+        check_name("rig", rig)?;
+        let _span = info_span!("coordinator", rig).entered();
+        let keys = Keys::new(rig);
+        let session = net.open()?;
+        let (tx, events) = mpsc::channel();
+        let mut subscribers = Vec::new();
+        for (key, status) in [(keys.output("*"), false), (keys.status("*"), true)] {
+            let tx = tx.clone();
+            let subscriber = session
+                .declare_subscriber(key)
+                .callback(move |sample| {
+                    let _ = tx.send(if status { Event::Status(sample) } else { Event::Output(sample) });
+                })
+                .wait()
+                .map_err(NodeError::zenoh)?;
+            subscribers.push(subscriber);
+        }
+        let liveliness = session
+            .liveliness()
+            .declare_subscriber(keys.node("*"))
+            .history(true)
+            .callback(move |sample| {
+                let name = Keys::last_chunk(sample.key_expr().as_str()).to_owned();
+                let _ = tx.send(Event::Node(name, sample.kind() == SampleKind::Put));
+            })
+            .wait()
+            .map_err(NodeError::zenoh)?;
+        subscribers.push(liveliness);
+        let token = session.liveliness().declare_token(keys.coordinator()).wait().map_err(NodeError::zenoh)?;
+        info!(rig, "coordinator up");
+        Ok(Coordinator {
+            rig: rig.to_owned(),
+            keys,
+            options: RigOptions {
+                rebalance_margin: if options.rebalance_margin.is_nan() {
+                    0.25
+                } else {
+                    options.rebalance_margin.max(0.0)
+                },
+                ..options
+            },
+            session,
+            events,
+            _subscribers: subscribers,
+            _token: token,
+            nodes: BTreeMap::new(),
+            views: BTreeMap::new(),
+            next_view: 0,
+            stream: DeltaStream::new(),
+            frame: 0,
+            joined: Vec::new(),
+            left: Vec::new(),
+        })
+    }
+
+    /// The rig's name.
+    pub fn rig(&self) -> &str {
+        &self.rig
+    }
+
+    /// Adds a view (checked now); it renders from the next frame on the
+    /// least loaded node.
+    pub fn add_view(&mut self, spec: ViewSpec) -> Result<RigViewId, NodeError> {
+        spec.check()?;
+        let id = RigViewId(self.next_view);
+        self.next_view += 1;
+        self.views.insert(id, RigView { spec, node: None, cost: None });
+        Ok(id)
+    }
+
+    /// Removes a view (from its node with the next frame).
+    pub fn remove_view(&mut self, view: RigViewId) -> Result<(), NodeError> {
+        let removed = self.views.remove(&view).ok_or(NodeError::NoSuchView(view))?;
+        if let Some(node) = removed.node.and_then(|n| self.nodes.get_mut(&n)) {
+            node.drop_view(view);
+        }
+        Ok(())
+    }
+
+    /// Changes [`RigOptions::stall_timeout`] from now on.
+    pub fn set_stall_timeout(&mut self, timeout: Duration) {
+        self.options.stall_timeout = timeout;
+    }
+
+    /// The node rendering `view` (`None` before its first frame).
+    pub fn node_of(&self, view: RigViewId) -> Option<&str> {
+        self.views.get(&view)?.node.as_deref()
+    }
+
+    /// The nodes that have joined and not left, by name.
+    pub fn nodes(&self) -> Vec<String> {
+        self.nodes.keys().cloned().collect()
+    }
+
+    /// `view`'s measured cost, seconds a frame (`None` before measured).
+    pub fn view_cost(&self, view: RigViewId) -> Option<f64> {
+        self.views.get(&view)?.cost
+    }
+
+    /// Waits until at least `count` nodes have joined, or `timeout`.
+    pub fn wait_for_nodes(&mut self, count: usize, timeout: Duration) -> Result<(), NodeError> {
+        let started = Instant::now();
+        loop {
+            self.drain_membership(None);
+            if self.nodes.len() >= count {
+                return Ok(());
+            }
+            let left = timeout.saturating_sub(started.elapsed());
+            if left.is_zero() {
+                return Err(NodeError::JoinTimeout {
+                    wanted: count,
+                    joined: self.nodes.len(),
+                    seconds: timeout.as_secs_f64(),
+                });
+            }
+            match self.events.recv_timeout(left.min(Duration::from_millis(50))) {
+                Ok(event) => self.handle_between_frames(event),
+                Err(mpsc::RecvTimeoutError::Timeout) => {}
+                Err(mpsc::RecvTimeoutError::Disconnected) => return Err(NodeError::Zenoh("session closed".into())),
+            }
+        }
+    }
+
+    /// Membership events queued (and anything else, dropped: between
+    /// frames no output is awaited).
+    fn drain_membership(&mut self, mut during: Option<&mut Vec<Event>>) {
+        while let Ok(event) = self.events.try_recv() {
+            match (event, during.as_deref_mut()) {
+                (Event::Node(name, up), _) => self.membership(name, up),
+                (other, Some(kept)) => kept.push(other),
+                (_, None) => {}
+            }
+        }
+    }
+
+    fn handle_between_frames(&mut self, event: Event) {
+        if let Event::Node(name, up) = event {
+            self.membership(name, up);
+        }
+    }
+
+    /// A node came or went.
+    fn membership(&mut self, name: String, up: bool) {
+        if up {
+            if check_name("node", &name).is_err() || self.nodes.contains_key(&name) {
+                return;
+            }
+            info!(node = %name, "node joined");
+            self.nodes.insert(name.clone(), NodeState::default());
+            self.joined.push(name);
+        } else if self.nodes.remove(&name).is_some() {
+            info!(node = %name, "node left");
+            for view in self.views.values_mut() {
+                if view.node.as_deref() == Some(&name) {
+                    view.node = None;
+                }
+            }
+            self.left.push(name);
+        }
+    }
+
+    /// Each usable node's load (its views' costs; an unmeasured view at
+    /// the mean of the measured, 1 when none is).
+    fn loads(&self) -> (Vec<String>, Vec<f64>) {
+        let usable: Vec<String> = self.nodes.iter().filter(|(_, n)| !n.stalled).map(|(k, _)| k.clone()).collect();
+        let measured: Vec<f64> = self.views.values().filter_map(|v| v.cost).collect();
+        let mean = if measured.is_empty() { 1.0 } else { measured.iter().sum::<f64>() / measured.len() as f64 };
+        let mut loads = vec![0.0; usable.len()];
+        for view in self.views.values() {
+            if let Some(i) = view.node.as_ref().and_then(|n| usable.iter().position(|u| u == n)) {
+                loads[i] += view.cost.unwrap_or(mean);
+            }
+        }
+        (usable, loads)
+    }
+
+    /// Puts `view` on `node` (its old node, if any, removes it with its
+    /// next order).
+    fn assign(&mut self, view: RigViewId, node: &str) {
+        let Some(placed) = self.views.get_mut(&view) else { return };
+        if let Some(old) = placed.node.take().and_then(|o| self.nodes.get_mut(&o)) {
+            old.drop_view(view);
+        }
+        placed.node = Some(node.to_owned());
+        if let Some(state) = self.nodes.get_mut(node) {
+            state.remove.remove(&view);
+            state.add.insert(view);
+        }
+    }
+
+    /// Views without a node go to the least loaded usable ones; after a
+    /// join, views move until no move evens the loads further.
+    fn place(&mut self, rebalance_fully: bool) -> Result<(), NodeError> {
+        let homeless: Vec<RigViewId> = self.views.iter().filter(|(_, v)| v.node.is_none()).map(|(id, _)| *id).collect();
+        for view in &homeless {
+            let (usable, loads) = self.loads();
+            let lightest = (0..usable.len()).min_by(|a, b| loads[*a].total_cmp(&loads[*b]));
+            let Some(lightest) = lightest else {
+                return Err(NodeError::NoNodes { frame: self.frame, views: homeless.len() });
+            };
+            let name = usable[lightest].clone();
+            self.assign(*view, &name);
+        }
+        if rebalance_fully {
+            for _ in 0..self.views.len() {
+                if self.rebalance_once(0.0).is_none() {
+                    break;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// One move that evens the loads (unmeasured views count at the mean,
+    /// as placement weighs them); returns it.
+    fn rebalance_once(&mut self, margin: f64) -> Option<(RigViewId, String, String)> {
+        let (usable, loads) = self.loads();
+        if usable.len() < 2 {
+            return None;
+        }
+        let measured: Vec<f64> = self.views.values().filter_map(|v| v.cost).collect();
+        let mean = if measured.is_empty() { 1.0 } else { measured.iter().sum::<f64>() / measured.len() as f64 };
+        let candidates: Vec<(GroupViewId, usize, Option<f64>)> = self
+            .views
+            .iter()
+            .filter_map(|(id, v)| {
+                let member = usable.iter().position(|u| Some(u) == v.node.as_ref())?;
+                Some((GroupViewId(id.0), member, Some(v.cost.unwrap_or(mean))))
+            })
+            .collect();
+        let (view, from, to) = best_move(&loads, &candidates, margin)?;
+        let view = RigViewId(view.0);
+        self.assign(view, &usable[to]);
+        Some((view, usable[from].clone(), usable[to].clone()))
+    }
+
+    /// Renders one frame of `scene` on the nodes: sends each its order
+    /// (the scene's changes, its changes of views), gathers every view's
+    /// images, takes over the views of nodes that leave, fail or stall
+    /// meanwhile, then moves at most one view to even the loads.
+    pub fn render_frame(&mut self, scene: &Scene) -> Result<RigFrame, NodeError> {
+        let started = Instant::now();
+        self.frame += 1;
+        let frame = self.frame;
+        let _span = info_span!("rig_frame", frame, views = self.views.len()).entered();
+        let mut report = RigFrame { frame, ..Default::default() };
+        let mut queued = Vec::new();
+        self.drain_membership(Some(&mut queued));
+        let had_joins = !self.joined.is_empty();
+        report.joined = std::mem::take(&mut self.joined);
+        self.place(had_joins)?;
+
+        // The scene: one delta for the nodes in step, a snapshot for the others.
+        let replicating = Instant::now();
+        let delta = self.stream.next(scene);
+        let unchanged = delta.base != 0 && delta.ops.is_empty() && delta.nodes.is_empty();
+        let delta_bytes = if unchanged { Vec::new() } else { delta.encode() };
+        report.delta_bytes = delta_bytes.len();
+        let snapshot =
+            self.nodes.values().any(|n| !n.in_step).then(|| scene.delta_since(0, &mut HashSet::new()).encode());
+        report.replicate_seconds = replicating.elapsed().as_secs_f64();
+
+        let sent_at = Instant::now();
+        let names: Vec<String> = self.nodes.keys().cloned().collect();
+        for name in &names {
+            let Some(state) = self.nodes.get_mut(name) else { continue };
+            let (update, payload) = match (&snapshot, state.in_step) {
+                (Some(snapshot), false) => (SceneUpdate::Snapshot, snapshot.clone()),
+                _ if unchanged => (SceneUpdate::Unchanged, Vec::new()),
+                _ if delta.is_snapshot() => (SceneUpdate::Snapshot, delta_bytes.clone()),
+                _ => (SceneUpdate::Delta, delta_bytes.clone()),
+            };
+            state.in_step = true;
+            report.scene_wire_bytes += payload.len();
+            let add = std::mem::take(&mut state.add);
+            let remove = std::mem::take(&mut state.remove);
+            let add: Vec<(RigViewId, ViewSpec)> =
+                add.into_iter().filter_map(|id| Some((id, self.views.get(&id)?.spec.clone()))).collect();
+            let order = Order {
+                frame,
+                scene: update,
+                add,
+                remove: remove.into_iter().collect(),
+                planes: self.options.planes,
+                only: None,
+            };
+            self.send(name, &order, payload)?;
+        }
+
+        // Gather.
+        let mut outputs: BTreeMap<RigViewId, ViewOutput> = BTreeMap::new();
+        let mut waiting_since: BTreeMap<String, Instant> = names.iter().map(|n| (n.clone(), sent_at)).collect();
+        let mut tries: BTreeMap<RigViewId, usize> = BTreeMap::new();
+        let mut node_seconds: BTreeMap<String, f64> = BTreeMap::new();
+        let mut pending = queued.into_iter();
+        loop {
+            let missing: Vec<RigViewId> = self.views.keys().filter(|v| !outputs.contains_key(v)).copied().collect();
+            if missing.is_empty() {
+                break;
+            }
+            // A node that owes images past the stall timeout is treated as gone for this frame.
+            let now = Instant::now();
+            let owing: BTreeSet<String> = missing.iter().filter_map(|v| self.views.get(v)?.node.clone()).collect();
+            let overdue: Vec<String> = owing
+                .iter()
+                .filter(|n| waiting_since.get(*n).is_some_and(|t| now.duration_since(*t) > self.options.stall_timeout))
+                .cloned()
+                .collect();
+            for name in overdue {
+                warn!(node = %name, frame, "node fell behind: its views render elsewhere");
+                if let Some(state) = self.nodes.get_mut(&name) {
+                    state.stalled = true;
+                }
+                report.stalled.push(name.clone());
+                waiting_since.remove(&name);
+                self.take_over(&name, &missing, frame, &mut tries, &mut waiting_since, &mut report)?;
+            }
+            let deadline = waiting_since.values().min().map(|t| *t + self.options.stall_timeout);
+            let wait = deadline.map_or(Duration::from_millis(100), |d| d.saturating_duration_since(Instant::now()));
+            let event = match pending.next() {
+                Some(event) => event,
+                None => match self.events.recv_timeout(wait.max(Duration::from_millis(1))) {
+                    Ok(event) => event,
+                    Err(mpsc::RecvTimeoutError::Timeout) => continue,
+                    Err(mpsc::RecvTimeoutError::Disconnected) => {
+                        return Err(NodeError::Zenoh("the session closed".into()));
+                    }
+                },
+            };
+            match event {
+                Event::Output(sample) => {
+                    let key = sample.key_expr().as_str().to_owned();
+                    let node = Keys::last_chunk(&key).to_owned();
+                    let tag = match sample.attachment().map(|a| wire::decode::<OutputTag>(&key, &a.to_bytes())) {
+                        Some(Ok(tag)) => tag,
+                        Some(Err(e)) => {
+                            warn!(%e, "output refused");
+                            continue;
+                        }
+                        None => continue,
+                    };
+                    if tag.frame != frame {
+                        continue; // a late image of an earlier frame
+                    }
+                    let payload = sample.payload().to_bytes();
+                    report.image_bytes += payload.len();
+                    if outputs.contains_key(&tag.view) {
+                        report.duplicates += 1;
+                        continue;
+                    }
+                    if !self.views.contains_key(&tag.view) {
+                        continue;
+                    }
+                    match ImagePlanes::from_payload(&key, &tag, &payload) {
+                        Ok(planes) => {
+                            let latency_seconds = started.elapsed().as_secs_f64();
+                            outputs.insert(
+                                tag.view,
+                                ViewOutput { view: tag.view, frame, node, size: tag.size, planes, latency_seconds },
+                            );
+                        }
+                        Err(e) => warn!(%e, "output refused"),
+                    }
+                }
+                Event::Status(sample) => {
+                    let key = sample.key_expr().as_str().to_owned();
+                    let node = Keys::last_chunk(&key).to_owned();
+                    let Ok(status) = wire::decode::<Status>(&key, &sample.payload().to_bytes()) else { continue };
+                    if status.frame != frame {
+                        continue;
+                    }
+                    match status.outcome {
+                        Outcome::Rendered { seconds, .. } => {
+                            *node_seconds.entry(node.clone()).or_default() += seconds;
+                            if let Some(state) = self.nodes.get_mut(&node) {
+                                state.stalled = false;
+                            }
+                            waiting_since.remove(&node);
+                        }
+                        Outcome::Failed { reason, needs_snapshot } => {
+                            warn!(%node, frame, %reason, "node failed its frame: its views render elsewhere");
+                            if let Some(state) = self.nodes.get_mut(&node) {
+                                state.in_step &= !needs_snapshot;
+                            }
+                            waiting_since.remove(&node);
+                            let missing: Vec<RigViewId> =
+                                self.views.keys().filter(|v| !outputs.contains_key(v)).copied().collect();
+                            // Off this node for good: placement brings views back by cost.
+                            self.take_over(&node, &missing, frame, &mut tries, &mut waiting_since, &mut report)?;
+                        }
+                    }
+                }
+                Event::Node(name, up) => {
+                    let gone = !up && self.nodes.contains_key(&name);
+                    let missing: Vec<RigViewId> =
+                        self.views.keys().filter(|v| !outputs.contains_key(v)).copied().collect();
+                    let theirs: Vec<RigViewId> = missing
+                        .iter()
+                        .filter(|v| self.views.get(v).and_then(|v| v.node.as_deref()) == Some(name.as_str()))
+                        .copied()
+                        .collect();
+                    self.membership(name.clone(), up);
+                    if gone {
+                        waiting_since.remove(&name);
+                        self.take_over(&name, &theirs, frame, &mut tries, &mut waiting_since, &mut report)?;
+                    }
+                }
+            }
+        }
+        report.latency_seconds = started.elapsed().as_secs_f64();
+        report.left = std::mem::take(&mut self.left);
+
+        // Costs: each node's time spread over the views it rendered.
+        for (node, seconds) in &node_seconds {
+            let rendered: Vec<RigViewId> = outputs.values().filter(|o| &o.node == node).map(|o| o.view).collect();
+            if rendered.is_empty() {
+                continue;
+            }
+            let each = seconds / rendered.len() as f64;
+            for view in rendered {
+                if let Some(v) = self.views.get_mut(&view) {
+                    v.cost = Some(v.cost.map_or(each, |c| c + COST_SMOOTHING * (each - c)));
+                }
+            }
+        }
+        if self.options.rebalance_margin.is_finite() {
+            report.moved.extend(self.rebalance_once(self.options.rebalance_margin));
+        }
+        report.outputs = outputs.into_values().collect();
+        Ok(report)
+    }
+
+    /// Gives `from`'s views among `missing` to other usable nodes, which
+    /// render this frame again for them (their replicas hold its scene).
+    fn take_over(
+        &mut self,
+        from: &str,
+        missing: &[RigViewId],
+        frame: u64,
+        tries: &mut BTreeMap<RigViewId, usize>,
+        waiting_since: &mut BTreeMap<String, Instant>,
+        report: &mut RigFrame,
+    ) -> Result<(), NodeError> {
+        let orphans: Vec<RigViewId> = missing
+            .iter()
+            .filter(|v| self.views.get(v).is_some_and(|v| v.node.as_deref() == Some(from) || v.node.is_none()))
+            .copied()
+            .collect();
+        if orphans.is_empty() {
+            return Ok(());
+        }
+        let mut given: BTreeMap<String, Vec<RigViewId>> = BTreeMap::new();
+        for view in &orphans {
+            let attempt = tries.entry(*view).or_default();
+            *attempt += 1;
+            if *attempt > self.nodes.len().max(1) + 1 {
+                return Err(NodeError::InvalidView {
+                    view: self.views.get(view).map(|v| v.spec.name.clone()).unwrap_or_default(),
+                    reason: format!("frame {frame}: every node failed to render it"),
+                });
+            }
+            let (usable, loads) = self.loads();
+            // Only a node whose replica holds this frame's scene can take over.
+            let candidates: Vec<usize> = (0..usable.len())
+                .filter(|i| usable[*i] != from && self.nodes.get(&usable[*i]).is_some_and(|n| n.in_step))
+                .collect();
+            let Some(&to) = candidates.iter().min_by(|a, b| loads[**a].total_cmp(&loads[**b])) else {
+                return Err(NodeError::NoNodes { frame, views: orphans.len() });
+            };
+            let name = usable[to].clone();
+            self.assign(*view, &name);
+            given.entry(name).or_default().push(*view);
+            report.taken_over.push(*view);
+        }
+        for (name, views) in given {
+            let Some(state) = self.nodes.get_mut(&name) else { continue };
+            let add = std::mem::take(&mut state.add);
+            let remove = std::mem::take(&mut state.remove);
+            let add: Vec<(RigViewId, ViewSpec)> =
+                add.into_iter().filter_map(|id| Some((id, self.views.get(&id)?.spec.clone()))).collect();
+            let order = Order {
+                frame,
+                scene: SceneUpdate::Unchanged,
+                add,
+                remove: remove.into_iter().collect(),
+                planes: self.options.planes,
+                only: Some(views),
+            };
+            self.send(&name, &order, Vec::new())?;
+            waiting_since.insert(name, Instant::now());
+        }
+        Ok(())
+    }
+
+    fn send(&self, node: &str, order: &Order, payload: Vec<u8>) -> Result<(), NodeError> {
+        self.session
+            .put(self.keys.order(node), payload)
+            .attachment(wire::encode(order))
+            .congestion_control(CongestionControl::Block)
+            .wait()
+            .map_err(NodeError::zenoh)
+    }
+}

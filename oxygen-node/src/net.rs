@@ -1,0 +1,62 @@
+//! Where a coordinator or node listens and whom it connects to: a small
+//! front for a Zenoh configuration.
+
+use zenoh::Wait;
+
+use crate::error::NodeError;
+
+/// A session's endpoints (Zenoh locators such as `tcp/127.0.0.1:7447` or
+/// `tcp/[::]:7447`). Peers are found only through them: multicast scouting
+/// is off, so two rigs on one network (or two test runs on one machine)
+/// never find each other by accident.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct NetConfig {
+    /// Endpoints to listen on (a coordinator's, typically).
+    pub listen: Vec<String>,
+    /// Endpoints to connect to (a node's: the coordinator's).
+    pub connect: Vec<String>,
+}
+
+impl NetConfig {
+    /// Listens on `endpoint`.
+    pub fn listen(endpoint: impl Into<String>) -> Self {
+        NetConfig { listen: vec![endpoint.into()], connect: Vec::new() }
+    }
+
+    /// Connects to `endpoint`.
+    pub fn connect(endpoint: impl Into<String>) -> Self {
+        NetConfig { listen: Vec::new(), connect: vec![endpoint.into()] }
+    }
+
+    /// The Zenoh configuration: peer mode, these endpoints, no multicast
+    /// scouting, and connecting retried for a while (a node may start
+    /// before its coordinator).
+    pub fn zenoh_config(&self) -> Result<zenoh::Config, NodeError> {
+        let mut config = zenoh::Config::default();
+        let json = |list: &[String]| -> Result<String, NodeError> {
+            for endpoint in list {
+                endpoint
+                    .parse::<zenoh::config::EndPoint>()
+                    .map_err(|e| NodeError::Zenoh(format!("{endpoint:?}: {e}")))?;
+            }
+            Ok(format!("[{}]", list.iter().map(|e| format!("{e:?}")).collect::<Vec<_>>().join(",")))
+        };
+        let set = |config: &mut zenoh::Config, key: &str, value: &str| {
+            config.insert_json5(key, value).map_err(|e| NodeError::Zenoh(format!("config {key} = {value}: {e}")))
+        };
+        set(&mut config, "mode", "\"peer\"")?;
+        set(&mut config, "scouting/multicast/enabled", "false")?;
+        set(&mut config, "listen/endpoints", &json(&self.listen)?)?;
+        set(&mut config, "connect/endpoints", &json(&self.connect)?)?;
+        // Keep trying the coordinator (every second, for a minute) rather
+        // than failing when a node starts first.
+        set(&mut config, "connect/timeout_ms", "60000")?;
+        set(&mut config, "connect/exit_on_failure", "false")?;
+        Ok(config)
+    }
+
+    /// Opens a Zenoh session with this configuration.
+    pub fn open(&self) -> Result<zenoh::Session, NodeError> {
+        zenoh::open(self.zenoh_config()?).wait().map_err(NodeError::zenoh)
+    }
+}

@@ -1,0 +1,231 @@
+//! The messages of a rig, as they travel: a `postcard` header in the Zenoh
+//! sample's attachment and the bulk (a scene delta, image planes) as its
+//! payload, so that megabytes of pixels are neither copied into nor parsed
+//! out of a serde structure.
+//!
+//! Receivers check every header against its payload's length and refuse
+//! what does not match; nothing here panics on a malformed message.
+
+use glam::UVec2;
+use serde::{Deserialize, Serialize};
+
+use crate::error::NodeError;
+use crate::spec::{Planes, RigViewId, ViewSpec};
+
+/// The key expressions of rig `rig` (see the crate docs' table).
+#[derive(Clone, Debug)]
+pub struct Keys {
+    rig: String,
+}
+
+impl Keys {
+    /// The keys of rig `rig` (a name already checked).
+    pub fn new(rig: &str) -> Self {
+        Keys { rig: rig.to_owned() }
+    }
+
+    /// The coordinator's liveliness token.
+    pub fn coordinator(&self) -> String {
+        format!("oxygen/{}/coordinator", self.rig)
+    }
+
+    /// Node `node`'s liveliness token (`*` for every node's).
+    pub fn node(&self, node: &str) -> String {
+        format!("oxygen/{}/node/{node}", self.rig)
+    }
+
+    /// Orders to node `node`.
+    pub fn order(&self, node: &str) -> String {
+        format!("oxygen/{}/order/{node}", self.rig)
+    }
+
+    /// Node `node`'s outputs (`*` for every node's).
+    pub fn output(&self, node: &str) -> String {
+        format!("oxygen/{}/output/{node}", self.rig)
+    }
+
+    /// Node `node`'s status (`*` for every node's).
+    pub fn status(&self, node: &str) -> String {
+        format!("oxygen/{}/status/{node}", self.rig)
+    }
+
+    /// The last chunk of `key` (the node's name in a node's keys).
+    pub fn last_chunk(key: &str) -> &str {
+        key.rsplit('/').next().unwrap_or(key)
+    }
+}
+
+/// What a node's replica does with an order's payload.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum SceneUpdate {
+    /// Nothing changed (the payload is empty).
+    Unchanged,
+    /// The payload is a delta from the revision the replica holds.
+    Delta,
+    /// The payload is a snapshot (the node joined, or fell out of step).
+    Snapshot,
+}
+
+/// A frame for one node to render; the payload is the encoded scene
+/// delta or snapshot ([`SceneUpdate`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Order {
+    /// The rig's frame (from 1).
+    pub frame: u64,
+    /// What the payload is.
+    pub scene: SceneUpdate,
+    /// Views the node renders from this frame on.
+    pub add: Vec<(RigViewId, ViewSpec)>,
+    /// Views it no longer renders.
+    pub remove: Vec<RigViewId>,
+    /// The images each view sends back.
+    pub planes: Planes,
+    /// When set, only these views' images are sent back (a frame rendered
+    /// again for views taken over from a node that left: the others were
+    /// received already).
+    pub only: Option<Vec<RigViewId>>,
+}
+
+/// One view's images of one frame; the payload holds the planes one after
+/// another (colour, depth, instances, those that [`OutputTag::planes`]
+/// names), little-endian.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct OutputTag {
+    /// The rig's frame.
+    pub frame: u64,
+    /// The view.
+    pub view: RigViewId,
+    /// Width and height.
+    pub size: UVec2,
+    /// The planes in the payload.
+    pub planes: Planes,
+}
+
+/// How a node's frame went.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Outcome {
+    /// Every view rendered and its images sent.
+    Rendered {
+        /// Views rendered.
+        views: u32,
+        /// Seconds from the order's arrival to the last image sent.
+        seconds: f64,
+        /// Of which rendering (the renderer's frame and its GPU work).
+        render_seconds: f64,
+    },
+    /// The frame could not be rendered here.
+    Failed {
+        /// Why.
+        reason: String,
+        /// The replica is out of step and needs a snapshot.
+        needs_snapshot: bool,
+    },
+}
+
+/// A node's report of one order.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Status {
+    /// The rig's frame.
+    pub frame: u64,
+    /// How it went.
+    pub outcome: Outcome,
+}
+
+/// Encodes a header.
+pub fn encode<T: Serialize>(header: &T) -> Vec<u8> {
+    // postcard fails only on types it cannot represent (none of these).
+    postcard::to_stdvec(header).unwrap_or_default()
+}
+
+/// Decodes a header received on `key`.
+pub fn decode<T: for<'de> Deserialize<'de>>(key: &str, bytes: &[u8]) -> Result<T, NodeError> {
+    postcard::from_bytes(bytes).map_err(|e| NodeError::Malformed { key: key.to_owned(), reason: e.to_string() })
+}
+
+/// One view's planes, as the coordinator hands them to the application.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ImagePlanes {
+    /// sRGB RGBA, row by row from the top.
+    pub color: Option<Vec<u8>>,
+    /// Device depth (reverse-Z).
+    pub depth: Option<Vec<f32>>,
+    /// Instance labels (stable id + 1, 0 for none).
+    pub instances: Option<Vec<u32>>,
+}
+
+impl ImagePlanes {
+    /// The payload of an output: the planes one after another.
+    pub fn to_payload(&self) -> Vec<u8> {
+        let mut bytes = Vec::new();
+        if let Some(color) = &self.color {
+            bytes.extend_from_slice(color);
+        }
+        if let Some(depth) = &self.depth {
+            bytes.extend(depth.iter().flat_map(|d| d.to_le_bytes()));
+        }
+        if let Some(instances) = &self.instances {
+            bytes.extend(instances.iter().flat_map(|i| i.to_le_bytes()));
+        }
+        bytes
+    }
+
+    /// The planes `tag` announces, cut out of `payload`; refused when its
+    /// length is not theirs.
+    pub fn from_payload(key: &str, tag: &OutputTag, payload: &[u8]) -> Result<Self, NodeError> {
+        let texels = tag.size.x as usize * tag.size.y as usize;
+        if tag.size.x > crate::spec::MAX_SIDE || tag.size.y > crate::spec::MAX_SIDE {
+            return Err(NodeError::Malformed { key: key.to_owned(), reason: format!("size {}", tag.size) });
+        }
+        let expected = tag.planes.bytes(tag.size);
+        if payload.len() != expected {
+            return Err(NodeError::Malformed {
+                key: key.to_owned(),
+                reason: format!("{} bytes of images where {} were announced", payload.len(), expected),
+            });
+        }
+        let mut rest = payload;
+        let mut take = |on: bool| -> Option<&[u8]> {
+            if !on {
+                return None;
+            }
+            let (plane, tail) = rest.split_at(texels * 4);
+            rest = tail;
+            Some(plane)
+        };
+        let words =
+            |plane: &[u8]| -> Vec<[u8; 4]> { plane.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]).collect() };
+        Ok(ImagePlanes {
+            color: take(tag.planes.color).map(<[u8]>::to_vec),
+            depth: take(tag.planes.depth).map(|p| words(p).into_iter().map(f32::from_le_bytes).collect()),
+            instances: take(tag.planes.instances).map(|p| words(p).into_iter().map(u32::from_le_bytes).collect()),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn planes_travel_and_a_wrong_length_is_refused() {
+        let planes = ImagePlanes {
+            color: Some((0..32).collect()),
+            depth: Some(vec![0.25, 0.5, 1.0, f32::MIN_POSITIVE, 0.0, 2.0, 3.0, 4.0]),
+            instances: Some(vec![0, 1, 2, u32::MAX, 5, 6, 7, 8]),
+        };
+        let tag = OutputTag {
+            frame: 3,
+            view: RigViewId(7),
+            size: UVec2::new(4, 2),
+            planes: Planes { color: true, depth: true, instances: true },
+        };
+        let payload = planes.to_payload();
+        assert_eq!(ImagePlanes::from_payload("k", &tag, &payload).unwrap(), planes);
+        assert!(ImagePlanes::from_payload("k", &tag, &payload[1..]).is_err());
+        let huge = OutputTag { size: UVec2::new(1 << 20, 1 << 20), ..tag.clone() };
+        assert!(ImagePlanes::from_payload("k", &huge, &payload).is_err());
+        let header: OutputTag = decode("k", &encode(&tag)).unwrap();
+        assert_eq!(header, tag);
+        assert!(decode::<OutputTag>("k", &[0xff; 3]).is_err());
+    }
+}

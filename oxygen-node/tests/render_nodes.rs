@@ -1,0 +1,268 @@
+//! Render nodes over Zenoh on the loopback interface: `oxygen-node`
+//! processes joining a coordinator in this test, one joining mid-run, one
+//! paused (it falls behind), one killed; every view's images arrive once a
+//! frame, equal bit for bit (the deterministic mode) to the same views
+//! rendered here by one renderer.
+//!
+//! Every wait is bounded (the coordinator's stall timeout, the nodes' wait
+//! for their coordinator), and the nodes stop by themselves when the
+//! coordinator goes; the guard kills whatever is left if a check fails.
+
+use std::collections::BTreeMap;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use oxygen::batch::{BatchDesc, StreamOptions};
+use oxygen::gpu::{Label, LabelSet};
+use oxygen::prelude::*;
+use oxygen_core::glam::DVec3;
+use oxygen_node::wire::ImagePlanes;
+use oxygen_node::{Coordinator, NetConfig, Planes, RigOptions, RigViewId, ViewSpec};
+
+const NODE: &str = env!("CARGO_BIN_EXE_oxygen-node");
+
+/// Node processes, killed on drop (a failed check leaves none behind).
+struct Nodes(BTreeMap<String, Child>);
+
+impl Nodes {
+    fn spawn(&mut self, rig: &str, name: &str, endpoint: &str) {
+        let child = Command::new(NODE)
+            .args(["--rig", rig, "--name", name, "--connect", endpoint, "--deterministic", "--wait", "120"])
+            .stdout(Stdio::null())
+            .stderr(Stdio::inherit())
+            .spawn()
+            .unwrap_or_else(|e| panic!("starting {NODE}: {e}"));
+        self.0.insert(name.to_owned(), child);
+    }
+
+    fn signal(&self, name: &str, signal: &str) {
+        let pid = self.0[name].id().to_string();
+        let status = Command::new("kill").args([signal, &pid]).status().expect("kill");
+        assert!(status.success(), "kill {signal} {pid}");
+    }
+
+    /// Waits (bounded) for every node left to exit by itself, successfully.
+    fn wait_all(&mut self, timeout: Duration) {
+        let started = Instant::now();
+        for (name, child) in &mut self.0 {
+            loop {
+                if let Some(status) = child.try_wait().expect("try_wait") {
+                    assert!(status.success(), "node {name} exited with {status}");
+                    break;
+                }
+                assert!(started.elapsed() < timeout, "node {name} did not stop within {timeout:?} of its coordinator");
+                std::thread::sleep(Duration::from_millis(50));
+            }
+        }
+        self.0.clear();
+    }
+}
+
+impl Drop for Nodes {
+    fn drop(&mut self) {
+        for child in self.0.values_mut() {
+            let _ = child.kill();
+            let _ = child.wait();
+        }
+    }
+}
+
+/// A port free on the loopback interface now.
+fn free_port() -> u16 {
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").expect("bind 127.0.0.1:0");
+    listener.local_addr().expect("local_addr").port()
+}
+
+/// Ten cameras around the grid: eight of 32 × 32, two of 48 × 32 (a
+/// second batch on the nodes).
+fn specs() -> Vec<ViewSpec> {
+    (0..10)
+        .map(|i| {
+            let angle = i as f64 / 10.0 * std::f64::consts::TAU;
+            let size = if i < 8 { UVec2::new(32, 32) } else { UVec2::new(48, 32) };
+            ViewSpec::look_at(
+                format!("cam{i}"),
+                Camera::perspective(1.0, 0.1, None),
+                DVec3::new(7.0 * angle.cos(), 4.0, 7.0 * angle.sin()),
+                DVec3::ZERO,
+                size,
+            )
+        })
+        .collect()
+}
+
+const PLANES: Planes = Planes { color: true, depth: true, instances: true };
+
+/// The same views rendered here by one renderer (batches by size,
+/// streamed), by name.
+struct Reference {
+    renderer: Renderer,
+    names: BTreeMap<ViewId, String>,
+}
+
+impl Reference {
+    fn new(specs: &[ViewSpec]) -> Self {
+        let mut renderer = Renderer::new_headless_with(RendererOptions { deterministic: true, ..Default::default() })
+            .unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
+        let mut batches = BTreeMap::new();
+        let mut names = BTreeMap::new();
+        for spec in specs {
+            let batch = *batches.entry((spec.size.x, spec.size.y)).or_insert_with(|| {
+                // As a deterministic node: a page of its own for each camera.
+                let desc = BatchDesc::new("reference", spec.size)
+                    .with_label_planes(LabelSet::of(&[Label::Instance]))
+                    .with_max_page_side(spec.size.x.max(spec.size.y));
+                let batch = renderer.register_batch(desc).expect("batch");
+                let stream = StreamOptions { color: true, depth: true, instances: true, ..Default::default() };
+                renderer.stream_batch(batch, Some(stream)).expect("stream");
+                batch
+            });
+            let id = renderer.add_camera(batch, spec.desc().expect("desc")).expect("camera");
+            names.insert(id, spec.name.clone());
+        }
+        Reference { renderer, names }
+    }
+
+    fn render(&mut self, scene: &Scene) -> BTreeMap<String, ImagePlanes> {
+        self.renderer.render_frame(scene).expect("reference frame");
+        let mut images = BTreeMap::new();
+        for frame in self.renderer.wait_streamed().expect("streamed") {
+            for camera in frame.cameras() {
+                let planes = ImagePlanes {
+                    color: camera.color.map(<[u8]>::to_vec),
+                    depth: camera.depth.map(<[f32]>::to_vec),
+                    instances: camera.instances.map(<[u32]>::to_vec),
+                };
+                images.insert(self.names[&camera.view].clone(), planes);
+            }
+        }
+        images
+    }
+}
+
+#[test]
+fn a_rig_renders_every_view_once_a_frame_through_a_join_a_stall_and_a_death() {
+    let grid = oxygen_demo::box_grid(9);
+    let (mut scene, moving) = (grid.scene, grid.first_box);
+    let specs = specs();
+    let mut reference = Reference::new(&specs);
+
+    let rig = format!("test-{}", std::process::id());
+    let endpoint = format!("tcp/127.0.0.1:{}", free_port());
+    let options = RigOptions { planes: PLANES, stall_timeout: Duration::from_secs(120), ..Default::default() };
+    let mut coordinator = Coordinator::new(&rig, &NetConfig::listen(&endpoint), options).expect("coordinator");
+    let views: Vec<RigViewId> = specs.iter().map(|s| coordinator.add_view(s.clone()).expect("view")).collect();
+
+    let mut nodes = Nodes(BTreeMap::new());
+    nodes.spawn(&rig, "a", &endpoint);
+    nodes.spawn(&rig, "b", &endpoint);
+    coordinator.wait_for_nodes(2, Duration::from_secs(120)).expect("two nodes");
+
+    let mut joined = Vec::new();
+    let mut left = Vec::new();
+    let mut stalled = Vec::new();
+    let mut taken_over = 0;
+    for frame in 1..=10u64 {
+        match frame {
+            // A third node joins: views move to it at once.
+            4 => {
+                nodes.spawn(&rig, "c", &endpoint);
+                coordinator.wait_for_nodes(3, Duration::from_secs(120)).expect("three nodes");
+            }
+            // c pauses (as a node overloaded or swapping would): it falls
+            // behind within the stall timeout and its views render
+            // elsewhere in that same frame.
+            7 => {
+                coordinator.set_stall_timeout(Duration::from_secs(3));
+                nodes.signal("c", "-STOP");
+            }
+            // c goes on (and gets views back as the loads say); b dies.
+            9 => {
+                nodes.signal("c", "-CONT");
+                coordinator.set_stall_timeout(Duration::from_secs(120));
+                nodes.signal("b", "-KILL");
+            }
+            _ => {}
+        }
+        scene
+            .set_local_transform(moving, Transform::from_translation(Vec3::new(-2.0, 0.5 + frame as f32 * 0.1, -2.0)))
+            .expect("move");
+        let report = coordinator.render_frame(&scene).expect("rig frame");
+        let expected = reference.render(&scene);
+
+        assert_eq!(report.frame, frame);
+        let got: Vec<RigViewId> = report.outputs.iter().map(|o| o.view).collect();
+        assert_eq!(got, views, "frame {frame}: every view once, in view order");
+        for output in &report.outputs {
+            assert_eq!(output.frame, frame);
+            let name = &specs[output.view.0 as usize].name;
+            let want = &expected[name];
+            assert_eq!(output.planes.color, want.color, "frame {frame}, {name} (from {}): colour", output.node);
+            assert_eq!(output.planes.depth, want.depth, "frame {frame}, {name} (from {}): depth", output.node);
+            assert_eq!(
+                output.planes.instances, want.instances,
+                "frame {frame}, {name} (from {}): instances",
+                output.node
+            );
+        }
+        if frame == 1 {
+            assert!(
+                report.delta_bytes > 0 && report.scene_wire_bytes >= 2 * report.delta_bytes,
+                "a snapshot to each node"
+            );
+        } else {
+            assert!(
+                report.delta_bytes > 0 && report.delta_bytes < 400,
+                "frame {frame}: {} bytes for one moved box",
+                report.delta_bytes
+            );
+        }
+        if frame == 4 {
+            let on_c = views.iter().filter(|v| coordinator.node_of(**v) == Some("c")).count();
+            assert!(on_c >= 2, "after c joined: {on_c} views on it");
+        }
+        joined.extend(report.joined.clone());
+        left.extend(report.left.clone());
+        stalled.extend(report.stalled.clone());
+        taken_over += report.taken_over.len();
+        eprintln!(
+            "frame {frame}: {:.3} s, delta {} B, scene on the wire {} B, images {} B, joined {:?}, left {:?}, stalled {:?}, taken over {:?}, moved {:?}",
+            report.latency_seconds,
+            report.delta_bytes,
+            report.scene_wire_bytes,
+            report.image_bytes,
+            report.joined,
+            report.left,
+            report.stalled,
+            report.taken_over,
+            report.moved
+        );
+    }
+    joined.sort();
+    assert_eq!(joined, ["a", "b", "c"]);
+    assert_eq!(stalled, ["c"], "c fell behind once");
+    assert_eq!(left, ["b"], "b died");
+    assert!(taken_over >= 2, "views of the stalled and the dead node rendered elsewhere ({taken_over})");
+    assert!(views.iter().all(|v| coordinator.node_of(*v).is_some_and(|n| n != "b")));
+    nodes.0.remove("b").map(|mut b| b.wait());
+
+    // The coordinator goes; the nodes stop by themselves.
+    drop(coordinator);
+    nodes.wait_all(Duration::from_secs(60));
+}
+
+#[test]
+fn a_node_without_a_coordinator_gives_up_with_a_clear_message() {
+    let endpoint = format!("tcp/127.0.0.1:{}", free_port());
+    let output = Command::new(NODE)
+        .args(["--rig", "nobody-here", "--name", "lonely", "--connect", &endpoint, "--wait", "2"])
+        .output()
+        .expect("run oxygen-node");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success(), "{stderr}");
+    assert!(stderr.contains("no coordinator of rig \"nobody-here\" within 2 s"), "{stderr}");
+
+    let bad = Command::new(NODE).args(["--rig", "a/b", "--connect", &endpoint]).output().expect("run oxygen-node");
+    let stderr = String::from_utf8_lossy(&bad.stderr);
+    assert!(!bad.status.success() && stderr.contains("rig \"a/b\" must be"), "{stderr}");
+}
