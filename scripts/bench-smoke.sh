@@ -43,6 +43,7 @@ runs=(
   "batch_bench|example|gpu|16 32x32 1,2 1"
   "cubes_bench|example|gpu|16 2 2"
   "group_bench|example|gpu|16 32x32 2 1,2 1"
+  "node_bench|node|gpu|16 32x32 4 1,2 1"
   "draw_path_bench|example|gpu|16"
   "environment_bench|example|gpu|1 --smoke"
   "hdr_format_bench|example|gpu|64 1"
@@ -65,7 +66,7 @@ failed=()
 # Every bench in the tree must be run above.
 listed=" "
 for run in "${runs[@]}"; do listed+="${run%%|*} "; done
-for file in examples/*_bench.rs examples/*_cost.rs examples/*_floor.rs examples/accuracy_atlas.rs */benches/*.rs; do
+for file in examples/*_bench.rs oxygen-node/examples/*_bench.rs examples/*_cost.rs examples/*_floor.rs examples/accuracy_atlas.rs */benches/*.rs; do
   [ -e "$file" ] || continue
   name="$(basename "$file" .rs)"
   case "$listed" in
@@ -81,6 +82,8 @@ say "building the examples and the sceneprep bench (dev profile)"
 started=$SECONDS
 cargo build --locked --examples
 cargo test --locked --no-run -p oxygen-sceneprep --bench prep
+# The render-node bench starts the oxygen-node program beside it.
+cargo build --locked -p oxygen-node --bins --examples
 say "build: $((SECONDS - started)) s"
 
 total_start=$(date +%s.%N)
@@ -96,6 +99,7 @@ for i in "${!runs[@]}"; do
   read -r -a argv <<<"$args"
   case "$kind" in
     example) command=(cargo run --locked --quiet --example "$name" -- "${argv[@]}") ;;
+    node) command=(cargo run --locked --quiet -p oxygen-node --example "$name" -- "${argv[@]}") ;;
     sceneprep) command=(cargo test --locked --quiet -p oxygen-sceneprep --bench "$name" -- "${argv[@]}") ;;
     *) say "unknown kind $kind"; exit 2 ;;
   esac

@@ -91,6 +91,20 @@ pub struct RigFrame {
     /// Images received twice (a view rendered again whose first images
     /// came after all) and ignored.
     pub duplicates: usize,
+    /// What each node reported of the frame, by name.
+    pub nodes: BTreeMap<String, NodeReport>,
+}
+
+/// One node's account of a frame.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct NodeReport {
+    /// Views whose images it sent (a frame rendered again counts again).
+    pub views: u32,
+    /// Seconds from its order's arrival to its last image sent.
+    pub seconds: f64,
+    /// Of which rendering (the renderer's frame and its GPU work, the
+    /// images streamed back).
+    pub render_seconds: f64,
 }
 
 enum Event {
@@ -107,8 +121,9 @@ struct NodeState {
     /// Views it will add and remove with its next order.
     add: BTreeSet<RigViewId>,
     remove: BTreeSet<RigViewId>,
-    /// Not answering: gets no views until it reports a frame again.
-    stalled: bool,
+    /// Not answering since this frame: gets no views, and no frame waits
+    /// for it, until it reports a later frame done.
+    stalled: Option<u64>,
 }
 
 impl NodeState {
@@ -146,6 +161,25 @@ pub struct Coordinator {
     /// Membership changes seen between frames, reported with the next.
     joined: Vec<String>,
     left: Vec<String>,
+}
+
+/// A node's orders of the frame not reported yet, and since when it has
+/// owed one.
+struct Awaited {
+    since: Instant,
+    orders: usize,
+}
+
+impl Awaited {
+    /// `node` reported one of its orders.
+    fn reported(waiting: &mut BTreeMap<String, Awaited>, node: &str) {
+        if let Some(awaited) = waiting.get_mut(node) {
+            awaited.orders = awaited.orders.saturating_sub(1);
+            if awaited.orders == 0 {
+                waiting.remove(node);
+            }
+        }
+    }
 }
 
 /// Weight of a new measurement in a view's smoothed cost.
@@ -319,7 +353,8 @@ impl Coordinator {
     /// Each usable node's load (its views' costs; an unmeasured view at
     /// the mean of the measured, 1 when none is).
     fn loads(&self) -> (Vec<String>, Vec<f64>) {
-        let usable: Vec<String> = self.nodes.iter().filter(|(_, n)| !n.stalled).map(|(k, _)| k.clone()).collect();
+        let usable: Vec<String> =
+            self.nodes.iter().filter(|(_, n)| n.stalled.is_none()).map(|(k, _)| k.clone()).collect();
         let measured: Vec<f64> = self.views.values().filter_map(|v| v.cost).collect();
         let mean = if measured.is_empty() { 1.0 } else { measured.iter().sum::<f64>() / measured.len() as f64 };
         let mut loads = vec![0.0; usable.len()];
@@ -446,33 +481,40 @@ impl Coordinator {
 
         // Gather.
         let mut outputs: BTreeMap<RigViewId, ViewOutput> = BTreeMap::new();
-        let mut waiting_since: BTreeMap<String, Instant> = names.iter().map(|n| (n.clone(), sent_at)).collect();
+        // No frame waits for a stalled node (it has no views).
+        let mut waiting_since: BTreeMap<String, Awaited> = names
+            .iter()
+            .filter(|n| self.nodes.get(*n).is_some_and(|s| s.stalled.is_none()))
+            .map(|n| (n.clone(), Awaited { since: sent_at, orders: 1 }))
+            .collect();
         let mut tries: BTreeMap<RigViewId, usize> = BTreeMap::new();
-        let mut node_seconds: BTreeMap<String, f64> = BTreeMap::new();
+
         let mut pending = queued.into_iter();
         loop {
+            // Done when every view's images are in and every node sent
+            // an order has reported it (its time feeds placement).
             let missing: Vec<RigViewId> = self.views.keys().filter(|v| !outputs.contains_key(v)).copied().collect();
-            if missing.is_empty() {
+            if missing.is_empty() && waiting_since.is_empty() {
                 break;
             }
-            // A node that owes images past the stall timeout is treated as gone for this frame.
+            // A node that has not reported past the stall timeout is
+            // treated as gone for this frame.
             let now = Instant::now();
-            let owing: BTreeSet<String> = missing.iter().filter_map(|v| self.views.get(v)?.node.clone()).collect();
-            let overdue: Vec<String> = owing
+            let overdue: Vec<String> = waiting_since
                 .iter()
-                .filter(|n| waiting_since.get(*n).is_some_and(|t| now.duration_since(*t) > self.options.stall_timeout))
-                .cloned()
+                .filter(|(_, a)| now.duration_since(a.since) > self.options.stall_timeout)
+                .map(|(n, _)| n.clone())
                 .collect();
             for name in overdue {
                 warn!(node = %name, frame, "node fell behind: its views render elsewhere");
                 if let Some(state) = self.nodes.get_mut(&name) {
-                    state.stalled = true;
+                    state.stalled = Some(frame);
                 }
                 report.stalled.push(name.clone());
                 waiting_since.remove(&name);
                 self.take_over(&name, &missing, frame, &mut tries, &mut waiting_since, &mut report)?;
             }
-            let deadline = waiting_since.values().min().map(|t| *t + self.options.stall_timeout);
+            let deadline = waiting_since.values().map(|a| a.since).min().map(|t| t + self.options.stall_timeout);
             let wait = deadline.map_or(Duration::from_millis(100), |d| d.saturating_duration_since(Instant::now()));
             let event = match pending.next() {
                 Some(event) => event,
@@ -524,22 +566,31 @@ impl Coordinator {
                     let node = Keys::last_chunk(&key).to_owned();
                     let Ok(status) = wire::decode::<Status>(&key, &sample.payload().to_bytes()) else { continue };
                     if status.frame != frame {
+                        // A stalled node that catches up is usable again.
+                        if let (Outcome::Rendered { .. }, Some(state)) = (&status.outcome, self.nodes.get_mut(&node))
+                            && state.stalled.is_some_and(|since| status.frame > since)
+                        {
+                            state.stalled = None;
+                        }
                         continue;
                     }
                     match status.outcome {
-                        Outcome::Rendered { seconds, .. } => {
-                            *node_seconds.entry(node.clone()).or_default() += seconds;
+                        Outcome::Rendered { views, seconds, render_seconds } => {
+                            let account = report.nodes.entry(node.clone()).or_default();
+                            account.views += views;
+                            account.seconds += seconds;
+                            account.render_seconds += render_seconds;
                             if let Some(state) = self.nodes.get_mut(&node) {
-                                state.stalled = false;
+                                state.stalled = None;
                             }
-                            waiting_since.remove(&node);
+                            Awaited::reported(&mut waiting_since, &node);
                         }
                         Outcome::Failed { reason, needs_snapshot } => {
                             warn!(%node, frame, %reason, "node failed its frame: its views render elsewhere");
                             if let Some(state) = self.nodes.get_mut(&node) {
                                 state.in_step &= !needs_snapshot;
                             }
-                            waiting_since.remove(&node);
+                            Awaited::reported(&mut waiting_since, &node);
                             let missing: Vec<RigViewId> =
                                 self.views.keys().filter(|v| !outputs.contains_key(v)).copied().collect();
                             // Off this node for good: placement brings views back by cost.
@@ -568,7 +619,8 @@ impl Coordinator {
         report.left = std::mem::take(&mut self.left);
 
         // Costs: each node's time spread over the views it rendered.
-        for (node, seconds) in &node_seconds {
+        for (node, account) in &report.nodes {
+            let seconds = account.seconds;
             let rendered: Vec<RigViewId> = outputs.values().filter(|o| &o.node == node).map(|o| o.view).collect();
             if rendered.is_empty() {
                 continue;
@@ -595,7 +647,7 @@ impl Coordinator {
         missing: &[RigViewId],
         frame: u64,
         tries: &mut BTreeMap<RigViewId, usize>,
-        waiting_since: &mut BTreeMap<String, Instant>,
+        waiting_since: &mut BTreeMap<String, Awaited>,
         report: &mut RigFrame,
     ) -> Result<(), NodeError> {
         let orphans: Vec<RigViewId> = missing
@@ -644,7 +696,9 @@ impl Coordinator {
                 only: Some(views),
             };
             self.send(&name, &order, Vec::new())?;
-            waiting_since.insert(name, Instant::now());
+            let awaited = waiting_since.entry(name).or_insert(Awaited { since: Instant::now(), orders: 0 });
+            awaited.since = Instant::now();
+            awaited.orders += 1;
         }
         Ok(())
     }

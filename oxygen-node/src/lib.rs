@@ -55,7 +55,7 @@ mod node;
 mod spec;
 pub mod wire;
 
-pub use coordinator::{Coordinator, RigFrame, RigOptions, ViewOutput};
+pub use coordinator::{Coordinator, NodeReport, RigFrame, RigOptions, ViewOutput};
 pub use error::NodeError;
 pub use net::NetConfig;
 pub use node::{NodeOptions, NodeSummary, run_node};

@@ -162,7 +162,7 @@ fn a_rig_renders_every_view_once_a_frame_through_a_join_a_stall_and_a_death() {
     let mut left = Vec::new();
     let mut stalled = Vec::new();
     let mut taken_over = 0;
-    for frame in 1..=10u64 {
+    for frame in 1..=12u64 {
         match frame {
             // A third node joins: views move to it at once.
             4 => {
@@ -179,7 +179,7 @@ fn a_rig_renders_every_view_once_a_frame_through_a_join_a_stall_and_a_death() {
             // c goes on (and gets views back as the loads say); b dies.
             9 => {
                 nodes.signal("c", "-CONT");
-                coordinator.set_stall_timeout(Duration::from_secs(120));
+                coordinator.set_stall_timeout(Duration::from_secs(30));
                 nodes.signal("b", "-KILL");
             }
             _ => {}
@@ -218,6 +218,8 @@ fn a_rig_renders_every_view_once_a_frame_through_a_join_a_stall_and_a_death() {
             );
         }
         if frame == 4 {
+            assert!(report.scene_wire_bytes > 3 * report.delta_bytes, "c got a snapshot");
+            assert!(report.taken_over.is_empty(), "c rendered its first frame from its snapshot");
             let on_c = views.iter().filter(|v| coordinator.node_of(**v) == Some("c")).count();
             assert!(on_c >= 2, "after c joined: {on_c} views on it");
         }
@@ -244,6 +246,8 @@ fn a_rig_renders_every_view_once_a_frame_through_a_join_a_stall_and_a_death() {
     assert_eq!(left, ["b"], "b died");
     assert!(taken_over >= 2, "views of the stalled and the dead node rendered elsewhere ({taken_over})");
     assert!(views.iter().all(|v| coordinator.node_of(*v).is_some_and(|n| n != "b")));
+    let on_c = views.iter().filter(|v| coordinator.node_of(**v) == Some("c")).count();
+    assert!(on_c >= 1, "c caught up and got views back ({on_c})");
     nodes.0.remove("b").map(|mut b| b.wait());
 
     // The coordinator goes; the nodes stop by themselves.
