@@ -71,6 +71,13 @@ impl VertexAttributes {
     }
 }
 
+/// Joints a skin may have, and one more than the largest joint index a
+/// vertex may name: glTF's `JOINTS_0` holds 16-bit indices at most. The cap
+/// bounds what a geometry's per-joint bounds cost (a vertex naming joint
+/// `j` makes `j + 1` of them), whoever made the geometry: an importer, or
+/// a scene delta from another process.
+pub const MAX_JOINTS: usize = 1 << 16;
+
 /// A vertex's skin: up to four joints (indices into its node's
 /// [`Skin::joints`](crate::scene::Skin::joints)) and their weights, stored in
 /// the vertex domain after the geometry's vertices and attribute records
@@ -183,8 +190,8 @@ pub enum GeometryError {
         reason: String,
     },
     /// [`Geometry::with_skin_weights`] got a different number of records
-    /// than there are vertices, or a joint index of 2^24 or more.
-    #[error("geometry '{name}': {weights} skin records for {vertices} vertices, or a joint index of 2^24 or more")]
+    /// than there are vertices, or a joint index of [`MAX_JOINTS`] or more.
+    #[error("geometry '{name}': {weights} skin records for {vertices} vertices, or a joint index of 65536 or more")]
     SkinWeights {
         /// Geometry name.
         name: String,
@@ -318,11 +325,11 @@ impl Geometry {
     }
 
     /// The geometry skinned: one record per vertex (joint indices below
-    /// 2^24, weights as [`SkinWeights::new`] leaves them). Also computes,
+    /// [`MAX_JOINTS`], weights as [`SkinWeights::new`] leaves them). Also computes,
     /// per joint, the bound of the vertices it moves, from which a skinned
     /// renderable's bound in any pose follows ([`Geometry::joint_bounds`]).
     pub fn with_skin_weights(mut self, skin: Vec<SkinWeights>) -> Result<Self, GeometryError> {
-        let too_large = skin.iter().any(|s| s.joints.iter().any(|j| !(*j >= 0.0 && *j < 16_777_216.0)));
+        let too_large = skin.iter().any(|s| s.joints.iter().any(|j| !(*j >= 0.0 && *j < MAX_JOINTS as f32)));
         if skin.len() != self.vertices.len() || too_large {
             return Err(GeometryError::SkinWeights {
                 name: self.name,
@@ -546,6 +553,18 @@ impl Geometry {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_joint_index_past_the_cap_is_refused_before_its_bounds_are_made() {
+        let skin = |joint: u32| vec![SkinWeights::new([joint, 0, 0, 0], [1.0, 0.0, 0.0, 0.0]); 24];
+        let last = (MAX_JOINTS - 1) as u32;
+        let skinned = Geometry::cube(1.0).with_skin_weights(skin(last)).expect("the largest joint index");
+        assert_eq!(skinned.joint_bounds().len(), MAX_JOINTS);
+        // One more would be accepted up to 2^24 before: 470 MB of bounds
+        // from one vertex of a hostile delta or file.
+        assert!(Geometry::cube(1.0).with_skin_weights(skin(last + 1)).is_err());
+        assert!(Geometry::cube(1.0).with_skin_weights(skin((1 << 24) - 1)).is_err());
+    }
 
     #[test]
     fn cube_faces_wind_counter_clockwise_seen_from_outside() {

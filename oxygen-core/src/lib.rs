@@ -37,7 +37,7 @@ pub use animation::{Animation, Channel, ChannelError, ChannelValues, Interpolati
 pub use camera::{Camera, CameraError, Projection};
 pub use environment::{Environment, EnvironmentError, EquirectImage, PrefilteredEnvironment, Sky, split_sum_brdf};
 pub use geometry::{
-    Geometry, GeometryError, MAX_MORPH_TARGETS, MorphTarget, SkinWeights, Submesh, Vertex, VertexAttributes,
+    Geometry, GeometryError, MAX_JOINTS, MAX_MORPH_TARGETS, MorphTarget, SkinWeights, Submesh, Vertex, VertexAttributes,
 };
 pub use light::{Light, LightKind, Mobility};
 pub use material::{AlphaMode, Material, MaterialUvs, UvTransform};

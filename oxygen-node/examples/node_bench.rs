@@ -15,7 +15,9 @@
 //! GPU, or with `NODE_BENCH_SPREAD=1` node i on GPU i (`--gpu i`, one
 //! node per GPU). Each measured frame moves one box, then
 //! `Coordinator::render_frame` sends the delta and gathers every camera's
-//! images (`NODE_BENCH_PLANES=color,depth,instances`, colour by default):
+//! images (`NODE_BENCH_PLANES=color,depth,instances`, colour by default;
+//! `none` reads nothing back: each view's output is then its tag, sent once
+//! the node's GPU is done):
 //! its time is the end-to-end latency (scene change to the last image in
 //! hand), and V ÷ its median is the view-frames per second.
 //! `NODE_BENCH_DETERMINISTIC=1` runs the nodes in the deterministic mode.
@@ -25,7 +27,9 @@
 //! the delta's bytes, the scene's bytes on the wire a frame (the delta to
 //! each node), the images' megabytes a frame, the slowest node's render
 //! time, the rest of the latency (sending, gathering, decoding: what
-//! sharding over processes costs), and the views per node. With
+//! sharding over processes costs), the views per node, and a hash of the
+//! last frame's images in view order (BLAKE3, 16 hex digits: with
+//! `NODE_BENCH_DETERMINISTIC=1`, equal for every N). With
 //! `OXYGEN_RECORD_DIR` set everything is appended to
 //! `$OXYGEN_RECORD_DIR/node_bench.jsonl` (`oxygen_demo::record`).
 
@@ -58,13 +62,14 @@ fn flag(name: &str) -> Result<bool, String> {
 
 fn planes() -> Result<Planes, String> {
     let Ok(list) = std::env::var("NODE_BENCH_PLANES") else { return Ok(Planes::default()) };
-    let mut planes = Planes { color: false, depth: false, instances: false };
+    let mut planes = Planes::NONE;
     for plane in list.split(',') {
         match plane {
+            "none" => {}
             "color" => planes.color = true,
             "depth" => planes.depth = true,
             "instances" => planes.instances = true,
-            other => return Err(format!("NODE_BENCH_PLANES: unknown plane {other:?} (color, depth, instances)")),
+            other => return Err(format!("NODE_BENCH_PLANES: unknown plane {other:?} (color, depth, instances, none)")),
         }
     }
     Ok(planes)
@@ -153,9 +158,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     drop(context);
 
     println!(
-        "| nodes | latency ms | view-frames/s | speed-up | efficiency | delta B | scene on the wire B | images MB | slowest node's render ms | rest ms | views per node |"
+        "| nodes | latency ms | view-frames/s | speed-up | efficiency | delta B | scene on the wire B | images MB | slowest node's render ms | rest ms | views per node | last frame's hash |"
     );
-    println!("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|");
+    println!("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|");
     let mut base: Option<(usize, f64)> = None;
     for &n in &counts {
         let rig = format!("bench-{}-{n}", std::process::id());
@@ -184,6 +189,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         let (mut latency_ms, mut render_ms, mut rest_ms) = (Vec::new(), Vec::new(), Vec::new());
         let (mut delta, mut wire, mut images) = (Vec::new(), Vec::new(), Vec::new());
+        let mut hash = String::new();
         for frame in 0..WARM_UP + frames {
             let angle = frame as f32 * 0.37;
             let at = Vec3::new(angle.cos() * side * 0.25, 0.5, angle.sin() * side * 0.25);
@@ -191,6 +197,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let report = coordinator.render_frame(&scene)?;
             if report.outputs.len() != views {
                 return Err(format!("frame {}: {} of {views} views' images", report.frame, report.outputs.len()).into());
+            }
+            if frame + 1 == WARM_UP + frames {
+                // The last frame's images, in view order: equal across
+                // node counts in the deterministic mode.
+                let mut hasher = blake3::Hasher::new();
+                for output in &report.outputs {
+                    hasher.update(&output.planes.to_payload());
+                }
+                hash = hasher.finalize().to_hex()[..16].to_owned();
             }
             if frame >= WARM_UP {
                 let slowest = report.nodes.values().map(|n| n.render_seconds).fold(0.0, f64::max);
@@ -222,7 +237,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
         };
         println!(
-            "| {n} | {latency:.3} | {per_second:.0} | {speed_up:.2} | {efficiency:.2} | {:.0} | {:.0} | {:.2} | {:.3} | {:.3} | {per_node:?} |",
+            "| {n} | {latency:.3} | {per_second:.0} | {speed_up:.2} | {efficiency:.2} | {:.0} | {:.0} | {:.2} | {:.3} | {:.3} | {per_node:?} | {hash} |",
             median(&delta),
             median(&wire),
             median(&images),
@@ -242,7 +257,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .value("image_megabytes_median", median(&images))
                 .value("slowest_render_ms_median", median(&render_ms))
                 .value("rest_ms_median", median(&rest_ms))
-                .value("views_per_node", per_node),
+                .value("views_per_node", per_node)
+                .value("last_frame_hash", hash.clone()),
         );
     }
     record.write()?;

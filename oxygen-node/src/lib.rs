@@ -48,6 +48,8 @@
 //!
 //! See `docs/multi-gpu.md` for the commands that start a rig.
 
+#![warn(missing_docs)]
+
 mod coordinator;
 mod error;
 mod net;

@@ -262,9 +262,27 @@ impl Node {
         }
         let rendering = Instant::now();
         self.renderer.render_frame(self.replica.scene())?;
+        let mut sent = 0;
+        if !order.planes.any() {
+            // No images: once the GPU is done, each view's output is its tag.
+            self.renderer
+                .gpu()
+                .device
+                .poll(oxygen::wgpu::PollType::wait_indefinitely())
+                .map_err(|e| NodeError::Render(oxygen::RenderError::Unsupported(format!("waiting for the GPU: {e}"))))?;
+            let render_seconds = rendering.elapsed().as_secs_f64();
+            for (view, placed) in &self.views {
+                if order.only.as_ref().is_some_and(|only| !only.contains(view)) {
+                    continue;
+                }
+                let tag = OutputTag { frame: order.frame, view: *view, size: placed.size, planes: Planes::NONE };
+                send(&tag, &ImagePlanes::default())?;
+                sent += 1;
+            }
+            return Ok((sent, render_seconds));
+        }
         let streamed = self.renderer.wait_streamed()?;
         let render_seconds = rendering.elapsed().as_secs_f64();
-        let mut sent = 0;
         for frame in streamed {
             for camera in frame.cameras() {
                 let Some(&view) = self.by_view.get(&camera.view) else { continue };
@@ -312,6 +330,10 @@ impl Node {
             desc = desc.with_label_planes(LabelSet::of(&[Label::Instance]));
         }
         let batch = self.renderer.register_batch(desc)?;
+        if !planes.any() {
+            self.batches.insert((size.x, size.y), batch);
+            return Ok(batch);
+        }
         let stream = StreamOptions {
             color: planes.color,
             depth: planes.depth,

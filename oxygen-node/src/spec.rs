@@ -99,6 +99,16 @@ impl Default for Planes {
 }
 
 impl Planes {
+    /// No images: each view's output only says it rendered (what a rig
+    /// that keeps its images on the nodes' GPUs, or a benchmark of
+    /// rendering alone, asks for).
+    pub const NONE: Planes = Planes { color: false, depth: false, instances: false };
+
+    /// Whether any plane is sent.
+    pub fn any(&self) -> bool {
+        self.color || self.depth || self.instances
+    }
+
     /// Bytes of one view's images of `size`.
     pub fn bytes(&self, size: UVec2) -> usize {
         let texels = size.x as usize * size.y as usize;

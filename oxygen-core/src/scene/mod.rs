@@ -411,8 +411,8 @@ impl Scene {
                     skin.inverse_bind_matrices.len()
                 )));
             }
-            if skin.joints.is_empty() || skin.joints.len() >= 1 << 24 {
-                return Err(bad(format!("{} joints (1 to 2^24 - 1)", skin.joints.len())));
+            if skin.joints.is_empty() || skin.joints.len() > crate::geometry::MAX_JOINTS {
+                return Err(bad(format!("{} joints (1 to {})", skin.joints.len(), crate::geometry::MAX_JOINTS)));
             }
             if let Some(i) = skin.joints.iter().position(|j| !self.nodes.contains_key(*j)) {
                 return Err(bad(format!("joint {i} is not a node of this scene")));
