@@ -72,7 +72,7 @@
 use std::time::Instant;
 
 use oxygen::batch::{BatchDesc, StreamOptions, StreamedFrame};
-use oxygen::glam::{Quat, Vec4};
+
 use oxygen::gpu::{Label, LabelSet};
 use oxygen::prelude::*;
 use oxygen::sceneprep::Visibility;

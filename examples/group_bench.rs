@@ -33,7 +33,6 @@
 
 use std::time::Instant;
 
-use oxygen::glam::{Quat, Vec4};
 use oxygen::group::RendererGroup;
 use oxygen::prelude::*;
 use oxygen_demo::record::{Record, Row};

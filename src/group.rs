@@ -218,10 +218,14 @@ impl RendererGroup {
     /// Removes a view from its member.
     pub fn unregister_view(&mut self, view: GroupViewId) -> Result<(), RenderError> {
         let placed = self.views.remove(&view).ok_or_else(|| no_such(view))?;
-        if let Some((member, id)) = placed.last.filter(|last| *last != (placed.member, placed.id)) {
-            self.members[member].renderer.unregister_view(id)?;
-        }
-        self.members[placed.member].renderer.unregister_view(placed.id)
+        // Both registrations go even when the first refuses (none is left
+        // behind); the first error is returned.
+        let old = match placed.last.filter(|last| *last != (placed.member, placed.id)) {
+            Some((member, id)) => self.members[member].renderer.unregister_view(id),
+            None => Ok(()),
+        };
+        let current = self.members[placed.member].renderer.unregister_view(placed.id);
+        old.and(current)
     }
 
     /// The member rendering `view`.
@@ -250,11 +254,22 @@ impl RendererGroup {
             }
             _ => register(&mut self.members[member].renderer)?,
         };
-        if last == Some((from, old)) {
+        let left = if last == Some((from, old)) {
             // Rendered there: kept, paused, until the new member renders it.
-            self.members[from].renderer.set_view_active(old, false)?;
+            self.members[from].renderer.set_view_active(old, false)
         } else {
-            self.members[from].renderer.unregister_view(old)?;
+            self.members[from].renderer.unregister_view(old)
+        };
+        if let Err(e) = left {
+            // The view stays where it was: the new registration goes, or
+            // the old image's, resumed above, pauses again.
+            let undo = if last == Some((member, id)) {
+                self.members[member].renderer.set_view_active(id, false)
+            } else {
+                self.members[member].renderer.unregister_view(id)
+            };
+            undo.ok();
+            return Err(e);
         }
         if let Some(placed) = self.views.get_mut(&view) {
             (placed.member, placed.id) = (member, id);

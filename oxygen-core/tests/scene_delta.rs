@@ -299,6 +299,16 @@ fn bad_deltas_are_refused_with_a_reason() {
         assert!(matches!(replica.apply(&dangling), Err(DeltaError::BadSlot(_))));
         assert_eq!(replica.revision(), None, "a failed apply waits for a snapshot");
     }
+    // Two records that make each other's parent: a cycle, refused.
+    let mut cyclic = snapshot.clone();
+    if let [a, b, ..] = cyclic.nodes.as_mut_slice() {
+        (a.parent, b.parent) = (Some(b.index), Some(a.index));
+        let refused = SceneReplica::new().apply(&cyclic);
+        assert!(
+            matches!(refused, Err(DeltaError::BadNode { source: oxygen_core::SceneError::Cycle { .. }, .. })),
+            "{refused:?}"
+        );
+    }
     // Every byte of a real delta flipped in turn: an error or a replica,
     // never a panic.
     let bytes = snapshot.encode();

@@ -265,11 +265,9 @@ impl Node {
         let mut sent = 0;
         if !order.planes.any() {
             // No images: once the GPU is done, each view's output is its tag.
-            self.renderer
-                .gpu()
-                .device
-                .poll(oxygen::wgpu::PollType::wait_indefinitely())
-                .map_err(|e| NodeError::Render(oxygen::RenderError::Unsupported(format!("waiting for the GPU: {e}"))))?;
+            self.renderer.gpu().device.poll(oxygen::wgpu::PollType::wait_indefinitely()).map_err(|e| {
+                NodeError::Render(oxygen::RenderError::Unsupported(format!("waiting for the GPU: {e}")))
+            })?;
             let render_seconds = rendering.elapsed().as_secs_f64();
             for (view, placed) in &self.views {
                 if order.only.as_ref().is_some_and(|only| !only.contains(view)) {

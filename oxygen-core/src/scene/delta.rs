@@ -722,12 +722,6 @@ impl SceneReplica {
     fn apply_nodes(&mut self, delta: &SceneDelta, keys: &HashMap<u32, NodeKey>) -> Result<(), DeltaError> {
         let key_of =
             |index: u32| keys.get(&index).copied().ok_or_else(|| DeltaError::BadSlot(format!("no node {index}")));
-        // Detach first: applying final parents one by one could pass
-        // through a cycle that the final state does not have.
-        for record in &delta.nodes {
-            let key = key_of(record.index)?;
-            self.scene.set_parent(key, None).map_err(|source| DeltaError::BadNode { index: record.index, source })?;
-        }
         for record in &delta.nodes {
             let key = key_of(record.index)?;
             self.apply_node(key, record, &key_of).map_err(|e| match e {
@@ -735,7 +729,21 @@ impl SceneReplica {
                 Applied::Delta(e) => e,
             })?;
         }
-        Ok(())
+        // Parents last, all at once: applied one by one, final parents
+        // could pass through a cycle that the final state does not have,
+        // and a snapshot's every node would walk the roots' list.
+        let moves = delta
+            .nodes
+            .iter()
+            .map(|record| Ok((key_of(record.index)?, record.parent.map(key_of).transpose()?)))
+            .collect::<Result<Vec<_>, DeltaError>>()?;
+        self.scene.reparent_many(&moves).map_err(|source| {
+            let index = match &source {
+                SceneError::Cycle { child, .. } | SceneError::NoSuchNode(child) => node_index(*child),
+                _ => 0,
+            };
+            DeltaError::BadNode { index, source }
+        })
     }
 
     fn apply_op(&mut self, op: &DeltaOp) -> Result<(), DeltaError> {
@@ -861,7 +869,6 @@ impl SceneReplica {
             }),
             None => None,
         };
-        let parent = record.parent.map(key_of).transpose().map_err(Applied::Delta)?;
         if let Some(node) = scene.nodes.get_mut(key) {
             node.name.clone_from(&record.name);
         }
@@ -898,7 +905,6 @@ impl SceneReplica {
         scene.set_camera(key, record.camera)?;
         scene.set_morph_weights(key, record.morph_weights.clone())?;
         scene.set_semantic_class(key, record.semantic_class)?;
-        scene.set_parent(key, parent)?;
         Ok(())
     }
 }

@@ -336,6 +336,71 @@ impl Scene {
         Ok(())
     }
 
+    /// Moves each `(child, parent)` of `moves` under its parent (or to the
+    /// roots with `None`) as one edit: every child leaves its place first,
+    /// then each joins its new one in the order given. The result is what
+    /// [`Scene::set_parent`] one move at a time gives when no step passes
+    /// through a cycle, in time linear in the nodes and lists touched (a
+    /// replica's snapshot moves every node). Refused, with nothing changed,
+    /// when a node is missing or the final hierarchy has a cycle.
+    pub(crate) fn reparent_many(&mut self, moves: &[(NodeKey, Option<NodeKey>)]) -> Result<(), SceneError> {
+        use std::collections::{HashMap, HashSet};
+        for &(child, parent) in moves {
+            for key in std::iter::once(child).chain(parent) {
+                if !self.nodes.contains_key(key) {
+                    return Err(SceneError::NoSuchNode(key));
+                }
+            }
+        }
+        // The last move of a node wins, as it would one at a time.
+        let final_parent: HashMap<NodeKey, Option<NodeKey>> = moves.iter().copied().collect();
+        let parent_of = |k: NodeKey| final_parent.get(&k).copied().unwrap_or_else(|| self.nodes[k].parent);
+        // Every moved node's chain must reach a root: each node is walked
+        // once (a chain stops at a node already known to reach one).
+        let mut reaches_root: HashSet<NodeKey> = HashSet::new();
+        for &(child, _) in moves {
+            let mut path = Vec::new();
+            let mut on_path = HashSet::new();
+            let mut cursor = Some(child);
+            while let Some(k) = cursor {
+                if reaches_root.contains(&k) {
+                    break;
+                }
+                if !on_path.insert(k) {
+                    let parent = parent_of(k).unwrap_or(k);
+                    return Err(SceneError::Cycle { child: k, parent });
+                }
+                path.push(k);
+                cursor = parent_of(k);
+            }
+            reaches_root.extend(path);
+        }
+        let moved: HashSet<NodeKey> = final_parent.keys().copied().collect();
+        let old_parents: HashSet<Option<NodeKey>> = moved.iter().map(|k| self.nodes[*k].parent).collect();
+        for old in old_parents {
+            match old {
+                Some(p) => self.nodes[p].children.retain(|c| !moved.contains(c)),
+                None => self.roots.retain(|r| !moved.contains(r)),
+            }
+        }
+        let mut placed = HashSet::new();
+        for &(child, _) in moves {
+            if !placed.insert(child) {
+                continue;
+            }
+            let parent = final_parent[&child];
+            match parent {
+                Some(p) => self.nodes[p].children.push(child),
+                None => self.roots.push(child),
+            }
+            self.nodes[child].parent = parent;
+        }
+        for &(child, _) in moves {
+            self.touch(child);
+        }
+        Ok(())
+    }
+
     /// A node by key.
     pub fn node(&self, key: NodeKey) -> Option<&Node> {
         self.nodes.get(key)
