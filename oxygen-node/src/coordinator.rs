@@ -539,24 +539,26 @@ impl Coordinator {
                         None => continue,
                     };
                     if tag.frame != frame {
-                        continue; // a late image of an earlier frame
+                        continue; // late images of an earlier frame
                     }
                     let payload = sample.payload().to_bytes();
                     report.image_bytes += payload.len();
-                    if outputs.contains_key(&tag.view) {
-                        report.duplicates += 1;
-                        continue;
-                    }
-                    if !self.views.contains_key(&tag.view) {
-                        continue;
-                    }
-                    match ImagePlanes::from_payload(&key, &tag, &payload) {
-                        Ok(planes) => {
+                    match ImagePlanes::split_payload(&key, &tag, &payload) {
+                        Ok(views) => {
                             let latency_seconds = started.elapsed().as_secs_f64();
-                            outputs.insert(
-                                tag.view,
-                                ViewOutput { view: tag.view, frame, node, size: tag.size, planes, latency_seconds },
-                            );
+                            for (view, planes) in views {
+                                if !self.views.contains_key(&view) {
+                                    continue;
+                                }
+                                match outputs.entry(view) {
+                                    std::collections::btree_map::Entry::Occupied(_) => report.duplicates += 1,
+                                    std::collections::btree_map::Entry::Vacant(slot) => {
+                                        let node = node.clone();
+                                        let size = tag.size;
+                                        slot.insert(ViewOutput { view, frame, node, size, planes, latency_seconds });
+                                    }
+                                }
+                            }
                         }
                         Err(e) => warn!(%e, "output refused"),
                     }

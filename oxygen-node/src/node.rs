@@ -20,7 +20,7 @@ use zenoh::sample::{Sample, SampleKind};
 use crate::error::{NodeError, check_name};
 use crate::net::NetConfig;
 use crate::spec::{Planes, RigViewId};
-use crate::wire::{self, ImagePlanes, Keys, Order, Outcome, OutputTag, SceneUpdate, Status};
+use crate::wire::{self, Keys, MAX_OUTPUT_BYTES, Order, Outcome, OutputTag, SceneUpdate, Status};
 
 /// How a render node runs.
 #[derive(Clone, Debug)]
@@ -198,10 +198,9 @@ pub fn run_node(options: &NodeOptions) -> Result<NodeSummary, NodeError> {
                 let payload = sample.payload().to_bytes();
                 summary.scene_bytes += payload.len() as u64;
                 let order_started = Instant::now();
-                let outcome = match node.obey(&header, &payload, |tag, planes| {
-                    let body = planes.to_payload();
+                let outcome = match node.obey(&header, &payload, |tag, body| {
                     summary.bytes_sent += body.len() as u64;
-                    summary.view_frames += 1;
+                    summary.view_frames += tag.views.len() as u64;
                     outputs.put(body).attachment(wire::encode(tag)).wait().map_err(NodeError::zenoh)
                 }) {
                     Ok((views, render_seconds)) => {
@@ -222,13 +221,14 @@ pub fn run_node(options: &NodeOptions) -> Result<NodeSummary, NodeError> {
 }
 
 impl Node {
-    /// Applies an order (scene, views), renders, and hands each view's
-    /// images to `send`; returns the views rendered and the render time.
+    /// Applies an order (scene, views), renders, and hands the views'
+    /// images to `send`, a batch's views together (in messages of at most
+    /// [`MAX_OUTPUT_BYTES`]); returns the views sent and the render time.
     fn obey(
         &mut self,
         order: &Order,
         payload: &[u8],
-        mut send: impl FnMut(&OutputTag, &ImagePlanes) -> Result<(), NodeError>,
+        mut send: impl FnMut(&OutputTag, Vec<u8>) -> Result<(), NodeError>,
     ) -> Result<(u32, f64), NodeError> {
         let _span =
             info_span!("node_order", frame = order.frame, add = order.add.len(), remove = order.remove.len()).entered();
@@ -260,51 +260,54 @@ impl Node {
         if self.views.is_empty() {
             return Ok((0, 0.0));
         }
+        let wanted = |view: &RigViewId| order.only.as_ref().is_none_or(|only| only.contains(view));
         let rendering = Instant::now();
         self.renderer.render_frame(self.replica.scene())?;
         let mut sent = 0;
         if !order.planes.any() {
-            // No images: once the GPU is done, each view's output is its tag.
+            // No images: once the GPU is done, the views' tags are the output.
             self.renderer.gpu().device.poll(oxygen::wgpu::PollType::wait_indefinitely()).map_err(|e| {
                 NodeError::Render(oxygen::RenderError::Unsupported(format!("waiting for the GPU: {e}")))
             })?;
             let render_seconds = rendering.elapsed().as_secs_f64();
-            for (view, placed) in &self.views {
-                if order.only.as_ref().is_some_and(|only| !only.contains(view)) {
-                    continue;
-                }
-                let tag = OutputTag { frame: order.frame, view: *view, size: placed.size, planes: Planes::NONE };
-                send(&tag, &ImagePlanes::default())?;
-                sent += 1;
+            let mut by_size: BTreeMap<(u32, u32), Vec<RigViewId>> = BTreeMap::new();
+            for (view, placed) in self.views.iter().filter(|(view, _)| wanted(view)) {
+                by_size.entry((placed.size.x, placed.size.y)).or_default().push(*view);
+            }
+            for ((w, h), views) in by_size {
+                sent += views.len() as u32;
+                let tag = OutputTag { frame: order.frame, views, size: UVec2::new(w, h), planes: Planes::NONE };
+                send(&tag, Vec::new())?;
             }
             return Ok((sent, render_seconds));
         }
         let streamed = self.renderer.wait_streamed()?;
         let render_seconds = rendering.elapsed().as_secs_f64();
         for frame in streamed {
-            for camera in frame.cameras() {
-                let Some(&view) = self.by_view.get(&camera.view) else { continue };
-                if order.only.as_ref().is_some_and(|only| !only.contains(&view)) {
-                    continue;
+            let size = UVec2::new(frame.size.0, frame.size.1);
+            let cameras: Vec<(RigViewId, oxygen::batch::StreamedCamera<'_>)> = frame
+                .cameras()
+                .filter_map(|camera| Some((*self.by_view.get(&camera.view)?, camera)))
+                .filter(|(view, _)| wanted(view))
+                .collect();
+            let Some((_, first)) = cameras.first() else { continue };
+            let planes = Planes {
+                color: first.color.is_some(),
+                depth: first.depth.is_some(),
+                instances: first.instances.is_some(),
+            };
+            let per_message = (MAX_OUTPUT_BYTES / planes.bytes(size).max(1)).max(1);
+            for chunk in cameras.chunks(per_message) {
+                let mut payload = Vec::with_capacity(chunk.len() * planes.bytes(size));
+                for (_, camera) in chunk {
+                    wire::append_planes(&mut payload, camera.color, camera.depth, camera.instances);
                 }
-                let planes = ImagePlanes {
-                    color: camera.color.map(<[u8]>::to_vec),
-                    depth: camera.depth.map(<[f32]>::to_vec),
-                    instances: camera.instances.map(<[u32]>::to_vec),
-                };
-                let tag = OutputTag {
-                    frame: order.frame,
-                    view,
-                    size: UVec2::new(camera.size.0, camera.size.1),
-                    planes: Planes {
-                        color: planes.color.is_some(),
-                        depth: planes.depth.is_some(),
-                        instances: planes.instances.is_some(),
-                    },
-                };
-                send(&tag, &planes)?;
-                sent += 1;
+                let tag =
+                    OutputTag { frame: order.frame, views: chunk.iter().map(|(v, _)| *v).collect(), size, planes };
+                send(&tag, payload)?;
+                sent += chunk.len() as u32;
             }
+            drop(cameras);
             self.renderer.recycle_streamed(frame);
         }
         Ok((sent, render_seconds))

@@ -86,20 +86,26 @@ pub struct Order {
     pub only: Option<Vec<RigViewId>>,
 }
 
-/// One view's images of one frame; the payload holds the planes one after
-/// another (colour, depth, instances, those that [`OutputTag::planes`]
-/// names), little-endian.
+/// Images of one frame of several views of one size (a node sends a
+/// batch's cameras together: one message, not one per view); the payload
+/// holds each view's planes in turn (colour, depth, instances, those that
+/// [`OutputTag::planes`] names, little-endian), views in the order of
+/// [`OutputTag::views`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct OutputTag {
     /// The rig's frame.
     pub frame: u64,
-    /// The view.
-    pub view: RigViewId,
-    /// Width and height.
+    /// The views, in the payload's order.
+    pub views: Vec<RigViewId>,
+    /// Width and height of every view's images.
     pub size: UVec2,
-    /// The planes in the payload.
+    /// The planes of each view in the payload.
     pub planes: Planes,
 }
+
+/// Largest payload of one output message: a node splits a batch's views
+/// into messages of at most this many bytes (at least one view each).
+pub const MAX_OUTPUT_BYTES: usize = 64 << 20;
 
 /// How a node's frame went.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -154,51 +160,71 @@ pub struct ImagePlanes {
 }
 
 impl ImagePlanes {
-    /// The payload of an output: the planes one after another.
+    /// Appends the planes to `payload` (colour, depth, instances).
+    pub fn append_to(&self, payload: &mut Vec<u8>) {
+        append_planes(payload, self.color.as_deref(), self.depth.as_deref(), self.instances.as_deref());
+    }
+
+    /// The planes as one payload.
     pub fn to_payload(&self) -> Vec<u8> {
         let mut bytes = Vec::new();
-        if let Some(color) = &self.color {
-            bytes.extend_from_slice(color);
-        }
-        if let Some(depth) = &self.depth {
-            bytes.extend(depth.iter().flat_map(|d| d.to_le_bytes()));
-        }
-        if let Some(instances) = &self.instances {
-            bytes.extend(instances.iter().flat_map(|i| i.to_le_bytes()));
-        }
+        self.append_to(&mut bytes);
         bytes
     }
 
-    /// The planes `tag` announces, cut out of `payload`; refused when its
-    /// length is not theirs.
-    pub fn from_payload(key: &str, tag: &OutputTag, payload: &[u8]) -> Result<Self, NodeError> {
-        let texels = tag.size.x as usize * tag.size.y as usize;
+    /// Each view's planes that `tag` announces, cut out of `payload`;
+    /// refused when its length is not theirs.
+    pub fn split_payload(key: &str, tag: &OutputTag, payload: &[u8]) -> Result<Vec<(RigViewId, Self)>, NodeError> {
+        let malformed = |reason: String| NodeError::Malformed { key: key.to_owned(), reason };
         if tag.size.x > crate::spec::MAX_SIDE || tag.size.y > crate::spec::MAX_SIDE {
-            return Err(NodeError::Malformed { key: key.to_owned(), reason: format!("size {}", tag.size) });
+            return Err(malformed(format!("size {}", tag.size)));
         }
-        let expected = tag.planes.bytes(tag.size);
-        if payload.len() != expected {
-            return Err(NodeError::Malformed {
-                key: key.to_owned(),
-                reason: format!("{} bytes of images where {} were announced", payload.len(), expected),
-            });
+        let each = tag.planes.bytes(tag.size);
+        let expected = tag.views.len().checked_mul(each);
+        if expected != Some(payload.len()) {
+            return Err(malformed(format!(
+                "{} bytes of images where {} views of {} were announced",
+                payload.len(),
+                tag.views.len(),
+                each
+            )));
         }
-        let mut rest = payload;
-        let mut take = |on: bool| -> Option<&[u8]> {
-            if !on {
-                return None;
-            }
-            let (plane, tail) = rest.split_at(texels * 4);
-            rest = tail;
-            Some(plane)
-        };
+        let texels = tag.size.x as usize * tag.size.y as usize;
         let words =
             |plane: &[u8]| -> Vec<[u8; 4]> { plane.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]).collect() };
-        Ok(ImagePlanes {
-            color: take(tag.planes.color).map(<[u8]>::to_vec),
-            depth: take(tag.planes.depth).map(|p| words(p).into_iter().map(f32::from_le_bytes).collect()),
-            instances: take(tag.planes.instances).map(|p| words(p).into_iter().map(u32::from_le_bytes).collect()),
-        })
+        let mut views = Vec::with_capacity(tag.views.len());
+        for (i, view) in tag.views.iter().enumerate() {
+            let mut rest = &payload[i * each..(i + 1) * each];
+            let mut take = |on: bool| -> Option<&[u8]> {
+                if !on {
+                    return None;
+                }
+                let (plane, tail) = rest.split_at(texels * 4);
+                rest = tail;
+                Some(plane)
+            };
+            let planes = ImagePlanes {
+                color: take(tag.planes.color).map(<[u8]>::to_vec),
+                depth: take(tag.planes.depth).map(|p| words(p).into_iter().map(f32::from_le_bytes).collect()),
+                instances: take(tag.planes.instances).map(|p| words(p).into_iter().map(u32::from_le_bytes).collect()),
+            };
+            views.push((*view, planes));
+        }
+        Ok(views)
+    }
+}
+
+/// Appends one view's planes to `payload`, as [`ImagePlanes::split_payload`]
+/// reads them.
+pub fn append_planes(payload: &mut Vec<u8>, color: Option<&[u8]>, depth: Option<&[f32]>, instances: Option<&[u32]>) {
+    if let Some(color) = color {
+        payload.extend_from_slice(color);
+    }
+    if let Some(depth) = depth {
+        payload.extend(depth.iter().flat_map(|d| d.to_le_bytes()));
+    }
+    if let Some(instances) = instances {
+        payload.extend(instances.iter().flat_map(|i| i.to_le_bytes()));
     }
 }
 
@@ -208,22 +234,27 @@ mod tests {
 
     #[test]
     fn planes_travel_and_a_wrong_length_is_refused() {
-        let planes = ImagePlanes {
-            color: Some((0..32).collect()),
-            depth: Some(vec![0.25, 0.5, 1.0, f32::MIN_POSITIVE, 0.0, 2.0, 3.0, 4.0]),
-            instances: Some(vec![0, 1, 2, u32::MAX, 5, 6, 7, 8]),
+        let view = |k: u8| ImagePlanes {
+            color: Some((k..k + 32).collect()),
+            depth: Some(vec![0.25, 0.5, 1.0, f32::MIN_POSITIVE, 0.0, 2.0, 3.0, f32::from(k)]),
+            instances: Some(vec![0, 1, 2, u32::MAX, 5, 6, 7, u32::from(k)]),
         };
         let tag = OutputTag {
             frame: 3,
-            view: RigViewId(7),
+            views: vec![RigViewId(7), RigViewId(2)],
             size: UVec2::new(4, 2),
             planes: Planes { color: true, depth: true, instances: true },
         };
-        let payload = planes.to_payload();
-        assert_eq!(ImagePlanes::from_payload("k", &tag, &payload).unwrap(), planes);
-        assert!(ImagePlanes::from_payload("k", &tag, &payload[1..]).is_err());
+        let mut payload = Vec::new();
+        view(1).append_to(&mut payload);
+        view(9).append_to(&mut payload);
+        let split = ImagePlanes::split_payload("k", &tag, &payload).unwrap();
+        assert_eq!(split, vec![(RigViewId(7), view(1)), (RigViewId(2), view(9))]);
+        assert!(ImagePlanes::split_payload("k", &tag, &payload[1..]).is_err());
+        let one_view = OutputTag { views: vec![RigViewId(7)], ..tag.clone() };
+        assert!(ImagePlanes::split_payload("k", &one_view, &payload).is_err());
         let huge = OutputTag { size: UVec2::new(1 << 20, 1 << 20), ..tag.clone() };
-        assert!(ImagePlanes::from_payload("k", &huge, &payload).is_err());
+        assert!(ImagePlanes::split_payload("k", &huge, &payload).is_err());
         let header: OutputTag = decode("k", &encode(&tag)).unwrap();
         assert_eq!(header, tag);
         assert!(decode::<OutputTag>("k", &[0xff; 3]).is_err());
