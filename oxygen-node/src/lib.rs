@@ -27,7 +27,7 @@
 //! | `oxygen/R/coordinator` | liveliness | the coordinator is up |
 //! | `oxygen/R/node/N` | liveliness | node `N` is up |
 //! | `oxygen/R/order/N` | coordinator → `N` | a frame to render: scene delta or snapshot, views added and removed |
-//! | `oxygen/R/output/N` | `N` → coordinator | the images of one frame of a batch's views (64 MiB a message at most) |
+//! | `oxygen/R/output/N` | `N` → coordinator | the images of one frame of a batch's views (1 MiB a message at most) |
 //! | `oxygen/R/status/N` | `N` → coordinator | a frame done (with its time) or failed |
 //!
 //! # A frame
