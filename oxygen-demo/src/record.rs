@@ -57,6 +57,7 @@ pub const RECORDED_ENV_PREFIXES: &[&str] = &[
     "BATCH_BENCH_",
     "GROUP_BENCH_",
     "SCHEDULE_BENCH_",
+    "NODE_BENCH_",
     "ATLAS_",
     "MESA_",
     "__GL_",
