@@ -36,14 +36,14 @@ else
 fi
 
 # Every run: bench name (its record is <name>.jsonl), how it runs
-# (example: `cargo run --example`; sceneprep: the oxygen-sceneprep bench
+# (example: its binary from the workspace build; sceneprep: the oxygen-sceneprep bench
 # through `cargo test`, unoptimised), cpu or gpu (a GPU bench's record must
 # name its adapter), and its arguments (@OUT@: a directory of its own).
 runs=(
   "batch_bench|example|gpu|16 32x32 1,2 1"
   "cubes_bench|example|gpu|16 2 2"
   "group_bench|example|gpu|16 32x32 2 1,2 1"
-  "node_bench|node|gpu|16 32x32 4 1,2 1"
+  "node_bench|example|gpu|16 32x32 4 1,2 1"
   "draw_path_bench|example|gpu|16"
   "environment_bench|example|gpu|1 --smoke"
   "hdr_format_bench|example|gpu|64 1"
@@ -80,10 +80,13 @@ done
 
 say "building the examples and the sceneprep bench (dev profile)"
 started=$SECONDS
-cargo build --locked --examples
-cargo test --locked --no-run -p oxygen-sceneprep --bench prep
-# The render-node bench starts the oxygen-node program beside it.
-cargo build --locked -p oxygen-node --bins --examples
+# With --workspace, as scripts/test.sh builds: a build of one package
+# resolves its dependencies' features for that package alone and compiles
+# dozens of crates again (minutes on two cores). The examples then run
+# from target/ (the render-node bench starts the oxygen-node program
+# beside it).
+cargo build --locked --workspace --bins --examples
+cargo test --locked --workspace --no-run --bench prep
 say "build: $((SECONDS - started)) s"
 
 total_start=$(date +%s.%N)
@@ -98,9 +101,8 @@ for i in "${!runs[@]}"; do
   args="${args//@OUT@/$dir/out}"
   read -r -a argv <<<"$args"
   case "$kind" in
-    example) command=(cargo run --locked --quiet --example "$name" -- "${argv[@]}") ;;
-    node) command=(cargo run --locked --quiet -p oxygen-node --example "$name" -- "${argv[@]}") ;;
-    sceneprep) command=(cargo test --locked --quiet -p oxygen-sceneprep --bench "$name" -- "${argv[@]}") ;;
+    example) command=("target/debug/examples/$name" "${argv[@]}") ;;
+    sceneprep) command=(cargo test --locked --quiet --workspace --bench "$name" -- "${argv[@]}") ;;
     *) say "unknown kind $kind"; exit 2 ;;
   esac
   start=$(date +%s.%N)

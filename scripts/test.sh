@@ -89,8 +89,10 @@ say "building tests (the first build compiles wgpu and takes a few minutes)"
 cargo build --locked --workspace --tests --examples
 
 # The adapter wgpu gives for WGPU_BACKEND=$1, printed; fails when none.
+# (The binary the build above made: `cargo run` would resolve features for
+# the root package alone and compile crates again.)
 adapter_for() {
-  WGPU_BACKEND=$1 cargo run --locked --quiet --example adapter_info 2>&1
+  WGPU_BACKEND=$1 target/debug/examples/adapter_info 2>&1
 }
 
 # The integration-test binaries that render (one list, shared with
@@ -169,7 +171,7 @@ for backend in $backends; do
       args=()
       for t in $(gpu_test_binaries); do args+=(--test "$t"); done
       say "GPU test binaries: ${args[*]}"
-      WGPU_BACKEND=gl cargo test --locked --no-fail-fast "${args[@]}" "$@" || failed+=("gl")
+      WGPU_BACKEND=gl cargo test --locked --no-fail-fast --workspace "${args[@]}" "$@" || failed+=("gl")
       report_skips gl || failed+=("gl (unexpected skips)")
       ;;
     *)

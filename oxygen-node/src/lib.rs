@@ -61,4 +61,4 @@ pub use coordinator::{Coordinator, NodeReport, RigFrame, RigOptions, ViewOutput}
 pub use error::NodeError;
 pub use net::NetConfig;
 pub use node::{NodeOptions, NodeSummary, run_node};
-pub use spec::{Planes, RigViewId, ViewSpec};
+pub use spec::{MAX_SIDE, Planes, RigViewId, ViewSpec};

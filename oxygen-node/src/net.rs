@@ -52,6 +52,11 @@ impl NetConfig {
         // than failing when a node starts first.
         set(&mut config, "connect/timeout_ms", "60000")?;
         set(&mut config, "connect/exit_on_failure", "false")?;
+        // Opening returns at once instead of waiting out the scouting
+        // delay for peers found by scouting, which is off: the endpoints
+        // connect in the background, and declarations reach a peer when it
+        // connects.
+        set(&mut config, "open/return_conditions/connect_scouted", "false")?;
         Ok(config)
     }
 
