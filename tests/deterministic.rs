@@ -325,6 +325,17 @@ fn the_shipped_scenes_render_bit_identically_twice() {
         .collect();
     files.sort();
     assert!(files.len() >= 10, "{} shipped scenes found under {}", files.len(), root.display());
+    // Two renderers for all the scenes (each compiles its pipelines once:
+    // made afresh per scene, this test took a minute and a half on GL),
+    // differing in threads, and per scene in registration order and history.
+    let renderer = |threads: usize| {
+        support::gpu_renderer_with(RendererOptions {
+            prep_threads: Some(threads),
+            deterministic: true,
+            ..Default::default()
+        })
+    };
+    let mut renderers = [renderer(1), renderer(2)];
     for file in &files {
         let mut scene = Scene::new();
         let imported =
@@ -334,12 +345,7 @@ fn the_shipped_scenes_render_bit_identically_twice() {
         let bounds = imported.bounds.unwrap_or_else(|| panic!("{}: no bounds to frame", file.display()));
         oxygen_demo::add_default_sun(&mut scene);
         let (center, radius) = ((bounds.min + bounds.max) * 0.5, (bounds.max - bounds.min).length().max(0.1));
-        let fingerprint = |config: Config| {
-            let mut renderer = support::gpu_renderer_with(RendererOptions {
-                prep_threads: Some(config.threads),
-                deterministic: true,
-                ..Default::default()
-            });
+        let fingerprint = |renderer: &mut Renderer, config: Config| {
             let eyes = [Vec3::new(0.4, 0.5, 1.0), Vec3::new(-1.0, 0.3, -0.4)];
             let mut order: Vec<Vec3> = eyes.to_vec();
             if config.reversed {
@@ -371,11 +377,15 @@ fn the_shipped_scenes_render_bit_identically_twice() {
                     (format!("{direction}"), hash_of((colour.as_raw(), &labels.instances, depth)))
                 })
                 .collect();
+            for (_, id, _) in views {
+                renderer.unregister_view(id).unwrap();
+            }
             hashes.sort();
             hashes
         };
-        let first = fingerprint(Config { threads: 1, reversed: false, history: false, ..REFERENCE });
-        let second = fingerprint(Config { threads: 2, reversed: true, history: true, ..REFERENCE });
+        let [one_thread, two_threads] = &mut renderers;
+        let first = fingerprint(one_thread, Config { threads: 1, reversed: false, history: false, ..REFERENCE });
+        let second = fingerprint(two_threads, Config { threads: 2, reversed: true, history: true, ..REFERENCE });
         assert_eq!(first, second, "{}: two renders of the same frame differ", file.display());
     }
 }
