@@ -60,5 +60,5 @@ pub mod wire;
 pub use coordinator::{Coordinator, NodeReport, RigFrame, RigOptions, ViewOutput};
 pub use error::NodeError;
 pub use net::NetConfig;
-pub use node::{NodeOptions, NodeSummary, run_node};
+pub use node::{MAX_GPU, NodeOptions, NodeSummary, run_node};
 pub use spec::{MAX_SIDE, Planes, RigViewId, ViewSpec};

@@ -22,6 +22,9 @@ use crate::net::NetConfig;
 use crate::spec::{Planes, RigViewId};
 use crate::wire::{self, Keys, MAX_OUTPUT_BYTES, Order, Outcome, OutputTag, SceneUpdate, Status};
 
+/// GPUs a node may name ([`NodeOptions::gpu`] below this).
+pub const MAX_GPU: usize = 64;
+
 /// How a render node runs.
 #[derive(Clone, Debug)]
 pub struct NodeOptions {
@@ -35,6 +38,7 @@ pub struct NodeOptions {
     pub renderer: RendererOptions,
     /// Which of the machine's GPUs (of the kind the first one is) renders:
     /// 0 for the first; past the last it wraps, a second device of a GPU.
+    /// Below [`MAX_GPU`].
     pub gpu: usize,
     /// How long to wait for the coordinator to appear before giving up.
     pub coordinator_wait: Duration,
@@ -98,6 +102,11 @@ struct Node {
 pub fn run_node(options: &NodeOptions) -> Result<NodeSummary, NodeError> {
     check_name("rig", &options.rig)?;
     check_name("node", &options.name)?;
+    if options.gpu >= MAX_GPU {
+        let message =
+            format!("GPU {} of a node: 0 to {} (it opens a device on each GPU up to it)", options.gpu, MAX_GPU - 1);
+        return Err(NodeError::Render(oxygen::RenderError::Unsupported(message)));
+    }
     let _span = info_span!("render_node", rig = %options.rig, node = %options.name).entered();
     let keys = Keys::new(&options.rig);
 

@@ -269,4 +269,12 @@ fn a_node_without_a_coordinator_gives_up_with_a_clear_message() {
     let bad = Command::new(NODE).args(["--rig", "a/b", "--connect", &endpoint]).output().expect("run oxygen-node");
     let stderr = String::from_utf8_lossy(&bad.stderr);
     assert!(!bad.status.success() && stderr.contains("rig \"a/b\" must be"), "{stderr}");
+
+    // A GPU index past the bound: refused before any device is opened.
+    let far = Command::new(NODE)
+        .args(["--rig", "r", "--connect", &endpoint, "--gpu", "64"])
+        .output()
+        .expect("run oxygen-node");
+    let stderr = String::from_utf8_lossy(&far.stderr);
+    assert!(!far.status.success() && stderr.contains("--gpu: 64 (0 to 63)"), "{stderr}");
 }

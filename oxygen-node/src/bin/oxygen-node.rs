@@ -16,7 +16,7 @@
 use std::process::ExitCode;
 use std::time::Duration;
 
-use oxygen_node::{NodeOptions, run_node};
+use oxygen_node::{MAX_GPU, NodeOptions, run_node};
 
 const USAGE: &str = "usage: oxygen-node --rig NAME --connect ENDPOINT [--name NAME] [--gpu N] [--listen ENDPOINT] [--deterministic] [--wait SECONDS]";
 
@@ -30,7 +30,13 @@ fn parse(mut args: impl Iterator<Item = String>) -> Result<NodeOptions, String> 
             "--name" => options.name = value("--name")?,
             "--connect" => options.net.connect.push(value("--connect")?),
             "--listen" => options.net.listen.push(value("--listen")?),
-            "--gpu" => options.gpu = value("--gpu")?.parse().map_err(|e| format!("--gpu: {e}"))?,
+            "--gpu" => {
+                options.gpu = value("--gpu")?.parse().map_err(|e| format!("--gpu: {e}"))?;
+                // The node opens a device on every GPU up to this one.
+                if options.gpu >= MAX_GPU {
+                    return Err(format!("--gpu: {} (0 to {})", options.gpu, MAX_GPU - 1));
+                }
+            }
             "--wait" => {
                 let seconds: f64 = value("--wait")?.parse().map_err(|e| format!("--wait: {e}"))?;
                 if !(seconds.is_finite() && seconds > 0.0) {
