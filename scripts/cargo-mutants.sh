@@ -14,8 +14,10 @@
 #              crate records GPU work, measured by scripts/wgsl_mutants.py
 #              and the GPU tests
 #   importer   the root crate's glTF importer and .hdr loader (untrusted input),
-#              tested by the importer's CPU tests, the mutant corpus and
-#              tests/environment.rs (which loads .hdr files; it renders, on
+#              tested by the importer's CPU tests, the mutant corpus,
+#              tests/gltf_animation.rs and tests/morph.rs (animations and
+#              morph targets) and tests/environment.rs (which loads .hdr
+#              files; these render, on
 #              whatever adapter the machine gives: lavapipe here)
 #
 # A full run is long on a 2-core machine (about 13 s a mutant for the CPU
@@ -55,7 +57,8 @@ case "$scope" in
     args=(-p oxygen --file 'src/gltf_import/**' --file src/environment_file.rs
       --cargo-test-arg=--test=gltf_import --cargo-test-arg=--test=gltf_untrusted
       --cargo-test-arg=--test=gltf_fuzz_corpus --cargo-test-arg=--lib
-      --cargo-test-arg=--test=environment)
+      --cargo-test-arg=--test=environment --cargo-test-arg=--test=gltf_animation
+      --cargo-test-arg=--test=morph)
     ;;
   *)
     say "unknown scope '$scope' (core, bindless, sceneprep, passes, importer)"
