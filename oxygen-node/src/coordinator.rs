@@ -464,18 +464,7 @@ impl Coordinator {
             };
             state.in_step = true;
             report.scene_wire_bytes += payload.len();
-            let add = std::mem::take(&mut state.add);
-            let remove = std::mem::take(&mut state.remove);
-            let add: Vec<(RigViewId, ViewSpec)> =
-                add.into_iter().filter_map(|id| Some((id, self.views.get(&id)?.spec.clone()))).collect();
-            let order = Order {
-                frame,
-                scene: update,
-                add,
-                remove: remove.into_iter().collect(),
-                planes: self.options.planes,
-                only: None,
-            };
+            let order = self.order(name, frame, update, None);
             self.send(name, &order, payload)?;
         }
 
@@ -684,25 +673,27 @@ impl Coordinator {
             report.taken_over.push(*view);
         }
         for (name, views) in given {
-            let Some(state) = self.nodes.get_mut(&name) else { continue };
-            let add = std::mem::take(&mut state.add);
-            let remove = std::mem::take(&mut state.remove);
-            let add: Vec<(RigViewId, ViewSpec)> =
-                add.into_iter().filter_map(|id| Some((id, self.views.get(&id)?.spec.clone()))).collect();
-            let order = Order {
-                frame,
-                scene: SceneUpdate::Unchanged,
-                add,
-                remove: remove.into_iter().collect(),
-                planes: self.options.planes,
-                only: Some(views),
-            };
+            if !self.nodes.contains_key(&name) {
+                continue;
+            }
+            let order = self.order(&name, frame, SceneUpdate::Unchanged, Some(views));
             self.send(&name, &order, Vec::new())?;
             let awaited = waiting_since.entry(name).or_insert(Awaited { since: Instant::now(), orders: 0 });
             awaited.since = Instant::now();
             awaited.orders += 1;
         }
         Ok(())
+    }
+
+    /// Node `node`'s order for `frame`: its pending changes of views
+    /// (taken), the planes, and `only` the views whose images it sends.
+    fn order(&mut self, node: &str, frame: u64, scene: SceneUpdate, only: Option<Vec<RigViewId>>) -> Order {
+        let (add, remove) = match self.nodes.get_mut(node) {
+            Some(state) => (std::mem::take(&mut state.add), std::mem::take(&mut state.remove)),
+            None => Default::default(),
+        };
+        let add = add.into_iter().filter_map(|id| Some((id, self.views.get(&id)?.spec.clone()))).collect();
+        Order { frame, scene, add, remove: remove.into_iter().collect(), planes: self.options.planes, only }
     }
 
     fn send(&self, node: &str, order: &Order, payload: Vec<u8>) -> Result<(), NodeError> {
