@@ -212,7 +212,7 @@ fn a_rig_renders_every_view_once_a_frame_through_a_join_a_stall_and_a_death() {
             );
         } else {
             assert!(
-                report.delta_bytes > 0 && report.delta_bytes < 400,
+                report.delta_bytes > 0 && report.delta_bytes <= 95,
                 "frame {frame}: {} bytes for one moved box",
                 report.delta_bytes
             );
