@@ -19,6 +19,15 @@
 #              morph targets) and tests/environment.rs (which loads .hdr
 #              files; these render, on
 #              whatever adapter the machine gives: lavapipe here)
+#   node       oxygen-node (render nodes: placement, membership, take-over,
+#              the wire headers' checks, the node program), tested by its
+#              unit tests and tests/render_nodes.rs (three node processes on
+#              loopback, rendering on whatever adapter the machine gives)
+#
+# OXYGEN_MUTANTS_TIMEOUT sets cargo-mutants' per-mutant test timeout in
+# seconds (default 300). A mutant that makes a worker loop for ever costs
+# the whole timeout: sceneprep's worker-pool mutants are run with 60 (its
+# baseline tests take a few seconds).
 #
 # A full run is long on a 2-core machine (about 13 s a mutant for the CPU
 # crates, a minute or more for the importer, whose every mutant relinks the
@@ -60,8 +69,11 @@ case "$scope" in
       --cargo-test-arg=--test=environment --cargo-test-arg=--test=gltf_animation
       --cargo-test-arg=--test=morph)
     ;;
+  node)
+    args=(-p oxygen-node --test-package oxygen-node)
+    ;;
   *)
-    say "unknown scope '$scope' (core, bindless, sceneprep, passes, importer)"
+    say "unknown scope '$scope' (core, bindless, sceneprep, passes, importer, node)"
     exit 2
     ;;
 esac
@@ -80,7 +92,7 @@ in_place=()
 if [ "${OXYGEN_MUTANTS_IN_PLACE:-}" = 1 ]; then
   in_place=(--in-place)
 fi
-cargo mutants "${args[@]}" "${in_place[@]}" --shard "$k/$n" --timeout 300 --output "$out"
+cargo mutants "${args[@]}" "${in_place[@]}" --shard "$k/$n" --timeout "${OXYGEN_MUTANTS_TIMEOUT:-300}" --output "$out"
 status=$?
 set -e
 # cargo-mutants exits 2 when mutants were missed, 3 on timeouts: a result,

@@ -37,9 +37,10 @@ step "clippy -D warnings (every target)" \
 step "cargo doc -D warnings (the workspace's API docs)" \
   env RUSTDOCFLAGS="-D warnings" cargo doc --locked --no-deps --workspace
 # The workspace's target folder: the fuzz crate's dependencies are the
-# workspace's, already checked by clippy above.
+# workspace's, already checked by clippy above. Without default features:
+# the Rust code only, not libFuzzer's C++ (which `cargo fuzz` builds).
 step "cargo check of the fuzz target" \
-  env CARGO_TARGET_DIR="$PWD/target" cargo check --locked --manifest-path fuzz/Cargo.toml --all-targets
+  env CARGO_TARGET_DIR="$PWD/target" cargo check --locked --manifest-path fuzz/Cargo.toml --all-targets --no-default-features
 case "${CI:-}" in ""|0|[Ff][Aa][Ll][Ss][Ee]) ci=0 ;; *) ci=1 ;; esac
 if [ "${OXYGEN_SKIP_PEER_CHECK:-0}" = 1 ] && [ "$ci" = 0 ]; then
   say "OXYGEN_SKIP_PEER_CHECK=1: not checking the Bevy peer bench"
