@@ -621,4 +621,308 @@ mod tests {
         let err = Geometry::new("nan", v, vec![0, 1, 2], vec![Submesh { first_index: 0, index_count: 3 }]);
         assert!(matches!(err, Err(GeometryError::NonFinitePosition { vertex: 1, .. })));
     }
+
+    fn positions(g: &Geometry) -> Vec<Vec3> {
+        g.vertices().iter().map(|v| Vec3::from(v.position)).collect()
+    }
+
+    fn uvs(g: &Geometry) -> Vec<Vec2> {
+        g.vertices().iter().map(|v| Vec2::from(v.uv)).collect()
+    }
+
+    #[test]
+    fn cube_corners_sit_half_its_edge_out_on_their_face() {
+        // Edge 3 (half 1.5): an edge of 2 would hide a scale applied the
+        // wrong way round.
+        let cube = Geometry::cube(3.0);
+        assert_eq!(cube.name(), "cube");
+        assert_eq!(cube.vertices().len(), 24);
+        assert_eq!(cube.submeshes(), &[Submesh { first_index: 0, index_count: 36 }]);
+        for (face, quad) in cube.vertices().chunks(4).enumerate() {
+            let n = Vec3::from(quad[0].normal);
+            for v in quad {
+                assert_eq!(Vec3::from(v.normal), n, "face {face}");
+                assert_eq!(Vec3::from(v.position).abs(), Vec3::splat(1.5), "face {face}");
+                assert_eq!(Vec3::from(v.position).dot(n), 1.5, "face {face}");
+            }
+        }
+        // The +X face, corner by corner: its u runs along -Z, its v down Y.
+        let expected = [
+            Vec3::new(1.5, -1.5, 1.5),
+            Vec3::new(1.5, -1.5, -1.5),
+            Vec3::new(1.5, 1.5, -1.5),
+            Vec3::new(1.5, 1.5, 1.5),
+        ];
+        assert_eq!(positions(&cube)[..4], expected);
+        assert_eq!(cube.indices()[..6], [0, 1, 2, 0, 2, 3]);
+        assert_eq!(cube.indices()[30..], [20, 21, 22, 20, 22, 23]);
+    }
+
+    #[test]
+    fn cube_faces_map_the_whole_texture_unmirrored() {
+        let cube = Geometry::cube(3.0);
+        for (face, quad) in cube.vertices().chunks(4).enumerate() {
+            let uv: Vec<Vec2> = quad.iter().map(|v| Vec2::from(v.uv)).collect();
+            // glTF UVs, origin top-left: bottom-left, bottom-right, top-right, top-left.
+            assert_eq!(uv, [Vec2::new(0.0, 1.0), Vec2::new(1.0, 1.0), Vec2::new(1.0, 0.0), Vec2::new(0.0, 0.0)]);
+            // Texture right (u) crossed with texture up (-v) is the outward
+            // normal on every face: no face shows its texture mirrored.
+            let p = |i: usize| Vec3::from(quad[i].position);
+            let right = p(1) - p(0);
+            let up = p(3) - p(0);
+            assert_eq!(right.cross(up).normalize(), Vec3::from(quad[0].normal), "face {face}");
+        }
+    }
+
+    #[test]
+    fn plane_is_a_square_in_xz_facing_up() {
+        let plane = Geometry::plane(3.0);
+        assert_eq!(plane.name(), "plane");
+        assert_eq!(
+            positions(&plane),
+            [
+                Vec3::new(-1.5, 0.0, 1.5),
+                Vec3::new(1.5, 0.0, 1.5),
+                Vec3::new(1.5, 0.0, -1.5),
+                Vec3::new(-1.5, 0.0, -1.5),
+            ]
+        );
+        // Seen from above with -Z up the screen, the texture reads upright.
+        assert_eq!(uvs(&plane), [Vec2::new(0.0, 1.0), Vec2::new(1.0, 1.0), Vec2::new(1.0, 0.0), Vec2::new(0.0, 0.0)]);
+        assert!(plane.vertices().iter().all(|v| v.normal == [0.0, 1.0, 0.0]));
+        assert_eq!(plane.indices(), &[0, 1, 2, 0, 2, 3]);
+        assert_eq!(plane.submeshes(), &[Submesh { first_index: 0, index_count: 6 }]);
+        let p = positions(&plane);
+        for tri in plane.indices().chunks(3) {
+            let n = (p[tri[1] as usize] - p[tri[0] as usize]).cross(p[tri[2] as usize] - p[tri[0] as usize]);
+            assert!(n.normalize() == Vec3::Y, "triangle {tri:?} faces {n}");
+        }
+    }
+
+    #[test]
+    fn quad_is_a_square_in_xy_facing_the_viewer() {
+        let quad = Geometry::quad(3.0);
+        assert_eq!(quad.name(), "quad");
+        assert_eq!(
+            positions(&quad),
+            [
+                Vec3::new(-1.5, -1.5, 0.0),
+                Vec3::new(1.5, -1.5, 0.0),
+                Vec3::new(1.5, 1.5, 0.0),
+                Vec3::new(-1.5, 1.5, 0.0),
+            ]
+        );
+        // glTF UVs (origin top-left): the bottom-left corner samples v = 1.
+        assert_eq!(uvs(&quad), [Vec2::new(0.0, 1.0), Vec2::new(1.0, 1.0), Vec2::new(1.0, 0.0), Vec2::new(0.0, 0.0)]);
+        assert!(quad.vertices().iter().all(|v| v.normal == [0.0, 0.0, 1.0]));
+        assert_eq!(quad.indices(), &[0, 1, 2, 0, 2, 3]);
+        assert_eq!(quad.submeshes(), &[Submesh { first_index: 0, index_count: 6 }]);
+        let p = positions(&quad);
+        for tri in quad.indices().chunks(3) {
+            let n = (p[tri[1] as usize] - p[tri[0] as usize]).cross(p[tri[2] as usize] - p[tri[0] as usize]);
+            assert!(n.normalize() == Vec3::Z, "triangle {tri:?} faces {n}");
+        }
+    }
+
+    #[test]
+    fn uv_sphere_vertices_lie_on_the_sphere_at_their_grid_angles() {
+        let sphere = Geometry::uv_sphere(2.0, 3, 3);
+        assert_eq!(sphere.name(), "uv sphere");
+        // (3 + 1) rings of (3 + 1) vertices: the seam column repeats the first.
+        assert_eq!(sphere.vertices().len(), 16);
+        // f32 sin/cos of angles below 2 pi are within 1e-7 or so; 1e-6 is
+        // ten ulps of a unit normal.
+        let close = |a: Vec3, b: Vec3| (a - b).abs().max_element() < 1e-6;
+        for (i, v) in sphere.vertices().iter().enumerate() {
+            let (ring, segment) = (i / 4, i % 4);
+            assert_eq!(Vec2::from(v.uv), Vec2::new(segment as f32 / 3.0, ring as f32 / 3.0), "vertex {i}");
+            let n = Vec3::from(v.normal);
+            assert!((n.length() - 1.0).abs() < 1e-6, "vertex {i}: {n}");
+            assert!(close(Vec3::from(v.position), n * 2.0), "vertex {i}");
+            // Latitude from the ring: 60 degrees a ring from the +Y pole.
+            assert!((n.y - (ring as f32 * std::f32::consts::FRAC_PI_3).cos()).abs() < 1e-6, "vertex {i}: {n}");
+        }
+        let n = |i: usize| Vec3::from(sphere.vertices()[i].normal);
+        assert!(close(n(0), Vec3::Y) && close(n(15), Vec3::NEG_Y));
+        let (s, c) = (3f32.sqrt() / 2.0, 0.5);
+        // Ring 1, segment 0: longitude 0 is +X.
+        assert!(close(n(4), Vec3::new(s, c, 0.0)), "{}", n(4));
+        // Ring 2, segment 1: 120 degrees of longitude, turning from +X to -Z.
+        assert!(close(n(9), Vec3::new(-s * 0.5, -c, -s * s)), "{}", n(9));
+        // The seam column closes the ring where it began.
+        assert!(close(n(7), n(4)));
+    }
+
+    #[test]
+    fn uv_sphere_indices_split_each_grid_cell_in_two() {
+        let sphere = Geometry::uv_sphere(1.0, 3, 3);
+        // Rows of 4 vertices; cell (ring, segment) with top-left corner a
+        // is (a, a + 4, a + 1) and (a + 1, a + 4, a + 5).
+        #[rustfmt::skip]
+        let expected = [
+            0, 4, 1, 1, 4, 5,    1, 5, 2, 2, 5, 6,      2, 6, 3, 3, 6, 7,
+            4, 8, 5, 5, 8, 9,    5, 9, 6, 6, 9, 10,     6, 10, 7, 7, 10, 11,
+            8, 12, 9, 9, 12, 13, 9, 13, 10, 10, 13, 14, 10, 14, 11, 11, 14, 15,
+        ];
+        assert_eq!(sphere.indices(), &expected);
+        assert_eq!(sphere.submeshes(), &[Submesh { first_index: 0, index_count: 54 }]);
+        // Fewer than three segments or rings are raised to three.
+        assert_eq!(Geometry::uv_sphere(1.0, 0, 1).indices(), &expected);
+    }
+
+    #[test]
+    fn skin_weights_are_normalised_and_bad_weights_count_as_zero() {
+        let s = SkinWeights::new([4, 5, 6, 7], [2.0, 2.0, 0.0, 0.0]);
+        assert_eq!(s.joints, [4.0, 5.0, 6.0, 7.0]);
+        assert_eq!(s.weights, [0.5, 0.5, 0.0, 0.0]);
+        let s = SkinWeights::new([0, 1, 2, 3], [-1.0, f32::NAN, f32::INFINITY, 3.0]);
+        assert_eq!(s.weights, [0.0, 0.0, 0.0, 1.0]);
+        // Nothing usable binds the vertex to its first joint.
+        let s = SkinWeights::new([9, 1, 2, 3], [0.0, -2.0, f32::NAN, 0.0]);
+        assert_eq!(s.weights, [1.0, 0.0, 0.0, 0.0]);
+    }
+
+    #[test]
+    fn influences_are_the_joints_with_positive_weight_in_order() {
+        let s = SkinWeights::new([3, 7, 9, 2], [0.5, 0.0, 0.5, 0.0]);
+        assert_eq!(s.influences().collect::<Vec<_>>(), [3, 9]);
+        let s = SkinWeights::new([3, 7, 9, 2], [0.1, 0.2, 0.3, 0.4]);
+        assert_eq!(s.influences().collect::<Vec<_>>(), [3, 7, 9, 2]);
+        let s = SkinWeights::new([8, 7, 9, 2], [0.0; 4]);
+        assert_eq!(s.influences().collect::<Vec<_>>(), [8]);
+    }
+
+    #[test]
+    fn skin_records_must_match_the_vertices_and_name_valid_joints() {
+        let valid = SkinWeights::new([0, 1, 0, 0], [0.5, 0.5, 0.0, 0.0]);
+        let quad = Geometry::quad(2.0);
+        let err = quad.clone().with_skin_weights(vec![valid; 3]);
+        assert!(matches!(err, Err(GeometryError::SkinWeights { weights: 3, vertices: 4, .. })), "{err:?}");
+        let skinned = quad.clone().with_skin_weights(vec![valid; 4]).unwrap();
+        assert_eq!(skinned.skin_weights(), Some(&[valid; 4][..]));
+        assert_eq!(quad.skin_weights(), None);
+        assert!(quad.joint_bounds().is_empty());
+        // The fields are public: a record built by hand may name a joint
+        // that is negative, not a number, or one past the cap.
+        for bad in [-1.0, f32::NAN, MAX_JOINTS as f32] {
+            let mut skin = vec![valid; 4];
+            skin[2].joints[1] = bad;
+            let err = quad.clone().with_skin_weights(skin);
+            assert!(matches!(err, Err(GeometryError::SkinWeights { weights: 4, vertices: 4, .. })), "{bad}: {err:?}");
+        }
+    }
+
+    #[test]
+    fn joint_bounds_hold_the_vertices_each_joint_moves() {
+        // Quad corners: (-1, -1), (1, -1), (1, 1), (-1, 1).
+        let skin = vec![
+            SkinWeights::new([2, 0, 0, 0], [1.0, 0.0, 0.0, 0.0]),
+            SkinWeights::new([0, 2, 0, 0], [0.5, 0.5, 0.0, 0.0]),
+            SkinWeights::new([0, 1, 0, 0], [1.0, 0.0, 0.0, 0.0]), // joint 1 named, unweighted
+            SkinWeights::new([2, 0, 0, 0], [1.0, 0.0, 0.0, 0.0]),
+        ];
+        let skinned = Geometry::quad(2.0).with_skin_weights(skin).unwrap();
+        assert_eq!(
+            skinned.joint_bounds(),
+            &[
+                Some(Aabb::new(Vec3::new(1.0, -1.0, 0.0), Vec3::new(1.0, 1.0, 0.0))),
+                None,
+                Some(Aabb::new(Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, 1.0, 0.0))),
+            ]
+        );
+    }
+
+    fn target(positions: Vec<Vec3>, normals: Option<Vec<Vec3>>) -> MorphTarget {
+        MorphTarget { positions, normals }
+    }
+
+    #[test]
+    fn morph_targets_need_one_finite_displacement_per_vertex() {
+        let quad = Geometry::quad(2.0);
+        let four = vec![Vec3::X; 4];
+        let refused = |t: MorphTarget| {
+            let err = quad.clone().with_morph_targets(vec![t]);
+            assert!(matches!(err, Err(GeometryError::MorphTargets { .. })), "{err:?}");
+        };
+        refused(target(vec![Vec3::X; 3], None));
+        refused(target(vec![Vec3::X; 5], Some(four.clone())));
+        refused(target(four.clone(), Some(vec![Vec3::X; 3])));
+        refused(target(vec![Vec3::X, Vec3::NAN, Vec3::X, Vec3::X], None));
+        refused(target(four.clone(), Some(vec![Vec3::X, Vec3::X, Vec3::INFINITY, Vec3::X])));
+        let targets = vec![target(four.clone(), None), target(four.clone(), Some(vec![Vec3::Y; 4]))];
+        let morphed = quad.with_morph_targets(targets.clone()).unwrap();
+        assert_eq!(morphed.morph_targets(), &targets[..]);
+    }
+
+    #[test]
+    fn at_most_64_morph_targets() {
+        let quad = Geometry::quad(2.0);
+        let targets = |count: usize| vec![target(vec![Vec3::X; 4], None); count];
+        assert_eq!(quad.clone().with_morph_targets(targets(MAX_MORPH_TARGETS)).unwrap().morph_targets().len(), 64);
+        let err = quad.clone().with_morph_targets(targets(MAX_MORPH_TARGETS + 1));
+        assert!(matches!(err, Err(GeometryError::MorphTargets { .. })), "{err:?}");
+        assert!(quad.with_morph_targets(Vec::new()).unwrap().morph_targets().is_empty());
+    }
+
+    /// A quad with two targets whose displacement ranges differ per axis
+    /// and include the origin only on some axes.
+    fn morphed_quad() -> Geometry {
+        let a = [Vec3::new(0.5, 0.0, 0.0), Vec3::new(0.0, 2.0, 0.0), Vec3::new(0.0, 0.0, -1.0), Vec3::ZERO];
+        let b = [Vec3::new(-2.0, 0.0, 0.0), Vec3::ZERO, Vec3::new(0.0, 0.0, 3.0), Vec3::new(0.0, -0.5, 0.0)];
+        let normals = vec![Vec3::Y, Vec3::NEG_Y, Vec3::X, Vec3::ZERO];
+        Geometry::quad(2.0)
+            .with_morph_targets(vec![target(a.to_vec(), None), target(b.to_vec(), Some(normals))])
+            .unwrap()
+    }
+
+    #[test]
+    fn morphed_bound_adds_each_weighted_displacement_range() {
+        let g = morphed_quad();
+        let weights = [0.5, -1.0];
+        let bound = g.morphed_bound(g.local_aabb(), &weights);
+        // 0.5 a spans (0, 0, -0.5)..(0.25, 1, 0); -b spans (0, 0, -3)..(2, 0.5, 0).
+        assert_eq!(bound, Aabb::new(Vec3::new(-1.0, -1.0, -3.5), Vec3::new(3.25, 2.5, 0.0)));
+        for (i, v) in g.vertices().iter().enumerate() {
+            let moved =
+                g.morph_targets().iter().zip(weights).fold(Vec3::from(v.position), |p, (t, w)| p + t.positions[i] * w);
+            assert!(moved.cmpge(bound.min).all() && moved.cmple(bound.max).all(), "vertex {i} at {moved}");
+        }
+        // Missing weights are zero; no weights leave the bound as it is.
+        let first_only = g.morphed_bound(g.local_aabb(), &[2.0]);
+        assert_eq!(first_only, Aabb::new(Vec3::new(-1.0, -1.0, -2.0), Vec3::new(2.0, 5.0, 0.0)));
+        assert_eq!(g.morphed_bound(g.local_aabb(), &[]), g.local_aabb());
+    }
+
+    #[test]
+    fn morph_records_hold_each_targets_deltas_in_vertex_order() {
+        let g = morphed_quad();
+        let records = g.morph_records();
+        assert_eq!(records.len(), 8);
+        let t = g.morph_targets();
+        for (i, r) in records.iter().enumerate() {
+            let (target, vertex) = (&t[i / 4], i % 4);
+            assert_eq!(Vec3::from(r.position), target.positions[vertex], "record {i}");
+            let normal = target.normals.as_ref().map_or(Vec3::ZERO, |n| n[vertex]);
+            assert_eq!(Vec3::from(r.normal), normal, "record {i}");
+            assert_eq!(r.uv, [0.0, 0.0]);
+        }
+        assert_eq!(records[6].normal, [1.0, 0.0, 0.0]);
+        assert!(Geometry::quad(1.0).morph_records().is_empty());
+    }
+
+    #[test]
+    fn vertex_domain_records_count_vertices_targets_attributes_and_skin() {
+        let skin = vec![SkinWeights::new([0; 4], [1.0, 0.0, 0.0, 0.0]); 4];
+        assert_eq!(Geometry::quad(1.0).vertex_domain_records(), 4);
+        assert_eq!(morphed_quad().vertex_domain_records(), 4 * 3);
+        assert_eq!(Geometry::quad(1.0).with_skin_weights(skin.clone()).unwrap().vertex_domain_records(), 4 * 2);
+        let everything = morphed_quad()
+            .with_attributes(vec![VertexAttributes::default(); 4])
+            .unwrap()
+            .with_skin_weights(skin)
+            .unwrap();
+        assert_eq!(everything.vertex_domain_records(), 4 * 5);
+        let single = Geometry::quad(1.0).with_morph_targets(vec![target(vec![Vec3::X; 4], None)]).unwrap();
+        assert_eq!(single.vertex_domain_records(), 4 * 2);
+    }
 }

@@ -200,4 +200,134 @@ mod tests {
         assert_eq!(b.min, Vec3::ONE);
         assert!(!b.is_empty());
     }
+
+    /// A box with distinct, non-unit sizes per axis, so that a centre or
+    /// extent computed with the wrong operator cannot land on the right value.
+    fn lopsided_box() -> Aabb {
+        Aabb::new(Vec3::new(2.0, 1.0, 3.0), Vec3::new(-1.0, -2.0, -0.5))
+    }
+
+    /// A matrix that swaps x and y, scales each axis differently and moves
+    /// the box: every entry is a small integer, so the transformed bound is
+    /// exact in f32 and f64.
+    fn axis_permuting_matrix() -> [[f64; 4]; 4] {
+        [[0.0, 2.0, 0.0, 0.0], [-3.0, 0.0, 0.0, 0.0], [0.0, 0.0, 4.0, 0.0], [10.0, -4.0, 2.0, 1.0]]
+    }
+
+    #[test]
+    fn centre_and_half_extents_of_a_box() {
+        let b = lopsided_box();
+        assert_eq!(b.center(), Vec3::new(0.5, -0.5, 1.25));
+        assert_eq!(b.half_extents(), Vec3::new(1.5, 1.5, 1.75));
+        assert_eq!(Aabb::from_center_half_extents(b.center(), b.half_extents()), b);
+    }
+
+    #[test]
+    fn corners_are_listed_x_fastest_then_y_then_z() {
+        let c = lopsided_box().corners();
+        let (lo, hi) = (Vec3::new(-1.0, -2.0, -0.5), Vec3::new(2.0, 1.0, 3.0));
+        for (i, corner) in c.iter().enumerate() {
+            let pick = |bit: usize, a: f32, b: f32| if i & bit == 0 { a } else { b };
+            let expected = Vec3::new(pick(1, lo.x, hi.x), pick(2, lo.y, hi.y), pick(4, lo.z, hi.z));
+            assert_eq!(*corner, expected, "corner {i}");
+        }
+    }
+
+    #[test]
+    fn finite_only_when_both_corners_are() {
+        assert!(lopsided_box().is_finite());
+        // One bad corner is enough; the never-grown empty box has two.
+        let inf_max = Aabb { min: Vec3::ZERO, max: Vec3::new(1.0, f32::INFINITY, 1.0) };
+        let nan_min = Aabb { min: Vec3::new(f32::NAN, 0.0, 0.0), max: Vec3::ONE };
+        assert!(!inf_max.is_finite());
+        assert!(!nan_min.is_finite());
+        assert!(!Aabb::EMPTY.is_finite());
+    }
+
+    #[test]
+    fn transformed_box_is_the_exact_bound_of_an_axis_permuting_transform() {
+        let m = Mat4::from_cols_array_2d(&axis_permuting_matrix().map(|c| c.map(|x| x as f32)));
+        // x' = -3y + 10, y' = 2x - 4, z' = 4z + 2 over the box's ranges.
+        let expected = Aabb::new(Vec3::new(7.0, -6.0, 0.0), Vec3::new(16.0, 0.0, 14.0));
+        assert_eq!(lopsided_box().transformed(&m), expected);
+        assert_eq!(Aabb::from_points(lopsided_box().corners().map(|c| m.transform_point3(c))), expected);
+    }
+
+    #[test]
+    fn transformed_box_is_tight_around_the_transformed_corners() {
+        let b = lopsided_box();
+        let m = Mat4::from_scale_rotation_translation(
+            Vec3::new(2.0, -1.0, 0.5),
+            glam::Quat::from_euler(glam::EulerRot::XYZ, 0.3, 1.1, -0.7),
+            Vec3::new(10.0, -4.0, 2.0),
+        );
+        // The centre/extent form is exact, not only conservative: it equals
+        // the corners' bound up to f32 rounding (measured 1e-6, one ulp of
+        // coordinates below 16); 1e-5 allows about ten ulps.
+        let t = b.transformed(&m);
+        let corners = Aabb::from_points(b.corners().map(|c| m.transform_point3(c)));
+        assert!((t.min - corners.min).abs().max_element() < 1e-5, "{t:?} vs {corners:?}");
+        assert!((t.max - corners.max).abs().max_element() < 1e-5, "{t:?} vs {corners:?}");
+    }
+
+    #[test]
+    fn f64_transformed_box_is_the_exact_bound_of_an_axis_permuting_transform() {
+        let m = DMat4::from_cols_array_2d(&axis_permuting_matrix());
+        let t = DAabb::transformed(&lopsided_box(), &m);
+        assert_eq!(t, DAabb::new(DVec3::new(7.0, -6.0, 0.0), DVec3::new(16.0, 0.0, 14.0)));
+    }
+
+    #[test]
+    fn f64_transformed_box_keeps_sub_unit_sizes_ten_million_units_out() {
+        let b = lopsided_box();
+        let rotation = glam::DQuat::from_euler(glam::EulerRot::XYZ, 0.3, 1.1, -0.7);
+        let m = DMat4::from_scale_rotation_translation(
+            DVec3::new(2.0, -1.0, 0.5),
+            rotation,
+            DVec3::new(1e7 + 0.25, -3e7, 0.5),
+        );
+        let t = DAabb::transformed(&b, &m);
+        let mut corners = DAabb::new(m.transform_point3(b.min.as_dvec3()), m.transform_point3(b.min.as_dvec3()));
+        for c in b.corners() {
+            let p = m.transform_point3(c.as_dvec3());
+            corners = corners.union(DAabb::new(p, p));
+        }
+        // Measured within 1e-15; an f64 ulp at 3e7 is 3.7e-9, so 1e-7 allows
+        // about 25 ulps, and is still ten million times finer than the f32
+        // step there (2 units).
+        assert!((t.min - corners.min).abs().max_element() < 1e-7, "{t:?} vs {corners:?}");
+        assert!((t.max - corners.max).abs().max_element() < 1e-7, "{t:?} vs {corners:?}");
+    }
+
+    #[test]
+    fn f64_centre_and_half_extents_are_exact_far_from_the_origin() {
+        // Quarter units ten million out: f32 would round them to whole units.
+        let b = DAabb::new(DVec3::new(1e7 + 0.75, -3e7 + 1.5, 0.5), DVec3::new(1e7 + 0.25, -3e7, 0.125));
+        assert_eq!(b.center(), DVec3::new(1e7 + 0.5, -3e7 + 0.75, 0.3125));
+        assert_eq!(b.half_extents(), DVec3::new(0.25, 0.75, 0.1875));
+    }
+
+    #[test]
+    fn f64_box_is_finite_only_when_both_corners_are() {
+        assert!(DAabb::new(DVec3::splat(-1e300), DVec3::splat(1e300)).is_finite());
+        let inf_max = DAabb { min: DVec3::ZERO, max: DVec3::new(1.0, 1.0, f64::INFINITY) };
+        let nan_min = DAabb { min: DVec3::new(0.0, f64::NAN, 0.0), max: DVec3::ONE };
+        assert!(!inf_max.is_finite());
+        assert!(!nan_min.is_finite());
+    }
+
+    #[test]
+    fn f64_box_with_f32_exact_corners_rounds_to_itself() {
+        // Outward rounding only moves a corner that f32 cannot hold: one
+        // already in f32 stays put, including far out where a step is 2.
+        for (min, max) in [
+            (DVec3::new(-1.5, 0.0, 1e7), DVec3::new(2.25, 3.0, 1e7 + 1.0)),
+            (DVec3::new(-3e7, 1e-3f32 as f64, -0.0), DVec3::new(3e7 + 2.0, 0.1f32 as f64, 0.0)),
+        ] {
+            let b = DAabb::new(min, max);
+            let rounded = b.to_f32_outward();
+            assert_eq!(rounded.min.as_dvec3(), b.min, "{b:?}");
+            assert_eq!(rounded.max.as_dvec3(), b.max, "{b:?}");
+        }
+    }
 }

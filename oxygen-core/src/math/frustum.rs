@@ -175,4 +175,64 @@ mod tests {
             assert!(f.intersects_sphere(&Sphere::from_aabb(&b)));
         }
     }
+
+    #[test]
+    fn a_normal_of_length_1e_minus_12_counts_as_degenerate() {
+        // sqrt(x * x) == x exactly in binary floating point, so these rows'
+        // normals are exactly at the threshold, which is exclusive.
+        assert_eq!(Plane::from_row(Vec4::new(1e-12, 0.0, 0.0, 1.0)), Plane::KEEP_ALL);
+        assert_eq!(Plane::from_row_f64(DVec4::new(0.0, 1e-12, 0.0, 1.0)), Plane::KEEP_ALL);
+        // Twice as long is a real plane, however far from the origin.
+        assert_eq!(Plane::from_row(Vec4::new(2e-12, 0.0, 0.0, 1e-12)), Plane { normal: Vec3::X, d: 0.5 });
+        // Through the origin: d is the slack alone, 8 eps (|0| + 1).
+        let p = Plane::from_row_f64(DVec4::new(0.0, 2e-12, 0.0, 0.0));
+        assert_eq!(p, Plane { normal: Vec3::Y, d: 8.0 * f32::EPSILON });
+    }
+
+    #[test]
+    fn f64_rows_without_a_usable_normal_keep_everything() {
+        for row in [
+            DVec4::ZERO,
+            DVec4::new(0.0, 0.0, 0.0, 5.0),
+            DVec4::new(f64::NAN, 1.0, 0.0, 0.0),
+            DVec4::new(1.0, f64::INFINITY, 0.0, 0.0),
+            DVec4::new(1e300, 1e300, 0.0, 0.0), // length overflows to infinity
+        ] {
+            assert_eq!(Plane::from_row_f64(row), Plane::KEEP_ALL, "{row}");
+        }
+    }
+
+    #[test]
+    fn f64_plane_of_a_known_row_is_normalized_and_moved_out_by_its_slack() {
+        // |(3, 0, 4)| = 5: normal (0.6, 0, 0.8), d = 10 / 5 = 2, slack
+        // 8 eps (|2| + 1) = 24 eps, twelve f32 steps at 2 (exact in f32).
+        let p = Plane::from_row_f64(DVec4::new(3.0, 0.0, 4.0, 10.0));
+        assert_eq!(p.normal, Vec3::new(0.6, 0.0, 0.8));
+        assert_eq!(p.d, 2.0 + 24.0 * f32::EPSILON);
+        // A negative offset is moved the same way, towards keeping more.
+        let q = Plane::from_row_f64(DVec4::new(0.0, -6.0, 8.0, -20.0));
+        assert_eq!(q.normal, Vec3::new(0.0, -0.6, 0.8));
+        assert_eq!(q.d, -2.0 + 24.0 * f32::EPSILON);
+        // Near the origin the slack is 8 eps: a point on the exact plane
+        // is inside by about that much.
+        let r = Plane::from_row_f64(DVec4::new(0.0, 0.0, -2.0, 0.0));
+        assert_eq!(r, Plane { normal: Vec3::NEG_Z, d: 8.0 * f32::EPSILON });
+    }
+
+    #[test]
+    fn f64_frustum_matches_the_f32_one_near_the_origin_and_is_never_tighter() {
+        let view = Mat4::look_at_rh(Vec3::new(1.0, 2.0, 3.0), Vec3::new(0.0, 0.0, -5.0), Vec3::Y);
+        let proj = reverse_z_perspective(70f32.to_radians(), 1.5, 0.1, Some(100.0));
+        let vp = proj * view;
+        let f32_planes = Frustum::from_view_projection(&vp).planes;
+        let f64_planes = Frustum::from_view_projection_f64(&vp.as_dmat4()).planes;
+        for (i, (a, b)) in f32_planes.iter().zip(&f64_planes).enumerate() {
+            // The two extractions differ by f32 rounding of the normal (an
+            // ulp or two near 1) and by the f64 path's slack of eight
+            // epsilons of |d| + 1 (below 1e-4 for |d| < 100).
+            assert!((a.normal - b.normal).abs().max_element() < 1e-6, "plane {i}: {a:?} vs {b:?}");
+            let slack = 8.0 * f32::EPSILON * (b.d.abs() + 1.0);
+            assert!(b.d >= a.d && b.d - a.d < 2.0 * slack, "plane {i}: {a:?} vs {b:?}");
+        }
+    }
 }
