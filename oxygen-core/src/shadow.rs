@@ -261,4 +261,111 @@ mod tests {
             }
         }
     }
+
+    fn view_of(camera: Camera, eye: Vec3) -> ResolvedView {
+        let resolver = LookAtResolver {
+            camera,
+            eye,
+            target: eye + Vec3::new(0.2, -0.3, -1.0),
+            up: Vec3::Y,
+            viewport: UVec2::new(1280, 720),
+        };
+        resolver
+            .resolve(
+                &ViewContext { view_id: ViewIds::default().allocate(), frame_index: 1, time_seconds: 0.0 },
+                &Scene::new(),
+            )
+            .unwrap()
+    }
+
+    /// Each corner seen through the camera lands on a corner of the screen
+    /// (NDC ±1, ±1) at the slice's near or far distance, and together the
+    /// eight cover all eight combinations once. Their order is not checked:
+    /// `fit_cascade` only sums them and takes the largest distance.
+    #[test]
+    fn slice_corners_are_the_frustum_corners_at_both_slice_distances() {
+        let cameras =
+            [Camera::perspective(50f32.to_radians(), 0.1, Some(200.0)), Camera::orthographic(7.5, -2.0, 60.0)];
+        for camera in cameras {
+            let view = view_of(camera, Vec3::new(4.0, 12.0, -3.0));
+            let (d0, d1) = (2.5, 17.0);
+            let mut seen = Vec::new();
+            for corner in slice_corners(&view, d0, d1) {
+                let in_view = view.world_to_view.transform_point3(corner);
+                let clip = view.projection.as_dmat4() * in_view.extend(1.0);
+                let (ndc_x, ndc_y) = (clip.x / clip.w, clip.y / clip.w);
+                // The f64 round trip through the inverse view keeps ~1e-12;
+                // 1e-5 leaves room for the f32 projection matrix.
+                assert!((ndc_x.abs() - 1.0).abs() < 1e-5 && (ndc_y.abs() - 1.0).abs() < 1e-5, "{camera:?}: {corner}");
+                let depth = -in_view.z;
+                let far = (depth - f64::from(d1)).abs() < 1e-9;
+                assert!(far || (depth - f64::from(d0)).abs() < 1e-9, "{camera:?}: depth {depth}");
+                seen.push((ndc_x > 0.0, ndc_y > 0.0, far));
+            }
+            seen.sort();
+            seen.dedup();
+            assert_eq!(seen.len(), 8, "{camera:?}: corners repeat: {seen:?}");
+        }
+    }
+
+    #[test]
+    fn no_cascade_is_fitted_to_an_empty_depth_range_or_past_the_cascade_count() {
+        let camera = camera_at(Vec3::new(0.0, 5.0, 0.0));
+        let light = Vec3::new(-0.4, -1.0, -0.3);
+        let settings = CascadeSettings::default();
+        assert!(fit_cascade(&camera, light, &settings, settings.count - 1).is_some());
+        assert!(fit_cascade(&camera, light, &settings, settings.count).is_none(), "index past the count");
+        let six = CascadeSettings { count: 6, ..settings };
+        assert!(fit_cascade(&camera, light, &six, 4).is_none(), "the count is capped at 4");
+        // Shadows ending exactly at the near plane leave nothing to cover.
+        let at_near = CascadeSettings { max_distance: camera.near, ..settings };
+        assert!(fit_cascade(&camera, light, &at_near, 0).is_none(), "an empty range");
+        let before_near = CascadeSettings { max_distance: camera.near * 0.5, ..settings };
+        assert!(fit_cascade(&camera, light, &before_near, 0).is_none(), "a reversed range");
+    }
+
+    /// The box's half-side is the slice's bounding radius rounded up to a
+    /// sixteenth; the texel size, the projection and the depth all follow it.
+    #[test]
+    fn a_cascade_box_is_the_bounding_sphere_rounded_up_to_a_sixteenth() {
+        let camera = camera_at(Vec3::new(3.0, 10.0, 5.0));
+        let settings = CascadeSettings { resolution: 1024, caster_margin: 30.0, ..Default::default() };
+        for index in 0..settings.count {
+            let c = fit_cascade(&camera, Vec3::new(-0.4, -1.0, -0.3), &settings, index).expect("a valid cascade");
+            let corners = slice_corners(&camera, c.split_near, c.split_far);
+            let center = corners.iter().copied().sum::<DVec3>() / 8.0;
+            let bound = corners.iter().map(|p| p.distance(center)).fold(0.0, f64::max);
+            // orthographic_rh's x scale is 2 / (right − left) = 1 / half-side.
+            let radius = 1.0 / f64::from(c.projection.x_axis.x);
+            // f32 matrix entries: a few ulps of a radius of up to ~50.
+            assert!(((radius * 16.0).round() - radius * 16.0).abs() < 1e-4, "cascade {index}: radius {radius}");
+            assert!(radius >= bound - 1e-5 && radius < bound + 1.0 / 16.0, "cascade {index}: {radius} for {bound}");
+            let texel = 2.0 * radius / 1024.0;
+            assert!((f64::from(c.texel_world_size) - texel).abs() < 1e-6 * texel, "cascade {index}");
+            let depth = 2.0 * radius + 30.0;
+            assert!((f64::from(c.depth) - depth).abs() < 1e-5 * depth, "cascade {index}: depth {}", c.depth);
+        }
+    }
+
+    /// A light straight down is parallel to the usual up vector (+Y); the
+    /// fit must pick another and still enclose the slice.
+    #[test]
+    fn a_vertical_light_still_gets_a_box_around_its_slice() {
+        let camera = camera_at(Vec3::new(3.0, 10.0, 5.0));
+        let settings = CascadeSettings { max_distance: 40.0, ..Default::default() };
+        for light in [Vec3::NEG_Y, Vec3::Y, Vec3::new(0.05, -1.0, 0.0)] {
+            for index in 0..settings.count {
+                let c = fit_cascade(&camera, light, &settings, index).expect("a vertical light is not degenerate");
+                assert!(c.view.is_finite(), "light {light}, cascade {index}: {:?}", c.view);
+                let clip_from_world = c.projection.as_dmat4() * c.view;
+                for corner in slice_corners(&camera, c.split_near, c.split_far) {
+                    let ndc = clip_from_world.project_point3(corner);
+                    assert!(
+                        ndc.x.abs() <= 1.0 + 1e-4 && ndc.y.abs() <= 1.0 + 1e-4 && (-1e-4..=1.0 + 1e-4).contains(&ndc.z),
+                        "light {light}, cascade {index} misses {corner}: {ndc}"
+                    );
+                }
+            }
+        }
+    }
 }

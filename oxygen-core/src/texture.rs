@@ -178,3 +178,74 @@ impl TextureImage {
         &self.pixels
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The renderer's sampler table and location records index by these
+    /// numbers, so they are part of the contract, not an implementation detail.
+    #[test]
+    fn wrap_modes_number_repeat_clamp_mirror_as_0_1_2() {
+        assert_eq!(Wrap::Repeat.index(), 0);
+        assert_eq!(Wrap::ClampToEdge.index(), 1);
+        assert_eq!(Wrap::MirroredRepeat.index(), 2);
+    }
+
+    #[test]
+    fn the_sampler_table_index_is_wrap_times_two_plus_nearest_and_ignores_wrap_v() {
+        let expected = [
+            (Wrap::Repeat, Filter::Linear, 0),
+            (Wrap::Repeat, Filter::Nearest, 1),
+            (Wrap::ClampToEdge, Filter::Linear, 2),
+            (Wrap::ClampToEdge, Filter::Nearest, 3),
+            (Wrap::MirroredRepeat, Filter::Linear, 4),
+            (Wrap::MirroredRepeat, Filter::Nearest, 5),
+        ];
+        for (wrap, filter, index) in expected {
+            assert_eq!(Sampling::new(wrap, filter).table_index(), index, "{wrap:?} {filter:?}");
+            // v wrapping differently is the shader's business: the entry follows u.
+            let mixed = Sampling { wrap_u: wrap, wrap_v: Wrap::MirroredRepeat, filter };
+            assert_eq!(mixed.table_index(), index, "{wrap:?} {filter:?} with mirrored v");
+        }
+    }
+
+    /// 5 texels in cells of 5 / 2 = 2: the last column and row start a third
+    /// cell that continues the alternation.
+    #[test]
+    fn a_checker_alternates_cells_of_size_over_cells_texels_up_to_the_last_texel() {
+        let (a, b) = ([255, 0, 0, 255], [0, 0, 255, 255]);
+        let image = TextureImage::checker("checker", 5, 2, a, b);
+        assert_eq!((image.width(), image.height()), (5, 5));
+        assert_eq!(image.color_space(), ColorSpace::Srgb);
+        let rows = ["aabba", "aabba", "bbaab", "bbaab", "aabba"];
+        for (y, row) in rows.iter().enumerate() {
+            for (x, cell) in row.chars().enumerate() {
+                let at = (y * 5 + x) * 4;
+                let want = if cell == 'a' { a } else { b };
+                assert_eq!(image.pixels()[at..at + 4], want, "texel ({x}, {y})");
+            }
+        }
+    }
+
+    #[test]
+    fn an_image_reports_what_it_was_built_from() {
+        let pixels: Vec<u8> = (0..3 * 2 * 4).collect();
+        let image = TextureImage::new("bricks", 3, 2, ColorSpace::Linear, pixels.clone()).expect("valid image");
+        assert_eq!(image.name(), "bricks");
+        assert_eq!((image.width(), image.height()), (3, 2));
+        assert_eq!(image.color_space(), ColorSpace::Linear);
+        assert_eq!(image.pixels(), pixels.as_slice());
+        assert_eq!(image.sampling(), Sampling::default());
+    }
+
+    #[test]
+    fn with_sampling_replaces_the_sampling_and_keeps_the_texels() {
+        let image = TextureImage::checker("checker", 4, 2, [0; 4], [255; 4]);
+        let sampling = Sampling { wrap_u: Wrap::ClampToEdge, wrap_v: Wrap::MirroredRepeat, filter: Filter::Nearest };
+        let resampled = image.clone().with_sampling(sampling);
+        assert_eq!(resampled.sampling(), sampling);
+        assert_eq!(resampled.pixels(), image.pixels());
+        assert_eq!(resampled.name(), "checker");
+    }
+}
