@@ -84,7 +84,9 @@ fn fs_ggx(v: Varying) -> @location(0) vec4<f32> {
     let n = normalize(cube_face_point(v.layer, v.uv));
     let alpha = max(params.roughness * params.roughness, 1e-4);
     let a2 = alpha * alpha;
-    var t = vec3<f32>(1.0, 0.0, 0.0);
+    // The CPU prefilter's frame (oxygen_core::environment): X × n near ±Y,
+    // which stays perpendicular to n there as a fixed X does not.
+    var t = normalize(cross(vec3<f32>(1.0, 0.0, 0.0), n));
     if abs(n.y) < 0.999 {
         t = normalize(cross(vec3<f32>(0.0, 1.0, 0.0), n));
     }
