@@ -463,6 +463,8 @@ impl ViewResolver for DLookAtResolver {
 
 #[cfg(test)]
 mod tests {
+    use glam::Vec4;
+
     use super::*;
 
     #[test]
@@ -599,5 +601,264 @@ mod tests {
         .resolve(&ctx(), &Scene::new())
         .unwrap();
         assert_eq!(v.relative_to(DVec3::ZERO), v);
+    }
+
+    /// A camera near the origin looking at it, `viewport` pixels.
+    fn look_at(viewport: UVec2) -> LookAtResolver {
+        LookAtResolver {
+            camera: Camera::perspective(1.0, 0.1, Some(100.0)),
+            eye: Vec3::new(1.0, 2.0, 3.0),
+            target: Vec3::ZERO,
+            up: Vec3::Y,
+            viewport,
+        }
+    }
+
+    /// Where the far-out f64 tests put their cameras.
+    const FAR_OUT: DVec3 = DVec3::new(3e7, -1e6, 3e7);
+
+    fn d_look_at(eye: DVec3, target: DVec3, up: Vec3) -> DLookAtResolver {
+        DLookAtResolver {
+            camera: Camera::perspective(1.0, 0.01, Some(100.0)),
+            eye,
+            target,
+            up,
+            viewport: UVec2::new(64, 32),
+        }
+    }
+
+    fn max_difference(a: Mat4, b: Mat4) -> f32 {
+        (a - b).abs().to_cols_array().into_iter().fold(0.0, f32::max)
+    }
+
+    /// The largest entry difference over the largest entry of `b`.
+    fn relative_difference(a: Mat4, b: Mat4) -> f32 {
+        max_difference(a, b) / b.abs().to_cols_array().into_iter().fold(0.0, f32::max)
+    }
+
+    #[test]
+    fn both_look_ats_project_with_the_viewport_aspect() {
+        let r = look_at(UVec2::new(64, 32));
+        let v = r.resolve(&ctx(), &Scene::new()).unwrap();
+        assert_eq!(v.aspect(), 2.0);
+        assert_eq!(v.viewport, UVec2::new(64, 32));
+        assert_eq!(v.projection, r.camera.projection_matrix(2.0).unwrap());
+        assert_eq!((v.near, v.far), (0.1, 100.0));
+
+        let d = d_look_at(FAR_OUT + r.eye.as_dvec3(), FAR_OUT, Vec3::Y);
+        let dv = d.resolve(&ctx(), &Scene::new()).unwrap();
+        assert_eq!(dv.aspect(), 2.0);
+        assert_eq!(dv.projection, d.camera.projection_matrix(2.0).unwrap());
+    }
+
+    #[test]
+    fn an_empty_viewport_is_refused_as_empty_on_every_path() {
+        let good = look_at(UVec2::new(8, 8)).resolve(&ctx(), &Scene::new()).unwrap();
+        for size in [UVec2::new(0, 8), UVec2::new(8, 0)] {
+            let empty = Err(ViewError::EmptyViewport { view: ctx().view_id, width: size.x, height: size.y });
+            assert_eq!(look_at(size).resolve(&ctx(), &Scene::new()), empty);
+            let d = DLookAtResolver { viewport: size, ..d_look_at(FAR_OUT + DVec3::Z, FAR_OUT, Vec3::Y) };
+            assert_eq!(d.resolve(&ctx(), &Scene::new()), empty);
+            assert_eq!(ResolvedView::new(good.view_id, good.view, good.projection, size, 0.1, 100.0), empty);
+            assert_eq!(good.with_viewport(size), empty);
+        }
+    }
+
+    #[test]
+    fn a_resized_view_keeps_its_pose_and_vertical_extent() {
+        let small = look_at(UVec2::new(64, 32)).resolve(&ctx(), &Scene::new()).unwrap();
+        let resized = small.with_viewport(UVec2::new(96, 64)).unwrap();
+        let direct = look_at(UVec2::new(96, 64)).resolve(&ctx(), &Scene::new()).unwrap();
+        assert_eq!(resized.viewport, UVec2::new(96, 64));
+        assert_eq!(resized.aspect(), 1.5);
+        assert_eq!((resized.world_to_view, resized.view), (direct.world_to_view, direct.view));
+        assert_eq!((resized.near, resized.far), (direct.near, direct.far));
+        // The scale 4/3 is rounded to f32 once and each scaled entry once
+        // more; measured 0, the bound (about 8 ulps of the largest entry,
+        // 1.83) leaves room for another rounding order.
+        let e = max_difference(resized.projection, direct.projection);
+        assert!(e <= 1e-6, "projection differs by {e}");
+    }
+
+    #[test]
+    fn a_resized_view_scales_the_whole_first_row_of_any_projection() {
+        // An off-centre, sheared and shifted projection (a jittered or
+        // tiled one): every entry of its first row is non-zero.
+        let mut projection = Camera::perspective(1.0, 0.1, Some(100.0)).projection_matrix(2.0).unwrap();
+        projection.y_axis.x = 0.05;
+        projection.z_axis.x = 0.1;
+        projection.w_axis.x = 0.2;
+        let view = Mat4::look_at_rh(Vec3::new(1.0, 2.0, 3.0), Vec3::ZERO, Vec3::Y);
+        let v = ResolvedView::new(fourth_id(), view, projection, UVec2::new(64, 32), 0.1, 100.0).unwrap();
+        let resized = v.with_viewport(UVec2::new(96, 64)).unwrap();
+        // Old aspect 2 over new aspect 1.5.
+        let k = 4.0 / 3.0;
+        let (got, expected) = (resized.projection.row(0), projection.row(0) * k);
+        // As above: measured 0, a few ulps allowed.
+        assert!((got - expected).abs().max_element() <= 1e-6, "{got} against {expected}");
+        for i in 1..4 {
+            assert_eq!(resized.projection.row(i), projection.row(i));
+        }
+        assert_eq!(resized.view, v.view);
+    }
+
+    #[test]
+    fn non_finite_matrices_are_refused_naming_which() {
+        let view = DMat4::look_at_rh(DVec3::new(1.0, 2.0, 3.0), DVec3::ZERO, DVec3::Y);
+        let projection = Camera::perspective(1.0, 0.1, Some(100.0)).projection_matrix(1.0).unwrap();
+        let resolve = |view: DMat4, projection: Mat4| {
+            ResolvedView::new_f64(fourth_id(), view, projection, UVec2::new(8, 8), 0.1, 100.0)
+        };
+        let refused = |which| Err(ViewError::NonFiniteMatrix { view: fourth_id(), which });
+        let mut nan_projection = projection;
+        nan_projection.z_axis.w = f32::NAN;
+        assert_eq!(resolve(view, nan_projection), refused("projection"));
+        // Finite in f64, past f32's range once rounded.
+        let beyond_f32 = DMat4::from_scale(DVec3::splat(1e39)) * view;
+        assert_eq!(resolve(beyond_f32, projection), refused("view"));
+        assert!(resolve(view, projection).is_ok());
+    }
+
+    #[test]
+    fn a_view_projection_needs_a_normal_finite_determinant() {
+        let resolve = |projection: Mat4| {
+            ResolvedView::new_f64(fourth_id(), DMat4::IDENTITY, projection, UVec2::new(8, 8), 0.1, 100.0)
+        };
+        let singular = Err(ViewError::SingularViewProjection { view: fourth_id() });
+        assert_eq!(resolve(Mat4::ZERO), singular);
+        // Powers of two, so the determinant is exact: 2^-126, the smallest
+        // normal f32, is refused (the bound is exclusive); 2^-125 is not.
+        let power = |e: i32| 2f32.powi(e);
+        let at = Mat4::from_diagonal(Vec4::new(power(-32), power(-32), power(-31), power(-31)));
+        assert_eq!(at.determinant(), f32::MIN_POSITIVE);
+        assert_eq!(resolve(at), singular);
+        let above = Mat4::from_diagonal(Vec4::new(power(-32), power(-32), power(-30), power(-31)));
+        assert_eq!(above.determinant(), 2.0 * f32::MIN_POSITIVE);
+        assert!(resolve(above).is_ok());
+        // Every entry finite but the determinant overflows: its inverse
+        // would come out as all zeros.
+        let huge = Mat4::from_diagonal(Vec4::splat(1e10));
+        assert_eq!(huge.determinant(), f32::INFINITY);
+        assert_eq!(resolve(huge), singular);
+    }
+
+    #[test]
+    fn an_eye_beyond_f32_range_is_refused_even_when_the_matrices_fit() {
+        // World → view shrinks by 1e-10 and moves by 1e30: both fit f32,
+        // but the eye it implies lies 1e40 out.
+        let shift = DVec3::new(1e30, 0.0, 0.0);
+        let world_to_view = DMat4::from_translation(shift) * DMat4::from_scale(DVec3::splat(1e-10));
+        // A "projection" undoing the shift leaves an invertible diagonal
+        // view-projection, so only the eye is wrong.
+        let projection = Mat4::from_translation(-shift.as_vec3());
+        assert!((projection * world_to_view.as_mat4()).inverse().is_finite());
+        assert!(!world_to_view.inverse().w_axis.truncate().as_vec3().is_finite());
+        let v = ResolvedView::new_f64(fourth_id(), world_to_view, projection, UVec2::new(8, 8), 0.1, 100.0);
+        assert_eq!(v, Err(ViewError::SingularViewProjection { view: fourth_id() }));
+    }
+
+    #[test]
+    fn the_resolved_frustum_is_the_view_projections() {
+        let v = look_at(UVec2::new(64, 32)).resolve(&ctx(), &Scene::new()).unwrap();
+        let from_f32 = Frustum::from_view_projection(&v.view_projection);
+        for (a, b) in v.frustum.planes.iter().zip(&from_f32.planes) {
+            let (en, ed) = ((a.normal - b.normal).abs().max_element(), (a.d - b.d).abs() / b.d.abs().max(1.0));
+            // The f64 planes are widened outward by their f32 rounding
+            // bound: measured up to 6e-8 on normals and 1.5e-6 relative on
+            // distances; the bounds allow about 4x that. A plane of another
+            // matrix is off by order 1.
+            assert!(en <= 2.5e-7 && ed <= 6e-6, "{a:?} against {b:?}");
+        }
+        let around = |p: Vec3| crate::Aabb::new(p - 0.1, p + 0.1);
+        assert!(v.frustum.intersects_aabb(&around(Vec3::ZERO)));
+        assert!(!v.frustum.intersects_aabb(&around(Vec3::new(2.0, 4.0, 6.0))), "behind the eye");
+        assert!(!v.frustum.intersects_aabb(&around(Vec3::new(-300.0, 0.0, -300.0))), "past the far plane");
+    }
+
+    #[test]
+    fn a_view_relative_to_an_origin_is_the_same_view_shifted_in_f32_and_f64() {
+        let eye = DVec3::new(0.3, 0.2, 1.0);
+        let far = d_look_at(FAR_OUT + eye, FAR_OUT, Vec3::Y).resolve(&ctx(), &Scene::new()).unwrap();
+        let at_origin = d_look_at(eye, DVec3::ZERO, Vec3::Y).resolve(&ctx(), &Scene::new()).unwrap();
+        // f64 rounding of a pose 3e7 out (ulp 4e-9): measured 7.5e-9 and
+        // 9.7e-9 for the two eyes below, bound 5x that.
+        let e = (far.camera_position_f64() - (FAR_OUT + eye)).length();
+        assert!(e < 5e-8, "eye off by {e}");
+
+        let relative = far.relative_to(FAR_OUT);
+        let e = (relative.camera_position_f64() - eye).length();
+        assert!(e < 5e-8, "relative eye off by {e}");
+        for (which, a, b) in [
+            ("view", relative.view, at_origin.view),
+            ("view-projection", relative.view_projection, at_origin.view_projection),
+            ("inverse view-projection", relative.inverse_view_projection, at_origin.inverse_view_projection),
+        ] {
+            // f32 rounding of the same f64 matrices: measured up to 1.5e-7
+            // of the largest entry (the inverse's), bound about 3x that.
+            let e = relative_difference(a, b);
+            assert!(e <= 5e-7, "{which} differs by {e}");
+        }
+        assert_eq!((relative.projection, relative.viewport), (far.projection, far.viewport));
+    }
+
+    #[test]
+    fn the_pose_check_and_resolve_share_one_threshold_on_up() {
+        // Looking along +X with up (0, y, 0), |forward × up|² is y², and
+        // y = 1e-6 squares exactly to the f32 threshold 1e-12.
+        let at = Vec3::new(0.0, 1e-6, 0.0);
+        assert_eq!(Vec3::X.cross(at).length_squared(), 1e-12);
+        let above = Vec3::new(0.0, 1e-6_f32.next_up(), 0.0);
+        let base = LookAtResolver { eye: Vec3::ZERO, target: Vec3::X, ..look_at(UVec2::new(8, 8)) };
+        assert!(matches!(base.with_up(at), Err(CameraError::DegenerateLookAt { .. })));
+        let resolved = LookAtResolver { up: at, ..base }.resolve(&ctx(), &Scene::new());
+        assert!(matches!(resolved, Err(ViewError::DegenerateLookAt { .. })), "{resolved:?}");
+        let accepted = base.with_up(above).unwrap();
+        assert!(accepted.resolve(&ctx(), &Scene::new()).is_ok());
+    }
+
+    #[test]
+    fn an_eye_closer_to_its_target_than_f32_can_square_is_degenerate_whatever_the_up() {
+        // 1e-25 squared underflows f32 to 0; crossed with an up of 1e30 the
+        // forward direction would look long enough (1e10 squared).
+        let target = Vec3::new(1e-25, 0.0, 0.0);
+        let huge_up = Vec3::new(0.0, 1e30, 0.0);
+        assert_eq!(target.length_squared(), 0.0);
+        assert!(target.cross(huge_up).length_squared() > 1e-12);
+        let r = LookAtResolver { eye: Vec3::ZERO, target, up: huge_up, ..look_at(UVec2::new(8, 8)) };
+        assert!(matches!(r.resolve(&ctx(), &Scene::new()), Err(ViewError::DegenerateLookAt { .. })));
+        let r = LookAtResolver { up: Vec3::Y, ..r };
+        assert!(matches!(r.with_up(huge_up), Err(CameraError::DegenerateLookAt { .. })));
+    }
+
+    #[test]
+    fn a_look_at_along_its_up_is_degenerate_not_a_nan() {
+        let r = LookAtResolver { eye: Vec3::new(0.0, 5.0, 0.0), target: Vec3::ZERO, ..look_at(UVec2::new(8, 8)) };
+        assert!(matches!(r.resolve(&ctx(), &Scene::new()), Err(ViewError::DegenerateLookAt { .. })));
+        let d = d_look_at(FAR_OUT + DVec3::Y * 5.0, FAR_OUT, Vec3::Y);
+        let err = d.resolve(&ctx(), &Scene::new()).unwrap_err();
+        let expected = ViewError::DegenerateLookAt {
+            view: ctx().view_id,
+            eye: (FAR_OUT + DVec3::Y * 5.0).as_vec3(),
+            target: FAR_OUT.as_vec3(),
+            up: Vec3::Y,
+        };
+        assert_eq!(err, expected);
+        let d = d_look_at(FAR_OUT, FAR_OUT, Vec3::Y);
+        assert!(matches!(d.resolve(&ctx(), &Scene::new()), Err(ViewError::DegenerateLookAt { .. })));
+    }
+
+    #[test]
+    fn an_f64_look_at_refuses_an_up_at_its_threshold_and_takes_one_above() {
+        // Looking along +X exactly (3e7 + 1 is exact in f64) with up
+        // (0, y, z), |forward × up|² is z² + y². The f32 nearest 1e-6
+        // squares to 5.05e-21 short of the f64 threshold 1e-12; this
+        // z (7.1e-11) makes up the difference exactly.
+        let (eye, target) = (FAR_OUT, FAR_OUT + DVec3::X);
+        let at = Vec3::new(0.0, 1e-6, f32::from_bits(0x2e9c_4330));
+        assert_eq!((target - eye).normalize().cross(at.as_dvec3()).length_squared(), 1e-12);
+        let refused = d_look_at(eye, target, at).resolve(&ctx(), &Scene::new());
+        assert!(matches!(refused, Err(ViewError::DegenerateLookAt { .. })), "{refused:?}");
+        let above = Vec3::new(0.0, 2e-6, 0.0);
+        assert!(d_look_at(eye, target, above).resolve(&ctx(), &Scene::new()).is_ok());
     }
 }

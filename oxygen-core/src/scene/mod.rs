@@ -600,3 +600,353 @@ impl Scene {
         out.resolve(self);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use glam::{DVec3, Mat4, Vec3, Vec4};
+
+    use super::*;
+    use crate::{MAX_JOINTS, Submesh};
+
+    /// A key that named a node of `scene` once and names none now.
+    fn stale_key(scene: &mut Scene) -> NodeKey {
+        let key = scene.add_node("gone", Transform::IDENTITY);
+        scene.remove_node(key).unwrap();
+        key
+    }
+
+    /// The cube cut into two submeshes of three faces each.
+    fn two_part_cube() -> Geometry {
+        let cube = Geometry::cube(1.0);
+        let halves = vec![Submesh { first_index: 0, index_count: 18 }, Submesh { first_index: 18, index_count: 18 }];
+        Geometry::new("two-part", cube.vertices().to_vec(), cube.indices().to_vec(), halves).unwrap()
+    }
+
+    #[test]
+    fn node_ids_are_dense_in_insertion_order_and_name_their_node() {
+        let mut scene = Scene::new();
+        let keys: Vec<NodeKey> = (0..3).map(|i| scene.add_node(format!("n{i}"), Transform::IDENTITY)).collect();
+        let ids: Vec<u32> = keys.iter().map(|k| node_index(*k)).collect();
+        // Slot indices of a fresh table count up from the first one.
+        assert_eq!(ids, [ids[0], ids[0] + 1, ids[0] + 2]);
+        for (key, id) in keys.iter().zip(&ids) {
+            assert_eq!(scene.node_at_index(*id), Some(*key));
+        }
+        assert_eq!(scene.node_at_index(ids[2] + 1), None);
+        scene.remove_node(keys[1]).unwrap();
+        assert_eq!(scene.node_at_index(ids[1]), None, "a removed node's id names nothing");
+        assert_eq!(scene.node_at_index(ids[2]), Some(keys[2]));
+    }
+
+    #[test]
+    fn asset_ids_are_dense_per_kind() {
+        let mut scene = Scene::new();
+        let g = [scene.add_geometry(Geometry::cube(1.0)), scene.add_geometry(Geometry::quad(1.0))];
+        let m = [
+            scene.add_material(Material::opaque("a", Vec4::ONE)),
+            scene.add_material(Material::opaque("b", Vec4::ONE)),
+        ];
+        let t = [
+            scene.add_texture(TextureImage::checker("a", 4, 2, [0; 4], [255; 4])),
+            scene.add_texture(TextureImage::checker("b", 4, 2, [0; 4], [255; 4])),
+        ];
+        assert_eq!(geometry_index(g[1]), geometry_index(g[0]) + 1);
+        assert_eq!(material_index(m[1]), material_index(m[0]) + 1);
+        assert_eq!(texture_index(t[1]), texture_index(t[0]) + 1);
+    }
+
+    #[test]
+    fn added_assets_are_what_their_handles_return_and_each_add_is_an_edit() {
+        let mut scene = Scene::new();
+        let mut last = scene.revision();
+        let mut edited = |scene: &Scene| {
+            assert!(scene.revision() > last, "revision {} after {last}", scene.revision());
+            assert_eq!(scene.assets_revision(), scene.revision());
+            last = scene.revision();
+        };
+
+        let cube = scene.add_geometry(Geometry::cube(2.0));
+        edited(&scene);
+        assert_eq!(scene.geometry(cube).map(|g| g.as_ref()), Some(&Geometry::cube(2.0)));
+
+        let mut rough = Material::opaque("rough", Vec4::new(0.2, 0.4, 0.6, 1.0));
+        rough.metallic = f32::NAN;
+        let first = scene.add_material(rough.clone());
+        edited(&scene);
+        let second = scene.add_material(Material::opaque("second", Vec4::ONE));
+        edited(&scene);
+        assert_eq!(scene.material(first), Some(&rough.sanitized()), "stored sanitized");
+        assert_eq!(scene.material(first).unwrap().metallic, 0.0);
+        let listed: Vec<(MaterialHandle, &str)> = scene.materials().map(|(h, m)| (h, m.name.as_str())).collect();
+        assert_eq!(listed, [(first, "rough"), (second, "second")]);
+
+        let checker = TextureImage::checker("checker", 8, 2, [0, 0, 0, 255], [255; 4]);
+        let texture = scene.add_texture(checker.clone());
+        edited(&scene);
+        assert_eq!(scene.texture(texture).map(|t| t.as_ref()), Some(&checker));
+
+        // The null handle names no asset.
+        assert!(scene.geometry(GeometryHandle::default()).is_none());
+        assert!(scene.material(MaterialHandle::default()).is_none());
+        assert!(scene.texture(TextureHandle::default()).is_none());
+    }
+
+    #[test]
+    fn a_replaced_material_is_stored_sanitized_and_an_unknown_handle_is_refused() {
+        let mut scene = Scene::new();
+        let handle = scene.add_material(Material::opaque("old", Vec4::ONE));
+        let before = scene.revision();
+        let mut new = Material::opaque("new", Vec4::new(2.0, 0.5, 0.5, 1.0));
+        new.roughness = f32::INFINITY;
+        scene.set_material(handle, new.clone()).unwrap();
+        assert_eq!(scene.material(handle), Some(&new.sanitized()));
+        assert_eq!(scene.material(handle).unwrap().base_color.x, 1.0, "clamped");
+        assert!(scene.revision() > before);
+        assert_eq!(scene.assets_revision(), scene.revision());
+
+        let unknown = MaterialHandle::default();
+        assert_eq!(scene.set_material(unknown, new), Err(SceneError::NoSuchMaterial(unknown)));
+    }
+
+    #[test]
+    fn removing_a_node_takes_its_subtree_and_leaves_its_siblings() {
+        let mut scene = Scene::new();
+        let r1 = scene.add_node("r1", Transform::IDENTITY);
+        let r2 = scene.add_node("r2", Transform::IDENTITY);
+        let r3 = scene.add_node("r3", Transform::IDENTITY);
+        let c1 = scene.add_child(r1, "c1", Transform::IDENTITY).unwrap();
+        let c2 = scene.add_child(r1, "c2", Transform::IDENTITY).unwrap();
+        let g = scene.add_child(c1, "g", Transform::IDENTITY).unwrap();
+        assert_eq!(scene.node_count(), 6);
+
+        let before = scene.revision();
+        scene.remove_node(c1).unwrap();
+        assert!(scene.revision() > before);
+        assert_eq!(scene.node(r1).unwrap().children, [c2]);
+        assert!(scene.node(c1).is_none() && scene.node(g).is_none(), "the subtree goes too");
+
+        let before = scene.revision();
+        scene.remove_node(r2).unwrap();
+        assert!(scene.revision() > before, "removing a root is an edit too");
+        assert_eq!(scene.roots(), [r1, r3]);
+
+        assert_eq!(scene.node_count(), 3);
+        let left: Vec<(NodeKey, &str)> = scene.nodes().map(|(k, n)| (k, n.name.as_str())).collect();
+        assert_eq!(left, [(r1, "r1"), (r3, "r3"), (c2, "c2")]);
+        assert_eq!(scene.remove_node(c1), Err(SceneError::NoSuchNode(c1)));
+    }
+
+    #[test]
+    fn reparenting_moves_a_node_out_of_its_old_place_only() {
+        let mut scene = Scene::new();
+        let a = scene.add_node("a", Transform::IDENTITY);
+        let b = scene.add_node("b", Transform::IDENTITY);
+        let c = scene.add_node("c", Transform::IDENTITY);
+        let a1 = scene.add_child(a, "a1", Transform::IDENTITY).unwrap();
+        let a2 = scene.add_child(a, "a2", Transform::IDENTITY).unwrap();
+
+        scene.set_parent(a1, Some(b)).unwrap();
+        assert_eq!(scene.node(a).unwrap().children, [a2]);
+        assert_eq!(scene.node(b).unwrap().children, [a1]);
+        assert_eq!(scene.node(a1).unwrap().parent, Some(b));
+
+        scene.set_parent(c, Some(a)).unwrap();
+        assert_eq!(scene.roots(), [a, b]);
+        assert_eq!(scene.node(a).unwrap().children, [a2, c]);
+
+        scene.set_parent(a1, None).unwrap();
+        assert_eq!(scene.roots(), [a, b, a1]);
+        assert!(scene.node(b).unwrap().children.is_empty());
+
+        assert_eq!(scene.set_parent(a, Some(c)), Err(SceneError::Cycle { child: a, parent: c }));
+    }
+
+    #[test]
+    fn a_renderable_names_live_assets_and_one_material_per_submesh() {
+        let mut scene = Scene::new();
+        let geometry = scene.add_geometry(two_part_cube());
+        let m1 = scene.add_material(Material::opaque("m1", Vec4::ONE));
+        let m2 = scene.add_material(Material::opaque("m2", Vec4::ONE));
+        let node = scene.add_node("box", Transform::IDENTITY);
+        let good = Renderable { geometry, materials: vec![m1, m2] };
+        let before = scene.revision();
+        scene.set_renderable(node, good.clone()).unwrap();
+        assert_eq!(scene.node(node).unwrap().renderable, Some(good.clone()));
+        assert!(scene.node(node).unwrap().revision() > before);
+
+        let unknown_material = MaterialHandle::default();
+        let refused = |scene: &mut Scene, renderable: Renderable| scene.set_renderable(node, renderable).unwrap_err();
+        assert_eq!(
+            refused(&mut scene, Renderable { geometry, materials: vec![m1, unknown_material] }),
+            SceneError::NoSuchMaterial(unknown_material)
+        );
+        assert_eq!(
+            refused(&mut scene, Renderable { geometry: GeometryHandle::default(), materials: vec![m1, m2] }),
+            SceneError::NoSuchGeometry(GeometryHandle::default())
+        );
+        assert_eq!(
+            refused(&mut scene, Renderable { geometry, materials: vec![m1] }),
+            SceneError::MaterialCountMismatch {
+                node: "box".into(),
+                geometry: "two-part".into(),
+                given: 1,
+                submeshes: 2
+            }
+        );
+        assert_eq!(scene.node(node).unwrap().renderable, Some(good.clone()), "a refused edit changes nothing");
+        let stale = stale_key(&mut scene);
+        assert_eq!(scene.set_renderable(stale, good), Err(SceneError::NoSuchNode(stale)));
+    }
+
+    #[test]
+    fn a_skin_needs_one_finite_bind_matrix_per_joint_of_this_scene() {
+        let mut scene = Scene::new();
+        let mesh = scene.add_node("mesh", Transform::IDENTITY);
+        let j1 = scene.add_node("j1", Transform::IDENTITY);
+        let j2 = scene.add_child(j1, "j2", Transform::IDENTITY).unwrap();
+        let stale = stale_key(&mut scene);
+        let skin = |joints: Vec<NodeKey>, matrices: Vec<Mat4>| Skin { joints, inverse_bind_matrices: matrices };
+        let reason = |scene: &mut Scene, skin: Skin| match scene.set_skin(mesh, Some(skin)) {
+            Err(SceneError::BadSkin { node, reason }) => {
+                assert_eq!(node, "mesh");
+                reason
+            }
+            other => panic!("expected BadSkin, got {other:?}"),
+        };
+
+        let good = skin(vec![j1, j2], vec![Mat4::IDENTITY, Mat4::from_translation(Vec3::Y)]);
+        scene.set_skin(mesh, Some(good.clone())).unwrap();
+        assert_eq!(scene.node(mesh).unwrap().skin.as_deref(), Some(&good));
+
+        assert_eq!(
+            reason(&mut scene, skin(vec![j1, j2], vec![Mat4::IDENTITY])),
+            "2 joints but 1 inverse bind matrices"
+        );
+        assert_eq!(reason(&mut scene, skin(vec![], vec![])), format!("0 joints (1 to {MAX_JOINTS})"));
+        assert_eq!(
+            reason(&mut scene, skin(vec![j1, stale], vec![Mat4::IDENTITY; 2])),
+            "joint 1 is not a node of this scene"
+        );
+        let not_finite = Mat4::from_translation(Vec3::new(0.0, f32::NAN, 0.0));
+        assert_eq!(
+            reason(&mut scene, skin(vec![j1, j2], vec![Mat4::IDENTITY, not_finite])),
+            "inverse bind matrix 1 is not finite"
+        );
+        // The joint count is bounded by what a skinned vertex can index:
+        // MAX_JOINTS itself fits, one more does not.
+        let most = skin(vec![j1; MAX_JOINTS], vec![Mat4::IDENTITY; MAX_JOINTS]);
+        scene.set_skin(mesh, Some(most)).unwrap();
+        assert_eq!(scene.node(mesh).unwrap().skin.as_ref().unwrap().joints.len(), MAX_JOINTS);
+        assert_eq!(
+            reason(&mut scene, skin(vec![j1; MAX_JOINTS + 1], vec![Mat4::IDENTITY; MAX_JOINTS + 1])),
+            format!("{} joints (1 to {MAX_JOINTS})", MAX_JOINTS + 1)
+        );
+
+        scene.set_skin(mesh, None).unwrap();
+        assert!(scene.node(mesh).unwrap().skin.is_none(), "None makes the node rigid again");
+        assert_eq!(scene.set_skin(stale, Some(good)), Err(SceneError::NoSuchNode(stale)));
+    }
+
+    #[test]
+    fn morph_weights_and_semantic_classes_are_set_on_live_nodes_only() {
+        let mut scene = Scene::new();
+        let node = scene.add_node("blob", Transform::IDENTITY);
+        scene.set_morph_weights(node, vec![0.5, f32::NAN, f32::NEG_INFINITY, 0.25]).unwrap();
+        assert_eq!(scene.node(node).unwrap().morph_weights, [0.5, 0.0, 0.0, 0.25]);
+
+        let before = scene.revision();
+        scene.set_semantic_class(node, 7).unwrap();
+        assert_eq!(scene.node(node).unwrap().semantic_class, 7);
+        assert!(scene.revision() > before);
+        let before = scene.revision();
+        scene.set_semantic_class(node, 7).unwrap();
+        assert_eq!(scene.revision(), before, "the same class again is no edit");
+
+        let stale = stale_key(&mut scene);
+        assert_eq!(scene.set_morph_weights(stale, vec![1.0]), Err(SceneError::NoSuchNode(stale)));
+        assert_eq!(scene.set_semantic_class(stale, 3), Err(SceneError::NoSuchNode(stale)));
+    }
+
+    #[test]
+    fn lods_are_sorted_coarsest_last_and_refused_with_a_reason() {
+        let mut scene = Scene::new();
+        let base = scene.add_geometry(Geometry::cube(1.0));
+        let mid = scene.add_geometry(Geometry::cube(1.0));
+        let coarse = scene.add_geometry(Geometry::quad(1.0));
+        let split = scene.add_geometry(two_part_cube());
+        let material = scene.add_material(Material::opaque("m", Vec4::ONE));
+        let node = scene.add_node("lodded", Transform::IDENTITY);
+        let bare = scene.add_node("bare", Transform::IDENTITY);
+        scene.set_renderable(node, Renderable { geometry: base, materials: vec![material] }).unwrap();
+        let lod = |geometry, below_screen_fraction| LodLevel { geometry, below_screen_fraction };
+
+        scene.set_lods(node, vec![lod(coarse, 0.1), lod(mid, 0.5)]).unwrap();
+        assert_eq!(scene.node(node).unwrap().lods, [lod(mid, 0.5), lod(coarse, 0.1)]);
+
+        let reason = |scene: &mut Scene, key: NodeKey, lods: Vec<LodLevel>| match scene.set_lods(key, lods) {
+            Err(SceneError::BadLod { reason, .. }) => reason,
+            other => panic!("expected BadLod, got {other:?}"),
+        };
+        for fraction in [0.0, -0.5, f32::INFINITY, f32::NAN] {
+            let why = reason(&mut scene, node, vec![lod(mid, fraction)]);
+            assert_eq!(why, format!("screen fraction {fraction} is not a positive finite number"));
+        }
+        assert_eq!(reason(&mut scene, node, vec![lod(split, 0.5)]), "LOD 'two-part' has 2 submeshes, the base mesh 1");
+        assert_eq!(reason(&mut scene, bare, vec![lod(mid, 0.5)]), "the node has no renderable");
+        let unknown = GeometryHandle::default();
+        assert_eq!(scene.set_lods(node, vec![lod(unknown, 0.5)]), Err(SceneError::NoSuchGeometry(unknown)));
+        assert_eq!(scene.node(node).unwrap().lods.len(), 2, "refused edits change nothing");
+
+        scene.set_lods(node, Vec::new()).unwrap();
+        assert!(scene.node(node).unwrap().lods.is_empty(), "an empty list removes them");
+        let stale = stale_key(&mut scene);
+        assert_eq!(scene.set_lods(stale, Vec::new()), Err(SceneError::NoSuchNode(stale)));
+    }
+
+    #[test]
+    fn lights_and_cameras_attach_to_live_nodes_and_come_off_with_none() {
+        let mut scene = Scene::new();
+        let node = scene.add_node("rig", Transform::IDENTITY);
+        let light = Light::point(40.0, Some(10.0));
+        let camera = Camera::perspective(1.0, 0.1, Some(100.0));
+        scene.set_light(node, Some(light.clone())).unwrap();
+        scene.set_camera(node, Some(camera)).unwrap();
+        assert_eq!(scene.node(node).unwrap().light, Some(light.clone()));
+        assert_eq!(scene.node(node).unwrap().camera, Some(camera));
+        scene.set_light(node, None).unwrap();
+        scene.set_camera(node, None).unwrap();
+        assert!(scene.node(node).unwrap().light.is_none() && scene.node(node).unwrap().camera.is_none());
+
+        let stale = stale_key(&mut scene);
+        assert_eq!(scene.set_light(stale, Some(light)), Err(SceneError::NoSuchNode(stale)));
+        assert_eq!(scene.set_camera(stale, Some(camera)), Err(SceneError::NoSuchNode(stale)));
+    }
+
+    #[test]
+    fn a_world_transform_composes_the_parent_chain() {
+        let mut scene = Scene::new();
+        let parent = scene.add_node("parent", Transform::from_translation(Vec3::X * 10.0).with_scale(Vec3::splat(2.0)));
+        let child = scene.add_child(parent, "child", Transform::from_translation(Vec3::Y)).unwrap();
+        let world = scene.world_transform(child).unwrap();
+        // Parent after child: the child's offset is scaled, then moved.
+        assert_eq!(world.transform_point3(DVec3::ZERO), DVec3::new(10.0, 2.0, 0.0));
+        assert_eq!(world.transform_vector3(DVec3::Z), DVec3::new(0.0, 0.0, 2.0));
+        let stale = stale_key(&mut scene);
+        assert!(scene.world_transform(stale).is_none());
+    }
+
+    #[test]
+    fn a_node_is_visible_only_when_it_and_every_ancestor_are() {
+        let mut scene = Scene::new();
+        let root = scene.add_node("root", Transform::IDENTITY);
+        let middle = scene.add_child(root, "middle", Transform::IDENTITY).unwrap();
+        let leaf = scene.add_child(middle, "leaf", Transform::IDENTITY).unwrap();
+        assert!(scene.is_effectively_visible(leaf));
+        scene.set_flags(middle, NodeFlags::CASTS_SHADOWS).unwrap();
+        assert!(!scene.is_effectively_visible(leaf), "a hidden parent hides its subtree");
+        assert!(!scene.is_effectively_visible(middle));
+        assert!(scene.is_effectively_visible(root));
+        let stale = stale_key(&mut scene);
+        assert!(!scene.is_effectively_visible(stale));
+    }
+}
