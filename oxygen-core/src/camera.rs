@@ -273,4 +273,15 @@ mod tests {
         assert_eq!(bad.projection_matrix(0.0), Err(CameraError::BadAspect(0.0)));
         assert!(matches!(bad.projection_matrix(1.0), Err(CameraError::BadDepthRange { .. })));
     }
+
+    /// An orthographic camera shows `half_height` above and below its axis
+    /// and `half_height × aspect` to either side: with 2 and 1.5, the
+    /// corner (3, 2) of the view lands on the NDC corner (1, 1).
+    #[test]
+    fn an_orthographic_view_is_as_wide_as_its_height_times_the_aspect() {
+        let camera = Camera::orthographic(2.0, 0.5, 10.0);
+        let m = camera.projection_matrix(1.5).unwrap();
+        let corner = m.project_point3(glam::Vec3::new(3.0, 2.0, -5.0));
+        assert!((corner.truncate() - glam::Vec2::ONE).abs().max_element() < 1e-6, "{corner}");
+    }
 }

@@ -76,3 +76,26 @@ impl Light {
         Light { kind: LightKind::Spot { range, inner_cone, outer_cone }, ..Light::directional(intensity) }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+
+    use super::*;
+
+    /// The point and spot constructors give the shape asked for, with the
+    /// directional light's defaults for everything else.
+    #[test]
+    fn point_and_spot_lights_have_their_own_shape_and_the_shared_defaults() {
+        let point = Light::point(40.0, Some(12.0));
+        assert_eq!(point.kind, LightKind::Point { range: Some(12.0) });
+        let spot = Light::spot(80.0, None, 0.25, 0.5);
+        assert_eq!(spot.kind, LightKind::Spot { range: None, inner_cone: 0.25, outer_cone: 0.5 });
+        for (light, intensity) in [(point, 40.0), (spot, 80.0)] {
+            assert_eq!(light.intensity, intensity);
+            assert_eq!(light.color, Vec3::ONE);
+            assert!(light.casts_shadows && light.affects_world);
+            assert_eq!(light.mobility, Mobility::Realtime);
+        }
+    }
+}

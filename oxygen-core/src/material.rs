@@ -229,4 +229,56 @@ mod tests {
         // The identity leaves coordinates where they are.
         assert_eq!(UvTransform::IDENTITY.apply(Vec2::new(0.4, 0.7)), Vec2::new(0.4, 0.7));
     }
+
+    /// Five transforms told apart by their offsets.
+    fn distinct_uvs() -> MaterialUvs {
+        let t = |x: f32| UvTransform { offset: Vec2::new(x, 0.0), ..UvTransform::IDENTITY };
+        MaterialUvs {
+            base_color: t(1.0),
+            metallic_roughness: t(2.0),
+            normal: t(3.0),
+            emissive: t(4.0),
+            occlusion: t(5.0),
+        }
+    }
+
+    /// The GPU record reads the five in a fixed order; a swap would put one
+    /// texture's transform on another.
+    #[test]
+    fn the_record_order_is_base_metallic_roughness_normal_emissive_occlusion() {
+        let offsets = distinct_uvs().in_record_order().map(|t| t.offset.x);
+        assert_eq!(offsets, [1.0, 2.0, 3.0, 4.0, 5.0]);
+    }
+
+    #[test]
+    fn uvs_are_the_identity_only_when_all_five_are() {
+        assert!(MaterialUvs::default().is_identity());
+        assert!(!distinct_uvs().is_identity());
+        // One texture on set 1 is enough to make the whole not the identity.
+        let occlusion_on_set_1 =
+            MaterialUvs { occlusion: UvTransform { uv_set: 1, ..UvTransform::IDENTITY }, ..MaterialUvs::default() };
+        assert!(!occlusion_on_set_1.is_identity());
+    }
+
+    /// Sanitising keeps finite transforms as they are and repairs the rest
+    /// field by field: a non-finite offset, rotation or scale becomes the
+    /// identity's, a set past 1 becomes 1.
+    #[test]
+    fn sanitizing_keeps_valid_uv_transforms_and_repairs_broken_ones() {
+        let mut material = Material::opaque("m", Vec4::ONE);
+        material.uvs = distinct_uvs();
+        material.uvs.normal = UvTransform {
+            uv_set: 7,
+            offset: Vec2::new(f32::NAN, 0.5),
+            rotation: f32::INFINITY,
+            scale: Vec2::new(2.0, 3.0),
+        };
+        material.uvs.emissive =
+            UvTransform { uv_set: 1, offset: Vec2::new(0.25, 0.5), rotation: 0.5, scale: Vec2::new(1.0, f32::NAN) };
+        let uvs = material.sanitized().uvs;
+        let mut want = distinct_uvs();
+        want.normal = UvTransform { uv_set: 1, offset: Vec2::ZERO, rotation: 0.0, scale: Vec2::new(2.0, 3.0) };
+        want.emissive = UvTransform { uv_set: 1, offset: Vec2::new(0.25, 0.5), rotation: 0.5, scale: Vec2::ONE };
+        assert_eq!(uvs, want);
+    }
 }

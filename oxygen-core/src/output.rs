@@ -166,3 +166,58 @@ impl ProbeId {
         Output::new(OutputSource::Probe(self))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::view::{ViewIdRange, ViewIds};
+
+    /// Ids print as their kind and number, in both forms: lists of ids in
+    /// `{:?}` (frame reports, errors) stay short and readable.
+    #[test]
+    fn probe_ids_print_as_probe_and_number_in_display_and_debug() {
+        let mut ids = ProbeIds::default();
+        let first = ids.allocate();
+        let second = ids.allocate();
+        assert_eq!(first.to_string(), "probe#0");
+        assert_eq!(format!("{second}"), "probe#1");
+        assert_eq!(format!("{:?}", [first, second]), "[probe#0, probe#1]");
+    }
+
+    #[test]
+    fn an_output_source_prints_as_the_view_or_probe_it_names() {
+        let view = ViewIds::new(ViewIdRange::Shadow).allocate();
+        let probe = ProbeIds::default().allocate();
+        assert_eq!(OutputSource::View(view).to_string(), "shadow-view#0");
+        assert_eq!(OutputSource::Probe(probe).to_string(), "probe#0");
+    }
+
+    /// The Debug form names the output's kind (the last segment of its type
+    /// name) and its source.
+    #[test]
+    fn an_outputs_debug_text_names_its_kind_and_source() {
+        let mut views = ViewIds::default();
+        let _ = views.allocate();
+        let view = views.allocate();
+        assert_eq!(format!("{:?}", view.depth()), "Output<Depth>(view#1)");
+        assert_eq!(format!("{:?}", view.shadow_map()), "Output<ShadowMap>(view#1)");
+        let probe = ProbeIds::default().allocate();
+        assert_eq!(format!("{:?}", probe.cube()), "Output<ProbeCube>(probe#0)");
+    }
+
+    /// Two outputs of one kind are equal exactly when they name the same source.
+    #[test]
+    fn outputs_are_equal_when_their_sources_are() {
+        let mut views = ViewIds::default();
+        let a = views.allocate();
+        let b = views.allocate();
+        assert_eq!(a.hdr(), a.hdr());
+        assert_ne!(a.hdr(), b.hdr());
+        let mut probes = ProbeIds::default();
+        let p = probes.allocate();
+        let q = probes.allocate();
+        assert_eq!(p.cube(), p.cube());
+        assert_ne!(p.cube(), q.cube());
+        assert_ne!(Output::<HdrColor>::new(OutputSource::Probe(p)), a.hdr());
+    }
+}

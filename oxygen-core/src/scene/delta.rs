@@ -965,3 +965,298 @@ pub fn scene_difference(a: &Scene, b: &Scene) -> Option<String> {
 fn asset_key<K: Key + From<KeyData>>(index: u32) -> K {
     K::from(KeyData::from_ffi(u64::from(index) | (1 << 32)))
 }
+
+#[cfg(test)]
+mod tests {
+    use glam::{Vec2, Vec3, Vec4};
+
+    use super::*;
+    use crate::{Filter, Wrap};
+
+    /// The delta as a receiver gets it: encoded, decoded, applied.
+    fn send(stream: &mut DeltaStream, scene: &Scene, replica: &mut SceneReplica) -> SceneDelta {
+        let delta = SceneDelta::decode(&stream.next(scene).encode()).unwrap();
+        replica.apply(&delta).unwrap();
+        delta
+    }
+
+    /// The hierarchy by slot index: the roots, and every node's children,
+    /// each as a set (a replica rebuilds lists from the records' parents,
+    /// so only membership is the source's).
+    fn hierarchy(scene: &Scene) -> (Vec<u32>, Vec<(u32, Vec<u32>)>) {
+        let sorted = |keys: &[NodeKey]| {
+            let mut indices: Vec<u32> = keys.iter().map(|k| node_index(*k)).collect();
+            indices.sort_unstable();
+            indices
+        };
+        let mut children: Vec<(u32, Vec<u32>)> =
+            scene.nodes().map(|(key, node)| (node_index(key), sorted(&node.children))).collect();
+        children.sort_unstable();
+        (sorted(scene.roots()), children)
+    }
+
+    /// Three events per revision, 2^20 in all: the journal is full. The
+    /// next event drops the older half, cut after the whole revision the
+    /// middle event (number 2^19, revision 174763, whose events are 524286
+    /// to 524288) belongs to, so a delta from that floor misses none.
+    #[test]
+    fn a_full_journal_drops_its_older_half_up_to_a_whole_revision() {
+        let mut journal = Journal::default();
+        for i in 0..MAX_JOURNAL_EVENTS as u64 {
+            journal.record(i / 3 + 1, Event::NodeAdded(i as u32));
+        }
+        assert_eq!(journal.events.len(), MAX_JOURNAL_EVENTS, "nothing dropped before it is full");
+        journal.record(349_527, Event::NodeRemoved(1));
+        assert_eq!(journal.floor, 174_763);
+        assert_eq!(journal.events.first(), Some(&(174_764, Event::NodeAdded(524_289))));
+        assert_eq!(journal.events.len(), MAX_JOURNAL_EVENTS - 524_289 + 1);
+        assert_eq!(journal.events.last(), Some(&(349_527, Event::NodeRemoved(1))));
+    }
+
+    /// Trimming frees the events a delta can no longer need, and makes a
+    /// delta from before the cut a snapshot.
+    #[test]
+    fn trimming_the_journal_drops_the_events_up_to_the_revision() {
+        let mut scene = Scene::new();
+        let a = scene.add_node("a", Transform::IDENTITY);
+        let cut = scene.revision();
+        scene.add_node("b", Transform::IDENTITY);
+        scene.remove_node(a).unwrap();
+        scene.trim_journal(cut);
+        let kept: Vec<Event> = scene.journal.events.iter().map(|(_, e)| *e).collect();
+        assert_eq!(kept, [Event::NodeAdded(2), Event::NodeRemoved(1)]);
+        assert!(scene.delta_since(cut - 1, &mut HashSet::new()).is_snapshot());
+    }
+
+    /// A delta from exactly the trimmed revision still has every event it
+    /// needs (those after the cut): a plain delta, not a snapshot.
+    #[test]
+    fn a_delta_from_the_journals_floor_is_not_a_snapshot() {
+        let mut scene = Scene::new();
+        let (mut stream, mut replica) = (DeltaStream::new(), SceneReplica::new());
+        scene.add_node("a", Transform::IDENTITY);
+        send(&mut stream, &scene, &mut replica);
+        scene.trim_journal(stream.revision());
+        scene.add_node("b", Transform::IDENTITY);
+        let delta = send(&mut stream, &scene, &mut replica);
+        assert!(!delta.is_snapshot());
+        assert_eq!(delta.ops, [DeltaOp::AddNode { index: 2 }]);
+        assert_eq!(scene_difference(&scene, replica.scene()), None);
+    }
+
+    /// From the scene's own revision nothing changed: an empty delta. From
+    /// a revision the scene has not reached (a replica of something else)
+    /// only a snapshot can help.
+    #[test]
+    fn a_delta_from_now_is_empty_and_one_from_the_future_is_a_snapshot() {
+        let mut scene = Scene::new();
+        scene.add_node("a", Transform::IDENTITY);
+        let now = scene.delta_since(scene.revision(), &mut HashSet::new());
+        assert!(!now.is_snapshot());
+        assert_eq!((now.base, now.revision), (scene.revision(), scene.revision()));
+        assert!(now.ops.is_empty() && now.nodes.is_empty(), "{now:?}");
+        let future = scene.delta_since(scene.revision() + 5, &mut HashSet::new());
+        assert!(future.is_snapshot());
+        assert_eq!(future.nodes.len(), 1);
+    }
+
+    /// A node whose last edit is the base revision itself is already on the
+    /// replica: only nodes edited after the base travel.
+    #[test]
+    fn a_delta_carries_only_the_nodes_edited_after_its_base() {
+        let mut scene = Scene::new();
+        let a = scene.add_node("a", Transform::IDENTITY);
+        scene.add_node("b", Transform::IDENTITY);
+        let base = scene.revision();
+        scene.set_local_transform(a, Transform::from_translation(Vec3::X)).unwrap();
+        let delta = scene.delta_since(base, &mut HashSet::new());
+        let indices: Vec<u32> = delta.nodes.iter().map(|n| n.index).collect();
+        assert_eq!(indices, [node_index(a)]);
+    }
+
+    #[test]
+    fn a_stream_is_at_the_revision_of_its_last_delta() {
+        let mut scene = Scene::new();
+        let mut stream = DeltaStream::new();
+        assert_eq!(stream.revision(), 0);
+        scene.add_node("a", Transform::IDENTITY);
+        scene.add_node("b", Transform::IDENTITY);
+        stream.next(&scene);
+        assert_eq!(stream.revision(), scene.revision());
+        assert_eq!(stream.revision(), 3);
+    }
+
+    /// A stream moved to another scene sends a snapshot, even when the
+    /// other scene's revision is past the stream's (a delta from the
+    /// stream's revision would then look possible, and be wrong).
+    #[test]
+    fn another_scene_on_a_stream_gets_a_snapshot_whatever_its_revision() {
+        let (mut stream, mut replica) = (DeltaStream::new(), SceneReplica::new());
+        let mut first = Scene::new();
+        first.add_node("a", Transform::IDENTITY);
+        send(&mut stream, &first, &mut replica);
+        let mut second = Scene::new();
+        for i in 0..5 {
+            second.add_node(format!("n{i}"), Transform::from_translation(Vec3::X * i as f32));
+        }
+        assert!(second.revision() > stream.revision());
+        let delta = send(&mut stream, &second, &mut replica);
+        assert!(delta.is_snapshot());
+        assert_eq!(scene_difference(&second, replica.scene()), None);
+    }
+
+    /// After a restart (a receiver was reset) the next delta is a snapshot;
+    /// the receivers keep the assets, so those travel by hash only.
+    #[test]
+    fn a_restarted_stream_sends_a_snapshot_without_the_asset_bodies_sent_before() {
+        let mut scene = Scene::new();
+        let cube = scene.add_geometry(Geometry::cube(1.0));
+        let material = scene.add_material(Material::opaque("m", Vec4::ONE));
+        let node = scene.add_node("n", Transform::IDENTITY);
+        scene.set_renderable(node, Renderable { geometry: cube, materials: vec![material] }).unwrap();
+        let (mut stream, mut replica) = (DeltaStream::new(), SceneReplica::new());
+        assert_eq!(send(&mut stream, &scene, &mut replica).assets.len(), 1);
+        stream.restart();
+        let again = send(&mut stream, &scene, &mut replica);
+        assert!(again.is_snapshot());
+        assert!(again.assets.is_empty(), "{} bodies sent again", again.assets.len());
+        assert!(
+            again
+                .ops
+                .iter()
+                .any(|op| matches!(op, DeltaOp::AddGeometry { index, .. } if *index == geometry_index(cube)))
+        );
+        assert_eq!(scene_difference(&scene, replica.scene()), None);
+    }
+
+    /// A replica's assets are rebuilt from their records: the same values
+    /// as the source's (morph targets and vertex attributes included;
+    /// `scene_difference` compares assets by hash alone).
+    #[test]
+    fn a_replicas_geometries_and_textures_equal_the_sources() {
+        let mut scene = Scene::new();
+        let cube = Geometry::cube(1.0);
+        let n = cube.vertices().len();
+        let target = MorphTarget { positions: vec![Vec3::Y * 0.25; n], normals: None };
+        let attributes = vec![VertexAttributes::new(Vec4::new(0.5, 0.25, 1.0, 1.0), Vec2::new(0.5, 0.5)); n];
+        let morphing = scene.add_geometry(cube.clone().with_morph_targets(vec![target]).unwrap());
+        let coloured = scene.add_geometry(cube.with_attributes(attributes).unwrap());
+        let pixels = (0..2 * 3 * 4).map(|i| (i * 29 % 256) as u8).collect();
+        let texture = TextureImage::new("t", 2, 3, ColorSpace::Linear, pixels)
+            .unwrap()
+            .with_sampling(Sampling::new(Wrap::ClampToEdge, Filter::Nearest));
+        let texture = scene.add_texture(texture);
+        let mut replica = SceneReplica::new();
+        send(&mut DeltaStream::new(), &scene, &mut replica);
+        for geometry in [morphing, coloured] {
+            assert_eq!(**replica.scene().geometry(geometry).unwrap(), **scene.geometry(geometry).unwrap());
+        }
+        assert_eq!(replica.scene().geometry(morphing).unwrap().morph_targets().len(), 1);
+        assert_eq!(**replica.scene().texture(texture).unwrap(), **scene.texture(texture).unwrap());
+    }
+
+    /// Removals are replayed one node at a time: the removed node leaves
+    /// its parent's children (or the roots), the others stay.
+    #[test]
+    fn a_replica_keeps_the_sources_roots_and_children_through_removals() {
+        let mut scene = Scene::new();
+        let parent = scene.add_node("parent", Transform::IDENTITY);
+        let children: Vec<NodeKey> =
+            (0..3).map(|i| scene.add_child(parent, format!("c{i}"), Transform::IDENTITY).unwrap()).collect();
+        let roots: Vec<NodeKey> = (0..3).map(|i| scene.add_node(format!("r{i}"), Transform::IDENTITY)).collect();
+        let (mut stream, mut replica) = (DeltaStream::new(), SceneReplica::new());
+        send(&mut stream, &scene, &mut replica);
+        scene.remove_node(children[1]).unwrap();
+        scene.remove_node(roots[1]).unwrap();
+        send(&mut stream, &scene, &mut replica);
+        assert_eq!(hierarchy(replica.scene()), hierarchy(&scene));
+        let (root_indices, _) = hierarchy(&scene);
+        assert_eq!(root_indices, [parent, roots[0], roots[2]].map(node_index));
+    }
+
+    /// Caches keyed on a scene's revision (world transforms, ScenePrep's)
+    /// must see a replica change: a delta that only removes a root still
+    /// moves the replica's revision forward.
+    #[test]
+    fn a_replicas_revision_advances_when_a_delta_only_removes_a_node() {
+        let mut scene = Scene::new();
+        scene.add_node("kept", Transform::IDENTITY);
+        let removed = scene.add_node("removed", Transform::IDENTITY);
+        let (mut stream, mut replica) = (DeltaStream::new(), SceneReplica::new());
+        send(&mut stream, &scene, &mut replica);
+        let before = replica.scene().revision();
+        scene.remove_node(removed).unwrap();
+        let delta = send(&mut stream, &scene, &mut replica);
+        assert!(delta.nodes.is_empty(), "{delta:?}");
+        assert!(replica.scene().revision() > before, "{} after {before}", replica.scene().revision());
+    }
+
+    /// Two records that make each other's parent: refused, naming a node of
+    /// the cycle.
+    #[test]
+    fn a_delta_whose_parents_make_a_cycle_is_refused_naming_a_node_of_it() {
+        let mut scene = Scene::new();
+        let a = node_index(scene.add_node("a", Transform::IDENTITY));
+        let b = node_index(scene.add_node("b", Transform::IDENTITY));
+        let mut delta = scene.delta_since(0, &mut HashSet::new());
+        for record in &mut delta.nodes {
+            record.parent = Some(if record.index == a { b } else { a });
+        }
+        match SceneReplica::new().apply(&delta) {
+            Err(DeltaError::BadNode { index, source: SceneError::Cycle { .. } }) => {
+                assert!(index == a || index == b, "node {index} named, the cycle is {a} and {b}")
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+
+    /// A material op naming a texture slot the replica has not got is
+    /// refused (the material would render with a texture that is not there).
+    #[test]
+    fn a_material_naming_a_texture_the_replica_lacks_is_refused() {
+        let mut scene = Scene::new();
+        scene.add_material(Material::opaque("dangling", Vec4::ONE));
+        let mut delta = scene.delta_since(0, &mut HashSet::new());
+        let Some(DeltaOp::AddMaterial { material, .. }) = delta.ops.last_mut() else { panic!("{:?}", delta.ops) };
+        material.normal_texture = Some(asset_key::<TextureHandle>(5));
+        let refused = SceneReplica::new().apply(&delta);
+        assert_eq!(refused, Err(DeltaError::BadSlot("material dangling names a texture the replica lacks".into())));
+    }
+
+    /// Hashes print as their first eight bytes in hex: enough to tell
+    /// assets apart in a message.
+    #[test]
+    fn a_delta_naming_an_asset_never_sent_is_refused_naming_its_hash() {
+        let mut bytes = [0xff; 32];
+        bytes[..8].copy_from_slice(&[0x01, 0x23, 0x45, 0x67, 0x89, 0xab, 0xcd, 0xef]);
+        let hash = AssetHash(bytes);
+        assert_eq!(hash.to_string(), "0123456789abcdef");
+        let mut scene = Scene::new();
+        scene.add_geometry(Geometry::cube(1.0));
+        let mut delta = scene.delta_since(0, &mut HashSet::new());
+        delta.assets.clear();
+        delta.ops = vec![DeltaOp::AddGeometry { index: 1, hash }];
+        let refused = SceneReplica::new().apply(&delta).unwrap_err();
+        assert_eq!(refused.to_string(), "asset 0123456789abcdef was never sent");
+    }
+
+    /// `scene_difference` (what replica tests rest on) finds a difference
+    /// and says where: the first op, or the first node record, that differs.
+    #[test]
+    fn scene_difference_names_the_first_op_or_node_that_differs() {
+        let scene = |name: &str, color: Vec4| {
+            let mut scene = Scene::new();
+            scene.add_node("x", Transform::IDENTITY);
+            scene.add_node(name, Transform::IDENTITY);
+            scene.add_material(Material::opaque("m", color));
+            scene
+        };
+        let source = scene("y", Vec4::ONE);
+        assert_eq!(scene_difference(&source, &scene("y", Vec4::ONE)), None);
+        // Ops: two nodes, then the material.
+        let other_material = scene_difference(&source, &scene("y", Vec4::ZERO)).unwrap();
+        assert!(other_material.contains("first difference at Some(2)"), "{other_material}");
+        let renamed = scene_difference(&source, &scene("renamed", Vec4::ONE)).unwrap();
+        assert!(renamed.starts_with("nodes differ") && renamed.contains("\"renamed\""), "{renamed}");
+    }
+}

@@ -171,3 +171,36 @@ impl Node {
         self.flags.contains(NodeFlags::VISIBLE)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use glam::{Mat4, Quat, Vec3};
+
+    use super::{Node, NodeFlags, Transform};
+
+    /// `T * R * S`: the point (1, 0, 0) is scaled to (2, 0, 0), turned 90°
+    /// about +Y to (0, 0, -2), then moved by (10, 20, 30).
+    #[test]
+    fn a_transforms_f32_matrix_scales_then_rotates_then_translates() {
+        let t = Transform::from_translation(Vec3::new(10.0, 20.0, 30.0))
+            .with_rotation(Quat::from_rotation_y(90f32.to_radians()))
+            .with_scale(Vec3::new(2.0, 3.0, 4.0));
+        let m: Mat4 = t.to_mat4();
+        let p = m.transform_point3(Vec3::X);
+        assert!((p - Vec3::new(10.0, 20.0, 28.0)).length() < 1e-5, "{p}");
+        // The f32 matrix is the f64 one rounded (both built from the same
+        // values; 1e-6 covers the rounding of a few units' entries).
+        let d = t.to_dmat4().as_mat4();
+        assert!(m.abs_diff_eq(d, 1e-6), "{m} against {d}");
+    }
+
+    #[test]
+    fn a_node_is_visible_by_its_own_flag() {
+        let mut node = Node::new("n".into(), None, Transform::IDENTITY);
+        assert!(node.is_visible(), "new nodes are visible");
+        node.flags = NodeFlags::CASTS_SHADOWS;
+        assert!(!node.is_visible());
+        node.flags = NodeFlags::VISIBLE;
+        assert!(node.is_visible());
+    }
+}

@@ -198,4 +198,86 @@ mod tests {
         let x = world.get(node).unwrap().w_axis.x;
         assert!((x as f64 - 1_000_100.0).abs() <= 0.0625, "x = {x}");
     }
+
+    /// `get_f64` hands out the composed matrix before its rounding to f32:
+    /// 1e6 + 0.1 rounds to 1000000.125 in f32 (spacing 0.0625), while f64
+    /// keeps the sum of the two f32 inputs to its spacing of 1.2e-10 there
+    /// (the bound, 1e-9, is 8 such steps).
+    #[test]
+    fn the_f64_world_matrix_keeps_what_f32_rounding_loses() {
+        let mut scene = Scene::new();
+        let far = scene.add_node("far", Transform::from_translation(Vec3::new(1e6, 0.0, 0.0)));
+        let near = scene.add_child(far, "near", Transform::from_translation(Vec3::new(0.1, 0.0, 0.0))).unwrap();
+        let mut world = super::WorldTransforms::new();
+        scene.resolve_world_transforms(&mut world);
+        let x = world.get_f64(near).unwrap().w_axis.x;
+        assert!((x - (1e6 + 0.1f32 as f64)).abs() < 1e-9, "x = {x}");
+        assert_eq!(world.get(near).unwrap().w_axis.x, x as f32);
+        assert_eq!(world.get_f64(far).unwrap().w_axis.x, 1e6);
+    }
+
+    #[test]
+    fn visible_nodes_under_visible_parents_are_effectively_visible() {
+        let mut scene = Scene::new();
+        let parent = scene.add_node("parent", Transform::IDENTITY);
+        let child = scene.add_child(parent, "child", Transform::IDENTITY).unwrap();
+        let mut world = super::WorldTransforms::new();
+        scene.resolve_world_transforms(&mut world);
+        assert!(world.is_effectively_visible(parent));
+        assert!(world.is_effectively_visible(child));
+    }
+
+    /// The table says which revision it reflects: the scene's newest, not a
+    /// fixed value (a new scene starts at revision 1; two additions make it 3).
+    #[test]
+    fn the_resolved_revision_is_the_scenes_revision_at_resolution() {
+        let mut scene = Scene::new();
+        let a = scene.add_node("a", Transform::IDENTITY);
+        scene.add_node("b", Transform::IDENTITY);
+        let mut world = super::WorldTransforms::new();
+        assert_eq!(world.resolved_revision(), 0, "nothing resolved yet");
+        scene.resolve_world_transforms(&mut world);
+        assert_eq!(world.resolved_revision(), scene.revision());
+        assert_eq!(scene.revision(), 3);
+        scene.set_local_transform(a, Transform::from_translation(Vec3::X)).unwrap();
+        scene.resolve_world_transforms(&mut world);
+        assert_eq!(world.resolved_revision(), 4);
+    }
+
+    /// An invalidated table recomputes every node even though the scene did
+    /// not change since the last resolution (which would otherwise cost nothing).
+    #[test]
+    fn invalidating_the_table_recomputes_every_node() {
+        let mut scene = Scene::new();
+        let a = scene.add_node("a", Transform::IDENTITY);
+        scene.add_child(a, "a1", Transform::from_translation(Vec3::X)).unwrap();
+        scene.add_node("b", Transform::IDENTITY);
+        let mut world = super::WorldTransforms::new();
+        scene.resolve_world_transforms(&mut world);
+        scene.resolve_world_transforms(&mut world);
+        assert_eq!(world.recomputed_last(), 0);
+        world.invalidate();
+        scene.resolve_world_transforms(&mut world);
+        assert_eq!(world.recomputed_last(), 3);
+    }
+
+    /// A parent whose own last edit was the one the previous resolution saw
+    /// (its revision equal to the resolved one) is up to date: a later edit
+    /// of its child recomputes the child alone, not the parent and its other
+    /// children.
+    #[test]
+    fn a_parent_edited_just_before_the_last_resolution_is_not_recomputed_for_its_childs_edit() {
+        let mut scene = Scene::new();
+        let parent = scene.add_node("parent", Transform::IDENTITY);
+        let child = scene.add_child(parent, "child", Transform::IDENTITY).unwrap();
+        scene.add_child(parent, "sibling", Transform::IDENTITY).unwrap();
+        scene.set_local_transform(parent, Transform::from_translation(Vec3::X)).unwrap();
+        let mut world = super::WorldTransforms::new();
+        scene.resolve_world_transforms(&mut world);
+        assert_eq!(scene.node(parent).unwrap().revision(), world.resolved_revision());
+        scene.set_local_transform(child, Transform::from_translation(Vec3::Y)).unwrap();
+        scene.resolve_world_transforms(&mut world);
+        assert_eq!(world.recomputed_last(), 1);
+        assert_eq!(world.get(child).unwrap().w_axis.truncate(), Vec3::new(1.0, 1.0, 0.0));
+    }
 }
