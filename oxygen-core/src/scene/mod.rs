@@ -420,7 +420,9 @@ impl Scene {
         self.nodes.len()
     }
 
-    /// Root nodes in insertion order.
+    /// Root nodes in the order they were added or moved to the roots (on a
+    /// replica built from scene deltas: the same roots, not necessarily in
+    /// the same order, as [`Node::children`] says).
     pub fn roots(&self) -> &[NodeKey] {
         &self.roots
     }

@@ -112,7 +112,10 @@ pub struct Node {
     pub name: String,
     /// Parent, `None` for a root.
     pub parent: Option<NodeKey>,
-    /// Children in insertion order.
+    /// Children in the order they were added or moved under this node. A
+    /// replica built from scene deltas holds the same children, not
+    /// necessarily in the same order (a delta re-places every node it
+    /// edits); nothing that renders depends on the order.
     pub children: Vec<NodeKey>,
     /// Transform relative to the parent.
     pub local: Transform,
