@@ -56,7 +56,7 @@ runs=(
   "schedule_bench|example|gpu|4 1 1"
   "visibility_bench|example|gpu|field 16 1 1"
   "visibility_bench|example|gpu|city 16 1 1"
-  "accuracy_atlas|example|gpu|@OUT@ 16 16"
+  "accuracy_atlas|example|gpu|@OUT@ 8 4"
   "sensor_rig|example|gpu|assets/AlphaBlendModeTest/AlphaBlendModeTest.glb @OUT@ --cameras 2 --size 32x32 --frames 1"
   "prep|sceneprep|cpu|--smoke"
 )
