@@ -160,6 +160,24 @@ mod tests {
     use super::*;
 
     #[test]
+    fn unlimited_limits_take_what_the_defaults_refuse() {
+        let defaults = ImportLimits::default();
+        // A terabyte at once, far past the default total of 768 MiB.
+        Budget::new(ImportLimits::unlimited()).spend_bytes(1 << 40).unwrap();
+        assert!(Budget::new(defaults).spend_bytes(defaults.max_total_bytes + 1).is_err());
+        let unlimited = ImportLimits::unlimited();
+        assert_eq!(
+            (unlimited.max_file_bytes, unlimited.max_json_bytes, unlimited.max_json_objects, unlimited.max_nodes),
+            (u64::MAX, u64::MAX, u64::MAX, u64::MAX)
+        );
+        assert_eq!((unlimited.max_node_depth, unlimited.max_texture_dimension), (u32::MAX, u32::MAX));
+        assert_eq!(
+            (unlimited.max_vertices, unlimited.max_indices, unlimited.max_image_file_bytes, unlimited.max_total_bytes),
+            (u64::MAX, u64::MAX, u64::MAX, u64::MAX)
+        );
+    }
+
+    #[test]
     fn a_budget_refuses_the_allocation_that_would_pass_its_limit_and_keeps_its_total() {
         let mut budget = Budget::new(ImportLimits { max_total_bytes: 100, ..ImportLimits::default() });
         budget.spend_bytes(60).unwrap();
