@@ -692,10 +692,15 @@ mod tests {
         assert!(plane.vertices().iter().all(|v| v.normal == [0.0, 1.0, 0.0]));
         assert_eq!(plane.indices(), &[0, 1, 2, 0, 2, 3]);
         assert_eq!(plane.submeshes(), &[Submesh { first_index: 0, index_count: 6 }]);
-        let p = positions(&plane);
-        for tri in plane.indices().chunks(3) {
+        assert_triangles_face(&plane, Vec3::Y);
+    }
+
+    /// Every triangle of `geometry` winds counter-clockwise around `normal`.
+    fn assert_triangles_face(geometry: &Geometry, normal: Vec3) {
+        let p = positions(geometry);
+        for tri in geometry.indices().chunks(3) {
             let n = (p[tri[1] as usize] - p[tri[0] as usize]).cross(p[tri[2] as usize] - p[tri[0] as usize]);
-            assert!(n.normalize() == Vec3::Y, "triangle {tri:?} faces {n}");
+            assert!(n.normalize() == normal, "triangle {tri:?} faces {n}");
         }
     }
 
@@ -717,11 +722,7 @@ mod tests {
         assert!(quad.vertices().iter().all(|v| v.normal == [0.0, 0.0, 1.0]));
         assert_eq!(quad.indices(), &[0, 1, 2, 0, 2, 3]);
         assert_eq!(quad.submeshes(), &[Submesh { first_index: 0, index_count: 6 }]);
-        let p = positions(&quad);
-        for tri in quad.indices().chunks(3) {
-            let n = (p[tri[1] as usize] - p[tri[0] as usize]).cross(p[tri[2] as usize] - p[tri[0] as usize]);
-            assert!(n.normalize() == Vec3::Z, "triangle {tri:?} faces {n}");
-        }
+        assert_triangles_face(&quad, Vec3::Z);
     }
 
     #[test]

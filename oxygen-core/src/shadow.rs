@@ -180,20 +180,20 @@ mod tests {
     use crate::{Camera, LookAtResolver, ViewIds};
     use glam::Vec4Swizzles;
 
-    fn camera_at(eye: Vec3) -> ResolvedView {
-        let resolver = LookAtResolver {
-            camera: Camera::perspective(60f32.to_radians(), 0.1, Some(200.0)),
-            eye,
-            target: eye + Vec3::new(0.0, -0.3, -1.0),
-            up: Vec3::Y,
-            viewport: UVec2::new(1280, 720),
-        };
+    /// `camera` at `eye` looking along `toward`, resolved at 1280 × 720.
+    fn view_looking(camera: Camera, eye: Vec3, toward: Vec3) -> ResolvedView {
+        let resolver =
+            LookAtResolver { camera, eye, target: eye + toward, up: Vec3::Y, viewport: UVec2::new(1280, 720) };
         resolver
             .resolve(
                 &ViewContext { view_id: ViewIds::default().allocate(), frame_index: 1, time_seconds: 0.0 },
                 &Scene::new(),
             )
             .unwrap()
+    }
+
+    fn camera_at(eye: Vec3) -> ResolvedView {
+        view_looking(Camera::perspective(60f32.to_radians(), 0.1, Some(200.0)), eye, Vec3::new(0.0, -0.3, -1.0))
     }
 
     #[test]
@@ -263,19 +263,7 @@ mod tests {
     }
 
     fn view_of(camera: Camera, eye: Vec3) -> ResolvedView {
-        let resolver = LookAtResolver {
-            camera,
-            eye,
-            target: eye + Vec3::new(0.2, -0.3, -1.0),
-            up: Vec3::Y,
-            viewport: UVec2::new(1280, 720),
-        };
-        resolver
-            .resolve(
-                &ViewContext { view_id: ViewIds::default().allocate(), frame_index: 1, time_seconds: 0.0 },
-                &Scene::new(),
-            )
-            .unwrap()
+        view_looking(camera, eye, Vec3::new(0.2, -0.3, -1.0))
     }
 
     /// Each corner seen through the camera lands on a corner of the screen

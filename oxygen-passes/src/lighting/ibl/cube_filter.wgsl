@@ -86,9 +86,11 @@ fn fs_ggx(v: Varying) -> @location(0) vec4<f32> {
     let a2 = alpha * alpha;
     // The CPU prefilter's frame (oxygen_core::environment): X × n near ±Y,
     // which stays perpendicular to n there as a fixed X does not.
-    var t = normalize(cross(vec3<f32>(1.0, 0.0, 0.0), n));
+    var t: vec3<f32>;
     if abs(n.y) < 0.999 {
         t = normalize(cross(vec3<f32>(0.0, 1.0, 0.0), n));
+    } else {
+        t = normalize(cross(vec3<f32>(1.0, 0.0, 0.0), n));
     }
     let b = cross(n, t);
     let source_size = f32(textureDimensions(source, 0).x);
