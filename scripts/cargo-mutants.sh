@@ -35,6 +35,12 @@
 # shard's outcomes.json is copied to
 # docs/records/mutants/<SCOPE>-<K>-of-<N>.json and its summary printed.
 #
+# OXYGEN_MUTANTS_BASELINE=skip skips the unmutated build and test that
+# cargo-mutants runs first in every shard (about five minutes of an
+# importer shard): use it for a run of shards in a tree whose baseline an
+# earlier shard has already seen pass. Set OXYGEN_MUTANTS_TIMEOUT with it,
+# since the timeout can no longer be derived from the baseline's time.
+#
 # OXYGEN_MUTANTS_IN_PLACE=1 mutates this checkout's files in place instead of
 # a fresh copy per shard (whose first build is a whole wgpu build, minutes on
 # two cores): use it only in a checkout of its own (`git worktree add`),
@@ -92,7 +98,8 @@ in_place=()
 if [ "${OXYGEN_MUTANTS_IN_PLACE:-}" = 1 ]; then
   in_place=(--in-place)
 fi
-cargo mutants "${args[@]}" "${in_place[@]}" --shard "$k/$n" --timeout "${OXYGEN_MUTANTS_TIMEOUT:-300}" --output "$out"
+baseline=(--baseline "${OXYGEN_MUTANTS_BASELINE:-run}")
+cargo mutants "${args[@]}" "${in_place[@]}" "${baseline[@]}" --shard "$k/$n" --timeout "${OXYGEN_MUTANTS_TIMEOUT:-300}" --output "$out"
 status=$?
 set -e
 # cargo-mutants exits 2 when mutants were missed, 3 on timeouts: a result,
