@@ -69,7 +69,10 @@ pub(crate) struct BatchPlan {
 
 /// Every view's targets and constants, and the budget they share.
 pub(crate) struct Targets {
-    views: HashMap<ViewId, ViewGpu>,
+    /// Boxed: a `ViewGpu` is kilobytes (its constants' CPU copy), and a
+    /// frame of a thousand cameras looks each up several times; probing
+    /// the map then stays within small entries.
+    views: HashMap<ViewId, Box<ViewGpu>>,
     /// Each batch's atlas, kept between frames (its cameras' images stay
     /// readable) and reallocated when the batch outgrows it.
     atlases: HashMap<BatchId, TileAtlas>,
@@ -96,7 +99,7 @@ impl Targets {
 
     /// What the renderer keeps for `view`, once a frame has prepared it.
     pub(crate) fn get(&self, view: ViewId) -> Option<&ViewGpu> {
-        self.views.get(&view)
+        self.views.get(&view).map(|v| &**v)
     }
 
     /// `batch`'s atlas, once a frame has allocated it.
@@ -228,18 +231,22 @@ impl Targets {
             }
         }
         for (view, frame) in views.iter().zip(frames) {
-            let entry = self.views.entry(view.id).or_insert_with(|| ViewGpu {
-                targets: None,
-                constants: SceneConstantsBuffer::new(
-                    device,
-                    heap.scene_constants_layout(),
-                    &format!("{} scene constants", view.id),
-                ),
-                constants_home: None,
-                holds: None,
-                constants_written: 0,
+            let entry = self.views.entry(view.id).or_insert_with(|| {
+                Box::new(ViewGpu {
+                    targets: None,
+                    constants: SceneConstantsBuffer::new(
+                        device,
+                        heap.scene_constants_layout(),
+                        &format!("{} scene constants", view.id),
+                    ),
+                    constants_home: None,
+                    holds: None,
+                    constants_written: 0,
+                })
             });
-            let (width, height, label) = (view.gpu.viewport.x, view.gpu.viewport.y, view.id.to_string());
+            let (width, height) = (view.gpu.viewport.x, view.gpu.viewport.y);
+            // Only new targets need it: not made every frame for every camera.
+            let label = || view.id.to_string();
             match view.target {
                 TargetPlan::Own { with_color, samples, labels } => {
                     let fits = entry.targets.as_ref().is_some_and(|t| {
@@ -247,6 +254,7 @@ impl Targets {
                             && t.labels.as_ref().map_or(LabelSet::NONE, |l| l.set()) == labels
                     });
                     if !fits {
+                        let label = label();
                         let targets = if with_color {
                             ViewTargets::with_hdr_format(device, width, height, &label, self.hdr_format)
                                 .with_msaa(device, samples, &label)
@@ -286,7 +294,7 @@ impl Targets {
                             .and_then(|t| t.color.as_ref())
                             .is_some_and(|c| c.hdr == *cube && c.hdr_layer == face && c.hdr.width() == width);
                         if !current {
-                            entry.targets = Some(ViewTargets::probe_face(device, cube, face, &label));
+                            entry.targets = Some(ViewTargets::probe_face(device, cube, face, &label()));
                         }
                     }
                 }

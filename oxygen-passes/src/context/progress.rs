@@ -10,7 +10,9 @@ pub struct FrameProgress {
 }
 
 struct ProgressState {
-    pending: Vec<ViewId>,
+    /// A set, not a list: a batch of a thousand cameras completes a
+    /// thousand views a frame.
+    pending: std::collections::HashSet<ViewId>,
     wakers: Vec<std::task::Waker>,
 }
 
@@ -34,7 +36,7 @@ impl FrameProgress {
     pub fn complete(&self, view: ViewId) {
         let wakers = {
             let mut state = self.lock();
-            state.pending.retain(|v| *v != view);
+            state.pending.remove(&view);
             std::mem::take(&mut state.wakers)
         };
         wakers.into_iter().for_each(std::task::Waker::wake);

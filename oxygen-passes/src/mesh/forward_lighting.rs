@@ -7,19 +7,28 @@ use bytemuck::Zeroable;
 
 use crate::{ForwardLitConfig, LightingInputs, MAX_CASCADES, MAX_PROBES, PassError, RenderContext};
 
+/// Whether the view reads a shadow map or a probe through group 1 (else
+/// the shared empty group is bound, and there is nothing to await).
+pub(crate) fn reads_inputs(ctx: &RenderContext<'_>, config: &ForwardLitConfig) -> bool {
+    let inputs = &ctx.inputs;
+    (config.sun_shadows && !inputs.cascades.is_empty())
+        || (config.local_shadows && inputs.local_shadows.is_some())
+        || (config.reflections && !inputs.probes.is_empty())
+}
+
 /// Group 1 for this view, or `None` when it reads no shadow map and no probe
 /// (the shared empty group is bound then).
 pub(crate) async fn bind_group(
     ctx: &RenderContext<'_>,
     config: &ForwardLitConfig,
 ) -> Result<Option<wgpu::BindGroup>, PassError> {
+    if !reads_inputs(ctx, config) {
+        return Ok(None);
+    }
     let inputs = &ctx.inputs;
     let cascades = if config.sun_shadows { &inputs.cascades[..inputs.cascades.len().min(MAX_CASCADES)] } else { &[] };
     let local = inputs.local_shadows.as_ref().filter(|_| config.local_shadows);
     let probes = if config.reflections { &inputs.probes[..inputs.probes.len().min(MAX_PROBES)] } else { &[] };
-    if cascades.is_empty() && local.is_none() && probes.is_empty() {
-        return Ok(None);
-    }
     let producers: Vec<_> = cascades
         .iter()
         .map(|c| c.producer)

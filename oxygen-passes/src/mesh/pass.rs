@@ -470,45 +470,56 @@ impl MeshPass {
                     .into(),
             });
         }
-        // Per view, its pipeline keys (one per partition); each distinct key
-        // is requested once, however many views of a batch share it, and
-        // before the views' lighting inputs are awaited, so that the
-        // pipelines compile while the views producing the inputs record.
-        let keys: Vec<(crate::PipelineKey, Vec<crate::PipelineKey>)> = views
-            .iter()
-            .map(|ctx| {
-                let shading = self.shading_key(ctx);
-                let variant = |p: &Partition| crate::PipelineVariant::from_mask(p.mask);
-                (shading, self.partitions(ctx).map(|p| crate::PipelineKey { variant: variant(p), ..shading }).collect())
-            })
-            .collect();
+        // Per view, its pipeline keys (one per partition, all views' in one
+        // list: a batch of a thousand cameras makes no list per camera);
+        // each distinct key is requested once, however many views of a
+        // batch share it, and before the views' lighting inputs are
+        // awaited, so that the pipelines compile while the views producing
+        // the inputs record.
+        let mut shading_keys: Vec<crate::PipelineKey> = Vec::with_capacity(views.len());
+        let mut partition_keys: Vec<crate::PipelineKey> = Vec::new();
+        let mut key_ranges: Vec<std::ops::Range<usize>> = Vec::with_capacity(views.len());
         let mut distinct: Vec<crate::PipelineKey> = Vec::new();
-        for key in keys.iter().flat_map(|(_, partitions)| partitions) {
-            if !distinct.contains(key) {
-                distinct.push(*key);
+        for ctx in views {
+            let shading = self.shading_key(ctx);
+            let start = partition_keys.len();
+            for p in self.partitions(ctx) {
+                let key = crate::PipelineKey { variant: crate::PipelineVariant::from_mask(p.mask), ..shading };
+                if !distinct.contains(&key) {
+                    distinct.push(key);
+                }
+                partition_keys.push(key);
             }
+            shading_keys.push(shading);
+            key_ranges.push(start..partition_keys.len());
         }
         let pipelines = futures::future::join_all(distinct.iter().map(|key| {
             let ctx = views[0];
             ctx.pipelines.get(&ctx.gpu.device, *key)
         }));
-        let lighting = futures::future::try_join_all(views.iter().map(|ctx| async move {
+        // Only the views that read a shadow map or a probe have a lighting
+        // group to await; the others bind the shared empty group.
+        let lit: Vec<usize> = match &self.lighting {
+            Some(config) => {
+                (0..views.len()).filter(|i| super::forward_lighting::reads_inputs(views[*i], config)).collect()
+            }
+            None => Vec::new(),
+        };
+        let lighting = futures::future::try_join_all(lit.iter().map(|i| async move {
             match &self.lighting {
-                Some(config) => super::forward_lighting::bind_group(ctx, config).await,
+                Some(config) => super::forward_lighting::bind_group(views[*i], config).await,
                 None => Ok(None),
             }
         }));
-        let (pipelines, lighting) = futures::future::join(pipelines, lighting).await;
-        let lighting = lighting?;
-        let pipeline_of = |key: &crate::PipelineKey| -> wgpu::RenderPipeline {
-            // Every key of `keys` is in `distinct`, in the same order as `pipelines`.
-            let at = distinct.iter().position(|k| k == key).unwrap_or(0);
-            pipelines[at].clone()
-        };
-        let prepared: Vec<(Option<wgpu::BindGroup>, Vec<wgpu::RenderPipeline>, crate::PipelineKey)> = lighting
-            .into_iter()
-            .zip(&keys)
-            .map(|(lighting, (shading, partitions))| (lighting, partitions.iter().map(pipeline_of).collect(), *shading))
+        let (pipelines, lit_groups) = futures::future::join(pipelines, lighting).await;
+        let mut lighting: Vec<Option<wgpu::BindGroup>> = vec![None; views.len()];
+        for (i, group) in lit.into_iter().zip(lit_groups?) {
+            lighting[i] = group;
+        }
+        // Every key is in `distinct`, in the order of `pipelines`.
+        let partition_pipelines: Vec<wgpu::RenderPipeline> = partition_keys
+            .iter()
+            .map(|key| pipelines[distinct.iter().position(|k| k == key).unwrap_or(0)].clone())
             .collect();
 
         // Views sharing a page of an atlas share its render pass; any other
@@ -603,7 +614,8 @@ impl MeshPass {
             let mut bound = Bound::default();
             for &i in members {
                 let ctx = views[i];
-                let (lighting, pipelines, shading) = &prepared[i];
+                let (lighting, pipelines, shading) =
+                    (&lighting[i], &partition_pipelines[key_ranges[i].clone()], &shading_keys[i]);
                 if let Some(tile) = ctx.targets.tile {
                     let (w, h) = (ctx.targets.width, ctx.targets.height);
                     pass.set_viewport(tile.x as f32, tile.y as f32, w as f32, h as f32, 0.0, 1.0);

@@ -322,12 +322,19 @@ impl GpuVisibility {
             }
         }
 
+        // Batches first: a camera culled with its batch needs no buffers,
+        // parameter upload or bind group of its own (a rig of a thousand
+        // moving cameras would otherwise write a thousand of each a frame).
+        uploaded += self.prepare_batches(device, queue, heap, views);
         for state in self.views.values_mut() {
             state.seen = false;
         }
         for request in views {
             let Some(plan) = request.prepared.gpu_plan() else { continue };
             let id = request.view.view_id;
+            if self.batch_members.contains_key(&id) {
+                continue;
+            }
             let state = self.views.entry(id).or_insert_with(|| ViewCull {
                 params: device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("cull params"),
@@ -417,7 +424,6 @@ impl GpuVisibility {
             }
         }
         self.views.retain(|_, state| state.seen);
-        uploaded += self.prepare_batches(device, queue, heap, views);
         self.uploaded_last_frame = uploaded;
     }
 
@@ -479,11 +485,10 @@ impl GpuVisibility {
             let (deterministic, room) = (plans[0].deterministic, plans[0].capacity);
             for (camera, (request, plan)) in requests.iter().zip(&plans).enumerate() {
                 let id = request.view.view_id;
-                let hiz = self.views.get(&id).and_then(|s| s.hiz.as_ref());
                 // Each camera's occupancy in the batch's history, one after
-                // the other.
+                // the other. Frustum culling only: no depth pyramid.
                 let occupancy_base = camera as u32 * room;
-                params.push(CullParams { counter_base: base, occupancy_base, ..cull_params(request, plan, hiz) });
+                params.push(CullParams { counter_base: base, occupancy_base, ..cull_params(request, plan, None) });
                 batch.cameras.push((id, base));
                 self.batch_members.insert(id, (key, base));
                 // The plan's counters, then the coverage counters (see `prepare`).
@@ -692,11 +697,7 @@ impl GpuVisibility {
     /// and command steps, one after the other. What [`GpuVisibility::record_early`]
     /// does view by view, without a compute pass per view.
     pub fn record_early_batch(&self, encoder: &mut wgpu::CommandEncoder, views: &[ViewId]) {
-        let states: Vec<&ViewCull> = views.iter().filter_map(|v| self.views.get(v)).collect();
-        if states.is_empty() {
-            return;
-        }
-        let _span = info_span!("cull_early_batch", views = states.len()).entered();
+        let _span = info_span!("cull_early_batch", views = views.len()).entered();
         // Every camera in one batch's buffers: one clear, one dispatch per step.
         let key = views.first().and_then(|v| self.batch_members.get(v)).map(|(key, _)| *key);
         if let Some(batch) = key.and_then(|key| self.batches.get(&key))
@@ -711,6 +712,10 @@ impl GpuVisibility {
             }
             let steps = self.early_steps(batch.instances, batch.groups, batch.deterministic);
             Self::dispatch(encoder, batch.bind_group.as_ref(), &steps, batch.cameras.len() as u32);
+            return;
+        }
+        let states: Vec<&ViewCull> = views.iter().filter_map(|v| self.views.get(v)).collect();
+        if states.is_empty() {
             return;
         }
         for state in &states {
@@ -810,11 +815,11 @@ impl GpuVisibility {
         prepared: &PreparedSceneFrame,
     ) -> Result<Vec<(oxygen_sceneprep::PassMask, Vec<oxygen_sceneprep::DrawMetadata>)>, oxygen_gpu::GpuError> {
         let _span = info_span!("read_draws", view = %prepared.view_id()).entered();
-        let (Some(plan), Some(state)) = (prepared.gpu_plan(), self.views.get(&prepared.view_id())) else {
+        // A camera culled with its batch has its counters in the batch's buffer.
+        let (Some(plan), Some((counts, base))) = (prepared.gpu_plan(), self.counters_of(prepared.view_id())) else {
             return Ok(Vec::new());
         };
         let words = |bytes: Vec<u8>| -> Vec<u32> { bytemuck::pod_collect_to_vec(&bytes) };
-        let (counts, base) = self.counters_of(prepared.view_id()).unwrap_or((&state.counts.buffer, 0));
         let counts = words(gpu.read_buffer(counts, base, u64::from(plan.counters()) * 4)?);
         let slots = prepared.slots();
         let command_size = std::mem::size_of::<oxygen_sceneprep::DrawIndexedIndirect>() as u64;
