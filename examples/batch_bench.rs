@@ -59,6 +59,9 @@
 //! run on this adapter, its storage-pulled line): run `raster_floor` on
 //! the same machine first. `BATCH_BENCH_TARGET_BUDGET_MIB` raises the
 //! targets' budget (`RendererOptions::target_budget_bytes`);
+//! `BATCH_BENCH_TURN_DEGREES=D` turns the ring about the grid by D degrees
+//! a frame, so that every camera has a new pose every frame (a rig on a
+//! moving robot); by default the cameras stand still.
 //! `BATCH_BENCH_MAX_PAGE_SIDE=S` caps the atlas' pages at S pixels
 //! (`BatchDesc::with_max_page_side`): at the cameras' size, one camera a
 //! page and a render pass per camera, which is what array layers cost
@@ -72,6 +75,7 @@
 use std::time::Instant;
 
 use oxygen::batch::{BatchDesc, StreamOptions, StreamedFrame};
+use oxygen::core::ViewContext;
 
 use oxygen::gpu::{Label, LabelSet};
 use oxygen::prelude::*;
@@ -90,10 +94,19 @@ fn box_grid(count: usize) -> (Scene, f32) {
     (grid.scene, grid.side)
 }
 
-/// Camera `i` of `n` on the ring.
-fn ring_camera(i: usize, n: usize, side: f32, size: UVec2) -> Result<LookAtResolver, Box<dyn std::error::Error>> {
+/// Camera `i` of `n` on the ring, turning about the vertical axis by
+/// `turn` radians a frame (0: standing still).
+fn ring_camera(i: usize, n: usize, side: f32, size: UVec2, turn: f32) -> Result<ViewDesc, Box<dyn std::error::Error>> {
     let eye = oxygen_demo::ring_eye(i, n, side);
-    Ok(LookAtResolver::new(Camera::try_perspective(60f32.to_radians(), 0.1, None)?, eye, Vec3::ZERO, size)?)
+    let look = LookAtResolver::new(Camera::try_perspective(60f32.to_radians(), 0.1, None)?, eye, Vec3::ZERO, size)?;
+    if turn == 0.0 {
+        return Ok(ViewDesc::new(look));
+    }
+    // A new pose every frame, as a rig's cameras on a moving robot have.
+    Ok(ViewDesc::new(move |ctx: &ViewContext, scene: &Scene| {
+        let rotation = glam::Quat::from_rotation_y(turn * ctx.frame_index as f32);
+        LookAtResolver { eye: rotation * eye, ..look }.resolve(ctx, scene)
+    }))
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -166,6 +179,7 @@ fn run(
     in_flight: u32,
     planes: StreamOptions,
     max_page_side: Option<u32>,
+    turn: f32,
 ) -> Result<Run, Box<dyn std::error::Error>> {
     let mut renderer = Renderer::new_headless_with(*options)?;
     if visibility.on_gpu() && !renderer.gpu_visibility_supported() {
@@ -187,8 +201,7 @@ fn run(
         Mode::Views => None,
     };
     for i in 0..views {
-        let camera = ring_camera(i, views, side, size)?;
-        let desc = ViewDesc::new(camera).with_visibility(visibility);
+        let desc = ring_camera(i, views, side, size, turn)?.with_visibility(visibility);
         let desc =
             if readback && batch.is_none() { desc.with_label_planes(LabelSet::of(&[Label::Instance])) } else { desc };
         ids.push(match batch {
@@ -378,6 +391,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Ok(side) => Some(side.parse::<u32>().map_err(|_| format!("BATCH_BENCH_MAX_PAGE_SIDE={side}: pixels"))?),
         Err(_) => None,
     };
+    // Cameras turning about the grid by this many degrees a frame: a new
+    // pose for every camera every frame (0: standing still).
+    let turn = match std::env::var("BATCH_BENCH_TURN_DEGREES") {
+        Ok(degrees) => match degrees.parse::<f32>() {
+            Ok(d) if d.is_finite() => d.to_radians(),
+            _ => return Err(format!("BATCH_BENCH_TURN_DEGREES={degrees}: a finite number of degrees").into()),
+        },
+        Err(_) => 0.0,
+    };
     // The batch's streamed planes (the lone views read all three).
     let planes = match std::env::var("BATCH_BENCH_PLANES") {
         Ok(list) => {
@@ -455,6 +477,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 in_flight,
                 planes,
                 max_page_side,
+                turn,
             )?;
             let (cpu, whole, gpu) = (median(&r.cpu_ms), median(&r.frame_ms), median(&r.gpu_ms));
             let per_second = *views as f64 / (whole / 1e3);
