@@ -227,4 +227,51 @@ mod tests {
         assert!(on_workers.load(Ordering::Relaxed) > 0, "no job ran on a worker");
         assert!(result.is_err(), "a worker's panic was lost");
     }
+
+    /// `threads` counts the caller's thread with the spawned workers: a
+    /// pool of four reports 4 (not 0, 1, 3 - 1 or 3 * 1), one of one
+    /// (or zero, which is one) reports 1.
+    #[test]
+    fn a_pool_counts_the_callers_thread_among_its_threads() {
+        assert_eq!(WorkerPool::new(4).threads(), 4);
+        assert_eq!(WorkerPool::new(1).threads(), 1);
+        assert_eq!(WorkerPool::new(0).threads(), 1);
+    }
+
+    /// A run of at most one item, or on a pool without workers, is done
+    /// inline: the workers are never woken, so the pool's generation (bumped
+    /// by every run that hands the job to the workers) stays 0. Read from
+    /// the state rather than from which thread ran the job, which would
+    /// only race.
+    #[test]
+    fn a_run_of_one_item_or_without_workers_wakes_no_worker() {
+        let caller = std::thread::current().id();
+        let on_caller = AtomicU64::new(0);
+        let job = |_| {
+            if std::thread::current().id() == caller {
+                on_caller.fetch_add(1, Ordering::Relaxed);
+            }
+        };
+        let pool = WorkerPool::new(3);
+        pool.run(0, &job);
+        pool.run(1, &job);
+        assert_eq!(pool.shared.lock().generation, 0, "a run of one item woke the workers");
+        let alone = WorkerPool::new(1);
+        alone.run(5, &job);
+        assert_eq!(alone.shared.lock().generation, 0, "a pool without workers handed out a job");
+        assert_eq!(on_caller.load(Ordering::Relaxed), 6);
+    }
+
+    /// Dropping the pool ends its workers: each holds the shared state
+    /// until its thread returns, so once `drop` is back nothing holds it.
+    /// (A pool that never told them to stop would leave them parked
+    /// forever, still holding it.)
+    #[test]
+    fn dropping_the_pool_ends_its_worker_threads() {
+        let pool = WorkerPool::new(3);
+        pool.run(8, &|_| {});
+        let shared = Arc::downgrade(&pool.shared);
+        drop(pool);
+        assert!(shared.upgrade().is_none(), "a worker thread outlived its pool");
+    }
 }

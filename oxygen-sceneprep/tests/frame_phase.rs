@@ -290,3 +290,196 @@ fn only_a_positive_finite_range_bounds_a_light() {
         }
     }
 }
+
+/// A renderable of `geometry` under a new node at `t`.
+fn mesh_node(scene: &mut Scene, name: &str, t: Transform, geometry: oxygen_core::GeometryHandle) -> NodeKey {
+    let material = scene.add_material(Material::opaque(name, Vec4::ONE));
+    let node = scene.add_node(name, t);
+    scene.set_renderable(node, Renderable { geometry, materials: vec![material] }).expect("a renderable on a new node");
+    node
+}
+
+/// A one-unit quad whose every vertex is weighed half to joint 0, half to
+/// joint 1 (so its vertices name two joints).
+fn two_joint_quad(scene: &mut Scene) -> oxygen_core::GeometryHandle {
+    let quad = Geometry::quad(1.0);
+    let weights = vec![oxygen_core::SkinWeights::new([0, 1, 0, 0], [0.5, 0.5, 0.0, 0.0]); quad.vertices().len()];
+    scene.add_geometry(quad.with_skin_weights(weights).expect("one weight record per vertex"))
+}
+
+/// Gives `node` a skin over new joint nodes at `joints`, identity bind matrices.
+fn skin_on(scene: &mut Scene, node: NodeKey, joints: &[Transform]) {
+    let joints: Vec<NodeKey> = joints.iter().map(|t| scene.add_node("joint", *t)).collect();
+    let binds = vec![glam::Mat4::IDENTITY; joints.len()];
+    scene
+        .set_skin(node, Some(oxygen_core::Skin { joints, inverse_bind_matrices: binds }))
+        .expect("joints of this scene, one bind matrix each");
+}
+
+/// The frame's entry of renderable `node`.
+fn renderable(prep: &ScenePrep, node: NodeKey) -> &oxygen_sceneprep::RenderableEntry {
+    let entries = &prep.frame_collection().renderables;
+    entries.iter().find(|e| e.node == node).expect("the node is among the frame's renderables")
+}
+
+/// What the frame skipped: each node with its reason.
+fn skipped(prep: &ScenePrep) -> Vec<(NodeKey, &'static str)> {
+    prep.frame_collection().skipped.iter().map(|s| (s.node, s.reason)).collect()
+}
+
+/// A morphed renderable's header among the frame's matrices is its vertex
+/// count, its target count, then one weight per target, zeros after, 16
+/// floats a matrix, in as many matrices as those 2 + targets floats need
+/// (its world matrix follows). The scene keeps weights past the targets:
+/// two extra non-zero ones here must not leak into the padding (1 target:
+/// the float after its weight; 15: the one after the second matrix's
+/// first), and 14 targets fill exactly one matrix (16 floats, not 2 × 14).
+#[test]
+fn a_morph_header_holds_the_counts_then_one_weight_per_target() {
+    for targets in [1usize, 14, 15] {
+        let mut scene = Scene::new();
+        let quad = Geometry::quad(1.0);
+        let vertices = quad.vertices().len();
+        let morphs = (0..targets)
+            .map(|_| oxygen_core::MorphTarget { positions: vec![Vec3::Z * 0.01; vertices], normals: None })
+            .collect();
+        let geometry = scene.add_geometry(quad.with_morph_targets(morphs).expect("a few finite targets"));
+        let node = mesh_node(&mut scene, "morphed", Transform::IDENTITY, geometry);
+        let weights: Vec<f32> = (1..=targets + 2).map(|i| i as f32 / 64.0).collect();
+        scene.set_morph_weights(node, weights.clone()).expect("weights of a node of the scene");
+        let prep = prepared_with_one_view(&scene);
+        let entry = renderable(&prep, node);
+        let matrices = (2 + targets).div_ceil(16);
+        assert_eq!(entry.transform_index, entry.morph_base + matrices as u32, "{targets} targets");
+        let world = &prep.frame_collection().transforms.world;
+        let header: Vec<f32> = world[entry.morph_base as usize..entry.transform_index as usize]
+            .iter()
+            .flat_map(|m| m.to_cols_array())
+            .collect();
+        let mut expected = vec![vertices as f32, targets as f32];
+        expected.extend_from_slice(&weights[..targets]);
+        expected.resize(16 * matrices, 0.0);
+        assert_eq!(header, expected, "{targets} targets");
+    }
+}
+
+/// A renderable's world matrix reaches the GPU relative to the render
+/// origin: its translation minus the origin, its axes unchanged. The cube
+/// sits 3.25, 2.5 and 0.125 from the origin, not 2e6 away (where adding the
+/// origin would put it).
+#[test]
+fn a_renderables_world_matrix_is_rebased_on_the_render_origin() {
+    let origin = glam::DVec3::new(1.0e6, 0.0, -1.0e6);
+    let mut scene = Scene::new();
+    // Both coordinates are f32 numbers (multiples of 1/16 near 1e6).
+    let node = cube_node(&mut scene, "far", Transform::from_translation(Vec3::new(1.0e6 + 3.25, 2.5, -1.0e6 + 0.125)));
+    let mut prep = ScenePrep::new();
+    prep.set_render_origin(origin);
+    let v = view(&scene);
+    prep.prepare(&scene, &[ViewRequest { view: &v, options: Default::default() }], &mut SlotAllocators::default())
+        .expect("a frame of one cube");
+    let world = prep.frame_collection().transforms.world[renderable(&prep, node).transform_index as usize];
+    assert_eq!(world, glam::Mat4::from_translation(Vec3::new(3.25, 2.5, 0.125)));
+}
+
+/// A finite scale whose determinant overflows `f32` (1e13 per axis: 1e39)
+/// has no normal matrix: its inverse would round to zero, a matrix that
+/// turns every normal into nothing, so the node is skipped like a singular
+/// one rather than drawn unlit.
+#[test]
+fn a_transform_whose_determinant_overflows_is_skipped() {
+    let mut scene = Scene::new();
+    let huge = cube_node(&mut scene, "huge", Transform::IDENTITY.with_scale(Vec3::splat(1.0e13)));
+    let prep = prepared_with_one_view(&scene);
+    assert!(prep.frame_collection().renderables.is_empty());
+    assert_eq!(skipped(&prep), vec![(huge, "non-finite or singular world transform")]);
+}
+
+/// A singular node transform hides a mesh unless a skin places it: a
+/// skinned mesh with its skin is kept (its joints place it, the node's
+/// transform is unused), but a rigid mesh under a skin, or a skinned mesh
+/// without one, is drawn with its node's flat transform, so each of those
+/// is skipped. One of the two conditions alone must not be enough.
+#[test]
+fn a_singular_transform_hides_a_mesh_unless_its_skin_places_it() {
+    let mut scene = Scene::new();
+    let flat = Transform::IDENTITY.with_scale(Vec3::new(1.0, 0.0, 1.0));
+    let skinned = two_joint_quad(&mut scene);
+    let rigid = scene.add_geometry(Geometry::quad(1.0));
+    let placed = mesh_node(&mut scene, "skinned mesh, skin", flat, skinned);
+    skin_on(&mut scene, placed, &[Transform::IDENTITY; 2]);
+    let rigid_under_skin = mesh_node(&mut scene, "rigid mesh, skin", flat, rigid);
+    skin_on(&mut scene, rigid_under_skin, &[Transform::IDENTITY; 2]);
+    let no_skin = mesh_node(&mut scene, "skinned mesh, no skin", flat, skinned);
+    let prep = prepared_with_one_view(&scene);
+    let kept: Vec<NodeKey> = prep.frame_collection().renderables.iter().map(|e| e.node).collect();
+    assert_eq!(kept, vec![placed]);
+    let reason = "non-finite or singular world transform";
+    assert_eq!(skipped(&prep), vec![(rigid_under_skin, reason), (no_skin, reason)]);
+}
+
+/// A skinned or a morphed renderable is drawn with its base mesh, so its
+/// LODs are left out of the frame (their vertices carry no skin or morph
+/// records); a rigid one keeps its LOD. Each deformation alone is enough:
+/// the skinned quad has no morph targets, the morphed one no skin.
+#[test]
+fn a_skinned_or_morphed_renderable_is_drawn_without_its_lods() {
+    let mut scene = Scene::new();
+    let coarse = scene.add_geometry(Geometry::quad(1.0));
+    let lod = [oxygen_core::LodLevel { geometry: coarse, below_screen_fraction: 0.1 }];
+    let rigid = scene.add_geometry(Geometry::quad(1.0));
+    let skinned = two_joint_quad(&mut scene);
+    let quad = Geometry::quad(1.0);
+    let morph = oxygen_core::MorphTarget { positions: vec![Vec3::Z * 0.1; quad.vertices().len()], normals: None };
+    let morphed = scene.add_geometry(quad.with_morph_targets(vec![morph]).expect("one finite target"));
+    let mut nodes = Vec::new();
+    for (name, geometry) in [("rigid", rigid), ("skinned", skinned), ("morphed", morphed)] {
+        let node = mesh_node(&mut scene, name, Transform::IDENTITY, geometry);
+        scene.set_lods(node, lod.to_vec()).expect("a one-submesh LOD of a one-submesh mesh");
+        nodes.push(node);
+    }
+    skin_on(&mut scene, nodes[1], &[Transform::IDENTITY; 2]);
+    let prep = prepared_with_one_view(&scene);
+    let lod_counts: Vec<u32> = nodes.iter().map(|n| renderable(&prep, *n).lods.1).collect();
+    assert_eq!(lod_counts, vec![1, 0, 0], "rigid, skinned, morphed");
+}
+
+/// A skin may have more joints than its mesh's vertices name (the spare
+/// one moves nothing), but a mesh naming a joint past the skin's joints
+/// (here joint 1 of a one-joint skin) is skipped with that reason.
+#[test]
+fn a_skin_may_have_spare_joints_but_none_missing() {
+    let mut scene = Scene::new();
+    let skinned = two_joint_quad(&mut scene);
+    let spare = mesh_node(&mut scene, "three joints", Transform::IDENTITY, skinned);
+    skin_on(&mut scene, spare, &[Transform::IDENTITY; 3]);
+    let missing = mesh_node(&mut scene, "one joint", Transform::IDENTITY, skinned);
+    skin_on(&mut scene, missing, &[Transform::IDENTITY]);
+    let prep = prepared_with_one_view(&scene);
+    let kept: Vec<NodeKey> = prep.frame_collection().renderables.iter().map(|e| e.node).collect();
+    assert_eq!(kept, vec![spare]);
+    assert_eq!(skipped(&prep), vec![(missing, "a vertex names a joint past the skin's joints")]);
+}
+
+/// A skinned mesh's winding follows its first joint, not its node: a
+/// first joint scaled by -1 along X (determinant -1) draws it mirrored
+/// under an unmirrored node, and plain joints draw it unmirrored under a
+/// mirrored node.
+#[test]
+fn a_skinned_mesh_is_mirrored_by_its_first_joint() {
+    let mut scene = Scene::new();
+    let skinned = two_joint_quad(&mut scene);
+    let mirror = Transform::IDENTITY.with_scale(Vec3::new(-1.0, 1.0, 1.0));
+    let by_joint = mesh_node(&mut scene, "mirrored joint", Transform::IDENTITY, skinned);
+    skin_on(&mut scene, by_joint, &[mirror, Transform::IDENTITY]);
+    let by_node = mesh_node(&mut scene, "mirrored node", mirror, skinned);
+    skin_on(&mut scene, by_node, &[Transform::IDENTITY; 2]);
+    let prep = prepared_with_one_view(&scene);
+    let mirrored = |node| {
+        let (first, count) = renderable(&prep, node).submeshes;
+        assert_eq!(count, 1);
+        prep.frame_collection().submeshes[first as usize].pass_mask.contains(oxygen_sceneprep::PassMask::MIRRORED)
+    };
+    assert!(mirrored(by_joint), "a mirroring first joint");
+    assert!(!mirrored(by_node), "plain joints under a mirroring node");
+}
