@@ -445,12 +445,12 @@ COMPOSE_MUTANTS = [
 
 OUTPUT_MUTANTS = [
     ("output-label-not-offset", LABELS,
-     "return Labels(draw.node_id + 1u,",
-     "return Labels(draw.node_id,",
+     "labels.instance = draw.node_id + 1u;",
+     "labels.instance = draw.node_id;",
      "instance labels name the node before the one drawn (and 0 is a node)"),
     ("output-semantic-class-dropped", LABELS,
-     "vec4<f32>(n, 1.0), semantic, bitcast",
-     "vec4<f32>(n, 1.0), 0u, bitcast",
+     "labels.semantic_class = normal_transform_domain",
+     "labels.semantic_class = 0u * normal_transform_domain",
      "the semantic plane shows no class (the normal record's class is not read)"),
     ("output-linear-depth-behind", LABELS,
      "let linear_depth = -(scene.camera.view",

@@ -2,7 +2,7 @@
 //! variant a partition selects (alpha × sidedness × winding), the targets,
 //! the depth bias and the optional shader code ([`PipelineKey`]).
 
-use oxygen_gpu::LabelSet;
+use oxygen_gpu::{Label, LabelSet};
 use oxygen_sceneprep::PassMask;
 
 use super::{Exposure, ShaderFeatures};
@@ -159,12 +159,23 @@ impl PipelineKey {
     /// The WGSL override constants the forward shader is specialised with
     /// (empty for depth-only passes).
     pub fn override_constants(&self) -> Vec<(&'static str, f64)> {
+        // The label planes drawn (mesh/label_values.wgsl, in every module
+        // that writes labels: the labels pass and the shading passes).
+        let drawn = |label| f64::from(u8::from(self.labels.contains(label)));
+        let labels = [
+            ("LABEL_INSTANCE", drawn(Label::Instance)),
+            ("LABEL_NORMAL", drawn(Label::Normal)),
+            ("LABEL_SEMANTIC", drawn(Label::Semantic)),
+            ("LABEL_LINEAR_DEPTH", drawn(Label::LinearDepth)),
+        ];
         match self.pass {
-            PassKind::DepthPrePass | PassKind::Shadow | PassKind::Labels => Vec::new(),
+            PassKind::DepthPrePass | PassKind::Shadow => Vec::new(),
+            PassKind::Labels => labels.to_vec(),
             PassKind::ShadingAfterPrePass | PassKind::Shading | PassKind::Transparent => {
                 let mut constants = self.features.override_constants().to_vec();
                 constants.push(("TONE_MAP_OUTPUT", f64::from(u8::from(self.tone_map.is_some()))));
                 constants.push(("EXPOSURE", f64::from(self.tone_map.map_or(1.0, Exposure::get))));
+                constants.extend(labels);
                 constants
             }
         }
