@@ -117,3 +117,47 @@ fn the_mesh_nodes_own_transform_does_not_touch_a_skinned_mesh() {
         assert_same(&actual, &expected, what);
     }
 }
+
+/// Found by mutation testing (sceneprep shard 4): the skin records were
+/// found at `skin - start` of the mesh's vertex range, and every test above
+/// puts the skinned mesh at the start of the vertex buffer, where
+/// `skin + start` is the same place. Here a rigid cube is drawn first and
+/// takes the buffer's start; the skinned cube must still be where its
+/// joint puts it.
+#[test]
+fn a_skinned_mesh_after_other_geometry_reads_its_own_weights() {
+    let moved = Transform::from_translation(Vec3::new(0.6, 0.1, 0.0));
+    let grey = Vec4::new(0.5, 0.5, 0.5, 1.0);
+    // The small cube's node comes first, so its geometry is placed first.
+    let first_a_small_cube = |scene: &mut Scene| {
+        let material = scene.add_material(Material::opaque("grey", grey));
+        let geometry = scene.add_geometry(Geometry::cube(0.4));
+        let node = scene.add_node("first", Transform::from_translation(Vec3::new(-1.3, -0.5, 0.0)));
+        scene.set_renderable(node, Renderable { geometry, materials: vec![material] }).unwrap();
+    };
+    let mut expected_scene = Scene::new();
+    first_a_small_cube(&mut expected_scene);
+    let material = expected_scene.add_material(Material::opaque("orange", Vec4::new(0.9, 0.5, 0.1, 1.0)));
+    let geometry = expected_scene.add_geometry(Geometry::cube(1.0));
+    let node = expected_scene.add_node("rigid", moved);
+    expected_scene.set_renderable(node, Renderable { geometry, materials: vec![material] }).unwrap();
+    with_sun(&mut expected_scene);
+
+    let mut scene = Scene::new();
+    first_a_small_cube(&mut scene);
+    let material = scene.add_material(Material::opaque("orange", Vec4::new(0.9, 0.5, 0.1, 1.0)));
+    let cube = Geometry::cube(1.0);
+    let weights = vec![SkinWeights::new([0, 0, 0, 0], [1.0, 0.0, 0.0, 0.0]); cube.vertices().len()];
+    let geometry = scene.add_geometry(cube.with_skin_weights(weights).unwrap());
+    let joint = scene.add_node("joint", moved);
+    let node = scene.add_node("skinned", Transform::IDENTITY);
+    scene.set_renderable(node, Renderable { geometry, materials: vec![material] }).unwrap();
+    scene.set_skin(node, Some(Skin { joints: vec![joint], inverse_bind_matrices: vec![Mat4::IDENTITY] })).unwrap();
+    with_sun(&mut scene);
+
+    let (expected, expected_draws) = render(&expected_scene, Vec3::ZERO);
+    assert_eq!(expected_draws, 2, "both cubes are in view");
+    let (actual, draws) = render(&scene, Vec3::ZERO);
+    assert_eq!(draws, 2, "both cubes are in view");
+    assert_same(&actual, &expected, "a skinned mesh placed second");
+}
