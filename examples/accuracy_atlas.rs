@@ -16,10 +16,17 @@
 //! clamped to 4, so that a highlight's peak does not swamp it), and SSIM of
 //! the tone-mapped sRGB luma (1 = identical; 8 × 8 windows, stride 4).
 //!
+//! Each reference is traced twice, with two seeds: the two images differ
+//! only by their noise, and their RMSE over √2 estimates one reference's
+//! own RMSE against the converged picture (tests/reference_view.rs checks
+//! that estimate). It is the scene's noise floor, printed beside each row:
+//! a knob's error near it is below what the reference can resolve.
+//!
 //! `accuracy_atlas --chart atlas.csv atlas.png` redraws the chart from a
 //! run's CSV.
 //!
-//! Writes `OUT_DIR/atlas.csv` (one row per setting), `OUT_DIR/atlas.png`
+//! Writes `OUT_DIR/atlas.csv` (one row per setting, with its scene's
+//! reference noise), `OUT_DIR/atlas.png`
 //! (time against RMSE, one curve per knob), and per setting an error map
 //! `OUT_DIR/error_<knob>_<setting>.png` (|raster − reference| luminance,
 //! ×8, white = 1/8 or more), and each scene's reference picture
@@ -106,6 +113,8 @@ struct Row {
     ms: f64,
     rmse: f64,
     ssim: f64,
+    /// The scene's reference noise (RMSE; 0 read from an older CSV).
+    noise: f64,
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -131,31 +140,36 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .value("measured_frames", MEASURED)
         .value("rmse_clamp", RMSE_CLAMP);
 
-    // The references, one per stage, traced once.
+    // The references, one per stage, each traced with two seeds: the
+    // first is the reference, the pair measures its noise.
     let mut references = Vec::new();
     for stage in &mut stages {
         if let Some(node) = stage.moving {
             move_to_frame(&mut stage.scene, node, FRAMES - 1);
         }
         let started = Instant::now();
-        let (hdr, srgb, adapter) = reference(stage, samples)?;
+        let (hdr, srgb, adapter) = reference(stage, samples, ReferenceSettings::DEFAULT_SEED)?;
         srgb.save(out.join(format!("reference_{}.png", file_name(stage.name))))?;
         let seconds = started.elapsed().as_secs_f64();
+        let (other, _, _) = reference(stage, samples, ReferenceSettings::DEFAULT_SEED.wrapping_add(1))?;
+        let noise = rmse(&hdr, &other) / std::f64::consts::SQRT_2;
         eprintln!(
-            "[atlas] reference of {}: {samples} samples per pixel in {seconds:.1} s on {}",
+            "[atlas] reference of {}: {samples} samples per pixel in {seconds:.1} s on {}, noise RMSE {noise:.5}",
             stage.name, adapter.name
         );
         record.set_adapter(&adapter);
-        record
-            .push_row_to("reference_rows", RecordRow::new().value("scene", stage.name).value("trace_seconds", seconds));
-        references.push((hdr, srgb));
+        record.push_row_to(
+            "reference_rows",
+            RecordRow::new().value("scene", stage.name).value("trace_seconds", seconds).value("noise_rmse", noise),
+        );
+        references.push((hdr, srgb, noise));
     }
 
     let mut rows = Vec::new();
     for (i, setting) in settings.iter().enumerate() {
         let stage = &mut stages[setting.stage];
         let (hdr, srgb, ms, timed_on_gpu) = raster(stage, setting)?;
-        let (reference_hdr, reference_srgb) = &references[setting.stage];
+        let (reference_hdr, reference_srgb, noise) = &references[setting.stage];
         let rmse = rmse(&hdr, reference_hdr);
         let ssim = ssim(&srgb, reference_srgb);
         let name = format!("{}_{}", file_name(setting.knob), file_name(&setting.value));
@@ -166,7 +180,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             srgb.save(out.join(format!("raster_{name}.png")))?;
         }
         eprintln!(
-            "[atlas] {}/{} {} = {}: {ms:.2} ms, RMSE {rmse:.5}, SSIM {ssim:.4}",
+            "[atlas] {}/{} {} = {}: {ms:.2} ms, RMSE {rmse:.5} (reference noise {noise:.5}), SSIM {ssim:.4}",
             i + 1,
             settings.len(),
             setting.knob,
@@ -181,23 +195,33 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .value("frame_ms", ms)
                 .value("frame_ms_from", if timed_on_gpu { "gpu timestamps" } else { "wall clock, waited" })
                 .value("rmse_linear", rmse)
+                .value("reference_noise_rmse", *noise)
                 .value("ssim", ssim),
         );
-        rows.push(Row { knob: setting.knob, value: setting.value.clone(), stage: stage_name, ms, rmse, ssim });
+        rows.push(Row {
+            knob: setting.knob,
+            value: setting.value.clone(),
+            stage: stage_name,
+            ms,
+            rmse,
+            ssim,
+            noise: *noise,
+        });
     }
 
-    let mut csv = String::from("knob,setting,scene,frame_ms,rmse_linear,ssim\n");
+    let mut csv = String::from("knob,setting,scene,frame_ms,rmse_linear,ssim,reference_noise_rmse\n");
     for r in &rows {
         // Names never hold the separator.
         let cell = |s: &str| s.replace(',', ";");
         csv.push_str(&format!(
-            "{},{},{},{:.4},{:.6},{:.5}\n",
+            "{},{},{},{:.4},{:.6},{:.5},{:.6}\n",
             cell(r.knob),
             cell(&r.value),
             cell(r.stage),
             r.ms,
             r.rmse,
-            r.ssim
+            r.ssim,
+            r.noise
         ));
     }
     std::fs::write(out.join("atlas.csv"), csv)?;
@@ -216,7 +240,9 @@ fn file_name(name: &str) -> String {
 fn read_csv(text: &str) -> Result<Vec<Row>, Box<dyn std::error::Error>> {
     let mut rows = Vec::new();
     for line in text.lines().skip(1).filter(|l| !l.trim().is_empty()) {
-        let cells: Vec<&str> = line.split(',').collect();
+        let mut cells: Vec<&str> = line.split(',').collect();
+        // Older CSVs have no noise column.
+        let noise = if cells.len() == 7 { cells.pop().unwrap_or("0") } else { "0" };
         let [knob, value, stage, ms, rmse, ssim] = cells[..] else {
             return Err(format!("not a row of the atlas: {line}").into());
         };
@@ -229,6 +255,7 @@ fn read_csv(text: &str) -> Result<Vec<Row>, Box<dyn std::error::Error>> {
             ms: ms.parse()?,
             rmse: rmse.parse()?,
             ssim: ssim.parse()?,
+            noise: noise.parse()?,
         });
     }
     Ok(rows)
@@ -471,10 +498,12 @@ fn settings() -> Vec<Setting> {
     all
 }
 
-/// The stage's reference: HDR and tone-mapped images, and the adapter.
+/// The stage's reference traced with `seed`: HDR and tone-mapped images,
+/// and the adapter.
 fn reference(
     stage: &Stage,
     samples: u32,
+    seed: u32,
 ) -> Result<(HdrPixels, image::RgbaImage, wgpu::AdapterInfo), Box<dyn std::error::Error>> {
     let mut renderer = Renderer::new_headless_with(RendererOptions {
         keep_hdr: true,
@@ -483,7 +512,7 @@ fn reference(
         origin: RenderOrigin::FollowFirstView { grid: 1.0 },
         ..Default::default()
     })?;
-    let settings = ReferenceSettings { samples_per_frame: 16, max_samples: samples, ..stage.reference };
+    let settings = ReferenceSettings { samples_per_frame: 16, max_samples: samples, seed, ..stage.reference };
     let view = renderer
         .register_view(ViewDesc::new(stage.camera).path_traced(), ReferenceGraph { settings, exposure: 1.0 })?;
     while renderer.reference_samples(view) < samples {

@@ -39,6 +39,16 @@ const ERROR_SAMPLES: [u32; 3] = [4, 16, 64];
 const ERROR_RATIO_MIN: f64 = 1.6;
 /// … and less than this.
 const ERROR_RATIO_MAX: f64 = 2.5;
+/// Samples per pixel of the two seeds' images in
+/// `two_seeds_measure_a_references_own_noise`.
+const NOISE_SAMPLES: u32 = 16;
+/// The band of that test's ratio (noise estimated from two seeds over the
+/// error against a converged image): 0.992 measured on lavapipe, Vulkan
+/// and GL alike; ±5 % is about two standard errors of such a ratio over
+/// the image's 1 728 values. An estimate that forgot the √2 reads 1.40,
+/// two seeds whose noise is shared read near 0.
+const NOISE_ESTIMATE_RATIO_MIN: f64 = 0.95;
+const NOISE_ESTIMATE_RATIO_MAX: f64 = 1.05;
 /// The emissive square: the traced radiance within this share of the
 /// BRDF integrated over the square.
 const EMISSIVE_TOLERANCE_REL: f64 = 0.05;
@@ -176,6 +186,7 @@ fn a_white_furnace_returns_the_environment_times_the_brdf_albedo() {
         environment: [1.0; 3],
         raster_model: false,
         raster_reflections: false,
+        seed: ReferenceSettings::DEFAULT_SEED,
     };
     let mut rows = Vec::new();
     for (name, metallic, roughness) in [("white diffuse", 0.0, 1.0), ("rough white metal", 1.0, 0.6)] {
@@ -231,6 +242,7 @@ fn the_error_falls_as_one_over_the_square_root_of_the_samples() {
         environment: [0.2; 3],
         raster_model: false,
         raster_reflections: false,
+        seed: ReferenceSettings::DEFAULT_SEED,
     };
     let reference_settings =
         ReferenceSettings { samples_per_frame: 256, max_samples: ERROR_REFERENCE_SAMPLES, ..settings(0) };
@@ -264,6 +276,73 @@ fn the_error_falls_as_one_over_the_square_root_of_the_samples() {
             .value("ratios", ratios)
             .value("ratio_min", ERROR_RATIO_MIN)
             .value("ratio_max", ERROR_RATIO_MAX)
+    });
+}
+
+/// The RMSE of two HDR images' colour channels.
+fn rmse_between(a: &oxygen::gpu::HdrImage, b: &oxygen::gpu::HdrImage) -> f64 {
+    let sum: f64 = a
+        .pixels
+        .iter()
+        .zip(&b.pixels)
+        .map(|(a, b)| (0..3).map(|c| (f64::from(a[c]) - f64::from(b[c])).powi(2)).sum::<f64>())
+        .sum();
+    (sum / (a.pixels.len() * 3) as f64).sqrt()
+}
+
+/// Two references that differ only in their seed differ only by their
+/// noise: one seed gives one image, bit for bit, another seed another, and
+/// the two seeds' RMSE over √2 estimates one image's RMSE against the
+/// converged picture. That estimate is what the accuracy atlas reports as
+/// each reference's noise floor.
+#[test]
+fn two_seeds_measure_a_references_own_noise() {
+    let mut scene =
+        sphere_scene(Material { roughness: 0.7, ..Material::opaque("ball", Vec4::new(0.8, 0.5, 0.3, 1.0)) });
+    let floor = scene.add_geometry(Geometry::plane(8.0));
+    let grey = scene.add_material(Material::opaque("floor", Vec4::splat(0.6)));
+    let node = scene.add_node("floor", Transform::from_translation(Vec3::new(0.0, -1.0, 0.0)));
+    scene.set_renderable(node, Renderable { geometry: floor, materials: vec![grey] }).unwrap();
+    oxygen_demo::add_default_sun(&mut scene);
+    let camera = look_at(Vec3::new(0.0, 1.5, 4.0), Vec3::ZERO, 32, 50.0);
+    let settings = |samples, seed| ReferenceSettings {
+        samples_per_frame: samples,
+        max_samples: samples,
+        max_bounces: 3,
+        environment: [0.2; 3],
+        seed,
+        ..ReferenceSettings::DEFAULT
+    };
+    let seed = ReferenceSettings::DEFAULT_SEED;
+    let (a, _) = trace(&scene, camera, settings(NOISE_SAMPLES, seed), 1);
+    let (again, _) = trace(&scene, camera, settings(NOISE_SAMPLES, seed), 1);
+    let (b, _) = trace(&scene, camera, settings(NOISE_SAMPLES, seed.wrapping_add(1)), 1);
+    assert!(a.pixels == again.pixels, "the same seed must give the same image");
+    assert!(a.pixels != b.pixels, "another seed must give other noise");
+    // Converged with a third seed, so that it shares no sample with `a`.
+    let converged_settings = ReferenceSettings {
+        samples_per_frame: 256,
+        max_samples: ERROR_REFERENCE_SAMPLES,
+        ..settings(0, seed.wrapping_add(2))
+    };
+    let (converged, _) = trace(&scene, camera, converged_settings, 4);
+    let estimate = rmse_between(&a, &b) / std::f64::consts::SQRT_2;
+    let actual = rmse_between(&a, &converged);
+    let ratio = estimate / actual;
+    eprintln!("noise estimate {estimate:.5}, error against the converged image {actual:.5}, ratio {ratio:.3}");
+    assert!(
+        (NOISE_ESTIMATE_RATIO_MIN..NOISE_ESTIMATE_RATIO_MAX).contains(&ratio),
+        "two seeds estimate the noise as {estimate}, the error against the converged image is {actual}"
+    );
+    support::record::write(|record| {
+        record
+            .value("samples", NOISE_SAMPLES)
+            .value("reference_samples", ERROR_REFERENCE_SAMPLES)
+            .value("estimate", estimate)
+            .value("actual", actual)
+            .value("ratio", ratio)
+            .value("ratio_min", NOISE_ESTIMATE_RATIO_MIN)
+            .value("ratio_max", NOISE_ESTIMATE_RATIO_MAX)
     });
 }
 
@@ -314,6 +393,7 @@ fn an_emissive_square_lights_a_plane_as_the_closed_form_says() {
         environment: [0.0; 3],
         raster_model: false,
         raster_reflections: false,
+        seed: ReferenceSettings::DEFAULT_SEED,
     };
     let mut rows = Vec::new();
     for point_x in [0.8f32, 1.5] {
@@ -484,6 +564,7 @@ fn the_reference_is_lit_by_the_renderer_environment() {
         environment: [0.0; 3],
         raster_model: false,
         raster_reflections: false,
+        seed: ReferenceSettings::DEFAULT_SEED,
     };
     let scene = sphere_scene(Material { metallic: 0.0, roughness: 1.0, ..Material::opaque("white", Vec4::ONE) });
     let mut renderer = gpu_renderer();
@@ -601,6 +682,7 @@ fn image_based_lighting_against_the_traced_reference() {
         environment: [0.0; 3],
         raster_model: false,
         raster_reflections: false,
+        seed: ReferenceSettings::DEFAULT_SEED,
     };
     // The camera looks at the sphere from +Z; the disc of 20 px stays
     // inside its 22.7 px silhouette.

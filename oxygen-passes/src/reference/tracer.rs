@@ -55,6 +55,11 @@ pub struct ReferenceSettings {
     /// surroundings' raster-model radiance along the reflection, weighted
     /// by the raster's split-sum BRDF. The reference for probe knobs.
     pub raster_reflections: bool,
+    /// The seed of every pixel's random sequence. Two references that
+    /// differ only in their seed differ only by their noise, which is how
+    /// the accuracy atlas measures a reference's own error (a new seed
+    /// restarts accumulation).
+    pub seed: u32,
 }
 
 impl ReferenceSettings {
@@ -67,7 +72,11 @@ impl ReferenceSettings {
         environment: [0.03; 3],
         raster_model: false,
         raster_reflections: false,
+        seed: Self::DEFAULT_SEED,
     };
+
+    /// The seed of [`Self::DEFAULT`] and the presets built on it.
+    pub const DEFAULT_SEED: u32 = 0x6f78_7967;
 
     /// The raster pass's light transport, traced: see [`Self::raster_model`].
     /// The environment is the forward pass's default clear colour, what a
@@ -82,8 +91,9 @@ impl ReferenceSettings {
 
     /// What restarts accumulation when it changes (a new cap or a new
     /// number of samples per frame continues the same mean).
-    fn key(&self) -> [u32; 6] {
+    fn key(&self) -> [u32; 7] {
         [
+            self.seed,
             self.max_bounces,
             self.environment[0].to_bits(),
             self.environment[1].to_bits(),
@@ -313,7 +323,7 @@ impl ReferenceTracer {
                 },
                 flags: settings.flags() | if ctx.lighting.has_environment() { ENVIRONMENT_MAP } else { 0 },
                 tlas_root: self.tlas_root,
-                seed: 0x6f78_7967,
+                seed: settings.seed,
                 node_base: self.ranges.map_or(0, |r| r[0].start),
                 word_base: self.ranges.map_or(0, |r| r[1].start),
                 instance_base: self.ranges.map_or(0, |r| r[2].start),
