@@ -124,7 +124,7 @@ for group in $groups; do
       ;;
     lighting)
       run environment_bench -- 7
-      run accuracy_atlas -- "$out/atlas" 1280 1024
+      run accuracy_atlas -- "$out/atlas" 1280 16384
       ;;
     msaa-parts)
       for graph in full no-pre-pass pre-pass unlit; do
