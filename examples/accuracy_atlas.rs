@@ -19,8 +19,9 @@
 //! Each reference is traced twice, with two seeds: the two images differ
 //! only by their noise, and their RMSE over √2 estimates one reference's
 //! own RMSE against the converged picture (tests/reference_view.rs checks
-//! that estimate). It is the scene's noise floor, printed beside each row:
-//! a knob's error near it is below what the reference can resolve.
+//! that estimate, unclamped). It is the scene's noise floor, measured in
+//! the same clamped RMSE as the rows and printed beside each: a knob's
+//! error near it is below what the reference can resolve.
 //!
 //! `accuracy_atlas --chart atlas.csv atlas.png` redraws the chart from a
 //! run's CSV.

@@ -411,7 +411,9 @@ impl Views {
     /// frustum culling, the batch graph having no depth pre-pass phases).
     /// Links (`ViewDesc::reads`) are kept; what a batch camera cannot have
     /// is refused: anti-aliasing, sun cascades of its own, a window
-    /// rectangle, a path-traced reference. Remove it with
+    /// rectangle, a path-traced reference, a visibility path other than
+    /// the batch's other cameras' (the same `with_visibility`, or none for
+    /// all). Remove it with
     /// [`Views::unregister`].
     pub fn add_camera(&mut self, batch: BatchId, desc: impl Into<ViewDesc>) -> Result<ViewId, RenderError> {
         let desc = desc.into();
@@ -431,6 +433,22 @@ impl Views {
             return Err(RenderError::InvalidBatch {
                 name: entry.name.clone(),
                 reason: format!("a batch camera cannot have {what}"),
+            });
+        }
+        // One visibility path for the whole batch: its cameras are culled
+        // and drawn together (a camera culled on the CPU among cameras
+        // culled on the GPU drew the wrong draws).
+        if let Some(first) = entry.cameras().next().and_then(|c| self.entries.get(&c))
+            && first.visibility != desc.visibility
+        {
+            let path = |v: Option<Visibility>| v.map_or("the renderer's default".to_owned(), |v| format!("{v:?}"));
+            return Err(RenderError::InvalidBatch {
+                name: entry.name.clone(),
+                reason: format!(
+                    "a batch's cameras share one visibility path: its cameras use {}, this camera asks for {}",
+                    path(first.visibility),
+                    path(desc.visibility)
+                ),
             });
         }
         for link in &desc.links {

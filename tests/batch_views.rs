@@ -798,3 +798,27 @@ fn normal_labels_of_a_double_sided_surface_face_the_camera() {
         assert!((n[1] - up).abs() < 1e-3, "{view}: normal {n:?}, expected y = {up}");
     }
 }
+
+/// Found in review: a batch whose cameras did not all cull on the GPU (one
+/// on the CPU path among GPU-culled ones) drew wrong images: the GPU
+/// cameras nothing (their one batch dispatch was skipped), the CPU camera
+/// the wrong draws. A batch's cameras now share one visibility path, and a
+/// camera asking for another is refused with the reason, before any frame.
+#[test]
+fn a_batch_refuses_a_camera_on_another_visibility_path() {
+    use oxygen::sceneprep::Visibility;
+    use oxygen::views::Views;
+    let size = UVec2::new(64, 48);
+    let cameras = ring(3, size);
+    let mut views = Views::new();
+    let batch = views.register_batch(BatchDesc::new("rig", size)).unwrap();
+    views.add_camera(batch, ViewDesc::new(cameras[0]).with_visibility(Visibility::GpuFrustum)).unwrap();
+    views.add_camera(batch, ViewDesc::new(cameras[1]).with_visibility(Visibility::GpuFrustum)).unwrap();
+    for other in [ViewDesc::new(cameras[2]).with_visibility(Visibility::Cpu), ViewDesc::new(cameras[2])] {
+        let error = views.add_camera(batch, other).expect_err("another visibility path is refused");
+        let text = error.to_string();
+        assert!(text.contains("share one visibility path") && text.contains("GpuFrustum"), "{text}");
+    }
+    // The same path is taken.
+    views.add_camera(batch, ViewDesc::new(cameras[2]).with_visibility(Visibility::GpuFrustum)).unwrap();
+}

@@ -44,11 +44,13 @@ const ERROR_RATIO_MAX: f64 = 2.5;
 const NOISE_SAMPLES: u32 = 16;
 /// The band of that test's ratio (noise estimated from two seeds over the
 /// error against a converged image): 0.992 measured on lavapipe, Vulkan
-/// and GL alike; ±5 % is about two standard errors of such a ratio over
-/// the image's 1 728 values. An estimate that forgot the √2 reads 1.40,
-/// two seeds whose noise is shared read near 0.
-const NOISE_ESTIMATE_RATIO_MIN: f64 = 0.95;
-const NOISE_ESTIMATE_RATIO_MAX: f64 = 1.05;
+/// and GL alike (the converged image's own noise, 1024 samples, pulls it
+/// down by about 0.8 %). ±8 % is over three standard errors of such a
+/// ratio over the image's 1 728 values, so that a change in how the tracer
+/// draws its samples does not fail it by chance; an estimate that forgot
+/// the √2 reads 1.40, two seeds whose noise is shared read near 0.
+const NOISE_ESTIMATE_RATIO_MIN: f64 = 0.92;
+const NOISE_ESTIMATE_RATIO_MAX: f64 = 1.08;
 /// The emissive square: the traced radiance within this share of the
 /// BRDF integrated over the square.
 const EMISSIVE_TOLERANCE_REL: f64 = 0.05;

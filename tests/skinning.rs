@@ -118,8 +118,8 @@ fn the_mesh_nodes_own_transform_does_not_touch_a_skinned_mesh() {
     }
 }
 
-/// Found by mutation testing (sceneprep shard 4): the skin records were
-/// found at `skin - start` of the mesh's vertex range, and every test above
+/// Found by mutation testing (sceneprep shard 4): the upload writes the skin
+/// records at offset `skin - start` of the mesh's vertex range, and every test above
 /// puts the skinned mesh at the start of the vertex buffer, where
 /// `skin + start` is the same place. Here a rigid cube is drawn first and
 /// takes the buffer's start; the skinned cube must still be where its

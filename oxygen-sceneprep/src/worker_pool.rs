@@ -53,7 +53,8 @@ pub struct WorkerPool {
 
 impl WorkerPool {
     /// A pool that runs jobs on `threads` threads in total (the caller's
-    /// thread included), so `threads - 1` workers are spawned.
+    /// thread included), so `threads - 1` workers are spawned; 0 counts as
+    /// 1 (the caller alone).
     pub fn new(threads: usize) -> Self {
         let shared = Arc::new(Shared {
             state: Mutex::new(State {
@@ -229,7 +230,7 @@ mod tests {
     }
 
     /// `threads` counts the caller's thread with the spawned workers: a
-    /// pool of four reports 4 (not 0, 1, 3 - 1 or 3 * 1), one of one
+    /// pool of four (three workers and the caller) reports 4, one of one
     /// (or zero, which is one) reports 1.
     #[test]
     fn a_pool_counts_the_callers_thread_among_its_threads() {

@@ -156,8 +156,9 @@ impl PipelineKey {
         }
     }
 
-    /// The WGSL override constants the forward shader is specialised with
-    /// (empty for depth-only passes).
+    /// The WGSL override constants the pipeline's module is specialised
+    /// with: the shading passes' features, tone map and label planes, the
+    /// labels pass's label planes, none for depth-only passes.
     pub fn override_constants(&self) -> Vec<(&'static str, f64)> {
         // The label planes drawn (mesh/label_values.wgsl, in every module
         // that writes labels: the labels pass and the shading passes).

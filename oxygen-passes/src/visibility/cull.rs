@@ -270,8 +270,10 @@ impl GpuVisibility {
     }
 
     /// Uploads what changed in `scene` and each view's parameters (only when
-    /// they changed), and makes sure every view has its buffers, pyramid and
-    /// bind group. Views not named are forgotten.
+    /// they changed), and makes sure every view culled alone has its
+    /// buffers, pyramid and bind group; a batch's cameras culled together
+    /// share the batch's instead, and have none of their own. Views not
+    /// named are forgotten.
     pub fn prepare(
         &mut self,
         device: &wgpu::Device,
@@ -587,7 +589,8 @@ impl GpuVisibility {
     /// cover, capped at 1 per group and summed, never more than all draws'
     /// coverage, then turned into times shaded by
     /// [`oxygen_sceneprep::expected_shaded_layers`]): `None` before the
-    /// first readback.
+    /// first readback, and for a camera culled with its batch (no coverage
+    /// is read back for those).
     pub fn estimated_overdraw(&self, view: ViewId) -> Option<f32> {
         self.views.get(&view)?.overdraw
     }
@@ -672,7 +675,8 @@ impl GpuVisibility {
     }
 
     /// Phase 1 for `view`: clears its counters, culls, writes list A.
-    /// Nothing for a view that is not on a GPU path this frame.
+    /// Nothing for a view that is not on a GPU path this frame, nor for a
+    /// camera culled with its batch ([`GpuVisibility::record_early_batch`]).
     pub fn record_early(&self, encoder: &mut wgpu::CommandEncoder, view: ViewId) {
         let Some(state) = self.views.get(&view) else { return };
         let _span = info_span!("cull_early", view = %view).entered();
@@ -692,17 +696,21 @@ impl GpuVisibility {
         [(&self.cull_early, instances), (&self.compact_early, compact), (&self.commands_early, groups)]
     }
 
-    /// Phase 1 for every view of `views` (a batch's cameras) in one
-    /// compute pass: their counters cleared first, then each view's cull
-    /// and command steps, one after the other. What [`GpuVisibility::record_early`]
-    /// does view by view, without a compute pass per view.
+    /// Phase 1 for every view of `views` (a batch's cameras): the cameras
+    /// culled together in one clear and one dispatch per step, the others
+    /// on a GPU path each with its own counters and steps, in one compute
+    /// pass (what [`GpuVisibility::record_early`] does view by view,
+    /// without a compute pass per view); cameras on the CPU path are
+    /// skipped.
     pub fn record_early_batch(&self, encoder: &mut wgpu::CommandEncoder, views: &[ViewId]) {
         let _span = info_span!("cull_early_batch", views = views.len()).entered();
-        // Every camera in one batch's buffers: one clear, one dispatch per step.
-        let key = views.first().and_then(|v| self.batch_members.get(v)).map(|(key, _)| *key);
+        // The cameras culled together (every camera of the batch on the
+        // GPU frustum path): one clear and one dispatch per step for all
+        // of them, in the batch's buffers. A batch may also hold cameras
+        // that are not (another visibility path, or none on the GPU): they
+        // are culled one by one below, each in its own buffers.
+        let key = views.iter().find_map(|v| self.batch_members.get(v)).map(|(key, _)| *key);
         if let Some(batch) = key.and_then(|key| self.batches.get(&key))
-            && batch.cameras.len() == views.len()
-            && views.iter().all(|v| self.batch_members.get(v).is_some_and(|(k, _)| Some(*k) == key))
             && batch.bind_group.is_some()
         {
             encoder.clear_buffer(&batch.counts.buffer, 0, None);
@@ -712,9 +720,9 @@ impl GpuVisibility {
             }
             let steps = self.early_steps(batch.instances, batch.groups, batch.deterministic);
             Self::dispatch(encoder, batch.bind_group.as_ref(), &steps, batch.cameras.len() as u32);
-            return;
         }
-        let states: Vec<&ViewCull> = views.iter().filter_map(|v| self.views.get(v)).collect();
+        let states: Vec<&ViewCull> =
+            views.iter().filter(|v| !self.batch_members.contains_key(v)).filter_map(|v| self.views.get(v)).collect();
         if states.is_empty() {
             return;
         }
