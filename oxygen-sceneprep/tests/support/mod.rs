@@ -1,7 +1,8 @@
 //! A global allocator that counts the heap allocations made while
-//! [`COUNTING`] is set: the zero-allocation tests include this module (each
-//! is a test binary of a single test, so that no other test allocates while
-//! it counts).
+//! [`COUNTING`] is set, on every thread: the zero-allocation tests include
+//! this module, each a test binary without libtest's harness
+//! (`harness = false` in Cargo.toml), so that nothing else in the process
+//! allocates while it counts.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
