@@ -10,7 +10,7 @@ use oxygen::core::{AlphaMode, NodeKey, Scene, ViewContext, ViewIds, ViewResolver
 use oxygen::import::{GltfError, ImportOptions, import_gltf};
 use oxygen::prelude::*;
 use oxygen::sceneprep::{ScenePrep, ViewRequest};
-use support::encode::base64_encode;
+use support::encode::{base64_encode, data_uri, png_chunk};
 
 fn asset(relative: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets").join(relative)
@@ -252,4 +252,62 @@ fn a_cameras_aspect_ratio_is_kept_when_positive_and_finite_and_dropped_quietly_o
         assert_eq!(imported.aspect_ratio, *expected, "{camera}");
     }
     assert!(import.warnings.is_empty(), "{:?}", import.warnings);
+}
+
+/// A triangle whose material's base-colour texture is `png`, all in `data:`
+/// URIs.
+fn textured_triangle(png: &[u8]) -> String {
+    let positions: Vec<u8> = [[0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
+        .iter()
+        .flat_map(|p| p.iter().flat_map(|c| c.to_le_bytes()))
+        .collect();
+    format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
+        "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"material":0}}]}}],
+        "materials":[{{"pbrMetallicRoughness":{{"baseColorTexture":{{"index":0}}}}}}],
+        "textures":[{{"source":0}}],"images":[{{"uri":"{}"}}],
+        "buffers":[{{"byteLength":36,"uri":"{}"}}],"bufferViews":[{{"buffer":0,"byteLength":36}}],
+        "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}}]}}"#,
+        data_uri("image/png", png),
+        data_uri("application/octet-stream", &positions)
+    )
+}
+
+/// A 1 × 1 RGBA8 PNG carrying a `tEXt` chunk of `text_bytes` bytes.
+fn one_texel_png_with_text(text_bytes: usize) -> Vec<u8> {
+    let mut encoded = std::io::Cursor::new(Vec::new());
+    image::RgbaImage::from_pixel(1, 1, image::Rgba([255, 128, 0, 255]))
+        .write_to(&mut encoded, image::ImageFormat::Png)
+        .expect("a 1 x 1 PNG encodes");
+    let encoded = encoded.into_inner();
+    // The signature (8 bytes) and the IHDR chunk (25) come first.
+    let (head, rest) = encoded.split_at(8 + 25);
+    let mut text = b"Comment\0".to_vec();
+    text.resize(text.len() + text_bytes, b'x');
+    let mut png = head.to_vec();
+    png_chunk(&mut png, b"tEXt", &text);
+    png.extend(rest);
+    png
+}
+
+/// The decoder's allocations are capped at 12 bytes a texel plus 1 MiB:
+/// a 1 × 1 picture carrying 64 KiB of text decodes, one carrying 2 MiB is
+/// refused as invalid, naming its image. A cap of 12 bytes a texel times
+/// 1 MiB (12 MiB here) would take the 2 MiB.
+#[test]
+fn a_small_picture_carrying_megabytes_of_metadata_is_refused_by_the_decoders_allocation_cap() {
+    let import = |text_bytes| {
+        let file = textured_triangle(&one_texel_png_with_text(text_bytes));
+        oxygen::import::import_gltf_slice(&mut Scene::new(), file.as_bytes(), "texel.gltf", &ImportOptions::default())
+    };
+    let small = import(64 << 10).expect("64 KiB of text fits under the cap");
+    assert_eq!(small.renderables, 1);
+    match import(2 << 20) {
+        Err(err @ GltfError::Invalid { .. }) => {
+            let text = err.to_string();
+            assert!(text.contains("image 0") && text.contains("limit"), "{text}");
+        }
+        Err(other) => panic!("expected the image to be refused as invalid, got {other}"),
+        Ok(_) => panic!("2 MiB of text passed the decoder's allocation cap"),
+    }
 }

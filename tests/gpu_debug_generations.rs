@@ -104,3 +104,33 @@ fn a_stale_draw_range_is_painted_magenta() {
     let flagged = magenta_pixels(&image);
     assert!(flagged > 96 * 64 / 4, "only {flagged} pixels flagged");
 }
+
+/// The GPU culling path writes its draws itself, and stamps each with its
+/// range's generation as the CPU path does: in debug mode a GPU-culled
+/// view paints nothing magenta, and every draw it read back carries the
+/// generation (found by the WGSL mutant `generation-not-stamped-by-cull`,
+/// which no test caught: the tests above draw on the CPU path).
+#[test]
+fn debug_generations_flag_nothing_on_the_gpu_culling_path() {
+    use oxygen::sceneprep::Visibility;
+    let options = RendererOptions { debug_generations: true, ..Default::default() };
+    let mut renderer = support::gpu_renderer_with(options);
+    if !renderer.gpu_visibility_supported() {
+        support::skip::skip(format_args!(
+            "{} cannot run GPU visibility (needs multi-draw-indirect with counts)",
+            renderer.gpu().describe()
+        ));
+        return;
+    }
+    let demo = multi_view_scene();
+    let desc = ViewDesc::new(main_camera(UVec2::new(96, 64))).with_visibility(Visibility::GpuFrustum);
+    let view = renderer.register_view(desc, standard_render_graph).unwrap();
+    for _ in 0..3 {
+        renderer.render_frame(&demo.scene).unwrap();
+    }
+    let generation = renderer.prepared_frame(view).unwrap().slots().draw_metadata.generation();
+    let draws: Vec<_> = renderer.view_draws(view).unwrap().into_iter().flat_map(|(_, draws)| draws).collect();
+    assert!(!draws.is_empty(), "the view draws the scene");
+    assert!(draws.iter().all(|d| d.generation == generation), "every GPU-written draw carries generation {generation}");
+    assert_eq!(magenta_pixels(&support::read_lit_color(&renderer, view)), 0);
+}

@@ -349,3 +349,142 @@ fn warn_non_finite(m: &Material, label: &str, warnings: &mut Vec<String>) {
         warnings.push(format!("{label}: non-finite {} replaced by defaults", bad.join(", ")));
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::ImportLimits;
+    use super::*;
+
+    /// A transform whose every field differs from the extension's defaults
+    /// (offset 0, rotation 0, scale 1, no texCoord), so a default one does
+    /// not read back the same.
+    fn raw_transform() -> json::Value {
+        serde_json::json!({"offset": [0.5, -0.25], "rotation": 0.3, "scale": [2.0, 3.0], "texCoord": 1})
+    }
+
+    /// Normal and occlusion textures keep `KHR_texture_transform` as raw
+    /// JSON: a readable one is read field by field, an absent or unreadable
+    /// one is no transform.
+    #[test]
+    fn a_raw_texture_transform_is_read_field_by_field_and_an_unreadable_one_is_ignored() {
+        let t = transform_in(Some(&raw_transform())).expect("a well-formed transform is read");
+        assert_eq!(t.offset.0, [0.5, -0.25]);
+        assert_eq!(t.rotation.0, 0.3);
+        assert_eq!(t.scale.0, [2.0, 3.0]);
+        assert_eq!(t.tex_coord, Some(1));
+        assert!(transform_in(None).is_none());
+        assert!(transform_in(Some(&serde_json::json!({"rotation": "a quarter turn"}))).is_none());
+    }
+
+    /// The texture's transform reaches its `UvTransform`, the extension's
+    /// texCoord (1) overriding the texture info's (0); none of it is the
+    /// identity a default `UvTransform` is.
+    #[test]
+    fn a_texture_transform_and_its_tex_coord_become_the_uv_transform() {
+        let transform = json::deserialize::from_value(raw_transform()).expect("the transform deserializes");
+        let info = TextureRef { index: json::Index::new(0), tex_coord: 0, transform: Some(transform) };
+        let mut warnings = Vec::new();
+        let uv = uv_transform(&info, "material 0", "normal", &mut warnings);
+        let expected =
+            UvTransform { uv_set: 1, offset: Vec2::new(0.5, -0.25), rotation: 0.3, scale: Vec2::new(2.0, 3.0) };
+        assert_eq!(uv, expected);
+        assert!(warnings.is_empty(), "{warnings:?}");
+    }
+
+    /// A transform with any one field not finite (1e39 reads as infinity) is
+    /// dropped whole with a warning, the others finite: one test per field
+    /// tells `a && b && c` from `a || b && c` and `a && (b || c)`. The
+    /// extension's texCoord is still used.
+    #[test]
+    fn a_texture_transform_with_any_one_field_not_finite_is_ignored_with_a_warning() {
+        for (field, value) in [("offset", "[1e39, 0.5]"), ("rotation", "1e39"), ("scale", "[2.0, 1e39]")] {
+            let mut fields = raw_transform();
+            fields[field] = json::deserialize::from_str(value).expect("a JSON value");
+            let transform = json::deserialize::from_value(fields).expect("the transform deserializes");
+            let info = TextureRef { index: json::Index::new(0), tex_coord: 0, transform: Some(transform) };
+            let mut warnings = Vec::new();
+            let uv = uv_transform(&info, "material 0", "normal", &mut warnings);
+            assert_eq!(uv, UvTransform { uv_set: 1, ..UvTransform::IDENTITY }, "{field}");
+            assert_eq!(warnings, ["material 0: the normal texture's transform is not finite; ignored"], "{field}");
+        }
+    }
+
+    /// Sets 0 and 1 are kept without a warning; 2 and up (2 is the boundary
+    /// a `>=` or `==` in place of `>` moves) read set 0 with a warning.
+    #[test]
+    fn texcoord_sets_0_and_1_are_kept_and_a_later_set_reads_set_0_with_a_warning() {
+        for (tex_coord, expected_set, warned) in [(0, 0, false), (1, 1, false), (2, 0, true), (5, 0, true)] {
+            let info = TextureRef { index: json::Index::new(0), tex_coord, transform: None };
+            let mut warnings = Vec::new();
+            let uv = uv_transform(&info, "material 0", "emissive", &mut warnings);
+            assert_eq!(uv, UvTransform { uv_set: expected_set, ..UvTransform::IDENTITY }, "texCoord {tex_coord}");
+            let expected_warning = format!(
+                "material 0: the emissive texture uses texcoord set {tex_coord}; set 0 is used (Oxygen keeps two)"
+            );
+            assert_eq!(warnings, if warned { vec![expected_warning] } else { vec![] }, "texCoord {tex_coord}");
+        }
+    }
+
+    /// A PNG of `width` × `height` texels.
+    fn png(width: u32, height: u32) -> Vec<u8> {
+        let mut bytes = Cursor::new(Vec::new());
+        image::RgbaImage::new(width, height).write_to(&mut bytes, image::ImageFormat::Png).expect("the PNG encodes");
+        bytes.into_inner()
+    }
+
+    /// The RGBA8 texels kept are charged at 4 bytes each: 3 × 2 texels are
+    /// 24 bytes, where `6 + 4` or `6 / 4` would charge 10 or 1.
+    #[test]
+    fn a_decoded_image_charges_four_bytes_a_texel_to_the_budget() {
+        let mut budget = Budget::new(ImportLimits::default());
+        let Ok((width, height, pixels)) = decode(&png(3, 2), &mut budget) else { panic!("the PNG decodes") };
+        assert_eq!((width, height, pixels.len()), (3, 2, 24));
+        assert_eq!(budget.total_bytes(), 24);
+    }
+
+    /// Beside the 4 bytes a texel kept, the decoder's buffer (8 bytes a
+    /// texel) must fit for a moment: 3 × 2 texels need 24 + 48 bytes, so a
+    /// total of 72 decodes and 71 is refused naming the 72, where a `+` or
+    /// `/` in place of the `*` would ask for far less.
+    #[test]
+    fn a_decoders_buffer_of_eight_bytes_a_texel_must_fit_beside_the_texels_kept() {
+        let budget = |max_total_bytes| Budget::new(ImportLimits { max_total_bytes, ..ImportLimits::default() });
+        assert!(decode(&png(3, 2), &mut budget(72)).is_ok(), "72 bytes are enough");
+        let Err(DecodeError::Limit(refused)) = decode(&png(3, 2), &mut budget(71)) else {
+            panic!("71 bytes are too few")
+        };
+        assert_eq!(refused, LimitExceeded { limit: "max_total_bytes", value: 72, max: 71 });
+    }
+
+    /// A finite material gets no warning; each non-finite factor alone is
+    /// named in one warning, and two at once in the same one.
+    #[test]
+    fn non_finite_factors_are_named_in_one_warning_and_a_finite_material_gets_none() {
+        type Edit = fn(&mut Material);
+        let warned = |edit: Edit| {
+            let mut material = Material::opaque("m", Vec4::ONE);
+            edit(&mut material);
+            let mut warnings = Vec::new();
+            warn_non_finite(&material, "material 3", &mut warnings);
+            warnings
+        };
+        assert!(warned(|_| {}).is_empty(), "a finite material");
+        let cases: [(&str, Edit); 7] = [
+            ("baseColorFactor", |m| m.base_color.y = f32::NAN),
+            ("emissive", |m| m.emissive.z = f32::INFINITY),
+            ("metallicFactor", |m| m.metallic = f32::NAN),
+            ("roughnessFactor", |m| m.roughness = f32::NEG_INFINITY),
+            ("normalTexture.scale", |m| m.normal_scale = f32::NAN),
+            ("occlusionTexture.strength", |m| m.occlusion_strength = f32::INFINITY),
+            ("alphaCutoff", |m| m.alpha_mode = AlphaMode::Mask { cutoff: f32::NAN }),
+        ];
+        for (name, edit) in cases {
+            assert_eq!(warned(edit), [format!("material 3: non-finite {name} replaced by defaults")]);
+        }
+        let both = warned(|m| {
+            m.metallic = f32::NAN;
+            m.alpha_mode = AlphaMode::Mask { cutoff: f32::INFINITY };
+        });
+        assert_eq!(both, ["material 3: non-finite metallicFactor, alphaCutoff replaced by defaults"]);
+    }
+}
