@@ -270,14 +270,7 @@ fn every_path_draws_one_sequence_whatever_the_history() {
     // frame) and late in that order too.
     let scene = tie_scene();
     let options = RendererOptions { deterministic: true, ..Default::default() };
-    let mut renderer = support::gpu_renderer_with(options);
-    if !renderer.gpu_visibility_supported() {
-        support::skip::skip(format_args!(
-            "{} cannot run GPU visibility (needs multi-draw-indirect with counts)",
-            renderer.gpu().describe()
-        ));
-        return;
-    }
+    let Some(mut renderer) = support::gpu_visibility_renderer(options) else { return };
     let (_, eye, target, (w, h), _) = VIEWS[0];
     // First a close look at the grid's left column only: every group then
     // has members drawn early (seen there) and late, in no instance order.

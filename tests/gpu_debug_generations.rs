@@ -114,14 +114,7 @@ fn a_stale_draw_range_is_painted_magenta() {
 fn debug_generations_flag_nothing_on_the_gpu_culling_path() {
     use oxygen::sceneprep::Visibility;
     let options = RendererOptions { debug_generations: true, ..Default::default() };
-    let mut renderer = support::gpu_renderer_with(options);
-    if !renderer.gpu_visibility_supported() {
-        support::skip::skip(format_args!(
-            "{} cannot run GPU visibility (needs multi-draw-indirect with counts)",
-            renderer.gpu().describe()
-        ));
-        return;
-    }
+    let Some(mut renderer) = support::gpu_visibility_renderer(options) else { return };
     let demo = multi_view_scene();
     let desc = ViewDesc::new(main_camera(UVec2::new(96, 64))).with_visibility(Visibility::GpuFrustum);
     let view = renderer.register_view(desc, standard_render_graph).unwrap();

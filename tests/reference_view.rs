@@ -140,6 +140,19 @@ fn sphere_scene(material: Material) -> Scene {
     scene
 }
 
+/// A rough sphere on a grey floor under the default sun: light that
+/// bounces, for the tests of the tracer's noise.
+fn rough_sphere_on_a_floor() -> Scene {
+    let mut scene =
+        sphere_scene(Material { roughness: 0.7, ..Material::opaque("ball", Vec4::new(0.8, 0.5, 0.3, 1.0)) });
+    let floor = scene.add_geometry(Geometry::plane(8.0));
+    let grey = scene.add_material(Material::opaque("floor", Vec4::splat(0.6)));
+    let node = scene.add_node("floor", Transform::from_translation(Vec3::new(0.0, -1.0, 0.0)));
+    scene.set_renderable(node, Renderable { geometry: floor, materials: vec![grey] }).unwrap();
+    oxygen_demo::add_default_sun(&mut scene);
+    scene
+}
+
 /// The mean of the HDR image's red channel over the square of `radius`
 /// around the centre.
 fn centre_mean(image: &oxygen::gpu::HdrImage, radius: u32) -> f64 {
@@ -229,13 +242,7 @@ fn a_white_furnace_returns_the_environment_times_the_brdf_albedo() {
 fn the_error_falls_as_one_over_the_square_root_of_the_samples() {
     // A lit sphere on a floor with bounces: the error of N samples against
     // a 1024-sample image, for N = 4, 16, 64.
-    let mut scene =
-        sphere_scene(Material { roughness: 0.7, ..Material::opaque("ball", Vec4::new(0.8, 0.5, 0.3, 1.0)) });
-    let floor = scene.add_geometry(Geometry::plane(8.0));
-    let grey = scene.add_material(Material::opaque("floor", Vec4::splat(0.6)));
-    let node = scene.add_node("floor", Transform::from_translation(Vec3::new(0.0, -1.0, 0.0)));
-    scene.set_renderable(node, Renderable { geometry: floor, materials: vec![grey] }).unwrap();
-    oxygen_demo::add_default_sun(&mut scene);
+    let scene = rough_sphere_on_a_floor();
     let camera = look_at(Vec3::new(0.0, 1.5, 4.0), Vec3::ZERO, 24, 50.0);
     let settings = |samples| ReferenceSettings {
         samples_per_frame: samples,
@@ -249,15 +256,7 @@ fn the_error_falls_as_one_over_the_square_root_of_the_samples() {
     let reference_settings =
         ReferenceSettings { samples_per_frame: 256, max_samples: ERROR_REFERENCE_SAMPLES, ..settings(0) };
     let (reference, _) = trace(&scene, camera, reference_settings, 4);
-    let rmse = |image: &oxygen::gpu::HdrImage| {
-        let sum: f64 = image
-            .pixels
-            .iter()
-            .zip(&reference.pixels)
-            .map(|(a, b)| (0..3).map(|c| (f64::from(a[c]) - f64::from(b[c])).powi(2)).sum::<f64>())
-            .sum();
-        (sum / (image.pixels.len() * 3) as f64).sqrt()
-    };
+    let rmse = |image: &oxygen::gpu::HdrImage| rmse_between(image, &reference);
     let errors: Vec<f64> = ERROR_SAMPLES.iter().map(|&n| rmse(&trace(&scene, camera, settings(n), 1).0)).collect();
     eprintln!("RMSE at 4, 16, 64 samples: {errors:?}");
     for pair in errors.windows(2) {
@@ -299,13 +298,7 @@ fn rmse_between(a: &oxygen::gpu::HdrImage, b: &oxygen::gpu::HdrImage) -> f64 {
 /// each reference's noise floor.
 #[test]
 fn two_seeds_measure_a_references_own_noise() {
-    let mut scene =
-        sphere_scene(Material { roughness: 0.7, ..Material::opaque("ball", Vec4::new(0.8, 0.5, 0.3, 1.0)) });
-    let floor = scene.add_geometry(Geometry::plane(8.0));
-    let grey = scene.add_material(Material::opaque("floor", Vec4::splat(0.6)));
-    let node = scene.add_node("floor", Transform::from_translation(Vec3::new(0.0, -1.0, 0.0)));
-    scene.set_renderable(node, Renderable { geometry: floor, materials: vec![grey] }).unwrap();
-    oxygen_demo::add_default_sun(&mut scene);
+    let scene = rough_sphere_on_a_floor();
     let camera = look_at(Vec3::new(0.0, 1.5, 4.0), Vec3::ZERO, 32, 50.0);
     let settings = |samples, seed| ReferenceSettings {
         samples_per_frame: samples,

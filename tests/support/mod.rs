@@ -181,3 +181,19 @@ pub fn texture_paths() -> Vec<TexturePath> {
     }
     vec![TexturePath::BindingArray, TexturePath::GroupedArrays]
 }
+
+/// A renderer with `options` that can run GPU visibility, or `None` after
+/// counting the calling test as skipped (the adapter lacks
+/// multi-draw-indirect with counts: GL).
+#[allow(dead_code)]
+pub fn gpu_visibility_renderer(options: oxygen::RendererOptions) -> Option<oxygen::Renderer> {
+    let renderer = gpu_renderer_with(options);
+    if renderer.gpu_visibility_supported() {
+        return Some(renderer);
+    }
+    skip::skip(format_args!(
+        "{} cannot run GPU visibility (needs multi-draw-indirect with counts)",
+        renderer.gpu().describe()
+    ));
+    None
+}
