@@ -151,6 +151,37 @@ fn masked_quad_is_kept_above_its_cutoff_dropped_below_and_visible_from_behind() 
     }
 }
 
+/// A masked surface below its cutoff hides nothing behind it when the depth
+/// pre-pass lays the depth: the pre-pass cuts it out as the shading pass
+/// does, so the blue wall behind shows through where the depth test would
+/// otherwise keep the cut-out surface's depth and show the clear colour.
+#[test]
+fn a_masked_surface_below_its_cutoff_leaves_no_depth_in_the_pre_pass() {
+    let mut scene = Scene::new();
+    let quad = scene.add_geometry(Geometry::quad(2.0));
+    let wall = scene.add_geometry(Geometry::quad(6.0));
+    let dropped = scene.add_material(Material {
+        alpha_mode: AlphaMode::Mask { cutoff: 0.5 },
+        ..Material::opaque("dropped", Vec4::new(1.0, 1.0, 0.0, 0.2))
+    });
+    let blue =
+        scene.add_material(Material { roughness: 1.0, ..Material::opaque("blue", Vec4::new(0.0, 0.0, 1.0, 1.0)) });
+    let node = scene.add_node("dropped", Transform::IDENTITY);
+    scene.set_renderable(node, Renderable { geometry: quad, materials: vec![dropped] }).unwrap();
+    let node = scene.add_node("wall", Transform::from_translation(Vec3::new(0.0, 0.0, -2.0)));
+    scene.set_renderable(node, Renderable { geometry: wall, materials: vec![blue] }).unwrap();
+    add_sun(&mut scene, Vec3::new(0.0, 0.0, -1.0), 3.0);
+
+    let mut renderer = gpu_renderer();
+    let cam = camera(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, 64);
+    let view = renderer.register_view(cam, graph_with_clear).unwrap();
+    renderer.render_frame(&scene).unwrap();
+    let image = support::read_lit_color(&renderer, view);
+    let resolved = cam.resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, &scene).unwrap();
+    let is_blue = |p: Rgb| p.b > 150 && p.r < 40 && p.g < 40;
+    assert_region(&image, pixel_of(&resolved, Vec3::ZERO), 6, is_blue, 0, "the wall behind the cut-out quad");
+}
+
 #[test]
 fn pipelines_are_created_once_and_reused_across_frames() {
     let demo = oxygen_demo::multi_view_scene();

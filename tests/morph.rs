@@ -9,7 +9,7 @@ mod support;
 use std::path::PathBuf;
 
 use oxygen::core::{MaterialHandle, NodeKey};
-use oxygen::core::{MorphTarget, Skin, SkinWeights};
+use oxygen::core::{MorphTarget, Skin, SkinWeights, Vertex};
 use oxygen::glam::{Mat4, Quat, Vec4};
 use oxygen::prelude::*;
 use support::deform::{assert_same, render, with_sun};
@@ -183,6 +183,42 @@ fn a_normal_mapped_surface_s_tangents_follow_its_morph() {
     assert!(
         c.differing > c.total / 20,
         "the turned lean must shade differently: {} of {} differ",
+        c.differing,
+        c.total
+    );
+}
+
+/// Normal displacements: a target that leaves the positions where they are
+/// and leans every normal towards +Y shades the quad at full weight as a
+/// quad whose own normals lean so (the vertex shader adds the weighted
+/// displacement and normalises), and differently from the unmorphed quad.
+#[test]
+fn normal_displacements_shade_the_morphed_surface() {
+    let lean = Vec3::new(0.0, 0.6, 0.8);
+    let scene = |geometry: Geometry, weight: Option<f32>| {
+        let mut scene = Scene::new();
+        let m = material(&mut scene);
+        let geometry = scene.add_geometry(geometry);
+        let node = scene.add_node("quad", Transform::IDENTITY);
+        scene.set_renderable(node, Renderable { geometry, materials: vec![m] }).unwrap();
+        if let Some(w) = weight {
+            scene.set_morph_weights(node, vec![w]).unwrap();
+        }
+        with_sun(&mut scene);
+        render(&scene, Vec3::ZERO).0
+    };
+    let quad = Geometry::quad(2.0);
+    let n = quad.vertices().len();
+    let target = MorphTarget { positions: vec![Vec3::ZERO; n], normals: Some(vec![lean - Vec3::Z; n]) };
+    let morphable = || quad.clone().with_morph_targets(vec![target.clone()]).unwrap();
+    let leaning: Vec<Vertex> = quad.vertices().iter().map(|v| Vertex { normal: lean.to_array(), ..*v }).collect();
+    let leaning = Geometry::new("leaning", leaning, quad.indices().to_vec(), quad.submeshes().to_vec()).unwrap();
+    let morphed = scene(morphable(), Some(1.0));
+    assert_same(&morphed, &scene(leaning, None), "normals morphed against normals leaning");
+    let c = compare(&morphed, &scene(morphable(), Some(0.0)), 8);
+    assert!(
+        c.differing > c.total / 20,
+        "the leaning normals must shade differently: {} of {} differ",
         c.differing,
         c.total
     );

@@ -179,6 +179,29 @@ fn shadow_cascades_can_be_shown_as_grey_depth() {
         let (lo, hi) = cell.pixels().fold((255u8, 0u8), |(lo, hi), p| (lo.min(p[0]), hi.max(p[0])));
         assert!(hi > lo + 20, "the cascade shows its casters (grey levels {lo}..{hi})");
     }
+    // Near is white: the grey follows the cascade's device depth (reverse-Z,
+    // larger is nearer), so the texels nearest the light are the lightest.
+    // Each pixel of the rectangle shows the texel under its centre.
+    for (id, rect) in ids.iter().zip(&rects) {
+        let depth = renderer.read_depth(*id).unwrap();
+        let (origin, size) = rect.pixels(UVec2::new(200, 150));
+        let cell = crop(&composed, origin, size);
+        let mut samples: Vec<(f32, u8)> = cell
+            .enumerate_pixels()
+            .map(|(x, y, p)| {
+                let tx = ((x as f32 + 0.5) / size.x as f32 * depth.width as f32) as u32;
+                let ty = ((y as f32 + 0.5) / size.y as f32 * depth.height as f32) as u32;
+                (depth.get(tx.min(depth.width - 1), ty.min(depth.height - 1)), p[0])
+            })
+            .collect();
+        samples.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let tenth = samples.len() / 10;
+        let mean = |s: &[(f32, u8)]| s.iter().map(|(_, g)| f32::from(*g)).sum::<f32>() / s.len() as f32;
+        let (far, near) = (mean(&samples[..tenth]), mean(&samples[samples.len() - tenth..]));
+        // Measured: 11.9 against 0.0 in the far cascade (inverted, the
+        // nearest would be the darkest).
+        assert!(near > far + 5.0, "{id:?}: nearest tenth grey {near:.1}, farthest tenth {far:.1}");
+    }
     renderer.hide_from_window(ids[0]);
     let gone = renderer.add_offscreen_window(UVec2::ONE);
     renderer.remove_window(gone).unwrap();
