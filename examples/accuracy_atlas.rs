@@ -37,7 +37,8 @@
 //! Knobs: sun-shadow resolution, cascade count, PCF radius, texture path,
 //! render origin (the scene 30 000 units from the world origin), reflection
 //! probe resolution and update interval (a mirror ball with a box moving
-//! past it; the reference is the last frame), the LOD bias (spheres with two
+//! past it; the reference is the last frame), the probe's parallax box
+//! (none, or the room around a mirror ball), the LOD bias (spheres with two
 //! coarser levels; the reference traces the full meshes), visibility (CPU,
 //! GPU frustum, GPU occlusion: each must cost no accuracy), and the render
 //! origin once more on the numerical extremes (a million units out, near
@@ -103,6 +104,8 @@ struct Setting {
     visibility: Option<Visibility>,
     /// A reflection probe at the origin: face resolution and update policy.
     probe: Option<(u32, ProbeUpdate)>,
+    /// The probe's parallax box (`ReflectionProbe::set_parallax_box`).
+    parallax: Option<oxygen::core::Aabb>,
     /// ScenePrep's LOD bias (`ViewPrepOptions::lod_bias`).
     lod_bias: f32,
 }
@@ -417,6 +420,48 @@ fn stages(viewport: UVec2) -> Result<Vec<Stage>, Box<dyn std::error::Error>> {
             reference: ReferenceSettings::RASTER_MODEL,
         }
     };
+    // The mirror ball inside a closed room of six unlit walls, each its own
+    // colour, two to three units from its surface: the probe parallax
+    // knob's scene (a probe without a box takes the walls as infinitely
+    // far and misplaces the seams between them in the reflection).
+    let room = {
+        let mut scene = Scene::new();
+        let chrome =
+            scene.add_material(Material { metallic: 1.0, roughness: 0.05, ..Material::opaque("mirror", Vec4::ONE) });
+        let sphere = scene.add_geometry(Geometry::uv_sphere(1.0, 64, 32));
+        let ball = scene.add_node("mirror ball", Transform::IDENTITY);
+        scene.set_renderable(ball, Renderable { geometry: sphere, materials: vec![chrome] })?;
+        let h = ROOM.max.x;
+        let wall = scene.add_geometry(Geometry::quad(2.0 * h));
+        let quarter = std::f32::consts::FRAC_PI_2;
+        for (name, at, rotation, color) in [
+            ("back", Vec3::new(0.0, 0.0, -h), Quat::IDENTITY, Vec4::new(0.8, 0.1, 0.1, 1.0)),
+            ("front", Vec3::new(0.0, 0.0, h), Quat::from_rotation_y(2.0 * quarter), Vec4::new(0.1, 0.8, 0.1, 1.0)),
+            ("left", Vec3::new(-h, 0.0, 0.0), Quat::from_rotation_y(quarter), Vec4::new(0.1, 0.1, 0.8, 1.0)),
+            ("right", Vec3::new(h, 0.0, 0.0), Quat::from_rotation_y(-quarter), Vec4::new(0.8, 0.8, 0.1, 1.0)),
+            ("floor", Vec3::new(0.0, -h, 0.0), Quat::from_rotation_x(-quarter), Vec4::new(0.5, 0.5, 0.5, 1.0)),
+            ("ceiling", Vec3::new(0.0, h, 0.0), Quat::from_rotation_x(quarter), Vec4::new(0.8, 0.3, 0.8, 1.0)),
+        ] {
+            let material =
+                scene.add_material(Material { unlit: true, double_sided: true, ..Material::opaque(name, color) });
+            let node = scene.add_node(name, Transform::from_translation(at).with_rotation(rotation));
+            scene.set_renderable(node, Renderable { geometry: wall, materials: vec![material] })?;
+        }
+        Stage {
+            name: "mirror ball in a room",
+            scene,
+            camera: LookAtResolver::new(
+                Camera::perspective(50f32.to_radians(), 0.1, None),
+                Vec3::new(0.0, 0.6, 2.6),
+                Vec3::ZERO,
+                viewport,
+            )
+            .unwrap(),
+            cascades: CascadeSettings { count: 1, resolution: 1024, ..Default::default() },
+            moving: None,
+            reference: ReferenceSettings::RASTER_MODEL_WITH_REFLECTIONS,
+        }
+    };
     Ok(vec![
         shadows,
         textured(Vec3::ZERO, "textured box")?,
@@ -424,8 +469,12 @@ fn stages(viewport: UVec2) -> Result<Vec<Stage>, Box<dyn std::error::Error>> {
         mirror,
         lods,
         extremes,
+        room,
     ])
 }
+
+/// The room around the parallax knob's mirror ball.
+const ROOM: oxygen::core::Aabb = oxygen::core::Aabb { min: Vec3::splat(-3.0), max: Vec3::splat(3.0) };
 
 fn settings() -> Vec<Setting> {
     let base = |knob, value: String, stage| Setting {
@@ -437,6 +486,7 @@ fn settings() -> Vec<Setting> {
         pcf_radius: 1,
         visibility: Some(Visibility::Cpu),
         probe: None,
+        parallax: None,
         lod_bias: 1.0,
     };
     let mut all = Vec::new();
@@ -475,6 +525,12 @@ fn settings() -> Vec<Setting> {
     for interval in [1, 4, 8, 16] {
         let mut s = base("probe update interval", format!("{interval} frames"), 3);
         s.probe = Some((128, ProbeUpdate::EveryNthFrame(interval)));
+        all.push(s);
+    }
+    for (name, parallax) in [("none", None), ("the room", Some(ROOM))] {
+        let mut s = base("probe parallax", name.to_string(), 6);
+        s.probe = Some((128, ProbeUpdate::EveryFrame));
+        s.parallax = parallax;
         all.push(s);
     }
     for bias in [0.25f32, 0.5, 1.0, 2.0, 4.0] {
@@ -549,6 +605,7 @@ fn raster(
         desc = desc.with_visibility(visibility);
     }
     if let Some(probe) = &probe {
+        probe.set_parallax_box(&mut renderer, setting.parallax)?;
         desc = desc.reads(probe.cube());
     }
     let config = ForwardLitConfig { shadow_pcf_radius: setting.pcf_radius, ..ForwardLitConfig::default() };

@@ -126,6 +126,17 @@ impl ReflectionProbe {
         self.faces
     }
 
+    /// Gives the probe a parallax box, or takes it away
+    /// ([`Renderer::set_probe_parallax`] says what it does and what it
+    /// refuses).
+    pub fn set_parallax_box(
+        &self,
+        renderer: &mut Renderer,
+        parallax: Option<oxygen_core::Aabb>,
+    ) -> Result<(), RenderError> {
+        renderer.set_probe_parallax(self.id, parallax)
+    }
+
     /// Asks an on-demand probe to re-render on the next frame.
     pub fn request_update(&mut self) {
         self.update_requested = true;

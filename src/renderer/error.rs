@@ -63,6 +63,19 @@ pub enum RenderError {
     /// holds no image of that frame.
     #[error("{0} did not write its HDR target (it tone-maps while shading; set RendererOptions::keep_hdr)")]
     HdrNotWritten(ViewId),
+    /// A reflection probe's parallax box cannot be used (not finite,
+    /// empty, or not holding the probe).
+    #[error("{probe:?}: parallax box {min:?}..{max:?}: {reason}")]
+    InvalidProbeBox {
+        /// The probe.
+        probe: ProbeId,
+        /// The box's smallest corner as given.
+        min: glam::Vec3,
+        /// The box's largest corner as given.
+        max: glam::Vec3,
+        /// What is wrong with it.
+        reason: &'static str,
+    },
     /// The view has not been rendered yet, so it has no image.
     #[error("{0} has not been rendered yet")]
     NotRendered(ViewId),

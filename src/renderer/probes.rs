@@ -12,10 +12,11 @@ use oxygen_passes::{LightingResources, ProbeCubeInput, ProbeId};
 use super::{RenderError, Renderer};
 use crate::views::ViewDesc;
 
-/// A probe's cube and position.
+/// A probe's cube, position and parallax box.
 struct ProbeResources {
     texture: wgpu::Texture,
     position: glam::Vec3,
+    parallax: Option<oxygen_core::Aabb>,
 }
 
 /// The renderer's reflection probes.
@@ -48,7 +49,13 @@ impl Probes {
         faces: [ViewId; oxygen_passes::PROBE_FACES],
     ) -> Option<ProbeCubeInput<'_>> {
         let resources = self.cubes.get(&probe)?;
-        Some(ProbeCubeInput { probe, faces, texture: &resources.texture, position: resources.position })
+        Some(ProbeCubeInput {
+            probe,
+            faces,
+            texture: &resources.texture,
+            position: resources.position,
+            parallax: resources.parallax,
+        })
     }
 
     /// The commands that GGX-prefilter `probe`'s levels across its faces,
@@ -95,6 +102,41 @@ impl Renderer {
         self.probes.filter_samples = samples.clamp(1, oxygen_passes::MAX_FILTER_SAMPLES);
     }
 
+    /// Gives reflection probe `probe` a parallax box (`None`: none, the
+    /// default): the world-space box its surroundings are taken to lie on,
+    /// and the region it serves first. A surface inside the box reflects
+    /// this probe ahead of nearer probes whose boxes do not hold it; its
+    /// reflection ray is followed to where it leaves the box, and the probe
+    /// is read towards that point (box projection). Without a box a probe
+    /// takes everything it sees as infinitely far, which puts reflections
+    /// of nearby walls in the wrong place (the accuracy atlas's
+    /// "probe parallax" rows measure both against the path-traced
+    /// reference). The box must be finite and hold the probe's position
+    /// strictly inside; anything else is refused with
+    /// [`RenderError::InvalidProbeBox`].
+    pub fn set_probe_parallax(
+        &mut self,
+        probe: ProbeId,
+        parallax: Option<oxygen_core::Aabb>,
+    ) -> Result<(), RenderError> {
+        let resources = self.probes.cubes.get_mut(&probe).ok_or(RenderError::NoSuchProbe(probe))?;
+        if let Some(bounds) = parallax {
+            let invalid = |reason| RenderError::InvalidProbeBox { probe, min: bounds.min, max: bounds.max, reason };
+            if !(bounds.min.is_finite() && bounds.max.is_finite()) {
+                return Err(invalid("its corners must be finite"));
+            }
+            if !bounds.min.cmplt(bounds.max).all() {
+                return Err(invalid("it is empty: min must be below max on every axis"));
+            }
+            let p = resources.position;
+            if !(bounds.min.cmplt(p).all() && p.cmplt(bounds.max).all()) {
+                return Err(invalid("it must hold the probe's position strictly inside"));
+            }
+        }
+        resources.parallax = parallax;
+        Ok(())
+    }
+
     /// Registers a probe's face view under an id of the renderer's own
     /// range ([`ViewIdRange::ProbeFace`]), so that it never takes an id the
     /// application's registry will hand out.
@@ -113,6 +155,6 @@ impl Renderer {
         position: glam::Vec3,
     ) {
         self.views.probes.insert(id, faces);
-        self.probes.cubes.insert(id, ProbeResources { texture, position });
+        self.probes.cubes.insert(id, ProbeResources { texture, position, parallax: None });
     }
 }

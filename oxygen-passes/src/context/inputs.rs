@@ -185,6 +185,9 @@ pub struct ProbeCubeInput<'a> {
     pub texture: &'a wgpu::Texture,
     /// Its world position.
     pub position: glam::Vec3,
+    /// Its parallax box (world space), when it has one: its surroundings
+    /// lie on the box's faces, and it serves the points inside first.
+    pub parallax: Option<oxygen_core::Aabb>,
 }
 
 /// A view this view is linked to, with its targets.

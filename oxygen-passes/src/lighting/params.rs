@@ -12,7 +12,7 @@ oxygen_gpu::gpu_struct! {
     /// declaration ([`oxygen_gpu::GpuStruct::wgsl`]) and included by
     /// `forward_lit.wgsl`.
     #[derive(Debug, PartialEq)]
-    pub struct LightingInputs: 1472 bytes {
+    pub struct LightingInputs: 1600 bytes {
         /// World → light clip space, per cascade.
         pub light_view_projection: [[[f32; 4]; 4]; MAX_CASCADES] => "array<mat4x4<f32>, MAX_CASCADES>",
         /// World size of one map texel, per cascade.
@@ -30,6 +30,12 @@ oxygen_gpu::gpu_struct! {
         pub padding: u32,
         /// World positions of the reflection probes (`w` = 1).
         pub probe_positions: [[f32; 4]; MAX_PROBES] => "array<vec4<f32>, MAX_PROBES>",
+        /// Smallest corner of each probe's parallax box, relative to the
+        /// render origin; `w` is 1 when the probe has a box, 0 when it takes
+        /// its surroundings as infinitely far.
+        pub probe_box_min: [[f32; 4]; MAX_PROBES] => "array<vec4<f32>, MAX_PROBES>",
+        /// Largest corner of each probe's parallax box (`w` unused).
+        pub probe_box_max: [[f32; 4]; MAX_PROBES] => "array<vec4<f32>, MAX_PROBES>",
         /// World → light clip space, per tile of the local-light shadow atlas
         /// (a spot's map, or one cube face of a point light's).
         pub tile_view_projection: [[[f32; 4]; 4]; MAX_SHADOW_TILES] => "array<mat4x4<f32>, MAX_SHADOW_TILES>",

@@ -71,6 +71,12 @@ pub(crate) async fn bind_group(
     for (slot, probe) in probes.iter().enumerate() {
         let relative = (probe.position.as_dvec3() - ctx.origin).as_vec3();
         uniform.probe_positions[slot] = relative.extend(1.0).to_array();
+        if let Some(bounds) = probe.parallax {
+            let min = (bounds.min.as_dvec3() - ctx.origin).as_vec3();
+            let max = (bounds.max.as_dvec3() - ctx.origin).as_vec3();
+            uniform.probe_box_min[slot] = min.extend(1.0).to_array();
+            uniform.probe_box_max[slot] = max.extend(1.0).to_array();
+        }
         probe_views[slot] = Some(crate::probe_view(probe.texture));
     }
     uniform.probe_count = probes.len() as u32;

@@ -80,17 +80,50 @@ fn fit_hdr(color: vec3<f32>) -> vec3<f32> {
 
 // The probe nearest to `position` (the surface reflects what that probe saw).
 fn nearest_probe(position: vec3<f32>) -> u32 {
+    // A probe whose parallax box holds the point serves it ahead of any
+    // whose box does not (or that has none); among equals, the nearest.
     var best = 0u;
     var best_distance = 3.4e38;
+    var best_inside = false;
     for (var i = 0u; i < shadows.probe_count; i++) {
         let offset = shadows.probe_positions[i].xyz - position;
         let d = dot(offset, offset);
-        if d < best_distance {
+        let inside = in_parallax_box(i, position);
+        if (inside && !best_inside) || (inside == best_inside && d < best_distance) {
             best_distance = d;
             best = i;
+            best_inside = inside;
         }
     }
     return best;
+}
+
+fn in_parallax_box(probe: u32, position: vec3<f32>) -> bool {
+    let box_min = shadows.probe_box_min[probe];
+    return box_min.w != 0.0 && all(position >= box_min.xyz) && all(position <= shadows.probe_box_max[probe].xyz);
+}
+
+// The direction to read probe `probe`'s cube in for a reflection leaving
+// `position` along `direction`. A probe without a parallax box takes its
+// surroundings as infinitely far: `direction` itself. With one they lie on
+// the box's faces: the ray leaves the box at the nearest of the three
+// planes it is heading for, and the probe saw that point from its own
+// position (box projection). A point outside the box, or a direction along
+// which no plane lies ahead, keeps `direction`; components of `direction`
+// near zero never divide (`select` takes the far value instead).
+fn probe_lookup(probe: u32, position: vec3<f32>, direction: vec3<f32>) -> vec3<f32> {
+    if !in_parallax_box(probe, position) {
+        return direction;
+    }
+    let ahead = select(shadows.probe_box_min[probe].xyz, shadows.probe_box_max[probe].xyz, direction > vec3<f32>(0.0));
+    let moving = abs(direction) > vec3<f32>(1e-20);
+    let safe = select(vec3<f32>(1.0), direction, moving);
+    let t = select(vec3<f32>(3.4e38), (ahead - position) / safe, moving);
+    let leave = min(t.x, min(t.y, t.z));
+    if !(leave > 0.0 && leave < 3.4e38) {
+        return direction;
+    }
+    return normalize_or(position + direction * leave - shadows.probe_positions[probe].xyz, direction);
 }
 
 // `roughness` picks the mip level: a rough surface reflects a blurrier
@@ -366,7 +399,8 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Der
     // split-sum BRDF (strong on metals, a few percent on dielectrics
     // except at grazing angles).
     if HAS_PROBES && shadows.probe_count > 0u {
-        let reflected = sample_probe(nearest_probe(mesh.world_position), reflect(-v, n), roughness);
+        let probe = nearest_probe(mesh.world_position);
+        let reflected = sample_probe(probe, probe_lookup(probe, mesh.world_position, reflect(-v, n)), roughness);
         let f0 = mix(vec3<f32>(0.04), albedo, metallic);
         color += reflected * split_sum_brdf(f0, roughness, max(dot(n, v), 0.0)) * occlusion;
     } else if has_environment {
