@@ -24,7 +24,9 @@
 //! error near it is below what the reference can resolve.
 //!
 //! `accuracy_atlas --chart atlas.csv atlas.png` redraws the chart from a
-//! run's CSV.
+//! run's CSV. `ATLAS_KNOBS="probe parallax,PCF radius"` runs the named
+//! knobs only (their scenes' references alone are traced); its CSV, chart
+//! and record hold those rows, and the record says which knobs it ran.
 //!
 //! Writes `OUT_DIR/atlas.csv` (one row per setting, with its scene's
 //! reference noise), `OUT_DIR/atlas.png`
@@ -135,7 +137,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     std::fs::create_dir_all(&out)?;
     let viewport = UVec2::new(size, size * 9 / 16);
     let mut stages = stages(viewport)?;
-    let settings = settings();
+    // ATLAS_KNOBS="probe parallax,PCF radius" runs those knobs only (and
+    // traces only their scenes' references); the record names them.
+    let knobs: Option<Vec<String>> =
+        std::env::var("ATLAS_KNOBS").ok().map(|v| v.split(',').map(|k| k.trim().to_string()).collect());
+    let settings: Vec<Setting> = settings()
+        .into_iter()
+        .filter(|s| knobs.as_ref().is_none_or(|knobs| knobs.iter().any(|k| k == s.knob)))
+        .collect();
+    if settings.is_empty() {
+        return Err(format!("ATLAS_KNOBS={knobs:?} names no knob of the atlas").into());
+    }
 
     let mut record = Record::new("accuracy_atlas")
         .value("viewport_px", [viewport.x, viewport.y])
@@ -143,11 +155,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .value("warm_up_frames", WARM_UP)
         .value("measured_frames", MEASURED)
         .value("rmse_clamp", RMSE_CLAMP);
+    if let Some(knobs) = &knobs {
+        record = record.value("knobs_only", knobs.clone());
+    }
 
     // The references, one per stage, each traced with two seeds: the
     // first is the reference, the pair measures its noise.
     let mut references = Vec::new();
-    for stage in &mut stages {
+    for (i, stage) in stages.iter_mut().enumerate() {
+        if !settings.iter().any(|s| s.stage == i) {
+            references.push(None);
+            continue;
+        }
         if let Some(node) = stage.moving {
             move_to_frame(&mut stage.scene, node, FRAMES - 1);
         }
@@ -166,14 +185,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "reference_rows",
             RecordRow::new().value("scene", stage.name).value("trace_seconds", seconds).value("noise_rmse", noise),
         );
-        references.push((hdr, srgb, noise));
+        references.push(Some((hdr, srgb, noise)));
     }
 
     let mut rows = Vec::new();
     for (i, setting) in settings.iter().enumerate() {
         let stage = &mut stages[setting.stage];
         let (hdr, srgb, ms, timed_on_gpu) = raster(stage, setting)?;
-        let (reference_hdr, reference_srgb, noise) = &references[setting.stage];
+        let (reference_hdr, reference_srgb, noise) =
+            references[setting.stage].as_ref().ok_or("a setting's scene has no reference")?;
         let rmse = rmse(&hdr, reference_hdr);
         let ssim = ssim(&srgb, reference_srgb);
         let name = format!("{}_{}", file_name(setting.knob), file_name(&setting.value));
