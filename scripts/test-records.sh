@@ -18,6 +18,9 @@
 #   msaa_tests.jsonl             tests/msaa.rs
 #       more_samples_bring_edges_closer_to_the_supersampled_picture:
 #       docs/performance.md, MSAA's edge error against a supersampled render
+#   probes_tests.jsonl           tests/probes.rs
+#       a_parallax_box_puts_a_rooms_reflections_where_the_reference_sees_them:
+#       docs/accuracy.md, a probe's error with and without its parallax box
 #   gpu_visibility_tests.jsonl   tests/gpu_visibility.rs
 #       occlusion_culling_never_drops_a_visible_object_along_a_camera_path:
 #       docs/performance.md, what the GPU visibility paths keep against what
@@ -52,7 +55,7 @@ lines_of() {
 
 # The binaries below; TEST_RECORDS_ONLY (names separated by spaces) runs
 # some of them only.
-binaries=" shadow_cascades reference_view gltf_fuzz_corpus frame_economy msaa gpu_visibility "
+binaries=" shadow_cascades reference_view probes gltf_fuzz_corpus frame_economy msaa gpu_visibility "
 for only in ${TEST_RECORDS_ONLY:-}; do
   case "$binaries" in
     *" $only "*) ;;
@@ -93,7 +96,12 @@ recorded_tests reference_view \
   the_reference_is_lit_by_the_renderer_environment \
   image_based_lighting_against_the_traced_reference \
   the_raster_model_reads_the_environment_as_the_raster_does \
-  skinned_and_morphed_meshes_are_traced_in_their_pose
+  skinned_and_morphed_meshes_are_traced_in_their_pose \
+  a_plane_seen_at_a_grazing_angle_reflects_as_the_brdf_says \
+  the_reference_traces_sun_shadows
+
+recorded_tests probes \
+  a_parallax_box_puts_a_rooms_reflections_where_the_reference_sees_them
 
 # CPU only: the importer's mutant corpus.
 recorded_tests gltf_fuzz_corpus \
