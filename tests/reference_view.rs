@@ -1012,39 +1012,72 @@ fn the_reference_traces_sun_shadows() {
     });
 }
 
-/// Rays keep the closest hit: an unlit red box in front of a tilted unlit
-/// green plane whose bounding box starts in front of the box, so the
-/// traversal meets the plane's triangles after the box's hit whatever
-/// order it visits them in. The box's pixels are red, twice, with the
-/// scene mirrored (so that either child order of the instances' tree
-/// visits the box first once).
+/// Rays keep the closest hit: an unlit red box in front of an unlit green
+/// quad tilted 45° in its own mesh space, so that the quad's bounding box
+/// (which the traversal tests in that space) starts in front of the box's
+/// near face while its surface lies behind. A traversal that visits the
+/// box first and then takes any hit of the quad's would show green where
+/// the box is. Which of the two it visits first depends on how the
+/// instances' tree orders them, so the scene is traced four times: mirrored
+/// (either child order of a split tree) and with the two added in either
+/// order (either order within one leaf).
 #[test]
 fn traced_rays_keep_the_closest_hit() {
+    // The quad through the origin, its normal (1, 1, 0) / √2: its box spans
+    // ±2.83 in x and y, ±4 in z.
+    let d = 4.0 * std::f32::consts::FRAC_1_SQRT_2;
+    let corners = [Vec3::new(-d, d, -4.0), Vec3::new(d, -d, -4.0), Vec3::new(d, -d, 4.0), Vec3::new(-d, d, 4.0)];
+    let normal = Vec3::new(1.0, 1.0, 0.0).normalize();
+    let vertices = corners.iter().map(|c| oxygen::core::Vertex::new(*c, normal, oxygen::glam::Vec2::ZERO)).collect();
+    let tilted = Geometry::new(
+        "tilted quad",
+        vertices,
+        vec![0, 1, 2, 0, 2, 3],
+        vec![oxygen::core::Submesh { first_index: 0, index_count: 6 }],
+    )
+    .unwrap();
     for side in [1.0f32, -1.0] {
-        let mut scene = Scene::new();
-        let unlit =
-            |name: &str, color: Vec4| Material { unlit: true, double_sided: true, ..Material::opaque(name, color) };
-        let red = scene.add_material(unlit("red", Vec4::new(1.0, 0.0, 0.0, 1.0)));
-        let green = scene.add_material(unlit("green", Vec4::new(0.0, 1.0, 0.0, 1.0)));
-        let cube = scene.add_geometry(Geometry::cube(1.0));
-        let node = scene.add_node("box", Transform::from_translation(Vec3::new(side, 0.0, 0.0)));
-        scene.set_renderable(node, Renderable { geometry: cube, materials: vec![red] }).unwrap();
-        // Facing the camera at 45°: its bounds reach x = ±1.83, in front of
-        // the box's near face (±1.5), its surface on the axis at ∓1.
-        let plane = scene.add_geometry(Geometry::plane(8.0));
-        let node = scene.add_node(
-            "plane",
-            Transform::from_translation(Vec3::new(-side, 0.0, 0.0))
-                .with_rotation(Quat::from_rotation_z(-side * std::f32::consts::FRAC_PI_4)),
-        );
-        scene.set_renderable(node, Renderable { geometry: plane, materials: vec![green] }).unwrap();
-        let camera = look_at(Vec3::new(6.0 * side, 0.0, 0.0), Vec3::ZERO, 32, 30.0);
-        let settings = ReferenceSettings { samples_per_frame: 1, max_samples: 1, ..ReferenceSettings::RASTER_MODEL };
-        let (image, view) = trace_once(&scene, camera, settings);
-        let centre = image.get(16, 16);
-        assert!(centre[0] > 0.9 && centre[1] < 0.05, "side {side}: the box's centre traced as {centre:?}, not its red");
-        let beside = support::pixel_of(&view, Vec3::new(-side, 0.0, 1.2));
-        let plane_pixel = image.get(beside.0, beside.1);
-        assert!(plane_pixel[1] > 0.9, "side {side}: the plane beside the box traced as {plane_pixel:?}");
+        for box_first in [true, false] {
+            let mut scene = Scene::new();
+            let unlit =
+                |name: &str, color: Vec4| Material { unlit: true, double_sided: true, ..Material::opaque(name, color) };
+            let red = scene.add_material(unlit("red", Vec4::new(1.0, 0.0, 0.0, 1.0)));
+            let green = scene.add_material(unlit("green", Vec4::new(0.0, 1.0, 0.0, 1.0)));
+            let cube = scene.add_geometry(Geometry::cube(1.0));
+            let quad = scene.add_geometry(tilted.clone());
+            // The box's near face at x = ±1.5; the quad's box from ±1.83,
+            // its surface on the axis at ∓1 (its mirror for side −1).
+            let parts = [
+                ("box", cube, red, Transform::from_translation(Vec3::new(side, 0.0, 0.0))),
+                (
+                    "quad",
+                    quad,
+                    green,
+                    Transform::from_translation(Vec3::new(-side, 0.0, 0.0))
+                        .with_rotation(Quat::from_rotation_y(if side > 0.0 { 0.0 } else { std::f32::consts::PI })),
+                ),
+            ];
+            let order: [usize; 2] = if box_first { [0, 1] } else { [1, 0] };
+            for i in order {
+                let (name, geometry, material, transform) = parts[i];
+                let node = scene.add_node(name, transform);
+                scene.set_renderable(node, Renderable { geometry, materials: vec![material] }).unwrap();
+            }
+            let camera = look_at(Vec3::new(6.0 * side, 0.0, 0.0), Vec3::ZERO, 32, 30.0);
+            let settings =
+                ReferenceSettings { samples_per_frame: 1, max_samples: 1, ..ReferenceSettings::RASTER_MODEL };
+            let (image, view) = trace_once(&scene, camera, settings);
+            let centre = image.get(16, 16);
+            assert!(
+                centre[0] > 0.9 && centre[1] < 0.05,
+                "side {side}, box added first {box_first}: the box's centre traced as {centre:?}, not its red"
+            );
+            let beside = support::pixel_of(&view, Vec3::new(-side, 0.0, 1.2));
+            let quad_pixel = image.get(beside.0, beside.1);
+            assert!(
+                quad_pixel[1] > 0.9,
+                "side {side}, box added first {box_first}: the quad beside the box traced as {quad_pixel:?}"
+            );
+        }
     }
 }
