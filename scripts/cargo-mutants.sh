@@ -30,8 +30,8 @@
 # baseline tests take a few seconds).
 #
 # A full run is long on a 2-core machine (about 13 s a mutant for the CPU
-# crates, a minute or more for the importer, whose every mutant relinks the
-# root crate's test binaries): shards let it go on across sessions. The
+# crates, about a minute for the importer, whose every mutant relinks the
+# seven test binaries of its scope): shards let it go on across sessions. The
 # shard's outcomes.json is copied to
 # docs/records/mutants/<SCOPE>-<K>-of-<N>.json and its summary printed.
 #
@@ -69,11 +69,14 @@ case "$scope" in
     args=(-p oxygen-passes --test-package oxygen-passes --file oxygen-passes/src/lighting/ibl/half.rs)
     ;;
   importer)
+    # --cargo-arg, not --cargo-test-arg: the build of each mutant then
+    # links these seven test binaries only, not the root crate's forty and
+    # its examples (about half of each mutant's time on two cores).
     args=(-p oxygen --file 'src/gltf_import/**' --file src/environment_file.rs
-      --cargo-test-arg=--test=gltf_import --cargo-test-arg=--test=gltf_untrusted
-      --cargo-test-arg=--test=gltf_fuzz_corpus --cargo-test-arg=--lib
-      --cargo-test-arg=--test=environment --cargo-test-arg=--test=gltf_animation
-      --cargo-test-arg=--test=morph)
+      --cargo-arg=--test=gltf_import --cargo-arg=--test=gltf_untrusted
+      --cargo-arg=--test=gltf_fuzz_corpus --cargo-arg=--lib
+      --cargo-arg=--test=environment --cargo-arg=--test=gltf_animation
+      --cargo-arg=--test=morph)
     ;;
   node)
     args=(-p oxygen-node --test-package oxygen-node)

@@ -388,3 +388,162 @@ fn generate_normals(positions: &[Vec3], indices: &[u32]) -> Vec<Vec3> {
     }
     normals.into_iter().map(|n| n.as_vec3().try_normalize().unwrap_or(Vec3::Z)).collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::ImportLimits;
+    use super::*;
+
+    /// The one triangle every test imports: accessor 0, `POSITION`.
+    const POSITIONS: [[f32; 3]; 3] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+    /// Accessor 1, a second UV set: no value is 0, so a set not read
+    /// (zeros) never passes for it.
+    const UV1: [[f32; 2]; 3] = [[0.25, 0.5], [0.75, 1.0], [0.125, 0.375]];
+    /// Accessor 2, RGBA vertex colours: none white, so a colour not read
+    /// (white) never passes for one.
+    const COLORS: [[f32; 4]; 3] = [[1.0, 0.0, 0.0, 1.0], [0.0, 0.5, 0.0, 0.75], [0.0, 0.0, 0.25, 0.5]];
+    /// Where the buffer's spare bytes begin (zeros, room for three VEC4
+    /// floats) and where it ends.
+    const SPARE: usize = 108;
+    const END: usize = SPARE + 48;
+
+    /// The buffer: positions, second UV set, colours, spare zeros.
+    fn buffer() -> Vec<u8> {
+        let floats = POSITIONS.iter().flatten().chain(UV1.iter().flatten()).chain(COLORS.iter().flatten());
+        let mut bytes: Vec<u8> = floats.flat_map(|f| f.to_le_bytes()).collect();
+        assert_eq!(bytes.len(), SPARE);
+        bytes.resize(END, 0);
+        bytes
+    }
+
+    /// A file with one mesh, "tri", of one triangle primitive whose
+    /// attributes are `POSITION` (accessor 0) and `attributes` (more JSON
+    /// members, each `,"NAME":accessor`). Accessors 1 and 2 are [`UV1`] and
+    /// [`COLORS`]; `extra`, when not empty, is accessor 3.
+    fn document(attributes: &str, extra: &str) -> json::Root {
+        let extra = if extra.is_empty() { String::new() } else { format!(",{extra}") };
+        json::deserialize::from_str(&format!(
+            r#"{{"asset":{{"version":"2.0"}},"buffers":[{{"byteLength":{END}}}],"bufferViews":[{{"buffer":0,"byteLength":{END}}}],
+            "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3"}},
+            {{"bufferView":0,"byteOffset":36,"componentType":5126,"count":3,"type":"VEC2"}},
+            {{"bufferView":0,"byteOffset":60,"componentType":5126,"count":3,"type":"VEC4"}}{extra}],
+            "meshes":[{{"name":"tri","primitives":[{{"attributes":{{"POSITION":0{attributes}}}}}]}}]}}"#
+        ))
+        .expect("the test document deserializes")
+    }
+
+    /// Accessor JSON over the buffer's one view.
+    fn accessor(byte_offset: usize, component_type: u32, count: usize, ty: &str) -> String {
+        format!(
+            r#"{{"bufferView":0,"byteOffset":{byte_offset},"componentType":{component_type},"count":{count},"type":"{ty}"}}"#
+        )
+    }
+
+    fn build_mesh(root: &json::Root) -> Result<MeshResult, super::super::GltfErrorKind> {
+        let buffers = [Cow::Owned(buffer())];
+        build(root, &buffers, 0, &mut Budget::new(ImportLimits::default()), &mut Vec::new())
+    }
+
+    /// The mesh's geometry; any failure panics with the error.
+    fn geometry(root: &json::Root) -> Geometry {
+        match build_mesh(root) {
+            Ok(MeshResult::Geometry(geometry, _)) => *geometry,
+            Ok(MeshResult::Empty) => panic!("the mesh imported empty"),
+            Err(e) => panic!("the mesh failed: {e:?}"),
+        }
+    }
+
+    /// The mesh's error; an import that succeeds panics naming `case`.
+    fn mesh_error(root: &json::Root, case: &str) -> MeshError {
+        match build_mesh(root) {
+            Err(super::super::GltfErrorKind::Mesh(e)) => e,
+            Err(other) => panic!("{case}: not a mesh error: {other:?}"),
+            Ok(_) => panic!("{case}: the mesh imported"),
+        }
+    }
+
+    /// Attributes Oxygen knows but does not read: the name, the accessor
+    /// type and component type glTF allows for it, and what the importer
+    /// validates it as.
+    const UNREAD: [(&str, &str, u32, Semantic); 5] = [
+        ("TEXCOORD_2", "VEC2", 5126, Semantic::TexCoord),
+        ("TANGENT", "VEC4", 5126, Semantic::Tangent),
+        ("COLOR_1", "VEC4", 5126, Semantic::Color),
+        ("JOINTS_1", "VEC4", 5123, Semantic::Joints),
+        ("WEIGHTS_1", "VEC4", 5126, Semantic::Weights),
+    ];
+
+    /// `TEXCOORD_1` becomes every vertex's `uv1` (a texture may name set
+    /// 1), with the colour left white; were it only validated, the mesh
+    /// would have no attribute records at all.
+    #[test]
+    fn texcoord_1_is_imported_as_each_vertexs_second_uv_set() {
+        let geometry = geometry(&document(r#","TEXCOORD_1":1"#, ""));
+        let attributes = geometry.attributes().expect("TEXCOORD_1 gives the mesh attribute records");
+        let uv1: Vec<[f32; 2]> = attributes.iter().map(|a| a.uv1).collect();
+        assert_eq!(uv1, UV1);
+        assert!(attributes.iter().all(|a| a.color == [1.0; 4]), "no COLOR_0: white");
+    }
+
+    /// `COLOR_0` becomes every vertex's colour (multiplied into the base
+    /// colour), with the second UV set left zero; were it only validated,
+    /// the mesh would have no attribute records at all.
+    #[test]
+    fn color_0_is_imported_as_each_vertexs_colour() {
+        let geometry = geometry(&document(r#","COLOR_0":2"#, ""));
+        let attributes = geometry.attributes().expect("COLOR_0 gives the mesh attribute records");
+        let colors: Vec<[f32; 4]> = attributes.iter().map(|a| a.color).collect();
+        assert_eq!(colors, COLORS);
+        assert!(attributes.iter().all(|a| a.uv1 == [0.0; 2]), "no TEXCOORD_1: zero");
+    }
+
+    /// An attribute Oxygen knows but does not read (a third UV set,
+    /// tangents, a second colour, joint or weight set) must still have one
+    /// element per vertex: a file whose attributes disagree is malformed,
+    /// and fails naming the accessor, rather than being half-imported.
+    /// With the right count it imports, and is not read.
+    #[test]
+    fn an_unread_known_attribute_must_have_as_many_elements_as_positions() {
+        for (name, ty, component_type, use_as) in UNREAD {
+            let file = |count| document(&format!(r#","{name}":3"#), &accessor(SPARE, component_type, count, ty));
+            let geometry = geometry(&file(3));
+            assert_eq!(geometry.vertices().len(), 3, "{name}");
+            assert!(geometry.attributes().is_none(), "{name} is not read into attribute records");
+            assert!(geometry.skin_weights().is_none(), "{name} is not read into skin weights");
+            let expected = MeshError {
+                mesh: 0,
+                name: "tri".into(),
+                primitive: 0,
+                accessor: Some(3),
+                what: format!("{use_as:?} has 2 elements, accessor 0 has 3"),
+            };
+            assert_eq!(mesh_error(&file(2), &format!("{name} of 2 elements")), expected, "{name}");
+        }
+    }
+
+    /// An attribute Oxygen knows but does not read is validated as fully as
+    /// one it reads: elements past its buffer view, or a type glTF does not
+    /// allow for it, fail the import naming the accessor.
+    #[test]
+    fn an_invalid_unread_known_attribute_fails_the_import() {
+        for (name, ty, component_type, _) in UNREAD {
+            let file = |extra: String| document(&format!(r#","{name}":3"#), &extra);
+            let past = mesh_error(&file(accessor(END, component_type, 3, ty)), &format!("{name} past its view"));
+            assert_eq!((past.primitive, past.accessor), (0, Some(3)), "{name}: {past}");
+            assert!(past.what.contains("do not fit its buffer view"), "{name}: {past}");
+            let scalar = mesh_error(&file(accessor(SPARE, component_type, 3, "SCALAR")), &format!("a SCALAR {name}"));
+            assert_eq!((scalar.primitive, scalar.accessor), (0, Some(3)), "{name}: {scalar}");
+            assert!(scalar.what.contains("is not allowed for"), "{name}: {scalar}");
+        }
+    }
+
+    /// An application-specific attribute (`_NAME`) is the application's
+    /// business: it is skipped without validation, so even one whose count
+    /// disagrees and whose bytes lie past its view does not stop the mesh.
+    #[test]
+    fn an_application_specific_attribute_is_skipped_unvalidated() {
+        let geometry = geometry(&document(r#","_TEMPERATURE":3"#, &accessor(END, 5126, 2, "SCALAR")));
+        assert_eq!(geometry.vertices().len(), 3);
+        assert!(geometry.attributes().is_none());
+    }
+}
