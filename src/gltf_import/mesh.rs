@@ -546,4 +546,97 @@ mod tests {
         assert_eq!(geometry.vertices().len(), 3);
         assert!(geometry.attributes().is_none());
     }
+
+    /// A file of one mesh, "two", whose two triangle primitives (both
+    /// accessor 0's positions) carry `first` and `second` morph targets
+    /// (each accessor 0 as its position displacements).
+    fn two_primitives(first: usize, second: usize) -> json::Root {
+        let targets = |n: usize| vec![r#"{"POSITION":0}"#; n].join(",");
+        json::deserialize::from_str(&format!(
+            r#"{{"asset":{{"version":"2.0"}},"buffers":[{{"byteLength":{END}}}],"bufferViews":[{{"buffer":0,"byteLength":{END}}}],
+            "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3"}}],
+            "meshes":[{{"name":"two","primitives":[{{"attributes":{{"POSITION":0}},"targets":[{}]}},
+            {{"attributes":{{"POSITION":0}},"targets":[{}]}}]}}]}}"#,
+            targets(first),
+            targets(second)
+        ))
+        .expect("the test document deserializes")
+    }
+
+    /// The primitives of one mesh share its morph weights, so they must
+    /// have as many targets each: the same count imports (both primitives'
+    /// vertices), a different one fails naming the primitive that differs.
+    #[test]
+    fn a_meshs_primitives_must_have_as_many_morph_targets_each() {
+        let geometry = geometry(&two_primitives(1, 1));
+        assert_eq!(geometry.vertices().len(), 6);
+        assert_eq!(geometry.morph_targets().len(), 1);
+        let expected = MeshError {
+            mesh: 0,
+            name: "two".into(),
+            primitive: 1,
+            accessor: None,
+            what: "0 morph targets where the mesh's first primitive has 1".into(),
+        };
+        assert_eq!(mesh_error(&two_primitives(1, 0), "one target, then none"), expected);
+    }
+
+    /// `MAX_MORPH_TARGETS` targets import; one more fails, saying so.
+    #[test]
+    fn at_most_max_morph_targets_are_imported() {
+        let most = oxygen_core::MAX_MORPH_TARGETS;
+        let targets = |n: usize| vec![r#"{"POSITION":0}"#; n].join(",");
+        let file = |n: usize| {
+            let mut root = document("", "");
+            let json = format!(r#"{{"attributes":{{"POSITION":0}},"targets":[{}]}}"#, targets(n));
+            root.meshes[0].primitives[0] = json::deserialize::from_str(&json).expect("the primitive deserializes");
+            root
+        };
+        assert_eq!(geometry(&file(most)).morph_targets().len(), most);
+        let error = mesh_error(&file(most + 1), "one target too many");
+        assert_eq!(error.what, format!("{} morph targets (at most {most})", most + 1));
+    }
+
+    /// The bytes an import charges to its budget for a mesh's vertices and
+    /// indices: one vertex record per vertex, one more with colours or a
+    /// second UV set, one more when skinned, one per morph target, and 4
+    /// bytes an index (three here: the triangle's implicit ones).
+    fn charged_bytes(root: &json::Root) -> u64 {
+        let buffers = [Cow::Owned(buffer())];
+        let mut budget = Budget::new(ImportLimits::default());
+        match build(root, &buffers, 0, &mut budget, &mut Vec::new()) {
+            Ok(MeshResult::Geometry(..)) => budget.total_bytes(),
+            Ok(MeshResult::Empty) => panic!("the mesh imported empty"),
+            Err(e) => panic!("the mesh failed: {e:?}"),
+        }
+    }
+
+    /// What each kind of record costs the budget, exactly: colours alone
+    /// (without a second UV set) make attribute records; a skin (joints
+    /// and weights) and two morph targets add theirs.
+    #[test]
+    fn the_budget_is_charged_a_vertex_record_per_vertex_for_each_kind_of_record() {
+        let record = size_of::<Vertex>() as u64;
+        let (vertices, indices) = (3u64, 3u64);
+        assert_eq!(charged_bytes(&document("", "")), vertices * record + 4 * indices, "positions alone");
+        assert_eq!(
+            charged_bytes(&document(r#","COLOR_0":2"#, "")),
+            vertices * record * 2 + 4 * indices,
+            "colours without a second UV set"
+        );
+        // JOINTS_0 (accessor 3: unsigned shorts over the spare zeros, all
+        // joint 0) and WEIGHTS_0 (accessor 4: the colours' floats, each
+        // vertex's summing above 0), two targets.
+        let mut root = document(
+            r#","COLOR_0":2,"JOINTS_0":3,"WEIGHTS_0":4"#,
+            &format!("{},{}", accessor(SPARE, 5123, 3, "VEC4"), accessor(60, 5126, 3, "VEC4")),
+        );
+        root.meshes[0].primitives[0].targets =
+            Some(json::deserialize::from_str(r#"[{"POSITION":0},{"POSITION":0}]"#).expect("targets deserialize"));
+        assert_eq!(
+            charged_bytes(&root),
+            vertices * record * (1 + 1 + 1 + 2) + 4 * indices,
+            "colours, skin, two targets"
+        );
+    }
 }
