@@ -639,4 +639,33 @@ mod tests {
             "colours, skin, two targets"
         );
     }
+
+    /// While a primitive is read its attributes live in scratch arrays
+    /// beside the mesh's, and the import must afford them on top of what it
+    /// has charged: here positions 12, normals 12 and texture coordinates
+    /// 8 bytes a vertex, 24 more for generated normals (no `NORMAL`), 24
+    /// for colours, 32 for a skin, and 4 an index. A budget that holds
+    /// exactly the charge and that scratch imports the mesh; one byte less
+    /// refuses it.
+    #[test]
+    fn a_primitives_scratch_arrays_must_fit_the_budget_beside_its_charge() {
+        let mut root = document(
+            r#","COLOR_0":2,"JOINTS_0":3,"WEIGHTS_0":4"#,
+            &format!("{},{}", accessor(SPARE, 5123, 3, "VEC4"), accessor(60, 5126, 3, "VEC4")),
+        );
+        root.meshes[0].primitives[0].targets = None;
+        let charged = charged_bytes(&root);
+        let scratch = 3 * (12 + 12 + 8 + 24 + 24 + 32) + 3 * 4;
+        let import = |max_total_bytes: u64| {
+            let buffers = [Cow::Owned(buffer())];
+            let mut budget = Budget::new(ImportLimits { max_total_bytes, ..ImportLimits::default() });
+            build(&root, &buffers, 0, &mut budget, &mut Vec::new())
+        };
+        assert!(matches!(import(charged + scratch), Ok(MeshResult::Geometry(..))), "charge and scratch fit exactly");
+        match import(charged + scratch - 1) {
+            Err(super::super::GltfErrorKind::Limit { .. }) => {}
+            Err(other) => panic!("a byte short of the scratch: not a limit: {other:?}"),
+            Ok(_) => panic!("a byte short of the scratch: the mesh imported"),
+        }
+    }
 }
