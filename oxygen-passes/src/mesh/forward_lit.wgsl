@@ -28,6 +28,8 @@ override HAS_SUN_SHADOWS: bool = true;
 override HAS_LOCAL_LIGHTS: bool = true;
 override HAS_LOCAL_SHADOWS: bool = true;
 override HAS_PROBES: bool = true;
+// A linked probe has a parallax box (see `probe_lookup`).
+override HAS_PROBE_PARALLAX: bool = true;
 override HAS_TEXTURES: bool = true;
 // Tone-map at the end of shading and write the display colour (the view's
 // sRGB target) instead of radiance: for views whose HDR image nothing reads.
@@ -99,6 +101,9 @@ fn nearest_probe(position: vec3<f32>) -> u32 {
 }
 
 fn in_parallax_box(probe: u32, position: vec3<f32>) -> bool {
+    if !HAS_PROBE_PARALLAX {
+        return false;
+    }
     let box_min = shadows.probe_box_min[probe];
     return box_min.w != 0.0 && all(position >= box_min.xyz) && all(position <= shadows.probe_box_max[probe].xyz);
 }

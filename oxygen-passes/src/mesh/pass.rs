@@ -371,11 +371,13 @@ impl MeshPass {
         }
         let inputs = &ctx.inputs;
         let config = self.lighting.as_ref();
+        let probes = config.is_some_and(|c| c.reflections) && !inputs.probes.is_empty();
         crate::ShaderFeatures {
             sun_shadows: config.is_some_and(|c| c.sun_shadows) && !inputs.cascades.is_empty(),
             local_lights: ctx.prepared.slots().positional_lights.count > 0,
             local_shadows: config.is_some_and(|c| c.local_shadows) && inputs.local_shadows.is_some(),
-            probes: config.is_some_and(|c| c.reflections) && !inputs.probes.is_empty(),
+            probes,
+            probe_parallax: probes && inputs.probes.iter().any(|p| p.parallax.is_some()),
             textures: ctx.shading.materials.textures,
             uv_transforms: ctx.shading.materials.uv_transforms,
         }

@@ -19,6 +19,11 @@ pub struct ShaderFeatures {
     pub local_shadows: bool,
     /// Reflect the linked reflection probes (`HAS_PROBES`).
     pub probes: bool,
+    /// Follow reflections to the probes' parallax boxes and prefer the
+    /// probe whose box holds the point (`HAS_PROBE_PARALLAX`); without it
+    /// every probe is read as infinitely far, the nearest serving. Only a
+    /// view linked to a probe that has a box needs it.
+    pub probe_parallax: bool,
     /// Sample material textures (`HAS_TEXTURES`); without it every texture
     /// reads as opaque white, which is what an untextured material gets.
     pub textures: bool,
@@ -37,6 +42,7 @@ impl ShaderFeatures {
         local_lights: true,
         local_shadows: true,
         probes: true,
+        probe_parallax: true,
         textures: true,
         uv_transforms: true,
     };
@@ -46,18 +52,20 @@ impl ShaderFeatures {
         local_lights: false,
         local_shadows: false,
         probes: false,
+        probe_parallax: false,
         textures: false,
         uv_transforms: false,
     };
 
     /// The override constants, by their WGSL names (bools as 0 or 1).
-    pub fn override_constants(&self) -> [(&'static str, f64); 6] {
+    pub fn override_constants(&self) -> [(&'static str, f64); 7] {
         let flag = |on: bool| f64::from(u8::from(on));
         [
             ("HAS_SUN_SHADOWS", flag(self.sun_shadows)),
             ("HAS_LOCAL_LIGHTS", flag(self.local_lights)),
             ("HAS_LOCAL_SHADOWS", flag(self.local_shadows)),
             ("HAS_PROBES", flag(self.probes)),
+            ("HAS_PROBE_PARALLAX", flag(self.probe_parallax)),
             ("HAS_TEXTURES", flag(self.textures)),
             ("HAS_UV_TRANSFORMS", flag(self.uv_transforms)),
         ]
