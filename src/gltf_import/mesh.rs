@@ -668,4 +668,101 @@ mod tests {
             Ok(_) => panic!("a byte short of the scratch: the mesh imported"),
         }
     }
+
+    /// `COLOR_0` may be RGB (VEC3) or RGBA (VEC4): an RGB colour has no
+    /// alpha, so its vertices must be opaque (alpha 1), not transparent (the
+    /// missing fourth component reads as 0); an RGBA colour keeps its own
+    /// alpha.
+    #[test]
+    fn an_rgb_color_0_gets_alpha_1_and_an_rgba_one_keeps_its_alpha() {
+        // Accessor 3: the colours' floats read three at a time.
+        let rgb = geometry(&document(r#","COLOR_0":3"#, &accessor(60, 5126, 3, "VEC3")));
+        let attributes = rgb.attributes().expect("COLOR_0 gives the mesh attribute records");
+        let colors: Vec<[f32; 4]> = attributes.iter().map(|a| a.color).collect();
+        assert_eq!(colors, [[1.0, 0.0, 0.0, 1.0], [1.0, 0.0, 0.5, 1.0], [0.0, 0.75, 0.0, 1.0]], "RGB: opaque");
+        let rgba = geometry(&document(r#","COLOR_0":2"#, ""));
+        let alphas: Vec<f32> = rgba.attributes().expect("RGBA colours").iter().map(|a| a.color[3]).collect();
+        assert_eq!(alphas, [1.0, 0.75, 0.5], "RGBA: its own alpha");
+    }
+
+    /// A mesh's primitives share one vertex and one index array: each
+    /// primitive's indices are its own vertices' positions, so they must be
+    /// offset by the vertices of the primitives before it, or the second
+    /// primitive would draw the first one's triangle.
+    #[test]
+    fn a_later_primitives_indices_are_offset_past_the_earlier_primitives_vertices() {
+        let geometry = geometry(&two_primitives(0, 0));
+        assert_eq!(geometry.vertices().len(), 6);
+        assert_eq!(geometry.indices(), [0, 1, 2, 3, 4, 5]);
+        assert_eq!(
+            geometry.submeshes(),
+            [Submesh { first_index: 0, index_count: 3 }, Submesh { first_index: 3, index_count: 3 }]
+        );
+    }
+
+    /// Morph targets are only attached when the mesh has some: a geometry
+    /// with morph targets counts its vertices in a float (below 2^24), but a
+    /// mesh without any must import at any size the budget allows. Here
+    /// 2^24 + 2 vertices (all at the origin: accessors without a buffer
+    /// view are zeros) and no targets import.
+    #[test]
+    fn a_mesh_too_large_to_morph_imports_when_it_has_no_morph_targets() {
+        let count = (1usize << 24) + 2;
+        assert!(count.is_multiple_of(3));
+        let root: json::Root = json::deserialize::from_str(&format!(
+            r#"{{"asset":{{"version":"2.0"}},
+            "accessors":[{{"componentType":5126,"count":{count},"type":"VEC3"}}],
+            "meshes":[{{"name":"big","primitives":[{{"attributes":{{"POSITION":0,"NORMAL":0}}}}]}}]}}"#
+        ))
+        .expect("the test document deserializes");
+        let mut budget = Budget::new(ImportLimits::unlimited());
+        match build(&root, &[], 0, &mut budget, &mut Vec::new()) {
+            Ok(MeshResult::Geometry(geometry, _)) => {
+                assert_eq!(geometry.vertices().len(), count);
+                assert!(geometry.morph_targets().is_empty());
+            }
+            Ok(MeshResult::Empty) => panic!("the mesh imported empty"),
+            Err(e) => panic!("the mesh failed: {e:?}"),
+        }
+    }
+
+    /// A primitive without `NORMAL` gets smooth normals: each vertex's is
+    /// the sum of its triangles' normals weighted by their areas, so a
+    /// vertex shared by a large horizontal triangle and a small vertical one
+    /// leans towards the large one's normal. The triangles lie off the
+    /// origin and outside the XY plane, so that edges taken from the wrong
+    /// corner, or corners added or divided instead of subtracted, give other
+    /// normals.
+    #[test]
+    fn generated_normals_are_area_weighted_sums_of_the_triangles_normals() {
+        // Triangle 0, 1, 2 in the plane y = 2 (area 3, facing +Y); triangle
+        // 0, 3, 4 in the plane x = 1 (area 1/2, facing +X).
+        let positions: [[f32; 3]; 5] =
+            [[1.0, 2.0, 1.0], [1.0, 2.0, 4.0], [3.0, 2.0, 1.0], [1.0, 3.0, 1.0], [1.0, 2.0, 2.0]];
+        let indices: [u32; 6] = [0, 1, 2, 0, 3, 4];
+        let mut bytes: Vec<u8> = positions.iter().flatten().flat_map(|f| f.to_le_bytes()).collect();
+        bytes.extend(indices.iter().flat_map(|i| i.to_le_bytes()));
+        let root: json::Root = json::deserialize::from_str(&format!(
+            r#"{{"asset":{{"version":"2.0"}},"buffers":[{{"byteLength":{len}}}],"bufferViews":[{{"buffer":0,"byteLength":{len}}}],
+            "accessors":[{{"bufferView":0,"componentType":5126,"count":5,"type":"VEC3"}},
+            {{"bufferView":0,"byteOffset":60,"componentType":5125,"count":6,"type":"SCALAR"}}],
+            "meshes":[{{"name":"bent","primitives":[{{"attributes":{{"POSITION":0}},"indices":1}}]}}]}}"#,
+            len = bytes.len()
+        ))
+        .expect("the test document deserializes");
+        let buffers = [Cow::Owned(bytes)];
+        let mut warnings = Vec::new();
+        let geometry = match build(&root, &buffers, 0, &mut Budget::new(ImportLimits::default()), &mut warnings) {
+            Ok(MeshResult::Geometry(geometry, _)) => geometry,
+            Ok(MeshResult::Empty) => panic!("the mesh imported empty"),
+            Err(e) => panic!("the mesh failed: {e:?}"),
+        };
+        assert_eq!(warnings, ["mesh 'bent': normals generated"]);
+        // The shared vertex: 2 × area 3 of +Y plus 2 × area 1/2 of +X.
+        let expected = [Vec3::new(1.0, 6.0, 0.0).normalize(), Vec3::Y, Vec3::Y, Vec3::X, Vec3::X];
+        for (i, (vertex, expected)) in geometry.vertices().iter().zip(expected).enumerate() {
+            let normal = Vec3::from(vertex.normal);
+            assert!((normal - expected).length() < 1e-6, "vertex {i}: normal {normal}, expected {expected}");
+        }
+    }
 }

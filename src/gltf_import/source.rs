@@ -464,4 +464,85 @@ mod tests {
     fn braces_inside_strings_are_not_objects() {
         assert_eq!(count_json_objects(br#"{"a":"{{\"{","b":[{},{}]}"#), 3);
     }
+
+    /// A fresh, empty folder for one test (removed first if a previous run
+    /// left it).
+    fn scratch_dir(test: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("oxygen-source-{test}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    /// `resolve` promises a regular file: a URI naming a folder inside the
+    /// root is refused there, with the same answer as a path outside it (so
+    /// a file cannot learn which folders exist), not left for a later read
+    /// to stumble on.
+    #[test]
+    fn a_uri_naming_a_folder_inside_the_root_is_not_resolved() {
+        let dir = scratch_dir("folder");
+        std::fs::create_dir_all(dir.join("textures")).unwrap();
+        std::fs::write(dir.join("a.bin"), b"1234").unwrap();
+        let root = AssetRoot::new(&dir, None).unwrap();
+        let refused = UriError::NotInsideRoot { root: std::fs::canonicalize(&dir).unwrap() };
+        assert_eq!(root.resolve("textures"), Err(refused.clone()));
+        assert_eq!(root.resolve("textures/"), Err(refused));
+        assert_eq!(root.resolve("a.bin"), Ok(std::fs::canonicalize(dir.join("a.bin")).unwrap()));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// An image may be exactly `cap` bytes (`max_image_file_bytes` is the
+    /// largest allowed, not the first refused); one byte more is refused,
+    /// saying how large it is.
+    #[test]
+    fn an_image_file_of_exactly_cap_bytes_is_read_and_one_byte_more_is_too_large() {
+        let dir = scratch_dir("cap");
+        let path = dir.join("image.png");
+        std::fs::write(&path, b"12345678").unwrap();
+        assert_eq!(read_file(&path, None, 8), Ok(b"12345678".to_vec()));
+        assert_eq!(read_file(&path, None, 7), Err(UriError::TooLarge { bytes: 8, max: 7 }));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A buffer file must hold at least its `byteLength`: a shorter one is
+    /// an error saying how many bytes it has and how many the glTF says,
+    /// not a short buffer that accessors would then be checked against.
+    /// A longer one is read up to `byteLength`.
+    #[test]
+    fn a_buffer_file_shorter_than_its_byte_length_is_too_short() {
+        let dir = scratch_dir("short");
+        let path = dir.join("buffer.bin");
+        std::fs::write(&path, b"123456").unwrap();
+        assert_eq!(read_file(&path, Some(10), 10), Err(UriError::TooShort { got: 6, need: 10 }));
+        assert_eq!(read_file(&path, Some(6), 6), Ok(b"123456".to_vec()));
+        assert_eq!(read_file(&path, Some(4), 4), Ok(b"1234".to_vec()));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// The image cap holds for what is read, not only for what the file's
+    /// metadata claims: a regular file whose size says 0 but that holds
+    /// more (a procfs file, or one that grows while read) is refused once
+    /// more than `cap` bytes come out of it.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn an_image_file_that_holds_more_than_its_metadata_says_is_still_capped() {
+        let path = Path::new("/proc/self/status");
+        let meta = std::fs::metadata(path).unwrap();
+        assert!(meta.is_file() && meta.len() == 0, "procfs reports a regular file of 0 bytes");
+        assert_eq!(read_file(path, None, 4), Err(UriError::TooLarge { bytes: 5, max: 4 }));
+    }
+
+    /// A URI scheme is a letter then letters, digits, `+`, `-` or `.`
+    /// (RFC 3986): `1abc:x` and `a b:x` have none (they are relative paths
+    /// with a colon in a name), while `http:`, `svn+ssh:` and a drive
+    /// letter `C:` do.
+    #[test]
+    fn a_scheme_starts_with_a_letter_and_holds_only_scheme_characters() {
+        for uri in ["http://x", "svn+ssh://x", "a.b-c:x", "C:x"] {
+            assert!(has_scheme(uri), "{uri}");
+        }
+        for uri in ["1abc:x", "a b:x", ":x", "no-colon", "ab/c:x"] {
+            assert!(!has_scheme(uri), "{uri}");
+        }
+    }
 }
