@@ -545,4 +545,61 @@ mod tests {
             assert!(!has_scheme(uri), "{uri}");
         }
     }
+
+    /// A `data:` URI's payload may decode to exactly the cap (three bytes
+    /// per four characters), not one byte more; its media type is kept
+    /// when given and absent when the header is empty.
+    #[test]
+    fn a_data_uri_decodes_up_to_its_cap_and_keeps_its_media_type() {
+        let (mime, bytes) = decode_data_uri("data:application/octet-stream;base64,AAEC", 3)
+            .expect("a data: URI")
+            .expect("three bytes under a cap of three");
+        assert_eq!(mime.as_deref(), Some("application/octet-stream"));
+        assert_eq!(bytes, [0, 1, 2]);
+        let (mime, _) = decode_data_uri("data:;base64,AAEC", 3).expect("a data: URI").expect("no media type");
+        assert_eq!(mime, None);
+        assert!(matches!(
+            decode_data_uri("data:;base64,AAECAwQF", 5),
+            Some(Err(UriError::TooLarge { bytes: 6, max: 5 }))
+        ));
+    }
+
+    /// A GLB's header is 12 bytes: a total below that is the header's own
+    /// error, while exactly 12 (a header and nothing else) is a file
+    /// without a JSON chunk.
+    #[test]
+    fn a_glb_total_below_its_header_is_refused_and_a_bare_header_has_no_json() {
+        let glb = |total: u32| {
+            let mut glb = b"glTF".to_vec();
+            glb.extend(2u32.to_le_bytes());
+            glb.extend(total.to_le_bytes());
+            glb.extend([0u8; 8]);
+            glb
+        };
+        let short = split_glb(&glb(8)).err().expect("a total of 8 is refused");
+        assert!(short.contains("GLB header says 8 bytes"), "{short}");
+        let bare = split_glb(&glb(12)).err().expect("a bare header is refused");
+        assert_eq!(bare, "GLB without a JSON chunk");
+    }
+
+    /// A GLB's second chunk is its binary buffer only when its type is
+    /// `BIN\0`; a chunk of another type is ignored (glTF 2.0, 4.4.3.3), not
+    /// read as the buffer.
+    #[test]
+    fn only_a_bin_chunk_is_a_glbs_buffer() {
+        let glb = |kind: &[u8; 4]| {
+            let mut glb = b"glTF".to_vec();
+            glb.extend(2u32.to_le_bytes());
+            glb.extend(36u32.to_le_bytes());
+            glb.extend(4u32.to_le_bytes());
+            glb.extend(b"JSON");
+            glb.extend(b"{}  ");
+            glb.extend(4u32.to_le_bytes());
+            glb.extend(kind);
+            glb.extend([1u8, 2, 3, 4]);
+            glb
+        };
+        assert_eq!(split_glb(&glb(b"BIN\0")).expect("a GLB").bin, Some(&[1u8, 2, 3, 4][..]));
+        assert_eq!(split_glb(&glb(b"XYZ\0")).expect("a GLB").bin, None);
+    }
 }
