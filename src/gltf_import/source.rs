@@ -576,9 +576,9 @@ mod tests {
             glb.extend([0u8; 8]);
             glb
         };
-        let short = split_glb(&glb(8)).err().expect("a total of 8 is refused");
+        let short = split_glb(&glb(8)).expect_err("a total of 8 is refused");
         assert!(short.contains("GLB header says 8 bytes"), "{short}");
-        let bare = split_glb(&glb(12)).err().expect("a bare header is refused");
+        let bare = split_glb(&glb(12)).expect_err("a bare header is refused");
         assert_eq!(bare, "GLB without a JSON chunk");
     }
 
