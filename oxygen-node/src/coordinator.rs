@@ -705,3 +705,23 @@ impl Coordinator {
             .map_err(NodeError::zenoh)
     }
 }
+
+#[cfg(test)]
+mod node_state_tests {
+    use super::*;
+
+    /// A view the node was only about to add is simply not added; one it
+    /// renders already is removed with its next order. (Removing a view
+    /// the node never got would make it drop one it does not have; adding
+    /// back a dropped one would keep rendering it.)
+    #[test]
+    fn dropping_a_view_cancels_its_pending_add_or_schedules_its_removal() {
+        let mut node = NodeState::default();
+        node.add.insert(RigViewId(1));
+        node.drop_view(RigViewId(1));
+        assert!(node.add.is_empty() && node.remove.is_empty(), "a pending add is cancelled: {node:?}");
+        node.drop_view(RigViewId(2));
+        assert!(node.add.is_empty(), "{node:?}");
+        assert_eq!(node.remove.iter().copied().collect::<Vec<_>>(), [RigViewId(2)], "a rendered view is removed");
+    }
+}

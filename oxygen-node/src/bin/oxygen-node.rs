@@ -89,3 +89,39 @@ fn main() -> ExitCode {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse_args(args: &[&str]) -> Result<NodeOptions, String> {
+        parse(args.iter().map(|a| a.to_string()))
+    }
+
+    /// `--wait` takes a finite number of seconds above 0: 0, a negative
+    /// number, infinity and NaN are refused (a node must not wait for ever
+    /// or not at all), a fraction is kept.
+    #[test]
+    fn wait_takes_a_finite_positive_number_of_seconds() {
+        let with_wait = |w: &str| parse_args(&["--rig", "r", "--connect", "tcp/127.0.0.1:1", "--wait", w]);
+        for bad in ["0", "-1", "inf", "NaN"] {
+            let error = with_wait(bad).err().unwrap_or_else(|| panic!("--wait {bad} accepted"));
+            assert!(error.contains("--wait"), "--wait {bad}: {error}");
+        }
+        let options = with_wait("0.5").expect("--wait 0.5");
+        assert_eq!(options.coordinator_wait, Duration::from_millis(500));
+    }
+
+    /// A node needs its rig's name and somewhere to reach it: a rig without
+    /// an endpoint, or an endpoint without a rig, is refused; `--listen`
+    /// serves as well as `--connect`.
+    #[test]
+    fn a_rig_and_an_endpoint_are_both_needed() {
+        for args in [&["--rig", "r"][..], &["--connect", "tcp/127.0.0.1:1"], &["--listen", "tcp/127.0.0.1:1"], &[]] {
+            let error = parse_args(args).err().unwrap_or_else(|| panic!("{args:?} accepted"));
+            assert!(error.contains("--rig and --connect"), "{args:?}: {error}");
+        }
+        assert!(parse_args(&["--rig", "r", "--listen", "tcp/127.0.0.1:1"]).is_ok());
+        assert!(parse_args(&["--rig", "r", "--connect", "tcp/127.0.0.1:1"]).is_ok());
+    }
+}
