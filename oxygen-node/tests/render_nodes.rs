@@ -278,3 +278,25 @@ fn a_node_without_a_coordinator_gives_up_with_a_clear_message() {
     let stderr = String::from_utf8_lossy(&far.stderr);
     assert!(!far.status.success() && stderr.contains("--gpu: 64 (0 to 63)"), "{stderr}");
 }
+
+/// A coordinator's own bookkeeping, with no node: it answers to its rig's
+/// name, and a view removed is gone (removing it again, or one never
+/// added, is an error naming it).
+#[test]
+fn a_coordinator_knows_its_rig_and_forgets_a_removed_view() {
+    let rig = format!("book-{}", std::process::id());
+    let endpoint = format!("tcp/127.0.0.1:{}", free_port());
+    let mut coordinator =
+        Coordinator::new(&rig, &NetConfig::listen(&endpoint), RigOptions::default()).expect("coordinator");
+    assert_eq!(coordinator.rig(), rig);
+    let spec = specs().remove(0);
+    let kept = coordinator.add_view(spec.clone()).expect("view");
+    let removed = coordinator.add_view(spec).expect("view");
+    coordinator.remove_view(removed).expect("a view just added is removed");
+    assert!(
+        matches!(coordinator.remove_view(removed), Err(oxygen_node::NodeError::NoSuchView(v)) if v == removed),
+        "a removed view is gone"
+    );
+    assert!(matches!(coordinator.remove_view(RigViewId(99)), Err(oxygen_node::NodeError::NoSuchView(_))));
+    coordinator.remove_view(kept).expect("the other view is still there");
+}
