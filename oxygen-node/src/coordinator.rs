@@ -725,3 +725,51 @@ mod node_state_tests {
         assert_eq!(node.remove.iter().copied().collect::<Vec<_>>(), [RigViewId(2)], "a rendered view is removed");
     }
 }
+
+#[cfg(test)]
+mod membership_tests {
+    use super::*;
+
+    /// A coordinator with no node, listening on a free local port.
+    fn coordinator() -> Coordinator {
+        let port = std::net::TcpListener::bind("127.0.0.1:0").and_then(|l| l.local_addr()).expect("a free port").port();
+        let net = NetConfig::listen(&format!("tcp/127.0.0.1:{port}"));
+        Coordinator::new(&format!("membership-{}", std::process::id()), &net, RigOptions::default())
+            .expect("coordinator")
+    }
+
+    fn view(coordinator: &mut Coordinator, name: &str) -> RigViewId {
+        let camera = oxygen_core::Camera::perspective(1.0, 0.1, None);
+        let spec = ViewSpec::look_at(name, camera, glam::DVec3::Z, glam::DVec3::ZERO, UVec2::splat(8));
+        coordinator.add_view(spec).expect("view")
+    }
+
+    /// A node joins once: a second announcement of the same name, or a name
+    /// that could not be a key expression, adds nobody.
+    #[test]
+    fn a_node_joins_once_and_only_under_a_usable_name() {
+        let mut coordinator = coordinator();
+        coordinator.membership("a".into(), true);
+        coordinator.membership("a".into(), true);
+        coordinator.membership("bad/name".into(), true);
+        assert_eq!(coordinator.nodes(), ["a"]);
+        assert_eq!(coordinator.joined, ["a"]);
+    }
+
+    /// A node that leaves takes its views' placement with it (they render
+    /// elsewhere from the next frame); the other nodes keep theirs.
+    #[test]
+    fn a_leaving_node_frees_its_views_and_only_its_views() {
+        let mut coordinator = coordinator();
+        coordinator.membership("a".into(), true);
+        coordinator.membership("b".into(), true);
+        let (on_a, on_b) = (view(&mut coordinator, "on a"), view(&mut coordinator, "on b"));
+        coordinator.assign(on_a, "a");
+        coordinator.assign(on_b, "b");
+        coordinator.membership("a".into(), false);
+        assert_eq!(coordinator.nodes(), ["b"]);
+        assert_eq!(coordinator.left, ["a"]);
+        assert_eq!(coordinator.node_of(on_a), None);
+        assert_eq!(coordinator.node_of(on_b), Some("b"));
+    }
+}

@@ -157,6 +157,8 @@ fn a_rig_renders_every_view_once_a_frame_through_a_join_a_stall_and_a_death() {
     nodes.spawn(&rig, "a", &endpoint);
     nodes.spawn(&rig, "b", &endpoint);
     coordinator.wait_for_nodes(2, Duration::from_secs(120)).expect("two nodes");
+    assert_eq!(coordinator.nodes(), ["a", "b"]);
+    assert!(views.iter().all(|v| coordinator.view_cost(*v).is_none()), "no view is measured before it renders");
 
     let mut joined = Vec::new();
     let mut left = Vec::new();
@@ -240,6 +242,13 @@ fn a_rig_renders_every_view_once_a_frame_through_a_join_a_stall_and_a_death() {
             report.moved
         );
     }
+    // Each view's cost is measured: seconds of a node's frame, a few
+    // milliseconds for a 32 × 32 camera on any adapter.
+    for view in &views {
+        let cost = coordinator.view_cost(*view);
+        assert!(cost.is_some_and(|c| c > 0.0 && c < 0.5), "{view}: cost {cost:?}");
+    }
+    assert_eq!(coordinator.nodes(), ["a", "c"], "b died");
     joined.sort();
     assert_eq!(joined, ["a", "b", "c"]);
     assert_eq!(stalled, ["c"], "c fell behind once");
