@@ -733,7 +733,7 @@ mod membership_tests {
     /// A coordinator with no node, listening on a free local port.
     fn coordinator() -> Coordinator {
         let port = std::net::TcpListener::bind("127.0.0.1:0").and_then(|l| l.local_addr()).expect("a free port").port();
-        let net = NetConfig::listen(&format!("tcp/127.0.0.1:{port}"));
+        let net = NetConfig::listen(format!("tcp/127.0.0.1:{port}"));
         Coordinator::new(&format!("membership-{}", std::process::id()), &net, RigOptions::default())
             .expect("coordinator")
     }
