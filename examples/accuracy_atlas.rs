@@ -451,22 +451,7 @@ fn stages(viewport: UVec2) -> Result<Vec<Stage>, Box<dyn std::error::Error>> {
         let sphere = scene.add_geometry(Geometry::uv_sphere(1.0, 64, 32));
         let ball = scene.add_node("mirror ball", Transform::IDENTITY);
         scene.set_renderable(ball, Renderable { geometry: sphere, materials: vec![chrome] })?;
-        let h = ROOM.max.x;
-        let wall = scene.add_geometry(Geometry::quad(2.0 * h));
-        let quarter = std::f32::consts::FRAC_PI_2;
-        for (name, at, rotation, color) in [
-            ("back", Vec3::new(0.0, 0.0, -h), Quat::IDENTITY, Vec4::new(0.8, 0.1, 0.1, 1.0)),
-            ("front", Vec3::new(0.0, 0.0, h), Quat::from_rotation_y(2.0 * quarter), Vec4::new(0.1, 0.8, 0.1, 1.0)),
-            ("left", Vec3::new(-h, 0.0, 0.0), Quat::from_rotation_y(quarter), Vec4::new(0.1, 0.1, 0.8, 1.0)),
-            ("right", Vec3::new(h, 0.0, 0.0), Quat::from_rotation_y(-quarter), Vec4::new(0.8, 0.8, 0.1, 1.0)),
-            ("floor", Vec3::new(0.0, -h, 0.0), Quat::from_rotation_x(-quarter), Vec4::new(0.5, 0.5, 0.5, 1.0)),
-            ("ceiling", Vec3::new(0.0, h, 0.0), Quat::from_rotation_x(quarter), Vec4::new(0.8, 0.3, 0.8, 1.0)),
-        ] {
-            let material =
-                scene.add_material(Material { unlit: true, double_sided: true, ..Material::opaque(name, color) });
-            let node = scene.add_node(name, Transform::from_translation(at).with_rotation(rotation));
-            scene.set_renderable(node, Renderable { geometry: wall, materials: vec![material] })?;
-        }
+        oxygen_demo::add_room_walls(&mut scene, ROOM.max.x);
         Stage {
             name: "mirror ball in a room",
             scene,

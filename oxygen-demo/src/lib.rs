@@ -151,6 +151,29 @@ pub fn floor_with_box(roughness: f32) -> Scene {
     scene
 }
 
+/// Six inward-facing unlit walls, each its own colour, closing the cube
+/// of half-size `half_size` around the origin: surroundings that lie
+/// exactly on a box (the reflection probes' parallax box is measured on
+/// them, `tests/probes.rs` and the accuracy atlas).
+pub fn add_room_walls(scene: &mut Scene, half_size: f32) {
+    let wall = scene.add_geometry(Geometry::quad(2.0 * half_size));
+    let h = half_size;
+    let quarter = std::f32::consts::FRAC_PI_2;
+    for (name, at, rotation, color) in [
+        ("back", Vec3::new(0.0, 0.0, -h), Quat::IDENTITY, Vec4::new(0.8, 0.1, 0.1, 1.0)),
+        ("front", Vec3::new(0.0, 0.0, h), Quat::from_rotation_y(2.0 * quarter), Vec4::new(0.1, 0.8, 0.1, 1.0)),
+        ("left", Vec3::new(-h, 0.0, 0.0), Quat::from_rotation_y(quarter), Vec4::new(0.1, 0.1, 0.8, 1.0)),
+        ("right", Vec3::new(h, 0.0, 0.0), Quat::from_rotation_y(-quarter), Vec4::new(0.8, 0.8, 0.1, 1.0)),
+        ("floor", Vec3::new(0.0, -h, 0.0), Quat::from_rotation_x(-quarter), Vec4::new(0.5, 0.5, 0.5, 1.0)),
+        ("ceiling", Vec3::new(0.0, h, 0.0), Quat::from_rotation_x(quarter), Vec4::new(0.8, 0.3, 0.8, 1.0)),
+    ] {
+        let material =
+            scene.add_material(Material { unlit: true, double_sided: true, ..Material::opaque(name, color) });
+        let node = scene.add_node(name, Transform::from_translation(at).with_rotation(rotation));
+        scene.set_renderable(node, Renderable { geometry: wall, materials: vec![material] }).expect("valid handles");
+    }
+}
+
 /// The interactive viewer's orbit camera (`examples/viewer.rs`), here so
 /// that a test renders headlessly exactly the view the viewer presents.
 /// The target is an f64 world position, so that the framing does not
