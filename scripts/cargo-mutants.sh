@@ -25,9 +25,10 @@
 #              loopback, rendering on whatever adapter the machine gives)
 #
 # OXYGEN_MUTANTS_TIMEOUT sets cargo-mutants' per-mutant test timeout in
-# seconds (default 300). A mutant that makes a worker loop for ever costs
-# the whole timeout: sceneprep's worker-pool mutants are run with 60 (its
-# baseline tests take a few seconds).
+# seconds (default 300; 90 for the node scope, whose rig test is then told
+# to wait 30 s at most: OXYGEN_NODE_TEST_WAIT_S). A mutant that makes a
+# worker loop for ever costs the whole timeout: sceneprep's worker-pool
+# mutants are run with 60 (its baseline tests take a few seconds).
 #
 # A full run is long on a 2-core machine (about 13 s a mutant for the CPU
 # crates, about a minute for the importer, whose every mutant relinks the
@@ -80,6 +81,11 @@ case "$scope" in
     ;;
   node)
     args=(-p oxygen-node --test-package oxygen-node)
+    # The rig test's waits (120 s each, for lavapipe on a busy machine)
+    # shortened: the unmutated suite takes about 5 s, and a mutant that
+    # makes a frame wait for ever is then caught in 30 s, not 120.
+    export OXYGEN_NODE_TEST_WAIT_S="${OXYGEN_NODE_TEST_WAIT_S:-30}"
+    default_timeout=90
     ;;
   *)
     say "unknown scope '$scope' (core, bindless, sceneprep, passes, importer, node)"
@@ -102,7 +108,7 @@ if [ "${OXYGEN_MUTANTS_IN_PLACE:-}" = 1 ]; then
   in_place=(--in-place)
 fi
 baseline=(--baseline "${OXYGEN_MUTANTS_BASELINE:-run}")
-cargo mutants "${args[@]}" "${in_place[@]}" "${baseline[@]}" --shard "$k/$n" --timeout "${OXYGEN_MUTANTS_TIMEOUT:-300}" --output "$out"
+cargo mutants "${args[@]}" "${in_place[@]}" "${baseline[@]}" --shard "$k/$n" --timeout "${OXYGEN_MUTANTS_TIMEOUT:-${default_timeout:-300}}" --output "$out"
 status=$?
 set -e
 # cargo-mutants exits 2 when mutants were missed, 3 on timeouts: a result,

@@ -772,4 +772,38 @@ mod membership_tests {
         assert_eq!(coordinator.node_of(on_a), None);
         assert_eq!(coordinator.node_of(on_b), Some("b"));
     }
+
+    /// Joins and departures queued since the last look are acted on when
+    /// the next frame starts (or while waiting for nodes), in the order
+    /// they came; a frame keeps the other events it finds for itself, and
+    /// between frames they are dropped.
+    #[test]
+    fn queued_membership_is_acted_on_in_order_and_other_events_are_kept_for_the_frame() {
+        let mut coordinator = coordinator();
+        // The test's own channel in place of the session's, so that it
+        // decides what is queued and when.
+        let (tx, events) = mpsc::channel();
+        coordinator.events = events;
+        let status = || {
+            let key = zenoh::key_expr::KeyExpr::try_from("membership/status/a").expect("key");
+            Event::Status(zenoh::sample::SampleBuilder::put(key, Vec::<u8>::new()).into())
+        };
+        for event in
+            [Event::Node("a".into(), true), status(), Event::Node("b".into(), true), Event::Node("a".into(), false)]
+        {
+            tx.send(event).expect("queued");
+        }
+        let mut kept = Vec::new();
+        coordinator.drain_membership(Some(&mut kept));
+        assert_eq!(coordinator.nodes(), ["b"]);
+        assert_eq!(coordinator.joined, ["a", "b"]);
+        assert_eq!(coordinator.left, ["a"]);
+        assert!(matches!(kept.as_slice(), [Event::Status(_)]), "the frame keeps the status it found");
+
+        tx.send(status()).expect("queued");
+        tx.send(Event::Node("c".into(), true)).expect("queued");
+        coordinator.drain_membership(None);
+        assert_eq!(coordinator.nodes(), ["b", "c"]);
+        assert!(coordinator.events.try_recv().is_err(), "between frames the status is dropped, not left queued");
+    }
 }

@@ -21,13 +21,33 @@ use oxygen_node::{Coordinator, NetConfig, Planes, RigOptions, RigViewId, ViewSpe
 
 const NODE: &str = env!("CARGO_BIN_EXE_oxygen-node");
 
+/// The longest this test waits for anything (a node to join, a frame, the
+/// nodes to stop): 120 s, enough for lavapipe on two busy cores, or
+/// `OXYGEN_NODE_TEST_WAIT_S` seconds. Mutation testing sets it lower: a
+/// mutant that makes a frame wait for ever then costs that much, not two
+/// minutes.
+fn longest_wait() -> Duration {
+    let seconds = std::env::var("OXYGEN_NODE_TEST_WAIT_S").ok().and_then(|s| s.parse::<u64>().ok()).unwrap_or(120);
+    Duration::from_secs(seconds.max(1))
+}
+
 /// Node processes, killed on drop (a failed check leaves none behind).
 struct Nodes(BTreeMap<String, Child>);
 
 impl Nodes {
     fn spawn(&mut self, rig: &str, name: &str, endpoint: &str) {
         let child = Command::new(NODE)
-            .args(["--rig", rig, "--name", name, "--connect", endpoint, "--deterministic", "--wait", "120"])
+            .args([
+                "--rig",
+                rig,
+                "--name",
+                name,
+                "--connect",
+                endpoint,
+                "--deterministic",
+                "--wait",
+                &longest_wait().as_secs().to_string(),
+            ])
             .stdout(Stdio::null())
             .stderr(Stdio::inherit())
             .spawn()
@@ -149,14 +169,14 @@ fn a_rig_renders_every_view_once_a_frame_through_a_join_a_stall_and_a_death() {
 
     let rig = format!("test-{}", std::process::id());
     let endpoint = format!("tcp/127.0.0.1:{}", free_port());
-    let options = RigOptions { planes: PLANES, stall_timeout: Duration::from_secs(120), ..Default::default() };
+    let options = RigOptions { planes: PLANES, stall_timeout: longest_wait(), ..Default::default() };
     let mut coordinator = Coordinator::new(&rig, &NetConfig::listen(&endpoint), options).expect("coordinator");
     let views: Vec<RigViewId> = specs.iter().map(|s| coordinator.add_view(s.clone()).expect("view")).collect();
 
     let mut nodes = Nodes(BTreeMap::new());
     nodes.spawn(&rig, "a", &endpoint);
     nodes.spawn(&rig, "b", &endpoint);
-    coordinator.wait_for_nodes(2, Duration::from_secs(120)).expect("two nodes");
+    coordinator.wait_for_nodes(2, longest_wait()).expect("two nodes");
     assert_eq!(coordinator.nodes(), ["a", "b"]);
     assert!(views.iter().all(|v| coordinator.view_cost(*v).is_none()), "no view is measured before it renders");
 
@@ -169,7 +189,7 @@ fn a_rig_renders_every_view_once_a_frame_through_a_join_a_stall_and_a_death() {
             // A third node joins: views move to it at once.
             4 => {
                 nodes.spawn(&rig, "c", &endpoint);
-                coordinator.wait_for_nodes(3, Duration::from_secs(120)).expect("three nodes");
+                coordinator.wait_for_nodes(3, longest_wait()).expect("three nodes");
             }
             // c pauses (as a node overloaded or swapping would): it falls
             // behind within the stall timeout and its views render
@@ -181,7 +201,7 @@ fn a_rig_renders_every_view_once_a_frame_through_a_join_a_stall_and_a_death() {
             // c goes on (and gets views back as the loads say); b dies.
             9 => {
                 nodes.signal("c", "-CONT");
-                coordinator.set_stall_timeout(Duration::from_secs(30));
+                coordinator.set_stall_timeout(longest_wait().min(Duration::from_secs(30)));
                 nodes.signal("b", "-KILL");
             }
             _ => {}
@@ -261,7 +281,7 @@ fn a_rig_renders_every_view_once_a_frame_through_a_join_a_stall_and_a_death() {
 
     // The coordinator goes; the nodes stop by themselves.
     drop(coordinator);
-    nodes.wait_all(Duration::from_secs(60));
+    nodes.wait_all(longest_wait().min(Duration::from_secs(60)));
 }
 
 #[test]
