@@ -12,9 +12,9 @@ use bytemuck::Zeroable;
 use oxygen_gpu::bindings::{self, LayoutEntries};
 
 use super::params::{
-    COMPARISON_SAMPLER_BINDING, ENVIRONMENT_BINDING, ENVIRONMENT_SAMPLER_BINDING, FIRST_PROBE_BINDING, LightingInputs,
-    MAX_CASCADES, MAX_PROBES, PROBE_FACES, PROBE_SAMPLER_BINDING, SHADOW_ATLAS_BINDING, SPLIT_SUM_BINDING,
-    UNIFORM_BINDING,
+    CLUSTER_LIGHTS_BINDING, COMPARISON_SAMPLER_BINDING, ENVIRONMENT_BINDING, ENVIRONMENT_SAMPLER_BINDING,
+    FIRST_PROBE_BINDING, LightingInputs, MAX_CASCADES, MAX_PROBES, PROBE_FACES, PROBE_SAMPLER_BINDING,
+    SHADOW_ATLAS_BINDING, SPLIT_SUM_BINDING, UNIFORM_BINDING,
 };
 
 /// (forward, up) of each probe face camera, in layer order; the shader's
@@ -39,6 +39,9 @@ pub(crate) struct LightingInputResources {
     pub(crate) placeholder_map: wgpu::TextureView,
     pub(crate) placeholder_probe: wgpu::TextureView,
     pub(crate) placeholder_atlas: wgpu::TextureView,
+    /// One zero word: the light clusters of a view that does not cull its
+    /// lights (the shader never reads it then).
+    pub(crate) no_clusters: wgpu::Buffer,
 }
 
 /// What every group 1 binds alike: the samplers and the split-sum table.
@@ -47,6 +50,7 @@ pub(crate) struct SharedInputs<'a> {
     probe_sampler: &'a wgpu::Sampler,
     environment_sampler: &'a wgpu::Sampler,
     split_sum: &'a wgpu::Buffer,
+    no_clusters: &'a wgpu::Buffer,
 }
 
 impl LightingInputResources {
@@ -56,6 +60,7 @@ impl LightingInputResources {
             probe_sampler: &self.probe_sampler,
             environment_sampler: &self.environment_sampler,
             split_sum: &self.split_sum_buffer,
+            no_clusters: &self.no_clusters,
         }
     }
 
@@ -80,6 +85,8 @@ impl LightingInputResources {
             .push(bindings::sampler_filtering())
             .at(SHADOW_ATLAS_BINDING)
             .push(bindings::depth_2d_array())
+            .at(CLUSTER_LIGHTS_BINDING)
+            .push(bindings::storage_read_only())
             .create_layout(device, "lighting inputs");
         // Reverse-Z: a fragment is lit when it is at least as close to the
         // light as the stored depth, i.e. its depth is greater or equal.
@@ -138,11 +145,18 @@ impl LightingInputResources {
         let placeholder_atlas = crate::lighting::shadow_atlas::atlas_view(&placeholder_atlas);
         let uniform = uniform_buffer(device, &LightingInputs::zeroed());
         let (split_sum_lut, split_sum_buffer) = crate::lighting::split_sum::build_lut(device, queue);
+        let no_clusters = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("no light clusters"),
+            size: 16,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
         let shared = SharedInputs {
             sampler: &sampler,
             probe_sampler: &probe_sampler,
             environment_sampler: &environment_sampler,
             split_sum: &split_sum_buffer,
+            no_clusters: &no_clusters,
         };
         let no_inputs = bind_group(
             device,
@@ -150,7 +164,7 @@ impl LightingInputResources {
             shared,
             ([&dummy_view; MAX_CASCADES], &placeholder_atlas),
             ([&dummy_probe_view; MAX_PROBES], &dummy_probe_view),
-            &uniform,
+            (&uniform, None),
         );
         LightingInputResources {
             layout,
@@ -163,6 +177,7 @@ impl LightingInputResources {
             placeholder_map: dummy_view,
             placeholder_probe: dummy_probe_view,
             placeholder_atlas,
+            no_clusters,
         }
     }
 }
@@ -194,7 +209,7 @@ pub(crate) fn bind_group(
     shared: SharedInputs<'_>,
     (maps, shadow_atlas): ([&wgpu::TextureView; MAX_CASCADES], &wgpu::TextureView),
     (probes, environment): ([&wgpu::TextureView; MAX_PROBES], &wgpu::TextureView),
-    uniform: &wgpu::Buffer,
+    (uniform, clusters): (&wgpu::Buffer, Option<&wgpu::Buffer>),
 ) -> wgpu::BindGroup {
     let mut entries: Vec<wgpu::BindGroupEntry<'_>> = maps
         .iter()
@@ -228,6 +243,10 @@ pub(crate) fn bind_group(
     entries.push(wgpu::BindGroupEntry {
         binding: SHADOW_ATLAS_BINDING,
         resource: wgpu::BindingResource::TextureView(shadow_atlas),
+    });
+    entries.push(wgpu::BindGroupEntry {
+        binding: CLUSTER_LIGHTS_BINDING,
+        resource: clusters.unwrap_or(shared.no_clusters).as_entire_binding(),
     });
     device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("lighting inputs"), layout, entries: &entries })
 }

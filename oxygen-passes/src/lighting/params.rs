@@ -12,7 +12,7 @@ oxygen_gpu::gpu_struct! {
     /// declaration ([`oxygen_gpu::GpuStruct::wgsl`]) and included by
     /// `forward_lit.wgsl`.
     #[derive(Debug, PartialEq)]
-    pub struct LightingInputs: 1600 bytes {
+    pub struct LightingInputs: 1632 bytes {
         /// World → light clip space, per cascade.
         pub light_view_projection: [[[f32; 4]; 4]; MAX_CASCADES] => "array<mat4x4<f32>, MAX_CASCADES>",
         /// World size of one map texel, per cascade.
@@ -52,6 +52,14 @@ oxygen_gpu::gpu_struct! {
         pub environment_levels: u32,
         /// Zero.
         pub reserved: u32,
+        /// Clustered light culling's grid (`HAS_CLUSTERED_LIGHTS`, see
+        /// `lighting/clusters.rs`): tiles across, tiles down, depth slices,
+        /// and 32-bit words of light bits per cluster. Zero without it.
+        pub cluster_grid: [u32; 4] => "vec4<u32>",
+        /// The grid's depth slicing: the far depth of slice 0 (metres in
+        /// front of the eye), 1 / ln of the ratio of one slice's far depth to
+        /// the next's, and two zeroes.
+        pub cluster_depth: [f32; 4] => "vec4<f32>",
     }
 }
 
@@ -72,7 +80,7 @@ const _: () = assert!(MAX_SHADOW_TILES.is_multiple_of(4));
 
 /// The numbers of group 1 that the shading pass's WGSL reads, by their
 /// Rust names: [`wgsl_constants`] emits exactly these.
-fn shared_numbers() -> [(&'static str, u32); 13] {
+fn shared_numbers() -> [(&'static str, u32); 14] {
     [
         ("MAX_CASCADES", MAX_CASCADES as u32),
         ("MAX_SHADOW_TILES", MAX_SHADOW_TILES as u32),
@@ -86,6 +94,7 @@ fn shared_numbers() -> [(&'static str, u32); 13] {
         ("ENVIRONMENT_BINDING", ENVIRONMENT_BINDING),
         ("ENVIRONMENT_SAMPLER_BINDING", ENVIRONMENT_SAMPLER_BINDING),
         ("SPLIT_SUM_BINDING", SPLIT_SUM_BINDING),
+        ("CLUSTER_LIGHTS_BINDING", CLUSTER_LIGHTS_BINDING),
         ("SPLIT_SUM_LUT_SIZE", SPLIT_SUM_LUT_SIZE),
     ]
 }
@@ -108,6 +117,9 @@ pub(crate) const FIRST_PROBE_BINDING: u32 = MAX_CASCADES as u32 + 4;
 pub(crate) const ENVIRONMENT_BINDING: u32 = FIRST_PROBE_BINDING + MAX_PROBES as u32;
 pub(crate) const ENVIRONMENT_SAMPLER_BINDING: u32 = ENVIRONMENT_BINDING + 1;
 pub(crate) const SPLIT_SUM_BINDING: u32 = ENVIRONMENT_SAMPLER_BINDING + 1;
+/// The view's light clusters (a storage buffer of light bits per cluster;
+/// one zero word when the view does not cull its lights).
+pub(crate) const CLUSTER_LIGHTS_BINDING: u32 = SPLIT_SUM_BINDING + 1;
 
 /// Layers of a probe texture: +X, −X, +Y, −Y, +Z, −Z.
 pub const PROBE_FACES: usize = 6;
@@ -144,6 +156,7 @@ mod tests {
             ("ENVIRONMENT_BINDING", ENVIRONMENT_BINDING),
             ("ENVIRONMENT_SAMPLER_BINDING", ENVIRONMENT_SAMPLER_BINDING),
             ("SPLIT_SUM_BINDING", SPLIT_SUM_BINDING),
+            ("CLUSTER_LIGHTS_BINDING", CLUSTER_LIGHTS_BINDING),
         ] {
             let line = format!("const {name}: u32 = {binding:#x}u;");
             assert!(wgsl.lines().any(|l| l == line), "{line} missing from\n{wgsl}");

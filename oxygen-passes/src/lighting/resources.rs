@@ -18,6 +18,8 @@ pub struct LightingResources {
     environment: Option<EnvironmentTexture>,
     /// Counts environment changes (views that accumulate restart on one).
     environment_generation: u64,
+    /// Clustered light culling's pipeline and per-view buffers.
+    clusters: crate::lighting::clusters::LightClusters,
 }
 
 /// The prefiltered environment on the GPU (faces and levels, the
@@ -39,6 +41,7 @@ impl LightingResources {
             cube_filter: CubeFilter::new(device),
             environment: None,
             environment_generation: 0,
+            clusters: Default::default(),
         }
     }
 
@@ -147,7 +150,7 @@ impl LightingResources {
             inputs.shared(),
             ([&inputs.placeholder_map; MAX_CASCADES], &inputs.placeholder_atlas),
             ([&inputs.placeholder_probe; MAX_PROBES], &view),
-            &buffer,
+            (&buffer, None),
         );
         self.environment = Some(EnvironmentTexture { texture, view, no_inputs });
     }
@@ -194,6 +197,17 @@ impl LightingResources {
         self.environment.is_some()
     }
 
+    /// Clustered light culling's pipeline and per-view buffers.
+    pub(crate) fn clusters(&self) -> &crate::lighting::clusters::LightClusters {
+        &self.clusters
+    }
+
+    /// Frees the light clusters of views not in `views` (the renderer calls
+    /// it once a frame with the views it keeps).
+    pub fn retain_views(&self, views: &[oxygen_core::ViewId]) {
+        self.clusters.retain(views);
+    }
+
     /// The layout of bind group 1.
     pub fn layout(&self) -> &wgpu::BindGroupLayout {
         &self.inputs.layout
@@ -206,7 +220,8 @@ impl LightingResources {
     }
 
     /// A group 1 with these cascade maps (unused slots `None`), local shadow
-    /// atlas, probes (six-layer array views, or `None`) and their uniform
+    /// atlas, probes (six-layer array views, or `None`), light clusters
+    /// (`None` for a view that does not cull its lights) and their uniform
     /// block.
     pub fn bind_group(
         &self,
@@ -214,6 +229,7 @@ impl LightingResources {
         maps: [Option<&wgpu::TextureView>; MAX_CASCADES],
         shadow_atlas: Option<&wgpu::TextureView>,
         probes: [Option<&wgpu::TextureView>; MAX_PROBES],
+        clusters: Option<&wgpu::Buffer>,
         uniform: &LightingInputs,
     ) -> wgpu::BindGroup {
         let inputs = &self.inputs;
@@ -233,7 +249,7 @@ impl LightingResources {
             inputs.shared(),
             (maps, shadow_atlas),
             (probes, environment),
-            &buffer,
+            (&buffer, clusters),
         )
     }
 

@@ -1,29 +1,40 @@
-//! What the forward lit pass reads from other views, as bind group 1: the
-//! view's own sun cascades, the frame's local-light shadow atlas and the
-//! reflection probes the view is linked to. Every input is awaited: the pass
-//! goes on once the views that render it have recorded.
+//! What the forward lit pass reads through bind group 1: from other views,
+//! the view's own sun cascades, the frame's local-light shadow atlas and the
+//! reflection probes the view is linked to; of its own, its light clusters
+//! when it culls its lights. Every input is awaited: the pass goes on once
+//! the views that render it have recorded.
 
 use bytemuck::Zeroable;
 
-use crate::{ForwardLitConfig, LightingInputs, MAX_CASCADES, MAX_PROBES, PassError, RenderContext};
+use crate::lighting::clusters::{ClusterJob, GridShape};
+use crate::{ForwardLitConfig, LightCulling, LightingInputs, MAX_CASCADES, MAX_PROBES, PassError, RenderContext};
 
-/// Whether the view reads a shadow map or a probe through group 1 (else
-/// the shared empty group is bound, and there is nothing to await).
+/// Whether the view culls its positional lights into clusters this frame
+/// (it asks to, and the frame has positional lights).
+pub(crate) fn clusters_lights(ctx: &RenderContext<'_>, config: &ForwardLitConfig) -> bool {
+    matches!(config.light_culling, LightCulling::Clustered(_)) && ctx.prepared.slots().positional_lights.count > 0
+}
+
+/// Whether the view reads a shadow map, a probe or its light clusters
+/// through group 1 (else the shared empty group is bound, and there is
+/// nothing to await).
 pub(crate) fn reads_inputs(ctx: &RenderContext<'_>, config: &ForwardLitConfig) -> bool {
     let inputs = &ctx.inputs;
     (config.sun_shadows && !inputs.cascades.is_empty())
         || (config.local_shadows && inputs.local_shadows.is_some())
         || (config.reflections && !inputs.probes.is_empty())
+        || clusters_lights(ctx, config)
 }
 
-/// Group 1 for this view, or `None` when it reads no shadow map and no probe
-/// (the shared empty group is bound then).
+/// Group 1 for this view, or `None` when it reads no shadow map, no probe
+/// and no light clusters (the shared empty group is bound then); with the
+/// cluster pass to record before the view shades, when it culls its lights.
 pub(crate) async fn bind_group(
     ctx: &RenderContext<'_>,
     config: &ForwardLitConfig,
-) -> Result<Option<wgpu::BindGroup>, PassError> {
+) -> Result<(Option<wgpu::BindGroup>, Option<ClusterJob>), PassError> {
     if !reads_inputs(ctx, config) {
-        return Ok(None);
+        return Ok((None, None));
     }
     let inputs = &ctx.inputs;
     let cascades = if config.sun_shadows { &inputs.cascades[..inputs.cascades.len().min(MAX_CASCADES)] } else { &[] };
@@ -81,11 +92,24 @@ pub(crate) async fn bind_group(
     }
     uniform.probe_count = probes.len() as u32;
 
-    Ok(Some(ctx.lighting.bind_group(
+    let clusters = match config.light_culling {
+        LightCulling::Clustered(grid) if clusters_lights(ctx, config) => {
+            let lights = ctx.prepared.slots().positional_lights.count;
+            let shape = GridShape::new(&grid, ctx.view.viewport, ctx.view.near, ctx.view.far, lights);
+            (uniform.cluster_grid, uniform.cluster_depth) = shape.uniform_fields();
+            Some(ctx.lighting.clusters().prepare(ctx, &shape)?)
+        }
+        _ => None,
+    };
+    let (bits, job) = clusters.unzip();
+
+    let group = ctx.lighting.bind_group(
         &ctx.gpu.device,
         maps,
         local.map(|l| l.atlas),
         probe_views.each_ref().map(Option::as_ref),
+        bits.as_ref(),
         &uniform,
-    )))
+    );
+    Ok((Some(group), job))
 }

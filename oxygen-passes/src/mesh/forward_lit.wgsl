@@ -27,6 +27,9 @@
 override HAS_SUN_SHADOWS: bool = true;
 override HAS_LOCAL_LIGHTS: bool = true;
 override HAS_LOCAL_SHADOWS: bool = true;
+// Visit the lights of the pixel's cluster only (when the view has clusters
+// this frame: `shadows.cluster_grid.w` words per cluster, else every light).
+override HAS_CLUSTERED_LIGHTS: bool = true;
 override HAS_PROBES: bool = true;
 // A linked probe has a parallax box (see `probe_lookup`).
 override HAS_PROBE_PARALLAX: bool = true;
@@ -79,6 +82,27 @@ fn fit_hdr(color: vec3<f32>) -> vec3<f32> {
 // The split-sum table's half floats, two texels (RGBA16F) per vec4<u32>
 // (environment.wgsl reads it, the environment and the cube layout).
 @group(1) @binding(SPLIT_SUM_BINDING) var<uniform> split_sum: array<vec4<u32>, SPLIT_SUM_LUT_SIZE * SPLIT_SUM_LUT_SIZE / 2u>;
+// The view's light clusters (lighting/clusters.wgsl): per cluster,
+// `shadows.cluster_grid.w` words, bit b of word w set when positional light
+// 32 w + b may reach it.
+@group(1) @binding(CLUSTER_LIGHTS_BINDING) var<storage, read> cluster_bits: array<u32>;
+
+// The first word of the cluster holding `position` (relative to the render
+// origin): its screen tile from the point's NDC (y up, as the cluster pass
+// cuts them), its depth slice from the distance in front of the eye.
+fn cluster_words(position: vec3<f32>) -> u32 {
+    let grid = shadows.cluster_grid;
+    let clip = scene.camera.view_projection * vec4<f32>(position, 1.0);
+    let ndc = clip.xy / max(abs(clip.w), 1e-30) * sign(clip.w);
+    let tile = vec2<u32>(clamp((ndc * 0.5 + 0.5) * vec2<f32>(grid.xy), vec2<f32>(0.0), vec2<f32>(grid.xy - 1u)));
+    let depth = -(scene.camera.view * vec4<f32>(position, 1.0)).z;
+    let first = shadows.cluster_depth.x;
+    var slice = 0u;
+    if depth >= first && grid.z > 1u {
+        slice = min(u32(1.0 + floor(log(depth / first) * shadows.cluster_depth.y)), grid.z - 1u);
+    }
+    return ((slice * grid.y + tile.y) * grid.x + tile.x) * grid.w;
+}
 
 // The probe nearest to `position` (the surface reflects what that probe saw).
 fn nearest_probe(position: vec3<f32>) -> u32 {
@@ -323,6 +347,35 @@ fn material_texture(slot: u32, at: TexCoord) -> vec4<f32> {
     return sample_at(slot, at);
 }
 
+// What positional light `i` of the frame adds at `position` (its shadow
+// included) to a surface of normal `n` seen along `v`.
+fn positional_light(
+    i: u32,
+    position: vec3<f32>,
+    geometric_normal: vec3<f32>,
+    n: vec3<f32>,
+    v: vec3<f32>,
+    albedo: vec3<f32>,
+    metallic: f32,
+    roughness: f32,
+) -> vec3<f32> {
+    let light = positional_light_domain[scene.renderer.positional_lights_slot + i];
+    let reach = positional_light_at(light, position);
+    let l = reach.l;
+    var attenuation = reach.attenuation;
+    if light.kind == LIGHT_SPOT {
+        if HAS_LOCAL_SHADOWS && light.shadow_slot != INVALID_SLOT {
+            attenuation *= tile_visibility(light.shadow_slot, light.position, position, geometric_normal);
+        }
+    } else if HAS_LOCAL_SHADOWS && light.shadow_slot != INVALID_SLOT {
+        // A point light's six faces follow its first tile, in
+        // PROBE_FACE_AXES order: the face is the major axis of -l.
+        let tile = light.shadow_slot + cube_face(-l);
+        attenuation *= tile_visibility(tile, light.position, position, geometric_normal);
+    }
+    return brdf_cosine(n, v, l, albedo, metallic, roughness) * light.color * light.intensity * attenuation;
+}
+
 // What a fragment writes: radiance for the HDR target, or, with
 // TONE_MAP_OUTPUT, the tone-mapped colour for the sRGB target (the same
 // operator as the tone-map pass).
@@ -382,22 +435,22 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Der
     }
 
     let pos_count = select(0u, scene.renderer.positional_light_count, HAS_LOCAL_LIGHTS);
-    for (var i = 0u; i < pos_count; i++) {
-        let light = positional_light_domain[scene.renderer.positional_lights_slot + i];
-        let reach = positional_light_at(light, mesh.world_position);
-        let l = reach.l;
-        var attenuation = reach.attenuation;
-        if light.kind == LIGHT_SPOT {
-            if HAS_LOCAL_SHADOWS && light.shadow_slot != INVALID_SLOT {
-                attenuation *= tile_visibility(light.shadow_slot, light.position, mesh.world_position, geometric_normal);
+    if HAS_CLUSTERED_LIGHTS && shadows.cluster_grid.w > 0u && pos_count > 0u {
+        // The cluster's lights, in the frame's order (bit by bit, word by
+        // word): the loop below minus lights that add exactly nothing here.
+        let base = cluster_words(mesh.world_position);
+        for (var w = 0u; w < shadows.cluster_grid.w; w++) {
+            var bits = cluster_bits[base + w];
+            while bits != 0u {
+                let i = w * 32u + firstTrailingBit(bits);
+                bits &= bits - 1u;
+                color += positional_light(i, mesh.world_position, geometric_normal, n, v, albedo, metallic, roughness);
             }
-        } else if HAS_LOCAL_SHADOWS && light.shadow_slot != INVALID_SLOT {
-            // A point light's six faces follow its first tile, in
-            // PROBE_FACE_AXES order: the face is the major axis of -l.
-            let tile = light.shadow_slot + cube_face(-l);
-            attenuation *= tile_visibility(tile, light.position, mesh.world_position, geometric_normal);
         }
-        color += brdf_cosine(n, v, l, albedo, metallic, roughness) * light.color * light.intensity * attenuation;
+    } else {
+        for (var i = 0u; i < pos_count; i++) {
+            color += positional_light(i, mesh.world_position, geometric_normal, n, v, albedo, metallic, roughness);
+        }
     }
     // Specular reflection of the probe's surroundings: sharp on smooth
     // surfaces, from blurrier mip levels on rough ones, weighted by the

@@ -43,6 +43,11 @@ pub struct ForwardLitConfig {
     /// lit surface does not shadow itself (acne). Larger values detach
     /// shadows from their casters. Default 1.5.
     pub shadow_normal_offset: f32,
+    /// How a pixel finds the positional lights that reach it: every light
+    /// of the frame (the default), or only those of its cluster after a
+    /// culling pass ([`crate::LightCulling`]). The image is the same; the
+    /// time is not.
+    pub light_culling: crate::LightCulling,
 }
 
 impl ForwardLitConfig {
@@ -55,6 +60,7 @@ impl ForwardLitConfig {
         reflections: true,
         shadow_pcf_radius: 1,
         shadow_normal_offset: 1.5,
+        light_culling: crate::LightCulling::EveryLight,
     };
 }
 
@@ -375,6 +381,7 @@ impl MeshPass {
         crate::ShaderFeatures {
             sun_shadows: config.is_some_and(|c| c.sun_shadows) && !inputs.cascades.is_empty(),
             local_lights: ctx.prepared.slots().positional_lights.count > 0,
+            clustered_lights: config.is_some_and(|c| super::forward_lighting::clusters_lights(ctx, c)),
             local_shadows: config.is_some_and(|c| c.local_shadows) && inputs.local_shadows.is_some(),
             probes,
             probe_parallax: probes && inputs.probes.iter().any(|p| p.parallax.is_some()),
@@ -510,13 +517,19 @@ impl MeshPass {
         let lighting = futures::future::try_join_all(lit.iter().map(|i| async move {
             match &self.lighting {
                 Some(config) => super::forward_lighting::bind_group(views[*i], config).await,
-                None => Ok(None),
+                None => Ok((None, None)),
             }
         }));
         let (pipelines, lit_groups) = futures::future::join(pipelines, lighting).await;
         let mut lighting: Vec<Option<wgpu::BindGroup>> = vec![None; views.len()];
-        for (i, group) in lit.into_iter().zip(lit_groups?) {
+        let mut cluster_jobs = Vec::new();
+        for (i, (group, job)) in lit.into_iter().zip(lit_groups?) {
             lighting[i] = group;
+            cluster_jobs.extend(job);
+        }
+        // The views' light clusters, sorted before any of them shades.
+        if let Some(ctx) = views.first() {
+            ctx.lighting.clusters().record(rec.encoder(), ctx.heap, &cluster_jobs);
         }
         // Every key is in `distinct`, in the order of `pipelines`.
         let partition_pipelines: Vec<wgpu::RenderPipeline> = partition_keys

@@ -32,6 +32,8 @@ pub(crate) static SOURCES: &[Source] = &[
     Source::wgsl("lighting/ibl/environment.wgsl", include_str!("../lighting/ibl/environment.wgsl")),
     Source::wgsl("lighting/ibl/cube_filter.wgsl", include_str!("../lighting/ibl/cube_filter.wgsl")),
     Source::gpu_struct::<crate::lighting::ibl::params::CubeFilterParams>("lighting/ibl/CubeFilterParams"),
+    Source::gpu_struct::<crate::lighting::clusters::ClusterParams>("lighting/ClusterParams"),
+    Source::wgsl("lighting/clusters.wgsl", include_str!("../lighting/clusters.wgsl")),
     // GPU visibility and the depth pyramid.
     Source::generated("visibility/constants", crate::visibility::params::wgsl_constants),
     Source::gpu_struct::<crate::visibility::params::CullParams>("visibility/CullParams"),
@@ -160,6 +162,8 @@ pub(crate) const COMPOSITE: ShaderModule = ShaderModule::plain("post/composite.w
 pub(crate) const DEPTH_COPY: ShaderModule = ShaderModule::plain("post/depth_copy.wgsl");
 /// The cube filter (environment and probe prefiltering).
 pub(crate) const CUBE_FILTER: ShaderModule = ShaderModule::plain("lighting/ibl/cube_filter.wgsl");
+/// Clustered light culling's pass.
+pub(crate) const LIGHT_CLUSTERS: ShaderModule = ShaderModule::plain("lighting/clusters.wgsl");
 /// The split-sum table.
 pub(crate) const SPLIT_SUM: ShaderModule = ShaderModule::plain("lighting/split_sum.wgsl");
 /// GPU visibility's cull and command passes.
@@ -232,6 +236,7 @@ pub(crate) const ENTRY_POINTS: &[EntryPoint] = &[
     entry(CUBE_FILTER, "fs_equirect", Stage::Fragment),
     entry(CUBE_FILTER, "fs_ggx", Stage::Fragment),
     entry(CUBE_FILTER, "fs_harmonics", Stage::Fragment),
+    entry(LIGHT_CLUSTERS, "assign_lights", Stage::Compute),
     entry(SPLIT_SUM, "vs", Stage::Vertex),
     entry(SPLIT_SUM, "fs", Stage::Fragment),
     entry(CULL, "cull_early", Stage::Compute),
