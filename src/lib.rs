@@ -78,7 +78,8 @@ pub mod import {
 }
 
 /// Lights and what they light: shadow settings and the shadow views'
-/// resolvers, reflection probes, and environments (the sky, HDR panoramas).
+/// resolvers, reflection probes, environments (the sky, HDR panoramas), and
+/// how shading finds the lights of a pixel (clustered light culling).
 pub mod lighting {
     pub use crate::environment_file::{EnvironmentFileError, MAX_ENVIRONMENT_SIDE, load_hdr_environment};
     pub use crate::probes::{ProbeFaceResolver, ProbeUpdate, ReflectionProbe};
@@ -86,6 +87,7 @@ pub mod lighting {
     pub use oxygen_core::{
         CascadeSettings, Environment, EnvironmentError, EquirectImage, Light, LightKind, Mobility, Sky,
     };
+    pub use oxygen_passes::{ClusterGrid, LightCulling};
 }
 
 /// The bindless heap.

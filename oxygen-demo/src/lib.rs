@@ -151,6 +151,75 @@ pub fn floor_with_box(roughness: f32) -> Scene {
     scene
 }
 
+/// A street of `lamps` lights: a 200 m road along −Z (12 m wide) between
+/// two rows of buildings (boxes of varied heights every 8 m), its lamps in
+/// two rows 4.5 m up, alternating point lights and downward spots, each of
+/// a warm or cool white and a range of 7 m, and one unbounded point light
+/// high above the far end; no sun. The scene of clustered light culling's
+/// test, benchmark and accuracy stage (a street with 1 000 lamps), seen by
+/// [`lamp_street_camera`].
+pub fn lamp_street(lamps: usize) -> Scene {
+    let mut scene = Scene::new();
+    let ground_material =
+        scene.add_material(Material { roughness: 0.7, ..Material::opaque("road", Vec4::new(0.5, 0.5, 0.52, 1.0)) });
+    let ground = scene.add_geometry(Geometry::plane(240.0));
+    let node = scene.add_node("road", Transform::from_translation(Vec3::new(0.0, 0.0, -100.0)));
+    scene
+        .set_renderable(node, Renderable { geometry: ground, materials: vec![ground_material] })
+        .expect("valid handles");
+    let cube = scene.add_geometry(Geometry::cube(1.0));
+    let walls = [Vec4::new(0.75, 0.6, 0.5, 1.0), Vec4::new(0.55, 0.6, 0.7, 1.0), Vec4::new(0.7, 0.7, 0.65, 1.0)];
+    let walls: Vec<_> =
+        walls.iter().map(|c| scene.add_material(Material { roughness: 0.6, ..Material::opaque("wall", *c) })).collect();
+    for i in 0..25 {
+        for side in [-1.0f32, 1.0] {
+            let height = 6.0 + ((i * 7 + usize::from(side > 0.0) * 3) % 5) as f32 * 3.0;
+            let at = Vec3::new(side * 11.0, height * 0.5, -4.0 - i as f32 * 8.0);
+            let node =
+                scene.add_node("building", Transform::from_translation(at).with_scale(Vec3::new(8.0, height, 6.5)));
+            let material = walls[(i + usize::from(side > 0.0)) % walls.len()];
+            scene
+                .set_renderable(node, Renderable { geometry: cube, materials: vec![material] })
+                .expect("valid handles");
+        }
+    }
+    let down = Quat::from_rotation_arc(Vec3::NEG_Z, Vec3::NEG_Y);
+    let spacing = 200.0 / (lamps.div_ceil(2).max(1)) as f32;
+    for i in 0..lamps {
+        let side = if i % 2 == 0 { -1.0 } else { 1.0 };
+        let at = Vec3::new(side * 5.0, 4.5, -1.0 - (i / 2) as f32 * spacing);
+        let warm = (i / 2) % 3 != 0;
+        let color = if warm { Vec3::new(1.0, 0.8, 0.55) } else { Vec3::new(0.7, 0.85, 1.0) };
+        let light = if (i / 2) % 2 == 0 {
+            Light { color, casts_shadows: false, ..Light::point(30.0, Some(7.0)) }
+        } else {
+            Light { color, casts_shadows: false, ..Light::spot(60.0, Some(7.0), 0.5, 0.9) }
+        };
+        let node = scene.add_node("lamp", Transform::from_translation(at).with_rotation(down));
+        scene.set_light(node, Some(light)).expect("a node");
+    }
+    let moon = scene.add_node("moon", Transform::from_translation(Vec3::new(0.0, 60.0, -220.0)));
+    scene
+        .set_light(
+            moon,
+            Some(Light { color: Vec3::new(0.6, 0.7, 1.0), casts_shadows: false, ..Light::point(800.0, None) }),
+        )
+        .expect("a node");
+    scene
+}
+
+/// The camera of [`lamp_street`]: at the near end of the road, 1.7 m up,
+/// looking down the street (perspective, 60°, near plane 0.1).
+pub fn lamp_street_camera(viewport: UVec2) -> LookAtResolver {
+    LookAtResolver::new(
+        Camera::perspective(60f32.to_radians(), 0.1, None),
+        Vec3::new(0.0, 1.7, 4.0),
+        Vec3::new(0.0, 2.5, -60.0),
+        viewport,
+    )
+    .expect("a valid camera")
+}
+
 /// Six inward-facing unlit walls, each its own colour, closing the cube
 /// of half-size `half_size` around the origin: surroundings that lie
 /// exactly on a box (the reflection probes' parallax box is measured on
