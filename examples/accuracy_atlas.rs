@@ -40,7 +40,8 @@
 //! render origin (the scene 30 000 units from the world origin), reflection
 //! probe resolution and update interval (a mirror ball with a box moving
 //! past it; the reference is the last frame), the probe's parallax box
-//! (none, or the room around a mirror ball), the LOD bias (spheres with two
+//! (none, or the room around a mirror ball), light culling (every light, or
+//! clustered: a street of 1 000 lamps; it must cost no accuracy), the LOD bias (spheres with two
 //! coarser levels; the reference traces the full meshes), visibility (CPU,
 //! GPU frustum, GPU occlusion: each must cost no accuracy), and the render
 //! origin once more on the numerical extremes (a million units out, near
@@ -60,7 +61,7 @@ use oxygen::core::LodLevel;
 use oxygen::core::NodeKey;
 use oxygen::glam::{Quat, Vec4};
 use oxygen::graph::{ReferenceGraph, lit_render_graph};
-use oxygen::lighting::{CascadeSettings, ProbeUpdate, ReflectionProbe};
+use oxygen::lighting::{CascadeSettings, ClusterGrid, LightCulling, ProbeUpdate, ReflectionProbe};
 use oxygen::passes::ReferenceSettings;
 use oxygen::prelude::*;
 use oxygen::sceneprep::{ViewPrepOptions, Visibility};
@@ -110,6 +111,8 @@ struct Setting {
     parallax: Option<oxygen::core::Aabb>,
     /// ScenePrep's LOD bias (`ViewPrepOptions::lod_bias`).
     lod_bias: f32,
+    /// How shading finds a pixel's positional lights.
+    light_culling: LightCulling,
 }
 
 struct Row {
@@ -467,6 +470,16 @@ fn stages(viewport: UVec2) -> Result<Vec<Stage>, Box<dyn std::error::Error>> {
             reference: ReferenceSettings::RASTER_MODEL_WITH_REFLECTIONS,
         }
     };
+    // A street of 1 000 lamps of 7 m range: the light culling knob's scene
+    // (clustered culling must cost no accuracy).
+    let street = Stage {
+        name: "a street of 1 000 lamps",
+        scene: oxygen_demo::lamp_street(1000),
+        camera: oxygen_demo::lamp_street_camera(viewport),
+        cascades: CascadeSettings { count: 1, resolution: 1024, ..Default::default() },
+        moving: None,
+        reference: ReferenceSettings::RASTER_MODEL,
+    };
     Ok(vec![
         shadows,
         textured(Vec3::ZERO, "textured box")?,
@@ -475,6 +488,7 @@ fn stages(viewport: UVec2) -> Result<Vec<Stage>, Box<dyn std::error::Error>> {
         lods,
         extremes,
         room,
+        street,
     ])
 }
 
@@ -493,6 +507,7 @@ fn settings() -> Vec<Setting> {
         probe: None,
         parallax: None,
         lod_bias: 1.0,
+        light_culling: LightCulling::EveryLight,
     };
     let mut all = Vec::new();
     for resolution in [256, 512, 1024, 2048, 4096] {
@@ -536,6 +551,13 @@ fn settings() -> Vec<Setting> {
         let mut s = base("probe parallax", name.to_string(), 6);
         s.probe = Some((128, ProbeUpdate::EveryFrame));
         s.parallax = parallax;
+        all.push(s);
+    }
+    for (name, culling) in
+        [("every light", LightCulling::EveryLight), ("clustered", LightCulling::Clustered(ClusterGrid::DEFAULT))]
+    {
+        let mut s = base("light culling", name.to_string(), 7);
+        s.light_culling = culling;
         all.push(s);
     }
     for bias in [0.25f32, 0.5, 1.0, 2.0, 4.0] {
@@ -613,7 +635,11 @@ fn raster(
         probe.set_parallax_box(&mut renderer, setting.parallax)?;
         desc = desc.reads(probe.cube());
     }
-    let config = ForwardLitConfig { shadow_pcf_radius: setting.pcf_radius, ..ForwardLitConfig::default() };
+    let config = ForwardLitConfig {
+        shadow_pcf_radius: setting.pcf_radius,
+        light_culling: setting.light_culling,
+        ..ForwardLitConfig::default()
+    };
     let view = renderer.register_view(desc, lit_render_graph(config))?;
     // GPU time between the frame's timestamps where the adapter writes
     // them (a report carries an earlier frame's), else the wall clock of
