@@ -42,13 +42,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         None => vec![1, 16, 256, 1000],
     };
     let height = (width * 9 / 16).max(1);
-    let modes = [("every light", LightCulling::EveryLight), ("clustered", LightCulling::Clustered(ClusterGrid::DEFAULT))];
+    let modes =
+        [("every light", LightCulling::EveryLight), ("clustered", LightCulling::Clustered(ClusterGrid::DEFAULT))];
     let grid = ClusterGrid::DEFAULT;
     let mut record = Record::new("light_bench")
         .value("viewport_px", [width, height])
         .value("warm_up_rounds", WARM_UP)
         .value("measured_frames", frames)
-        .value("grid", format!("{} px tiles, {} slices over {} m", grid.tile_pixels, grid.depth_slices, grid.depth_range));
+        .value(
+            "grid",
+            format!("{} px tiles, {} slices over {} m", grid.tile_pixels, grid.depth_slices, grid.depth_range),
+        );
     println!("{width}x{height}, {frames} interleaved frames per mode after {WARM_UP} warm-up rounds");
     println!("{:>6} {:<12} {:>10} {:>10} {:>10}", "lamps", "mode", "GPU ms", "frame ms", "× every");
     for &count in &lamps {

@@ -51,9 +51,36 @@ pub struct Light {
     pub affects_world: bool,
     /// Real-time or baked.
     pub mobility: Mobility,
+    /// How large the light looks, for soft shadows: a directional light's
+    /// angular radius in radians (the sun's is about 0.0047, 0.27°). 0, the
+    /// default, is a point source with hard-edged shadows. The path-traced
+    /// reference samples directions over the light's disc, and a view's
+    /// PCSS shadows (`ShadowFilter::Pcss`) widen their penumbrae by it.
+    /// Negative or non-finite values count as 0, values past
+    /// [`Light::MAX_ANGULAR_RADIUS`] as that. Point and spot lights are
+    /// points whatever it holds.
+    #[serde(default)]
+    pub source_radius: f32,
 }
 
 impl Light {
+    /// The largest angular radius a directional light's disc may have
+    /// (0.3 rad, about 17°): past it a shadow's penumbra is most of the
+    /// shadow.
+    pub const MAX_ANGULAR_RADIUS: f32 = 0.3;
+
+    /// The angular radius shaders use: [`Light::source_radius`] of a
+    /// directional light, finite and within 0 to
+    /// [`Light::MAX_ANGULAR_RADIUS`]; 0 for other lights.
+    pub fn angular_radius(&self) -> f32 {
+        match self.kind {
+            LightKind::Directional if self.source_radius.is_finite() => {
+                self.source_radius.clamp(0.0, Self::MAX_ANGULAR_RADIUS)
+            }
+            _ => 0.0,
+        }
+    }
+
     /// A white real-time directional light that casts shadows.
     pub fn directional(intensity: f32) -> Self {
         Light {
@@ -63,6 +90,7 @@ impl Light {
             casts_shadows: true,
             affects_world: true,
             mobility: Mobility::Realtime,
+            source_radius: 0.0,
         }
     }
 
@@ -96,6 +124,20 @@ mod tests {
             assert_eq!(light.color, Vec3::ONE);
             assert!(light.casts_shadows && light.affects_world);
             assert_eq!(light.mobility, Mobility::Realtime);
+            assert_eq!(light.source_radius, 0.0);
         }
+    }
+
+    /// A directional light's disc is kept finite and within its bounds; other
+    /// lights are points.
+    #[test]
+    fn only_a_directional_light_has_an_angular_radius_within_bounds() {
+        let sun = |r: f32| Light { source_radius: r, ..Light::directional(1.0) };
+        assert_eq!(sun(0.01).angular_radius(), 0.01);
+        assert_eq!(sun(-0.01).angular_radius(), 0.0);
+        assert_eq!(sun(f32::NAN).angular_radius(), 0.0);
+        assert_eq!(sun(f32::INFINITY).angular_radius(), 0.0);
+        assert_eq!(sun(2.0).angular_radius(), Light::MAX_ANGULAR_RADIUS);
+        assert_eq!(Light { source_radius: 0.1, ..Light::point(1.0, None) }.angular_radius(), 0.0);
     }
 }

@@ -58,7 +58,7 @@ pub use lighting::inputs::PROBE_FACE_AXES;
 pub use lighting::params::{MAX_CASCADES, PROBE_FACES};
 pub use lighting::shadow_atlas::array_layer_count;
 pub use lighting::split_sum::SPLIT_SUM_LUT_SIZE;
-pub use mesh::{ColorOps, DrawList, ForwardLitConfig, MeshPass};
+pub use mesh::{ColorOps, DrawList, ForwardLitConfig, MeshPass, ShadowFilter};
 pub use oxygen_core::{
     Color, Depth, HdrColor, InstanceIds, LinearDepth, Normals, Output, OutputSource, ProbeCube, ProbeId,
     SemanticClasses, ShadowMap,

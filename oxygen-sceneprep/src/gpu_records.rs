@@ -260,8 +260,11 @@ oxygen_gpu::gpu_struct! {
         pub flags: u32,
         /// Shadow data slot, [`INVALID_SLOT`] when none.
         pub shadow_slot: u32,
+        /// Angular radius of the light's disc in radians (0: a point;
+        /// `Light::angular_radius`).
+        pub angular_radius: f32,
         /// Zero.
-        pub reserved: [u32; 3] => "array<u32, 3>",
+        pub reserved: [u32; 2] => "array<u32, 2>",
     }
 }
 

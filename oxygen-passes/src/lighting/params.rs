@@ -12,7 +12,7 @@ oxygen_gpu::gpu_struct! {
     /// declaration ([`oxygen_gpu::GpuStruct::wgsl`]) and included by
     /// `forward_lit.wgsl`.
     #[derive(Debug, PartialEq)]
-    pub struct LightingInputs: 1632 bytes {
+    pub struct LightingInputs: 1648 bytes {
         /// World → light clip space, per cascade.
         pub light_view_projection: [[[f32; 4]; 4]; MAX_CASCADES] => "array<mat4x4<f32>, MAX_CASCADES>",
         /// World size of one map texel, per cascade.
@@ -60,6 +60,11 @@ oxygen_gpu::gpu_struct! {
         /// front of the eye), 1 / ln of the ratio of one slice's far depth to
         /// the next's, and two zeroes.
         pub cluster_depth: [f32; 4] => "vec4<f32>",
+        /// The sun's soft shadows (`HAS_SOFT_SHADOWS`, `ShadowFilter::Pcss`):
+        /// gathers per side of the blocker search (0: PCF of `pcf_radius`),
+        /// the widest penumbra's radius in texels, comparisons per side of
+        /// the filter, heights of the blocker ladder past the first.
+        pub shadow_filter: [f32; 4] => "vec4<f32>",
     }
 }
 

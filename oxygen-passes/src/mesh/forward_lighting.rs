@@ -60,6 +60,7 @@ pub(crate) async fn bind_group(
         uniform.count = i as u32 + 1;
     }
     uniform.pcf_radius = config.shadow_pcf_radius.min(3);
+    uniform.shadow_filter = config.shadow_filter.uniform();
     // A non-finite offset falls back to the default: no NaN reaches a shader.
     uniform.normal_offset = if config.shadow_normal_offset.is_finite() {
         config.shadow_normal_offset

@@ -27,6 +27,9 @@
 override HAS_SUN_SHADOWS: bool = true;
 override HAS_LOCAL_LIGHTS: bool = true;
 override HAS_LOCAL_SHADOWS: bool = true;
+// Soften the sun's shadow by its disc when the view asks for PCSS
+// (`shadows.shadow_filter.x` taps per side; 0: PCF).
+override HAS_SOFT_SHADOWS: bool = true;
 // Visit the lights of the pixel's cluster only (when the view has clusters
 // this frame: `shadows.cluster_grid.w` words per cluster, else every light).
 override HAS_CLUSTERED_LIGHTS: bool = true;
@@ -221,15 +224,141 @@ fn compare_cascade(cascade: u32, uv: vec2<f32>, depth: f32) -> f32 {
     }
 }
 
+// The four texels of cascade `cascade` around `uv`, each compared with
+// `depth` (1: lit, the texel's depth at most `depth`'s nearness).
+fn gather_cascade(cascade: u32, uv: vec2<f32>, depth: f32) -> vec4<f32> {
+    switch cascade {
+        case 0u: { return textureGatherCompare(shadow_map_0, shadow_sampler, uv, depth); }
+        case 1u: { return textureGatherCompare(shadow_map_1, shadow_sampler, uv, depth); }
+        case 2u: { return textureGatherCompare(shadow_map_2, shadow_sampler, uv, depth); }
+        default: { return textureGatherCompare(shadow_map_3, shadow_sampler, uv, depth); }
+    }
+}
+
+// What soft shadows know of the cascade around a point: where it is in
+// the map, its depth, and how depth changes along its surface's plane.
+struct ShadowPoint {
+    cascade: u32,
+    uv: vec2<f32>,
+    depth: f32,
+    // Depth change per NDC x and y along the surface's plane.
+    slope: vec2<f32>,
+}
+
+// The depth the surface's plane has `offset` (UV) away from the point.
+fn plane_depth(p: ShadowPoint, offset: vec2<f32>) -> f32 {
+    return p.depth + dot(p.slope, vec2<f32>(2.0 * offset.x, -2.0 * offset.y));
+}
+
+// Texels within `radius` texels of the point (a grid of `taps`² gathers of
+// four) standing more than `height` (depth units) above its plane.
+fn blocked_above(p: ShadowPoint, taps: u32, radius: f32, height: f32) -> f32 {
+    var blocked = 0.0;
+    for (var y = 0u; y < taps; y++) {
+        for (var x = 0u; x < taps; x++) {
+            let at = (vec2<f32>(f32(x), f32(y)) + 0.5) * (2.0 / f32(taps)) - 1.0;
+            let offset = at * radius * shadows.uv_texel[p.cascade];
+            let lit = gather_cascade(p.cascade, p.uv + offset, plane_depth(p, offset) + height);
+            blocked += 4.0 - (lit.x + lit.y + lit.z + lit.w);
+        }
+    }
+    return blocked;
+}
+
+// Percentage-closer soft shadows in cascade `i` for a sun of angular radius
+// `angle`. The blockers are the texels across the widest penumbra that
+// stand above the surface's plane (`normal`: each texel is compared with
+// the depth the plane has there, not the centre's, so a surface tilted
+// towards the sun does not shadow itself). Their mean height is measured
+// with comparisons only (GL's shaders cannot read a depth texture's values
+// in a shader that also compares it): how many stand above each of a
+// geometric ladder of heights, whose integral over the ladder is the sum
+// of their heights. That height times tan(angle) is the penumbra's radius,
+// over which a grid of comparisons is averaged. No blocker: fully lit.
+// Regular grids: the filter is the same from pixel to pixel (no noise).
+fn soft_shadow(i: u32, uv: vec2<f32>, depth: f32, angle: f32, normal: vec3<f32>) -> f32 {
+    let search_taps = u32(shadows.shadow_filter.x);
+    let widest = shadows.shadow_filter.y;
+    let filter_taps = u32(shadows.shadow_filter.z);
+    // The cascade's orthographic projection: its rows are the light's axes
+    // scaled to NDC per metre (the z row's length converts depth to metres).
+    let m = shadows.light_view_projection[i];
+    let r0 = vec3<f32>(m[0][0], m[1][0], m[2][0]);
+    let r1 = vec3<f32>(m[0][1], m[1][1], m[2][1]);
+    let r2 = vec3<f32>(m[0][2], m[1][2], m[2][2]);
+    let depth_per_metre = max(length(r2), 1e-20);
+    let texel_metres = max(shadows.texel_world_size[i], 1e-20);
+    // Depth change per NDC x and y along the surface's plane (the rows are
+    // orthogonal: a step in the plane is a sum of them), kept below four
+    // texels' depth a texel (a plane along the light's rays has none).
+    let facing = dot(normal, r2);
+    var slope = vec2<f32>(0.0);
+    if abs(facing) > 1e-6 {
+        slope = -dot(r2, r2) / facing * vec2<f32>(dot(normal, r0) / max(dot(r0, r0), 1e-30), dot(normal, r1) / max(dot(r1, r1), 1e-30));
+    }
+    let steepest = 4.0 * depth_per_metre * texel_metres / max(2.0 * shadows.uv_texel[i], 1e-20);
+    let p = ShadowPoint(i, uv, depth, clamp(slope, vec2<f32>(-steepest), vec2<f32>(steepest)));
+
+    // A blocker stands a texel's depth above the plane; past the height
+    // whose penumbra is the widest, heights no longer matter. One loop over
+    // the ladder (its length a uniform, so that the compiler keeps one copy
+    // of the search: unrolled, the shader took minutes to compile on GL).
+    let lowest = depth_per_metre * texel_metres;
+    let tangent = tan(angle);
+    let highest = widest * texel_metres / max(tangent, 1e-6) * depth_per_metre;
+    let levels = u32(shadows.shadow_filter.w);
+    let ratio = pow(max(highest / lowest, 1.0), 1.0 / f32(max(levels, 1u)));
+    var blockers = 0.0;
+    var integral = 0.0;
+    var height = lowest;
+    var previous = 0.0;
+    for (var k = 0u; k <= levels; k++) {
+        let count = blocked_above(p, search_taps, widest, height);
+        if k == 0u {
+            blockers = count;
+        } else {
+            integral += (height - height / ratio) * 0.5 * (count + previous);
+        }
+        if count == 0.0 {
+            break;
+        }
+        previous = count;
+        height *= ratio;
+    }
+    if blockers == 0.0 {
+        return 1.0;
+    }
+    let mean_height = (lowest + integral / blockers) / depth_per_metre;
+    // No narrower than a texel and a half: the map's bilinear comparisons
+    // cannot draw a sharper edge than that without stair steps (a sun of
+    // 0.5° in tests/soft_shadows.rs: 1.5 is where PCSS stops being worse
+    // than PCF of radius 1).
+    let radius = clamp(mean_height * tangent / texel_metres, 1.5, widest);
+    var lit = 0.0;
+    for (var y = 0u; y < filter_taps; y++) {
+        for (var x = 0u; x < filter_taps; x++) {
+            let at = (vec2<f32>(f32(x), f32(y)) + 0.5) * (2.0 / f32(filter_taps)) - 1.0;
+            let offset = at * radius * shadows.uv_texel[i];
+            lit += compare_cascade(i, uv + offset, plane_depth(p, offset));
+        }
+    }
+    return lit / f32(filter_taps * filter_taps);
+}
+
 // Fraction of the light reaching `world_position`: the first cascade whose
-// box holds the point, a normal offset against acne, (2r + 1)² PCF taps.
-fn shadow_visibility(world_position: vec3<f32>, geometric_normal: vec3<f32>) -> f32 {
+// box holds the point, a normal offset against acne, then (2r + 1)² PCF
+// taps, or soft shadows for a sun of angular radius `angle` when the view
+// asks for them.
+fn shadow_visibility(world_position: vec3<f32>, geometric_normal: vec3<f32>, angle: f32) -> f32 {
     for (var i = 0u; i < shadows.count; i++) {
         let offset = geometric_normal * shadows.texel_world_size[i] * shadows.normal_offset;
         let clip = shadows.light_view_projection[i] * vec4<f32>(world_position + offset, 1.0);
         let ndc = clip.xyz / clip.w;
         if all(abs(ndc.xy) < vec2<f32>(0.98)) && ndc.z >= 0.0 && ndc.z <= 1.0 {
             let uv = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
+            if HAS_SOFT_SHADOWS && shadows.shadow_filter.x > 0.0 {
+                return soft_shadow(i, uv, ndc.z, angle, geometric_normal);
+            }
             let r = i32(shadows.pcf_radius);
             var lit = 0.0;
             for (var y = -r; y <= r; y++) {
@@ -429,7 +558,7 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Der
         // The cascades belong to the first shadow-casting directional light.
         if HAS_SUN_SHADOWS && (light.flags & LIGHT_CASTS_SHADOWS) != 0u && !shadowed_light_done {
             shadowed_light_done = true;
-            visibility = shadow_visibility(mesh.world_position, geometric_normal);
+            visibility = shadow_visibility(mesh.world_position, geometric_normal, light.angular_radius);
         }
         color += brdf_cosine(n, v, -light.direction, albedo, metallic, roughness) * light.color * light.intensity * visibility;
     }

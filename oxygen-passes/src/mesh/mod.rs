@@ -6,4 +6,4 @@
 mod forward_lighting;
 mod pass;
 
-pub use pass::{ColorOps, DrawList, ForwardLitConfig, MeshPass};
+pub use pass::{ColorOps, DrawList, ForwardLitConfig, MeshPass, ShadowFilter};

@@ -43,6 +43,10 @@ pub struct ForwardLitConfig {
     /// lit surface does not shadow itself (acne). Larger values detach
     /// shadows from their casters. Default 1.5.
     pub shadow_normal_offset: f32,
+    /// How the sun's shadow is filtered: PCF of `shadow_pcf_radius` (the
+    /// default), or soft shadows as wide as the sun's disc makes them
+    /// ([`ShadowFilter::Pcss`]).
+    pub shadow_filter: ShadowFilter,
     /// How a pixel finds the positional lights that reach it: every light
     /// of the frame (the default), or only those of its cluster after a
     /// culling pass ([`crate::LightCulling`]). The image is the same; the
@@ -60,6 +64,7 @@ impl ForwardLitConfig {
         reflections: true,
         shadow_pcf_radius: 1,
         shadow_normal_offset: 1.5,
+        shadow_filter: ShadowFilter::Pcf,
         light_culling: crate::LightCulling::EveryLight,
     };
 }
@@ -67,6 +72,58 @@ impl ForwardLitConfig {
 impl Default for ForwardLitConfig {
     fn default() -> Self {
         Self::DEFAULT
+    }
+}
+
+/// Heights past the first at which soft shadows count blockers (a
+/// geometric ladder from one texel's depth to the height whose penumbra is
+/// the widest): their mean height is measured to within the ladder's ratio.
+const BLOCKER_LEVELS: f32 = 6.0;
+
+/// How a view filters its sun shadow (its cascades).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum ShadowFilter {
+    /// Percentage-closer filtering over `(2r + 1)²` taps of
+    /// [`ForwardLitConfig::shadow_pcf_radius`]: the same penumbra however far
+    /// the caster is.
+    #[default]
+    Pcf,
+    /// Percentage-closer soft shadows for a sun with a disc
+    /// (`Light::source_radius`): a search for the blockers between the
+    /// surface and the sun, then a filter as wide as the penumbra the
+    /// blockers' distance and the disc make, so that contact shadows stay
+    /// sharp and far casters blur. A sun without a disc is filtered as PCF
+    /// of one texel.
+    Pcss {
+        /// Reads per side of the blocker search (`search_taps²`, on a grid
+        /// across the widest penumbra), 2 to 16; 8 by default (a read every
+        /// 4 texels: a caster narrower than that can be stepped over).
+        search_taps: u32,
+        /// Comparisons per side of the filter (`filter_taps²`, across the
+        /// penumbra found), 2 to 16; 8 by default.
+        filter_taps: u32,
+        /// Radius of the widest penumbra, and of the blocker search, in
+        /// texels of the cascade, 1 to 64; 16 by default. A wider penumbra
+        /// is drawn this wide.
+        max_penumbra_texels: f32,
+    },
+}
+
+impl ShadowFilter {
+    /// PCSS with an 8 × 8 blocker search, an 8 × 8 filter and penumbrae up
+    /// to 16 texels.
+    pub const PCSS: ShadowFilter = ShadowFilter::Pcss { search_taps: 8, filter_taps: 8, max_penumbra_texels: 16.0 };
+
+    /// The uniform's `shadow_filter` (settings brought into range; no NaN
+    /// reaches the shader).
+    pub(crate) fn uniform(self) -> [f32; 4] {
+        match self {
+            ShadowFilter::Pcf => [0.0; 4],
+            ShadowFilter::Pcss { search_taps, filter_taps, max_penumbra_texels } => {
+                let radius = if max_penumbra_texels.is_finite() { max_penumbra_texels.clamp(1.0, 64.0) } else { 16.0 };
+                [search_taps.clamp(2, 16) as f32, radius, filter_taps.clamp(2, 16) as f32, BLOCKER_LEVELS]
+            }
+        }
     }
 }
 
@@ -383,6 +440,8 @@ impl MeshPass {
             local_lights: ctx.prepared.slots().positional_lights.count > 0,
             clustered_lights: config.is_some_and(|c| super::forward_lighting::clusters_lights(ctx, c)),
             local_shadows: config.is_some_and(|c| c.local_shadows) && inputs.local_shadows.is_some(),
+            soft_shadows: config.is_some_and(|c| c.sun_shadows && matches!(c.shadow_filter, ShadowFilter::Pcss { .. }))
+                && !inputs.cascades.is_empty(),
             probes,
             probe_parallax: probes && inputs.probes.iter().any(|p| p.parallax.is_some()),
             textures: ctx.shading.materials.textures,

@@ -17,6 +17,10 @@ pub struct ShaderFeatures {
     pub local_lights: bool,
     /// Sample the local-light shadow atlas (`HAS_LOCAL_SHADOWS`).
     pub local_shadows: bool,
+    /// Soften the sun's shadows by its disc (`HAS_SOFT_SHADOWS`,
+    /// [`crate::ShadowFilter::Pcss`]): a blocker search, then a filter as
+    /// wide as the penumbra; without it PCF of a fixed radius.
+    pub soft_shadows: bool,
     /// Visit only the positional lights of the pixel's cluster, from the
     /// view's light clusters (`HAS_CLUSTERED_LIGHTS`,
     /// [`crate::LightCulling::Clustered`]); without it every light.
@@ -45,6 +49,7 @@ impl ShaderFeatures {
         sun_shadows: true,
         local_lights: true,
         local_shadows: true,
+        soft_shadows: true,
         clustered_lights: true,
         probes: true,
         probe_parallax: true,
@@ -56,6 +61,7 @@ impl ShaderFeatures {
         sun_shadows: false,
         local_lights: false,
         local_shadows: false,
+        soft_shadows: false,
         clustered_lights: false,
         probes: false,
         probe_parallax: false,
@@ -64,12 +70,13 @@ impl ShaderFeatures {
     };
 
     /// The override constants, by their WGSL names (bools as 0 or 1).
-    pub fn override_constants(&self) -> [(&'static str, f64); 8] {
+    pub fn override_constants(&self) -> [(&'static str, f64); 9] {
         let flag = |on: bool| f64::from(u8::from(on));
         [
             ("HAS_SUN_SHADOWS", flag(self.sun_shadows)),
             ("HAS_LOCAL_LIGHTS", flag(self.local_lights)),
             ("HAS_LOCAL_SHADOWS", flag(self.local_shadows)),
+            ("HAS_SOFT_SHADOWS", flag(self.soft_shadows)),
             ("HAS_CLUSTERED_LIGHTS", flag(self.clustered_lights)),
             ("HAS_PROBES", flag(self.probes)),
             ("HAS_PROBE_PARALLAX", flag(self.probe_parallax)),

@@ -407,13 +407,31 @@ fn offset_origin(s: Surface, towards: vec3<f32>) -> vec3<f32> {
     return s.position + side * (1e-4 * scale);
 }
 
+// The direction towards a directional light for one sample: its centre,
+// or for a light with a disc (`angular_radius`) a direction uniform over
+// the disc's cone, so that the mean over the samples is the disc's light
+// (its illuminance spread over the disc) and its shadows get their
+// penumbrae. `salt` is the sample's.
+fn sun_direction(light: DirectionalLightRecord, salt: u32) -> vec3<f32> {
+    let centre = -light.direction;
+    if light.angular_radius <= 0.0 {
+        return centre;
+    }
+    let u1 = f32(pcg(salt ^ 0xA511E9B3u) >> 8u) / 16777216.0;
+    let u2 = f32(pcg(salt ^ 0x63D83595u) >> 8u) / 16777216.0;
+    let cos_theta = 1.0 - u1 * (1.0 - cos(light.angular_radius));
+    let sin_theta = sqrt(max(0.0, 1.0 - cos_theta * cos_theta));
+    let phi = 2.0 * PI * u2;
+    return tangent_frame(centre) * vec3<f32>(sin_theta * cos(phi), sin_theta * sin(phi), cos_theta);
+}
+
 // Light from every light of the frame reaching `s` towards `v`, each through
 // one shadow ray.
 fn direct_light(s: Surface, v: vec3<f32>, salt: u32) -> vec3<f32> {
     var color = vec3<f32>(0.0);
     for (var i = 0u; i < scene.renderer.directional_light_count; i++) {
         let light = directional_light_domain[scene.renderer.directional_lights_slot + i];
-        let l = -light.direction;
+        let l = sun_direction(light, salt ^ (i * 0x632BE5ABu));
         let f = brdf_cosine(s.normal, v, l, s.albedo, s.metallic, s.roughness);
         if all(f == vec3<f32>(0.0)) || dot(l, s.geometric) <= 0.0 {
             continue;

@@ -538,7 +538,8 @@ impl FrameCollection {
                     color,
                     flags: shadow_flags,
                     shadow_slot: INVALID_SLOT,
-                    reserved: [0; 3],
+                    angular_radius: light.angular_radius(),
+                    reserved: [0; 2],
                 });
             }
             LightKind::Point { range } | LightKind::Spot { range, .. } => {

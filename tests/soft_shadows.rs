@@ -1,0 +1,108 @@
+//! Soft sun shadows (`ShadowFilter::Pcss`) against the path-traced
+//! reference, which samples the same sun disc (`Light::source_radius`): a
+//! tall box on a floor under a sun of 5° and of 0.5°. With the wide disc
+//! PCSS must bring the picture closer to the reference than PCF does; with
+//! the narrow one it must not be worse by more than the reference's noise.
+
+mod support;
+
+use oxygen::glam::{Quat, Vec4};
+use oxygen::gpu::HdrImage;
+use oxygen::graph::{ReferenceGraph, StandardGraph};
+use oxygen::lighting::CascadeSettings;
+use oxygen::passes::{ReferenceSettings, ShadowFilter};
+use oxygen::prelude::*;
+use oxygen_demo::record::Row;
+
+const SIZE: UVec2 = UVec2::new(96, 64);
+/// Reference samples per pixel (16 a frame).
+const SAMPLES: u32 = 256;
+
+fn scene(sun_degrees: f32) -> Scene {
+    let mut scene = Scene::new();
+    let grey = scene.add_material(Material::opaque("grey", Vec4::new(0.7, 0.7, 0.7, 1.0)));
+    let floor = scene.add_geometry(Geometry::plane(16.0));
+    let node = scene.add_node("floor", Transform::IDENTITY);
+    scene.set_renderable(node, Renderable { geometry: floor, materials: vec![grey] }).unwrap();
+    let cube = scene.add_geometry(Geometry::cube(1.0));
+    let node = scene
+        .add_node("pole", Transform::from_translation(Vec3::new(0.0, 1.5, 0.0)).with_scale(Vec3::new(0.5, 3.0, 0.5)));
+    scene.set_renderable(node, Renderable { geometry: cube, materials: vec![grey] }).unwrap();
+    let travel = Vec3::new(0.9, -0.7, 0.25).normalize();
+    let sun = scene.add_node("sun", Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, travel)));
+    let light = Light { source_radius: sun_degrees.to_radians(), ..Light::directional(3.0) };
+    scene.set_light(sun, Some(light)).unwrap();
+    scene
+}
+
+fn camera() -> LookAtResolver {
+    LookAtResolver::new(Camera::perspective(0.9, 0.1, None), Vec3::new(1.5, 7.0, 5.5), Vec3::new(2.2, 0.0, 0.6), SIZE)
+        .unwrap()
+}
+
+/// The scene's reference (raster model: direct light, exact shadows of the
+/// sun's disc) and the raster images with PCF (radius 1) and PCSS.
+fn render(scene: &Scene) -> (HdrImage, HdrImage, HdrImage) {
+    let mut renderer = support::gpu_renderer();
+    let cascades = CascadeSettings { count: 1, resolution: 1024, max_distance: 20.0, ..Default::default() };
+    let raster = |renderer: &mut Renderer, filter: ShadowFilter| {
+        let config = ForwardLitConfig { shadow_filter: filter, ..ForwardLitConfig::DEFAULT };
+        renderer.register_view(ViewDesc::new(camera()).with_sun_shadows(cascades), StandardGraph::new(config)).unwrap()
+    };
+    let pcf = raster(&mut renderer, ShadowFilter::Pcf);
+    let pcss = raster(&mut renderer, ShadowFilter::PCSS);
+    let settings = ReferenceSettings { samples_per_frame: 16, max_samples: SAMPLES, ..ReferenceSettings::RASTER_MODEL };
+    let traced = renderer
+        .register_view(ViewDesc::new(camera()).path_traced(), ReferenceGraph { settings, exposure: 1.0 })
+        .unwrap();
+    while renderer.reference_samples(traced) < SAMPLES {
+        renderer.render_frame(scene).unwrap();
+    }
+    let read = |view| {
+        let image = renderer.read_hdr(view).unwrap();
+        support::assert_hdr_image_finite(&image, "soft shadows");
+        image
+    };
+    (read(traced), read(pcf), read(pcss))
+}
+
+/// RMSE of linear radiance (each channel clamped to 4, as the accuracy
+/// atlas measures).
+fn rmse(a: &HdrImage, b: &HdrImage) -> f64 {
+    let clamp = |x: f32| f64::from(x).clamp(0.0, 4.0);
+    let sum: f64 = a
+        .pixels
+        .iter()
+        .zip(&b.pixels)
+        .map(|(p, q)| (0..3).map(|c| (clamp(p[c]) - clamp(q[c])).powi(2)).sum::<f64>())
+        .sum();
+    (sum / (a.pixels.len() * 3) as f64).sqrt()
+}
+
+/// Measured on lavapipe, Vulkan and GL alike (docs/records/soft_shadows_tests.jsonl):
+/// at 5° PCSS's RMSE is 0.73 of PCF's (0.01554 against 0.02122; the test
+/// allows 0.8); at 0.5° 0.99 of it (0.01514 against 0.01530: the penumbra
+/// is about the map's texel, where both filters blur alike; the test
+/// allows PCSS 2 % above PCF).
+#[test]
+fn soft_shadows_follow_the_suns_disc_toward_the_reference() {
+    let mut rows = Vec::new();
+    for degrees in [5.0f32, 0.5] {
+        let (reference, pcf, pcss) = render(&scene(degrees));
+        let (pcf_error, pcss_error) = (rmse(&pcf, &reference), rmse(&pcss, &reference));
+        eprintln!("sun of {degrees}°: RMSE against the reference: PCF {pcf_error:.5}, PCSS {pcss_error:.5}");
+        rows.push(
+            Row::new()
+                .value("sun_degrees", degrees)
+                .value("rmse_pcf", pcf_error)
+                .value("rmse_pcss", pcss_error)
+                .value("reference_samples", SAMPLES),
+        );
+        let allowed = if degrees >= 5.0 { 0.8 } else { 1.02 };
+        assert!(pcss_error < allowed * pcf_error, "sun of {degrees}°: PCSS {pcss_error} against PCF {pcf_error}");
+    }
+    support::record::write(|mut record| {
+        rows.into_iter().for_each(|row| record.push_row(row));
+        record
+    });
+}
