@@ -171,6 +171,30 @@ struct Awaited {
 }
 
 impl Awaited {
+    /// Whether, at `now`, it has owed a report for longer than `timeout`
+    /// (the node is then treated as fallen behind). At exactly `timeout` it
+    /// is not yet late: the gather loop wakes at that deadline (see
+    /// [`Awaited::wait`]) and looks again.
+    fn overdue(&self, now: Instant, timeout: Duration) -> bool {
+        now.duration_since(self.since) > timeout
+    }
+
+    /// How long the gather loop may block on its next event at `now`: until
+    /// the earliest deadline of the nodes `waiting` (`timeout` after each
+    /// one's `since`; zero once passed), or 100 ms when no node is awaited.
+    /// Blocking until the deadline, not polling, keeps the coordinator off
+    /// the CPU while the nodes render. A timeout past what the clock can
+    /// hold (`Duration::MAX`: never give up on a node) has no deadline: the
+    /// loop then looks again every second.
+    fn wait(waiting: &BTreeMap<String, Awaited>, now: Instant, timeout: Duration) -> Duration {
+        match waiting.values().map(|a| a.since).min() {
+            None => Duration::from_millis(100),
+            Some(since) => since
+                .checked_add(timeout)
+                .map_or(Duration::from_secs(1), |deadline| deadline.saturating_duration_since(now)),
+        }
+    }
+
     /// `node` reported one of its orders.
     fn reported(waiting: &mut BTreeMap<String, Awaited>, node: &str) {
         if let Some(awaited) = waiting.get_mut(node) {
@@ -350,13 +374,20 @@ impl Coordinator {
         }
     }
 
+    /// The mean measured cost of the views, 1 when none is measured: what
+    /// an unmeasured view counts as, in placement and in moves alike (one
+    /// rule, so that a move weighs a view as the loads it evens do).
+    fn mean_cost(&self) -> f64 {
+        let measured: Vec<f64> = self.views.values().filter_map(|v| v.cost).collect();
+        if measured.is_empty() { 1.0 } else { measured.iter().sum::<f64>() / measured.len() as f64 }
+    }
+
     /// Each usable node's load (its views' costs; an unmeasured view at
     /// the mean of the measured, 1 when none is).
     fn loads(&self) -> (Vec<String>, Vec<f64>) {
         let usable: Vec<String> =
             self.nodes.iter().filter(|(_, n)| n.stalled.is_none()).map(|(k, _)| k.clone()).collect();
-        let measured: Vec<f64> = self.views.values().filter_map(|v| v.cost).collect();
-        let mean = if measured.is_empty() { 1.0 } else { measured.iter().sum::<f64>() / measured.len() as f64 };
+        let mean = self.mean_cost();
         let mut loads = vec![0.0; usable.len()];
         for view in self.views.values() {
             if let Some(i) = view.node.as_ref().and_then(|n| usable.iter().position(|u| u == n)) {
@@ -410,8 +441,7 @@ impl Coordinator {
         if usable.len() < 2 {
             return None;
         }
-        let measured: Vec<f64> = self.views.values().filter_map(|v| v.cost).collect();
-        let mean = if measured.is_empty() { 1.0 } else { measured.iter().sum::<f64>() / measured.len() as f64 };
+        let mean = self.mean_cost();
         let candidates: Vec<(GroupViewId, usize, Option<f64>)> = self
             .views
             .iter()
@@ -491,7 +521,7 @@ impl Coordinator {
             let now = Instant::now();
             let overdue: Vec<String> = waiting_since
                 .iter()
-                .filter(|(_, a)| now.duration_since(a.since) > self.options.stall_timeout)
+                .filter(|(_, a)| a.overdue(now, self.options.stall_timeout))
                 .map(|(n, _)| n.clone())
                 .collect();
             for name in overdue {
@@ -503,8 +533,7 @@ impl Coordinator {
                 waiting_since.remove(&name);
                 self.take_over(&name, &missing, frame, &mut tries, &mut waiting_since, &mut report)?;
             }
-            let deadline = waiting_since.values().map(|a| a.since).min().map(|t| t + self.options.stall_timeout);
-            let wait = deadline.map_or(Duration::from_millis(100), |d| d.saturating_duration_since(Instant::now()));
+            let wait = Awaited::wait(&waiting_since, Instant::now(), self.options.stall_timeout);
             let event = match pending.next() {
                 Some(event) => event,
                 None => match self.events.recv_timeout(wait.max(Duration::from_millis(1))) {
@@ -731,14 +760,15 @@ mod membership_tests {
     use super::*;
 
     /// A coordinator with no node, listening on a free local port.
-    fn coordinator() -> Coordinator {
+    pub(super) fn coordinator() -> Coordinator {
         let port = std::net::TcpListener::bind("127.0.0.1:0").and_then(|l| l.local_addr()).expect("a free port").port();
         let net = NetConfig::listen(format!("tcp/127.0.0.1:{port}"));
         Coordinator::new(&format!("membership-{}", std::process::id()), &net, RigOptions::default())
             .expect("coordinator")
     }
 
-    fn view(coordinator: &mut Coordinator, name: &str) -> RigViewId {
+    /// An 8 × 8 view `name` added to `coordinator`.
+    pub(super) fn view(coordinator: &mut Coordinator, name: &str) -> RigViewId {
         let camera = oxygen_core::Camera::perspective(1.0, 0.1, None);
         let spec = ViewSpec::look_at(name, camera, glam::DVec3::Z, glam::DVec3::ZERO, UVec2::splat(8));
         coordinator.add_view(spec).expect("view")
@@ -805,5 +835,284 @@ mod membership_tests {
         coordinator.drain_membership(None);
         assert_eq!(coordinator.nodes(), ["b", "c"]);
         assert!(coordinator.events.try_recv().is_err(), "between frames the status is dropped, not left queued");
+    }
+}
+
+#[cfg(test)]
+mod placement_tests {
+    use super::membership_tests::{coordinator, view};
+    use super::*;
+
+    /// Gives `view` a measured cost.
+    fn measured(coordinator: &mut Coordinator, view: RigViewId, cost: f64) {
+        coordinator.views.get_mut(&view).expect("view").cost = Some(cost);
+    }
+
+    /// An unmeasured view weighs in its node's load as the mean of the
+    /// measured ones, (1 + 3) / 2 = 2 here; with none measured, as 1.
+    #[test]
+    fn an_unmeasured_view_weighs_the_mean_measured_cost_in_a_load() {
+        let mut coordinator = coordinator();
+        coordinator.membership("a".into(), true);
+        coordinator.membership("b".into(), true);
+        let new = view(&mut coordinator, "new");
+        coordinator.assign(new, "b");
+        assert_eq!(coordinator.loads(), (vec!["a".to_owned(), "b".to_owned()], vec![0.0, 1.0]), "none measured");
+        let (cheap, dear) = (view(&mut coordinator, "cheap"), view(&mut coordinator, "dear"));
+        measured(&mut coordinator, cheap, 1.0);
+        measured(&mut coordinator, dear, 3.0);
+        coordinator.assign(cheap, "a");
+        coordinator.assign(dear, "a");
+        assert_eq!(coordinator.loads(), (vec!["a".to_owned(), "b".to_owned()], vec![4.0, 2.0]));
+    }
+
+    /// A move weighs an unmeasured view at the mean measured cost too. With
+    /// a carrying two unmeasured views (2 each) and one of 1, b one of 3 and
+    /// c none, the loads are 5, 3 and 0: an unmeasured view moving from a to
+    /// c leaves a gap of |5 − 2 × 2| = 1, the measured one |5 − 2 × 1| = 3.
+    #[test]
+    fn a_move_weighs_an_unmeasured_view_at_the_mean_measured_cost() {
+        let mut coordinator = coordinator();
+        for node in ["a", "b", "c"] {
+            coordinator.membership(node.into(), true);
+        }
+        let (cheap, dear) = (view(&mut coordinator, "cheap"), view(&mut coordinator, "dear"));
+        let (new, newer) = (view(&mut coordinator, "new"), view(&mut coordinator, "newer"));
+        measured(&mut coordinator, cheap, 1.0);
+        measured(&mut coordinator, dear, 3.0);
+        for (view, node) in [(cheap, "a"), (new, "a"), (newer, "a"), (dear, "b")] {
+            coordinator.assign(view, node);
+        }
+        assert_eq!(coordinator.rebalance_once(0.0), Some((new, "a".to_owned(), "c".to_owned())));
+        assert_eq!(coordinator.node_of(new), Some("c"));
+    }
+
+    /// Two nodes are enough for a move: with both views on one, one goes to
+    /// the other. A single node has nowhere to move a view.
+    #[test]
+    fn a_view_moves_between_two_nodes_and_never_on_one() {
+        let mut coordinator = coordinator();
+        coordinator.membership("a".into(), true);
+        let (first, second) = (view(&mut coordinator, "first"), view(&mut coordinator, "second"));
+        coordinator.assign(first, "a");
+        coordinator.assign(second, "a");
+        assert_eq!(coordinator.rebalance_once(0.0), None, "one node");
+        coordinator.membership("b".into(), true);
+        assert_eq!(coordinator.rebalance_once(0.0), Some((first, "a".to_owned(), "b".to_owned())));
+        assert_eq!(coordinator.rebalance_once(0.0), None, "1 and 1: even");
+    }
+}
+
+#[cfg(test)]
+mod frame_tests {
+    use oxygen_core::scene::delta::SceneDelta;
+    use oxygen_core::{NodeKey, Transform};
+    use zenoh::key_expr::KeyExpr;
+    use zenoh::sample::SampleBuilder;
+
+    use super::membership_tests::{coordinator, view};
+    use super::*;
+
+    /// Renders a frame of `scene` that finds `events` queued, as if they
+    /// had come from the nodes, and nothing after them: the queue is closed,
+    /// so a frame that waits for more fails at once (the session closed)
+    /// instead of waiting out the stall timeout.
+    fn frame(coordinator: &mut Coordinator, scene: &Scene, events: Vec<Event>) -> RigFrame {
+        let (tx, rx) = mpsc::channel();
+        for event in events {
+            tx.send(event).expect("queued");
+        }
+        drop(tx);
+        coordinator.events = rx;
+        coordinator.render_frame(scene).expect("the frame")
+    }
+
+    /// Node `node` reports frame `frame` rendered: `views` views in
+    /// `seconds` (half of it rendering).
+    fn rendered(coordinator: &Coordinator, node: &str, frame: u64, views: u32, seconds: f64) -> Event {
+        let key = KeyExpr::try_from(coordinator.keys.status(node)).expect("key");
+        let status = Status { frame, outcome: Outcome::Rendered { views, seconds, render_seconds: seconds / 2.0 } };
+        Event::Status(SampleBuilder::put(key, wire::encode(&status)).into())
+    }
+
+    /// Node `node`'s images of `views` of frame `frame` (8 × 8, the
+    /// default planes, every byte `fill`), and their size in bytes.
+    fn images(coordinator: &Coordinator, node: &str, frame: u64, views: &[RigViewId], fill: u8) -> (Event, usize) {
+        let (size, planes) = (UVec2::splat(8), coordinator.options.planes);
+        let payload = vec![fill; views.len() * planes.bytes(size)];
+        let bytes = payload.len();
+        let tag = OutputTag { frame, views: views.to_vec(), size, planes };
+        let key = KeyExpr::try_from(coordinator.keys.output(node)).expect("key");
+        (Event::Output(SampleBuilder::put(key, payload).attachment(wire::encode(&tag)).into()), bytes)
+    }
+
+    /// A scene of one node, and the node.
+    fn scene() -> (Scene, NodeKey) {
+        let mut scene = Scene::new();
+        let node = scene.add_node("box", Transform::IDENTITY);
+        (scene, node)
+    }
+
+    /// Moves `node` of `scene` to `x` along the x axis.
+    fn shift(scene: &mut Scene, node: NodeKey, x: f32) {
+        scene.set_local_transform(node, Transform::from_translation(glam::Vec3::X * x)).expect("moved");
+    }
+
+    /// The orders `coordinator` sends from now on, as they leave (its
+    /// session hears its own puts).
+    fn listen(coordinator: &Coordinator) -> (zenoh::pubsub::Subscriber<()>, mpsc::Receiver<Sample>) {
+        let (tx, rx) = mpsc::channel();
+        let subscriber = coordinator
+            .session
+            .declare_subscriber(coordinator.keys.order("*"))
+            .callback(move |sample| {
+                let _ = tx.send(sample);
+            })
+            .wait()
+            .expect("subscriber");
+        (subscriber, rx)
+    }
+
+    /// The next order sent: its node, its header and its payload.
+    fn next_order(orders: &mpsc::Receiver<Sample>) -> (String, Order, Vec<u8>) {
+        let sample = orders.recv_timeout(Duration::from_secs(10)).expect("an order");
+        let key = sample.key_expr().as_str().to_owned();
+        let order = wire::decode::<Order>(&key, &sample.attachment().expect("a header").to_bytes()).expect("order");
+        (Keys::last_chunk(&key).to_owned(), order, sample.payload().to_bytes().to_vec())
+    }
+
+    /// Each node's order says what its payload is, and the payload is what
+    /// the node's replica needs: the whole scene when it is not in step (its
+    /// first frame, or after every node in step left: the stream's own
+    /// delta would not apply to it), nothing when the scene did not change,
+    /// the delta when it did, and the stream's snapshot, labelled a
+    /// snapshot, when the scene is another one.
+    #[test]
+    fn each_node_gets_the_scene_update_its_replica_needs() {
+        let mut coordinator = coordinator();
+        let (_subscriber, orders) = listen(&coordinator);
+        coordinator.membership("a".into(), true);
+        let (mut scene, node) = scene();
+        let whole = |scene: &Scene| scene.delta_since(0, &mut HashSet::new()).encode();
+
+        // a's first frame: the whole scene.
+        let events = vec![rendered(&coordinator, "a", 1, 0, 0.1)];
+        let report = frame(&mut coordinator, &scene, events);
+        let (to, order, payload) = next_order(&orders);
+        assert_eq!((to.as_str(), order.frame, order.scene), ("a", 1, SceneUpdate::Snapshot));
+        assert_eq!(payload, whole(&scene));
+        assert_eq!(report.scene_wire_bytes, payload.len());
+
+        // Nothing changed: nothing travels, and a is told so.
+        let events = vec![rendered(&coordinator, "a", 2, 0, 0.1)];
+        let report = frame(&mut coordinator, &scene, events);
+        assert_eq!((report.delta_bytes, report.scene_wire_bytes), (0, 0), "an unchanged scene sends no bytes");
+        let (_, order, payload) = next_order(&orders);
+        assert_eq!((order.frame, order.scene, payload.len()), (2, SceneUpdate::Unchanged, 0));
+
+        // The node moved: the delta from the revision a holds.
+        shift(&mut scene, node, 1.0);
+        let events = vec![rendered(&coordinator, "a", 3, 0, 0.1)];
+        let report = frame(&mut coordinator, &scene, events);
+        let (_, order, payload) = next_order(&orders);
+        assert_eq!((order.frame, order.scene), (3, SceneUpdate::Delta));
+        assert!(!payload.is_empty() && payload.len() == report.delta_bytes, "{} bytes", payload.len());
+        assert!(!SceneDelta::decode(&payload).expect("a delta").is_snapshot());
+
+        // Another scene: the stream starts again with a snapshot, which a
+        // (in step) gets as the delta, labelled a snapshot.
+        let (mut other, other_node) = self::scene();
+        let events = vec![rendered(&coordinator, "a", 4, 0, 0.1)];
+        let report = frame(&mut coordinator, &other, events);
+        let (_, order, payload) = next_order(&orders);
+        assert_eq!((order.frame, order.scene), (4, SceneUpdate::Snapshot));
+        assert_eq!(payload.len(), report.delta_bytes);
+        assert!(SceneDelta::decode(&payload).expect("a delta").is_snapshot());
+
+        // a leaves and b joins, the scene changed: no node is in step, and
+        // b gets the whole scene, not the delta.
+        shift(&mut other, other_node, 2.0);
+        let events =
+            vec![Event::Node("a".into(), false), Event::Node("b".into(), true), rendered(&coordinator, "b", 5, 0, 0.1)];
+        let report = frame(&mut coordinator, &other, events);
+        let (to, order, payload) = next_order(&orders);
+        assert_eq!((to.as_str(), order.frame, order.scene), ("b", 5, SceneUpdate::Snapshot));
+        assert_eq!(payload, whole(&other));
+        assert!(report.delta_bytes > 0 && report.delta_bytes < payload.len(), "the delta was smaller");
+        assert_eq!(report.scene_wire_bytes, payload.len());
+    }
+
+    /// A frame ends when every view's images are in and every node sent an
+    /// order has reported it, whichever comes last: the images alone leave
+    /// the node's time (and so its views' costs) unknown; its report alone
+    /// leaves a view without images.
+    #[test]
+    fn a_frame_waits_for_every_image_and_every_report() {
+        let mut coordinator = coordinator();
+        coordinator.membership("a".into(), true);
+        let view = view(&mut coordinator, "v");
+        let (scene, _) = scene();
+
+        let events = vec![images(&coordinator, "a", 1, &[view], 1).0, rendered(&coordinator, "a", 1, 1, 0.5)];
+        let report = frame(&mut coordinator, &scene, events);
+        assert_eq!(report.outputs.iter().map(|o| o.view).collect::<Vec<_>>(), [view]);
+        let account = NodeReport { views: 1, seconds: 0.5, render_seconds: 0.25 };
+        assert_eq!(report.nodes.get("a"), Some(&account), "the report after the images is awaited");
+        assert_eq!(coordinator.view_cost(view), Some(0.5));
+
+        let events = vec![rendered(&coordinator, "a", 2, 1, 0.5), images(&coordinator, "a", 2, &[view], 2).0];
+        let report = frame(&mut coordinator, &scene, events);
+        assert_eq!(report.nodes.get("a"), Some(&account));
+        let outputs: Vec<(RigViewId, u64, &str)> =
+            report.outputs.iter().map(|o| (o.view, o.frame, o.node.as_str())).collect();
+        assert_eq!(outputs, [(view, 2, "a")], "the images after the report are awaited");
+    }
+
+    /// Every image of the frame counts in `image_bytes`, a view's second
+    /// images too, which count as a duplicate (the first are kept); late
+    /// images of an earlier frame count in neither.
+    #[test]
+    fn every_image_of_the_frame_counts_in_bytes_and_a_second_one_as_a_duplicate() {
+        let mut coordinator = coordinator();
+        coordinator.membership("a".into(), true);
+        let view = view(&mut coordinator, "v");
+        let (scene, _) = scene();
+        let events = vec![images(&coordinator, "a", 1, &[view], 1).0, rendered(&coordinator, "a", 1, 1, 0.5)];
+        let report = frame(&mut coordinator, &scene, events);
+        assert_eq!((report.image_bytes, report.duplicates), (images(&coordinator, "a", 1, &[view], 1).1, 0));
+
+        let (late, _) = images(&coordinator, "a", 1, &[view], 1);
+        let (first, bytes) = images(&coordinator, "a", 2, &[view], 2);
+        let (again, again_bytes) = images(&coordinator, "a", 2, &[view], 3);
+        let events = vec![late, first, again, rendered(&coordinator, "a", 2, 1, 0.5)];
+        let report = frame(&mut coordinator, &scene, events);
+        assert_eq!(report.image_bytes, bytes + again_bytes, "both of frame 2's, not frame 1's");
+        assert_eq!(report.duplicates, 1);
+        assert_eq!(report.outputs.len(), 1);
+        assert_eq!(report.outputs[0].planes.color.as_deref(), Some(&[2u8; 8 * 8 * 4][..]), "the first kept");
+    }
+
+    /// A node is late once it has owed its report for longer than the stall
+    /// timeout, not at the timeout itself; the gather loop blocks until the
+    /// earliest of the awaited nodes' deadlines (none left once it passed),
+    /// or 100 ms when no node is awaited.
+    #[test]
+    fn a_node_is_late_past_the_stall_timeout_and_the_loop_sleeps_until_then() {
+        let (since, timeout) = (Instant::now(), Duration::from_secs(3));
+        let awaited = Awaited { since, orders: 1 };
+        assert!(!awaited.overdue(since, timeout));
+        assert!(!awaited.overdue(since + timeout, timeout), "at the timeout: not yet");
+        assert!(awaited.overdue(since + timeout + Duration::from_nanos(1), timeout));
+
+        let mut waiting = BTreeMap::new();
+        assert_eq!(Awaited::wait(&waiting, since, timeout), Duration::from_millis(100), "none awaited");
+        let second = Duration::from_secs(1);
+        waiting.insert("early".to_owned(), Awaited { since, orders: 1 });
+        waiting.insert("later".to_owned(), Awaited { since: since + second, orders: 1 });
+        assert_eq!(Awaited::wait(&waiting, since + second, timeout), 2 * second, "until the earliest deadline");
+        assert_eq!(Awaited::wait(&waiting, since + 5 * second, timeout), Duration::ZERO, "passed");
+        // Never giving up on a node is a timeout, not a panic.
+        assert!(!awaited.overdue(since + 5 * second, Duration::MAX));
+        assert_eq!(Awaited::wait(&waiting, since, Duration::MAX), second, "no deadline: look again every second");
     }
 }

@@ -206,9 +206,17 @@ fn a_rig_renders_every_view_once_a_frame_through_a_join_a_stall_and_a_death() {
             }
             _ => {}
         }
-        scene
-            .set_local_transform(moving, Transform::from_translation(Vec3::new(-2.0, 0.5 + frame as f32 * 0.1, -2.0)))
-            .expect("move");
+        // Frame 6 leaves the scene as it was: no scene bytes travel, and the
+        // nodes render it from the replicas they hold.
+        let still = frame == 6;
+        if !still {
+            scene
+                .set_local_transform(
+                    moving,
+                    Transform::from_translation(Vec3::new(-2.0, 0.5 + frame as f32 * 0.1, -2.0)),
+                )
+                .expect("move");
+        }
         let report = coordinator.render_frame(&scene).expect("rig frame");
         let expected = reference.render(&scene);
 
@@ -227,11 +235,20 @@ fn a_rig_renders_every_view_once_a_frame_through_a_join_a_stall_and_a_death() {
                 output.node
             );
         }
+        let received: usize = report.outputs.iter().map(|o| PLANES.bytes(o.size)).sum();
+        assert!(report.image_bytes >= received, "frame {frame}: {} bytes of images for {received}", report.image_bytes);
         if frame == 1 {
             assert!(
                 report.delta_bytes > 0 && report.scene_wire_bytes >= 2 * report.delta_bytes,
                 "a snapshot to each node"
             );
+        } else if still {
+            assert_eq!(
+                (report.delta_bytes, report.scene_wire_bytes),
+                (0, 0),
+                "frame {frame}: the scene did not change"
+            );
+            assert!(report.taken_over.is_empty(), "frame {frame}: every node rendered its replica as it was");
         } else {
             assert!(
                 report.delta_bytes > 0 && report.delta_bytes <= 95,
