@@ -41,7 +41,8 @@
 //! probe resolution and update interval (a mirror ball with a box moving
 //! past it; the reference is the last frame), the probe's parallax box
 //! (none, or the room around a mirror ball), light culling (every light, or
-//! clustered: a street of 1 000 lamps; it must cost no accuracy), the LOD bias (spheres with two
+//! clustered: a street of 1 000 lamps; it must cost no accuracy), the sun
+//! shadow filter (PCF or PCSS, a pole under a sun of 5° and of 0.5°), the LOD bias (spheres with two
 //! coarser levels; the reference traces the full meshes), visibility (CPU,
 //! GPU frustum, GPU occlusion: each must cost no accuracy), and the render
 //! origin once more on the numerical extremes (a million units out, near
@@ -62,7 +63,7 @@ use oxygen::core::NodeKey;
 use oxygen::glam::{Quat, Vec4};
 use oxygen::graph::{ReferenceGraph, lit_render_graph};
 use oxygen::lighting::{CascadeSettings, ClusterGrid, LightCulling, ProbeUpdate, ReflectionProbe};
-use oxygen::passes::ReferenceSettings;
+use oxygen::passes::{ReferenceSettings, ShadowFilter};
 use oxygen::prelude::*;
 use oxygen::sceneprep::{ViewPrepOptions, Visibility};
 use oxygen_demo::record::{Record, Row as RecordRow};
@@ -113,6 +114,8 @@ struct Setting {
     lod_bias: f32,
     /// How shading finds a pixel's positional lights.
     light_culling: LightCulling,
+    /// How the sun's shadow is filtered.
+    shadow_filter: ShadowFilter,
 }
 
 struct Row {
@@ -480,6 +483,16 @@ fn stages(viewport: UVec2) -> Result<Vec<Stage>, Box<dyn std::error::Error>> {
         moving: None,
         reference: ReferenceSettings::RASTER_MODEL,
     };
+    // A pole under a sun of 5° and of 0.5° (its angular radius): the sun
+    // shadow filter's scenes (the reference traces the disc).
+    let pole = |degrees: f32, name: &'static str| Stage {
+        name,
+        scene: oxygen_demo::pole_under_sun(degrees),
+        camera: oxygen_demo::pole_camera(viewport),
+        cascades: CascadeSettings { count: 1, resolution: 1024, max_distance: 20.0, ..Default::default() },
+        moving: None,
+        reference: ReferenceSettings::RASTER_MODEL,
+    };
     Ok(vec![
         shadows,
         textured(Vec3::ZERO, "textured box")?,
@@ -489,6 +502,8 @@ fn stages(viewport: UVec2) -> Result<Vec<Stage>, Box<dyn std::error::Error>> {
         extremes,
         room,
         street,
+        pole(5.0, "a pole under a sun of 5°"),
+        pole(0.5, "a pole under a sun of 0.5°"),
     ])
 }
 
@@ -508,6 +523,7 @@ fn settings() -> Vec<Setting> {
         parallax: None,
         lod_bias: 1.0,
         light_culling: LightCulling::EveryLight,
+        shadow_filter: ShadowFilter::Pcf,
     };
     let mut all = Vec::new();
     for resolution in [256, 512, 1024, 2048, 4096] {
@@ -559,6 +575,13 @@ fn settings() -> Vec<Setting> {
         let mut s = base("light culling", name.to_string(), 7);
         s.light_culling = culling;
         all.push(s);
+    }
+    for (stage, sun) in [(8, "5°"), (9, "0.5°")] {
+        for (name, filter) in [("PCF", ShadowFilter::Pcf), ("PCSS", ShadowFilter::PCSS)] {
+            let mut s = base("sun shadow filter", format!("{name}, sun {sun}"), stage);
+            s.shadow_filter = filter;
+            all.push(s);
+        }
     }
     for bias in [0.25f32, 0.5, 1.0, 2.0, 4.0] {
         let mut s = base("LOD bias", bias.to_string(), 4);
@@ -638,6 +661,7 @@ fn raster(
     let config = ForwardLitConfig {
         shadow_pcf_radius: setting.pcf_radius,
         light_culling: setting.light_culling,
+        shadow_filter: setting.shadow_filter,
         ..ForwardLitConfig::default()
     };
     let view = renderer.register_view(desc, lit_render_graph(config))?;

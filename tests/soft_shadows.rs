@@ -1,12 +1,12 @@
 //! Soft sun shadows (`ShadowFilter::Pcss`) against the path-traced
 //! reference, which samples the same sun disc (`Light::source_radius`): a
-//! tall box on a floor under a sun of 5° and of 0.5°. With the wide disc
+//! pole on a floor under a sun of 5° and of 0.5°
+//! (`oxygen_demo::pole_under_sun`). With the wide disc
 //! PCSS must bring the picture closer to the reference than PCF does; with
 //! the narrow one it must not be worse by more than the reference's noise.
 
 mod support;
 
-use oxygen::glam::{Quat, Vec4};
 use oxygen::gpu::HdrImage;
 use oxygen::graph::{ReferenceGraph, StandardGraph};
 use oxygen::lighting::CascadeSettings;
@@ -18,28 +18,6 @@ const SIZE: UVec2 = UVec2::new(96, 64);
 /// Reference samples per pixel (16 a frame).
 const SAMPLES: u32 = 256;
 
-fn scene(sun_degrees: f32) -> Scene {
-    let mut scene = Scene::new();
-    let grey = scene.add_material(Material::opaque("grey", Vec4::new(0.7, 0.7, 0.7, 1.0)));
-    let floor = scene.add_geometry(Geometry::plane(16.0));
-    let node = scene.add_node("floor", Transform::IDENTITY);
-    scene.set_renderable(node, Renderable { geometry: floor, materials: vec![grey] }).unwrap();
-    let cube = scene.add_geometry(Geometry::cube(1.0));
-    let node = scene
-        .add_node("pole", Transform::from_translation(Vec3::new(0.0, 1.5, 0.0)).with_scale(Vec3::new(0.5, 3.0, 0.5)));
-    scene.set_renderable(node, Renderable { geometry: cube, materials: vec![grey] }).unwrap();
-    let travel = Vec3::new(0.9, -0.7, 0.25).normalize();
-    let sun = scene.add_node("sun", Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, travel)));
-    let light = Light { source_radius: sun_degrees.to_radians(), ..Light::directional(3.0) };
-    scene.set_light(sun, Some(light)).unwrap();
-    scene
-}
-
-fn camera() -> LookAtResolver {
-    LookAtResolver::new(Camera::perspective(0.9, 0.1, None), Vec3::new(1.5, 7.0, 5.5), Vec3::new(2.2, 0.0, 0.6), SIZE)
-        .unwrap()
-}
-
 /// The scene's reference (raster model: direct light, exact shadows of the
 /// sun's disc) and the raster images with PCF (radius 1) and PCSS.
 fn render(scene: &Scene) -> (HdrImage, HdrImage, HdrImage) {
@@ -47,13 +25,21 @@ fn render(scene: &Scene) -> (HdrImage, HdrImage, HdrImage) {
     let cascades = CascadeSettings { count: 1, resolution: 1024, max_distance: 20.0, ..Default::default() };
     let raster = |renderer: &mut Renderer, filter: ShadowFilter| {
         let config = ForwardLitConfig { shadow_filter: filter, ..ForwardLitConfig::DEFAULT };
-        renderer.register_view(ViewDesc::new(camera()).with_sun_shadows(cascades), StandardGraph::new(config)).unwrap()
+        renderer
+            .register_view(
+                ViewDesc::new(oxygen_demo::pole_camera(SIZE)).with_sun_shadows(cascades),
+                StandardGraph::new(config),
+            )
+            .unwrap()
     };
     let pcf = raster(&mut renderer, ShadowFilter::Pcf);
     let pcss = raster(&mut renderer, ShadowFilter::PCSS);
     let settings = ReferenceSettings { samples_per_frame: 16, max_samples: SAMPLES, ..ReferenceSettings::RASTER_MODEL };
     let traced = renderer
-        .register_view(ViewDesc::new(camera()).path_traced(), ReferenceGraph { settings, exposure: 1.0 })
+        .register_view(
+            ViewDesc::new(oxygen_demo::pole_camera(SIZE)).path_traced(),
+            ReferenceGraph { settings, exposure: 1.0 },
+        )
         .unwrap();
     while renderer.reference_samples(traced) < SAMPLES {
         renderer.render_frame(scene).unwrap();
@@ -88,7 +74,7 @@ fn rmse(a: &HdrImage, b: &HdrImage) -> f64 {
 fn soft_shadows_follow_the_suns_disc_toward_the_reference() {
     let mut rows = Vec::new();
     for degrees in [5.0f32, 0.5] {
-        let (reference, pcf, pcss) = render(&scene(degrees));
+        let (reference, pcf, pcss) = render(&oxygen_demo::pole_under_sun(degrees));
         let (pcf_error, pcss_error) = (rmse(&pcf, &reference), rmse(&pcss, &reference));
         eprintln!("sun of {degrees}°: RMSE against the reference: PCF {pcf_error:.5}, PCSS {pcss_error:.5}");
         rows.push(

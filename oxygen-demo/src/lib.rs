@@ -151,6 +151,40 @@ pub fn floor_with_box(roughness: f32) -> Scene {
     scene
 }
 
+/// A pole 3 m tall and 0.5 m wide on a 16 m grey floor under a sun of
+/// angular radius `sun_degrees` (`Light::source_radius`), low enough that
+/// the pole's shadow runs several metres: a contact edge at its foot and a
+/// penumbra widening towards its tip. The scene of soft shadows' test and
+/// accuracy stage, seen by [`pole_camera`].
+pub fn pole_under_sun(sun_degrees: f32) -> Scene {
+    let mut scene = Scene::new();
+    let grey = scene.add_material(Material::opaque("grey", Vec4::new(0.7, 0.7, 0.7, 1.0)));
+    let floor = scene.add_geometry(Geometry::plane(16.0));
+    let node = scene.add_node("floor", Transform::IDENTITY);
+    scene.set_renderable(node, Renderable { geometry: floor, materials: vec![grey] }).expect("valid handles");
+    let cube = scene.add_geometry(Geometry::cube(1.0));
+    let pole = Transform::from_translation(Vec3::new(0.0, 1.5, 0.0)).with_scale(Vec3::new(0.5, 3.0, 0.5));
+    let node = scene.add_node("pole", pole);
+    scene.set_renderable(node, Renderable { geometry: cube, materials: vec![grey] }).expect("valid handles");
+    let travel = Vec3::new(0.9, -0.7, 0.25).normalize();
+    let sun = scene.add_node("sun", Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, travel)));
+    let light = Light { source_radius: sun_degrees.to_radians(), ..Light::directional(3.0) };
+    scene.set_light(sun, Some(light)).expect("a node");
+    scene
+}
+
+/// The camera of [`pole_under_sun`]: above and beside the pole, looking at
+/// its shadow.
+pub fn pole_camera(viewport: UVec2) -> LookAtResolver {
+    LookAtResolver::new(
+        Camera::perspective(0.9, 0.1, None),
+        Vec3::new(1.5, 7.0, 5.5),
+        Vec3::new(2.2, 0.0, 0.6),
+        viewport,
+    )
+    .expect("a valid camera")
+}
+
 /// A street of `lamps` lights: a 200 m road along −Z (12 m wide) between
 /// two rows of buildings (boxes of varied heights every 8 m), its lamps in
 /// two rows 4.5 m up, alternating point lights and downward spots, each of
