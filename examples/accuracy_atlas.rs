@@ -577,7 +577,13 @@ fn settings() -> Vec<Setting> {
         all.push(s);
     }
     for (stage, sun) in [(8, "5°"), (9, "0.5°")] {
-        for (name, filter) in [("PCF", ShadowFilter::Pcf), ("PCSS", ShadowFilter::PCSS)] {
+        let pcss = |taps: u32| ShadowFilter::Pcss { search_taps: taps, filter_taps: taps, max_penumbra_texels: 16.0 };
+        for (name, filter) in [
+            ("PCF", ShadowFilter::Pcf),
+            ("PCSS 4×4", pcss(4)),
+            ("PCSS 6×6", pcss(6)),
+            ("PCSS 8×8 (the default)", ShadowFilter::PCSS),
+        ] {
             let mut s = base("sun shadow filter", format!("{name}, sun {sun}"), stage);
             s.shadow_filter = filter;
             all.push(s);
