@@ -19,6 +19,11 @@
 #              morph targets) and tests/environment.rs (which loads .hdr
 #              files; these render, on
 #              whatever adapter the machine gives: lavapipe here)
+#   gpu        oxygen-gpu's CPU logic: read-back texel decoding (half floats,
+#              Rg11b10), HDR images, label sets, target and atlas sizes and
+#              layouts, the bind-group layout builder, the gpu_struct layout
+#              checks, adapter ranking; not what needs a device (creating
+#              contexts and targets, reading back), which the GPU tests cover
 #   node       oxygen-node (render nodes: placement, membership, take-over,
 #              the wire headers' checks, the node program), tested by its
 #              unit tests and tests/render_nodes.rs (three node processes on
@@ -79,6 +84,10 @@ case "$scope" in
       --cargo-arg=--test=environment --cargo-arg=--test=gltf_animation
       --cargo-arg=--test=morph)
     ;;
+  gpu)
+    args=(-p oxygen-gpu --test-package oxygen-gpu
+      -E 'GpuContext::|pick_adapter|ViewTargets::(create|depth_only|probe_face|render_depth_view|atlas_layer)|TileAtlas::view_targets|create_layout|single_layer_view|shared_instance|in texture_2d$')
+    ;;
   node)
     args=(-p oxygen-node --test-package oxygen-node)
     # The rig test's waits (120 s each, for lavapipe on a busy machine)
@@ -88,7 +97,7 @@ case "$scope" in
     default_timeout=90
     ;;
   *)
-    say "unknown scope '$scope' (core, bindless, sceneprep, passes, importer, node)"
+    say "unknown scope '$scope' (core, bindless, sceneprep, passes, importer, gpu, node)"
     exit 2
     ;;
 esac
