@@ -844,7 +844,7 @@ mod placement_tests {
     use super::*;
 
     /// Gives `view` a measured cost.
-    fn measured(coordinator: &mut Coordinator, view: RigViewId, cost: f64) {
+    pub(super) fn measured(coordinator: &mut Coordinator, view: RigViewId, cost: f64) {
         coordinator.views.get_mut(&view).expect("view").cost = Some(cost);
     }
 
@@ -911,6 +911,7 @@ mod frame_tests {
     use zenoh::sample::SampleBuilder;
 
     use super::membership_tests::{coordinator, view};
+    use super::placement_tests::measured;
     use super::*;
 
     /// Renders a frame of `scene` that finds `events` queued, as if they
@@ -918,13 +919,54 @@ mod frame_tests {
     /// so a frame that waits for more fails at once (the session closed)
     /// instead of waiting out the stall timeout.
     fn frame(coordinator: &mut Coordinator, scene: &Scene, events: Vec<Event>) -> RigFrame {
+        try_frame(coordinator, scene, events).expect("the frame")
+    }
+
+    /// As [`frame`], for a frame that may fail.
+    fn try_frame(coordinator: &mut Coordinator, scene: &Scene, events: Vec<Event>) -> Result<RigFrame, NodeError> {
         let (tx, rx) = mpsc::channel();
         for event in events {
             tx.send(event).expect("queued");
         }
         drop(tx);
         coordinator.events = rx;
-        coordinator.render_frame(scene).expect("the frame")
+        coordinator.render_frame(scene)
+    }
+
+    /// As [`frame`], with `events` coming once the frame's first order went
+    /// out (`orders` hears it), in the middle of the frame: what the frame
+    /// finds queued when it starts it takes as having happened before it
+    /// (joins and departures included).
+    fn frame_after_orders(
+        coordinator: &mut Coordinator,
+        scene: &Scene,
+        orders: mpsc::Receiver<Sample>,
+        events: Vec<Event>,
+    ) -> RigFrame {
+        let (tx, rx) = mpsc::channel();
+        coordinator.events = rx;
+        let sender = std::thread::spawn(move || {
+            orders.recv_timeout(Duration::from_secs(10)).expect("an order");
+            for event in events {
+                tx.send(event).expect("queued");
+            }
+        });
+        let report = coordinator.render_frame(scene);
+        sender.join().expect("the events sent");
+        report.expect("the frame")
+    }
+
+    /// A coordinator whose nodes `names` joined before its first frame (no
+    /// view moves on their account) and which moves no view after a frame
+    /// either: each test puts its views where it wants them.
+    fn rig(names: &[&str]) -> Coordinator {
+        let mut coordinator = coordinator();
+        for name in names {
+            coordinator.membership((*name).to_owned(), true);
+        }
+        coordinator.joined.clear();
+        coordinator.options.rebalance_margin = f64::INFINITY;
+        coordinator
     }
 
     /// Node `node` reports frame `frame` rendered: `views` views in
@@ -933,6 +975,14 @@ mod frame_tests {
         let key = KeyExpr::try_from(coordinator.keys.status(node)).expect("key");
         let status = Status { frame, outcome: Outcome::Rendered { views, seconds, render_seconds: seconds / 2.0 } };
         Event::Status(SampleBuilder::put(key, wire::encode(&status)).into())
+    }
+
+    /// Node `node` reports that it could not render frame `frame` (its
+    /// replica lost the scene when `needs_snapshot`).
+    fn failed(coordinator: &Coordinator, node: &str, frame: u64, needs_snapshot: bool) -> Event {
+        let key = KeyExpr::try_from(coordinator.keys.status(node)).expect("key");
+        let outcome = Outcome::Failed { reason: "a test's failure".into(), needs_snapshot };
+        Event::Status(SampleBuilder::put(key, wire::encode(&Status { frame, outcome })).into())
     }
 
     /// Node `node`'s images of `views` of frame `frame` (8 × 8, the
@@ -1114,5 +1164,175 @@ mod frame_tests {
         // Never giving up on a node is a timeout, not a panic.
         assert!(!awaited.overdue(since + 5 * second, Duration::MAX));
         assert_eq!(Awaited::wait(&waiting, since, Duration::MAX), second, "no deadline: look again every second");
+    }
+
+    /// A stalled node is usable again once it reports a frame later than
+    /// the one it stalled in: its reports of that frame or of an earlier one
+    /// are late answers, not a sign that it keeps up.
+    #[test]
+    fn a_stalled_node_is_usable_again_once_it_reports_a_later_frame() {
+        let mut coordinator = rig(&["a", "b"]);
+        let (scene, _) = scene();
+        coordinator.frame = 3;
+        coordinator.nodes.get_mut("a").expect("a").stalled = Some(2);
+        let events = vec![
+            rendered(&coordinator, "a", 1, 0, 0.1),
+            rendered(&coordinator, "a", 2, 0, 0.1),
+            rendered(&coordinator, "b", 4, 0, 0.1),
+        ];
+        frame(&mut coordinator, &scene, events);
+        assert_eq!(coordinator.nodes["a"].stalled, Some(2), "frames 1 and 2 reported late: still stalled");
+        assert_eq!(coordinator.loads().0, ["b"]);
+
+        let events = vec![rendered(&coordinator, "a", 3, 0, 0.1), rendered(&coordinator, "b", 5, 0, 0.1)];
+        frame(&mut coordinator, &scene, events);
+        assert_eq!(coordinator.nodes["a"].stalled, None, "frame 3 reported: caught up");
+        assert_eq!(coordinator.loads().0, ["a", "b"]);
+    }
+
+    /// A node that failed its frame stays in step unless its replica lost
+    /// the scene: then, and only then, its next order carries the whole
+    /// scene (a delta would not apply to it; a snapshot it does not need
+    /// would cost the wire the whole scene).
+    #[test]
+    fn a_failed_node_gets_the_whole_scene_next_only_when_its_replica_lost_it() {
+        let mut coordinator = rig(&["a"]);
+        let (_subscriber, orders) = listen(&coordinator);
+        let (scene, _) = scene();
+        let events = vec![failed(&coordinator, "a", 1, false)];
+        frame(&mut coordinator, &scene, events);
+        assert_eq!(next_order(&orders).1.scene, SceneUpdate::Snapshot, "a's first frame");
+        let events = vec![failed(&coordinator, "a", 2, true)];
+        frame(&mut coordinator, &scene, events);
+        let (_, order, payload) = next_order(&orders);
+        assert_eq!((order.scene, payload.len()), (SceneUpdate::Unchanged, 0), "a failed, its replica intact");
+        let events = vec![rendered(&coordinator, "a", 3, 0, 0.1)];
+        frame(&mut coordinator, &scene, events);
+        let (_, order, payload) = next_order(&orders);
+        assert_eq!(order.scene, SceneUpdate::Snapshot, "a's replica lost the scene");
+        assert_eq!(payload, scene.delta_since(0, &mut HashSet::new()).encode());
+    }
+
+    /// A failed node's views without images render again in the same frame
+    /// on the least loaded other node whose replica holds the frame's scene
+    /// (not on the node that failed, nor on one out of step however light),
+    /// and the frame waits for that node's reports of both its orders.
+    #[test]
+    fn a_failed_nodes_views_render_again_on_the_lightest_other_node_in_step() {
+        let mut coordinator = rig(&["a", "b", "c"]);
+        let (_subscriber, orders) = listen(&coordinator);
+        let (scene, _) = scene();
+        let v = view(&mut coordinator, "v");
+        let (w1, w2) = (view(&mut coordinator, "w1"), view(&mut coordinator, "w2"));
+        for (view, node) in [(v, "a"), (w1, "b"), (w2, "b")] {
+            measured(&mut coordinator, view, 1.0);
+            coordinator.assign(view, node);
+        }
+        // Loads a 1, b 2, c 0; c falls out of step, then a fails.
+        let events = vec![
+            failed(&coordinator, "c", 1, true),
+            images(&coordinator, "b", 1, &[w1, w2], 1).0,
+            failed(&coordinator, "a", 1, false),
+            images(&coordinator, "b", 1, &[v], 2).0,
+            rendered(&coordinator, "b", 1, 2, 0.2),
+            rendered(&coordinator, "b", 1, 1, 0.1),
+        ];
+        let report = frame(&mut coordinator, &scene, events);
+        assert_eq!(report.taken_over, [v]);
+        assert_eq!(coordinator.node_of(v), Some("b"));
+        let sent: Vec<String> = (0..4).map(|_| next_order(&orders).0).collect();
+        assert_eq!(sent, ["a", "b", "c", "b"], "the frame's three orders, then b's second");
+        let outputs: Vec<(RigViewId, &str)> = report.outputs.iter().map(|o| (o.view, o.node.as_str())).collect();
+        assert_eq!(outputs, [(v, "b"), (w1, "b"), (w2, "b")]);
+        let account = report.nodes.get("b").expect("b's account");
+        assert_eq!(account.views, 3, "both of b's reports were awaited: {account:?}");
+        assert!((account.seconds - 0.3).abs() < 1e-12, "{account:?}");
+    }
+
+    /// A view whose node fails is tried once on each node and once more
+    /// (a node that failed may well render it on a second try); failing
+    /// after that, the frame gives up with an error that names the view.
+    #[test]
+    fn a_view_every_node_fails_is_given_up_after_a_try_on_each_node_and_one_more() {
+        let mut coordinator = rig(&["a", "b"]);
+        let (scene, _) = scene();
+        let v = view(&mut coordinator, "v");
+        coordinator.assign(v, "a");
+        // Three tries: a fails it, then b, then a; b renders it.
+        let events = vec![
+            failed(&coordinator, "a", 1, false),
+            rendered(&coordinator, "b", 1, 0, 0.1),
+            failed(&coordinator, "b", 1, false),
+            failed(&coordinator, "a", 1, false),
+            images(&coordinator, "b", 1, &[v], 1).0,
+            rendered(&coordinator, "b", 1, 1, 0.1),
+        ];
+        let report = frame(&mut coordinator, &scene, events);
+        assert_eq!(report.taken_over, [v, v, v]);
+        assert_eq!(report.outputs.iter().map(|o| o.node.as_str()).collect::<Vec<_>>(), ["b"]);
+
+        // A fourth failure in a frame is one too many.
+        let events = vec![
+            failed(&coordinator, "b", 2, false),
+            rendered(&coordinator, "a", 2, 0, 0.1),
+            failed(&coordinator, "a", 2, false),
+            failed(&coordinator, "b", 2, false),
+            failed(&coordinator, "a", 2, false),
+        ];
+        match try_frame(&mut coordinator, &scene, events) {
+            Err(NodeError::InvalidView { view, reason }) => {
+                assert_eq!(view, "v");
+                assert!(reason.contains("frame 2: every node failed"), "{reason}");
+            }
+            other => panic!("the fourth failure gives up on the view: {:?}", other.map(|r| r.taken_over)),
+        }
+    }
+
+    /// A node's seconds are spread evenly over the views whose images it
+    /// sent, which become their costs; a later measurement moves a cost
+    /// 30 % of the way to it.
+    #[test]
+    fn a_nodes_seconds_are_spread_over_its_views_and_smoothed_into_their_costs() {
+        let mut coordinator = rig(&["a", "b"]);
+        let (scene, _) = scene();
+        let (v1, v2, w) = (view(&mut coordinator, "v1"), view(&mut coordinator, "v2"), view(&mut coordinator, "w"));
+        for (view, node) in [(v1, "a"), (v2, "a"), (w, "b")] {
+            coordinator.assign(view, node);
+        }
+        let costs = |coordinator: &Coordinator| [v1, v2, w].map(|v| coordinator.view_cost(v).expect("measured"));
+        let close = |got: [f64; 3], want: [f64; 3]| got.iter().zip(want).all(|(g, w)| (g - w).abs() < 1e-12);
+        for (frame_no, a_seconds, want) in [(1, 1.0, [0.5, 0.5, 3.0]), (2, 2.0, [0.65, 0.65, 3.0])] {
+            let events = vec![
+                images(&coordinator, "a", frame_no, &[v1, v2], 1).0,
+                images(&coordinator, "b", frame_no, &[w], 1).0,
+                rendered(&coordinator, "a", frame_no, 2, a_seconds),
+                rendered(&coordinator, "b", frame_no, 1, 3.0),
+            ];
+            frame(&mut coordinator, &scene, events);
+            let got = costs(&coordinator);
+            assert!(close(got, want), "frame {frame_no}: costs {got:?}, not {want:?}");
+        }
+    }
+
+    /// A node announced again while the frame waits for it (liveliness
+    /// can deliver a token twice: its history and the live put) is the
+    /// same node: it keeps its views, and the frame still waits for its
+    /// images and its report.
+    #[test]
+    fn a_node_announced_again_mid_frame_keeps_its_views_and_is_still_awaited() {
+        let mut coordinator = rig(&["a"]);
+        let (_subscriber, orders) = listen(&coordinator);
+        let (scene, _) = scene();
+        let v = view(&mut coordinator, "v");
+        coordinator.assign(v, "a");
+        let events = vec![
+            Event::Node("a".into(), true),
+            images(&coordinator, "a", 1, &[v], 1).0,
+            rendered(&coordinator, "a", 1, 1, 0.5),
+        ];
+        let report = frame_after_orders(&mut coordinator, &scene, orders, events);
+        assert!(report.taken_over.is_empty() && report.left.is_empty(), "{report:?}");
+        assert_eq!(report.outputs.iter().map(|o| o.node.as_str()).collect::<Vec<_>>(), ["a"]);
+        assert_eq!(report.nodes.get("a").map(|r| r.views), Some(1), "a's report was awaited");
     }
 }

@@ -65,3 +65,47 @@ impl NetConfig {
         zenoh::open(self.zenoh_config()?).wait().map_err(NodeError::zenoh)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A node connects to its coordinator's endpoint and listens nowhere;
+    /// a coordinator listens on its own and connects to nobody.
+    #[test]
+    fn connect_and_listen_name_one_endpoint_each() {
+        let endpoint = "tcp/127.0.0.1:7447";
+        assert_eq!(NetConfig::connect(endpoint), NetConfig { listen: Vec::new(), connect: vec![endpoint.into()] });
+        assert_eq!(NetConfig::listen(endpoint), NetConfig { listen: vec![endpoint.into()], connect: Vec::new() });
+    }
+
+    /// The Zenoh configuration, read back as JSON: a peer on exactly these
+    /// endpoints, never scouting (Zenoh's default would find every peer on
+    /// the network, and listen on a port of its choosing), retrying its
+    /// connections for a minute, and opening without waiting for scouted
+    /// peers.
+    #[test]
+    fn the_zenoh_config_is_a_peer_on_these_endpoints_without_scouting() {
+        let net = NetConfig {
+            listen: vec!["tcp/127.0.0.1:7447".into()],
+            connect: vec!["tcp/127.0.0.1:7448".into(), "tcp/[::1]:7449".into()],
+        };
+        let config = net.zenoh_config().expect("config");
+        let get = |key: &str| config.get_json(key).unwrap_or_else(|e| panic!("{key}: {e}"));
+        assert_eq!(get("mode"), r#""peer""#);
+        assert_eq!(get("scouting/multicast/enabled"), "false");
+        assert_eq!(get("listen/endpoints"), r#"["tcp/127.0.0.1:7447"]"#);
+        assert_eq!(get("connect/endpoints"), r#"["tcp/127.0.0.1:7448","tcp/[::1]:7449"]"#);
+        assert_eq!(get("connect/timeout_ms"), "60000");
+        assert_eq!(get("connect/exit_on_failure"), "false");
+        assert_eq!(get("open/return_conditions/connect_scouted"), "false");
+    }
+
+    /// An endpoint Zenoh cannot parse is refused by name, before a session
+    /// tries it.
+    #[test]
+    fn an_endpoint_zenoh_cannot_parse_is_refused_by_name() {
+        let error = NetConfig::connect("127.0.0.1:7447").zenoh_config().expect_err("no protocol: refused");
+        assert!(error.to_string().contains("\"127.0.0.1:7447\""), "{error}");
+    }
+}

@@ -57,6 +57,19 @@ impl NodeOptions {
             coordinator_wait: Duration::from_secs(60),
         }
     }
+
+    /// What the node asks of the machine's GPUs: the device options its
+    /// renderer would ask for itself (the features it uses where present,
+    /// its trust in its own indirect arguments), and how many devices to
+    /// open, one on each GPU up to [`NodeOptions::gpu`] (the last renders).
+    fn devices(&self) -> (GpuOptions, usize) {
+        let gpu_options = GpuOptions {
+            optional_features: Renderer::OPTIONAL_FEATURES,
+            trust_indirect_args: self.renderer.trust_indirect_args,
+            ..Default::default()
+        };
+        (gpu_options, self.gpu + 1)
+    }
 }
 
 /// What a node did before its coordinator left.
@@ -111,12 +124,8 @@ pub fn run_node(options: &NodeOptions) -> Result<NodeSummary, NodeError> {
     let keys = Keys::new(&options.rig);
 
     // The device first: a node is announced only once it can render.
-    let gpu_options = GpuOptions {
-        optional_features: Renderer::OPTIONAL_FEATURES,
-        trust_indirect_args: options.renderer.trust_indirect_args,
-        ..Default::default()
-    };
-    let context = GpuContext::new_headless_group(&gpu_options, options.gpu + 1, true)
+    let (gpu_options, devices) = options.devices();
+    let context = GpuContext::new_headless_group(&gpu_options, devices, true)
         .map_err(|e| NodeError::Render(e.into()))?
         .pop()
         .ok_or_else(|| NodeError::Render(oxygen::RenderError::Unsupported("no GPU context".into())))?;
@@ -368,5 +377,30 @@ impl Node {
             self.renderer.unregister_batch(batch)?;
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A node's device is asked for what a renderer of the node's options
+    /// asks for on its own (without the optional features a renderer
+    /// falls back to slower paths; without the trust, wgpu checks every
+    /// indirect draw), and for GPU `n` it opens n + 1 devices, the last
+    /// on GPU `n`.
+    #[test]
+    fn a_node_asks_the_gpu_for_its_renderers_features_and_a_device_up_to_its_gpu() {
+        for trust in [false, true] {
+            let mut options = NodeOptions::new("r", "n", "tcp/127.0.0.1:7447");
+            options.renderer.trust_indirect_args = trust;
+            options.gpu = 2;
+            let (gpu, devices) = options.devices();
+            assert_eq!(gpu.optional_features, Renderer::OPTIONAL_FEATURES);
+            assert_eq!(gpu.required_features, oxygen::wgpu::Features::empty());
+            assert_eq!(gpu.trust_indirect_args, trust);
+            assert_eq!(devices, 3, "GPUs 0, 1 and 2");
+        }
+        assert_eq!(NodeOptions::new("r", "n", "tcp/127.0.0.1:7447").devices().1, 1, "GPU 0: one device");
     }
 }

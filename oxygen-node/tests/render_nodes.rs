@@ -13,11 +13,11 @@ use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 use oxygen::batch::{BatchDesc, StreamOptions};
-use oxygen::gpu::{Label, LabelSet};
+use oxygen::gpu::{GpuContext, GpuOptions, Label, LabelSet};
 use oxygen::prelude::*;
 use oxygen_core::glam::DVec3;
 use oxygen_node::wire::ImagePlanes;
-use oxygen_node::{Coordinator, NetConfig, Planes, RigOptions, RigViewId, ViewSpec};
+use oxygen_node::{Coordinator, NetConfig, NodeOptions, Planes, RigOptions, RigViewId, ViewSpec, run_node};
 
 const NODE: &str = env!("CARGO_BIN_EXE_oxygen-node");
 
@@ -299,6 +299,46 @@ fn a_rig_renders_every_view_once_a_frame_through_a_join_a_stall_and_a_death() {
     // The coordinator goes; the nodes stop by themselves.
     drop(coordinator);
     nodes.wait_all(longest_wait().min(Duration::from_secs(60)));
+}
+
+/// A node run in this process, as a program embedding one would, through
+/// three frames of two views (two batches): what it returns when its
+/// coordinator goes accounts for exactly what the coordinator saw (each
+/// order rendered, each view's images, the bytes of scene it was sent and
+/// of images it sent) and names the adapter that rendered.
+#[test]
+fn a_nodes_summary_accounts_for_what_its_coordinator_saw() {
+    let rig = format!("summary-{}", std::process::id());
+    let endpoint = format!("tcp/127.0.0.1:{}", free_port());
+    let options = RigOptions { planes: PLANES, stall_timeout: longest_wait(), ..Default::default() };
+    let mut coordinator = Coordinator::new(&rig, &NetConfig::listen(&endpoint), options).expect("coordinator");
+    let specs = specs();
+    for spec in [&specs[0], &specs[8]] {
+        coordinator.add_view(spec.clone()).expect("view");
+    }
+    let mut node_options = NodeOptions::new(&rig, "here", &endpoint);
+    node_options.coordinator_wait = longest_wait();
+    let node = std::thread::spawn(move || run_node(&node_options));
+    coordinator.wait_for_nodes(1, longest_wait()).expect("the node");
+
+    let grid = oxygen_demo::box_grid(4);
+    let (mut scene, moving) = (grid.scene, grid.first_box);
+    let (mut image_bytes, mut scene_bytes) = (0, 0);
+    for frame in 1..=3 {
+        let at = Vec3::new(-1.0, 0.5 + frame as f32 * 0.1, -1.0);
+        scene.set_local_transform(moving, Transform::from_translation(at)).expect("move");
+        let report = coordinator.render_frame(&scene).expect("rig frame");
+        assert_eq!(report.outputs.len(), 2, "frame {frame}");
+        image_bytes += report.image_bytes;
+        scene_bytes += report.scene_wire_bytes;
+    }
+    drop(coordinator);
+    let summary = node.join().expect("the node's thread").expect("the node");
+    assert_eq!((summary.frames, summary.view_frames), (3, 6));
+    assert_eq!(summary.bytes_sent, image_bytes as u64, "the images sent are the images received");
+    assert_eq!(summary.scene_bytes, scene_bytes as u64, "the scene received is the scene sent");
+    let adapter = GpuContext::new_headless(&GpuOptions::default()).expect("an adapter").describe();
+    assert_eq!(summary.adapter, adapter);
 }
 
 #[test]
