@@ -131,14 +131,7 @@ pub fn run_node(options: &NodeOptions) -> Result<NodeSummary, NodeError> {
         .ok_or_else(|| NodeError::Render(oxygen::RenderError::Unsupported("no GPU context".into())))?;
     let adapter = context.describe();
     info!(%adapter, "render node's adapter");
-    let mut node = Node {
-        renderer: Renderer::with_options(context, options.renderer)?,
-        replica: SceneReplica::new(),
-        views: BTreeMap::new(),
-        batches: HashMap::new(),
-        by_view: HashMap::new(),
-        deterministic: options.renderer.deterministic,
-    };
+    let mut node = Node::new(Renderer::with_options(context, options.renderer)?, options.renderer.deterministic);
 
     let session = options.net.open()?;
     let (tx, rx) = mpsc::channel();
@@ -238,7 +231,28 @@ pub fn run_node(options: &NodeOptions) -> Result<NodeSummary, NodeError> {
     Ok(summary)
 }
 
+/// How many views of `view_bytes` bytes of images each go in one output
+/// message: as many as fit in [`MAX_OUTPUT_BYTES`], and at least one (a
+/// view larger than that travels alone). A view of no bytes weighs one,
+/// so that nothing divides by zero.
+fn views_per_message(view_bytes: usize) -> usize {
+    (MAX_OUTPUT_BYTES / view_bytes.max(1)).max(1)
+}
+
 impl Node {
+    /// A node rendering with `renderer` (in its deterministic mode when
+    /// `deterministic`): an empty replica, no views yet.
+    fn new(renderer: Renderer, deterministic: bool) -> Self {
+        Node {
+            renderer,
+            replica: SceneReplica::new(),
+            views: BTreeMap::new(),
+            batches: HashMap::new(),
+            by_view: HashMap::new(),
+            deterministic,
+        }
+    }
+
     /// Applies an order (scene, views), renders, and hands the views'
     /// images to `send`, a batch's views together (in messages of at most
     /// [`MAX_OUTPUT_BYTES`]); returns the views sent and the render time.
@@ -314,7 +328,7 @@ impl Node {
                 depth: first.depth.is_some(),
                 instances: first.instances.is_some(),
             };
-            let per_message = (MAX_OUTPUT_BYTES / planes.bytes(size).max(1)).max(1);
+            let per_message = views_per_message(planes.bytes(size));
             for chunk in cameras.chunks(per_message) {
                 let mut payload = Vec::with_capacity(chunk.len() * planes.bytes(size));
                 for (_, camera) in chunk {
@@ -382,7 +396,12 @@ impl Node {
 
 #[cfg(test)]
 mod tests {
+    use std::collections::HashSet;
+
+    use oxygen_core::{Camera, Scene};
+
     use super::*;
+    use crate::spec::ViewSpec;
 
     /// A node's device is asked for what a renderer of the node's options
     /// asks for on its own (without the optional features a renderer
@@ -402,5 +421,127 @@ mod tests {
             assert_eq!(devices, 3, "GPUs 0, 1 and 2");
         }
         assert_eq!(NodeOptions::new("r", "n", "tcp/127.0.0.1:7447").devices().1, 1, "GPU 0: one device");
+    }
+
+    /// A node rendering on this machine's first adapter, no view yet.
+    fn node() -> Node {
+        let renderer = Renderer::new_headless().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
+        Node::new(renderer, false)
+    }
+
+    /// A camera `name` of `size` pixels looking at the origin.
+    fn spec(name: &str, size: UVec2) -> (RigViewId, ViewSpec) {
+        let id = RigViewId(name.trim_start_matches('v').parse().expect("v and a number"));
+        let camera = Camera::perspective(1.0, 0.1, None);
+        (id, ViewSpec::look_at(name, camera, glam::DVec3::new(0.0, 1.0, 4.0), glam::DVec3::ZERO, size))
+    }
+
+    /// Frame `frame`'s order: the scene as the replica holds it, views
+    /// `add` and `remove`d, images of `planes` for every view.
+    fn order(frame: u64, add: Vec<(RigViewId, ViewSpec)>, remove: Vec<RigViewId>, planes: Planes) -> Order {
+        Order { frame, scene: SceneUpdate::Unchanged, add, remove, planes, only: None }
+    }
+
+    /// The messages a node sent for an order, by size: each one's tag and
+    /// its payload's length.
+    type Messages = BTreeMap<(u32, u32), (OutputTag, usize)>;
+
+    /// `node` obeys `order` (with `payload` for its scene): the views it
+    /// says it sent, and each message it sent (its tag, its payload's
+    /// length), by size.
+    fn obey(node: &mut Node, order: &Order, payload: &[u8]) -> (u32, Messages) {
+        let mut messages = BTreeMap::new();
+        let (sent, _) = node
+            .obey(order, payload, |tag, body| {
+                let previous = messages.insert((tag.size.x, tag.size.y), (tag.clone(), body.len()));
+                assert!(previous.is_none(), "one message a size here: {tag:?}");
+                Ok(())
+            })
+            .expect("the order");
+        (sent, messages)
+    }
+
+    /// `node` obeys its first order: `order` with a snapshot of a scene of
+    /// one node.
+    fn first(node: &mut Node, mut order: Order) -> (u32, Messages) {
+        let mut scene = Scene::new();
+        scene.add_node("box", oxygen_core::Transform::IDENTITY);
+        order.scene = SceneUpdate::Snapshot;
+        obey(node, &order, &scene.delta_since(0, &mut HashSet::new()).encode())
+    }
+
+    /// A view's images travel in messages of as many whole views as fit in
+    /// [`MAX_OUTPUT_BYTES`] (its quotient by a view's bytes: the remainder
+    /// or the product would cut a batch into one view a message, or send
+    /// it whole however large), a view larger than that alone, and a view
+    /// of no bytes weighs one.
+    #[test]
+    fn an_output_message_holds_as_many_whole_views_as_fit() {
+        assert_eq!(views_per_message(4096), 256, "256 views of 32 × 32 colour");
+        assert_eq!(views_per_message(300_000), 3);
+        assert_eq!(views_per_message(MAX_OUTPUT_BYTES), 1);
+        assert_eq!(views_per_message(MAX_OUTPUT_BYTES + 1), 1, "a view over the limit goes alone");
+        assert_eq!(views_per_message(0), MAX_OUTPUT_BYTES);
+    }
+
+    /// An order of no planes renders and answers with the views' tags
+    /// alone, one message a size, and counts every view it answered for.
+    #[test]
+    fn a_node_asked_for_no_images_answers_with_each_sizes_views_and_counts_them() {
+        let mut node = node();
+        let small = UVec2::splat(8);
+        let add = vec![spec("v0", small), spec("v1", small), spec("v2", UVec2::new(16, 8))];
+        let (sent, messages) = first(&mut node, order(1, add, vec![], Planes::NONE));
+        assert_eq!(sent, 3, "three views answered for");
+        let tags: Vec<(Vec<RigViewId>, Planes, usize)> =
+            messages.into_values().map(|(tag, bytes)| (tag.views, tag.planes, bytes)).collect();
+        assert_eq!(tags, [(vec![RigViewId(0), RigViewId(1)], Planes::NONE, 0), (vec![RigViewId(2)], Planes::NONE, 0)]);
+    }
+
+    /// A batch streams the planes of the order that made it, and only
+    /// those (neither colour nor depth unless asked for, though a stream
+    /// has both by default); each view's images are sent, and counted.
+    #[test]
+    fn a_nodes_batch_streams_only_the_planes_ordered_and_the_views_sent_are_counted() {
+        let mut node = node();
+        let depth = Planes { color: false, depth: true, instances: false };
+        let small = UVec2::splat(8);
+        let (sent, messages) = first(&mut node, order(1, vec![spec("v0", small), spec("v1", small)], vec![], depth));
+        assert_eq!(sent, 2);
+        let (tag, bytes) = &messages[&(8, 8)];
+        assert_eq!((&tag.views, tag.planes, *bytes), (&vec![RigViewId(0), RigViewId(1)], depth, 2 * 8 * 8 * 4));
+
+        let color = Planes { color: true, depth: false, instances: false };
+        let (sent, messages) = obey(&mut node, &order(2, vec![spec("v2", UVec2::new(16, 8))], vec![], color), &[]);
+        assert_eq!(sent, 3, "the views of both batches");
+        let (tag, bytes) = &messages[&(16, 8)];
+        assert_eq!((&tag.views, tag.planes, *bytes), (&vec![RigViewId(2)], color, 16 * 8 * 4));
+        assert_eq!(messages[&(8, 8)].0.planes, depth, "the first batch streams what it streamed");
+    }
+
+    /// A view removed, or added again elsewhere, no longer renders where it
+    /// was, and a batch left without cameras is gone from the renderer too.
+    #[test]
+    fn a_removed_view_stops_rendering_and_takes_its_empty_batch_with_it() {
+        let mut node = node();
+        let (small, wide) = (UVec2::splat(8), UVec2::new(16, 8));
+        let add = vec![spec("v0", small), spec("v1", small), spec("v2", wide)];
+        first(&mut node, order(1, add, vec![], Planes::NONE));
+        let wide_batch = node.batches[&(16, 8)];
+
+        let (sent, messages) = obey(&mut node, &order(2, vec![], vec![RigViewId(0), RigViewId(2)], Planes::NONE), &[]);
+        assert_eq!(sent, 1);
+        assert_eq!(messages.into_values().map(|(tag, _)| tag.views).collect::<Vec<_>>(), [vec![RigViewId(1)]]);
+        assert_eq!(node.renderer.views().count(), 1, "one camera left in the renderer");
+        assert!(node.renderer.batch_cameras(wide_batch).is_err(), "the empty batch is unregistered");
+        assert_eq!(node.batches.keys().collect::<Vec<_>>(), [&(8, 8)]);
+
+        // v1 moves to the wide batch: its old camera and batch go.
+        let small_batch = node.batches[&(8, 8)];
+        let (sent, messages) = obey(&mut node, &order(3, vec![spec("v1", wide)], vec![], Planes::NONE), &[]);
+        assert_eq!(sent, 1);
+        assert_eq!(messages.keys().collect::<Vec<_>>(), [&(16, 8)]);
+        assert_eq!(node.renderer.views().count(), 1);
+        assert!(node.renderer.batch_cameras(small_batch).is_err());
     }
 }
