@@ -47,6 +47,7 @@ runs=(
   "draw_path_bench|example|gpu|16"
   "environment_bench|example|gpu|1 --smoke"
   "hdr_format_bench|example|gpu|64 1"
+  "light_bench|example|gpu|32 1 1,16"
   "indirect_count_cost|example|gpu|1"
   "msaa_bench|example|gpu|64 4 1"
   "prepass_bench|example|gpu|16 1"

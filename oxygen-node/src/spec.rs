@@ -148,6 +148,46 @@ mod tests {
         assert!(bad_camera.check().is_err());
     }
 
+    /// Each of eye, target and up is checked for being finite (a NaN target
+    /// would otherwise slip through: its line of sight is NaN, and every
+    /// comparison with NaN is false), and both sides may reach
+    /// [`MAX_SIDE`], not pass it.
+    #[test]
+    fn every_position_must_be_finite_and_each_side_may_reach_the_largest() {
+        for bad in [
+            ViewSpec { target: DVec3::new(0.0, f64::INFINITY, 0.0), ..spec() },
+            ViewSpec { up: Vec3::new(f32::NAN, 1.0, 0.0), ..spec() },
+        ] {
+            let message = bad.check().expect_err("a position that is not finite").to_string();
+            assert!(message.contains("finite"), "{message}");
+        }
+        for size in [UVec2::new(MAX_SIDE, 24), UVec2::new(24, MAX_SIDE), UVec2::splat(MAX_SIDE)] {
+            assert!(ViewSpec { size, ..spec() }.check().is_ok(), "{size}");
+        }
+        let message =
+            ViewSpec { size: UVec2::new(24, MAX_SIDE + 1), ..spec() }.check().expect_err("too tall").to_string();
+        assert!(message.contains("size"), "{message}");
+    }
+
+    /// Views are named by their number in logs and errors.
+    #[test]
+    fn a_rig_view_displays_its_number() {
+        assert_eq!(RigViewId(7).to_string(), "rig-view#7");
+    }
+
+    /// A rig that asks for no plane sends none; any one plane is a plane.
+    #[test]
+    fn planes_say_whether_any_is_sent() {
+        assert!(!Planes::NONE.any());
+        for planes in [
+            Planes { color: true, ..Planes::NONE },
+            Planes { depth: true, ..Planes::NONE },
+            Planes { instances: true, ..Planes::NONE },
+        ] {
+            assert!(planes.any(), "{planes:?}");
+        }
+    }
+
     #[test]
     fn planes_count_their_bytes() {
         let all = Planes { color: true, depth: true, instances: true };

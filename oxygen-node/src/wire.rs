@@ -237,6 +237,21 @@ pub fn append_planes(payload: &mut Vec<u8>, color: Option<&[u8]>, depth: Option<
 mod tests {
     use super::*;
 
+    /// The keys are the rig's wire contract (the crate docs' table): every
+    /// one lies under its own rig's name, so two rigs on one network never
+    /// hear each other.
+    #[test]
+    fn every_key_lies_under_its_rig() {
+        let keys = Keys::new("bench");
+        assert_eq!(keys.coordinator(), "oxygen/bench/coordinator");
+        assert_eq!(keys.node("a"), "oxygen/bench/node/a");
+        assert_eq!(keys.order("a"), "oxygen/bench/order/a");
+        assert_eq!(keys.output("*"), "oxygen/bench/output/*");
+        assert_eq!(keys.status("a"), "oxygen/bench/status/a");
+        assert_ne!(Keys::new("other").coordinator(), keys.coordinator());
+        assert_eq!(Keys::last_chunk("oxygen/bench/status/a"), "a");
+    }
+
     #[test]
     fn planes_travel_and_a_wrong_length_is_refused() {
         let view = |k: u8| ImagePlanes {
