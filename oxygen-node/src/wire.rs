@@ -279,4 +279,42 @@ mod tests {
         assert_eq!(header, tag);
         assert!(decode::<OutputTag>("k", &[0xff; 3]).is_err());
     }
+
+    /// One view's payload is its planes in order, as `append_to` writes
+    /// them, and splits back into the same planes.
+    #[test]
+    fn a_views_payload_is_its_planes_in_order() {
+        let planes = ImagePlanes { color: Some(vec![1, 2, 3, 4]), depth: Some(vec![0.5]), instances: Some(vec![9]) };
+        let mut appended = Vec::new();
+        planes.append_to(&mut appended);
+        let payload = planes.to_payload();
+        assert_eq!(payload, appended);
+        assert_eq!(payload.len(), 12);
+        let tag = OutputTag {
+            frame: 1,
+            views: vec![RigViewId(3)],
+            size: UVec2::ONE,
+            planes: Planes { color: true, depth: true, instances: true },
+        };
+        assert_eq!(ImagePlanes::split_payload("k", &tag, &payload).unwrap(), vec![(RigViewId(3), planes)]);
+    }
+
+    /// A tag may announce views of up to `MAX_SIDE` a side, each side on
+    /// its own; past it the tag is refused for its size even when the
+    /// payload's length agrees with it.
+    #[test]
+    fn a_tag_may_announce_the_largest_side_and_not_one_more() {
+        let colour = |size: UVec2| {
+            let tag = OutputTag { frame: 1, views: vec![RigViewId(0)], size, planes: Planes::default() };
+            let payload = vec![7u8; Planes::default().bytes(size)];
+            ImagePlanes::split_payload("k", &tag, &payload).map(|views| views.len()).map_err(|e| e.to_string())
+        };
+        let side = crate::spec::MAX_SIDE;
+        assert_eq!(colour(UVec2::new(side, 1)), Ok(1));
+        assert_eq!(colour(UVec2::new(1, side)), Ok(1));
+        for size in [UVec2::new(side + 1, 1), UVec2::new(1, side + 1)] {
+            let refused = colour(size).expect_err("past the largest side");
+            assert!(refused.contains("size"), "{size}: {refused}");
+        }
+    }
 }
