@@ -346,3 +346,50 @@ impl GpuContext {
         )
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use wgpu::{AdapterInfo, Backend, DeviceType};
+
+    #[test]
+    fn adapters_rank_by_device_type_then_backend() {
+        // Best first: each kind of device before the next, and within a kind
+        // a native backend (Vulkan, Metal, Dx12) before the rest.
+        let order = [
+            (DeviceType::DiscreteGpu, Backend::Vulkan),
+            (DeviceType::DiscreteGpu, Backend::Gl),
+            (DeviceType::IntegratedGpu, Backend::Metal),
+            (DeviceType::IntegratedGpu, Backend::Gl),
+            (DeviceType::VirtualGpu, Backend::Dx12),
+            (DeviceType::VirtualGpu, Backend::BrowserWebGpu),
+            (DeviceType::Cpu, Backend::Vulkan),
+            (DeviceType::Cpu, Backend::Gl),
+            (DeviceType::Other, Backend::Vulkan),
+            (DeviceType::Other, Backend::Noop),
+        ];
+        let ranks = order.map(|(device, backend)| rank(&AdapterInfo::new(device, backend)));
+        for (pair, ranks) in order.windows(2).zip(ranks.windows(2)) {
+            assert!(
+                ranks[0] < ranks[1],
+                "{:?} ranked {} should beat {:?} ranked {}",
+                pair[0],
+                ranks[0],
+                pair[1],
+                ranks[1]
+            );
+        }
+    }
+
+    #[test]
+    fn native_backends_of_one_device_type_rank_alike() {
+        // `new_headless_many` groups adapters of equal rank as one kind.
+        for device in [DeviceType::DiscreteGpu, DeviceType::IntegratedGpu, DeviceType::Cpu] {
+            let native = [Backend::Vulkan, Backend::Metal, Backend::Dx12].map(|b| rank(&AdapterInfo::new(device, b)));
+            assert!(native.iter().all(|r| *r == native[0]), "{device:?}: {native:?}");
+            let other =
+                [Backend::Gl, Backend::BrowserWebGpu, Backend::Noop].map(|b| rank(&AdapterInfo::new(device, b)));
+            assert!(other.iter().all(|r| *r == other[0] && *r > native[0]), "{device:?}: {other:?} after {native:?}");
+        }
+    }
+}

@@ -181,6 +181,22 @@ mod tests {
     }
 
     #[test]
+    fn adding_a_label_already_there_keeps_it() {
+        let set = LabelSet::of(&[Label::Normal, Label::Normal]);
+        assert_eq!(set.iter().collect::<Vec<_>>(), [Label::Normal]);
+        assert_eq!(set.with(Label::Normal), set);
+        let both = LabelSet::of(&[Label::Instance, Label::Normal]);
+        assert_eq!(both.union(set), both);
+        assert_eq!(LabelSet::ALL.union(both), LabelSet::ALL);
+    }
+
+    #[test]
+    fn every_label_has_a_name_of_its_own() {
+        let names = Label::ALL.map(Label::name);
+        assert_eq!(names, ["instances", "normals", "semantic classes", "linear depth"]);
+    }
+
+    #[test]
     fn every_format_matches_its_byte_count() {
         for label in Label::ALL {
             assert_eq!(label.format().block_copy_size(None), Some(label.bytes_per_pixel() as u32), "{label:?}");

@@ -396,6 +396,16 @@ mod tests {
         assert_eq!(unpack_rg11b10_ufloat(1 << 22)[2], f32::powi(2.0, -19));
     }
 
+    #[test]
+    fn packed_small_float_nans_stay_nan() {
+        // Exponent 31 with a mantissa is NaN, without one infinity, in each
+        // channel (green and red: 6 mantissa bits, blue: 5).
+        let nan = 0x7c1 | (0x7c1 << 11) | (0x3e1 << 22);
+        assert!(unpack_rg11b10_ufloat(nan)[..3].iter().all(|c| c.is_nan()), "{:?}", unpack_rg11b10_ufloat(nan));
+        let infinity = 0x7c0 | (0x7c0 << 11) | (0x3e0 << 22);
+        assert_eq!(unpack_rg11b10_ufloat(infinity), [f32::INFINITY, f32::INFINITY, f32::INFINITY, 1.0]);
+    }
+
     use super::*;
 
     #[test]
@@ -413,6 +423,22 @@ mod tests {
         assert_eq!(f16_to_f32(0xfc00), f32::NEG_INFINITY);
         assert!(f16_to_f32(0x7e00).is_nan());
         assert!(f16_to_f32(0x7c01).is_nan(), "a signalling NaN stays NaN");
+    }
+
+    #[test]
+    fn a_texel_is_read_at_its_column_and_row() {
+        // 3 × 2, each texel holding its index: the row length is the width.
+        let pixels = (0..6).map(|i| [i as f32, 0.5, -1.0, 2.0]).collect();
+        let image = HdrImage { width: 3, height: 2, pixels };
+        for (x, y) in [(0, 0), (2, 0), (0, 1), (1, 1), (2, 1)] {
+            assert_eq!(image.get(x, y), [(y * 3 + x) as f32, 0.5, -1.0, 2.0], "({x}, {y})");
+        }
+    }
+
+    #[test]
+    #[should_panic(expected = "(3, 0) is outside 3×2")]
+    fn a_texel_past_the_row_is_refused() {
+        HdrImage { width: 3, height: 2, pixels: vec![[0.0; 4]; 6] }.get(3, 0);
     }
 
     #[test]

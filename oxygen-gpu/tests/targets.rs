@@ -1,9 +1,9 @@
-//! View targets and tile atlases: the sizes the renderer counts against its
-//! target budget before it allocates (on the CPU), and the same figures,
-//! the tiles' places and the targets' fit read from targets allocated on
-//! the test adapter (lavapipe here).
+//! View targets, tile atlases and label targets: the sizes the renderer
+//! counts against its target budget before it allocates (on the CPU), and
+//! the same figures, the tiles' places, the label planes and the targets'
+//! fit read from targets allocated on the test adapter (lavapipe here).
 
-use oxygen_gpu::{GpuContext, GpuOptions, HdrFormat, LabelSet, Msaa, TileAtlas, ViewTargets};
+use oxygen_gpu::{GpuContext, GpuOptions, HdrFormat, Label, LabelSet, LabelTargets, Msaa, TileAtlas, ViewTargets};
 
 /// A device on the test adapter; fails (never skips) without one, as the
 /// root crate's GPU tests do.
@@ -163,4 +163,26 @@ fn targets_fit_only_the_request_they_were_made_for() {
         wgpu::TextureUsages::RENDER_ATTACHMENT,
     );
     assert!(!ViewTargets::atlas_layer(&layers, 0).fits(w, w, false, 1), "an atlas layer owns no texture");
+}
+
+/// Label targets hold one plane for each label of their set, of its format
+/// and the view's size, and count the bytes of those planes only.
+#[test]
+fn label_targets_hold_a_plane_for_each_label_of_their_set() {
+    let gpu = device();
+    let set = LabelSet::of(&[Label::Normal, Label::LinearDepth]);
+    let targets = LabelTargets::new(&gpu.device, 4, 2, set, "view 0");
+    assert_eq!(targets.set(), set);
+    assert_eq!(targets.bytes_per_pixel(), 12);
+    for label in Label::ALL {
+        let plane = targets.plane(label);
+        assert_eq!(plane.is_some(), set.contains(label), "{label:?}");
+        if let Some(plane) = plane {
+            assert_eq!(plane.texture.format(), label.format(), "{label:?}");
+            assert_eq!((plane.texture.width(), plane.texture.height()), (4, 2), "{label:?}");
+        }
+    }
+    let none = LabelTargets::new(&gpu.device, 4, 2, LabelSet::NONE, "view 1");
+    assert!(none.set().is_empty());
+    assert_eq!(none.bytes_per_pixel(), 0);
 }
