@@ -24,6 +24,9 @@
 #              layouts, the bind-group layout builder, the gpu_struct layout
 #              checks, adapter ranking; not what needs a device (creating
 #              contexts and targets, reading back), which the GPU tests cover
+#   demo       oxygen-demo's record writer and span timer (the evidence the
+#              benches and tests write; the demo scenes themselves are
+#              fixtures, checked by the tests that render them)
 #   node       oxygen-node (render nodes: placement, membership, take-over,
 #              the wire headers' checks, the node program), tested by its
 #              unit tests and tests/render_nodes.rs (three node processes on
@@ -88,6 +91,10 @@ case "$scope" in
     args=(-p oxygen-gpu --test-package oxygen-gpu
       -E 'GpuContext::|pick_adapter|ViewTargets::(create|depth_only|probe_face|render_depth_view|atlas_layer)|TileAtlas::view_targets|create_layout|single_layer_view|shared_instance|in texture_2d$')
     ;;
+  demo)
+    args=(-p oxygen-demo --test-package oxygen-demo
+      --file oxygen-demo/src/record.rs --file oxygen-demo/src/span_times.rs)
+    ;;
   node)
     args=(-p oxygen-node --test-package oxygen-node)
     # The rig test's waits (120 s each, for lavapipe on a busy machine)
@@ -97,7 +104,7 @@ case "$scope" in
     default_timeout=90
     ;;
   *)
-    say "unknown scope '$scope' (core, bindless, sceneprep, passes, importer, gpu, node)"
+    say "unknown scope '$scope' (core, bindless, sceneprep, passes, importer, gpu, demo, node)"
     exit 2
     ;;
 esac
