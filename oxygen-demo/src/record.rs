@@ -574,6 +574,7 @@ mod tests {
 
     #[test]
     fn a_record_is_one_line_with_its_fields_in_order() {
+        let _env = EnvGuard::set(&[]);
         let line = Record::new("unit_bench")
             .value("frame_ms_median", 0.75)
             .value("gpu_ms", None::<f64>)
@@ -613,6 +614,9 @@ mod tests {
         assert_eq!(program_name("/t/release/deps/prep-0123456789abcdef"), "prep");
         assert_eq!(program_name("target/debug/examples/cubes_bench"), "cubes_bench");
         assert_eq!(program_name("raster-floor"), "raster-floor");
+        // All hex but not a hash's 16 digits, and 16 characters but not hex.
+        assert_eq!(program_name("shader-cafe"), "shader-cafe");
+        assert_eq!(program_name("a-0123456789abcdeg"), "a-0123456789abcdeg");
         assert_eq!(shell_quote("a b"), "'a b'");
         assert_eq!(shell_quote("10000,100000"), "10000,100000");
     }
@@ -623,5 +627,199 @@ mod tests {
         assert_eq!(resolve_dir(Path::new("docs/records"), Some(root)), Path::new("/ws/docs/records"));
         assert_eq!(resolve_dir(Path::new("/tmp/r"), Some(root)), Path::new("/tmp/r"));
         assert_eq!(resolve_dir(Path::new("r"), None), Path::new("r"));
+    }
+
+    /// Serialises the tests that read or set environment variables (a
+    /// record reads its directory, commit and `command.env` from them, and
+    /// they are the whole process's).
+    static ENV: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+    /// Holds [`ENV`] with some variables set (or removed), and puts them
+    /// back when dropped, a failed assertion included.
+    struct EnvGuard {
+        saved: Vec<(&'static str, Option<std::ffi::OsString>)>,
+        _lock: std::sync::MutexGuard<'static, ()>,
+    }
+
+    impl EnvGuard {
+        /// Takes [`ENV`], then sets each variable given `Some` and removes
+        /// each given `None`.
+        fn set(vars: &[(&'static str, Option<&str>)]) -> EnvGuard {
+            let lock = ENV.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+            let saved = vars.iter().map(|&(key, _)| (key, std::env::var_os(key))).collect();
+            for &(key, value) in vars {
+                set_env(key, value);
+            }
+            EnvGuard { saved, _lock: lock }
+        }
+    }
+
+    impl Drop for EnvGuard {
+        fn drop(&mut self) {
+            for (key, value) in self.saved.drain(..) {
+                set_env(key, value.as_deref().and_then(std::ffi::OsStr::to_str));
+            }
+        }
+    }
+
+    /// Sets `key` to `value`, or removes it for `None`.
+    fn set_env(key: &str, value: Option<&str>) {
+        // SAFETY: every test of this module that touches the environment
+        // holds ENV, and the other tests of this crate do not read it.
+        unsafe {
+            match value {
+                Some(value) => std::env::set_var(key, value),
+                None => std::env::remove_var(key),
+            }
+        }
+    }
+
+    /// A fresh directory under the system's temporary one, for this
+    /// process and test.
+    fn temp_dir(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("oxygen-record-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("a temporary directory");
+        dir
+    }
+
+    #[test]
+    fn errors_say_what_went_wrong_and_why() {
+        let json = serde_json::from_str::<Value>("{").expect_err("unclosed");
+        let json_text = json.to_string();
+        let io = std::io::Error::other("disk full");
+        let cases = [
+            (
+                RecordError::InvalidBench("a/b".into()),
+                "bench name \"a/b\" is not a plain file name (ASCII letters, digits, _ and -)",
+                None,
+            ),
+            (RecordError::EmptyKey, "a record value has an empty key", None),
+            (RecordError::DuplicateKey("rows[2].ms".into()), "record key \"rows[2].ms\" is given twice", None),
+            (
+                RecordError::NotFinite { key: "ms".into(), value: f64::INFINITY },
+                "record value \"ms\" is inf, which JSON cannot hold (record a missing figure as None)",
+                None,
+            ),
+            (RecordError::NoValues, "the record has no values", None),
+            (RecordError::Json(json), &format!("the record does not serialise: {json_text}"), Some(json_text.clone())),
+            (
+                RecordError::Io { path: PathBuf::from("/r/b.jsonl"), source: io },
+                "cannot append the record to /r/b.jsonl: disk full",
+                Some("disk full".to_owned()),
+            ),
+        ];
+        for (error, text, source) in cases {
+            assert_eq!(error.to_string(), text);
+            assert_eq!(std::error::Error::source(&error).map(ToString::to_string), source, "{error}");
+        }
+    }
+
+    #[test]
+    fn every_kind_of_value_becomes_json() {
+        let json = |value: Result<Value, RecordError>| value.expect("a finite value");
+        assert_eq!(json(1.5f32.into_json()), 1.5);
+        assert!(matches!(f32::NAN.into_json(), Err(RecordError::NotFinite { .. })));
+        let text = String::from("cpu");
+        assert_eq!(json((&text).into_json()), "cpu");
+        assert_eq!(json(Some(2u32).into_json()), 2);
+        assert_eq!(json(None::<u32>.into_json()), Value::Null);
+        let list = vec![1.0, 2.5];
+        assert_eq!(json(list.as_slice().into_json()), serde_json::json!([1.0, 2.5]));
+        assert_eq!(json((&list).into_json()), serde_json::json!([1.0, 2.5]));
+        assert_eq!(json([3u8, 4].into_json()), serde_json::json!([3, 4]));
+        let mut row = Row::new().value("a", 1);
+        row.insert("b", true);
+        assert_eq!(json(row.into_json()), serde_json::json!({"a": 1, "b": true}));
+    }
+
+    #[test]
+    fn a_written_record_holds_every_field() {
+        let dir = temp_dir("write");
+        let mut info = wgpu::AdapterInfo::new(wgpu::DeviceType::DiscreteGpu, wgpu::Backend::Vulkan);
+        info.name = "Unit GPU".into();
+        info.driver = "unit driver".into();
+        info.driver_info = "1.2.3".into();
+        let mut record = Record::new("unit_write").value("frames", 3);
+        record.set_adapter(&info);
+        record.insert("label", "x");
+        record.push_row_to("passes", Row::new().value("pass", "shadow"));
+        record.push_row(Row::new().value("case", "a"));
+        let (first, second) = {
+            let dir = dir.to_str().expect("a UTF-8 temporary directory");
+            let vars = [(RECORD_DIR_VAR, Some(dir)), (COMMIT_VAR, Some("0123abcd")), ("OXYGEN_UNIT_KNOB", Some("on"))];
+            let _env = EnvGuard::set(&vars);
+            (record.write().expect("written"), Record::new("unit_write").value("frames", 4).write().expect("written"))
+        };
+        let path = dir.join("unit_write.jsonl");
+        assert_eq!(first.as_deref(), Some(path.as_path()));
+        assert_eq!(second.as_deref(), Some(path.as_path()));
+        let text = std::fs::read_to_string(&path).expect("the record file");
+        std::fs::remove_dir_all(&dir).expect("the temporary directory removed");
+        let lines: Vec<Value> = text.lines().map(|line| serde_json::from_str(line).expect("JSON")).collect();
+        assert_eq!(lines.len(), 2, "appended: {text}");
+        assert!(text.ends_with('\n'));
+        let record = &lines[0];
+        assert_eq!(record["bench"], "unit_write");
+        assert_eq!(record["commit"], "0123abcd");
+        assert_eq!(record["dirty"], Value::Null);
+        let date = record["date"].as_str().expect("a date");
+        assert!(date.len() == 20 && date.as_bytes()[10] == b'T' && date.ends_with('Z'), "{date}");
+        let adapter = serde_json::json!({
+            "name": "Unit GPU", "backend": "Vulkan", "device_type": "DiscreteGpu", "driver": "unit driver", "driver_info": "1.2.3",
+        });
+        assert_eq!(record["adapter"], adapter);
+        let parallelism = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let host = serde_json::json!({ "available_parallelism": parallelism, "os": std::env::consts::OS, "arch": std::env::consts::ARCH });
+        assert_eq!(record["host"], host);
+        let program = program_name(&std::env::args().next().expect("a program"));
+        let argv = record["command"]["argv"].as_str().expect("argv");
+        assert_eq!(argv.split(' ').next(), Some(program.as_str()), "{argv}");
+        let env = record["command"]["env"].as_object().expect("env");
+        assert_eq!(env.get("OXYGEN_UNIT_KNOB"), Some(&Value::from("on")), "{env:?}");
+        assert!(!env.contains_key(RECORD_DIR_VAR) && !env.contains_key(COMMIT_VAR), "{env:?}");
+        assert!(env.keys().all(|k| RECORDED_ENV_PREFIXES.iter().any(|p| k.starts_with(p))), "{env:?}");
+        let values =
+            serde_json::json!({ "frames": 3, "label": "x", "passes": [{"pass": "shadow"}], "rows": [{"case": "a"}] });
+        assert_eq!(record["values"], values);
+        assert_eq!(lines[1]["values"], serde_json::json!({ "frames": 4 }));
+    }
+
+    #[test]
+    fn without_a_directory_nothing_is_written() {
+        let _env = EnvGuard::set(&[(RECORD_DIR_VAR, None)]);
+        assert!(matches!(Record::new("unit_unkept").value("x", 1).write(), Ok(None)));
+        assert!(matches!(Record::new("unit_unkept").write(), Err(RecordError::NoValues)));
+    }
+
+    #[test]
+    fn git_state_names_the_commit_and_whether_it_is_dirty() {
+        let repo = temp_dir("git");
+        let git = |args: &[&str]| {
+            let identity = ["-c", "user.name=unit", "-c", "user.email=unit@example.com", "-c", "commit.gpgsign=false"];
+            let out = Command::new("git").args(identity).args(args).current_dir(&repo).output().expect("git runs");
+            assert!(out.status.success(), "git {args:?}: {}", String::from_utf8_lossy(&out.stderr));
+            String::from_utf8(out.stdout).expect("UTF-8").trim().to_owned()
+        };
+        git(&["init", "-q"]);
+        std::fs::write(repo.join("f"), "1").expect("a file");
+        git(&["add", "f"]);
+        git(&["commit", "-q", "-m", "unit"]);
+        let head = git(&["rev-parse", "HEAD"]);
+        let state = |commit: Option<&str>| {
+            let _env = EnvGuard::set(&[(COMMIT_VAR, commit)]);
+            git_state(Some(&repo))
+        };
+        assert_eq!(state(None), (head.clone(), Some(false)));
+        std::fs::write(repo.join("f"), "2").expect("a change");
+        assert_eq!(state(None), (head, Some(true)));
+        assert_eq!(state(Some("0123abcd")), ("0123abcd".to_owned(), None));
+        std::fs::remove_dir_all(&repo).expect("the temporary repository removed");
+    }
+
+    #[test]
+    fn the_workspace_root_is_this_crates_parent() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).parent().expect("a workspace");
+        assert_eq!(workspace_root().as_deref(), Some(root));
     }
 }

@@ -77,3 +77,69 @@ impl SpanTimes {
         list
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::thread::sleep;
+
+    /// What [`SpanTimes::install`] sets globally, set here for one thread
+    /// only: the test process has a single global subscriber, which
+    /// `install_feeds_the_totals_it_returns` takes.
+    fn scoped(times: &SpanTimes, f: impl FnOnce()) {
+        let layer = TimesLayer { times: times.clone() }.with_filter(tracing_subscriber::filter::LevelFilter::INFO);
+        tracing::subscriber::with_default(tracing_subscriber::registry().with(layer), f);
+    }
+
+    /// Enters `span` for at least `pause`, so that its time is not zero
+    /// (a subtracted time then overflows, and a sum differs from a product).
+    fn enter(span: &tracing::Span, pause: Duration) {
+        let _entered = span.enter();
+        sleep(pause);
+    }
+
+    #[test]
+    fn every_entry_of_a_span_is_timed_and_counted() {
+        let times = SpanTimes::default();
+        scoped(&times, || {
+            let outer = tracing::info_span!("outer");
+            let inner = tracing::info_span!("inner");
+            enter(&inner, Duration::from_millis(2));
+            {
+                let _outer = outer.enter();
+                enter(&inner, Duration::from_millis(2));
+                sleep(Duration::from_millis(8));
+            }
+            // Below the layer's level: not counted.
+            let _debug = tracing::debug_span!("debug").entered();
+        });
+        // By name: which sum is larger depends on the sleeps' overshoot.
+        let mut list = times.take();
+        list.sort_by_key(|&(name, ..)| name);
+        let counts: Vec<_> = list.iter().map(|&(name, _, count)| (name, count)).collect();
+        assert_eq!(counts, [("inner", 2), ("outer", 1)], "{list:?}");
+        assert!(list[0].1 >= Duration::from_millis(4), "{list:?}");
+        assert!(list[1].1 >= Duration::from_millis(10), "{list:?}");
+        assert!(times.take().is_empty(), "take starts afresh");
+    }
+
+    #[test]
+    fn the_largest_time_comes_first_then_names_in_order() {
+        let times = SpanTimes::default();
+        let (long, short) = (Duration::from_millis(5), Duration::from_millis(1));
+        times.totals.lock().unwrap().extend([("b", (short, 1)), ("c", (long, 2)), ("a", (short, 3))]);
+        assert_eq!(times.take(), [("c", long, 2), ("a", short, 3), ("b", short, 1)]);
+    }
+
+    #[test]
+    fn install_feeds_the_totals_it_returns() {
+        let times = SpanTimes::install().expect("the only global subscriber of this test process");
+        enter(&tracing::info_span!("installed"), Duration::from_millis(1));
+        let list = times.take();
+        assert!(
+            list.iter().any(|&(name, time, count)| name == "installed" && count == 1 && !time.is_zero()),
+            "{list:?}"
+        );
+        assert!(SpanTimes::install().is_none(), "a second global subscriber");
+    }
+}
