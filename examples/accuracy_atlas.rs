@@ -776,24 +776,38 @@ fn chart(rows: &[Row], path: &Path) -> Result<(), Box<dyn std::error::Error>> {
     {
         let root = BitMapBackend::with_buffer(&mut pixels, (width, height)).into_drawing_area();
         root.fill(&WHITE)?;
-        let max_ms = rows.iter().map(|r| r.ms).fold(0.0, f64::max) * 1.1;
-        let max_rmse = rows.iter().map(|r| r.rmse).fold(0.0, f64::max) * 1.1;
+        // Both axes logarithmic: the times run from under a millisecond to
+        // a light loop's hundreds, the errors over two decades.
+        let positive = |v: f64| if v.is_finite() && v > 0.0 { Some(v) } else { None };
+        let span = |values: &mut dyn Iterator<Item = f64>| {
+            let (lo, hi) = values.filter_map(positive).fold((f64::MAX, 0.0f64), |(lo, hi), v| (lo.min(v), hi.max(v)));
+            if hi > 0.0 { (lo / 1.3, hi * 1.3) } else { (1e-3, 1.0) }
+        };
+        let (ms_lo, ms_hi) = span(&mut rows.iter().map(|r| r.ms));
+        let (rmse_lo, rmse_hi) = span(&mut rows.iter().map(|r| r.rmse));
         let mut chart = ChartBuilder::on(&root)
             .caption("Accuracy atlas: frame time against RMSE to the path-traced reference", ("sans-serif", 24))
             .margin(20)
             .x_label_area_size(50)
             .y_label_area_size(80)
-            .build_cartesian_2d(0.0..max_ms.max(1e-3), 0.0..max_rmse.max(1e-6))?;
-        chart.configure_mesh().x_desc("frame ms (GPU)").y_desc("RMSE, linear radiance").draw()?;
-        let mut knobs: Vec<&str> = rows.iter().map(|r| r.knob).collect();
-        knobs.dedup();
-        for (k, knob) in knobs.iter().enumerate() {
+            .build_cartesian_2d((ms_lo..ms_hi).log_scale(), (rmse_lo..rmse_hi).log_scale())?;
+        chart.configure_mesh().x_desc("frame ms (GPU), log scale").y_desc("RMSE, linear radiance, log scale").draw()?;
+        // One curve per knob and scene (a knob measured on two scenes draws
+        // two curves, each named with its scene).
+        let mut curves: Vec<(&str, &str)> = rows.iter().map(|r| (r.knob, r.stage)).collect();
+        curves.dedup();
+        for (k, (knob, stage)) in curves.iter().enumerate() {
             let color = Palette99::pick(k).to_rgba();
-            let points: Vec<(f64, f64, String)> =
-                rows.iter().filter(|r| r.knob == *knob).map(|r| (r.ms, r.rmse, r.value.clone())).collect();
+            let points: Vec<(f64, f64, String)> = rows
+                .iter()
+                .filter(|r| r.knob == *knob && r.stage == *stage && positive(r.ms).is_some() && positive(r.rmse).is_some())
+                .map(|r| (r.ms, r.rmse, r.value.clone()))
+                .collect();
+            let scenes = curves.iter().filter(|(other, _)| other == knob).count();
+            let name = if scenes > 1 { format!("{knob} ({stage})") } else { knob.to_string() };
             chart
                 .draw_series(LineSeries::new(points.iter().map(|p| (p.0, p.1)), color.stroke_width(2)))?
-                .label(*knob)
+                .label(name)
                 .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], color.stroke_width(2)));
             chart.draw_series(points.iter().map(|p| {
                 EmptyElement::at((p.0, p.1))
