@@ -800,7 +800,9 @@ fn chart(rows: &[Row], path: &Path) -> Result<(), Box<dyn std::error::Error>> {
             let color = Palette99::pick(k).to_rgba();
             let points: Vec<(f64, f64, String)> = rows
                 .iter()
-                .filter(|r| r.knob == *knob && r.stage == *stage && positive(r.ms).is_some() && positive(r.rmse).is_some())
+                .filter(|r| {
+                    r.knob == *knob && r.stage == *stage && positive(r.ms).is_some() && positive(r.rmse).is_some()
+                })
                 .map(|r| (r.ms, r.rmse, r.value.clone()))
                 .collect();
             let scenes = curves.iter().filter(|(other, _)| other == knob).count();
