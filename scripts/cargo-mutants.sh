@@ -24,6 +24,11 @@
 #              layouts, the bind-group layout builder, the gpu_struct layout
 #              checks, adapter ranking; not what needs a device (creating
 #              contexts and targets, reading back), which the GPU tests cover
+#   root       the root crate's modules that have unit tests of their own
+#              (batches, graphs, renderer groups, schedules, windows, the
+#              renderer's recording), tested by the root crate's unit tests
+#              (--lib): the rest of the root crate outside the importer is
+#              reached only by rendering tests (see docs/testing.md)
 #   demo       oxygen-demo's record writer and span timer (the evidence the
 #              benches and tests write; the demo scenes themselves are
 #              fixtures, checked by the tests that render them)
@@ -91,6 +96,11 @@ case "$scope" in
     args=(-p oxygen-gpu --test-package oxygen-gpu
       -E 'GpuContext::|pick_adapter|ViewTargets::(create|depth_only|probe_face|render_depth_view|atlas_layer)|TileAtlas::view_targets|create_layout|single_layer_view|shared_instance|in texture_2d$')
     ;;
+  root)
+    args=(-p oxygen --file src/batch.rs --file src/graph.rs --file src/group.rs
+      --file src/schedule.rs --file src/windows.rs --file src/renderer/record.rs
+      --cargo-arg=--lib)
+    ;;
   demo)
     args=(-p oxygen-demo --test-package oxygen-demo
       --file oxygen-demo/src/record.rs --file oxygen-demo/src/span_times.rs)
@@ -104,7 +114,7 @@ case "$scope" in
     default_timeout=90
     ;;
   *)
-    say "unknown scope '$scope' (core, bindless, sceneprep, passes, importer, gpu, demo, node)"
+    say "unknown scope '$scope' (core, bindless, sceneprep, passes, importer, gpu, demo, root, node)"
     exit 2
     ;;
 esac
