@@ -197,4 +197,37 @@ mod tests {
         assert_eq!(batch.slots.len(), 1, "trailing free tiles go");
         assert_eq!(batch.cameras().collect::<Vec<_>>(), [a]);
     }
+
+    /// A batch is named by its number in reports and errors.
+    #[test]
+    fn a_batch_id_names_its_number() {
+        let id = BatchId { index: 3 };
+        assert_eq!(id.index(), 3);
+        assert_eq!(id.to_string(), "batch#3");
+        assert_eq!(format!("{id:?}"), "batch#3");
+    }
+
+    /// Each builder of a batch's description sets its own field.
+    #[test]
+    fn a_batch_description_keeps_what_each_builder_sets() {
+        let graph = BatchGraph { exposure: 2.0, ..standard_batch_graph };
+        let desc = BatchDesc::new("walls", UVec2::new(4, 4))
+            .with_max_page_side(512)
+            .with_label_planes(LabelSet::ALL)
+            .with_graph(graph.clone());
+        assert_eq!(desc.max_page_side, Some(512));
+        assert_eq!(desc.labels, LabelSet::ALL);
+        assert_eq!(desc.graph, graph);
+    }
+
+    /// A page is as large as the device allows, or as the batch asked if
+    /// that is smaller.
+    #[test]
+    fn a_page_is_no_larger_than_asked_or_than_the_device_allows() {
+        let mut batch = entry();
+        assert_eq!(batch.page_side(4096), 4096);
+        batch.max_page_side = Some(512);
+        assert_eq!(batch.page_side(4096), 512);
+        assert_eq!(batch.page_side(256), 256);
+    }
 }

@@ -398,6 +398,28 @@ mod tests {
         assert_eq!(StandardGraph::default(), default);
     }
 
+    /// The standard graph runs occlusion culling's two phases; a graph
+    /// written as a closure does not (its views get frustum culling), and
+    /// the renderer's type-erased store says the same.
+    #[test]
+    fn only_the_standard_graph_runs_the_occlusion_phases() {
+        let closure = async |_: &RenderContext<'_>, _: &mut CommandRecorder| -> Result<(), PassError> { Ok(()) };
+        assert!(!closure.runs_occlusion_phases());
+        assert!(!ErasedGraph::two_phase(&closure));
+        assert!(standard_render_graph.runs_occlusion_phases());
+        assert!(ErasedGraph::two_phase(&standard_render_graph));
+    }
+
+    /// Choosing the pre-pass keeps the rest of the graph.
+    #[test]
+    fn choosing_the_pre_pass_keeps_the_rest_of_the_graph() {
+        let lit = ForwardLitConfig { shadow_pcf_radius: 3, ..ForwardLitConfig::DEFAULT };
+        let graph = StandardGraph { exposure: 0.5, ..StandardGraph::new(lit.clone()) }.with_pre_pass(PrePass::Off);
+        assert_eq!(graph.pre_pass, PrePass::Off);
+        assert_eq!(graph.lit, lit);
+        assert_eq!(graph.exposure, 0.5);
+    }
+
     #[test]
     fn the_automatic_pre_pass_follows_the_threshold_and_refuses_nan() {
         let auto = PrePass::Auto { min_overdraw: 2.0, fragments_per_index: 0.0 };
