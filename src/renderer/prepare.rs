@@ -268,8 +268,7 @@ impl Renderer {
         drop(_targets);
         self.visibility.prepare(&self.gpu, &self.heap, &self.prep, &views, frames);
         self.reference.prepare(&self.gpu, &mut self.heap, &self.prep, &views)?;
-        let ids: Vec<_> = views.iter().map(|v| v.id).collect();
-        self.lighting.retain_views(&ids);
+        self.lighting.retain_views(|id| views.iter().any(|v| v.id == id));
         let uploaded_bytes =
             self.heap.bytes_written() - heap_bytes_before + constants_bytes + self.visibility.uploaded_last_frame();
         let skipped_nodes = self.prep.frame_collection().skipped.iter().map(|s| FrameWarning::NodeSkipped {

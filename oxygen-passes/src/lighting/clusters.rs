@@ -201,9 +201,6 @@ pub(crate) struct LightClusters {
     views: Mutex<HashMap<ViewId, ViewClusters>>,
 }
 
-/// Invocations of a workgroup of the cluster pass (`@workgroup_size`).
-const WORKGROUP: u32 = 64;
-
 impl LightClusters {
     fn pipeline(&self, device: &wgpu::Device, heap: &BindlessHeap) -> &(wgpu::BindGroupLayout, wgpu::ComputePipeline) {
         self.pipeline.get_or_init(|| {
@@ -261,7 +258,7 @@ impl LightClusters {
         let params = ClusterParams {
             view: ctx.view.view.to_cols_array_2d(),
             inverse_projection: finite_inverse(ctx.view.projection).to_cols_array_2d(),
-            grid: [shape.tiles.x, shape.tiles.y, shape.slices, shape.words],
+            grid: shape.uniform_fields().0,
             depth: [
                 shape.first_depth,
                 shape.inverse_log_ratio,
@@ -318,25 +315,19 @@ impl LightClusters {
         pass.set_bind_group(0, heap.bind_group(), &[]);
         for job in jobs {
             pass.set_bind_group(1, &job.group, &[]);
-            let groups = job.invocations.div_ceil(WORKGROUP);
-            // Past 65 535 workgroups in x the rest go to y (the shader
-            // linearises the two).
-            let (x, y) =
-                if groups > MAX_WORKGROUPS { (MAX_WORKGROUPS, groups.div_ceil(MAX_WORKGROUPS)) } else { (groups, 1) };
-            pass.dispatch_workgroups(x, y, 1);
+            // Workgroups of 64, past 65 535 of them in y too (the shader
+            // linearises the two, as the cull shader does).
+            crate::visibility::dispatch_threads(&mut pass, job.invocations);
         }
     }
 
-    /// Forgets the buffers of views not in `views`.
-    pub(crate) fn retain(&self, views: &[ViewId]) {
+    /// Forgets the buffers of the views `keep` says no to.
+    pub(crate) fn retain(&self, keep: impl Fn(ViewId) -> bool) {
         if let Ok(mut state) = self.views.lock() {
-            state.retain(|id, _| views.contains(id));
+            state.retain(|id, _| keep(*id));
         }
     }
 }
-
-/// Workgroups per dimension every adapter allows.
-const MAX_WORKGROUPS: u32 = 65_535;
 
 /// `m`'s inverse, or the identity when `m` has none (a degenerate
 /// projection never reaches a shader as NaN).

@@ -202,10 +202,10 @@ impl LightingResources {
         &self.clusters
     }
 
-    /// Frees the light clusters of views not in `views` (the renderer calls
-    /// it once a frame with the views it keeps).
-    pub fn retain_views(&self, views: &[oxygen_core::ViewId]) {
-        self.clusters.retain(views);
+    /// Frees the light clusters of the views `keep` says no to (the
+    /// renderer calls it once a frame with the views it renders).
+    pub fn retain_views(&self, keep: impl Fn(oxygen_core::ViewId) -> bool) {
+        self.clusters.retain(keep);
     }
 
     /// The layout of bind group 1.

@@ -918,7 +918,7 @@ fn workgroup_each(items: u32) -> u32 {
 
 /// Dispatches `threads` invocations of 64: past 65 535 workgroups the rest
 /// go into y; the shader rebuilds the linear index and skips the overshoot.
-fn dispatch_threads(pass: &mut wgpu::ComputePass<'_>, threads: u32) {
+pub(crate) fn dispatch_threads(pass: &mut wgpu::ComputePass<'_>, threads: u32) {
     dispatch_threads_for(pass, threads, 1);
 }
 

@@ -12,4 +12,5 @@ pub(crate) mod params;
 
 #[cfg(feature = "testing")]
 pub use cull::cull_shader_source;
+pub(crate) use cull::dispatch_threads;
 pub use cull::{GPU_VISIBILITY_FEATURES, GpuViewRequest, GpuVisibility};
