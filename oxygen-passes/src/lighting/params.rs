@@ -63,7 +63,7 @@ oxygen_gpu::gpu_struct! {
         /// The sun's soft shadows (`HAS_SOFT_SHADOWS`, `ShadowFilter::Pcss`):
         /// gathers per side of the blocker search (0: PCF of `pcf_radius`),
         /// the widest penumbra's radius in texels, comparisons per side of
-        /// the filter, heights of the blocker ladder past the first.
+        /// the filter, a zero.
         pub shadow_filter: [f32; 4] => "vec4<f32>",
     }
 }

@@ -250,13 +250,23 @@ fn plane_depth(p: ShadowPoint, offset: vec2<f32>) -> f32 {
     return p.depth + dot(p.slope, vec2<f32>(2.0 * offset.x, -2.0 * offset.y));
 }
 
+// Heights of the blocker search's ladder past the first (a geometric
+// ladder from a texel's depth to the height whose penumbra is the widest):
+// the blockers' mean height is measured to within the ladder's ratio.
+const BLOCKER_LEVELS: u32 = 6u;
+
+// Tap (x, y) of a `taps` × `taps` grid spread evenly over [-1, 1]².
+fn grid_tap(x: u32, y: u32, taps: u32) -> vec2<f32> {
+    return (vec2<f32>(f32(x), f32(y)) + 0.5) * (2.0 / f32(taps)) - 1.0;
+}
+
 // Texels within `radius` texels of the point (a grid of `taps`² gathers of
 // four) standing more than `height` (depth units) above its plane.
 fn blocked_above(p: ShadowPoint, taps: u32, radius: f32, height: f32) -> f32 {
     var blocked = 0.0;
     for (var y = 0u; y < taps; y++) {
         for (var x = 0u; x < taps; x++) {
-            let at = (vec2<f32>(f32(x), f32(y)) + 0.5) * (2.0 / f32(taps)) - 1.0;
+            let at = grid_tap(x, y, taps);
             let offset = at * radius * shadows.uv_texel[p.cascade];
             let lit = gather_cascade(p.cascade, p.uv + offset, plane_depth(p, offset) + height);
             blocked += 4.0 - (lit.x + lit.y + lit.z + lit.w);
@@ -300,14 +310,12 @@ fn soft_shadow(i: u32, uv: vec2<f32>, depth: f32, angle: f32, normal: vec3<f32>)
     let p = ShadowPoint(i, uv, depth, clamp(slope, vec2<f32>(-steepest), vec2<f32>(steepest)));
 
     // A blocker stands a texel's depth above the plane; past the height
-    // whose penumbra is the widest, heights no longer matter. One loop over
-    // the ladder (its length a uniform, so that the compiler keeps one copy
-    // of the search: unrolled, the shader took minutes to compile on GL).
+    // whose penumbra is the widest, heights no longer matter.
     let lowest = depth_per_metre * texel_metres;
     let tangent = tan(angle);
     let highest = widest * texel_metres / max(tangent, 1e-6) * depth_per_metre;
-    let levels = u32(shadows.shadow_filter.w);
-    let ratio = pow(max(highest / lowest, 1.0), 1.0 / f32(max(levels, 1u)));
+    let levels = BLOCKER_LEVELS;
+    let ratio = pow(max(highest / lowest, 1.0), 1.0 / f32(levels));
     var blockers = 0.0;
     var integral = 0.0;
     var height = lowest;
@@ -337,7 +345,7 @@ fn soft_shadow(i: u32, uv: vec2<f32>, depth: f32, angle: f32, normal: vec3<f32>)
     var lit = 0.0;
     for (var y = 0u; y < filter_taps; y++) {
         for (var x = 0u; x < filter_taps; x++) {
-            let at = (vec2<f32>(f32(x), f32(y)) + 0.5) * (2.0 / f32(filter_taps)) - 1.0;
+            let at = grid_tap(x, y, filter_taps);
             let offset = at * radius * shadows.uv_texel[i];
             lit += compare_cascade(i, uv + offset, plane_depth(p, offset));
         }

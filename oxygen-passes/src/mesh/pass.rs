@@ -75,11 +75,6 @@ impl Default for ForwardLitConfig {
     }
 }
 
-/// Heights past the first at which soft shadows count blockers (a
-/// geometric ladder from one texel's depth to the height whose penumbra is
-/// the widest): their mean height is measured to within the ladder's ratio.
-const BLOCKER_LEVELS: f32 = 6.0;
-
 /// How a view filters its sun shadow (its cascades).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub enum ShadowFilter {
@@ -121,7 +116,7 @@ impl ShadowFilter {
             ShadowFilter::Pcf => [0.0; 4],
             ShadowFilter::Pcss { search_taps, filter_taps, max_penumbra_texels } => {
                 let radius = if max_penumbra_texels.is_finite() { max_penumbra_texels.clamp(1.0, 64.0) } else { 16.0 };
-                [search_taps.clamp(2, 16) as f32, radius, filter_taps.clamp(2, 16) as f32, BLOCKER_LEVELS]
+                [search_taps.clamp(2, 16) as f32, radius, filter_taps.clamp(2, 16) as f32, 0.0]
             }
         }
     }
