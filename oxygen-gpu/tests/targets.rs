@@ -11,6 +11,13 @@ fn device() -> GpuContext {
     GpuContext::new_headless(&GpuOptions::default()).unwrap_or_else(|e| panic!("these tests need an adapter: {e}"))
 }
 
+/// A `side`² texture of `layers` layers to render into (a shadow atlas, a
+/// probe's cube).
+fn square_array(gpu: &GpuContext, side: u32, layers: u32, format: wgpu::TextureFormat) -> wgpu::Texture {
+    let size = wgpu::Extent3d { width: side, height: side, depth_or_array_layers: layers };
+    oxygen_gpu::texture_2d(&gpu.device, "layers", size, 1, format, wgpu::TextureUsages::RENDER_ATTACHMENT)
+}
+
 #[test]
 fn msaa_settings_are_their_sample_counts_and_nothing_else() {
     for (msaa, samples) in [(Msaa::Off, 1), (Msaa::X2, 2), (Msaa::X4, 4)] {
@@ -115,25 +122,11 @@ fn allocated_targets_count_what_was_predicted() {
     assert!(unlabelled.labels.is_none());
     let atlas = TileAtlas::new(&gpu.device, (8, 4), 2, None, LabelSet::NONE, None, "tiles").expect("an atlas");
     assert_eq!(atlas.view_targets(1).expect("a tile").bytes(), 0);
-    let layers = oxygen_gpu::texture_2d(
-        &gpu.device,
-        "layers",
-        wgpu::Extent3d { width: 8, height: 8, depth_or_array_layers: 2 },
-        1,
-        ViewTargets::DEPTH_FORMAT,
-        wgpu::TextureUsages::RENDER_ATTACHMENT,
-    );
+    let layers = square_array(&gpu, 8, 2, ViewTargets::DEPTH_FORMAT);
     assert_eq!(ViewTargets::atlas_layer(&layers, 1).bytes(), 0);
     // A probe face draws into its cube's layer (the probe's texture) and
     // owns only its depth.
-    let cube = oxygen_gpu::texture_2d(
-        &gpu.device,
-        "cube",
-        wgpu::Extent3d { width: 8, height: 8, depth_or_array_layers: 6 },
-        1,
-        ViewTargets::HDR_FORMAT,
-        wgpu::TextureUsages::RENDER_ATTACHMENT,
-    );
+    let cube = square_array(&gpu, 8, 6, ViewTargets::HDR_FORMAT);
     assert_eq!(ViewTargets::probe_face(&gpu.device, &cube, 2, "face").bytes(), 8 * 8 * 4);
 }
 
@@ -154,14 +147,7 @@ fn targets_fit_only_the_request_they_were_made_for() {
     assert!(!depth.fits(w, h, true, 1), "no colour where colour is asked for");
     let msaa = ViewTargets::new(&gpu.device, w, h, "msaa").with_msaa(&gpu.device, 4, "msaa");
     assert!(msaa.fits(w, h, true, 4));
-    let layers = oxygen_gpu::texture_2d(
-        &gpu.device,
-        "layers",
-        wgpu::Extent3d { width: w, height: w, depth_or_array_layers: 2 },
-        1,
-        ViewTargets::DEPTH_FORMAT,
-        wgpu::TextureUsages::RENDER_ATTACHMENT,
-    );
+    let layers = square_array(&gpu, w, 2, ViewTargets::DEPTH_FORMAT);
     assert!(!ViewTargets::atlas_layer(&layers, 0).fits(w, w, false, 1), "an atlas layer owns no texture");
 }
 

@@ -997,6 +997,14 @@ mod frame_tests {
     }
 
     /// A scene of one node, and the node.
+    /// A coordinator with node a joined, one view and a scene of one node.
+    fn one_node_one_view() -> (Coordinator, RigViewId, Scene) {
+        let mut coordinator = coordinator();
+        coordinator.membership("a".into(), true);
+        let view = view(&mut coordinator, "v");
+        (coordinator, view, scene().0)
+    }
+
     fn scene() -> (Scene, NodeKey) {
         let mut scene = Scene::new();
         let node = scene.add_node("box", Transform::IDENTITY);
@@ -1098,10 +1106,7 @@ mod frame_tests {
     /// leaves a view without images.
     #[test]
     fn a_frame_waits_for_every_image_and_every_report() {
-        let mut coordinator = coordinator();
-        coordinator.membership("a".into(), true);
-        let view = view(&mut coordinator, "v");
-        let (scene, _) = scene();
+        let (mut coordinator, view, scene) = one_node_one_view();
 
         let events = vec![images(&coordinator, "a", 1, &[view], 1).0, rendered(&coordinator, "a", 1, 1, 0.5)];
         let report = frame(&mut coordinator, &scene, events);
@@ -1123,10 +1128,7 @@ mod frame_tests {
     /// images of an earlier frame count in neither.
     #[test]
     fn every_image_of_the_frame_counts_in_bytes_and_a_second_one_as_a_duplicate() {
-        let mut coordinator = coordinator();
-        coordinator.membership("a".into(), true);
-        let view = view(&mut coordinator, "v");
-        let (scene, _) = scene();
+        let (mut coordinator, view, scene) = one_node_one_view();
         let events = vec![images(&coordinator, "a", 1, &[view], 1).0, rendered(&coordinator, "a", 1, 1, 0.5)];
         let report = frame(&mut coordinator, &scene, events);
         assert_eq!((report.image_bytes, report.duplicates), (images(&coordinator, "a", 1, &[view], 1).1, 0));
