@@ -97,7 +97,7 @@ case "$scope" in
       -E 'GpuContext::|pick_adapter|ViewTargets::(create|depth_only|probe_face|render_depth_view|atlas_layer)|TileAtlas::view_targets|create_layout|single_layer_view|shared_instance|in texture_2d$')
     ;;
   root)
-    args=(-p oxygen --file src/batch.rs --file src/graph.rs --file src/group.rs
+    args=(-p oxygen --file src/batch.rs --file src/graph.rs --file 'src/group/**'
       --file src/schedule.rs --file src/windows.rs --file src/renderer/record.rs
       --cargo-arg=--lib)
     ;;

@@ -131,6 +131,11 @@ mod tests {
     }
 
     #[test]
+    fn window_ids_print_with_their_number() {
+        assert_eq!(WindowId(7).to_string(), "window#7");
+    }
+
+    #[test]
     fn unsupported_present_modes_fall_back_to_fifo() {
         let only_fifo = [wgpu::PresentMode::Fifo];
         assert_eq!(PresentMode::Mailbox.wgpu(&only_fifo), wgpu::PresentMode::Fifo);

@@ -113,9 +113,11 @@ fn dependency_order<K: Ord + Copy>(keys: &[K], deps: &[BTreeSet<usize>]) -> Vec<
     let mut done = vec![false; n];
     let mut order = Vec::with_capacity(n);
     while order.len() < n {
+        // An index enters `ready` once, when its last producer is done and
+        // it is not; the stalled walk only runs with `ready` empty, so
+        // nothing popped is done already.
         let next = match ready.pop() {
-            Some(std::cmp::Reverse((_, i))) if !done[i] => i,
-            Some(_) => continue,
+            Some(std::cmp::Reverse((_, i))) => i,
             None => match stalled.find(|i| !done[*i]) {
                 Some(i) => i,
                 None => break,

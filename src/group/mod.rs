@@ -25,7 +25,9 @@
 //! another view's outputs (a link) is refused, since the two could land on
 //! different devices. Their own shadow cascades render with them.
 
-use std::collections::{BTreeMap, HashMap};
+mod placement;
+
+use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use oxygen_core::Scene;
@@ -37,6 +39,7 @@ use tracing::info_span;
 use crate::graph::RenderGraph;
 use crate::views::ViewDesc;
 use crate::{DepthImage, FrameReport, LabelImage, RenderError, Renderer, RendererOptions, ViewReport};
+use placement::Placement;
 
 /// A view of a [`RendererGroup`] (its members number their own views).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -96,21 +99,6 @@ pub struct GroupFrameReport {
 /// view it moves).
 type Register = Arc<dyn Fn(&mut Renderer) -> Result<ViewId, RenderError> + Send + Sync>;
 
-struct GroupView {
-    member: usize,
-    id: ViewId,
-    /// Where its latest image is: the member and id that rendered it last.
-    /// After a move this stays on the old member (paused there) until the
-    /// new one has rendered the view, so that reads never find nothing.
-    last: Option<(usize, ViewId)>,
-    register: Register,
-    /// Smoothed seconds per frame (prepare, record, GPU); `None` until
-    /// measured.
-    cost: Option<f64>,
-    /// The last group frame it rendered in.
-    rendered: u64,
-}
-
 struct Member {
     renderer: Renderer,
     /// `None` for the first member, which renders the application's scene.
@@ -121,17 +109,15 @@ struct Member {
 /// splitting the views between them (see the module docs).
 pub struct RendererGroup {
     members: Vec<Member>,
-    views: BTreeMap<GroupViewId, GroupView>,
+    /// Where each view is and what it costs.
+    placement: Placement<ViewId>,
+    /// How to register each view again when it moves.
+    registers: BTreeMap<GroupViewId, Register>,
     stream: DeltaStream,
-    next_view: u32,
     frame: u64,
-    margin: f64,
     /// Members render one after another (GL: one EGL context per thread).
     sequential: bool,
 }
-
-/// Weight of a new measurement in a view's smoothed cost.
-const COST_SMOOTHING: f64 = 0.3;
 
 impl RendererGroup {
     /// A group of `devices` headless renderers with `options` each, one
@@ -162,12 +148,11 @@ impl RendererGroup {
             members.push(Member { renderer, replica: (i > 0).then(SceneReplica::new) });
         }
         Ok(RendererGroup {
+            placement: Placement::new(members.len()),
             members,
-            views: BTreeMap::new(),
+            registers: BTreeMap::new(),
             stream: DeltaStream::new(),
-            next_view: 0,
             frame: 0,
-            margin: 0.25,
             sequential,
         })
     }
@@ -187,7 +172,7 @@ impl RendererGroup {
     /// more than the least loaded before a view moves; `f64::INFINITY`
     /// never moves one.
     pub fn set_rebalance_margin(&mut self, margin: f64) {
-        self.margin = if margin.is_nan() { 0.25 } else { margin.max(0.0) };
+        self.placement.set_margin(margin);
     }
 
     /// Registers a view made by `desc` (called again if the view moves to
@@ -207,20 +192,20 @@ impl RendererGroup {
             ));
         }
         let register: Register = Arc::new(move |renderer: &mut Renderer| renderer.register_view(desc(), graph.clone()));
-        let member = self.lightest(None);
+        let member = self.placement.lightest(None);
         let id = register(&mut self.members[member].renderer)?;
-        let view = GroupViewId(self.next_view);
-        self.next_view += 1;
-        self.views.insert(view, GroupView { member, id, last: None, register, cost: None, rendered: 0 });
+        let view = self.placement.add(member, id);
+        self.registers.insert(view, register);
         Ok(view)
     }
 
     /// Removes a view from its member.
     pub fn unregister_view(&mut self, view: GroupViewId) -> Result<(), RenderError> {
-        let placed = self.views.remove(&view).ok_or_else(|| no_such(view))?;
+        let placed = self.placement.remove(view).ok_or_else(|| no_such(view))?;
+        self.registers.remove(&view);
         // Both registrations go even when the first refuses (none is left
         // behind); the first error is returned.
-        let old = match placed.last.filter(|last| *last != (placed.member, placed.id)) {
+        let old = match placed.paused() {
             Some((member, id)) => self.members[member].renderer.unregister_view(id),
             None => Ok(()),
         };
@@ -230,7 +215,7 @@ impl RendererGroup {
 
     /// The member rendering `view`.
     pub fn member_of(&self, view: GroupViewId) -> Option<usize> {
-        self.views.get(&view).map(|v| v.member)
+        self.placement.get(view).map(|p| p.member)
     }
 
     /// Moves `view` to member `member` now: it renders there from the next
@@ -240,21 +225,19 @@ impl RendererGroup {
         if member >= self.members.len() {
             return Err(RenderError::Unsupported(format!("member {member} of a group of {}", self.members.len())));
         }
-        let placed = self.views.get(&view).ok_or_else(|| no_such(view))?;
-        if placed.member == member {
+        let register = self.registers.get(&view).map(Arc::clone).ok_or_else(|| no_such(view))?;
+        let Some(plan) = self.placement.plan_move(view, member) else {
             return Ok(());
-        }
-        let (from, old, last, register) = (placed.member, placed.id, placed.last, Arc::clone(&placed.register));
-        // Back to where its latest image is (a second move before it
-        // rendered): that registration simply resumes.
-        let id = match last {
-            Some((m, id)) if m == member => {
-                self.members[m].renderer.set_view_active(id, true)?;
+        };
+        let id = match plan.resume {
+            Some(id) => {
+                self.members[member].renderer.set_view_active(id, true)?;
                 id
             }
-            _ => register(&mut self.members[member].renderer)?,
+            None => register(&mut self.members[member].renderer)?,
         };
-        let left = if last == Some((from, old)) {
+        let (from, old) = plan.from;
+        let left = if plan.pause_left {
             // Rendered there: kept, paused, until the new member renders it.
             self.members[from].renderer.set_view_active(old, false)
         } else {
@@ -263,7 +246,7 @@ impl RendererGroup {
         if let Err(e) = left {
             // The view stays where it was: the new registration goes, or
             // the old image's, resumed above, pauses again.
-            let undo = if last == Some((member, id)) {
+            let undo = if plan.resume.is_some() {
                 self.members[member].renderer.set_view_active(id, false)
             } else {
                 self.members[member].renderer.unregister_view(id)
@@ -271,9 +254,7 @@ impl RendererGroup {
             undo.ok();
             return Err(e);
         }
-        if let Some(placed) = self.views.get_mut(&view) {
-            (placed.member, placed.id) = (member, id);
-        }
+        self.placement.moved(view, member, id);
         Ok(())
     }
 
@@ -281,34 +262,14 @@ impl RendererGroup {
     /// GPU time, smoothed over the frames it rendered); `None` before its
     /// first frame.
     pub fn view_cost(&self, view: GroupViewId) -> Option<f64> {
-        self.views.get(&view)?.cost
+        self.placement.get(view)?.cost
     }
 
     /// Each member's load, as placement weighs it: the sum of its views'
     /// costs ([`RendererGroup::view_cost`]; a view not yet measured at the
     /// mean of those that were, 1 s when none was).
     pub fn member_loads(&self) -> Vec<f64> {
-        self.loads(None)
-    }
-
-    /// The member with the least load, not counting `excluding`'s view.
-    fn lightest(&self, excluding: Option<GroupViewId>) -> usize {
-        let loads = self.loads(excluding);
-        (0..self.members.len()).min_by(|a, b| loads[*a].total_cmp(&loads[*b])).unwrap_or(0)
-    }
-
-    /// Each member's load: its views' smoothed costs, a view not measured
-    /// yet at the mean of those that were (1 when none was).
-    fn loads(&self, excluding: Option<GroupViewId>) -> Vec<f64> {
-        let measured: Vec<f64> = self.views.values().filter_map(|v| v.cost).collect();
-        let mean = if measured.is_empty() { 1.0 } else { measured.iter().sum::<f64>() / measured.len() as f64 };
-        let mut loads = vec![0.0; self.members.len()];
-        for (id, view) in &self.views {
-            if Some(*id) != excluding {
-                loads[view.member] += view.cost.unwrap_or(mean);
-            }
-        }
-        loads
+        self.placement.loads(None)
     }
 
     /// Renders one frame of `scene` through every view: the scene's
@@ -316,7 +277,7 @@ impl RendererGroup {
     /// concurrently, their reports are gathered by group view, and a view
     /// may move to even the load (see the module docs).
     pub fn render_frame(&mut self, scene: &Scene) -> Result<GroupFrameReport, RenderError> {
-        let _span = info_span!("group_frame", members = self.members.len(), views = self.views.len()).entered();
+        let _span = info_span!("group_frame", members = self.members.len(), views = self.placement.len()).entered();
         self.frame += 1;
         let started = std::time::Instant::now();
         let mut delta_bytes = 0;
@@ -361,34 +322,29 @@ impl RendererGroup {
         let members: Vec<FrameReport> = results.into_iter().collect::<Result<_, _>>()?;
 
         // Each member's views back to group views; costs updated.
-        let mut by_member: Vec<HashMap<ViewId, GroupViewId>> = vec![HashMap::new(); self.members.len()];
-        for (id, view) in &self.views {
-            by_member[view.member].insert(view.id, *id);
-        }
-        let mut views = Vec::new();
-        let mut stale = Vec::new();
-        for (member, report) in members.iter().enumerate() {
-            for view_report in &report.views {
-                let Some(&group_view) = by_member[member].get(&view_report.view) else { continue };
-                if let Some(view) = self.views.get_mut(&group_view) {
-                    let seconds =
-                        view_report.prep_seconds + view_report.record_seconds + view_report.gpu_seconds.unwrap_or(0.0);
-                    view.cost = Some(match view.cost {
-                        Some(cost) => cost + COST_SMOOTHING * (seconds - cost),
-                        None => seconds,
-                    });
-                    view.rendered = self.frame;
-                    // Rendered where it now lives: the old registration,
-                    // paused since the move, goes.
-                    if let Some((old_member, old)) = view.last.filter(|last| *last != (member, view_report.view)) {
-                        stale.push((old_member, old));
-                    }
-                    view.last = Some((member, view_report.view));
-                }
-                views.push(GroupViewReport { view: group_view, member, report: view_report.clone() });
-            }
-        }
+        let renders: Vec<(usize, ViewId, f64)> = members
+            .iter()
+            .enumerate()
+            .flat_map(|(member, report)| {
+                report
+                    .views
+                    .iter()
+                    .map(move |v| (member, v.view, v.prep_seconds + v.record_seconds + v.gpu_seconds.unwrap_or(0.0)))
+            })
+            .collect();
+        let (group_views, stale) = self.placement.rendered(self.frame, &renders);
+        let member_views =
+            members.iter().enumerate().flat_map(|(member, report)| report.views.iter().map(move |v| (member, v)));
+        let mut views: Vec<GroupViewReport> = group_views
+            .into_iter()
+            .zip(member_views)
+            .filter_map(|(view, (member, report))| {
+                Some(GroupViewReport { view: view?, member, report: report.clone() })
+            })
+            .collect();
         views.sort_by_key(|v| v.view);
+        // Rendered where they now live: the old registrations, paused
+        // since their moves, go.
         for (member, id) in stale {
             self.members[member].renderer.unregister_view(id)?;
         }
@@ -406,25 +362,17 @@ impl RendererGroup {
 
     /// Moves at most one view ([`best_move`]) to even the members' loads.
     fn rebalance(&mut self) -> Result<Vec<(GroupViewId, usize, usize)>, RenderError> {
-        if self.members.len() < 2 || !self.margin.is_finite() {
+        let Some((view, from, to)) = self.placement.next_move() else {
             return Ok(Vec::new());
-        }
-        let loads = self.loads(None);
-        let views: Vec<(GroupViewId, usize, Option<f64>)> =
-            self.views.iter().map(|(id, v)| (*id, v.member, v.cost)).collect();
-        match best_move(&loads, &views, self.margin) {
-            Some((view, from, to)) => {
-                self.place(view, to)?;
-                Ok(vec![(view, from, to)])
-            }
-            None => Ok(Vec::new()),
-        }
+        };
+        self.place(view, to)?;
+        Ok(vec![(view, from, to)])
     }
 
     /// Where `view`'s latest image is, and the frame it is from.
     fn placed(&self, view: GroupViewId) -> Result<(&Renderer, ViewId, usize, u64), RenderError> {
-        let placed = self.views.get(&view).ok_or_else(|| no_such(view))?;
-        let (member, id) = placed.last.unwrap_or((placed.member, placed.id));
+        let placed = self.placement.get(view).ok_or_else(|| no_such(view))?;
+        let (member, id) = placed.readable();
         Ok((&self.members[member].renderer, id, member, placed.rendered))
     }
 
@@ -450,8 +398,8 @@ impl RendererGroup {
     /// Every view's colour image, in view order, tagged: the frame's
     /// outputs gathered from every member.
     pub fn gather_colors(&self) -> Result<Vec<Tagged<image::RgbaImage>>, RenderError> {
-        let _span = info_span!("gather_colors", views = self.views.len()).entered();
-        self.views.keys().map(|view| self.read_color(*view)).collect()
+        let _span = info_span!("gather_colors", views = self.placement.len()).entered();
+        self.placement.views().map(|(view, _)| self.read_color(view)).collect()
     }
 }
 
@@ -501,6 +449,17 @@ mod tests {
 
     fn view(id: u32, member: usize, cost: f64) -> (GroupViewId, usize, Option<f64>) {
         (GroupViewId(id), member, Some(cost))
+    }
+
+    #[test]
+    fn group_view_ids_print_with_their_number() {
+        assert_eq!(GroupViewId(12).to_string(), "group-view#12");
+    }
+
+    #[test]
+    fn a_group_of_no_device_is_refused_before_any_gpu_is_asked() {
+        let refused = RendererGroup::new_headless(0, RendererOptions::default());
+        assert!(matches!(refused, Err(RenderError::Unsupported(_))));
     }
 
     #[test]
