@@ -99,6 +99,7 @@ case "$scope" in
   root)
     args=(-p oxygen --file src/batch.rs --file src/graph.rs --file 'src/group/**'
       --file src/schedule.rs --file src/windows.rs --file src/renderer/record.rs
+      --file src/renderer/schedules.rs
       --cargo-arg=--lib)
     ;;
   demo)

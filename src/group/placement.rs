@@ -87,11 +87,6 @@ impl<K: Copy + Eq + Hash> Placement<K> {
         self.margin = if margin.is_nan() { DEFAULT_MARGIN } else { margin.max(0.0) };
     }
 
-    /// The margin in force.
-    pub fn margin(&self) -> f64 {
-        self.margin
-    }
-
     /// How many views it holds.
     pub fn len(&self) -> usize {
         self.views.len()
@@ -271,15 +266,15 @@ mod tests {
     #[test]
     fn a_margin_is_never_negative_or_nan() {
         let mut table = Placement::<u32>::new(2);
-        assert_eq!(table.margin(), DEFAULT_MARGIN);
+        assert_eq!(table.margin, DEFAULT_MARGIN);
         table.set_margin(0.5);
-        assert_eq!(table.margin(), 0.5);
+        assert_eq!(table.margin, 0.5);
         table.set_margin(-1.0);
-        assert_eq!(table.margin(), 0.0);
+        assert_eq!(table.margin, 0.0);
         table.set_margin(f64::NAN);
-        assert_eq!(table.margin(), DEFAULT_MARGIN);
+        assert_eq!(table.margin, DEFAULT_MARGIN);
         table.set_margin(f64::INFINITY);
-        assert_eq!(table.margin(), f64::INFINITY);
+        assert_eq!(table.margin, f64::INFINITY);
     }
 
     #[test]

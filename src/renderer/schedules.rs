@@ -404,3 +404,390 @@ impl SceneChanges {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    //! The schedules' decisions frame by frame, without a device: views
+    //! registered in a [`Views`] registry, resolved and collected on the
+    //! CPU as the renderer's first steps do, decided, and the kept ones
+    //! marked rendered.
+
+    use std::sync::Arc;
+
+    use oxygen_bindless::SlotAllocators;
+    use oxygen_core::glam::{UVec2, Vec3};
+    use oxygen_core::{Camera, LookAtResolver, Transform, ViewResolver};
+    use oxygen_gpu::LabelSet;
+    use oxygen_sceneprep::ScenePrep;
+
+    use super::*;
+    use crate::graph::standard_render_graph;
+    use crate::renderer::ViewRole;
+    use crate::renderer::prepare::TargetPlan;
+    use crate::views::{ViewDesc, Views};
+
+    /// What a frame decided: the views kept with why, the idle ones with why.
+    type Decided = (Vec<(ViewId, RenderReason)>, Vec<(ViewId, IdleReason)>);
+
+    struct Rig {
+        demo: oxygen_demo::DemoScene,
+        views: Views,
+        schedules: Schedules,
+        prep: ScenePrep,
+        slots: SlotAllocators,
+        frame: u64,
+    }
+
+    fn camera() -> LookAtResolver {
+        oxygen_demo::main_camera(UVec2::new(32, 24))
+    }
+
+    /// A camera looking away from every cube, ground and light.
+    fn away() -> LookAtResolver {
+        LookAtResolver {
+            camera: Camera::perspective(40f32.to_radians(), 0.1, Some(50.0)),
+            eye: Vec3::new(0.0, 5.0, -60.0),
+            target: Vec3::new(0.0, 5.0, -120.0),
+            up: Vec3::Y,
+            viewport: UVec2::new(32, 24),
+        }
+    }
+
+    impl Rig {
+        fn new() -> Self {
+            Rig {
+                demo: oxygen_demo::multi_view_scene(),
+                views: Views::new(),
+                schedules: Schedules::default(),
+                prep: ScenePrep::with_threads(1),
+                slots: SlotAllocators::new(128 << 20),
+                frame: 0,
+            }
+        }
+
+        fn add(&mut self, desc: ViewDesc) -> ViewId {
+            self.views.register(desc, standard_render_graph).unwrap()
+        }
+
+        fn on(&mut self, resolver: impl ViewResolver + 'static, schedule: Schedule) -> ViewId {
+            self.add(ViewDesc::new(resolver).with_schedule(schedule))
+        }
+
+        /// Frame `self.frame + 1` at `seconds`, every view in it.
+        fn at(&mut self, seconds: f32) -> Decided {
+            self.without(seconds, &[])
+        }
+
+        /// The next frame, a second after the last.
+        fn next(&mut self) -> Decided {
+            self.at(self.frame as f32 + 1.0)
+        }
+
+        /// A frame at `seconds` that leaves `out` out (paused, say).
+        fn without(&mut self, seconds: f32, out: &[ViewId]) -> Decided {
+            self.frame += 1;
+            let clock = FrameClock { index: self.frame, time_seconds: seconds };
+            let scene = &self.demo.scene;
+            let resolved: Vec<ResolvedFrameView> = self
+                .views
+                .entries
+                .iter()
+                .filter(|(id, _)| !out.contains(id))
+                .map(|(id, entry)| {
+                    let mut world = entry.resolver.resolve(&clock.context(*id), scene).unwrap();
+                    world.view_id = *id;
+                    ResolvedFrameView {
+                        id: *id,
+                        role: ViewRole::Registered,
+                        world,
+                        options: entry.options,
+                        graph: Arc::clone(&entry.graph),
+                        links: entry.links.clone(),
+                        target: TargetPlan::Own { with_color: true, samples: 1, labels: LabelSet::NONE },
+                    }
+                })
+                .collect();
+            let collection = self.prep.begin_frame(scene, &mut self.slots).unwrap();
+            let (kept, idle) = self.schedules.decide(clock, scene, collection, resolved, &self.views);
+            for (view, _) in &kept {
+                self.schedules.rendered(view.id, clock, &view.world);
+            }
+            (
+                kept.into_iter().map(|(v, reason)| (v.id, reason)).collect(),
+                idle.into_iter().map(|v| (v.view, v.reason)).collect(),
+            )
+        }
+
+        fn lift(&mut self, node: NodeKey, y: f32) {
+            self.demo.scene.set_local_transform(node, Transform::from_translation(Vec3::new(0.0, y, 0.0))).unwrap();
+        }
+    }
+
+    fn why(decided: &Decided, view: ViewId) -> Result<RenderReason, IdleReason> {
+        match decided.0.iter().find(|(v, _)| *v == view) {
+            Some((_, reason)) => Ok(*reason),
+            None => Err(decided.1.iter().find(|(v, _)| *v == view).map(|(_, r)| *r).expect("decided")),
+        }
+    }
+
+    #[test]
+    fn every_frame_views_render_every_frame_and_nothing_is_idle() {
+        let mut rig = Rig::new();
+        let a = rig.on(camera(), Schedule::EveryFrame);
+        let b = rig.on(away(), Schedule::EveryFrame);
+        for _ in 0..3 {
+            let decided = rig.next();
+            assert_eq!(decided.0, [(a, RenderReason::EveryFrame), (b, RenderReason::EveryFrame)]);
+            assert!(decided.1.is_empty());
+        }
+    }
+
+    #[test]
+    fn every_nth_renders_first_then_every_nth_frame_from_its_first() {
+        let mut rig = Rig::new();
+        rig.on(camera(), Schedule::EveryFrame);
+        // Joins at frame 2: it renders at 2, 5, 8.
+        rig.next();
+        let third = rig.on(camera(), Schedule::EveryNth(3));
+        let mut seen = Vec::new();
+        for _ in 2..=8 {
+            seen.push(why(&rig.next(), third));
+        }
+        let not_due = |next_frame| Err(IdleReason::NotDue { next_frame });
+        assert_eq!(
+            seen,
+            [
+                Ok(RenderReason::FirstFrame),
+                not_due(5),
+                not_due(5),
+                Ok(RenderReason::Due),
+                not_due(8),
+                not_due(8),
+                Ok(RenderReason::Due)
+            ]
+        );
+    }
+
+    #[test]
+    fn a_rate_counts_periods_from_its_first_and_from_now_when_far_behind() {
+        let mut rig = Rig::new();
+        let sensor = rig.on(camera(), Schedule::Rate(4.0));
+        assert_eq!(why(&rig.at(0.0), sensor), Ok(RenderReason::FirstFrame));
+        assert_eq!(why(&rig.at(0.1), sensor), Err(IdleReason::RateNotDue { next_seconds: 0.25 }));
+        // Late by 0.05 s: the next is still due at 0.5, not 0.55.
+        assert_eq!(why(&rig.at(0.3), sensor), Ok(RenderReason::Due));
+        assert_eq!(why(&rig.at(0.45), sensor), Err(IdleReason::RateNotDue { next_seconds: 0.5 }));
+        assert_eq!(why(&rig.at(0.5), sensor), Ok(RenderReason::Due));
+        // Three periods late: from now (2.0), so the next is at 2.25.
+        assert_eq!(why(&rig.at(2.0), sensor), Ok(RenderReason::Due));
+        assert_eq!(why(&rig.at(2.2), sensor), Err(IdleReason::RateNotDue { next_seconds: 2.25 }));
+    }
+
+    #[test]
+    fn once_and_on_demand_views_render_when_asked() {
+        let mut rig = Rig::new();
+        let once = rig.on(camera(), Schedule::Once);
+        let asked = rig.on(camera(), Schedule::OnDemand);
+        let first = rig.next();
+        assert_eq!(why(&first, once), Ok(RenderReason::FirstFrame));
+        assert_eq!(why(&first, asked), Err(IdleReason::NotRequested), "on demand: not even a first frame");
+        let second = rig.next();
+        assert_eq!(why(&second, once), Err(IdleReason::NotRequested));
+        rig.schedules.request(once);
+        rig.schedules.request(asked);
+        let third = rig.next();
+        assert_eq!(why(&third, once), Ok(RenderReason::Requested));
+        assert_eq!(why(&third, asked), Ok(RenderReason::Requested));
+        // A request is for one frame.
+        let fourth = rig.next();
+        assert_eq!(why(&fourth, once), Err(IdleReason::NotRequested));
+        assert_eq!(why(&fourth, asked), Err(IdleReason::NotRequested));
+        // A request beats a rate that is not due, too.
+        let sensor = rig.on(camera(), Schedule::Rate(0.001));
+        rig.at(100.0);
+        rig.schedules.request(sensor);
+        assert_eq!(why(&rig.at(101.0), sensor), Ok(RenderReason::Requested));
+    }
+
+    #[test]
+    fn when_changed_follows_its_camera_the_nodes_it_sees_lights_and_assets() {
+        let mut rig = Rig::new();
+        let watcher = rig.on(camera(), Schedule::WhenChanged);
+        let elsewhere = rig.on(away(), Schedule::WhenChanged);
+        let first = rig.next();
+        assert_eq!(why(&first, watcher), Ok(RenderReason::FirstFrame));
+        assert_eq!(why(&first, elsewhere), Ok(RenderReason::FirstFrame));
+        let still = rig.next();
+        assert_eq!(why(&still, watcher), Err(IdleReason::Unchanged));
+        assert_eq!(why(&still, elsewhere), Err(IdleReason::Unchanged));
+        // A cube in view moves: the watcher renders, the other does not.
+        let cube = rig.demo.cubes[4];
+        rig.lift(cube, 2.0);
+        let moved = rig.next();
+        assert_eq!(why(&moved, watcher), Ok(RenderReason::Changed(Change::Node(cube))));
+        assert_eq!(why(&moved, elsewhere), Err(IdleReason::Unchanged));
+        assert_eq!(why(&rig.next(), watcher), Err(IdleReason::Unchanged), "seen once, then still");
+        // Its camera moves.
+        rig.views.entries.get_mut(&watcher).unwrap().resolver =
+            Box::new(LookAtResolver { eye: Vec3::new(5.0, 7.0, 12.0), ..camera() });
+        assert_eq!(why(&rig.next(), watcher), Ok(RenderReason::Changed(Change::Camera)));
+        // The light moves: every watcher renders.
+        let sun = rig.demo.sun;
+        rig.lift(sun, 9.0);
+        let lit = rig.next();
+        assert_eq!(why(&lit, watcher), Ok(RenderReason::Changed(Change::Light(sun))));
+        assert_eq!(why(&lit, elsewhere), Ok(RenderReason::Changed(Change::Light(sun))));
+        // The environment changes: every watcher renders, once.
+        rig.schedules.environment_changed();
+        let environment = rig.next();
+        assert_eq!(why(&environment, watcher), Ok(RenderReason::Changed(Change::Assets)));
+        assert_eq!(why(&environment, elsewhere), Ok(RenderReason::Changed(Change::Assets)));
+        assert_eq!(why(&rig.next(), elsewhere), Err(IdleReason::Unchanged));
+    }
+
+    #[test]
+    fn a_node_leaving_or_entering_the_view_wakes_it_and_a_removed_one_too() {
+        let mut rig = Rig::new();
+        let watcher = rig.on(camera(), Schedule::WhenChanged);
+        rig.next();
+        // Out of every view: seen where it was (in view), so it wakes.
+        let cube = rig.demo.cubes[0];
+        rig.lift(cube, -500.0);
+        assert_eq!(why(&rig.next(), watcher), Ok(RenderReason::Changed(Change::Node(cube))));
+        // Moving about out of view: nothing.
+        rig.lift(cube, -600.0);
+        assert_eq!(why(&rig.next(), watcher), Err(IdleReason::Unchanged));
+        // Back into view, from out of it.
+        rig.lift(cube, 1.0);
+        assert_eq!(why(&rig.next(), watcher), Ok(RenderReason::Changed(Change::Node(cube))));
+        // Gone from the scene.
+        rig.demo.scene.remove_node(cube).unwrap();
+        assert_eq!(why(&rig.next(), watcher), Ok(RenderReason::Changed(Change::Node(cube))));
+        assert_eq!(why(&rig.next(), watcher), Err(IdleReason::Unchanged));
+    }
+
+    #[test]
+    fn a_watcher_left_out_of_a_frame_renders_when_it_comes_back() {
+        let mut rig = Rig::new();
+        let watcher = rig.on(camera(), Schedule::WhenChanged);
+        let other = rig.on(camera(), Schedule::WhenChanged);
+        rig.next();
+        rig.next();
+        let (kept, _) = rig.without(3.0, &[watcher]);
+        assert!(kept.is_empty());
+        let back = rig.at(4.0);
+        assert_eq!(why(&back, watcher), Ok(RenderReason::Changed(Change::Unwatched)));
+        assert_eq!(why(&back, other), Err(IdleReason::Unchanged), "it watched every frame");
+    }
+
+    #[test]
+    fn a_watcher_reading_a_view_that_renders_renders_after_it() {
+        let mut rig = Rig::new();
+        let source = rig.on(camera(), Schedule::EveryNth(2));
+        let reader = rig.add(ViewDesc::new(away()).with_schedule(Schedule::WhenChanged).reads(source.color()));
+        let chained = rig.add(ViewDesc::new(away()).with_schedule(Schedule::WhenChanged).reads(reader.color()));
+        rig.next();
+        // Frame 2: the source is not due, so nothing reads anything new.
+        let idle = rig.next();
+        assert_eq!(why(&idle, reader), Err(IdleReason::Unchanged));
+        assert_eq!(why(&idle, chained), Err(IdleReason::Unchanged));
+        // Frame 3: the source renders, the reader after it, and its reader.
+        let woke = rig.next();
+        assert_eq!(why(&woke, source), Ok(RenderReason::Due));
+        assert_eq!(why(&woke, reader), Ok(RenderReason::Changed(Change::Input(source))));
+        assert_eq!(why(&woke, chained), Ok(RenderReason::Changed(Change::Input(reader))));
+    }
+
+    #[test]
+    fn views_that_are_not_watched_forget_the_scene_and_a_new_watcher_renders_first() {
+        let mut rig = Rig::new();
+        let nth = rig.on(camera(), Schedule::EveryNth(2));
+        rig.next();
+        rig.next();
+        assert!(rig.schedules.seen.is_empty() && rig.schedules.scene.is_none(), "nothing watches");
+        let watcher = rig.on(camera(), Schedule::WhenChanged);
+        let decided = rig.next();
+        assert_eq!(why(&decided, watcher), Ok(RenderReason::FirstFrame));
+        assert_eq!(why(&decided, nth), Ok(RenderReason::Due));
+        assert!(!rig.schedules.seen.is_empty(), "a watcher keeps what the scene looked like");
+        // Every view every frame again: nothing kept.
+        rig.schedules.forget(watcher);
+        rig.views.entries.remove(&watcher);
+        rig.views.entries.remove(&nth);
+        rig.on(camera(), Schedule::EveryFrame);
+        rig.next();
+        assert!(rig.schedules.seen.is_empty() && rig.schedules.looked_at.is_none());
+    }
+
+    #[test]
+    fn measurements_average_and_nonsense_is_ignored() {
+        let mut schedules = Schedules::default();
+        let view = oxygen_demo::view_id(1);
+        schedules.measured(view, 0.004);
+        schedules.measured(view, f64::NAN);
+        schedules.measured(view, -1.0);
+        schedules.measured(view, f64::INFINITY);
+        assert_eq!(schedules.views[&view].cost, Some(0.004));
+        schedules.measured(view, 0.008);
+        assert_eq!(schedules.views[&view].cost, Some(0.75 * 0.004 + 0.25 * 0.008));
+        schedules.measured(view, 0.0);
+        assert_eq!(schedules.views[&view].cost, Some(0.75 * (0.75 * 0.004 + 0.25 * 0.008)));
+        schedules.forget(view);
+        assert!(!schedules.views.contains_key(&view));
+        assert!(!schedules.budgeted());
+        schedules.set_budget(Some(FrameBudget { seconds: 0.01, max_deferral: 2 }));
+        assert!(schedules.budgeted());
+        schedules.set_budget(None);
+        assert!(!schedules.budgeted());
+    }
+
+    #[test]
+    fn a_budget_keeps_the_first_view_then_what_fits_by_priority_and_defers_the_rest_boundedly() {
+        let mut rig = Rig::new();
+        let low = rig.add(ViewDesc::new(camera()).with_schedule(Schedule::EveryNth(1)).with_priority(1));
+        let high = rig.add(ViewDesc::new(camera()).with_schedule(Schedule::EveryNth(1)).with_priority(5));
+        let mid = rig.add(ViewDesc::new(camera()).with_schedule(Schedule::EveryNth(1)).with_priority(3));
+        rig.schedules.set_budget(Some(FrameBudget { seconds: 0.005, max_deferral: 2 }));
+        for view in [low, high, mid] {
+            rig.schedules.measured(view, 0.003);
+        }
+        // Room for one of 3 ms in 5 ms after the first: by priority, high
+        // (always kept, first) and mid; low is deferred.
+        let first = rig.next();
+        assert_eq!(why(&first, high), Ok(RenderReason::FirstFrame));
+        assert_eq!(why(&first, mid), Err(IdleReason::Deferred { frames: 1 }), "3 + 3 > 5");
+        assert_eq!(why(&first, low), Err(IdleReason::Deferred { frames: 1 }));
+        // Deferred views stay due; the longest deferred of equal priority go first.
+        let second = rig.next();
+        assert_eq!(why(&second, high), Ok(RenderReason::Due));
+        assert_eq!(why(&second, mid), Err(IdleReason::Deferred { frames: 2 }));
+        assert_eq!(why(&second, low), Err(IdleReason::Deferred { frames: 2 }));
+        // At the bound (2 frames) they render, whatever the budget.
+        let third = rig.next();
+        assert_eq!(why(&third, mid), Ok(RenderReason::FirstFrame));
+        assert_eq!(why(&third, low), Ok(RenderReason::FirstFrame));
+        // Rendered: their deferral starts again.
+        assert_eq!(rig.schedules.views[&low].deferred, 0);
+        // A view never measured is guessed at the mean of those that were
+        // (3 ms): 3 + 3 > 5, so it waits.
+        let new = rig.add(ViewDesc::new(camera()).with_schedule(Schedule::EveryNth(1)).with_priority(4));
+        let fourth = rig.next();
+        assert_eq!(why(&fourth, high), Ok(RenderReason::Due));
+        assert_eq!(why(&fourth, new), Err(IdleReason::Deferred { frames: 1 }));
+    }
+
+    #[test]
+    fn a_budget_with_room_defers_nothing_and_a_cheap_view_fits_beside_a_dear_one() {
+        let mut rig = Rig::new();
+        let dear = rig.add(ViewDesc::new(camera()).with_schedule(Schedule::EveryNth(1)).with_priority(2));
+        let cheap = rig.add(ViewDesc::new(camera()).with_schedule(Schedule::EveryNth(1)).with_priority(1));
+        rig.schedules.measured(dear, 0.004);
+        rig.schedules.measured(cheap, 0.001);
+        rig.schedules.set_budget(Some(FrameBudget { seconds: 0.005, max_deferral: 3 }));
+        // 4 + 1 is exactly the budget: both render.
+        let decided = rig.next();
+        assert_eq!(why(&decided, dear), Ok(RenderReason::FirstFrame));
+        assert_eq!(why(&decided, cheap), Ok(RenderReason::FirstFrame));
+        assert!(decided.1.is_empty());
+    }
+}
