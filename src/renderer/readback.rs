@@ -197,20 +197,19 @@ impl DepthImage {
 
     /// Linear depth in world units (metres for a scene in metres) at each
     /// pixel: the distance from the camera's plane along its view
-    /// direction, found by unprojecting the pixel's centre through the
-    /// view's projection (so any projection, perspective or orthographic,
-    /// finite or infinite far plane). Pixels where nothing was drawn (depth
-    /// 0 under an infinite far plane) are `f32::INFINITY`.
+    /// direction, found by unprojecting the device depth through the
+    /// view's projection (perspective or orthographic, finite or infinite
+    /// far plane). Pixels where nothing was drawn (depth 0 under an
+    /// infinite far plane) are `f32::INFINITY`.
     pub fn linear(&self) -> Vec<f32> {
         let inverse = self.view.projection.inverse();
-        let (w, h) = (self.width.max(1) as f32, self.height.max(1) as f32);
+        // The projections a camera makes (centred or not) give clip z and
+        // w from view z alone, so the pixel's place does not matter: the
+        // axis stands for every pixel.
         self.depth
             .iter()
-            .enumerate()
-            .map(|(i, d)| {
-                let (x, y) = ((i as u32 % self.width) as f32, (i as u32 / self.width) as f32);
-                let ndc = glam::Vec4::new((x + 0.5) / w * 2.0 - 1.0, 1.0 - (y + 0.5) / h * 2.0, *d, 1.0);
-                let p = inverse * ndc;
+            .map(|d| {
+                let p = inverse * glam::Vec4::new(0.0, 0.0, *d, 1.0);
                 let z = -p.z / p.w;
                 if z.is_finite() && z >= 0.0 { z } else { f32::INFINITY }
             })
@@ -262,5 +261,68 @@ impl LabelImage {
         let classes: std::collections::HashMap<u32, u32> =
             scene.nodes().map(|(key, node)| (oxygen_core::scene::node_index(key) + 1, node.semantic_class)).collect();
         self.instances.iter().map(|label| classes.get(label).copied().unwrap_or(0)).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use oxygen_core::glam::{UVec2, Vec3};
+    use oxygen_core::{Camera, LookAtResolver, Scene, ViewContext, ViewResolver};
+
+    use super::*;
+
+    fn view(camera: Camera, size: UVec2) -> oxygen_core::ResolvedView {
+        let resolver = LookAtResolver { camera, eye: Vec3::ZERO, target: Vec3::NEG_Z, up: Vec3::Y, viewport: size };
+        let ctx = ViewContext { view_id: oxygen_demo::view_id(0), frame_index: 1, time_seconds: 0.0 };
+        resolver.resolve(&ctx, &Scene::new()).unwrap()
+    }
+
+    #[test]
+    fn linear_depth_inverts_reverse_z_perspective_and_orthographic_projections() {
+        // Reverse Z with an infinite far plane: device depth near / z.
+        let near = 0.1;
+        let size = UVec2::new(3, 2);
+        let perspective = view(Camera::perspective(60f32.to_radians(), near, None), size);
+        let depth = vec![1.0, 0.5, 0.01, 0.0, 0.2, 0.1];
+        let image = DepthImage { width: 3, height: 2, depth: depth.clone(), view: perspective };
+        assert_eq!(image.get(2, 0), 0.01);
+        assert_eq!(image.get(0, 1), 0.0);
+        assert_eq!(image.get(1, 1), 0.2);
+        let linear = image.linear();
+        for (i, (d, z)) in depth.iter().zip(&linear).enumerate() {
+            let want = if *d == 0.0 { f32::INFINITY } else { near / d };
+            // The distance along the view direction, whatever the pixel:
+            // the same for each pixel of a row or column.
+            assert!((z - want).abs() <= 1e-5 * want.max(1.0) || *z == want, "pixel {i}: {z}, want {want}");
+        }
+        // Orthographic, near 1 and far 11: device depth 1 at 1, 0 at 11.
+        let ortho = view(Camera::orthographic(4.0, 1.0, 11.0), UVec2::new(2, 1));
+        let image = DepthImage { width: 2, height: 1, depth: vec![1.0, 0.25], view: ortho };
+        let linear = image.linear();
+        assert!((linear[0] - 1.0).abs() < 1e-5 && (linear[1] - 8.5).abs() < 1e-4, "{linear:?}");
+    }
+
+    #[test]
+    fn labels_name_the_node_and_its_class_and_nothing_where_none_is() {
+        let mut scene = Scene::new();
+        let a = scene.add_node("a", oxygen_core::Transform::IDENTITY);
+        let b = scene.add_node("b", oxygen_core::Transform::IDENTITY);
+        scene.set_semantic_class(b, 7).unwrap();
+        let label = |key| oxygen_core::scene::node_index(key) + 1;
+        let image = LabelImage {
+            width: 2,
+            height: 2,
+            planes: oxygen_gpu::LabelSet::of(&[Label::Instance]),
+            instances: vec![0, label(a), label(b), 999],
+            normals: Vec::new(),
+            classes: Vec::new(),
+            linear_depth: Vec::new(),
+        };
+        assert_eq!(image.node(&scene, 0, 0), None, "background");
+        assert_eq!(image.node(&scene, 1, 0), Some(a));
+        assert_eq!(image.node(&scene, 0, 1), Some(b));
+        assert_eq!(image.node(&scene, 1, 1), None, "a node not in the scene");
+        assert_eq!(image.node(&scene, 5, 5), None, "outside the image");
+        assert_eq!(image.semantic(&scene), [0, 0, 7, 0]);
     }
 }
