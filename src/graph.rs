@@ -206,7 +206,7 @@ impl RenderGraph for StandardGraph {
             ctx.cull_occluded(rec);
             MeshPass::depth_pre_pass().drawing(DrawList::Late).run(ctx, rec).await?;
         }
-        let exposure = if self.exposure == 0.0 { 1.0 } else { self.exposure };
+        let exposure = tone_map_exposure(self.exposure);
         // Nothing blends over the HDR image and no other view reads it:
         // shading tone-maps in place and the frame skips the HDR write and
         // the full-screen tone-map pass.
@@ -233,6 +233,12 @@ impl RenderGraph for StandardGraph {
     }
 }
 
+/// The exposure a graph's tone map applies: its own, 1 for an exposure of
+/// 0 (a graph written with every field zeroed shows its scene, not black).
+fn tone_map_exposure(exposure: f32) -> f32 {
+    if exposure == 0.0 { 1.0 } else { exposure }
+}
+
 /// The default graph ([`StandardGraph`] with default settings), as a value
 /// to pass to `register_view`.
 #[allow(non_upper_case_globals)] // Reads as the function it replaced: `register_view(camera, standard_render_graph)`.
@@ -254,7 +260,7 @@ pub struct ReferenceGraph {
 impl RenderGraph for ReferenceGraph {
     async fn record(&self, ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError> {
         ReferencePass { settings: self.settings }.run(ctx, rec).await?;
-        let exposure = if self.exposure == 0.0 { 1.0 } else { self.exposure };
+        let exposure = tone_map_exposure(self.exposure);
         TonemapPass::new(exposure).run(ctx, rec).await
     }
 }
@@ -301,7 +307,7 @@ impl BatchGraph {
         if views.is_empty() {
             return Ok(());
         }
-        let exposure = if self.exposure == 0.0 { 1.0 } else { self.exposure };
+        let exposure = tone_map_exposure(self.exposure);
         let lit = self.lit.clone();
         if lit.depth_from_pre_pass {
             MeshPass::depth_pre_pass().run_batch(views, rec).await?;
@@ -390,6 +396,26 @@ impl RenderGraph for ProbeFaceGraph {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_zero_exposure_tone_maps_at_one_and_any_other_as_itself() {
+        assert_eq!(tone_map_exposure(0.0), 1.0);
+        assert_eq!(tone_map_exposure(2.5), 2.5);
+        assert_eq!(tone_map_exposure(1.0), 1.0);
+    }
+
+    #[test]
+    fn the_standard_batch_graph_has_no_pre_pass_and_no_sun_cascades() {
+        // Batch cameras are small and own no cascades (see its docs); the
+        // rest is the forward default.
+        assert!(!standard_batch_graph.lit.depth_from_pre_pass);
+        assert!(!standard_batch_graph.lit.sun_shadows);
+        let rest =
+            ForwardLitConfig { depth_from_pre_pass: true, sun_shadows: true, ..standard_batch_graph.lit.clone() };
+        assert_eq!(rest, ForwardLitConfig::DEFAULT);
+        assert_eq!(standard_batch_graph.exposure, 1.0);
+        assert_eq!(BatchGraph::default(), standard_batch_graph);
+    }
 
     #[test]
     fn the_constant_standard_graph_matches_the_default_configuration() {
