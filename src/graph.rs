@@ -211,8 +211,7 @@ impl RenderGraph for StandardGraph {
         // shading tone-maps in place and the frame skips the HDR write and
         // the full-screen tone-map pass.
         if !ctx.hdr_read_after_shading() {
-            MeshPass::forward_lit(lit).with_labels().tone_mapped(exposure).run(ctx, rec).await?;
-            return labels_if_asked(&[ctx], rec).await;
+            return MeshPass::forward_lit(lit).with_labels().tone_mapped(exposure).run(ctx, rec).await;
         }
         let mut transparent = MeshPass::transparent();
         let mut shading = MeshPass::forward_lit(lit).with_labels();
@@ -224,8 +223,7 @@ impl RenderGraph for StandardGraph {
         shading.run(ctx, rec).await?;
         // Records nothing on a frame without blended draws.
         transparent.run(ctx, rec).await?;
-        TonemapPass::new(exposure).run(ctx, rec).await?;
-        labels_if_asked(&[ctx], rec).await
+        TonemapPass::new(exposure).run(ctx, rec).await
     }
 
     fn runs_occlusion_phases(&self) -> bool {
@@ -313,37 +311,24 @@ impl BatchGraph {
             MeshPass::depth_pre_pass().run_batch(views, rec).await?;
         }
         if !views.iter().any(|ctx| ctx.hdr_read_after_shading()) {
-            MeshPass::forward_lit(lit).with_labels().tone_mapped(exposure).run_batch(views, rec).await?;
-            return labels_if_asked(views, rec).await;
+            return MeshPass::forward_lit(lit).with_labels().tone_mapped(exposure).run_batch(views, rec).await;
         }
         MeshPass::forward_lit(lit).with_labels().run_batch(views, rec).await?;
         MeshPass::transparent().run_batch(views, rec).await?;
-        // The tone map covers its whole target: once per page of the atlas
-        // (per view for views with targets of their own).
-        let mut toned: Vec<(Option<u32>, &wgpu::Texture)> = Vec::new();
+        // The tone map covers its whole target: once per page of the
+        // batch's atlas (per view for a view with targets of its own).
+        let mut toned_pages: Vec<u32> = Vec::new();
         for ctx in views {
-            let page = (ctx.targets.tile.map(|t| t.page), &ctx.targets.depth);
-            if ctx.targets.tile.is_some() && toned.iter().any(|(p, d)| *p == page.0 && *d == page.1) {
-                continue;
+            if let Some(tile) = ctx.targets.tile {
+                if toned_pages.contains(&tile.page) {
+                    continue;
+                }
+                toned_pages.push(tile.page);
             }
-            toned.push(page);
             TonemapPass::new(exposure).run(ctx, rec).await?;
         }
-        labels_if_asked(views, rec).await
+        Ok(())
     }
-}
-
-/// The labels the shading pass could not write ([`MeshPass::with_labels`]
-/// writes those of single-sampled views): the labels pass
-/// ([`MeshPass::labels`]) over the multisampled views that asked for
-/// labels, which it refuses with a clear error; nothing when none did.
-async fn labels_if_asked(views: &[&RenderContext<'_>], rec: &mut CommandRecorder) -> Result<(), PassError> {
-    let asked: Vec<&RenderContext<'_>> =
-        views.iter().copied().filter(|ctx| ctx.targets.labels.is_some() && ctx.targets.msaa.is_some()).collect();
-    if asked.is_empty() {
-        return Ok(());
-    }
-    MeshPass::labels().run_batch(&asked, rec).await
 }
 
 impl RenderGraph for BatchGraph {

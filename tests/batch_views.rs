@@ -48,8 +48,13 @@ fn alone(scene: &Scene, cameras: &[LookAtResolver], options: RendererOptions) ->
         .map(|camera| {
             let mut renderer = support::gpu_renderer_with(options);
             let view = renderer.register_view(*camera, lone_graph()).unwrap();
+            // The batch graph records an ordinary view too, as the
+            // standard graph with its settings does.
+            let by_batch_graph = renderer.register_view(*camera, standard_batch_graph).unwrap();
             renderer.render_frame(scene).unwrap();
-            renderer.read_color(view).unwrap()
+            let image = renderer.read_color(view).unwrap();
+            assert!(renderer.read_color(by_batch_graph).unwrap() == image, "a view recorded by the batch graph");
+            image
         })
         .collect()
 }
