@@ -135,6 +135,23 @@ fn dependency_order<K: Ord + Copy>(keys: &[K], deps: &[BTreeSet<usize>]) -> Vec<
     order
 }
 
+/// Makes the views `members` (indices into `deps`, each view's set of the
+/// views it waits for) record as one, as a batch's cameras do: each waits
+/// for what any of them waits for outside them, and a view waiting for
+/// any of them waits for all of them.
+fn record_as_one(deps: &mut [BTreeSet<usize>], members: &[usize]) {
+    let inside: BTreeSet<usize> = members.iter().copied().collect();
+    let union: BTreeSet<usize> =
+        members.iter().flat_map(|m| deps[*m].iter().copied()).filter(|d| !inside.contains(d)).collect();
+    for (i, d) in deps.iter_mut().enumerate() {
+        if inside.contains(&i) {
+            d.clone_from(&union);
+        } else if !d.is_disjoint(&inside) {
+            d.extend(inside.iter().copied());
+        }
+    }
+}
+
 impl Renderer {
     /// The frame's views in recording and submission order: every view after
     /// the views it reads (its links, its sun cascades, and for colour views
@@ -158,8 +175,6 @@ impl Renderer {
             deps
         };
         let mut deps: Vec<BTreeSet<usize>> = plan.views.iter().map(dependencies).collect();
-        // A batch records as one: every camera waits for what any of them
-        // reads, and a view reading any camera waits for all of them.
         let mut batches: BTreeMap<crate::batch::BatchId, Vec<usize>> = BTreeMap::new();
         for (i, view) in plan.views.iter().enumerate() {
             if let TargetPlan::Tile { batch, .. } = view.target {
@@ -167,20 +182,7 @@ impl Renderer {
             }
         }
         for members in batches.values() {
-            let inside: BTreeSet<usize> = members.iter().copied().collect();
-            let union: BTreeSet<usize> =
-                members.iter().flat_map(|m| deps[*m].iter().copied()).filter(|d| !inside.contains(d)).collect();
-            for m in members {
-                deps[*m] = union.clone();
-            }
-            for d in deps.iter_mut() {
-                if !d.is_disjoint(&inside) {
-                    d.extend(inside.iter().copied());
-                }
-            }
-            for m in members {
-                deps[*m].retain(|d| !inside.contains(d));
-            }
+            record_as_one(&mut deps, members);
         }
         let ids: Vec<ViewId> = plan.views.iter().map(|v| v.id).collect();
         let order = dependency_order(&ids, &deps);
@@ -731,6 +733,17 @@ mod tests {
         let keys = [5u32, 9, 7];
         let deps = [BTreeSet::from([2]), BTreeSet::new(), BTreeSet::new()];
         assert_eq!(dependency_order(&keys, &deps), vec![2, 0, 1]);
+    }
+
+    #[test]
+    fn a_batch_waits_as_one_and_is_waited_for_as_one() {
+        // 0, 1 and 2 are a batch; 0 reads 3, 2 reads 4 and 1 (inside: no
+        // wait); 5 reads 1; 6 reads nothing of them.
+        let set = |s: &[usize]| s.iter().copied().collect::<BTreeSet<usize>>();
+        let mut deps = vec![set(&[3]), set(&[]), set(&[4, 1]), set(&[]), set(&[]), set(&[1]), set(&[3])];
+        super::record_as_one(&mut deps, &[0, 1, 2]);
+        let want = [set(&[3, 4]), set(&[3, 4]), set(&[3, 4]), set(&[]), set(&[]), set(&[0, 1, 2]), set(&[3])];
+        assert_eq!(deps, want);
     }
 
     #[test]
