@@ -100,6 +100,7 @@ case "$scope" in
     args=(-p oxygen --file src/batch.rs --file src/graph.rs --file 'src/group/**'
       --file src/schedule.rs --file src/windows.rs --file src/renderer/record.rs
       --file src/renderer/schedules.rs --file src/renderer/readback.rs
+      --file src/views.rs --file src/shadows.rs
       -E 'Renderer::(view_draws|read_|view_targets|not_rendered|prepared_frame)'
       --cargo-arg=--lib)
     ;;

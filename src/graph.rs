@@ -393,10 +393,9 @@ mod tests {
     fn the_standard_batch_graph_has_no_pre_pass_and_no_sun_cascades() {
         // Batch cameras are small and own no cascades (see its docs); the
         // rest is the forward default.
-        assert!(!standard_batch_graph.lit.depth_from_pre_pass);
-        assert!(!standard_batch_graph.lit.sun_shadows);
-        let rest =
-            ForwardLitConfig { depth_from_pre_pass: true, sun_shadows: true, ..standard_batch_graph.lit.clone() };
+        let lit = standard_batch_graph.lit.clone();
+        assert!(!lit.depth_from_pre_pass && !lit.sun_shadows, "{lit:?}");
+        let rest = ForwardLitConfig { depth_from_pre_pass: true, sun_shadows: true, ..lit };
         assert_eq!(rest, ForwardLitConfig::DEFAULT);
         assert_eq!(standard_batch_graph.exposure, 1.0);
         assert_eq!(BatchGraph::default(), standard_batch_graph);

@@ -283,3 +283,362 @@ impl ShadowViews {
         self.cascades.values().chain(self.local.values()).copied()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::{DMat4, DVec3, Mat4, Quat, UVec2, Vec3};
+    use oxygen_core::{Camera, Light, LookAtResolver, Transform};
+    use oxygen_sceneprep::LocalShadowCaster;
+
+    struct Lit {
+        scene: Scene,
+        sun: NodeKey,
+        spot: NodeKey,
+        lamp: NodeKey,
+    }
+
+    const SPOT_AT: Vec3 = Vec3::new(-4.0, 4.0, 2.0);
+    const LAMP_AT: Vec3 = Vec3::new(3.0, 1.5, 1.5);
+
+    /// A sun, a spot light aimed at the origin (range 25, outer cone 0.45)
+    /// and a point light (range 10).
+    fn lit() -> Lit {
+        let mut scene = Scene::new();
+        let travelling = Vec3::new(-0.5, -1.0, -0.35).normalize();
+        let sun = Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, travelling));
+        let sun = scene.add_node("sun", sun);
+        scene.set_light(sun, Some(Light::directional(2.0))).unwrap();
+        let aim = Quat::from_rotation_arc(Vec3::NEG_Z, (Vec3::ZERO - SPOT_AT).normalize());
+        let spot = scene.add_node("spot", Transform::from_translation(SPOT_AT).with_rotation(aim));
+        scene.set_light(spot, Some(Light::spot(200.0, Some(25.0), 0.3, 0.45))).unwrap();
+        let lamp = scene.add_node("lamp", Transform::from_translation(LAMP_AT));
+        scene.set_light(lamp, Some(Light::point(20.0, Some(10.0)))).unwrap();
+        Lit { scene, sun, spot, lamp }
+    }
+
+    fn context(view_id: ViewId) -> ViewContext {
+        ViewContext { view_id, frame_index: 1, time_seconds: 0.0 }
+    }
+
+    fn shadow_id() -> ViewId {
+        ViewIds::new(ViewIdRange::Shadow).allocate()
+    }
+
+    fn camera(scene: &Scene, view_id: ViewId) -> ResolvedView {
+        let camera = Camera::perspective(50f32.to_radians(), 0.1, Some(60.0));
+        let resolver = LookAtResolver::new(camera, Vec3::new(0.5, 4.0, 7.0), Vec3::ZERO, UVec2::new(128, 96));
+        resolver.unwrap().resolve(&context(view_id), scene).unwrap()
+    }
+
+    fn spot(light: NodeKey) -> SpotShadowResolver {
+        SpotShadowResolver { light, resolution: 256, near: 0.05, far: 100.0 }
+    }
+
+    fn point_face(light: NodeKey, face: usize) -> PointShadowFaceResolver {
+        PointShadowFaceResolver { light, face, resolution: 256, near: 0.05, far: 100.0 }
+    }
+
+    /// Where a resolved view looks, in world space.
+    fn forward(view: &ResolvedView) -> Vec3 {
+        view.world_to_view.inverse().transform_vector3(DVec3::NEG_Z).as_vec3()
+    }
+
+    fn assert_near(a: Vec3, b: Vec3) {
+        assert!(a.abs_diff_eq(b, 1e-5), "{a} is not {b}");
+    }
+
+    /// The vertical field of view of a perspective projection.
+    fn fov(projection: &Mat4) -> f32 {
+        2.0 * (1.0 / projection.y_axis.y).atan()
+    }
+
+    /// The frame of `lit`: its sun casts, the spot has tile 0 and the lamp
+    /// tiles 1 to 6.
+    fn frame(lit: &Lit) -> FrameCollection {
+        let mut frame = FrameCollection::default();
+        frame.shadow_sun = Some(lit.sun);
+        frame.local_shadow_casters =
+            vec![caster(lit.spot, LocalShadowKind::Spot, 0), caster(lit.lamp, LocalShadowKind::Point, 1)];
+        frame
+    }
+
+    fn caster(node: NodeKey, kind: LocalShadowKind, first_tile: u32) -> LocalShadowCaster {
+        LocalShadowCaster { node, kind, light_index: 0, first_tile, tile_count: kind.tile_count() }
+    }
+
+    fn cascades(count: u32) -> CascadeSettings {
+        CascadeSettings { count, resolution: 256, max_distance: 30.0, ..Default::default() }
+    }
+
+    fn local() -> Option<LocalShadowSettings> {
+        Some(LocalShadowSettings { resolution: 256, ..Default::default() })
+    }
+
+    fn owners<const N: usize>(lit: &Lit, count: u32) -> [(ViewId, ResolvedView, CascadeSettings); N] {
+        let mut ids = ViewIds::default();
+        std::array::from_fn(|_| {
+            let id = ids.allocate();
+            (id, camera(&lit.scene, id), cascades(count))
+        })
+    }
+
+    fn ids_of(planned: &[PlannedShadow]) -> Vec<ViewId> {
+        planned.iter().map(|p| p.id).collect()
+    }
+
+    #[test]
+    fn a_shadow_view_prepares_only_casters_and_only_depth() {
+        let expected =
+            ViewPrepOptions { filter: ViewFilter::ShadowCastersOnly, depth_only: true, ..ViewPrepOptions::default() };
+        assert_eq!(shadow_view_options(), expected);
+    }
+
+    #[test]
+    fn local_shadows_default_to_1024_texels_from_5_cm_to_100_m() {
+        let settings = LocalShadowSettings::default();
+        assert_eq!((settings.resolution, settings.near, settings.far), (1024, 0.05, 100.0));
+    }
+
+    /// The light's position does not matter, only where its −Z points.
+    #[test]
+    fn a_cascade_is_fitted_down_the_lights_minus_z_at_the_settings_resolution() {
+        let lit = lit();
+        let id = shadow_id();
+        let camera = camera(&lit.scene, id);
+        // Local −Z is world −Y: straight down.
+        let at = DVec3::new(10.0, 20.0, 30.0).extend(1.0);
+        let light_world = DMat4::from_cols(DVec3::X.extend(0.0), DVec3::NEG_Z.extend(0.0), DVec3::Y.extend(0.0), at);
+        let settings = cascades(2);
+        let resolved = resolve_cascade(id, &camera, light_world, &settings, 1).unwrap();
+        let fitted = fit_cascade(&camera, Vec3::NEG_Y, &settings, 1).unwrap();
+        assert_eq!(resolved.view_id, id);
+        assert_eq!(resolved.world_to_view, fitted.view);
+        assert_eq!(resolved.projection, fitted.projection);
+        assert_eq!((resolved.near, resolved.far), (0.0, fitted.depth));
+        assert_eq!(resolved.viewport, UVec2::splat(256));
+        let tiny = CascadeSettings { resolution: 0, ..settings };
+        assert_eq!(resolve_cascade(id, &camera, light_world, &tiny, 0).unwrap().viewport, UVec2::ONE);
+    }
+
+    #[test]
+    fn a_cascade_that_cannot_be_fitted_is_an_error_naming_the_view_and_the_cascade() {
+        let lit = lit();
+        let id = shadow_id();
+        let camera = camera(&lit.scene, id);
+        let message = match resolve_cascade(id, &camera, DMat4::IDENTITY, &cascades(2), 3) {
+            Err(ViewError::Other { view, message }) if view == id => message,
+            other => panic!("{other:?}"),
+        };
+        assert!(message.starts_with("cascade 3 cannot be fitted"), "{message}");
+    }
+
+    /// A tenth wider than the cone, so PCF taps at its edge stay inside.
+    #[test]
+    fn a_spot_shadow_looks_down_the_light_over_its_cone_and_a_tenth() {
+        let lit = lit();
+        let id = shadow_id();
+        let resolved = spot(lit.spot).resolve(&context(id), &lit.scene).unwrap();
+        assert_eq!(resolved.view_id, id);
+        assert_near(resolved.camera_position, SPOT_AT);
+        assert_near(forward(&resolved), (Vec3::ZERO - SPOT_AT).normalize());
+        assert!((fov(&resolved.projection) - 0.45 * 2.2).abs() < 1e-5, "{}", fov(&resolved.projection));
+        assert_eq!((resolved.near, resolved.far), (0.05, 25.0));
+        assert_eq!(resolved.viewport, UVec2::splat(256));
+    }
+
+    #[test]
+    fn a_spot_shadows_field_of_view_stays_between_a_sliver_and_170_degrees() {
+        let mut lit = lit();
+        for (outer_cone, expected) in [(0.001, 0.05), (2.0, 170f32.to_radians())] {
+            lit.scene.set_light(lit.spot, Some(Light::spot(1.0, None, 0.0, outer_cone))).unwrap();
+            let resolved = spot(lit.spot).resolve(&context(shadow_id()), &lit.scene).unwrap();
+            assert!((fov(&resolved.projection) - expected).abs() < 1e-4, "cone {outer_cone}");
+        }
+    }
+
+    /// A range the depth range cannot end at (none, infinite, not past the
+    /// near plane) gives way to the settings' far plane.
+    #[test]
+    fn a_local_shadow_ends_at_the_lights_range_or_else_at_the_far_plane() {
+        let mut lit = lit();
+        for (range, far) in
+            [(Some(25.0), 25.0), (None, 100.0), (Some(f32::INFINITY), 100.0), (Some(0.05), 100.0), (Some(0.01), 100.0)]
+        {
+            lit.scene.set_light(lit.spot, Some(Light::spot(1.0, range, 0.3, 0.45))).unwrap();
+            lit.scene.set_light(lit.lamp, Some(Light::point(1.0, range))).unwrap();
+            let spot = spot(lit.spot).resolve(&context(shadow_id()), &lit.scene);
+            let point = point_face(lit.lamp, 0).resolve(&context(shadow_id()), &lit.scene);
+            for resolved in [spot, point] {
+                let resolved = resolved.unwrap_or_else(|e| panic!("range {range:?}: {e}"));
+                assert_eq!((resolved.near, resolved.far), (0.05, far), "range {range:?}");
+            }
+        }
+    }
+
+    /// Two texels of margin on each side beyond the 90° face.
+    #[test]
+    fn a_point_shadow_face_looks_along_its_axis_from_the_light_a_little_wider_than_90_degrees() {
+        let lit = lit();
+        for (face, (axis, _)) in oxygen_passes::PROBE_FACE_AXES.iter().enumerate() {
+            let id = shadow_id();
+            let resolved = point_face(lit.lamp, face).resolve(&context(id), &lit.scene).unwrap();
+            assert_eq!(resolved.view_id, id);
+            assert_near(resolved.camera_position, LAMP_AT);
+            assert_near(forward(&resolved), Vec3::from(*axis));
+            assert!((resolved.projection.y_axis.y - 256.0 / 260.0).abs() < 1e-6, "face {face}");
+            assert_eq!((resolved.far, resolved.viewport), (10.0, UVec2::splat(256)));
+        }
+    }
+
+    #[test]
+    fn a_point_shadow_face_past_the_sixth_is_the_sixth() {
+        let lit = lit();
+        let resolve = |face| point_face(lit.lamp, face).resolve(&context(shadow_id()), &lit.scene).unwrap();
+        assert_eq!(resolve(9), resolve(5));
+        assert_near(forward(&resolve(6)), Vec3::NEG_Z);
+    }
+
+    #[test]
+    fn a_shadow_view_fails_when_its_light_changed_kind_or_is_gone() {
+        let mut lit = lit();
+        let id = shadow_id();
+        let message = |result: Result<ResolvedView, ViewError>| match result {
+            Err(ViewError::Other { view, message }) if view == id => message,
+            other => panic!("{other:?}"),
+        };
+        assert_eq!(message(spot(lit.lamp).resolve(&context(id), &lit.scene)), "the light is no longer a spot light");
+        assert_eq!(
+            message(point_face(lit.spot, 0).resolve(&context(id), &lit.scene)),
+            "the light is no longer a point light"
+        );
+        lit.scene.set_light(lit.spot, None).unwrap();
+        assert_eq!(message(spot(lit.spot).resolve(&context(id), &lit.scene)), "the light's node or light is gone");
+        lit.scene.remove_node(lit.lamp).unwrap();
+        assert_eq!(
+            message(point_face(lit.lamp, 0).resolve(&context(id), &lit.scene)),
+            "the light's node or light is gone"
+        );
+    }
+
+    #[test]
+    fn a_frame_plans_each_owners_cascades_then_a_view_per_local_tile() {
+        let lit = lit();
+        let mut shadows = ShadowViews::new(local());
+        let owners = owners::<1>(&lit, 2);
+        let owner = owners[0].0;
+        let (planned, released) = shadows.plan(&owners, &frame(&lit), &lit.scene, 3, 0.5);
+        let roles: Vec<ShadowRole> = planned.iter().map(|p| p.role).collect();
+        let mut expected = vec![ShadowRole::Cascade { owner, index: 0 }, ShadowRole::Cascade { owner, index: 1 }];
+        expected.push(ShadowRole::Local { light: lit.spot, face: 0, tile: 0 });
+        expected.extend((0..6).map(|face| ShadowRole::Local { light: lit.lamp, face, tile: face + 1 }));
+        assert_eq!(roles, expected);
+        let ids: std::collections::BTreeSet<ViewId> = planned.iter().map(|p| p.id).collect();
+        assert_eq!(ids.len(), planned.len(), "every shadow view has an id of its own");
+        assert!(ids.iter().all(|id| id.range() == ViewIdRange::Shadow));
+        assert!(released.is_empty());
+    }
+
+    /// What a planned view resolved to is what its resolver gives for its id.
+    #[test]
+    fn each_planned_shadow_view_is_resolved_as_its_resolver_would() {
+        let lit = lit();
+        let mut shadows = ShadowViews::new(local());
+        let owners = owners::<1>(&lit, 2);
+        let sun = lit.scene.world_transform(lit.sun).unwrap();
+        let (planned, _) = shadows.plan(&owners, &frame(&lit), &lit.scene, 3, 0.5);
+        for shadow in &planned {
+            let expected = match shadow.role {
+                ShadowRole::Cascade { index, .. } => resolve_cascade(shadow.id, &owners[0].1, sun, &cascades(2), index),
+                ShadowRole::Local { light, .. } if light == lit.spot => {
+                    spot(light).resolve(&context(shadow.id), &lit.scene)
+                }
+                ShadowRole::Local { light, face, .. } => {
+                    point_face(light, face as usize).resolve(&context(shadow.id), &lit.scene)
+                }
+            };
+            assert_eq!(shadow.resolved, expected, "{:?}", shadow.role);
+            assert!(shadow.resolved.is_ok(), "{:?}", shadow.role);
+        }
+    }
+
+    #[test]
+    fn a_shadow_view_keeps_its_id_from_frame_to_frame() {
+        let lit = lit();
+        let mut shadows = ShadowViews::new(local());
+        let owners = owners::<2>(&lit, 2);
+        let (first, _) = shadows.plan(&owners, &frame(&lit), &lit.scene, 1, 0.0);
+        let (second, released) = shadows.plan(&owners, &frame(&lit), &lit.scene, 2, 0.1);
+        assert_eq!(ids_of(&second), ids_of(&first));
+        assert!(released.is_empty());
+    }
+
+    #[test]
+    fn views_no_longer_needed_are_released_and_the_rest_kept() {
+        let lit = lit();
+        let mut shadows = ShadowViews::new(local());
+        let owners = owners::<2>(&lit, 2);
+        let (first, _) = shadows.plan(&owners, &frame(&lit), &lit.scene, 1, 0.0);
+        let first = ids_of(&first);
+        // The second owner is gone, and so is the lamp's shadow.
+        let mut next = frame(&lit);
+        next.local_shadow_casters.truncate(1);
+        let (second, released) = shadows.plan(&owners[..1], &next, &lit.scene, 2, 0.1);
+        assert_eq!(ids_of(&second), [first[0], first[1], first[4]]);
+        assert_eq!(released, [&first[2..4], &first[5..]].concat());
+        // Without a shadow sun every cascade goes.
+        next.shadow_sun = None;
+        let (third, released) = shadows.plan(&owners[..1], &next, &lit.scene, 3, 0.2);
+        assert_eq!((ids_of(&third), released), (vec![first[4]], vec![first[0], first[1]]));
+    }
+
+    #[test]
+    fn the_cascade_count_is_clamped_between_one_and_what_the_shader_samples() {
+        let lit = lit();
+        for (count, planned) in [(0, 1), (3, 3), (9, oxygen_passes::MAX_CASCADES)] {
+            let mut shadows = ShadowViews::new(None);
+            let (cascades, _) = shadows.plan(&owners::<1>(&lit, count), &frame(&lit), &lit.scene, 1, 0.0);
+            assert_eq!(cascades.len(), planned, "count {count}");
+            assert!(cascades.iter().all(|c| c.resolved.is_ok()), "count {count}");
+        }
+    }
+
+    #[test]
+    fn without_a_shadow_sun_or_local_settings_nothing_is_planned() {
+        let mut lit = lit();
+        let mut shadows = ShadowViews::new(None);
+        let mut sunless = frame(&lit);
+        sunless.shadow_sun = None;
+        assert!(shadows.plan(&owners::<1>(&lit, 2), &sunless, &lit.scene, 1, 0.0).0.is_empty());
+        // A sun whose node is gone casts nothing either.
+        let gone = frame(&lit);
+        lit.scene.remove_node(lit.sun).unwrap();
+        assert!(shadows.plan(&owners::<1>(&lit, 2), &gone, &lit.scene, 2, 0.0).0.is_empty());
+        assert_eq!(shadows.all().count(), 0);
+    }
+
+    #[test]
+    fn an_owners_cascades_are_listed_nearest_first_and_all_lists_every_shadow_view() {
+        let lit = lit();
+        let mut shadows = ShadowViews::new(local());
+        let owners = owners::<2>(&lit, 3);
+        let (planned, _) = shadows.plan(&owners, &frame(&lit), &lit.scene, 1, 0.0);
+        let ids = ids_of(&planned);
+        assert_eq!(shadows.cascades_of(owners[0].0).collect::<Vec<_>>(), ids[0..3]);
+        assert_eq!(shadows.cascades_of(owners[1].0).collect::<Vec<_>>(), ids[3..6]);
+        assert_eq!(shadows.all().collect::<Vec<_>>(), ids);
+    }
+
+    #[test]
+    fn forgetting_an_owner_drops_its_cascades_and_no_others() {
+        let lit = lit();
+        let mut shadows = ShadowViews::new(local());
+        let owners = owners::<2>(&lit, 2);
+        let (planned, _) = shadows.plan(&owners, &frame(&lit), &lit.scene, 1, 0.0);
+        let ids = ids_of(&planned);
+        shadows.forget_owner(owners[0].0);
+        assert_eq!(shadows.cascades_of(owners[0].0).count(), 0);
+        assert_eq!(shadows.cascades_of(owners[1].0).collect::<Vec<_>>(), ids[2..4]);
+        assert_eq!(shadows.all().collect::<Vec<_>>(), ids[2..]);
+    }
+}

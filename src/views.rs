@@ -579,3 +579,510 @@ impl Views {
         Ok(&frames[0])
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::graph::standard_render_graph;
+    use glam::{UVec2, Vec3, Vec4};
+    use oxygen_core::{Geometry, Light, Material, Renderable, Transform, ViewIdRange};
+    use oxygen_gpu::{Label, Msaa};
+
+    fn camera() -> LookAtResolver {
+        LookAtResolver::new(
+            Camera::perspective(50f32.to_radians(), 0.1, Some(60.0)),
+            Vec3::new(0.0, 2.0, 8.0),
+            Vec3::ZERO,
+            UVec2::new(64, 48),
+        )
+        .unwrap()
+    }
+
+    fn register(views: &mut Views, desc: impl Into<ViewDesc>) -> ViewId {
+        views.register(desc, standard_render_graph).unwrap()
+    }
+
+    fn links(views: &Views, view: ViewId) -> Vec<OutputSource> {
+        views.entries[&view].links.clone()
+    }
+
+    /// An id that was registered and is not any more.
+    fn gone(views: &mut Views) -> ViewId {
+        let id = register(views, camera());
+        views.unregister(id).unwrap();
+        id
+    }
+
+    /// A probe as the renderer registers one: its six faces under ids of the
+    /// probe-face range, then the probe.
+    fn add_probe(views: &mut Views, face_ids: &mut ViewIds) -> (ProbeId, [ViewId; oxygen_passes::PROBE_FACES]) {
+        let probe = views.allocate_probe();
+        let faces = std::array::from_fn(|face| {
+            let id = face_ids.allocate();
+            let mut desc = ViewDesc::new(camera());
+            desc.target = TargetKind::ProbeFace { probe, face: face as u32 };
+            views.register_owned(id, desc, standard_render_graph);
+            id
+        });
+        views.probes.insert(probe, faces);
+        (probe, faces)
+    }
+
+    fn rig(size: UVec2) -> BatchDesc {
+        BatchDesc::new("rig", size)
+    }
+
+    fn looking_down(size: UVec2) -> LookAtResolver {
+        LookAtResolver::new(
+            Camera::perspective(60f32.to_radians(), 0.1, None),
+            Vec3::new(0.0, 9.0, 0.0),
+            Vec3::ZERO,
+            size,
+        )
+        .unwrap()
+        .with_up(Vec3::NEG_Z)
+        .unwrap()
+    }
+
+    /// Nine unit boxes on a 3 × 3 grid, two units apart, under a sun.
+    fn boxes() -> Scene {
+        let mut scene = Scene::new();
+        let grey = scene.add_material(Material::opaque("grey", Vec4::splat(0.6)));
+        let cube = scene.add_geometry(Geometry::cube(1.0));
+        for row in 0..3 {
+            for column in 0..3 {
+                let at = Vec3::new(column as f32 * 2.0 - 2.0, 0.5, row as f32 * 2.0 - 2.0);
+                let node = scene.add_node("box", Transform::from_translation(at));
+                scene.set_renderable(node, Renderable { geometry: cube, materials: vec![grey] }).unwrap();
+            }
+        }
+        let sun = scene.add_node("sun", Transform::IDENTITY);
+        scene.set_light(sun, Some(Light::directional(1.0))).unwrap();
+        scene
+    }
+
+    #[test]
+    fn a_description_keeps_what_its_builders_ask_for() {
+        let cascades = CascadeSettings { count: 2, ..Default::default() };
+        let options = ViewPrepOptions { lod_bias: 2.0, ..Default::default() };
+        let rect = crate::WindowRect::grid(2, 1, 1, 0);
+        let desc = ViewDesc::new(camera())
+            .with_options(options)
+            .with_label_planes(LabelSet::of(&[Label::Normal]))
+            .with_schedule(Schedule::EveryNth(4))
+            .with_priority(7)
+            .named("main")
+            .with_msaa(Msaa::X4)
+            .shown_in(crate::WindowId(3), rect)
+            .with_visibility(Visibility::GpuFrustum)
+            .with_sun_shadows(cascades);
+        assert_eq!(desc.options, options);
+        assert_eq!(desc.labels, LabelSet::of(&[Label::Normal]));
+        assert_eq!(desc.schedule, Schedule::EveryNth(4));
+        assert_eq!(desc.priority, 7);
+        assert_eq!(desc.name.as_deref(), Some("main"));
+        assert_eq!(desc.msaa, Msaa::X4);
+        assert_eq!(desc.shown, Some((crate::WindowId(3), rect)));
+        assert_eq!(desc.visibility, Some(Visibility::GpuFrustum));
+        assert_eq!(desc.sun_shadows, Some(cascades));
+        assert_eq!(desc.target, TargetKind::Own);
+        assert_eq!(ViewDesc::new(camera()).with_labels().labels, LabelSet::ALL);
+    }
+
+    /// A path-traced reference is prepared on the CPU path whatever else it
+    /// was told, and keeps the ray-tracing scene.
+    #[test]
+    fn a_path_traced_view_keeps_the_ray_scene_and_is_culled_on_the_cpu() {
+        let desc = ViewDesc::new(camera()).with_visibility(Visibility::GpuOcclusion).path_traced();
+        assert!(desc.options.ray_scene);
+        assert_eq!(desc.visibility, Some(Visibility::Cpu));
+    }
+
+    #[test]
+    fn reading_two_outputs_of_one_view_links_it_once() {
+        let mut views = Views::new();
+        let [a, b] = std::array::from_fn(|_| register(&mut views, camera()));
+        let desc = ViewDesc::new(camera()).reads(a.hdr()).reads(a.depth()).reads(b.depth());
+        assert_eq!(desc.links, [OutputSource::View(a), OutputSource::View(b)]);
+    }
+
+    #[test]
+    fn a_registered_view_keeps_its_description_and_starts_active() {
+        let mut views = Views::new();
+        let source = register(&mut views, camera());
+        let desc = ViewDesc::from(camera())
+            .named("main")
+            .with_schedule(Schedule::Once)
+            .with_priority(3)
+            .with_msaa(Msaa::X2)
+            .reads(source.depth());
+        let id = register(&mut views, desc);
+        let entry = &views.entries[&id];
+        assert!(entry.active);
+        assert_eq!(entry.name.as_deref(), Some("main"));
+        assert_eq!(entry.schedule, Schedule::Once);
+        assert_eq!(entry.priority, 3);
+        assert_eq!(entry.msaa, Msaa::X2);
+        assert_eq!(entry.links, [OutputSource::View(source)]);
+        assert_eq!(entry.target, TargetKind::Own);
+    }
+
+    #[test]
+    fn registered_views_get_fresh_application_ids_listed_in_order() {
+        let mut views = Views::default();
+        let ids: Vec<ViewId> = (0..3).map(|_| register(&mut views, camera())).collect();
+        assert_eq!(views.ids().collect::<Vec<_>>(), ids);
+        assert!(ids.windows(2).all(|w| w[0] < w[1]));
+        assert!(ids.iter().all(|id| id.range() == ViewIdRange::Application));
+    }
+
+    #[test]
+    fn labels_are_refused_on_a_multisampled_or_depth_only_view_only() {
+        let mut views = Views::new();
+        let depth_only = ViewPrepOptions { depth_only: true, ..Default::default() };
+        for refused in [
+            ViewDesc::new(camera()).with_labels().with_msaa(Msaa::X2),
+            ViewDesc::new(camera()).with_labels().with_options(depth_only),
+        ] {
+            let result = views.register(refused, standard_render_graph);
+            assert!(matches!(result, Err(RenderError::Unsupported(_))), "{result:?}");
+        }
+        assert_eq!(views.ids().count(), 0);
+        register(&mut views, ViewDesc::new(camera()).with_labels());
+        register(&mut views, ViewDesc::new(camera()).with_msaa(Msaa::X4));
+        register(&mut views, ViewDesc::new(camera()).with_options(depth_only));
+        assert_eq!(views.ids().count(), 3);
+    }
+
+    #[test]
+    fn a_schedule_that_cannot_be_kept_is_refused_at_registration() {
+        let mut views = Views::new();
+        for schedule in [Schedule::EveryNth(0), Schedule::Rate(0.0), Schedule::Rate(f64::NAN)] {
+            let result = views.register(ViewDesc::new(camera()).with_schedule(schedule), standard_render_graph);
+            assert!(matches!(result, Err(RenderError::InvalidSchedule { view: None, .. })), "{result:?}");
+        }
+        assert_eq!(views.ids().count(), 0);
+    }
+
+    #[test]
+    fn a_view_reading_a_missing_view_or_probe_is_refused() {
+        let mut views = Views::new();
+        let gone = gone(&mut views);
+        let result = views.register(ViewDesc::new(camera()).reads(gone.hdr()), standard_render_graph);
+        assert!(matches!(result, Err(RenderError::NoSuchView(v)) if v == gone), "{result:?}");
+        let unregistered = views.allocate_probe();
+        let result = views.register(ViewDesc::new(camera()).reads(unregistered.cube()), standard_render_graph);
+        assert!(matches!(result, Err(RenderError::NoSuchProbe(p)) if p == unregistered), "{result:?}");
+        assert_eq!(views.ids().count(), 0);
+    }
+
+    #[test]
+    fn a_view_may_read_registered_views_and_probes() {
+        let mut views = Views::new();
+        let (probe, _) = add_probe(&mut views, &mut ViewIds::new(ViewIdRange::ProbeFace));
+        let a = register(&mut views, camera());
+        let reader = register(&mut views, ViewDesc::new(camera()).reads(a.hdr()).reads(probe.cube()));
+        assert_eq!(links(&views, reader), [OutputSource::View(a), OutputSource::Probe(probe)]);
+    }
+
+    #[test]
+    fn a_probe_face_is_a_view_under_the_id_the_renderer_gave_it() {
+        let mut views = Views::new();
+        let (probe, faces) = add_probe(&mut views, &mut ViewIds::new(ViewIdRange::ProbeFace));
+        assert_eq!(views.ids().collect::<Vec<_>>(), faces);
+        assert_eq!(views.entries[&faces[4]].target, TargetKind::ProbeFace { probe, face: 4 });
+        // The application's ids are not taken by the faces.
+        assert_eq!(register(&mut views, camera()).to_string(), "view#0");
+    }
+
+    #[test]
+    fn linking_adds_a_producer_once() {
+        let mut views = Views::new();
+        let [a, b] = std::array::from_fn(|_| register(&mut views, camera()));
+        views.link(b, a.hdr()).unwrap();
+        views.link(b, a.depth()).unwrap();
+        assert_eq!(links(&views, b), [OutputSource::View(a)]);
+        assert!(links(&views, a).is_empty());
+    }
+
+    #[test]
+    fn linking_from_or_to_what_is_not_registered_fails() {
+        let mut views = Views::new();
+        let a = register(&mut views, camera());
+        let gone = gone(&mut views);
+        let result = views.link(gone, a.hdr());
+        assert!(matches!(result, Err(RenderError::NoSuchView(v)) if v == gone), "{result:?}");
+        let result = views.link(a, gone.hdr());
+        assert!(matches!(result, Err(RenderError::NoSuchView(v)) if v == gone), "{result:?}");
+        let unregistered = views.allocate_probe();
+        let result = views.link(a, unregistered.cube());
+        assert!(matches!(result, Err(RenderError::NoSuchProbe(p)) if p == unregistered), "{result:?}");
+        assert!(links(&views, a).is_empty());
+    }
+
+    #[test]
+    fn a_link_to_itself_or_back_through_other_views_closes_a_cycle() {
+        let mut views = Views::new();
+        let a = register(&mut views, camera());
+        let b = register(&mut views, ViewDesc::new(camera()).reads(a.hdr()));
+        let c = register(&mut views, ViewDesc::new(camera()).reads(b.depth()));
+        let result = views.link(a, a.depth());
+        assert!(matches!(&result, Err(RenderError::LinkCycle { view, output }) if *view == a && output == "view#0"));
+        let result = views.link(a, c.hdr());
+        assert!(matches!(&result, Err(RenderError::LinkCycle { view, output }) if *view == a && output == "view#2"));
+        assert!(links(&views, a).is_empty(), "a refused link is not added");
+    }
+
+    /// Reading a view that reads others is no cycle: only a path back to
+    /// the reader is.
+    #[test]
+    fn a_view_may_link_to_a_view_that_reads_others() {
+        let mut views = Views::new();
+        let a = register(&mut views, camera());
+        let b = register(&mut views, ViewDesc::new(camera()).reads(a.hdr()));
+        let d = register(&mut views, camera());
+        views.link(d, b.hdr()).unwrap();
+        views.link(d, a.hdr()).unwrap();
+        assert_eq!(links(&views, d), [OutputSource::View(b), OutputSource::View(a)]);
+    }
+
+    /// A probe's cube is produced by its six faces: a face cannot read a
+    /// view that reads the cube, nor a view the cube of a probe whose faces
+    /// read that view.
+    #[test]
+    fn a_probes_faces_and_the_views_reading_its_cube_cannot_wait_for_each_other() {
+        let mut views = Views::new();
+        let mut face_ids = ViewIds::new(ViewIdRange::ProbeFace);
+        let (probe, faces) = add_probe(&mut views, &mut face_ids);
+        let reader = register(&mut views, ViewDesc::new(camera()).reads(probe.cube()));
+        let result = views.link(faces[2], reader.hdr());
+        assert!(matches!(result, Err(RenderError::LinkCycle { view, .. }) if view == faces[2]), "{result:?}");
+
+        let (other, other_faces) = add_probe(&mut views, &mut face_ids);
+        let source = register(&mut views, camera());
+        views.link(other_faces[5], source.hdr()).unwrap();
+        let result = views.link(source, other.cube());
+        assert!(matches!(&result, Err(RenderError::LinkCycle { output, .. }) if output == "probe#1"), "{result:?}");
+    }
+
+    #[test]
+    fn a_batch_needs_cameras_of_some_size() {
+        let mut views = Views::new();
+        for size in [UVec2::new(0, 8), UVec2::new(8, 0)] {
+            let result = views.register_batch(rig(size));
+            assert!(matches!(&result, Err(RenderError::InvalidBatch { name, .. }) if name == "rig"), "{result:?}");
+        }
+        let batch = views.register_batch(rig(UVec2::new(8, 8))).unwrap();
+        assert_eq!(views.batch_name(batch), Some("rig"));
+    }
+
+    #[test]
+    fn a_batchs_pages_must_hold_one_camera_on_its_longer_side() {
+        let mut views = Views::new();
+        let size = UVec2::new(8, 16);
+        let result = views.register_batch(rig(size).with_max_page_side(15));
+        assert!(matches!(result, Err(RenderError::InvalidBatch { .. })), "{result:?}");
+        for side in [16, 32] {
+            let batch = views.register_batch(rig(size).with_max_page_side(side)).unwrap();
+            assert_eq!(views.batches[&batch].max_page_side, Some(side));
+        }
+    }
+
+    #[test]
+    fn batch_cameras_take_tiles_in_order_and_are_named_after_their_batch_and_tile() {
+        let mut views = Views::new();
+        let lone = register(&mut views, camera());
+        let batch = views.register_batch(rig(UVec2::new(8, 8))).unwrap();
+        let x = views.add_camera(batch, camera()).unwrap();
+        let y = views.add_camera(batch, ViewDesc::new(camera()).named("left eye")).unwrap();
+        let z = views.add_camera(batch, camera()).unwrap();
+        assert_eq!(views.batch_cameras(batch).unwrap(), [x, y, z]);
+        assert_eq!([views.name(x), views.name(y), views.name(z)], [Some("rig[0]"), Some("left eye"), Some("rig[2]")]);
+        assert_eq!(views.entries[&z].target, TargetKind::Tile { batch, slot: 2 });
+        assert_eq!([views.batch_of(x), views.batch_of(lone)], [Some(batch), None]);
+        assert_eq!(views.ids().collect::<Vec<_>>(), [lone, x, y, z]);
+    }
+
+    #[test]
+    fn a_batch_camera_draws_the_label_planes_of_its_own_and_its_batchs() {
+        let mut views = Views::new();
+        let batch =
+            views.register_batch(rig(UVec2::new(8, 8)).with_label_planes(LabelSet::of(&[Label::Instance]))).unwrap();
+        let id = views.add_camera(batch, ViewDesc::new(camera()).with_label_planes(LabelSet::of(&[Label::Normal])));
+        let labels = views.entries[&id.unwrap()].labels;
+        assert_eq!(labels, LabelSet::of(&[Label::Instance, Label::Normal]));
+    }
+
+    #[test]
+    fn a_batch_camera_cannot_have_msaa_sun_cascades_a_window_or_a_path_traced_reference() {
+        let mut views = Views::new();
+        let batch = views.register_batch(rig(UVec2::new(8, 8))).unwrap();
+        for (desc, what) in [
+            (ViewDesc::new(camera()).with_msaa(Msaa::X4), "anti-aliasing"),
+            (ViewDesc::new(camera()).with_sun_shadows(CascadeSettings::default()), "sun cascades"),
+            (ViewDesc::new(camera()).shown_in(crate::WindowId(0), crate::WindowRect::FULL), "a window rectangle"),
+            (ViewDesc::new(camera()).path_traced(), "a path-traced reference"),
+        ] {
+            let reason = match views.add_camera(batch, desc) {
+                Err(RenderError::InvalidBatch { name, reason }) if name == "rig" => reason,
+                other => panic!("{what}: {other:?}"),
+            };
+            assert!(reason.contains(what), "{what}: {reason}");
+        }
+        assert!(views.batch_cameras(batch).unwrap().is_empty());
+        assert_eq!(views.ids().count(), 0);
+    }
+
+    #[test]
+    fn a_batchs_cameras_share_one_visibility_path() {
+        let mut views = Views::new();
+        let batch = views.register_batch(rig(UVec2::new(8, 8))).unwrap();
+        let gpu = || ViewDesc::new(camera()).with_visibility(Visibility::GpuFrustum);
+        views.add_camera(batch, gpu()).unwrap();
+        views.add_camera(batch, gpu()).unwrap();
+        for other in [ViewDesc::new(camera()).with_visibility(Visibility::Cpu), ViewDesc::new(camera())] {
+            let result = views.add_camera(batch, other);
+            assert!(matches!(&result, Err(RenderError::InvalidBatch { reason, .. }) if reason.contains("share")));
+        }
+        assert_eq!(views.batch_cameras(batch).unwrap().len(), 2);
+    }
+
+    #[test]
+    fn a_camera_of_a_missing_batch_or_reading_a_missing_view_is_refused() {
+        let mut views = Views::new();
+        let batch = views.register_batch(rig(UVec2::new(8, 8))).unwrap();
+        let gone = gone(&mut views);
+        let result = views.add_camera(batch, ViewDesc::new(camera()).reads(gone.depth()));
+        assert!(matches!(result, Err(RenderError::NoSuchView(v)) if v == gone), "{result:?}");
+        views.unregister_batch(batch).unwrap();
+        let result = views.add_camera(batch, camera());
+        assert!(matches!(result, Err(RenderError::NoSuchBatch(b)) if b == batch), "{result:?}");
+        assert_eq!(views.ids().count(), 0);
+    }
+
+    #[test]
+    fn an_unregistered_camera_frees_its_tile_for_the_next_and_the_others_keep_theirs() {
+        let mut views = Views::new();
+        let batch = views.register_batch(rig(UVec2::new(8, 8))).unwrap();
+        let [x, y] = std::array::from_fn(|_| views.add_camera(batch, camera()).unwrap());
+        views.unregister(x).unwrap();
+        assert_eq!(views.batch_cameras(batch).unwrap(), [y]);
+        let z = views.add_camera(batch, camera()).unwrap();
+        assert_eq!(views.batch_cameras(batch).unwrap(), [z, y]);
+        assert_eq!(views.name(z), Some("rig[0]"));
+        assert_eq!(views.entries[&y].target, TargetKind::Tile { batch, slot: 1 });
+    }
+
+    #[test]
+    fn unregistering_a_batch_removes_it_and_its_cameras_only() {
+        let mut views = Views::new();
+        let lone = register(&mut views, camera());
+        let batch = views.register_batch(rig(UVec2::new(8, 8))).unwrap();
+        views.add_camera(batch, camera()).unwrap();
+        views.add_camera(batch, camera()).unwrap();
+        views.unregister_batch(batch).unwrap();
+        assert_eq!(views.ids().collect::<Vec<_>>(), [lone]);
+        assert_eq!(views.batch_name(batch), None);
+        assert!(matches!(views.batch_cameras(batch), Err(RenderError::NoSuchBatch(b)) if b == batch));
+        assert!(matches!(views.unregister_batch(batch), Err(RenderError::NoSuchBatch(b)) if b == batch));
+    }
+
+    #[test]
+    fn a_name_finds_the_first_view_registered_under_it() {
+        let mut views = Views::new();
+        let main = register(&mut views, ViewDesc::new(camera()).named("main"));
+        let unnamed = register(&mut views, camera());
+        let inset = register(&mut views, ViewDesc::new(camera()).named("inset"));
+        let again = register(&mut views, ViewDesc::new(camera()).named("main"));
+        assert_eq!([views.name(main), views.name(unnamed), views.name(again)], [Some("main"), None, Some("main")]);
+        assert_eq!([views.find("inset"), views.find("main"), views.find("side")], [Some(inset), Some(main), None]);
+        views.unregister(inset).unwrap();
+        assert_eq!((views.name(inset), views.find("inset")), (None, None));
+    }
+
+    #[test]
+    fn unregistering_a_view_drops_the_links_to_it_and_no_others() {
+        let mut views = Views::new();
+        let [a, b] = std::array::from_fn(|_| register(&mut views, camera()));
+        let c = register(&mut views, ViewDesc::new(camera()).reads(a.hdr()).reads(b.depth()));
+        views.unregister(a).unwrap();
+        assert_eq!(links(&views, c), [OutputSource::View(b)]);
+        assert_eq!(views.ids().collect::<Vec<_>>(), [b, c]);
+        assert!(matches!(views.unregister(a), Err(RenderError::NoSuchView(v)) if v == a));
+    }
+
+    #[test]
+    fn a_schedule_set_later_is_kept_unless_registration_would_refuse_it() {
+        let mut views = Views::new();
+        let a = register(&mut views, camera());
+        views.set_schedule(a, Schedule::EveryNth(3)).unwrap();
+        assert_eq!(views.entries[&a].schedule, Schedule::EveryNth(3));
+        let result = views.set_schedule(a, Schedule::Rate(-1.0));
+        assert!(matches!(result, Err(RenderError::InvalidSchedule { view: Some(v), .. }) if v == a), "{result:?}");
+        assert_eq!(views.entries[&a].schedule, Schedule::EveryNth(3));
+        let gone = gone(&mut views);
+        let result = views.set_schedule(gone, Schedule::Once);
+        assert!(matches!(result, Err(RenderError::NoSuchView(v)) if v == gone), "{result:?}");
+    }
+
+    #[test]
+    fn a_view_is_paused_and_resumed() {
+        let mut views = Views::new();
+        let a = register(&mut views, camera());
+        views.set_active(a, false).unwrap();
+        assert!(!views.entries[&a].active);
+        views.set_active(a, true).unwrap();
+        assert!(views.entries[&a].active);
+        let gone = gone(&mut views);
+        assert!(matches!(views.set_active(gone, false), Err(RenderError::NoSuchView(v)) if v == gone));
+    }
+
+    /// Each call is a frame of its own, numbered from 1 as a renderer's are.
+    #[test]
+    fn preparing_hands_the_resolver_the_view_and_frames_numbered_from_one() {
+        let mut views = Views::new();
+        let failing = |ctx: &ViewContext, _: &Scene| -> Result<ResolvedView, ViewError> {
+            Err(ViewError::Other { view: ctx.view_id, message: format!("frame {}", ctx.frame_index) })
+        };
+        let id = register(&mut views, failing);
+        for frame in 1..=2 {
+            let message = match views.prepare(&Scene::new(), id).map(|_| ()) {
+                Err(RenderError::View(ViewError::Other { view, message })) if view == id => message,
+                other => panic!("{other:?}"),
+            };
+            assert_eq!(message, format!("frame {frame}"));
+        }
+    }
+
+    #[test]
+    fn preparing_a_view_draws_what_it_sees() {
+        let mut views = Views::new();
+        let id = register(&mut views, looking_down(UVec2::new(64, 64)));
+        let frame = views.prepare(&boxes(), id).unwrap();
+        assert_eq!(frame.view_id(), id);
+        assert_eq!(frame.draws().len(), 9);
+        let gone = gone(&mut views);
+        assert!(matches!(views.prepare(&boxes(), gone), Err(RenderError::NoSuchView(v)) if v == gone));
+    }
+
+    /// The resolver asks for a wide image; the batch's narrow size wins, as
+    /// it does when the renderer resolves the camera.
+    #[test]
+    fn a_batch_camera_is_prepared_at_its_batchs_size() {
+        let scene = boxes();
+        let narrow = UVec2::new(16, 64);
+        let draws = |desc: &mut dyn FnMut(&mut Views) -> ViewId| {
+            let mut views = Views::new();
+            let id = desc(&mut views);
+            views.prepare(&scene, id).unwrap().canonical_draws()
+        };
+        let batched = draws(&mut |views| {
+            let batch = views.register_batch(rig(narrow)).unwrap();
+            views.add_camera(batch, looking_down(UVec2::new(480, 100))).unwrap()
+        });
+        let lone_narrow = draws(&mut |views| register(views, looking_down(narrow)));
+        let lone_wide = draws(&mut |views| register(views, looking_down(UVec2::new(480, 100))));
+        assert_eq!(batched, lone_narrow);
+        assert_ne!(batched, lone_wide, "the sizes must frame different boxes for this test to tell");
+    }
+}

@@ -215,7 +215,9 @@ mod tests {
             .enumerate()
             .map(|(i, &(member, cost))| {
                 let view = table.add(member, 100 + i as u32);
-                table.views.get_mut(&view).map(|p| p.cost = cost);
+                if let Some(placed) = table.views.get_mut(&view) {
+                    placed.cost = cost;
+                }
                 view
             })
             .collect();
