@@ -24,11 +24,19 @@
 #              layouts, the bind-group layout builder, the gpu_struct layout
 #              checks, adapter ranking; not what needs a device (creating
 #              contexts and targets, reading back), which the GPU tests cover
-#   root       the root crate's modules that have unit tests of their own
-#              (batches, graphs, renderer groups, schedules, windows, the
-#              renderer's recording), tested by the root crate's unit tests
-#              (--lib): the rest of the root crate outside the importer is
-#              reached only by rendering tests (see docs/testing.md)
+#   root       the root crate's CPU logic outside the importer: batches,
+#              graphs, renderer groups, schedules (and the renderer's
+#              schedules subsystem), windows' rectangles, the view registry,
+#              shadow planning, the renderer's recording order and executor,
+#              read-back images (not the Renderer methods that read a
+#              device), tested by the root crate's unit tests (--lib); the
+#              rest of the root crate records and reads GPU work, reached by
+#              the GPU tests (see docs/testing.md)
+#   streams    the CPU side of batch streaming (renderer/streams.rs: page
+#              layouts in a staging buffer, cutting mapped pages into the
+#              cameras' blocks, frames' accessors, spare buffers), tested by
+#              the root crate's unit tests; not the rings' copies, mappings
+#              and threads, which tests/batch_views.rs covers on a device
 #   demo       oxygen-demo's record writer and span timer (the evidence the
 #              benches and tests write; the demo scenes themselves are
 #              fixtures, checked by the tests that render them)
@@ -107,6 +115,12 @@ case "$scope" in
       # unit tests) reach none of these files.
       --cargo-test-arg=-- --cargo-test-arg=--skip --cargo-test-arg=gltf_import)
     ;;
+  streams)
+    args=(-p oxygen --file src/renderer/streams.rs
+      -E 'Ring::|Streams::(new|after_submit|take)\b|arrive|\bcut\b|Slot::new|Renderer::|PageLayout::of'
+      --cargo-arg=--lib
+      --cargo-test-arg=-- --cargo-test-arg=--skip --cargo-test-arg=gltf_import)
+    ;;
   demo)
     args=(-p oxygen-demo --test-package oxygen-demo
       --file oxygen-demo/src/record.rs --file oxygen-demo/src/span_times.rs)
@@ -120,7 +134,7 @@ case "$scope" in
     default_timeout=90
     ;;
   *)
-    say "unknown scope '$scope' (core, bindless, sceneprep, passes, importer, gpu, demo, root, node)"
+    say "unknown scope '$scope' (core, bindless, sceneprep, passes, importer, gpu, demo, root, streams, node)"
     exit 2
     ;;
 esac

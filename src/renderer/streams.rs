@@ -616,13 +616,23 @@ fn cut(
     batch: BatchId,
 ) -> Result<StreamedFrame, RenderError> {
     let _span = info_span!("stream_cut", batch = %batch, cameras = content.cameras.len()).entered();
+    {
+        let mapped = buffer.slice(..content.layout.bytes()).get_mapped_range().map_err(oxygen_gpu::GpuError::from)?;
+        cut_pages(&mapped, &content, &mut planes);
+    }
+    buffer.unmap();
+    Ok(frame_of(content, planes, batch))
+}
+
+/// Cuts `mapped` (a staging buffer's pages, laid out as `content.layout`
+/// says) into `planes`: camera after camera, in the order of `content`'s
+/// cameras.
+fn cut_pages(mapped: &[u8], content: &SlotContent, planes: &mut Planes) {
     let layout = content.layout;
     let (w, h) = layout.tile;
     let row = w as usize * 4;
     let camera_bytes = row * h as usize;
     {
-        let mapped = buffer.slice(..layout.bytes()).get_mapped_range().map_err(oxygen_gpu::GpuError::from)?;
-        let mapped: &[u8] = &mapped;
         // Copies one camera's rows of one plane into its block.
         let copy = |tile: &Tile, plane: Plane, out: &mut [u8]| {
             let base = layout.offset(tile.page, plane) as usize;
@@ -662,7 +672,10 @@ fn cut(
             });
         }
     }
-    buffer.unmap();
+}
+
+/// The frame `content`'s pages were cut into `planes`.
+fn frame_of(content: SlotContent, mut planes: Planes, batch: BatchId) -> StreamedFrame {
     // The GPU wrote little-endian words; on a big-endian host they turn round.
     if cfg!(target_endian = "big") {
         for words in [&mut planes.instances, &mut planes.semantic].into_iter().flatten() {
@@ -672,18 +685,18 @@ fn cut(
             floats.iter_mut().for_each(|f| *f = f32::from_bits(u32::from_le(f.to_bits())));
         }
     }
-    Ok(StreamedFrame {
+    StreamedFrame {
         batch,
         frame: content.frame,
         time_seconds: content.time_seconds,
-        size: (w, h),
+        size: content.layout.tile,
         views: content.cameras.iter().map(|(view, _)| *view).collect(),
         color: planes.color,
         depth: planes.depth,
         instances: planes.instances,
         semantic: planes.semantic,
         linear_depth: planes.linear_depth,
-    })
+    }
 }
 
 impl Renderer {
@@ -756,5 +769,184 @@ impl Renderer {
         let entry = self.views.batches.get(&batch)?;
         let tiles = entry.slots.iter().enumerate().filter_map(|(i, v)| Some(((*v)?, atlas.tile(i as u32)?))).collect();
         Some((atlas, tiles))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    //! The CPU side of streaming: where a page's planes lie in a staging
+    //! buffer, cutting mapped pages into cameras' blocks, the frames'
+    //! accessors, and the spare buffers; the copies and mappings are the
+    //! GPU tests' (`tests/batch_views.rs`).
+
+    use super::*;
+
+    fn batch() -> BatchId {
+        crate::batch::BatchIds::default().allocate()
+    }
+
+    /// Two pages of 8 × 4 pixels, tiles of 4 × 2; colour, depth, instance
+    /// ids and linear depth streamed.
+    fn layout() -> PageLayout {
+        PageLayout {
+            width: 8,
+            height: 4,
+            pages: 2,
+            tile: (4, 2),
+            row_bytes: 256,
+            color: true,
+            depth: true,
+            labels: LabelSet::of(&[Label::LinearDepth, Label::Instance]),
+        }
+    }
+
+    /// The word the fake staging buffer holds at `page`, plane number
+    /// `plane`, row `y`, column `x`.
+    fn word(page: u32, plane: u32, y: u32, x: u32) -> u32 {
+        (page << 24) | (plane << 16) | (y << 8) | x
+    }
+
+    /// A staging buffer as the copies leave it: every texel its own word,
+    /// the rows' padding past the page's width left at 0xAB.
+    fn mapped(layout: &PageLayout) -> Vec<u8> {
+        let mut bytes = vec![0xAB; layout.bytes() as usize];
+        for page in 0..layout.pages {
+            for (k, plane) in layout.planes().enumerate() {
+                let base = layout.offset(page, plane) as usize;
+                for y in 0..layout.height {
+                    for x in 0..layout.width {
+                        let at = base + (y * layout.row_bytes + x * 4) as usize;
+                        bytes[at..at + 4].copy_from_slice(&word(page, k as u32, y, x).to_le_bytes());
+                    }
+                }
+            }
+        }
+        bytes
+    }
+
+    fn view(i: u32) -> ViewId {
+        oxygen_demo::view_id(i)
+    }
+
+    fn tile(page: u32, x: u32, y: u32) -> Tile {
+        Tile { x, y, page, index: 0 }
+    }
+
+    #[test]
+    fn a_page_lays_its_planes_one_after_another_and_pages_follow() {
+        let layout = layout();
+        let planes: Vec<Plane> = layout.planes().collect();
+        assert_eq!(
+            planes,
+            [Plane::Color, Plane::Depth, Plane::Label(Label::Instance), Plane::Label(Label::LinearDepth)]
+        );
+        assert_eq!(layout.page_bytes(), 256 * 4);
+        assert_eq!(layout.offset(0, Plane::Color), 0);
+        assert_eq!(layout.offset(0, Plane::Depth), 1024);
+        assert_eq!(layout.offset(0, Plane::Label(Label::LinearDepth)), 3 * 1024);
+        assert_eq!(layout.offset(1, Plane::Color), 4 * 1024);
+        assert_eq!(layout.offset(1, Plane::Label(Label::Instance)), 6 * 1024);
+        assert_eq!(layout.bytes(), 2 * 4 * 1024);
+        let depth_only = PageLayout { color: false, labels: LabelSet::NONE, ..layout };
+        assert_eq!(depth_only.planes().collect::<Vec<_>>(), [Plane::Depth]);
+        assert_eq!(depth_only.offset(1, Plane::Depth), 1024);
+        assert_eq!(depth_only.bytes(), 2 * 1024);
+    }
+
+    #[test]
+    fn mapped_pages_are_cut_into_each_cameras_block_of_each_plane() {
+        let layout = layout();
+        // Three cameras (two threads' runs on a machine of two cores or
+        // more): on page 0 at the corner and in the middle, on page 1.
+        let cameras = vec![(view(3), tile(0, 0, 0)), (view(1), tile(0, 4, 2)), (view(2), tile(1, 4, 0))];
+        let content = SlotContent { frame: 9, time_seconds: 0.5, layout, cameras: cameras.clone() };
+        let mut spare = Spare::default();
+        let mut planes = Planes::for_layout(&layout, cameras.len(), &mut spare);
+        assert!(planes.semantic.is_none(), "a plane not streamed has no buffer");
+        cut_pages(&mapped(&layout), &content, &mut planes);
+        let frame = frame_of(content, planes, batch());
+        assert_eq!((frame.frame, frame.time_seconds, frame.size), (9, 0.5, (4, 2)));
+        assert_eq!(frame.views, [view(3), view(1), view(2)]);
+        for (i, (id, t)) in cameras.iter().enumerate() {
+            let camera = frame.camera(i).unwrap();
+            assert_eq!(camera.view, *id);
+            assert_eq!(frame.camera_of(*id), Some(camera));
+            let want = |plane: u32| -> Vec<u32> {
+                (0..2).flat_map(|y| (0..4).map(move |x| word(t.page, plane, t.y + y, t.x + x))).collect()
+            };
+            let color: Vec<u32> =
+                camera.color.unwrap().chunks_exact(4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect();
+            assert_eq!(color, want(0), "camera {i}'s colour");
+            assert_eq!(camera.depth.unwrap().iter().map(|f| f.to_bits()).collect::<Vec<_>>(), want(1));
+            assert_eq!(camera.instances.unwrap(), want(2).as_slice());
+            assert_eq!(camera.linear_depth.unwrap().iter().map(|f| f.to_bits()).collect::<Vec<_>>(), want(3));
+            assert_eq!(camera.semantic, None);
+        }
+        assert_eq!(frame.camera(3), None);
+        assert_eq!(frame.camera_of(view(7)), None);
+        assert_eq!(frame.cameras().map(|c| c.view).collect::<Vec<_>>(), frame.views);
+        // Colour, 4 bytes a texel, plus depth, ids and linear depth, 4 each.
+        assert_eq!(frame.bytes(), 3 * 8 * 4 * 4);
+        let image = frame.camera(1).unwrap().color_image().unwrap();
+        assert_eq!(image.dimensions(), (4, 2));
+        assert_eq!(image.get_pixel(0, 0).0, word(0, 0, 2, 4).to_le_bytes());
+    }
+
+    #[test]
+    fn handed_back_buffers_take_later_frames_up_to_a_bound() {
+        let layout = layout();
+        let mut spare = Spare::default();
+        let frame = |n: usize| StreamedFrame {
+            batch: batch(),
+            frame: 1,
+            time_seconds: 0.0,
+            size: (4, 2),
+            views: vec![view(0)],
+            color: Some(vec![7; n]),
+            depth: Some(vec![1.0; n]),
+            instances: None,
+            semantic: Some(vec![5; n]),
+            linear_depth: None,
+        };
+        for _ in 0..Spare::KEEP + 3 {
+            spare.keep(frame(100));
+        }
+        assert_eq!(
+            (spare.color.len(), spare.depth.len(), spare.semantic.len()),
+            (Spare::KEEP, Spare::KEEP, Spare::KEEP)
+        );
+        assert!(spare.instances.is_empty() && spare.linear_depth.is_empty());
+        // A spare buffer is cut to the length asked for; with none spare,
+        // a fresh zeroed one.
+        let planes = Planes::for_layout(&layout, 2, &mut spare);
+        assert_eq!(planes.color.as_ref().map(Vec::len), Some(4 * 2 * 8));
+        assert_eq!(planes.depth.as_ref().map(Vec::len), Some(2 * 8));
+        assert_eq!(planes.instances, Some(vec![0; 16]), "no spare ids: fresh zeros");
+        assert_eq!(spare.color.len(), Spare::KEEP - 1, "one spare colour buffer taken");
+        let mut pile = vec![vec![3u32; 2]];
+        assert_eq!(plane_buffer(&mut pile, 5), [3, 3, 0, 0, 0], "grown with zeros");
+        assert!(pile.is_empty());
+        assert_eq!(plane_buffer(&mut pile, 2), [0, 0]);
+    }
+
+    #[test]
+    fn options_name_their_label_planes_and_cameras_cost_their_planes() {
+        let options = StreamOptions { instances: true, linear_depth: true, ..StreamOptions::default() };
+        assert_eq!(options.label_planes(), LabelSet::of(&[Label::Instance, Label::LinearDepth]));
+        assert_eq!(
+            StreamOptions { semantic: true, ..Default::default() }.label_planes(),
+            LabelSet::of(&[Label::Semantic])
+        );
+        assert_eq!(StreamOptions::default().label_planes(), LabelSet::NONE);
+        let mut streams = Streams::new(&wgpu::DownlevelCapabilities::default());
+        let mut ids = crate::batch::BatchIds::default();
+        let (streamed, other) = (ids.allocate(), ids.allocate());
+        streams.rings.insert(streamed, Ring::new(options));
+        // Colour, depth and the ids the batch draws (not linear depth,
+        // which it does not): three planes of 4 bytes.
+        let drawn = LabelSet::of(&[Label::Instance, Label::Normal]);
+        assert_eq!(streams.camera_bytes(streamed, (10, 3), drawn), 3 * 4 * 30);
+        assert_eq!(streams.camera_bytes(streamed, (10, 3), LabelSet::NONE), 2 * 4 * 30);
+        assert_eq!(streams.camera_bytes(other, (10, 3), drawn), 0, "not streamed");
     }
 }
