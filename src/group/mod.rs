@@ -480,4 +480,16 @@ mod tests {
         let unmeasured = [(GroupViewId(0), 0, None), view(1, 0, 2.0), view(2, 1, 1.0)];
         assert_eq!(best_move(&[4.0, 1.0, 0.0], &unmeasured, 0.25), Some((GroupViewId(1), 0, 2)));
     }
+
+    #[test]
+    fn the_margin_is_a_fraction_of_the_lightest_load_and_a_move_must_narrow_the_gap() {
+        // 12 against 10 is within 25 % of 10 (12.5): nothing moves, though
+        // moving the 1 would even them.
+        let views = [view(0, 0, 1.0), view(1, 0, 11.0), view(2, 1, 10.0)];
+        assert_eq!(best_move(&[12.0, 10.0], &views, 0.25), None);
+        assert_eq!(best_move(&[12.0, 10.0], &views, 0.1), Some((GroupViewId(0), 0, 1)));
+        // A move that leaves the same gap the other way is not made: 8
+        // against 4, the only view costs 4.
+        assert_eq!(best_move(&[8.0, 4.0], &[view(0, 0, 4.0), view(1, 0, 4.0)], 0.25), None);
+    }
 }

@@ -893,6 +893,26 @@ mod tests {
     }
 
     #[test]
+    fn a_frame_counts_the_bytes_of_every_plane_it_holds() {
+        let frame = StreamedFrame {
+            batch: batch(),
+            frame: 1,
+            time_seconds: 0.0,
+            size: (1, 1),
+            views: Vec::new(),
+            color: Some(vec![0; 1]),
+            depth: Some(vec![0.0; 10]),
+            instances: Some(vec![0; 100]),
+            semantic: Some(vec![0; 1000]),
+            linear_depth: Some(vec![0.0; 10000]),
+        };
+        assert_eq!(frame.bytes(), 1 + 4 * 11110);
+        let none =
+            StreamedFrame { color: None, depth: None, instances: None, semantic: None, linear_depth: None, ..frame };
+        assert_eq!(none.bytes(), 0);
+    }
+
+    #[test]
     fn handed_back_buffers_take_later_frames_up_to_a_bound() {
         let layout = layout();
         let mut spare = Spare::default();
