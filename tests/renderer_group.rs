@@ -76,6 +76,15 @@ fn a_group_of_two_devices_renders_what_one_renderer_renders() {
     let mut group = RendererGroup::new_headless(2, options()).unwrap();
     assert_eq!(group.devices(), 2);
     let mut alone = support::gpu_renderer_with(options());
+    // Every member asks for what a renderer of its own asks for.
+    for member in 0..2 {
+        let features = group.renderer(member).map(|r| r.gpu().features);
+        assert_eq!(features, Some(alone.gpu().features), "member {member}'s device features");
+    }
+    assert!(group.renderer(2).is_none());
+    // The first member renders the application's scene, the second a
+    // replica of it.
+    assert!(group.replica(0).is_none() && group.replica(2).is_none());
     let mut views = Vec::new();
     let mut lone = Vec::new();
     for i in 0..6 {
@@ -96,7 +105,10 @@ fn a_group_of_two_devices_renders_what_one_renderer_renders() {
         let report = group.render_frame(&scene).unwrap();
         alone.render_frame(&scene).unwrap();
         assert_each_once(&report, &views);
+        assert_eq!(report.frame, frame as u64 + 1, "group frames count from 1");
         assert!(report.delta_bytes > 0, "frame {frame}: the scene changed, so a delta went to the second device");
+        let replica = group.replica(1).expect("the second member renders a replica");
+        assert_eq!(replica.nodes().count(), scene.nodes().count(), "frame {frame}: the replica's nodes");
         for (view, lone) in views.iter().zip(&lone) {
             let color = group.read_color(*view).unwrap();
             assert_eq!(color.frame, report.frame, "the output is tagged with its frame");
@@ -122,6 +134,7 @@ fn the_group_moves_views_to_even_the_measured_load() {
     let (scene, _) = field();
     let mut group = RendererGroup::new_headless(2, options()).unwrap();
     group.set_rebalance_margin(0.3);
+    assert_eq!(group.rebalance_margin(), 0.3);
     let mut alone = support::gpu_renderer_with(options());
     // One large view and five tiny ones: placed by count first (nothing is
     // measured yet), the large one shares its device with two tiny ones.
@@ -161,6 +174,13 @@ fn the_group_moves_views_to_even_the_measured_load() {
     let costs: Vec<f64> = views.iter().map(|v| group.view_cost(*v).unwrap()).collect();
     let loads = group.member_loads();
     eprintln!("costs {costs:?}, loads {loads:?}, {moves} moves");
+    // Every view measured, and each member's load the sum of its views'.
+    assert!(costs.iter().all(|c| c.is_finite() && *c > 0.0), "{costs:?}");
+    for (member, load) in loads.iter().enumerate() {
+        let sum: f64 =
+            views.iter().zip(&costs).filter(|(v, _)| group.member_of(**v) == Some(member)).map(|(_, c)| c).sum();
+        assert!((load - sum).abs() <= 1e-9 * sum.max(1e-3), "member {member}: load {load}, its views' costs {sum}");
+    }
     assert!(settled, "the placement never settled ({moves} moves)");
     // (Whether anything moved depends on the costs this machine measured:
     // the policy itself is tested with given costs in `group`'s unit test.)

@@ -168,6 +168,19 @@ impl RendererGroup {
         self.members.get(index).map(|m| &m.renderer)
     }
 
+    /// The scene member `index` renders: `None` for the first, which
+    /// renders the application's scene itself, and past the last; each
+    /// other member's replica, which the frames' deltas keep equal to the
+    /// application's.
+    pub fn replica(&self, index: usize) -> Option<&Scene> {
+        self.members.get(index)?.replica.as_ref().map(SceneReplica::scene)
+    }
+
+    /// The rebalance margin in force ([`RendererGroup::set_rebalance_margin`]).
+    pub fn rebalance_margin(&self) -> f64 {
+        self.placement.margin
+    }
+
     /// How far (a fraction, default 0.25) the most loaded member may carry
     /// more than the least loaded before a view moves; `f64::INFINITY`
     /// never moves one.

@@ -71,7 +71,9 @@ pub(crate) struct Placement<K> {
     members: usize,
     views: BTreeMap<GroupViewId, Placed<K>>,
     next_view: u32,
-    margin: f64,
+    /// How far the most loaded member may carry more than the least loaded
+    /// before a view moves ([`Placement::set_margin`]).
+    pub margin: f64,
 }
 
 impl<K: Copy + Eq + Hash> Placement<K> {
