@@ -107,6 +107,14 @@ fn a_group_of_two_devices_renders_what_one_renderer_renders() {
         assert_each_once(&report, &views);
         assert_eq!(report.frame, frame as u64 + 1, "group frames count from 1");
         assert!(report.delta_bytes > 0, "frame {frame}: the scene changed, so a delta went to the second device");
+        if frame == 0 {
+            // A view's first cost is what its first frame took: preparing,
+            // recording and GPU time.
+            for v in &report.views {
+                let took = v.report.prep_seconds + v.report.record_seconds + v.report.gpu_seconds.unwrap_or(0.0);
+                assert_eq!(group.view_cost(v.view), Some(took), "{}", v.view);
+            }
+        }
         let replica = group.replica(1).expect("the second member renders a replica");
         assert_eq!(replica.nodes().count(), scene.nodes().count(), "frame {frame}: the replica's nodes");
         for (view, lone) in views.iter().zip(&lone) {
@@ -158,6 +166,9 @@ fn the_group_moves_views_to_even_the_measured_load() {
         let report = group.render_frame(&scene).unwrap();
         alone.render_frame(&scene).unwrap();
         assert_each_once(&report, &views);
+        // The scene stands still: after the first frame's snapshot no delta
+        // goes out.
+        assert_eq!(report.delta_bytes == 0, frame > 0, "frame {frame}: {} bytes of delta", report.delta_bytes);
         moves += report.moved.len();
         // A moved view renders the same pixels on its new device.
         for (view, lone) in views.iter().zip(&lone) {
@@ -201,6 +212,20 @@ fn the_group_moves_views_to_even_the_measured_load() {
     assert_eq!(group.member_of(small), Some(with_big));
     let report = group.render_frame(&scene).unwrap();
     assert_each_once(&report, &views);
+}
+
+#[test]
+fn a_group_of_one_device_sends_no_delta() {
+    let (mut scene, mover) = field();
+    let mut group = RendererGroup::new_headless(1, options()).unwrap();
+    let view = group.register_view(|| desc(0, UVec2::splat(16)), standard_render_graph).unwrap();
+    for frame in 0..2 {
+        scene.set_local_transform(mover, Transform::from_translation(Vec3::new(frame as f32, 1.0, 0.0))).unwrap();
+        let report = group.render_frame(&scene).unwrap();
+        assert_eq!(report.delta_bytes, 0, "frame {frame}: no replica to send one to");
+        assert_eq!(report.views.iter().map(|v| v.view).collect::<Vec<_>>(), [view]);
+    }
+    assert!(group.replica(0).is_none());
 }
 
 #[test]
