@@ -310,10 +310,10 @@ mod tests {
         assert_eq!(seen, [Some(views[0]), Some(views[1]), None]);
         assert!(stale.is_empty());
         assert_eq!(table.get(views[0]).map(|p| (p.cost, p.rendered, p.last)), Some((Some(2.0), 1, Some((0, 100)))));
-        // The next measurement weighs 0.3: 2 + 0.3 × (4 − 2).
-        table.rendered(2, &[(0, 100, 4.0)]);
+        // The next measurement weighs 0.3: 2 + 0.3 × (5 − 2).
+        table.rendered(2, &[(0, 100, 5.0)]);
         let cost = table.get(views[0]).and_then(|p| p.cost).unwrap_or(f64::NAN);
-        assert!((cost - 2.6).abs() < 1e-12, "{cost}");
+        assert!((cost - 2.9).abs() < 1e-12, "{cost}");
         assert_eq!(table.get(views[1]).map(|p| p.rendered), Some(1), "not rendered in frame 2");
         // Moved to member 1 as 300: until it renders there, reads go to
         // member 0; once it has, member 0's registration is stale.
@@ -338,5 +338,8 @@ mod tests {
         assert_eq!(table.next_move(), Some((views[0], 0, 1)));
         let (alone, _) = table_of(1, &[0, 0]);
         assert_eq!(alone.next_move(), None, "one member: nowhere to go");
+        // Three members: the heaviest gives to the lightest.
+        let (three, views) = super::tests::table(3, &[(0, Some(3.0)), (0, Some(1.0)), (0, Some(1.0)), (1, Some(1.0))]);
+        assert_eq!(three.next_move(), Some((views[0], 0, 2)));
     }
 }

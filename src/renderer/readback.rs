@@ -295,6 +295,10 @@ mod tests {
             // the same for each pixel of a row or column.
             assert!((z - want).abs() <= 1e-5 * want.max(1.0) || *z == want, "pixel {i}: {z}, want {want}");
         }
+        // A depth no rasterizer writes (negative: behind the camera) is no
+        // distance either.
+        let behind = DepthImage { depth: vec![-0.5], width: 1, height: 1, ..image };
+        assert_eq!(behind.linear(), [f32::INFINITY]);
         // Orthographic, near 1 and far 11: device depth 1 at 1, 0 at 11.
         let ortho = view(Camera::orthographic(4.0, 1.0, 11.0), UVec2::new(2, 1));
         let image = DepthImage { width: 2, height: 1, depth: vec![1.0, 0.25], view: ortho };
