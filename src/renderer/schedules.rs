@@ -332,17 +332,19 @@ impl Schedules {
         let mut now: HashMap<NodeKey, Seen> = HashMap::with_capacity(self.seen.len());
         let joints_of = |node: &oxygen_core::Node| -> u64 {
             let Some(skin) = &node.skin else { return 0 };
-            // Folds the joints' world matrices (their bits) into one value:
-            // any joint that moved changes it.
-            let mut folded = 0xcbf2_9ce4_8422_2325u64;
+            // Hashes the joints' world matrices (their bits) into one value:
+            // any joint that moved changes it (but for a collision, one in
+            // 2^64). `DefaultHasher::new` has fixed keys: the same matrices
+            // give the same value every frame.
+            let mut hasher = std::hash::DefaultHasher::new();
             for joint in &skin.joints {
                 if let Some(m) = collection.world.get_f64(*joint) {
                     for x in m.to_cols_array() {
-                        folded = (folded ^ x.to_bits()).wrapping_mul(0x0000_0100_0000_01b3);
+                        std::hash::Hasher::write_u64(&mut hasher, x.to_bits());
                     }
                 }
             }
-            folded
+            std::hash::Hasher::finish(&hasher)
         };
         for entry in &collection.renderables {
             let (Some(node), Some(world)) = (scene.node(entry.node), collection.world.get_f64(entry.node)) else {
@@ -774,6 +776,62 @@ mod tests {
         let fourth = rig.next();
         assert_eq!(why(&fourth, high), Ok(RenderReason::Due));
         assert_eq!(why(&fourth, new), Err(IdleReason::Deferred { frames: 1 }));
+    }
+
+    #[test]
+    fn views_deferred_to_the_bound_take_the_budget_first() {
+        let mut rig = Rig::new();
+        let every = |priority| ViewDesc::new(camera()).with_schedule(Schedule::EveryNth(1)).with_priority(priority);
+        let (first, middle, last) = (rig.add(every(9)), rig.add(every(5)), rig.add(every(1)));
+        rig.schedules.measured(first, 0.003);
+        rig.schedules.measured(middle, 0.001);
+        rig.schedules.measured(last, 0.003);
+        rig.schedules.set_budget(Some(FrameBudget { seconds: 0.005, max_deferral: 1 }));
+        // By priority: 3 ms, then 1 ms (4), then 3 more do not fit.
+        let one = rig.next();
+        assert_eq!(why(&one, last), Err(IdleReason::Deferred { frames: 1 }));
+        // At its bound it goes first (3 ms); the first by priority (3 more)
+        // no longer fits, the middle one (1 ms) does.
+        let two = rig.next();
+        assert_eq!(why(&two, last), Ok(RenderReason::FirstFrame));
+        assert_eq!(why(&two, first), Err(IdleReason::Deferred { frames: 1 }));
+        assert_eq!(why(&two, middle), Ok(RenderReason::Due));
+    }
+
+    #[test]
+    fn an_unmeasured_view_is_guessed_at_the_mean_cost() {
+        let mut rig = Rig::new();
+        let every = |priority| ViewDesc::new(camera()).with_schedule(Schedule::EveryNth(1)).with_priority(priority);
+        let (high, new, low) = (rig.add(every(9)), rig.add(every(5)), rig.add(every(1)));
+        rig.schedules.measured(high, 0.001);
+        rig.schedules.measured(low, 0.001);
+        rig.schedules.set_budget(Some(FrameBudget { seconds: 0.0025, max_deferral: 4 }));
+        // The new one counts 1 ms (the mean): 1 + 1 fits in 2.5, the third
+        // 1 ms does not.
+        let decided = rig.next();
+        assert_eq!(why(&decided, high), Ok(RenderReason::FirstFrame));
+        assert_eq!(why(&decided, new), Ok(RenderReason::FirstFrame));
+        assert_eq!(why(&decided, low), Err(IdleReason::Deferred { frames: 1 }));
+    }
+
+    #[test]
+    fn a_view_deferred_when_due_is_owed_until_it_renders() {
+        let mut rig = Rig::new();
+        let first = rig.add(ViewDesc::new(camera()).with_priority(9).with_schedule(Schedule::EveryNth(1)));
+        let third = rig.add(ViewDesc::new(camera()).with_priority(1).with_schedule(Schedule::EveryNth(3)));
+        rig.schedules.measured(first, 0.004);
+        rig.schedules.measured(third, 0.004);
+        // Frame 1 renders both (no budget yet); frames 2 and 3 are not due.
+        assert_eq!(why(&rig.next(), third), Ok(RenderReason::FirstFrame));
+        rig.next();
+        rig.next();
+        rig.schedules.set_budget(Some(FrameBudget { seconds: 0.005, max_deferral: 9 }));
+        // Frame 4: due, deferred; frame 5, not due by its count, but owed.
+        assert_eq!(why(&rig.next(), third), Err(IdleReason::Deferred { frames: 1 }));
+        rig.schedules.set_budget(None);
+        assert_eq!(why(&rig.next(), third), Ok(RenderReason::Due));
+        // Rendered: frame 6 is not due again.
+        assert_eq!(why(&rig.next(), third), Err(IdleReason::NotDue { next_frame: 7 }));
     }
 
     #[test]
