@@ -669,6 +669,32 @@ mod tests {
     }
 
     #[test]
+    fn a_moved_joint_wakes_the_watchers_of_its_skinned_mesh() {
+        use oxygen_core::glam::{Mat4, Vec4};
+        use oxygen_core::{Geometry, Material, Renderable, Skin, SkinWeights};
+        let mut rig = Rig::new();
+        let scene = &mut rig.demo.scene;
+        let cube = Geometry::cube(1.0);
+        // Every vertex follows the first joint; the second moves nothing.
+        let weights = vec![SkinWeights::new([0, 1, 0, 0], [1.0, 0.0, 0.0, 0.0]); cube.vertices().len()];
+        let geometry = scene.add_geometry(cube.with_skin_weights(weights).unwrap());
+        let material = scene.add_material(Material::opaque("skin", Vec4::ONE));
+        let held = scene.add_node("held", Transform::from_translation(Vec3::new(0.0, 1.0, 0.0)));
+        let idle = scene.add_node("idle", Transform::IDENTITY);
+        let mesh = scene.add_node("skinned", Transform::IDENTITY);
+        scene.set_renderable(mesh, Renderable { geometry, materials: vec![material] }).unwrap();
+        let skin = Skin { joints: vec![held, idle], inverse_bind_matrices: vec![Mat4::IDENTITY; 2] };
+        scene.set_skin(mesh, Some(skin)).unwrap();
+        let watcher = rig.on(camera(), Schedule::WhenChanged);
+        rig.next();
+        assert_eq!(why(&rig.next(), watcher), Err(IdleReason::Unchanged));
+        // A joint moved: the mesh's pose changed, whatever its bounds did.
+        rig.demo.scene.set_local_transform(idle, Transform::from_translation(Vec3::X)).unwrap();
+        assert_eq!(why(&rig.next(), watcher), Ok(RenderReason::Changed(Change::Node(mesh))));
+        assert_eq!(why(&rig.next(), watcher), Err(IdleReason::Unchanged));
+    }
+
+    #[test]
     fn a_watcher_left_out_of_a_frame_renders_when_it_comes_back() {
         let mut rig = Rig::new();
         let watcher = rig.on(camera(), Schedule::WhenChanged);
