@@ -25,6 +25,7 @@ use oxygen_passes::{
     CommandRecorder, FrameProgress, LinkedView, LocalShadowsInput, OutputSource, PassError, Pipelines, ProbeId,
     RecordStats, RenderContext, Shading, ShadowMapInput, ViewInputs,
 };
+use oxygen_sceneprep::DrawMetadata;
 use tracing::{Instrument, info_span};
 
 use super::prepare::{FrameView, PreparedFrame, TargetPlan};
@@ -150,6 +151,18 @@ fn record_as_one(deps: &mut [BTreeSet<usize>], members: &[usize]) {
             d.extend(inside.iter().copied());
         }
     }
+}
+
+/// Triangles a view drew: its CPU draws' (a third of each index count,
+/// times its instances), plus on a GPU path (`gpu_path`) the GPU's count of
+/// its depth pass's indices, `gpu_indices`; on a GPU path without that
+/// count (not read back yet), no figure.
+fn drawn_triangles(cpu_draws: &[DrawMetadata], gpu_path: bool, gpu_indices: Option<u64>) -> Option<u64> {
+    let cpu: u64 = cpu_draws.iter().map(|d| u64::from(d.index_count / 3) * u64::from(d.instance_count)).sum();
+    if !gpu_path {
+        return Some(cpu);
+    }
+    gpu_indices.map(|indices| indices / 3 + cpu)
 }
 
 impl Renderer {
@@ -408,18 +421,11 @@ impl Renderer {
                     why: None,
                     // Filled in from the timer's latest readback (render_frame).
                     gpu_seconds: None,
-                    triangles: {
-                        let cpu: u64 = frames[i]
-                            .draws()
-                            .iter()
-                            .map(|d| u64::from(d.index_count / 3) * u64::from(d.instance_count))
-                            .sum();
-                        match (frames[i].gpu_plan(), &self.visibility.gpu) {
-                            (None, _) => Some(cpu),
-                            (Some(_), Some(gpu)) => gpu.depth_pass_indices(view.id).map(|indices| indices / 3 + cpu),
-                            (Some(_), None) => None,
-                        }
-                    },
+                    triangles: drawn_triangles(
+                        frames[i].draws(),
+                        frames[i].gpu_plan().is_some(),
+                        self.visibility.gpu.as_ref().and_then(|gpu| gpu.depth_pass_indices(view.id)),
+                    ),
                     // Its constants are added from the targets (render_frame).
                     uploaded_bytes: (std::mem::size_of_val(frames[i].draws())
                         + std::mem::size_of_val(frames[i].indirect_args())) as u64,
@@ -685,6 +691,8 @@ fn run_executor<'a>(
 mod tests {
     use std::collections::BTreeSet;
 
+    use oxygen_sceneprep::DrawMetadata;
+
     use super::dependency_order;
 
     /// The order as first written: at each step the lowest key among the
@@ -744,6 +752,20 @@ mod tests {
         super::record_as_one(&mut deps, &[0, 1, 2]);
         let want = [set(&[3, 4]), set(&[3, 4]), set(&[3, 4]), set(&[]), set(&[]), set(&[0, 1, 2]), set(&[3])];
         assert_eq!(deps, want);
+    }
+
+    #[test]
+    fn a_views_triangles_are_its_draws_times_their_instances_and_the_gpus_count() {
+        let draw = |index_count, instance_count| DrawMetadata { index_count, instance_count, ..Default::default() };
+        // 36 indices twice and 7 indices (2 whole triangles) three times.
+        let draws = [draw(36, 2), draw(7, 3)];
+        assert_eq!(super::drawn_triangles(&draws, false, None), Some(24 + 6));
+        assert_eq!(super::drawn_triangles(&draws, false, Some(999)), Some(30), "a CPU path has no GPU count");
+        // A GPU path adds the GPU's depth-pass indices to its CPU draws'
+        // (blended draws stay on the CPU); none counted yet, no figure.
+        assert_eq!(super::drawn_triangles(&draws, true, Some(300)), Some(100 + 30));
+        assert_eq!(super::drawn_triangles(&draws, true, None), None);
+        assert_eq!(super::drawn_triangles(&[], true, Some(2)), Some(0));
     }
 
     #[test]
