@@ -212,6 +212,8 @@ fn views_render_in_registration_order_and_can_be_unregistered() {
     let report = renderer.render_frame(&demo.scene).unwrap();
     assert_eq!(report.views.iter().map(|v| v.view).collect::<Vec<_>>(), vec![a, b]);
     assert!(report.views.iter().all(|v| v.recorded.draw_calls > 0));
+    // Recording a view's passes takes time, and the report says how much.
+    assert!(report.views.iter().all(|v| v.record_seconds > 0.0), "{:?}", report.views);
     renderer.unregister_view(a).unwrap();
     let report = renderer.render_frame(&demo.scene).unwrap();
     assert_eq!(report.views.len(), 1);
