@@ -229,6 +229,24 @@ fn a_group_of_one_device_sends_no_delta() {
 }
 
 #[test]
+fn an_unregistered_view_leaves_the_group_and_its_member() {
+    let (scene, _) = field();
+    let mut group = RendererGroup::new_headless(2, options()).unwrap();
+    let views: Vec<GroupViewId> = (0..3)
+        .map(|i| group.register_view(move || desc(i, UVec2::splat(16)), standard_render_graph).unwrap())
+        .collect();
+    group.render_frame(&scene).unwrap();
+    group.unregister_view(views[1]).unwrap();
+    assert_eq!(group.member_of(views[1]), None);
+    assert!(group.unregister_view(views[1]).is_err(), "a second time: no such view");
+    let report = group.render_frame(&scene).unwrap();
+    assert_each_once(&report, &[views[0], views[2]]);
+    // Its member renders it no more.
+    let rendered: usize = report.members.iter().map(|m| m.views.len()).sum();
+    assert_eq!(rendered, 2);
+}
+
+#[test]
 fn a_group_refuses_a_view_that_reads_another() {
     let mut group = RendererGroup::new_headless(2, options()).unwrap();
     let other = oxygen_demo::view_id(7);
