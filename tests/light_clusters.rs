@@ -135,6 +135,35 @@ fn a_batch_of_cameras_shades_the_same_from_their_clusters() {
 /// A grid whose light bits would not fit in one storage binding is refused
 /// before anything is allocated, with its numbers and what to change.
 #[test]
+fn a_view_that_shades_twice_in_a_frame_sorts_its_lights_once() {
+    // A graph whose forward pass runs twice (the second over the first's
+    // image, as a custom graph's second lit pass would): the second pass
+    // reads the bits the first one's job fills.
+    let scene = oxygen_demo::lamp_street(LAMPS);
+    let culling = clustered(16, 16);
+    let graph = async move |ctx: &RenderContext<'_>, rec: &mut CommandRecorder| {
+        let lit = ForwardLitConfig { depth_from_pre_pass: false, ..config(culling) };
+        MeshPass::forward_lit(lit.clone()).run(ctx, rec).await?;
+        MeshPass::forward_lit(lit).run(ctx, rec).await?;
+        TonemapPass::default().run(ctx, rec).await
+    };
+    let mut renderer = gpu_renderer();
+    let view = renderer.register_view(oxygen_demo::lamp_street_camera(SIZE), graph).expect("view");
+    for frame in 0..2 {
+        let report = renderer.render_frame(&scene).expect("frame");
+        assert_eq!(report.views[0].recorded.light_cluster_jobs, 1, "frame {frame}: one cluster job");
+    }
+    let twice = renderer.read_hdr(view).expect("HDR image");
+    let every = render(&scene, oxygen_demo::lamp_street_camera(SIZE), LightCulling::EveryLight);
+    let (worst, differing) = difference(&twice, &every, TOLERANCE);
+    assert_eq!(differing, 0, "shaded twice from one sort: worst relative difference {worst}");
+    // The standard graph shades once: one job too.
+    let mut renderer = gpu_renderer();
+    renderer.register_view(oxygen_demo::lamp_street_camera(SIZE), StandardGraph::new(config(culling))).expect("view");
+    assert_eq!(renderer.render_frame(&scene).expect("frame").views[0].recorded.light_cluster_jobs, 1);
+}
+
+#[test]
 fn a_grid_too_large_for_a_storage_binding_is_refused_with_its_numbers() {
     let scene = oxygen_demo::lamp_street(LAMPS);
     let mut renderer = gpu_renderer();

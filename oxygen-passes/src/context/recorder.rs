@@ -16,6 +16,9 @@ pub struct RecordStats {
     /// Shading tone-mapped in place and wrote the display colour: the HDR
     /// image was not written this frame.
     pub tone_mapped_in_pass: bool,
+    /// Light-cluster jobs recorded (one per clustered view a frame, however
+    /// many of its passes shade).
+    pub light_cluster_jobs: u32,
 }
 
 /// The command encoder of one view plus counters.

@@ -184,6 +184,10 @@ struct ViewClusters {
     params: wgpu::Buffer,
     bits: wgpu::Buffer,
     group: wgpu::BindGroup,
+    /// The frame and parameters its bits were last prepared for: a second
+    /// pass of the same view in the same frame (the blended pass after
+    /// shading) reads those bits instead of sorting the lights again.
+    prepared: Option<(u64, ClusterParams)>,
 }
 
 /// One view's cluster pass this frame, recorded by the shading pass before
@@ -230,13 +234,15 @@ impl LightClusters {
     }
 
     /// Prepares `view`'s cluster pass over `shape`: writes its parameters
-    /// and returns its light-bit buffer (for group 1) and the job to record.
-    /// Fails when the bits would not fit in one storage binding.
+    /// and returns its light-bit buffer (for group 1) and the job to record,
+    /// none when a pass of the view prepared the same bits earlier in this
+    /// frame (the job recorded then fills them before this pass reads
+    /// them). Fails when the bits would not fit in one storage binding.
     pub(crate) fn prepare(
         &self,
         ctx: &crate::RenderContext<'_>,
         shape: &GridShape,
-    ) -> Result<(wgpu::Buffer, ClusterJob), PassError> {
+    ) -> Result<(wgpu::Buffer, Option<ClusterJob>), PassError> {
         let _span =
             info_span!("light_clusters", view = %ctx.view.view_id, clusters = shape.clusters(), words = shape.words)
                 .entered();
@@ -269,7 +275,14 @@ impl LightClusters {
         };
         let (layout, _) = self.pipeline(device, ctx.heap);
         let mut views = self.views.lock().map_err(|_| PassError::Graph("light cluster state poisoned".into()))?;
-        let state = match views.get(&ctx.view.view_id) {
+        let frame = ctx.prepared.frame_index();
+        if let Some(state) = views.get(&ctx.view.view_id)
+            && state.bits.size() >= bytes
+            && state.prepared.as_ref() == Some(&(frame, params))
+        {
+            return Ok((state.bits.clone(), None));
+        }
+        let state = match views.get_mut(&ctx.view.view_id) {
             Some(state) if state.bits.size() >= bytes => state,
             _ => {
                 let params = device.create_buffer(&wgpu::BufferDescriptor {
@@ -292,15 +305,16 @@ impl LightClusters {
                         wgpu::BindGroupEntry { binding: 1, resource: bits.as_entire_binding() },
                     ],
                 });
-                views.insert(ctx.view.view_id, ViewClusters { params, bits, group });
-                &views[&ctx.view.view_id]
+                views.insert(ctx.view.view_id, ViewClusters { params, bits, group, prepared: None });
+                views.get_mut(&ctx.view.view_id).ok_or_else(|| PassError::Graph("light cluster state lost".into()))?
             }
         };
         ctx.gpu.queue.write_buffer(&state.params, 0, bytemuck::bytes_of(&params));
+        state.prepared = Some((frame, params));
         // One invocation per word of every cluster; `bytes` fits a storage
         // binding, which is far below u32 words.
         let invocations = u32::try_from(shape.clusters() * u64::from(shape.words)).unwrap_or(u32::MAX);
-        Ok((state.bits.clone(), ClusterJob { group: state.group.clone(), invocations }))
+        Ok((state.bits.clone(), Some(ClusterJob { group: state.group.clone(), invocations })))
     }
 
     /// Records `jobs` (one compute pass for all of them).

@@ -102,7 +102,10 @@ pub(crate) async fn bind_group(
         }
         _ => None,
     };
-    let (bits, job) = clusters.unzip();
+    let (bits, job) = match clusters {
+        Some((bits, job)) => (Some(bits), job),
+        None => (None, None),
+    };
 
     let group = ctx.lighting.bind_group(
         &ctx.gpu.device,

@@ -584,6 +584,7 @@ impl MeshPass {
         // The views' light clusters, sorted before any of them shades.
         if let Some(ctx) = views.first() {
             ctx.lighting.clusters().record(rec.encoder(), ctx.heap, &cluster_jobs);
+            rec.stats.light_cluster_jobs += u32::try_from(cluster_jobs.len()).unwrap_or(u32::MAX);
         }
         // Every key is in `distinct`, in the order of `pipelines`.
         let partition_pipelines: Vec<wgpu::RenderPipeline> = partition_keys
