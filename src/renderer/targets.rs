@@ -172,12 +172,18 @@ impl Targets {
         taken: &mut u64,
     ) -> Result<(), OverBudget> {
         let bytes = self.bytes_for(viewport, with_color, samples, labels);
-        if taken.saturating_add(bytes) > self.budget {
-            let (width, height, budget) = (viewport.x, viewport.y, self.budget);
-            return Err(OverBudget { width, height, bytes, budget, taken: *taken });
+        match taken.checked_add(bytes) {
+            Some(total) if total <= self.budget => {
+                *taken = total;
+                Ok(())
+            }
+            // Past the budget, or past what a u64 counts (a sum that would
+            // wrap is over any budget).
+            _ => {
+                let (width, height, budget) = (viewport.x, viewport.y, self.budget);
+                Err(OverBudget { width, height, bytes, budget, taken: *taken })
+            }
         }
-        *taken += bytes;
-        Ok(())
     }
 
     /// Target bytes of paused views: they keep their targets, so their
@@ -450,4 +456,53 @@ pub(crate) fn atlas_layers(views: &[FrameView]) -> u32 {
 /// The page of a batch camera's targets.
 fn tile_page(targets: &ViewTargets) -> usize {
     targets.tile.map_or(0, |t| t.page as usize)
+}
+
+#[cfg(test)]
+mod tests {
+    use oxygen_gpu::Label;
+
+    use super::*;
+
+    #[test]
+    fn a_views_targets_are_its_attachments_and_its_label_planes() {
+        let targets = Targets::new(HdrFormat::Rgba16Float, 1 << 30);
+        let size = glam::UVec2::new(40, 30);
+        let labels = LabelSet::of(&[Label::Instance, Label::Semantic]);
+        let planes = 40 * 30 * labels.bytes_per_pixel();
+        assert!(planes > 0);
+        assert_eq!(
+            targets.bytes_for(size, true, 4, labels),
+            ViewTargets::bytes_for_msaa(40, 30, Some(HdrFormat::Rgba16Float), 4) + planes
+        );
+        assert_eq!(targets.bytes_for(size, false, 1, LabelSet::NONE), ViewTargets::bytes_for_msaa(40, 30, None, 1));
+        assert!(targets.bytes_for(size, false, 1, LabelSet::NONE) < targets.bytes_for(size, true, 1, LabelSet::NONE));
+    }
+
+    #[test]
+    fn views_are_admitted_up_to_the_budget_exactly_and_a_refusal_takes_nothing() {
+        let size = glam::UVec2::new(64, 64);
+        let one = Targets::new(HdrFormat::Rgba16Float, 0).bytes_for(size, true, 1, LabelSet::NONE);
+        // Room for exactly two.
+        let targets = Targets::new(HdrFormat::Rgba16Float, 2 * one);
+        let mut taken = 0;
+        assert!(targets.admit(size, true, 1, LabelSet::NONE, &mut taken).is_ok());
+        assert!(targets.admit(size, true, 1, LabelSet::NONE, &mut taken).is_ok());
+        assert_eq!(taken, 2 * one);
+        let refused =
+            targets.admit(size, true, 1, LabelSet::NONE, &mut taken).err().map(|e| e.for_view(oxygen_demo::view_id(3)));
+        let Some(RenderError::TargetBudget { width, height, bytes, budget, taken: before, .. }) = refused else {
+            panic!("the third view is refused: {refused:?}");
+        };
+        assert_eq!((width, height, bytes, budget, before), (64, 64, one, 2 * one, 2 * one));
+        assert_eq!(taken, 2 * one, "a refused view takes nothing");
+        // Near the top of u64 a sum that would wrap round is refused, even
+        // under a budget of everything.
+        let mut almost_all = u64::MAX - 1;
+        assert!(
+            Targets::new(HdrFormat::Rgba16Float, u64::MAX)
+                .admit(size, true, 1, LabelSet::NONE, &mut almost_all)
+                .is_err()
+        );
+    }
 }
