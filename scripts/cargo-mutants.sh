@@ -37,6 +37,9 @@
 #              cameras' blocks, frames' accessors, spare buffers), tested by
 #              the root crate's unit tests; not the rings' copies, mappings
 #              and threads, which tests/batch_views.rs covers on a device
+#   targets    the target budget's arithmetic (a view's target bytes and its
+#              admission), tested by the root crate's unit tests; not the
+#              allocation of targets and atlases, which needs a device
 #   demo       oxygen-demo's record writer and span timer (the evidence the
 #              benches and tests write; the demo scenes themselves are
 #              fixtures, checked by the tests that render them)
@@ -121,6 +124,11 @@ case "$scope" in
       --cargo-arg=--lib
       --cargo-test-arg=-- --cargo-test-arg=--skip --cargo-test-arg=gltf_import)
     ;;
+  targets)
+    args=(-p oxygen --file src/renderer/targets.rs -F 'Targets::(bytes_for|admit)'
+      --cargo-arg=--lib
+      --cargo-test-arg=-- --cargo-test-arg=--skip --cargo-test-arg=gltf_import)
+    ;;
   demo)
     args=(-p oxygen-demo --test-package oxygen-demo
       --file oxygen-demo/src/record.rs --file oxygen-demo/src/span_times.rs)
@@ -134,7 +142,7 @@ case "$scope" in
     default_timeout=90
     ;;
   *)
-    say "unknown scope '$scope' (core, bindless, sceneprep, passes, importer, gpu, demo, root, streams, node)"
+    say "unknown scope '$scope' (core, bindless, sceneprep, passes, importer, gpu, demo, root, streams, targets, node)"
     exit 2
     ;;
 esac
