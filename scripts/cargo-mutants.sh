@@ -40,6 +40,8 @@
 #   targets    the target budget's arithmetic (a view's target bytes and its
 #              admission), tested by the root crate's unit tests; not the
 #              allocation of targets and atlases, which needs a device
+#   timing     GPU timing's decoding of a timestamp readback into seconds
+#              (not the queries and their mapping, which need a device)
 #   demo       oxygen-demo's record writer and span timer (the evidence the
 #              benches and tests write; the demo scenes themselves are
 #              fixtures, checked by the tests that render them)
@@ -129,6 +131,11 @@ case "$scope" in
       --cargo-arg=--lib
       --cargo-test-arg=-- --cargo-test-arg=--skip --cargo-test-arg=gltf_import)
     ;;
+  timing)
+    args=(-p oxygen --file src/renderer/gpu_timer.rs -F 'span_seconds'
+      --cargo-arg=--lib
+      --cargo-test-arg=-- --cargo-test-arg=--skip --cargo-test-arg=gltf_import)
+    ;;
   demo)
     args=(-p oxygen-demo --test-package oxygen-demo
       --file oxygen-demo/src/record.rs --file oxygen-demo/src/span_times.rs)
@@ -142,7 +149,7 @@ case "$scope" in
     default_timeout=90
     ;;
   *)
-    say "unknown scope '$scope' (core, bindless, sceneprep, passes, importer, gpu, demo, root, streams, targets, node)"
+    say "unknown scope '$scope' (core, bindless, sceneprep, passes, importer, gpu, demo, root, streams, targets, timing, node)"
     exit 2
     ;;
 esac

@@ -110,18 +110,10 @@ impl GpuTimer {
     pub(crate) fn collect(&mut self) -> Option<f64> {
         match self.state.load(Ordering::Acquire) {
             MAPPED => {
-                if let Ok(bytes) = self.readback.slice(..).get_mapped_range() {
-                    let tick = |i: usize| {
-                        let mut word = [0u8; 8];
-                        word.copy_from_slice(&bytes[i * 8..i * 8 + 8]);
-                        u64::from_le_bytes(word)
-                    };
-                    let ticks = [tick(0), tick(1)];
-                    // A frame whose end precedes its start (a wrapped or reset
-                    // counter) is not reported.
-                    if ticks[1] >= ticks[0] {
-                        self.last_seconds = Some((ticks[1] - ticks[0]) as f64 * self.period_ns * 1e-9);
-                    }
+                if let Ok(bytes) = self.readback.slice(..).get_mapped_range()
+                    && let Some(seconds) = span_seconds(&bytes, 0, self.period_ns)
+                {
+                    self.last_seconds = Some(seconds);
                 }
                 self.readback.unmap();
                 if let Some(jobs) = &self.jobs
@@ -129,15 +121,9 @@ impl GpuTimer {
                 {
                     let n = self.timed_jobs.len();
                     if let Ok(bytes) = jobs.readback.slice(..(n * 16) as u64).get_mapped_range() {
-                        let tick = |i: usize| {
-                            let mut word = [0u8; 8];
-                            word.copy_from_slice(&bytes[i * 8..i * 8 + 8]);
-                            u64::from_le_bytes(word)
-                        };
                         for (j, view) in self.timed_jobs.iter().enumerate() {
-                            let (start, end) = (tick(2 * j), tick(2 * j + 1));
-                            if end >= start {
-                                self.last_jobs.insert(*view, (end - start) as f64 * self.period_ns * 1e-9);
+                            if let Some(seconds) = span_seconds(&bytes, j, self.period_ns) {
+                                self.last_jobs.insert(*view, seconds);
                             }
                         }
                     }
@@ -231,5 +217,43 @@ impl GpuTimer {
                 state.store(if result.is_ok() { MAPPED } else { FAILED }, Ordering::Release);
             });
         }
+    }
+}
+
+/// Seconds between timestamps `2 * span` (start) and `2 * span + 1` (end)
+/// of a query readback (little-endian u64 ticks of `period_ns` each);
+/// `None` when the end precedes the start (a wrapped or reset counter) or
+/// the bytes hold no such pair.
+fn span_seconds(bytes: &[u8], span: usize, period_ns: f64) -> Option<f64> {
+    let tick = |i: usize| -> Option<u64> {
+        let word = bytes.get(i * 8..i * 8 + 8)?;
+        Some(u64::from_le_bytes(word.try_into().ok()?))
+    };
+    let (start, end) = (tick(2 * span)?, tick(2 * span + 1)?);
+    (end >= start).then(|| (end - start) as f64 * period_ns * 1e-9)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::span_seconds;
+
+    fn ticks(values: &[u64]) -> Vec<u8> {
+        values.iter().flat_map(|t| t.to_le_bytes()).collect()
+    }
+
+    #[test]
+    fn a_span_is_its_ticks_apart_times_the_period() {
+        // Two spans: 1 000 ticks of 2.5 ns, and 40 ticks of 1 ns.
+        let bytes = ticks(&[5_000, 6_000, 100, 140]);
+        assert_eq!(span_seconds(&bytes, 0, 2.5), Some(1_000.0 * 2.5e-9));
+        assert_eq!(span_seconds(&bytes, 1, 1.0), Some(40e-9));
+        assert_eq!(span_seconds(&ticks(&[7, 7]), 0, 1.0), Some(0.0), "an empty span");
+    }
+
+    #[test]
+    fn a_span_that_ends_before_it_starts_or_is_missing_has_no_time() {
+        assert_eq!(span_seconds(&ticks(&[10, 9]), 0, 1.0), None, "a wrapped or reset counter");
+        assert_eq!(span_seconds(&ticks(&[1, 2]), 1, 1.0), None, "past the readback");
+        assert_eq!(span_seconds(&ticks(&[1, 2])[..12], 0, 1.0), None, "a cut-off word");
     }
 }
