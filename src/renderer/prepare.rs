@@ -268,7 +268,10 @@ impl Renderer {
         drop(_targets);
         self.visibility.prepare(&self.gpu, &self.heap, &self.prep, &views, frames);
         self.reference.prepare(&self.gpu, &mut self.heap, &self.prep, &views)?;
-        self.lighting.retain_views(|id| views.iter().any(|v| v.id == id));
+        // A set: a scan of the frame's views per clustered view is quadratic
+        // in a batch of a thousand cameras.
+        let rendered: std::collections::HashSet<ViewId> = views.iter().map(|v| v.id).collect();
+        self.lighting.retain_views(|id| rendered.contains(&id));
         let uploaded_bytes =
             self.heap.bytes_written() - heap_bytes_before + constants_bytes + self.visibility.uploaded_last_frame();
         let skipped_nodes = self.prep.frame_collection().skipped.iter().map(|s| FrameWarning::NodeSkipped {

@@ -525,6 +525,11 @@ mod tests {
         }
     }
 
+    /// A view due every frame with `priority`, as the budget tests rank them.
+    fn every_frame(priority: u32) -> ViewDesc {
+        ViewDesc::new(camera()).with_schedule(Schedule::EveryNth(1)).with_priority(priority)
+    }
+
     fn why(decided: &Decided, view: ViewId) -> Result<RenderReason, IdleReason> {
         match decided.0.iter().find(|(v, _)| *v == view) {
             Some((_, reason)) => Ok(*reason),
@@ -772,9 +777,9 @@ mod tests {
     #[test]
     fn a_budget_keeps_the_first_view_then_what_fits_by_priority_and_defers_the_rest_boundedly() {
         let mut rig = Rig::new();
-        let low = rig.add(ViewDesc::new(camera()).with_schedule(Schedule::EveryNth(1)).with_priority(1));
-        let high = rig.add(ViewDesc::new(camera()).with_schedule(Schedule::EveryNth(1)).with_priority(5));
-        let mid = rig.add(ViewDesc::new(camera()).with_schedule(Schedule::EveryNth(1)).with_priority(3));
+        let low = rig.add(every_frame(1));
+        let high = rig.add(every_frame(5));
+        let mid = rig.add(every_frame(3));
         rig.schedules.set_budget(Some(FrameBudget { seconds: 0.005, max_deferral: 2 }));
         for view in [low, high, mid] {
             rig.schedules.measured(view, 0.003);
@@ -798,7 +803,7 @@ mod tests {
         assert_eq!(rig.schedules.views[&low].deferred, 0);
         // A view never measured is guessed at the mean of those that were
         // (3 ms): 3 + 3 > 5, so it waits.
-        let new = rig.add(ViewDesc::new(camera()).with_schedule(Schedule::EveryNth(1)).with_priority(4));
+        let new = rig.add(every_frame(4));
         let fourth = rig.next();
         assert_eq!(why(&fourth, high), Ok(RenderReason::Due));
         assert_eq!(why(&fourth, new), Err(IdleReason::Deferred { frames: 1 }));
@@ -807,8 +812,7 @@ mod tests {
     #[test]
     fn views_deferred_to_the_bound_take_the_budget_first() {
         let mut rig = Rig::new();
-        let every = |priority| ViewDesc::new(camera()).with_schedule(Schedule::EveryNth(1)).with_priority(priority);
-        let (first, middle, last) = (rig.add(every(9)), rig.add(every(5)), rig.add(every(1)));
+        let (first, middle, last) = (rig.add(every_frame(9)), rig.add(every_frame(5)), rig.add(every_frame(1)));
         rig.schedules.measured(first, 0.003);
         rig.schedules.measured(middle, 0.001);
         rig.schedules.measured(last, 0.003);
@@ -827,8 +831,7 @@ mod tests {
     #[test]
     fn an_unmeasured_view_is_guessed_at_the_mean_cost() {
         let mut rig = Rig::new();
-        let every = |priority| ViewDesc::new(camera()).with_schedule(Schedule::EveryNth(1)).with_priority(priority);
-        let (high, new, low) = (rig.add(every(9)), rig.add(every(5)), rig.add(every(1)));
+        let (high, new, low) = (rig.add(every_frame(9)), rig.add(every_frame(5)), rig.add(every_frame(1)));
         rig.schedules.measured(high, 0.001);
         rig.schedules.measured(low, 0.001);
         rig.schedules.set_budget(Some(FrameBudget { seconds: 0.0025, max_deferral: 4 }));
@@ -843,7 +846,7 @@ mod tests {
     #[test]
     fn a_view_deferred_when_due_is_owed_until_it_renders() {
         let mut rig = Rig::new();
-        let first = rig.add(ViewDesc::new(camera()).with_priority(9).with_schedule(Schedule::EveryNth(1)));
+        let first = rig.add(every_frame(9));
         let third = rig.add(ViewDesc::new(camera()).with_priority(1).with_schedule(Schedule::EveryNth(3)));
         rig.schedules.measured(first, 0.004);
         rig.schedules.measured(third, 0.004);
@@ -863,8 +866,8 @@ mod tests {
     #[test]
     fn a_budget_with_room_defers_nothing_and_a_cheap_view_fits_beside_a_dear_one() {
         let mut rig = Rig::new();
-        let dear = rig.add(ViewDesc::new(camera()).with_schedule(Schedule::EveryNth(1)).with_priority(2));
-        let cheap = rig.add(ViewDesc::new(camera()).with_schedule(Schedule::EveryNth(1)).with_priority(1));
+        let dear = rig.add(every_frame(2));
+        let cheap = rig.add(every_frame(1));
         rig.schedules.measured(dear, 0.004);
         rig.schedules.measured(cheap, 0.001);
         rig.schedules.set_budget(Some(FrameBudget { seconds: 0.005, max_deferral: 3 }));

@@ -185,8 +185,8 @@ struct ViewClusters {
     bits: wgpu::Buffer,
     group: wgpu::BindGroup,
     /// The frame and parameters its bits were last prepared for: a second
-    /// pass of the same view in the same frame (the blended pass after
-    /// shading) reads those bits instead of sorting the lights again.
+    /// lit pass of the same view in the same frame reads those bits instead
+    /// of sorting the lights again.
     prepared: Option<(u64, ClusterParams)>,
 }
 
@@ -276,14 +276,13 @@ impl LightClusters {
         let (layout, _) = self.pipeline(device, ctx.heap);
         let mut views = self.views.lock().map_err(|_| PassError::Graph("light cluster state poisoned".into()))?;
         let frame = ctx.prepared.frame_index();
-        if let Some(state) = views.get(&ctx.view.view_id)
-            && state.bits.size() >= bytes
-            && state.prepared.as_ref() == Some(&(frame, params))
-        {
-            return Ok((state.bits.clone(), None));
-        }
         let state = match views.get_mut(&ctx.view.view_id) {
-            Some(state) if state.bits.size() >= bytes => state,
+            Some(state) if state.bits.size() >= bytes => {
+                if state.prepared == Some((frame, params)) {
+                    return Ok((state.bits.clone(), None));
+                }
+                state
+            }
             _ => {
                 let params = device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("light cluster params"),

@@ -102,10 +102,7 @@ pub(crate) async fn bind_group(
         }
         _ => None,
     };
-    let (bits, job) = match clusters {
-        Some((bits, job)) => (Some(bits), job),
-        None => (None, None),
-    };
+    let (bits, job) = clusters.map_or((None, None), |(bits, job)| (Some(bits), job));
 
     let group = ctx.lighting.bind_group(
         &ctx.gpu.device,
