@@ -366,6 +366,14 @@ impl ScenePrep {
         self.materials.features()
     }
 
+    /// Whether some mesh resident for the frames prepared so far has vertex
+    /// colours or a second UV set: shaders pass those on only then. A mesh
+    /// stays resident once some view drew it, so this answers for every
+    /// mesh the frame's draws can name.
+    pub fn vertex_attributes(&self) -> bool {
+        self.geometry.any_attributes()
+    }
+
     /// The prepared frames of the last `prepare` or `prepare_views`, in
     /// request order; empty between `begin_frame` and `prepare_views`.
     pub fn frames(&self) -> &[PreparedSceneFrame] {

@@ -71,6 +71,8 @@ pub(crate) struct PreparedFrame {
     pub(crate) atlas: Option<wgpu::Texture>,
     /// What the scene's materials need of the shading pipelines.
     pub(crate) materials: MaterialFeatures,
+    /// Whether some mesh drawn has vertex colours or a second UV set.
+    pub(crate) vertex_attributes: bool,
     /// The views left out, and why.
     pub(crate) warnings: Vec<FrameWarning>,
     /// The nodes ScenePrep left out, and why.
@@ -287,6 +289,7 @@ impl Renderer {
             frames: self.prep.take_frames(),
             atlas,
             materials: self.prep.material_features(),
+            vertex_attributes: self.prep.vertex_attributes(),
             warnings,
             skipped_nodes,
             seconds,

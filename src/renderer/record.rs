@@ -349,7 +349,11 @@ impl Renderer {
                     progress: &progress,
                     origin: plan.origin,
                     hdr_read_by_others: self.settings.keep_hdr || hdr_readers.contains(&view.id),
-                    shading: Shading { materials: plan.materials, specialize: self.settings.specialize_shaders },
+                    shading: Shading {
+                        materials: plan.materials,
+                        vertex_attributes: plan.vertex_attributes,
+                        specialize: self.settings.specialize_shaders,
+                    },
                 },
             ));
         }

@@ -59,6 +59,10 @@ pub struct Shading {
     /// it: pipelines leave texture sampling and the UV-transform path out
     /// when no material needs them.
     pub materials: MaterialFeatures,
+    /// Some mesh the frame draws has vertex colours or a second UV set
+    /// (ScenePrep's geometry cache: [`oxygen_sceneprep::ScenePrep::vertex_attributes`]);
+    /// without, every mesh pipeline's vertex stage leaves them out.
+    pub vertex_attributes: bool,
     /// Specialise the shading pipelines to what the view has this frame;
     /// `false` runs the fully featured shader everywhere (for comparisons).
     pub specialize: bool,
@@ -67,7 +71,7 @@ pub struct Shading {
 impl Shading {
     /// Every feature in every pipeline: what a context made without a scene
     /// in view uses.
-    pub const ALL: Shading = Shading { materials: MaterialFeatures::ALL, specialize: true };
+    pub const ALL: Shading = Shading { materials: MaterialFeatures::ALL, vertex_attributes: true, specialize: true };
 }
 
 /// What an automatic depth pre-pass decides from, for one view and frame

@@ -4,7 +4,8 @@
 #include "mesh/mesh_vertex.wgsl"
 
 @fragment
-fn fs_alpha_test(mesh: MeshVarying) {
+fn fs_alpha_test(io: MeshIo) {
+    let mesh = unpack_varying(io);
     // Derivatives first, in uniform control flow, as in the shading pass so
     // both passes test the same mip level's alpha.
     let d = uv_derivatives_of(mesh);

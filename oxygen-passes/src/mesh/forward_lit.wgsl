@@ -636,12 +636,14 @@ fn masked_color(mesh: MeshVarying, front_facing: bool) -> vec4<f32> {
 }
 
 @fragment
-fn fs_opaque(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> @location(0) vec4<f32> {
+fn fs_opaque(io: MeshIo, @builtin(front_facing) front_facing: bool) -> @location(0) vec4<f32> {
+    let mesh = unpack_varying(io);
     return opaque_color(mesh, front_facing);
 }
 
 @fragment
-fn fs_masked(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> @location(0) vec4<f32> {
+fn fs_masked(io: MeshIo, @builtin(front_facing) front_facing: bool) -> @location(0) vec4<f32> {
+    let mesh = unpack_varying(io);
     return masked_color(mesh, front_facing);
 }
 
@@ -662,18 +664,21 @@ fn labelled(color: vec4<f32>, mesh: MeshVarying, front_facing: bool) -> Labelled
 }
 
 @fragment
-fn fs_opaque_labelled(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> Labelled {
+fn fs_opaque_labelled(io: MeshIo, @builtin(front_facing) front_facing: bool) -> Labelled {
+    let mesh = unpack_varying(io);
     return labelled(opaque_color(mesh, front_facing), mesh, front_facing);
 }
 
 @fragment
-fn fs_masked_labelled(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> Labelled {
+fn fs_masked_labelled(io: MeshIo, @builtin(front_facing) front_facing: bool) -> Labelled {
+    let mesh = unpack_varying(io);
     return labelled(masked_color(mesh, front_facing), mesh, front_facing);
 }
 
 // Transparent surfaces: premultiplied alpha (blend One, OneMinusSrcAlpha).
 @fragment
-fn fs_blend(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> @location(0) vec4<f32> {
+fn fs_blend(io: MeshIo, @builtin(front_facing) front_facing: bool) -> @location(0) vec4<f32> {
+    let mesh = unpack_varying(io);
     let d = derivatives_of(mesh);
     let handle = material_handle_of(mesh);
     if handle == INVALID_SLOT {

@@ -8,12 +8,14 @@
 #include "mesh/label_values.wgsl"
 
 @fragment
-fn fs_labels(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> Labels {
+fn fs_labels(io: MeshIo, @builtin(front_facing) front_facing: bool) -> Labels {
+    let mesh = unpack_varying(io);
     return labels_of(mesh, front_facing);
 }
 
 @fragment
-fn fs_labels_masked(mesh: MeshVarying, @builtin(front_facing) front_facing: bool) -> Labels {
+fn fs_labels_masked(io: MeshIo, @builtin(front_facing) front_facing: bool) -> Labels {
+    let mesh = unpack_varying(io);
     // Derivatives first, in uniform control flow, as the shading pass takes them.
     let d = uv_derivatives_of(mesh);
     let material = material_of(mesh);

@@ -10,26 +10,27 @@
 #include "sceneprep/gpu_records.wgsl"
 #include "bindless/domains"
 #include "bindless/textures"
+#include "mesh/varyings"
 
+// What the fragment functions read of a surface point: the vertex stage's
+// outputs unpacked (mesh/varyings: `unpack_varying`). The vertex colour is
+// white and the second UV set zero when the module was composed without
+// vertex attributes.
 struct MeshVarying {
-    // Invariant so that the shading pass reproduces the pre-pass depth bit
-    // for bit and its GreaterEqual test passes exactly on the visible surface.
-    @builtin(position) @invariant clip_position: vec4<f32>,
-    @location(0) world_position: vec3<f32>,
-    @location(1) world_normal: vec3<f32>,
-    @location(2) uv: vec2<f32>,
+    clip_position: vec4<f32>,
+    world_position: vec3<f32>,
+    world_normal: vec3<f32>,
+    uv: vec2<f32>,
     // The draw's index in the view's draws: the fragment stage reads its
-    // DrawMetadata again for the material and the labels. One flat varying
-    // for all of them, because in vertex-bound work every varying costs
-    // (two more for the labels cost an H200 a fifth of a batch's frame).
-    @location(3) @interpolate(flat) draw: u32,
+    // DrawMetadata again for the material and the labels.
+    draw: u32,
     // Vertex colour (white without COLOR_0) and the second UV set.
-    @location(4) color: vec4<f32>,
-    @location(5) uv1: vec2<f32>,
+    color: vec4<f32>,
+    uv1: vec2<f32>,
 }
 
 @vertex
-fn vs_main(@builtin(vertex_index) vertex_index: u32, @builtin(instance_index) draw_index: u32) -> MeshVarying {
+fn vs_main(@builtin(vertex_index) vertex_index: u32, @builtin(instance_index) draw_index: u32) -> MeshIo {
     let draw = draw_metadata_domain[scene.renderer.draw_metadata_slot + draw_index];
     let v = vertex_domain[vertex_index];
     // Morph targets first (glTF: morph, then skin): the weighted sum of the
@@ -91,12 +92,12 @@ fn vs_main(@builtin(vertex_index) vertex_index: u32, @builtin(instance_index) dr
     // VertexRecords: colour in px..nx, the second UV set in ny, nz).
     out.color = vec4<f32>(1.0);
     out.uv1 = vec2<f32>(0.0);
-    if draw.attributes_slot != INVALID_SLOT {
+    if HAS_VERTEX_ATTRIBUTES && draw.attributes_slot != INVALID_SLOT {
         let a = vertex_domain[draw.attributes_slot + (vertex_index - draw.vertex_slot)];
         out.color = vec4<f32>(a.px, a.py, a.pz, a.nx);
         out.uv1 = vec2<f32>(a.ny, a.nz);
     }
-    return out;
+    return pack_varying(out);
 }
 
 // The draw a fragment belongs to.

@@ -441,6 +441,7 @@ impl MeshPass {
             probe_parallax: probes && inputs.probes.iter().any(|p| p.parallax.is_some()),
             textures: ctx.shading.materials.textures,
             uv_transforms: ctx.shading.materials.uv_transforms,
+            vertex_attributes: ctx.shading.vertex_attributes,
         }
     }
 

@@ -15,7 +15,7 @@ use std::task::{Context, Poll, Waker};
 use oxygen_bindless::{BindlessHeap, TexturePath};
 use tracing::debug;
 
-use super::{AlphaClass, PassKind, PipelineKey, mesh_entry_points, shader_source};
+use super::{AlphaClass, PassKind, PipelineKey, mesh_entry_points, pipeline_source};
 
 /// A tile clear pipeline's key: the shading pass's key and the clear colour
 /// (its `f32` bits; `None` leaves the colour as it is).
@@ -34,7 +34,8 @@ pub(super) type TileClearKey = (PipelineKey, Option<[u32; 4]>);
 pub struct Pipelines {
     pub(super) layout: wgpu::PipelineLayout,
     texture_path: TexturePath,
-    modules: Mutex<HashMap<PassKind, wgpu::ShaderModule>>,
+    /// By pass and whether the vertex stage carries vertex attributes.
+    modules: Mutex<HashMap<(PassKind, bool), wgpu::ShaderModule>>,
     state: Mutex<CompileState>,
     pub(super) tonemap: Mutex<Option<(wgpu::RenderPipeline, wgpu::BindGroupLayout)>>,
     /// The environment's full-screen draw, per shading key (targets,
@@ -140,7 +141,7 @@ impl Pipelines {
         let _span =
             tracing::info_span!("compile_pipeline", pass = ?key.pass, variant = ?key.variant, features = ?key.features)
                 .entered();
-        let module = self.module(device, key.pass);
+        let module = self.module(device, key.pass, &key.features);
         let pipeline = self.create(device, &module, key);
         self.created.fetch_add(1, Ordering::Relaxed);
         debug!(?key, "pipeline created");
@@ -153,14 +154,21 @@ impl Pipelines {
 }
 
 impl Pipelines {
-    pub(super) fn module(&self, device: &wgpu::Device, pass: PassKind) -> wgpu::ShaderModule {
+    /// The shader module of `pass` for pipelines of `features` (their
+    /// vertex outputs: [`crate::ShaderFeatures::vertex_attributes`]).
+    pub(super) fn module(
+        &self,
+        device: &wgpu::Device,
+        pass: PassKind,
+        features: &crate::ShaderFeatures,
+    ) -> wgpu::ShaderModule {
         let mut modules = self.modules.lock().unwrap_or_else(|e| e.into_inner());
         modules
-            .entry(pass)
+            .entry((pass, features.vertex_attributes))
             .or_insert_with(|| {
                 device.create_shader_module(wgpu::ShaderModuleDescriptor {
                     label: Some(&format!("{pass:?}")),
-                    source: wgpu::ShaderSource::Wgsl(shader_source(pass, self.texture_path).into()),
+                    source: wgpu::ShaderSource::Wgsl(pipeline_source(pass, self.texture_path, features).into()),
                 })
             })
             .clone()

@@ -1,9 +1,9 @@
 //! The optional parts of the forward shader a pipeline keeps, and the
 //! exposure a pipeline that tone-maps in place is specialised with.
 
-/// Optional parts of the forward shader. Each is a WGSL pipeline-overridable
-/// constant (`override HAS_SUN_SHADOWS: bool = true;` …) set when the
-/// pipeline is created, so a scene without, say, positional lights runs a
+/// Optional parts of the forward shader. Each but one is a WGSL
+/// pipeline-overridable constant (`override HAS_SUN_SHADOWS: bool = true;`
+/// …) set when the pipeline is created, so a scene without, say, positional lights runs a
 /// pipeline whose light loop the shader compiler removed. A pass picks the
 /// features from what its view has this frame; every combination is a
 /// pipeline of its own, created the first time it is needed and cached.
@@ -41,6 +41,15 @@ pub struct ShaderFeatures {
     /// path cost textured shading 0.23 ms at 1280 × 720 on an H100 (1.24 →
     /// 1.47 ms) even for materials that skip it at run time.
     pub uv_transforms: bool,
+    /// The vertex stage passes vertex colours and the second UV set on
+    /// (glTF `COLOR_0`, `TEXCOORD_1`); without, the colour is white and
+    /// set 1 is set 0's place. Not an override constant: a vertex output
+    /// cannot be left out by one, so this picks which of two compositions
+    /// of the module the pipeline compiles (`mesh/varyings_plain.wgsl`,
+    /// three locations, or `mesh/varyings_attributes.wgsl`, five). Every
+    /// mesh pass, depth-only ones included, follows it, since the work it
+    /// saves is the vertices'.
+    pub vertex_attributes: bool,
 }
 
 impl ShaderFeatures {
@@ -55,6 +64,7 @@ impl ShaderFeatures {
         probe_parallax: true,
         textures: true,
         uv_transforms: true,
+        vertex_attributes: true,
     };
     /// No optional part: sun and ambient light on untextured materials.
     pub const NONE: ShaderFeatures = ShaderFeatures {
@@ -67,9 +77,19 @@ impl ShaderFeatures {
         probe_parallax: false,
         textures: false,
         uv_transforms: false,
+        vertex_attributes: false,
     };
 
-    /// The override constants, by their WGSL names (bools as 0 or 1).
+    /// Every optional part but the vertex outputs, which stay as they are:
+    /// the features of a pass whose fragment stage has no optional code
+    /// (depth-only and labels passes), whose vertex stage still follows
+    /// the scene's meshes.
+    pub fn vertex_outputs_only(self) -> ShaderFeatures {
+        ShaderFeatures { vertex_attributes: self.vertex_attributes, ..ShaderFeatures::ALL }
+    }
+
+    /// The override constants, by their WGSL names (bools as 0 or 1);
+    /// [`ShaderFeatures::vertex_attributes`] is not one.
     pub fn override_constants(&self) -> [(&'static str, f64); 9] {
         let flag = |on: bool| f64::from(u8::from(on));
         [

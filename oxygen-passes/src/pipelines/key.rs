@@ -112,8 +112,9 @@ pub struct PipelineKey {
     /// Rasterizer depth bias ([`DepthBias::NONE`] except for shadow maps).
     pub depth_bias: DepthBias,
     /// Optional shading code the pipeline keeps (forward lit and
-    /// transparent passes; [`ShaderFeatures::ALL`] for depth-only passes,
-    /// whose shader has none).
+    /// transparent passes; for depth-only and labels passes, whose
+    /// fragment stage has none, [`ShaderFeatures::vertex_outputs_only`]:
+    /// only their vertex outputs vary).
     pub features: ShaderFeatures,
     /// Tone-map in the fragment shader with this exposure and write the
     /// display colour directly (the forward lit pass of a view whose HDR
@@ -141,15 +142,18 @@ impl PipelineKey {
     pub(super) fn canonical(self) -> Self {
         match self.pass {
             PassKind::DepthPrePass | PassKind::Shadow => PipelineKey {
-                features: ShaderFeatures::ALL,
+                features: self.features.vertex_outputs_only(),
                 tone_map: None,
                 labels: LabelSet::NONE,
                 last_tie_wins: false,
                 ..self
             },
-            PassKind::Labels => {
-                PipelineKey { features: ShaderFeatures::ALL, tone_map: None, last_tie_wins: false, ..self }
-            }
+            PassKind::Labels => PipelineKey {
+                features: self.features.vertex_outputs_only(),
+                tone_map: None,
+                last_tie_wins: false,
+                ..self
+            },
             PassKind::Transparent => PipelineKey { labels: LabelSet::NONE, last_tie_wins: false, ..self },
             PassKind::ShadingAfterPrePass => PipelineKey { last_tie_wins: false, ..self },
             PassKind::Shading => self,

@@ -6,7 +6,7 @@
 use oxygen_bindless::TexturePath;
 
 use super::PassKind;
-use crate::shaders::{DEPTH_ONLY, FORWARD_LIT, LABELS, ShaderModule};
+use crate::shaders::{DEPTH_ONLY, FORWARD_LIT, LABELS, MeshVaryings, ShaderModule};
 
 /// The registry's module a pass's pipelines are made from.
 pub(crate) fn mesh_module(pass: PassKind) -> ShaderModule {
@@ -39,7 +39,15 @@ pub(crate) fn mesh_entry_points(pass: PassKind, masked: bool, labels: bool) -> (
 
 /// The full WGSL of a pass, composed from `mesh/depth_only.wgsl` or
 /// `mesh/forward_lit.wgsl` and what they include (the heap's declarations,
-/// the GPU records, the generated constants, the shared vertex stage).
+/// the GPU records, the generated constants, the shared vertex stage with
+/// every vertex output: right for any scene).
 pub fn shader_source(pass: PassKind, textures: TexturePath) -> String {
     mesh_module(pass).textured_source(textures)
+}
+
+/// The WGSL a pipeline of `pass` with `features` compiles: the vertex
+/// stage carries vertex colours and the second UV set only when
+/// [`ShaderFeatures::vertex_attributes`](crate::ShaderFeatures::vertex_attributes).
+pub(crate) fn pipeline_source(pass: PassKind, textures: TexturePath, features: &crate::ShaderFeatures) -> String {
+    mesh_module(pass).mesh_source(textures, MeshVaryings::of(features.vertex_attributes))
 }

@@ -21,4 +21,5 @@ pub use key::{AlphaClass, DepthBias, PassKind, PipelineKey, PipelineVariant};
 pub(crate) use mesh_shader::mesh_entry_points;
 #[cfg(test)]
 pub(crate) use mesh_shader::mesh_module;
+pub(crate) use mesh_shader::pipeline_source;
 pub use mesh_shader::shader_source;

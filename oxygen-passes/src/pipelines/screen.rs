@@ -40,7 +40,7 @@ impl Pipelines {
         if let Some(p) = self.sky.lock().unwrap_or_else(|e| e.into_inner()).get(&key) {
             return p.clone();
         }
-        let module = self.module(device, PassKind::Shading);
+        let module = self.module(device, PassKind::Shading, &key.features);
         let constants = PipelineKey { pass: PassKind::Shading, ..key }.override_constants();
         // A pass that writes labels has their targets too; the sky leaves
         // them as cleared (no node: 0).
@@ -65,7 +65,7 @@ impl Pipelines {
         if let Some(p) = self.tile_clear.lock().unwrap_or_else(|e| e.into_inner()).get(&cache_key) {
             return p.clone();
         }
-        let module = self.module(device, PassKind::Shading);
+        let module = self.module(device, PassKind::Shading, &key.features);
         let mut constants = PipelineKey { pass: PassKind::Shading, ..key }.override_constants();
         let [r, g, b, a] = color.unwrap_or_default();
         constants.extend(

@@ -25,11 +25,11 @@ fn every_struct_shared_with_wgsl_has_the_rust_layout_in_every_shader_declaring_i
     let mut problems = Vec::new();
     for layout in generated {
         let mut declared_by = 0;
-        for ((root, path), (_, module)) in &modules {
+        for ((root, path, varyings), (_, module)) in &modules {
             if module.types.iter().any(|(_, t)| t.name.as_deref() == Some(layout.name)) {
                 declared_by += 1;
                 if let Err(problem) = check_layout(module, &layout) {
-                    problems.push(format!("{root} / {path:?}: {problem}"));
+                    problems.push(format!("{root} / {path:?} / {varyings:?}: {problem}"));
                 }
             }
         }

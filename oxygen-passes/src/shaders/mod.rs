@@ -13,7 +13,7 @@ pub(crate) mod registry;
 pub(crate) use registry::HIZ_VISIBLE_BOXES;
 pub(crate) use registry::{
     COMPOSE_WINDOW, COMPOSITE, CUBE_FILTER, CULL, DEPTH_COPY, DEPTH_ONLY, FORWARD_LIT, HIZ, LABELS, LIGHT_CLUSTERS,
-    REFERENCE, SPLIT_SUM, ShaderModule, TONEMAP,
+    MeshVaryings, REFERENCE, SPLIT_SUM, ShaderModule, TONEMAP,
 };
 
 #[cfg(test)]

@@ -24,6 +24,8 @@ pub(crate) static SOURCES: &[Source] = &[
     Source::wgsl("mesh/forward_lit.wgsl", include_str!("../mesh/forward_lit.wgsl")),
     Source::wgsl("mesh/labels.wgsl", include_str!("../mesh/labels.wgsl")),
     Source::wgsl("mesh/label_values.wgsl", include_str!("../mesh/label_values.wgsl")),
+    Source::wgsl(VARYINGS_PLAIN, include_str!("../mesh/varyings_plain.wgsl")),
+    Source::wgsl(VARYINGS_WITH_ATTRIBUTES, include_str!("../mesh/varyings_attributes.wgsl")),
     // Lighting: group 1, the split-sum table, image-based lighting.
     Source::generated("lighting/constants", crate::lighting::params::wgsl_constants),
     Source::gpu_struct::<crate::lighting::params::LightingInputs>("lighting/LightingInputs"),
@@ -100,8 +102,45 @@ const TEXTURES: &str = "bindless/textures";
 const BINDING_ARRAY: &str = "bindless/textures/binding_array";
 const GROUPED_ARRAYS: &str = "bindless/textures/grouped_arrays";
 
+/// What the mesh vertex stage includes for its outputs; each composition
+/// of a mesh module resolves it to one of the two below.
+const VARYINGS: &str = "mesh/varyings";
+const VARYINGS_PLAIN: &str = "mesh/varyings_plain.wgsl";
+const VARYINGS_WITH_ATTRIBUTES: &str = "mesh/varyings_attributes.wgsl";
+
+/// Which outputs a mesh module's vertex stage writes: the module is
+/// composed once for each ([`crate::ShaderFeatures::vertex_attributes`]
+/// picks one), since a location cannot be left out by an override constant.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub(crate) enum MeshVaryings {
+    /// Position, normal and UV packed in two locations, and the draw:
+    /// for scenes whose meshes have no vertex colours or second UV set.
+    Plain,
+    /// Those and the vertex colour and second UV set: right for any scene.
+    WithAttributes,
+}
+
+impl MeshVaryings {
+    /// Both, for the tests that compose every variant.
+    #[cfg(test)]
+    pub(crate) const ALL: [MeshVaryings; 2] = [MeshVaryings::Plain, MeshVaryings::WithAttributes];
+
+    /// The one that draws meshes with vertex attributes when `attributes`.
+    pub(crate) fn of(attributes: bool) -> Self {
+        if attributes { MeshVaryings::WithAttributes } else { MeshVaryings::Plain }
+    }
+
+    fn source(self) -> &'static str {
+        match self {
+            MeshVaryings::Plain => VARYINGS_PLAIN,
+            MeshVaryings::WithAttributes => VARYINGS_WITH_ATTRIBUTES,
+        }
+    }
+}
+
 /// A shader module the crate compiles: a root source, composed with the
-/// texture path's bindings when it reads textures.
+/// texture path's bindings when it reads textures, and with one of the
+/// mesh vertex stage's output sets when it draws meshes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct ShaderModule {
     /// The root source.
@@ -109,26 +148,35 @@ pub(crate) struct ShaderModule {
     /// Whether it includes the texture path's bindings (and so is composed
     /// once per path).
     pub(crate) textured: bool,
+    /// Whether it includes the mesh vertex stage (and so is composed once
+    /// per [`MeshVaryings`]).
+    pub(crate) mesh: bool,
 }
 
 impl ShaderModule {
     const fn plain(root: &'static str) -> Self {
-        ShaderModule { root, textured: false }
+        ShaderModule { root, textured: false, mesh: false }
     }
 
     const fn textured(root: &'static str) -> Self {
-        ShaderModule { root, textured: true }
+        ShaderModule { root, textured: true, mesh: false }
+    }
+
+    const fn mesh(root: &'static str) -> Self {
+        ShaderModule { root, textured: true, mesh: true }
     }
 
     /// The module's WGSL, with the bindings of `textures` (`None` for a
-    /// module that reads no texture).
-    pub(crate) fn compose(self, textures: Option<TexturePath>) -> Result<String, ComposeError> {
-        let aliases: &[(&str, &str)] = match textures {
-            Some(TexturePath::BindingArray) => &[(TEXTURES, BINDING_ARRAY)],
-            Some(TexturePath::GroupedArrays) => &[(TEXTURES, GROUPED_ARRAYS)],
-            None => &[],
+    /// module that reads no texture) and the vertex outputs of `varyings`
+    /// (ignored by a module that draws no mesh).
+    pub(crate) fn compose(self, textures: Option<TexturePath>, varyings: MeshVaryings) -> Result<String, ComposeError> {
+        let texture_alias = match textures {
+            Some(TexturePath::BindingArray) => Some((TEXTURES, BINDING_ARRAY)),
+            Some(TexturePath::GroupedArrays) => Some((TEXTURES, GROUPED_ARRAYS)),
+            None => None,
         };
-        Composer::new(SOURCES).with_aliases(aliases).compose(self.root)
+        let aliases: Vec<(&str, &str)> = texture_alias.into_iter().chain([(VARYINGS, varyings.source())]).collect();
+        Composer::new(SOURCES).with_aliases(&aliases).compose(self.root)
     }
 
     /// The WGSL of a module that reads no texture. The registry is static:
@@ -136,22 +184,29 @@ impl ShaderModule {
     /// so a failure here is a bug in the registry, reported with the
     /// composer's message.
     pub(crate) fn source(self) -> String {
-        self.compose(None).unwrap_or_else(|e| panic!("shader {}: {e}", self.root))
+        self.compose(None, MeshVaryings::WithAttributes).unwrap_or_else(|e| panic!("shader {}: {e}", self.root))
     }
 
     /// The WGSL of a module that reads textures, on `textures` (fails as
-    /// [`ShaderModule::source`] does).
+    /// [`ShaderModule::source`] does); a mesh module with every vertex output.
     pub(crate) fn textured_source(self, textures: TexturePath) -> String {
-        self.compose(Some(textures)).unwrap_or_else(|e| panic!("shader {} on {textures:?}: {e}", self.root))
+        self.mesh_source(textures, MeshVaryings::WithAttributes)
+    }
+
+    /// The WGSL of a mesh module on `textures` whose vertex stage writes
+    /// `varyings` (fails as [`ShaderModule::source`] does).
+    pub(crate) fn mesh_source(self, textures: TexturePath, varyings: MeshVaryings) -> String {
+        self.compose(Some(textures), varyings)
+            .unwrap_or_else(|e| panic!("shader {} on {textures:?} ({varyings:?}): {e}", self.root))
     }
 }
 
 /// The depth pre-pass and shadow maps.
-pub(crate) const DEPTH_ONLY: ShaderModule = ShaderModule::textured("mesh/depth_only.wgsl");
+pub(crate) const DEPTH_ONLY: ShaderModule = ShaderModule::mesh("mesh/depth_only.wgsl");
 /// Forward lit and transparent shading, and the sky behind them.
-pub(crate) const FORWARD_LIT: ShaderModule = ShaderModule::textured("mesh/forward_lit.wgsl");
+pub(crate) const FORWARD_LIT: ShaderModule = ShaderModule::mesh("mesh/forward_lit.wgsl");
 /// The labels pass (instance ids and normals).
-pub(crate) const LABELS: ShaderModule = ShaderModule::textured("mesh/labels.wgsl");
+pub(crate) const LABELS: ShaderModule = ShaderModule::mesh("mesh/labels.wgsl");
 /// The path-traced reference.
 pub(crate) const REFERENCE: ShaderModule = ShaderModule::textured("reference/trace.wgsl");
 /// The tone map.

@@ -11,7 +11,7 @@ use std::collections::{HashMap, HashSet};
 use oxygen_bindless::TexturePath;
 
 use super::compose::{Composer, SourceText};
-use super::registry::{ENTRY_POINTS, SOURCES, ShaderModule, Stage};
+use super::registry::{ENTRY_POINTS, MeshVaryings, SOURCES, ShaderModule, Stage};
 use crate::pipelines::{
     DepthBias, Exposure, PassKind, PipelineKey, PipelineVariant, ShaderFeatures, mesh_entry_points, mesh_module,
 };
@@ -30,6 +30,16 @@ pub(super) fn paths(module: ShaderModule) -> Vec<Option<TexturePath>> {
         vec![None]
     }
 }
+
+/// Each composition of a module: a texture path of [`paths`], and for a
+/// mesh module each set of vertex outputs (the others compose with one).
+pub(super) fn compositions(module: ShaderModule) -> Vec<(Option<TexturePath>, MeshVaryings)> {
+    let varyings: &[MeshVaryings] = if module.mesh { &MeshVaryings::ALL } else { &[MeshVaryings::WithAttributes] };
+    paths(module).into_iter().flat_map(|path| varyings.iter().map(move |v| (path, *v))).collect()
+}
+
+/// A composed module's key: its root, texture path and vertex outputs.
+pub(super) type ModuleKey = (&'static str, Option<TexturePath>, MeshVaryings);
 
 /// What a device on `path` grants: the binding-array path needs exactly
 /// what its device features enable, the others nothing.
@@ -54,15 +64,16 @@ fn validate(what: &str, source: &str, path: Option<TexturePath>) -> naga::Module
     module
 }
 
-/// Every module of [`ENTRY_POINTS`] on every path, composed, parsed and
-/// validated: (module, path) → (source, module).
-pub(super) fn composed_modules() -> HashMap<(&'static str, Option<TexturePath>), (String, naga::Module)> {
+/// Every module of [`ENTRY_POINTS`] in every composition, composed, parsed
+/// and validated: (module, path, vertex outputs) → (source, module).
+pub(super) fn composed_modules() -> HashMap<ModuleKey, (String, naga::Module)> {
     let mut modules = HashMap::new();
     for entry in ENTRY_POINTS {
-        for path in paths(entry.module) {
-            modules.entry((entry.module.root, path)).or_insert_with(|| {
-                let what = format!("{} / {path:?}", entry.module.root);
-                let source = entry.module.compose(path).unwrap_or_else(|e| panic!("{what} does not compose: {e}"));
+        for (path, varyings) in compositions(entry.module) {
+            modules.entry((entry.module.root, path, varyings)).or_insert_with(|| {
+                let what = format!("{} / {path:?} / {varyings:?}", entry.module.root);
+                let source =
+                    entry.module.compose(path, varyings).unwrap_or_else(|e| panic!("{what} does not compose: {e}"));
                 let module = validate(&what, &source, path);
                 (source, module)
             });
@@ -72,11 +83,11 @@ pub(super) fn composed_modules() -> HashMap<(&'static str, Option<TexturePath>),
 }
 
 #[test]
-fn every_entry_point_validates_at_its_stage_on_every_texture_path() {
+fn every_entry_point_validates_at_its_stage_in_every_composition() {
     let modules = composed_modules();
     for entry in ENTRY_POINTS {
-        for path in paths(entry.module) {
-            let (_, module) = &modules[&(entry.module.root, path)];
+        for (path, varyings) in compositions(entry.module) {
+            let (_, module) = &modules[&(entry.module.root, path, varyings)];
             let found = module.entry_points.iter().find(|e| e.name == entry.name);
             let stage = found.map(|e| match e.stage {
                 naga::ShaderStage::Vertex => Stage::Vertex,
@@ -84,19 +95,40 @@ fn every_entry_point_validates_at_its_stage_on_every_texture_path() {
                 naga::ShaderStage::Compute => Stage::Compute,
                 other => panic!("{}: unexpected stage {other:?}", entry.name),
             });
-            assert_eq!(stage, Some(entry.stage), "{} / {path:?}: entry point {}", entry.module.root, entry.name);
+            assert_eq!(
+                stage,
+                Some(entry.stage),
+                "{} / {path:?} / {varyings:?}: entry point {}",
+                entry.module.root,
+                entry.name
+            );
         }
     }
     // And nothing else: every entry point of a module is listed.
-    for ((root, path), (_, module)) in &modules {
+    for ((root, path, varyings), (_, module)) in &modules {
         for e in &module.entry_points {
             assert!(
                 ENTRY_POINTS.iter().any(|l| l.module.root == *root && l.name == e.name),
-                "{root} / {path:?}: entry point {} is not in ENTRY_POINTS",
+                "{root} / {path:?} / {varyings:?}: entry point {} is not in ENTRY_POINTS",
                 e.name
             );
         }
     }
+}
+
+/// The plain vertex outputs are what their name says: fewer locations
+/// than those with vertex attributes, and no colour or second UV set.
+#[test]
+fn plain_vertex_outputs_leave_the_attributes_out() {
+    let modules = composed_modules();
+    let locations = |varyings| {
+        let (source, _) = &modules[&(super::FORWARD_LIT.root, Some(TexturePath::GroupedArrays), varyings)];
+        let start = source.find("struct MeshIo {").expect("the vertex outputs are declared");
+        let end = start + source[start..].find('}').expect("and closed");
+        source[start..end].matches("@location(").count()
+    };
+    assert_eq!(locations(MeshVaryings::Plain), 3);
+    assert_eq!(locations(MeshVaryings::WithAttributes), 5);
 }
 
 /// Every source of the registry is part of some module: the registry holds
@@ -148,7 +180,9 @@ fn every_wgsl_file_is_registered_once() {
 #[test]
 fn composing_outside_the_registry_is_an_error() {
     assert!(Composer::new(SOURCES).compose("mesh/nowhere.wgsl").is_err());
-    let error = super::FORWARD_LIT.compose(None).expect_err("the texture path is chosen per device");
+    let error = super::FORWARD_LIT
+        .compose(None, MeshVaryings::WithAttributes)
+        .expect_err("the texture path is chosen per device");
     assert!(error.to_string().contains("bindless/textures"), "{error}");
 }
 
@@ -220,8 +254,8 @@ fn every_override_constant_of_a_mesh_pipeline_is_declared() {
             last_tie_wins: false,
         };
         let module = mesh_module(pass);
-        for path in paths(module) {
-            let (source, parsed) = &modules[&(module.root, path)];
+        for (path, varyings) in compositions(module) {
+            let (source, parsed) = &modules[&(module.root, path, varyings)];
             let declared: Vec<_> = parsed.overrides.iter().filter_map(|(_, o)| o.name.clone()).collect();
             for (name, _) in key.override_constants() {
                 assert!(
@@ -230,12 +264,12 @@ fn every_override_constant_of_a_mesh_pipeline_is_declared() {
                     module.root
                 );
                 // Several kinds share a module: flip each of its constants once.
-                if !flipped_already.insert((module.root, path, name)) {
+                if !flipped_already.insert((module.root, path, varyings, name)) {
                     continue;
                 }
                 let (on, off) = (format!("override {name}: bool = true;"), format!("override {name}: bool = false;"));
                 let flipped = if source.contains(&on) { source.replace(&on, &off) } else { source.replace(&off, &on) };
-                validate(&format!("{} / {path:?} with {name} flipped", module.root), &flipped, path);
+                validate(&format!("{} / {path:?} / {varyings:?} with {name} flipped", module.root), &flipped, path);
             }
         }
     }

@@ -31,6 +31,8 @@ pub struct GeometryCache {
     entries: Vec<Option<(GeometryHandle, GeometrySlots)>>,
     pending: Vec<(GeometrySlots, Arc<Geometry>)>,
     resident: usize,
+    /// Resident meshes with attribute records.
+    with_attributes: usize,
 }
 
 impl GeometryCache {
@@ -84,6 +86,7 @@ impl GeometryCache {
         }
         self.entries[index] = Some((handle, s));
         self.resident += 1;
+        self.with_attributes += usize::from(attributes != oxygen_bindless::INVALID_SLOT);
         self.pending.push((s, Arc::clone(geometry)));
         Ok(s)
     }
@@ -99,9 +102,16 @@ impl GeometryCache {
         self.resident
     }
 
+    /// Whether some resident mesh has attribute records (vertex colours or
+    /// a second UV set), which the mesh shaders then pass on.
+    pub fn any_attributes(&self) -> bool {
+        self.with_attributes > 0
+    }
+
     fn free_slots(&mut self, s: GeometrySlots, slots: &mut SlotAllocators) -> Result<(), SlotError> {
         self.pending.retain(|(p, _)| *p != s);
         self.resident -= 1;
+        self.with_attributes -= usize::from(s.attributes != oxygen_bindless::INVALID_SLOT);
         slots.free(s.vertices)?;
         slots.free(s.indices)
     }
@@ -115,6 +125,7 @@ impl GeometryCache {
         }
         self.pending.clear();
         self.resident = 0;
+        self.with_attributes = 0;
         Ok(())
     }
 }
