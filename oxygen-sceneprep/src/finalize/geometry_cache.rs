@@ -195,6 +195,32 @@ mod tests {
         Ok(())
     }
 
+    /// Whether some resident mesh has attribute records follows the meshes
+    /// resident: a mesh with them turns it on, its slot taken by a mesh
+    /// without (another generation) and a cleared cache turn it off.
+    #[test]
+    fn any_attributes_follows_the_resident_meshes() -> Result<(), SlotError> {
+        let quad = Geometry::quad(1.0);
+        let n = quad.vertices().len();
+        let coloured = Arc::new(quad.with_attributes(vec![VertexAttributes::default(); n]).expect("attributes"));
+        let mut slots = SlotAllocators::default();
+        let mut cache = GeometryCache::default();
+        cache.resolve(handle(1, 1), &mesh("plain", 1.0), &mut slots)?;
+        assert!(!cache.any_attributes(), "a mesh without attribute records");
+        cache.resolve(handle(2, 1), &coloured, &mut slots)?;
+        cache.resolve(handle(2, 1), &coloured, &mut slots)?;
+        assert!(cache.any_attributes(), "a mesh with them");
+        cache.resolve(handle(3, 1), &coloured, &mut slots)?;
+        cache.resolve(handle(2, 3), &mesh("plain again", 1.0), &mut slots)?;
+        assert!(cache.any_attributes(), "one of the two coloured meshes is still resident");
+        cache.resolve(handle(3, 3), &mesh("plain too", 1.0), &mut slots)?;
+        assert!(!cache.any_attributes(), "both replaced by meshes without");
+        cache.resolve(handle(4, 1), &coloured, &mut slots)?;
+        cache.clear(&mut slots)?;
+        assert!(!cache.any_attributes(), "a cleared cache holds none");
+        Ok(())
+    }
+
     /// A mesh drawn again keeps its slots and is uploaded once; the count of
     /// resident meshes grows by one per new mesh.
     #[test]
