@@ -87,7 +87,7 @@ pub mod lighting {
     pub use oxygen_core::{
         CascadeSettings, Environment, EnvironmentError, EquirectImage, Light, LightKind, Mobility, Sky,
     };
-    pub use oxygen_passes::{ClusterGrid, LightCulling};
+    pub use oxygen_passes::{AmbientOcclusion, AmbientOcclusionPass, AoQuality, ClusterGrid, LightCulling};
 }
 
 /// The bindless heap.

@@ -185,6 +185,43 @@ pub fn pole_camera(viewport: UVec2) -> LookAtResolver {
     .expect("a valid camera")
 }
 
+/// A corner and a crevice under nothing but the ambient light: a floor
+/// and two walls meeting at a right angle (4 m each way), a box leaning
+/// into the corner and a second box on the floor with a 5 cm gap beside a
+/// third; no lights. The scene of ambient occlusion's test and accuracy
+/// stage, seen by [`corner_camera`]: every pixel shows a surface, so the
+/// background of a raster view and its reference never differ.
+pub fn corner_and_crevice() -> Scene {
+    let mut scene = Scene::new();
+    let grey =
+        scene.add_material(Material { roughness: 0.8, ..Material::opaque("grey", Vec4::new(0.8, 0.8, 0.8, 1.0)) });
+    let cube = scene.add_geometry(Geometry::cube(1.0));
+    let mut block = |name: &str, at: Vec3, size: Vec3| {
+        let node = scene.add_node(name, Transform::from_translation(at).with_scale(size));
+        scene.set_renderable(node, Renderable { geometry: cube, materials: vec![grey] }).expect("valid handles");
+    };
+    // Floor, back wall (−Z) and left wall (−X), thick enough to be solid.
+    block("floor", Vec3::new(0.0, -0.1, 0.0), Vec3::new(8.0, 0.2, 8.0));
+    block("back wall", Vec3::new(0.0, 2.0, -2.1), Vec3::new(8.0, 4.0, 0.2));
+    block("left wall", Vec3::new(-2.1, 2.0, 0.0), Vec3::new(0.2, 4.0, 8.0));
+    block("corner box", Vec3::new(-1.5, 0.5, -1.5), Vec3::new(1.0, 1.0, 1.0));
+    block("crevice left", Vec3::new(0.2, 0.4, 0.2), Vec3::new(0.8, 0.8, 0.8));
+    block("crevice right", Vec3::new(1.05, 0.4, 0.2), Vec3::new(0.8, 0.8, 0.8));
+    scene
+}
+
+/// The camera of [`corner_and_crevice`]: in front of the corner, looking
+/// into it from above.
+pub fn corner_camera(viewport: UVec2) -> LookAtResolver {
+    LookAtResolver::new(
+        Camera::perspective(1.0, 0.1, None),
+        Vec3::new(1.6, 2.4, 2.6),
+        Vec3::new(-0.4, 0.6, -0.6),
+        viewport,
+    )
+    .expect("a valid camera")
+}
+
 /// A street of `lamps` lights: a 200 m road along −Z (12 m wide) between
 /// two rows of buildings (boxes of varied heights every 8 m), its lamps in
 /// two rows 4.5 m up, alternating point lights and downward spots, each of

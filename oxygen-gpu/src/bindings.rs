@@ -199,6 +199,13 @@ pub const fn depth_2d() -> wgpu::BindingType {
     texture_2d(wgpu::TextureSampleType::Depth)
 }
 
+/// A multisampled 2D texture (`texture_multisampled_2d<f32>`), for
+/// `textureLoad` of one sample (a depth texture too, with
+/// [`UNFILTERABLE_FLOAT`], where GL cannot load a depth binding).
+pub const fn texture_2d_multisampled(sample_type: wgpu::TextureSampleType) -> wgpu::BindingType {
+    wgpu::BindingType::Texture { sample_type, view_dimension: wgpu::TextureViewDimension::D2, multisampled: true }
+}
+
 /// A 2D array depth texture (`texture_depth_2d_array`).
 pub const fn depth_2d_array() -> wgpu::BindingType {
     texture_2d_array(wgpu::TextureSampleType::Depth)

@@ -472,7 +472,7 @@ impl ViewTargets {
             return self;
         }
         let size = wgpu::Extent3d { width: self.width, height: self.height, depth_or_array_layers: 1 };
-        let make = |format, suffix: &str| {
+        let make = |format, suffix: &str, usage| {
             device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(&format!("{label} {suffix} ×{samples}")),
                 size,
@@ -480,12 +480,17 @@ impl ViewTargets {
                 sample_count: samples,
                 dimension: wgpu::TextureDimension::D2,
                 format,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+                usage,
                 view_formats: &[],
             })
         };
-        let msaa_color = make(color.hdr.format(), "hdr");
-        let msaa_depth = make(Self::DEPTH_FORMAT, "depth");
+        let msaa_color = make(color.hdr.format(), "hdr", wgpu::TextureUsages::RENDER_ATTACHMENT);
+        // Depth is read too: ambient occlusion loads its first sample.
+        let msaa_depth = make(
+            Self::DEPTH_FORMAT,
+            "depth",
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+        );
         self.msaa = Some(MsaaTargets {
             samples,
             color_view: msaa_color.create_view(&Default::default()),

@@ -49,6 +49,7 @@ pub use context::{
     PrePassEstimate, ProbeCubeInput, RecordStats, RenderContext, RenderPass, Shading, ShadowMapInput, ViewInputs,
 };
 pub use lighting::LightingResources;
+pub use lighting::ambient_occlusion::{AmbientOcclusion, AmbientOcclusionPass, AoQuality};
 pub use lighting::clusters::{ClusterGrid, LightCulling};
 pub use lighting::ibl::cube_filter::{
     EnvironmentQuality, HARMONICS_LAYER, HARMONICS_SCALE, MAX_ENVIRONMENT_SIZE, MAX_FILTER_SAMPLES,

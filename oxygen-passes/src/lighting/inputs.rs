@@ -12,9 +12,9 @@ use bytemuck::Zeroable;
 use oxygen_gpu::bindings::{self, LayoutEntries};
 
 use super::params::{
-    CLUSTER_LIGHTS_BINDING, COMPARISON_SAMPLER_BINDING, ENVIRONMENT_BINDING, ENVIRONMENT_SAMPLER_BINDING,
-    FIRST_PROBE_BINDING, LightingInputs, MAX_CASCADES, MAX_PROBES, PROBE_FACES, PROBE_SAMPLER_BINDING,
-    SHADOW_ATLAS_BINDING, SPLIT_SUM_BINDING, UNIFORM_BINDING,
+    AMBIENT_OCCLUSION_BINDING, CLUSTER_LIGHTS_BINDING, COMPARISON_SAMPLER_BINDING, ENVIRONMENT_BINDING,
+    ENVIRONMENT_SAMPLER_BINDING, FIRST_PROBE_BINDING, LightingInputs, MAX_CASCADES, MAX_PROBES, PROBE_FACES,
+    PROBE_SAMPLER_BINDING, SHADOW_ATLAS_BINDING, SPLIT_SUM_BINDING, UNIFORM_BINDING,
 };
 
 /// (forward, up) of each probe face camera, in layer order; the shader's
@@ -86,6 +86,8 @@ impl LightingInputResources {
             .at(SHADOW_ATLAS_BINDING)
             .push(bindings::depth_2d_array())
             .at(CLUSTER_LIGHTS_BINDING)
+            .push(bindings::storage_read_only())
+            .at(AMBIENT_OCCLUSION_BINDING)
             .push(bindings::storage_read_only())
             .create_layout(device, "lighting inputs");
         // Reverse-Z: a fragment is lit when it is at least as close to the
@@ -164,7 +166,7 @@ impl LightingInputResources {
             shared,
             ([&dummy_view; MAX_CASCADES], &placeholder_atlas),
             ([&dummy_probe_view; MAX_PROBES], &dummy_probe_view),
-            (&uniform, None),
+            (&uniform, None, None),
         );
         LightingInputResources {
             layout,
@@ -209,7 +211,7 @@ pub(crate) fn bind_group(
     shared: SharedInputs<'_>,
     (maps, shadow_atlas): ([&wgpu::TextureView; MAX_CASCADES], &wgpu::TextureView),
     (probes, environment): ([&wgpu::TextureView; MAX_PROBES], &wgpu::TextureView),
-    (uniform, clusters): (&wgpu::Buffer, Option<&wgpu::Buffer>),
+    (uniform, clusters, ambient_occlusion): (&wgpu::Buffer, Option<&wgpu::Buffer>, Option<&wgpu::Buffer>),
 ) -> wgpu::BindGroup {
     let mut entries: Vec<wgpu::BindGroupEntry<'_>> = maps
         .iter()
@@ -247,6 +249,12 @@ pub(crate) fn bind_group(
     entries.push(wgpu::BindGroupEntry {
         binding: CLUSTER_LIGHTS_BINDING,
         resource: clusters.unwrap_or(shared.no_clusters).as_entire_binding(),
+    });
+    // The same zero word stands for a view without ambient occlusion (the
+    // shader reads it only with `shadows.ambient_occlusion_width` > 0).
+    entries.push(wgpu::BindGroupEntry {
+        binding: AMBIENT_OCCLUSION_BINDING,
+        resource: ambient_occlusion.unwrap_or(shared.no_clusters).as_entire_binding(),
     });
     device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("lighting inputs"), layout, entries: &entries })
 }

@@ -9,6 +9,7 @@
 //! them, the resources hold group 1; the pipelines read its layout, never
 //! the other way round.
 
+pub(crate) mod ambient_occlusion;
 pub(crate) mod clusters;
 pub(crate) mod ibl;
 pub(crate) mod inputs;

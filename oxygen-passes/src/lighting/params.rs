@@ -50,8 +50,9 @@ oxygen_gpu::gpu_struct! {
         /// Mip levels of the prefiltered environment (0: none; the constant
         /// ambient term lights the scene instead).
         pub environment_levels: u32,
-        /// Zero.
-        pub reserved: u32,
+        /// Width of the view's ambient occlusion (one float a pixel, row by
+        /// row, at `AMBIENT_OCCLUSION_BINDING`); 0 without it.
+        pub ambient_occlusion_width: u32,
         /// Clustered light culling's grid (`HAS_CLUSTERED_LIGHTS`, see
         /// `lighting/clusters.rs`): tiles across, tiles down, depth slices,
         /// and 32-bit words of light bits per cluster. Zero without it.
@@ -85,7 +86,7 @@ const _: () = assert!(MAX_SHADOW_TILES.is_multiple_of(4));
 
 /// The numbers of group 1 that the shading pass's WGSL reads, by their
 /// Rust names: [`wgsl_constants`] emits exactly these.
-fn shared_numbers() -> [(&'static str, u32); 14] {
+fn shared_numbers() -> [(&'static str, u32); 15] {
     [
         ("MAX_CASCADES", MAX_CASCADES as u32),
         ("MAX_SHADOW_TILES", MAX_SHADOW_TILES as u32),
@@ -100,6 +101,7 @@ fn shared_numbers() -> [(&'static str, u32); 14] {
         ("ENVIRONMENT_SAMPLER_BINDING", ENVIRONMENT_SAMPLER_BINDING),
         ("SPLIT_SUM_BINDING", SPLIT_SUM_BINDING),
         ("CLUSTER_LIGHTS_BINDING", CLUSTER_LIGHTS_BINDING),
+        ("AMBIENT_OCCLUSION_BINDING", AMBIENT_OCCLUSION_BINDING),
         ("SPLIT_SUM_LUT_SIZE", SPLIT_SUM_LUT_SIZE),
     ]
 }
@@ -125,6 +127,9 @@ pub(crate) const SPLIT_SUM_BINDING: u32 = ENVIRONMENT_SAMPLER_BINDING + 1;
 /// The view's light clusters (a storage buffer of light bits per cluster;
 /// one zero word when the view does not cull its lights).
 pub(crate) const CLUSTER_LIGHTS_BINDING: u32 = SPLIT_SUM_BINDING + 1;
+/// The view's ambient occlusion (a storage buffer of one float a pixel;
+/// one zero word when the view has none).
+pub(crate) const AMBIENT_OCCLUSION_BINDING: u32 = CLUSTER_LIGHTS_BINDING + 1;
 
 /// Layers of a probe texture: +X, −X, +Y, −Y, +Z, −Z.
 pub const PROBE_FACES: usize = 6;
@@ -162,6 +167,7 @@ mod tests {
             ("ENVIRONMENT_SAMPLER_BINDING", ENVIRONMENT_SAMPLER_BINDING),
             ("SPLIT_SUM_BINDING", SPLIT_SUM_BINDING),
             ("CLUSTER_LIGHTS_BINDING", CLUSTER_LIGHTS_BINDING),
+            ("AMBIENT_OCCLUSION_BINDING", AMBIENT_OCCLUSION_BINDING),
         ] {
             let line = format!("const {name}: u32 = {binding:#x}u;");
             assert!(wgsl.lines().any(|l| l == line), "{line} missing from\n{wgsl}");

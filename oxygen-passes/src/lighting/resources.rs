@@ -20,6 +20,8 @@ pub struct LightingResources {
     environment_generation: u64,
     /// Clustered light culling's pipeline and per-view buffers.
     clusters: crate::lighting::clusters::LightClusters,
+    /// Ambient occlusion's pipelines and per-view buffers.
+    ambient_occlusion: crate::lighting::ambient_occlusion::AmbientOcclusionState,
 }
 
 /// The prefiltered environment on the GPU (faces and levels, the
@@ -42,6 +44,7 @@ impl LightingResources {
             environment: None,
             environment_generation: 0,
             clusters: Default::default(),
+            ambient_occlusion: Default::default(),
         }
     }
 
@@ -150,7 +153,7 @@ impl LightingResources {
             inputs.shared(),
             ([&inputs.placeholder_map; MAX_CASCADES], &inputs.placeholder_atlas),
             ([&inputs.placeholder_probe; MAX_PROBES], &view),
-            (&buffer, None),
+            (&buffer, None, None),
         );
         self.environment = Some(EnvironmentTexture { texture, view, no_inputs });
     }
@@ -202,10 +205,23 @@ impl LightingResources {
         &self.clusters
     }
 
-    /// Frees the light clusters of the views `keep` says no to (the
-    /// renderer calls it once a frame with the views it renders).
+    /// Ambient occlusion's pipelines and per-view buffers.
+    pub(crate) fn ambient_occlusion(&self) -> &crate::lighting::ambient_occlusion::AmbientOcclusionState {
+        &self.ambient_occlusion
+    }
+
+    /// Views holding ambient-occlusion buffers: those that computed it in
+    /// a frame they still render (a view without the knob holds none).
+    pub fn ambient_occlusion_views(&self) -> usize {
+        self.ambient_occlusion.views()
+    }
+
+    /// Frees the light clusters and the ambient occlusion of the views
+    /// `keep` says no to (the renderer calls it once a frame with the views
+    /// it renders).
     pub fn retain_views(&self, keep: impl Fn(oxygen_core::ViewId) -> bool) {
-        self.clusters.retain(keep);
+        self.clusters.retain(&keep);
+        self.ambient_occlusion.retain(keep);
     }
 
     /// The layout of bind group 1.
@@ -221,15 +237,15 @@ impl LightingResources {
 
     /// A group 1 with these cascade maps (unused slots `None`), local shadow
     /// atlas, probes (six-layer array views, or `None`), light clusters
-    /// (`None` for a view that does not cull its lights) and their uniform
-    /// block.
+    /// (`None` for a view that does not cull its lights), ambient
+    /// occlusion (`None` for a view without) and their uniform block.
     pub fn bind_group(
         &self,
         device: &wgpu::Device,
         maps: [Option<&wgpu::TextureView>; MAX_CASCADES],
         shadow_atlas: Option<&wgpu::TextureView>,
         probes: [Option<&wgpu::TextureView>; MAX_PROBES],
-        clusters: Option<&wgpu::Buffer>,
+        (clusters, ambient_occlusion): (Option<&wgpu::Buffer>, Option<&wgpu::Buffer>),
         uniform: &LightingInputs,
     ) -> wgpu::BindGroup {
         let inputs = &self.inputs;
@@ -249,7 +265,7 @@ impl LightingResources {
             inputs.shared(),
             (maps, shadow_atlas),
             (probes, environment),
-            (&buffer, clusters),
+            (&buffer, clusters, ambient_occlusion),
         )
     }
 

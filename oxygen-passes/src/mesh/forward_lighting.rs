@@ -1,7 +1,7 @@
 //! What the forward lit pass reads through bind group 1: from other views,
 //! the view's own sun cascades, the frame's local-light shadow atlas and the
 //! reflection probes the view is linked to; of its own, its light clusters
-//! when it culls its lights. Every input is awaited: the pass goes on once
+//! when it culls its lights and its ambient occlusion when it has it. Every input is awaited: the pass goes on once
 //! the views that render it have recorded.
 
 use bytemuck::Zeroable;
@@ -24,6 +24,7 @@ pub(crate) fn reads_inputs(ctx: &RenderContext<'_>, config: &ForwardLitConfig) -
         || (config.local_shadows && inputs.local_shadows.is_some())
         || (config.reflections && !inputs.probes.is_empty())
         || clusters_lights(ctx, config)
+        || config.ambient_occlusion.is_some()
 }
 
 /// Group 1 for this view, or `None` when it reads no shadow map, no probe
@@ -104,12 +105,29 @@ pub(crate) async fn bind_group(
     };
     let (bits, job) = clusters.map_or((None, None), |(bits, job)| (Some(bits), job));
 
+    let ambient_occlusion = match config.ambient_occlusion {
+        Some(_) => {
+            let frame = ctx.prepared.frame_index();
+            let output = ctx.lighting.ambient_occlusion().output(ctx.view.view_id, frame).ok_or_else(|| {
+                PassError::BadInput {
+                    pass: "forward lit",
+                    what: "ambient occlusion is asked for, but no AmbientOcclusionPass ran for the view this frame \
+                           (record one after its depth pre-pass; the standard graph does)"
+                        .into(),
+                }
+            })?;
+            uniform.ambient_occlusion_width = ctx.targets.width;
+            Some(output)
+        }
+        None => None,
+    };
+
     let group = ctx.lighting.bind_group(
         &ctx.gpu.device,
         maps,
         local.map(|l| l.atlas),
         probe_views.each_ref().map(Option::as_ref),
-        bits.as_ref(),
+        (bits.as_ref(), ambient_occlusion.as_ref()),
         &uniform,
     );
     Ok((Some(group), job))

@@ -37,6 +37,9 @@ override HAS_PROBES: bool = true;
 // A linked probe has a parallax box (see `probe_lookup`).
 override HAS_PROBE_PARALLAX: bool = true;
 override HAS_TEXTURES: bool = true;
+// Dim the indirect light by the view's screen-space ambient occlusion
+// (lighting/ambient_occlusion.rs; `shadows.ambient_occlusion_width` > 0).
+override HAS_AMBIENT_OCCLUSION: bool = true;
 // Tone-map at the end of shading and write the display colour (the view's
 // sRGB target) instead of radiance: for views whose HDR image nothing reads.
 override TONE_MAP_OUTPUT: bool = false;
@@ -89,6 +92,21 @@ fn fit_hdr(color: vec3<f32>) -> vec3<f32> {
 // `shadows.cluster_grid.w` words, bit b of word w set when positional light
 // 32 w + b may reach it.
 @group(1) @binding(CLUSTER_LIGHTS_BINDING) var<storage, read> cluster_bits: array<u32>;
+// The view's ambient occlusion: the share of the indirect light reaching
+// each pixel, row by row, `shadows.ambient_occlusion_width` a row.
+@group(1) @binding(AMBIENT_OCCLUSION_BINDING) var<storage, read> screen_occlusion: array<f32>;
+
+// The screen-space ambient occlusion at fragment position `frag` (1 when
+// the view has none).
+fn screen_ambient_occlusion(frag: vec4<f32>) -> f32 {
+    let width = shadows.ambient_occlusion_width;
+    if !HAS_AMBIENT_OCCLUSION || width == 0u {
+        return 1.0;
+    }
+    let p = vec2<u32>(max(frag.xy, vec2<f32>(0.0)));
+    let i = min(p.y * width + min(p.x, width - 1u), arrayLength(&screen_occlusion) - 1u);
+    return clamp(screen_occlusion[i], 0.0, 1.0);
+}
 
 // The first word of the cluster holding `position` (relative to the render
 // origin): its screen tile from the point's NDC (y up, as the cluster pass
@@ -546,7 +564,7 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Der
     // Ambient occlusion dims indirect light only: the ambient term and the
     // probe reflection, not the lights.
     let occlusion_texel = material_texture(material.occlusion_texture, tex_coord(mesh, material, material.uv_transforms[4], d.uv));
-    let occlusion = mix(1.0, occlusion_texel.r, material.occlusion_strength);
+    let occlusion = mix(1.0, occlusion_texel.r, material.occlusion_strength) * screen_ambient_occlusion(mesh.clip_position);
     // Ambient light: the environment's irradiance (diffuse) and its
     // prefiltered reflection (specular, below) when the renderer has one;
     // else a constant.

@@ -52,6 +52,12 @@ pub struct ForwardLitConfig {
     /// culling pass ([`crate::LightCulling`]). The image is the same; the
     /// time is not.
     pub light_culling: crate::LightCulling,
+    /// Screen-space ambient occlusion dimming the indirect light (ambient,
+    /// environment, probes), computed from the depth by an
+    /// [`crate::AmbientOcclusionPass`] recorded before this pass (the
+    /// standard graph records it, with a depth pre-pass); `None`, the
+    /// default, leaves it out: no pass, no buffers, no shader code.
+    pub ambient_occlusion: Option<crate::AmbientOcclusion>,
 }
 
 impl ForwardLitConfig {
@@ -66,6 +72,7 @@ impl ForwardLitConfig {
         shadow_normal_offset: 1.5,
         shadow_filter: ShadowFilter::Pcf,
         light_culling: crate::LightCulling::EveryLight,
+        ambient_occlusion: None,
     };
 }
 
@@ -442,6 +449,7 @@ impl MeshPass {
             textures: ctx.shading.materials.textures,
             uv_transforms: ctx.shading.materials.uv_transforms,
             vertex_attributes: ctx.shading.vertex_attributes,
+            ambient_occlusion: config.is_some_and(|c| c.ambient_occlusion.is_some()),
         }
     }
 

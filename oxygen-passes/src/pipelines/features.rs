@@ -50,6 +50,9 @@ pub struct ShaderFeatures {
     /// mesh pass, depth-only ones included, follows it, since the work it
     /// saves is the vertices'.
     pub vertex_attributes: bool,
+    /// Dim the indirect light by the view's screen-space ambient occlusion
+    /// (`HAS_AMBIENT_OCCLUSION`, [`crate::AmbientOcclusion`]).
+    pub ambient_occlusion: bool,
 }
 
 impl ShaderFeatures {
@@ -65,6 +68,7 @@ impl ShaderFeatures {
         textures: true,
         uv_transforms: true,
         vertex_attributes: true,
+        ambient_occlusion: true,
     };
     /// No optional part: sun and ambient light on untextured materials.
     pub const NONE: ShaderFeatures = ShaderFeatures {
@@ -78,6 +82,7 @@ impl ShaderFeatures {
         textures: false,
         uv_transforms: false,
         vertex_attributes: false,
+        ambient_occlusion: false,
     };
 
     /// Every optional part but the vertex outputs, which stay as they are:
@@ -90,7 +95,7 @@ impl ShaderFeatures {
 
     /// The override constants, by their WGSL names (bools as 0 or 1);
     /// [`ShaderFeatures::vertex_attributes`] is not one.
-    pub fn override_constants(&self) -> [(&'static str, f64); 9] {
+    pub fn override_constants(&self) -> [(&'static str, f64); 10] {
         let flag = |on: bool| f64::from(u8::from(on));
         [
             ("HAS_SUN_SHADOWS", flag(self.sun_shadows)),
@@ -102,6 +107,7 @@ impl ShaderFeatures {
             ("HAS_PROBE_PARALLAX", flag(self.probe_parallax)),
             ("HAS_TEXTURES", flag(self.textures)),
             ("HAS_UV_TRANSFORMS", flag(self.uv_transforms)),
+            ("HAS_AMBIENT_OCCLUSION", flag(self.ambient_occlusion)),
         ]
     }
 }

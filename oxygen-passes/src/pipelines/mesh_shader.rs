@@ -41,6 +41,7 @@ pub(crate) fn mesh_entry_points(pass: PassKind, masked: bool, labels: bool) -> (
 /// `mesh/forward_lit.wgsl` and what they include (the heap's declarations,
 /// the GPU records, the generated constants, the shared vertex stage with
 /// every vertex output: right for any scene).
+#[cfg(any(test, feature = "testing"))]
 pub fn shader_source(pass: PassKind, textures: TexturePath) -> String {
     mesh_module(pass).textured_source(textures)
 }

@@ -22,4 +22,5 @@ pub(crate) use mesh_shader::mesh_entry_points;
 #[cfg(test)]
 pub(crate) use mesh_shader::mesh_module;
 pub(crate) use mesh_shader::pipeline_source;
+#[cfg(any(test, feature = "testing"))]
 pub use mesh_shader::shader_source;

@@ -36,6 +36,8 @@ pub(crate) static SOURCES: &[Source] = &[
     Source::gpu_struct::<crate::lighting::ibl::params::CubeFilterParams>("lighting/ibl/CubeFilterParams"),
     Source::gpu_struct::<crate::lighting::clusters::ClusterParams>("lighting/ClusterParams"),
     Source::wgsl("lighting/clusters.wgsl", include_str!("../lighting/clusters.wgsl")),
+    Source::gpu_struct::<crate::lighting::ambient_occlusion::AoParams>("lighting/AoParams"),
+    Source::wgsl("lighting/ambient_occlusion.wgsl", include_str!("../lighting/ambient_occlusion.wgsl")),
     // GPU visibility and the depth pyramid.
     Source::generated("visibility/constants", crate::visibility::params::wgsl_constants),
     Source::gpu_struct::<crate::visibility::params::CullParams>("visibility/CullParams"),
@@ -219,6 +221,8 @@ pub(crate) const DEPTH_COPY: ShaderModule = ShaderModule::plain("post/depth_copy
 pub(crate) const CUBE_FILTER: ShaderModule = ShaderModule::plain("lighting/ibl/cube_filter.wgsl");
 /// Clustered light culling's pass.
 pub(crate) const LIGHT_CLUSTERS: ShaderModule = ShaderModule::plain("lighting/clusters.wgsl");
+/// Screen-space ambient occlusion's steps.
+pub(crate) const AMBIENT_OCCLUSION: ShaderModule = ShaderModule::plain("lighting/ambient_occlusion.wgsl");
 /// The split-sum table.
 pub(crate) const SPLIT_SUM: ShaderModule = ShaderModule::plain("lighting/split_sum.wgsl");
 /// GPU visibility's cull and command passes.
@@ -279,6 +283,11 @@ pub(crate) const ENTRY_POINTS: &[EntryPoint] = &[
     entry(LABELS, "fs_labels", Stage::Fragment),
     entry(LABELS, "fs_labels_masked", Stage::Fragment),
     entry(REFERENCE, "trace_paths", Stage::Compute),
+    entry(AMBIENT_OCCLUSION, "linearize", Stage::Compute),
+    entry(AMBIENT_OCCLUSION, "linearize_multisampled", Stage::Compute),
+    entry(AMBIENT_OCCLUSION, "gtao", Stage::Compute),
+    entry(AMBIENT_OCCLUSION, "denoise", Stage::Compute),
+    entry(AMBIENT_OCCLUSION, "temporal", Stage::Compute),
     entry(TONEMAP, "vs_fullscreen", Stage::Vertex),
     entry(TONEMAP, "fs_tonemap", Stage::Fragment),
     entry(COMPOSITE, "vs", Stage::Vertex),
