@@ -42,7 +42,9 @@
 //! past it; the reference is the last frame), the probe's parallax box
 //! (none, or the room around a mirror ball), light culling (every light, or
 //! clustered: a street of 1 000 lamps; it must cost no accuracy), the sun
-//! shadow filter (PCF or PCSS, a pole under a sun of 5° and of 0.5°), the LOD bias (spheres with two
+//! shadow filter (PCF or PCSS, a pole under a sun of 5° and of 0.5°),
+//! ambient occlusion (off, each quality level, the default radius, the
+//! temporal step: a corner and a crevice under the ambient light alone), the LOD bias (spheres with two
 //! coarser levels; the reference traces the full meshes), visibility (CPU,
 //! GPU frustum, GPU occlusion: each must cost no accuracy), and the render
 //! origin once more on the numerical extremes (a million units out, near
@@ -62,7 +64,9 @@ use oxygen::core::LodLevel;
 use oxygen::core::NodeKey;
 use oxygen::glam::{Quat, Vec4};
 use oxygen::graph::{ReferenceGraph, lit_render_graph};
-use oxygen::lighting::{CascadeSettings, ClusterGrid, LightCulling, ProbeUpdate, ReflectionProbe};
+use oxygen::lighting::{
+    AmbientOcclusion, AoQuality, CascadeSettings, ClusterGrid, LightCulling, ProbeUpdate, ReflectionProbe,
+};
 use oxygen::passes::{ReferenceSettings, ShadowFilter};
 use oxygen::prelude::*;
 use oxygen::sceneprep::{ViewPrepOptions, Visibility};
@@ -116,6 +120,8 @@ struct Setting {
     light_culling: LightCulling,
     /// How the sun's shadow is filtered.
     shadow_filter: ShadowFilter,
+    /// Screen-space ambient occlusion.
+    ambient_occlusion: Option<AmbientOcclusion>,
 }
 
 struct Row {
@@ -504,6 +510,17 @@ fn stages(viewport: UVec2) -> Result<Vec<Stage>, Box<dyn std::error::Error>> {
         street,
         pole(5.0, "a pole under a sun of 5°"),
         pole(0.5, "a pole under a sun of 0.5°"),
+        // A corner and a crevice under the ambient light alone: ambient
+        // occlusion's scene. The reference traces one bounce into a sky of
+        // the raster's ambient level, so a point gets the sky it sees.
+        Stage {
+            name: "a corner and a crevice",
+            scene: oxygen_demo::corner_and_crevice(),
+            camera: oxygen_demo::corner_camera(viewport),
+            cascades: CascadeSettings::default(),
+            moving: None,
+            reference: ReferenceSettings { max_bounces: 1, environment: [0.03; 3], ..ReferenceSettings::DEFAULT },
+        },
     ])
 }
 
@@ -524,6 +541,7 @@ fn settings() -> Vec<Setting> {
         lod_bias: 1.0,
         light_culling: LightCulling::EveryLight,
         shadow_filter: ShadowFilter::Pcf,
+        ambient_occlusion: None,
     };
     let mut all = Vec::new();
     for resolution in [256, 512, 1024, 2048, 4096] {
@@ -588,6 +606,22 @@ fn settings() -> Vec<Setting> {
             s.shadow_filter = filter;
             all.push(s);
         }
+    }
+    // Ambient occlusion: off, each quality level at the room's size (4 m),
+    // the default radius (1 m), and the temporal step.
+    let occlusion = |quality, radius, temporal| Some(AmbientOcclusion { quality, radius, temporal });
+    for (name, settings) in [
+        ("none", None),
+        ("Low, 4 m", occlusion(AoQuality::Low, 4.0, false)),
+        ("Medium, 4 m", occlusion(AoQuality::Medium, 4.0, false)),
+        ("High, 4 m", occlusion(AoQuality::High, 4.0, false)),
+        ("Ultra, 4 m", occlusion(AoQuality::Ultra, 4.0, false)),
+        ("Medium, 1 m (the default)", occlusion(AoQuality::Medium, 1.0, false)),
+        ("Medium, 4 m, temporal", occlusion(AoQuality::Medium, 4.0, true)),
+    ] {
+        let mut s = base("ambient occlusion", name.to_string(), 10);
+        s.ambient_occlusion = settings;
+        all.push(s);
     }
     for bias in [0.25f32, 0.5, 1.0, 2.0, 4.0] {
         let mut s = base("LOD bias", bias.to_string(), 4);
@@ -668,6 +702,7 @@ fn raster(
         shadow_pcf_radius: setting.pcf_radius,
         light_culling: setting.light_culling,
         shadow_filter: setting.shadow_filter,
+        ambient_occlusion: setting.ambient_occlusion,
         ..ForwardLitConfig::default()
     };
     let view = renderer.register_view(desc, lit_render_graph(config))?;
