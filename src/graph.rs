@@ -22,8 +22,8 @@ use std::future::Future;
 use std::pin::Pin;
 
 use oxygen_passes::{
-    AmbientOcclusionPass, CommandRecorder, DepthBias, DrawList, ForwardLitConfig, MeshPass, PassError, PrePassEstimate,
-    ReferencePass, ReferenceSettings, RenderContext, RenderPass, TonemapPass,
+    AmbientOcclusionPass, CommandRecorder, DepthBias, DrawList, ForwardLitConfig, LinearDepthPass, MeshPass, PassError,
+    PrePassEstimate, ReferencePass, ReferenceSettings, RenderContext, RenderPass, TonemapPass,
 };
 
 /// What a view records each frame: a future that awaits its passes.
@@ -83,8 +83,9 @@ impl<G: RenderGraph> ErasedGraph for G {
 }
 
 /// The standard graph: a depth pre-pass when it pays ([`PrePass`]) or when
-/// the view has ambient occlusion (computed from that depth before
-/// shading, [`ForwardLitConfig::ambient_occlusion`]), forward
+/// the view has ambient occlusion or contact shadows (which read that
+/// depth, [`ForwardLitConfig::ambient_occlusion`],
+/// [`ForwardLitConfig::contact_shadows`]), forward
 /// lit shading of the opaque and masked partitions into HDR (with the view's
 /// sun cascades, the frame's local shadows and the probes it is linked to),
 /// blended partitions back-to-front, then the tone map to the view's sRGB
@@ -201,7 +202,8 @@ impl RenderGraph for StandardGraph {
         // Occlusion culling builds its pyramid from the pre-pass's depth,
         // and ambient occlusion is computed from it before shading.
         let occlusion = ctx.occlusion_culling();
-        lit.depth_from_pre_pass = occlusion || lit.ambient_occlusion.is_some() || self.pre_pass.resolved(ctx);
+        let screen_space = lit.ambient_occlusion.is_some() || lit.contact_shadows.is_some();
+        lit.depth_from_pre_pass = occlusion || screen_space || self.pre_pass.resolved(ctx);
         if lit.depth_from_pre_pass {
             MeshPass::depth_pre_pass().drawing(DrawList::Early).run(ctx, rec).await?;
         }
@@ -211,6 +213,10 @@ impl RenderGraph for StandardGraph {
         }
         if let Some(settings) = lit.ambient_occlusion {
             AmbientOcclusionPass::new(settings).run(ctx, rec).await?;
+        }
+        // Records nothing when the occlusion pass wrote the depth already.
+        if lit.contact_shadows.is_some() {
+            LinearDepthPass.run(ctx, rec).await?;
         }
         let exposure = tone_map_exposure(self.exposure);
         // Nothing blends over the HDR image and no other view reads it:

@@ -87,7 +87,9 @@ pub mod lighting {
     pub use oxygen_core::{
         CascadeSettings, Environment, EnvironmentError, EquirectImage, Light, LightKind, Mobility, Sky,
     };
-    pub use oxygen_passes::{AmbientOcclusion, AmbientOcclusionPass, AoQuality, ClusterGrid, LightCulling};
+    pub use oxygen_passes::{
+        AmbientOcclusion, AmbientOcclusionPass, AoQuality, ClusterGrid, ContactShadows, LightCulling, LinearDepthPass,
+    };
 }
 
 /// The bindless heap.

@@ -185,6 +185,40 @@ pub fn pole_camera(viewport: UVec2) -> LookAtResolver {
     .expect("a valid camera")
 }
 
+/// A thin pole on the ground under a sun: a pole 4 cm across and 1.5 m
+/// tall on a grey floor, a sun 40° above the horizon and no disc. Its
+/// shadow is about a texel of a coarse shadow map wide, which the map's
+/// filter and biases wash out near the pole's foot: contact shadows'
+/// test and accuracy stage, seen by [`thin_pole_camera`].
+pub fn thin_pole_under_sun() -> Scene {
+    let mut scene = Scene::new();
+    let grey = scene.add_material(Material::opaque("grey", Vec4::new(0.7, 0.7, 0.7, 1.0)));
+    let floor = scene.add_geometry(Geometry::plane(16.0));
+    let node = scene.add_node("floor", Transform::IDENTITY);
+    scene.set_renderable(node, Renderable { geometry: floor, materials: vec![grey] }).expect("valid handles");
+    let cube = scene.add_geometry(Geometry::cube(1.0));
+    let pole = Transform::from_translation(Vec3::new(0.0, 0.75, 0.0)).with_scale(Vec3::new(0.04, 1.5, 0.04));
+    let node = scene.add_node("pole", pole);
+    scene.set_renderable(node, Renderable { geometry: cube, materials: vec![grey] }).expect("valid handles");
+    let elevation = 40f32.to_radians();
+    let travel = Vec3::new(0.9 * elevation.cos(), -elevation.sin(), 0.44 * elevation.cos()).normalize();
+    let sun = scene.add_node("sun", Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, travel)));
+    scene.set_light(sun, Some(Light::directional(3.0))).expect("a node");
+    scene
+}
+
+/// The camera of [`thin_pole_under_sun`]: close to the pole's foot, looking
+/// along its shadow.
+pub fn thin_pole_camera(viewport: UVec2) -> LookAtResolver {
+    LookAtResolver::new(
+        Camera::perspective(0.8, 0.05, None),
+        Vec3::new(-0.4, 1.3, 2.0),
+        Vec3::new(0.7, 0.1, 0.3),
+        viewport,
+    )
+    .expect("a valid camera")
+}
+
 /// A corner and a crevice under nothing but the ambient light: a floor
 /// and two walls meeting at a right angle (4 m each way), a box leaning
 /// into the corner and a second box on the floor with a 5 cm gap beside a

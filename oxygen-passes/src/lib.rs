@@ -49,8 +49,9 @@ pub use context::{
     PrePassEstimate, ProbeCubeInput, RecordStats, RenderContext, RenderPass, Shading, ShadowMapInput, ViewInputs,
 };
 pub use lighting::LightingResources;
-pub use lighting::ambient_occlusion::{AmbientOcclusion, AmbientOcclusionPass, AoQuality};
+pub use lighting::ambient_occlusion::{AmbientOcclusion, AmbientOcclusionPass, AoQuality, LinearDepthPass};
 pub use lighting::clusters::{ClusterGrid, LightCulling};
+pub use lighting::contact_shadows::ContactShadows;
 pub use lighting::ibl::cube_filter::{
     EnvironmentQuality, HARMONICS_LAYER, HARMONICS_SCALE, MAX_ENVIRONMENT_SIZE, MAX_FILTER_SAMPLES,
     PROBE_FILTER_SAMPLES, prefiltered_levels,

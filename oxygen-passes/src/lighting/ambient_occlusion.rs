@@ -214,35 +214,43 @@ struct LastFrame {
     projection: Mat4,
 }
 
-/// One view's buffers, kept across frames.
-struct ViewAo {
-    pixels: u64,
-    params: wgpu::Buffer,
-    /// Linear depth: this frame's and, with the temporal step, last
-    /// frame's (they swap every frame).
-    depth: [wgpu::Buffer; 2],
+/// A view's occlusion buffers, made the first frame it asks for occlusion.
+struct Occlusion {
     raw: wgpu::Buffer,
     denoised: wgpu::Buffer,
     /// The results: this frame's and last frame's (they swap every frame).
     result: [wgpu::Buffer; 2],
+}
+
+/// One view's buffers, kept across frames.
+struct ViewAo {
+    pixels: u64,
+    params: wgpu::Buffer,
+    /// Linear depth: this frame's and last frame's (they swap every frame).
+    depth: [wgpu::Buffer; 2],
+    occlusion: Option<Occlusion>,
     /// Which of the pairs is this frame's.
     current: usize,
-    /// The frame the buffers were last filled for, and its camera.
+    /// The frame the depth was last filled for, and its camera.
     last: Option<LastFrame>,
-    /// Whether the last filling had the temporal step.
-    last_temporal: bool,
+    /// The camera of the frame before `last`, when its occlusion had the
+    /// temporal step and `last` is the frame after it.
+    previous: Option<LastFrame>,
+    /// Whether `last`'s frame computed occlusion, and with the temporal step.
+    last_occlusion: Option<bool>,
+}
+
+fn pixel_buffer(device: &wgpu::Device, label: &str, pixels: u64) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: (pixels * 4).max(16),
+        usage: wgpu::BufferUsages::STORAGE,
+        mapped_at_creation: false,
+    })
 }
 
 impl ViewAo {
     fn new(device: &wgpu::Device, pixels: u64) -> Self {
-        let buffer = |label: &str| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: (pixels * 4).max(16),
-                usage: wgpu::BufferUsages::STORAGE,
-                mapped_at_creation: false,
-            })
-        };
         ViewAo {
             pixels,
             params: device.create_buffer(&wgpu::BufferDescriptor {
@@ -251,23 +259,29 @@ impl ViewAo {
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             }),
-            depth: [buffer("ambient occlusion depth"), buffer("ambient occlusion depth")],
-            raw: buffer("ambient occlusion raw"),
-            denoised: buffer("ambient occlusion denoised"),
-            result: [buffer("ambient occlusion"), buffer("ambient occlusion")],
+            depth: [pixel_buffer(device, "view depth", pixels), pixel_buffer(device, "view depth", pixels)],
+            occlusion: None,
             current: 0,
             last: None,
-            last_temporal: false,
+            previous: None,
+            last_occlusion: None,
         }
     }
 
-    /// The buffer the view's shading reads this frame.
-    fn output(&self, temporal: bool) -> &wgpu::Buffer {
-        if temporal { &self.result[self.current] } else { &self.denoised }
+    /// The buffer the view's shading reads this frame, once its occlusion
+    /// was computed.
+    fn output(&self) -> Option<&wgpu::Buffer> {
+        let occlusion = self.occlusion.as_ref()?;
+        match self.last_occlusion? {
+            true => Some(&occlusion.result[self.current]),
+            false => Some(&occlusion.denoised),
+        }
     }
 }
 
-/// The occlusion's pipelines (made on first use) and every view's buffers.
+/// The screen-space steps' pipelines (made on first use) and every view's
+/// buffers: its depth in metres (for ambient occlusion and contact
+/// shadows) and its occlusion.
 #[derive(Default)]
 pub(crate) struct AmbientOcclusionState {
     pipelines: OnceLock<AoPipelines>,
@@ -275,22 +289,25 @@ pub(crate) struct AmbientOcclusionState {
 }
 
 impl AmbientOcclusionState {
-    /// Records `ctx`'s view's occlusion steps for this frame into `encoder`
-    /// (once a frame: a second call in the same frame records nothing).
+    /// Records `ctx`'s view's depth in metres for this frame into
+    /// `encoder`, and its occlusion when `settings` asks for it (each once
+    /// a frame: a second call records only what the first did not).
     pub(crate) fn record(
         &self,
         ctx: &RenderContext<'_>,
         encoder: &mut wgpu::CommandEncoder,
-        settings: &AmbientOcclusion,
+        settings: Option<&AmbientOcclusion>,
     ) -> Result<(), PassError> {
         const PASS: &str = "ambient occlusion";
-        if let Some(problem) = settings.problem() {
+        if let Some(problem) = settings.and_then(AmbientOcclusion::problem) {
             return Err(PassError::BadInput { pass: PASS, what: problem });
         }
         if ctx.targets.tile.is_some() {
             return Err(PassError::BadInput {
                 pass: PASS,
-                what: "a camera of a batch has no ambient occlusion (its tile shares the batch's depth atlas)".into(),
+                what: "a camera of a batch has no screen-space depth (its tile shares the batch's depth atlas): \
+                       no ambient occlusion or contact shadows"
+                    .into(),
             });
         }
         if ctx.targets.msaa.is_some() && ctx.gpu.adapter_info.backend == wgpu::Backend::Gl {
@@ -300,20 +317,24 @@ impl AmbientOcclusionState {
             // them); refused rather than shipped wrong.
             return Err(PassError::BadInput {
                 pass: PASS,
-                what: "ambient occlusion of a multisampled view is not available on GL (use Vulkan, or no MSAA)".into(),
+                what: "the screen-space depth of a multisampled view (ambient occlusion, contact shadows) is not \
+                       available on GL (use Vulkan, or no MSAA)"
+                    .into(),
             });
         }
         let (width, height) = (ctx.targets.width, ctx.targets.height);
         let pixels = u64::from(width) * u64::from(height);
-        let (slices, steps) = settings.quality.samples();
-        let _span = info_span!("ambient_occlusion", view = %ctx.view.view_id, width, height, slices, steps).entered();
+        let quality = settings.map(|s| s.quality.samples());
+        let _span =
+            info_span!("screen_space_depth", view = %ctx.view.view_id, width, height, occlusion = ?quality).entered();
         let device = &ctx.gpu.device;
         let limit = device.limits().max_storage_buffer_binding_size;
         if pixels * 4 > limit {
             return Err(PassError::BadInput {
                 pass: PASS,
                 what: format!(
-                    "{width} × {height} pixels of occlusion exceed the device's storage binding limit of {limit} bytes"
+                    "{width} × {height} pixels of screen-space depth exceed the device's storage binding limit of \
+                     {limit} bytes"
                 ),
             });
         }
@@ -329,17 +350,35 @@ impl AmbientOcclusionState {
                     .ok_or_else(|| PassError::Graph("ambient occlusion state lost".into()))?
             }
         };
-        if state.last.is_some_and(|last| last.frame == frame) {
+        let same_frame = state.last.is_some_and(|last| last.frame == frame);
+        if same_frame && (settings.is_none() || state.last_occlusion.is_some()) {
             return Ok(());
         }
-        // Last frame's result is blended in only when it was last frame's
-        // and had the temporal step too.
-        let previous = state.last.filter(|last| settings.temporal && state.last_temporal && last.frame + 1 == frame);
-        state.current = 1 - state.current;
+        if !same_frame {
+            // Last frame's result is blended in only when it was last
+            // frame's and had the temporal step too.
+            state.previous = state.last.filter(|last| state.last_occlusion == Some(true) && last.frame + 1 == frame);
+            state.current = 1 - state.current;
+            state.last =
+                Some(LastFrame { frame, world_to_view: ctx.view.world_to_view, projection: ctx.view.projection });
+            state.last_occlusion = None;
+        }
+        let previous = state.previous.filter(|_| settings.is_some_and(|s| s.temporal));
         let params = params(ctx, settings, previous, frame);
         ctx.gpu.queue.write_buffer(&state.params, 0, bytemuck::bytes_of(&params));
-        state.last = Some(LastFrame { frame, world_to_view: ctx.view.world_to_view, projection: ctx.view.projection });
-        state.last_temporal = settings.temporal;
+        if let Some(settings) = settings {
+            state.last_occlusion = Some(settings.temporal);
+            if state.occlusion.is_none() {
+                state.occlusion = Some(Occlusion {
+                    raw: pixel_buffer(device, "ambient occlusion raw", pixels),
+                    denoised: pixel_buffer(device, "ambient occlusion denoised", pixels),
+                    result: [
+                        pixel_buffer(device, "ambient occlusion", pixels),
+                        pixel_buffer(device, "ambient occlusion", pixels),
+                    ],
+                });
+            }
+        }
 
         let (current, last) = (state.current, 1 - state.current);
         let group = |layout: &wgpu::BindGroupLayout, entries: &[(u32, wgpu::BindingResource<'_>)]| {
@@ -351,9 +390,9 @@ impl AmbientOcclusionState {
             );
             device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(PASS), layout, entries: &all })
         };
-        let (linearize, linearize_group) = match &ctx.targets.msaa {
+        let linearize = (!same_frame).then(|| match &ctx.targets.msaa {
             None => (
-                &pipelines.linearize,
+                &pipelines.linearize.1,
                 group(
                     &pipelines.linearize.0,
                     &[
@@ -363,7 +402,7 @@ impl AmbientOcclusionState {
                 ),
             ),
             Some(msaa) => (
-                &pipelines.linearize_multisampled,
+                &pipelines.linearize_multisampled.1,
                 group(
                     &pipelines.linearize_multisampled.0,
                     &[
@@ -372,45 +411,50 @@ impl AmbientOcclusionState {
                     ],
                 ),
             ),
-        };
-        let gtao = group(
-            &pipelines.gtao.0,
-            &[(3, state.raw.as_entire_binding()), (4, state.depth[current].as_entire_binding())],
-        );
-        let denoise_out = if settings.temporal { &state.denoised } else { state.output(false) };
-        let denoise = group(
-            &pipelines.denoise.0,
-            &[
-                (4, state.depth[current].as_entire_binding()),
-                (5, state.raw.as_entire_binding()),
-                (6, denoise_out.as_entire_binding()),
-            ],
-        );
-        let temporal = settings.temporal.then(|| {
-            group(
-                &pipelines.temporal.0,
-                &[
-                    (4, state.depth[current].as_entire_binding()),
-                    (5, state.denoised.as_entire_binding()),
-                    (6, state.result[current].as_entire_binding()),
-                    (7, state.depth[last].as_entire_binding()),
-                    (8, state.result[last].as_entire_binding()),
-                ],
-            )
         });
+        let mut steps = Vec::new();
+        if let (Some(settings), Some(occlusion)) = (settings, &state.occlusion) {
+            steps.push((
+                &pipelines.gtao.1,
+                group(
+                    &pipelines.gtao.0,
+                    &[(3, occlusion.raw.as_entire_binding()), (4, state.depth[current].as_entire_binding())],
+                ),
+            ));
+            steps.push((
+                &pipelines.denoise.1,
+                group(
+                    &pipelines.denoise.0,
+                    &[
+                        (4, state.depth[current].as_entire_binding()),
+                        (5, occlusion.raw.as_entire_binding()),
+                        (6, occlusion.denoised.as_entire_binding()),
+                    ],
+                ),
+            ));
+            if settings.temporal {
+                steps.push((
+                    &pipelines.temporal.1,
+                    group(
+                        &pipelines.temporal.0,
+                        &[
+                            (4, state.depth[current].as_entire_binding()),
+                            (5, occlusion.denoised.as_entire_binding()),
+                            (6, occlusion.result[current].as_entire_binding()),
+                            (7, state.depth[last].as_entire_binding()),
+                            (8, occlusion.result[last].as_entire_binding()),
+                        ],
+                    ),
+                ));
+            }
+        }
         let mut pass =
             encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(PASS), timestamp_writes: None });
         let groups = (width.div_ceil(8), height.div_ceil(8));
-        let mut step = |pipeline: &wgpu::ComputePipeline, bind_group: &wgpu::BindGroup| {
+        for (pipeline, bind_group) in linearize.iter().chain(&steps) {
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, bind_group, &[]);
             pass.dispatch_workgroups(groups.0, groups.1, 1);
-        };
-        step(&linearize.1, &linearize_group);
-        step(&pipelines.gtao.1, &gtao);
-        step(&pipelines.denoise.1, &denoise);
-        if let Some(temporal) = &temporal {
-            step(&pipelines.temporal.1, temporal);
         }
         Ok(())
     }
@@ -421,7 +465,16 @@ impl AmbientOcclusionState {
     pub(crate) fn output(&self, view: ViewId, frame: u64) -> Option<wgpu::Buffer> {
         let views = self.views.lock().ok()?;
         let state = views.get(&view)?;
-        (state.last?.frame == frame).then(|| state.output(state.last_temporal).clone())
+        (state.last?.frame == frame).then(|| state.output().cloned()).flatten()
+    }
+
+    /// `view`'s depth in metres in frame `frame` (one float a pixel, row by
+    /// row; 0 where nothing was drawn), when a pass of the view recorded it
+    /// this frame.
+    pub(crate) fn depth(&self, view: ViewId, frame: u64) -> Option<wgpu::Buffer> {
+        let views = self.views.lock().ok()?;
+        let state = views.get(&view)?;
+        (state.last?.frame == frame).then(|| state.depth[state.current].clone())
     }
 
     /// Frees the buffers of the views `keep` says no to.
@@ -431,16 +484,28 @@ impl AmbientOcclusionState {
         }
     }
 
-    /// Views holding occlusion buffers (for tests: a view without the knob
-    /// holds none).
+    /// Views holding screen-space buffers (for tests: a view without
+    /// ambient occlusion or contact shadows holds none).
     pub(crate) fn views(&self) -> usize {
         self.views.lock().map_or(0, |views| views.len())
+    }
+
+    /// Views holding occlusion buffers.
+    pub(crate) fn occlusion_views(&self) -> usize {
+        self.views.lock().map_or(0, |views| views.values().filter(|v| v.occlusion.is_some()).count())
     }
 }
 
 /// The parameters of `ctx`'s view this frame; `previous` is last frame's
 /// camera when its result is blended in.
-fn params(ctx: &RenderContext<'_>, settings: &AmbientOcclusion, previous: Option<LastFrame>, frame: u64) -> AoParams {
+fn params(
+    ctx: &RenderContext<'_>,
+    settings: Option<&AmbientOcclusion>,
+    previous: Option<LastFrame>,
+    frame: u64,
+) -> AoParams {
+    let temporal = settings.is_some_and(|s| s.temporal);
+    let settings = settings.copied().unwrap_or_default();
     let projection = ctx.view.projection;
     // Perspective: clip w = −z_view (the third column's w is −1).
     let perspective = projection.z_axis.w != 0.0;
@@ -476,7 +541,7 @@ fn params(ctx: &RenderContext<'_>, settings: &AmbientOcclusion, previous: Option
             DENOISE_DEPTH_TOLERANCE,
         ],
         unproject,
-        frame: [(frame % 64) as u32 * u32::from(settings.temporal), u32::from(previous.is_some()), 0, 0],
+        frame: [(frame % 64) as u32 * u32::from(temporal), u32::from(previous.is_some()), 0, 0],
         frame_weights: [TEMPORAL_WEIGHT, REPROJECTION_DEPTH_TOLERANCE, 0.0, 0.0],
     }
 }
@@ -504,7 +569,26 @@ impl RenderPass for AmbientOcclusionPass {
     }
 
     async fn run(&mut self, ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError> {
-        ctx.lighting.ambient_occlusion().record(ctx, rec.encoder(), &self.settings)
+        ctx.lighting.ambient_occlusion().record(ctx, rec.encoder(), Some(&self.settings))
+    }
+}
+
+/// Records its view's depth in metres (one float a pixel, kept for the
+/// frame) for the screen-space effects that read it in shading: contact
+/// shadows ([`crate::ContactShadows`]). Records nothing when an
+/// [`AmbientOcclusionPass`] of the view did this frame (it computes the
+/// same depth first). Needs the view's depth laid down first (a depth
+/// pre-pass).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LinearDepthPass;
+
+impl RenderPass for LinearDepthPass {
+    fn name(&self) -> &'static str {
+        "linear depth"
+    }
+
+    async fn run(&mut self, ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError> {
+        ctx.lighting.ambient_occlusion().record(ctx, rec.encoder(), None)
     }
 }
 

@@ -14,7 +14,7 @@ use oxygen_gpu::bindings::{self, LayoutEntries};
 use super::params::{
     AMBIENT_OCCLUSION_BINDING, CLUSTER_LIGHTS_BINDING, COMPARISON_SAMPLER_BINDING, ENVIRONMENT_BINDING,
     ENVIRONMENT_SAMPLER_BINDING, FIRST_PROBE_BINDING, LightingInputs, MAX_CASCADES, MAX_PROBES, PROBE_FACES,
-    PROBE_SAMPLER_BINDING, SHADOW_ATLAS_BINDING, SPLIT_SUM_BINDING, UNIFORM_BINDING,
+    PROBE_SAMPLER_BINDING, SHADOW_ATLAS_BINDING, SPLIT_SUM_BINDING, UNIFORM_BINDING, VIEW_DEPTH_BINDING,
 };
 
 /// (forward, up) of each probe face camera, in layer order; the shader's
@@ -88,6 +88,8 @@ impl LightingInputResources {
             .at(CLUSTER_LIGHTS_BINDING)
             .push(bindings::storage_read_only())
             .at(AMBIENT_OCCLUSION_BINDING)
+            .push(bindings::storage_read_only())
+            .at(VIEW_DEPTH_BINDING)
             .push(bindings::storage_read_only())
             .create_layout(device, "lighting inputs");
         // Reverse-Z: a fragment is lit when it is at least as close to the
@@ -166,7 +168,7 @@ impl LightingInputResources {
             shared,
             ([&dummy_view; MAX_CASCADES], &placeholder_atlas),
             ([&dummy_probe_view; MAX_PROBES], &dummy_probe_view),
-            (&uniform, None, None),
+            (&uniform, None, None, None),
         );
         LightingInputResources {
             layout,
@@ -211,7 +213,12 @@ pub(crate) fn bind_group(
     shared: SharedInputs<'_>,
     (maps, shadow_atlas): ([&wgpu::TextureView; MAX_CASCADES], &wgpu::TextureView),
     (probes, environment): ([&wgpu::TextureView; MAX_PROBES], &wgpu::TextureView),
-    (uniform, clusters, ambient_occlusion): (&wgpu::Buffer, Option<&wgpu::Buffer>, Option<&wgpu::Buffer>),
+    (uniform, clusters, ambient_occlusion, depth): (
+        &wgpu::Buffer,
+        Option<&wgpu::Buffer>,
+        Option<&wgpu::Buffer>,
+        Option<&wgpu::Buffer>,
+    ),
 ) -> wgpu::BindGroup {
     let mut entries: Vec<wgpu::BindGroupEntry<'_>> = maps
         .iter()
@@ -250,11 +257,16 @@ pub(crate) fn bind_group(
         binding: CLUSTER_LIGHTS_BINDING,
         resource: clusters.unwrap_or(shared.no_clusters).as_entire_binding(),
     });
-    // The same zero word stands for a view without ambient occlusion (the
-    // shader reads it only with `shadows.ambient_occlusion_width` > 0).
+    // The same zero word stands for a view without ambient occlusion or
+    // depth in metres (the shader reads them only with their feature on and
+    // `shadows.screen_width` > 0).
     entries.push(wgpu::BindGroupEntry {
         binding: AMBIENT_OCCLUSION_BINDING,
         resource: ambient_occlusion.unwrap_or(shared.no_clusters).as_entire_binding(),
+    });
+    entries.push(wgpu::BindGroupEntry {
+        binding: VIEW_DEPTH_BINDING,
+        resource: depth.unwrap_or(shared.no_clusters).as_entire_binding(),
     });
     device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("lighting inputs"), layout, entries: &entries })
 }

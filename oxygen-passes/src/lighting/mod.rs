@@ -11,6 +11,7 @@
 
 pub(crate) mod ambient_occlusion;
 pub(crate) mod clusters;
+pub(crate) mod contact_shadows;
 pub(crate) mod ibl;
 pub(crate) mod inputs;
 pub(crate) mod params;

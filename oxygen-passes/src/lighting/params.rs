@@ -12,7 +12,7 @@ oxygen_gpu::gpu_struct! {
     /// declaration ([`oxygen_gpu::GpuStruct::wgsl`]) and included by
     /// `forward_lit.wgsl`.
     #[derive(Debug, PartialEq)]
-    pub struct LightingInputs: 1648 bytes {
+    pub struct LightingInputs: 1664 bytes {
         /// World → light clip space, per cascade.
         pub light_view_projection: [[[f32; 4]; 4]; MAX_CASCADES] => "array<mat4x4<f32>, MAX_CASCADES>",
         /// World size of one map texel, per cascade.
@@ -50,9 +50,10 @@ oxygen_gpu::gpu_struct! {
         /// Mip levels of the prefiltered environment (0: none; the constant
         /// ambient term lights the scene instead).
         pub environment_levels: u32,
-        /// Width of the view's ambient occlusion (one float a pixel, row by
-        /// row, at `AMBIENT_OCCLUSION_BINDING`); 0 without it.
-        pub ambient_occlusion_width: u32,
+        /// Width of the view's screen-space buffers (one float a pixel, row
+        /// by row: its ambient occlusion at `AMBIENT_OCCLUSION_BINDING`, its
+        /// depth in metres at `VIEW_DEPTH_BINDING`); 0 without either.
+        pub screen_width: u32,
         /// Clustered light culling's grid (`HAS_CLUSTERED_LIGHTS`, see
         /// `lighting/clusters.rs`): tiles across, tiles down, depth slices,
         /// and 32-bit words of light bits per cluster. Zero without it.
@@ -66,6 +67,10 @@ oxygen_gpu::gpu_struct! {
         /// the widest penumbra's radius in texels, comparisons per side of
         /// the filter, a zero.
         pub shadow_filter: [f32; 4] => "vec4<f32>",
+        /// Contact shadows (`HAS_CONTACT_SHADOWS`, `ContactShadows`): the
+        /// march's length and the surfaces' thickness in metres, its steps,
+        /// a zero.
+        pub contact_shadows: [f32; 4] => "vec4<f32>",
     }
 }
 
@@ -86,7 +91,7 @@ const _: () = assert!(MAX_SHADOW_TILES.is_multiple_of(4));
 
 /// The numbers of group 1 that the shading pass's WGSL reads, by their
 /// Rust names: [`wgsl_constants`] emits exactly these.
-fn shared_numbers() -> [(&'static str, u32); 15] {
+fn shared_numbers() -> [(&'static str, u32); 16] {
     [
         ("MAX_CASCADES", MAX_CASCADES as u32),
         ("MAX_SHADOW_TILES", MAX_SHADOW_TILES as u32),
@@ -102,6 +107,7 @@ fn shared_numbers() -> [(&'static str, u32); 15] {
         ("SPLIT_SUM_BINDING", SPLIT_SUM_BINDING),
         ("CLUSTER_LIGHTS_BINDING", CLUSTER_LIGHTS_BINDING),
         ("AMBIENT_OCCLUSION_BINDING", AMBIENT_OCCLUSION_BINDING),
+        ("VIEW_DEPTH_BINDING", VIEW_DEPTH_BINDING),
         ("SPLIT_SUM_LUT_SIZE", SPLIT_SUM_LUT_SIZE),
     ]
 }
@@ -130,6 +136,9 @@ pub(crate) const CLUSTER_LIGHTS_BINDING: u32 = SPLIT_SUM_BINDING + 1;
 /// The view's ambient occlusion (a storage buffer of one float a pixel;
 /// one zero word when the view has none).
 pub(crate) const AMBIENT_OCCLUSION_BINDING: u32 = CLUSTER_LIGHTS_BINDING + 1;
+/// The view's depth in metres (a storage buffer of one float a pixel, for
+/// contact shadows; one zero word when the view has none).
+pub(crate) const VIEW_DEPTH_BINDING: u32 = AMBIENT_OCCLUSION_BINDING + 1;
 
 /// Layers of a probe texture: +X, −X, +Y, −Y, +Z, −Z.
 pub const PROBE_FACES: usize = 6;
@@ -168,6 +177,7 @@ mod tests {
             ("SPLIT_SUM_BINDING", SPLIT_SUM_BINDING),
             ("CLUSTER_LIGHTS_BINDING", CLUSTER_LIGHTS_BINDING),
             ("AMBIENT_OCCLUSION_BINDING", AMBIENT_OCCLUSION_BINDING),
+            ("VIEW_DEPTH_BINDING", VIEW_DEPTH_BINDING),
         ] {
             let line = format!("const {name}: u32 = {binding:#x}u;");
             assert!(wgsl.lines().any(|l| l == line), "{line} missing from\n{wgsl}");

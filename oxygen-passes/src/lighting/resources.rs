@@ -153,7 +153,7 @@ impl LightingResources {
             inputs.shared(),
             ([&inputs.placeholder_map; MAX_CASCADES], &inputs.placeholder_atlas),
             ([&inputs.placeholder_probe; MAX_PROBES], &view),
-            (&buffer, None, None),
+            (&buffer, None, None, None),
         );
         self.environment = Some(EnvironmentTexture { texture, view, no_inputs });
     }
@@ -213,6 +213,12 @@ impl LightingResources {
     /// Views holding ambient-occlusion buffers: those that computed it in
     /// a frame they still render (a view without the knob holds none).
     pub fn ambient_occlusion_views(&self) -> usize {
+        self.ambient_occlusion.occlusion_views()
+    }
+
+    /// Views holding screen-space buffers (depth in metres, for ambient
+    /// occlusion or contact shadows): a view with neither holds none.
+    pub fn screen_space_views(&self) -> usize {
         self.ambient_occlusion.views()
     }
 
@@ -238,14 +244,15 @@ impl LightingResources {
     /// A group 1 with these cascade maps (unused slots `None`), local shadow
     /// atlas, probes (six-layer array views, or `None`), light clusters
     /// (`None` for a view that does not cull its lights), ambient
-    /// occlusion (`None` for a view without) and their uniform block.
+    /// occlusion and depth in metres (`None` for a view without) and their
+    /// uniform block.
     pub fn bind_group(
         &self,
         device: &wgpu::Device,
         maps: [Option<&wgpu::TextureView>; MAX_CASCADES],
         shadow_atlas: Option<&wgpu::TextureView>,
         probes: [Option<&wgpu::TextureView>; MAX_PROBES],
-        (clusters, ambient_occlusion): (Option<&wgpu::Buffer>, Option<&wgpu::Buffer>),
+        (clusters, ambient_occlusion, depth): (Option<&wgpu::Buffer>, Option<&wgpu::Buffer>, Option<&wgpu::Buffer>),
         uniform: &LightingInputs,
     ) -> wgpu::BindGroup {
         let inputs = &self.inputs;
@@ -265,7 +272,7 @@ impl LightingResources {
             inputs.shared(),
             (maps, shadow_atlas),
             (probes, environment),
-            (&buffer, clusters, ambient_occlusion),
+            (&buffer, clusters, ambient_occlusion, depth),
         )
     }
 

@@ -25,6 +25,7 @@ pub(crate) fn reads_inputs(ctx: &RenderContext<'_>, config: &ForwardLitConfig) -
         || (config.reflections && !inputs.probes.is_empty())
         || clusters_lights(ctx, config)
         || config.ambient_occlusion.is_some()
+        || config.contact_shadows.is_some()
 }
 
 /// Group 1 for this view, or `None` when it reads no shadow map, no probe
@@ -105,29 +106,43 @@ pub(crate) async fn bind_group(
     };
     let (bits, job) = clusters.map_or((None, None), |(bits, job)| (Some(bits), job));
 
+    let frame = ctx.prepared.frame_index();
+    let screen = ctx.lighting.ambient_occlusion();
+    let missing = |what: &str, pass: &str| PassError::BadInput {
+        pass: "forward lit",
+        what: format!(
+            "{what} is asked for, but no {pass} ran for the view this frame (record one after its depth \
+             pre-pass; the standard graph does)"
+        ),
+    };
     let ambient_occlusion = match config.ambient_occlusion {
-        Some(_) => {
-            let frame = ctx.prepared.frame_index();
-            let output = ctx.lighting.ambient_occlusion().output(ctx.view.view_id, frame).ok_or_else(|| {
-                PassError::BadInput {
-                    pass: "forward lit",
-                    what: "ambient occlusion is asked for, but no AmbientOcclusionPass ran for the view this frame \
-                           (record one after its depth pre-pass; the standard graph does)"
-                        .into(),
-                }
-            })?;
-            uniform.ambient_occlusion_width = ctx.targets.width;
-            Some(output)
+        Some(_) => Some(
+            screen
+                .output(ctx.view.view_id, frame)
+                .ok_or_else(|| missing("ambient occlusion", "AmbientOcclusionPass"))?,
+        ),
+        None => None,
+    };
+    let depth = match config.contact_shadows {
+        Some(contact) => {
+            if let Some(problem) = contact.problem() {
+                return Err(PassError::BadInput { pass: "forward lit", what: problem });
+            }
+            uniform.contact_shadows = contact.uniform();
+            Some(screen.depth(ctx.view.view_id, frame).ok_or_else(|| missing("contact shadows", "LinearDepthPass"))?)
         }
         None => None,
     };
+    if ambient_occlusion.is_some() || depth.is_some() {
+        uniform.screen_width = ctx.targets.width;
+    }
 
     let group = ctx.lighting.bind_group(
         &ctx.gpu.device,
         maps,
         local.map(|l| l.atlas),
         probe_views.each_ref().map(Option::as_ref),
-        (bits.as_ref(), ambient_occlusion.as_ref()),
+        (bits.as_ref(), ambient_occlusion.as_ref(), depth.as_ref()),
         &uniform,
     );
     Ok((Some(group), job))

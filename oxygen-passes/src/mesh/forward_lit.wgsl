@@ -38,8 +38,11 @@ override HAS_PROBES: bool = true;
 override HAS_PROBE_PARALLAX: bool = true;
 override HAS_TEXTURES: bool = true;
 // Dim the indirect light by the view's screen-space ambient occlusion
-// (lighting/ambient_occlusion.rs; `shadows.ambient_occlusion_width` > 0).
+// (lighting/ambient_occlusion.rs; `shadows.screen_width` > 0).
 override HAS_AMBIENT_OCCLUSION: bool = true;
+// March toward each shadow-casting light through the view's depth
+// (lighting/contact_shadows.rs; `shadows.screen_width` > 0).
+override HAS_CONTACT_SHADOWS: bool = true;
 // Tone-map at the end of shading and write the display colour (the view's
 // sRGB target) instead of radiance: for views whose HDR image nothing reads.
 override TONE_MAP_OUTPUT: bool = false;
@@ -93,13 +96,68 @@ fn fit_hdr(color: vec3<f32>) -> vec3<f32> {
 // 32 w + b may reach it.
 @group(1) @binding(CLUSTER_LIGHTS_BINDING) var<storage, read> cluster_bits: array<u32>;
 // The view's ambient occlusion: the share of the indirect light reaching
-// each pixel, row by row, `shadows.ambient_occlusion_width` a row.
+// each pixel, row by row, `shadows.screen_width` a row.
 @group(1) @binding(AMBIENT_OCCLUSION_BINDING) var<storage, read> screen_occlusion: array<f32>;
+
+// The view's depth in metres, row by row, `shadows.screen_width` a row
+// (0 where nothing was drawn): what contact shadows march through.
+@group(1) @binding(VIEW_DEPTH_BINDING) var<storage, read> view_depth: array<f32>;
+
+// The share of the light arriving at `position` from the unit direction
+// `to_light` that no surface of the view's depth blocks within
+// `max_length` metres (the contact shadows' length when shorter): 0 when
+// the ray passes behind a surface by less than its thickness, else 1.
+// `frag` is the fragment's position (it turns the samples' offset from
+// pixel to pixel).
+fn contact_visibility(position: vec3<f32>, normal: vec3<f32>, to_light: vec3<f32>, max_length: f32, frag: vec4<f32>) -> f32 {
+    let width = shadows.screen_width;
+    if !HAS_CONTACT_SHADOWS || width == 0u {
+        return 1.0;
+    }
+    let count = arrayLength(&view_depth);
+    let height = count / width;
+    let length = min(shadows.contact_shadows.x, max_length);
+    let thickness = shadows.contact_shadows.y;
+    let steps = u32(shadows.contact_shadows.z);
+    if !(length > 0.0) || steps == 0u || height == 0u {
+        return 1.0;
+    }
+    // Off the surface by a fraction of its depth, and as much slack in the
+    // comparison: the depth holds one value a pixel, which a grazing
+    // surface would otherwise shadow itself through.
+    let depth = max(-(scene.camera.view * vec4<f32>(position, 1.0)).z, 0.0);
+    let slack = CONTACT_DEPTH_SLACK * depth;
+    let start = position + normal * slack;
+    let jitter = fract(52.9829189 * fract(dot(frag.xy, vec2<f32>(0.06711056, 0.00583715))));
+    for (var i = 0u; i < steps; i++) {
+        let p = start + to_light * (length * (f32(i) + jitter) / f32(steps));
+        let clip = scene.camera.view_projection * vec4<f32>(p, 1.0);
+        if clip.w <= 0.0 {
+            break;
+        }
+        let ndc = clip.xy / clip.w;
+        if any(abs(ndc) >= vec2<f32>(1.0)) {
+            break;
+        }
+        let pixel = vec2<u32>(vec2<f32>((ndc.x + 1.0) * 0.5, (1.0 - ndc.y) * 0.5) * vec2<f32>(f32(width), f32(height)));
+        let surface = view_depth[min(pixel.y * width + min(pixel.x, width - 1u), count - 1u)];
+        let ray = -(scene.camera.view * vec4<f32>(p, 1.0)).z;
+        let behind = ray - surface;
+        if surface > 0.0 && behind > CONTACT_DEPTH_SLACK * ray && behind < thickness {
+            return 0.0;
+        }
+    }
+    return 1.0;
+}
+
+// Share of a point's depth by which contact shadows start off its surface
+// and by which a sample must pass behind the depth to count.
+const CONTACT_DEPTH_SLACK: f32 = 0.002;
 
 // The screen-space ambient occlusion at fragment position `frag` (1 when
 // the view has none).
 fn screen_ambient_occlusion(frag: vec4<f32>) -> f32 {
-    let width = shadows.ambient_occlusion_width;
+    let width = shadows.screen_width;
     if !HAS_AMBIENT_OCCLUSION || width == 0u {
         return 1.0;
     }
@@ -513,6 +571,7 @@ fn positional_light(
     albedo: vec3<f32>,
     metallic: f32,
     roughness: f32,
+    frag: vec4<f32>,
 ) -> vec3<f32> {
     let light = positional_light_domain[scene.renderer.positional_lights_slot + i];
     let reach = positional_light_at(light, position);
@@ -527,6 +586,9 @@ fn positional_light(
         // PROBE_FACE_AXES order: the face is the major axis of -l.
         let tile = light.shadow_slot + cube_face(-l);
         attenuation *= tile_visibility(tile, light.position, position, geometric_normal);
+    }
+    if HAS_CONTACT_SHADOWS && light.shadow_slot != INVALID_SLOT && attenuation > 0.0 {
+        attenuation *= contact_visibility(position, geometric_normal, l, distance(light.position, position), frag);
     }
     return brdf_cosine(n, v, l, albedo, metallic, roughness) * light.color * light.intensity * attenuation;
 }
@@ -586,6 +648,9 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Der
             shadowed_light_done = true;
             visibility = shadow_visibility(mesh.world_position, geometric_normal, light.angular_radius);
         }
+        if HAS_CONTACT_SHADOWS && (light.flags & LIGHT_CASTS_SHADOWS) != 0u && visibility > 0.0 {
+            visibility *= contact_visibility(mesh.world_position, geometric_normal, -light.direction, 3.0e38, mesh.clip_position);
+        }
         color += brdf_cosine(n, v, -light.direction, albedo, metallic, roughness) * light.color * light.intensity * visibility;
     }
 
@@ -599,12 +664,12 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Der
             while bits != 0u {
                 let i = w * 32u + firstTrailingBit(bits);
                 bits &= bits - 1u;
-                color += positional_light(i, mesh.world_position, geometric_normal, n, v, albedo, metallic, roughness);
+                color += positional_light(i, mesh.world_position, geometric_normal, n, v, albedo, metallic, roughness, mesh.clip_position);
             }
         }
     } else {
         for (var i = 0u; i < pos_count; i++) {
-            color += positional_light(i, mesh.world_position, geometric_normal, n, v, albedo, metallic, roughness);
+            color += positional_light(i, mesh.world_position, geometric_normal, n, v, albedo, metallic, roughness, mesh.clip_position);
         }
     }
     // Specular reflection of the probe's surroundings: sharp on smooth

@@ -58,6 +58,13 @@ pub struct ForwardLitConfig {
     /// standard graph records it, with a depth pre-pass); `None`, the
     /// default, leaves it out: no pass, no buffers, no shader code.
     pub ambient_occlusion: Option<crate::AmbientOcclusion>,
+    /// Contact shadows: a short march through the view's depth toward
+    /// each light that casts shadows, darkening what the shadow map
+    /// misses ([`crate::ContactShadows`]). Reads the depth in metres a
+    /// [`crate::LinearDepthPass`] (or the ambient-occlusion pass) records
+    /// before this pass (the standard graph records it, with a depth
+    /// pre-pass); `None`, the default, leaves it out.
+    pub contact_shadows: Option<crate::ContactShadows>,
 }
 
 impl ForwardLitConfig {
@@ -73,6 +80,7 @@ impl ForwardLitConfig {
         shadow_filter: ShadowFilter::Pcf,
         light_culling: crate::LightCulling::EveryLight,
         ambient_occlusion: None,
+        contact_shadows: None,
     };
 }
 
@@ -450,6 +458,7 @@ impl MeshPass {
             uv_transforms: ctx.shading.materials.uv_transforms,
             vertex_attributes: ctx.shading.vertex_attributes,
             ambient_occlusion: config.is_some_and(|c| c.ambient_occlusion.is_some()),
+            contact_shadows: config.is_some_and(|c| c.contact_shadows.is_some()),
         }
     }
 

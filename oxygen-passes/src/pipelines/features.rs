@@ -53,6 +53,9 @@ pub struct ShaderFeatures {
     /// Dim the indirect light by the view's screen-space ambient occlusion
     /// (`HAS_AMBIENT_OCCLUSION`, [`crate::AmbientOcclusion`]).
     pub ambient_occlusion: bool,
+    /// March toward each shadow-casting light through the view's depth
+    /// (`HAS_CONTACT_SHADOWS`, [`crate::ContactShadows`]).
+    pub contact_shadows: bool,
 }
 
 impl ShaderFeatures {
@@ -69,6 +72,7 @@ impl ShaderFeatures {
         uv_transforms: true,
         vertex_attributes: true,
         ambient_occlusion: true,
+        contact_shadows: true,
     };
     /// No optional part: sun and ambient light on untextured materials.
     pub const NONE: ShaderFeatures = ShaderFeatures {
@@ -83,6 +87,7 @@ impl ShaderFeatures {
         uv_transforms: false,
         vertex_attributes: false,
         ambient_occlusion: false,
+        contact_shadows: false,
     };
 
     /// Every optional part but the vertex outputs, which stay as they are:
@@ -95,7 +100,7 @@ impl ShaderFeatures {
 
     /// The override constants, by their WGSL names (bools as 0 or 1);
     /// [`ShaderFeatures::vertex_attributes`] is not one.
-    pub fn override_constants(&self) -> [(&'static str, f64); 10] {
+    pub fn override_constants(&self) -> [(&'static str, f64); 11] {
         let flag = |on: bool| f64::from(u8::from(on));
         [
             ("HAS_SUN_SHADOWS", flag(self.sun_shadows)),
@@ -108,6 +113,7 @@ impl ShaderFeatures {
             ("HAS_TEXTURES", flag(self.textures)),
             ("HAS_UV_TRANSFORMS", flag(self.uv_transforms)),
             ("HAS_AMBIENT_OCCLUSION", flag(self.ambient_occlusion)),
+            ("HAS_CONTACT_SHADOWS", flag(self.contact_shadows)),
         ]
     }
 }
