@@ -44,7 +44,9 @@
 //! clustered: a street of 1 000 lamps; it must cost no accuracy), the sun
 //! shadow filter (PCF or PCSS, a pole under a sun of 5° and of 0.5°),
 //! ambient occlusion (off, each quality level, the default radius, the
-//! temporal step: a corner and a crevice under the ambient light alone), the LOD bias (spheres with two
+//! temporal step: a corner and a crevice under the ambient light alone),
+//! contact shadows (off, three lengths, more steps, the default thickness:
+//! a pole 4 cm across under a sun, one coarse cascade), the LOD bias (spheres with two
 //! coarser levels; the reference traces the full meshes), visibility (CPU,
 //! GPU frustum, GPU occlusion: each must cost no accuracy), and the render
 //! origin once more on the numerical extremes (a million units out, near
@@ -65,7 +67,8 @@ use oxygen::core::NodeKey;
 use oxygen::glam::{Quat, Vec4};
 use oxygen::graph::{ReferenceGraph, lit_render_graph};
 use oxygen::lighting::{
-    AmbientOcclusion, AoQuality, CascadeSettings, ClusterGrid, LightCulling, ProbeUpdate, ReflectionProbe,
+    AmbientOcclusion, AoQuality, CascadeSettings, ClusterGrid, ContactShadows, LightCulling, ProbeUpdate,
+    ReflectionProbe,
 };
 use oxygen::passes::{ReferenceSettings, ShadowFilter};
 use oxygen::prelude::*;
@@ -122,6 +125,8 @@ struct Setting {
     shadow_filter: ShadowFilter,
     /// Screen-space ambient occlusion.
     ambient_occlusion: Option<AmbientOcclusion>,
+    /// Contact shadows.
+    contact_shadows: Option<ContactShadows>,
 }
 
 struct Row {
@@ -521,6 +526,16 @@ fn stages(viewport: UVec2) -> Result<Vec<Stage>, Box<dyn std::error::Error>> {
             moving: None,
             reference: ReferenceSettings { max_bounces: 1, environment: [0.03; 3], ..ReferenceSettings::DEFAULT },
         },
+        // A pole 4 cm across under a sun, one coarse cascade (4 cm texels):
+        // contact shadows' scene.
+        Stage {
+            name: "a thin pole under a sun",
+            scene: oxygen_demo::thin_pole_under_sun(),
+            camera: oxygen_demo::thin_pole_camera(viewport),
+            cascades: CascadeSettings { count: 1, resolution: 256, max_distance: 10.0, ..Default::default() },
+            moving: None,
+            reference: ReferenceSettings::RASTER_MODEL,
+        },
     ])
 }
 
@@ -542,6 +557,7 @@ fn settings() -> Vec<Setting> {
         light_culling: LightCulling::EveryLight,
         shadow_filter: ShadowFilter::Pcf,
         ambient_occlusion: None,
+        contact_shadows: None,
     };
     let mut all = Vec::new();
     for resolution in [256, 512, 1024, 2048, 4096] {
@@ -621,6 +637,21 @@ fn settings() -> Vec<Setting> {
     ] {
         let mut s = base("ambient occlusion", name.to_string(), 10);
         s.ambient_occlusion = settings;
+        all.push(s);
+    }
+    // Contact shadows: off, three lengths as thick as the pole, more
+    // steps, and the default thickness.
+    let contact = |length, thickness, steps| Some(ContactShadows { length, thickness, steps });
+    for (name, settings) in [
+        ("none", None),
+        ("0.5 m", contact(0.5, 0.04, 16)),
+        ("1 m", contact(1.0, 0.04, 16)),
+        ("2 m", contact(2.0, 0.04, 16)),
+        ("1 m, 32 steps", contact(1.0, 0.04, 32)),
+        ("1 m, 5 cm thick (the default)", contact(1.0, 0.05, 16)),
+    ] {
+        let mut s = base("contact shadows", name.to_string(), 11);
+        s.contact_shadows = settings;
         all.push(s);
     }
     for bias in [0.25f32, 0.5, 1.0, 2.0, 4.0] {
@@ -703,6 +734,7 @@ fn raster(
         light_culling: setting.light_culling,
         shadow_filter: setting.shadow_filter,
         ambient_occlusion: setting.ambient_occlusion,
+        contact_shadows: setting.contact_shadows,
         ..ForwardLitConfig::default()
     };
     let view = renderer.register_view(desc, lit_render_graph(config))?;
