@@ -22,8 +22,8 @@ use std::future::Future;
 use std::pin::Pin;
 
 use oxygen_passes::{
-    AmbientOcclusionPass, CommandRecorder, DepthBias, DrawList, ForwardLitConfig, LinearDepthPass, MeshPass, PassError,
-    PrePassEstimate, ReferencePass, ReferenceSettings, RenderContext, RenderPass, TonemapPass,
+    AmbientOcclusionPass, AutoExposure, Bloom, CommandRecorder, DepthBias, DrawList, ForwardLitConfig, LinearDepthPass,
+    MeshPass, PassError, PrePassEstimate, ReferencePass, ReferenceSettings, RenderContext, RenderPass, TonemapPass,
 };
 
 /// What a view records each frame: a future that awaits its passes.
@@ -89,9 +89,11 @@ impl<G: RenderGraph> ErasedGraph for G {
 /// lit shading of the opaque and masked partitions into HDR (with the view's
 /// sun cascades, the frame's local shadows and the probes it is linked to),
 /// blended partitions back-to-front, then the tone map to the view's sRGB
-/// target. A view with nothing blended whose HDR image no other view reads
-/// ([`RenderContext::hdr_read_after_shading`]) tone-maps at the end of
-/// shading straight into its sRGB target: one full-screen pass fewer.
+/// target (with a bloom chain and automatic exposure when asked for). A
+/// view with nothing blended whose HDR image no other view reads
+/// ([`RenderContext::hdr_read_after_shading`]) and without those effects
+/// tone-maps at the end of shading straight into its sRGB target: one
+/// full-screen pass fewer.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StandardGraph {
     /// The forward lit pass's configuration; its `depth_from_pre_pass` is
@@ -101,6 +103,13 @@ pub struct StandardGraph {
     pub exposure: f32,
     /// Whether to lay down depth first.
     pub pre_pass: PrePass,
+    /// A bloom chain mixed into the image before the tone map
+    /// ([`oxygen_passes::Bloom`]); `None`, the default, records none.
+    pub bloom: Option<Bloom>,
+    /// Exposure chosen from the image and adapted over time, times
+    /// `exposure` ([`oxygen_passes::AutoExposure`]); `None`, the default,
+    /// keeps `exposure` alone.
+    pub auto_exposure: Option<AutoExposure>,
 }
 
 impl Default for StandardGraph {
@@ -114,12 +123,22 @@ impl StandardGraph {
     /// the pre-pass as `lit.depth_from_pre_pass` says (on or off).
     pub fn new(lit: ForwardLitConfig) -> Self {
         let pre_pass = if lit.depth_from_pre_pass { PrePass::On } else { PrePass::Off };
-        StandardGraph { lit, exposure: 1.0, pre_pass }
+        StandardGraph { lit, exposure: 1.0, pre_pass, bloom: None, auto_exposure: None }
     }
 
     /// The same graph with another pre-pass choice.
     pub fn with_pre_pass(self, pre_pass: PrePass) -> Self {
         StandardGraph { pre_pass, ..self }
+    }
+
+    /// The same graph with a bloom chain (`None`: none).
+    pub fn with_bloom(self, bloom: Option<Bloom>) -> Self {
+        StandardGraph { bloom, ..self }
+    }
+
+    /// The same graph with automatic exposure (`None`: the fixed exposure).
+    pub fn with_auto_exposure(self, auto_exposure: Option<AutoExposure>) -> Self {
+        StandardGraph { auto_exposure, ..self }
     }
 }
 
@@ -219,10 +238,12 @@ impl RenderGraph for StandardGraph {
             LinearDepthPass.run(ctx, rec).await?;
         }
         let exposure = tone_map_exposure(self.exposure);
-        // Nothing blends over the HDR image and no other view reads it:
-        // shading tone-maps in place and the frame skips the HDR write and
-        // the full-screen tone-map pass.
-        if !ctx.hdr_read_after_shading() {
+        // Nothing blends over the HDR image, no other view reads it and the
+        // tone map has no effect that reads it whole: shading tone-maps in
+        // place and the frame skips the HDR write and the full-screen
+        // tone-map pass.
+        let effects = self.bloom.is_some() || self.auto_exposure.is_some();
+        if !ctx.hdr_read_after_shading() && !effects {
             return MeshPass::forward_lit(lit).with_labels().tone_mapped(exposure).run(ctx, rec).await;
         }
         let mut transparent = MeshPass::transparent();
@@ -235,7 +256,7 @@ impl RenderGraph for StandardGraph {
         shading.run(ctx, rec).await?;
         // Records nothing on a frame without blended draws.
         transparent.run(ctx, rec).await?;
-        TonemapPass::new(exposure).run(ctx, rec).await
+        TonemapPass::new(exposure).with_bloom(self.bloom).with_auto_exposure(self.auto_exposure).run(ctx, rec).await
     }
 
     fn runs_occlusion_phases(&self) -> bool {
@@ -252,8 +273,13 @@ fn tone_map_exposure(exposure: f32) -> f32 {
 /// The default graph ([`StandardGraph`] with default settings), as a value
 /// to pass to `register_view`.
 #[allow(non_upper_case_globals)] // Reads as the function it replaced: `register_view(camera, standard_render_graph)`.
-pub const standard_render_graph: StandardGraph =
-    StandardGraph { lit: ForwardLitConfig::DEFAULT, exposure: 1.0, pre_pass: PrePass::DEFAULT };
+pub const standard_render_graph: StandardGraph = StandardGraph {
+    lit: ForwardLitConfig::DEFAULT,
+    exposure: 1.0,
+    pre_pass: PrePass::DEFAULT,
+    bloom: None,
+    auto_exposure: None,
+};
 
 /// The graph of a path-traced reference view
 /// ([`ViewDesc::path_traced`](crate::ViewDesc::path_traced)): the frame's

@@ -88,7 +88,8 @@ pub mod lighting {
         CascadeSettings, Environment, EnvironmentError, EquirectImage, Light, LightKind, Mobility, Sky,
     };
     pub use oxygen_passes::{
-        AmbientOcclusion, AmbientOcclusionPass, AoQuality, ClusterGrid, ContactShadows, LightCulling, LinearDepthPass,
+        AmbientOcclusion, AmbientOcclusionPass, AoQuality, AutoExposure, Bloom, ClusterGrid, ContactShadows,
+        LightCulling, LinearDepthPass,
     };
 }
 

@@ -87,6 +87,7 @@ fn a_stale_draw_range_is_painted_magenta() {
         origin: glam::DVec3::ZERO,
         hdr_read_by_others: false,
         shading: Shading::ALL,
+        time_seconds: 0.0,
     };
     let mut recorder = CommandRecorder::new(&gpu.device, "stale view");
     // Driven by hand under `block_on`: with no recording thread attached,

@@ -354,6 +354,7 @@ impl Renderer {
                         vertex_attributes: plan.vertex_attributes,
                         specialize: self.settings.specialize_shaders,
                     },
+                    time_seconds: plan.clock.time_seconds,
                 },
             ));
         }

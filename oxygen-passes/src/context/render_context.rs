@@ -49,6 +49,10 @@ pub struct RenderContext<'a> {
     pub hdr_read_by_others: bool,
     /// What the frame's shading pipelines carry.
     pub shading: Shading,
+    /// The frame's time in seconds (the renderer's clock, or the time the
+    /// frame was rendered at): for passes that change over time
+    /// (automatic exposure's adaptation).
+    pub time_seconds: f32,
 }
 
 /// What the frame's shading pipelines carry, the same for every view of the

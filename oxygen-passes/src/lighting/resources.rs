@@ -22,6 +22,10 @@ pub struct LightingResources {
     clusters: crate::lighting::clusters::LightClusters,
     /// Ambient occlusion's pipelines and per-view buffers.
     ambient_occlusion: crate::lighting::ambient_occlusion::AmbientOcclusionState,
+    /// The tone map's effects (bloom, automatic exposure): pipelines and
+    /// per-view buffers. Here with the other per-view lighting state:
+    /// exposure is the last step of what light a picture shows.
+    effects: crate::post::effects::EffectsState,
 }
 
 /// The prefiltered environment on the GPU (faces and levels, the
@@ -45,6 +49,7 @@ impl LightingResources {
             environment_generation: 0,
             clusters: Default::default(),
             ambient_occlusion: Default::default(),
+            effects: Default::default(),
         }
     }
 
@@ -216,18 +221,31 @@ impl LightingResources {
         self.ambient_occlusion.occlusion_views()
     }
 
+    /// The tone map's effects.
+    pub(crate) fn effects(&self) -> &crate::post::effects::EffectsState {
+        &self.effects
+    }
+
+    /// Views holding buffers of the tone map's effects (bloom, automatic
+    /// exposure): a view with neither holds none.
+    pub fn tone_map_effect_views(&self) -> usize {
+        self.effects.views()
+    }
+
     /// Views holding screen-space buffers (depth in metres, for ambient
     /// occlusion or contact shadows): a view with neither holds none.
     pub fn screen_space_views(&self) -> usize {
         self.ambient_occlusion.views()
     }
 
-    /// Frees the light clusters and the ambient occlusion of the views
+    /// Frees the light clusters, the screen-space buffers and the tone
+    /// map's effects of the views
     /// `keep` says no to (the renderer calls it once a frame with the views
     /// it renders).
     pub fn retain_views(&self, keep: impl Fn(oxygen_core::ViewId) -> bool) {
         self.clusters.retain(&keep);
-        self.ambient_occlusion.retain(keep);
+        self.ambient_occlusion.retain(&keep);
+        self.effects.retain(keep);
     }
 
     /// The layout of bind group 1.

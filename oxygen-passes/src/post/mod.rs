@@ -1,16 +1,19 @@
 //! Post-processing after shading: the tone map from the HDR target to the
-//! displayable sRGB target, and the operator it shares with the forward
-//! pass's in-pass tone map.
+//! displayable sRGB target (with its optional effects: bloom and automatic
+//! exposure), and the operator it shares with the forward pass's in-pass
+//! tone map.
 //! `params` holds the pass's parameter block, declared once for Rust and
 //! WGSL.
 
 mod composite;
 mod depth_copy;
+pub(crate) mod effects;
 pub(crate) mod params;
 mod tonemap;
 
 pub use composite::CompositePass;
 pub use depth_copy::DepthCopy;
+pub use effects::{AutoExposure, Bloom};
 pub use tonemap::TonemapPass;
 pub(crate) use tonemap::pbr_neutral;
 /// The tone-map shader (self-contained: no bindless declarations): the

@@ -12,16 +12,31 @@ use tracing::info_span;
 use super::params::TonemapParams;
 use crate::{CommandRecorder, PassError, RenderContext, RenderPass};
 
-/// The tone-map pass.
+/// The tone-map pass, with its optional effects: bloom and automatic
+/// exposure (`post/effects.rs`; each recorded only when asked for).
 pub struct TonemapPass {
     exposure: f32,
+    bloom: Option<crate::Bloom>,
+    auto_exposure: Option<crate::AutoExposure>,
 }
 
 impl TonemapPass {
     /// A pass scaling radiance by `exposure` (non-finite or negative values become 1).
     pub fn new(exposure: f32) -> Self {
         let exposure = if exposure.is_finite() && exposure >= 0.0 { exposure } else { 1.0 };
-        TonemapPass { exposure }
+        TonemapPass { exposure, bloom: None, auto_exposure: None }
+    }
+
+    /// The same pass with a bloom chain mixed into the image first
+    /// (`None`: none).
+    pub fn with_bloom(self, bloom: Option<crate::Bloom>) -> Self {
+        TonemapPass { bloom, ..self }
+    }
+
+    /// The same pass choosing its exposure from the image, times the fixed
+    /// one (`None`: the fixed exposure alone).
+    pub fn with_auto_exposure(self, auto_exposure: Option<crate::AutoExposure>) -> Self {
+        TonemapPass { auto_exposure, ..self }
     }
 }
 
@@ -58,6 +73,31 @@ impl RenderPass for TonemapPass {
         let _span = info_span!("tonemap", view = %ctx.view.view_id).entered();
         let device = &ctx.gpu.device;
         let color = ctx.color_targets(self.name())?;
+        if self.bloom.is_some() || self.auto_exposure.is_some() {
+            let Some(color_view) = color.color_view.as_ref() else {
+                return Err(PassError::NoColorTarget { pass: self.name() });
+            };
+            let effects = ctx.lighting.effects().record(
+                ctx,
+                rec.encoder(),
+                &color.hdr,
+                &color.hdr_view,
+                ViewTargets::COLOR_FORMAT,
+                self.exposure,
+                self.bloom.as_ref(),
+                self.auto_exposure.as_ref(),
+            )?;
+            let mut pass = crate::pipelines::fullscreen_pass(rec.encoder(), color_view, "tonemap with effects");
+            pass.set_pipeline(&effects.pipeline);
+            pass.set_bind_group(0, &effects.bind_group, &[]);
+            pass.draw(0..3, 0..1);
+            drop(pass);
+            rec.stats.render_passes += 1;
+            rec.stats.pipeline_binds += 1;
+            rec.stats.draw_calls += 1;
+            rec.stats.draw_commands += 1;
+            return Ok(());
+        }
         let (pipeline, layout) = ctx.pipelines.tonemap(device, ViewTargets::COLOR_FORMAT);
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("tonemap params"),

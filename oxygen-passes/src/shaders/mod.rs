@@ -12,8 +12,8 @@ pub(crate) mod registry;
 #[cfg(any(test, feature = "testing"))]
 pub(crate) use registry::HIZ_VISIBLE_BOXES;
 pub(crate) use registry::{
-    AMBIENT_OCCLUSION, COMPOSE_WINDOW, COMPOSITE, CUBE_FILTER, CULL, DEPTH_COPY, DEPTH_ONLY, FORWARD_LIT, HIZ, LABELS,
-    LIGHT_CLUSTERS, MeshVaryings, REFERENCE, SPLIT_SUM, ShaderModule, TONEMAP,
+    AMBIENT_OCCLUSION, COMPOSE_WINDOW, COMPOSITE, CUBE_FILTER, CULL, DEPTH_COPY, DEPTH_ONLY, EFFECTS, FORWARD_LIT, HIZ,
+    LABELS, LIGHT_CLUSTERS, MeshVaryings, REFERENCE, SPLIT_SUM, ShaderModule, TONEMAP,
 };
 
 #[cfg(test)]

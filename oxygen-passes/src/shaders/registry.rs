@@ -54,6 +54,10 @@ pub(crate) static SOURCES: &[Source] = &[
     Source::gpu_struct::<crate::post::params::TonemapParams>("post/TonemapParams"),
     Source::wgsl("post/tonemap_operator.wgsl", include_str!("../post/tonemap_operator.wgsl")),
     Source::wgsl("post/tonemap.wgsl", include_str!("../post/tonemap.wgsl")),
+    Source::gpu_struct::<crate::post::effects::BloomParams>("post/BloomParams"),
+    Source::gpu_struct::<crate::post::effects::ExposureParams>("post/ExposureParams"),
+    Source::gpu_struct::<crate::post::effects::EffectsParams>("post/EffectsParams"),
+    Source::wgsl("post/effects.wgsl", include_str!("../post/effects.wgsl")),
     Source::wgsl("post/depth_copy.wgsl", include_str!("../post/depth_copy.wgsl")),
     Source::gpu_struct::<crate::post::params::CompositeParams>("post/CompositeParams"),
     Source::wgsl("post/composite.wgsl", include_str!("../post/composite.wgsl")),
@@ -213,6 +217,8 @@ pub(crate) const LABELS: ShaderModule = ShaderModule::mesh("mesh/labels.wgsl");
 pub(crate) const REFERENCE: ShaderModule = ShaderModule::textured("reference/trace.wgsl");
 /// The tone map.
 pub(crate) const TONEMAP: ShaderModule = ShaderModule::plain("post/tonemap.wgsl");
+/// The tone map's effects: bloom, automatic exposure, the tone map with them.
+pub(crate) const EFFECTS: ShaderModule = ShaderModule::plain("post/effects.wgsl");
 /// Another view's image drawn into a rectangle (insets).
 pub(crate) const COMPOSITE: ShaderModule = ShaderModule::plain("post/composite.wgsl");
 /// Depth into a float texture, for depth readback on GL.
@@ -290,6 +296,12 @@ pub(crate) const ENTRY_POINTS: &[EntryPoint] = &[
     entry(AMBIENT_OCCLUSION, "temporal", Stage::Compute),
     entry(TONEMAP, "vs_fullscreen", Stage::Vertex),
     entry(TONEMAP, "fs_tonemap", Stage::Fragment),
+    entry(EFFECTS, "vs_fullscreen", Stage::Vertex),
+    entry(EFFECTS, "fs_bloom_down", Stage::Fragment),
+    entry(EFFECTS, "fs_bloom_up", Stage::Fragment),
+    entry(EFFECTS, "luminance_histogram", Stage::Compute),
+    entry(EFFECTS, "adapt_exposure", Stage::Compute),
+    entry(EFFECTS, "fs_tonemap_effects", Stage::Fragment),
     entry(COMPOSITE, "vs", Stage::Vertex),
     entry(COMPOSITE, "fs", Stage::Fragment),
     entry(DEPTH_COPY, "vs", Stage::Vertex),
