@@ -124,6 +124,7 @@ for group in $groups; do
       ;;
     lighting)
       run environment_bench -- 7
+      run tone_map_effects_bench -- 1280 40
       run accuracy_atlas -- "$out/atlas" 1280 16384
       ;;
     msaa-parts)
@@ -145,6 +146,7 @@ for group in $groups; do
     lavapipe)
       run shadow_bench -- 10000
       run hdr_format_bench -- 1280 10
+      run tone_map_effects_bench -- 1280 10
       run prepass_bench -- 10000
       run msaa_bench -- 640 400 20
       run msaa_bench -- 640 0 20
