@@ -524,7 +524,7 @@ fn params(
     let (slices, steps) = settings.quality.samples();
     let (reproject, previous_projection) = match previous {
         Some(last) => {
-            let reproject = (last.world_to_view * ctx.view.world_to_view.inverse()).as_mat4();
+            let reproject = reprojection(last.world_to_view, ctx.view.world_to_view);
             (finite(reproject), finite(last.projection))
         }
         None => (Mat4::IDENTITY, projection),
@@ -544,6 +544,13 @@ fn params(
         frame: [(frame % 64) as u32 * u32::from(temporal), u32::from(previous.is_some()), 0, 0],
         frame_weights: [TEMPORAL_WEIGHT, REPROJECTION_DEPTH_TOLERANCE, 0.0, 0.0],
     }
+}
+
+/// This frame's view space → last frame's, from the two frames'
+/// world → view transforms (in f64: the world may be far from its origin,
+/// and the product is near the identity for a camera that barely moved).
+fn reprojection(last_world_to_view: DMat4, world_to_view: DMat4) -> Mat4 {
+    (last_world_to_view * world_to_view.inverse()).as_mat4()
 }
 
 /// Records its view's ambient occlusion ([`AmbientOcclusion`]) for the
@@ -595,6 +602,23 @@ impl RenderPass for LinearDepthPass {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A point seen by this frame's camera lands where last frame's camera
+    /// saw it, far from the world's origin too.
+    #[test]
+    fn reprojection_takes_this_frames_view_space_to_last_frames() {
+        use glam::DVec3;
+        let at = DVec3::new(1.0e6, 20.0, -3.0e5);
+        let last = DMat4::look_at_rh(at + DVec3::new(0.0, 2.0, 5.0), at, DVec3::Y);
+        let now = DMat4::look_at_rh(at + DVec3::new(0.3, 2.1, 4.8), at + DVec3::new(0.1, 0.0, 0.0), DVec3::Y);
+        let world = at + DVec3::new(0.5, 0.25, -1.0);
+        let seen_now = now.transform_point3(world).as_vec3();
+        let seen_last = last.transform_point3(world).as_vec3();
+        let moved = reprojection(last, now).transform_point3(seen_now);
+        assert!((moved - seen_last).length() < 1.0e-4, "{moved} against {seen_last}");
+        // A camera that did not move: the identity.
+        assert!(reprojection(now, now).abs_diff_eq(Mat4::IDENTITY, 1.0e-6));
+    }
 
     #[test]
     fn quality_levels_grow_in_samples() {
