@@ -71,7 +71,7 @@ impl DomainKind {
             DomainKind::NormalTransforms => 48,
             DomainKind::Materials => 240,
             DomainKind::DirectionalLights => 48,
-            DomainKind::PositionalLights => 64,
+            DomainKind::PositionalLights => 80,
             DomainKind::Vertices => 32,
             DomainKind::Indices => 4,
             DomainKind::IndirectArgs => 20,

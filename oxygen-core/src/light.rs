@@ -57,8 +57,10 @@ pub struct Light {
     /// reference samples directions over the light's disc, and a view's
     /// PCSS shadows (`ShadowFilter::Pcss`) widen their penumbrae by it.
     /// Negative or non-finite values count as 0, values past
-    /// [`Light::MAX_ANGULAR_RADIUS`] as that. Point and spot lights are
-    /// points whatever it holds.
+    /// [`Light::MAX_ANGULAR_RADIUS`] as that. For a point or spot light it
+    /// is the radius of its sphere in metres ([`Light::radius`]): the
+    /// reference traces its shadows to points of its disc, and PCSS widens
+    /// their penumbrae by it.
     #[serde(default)]
     pub source_radius: f32,
 }
@@ -76,6 +78,21 @@ impl Light {
         match self.kind {
             LightKind::Directional if self.source_radius.is_finite() => {
                 self.source_radius.clamp(0.0, Self::MAX_ANGULAR_RADIUS)
+            }
+            _ => 0.0,
+        }
+    }
+
+    /// The largest radius a point or spot light's sphere may have (1 m).
+    pub const MAX_RADIUS: f32 = 1.0;
+
+    /// The radius in metres shaders use: [`Light::source_radius`] of a
+    /// point or spot light, finite and within 0 to [`Light::MAX_RADIUS`];
+    /// 0 for a directional light.
+    pub fn radius(&self) -> f32 {
+        match self.kind {
+            LightKind::Point { .. } | LightKind::Spot { .. } if self.source_radius.is_finite() => {
+                self.source_radius.clamp(0.0, Self::MAX_RADIUS)
             }
             _ => 0.0,
         }

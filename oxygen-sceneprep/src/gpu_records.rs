@@ -269,9 +269,9 @@ oxygen_gpu::gpu_struct! {
 }
 
 oxygen_gpu::gpu_struct! {
-    /// A point or spot light as shaders read it (64 bytes).
+    /// A point or spot light as shaders read it (80 bytes).
     #[derive(Debug, PartialEq)]
-    pub struct PositionalLightRecord: 64 bytes {
+    pub struct PositionalLightRecord: 80 bytes {
         /// World position.
         pub position: [f32; 3],
         /// Cut-off range; 0 means unbounded.
@@ -294,6 +294,17 @@ oxygen_gpu::gpu_struct! {
         /// atlas (a spot has one tile, a point light six, one per cube face in
         /// `PROBE_FACE_AXES` order); [`INVALID_SLOT`] when it casts none.
         pub shadow_slot: u32,
+        /// Radius of the light's sphere in metres (`Light::radius`): 0 is a
+        /// point. The reference traces shadows to points of its disc; PCSS
+        /// widens the light's shadow penumbrae by it.
+        pub radius: f32,
+        /// Zero: explicit padding to 16-byte records (scalars: a `vec3`
+        /// would align to 16 in WGSL).
+        pub pad0: u32,
+        /// Zero.
+        pub pad1: u32,
+        /// Zero.
+        pub pad2: u32,
     }
 }
 

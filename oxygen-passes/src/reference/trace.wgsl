@@ -425,6 +425,20 @@ fn sun_direction(light: DirectionalLightRecord, salt: u32) -> vec3<f32> {
     return tangent_frame(centre) * vec3<f32>(sin_theta * cos(phi), sin_theta * sin(phi), cos_theta);
 }
 
+// A point of positional light `light`'s disc as seen from `position`
+// (`l`: the unit direction to its centre): uniform over the disc of its
+// radius facing the point; the centre for a point light without one.
+fn light_disc_point(light: PositionalLightRecord, position: vec3<f32>, l: vec3<f32>, salt: u32) -> vec3<f32> {
+    if light.radius <= 0.0 {
+        return light.position;
+    }
+    let u1 = f32(pcg(salt ^ 0x2C1B3C6Du) >> 8u) / 16777216.0;
+    let u2 = f32(pcg(salt ^ 0x297A2D39u) >> 8u) / 16777216.0;
+    let r = light.radius * sqrt(u1);
+    let phi = 2.0 * PI * u2;
+    return light.position + tangent_frame(l) * vec3<f32>(r * cos(phi), r * sin(phi), 0.0);
+}
+
 // Light from every light of the frame reaching `s` towards `v`, each through
 // one shadow ray.
 fn direct_light(s: Surface, v: vec3<f32>, salt: u32) -> vec3<f32> {
@@ -448,8 +462,14 @@ fn direct_light(s: Surface, v: vec3<f32>, salt: u32) -> vec3<f32> {
         if reach.attenuation <= 0.0 || all(f == vec3<f32>(0.0)) || dot(reach.l, s.geometric) <= 0.0 {
             continue;
         }
-        let origin = offset_origin(s, reach.l);
-        let shadow = trace(Ray(origin, reach.l), length(light.position - origin) * 0.9999, true, salt);
+        // The shadow ray goes to a point of the light's disc (its sphere
+        // seen from the surface), uniform over it, so that a light with a
+        // radius casts penumbrae; the light itself is shaded from its
+        // centre, as the raster does.
+        let on_light = light_disc_point(light, s.position, reach.l, salt ^ (i * 0x9E3779B9u));
+        let towards = normalize(on_light - s.position);
+        let origin = offset_origin(s, towards);
+        let shadow = trace(Ray(origin, towards), length(on_light - origin) * 0.9999, true, salt);
         if shadow.instance == NO_HIT {
             color += f * light.color * light.intensity * reach.attenuation;
         }

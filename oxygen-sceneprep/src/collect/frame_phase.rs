@@ -581,6 +581,10 @@ impl FrameCollection {
                     cos_outer,
                     flags: shadow_flags,
                     shadow_slot,
+                    radius: light.radius(),
+                    pad0: 0,
+                    pad1: 0,
+                    pad2: 0,
                 });
             }
         }
