@@ -4,6 +4,9 @@
 //! (`oxygen_demo::pole_under_sun`). With the wide disc
 //! PCSS must bring the picture closer to the reference than PCF does; with
 //! the narrow one it must not be worse by more than the reference's noise.
+//! The same for a spot light with a radius over a pole
+//! (`oxygen_demo::pole_under_spot`): the reference traces to points of the
+//! light's disc, PCSS widens the spot's penumbra by its radius.
 
 mod support;
 
@@ -91,4 +94,46 @@ fn soft_shadows_follow_the_suns_disc_toward_the_reference() {
         rows.into_iter().for_each(|row| record.push_row(row));
         record
     });
+}
+
+/// The spot scene's reference and its raster images with PCF and PCSS
+/// (one local shadow map of 1024²).
+fn render_spot(scene: &Scene) -> (HdrImage, HdrImage, HdrImage) {
+    let options = RendererOptions {
+        local_shadows: Some(oxygen::lighting::LocalShadowSettings { resolution: 1024, ..Default::default() }),
+        ..Default::default()
+    };
+    let mut renderer = support::gpu_renderer_with(options);
+    let raster = |renderer: &mut Renderer, filter: ShadowFilter| {
+        let config = ForwardLitConfig { shadow_filter: filter, ..ForwardLitConfig::DEFAULT };
+        renderer.register_view(ViewDesc::new(oxygen_demo::pole_spot_camera(SIZE)), StandardGraph::new(config)).unwrap()
+    };
+    let pcf = raster(&mut renderer, ShadowFilter::Pcf);
+    let pcss = raster(&mut renderer, ShadowFilter::PCSS);
+    let settings = ReferenceSettings { samples_per_frame: 16, max_samples: SAMPLES, ..ReferenceSettings::RASTER_MODEL };
+    let traced = renderer
+        .register_view(
+            ViewDesc::new(oxygen_demo::pole_spot_camera(SIZE)).path_traced(),
+            ReferenceGraph { settings, exposure: 1.0 },
+        )
+        .unwrap();
+    while renderer.reference_samples(traced) < SAMPLES {
+        renderer.render_frame(scene).unwrap();
+    }
+    let read = |view| {
+        let image = renderer.read_hdr(view).unwrap();
+        support::assert_hdr_image_finite(&image, "soft spot shadows");
+        image
+    };
+    (read(traced), read(pcf), read(pcss))
+}
+
+#[test]
+fn soft_spot_shadows_follow_the_lights_radius_toward_the_reference() {
+    for (radius, bound) in [(0.3f32, 0.9), (0.5, 0.8)] {
+        let (reference, pcf, pcss) = render_spot(&oxygen_demo::pole_under_spot(radius));
+        let (pcf, pcss) = (rmse(&pcf, &reference), rmse(&pcss, &reference));
+        eprintln!("spot of {radius} m: RMSE PCF {pcf:.6}, PCSS {pcss:.6} ({:.3} of it)", pcss / pcf);
+        assert!(pcss < bound * pcf, "a spot of {radius} m: PCSS {pcss:.6} against PCF {pcf:.6}");
+    }
 }

@@ -173,6 +173,41 @@ pub fn pole_under_sun(sun_degrees: f32) -> Scene {
     scene
 }
 
+/// A pole on a floor under a spot light of `radius` metres
+/// (`Light::source_radius`): the pole 0.3 m across and 2 m tall, the spot
+/// 5 m up and 3 m aside pointing at the pole's foot, no other light. Soft
+/// spot shadows' scene, seen by [`pole_spot_camera`].
+pub fn pole_under_spot(radius: f32) -> Scene {
+    let mut scene = Scene::new();
+    let grey = scene.add_material(Material::opaque("grey", Vec4::new(0.7, 0.7, 0.7, 1.0)));
+    let floor = scene.add_geometry(Geometry::plane(16.0));
+    let node = scene.add_node("floor", Transform::IDENTITY);
+    scene.set_renderable(node, Renderable { geometry: floor, materials: vec![grey] }).expect("valid handles");
+    let cube = scene.add_geometry(Geometry::cube(1.0));
+    let pole = Transform::from_translation(Vec3::new(0.0, 1.0, 0.0)).with_scale(Vec3::new(0.3, 2.0, 0.3));
+    let node = scene.add_node("pole", pole);
+    scene.set_renderable(node, Renderable { geometry: cube, materials: vec![grey] }).expect("valid handles");
+    let at = Vec3::new(-3.0, 5.0, -1.0);
+    let axis = (Vec3::new(0.5, 0.0, 0.2) - at).normalize();
+    let spot = scene
+        .add_node("spot", Transform::from_translation(at).with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, axis)));
+    let light = Light { source_radius: radius, ..Light::spot(60.0, None, 0.5, 0.7) };
+    scene.set_light(spot, Some(light)).expect("a node");
+    scene
+}
+
+/// The camera of [`pole_under_spot`]: above the floor beyond the pole,
+/// looking at its shadow.
+pub fn pole_spot_camera(viewport: UVec2) -> LookAtResolver {
+    LookAtResolver::new(
+        Camera::perspective(0.9, 0.1, None),
+        Vec3::new(3.5, 5.0, 3.0),
+        Vec3::new(1.5, 0.0, 0.5),
+        viewport,
+    )
+    .expect("a valid camera")
+}
+
 /// The camera of [`pole_under_sun`]: above and beside the pole, looking at
 /// its shadow.
 pub fn pole_camera(viewport: UVec2) -> LookAtResolver {

@@ -12,7 +12,7 @@ oxygen_gpu::gpu_struct! {
     /// declaration ([`oxygen_gpu::GpuStruct::wgsl`]) and included by
     /// `forward_lit.wgsl`.
     #[derive(Debug, PartialEq)]
-    pub struct LightingInputs: 1664 bytes {
+    pub struct LightingInputs: 1792 bytes {
         /// World → light clip space, per cascade.
         pub light_view_projection: [[[f32; 4]; 4]; MAX_CASCADES] => "array<mat4x4<f32>, MAX_CASCADES>",
         /// World size of one map texel, per cascade.
@@ -71,6 +71,10 @@ oxygen_gpu::gpu_struct! {
         /// march's length and the surfaces' thickness in metres, its steps,
         /// a zero.
         pub contact_shadows: [f32; 4] => "vec4<f32>",
+        /// Per tile, the device depth of a point z metres along its light's
+        /// axis is a + b / z: (a, b) of two tiles a `vec4` (soft shadows of
+        /// spot lights with a radius).
+        pub tile_depth: [[f32; 4]; MAX_SHADOW_TILES / 2] => "array<vec4<f32>, MAX_SHADOW_TILES / 2u>",
     }
 }
 

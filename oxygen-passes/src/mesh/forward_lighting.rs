@@ -77,6 +77,11 @@ pub(crate) async fn bind_group(
             // Perspective: projection.y_axis.y is cot(fov / 2).
             uniform.tile_texel_angle[tile] =
                 2.0 / map.view.projection.y_axis.y.abs().max(1e-6) / map.resolution.max(1) as f32;
+            // Clip z = z_axis.z · z_view + w_axis.z and clip w = −z_view:
+            // depth = −z_axis.z + w_axis.z / distance.
+            let terms = [-map.view.projection.z_axis.z, map.view.projection.w_axis.z];
+            let terms = if terms.iter().all(|t| t.is_finite()) { terms } else { [0.0, 0.0] };
+            uniform.tile_depth[tile / 2][(tile % 2) * 2..(tile % 2) * 2 + 2].copy_from_slice(&terms);
             uniform.tile_count = tile as u32 + 1;
         }
     }

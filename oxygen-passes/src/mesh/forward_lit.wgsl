@@ -256,7 +256,7 @@ fn probe_lod(levels: u32, roughness: f32) -> f32 {
 // Fraction of a shadow-casting local light's light reaching `world_position`
 // through atlas tile `slot` (a spot's map, or one cube face of a point
 // light's) (3 × 3 PCF; the normal offset grows with the distance from the light).
-fn tile_visibility(slot: u32, light_position: vec3<f32>, world_position: vec3<f32>, geometric_normal: vec3<f32>) -> f32 {
+fn tile_visibility(slot: u32, light_position: vec3<f32>, world_position: vec3<f32>, geometric_normal: vec3<f32>, light_radius: f32) -> f32 {
     if slot >= shadows.tile_count {
         return 1.0;
     }
@@ -270,10 +270,17 @@ fn tile_visibility(slot: u32, light_position: vec3<f32>, world_position: vec3<f3
     if any(abs(ndc.xy) > vec2<f32>(1.0)) || ndc.z < 0.0 || ndc.z > 1.0 {
         return 1.0;
     }
+    let uv = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
+    if HAS_SOFT_SHADOWS && shadows.shadow_filter.x > 0.0 && light_radius > 0.0 {
+        let to_light = (light_position - world_position) / max(distance, 1e-6);
+        let facing = clamp(dot(geometric_normal, to_light), 0.05, 1.0);
+        let tangent = sqrt(1.0 - facing * facing) / facing;
+        // clip.w: the point's distance along the light's axis.
+        return soft_tile_visibility(slot, uv, clip.w, light_radius, tangent);
+    }
     // The map is layer `slot` of the atlas; 3 x 3 taps one texel apart,
     // each a bilinear comparison (reverse-Z: lit when at least as close to
     // the light as the stored depth).
-    let uv = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
     let texel = 1.0 / vec2<f32>(textureDimensions(shadow_atlas));
     var lit = 0.0;
     for (var y = -1; y <= 1; y++) {
@@ -283,6 +290,87 @@ fn tile_visibility(slot: u32, light_position: vec3<f32>, world_position: vec3<f3
         }
     }
     return lit / 9.0;
+}
+
+// The device depth tile `slot`'s map holds for a point `z` metres along its
+// light's axis: a + b / z (its perspective projection's depth row).
+fn tile_device_depth(slot: u32, z: f32) -> f32 {
+    let terms = shadows.tile_depth[slot / 2u];
+    let ab = select(terms.xy, terms.zw, (slot & 1u) == 1u);
+    return ab.x + ab.y / max(z, 1e-6);
+}
+
+// Texels of tile `slot` within `radius` texels of `uv` (a grid of
+// `taps`² gathers of four) nearer the light than `height` metres above
+// the receiver at distance `z`, the receiver's plane allowed to rise
+// `slope` metres a texel of offset (so that a surface tilted from the
+// light does not count itself a blocker).
+fn tile_blocked_above(slot: u32, uv: vec2<f32>, z: f32, taps: u32, radius: f32, height: f32, slope: f32) -> f32 {
+    let texel = 1.0 / vec2<f32>(textureDimensions(shadow_atlas));
+    var blocked = 0.0;
+    for (var y = 0u; y < taps; y++) {
+        for (var x = 0u; x < taps; x++) {
+            let at = grid_tap(x, y, taps) * radius;
+            let reference = tile_device_depth(slot, z - height - length(at) * slope);
+            let lit = textureGatherCompare(shadow_atlas, shadow_sampler, uv + at * texel, slot, reference);
+            blocked += 4.0 - (lit.x + lit.y + lit.z + lit.w);
+        }
+    }
+    return blocked;
+}
+
+// Percentage-closer soft shadows from a spot light of radius
+// `light_radius` metres through its tile `slot`, for a receiver `z` metres
+// along the light's axis whose surface is tilted `tangent` (tan of the
+// angle between its normal and the light) from facing it. As the sun's
+// (`soft_shadow`), with comparisons only: the blockers' mean height above
+// the receiver from a geometric ladder of heights, then a grid of
+// comparisons across the penumbra a sphere of that radius casts from that
+// height (radius × height / blocker distance, at the receiver).
+fn soft_tile_visibility(slot: u32, uv: vec2<f32>, z: f32, light_radius: f32, tangent: f32) -> f32 {
+    let search_taps = u32(shadows.shadow_filter.x);
+    let widest = shadows.shadow_filter.y;
+    let filter_taps = u32(shadows.shadow_filter.z);
+    let texel_metres = max(z * shadows.tile_texel_angle[slot / 4u][slot % 4u], 1e-6);
+    let slope = min(tangent, 4.0) * texel_metres;
+    // From a texel's depth up to the height whose penumbra is the widest.
+    let lowest = texel_metres;
+    let highest = widest * texel_metres * z / (light_radius + widest * texel_metres);
+    let ratio = pow(max(highest / lowest, 1.0), 1.0 / f32(BLOCKER_LEVELS));
+    var blockers = 0.0;
+    var integral = 0.0;
+    var height = lowest;
+    var previous = 0.0;
+    for (var k = 0u; k <= BLOCKER_LEVELS; k++) {
+        let count = tile_blocked_above(slot, uv, z, search_taps, widest, height, slope);
+        if k == 0u {
+            blockers = count;
+        } else {
+            integral += (height - height / ratio) * 0.5 * (count + previous);
+        }
+        if count == 0.0 {
+            break;
+        }
+        previous = count;
+        height *= ratio;
+    }
+    if blockers == 0.0 {
+        return 1.0;
+    }
+    let mean_height = lowest + integral / blockers;
+    let blocker_distance = max(z - mean_height, 1e-3);
+    // As the sun's: no narrower than a texel and a half.
+    let radius = clamp(light_radius * mean_height / blocker_distance / texel_metres, 1.5, widest);
+    let texel = 1.0 / vec2<f32>(textureDimensions(shadow_atlas));
+    var lit = 0.0;
+    for (var y = 0u; y < filter_taps; y++) {
+        for (var x = 0u; x < filter_taps; x++) {
+            let at = grid_tap(x, y, filter_taps) * radius;
+            let reference = tile_device_depth(slot, z - length(at) * slope);
+            lit += textureSampleCompareLevel(shadow_atlas, shadow_sampler, uv + at * texel, slot, reference);
+        }
+    }
+    return lit / f32(filter_taps * filter_taps);
 }
 
 // Radiance the probe saw along `direction`.
@@ -579,13 +667,15 @@ fn positional_light(
     var attenuation = reach.attenuation;
     if light.kind == LIGHT_SPOT {
         if HAS_LOCAL_SHADOWS && light.shadow_slot != INVALID_SLOT {
-            attenuation *= tile_visibility(light.shadow_slot, light.position, position, geometric_normal);
+            attenuation *= tile_visibility(light.shadow_slot, light.position, position, geometric_normal, light.radius);
         }
     } else if HAS_LOCAL_SHADOWS && light.shadow_slot != INVALID_SLOT {
         // A point light's six faces follow its first tile, in
         // PROBE_FACE_AXES order: the face is the major axis of -l.
         let tile = light.shadow_slot + cube_face(-l);
-        attenuation *= tile_visibility(tile, light.position, position, geometric_normal);
+        // Point lights' shadows stay PCF: a soft search would cross the
+        // cube's faces.
+        attenuation *= tile_visibility(tile, light.position, position, geometric_normal, 0.0);
     }
     if HAS_CONTACT_SHADOWS && light.shadow_slot != INVALID_SLOT && attenuation > 0.0 {
         attenuation *= contact_visibility(position, geometric_normal, l, distance(light.position, position), frag);

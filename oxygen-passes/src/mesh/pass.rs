@@ -90,7 +90,9 @@ impl Default for ForwardLitConfig {
     }
 }
 
-/// How a view filters its sun shadow (its cascades).
+/// How a view filters its sun shadow (its cascades) and the shadows of
+/// spot lights with a radius (their tiles of the local shadow atlas;
+/// point lights' stay PCF).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub enum ShadowFilter {
     /// Percentage-closer filtering over `(2r + 1)²` taps of
@@ -98,12 +100,13 @@ pub enum ShadowFilter {
     /// the caster is.
     #[default]
     Pcf,
-    /// Percentage-closer soft shadows for a sun with a disc
-    /// (`Light::source_radius`): a search for the blockers between the
-    /// surface and the sun, then a filter as wide as the penumbra the
-    /// blockers' distance and the disc make, so that contact shadows stay
-    /// sharp and far casters blur. A sun without a disc is filtered as PCF
-    /// of one texel.
+    /// Percentage-closer soft shadows for a sun with a disc and for spot
+    /// lights with a radius (`Light::source_radius`): a search for the
+    /// blockers between the surface and the light, then a filter as wide as
+    /// the penumbra the blockers' distance and the disc or sphere make, so
+    /// that contact shadows stay sharp and far casters blur. A sun without a
+    /// disc is filtered as PCF of one texel, a spot without a radius as
+    /// today's 3 × 3 taps.
     Pcss {
         /// Reads per side of the blocker search (`search_taps²`, on a grid
         /// across the widest penumbra), 2 to 16; 8 by default (a read every
@@ -450,8 +453,11 @@ impl MeshPass {
             local_lights: ctx.prepared.slots().positional_lights.count > 0,
             clustered_lights: config.is_some_and(|c| super::forward_lighting::clusters_lights(ctx, c)),
             local_shadows: config.is_some_and(|c| c.local_shadows) && inputs.local_shadows.is_some(),
-            soft_shadows: config.is_some_and(|c| c.sun_shadows && matches!(c.shadow_filter, ShadowFilter::Pcss { .. }))
-                && !inputs.cascades.is_empty(),
+            soft_shadows: config.is_some_and(|c| {
+                matches!(c.shadow_filter, ShadowFilter::Pcss { .. })
+                    && ((c.sun_shadows && !inputs.cascades.is_empty())
+                        || (c.local_shadows && inputs.local_shadows.is_some()))
+            }),
             probes,
             probe_parallax: probes && inputs.probes.iter().any(|p| p.parallax.is_some()),
             textures: ctx.shading.materials.textures,
