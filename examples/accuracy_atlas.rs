@@ -46,7 +46,9 @@
 //! ambient occlusion (off, each quality level, the default radius, the
 //! temporal step: a corner and a crevice under the ambient light alone),
 //! contact shadows (off, three lengths, more steps, the default thickness:
-//! a pole 4 cm across under a sun, one coarse cascade), the LOD bias (spheres with two
+//! a pole 4 cm across under a sun, one coarse cascade), the spot shadow
+//! filter (PCF or PCSS, a pole under a spot of 0.5 m and of 0.1 m radius),
+//! the LOD bias (spheres with two
 //! coarser levels; the reference traces the full meshes), visibility (CPU,
 //! GPU frustum, GPU occlusion: each must cost no accuracy), and the render
 //! origin once more on the numerical extremes (a million units out, near
@@ -536,6 +538,24 @@ fn stages(viewport: UVec2) -> Result<Vec<Stage>, Box<dyn std::error::Error>> {
             moving: None,
             reference: ReferenceSettings::RASTER_MODEL,
         },
+        // A pole under a spot light of 0.5 m and of 0.1 m radius: the spot
+        // shadow filter's scenes (the reference traces the light's disc).
+        Stage {
+            name: "a pole under a spot of 0.5 m",
+            scene: oxygen_demo::pole_under_spot(0.5),
+            camera: oxygen_demo::pole_spot_camera(viewport),
+            cascades: CascadeSettings::default(),
+            moving: None,
+            reference: ReferenceSettings::RASTER_MODEL,
+        },
+        Stage {
+            name: "a pole under a spot of 0.1 m",
+            scene: oxygen_demo::pole_under_spot(0.1),
+            camera: oxygen_demo::pole_spot_camera(viewport),
+            cascades: CascadeSettings::default(),
+            moving: None,
+            reference: ReferenceSettings::RASTER_MODEL,
+        },
     ])
 }
 
@@ -653,6 +673,20 @@ fn settings() -> Vec<Setting> {
         let mut s = base("contact shadows", name.to_string(), 11);
         s.contact_shadows = settings;
         all.push(s);
+    }
+    // Spot shadows: PCF (3 × 3 taps) and PCSS under spots with a radius,
+    // one local shadow map of 1024².
+    for (stage, radius) in [(12, "0.5 m"), (13, "0.1 m")] {
+        let pcss = |taps: u32| ShadowFilter::Pcss { search_taps: taps, filter_taps: taps, max_penumbra_texels: 16.0 };
+        for (name, filter) in
+            [("PCF", ShadowFilter::Pcf), ("PCSS 4×4", pcss(4)), ("PCSS 8×8 (the default)", ShadowFilter::PCSS)]
+        {
+            let mut s = base("spot shadow filter", format!("{name}, spot {radius}"), stage);
+            s.options.local_shadows =
+                Some(oxygen::lighting::LocalShadowSettings { resolution: 1024, ..Default::default() });
+            s.shadow_filter = filter;
+            all.push(s);
+        }
     }
     for bias in [0.25f32, 0.5, 1.0, 2.0, 4.0] {
         let mut s = base("LOD bias", bias.to_string(), 4);
