@@ -466,7 +466,21 @@ impl ViewTargets {
     /// These targets with multisampled colour and depth of `samples`
     /// samples (2 or 4; the device must support the count for the HDR and
     /// depth formats). Targets without colour are returned as they are.
-    pub fn with_msaa(mut self, device: &wgpu::Device, samples: u32, label: &str) -> Self {
+    pub fn with_msaa(self, device: &wgpu::Device, samples: u32, label: &str) -> Self {
+        self.with_msaa_depth(device, samples, label, false)
+    }
+
+    /// [`ViewTargets::with_msaa`] whose multisampled depth can also be
+    /// bound for reading (screen-space effects load its first sample).
+    /// Not on GL: there a sampled multisampled depth is a texture instead
+    /// of a renderbuffer, and llvmpipe's GL then renders multisampled views
+    /// wrongly (`tests/msaa.rs` fails), so GL views keep the renderbuffer
+    /// and refuse those effects.
+    pub fn with_msaa_sampled_depth(self, device: &wgpu::Device, samples: u32, label: &str) -> Self {
+        self.with_msaa_depth(device, samples, label, true)
+    }
+
+    fn with_msaa_depth(mut self, device: &wgpu::Device, samples: u32, label: &str, sampled_depth: bool) -> Self {
         let Some(color) = &self.color else { return self };
         if samples <= 1 {
             return self;
@@ -485,12 +499,12 @@ impl ViewTargets {
             })
         };
         let msaa_color = make(color.hdr.format(), "hdr", wgpu::TextureUsages::RENDER_ATTACHMENT);
-        // Depth is read too: ambient occlusion loads its first sample.
-        let msaa_depth = make(
-            Self::DEPTH_FORMAT,
-            "depth",
-            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-        );
+        let depth_usage = if sampled_depth {
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING
+        } else {
+            wgpu::TextureUsages::RENDER_ATTACHMENT
+        };
+        let msaa_depth = make(Self::DEPTH_FORMAT, "depth", depth_usage);
         self.msaa = Some(MsaaTargets {
             samples,
             color_view: msaa_color.create_view(&Default::default()),

@@ -262,8 +262,15 @@ impl Targets {
                     if !fits {
                         let label = label();
                         let targets = if with_color {
-                            ViewTargets::with_hdr_format(device, width, height, &label, self.hdr_format)
-                                .with_msaa(device, samples, &label)
+                            let targets = ViewTargets::with_hdr_format(device, width, height, &label, self.hdr_format);
+                            // Screen-space effects read the multisampled
+                            // depth; GL's cannot be read (see
+                            // `ViewTargets::with_msaa_sampled_depth`).
+                            if gpu.adapter_info.backend == wgpu::Backend::Gl {
+                                targets.with_msaa(device, samples, &label)
+                            } else {
+                                targets.with_msaa_sampled_depth(device, samples, &label)
+                            }
                         } else {
                             ViewTargets::depth_only(device, width, height, &label)
                         };

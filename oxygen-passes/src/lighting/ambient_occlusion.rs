@@ -311,10 +311,9 @@ impl AmbientOcclusionState {
             });
         }
         if ctx.targets.msaa.is_some() && ctx.gpu.adapter_info.backend == wgpu::Backend::Gl {
-            // Measured on llvmpipe: the occlusion of a multisampled view on
-            // GL took a third of the error away that it takes on Vulkan
-            // (its depth's samples do not land where the shading reads
-            // them); refused rather than shipped wrong.
+            // GL's multisampled depth stays a renderbuffer, which no shader
+            // can read (a readable one made llvmpipe render multisampled
+            // views wrongly: `ViewTargets::with_msaa_sampled_depth`).
             return Err(PassError::BadInput {
                 pass: PASS,
                 what: "the screen-space depth of a multisampled view (ambient occlusion, contact shadows) is not \
