@@ -49,6 +49,16 @@ pub trait RenderGraph: Send + Sync + 'static {
     fn runs_occlusion_phases(&self) -> bool {
         false
     }
+
+    /// Whether the graph's passes read the view's depth in a shader
+    /// (ambient occlusion, contact shadows: [`oxygen_passes::LinearDepthPass`]).
+    /// A multisampled view's depth is then made readable where the backend
+    /// allows it (not on GL); otherwise it stays a render attachment only,
+    /// and those passes refuse the view. [`StandardGraph`] says so when its
+    /// forward configuration asks for either.
+    fn reads_screen_depth(&self) -> bool {
+        false
+    }
 }
 
 impl<F> RenderGraph for F
@@ -71,6 +81,7 @@ pub(crate) type GraphFuture<'a> = Pin<Box<dyn Future<Output = Result<(), PassErr
 pub(crate) trait ErasedGraph: Send + Sync {
     fn record_boxed<'a>(&'a self, ctx: &'a RenderContext<'a>, rec: &'a mut CommandRecorder) -> GraphFuture<'a>;
     fn two_phase(&self) -> bool;
+    fn screen_depth(&self) -> bool;
 }
 
 impl<G: RenderGraph> ErasedGraph for G {
@@ -79,6 +90,9 @@ impl<G: RenderGraph> ErasedGraph for G {
     }
     fn two_phase(&self) -> bool {
         self.runs_occlusion_phases()
+    }
+    fn screen_depth(&self) -> bool {
+        self.reads_screen_depth()
     }
 }
 
@@ -262,6 +276,10 @@ impl RenderGraph for StandardGraph {
     fn runs_occlusion_phases(&self) -> bool {
         true
     }
+
+    fn reads_screen_depth(&self) -> bool {
+        self.lit.ambient_occlusion.is_some() || self.lit.contact_shadows.is_some()
+    }
 }
 
 /// The exposure a graph's tone map applies: its own, 1 for an exposure of
@@ -444,6 +462,25 @@ mod tests {
         let default = StandardGraph::new(ForwardLitConfig::default()).with_pre_pass(PrePass::DEFAULT);
         assert_eq!(standard_render_graph, default);
         assert_eq!(StandardGraph::default(), default);
+    }
+
+    /// The standard graph reads its depth in a shader exactly when its
+    /// forward configuration has ambient occlusion or contact shadows; a
+    /// closure graph says it does not.
+    #[test]
+    fn only_screen_space_effects_make_the_standard_graph_read_its_depth() {
+        assert!(!standard_render_graph.reads_screen_depth());
+        let with = |lit: ForwardLitConfig| StandardGraph::new(lit).reads_screen_depth();
+        let ao = oxygen_passes::AmbientOcclusion::DEFAULT;
+        assert!(with(ForwardLitConfig { ambient_occlusion: Some(ao), ..ForwardLitConfig::DEFAULT }));
+        let contact = oxygen_passes::ContactShadows::DEFAULT;
+        assert!(with(ForwardLitConfig { contact_shadows: Some(contact), ..ForwardLitConfig::DEFAULT }));
+        let closure = async |_: &RenderContext<'_>, _: &mut CommandRecorder| -> Result<(), PassError> { Ok(()) };
+        assert!(!closure.reads_screen_depth());
+        assert!(ErasedGraph::screen_depth(&StandardGraph::new(ForwardLitConfig {
+            ambient_occlusion: Some(ao),
+            ..ForwardLitConfig::DEFAULT
+        })));
     }
 
     /// The standard graph runs occlusion culling's two phases; a graph

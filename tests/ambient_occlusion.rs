@@ -10,8 +10,8 @@ mod support;
 
 use oxygen::gpu::HdrImage;
 use oxygen::graph::{ReferenceGraph, StandardGraph};
-use oxygen::lighting::{AmbientOcclusion, AoQuality};
-use oxygen::passes::ReferenceSettings;
+use oxygen::lighting::{AmbientOcclusion, AmbientOcclusionPass, AoQuality};
+use oxygen::passes::{PassError, ReferenceSettings};
 use oxygen::prelude::*;
 use oxygen::views::{ResolvedView, ViewContext, ViewError, ViewResolver};
 
@@ -198,4 +198,27 @@ fn the_temporal_step_follows_a_moving_camera() {
     // Measured on lavapipe: 0.08 of occlusion's effect; a history that
     // never takes the new frame in gives 0.25.
     assert!(trail < 0.15 * occlusion, "the temporal image trails the camera: {trail:.6} against {occlusion:.6}");
+}
+
+/// A graph that runs the occlusion pass without saying it reads the depth
+/// gets, on a multisampled view, an error naming what to do (its depth was
+/// not made readable), not a validation panic.
+#[test]
+fn a_graph_that_does_not_declare_its_depth_read_is_refused_on_a_multisampled_view() {
+    let mut renderer = support::gpu_renderer();
+    let scene = oxygen_demo::corner_and_crevice();
+    let graph = async |ctx: &RenderContext<'_>, rec: &mut CommandRecorder| -> Result<(), PassError> {
+        MeshPass::depth_pre_pass().run(ctx, rec).await?;
+        AmbientOcclusionPass::new(AmbientOcclusion::DEFAULT).run(ctx, rec).await
+    };
+    let desc = ViewDesc::new(oxygen_demo::corner_camera(SIZE)).with_msaa(oxygen::gpu::Msaa::X4);
+    let view = renderer.register_view(desc, graph).unwrap();
+    let frame = renderer.render_frame(&scene).err().map(|e| e.to_string()).unwrap_or_default();
+    let read = renderer.read_hdr(view).err().map(|e| e.to_string()).unwrap_or_default();
+    let expected = if renderer.gpu().adapter_info.backend == wgpu::Backend::Gl {
+        "not available on GL"
+    } else {
+        "reads_screen_depth"
+    };
+    assert!(frame.contains(expected) || read.contains(expected), "frame: {frame:?}, read: {read:?}");
 }

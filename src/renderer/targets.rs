@@ -263,13 +263,13 @@ impl Targets {
                         let label = label();
                         let targets = if with_color {
                             let targets = ViewTargets::with_hdr_format(device, width, height, &label, self.hdr_format);
-                            // Screen-space effects read the multisampled
-                            // depth; GL's cannot be read (see
+                            // A graph's screen-space effects read the
+                            // multisampled depth; GL's cannot be read (see
                             // `ViewTargets::with_msaa_sampled_depth`).
-                            if gpu.adapter_info.backend == wgpu::Backend::Gl {
-                                targets.with_msaa(device, samples, &label)
-                            } else {
+                            if view.graph.screen_depth() && gpu.adapter_info.backend != wgpu::Backend::Gl {
                                 targets.with_msaa_sampled_depth(device, samples, &label)
+                            } else {
+                                targets.with_msaa(device, samples, &label)
                             }
                         } else {
                             ViewTargets::depth_only(device, width, height, &label)

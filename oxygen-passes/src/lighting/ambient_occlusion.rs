@@ -310,16 +310,23 @@ impl AmbientOcclusionState {
                     .into(),
             });
         }
-        if ctx.targets.msaa.is_some() && ctx.gpu.adapter_info.backend == wgpu::Backend::Gl {
+        if let Some(msaa) = &ctx.targets.msaa
+            && !msaa.depth.usage().contains(wgpu::TextureUsages::TEXTURE_BINDING)
+        {
             // GL's multisampled depth stays a renderbuffer, which no shader
             // can read (a readable one made llvmpipe render multisampled
-            // views wrongly: `ViewTargets::with_msaa_sampled_depth`).
-            return Err(PassError::BadInput {
-                pass: PASS,
-                what: "the screen-space depth of a multisampled view (ambient occlusion, contact shadows) is not \
-                       available on GL (use Vulkan, or no MSAA)"
-                    .into(),
-            });
+            // views wrongly: `ViewTargets::with_msaa_sampled_depth`); other
+            // backends make it readable when the view's graph says it reads
+            // it.
+            let what = if ctx.gpu.adapter_info.backend == wgpu::Backend::Gl {
+                "the screen-space depth of a multisampled view (ambient occlusion, contact shadows) is not \
+                 available on GL (use Vulkan, or no MSAA)"
+            } else {
+                "the view's multisampled depth is not readable: its graph must say that it reads the depth \
+                 (RenderGraph::reads_screen_depth; the standard graph does when it has ambient occlusion or \
+                 contact shadows)"
+            };
+            return Err(PassError::BadInput { pass: PASS, what: what.into() });
         }
         let (width, height) = (ctx.targets.width, ctx.targets.height);
         let pixels = u64::from(width) * u64::from(height);
