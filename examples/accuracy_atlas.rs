@@ -173,7 +173,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .value("reference_samples_per_pixel", samples)
         .value("warm_up_frames", WARM_UP)
         .value("measured_frames", MEASURED)
-        .value("rmse_clamp", RMSE_CLAMP);
+        .value("rmse_clamp", oxygen_demo::RADIANCE_RMSE_CLAMP);
     if let Some(knobs) = &knobs {
         record = record.value("knobs_only", knobs.clone());
     }
@@ -194,7 +194,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         srgb.save(out.join(format!("reference_{}.png", file_name(stage.name))))?;
         let seconds = started.elapsed().as_secs_f64();
         let (other, _, _) = reference(stage, samples, ReferenceSettings::DEFAULT_SEED.wrapping_add(1))?;
-        let noise = rmse(&hdr, &other) / std::f64::consts::SQRT_2;
+        let noise = oxygen_demo::radiance_rmse(&hdr, &other) / std::f64::consts::SQRT_2;
         eprintln!(
             "[atlas] reference of {}: {samples} samples per pixel in {seconds:.1} s on {}, noise RMSE {noise:.5}",
             stage.name, adapter.name
@@ -213,7 +213,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let (hdr, srgb, ms, timed_on_gpu) = raster(stage, setting)?;
         let (reference_hdr, reference_srgb, noise) =
             references[setting.stage].as_ref().ok_or("a setting's scene has no reference")?;
-        let rmse = rmse(&hdr, reference_hdr);
+        let rmse = oxygen_demo::radiance_rmse(&hdr, reference_hdr);
         let ssim = ssim(&srgb, reference_srgb);
         let name = format!("{}_{}", file_name(setting.knob), file_name(&setting.value));
         error_map(&hdr, reference_hdr, srgb.dimensions()).save(out.join(format!("error_{name}.png")))?;
@@ -804,17 +804,6 @@ fn raster(
     };
     let hdr = renderer.read_hdr(view)?;
     Ok((hdr.pixels, renderer.read_color(view)?, ms, timed_on_gpu))
-}
-
-/// Radiance above this is clamped before the RMSE: the sun's highlight on
-/// a near-mirror reaches tens of thousands in one pixel, and one such
-/// pixel would outweigh every other difference in the image.
-const RMSE_CLAMP: f64 = 4.0;
-
-fn rmse(a: &[[f32; 4]], b: &[[f32; 4]]) -> f64 {
-    let clamp = |x: f32| f64::from(x).clamp(0.0, RMSE_CLAMP);
-    let sum: f64 = a.iter().zip(b).map(|(p, q)| (0..3).map(|c| (clamp(p[c]) - clamp(q[c])).powi(2)).sum::<f64>()).sum();
-    (sum / (a.len().max(1) * 3) as f64).sqrt()
 }
 
 fn luma(p: &image::Rgba<u8>) -> f64 {

@@ -9,7 +9,7 @@
 mod support;
 
 use oxygen::gpu::HdrImage;
-use oxygen::graph::{ReferenceGraph, StandardGraph};
+use oxygen::graph::StandardGraph;
 use oxygen::lighting::{AmbientOcclusion, AmbientOcclusionPass, AoQuality};
 use oxygen::passes::{PassError, ReferenceSettings};
 use oxygen::prelude::*;
@@ -36,18 +36,7 @@ fn reference(renderer: &mut Renderer, scene: &Scene) -> HdrImage {
         environment: [AMBIENT; 3],
         ..ReferenceSettings::DEFAULT
     };
-    let traced = renderer
-        .register_view(
-            ViewDesc::new(oxygen_demo::corner_camera(SIZE)).path_traced(),
-            ReferenceGraph { settings, exposure: 1.0 },
-        )
-        .unwrap();
-    while renderer.reference_samples(traced) < SAMPLES {
-        renderer.render_frame(scene).unwrap();
-    }
-    let image = renderer.read_hdr(traced).unwrap();
-    renderer.unregister_view(traced).unwrap();
-    image
+    support::reference_hdr(renderer, scene, ViewDesc::new(oxygen_demo::corner_camera(SIZE)), settings)
 }
 
 /// The raster view's HDR image with `ambient_occlusion`, after `frames`
@@ -71,27 +60,7 @@ fn raster_with(
 ) -> HdrImage {
     let config = ForwardLitConfig { ambient_occlusion, ..ForwardLitConfig::DEFAULT };
     let desc = ViewDesc::new(oxygen_demo::corner_camera(SIZE)).with_msaa(msaa);
-    let view = renderer.register_view(desc, StandardGraph::new(config)).unwrap();
-    for _ in 0..frames {
-        renderer.render_frame(scene).unwrap();
-    }
-    let image = renderer.read_hdr(view).unwrap();
-    support::assert_hdr_image_finite(&image, "ambient occlusion");
-    renderer.unregister_view(view).unwrap();
-    image
-}
-
-/// RMSE of linear radiance (each channel clamped to 4, as the accuracy
-/// atlas measures).
-fn rmse(a: &HdrImage, b: &HdrImage) -> f64 {
-    let clamp = |x: f32| f64::from(x).clamp(0.0, 4.0);
-    let sum: f64 = a
-        .pixels
-        .iter()
-        .zip(&b.pixels)
-        .map(|(p, q)| (0..3).map(|c| (clamp(p[c]) - clamp(q[c])).powi(2)).sum::<f64>())
-        .sum();
-    (sum / (a.pixels.len() * 3) as f64).sqrt()
+    support::view_hdr(renderer, scene, desc, StandardGraph::new(config), frames, "ambient occlusion")
 }
 
 #[test]
@@ -99,14 +68,16 @@ fn ambient_occlusion_moves_the_corner_toward_the_reference() {
     let mut renderer = support::gpu_renderer();
     let scene = oxygen_demo::corner_and_crevice();
     let reference = reference(&mut renderer, &scene);
-    let without = rmse(&raster(&mut renderer, &scene, None, 1), &reference);
+    let without = support::radiance_rmse(&raster(&mut renderer, &scene, None, 1), &reference);
     let mut errors = Vec::new();
     for quality in AoQuality::ALL {
         for temporal in [false, true] {
             let settings = AmbientOcclusion { quality, temporal, radius: RADIUS };
             let frames = if temporal { 8 } else { 1 };
-            errors
-                .push(((quality, temporal), rmse(&raster(&mut renderer, &scene, Some(settings), frames), &reference)));
+            errors.push((
+                (quality, temporal),
+                support::radiance_rmse(&raster(&mut renderer, &scene, Some(settings), frames), &reference),
+            ));
         }
     }
     // A multisampled view computes it from its depth's first sample; GL
@@ -122,7 +93,7 @@ fn ambient_occlusion_moves_the_corner_toward_the_reference() {
         renderer.unregister_view(view).unwrap();
     } else {
         let msaa = raster_with(&mut renderer, &scene, Some(settings), 1, oxygen::gpu::Msaa::X4);
-        errors.push(((AoQuality::Medium, false), rmse(&msaa, &reference)));
+        errors.push(((AoQuality::Medium, false), support::radiance_rmse(&msaa, &reference)));
     }
     eprintln!("RMSE without ambient occlusion {without:.6}; with (the last with MSAA ×4): {errors:?}");
     // Measured on lavapipe: 0.56 (Ultra) to 0.64 (Low) of the error
@@ -192,8 +163,8 @@ fn the_temporal_step_follows_a_moving_camera() {
     }
     let read = |view| renderer.read_hdr(view).unwrap();
     let (temporal, spatial, none) = (read(temporal), read(spatial), read(none));
-    let trail = rmse(&temporal, &spatial);
-    let occlusion = rmse(&spatial, &none);
+    let trail = support::radiance_rmse(&temporal, &spatial);
+    let occlusion = support::radiance_rmse(&spatial, &none);
     eprintln!("temporal against single-frame occlusion {trail:.6}; occlusion's own effect {occlusion:.6}");
     // Measured on lavapipe: 0.08 of occlusion's effect; a history that
     // never takes the new frame in gives 0.25.

@@ -8,7 +8,7 @@
 mod support;
 
 use oxygen::gpu::HdrImage;
-use oxygen::graph::{ReferenceGraph, StandardGraph};
+use oxygen::graph::StandardGraph;
 use oxygen::lighting::{CascadeSettings, ContactShadows};
 use oxygen::passes::ReferenceSettings;
 use oxygen::prelude::*;
@@ -24,42 +24,13 @@ fn cascades() -> CascadeSettings {
 
 fn reference(renderer: &mut Renderer, scene: &Scene) -> HdrImage {
     let settings = ReferenceSettings { samples_per_frame: 16, max_samples: SAMPLES, ..ReferenceSettings::RASTER_MODEL };
-    let traced = renderer
-        .register_view(
-            ViewDesc::new(oxygen_demo::thin_pole_camera(SIZE)).path_traced(),
-            ReferenceGraph { settings, exposure: 1.0 },
-        )
-        .unwrap();
-    while renderer.reference_samples(traced) < SAMPLES {
-        renderer.render_frame(scene).unwrap();
-    }
-    let image = renderer.read_hdr(traced).unwrap();
-    renderer.unregister_view(traced).unwrap();
-    image
+    support::reference_hdr(renderer, scene, ViewDesc::new(oxygen_demo::thin_pole_camera(SIZE)), settings)
 }
 
 fn raster(renderer: &mut Renderer, scene: &Scene, contact_shadows: Option<ContactShadows>) -> HdrImage {
     let config = ForwardLitConfig { contact_shadows, ..ForwardLitConfig::DEFAULT };
     let desc = ViewDesc::new(oxygen_demo::thin_pole_camera(SIZE)).with_sun_shadows(cascades());
-    let view = renderer.register_view(desc, StandardGraph::new(config)).unwrap();
-    renderer.render_frame(scene).unwrap();
-    let image = renderer.read_hdr(view).unwrap();
-    support::assert_hdr_image_finite(&image, "contact shadows");
-    renderer.unregister_view(view).unwrap();
-    image
-}
-
-/// RMSE of linear radiance (each channel clamped to 4, as the accuracy
-/// atlas measures).
-fn rmse(a: &HdrImage, b: &HdrImage) -> f64 {
-    let clamp = |x: f32| f64::from(x).clamp(0.0, 4.0);
-    let sum: f64 = a
-        .pixels
-        .iter()
-        .zip(&b.pixels)
-        .map(|(p, q)| (0..3).map(|c| (clamp(p[c]) - clamp(q[c])).powi(2)).sum::<f64>())
-        .sum();
-    (sum / (a.pixels.len() * 3) as f64).sqrt()
+    support::view_hdr(renderer, scene, desc, StandardGraph::new(config), 1, "contact shadows")
 }
 
 #[test]
@@ -67,12 +38,12 @@ fn contact_shadows_move_a_thin_poles_shadow_toward_the_reference() {
     let mut renderer = support::gpu_renderer();
     let scene = oxygen_demo::thin_pole_under_sun();
     let reference = reference(&mut renderer, &scene);
-    let without = rmse(&raster(&mut renderer, &scene, None), &reference);
+    let without = support::radiance_rmse(&raster(&mut renderer, &scene, None), &reference);
     let mut errors = Vec::new();
     for length in [0.5f32, 1.0, 2.0] {
         // As thick as the pole: a thicker guess widens the shadow behind it.
         let settings = ContactShadows { length, thickness: 0.04, steps: 32 };
-        errors.push((length, rmse(&raster(&mut renderer, &scene, Some(settings)), &reference)));
+        errors.push((length, support::radiance_rmse(&raster(&mut renderer, &scene, Some(settings)), &reference)));
     }
     eprintln!("RMSE without contact shadows {without:.6}; with, by length: {errors:?}");
     // Measured on lavapipe: 0.92 (0.5 m), 0.86 (1 m) and 0.77 (2 m) of the

@@ -11,7 +11,7 @@
 mod support;
 
 use oxygen::gpu::HdrImage;
-use oxygen::graph::{ReferenceGraph, StandardGraph};
+use oxygen::graph::StandardGraph;
 use oxygen::lighting::CascadeSettings;
 use oxygen::passes::{ReferenceSettings, ShadowFilter};
 use oxygen::prelude::*;
@@ -22,63 +22,38 @@ const SIZE: UVec2 = UVec2::new(96, 64);
 const SAMPLES: u32 = 256;
 
 /// The scene's reference (raster model: direct light, exact shadows of the
-/// sun's disc) and the raster images with PCF (radius 1) and PCSS.
-fn render(scene: &Scene) -> (HdrImage, HdrImage, HdrImage) {
-    let mut renderer = support::gpu_renderer();
-    let cascades = CascadeSettings { count: 1, resolution: 1024, max_distance: 20.0, ..Default::default() };
+/// light's disc) and the raster images with PCF (radius 1) and PCSS, all
+/// through `desc` (the raster views registered together).
+fn render(mut renderer: Renderer, scene: &Scene, desc: impl Fn() -> ViewDesc) -> (HdrImage, HdrImage, HdrImage) {
     let raster = |renderer: &mut Renderer, filter: ShadowFilter| {
         let config = ForwardLitConfig { shadow_filter: filter, ..ForwardLitConfig::DEFAULT };
-        renderer
-            .register_view(
-                ViewDesc::new(oxygen_demo::pole_camera(SIZE)).with_sun_shadows(cascades),
-                StandardGraph::new(config),
-            )
-            .unwrap()
+        renderer.register_view(desc(), StandardGraph::new(config)).unwrap()
     };
     let pcf = raster(&mut renderer, ShadowFilter::Pcf);
     let pcss = raster(&mut renderer, ShadowFilter::PCSS);
     let settings = ReferenceSettings { samples_per_frame: 16, max_samples: SAMPLES, ..ReferenceSettings::RASTER_MODEL };
-    let traced = renderer
-        .register_view(
-            ViewDesc::new(oxygen_demo::pole_camera(SIZE)).path_traced(),
-            ReferenceGraph { settings, exposure: 1.0 },
-        )
-        .unwrap();
-    while renderer.reference_samples(traced) < SAMPLES {
-        renderer.render_frame(scene).unwrap();
-    }
+    let reference = support::reference_hdr(&mut renderer, scene, desc(), settings);
     let read = |view| {
         let image = renderer.read_hdr(view).unwrap();
         support::assert_hdr_image_finite(&image, "soft shadows");
         image
     };
-    (read(traced), read(pcf), read(pcss))
+    (reference, read(pcf), read(pcss))
 }
 
-/// RMSE of linear radiance (each channel clamped to 4, as the accuracy
-/// atlas measures).
-fn rmse(a: &HdrImage, b: &HdrImage) -> f64 {
-    let clamp = |x: f32| f64::from(x).clamp(0.0, 4.0);
-    let sum: f64 = a
-        .pixels
-        .iter()
-        .zip(&b.pixels)
-        .map(|(p, q)| (0..3).map(|c| (clamp(p[c]) - clamp(q[c])).powi(2)).sum::<f64>())
-        .sum();
-    (sum / (a.pixels.len() * 3) as f64).sqrt()
+/// The sun scene through one cascade of 1024² over 20 m.
+fn render_sun(scene: &Scene) -> (HdrImage, HdrImage, HdrImage) {
+    let cascades = CascadeSettings { count: 1, resolution: 1024, max_distance: 20.0, ..Default::default() };
+    render(support::gpu_renderer(), scene, || ViewDesc::new(oxygen_demo::pole_camera(SIZE)).with_sun_shadows(cascades))
 }
 
-/// Measured on lavapipe, Vulkan and GL alike (docs/records/soft_shadows_tests.jsonl):
-/// at 5° PCSS's RMSE is 0.73 of PCF's (0.01554 against 0.02122; the test
-/// allows 0.8); at 0.5° 0.99 of it (0.01514 against 0.01530: the penumbra
-/// is about the map's texel, where both filters blur alike; the test
-/// allows PCSS 2 % above PCF).
 #[test]
 fn soft_shadows_follow_the_suns_disc_toward_the_reference() {
     let mut rows = Vec::new();
     for degrees in [5.0f32, 0.5] {
-        let (reference, pcf, pcss) = render(&oxygen_demo::pole_under_sun(degrees));
-        let (pcf_error, pcss_error) = (rmse(&pcf, &reference), rmse(&pcss, &reference));
+        let (reference, pcf, pcss) = render_sun(&oxygen_demo::pole_under_sun(degrees));
+        let (pcf_error, pcss_error) =
+            (support::radiance_rmse(&pcf, &reference), support::radiance_rmse(&pcss, &reference));
         eprintln!("sun of {degrees}°: RMSE against the reference: PCF {pcf_error:.5}, PCSS {pcss_error:.5}");
         rows.push(
             Row::new()
@@ -96,43 +71,20 @@ fn soft_shadows_follow_the_suns_disc_toward_the_reference() {
     });
 }
 
-/// The spot scene's reference and its raster images with PCF and PCSS
-/// (one local shadow map of 1024²).
+/// The spot scene through one local shadow map of 1024².
 fn render_spot(scene: &Scene) -> (HdrImage, HdrImage, HdrImage) {
     let options = RendererOptions {
         local_shadows: Some(oxygen::lighting::LocalShadowSettings { resolution: 1024, ..Default::default() }),
         ..Default::default()
     };
-    let mut renderer = support::gpu_renderer_with(options);
-    let raster = |renderer: &mut Renderer, filter: ShadowFilter| {
-        let config = ForwardLitConfig { shadow_filter: filter, ..ForwardLitConfig::DEFAULT };
-        renderer.register_view(ViewDesc::new(oxygen_demo::pole_spot_camera(SIZE)), StandardGraph::new(config)).unwrap()
-    };
-    let pcf = raster(&mut renderer, ShadowFilter::Pcf);
-    let pcss = raster(&mut renderer, ShadowFilter::PCSS);
-    let settings = ReferenceSettings { samples_per_frame: 16, max_samples: SAMPLES, ..ReferenceSettings::RASTER_MODEL };
-    let traced = renderer
-        .register_view(
-            ViewDesc::new(oxygen_demo::pole_spot_camera(SIZE)).path_traced(),
-            ReferenceGraph { settings, exposure: 1.0 },
-        )
-        .unwrap();
-    while renderer.reference_samples(traced) < SAMPLES {
-        renderer.render_frame(scene).unwrap();
-    }
-    let read = |view| {
-        let image = renderer.read_hdr(view).unwrap();
-        support::assert_hdr_image_finite(&image, "soft spot shadows");
-        image
-    };
-    (read(traced), read(pcf), read(pcss))
+    render(support::gpu_renderer_with(options), scene, || ViewDesc::new(oxygen_demo::pole_spot_camera(SIZE)))
 }
 
 #[test]
 fn soft_spot_shadows_follow_the_lights_radius_toward_the_reference() {
     for (radius, bound) in [(0.3f32, 0.9), (0.5, 0.8)] {
         let (reference, pcf, pcss) = render_spot(&oxygen_demo::pole_under_spot(radius));
-        let (pcf, pcss) = (rmse(&pcf, &reference), rmse(&pcss, &reference));
+        let (pcf, pcss) = (support::radiance_rmse(&pcf, &reference), support::radiance_rmse(&pcss, &reference));
         eprintln!("spot of {radius} m: RMSE PCF {pcf:.6}, PCSS {pcss:.6} ({:.3} of it)", pcss / pcf);
         assert!(pcss < bound * pcf, "a spot of {radius} m: PCSS {pcss:.6} against PCF {pcf:.6}");
     }

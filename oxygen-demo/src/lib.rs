@@ -151,21 +151,28 @@ pub fn floor_with_box(roughness: f32) -> Scene {
     scene
 }
 
-/// A pole 3 m tall and 0.5 m wide on a 16 m grey floor under a sun of
-/// angular radius `sun_degrees` (`Light::source_radius`), low enough that
-/// the pole's shadow runs several metres: a contact edge at its foot and a
-/// penumbra widening towards its tip. The scene of soft shadows' test and
-/// accuracy stage, seen by [`pole_camera`].
-pub fn pole_under_sun(sun_degrees: f32) -> Scene {
+/// A grey box of `size` standing on the origin of a 16 m grey floor, no
+/// light: the pole of the shadow scenes below.
+fn grey_pole_on_floor(size: Vec3) -> Scene {
     let mut scene = Scene::new();
     let grey = scene.add_material(Material::opaque("grey", Vec4::new(0.7, 0.7, 0.7, 1.0)));
     let floor = scene.add_geometry(Geometry::plane(16.0));
     let node = scene.add_node("floor", Transform::IDENTITY);
     scene.set_renderable(node, Renderable { geometry: floor, materials: vec![grey] }).expect("valid handles");
     let cube = scene.add_geometry(Geometry::cube(1.0));
-    let pole = Transform::from_translation(Vec3::new(0.0, 1.5, 0.0)).with_scale(Vec3::new(0.5, 3.0, 0.5));
+    let pole = Transform::from_translation(Vec3::new(0.0, size.y * 0.5, 0.0)).with_scale(size);
     let node = scene.add_node("pole", pole);
     scene.set_renderable(node, Renderable { geometry: cube, materials: vec![grey] }).expect("valid handles");
+    scene
+}
+
+/// A pole 3 m tall and 0.5 m wide on a 16 m grey floor under a sun of
+/// angular radius `sun_degrees` (`Light::source_radius`), low enough that
+/// the pole's shadow runs several metres: a contact edge at its foot and a
+/// penumbra widening towards its tip. The scene of soft shadows' test and
+/// accuracy stage, seen by [`pole_camera`].
+pub fn pole_under_sun(sun_degrees: f32) -> Scene {
+    let mut scene = grey_pole_on_floor(Vec3::new(0.5, 3.0, 0.5));
     let travel = Vec3::new(0.9, -0.7, 0.25).normalize();
     let sun = scene.add_node("sun", Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, travel)));
     let light = Light { source_radius: sun_degrees.to_radians(), ..Light::directional(3.0) };
@@ -173,20 +180,26 @@ pub fn pole_under_sun(sun_degrees: f32) -> Scene {
     scene
 }
 
+/// Radiance above this is clamped before [`radiance_rmse`]: the sun's
+/// highlight on a near-mirror reaches tens of thousands in one pixel, and
+/// one such pixel would outweigh every other difference in the image.
+pub const RADIANCE_RMSE_CLAMP: f64 = 4.0;
+
+/// RMSE of two images' linear radiance (RGB of each pixel, each channel
+/// clamped to [`RADIANCE_RMSE_CLAMP`]): how the accuracy atlas and the
+/// tests against the path-traced reference measure a picture's error.
+pub fn radiance_rmse(a: &[[f32; 4]], b: &[[f32; 4]]) -> f64 {
+    let clamp = |x: f32| f64::from(x).clamp(0.0, RADIANCE_RMSE_CLAMP);
+    let sum: f64 = a.iter().zip(b).map(|(p, q)| (0..3).map(|c| (clamp(p[c]) - clamp(q[c])).powi(2)).sum::<f64>()).sum();
+    (sum / (a.len().max(1) * 3) as f64).sqrt()
+}
+
 /// A pole on a floor under a spot light of `radius` metres
 /// (`Light::source_radius`): the pole 0.3 m across and 2 m tall, the spot
 /// 5 m up and 3 m aside pointing at the pole's foot, no other light. Soft
 /// spot shadows' scene, seen by [`pole_spot_camera`].
 pub fn pole_under_spot(radius: f32) -> Scene {
-    let mut scene = Scene::new();
-    let grey = scene.add_material(Material::opaque("grey", Vec4::new(0.7, 0.7, 0.7, 1.0)));
-    let floor = scene.add_geometry(Geometry::plane(16.0));
-    let node = scene.add_node("floor", Transform::IDENTITY);
-    scene.set_renderable(node, Renderable { geometry: floor, materials: vec![grey] }).expect("valid handles");
-    let cube = scene.add_geometry(Geometry::cube(1.0));
-    let pole = Transform::from_translation(Vec3::new(0.0, 1.0, 0.0)).with_scale(Vec3::new(0.3, 2.0, 0.3));
-    let node = scene.add_node("pole", pole);
-    scene.set_renderable(node, Renderable { geometry: cube, materials: vec![grey] }).expect("valid handles");
+    let mut scene = grey_pole_on_floor(Vec3::new(0.3, 2.0, 0.3));
     let at = Vec3::new(-3.0, 5.0, -1.0);
     let axis = (Vec3::new(0.5, 0.0, 0.2) - at).normalize();
     let spot = scene
@@ -226,15 +239,7 @@ pub fn pole_camera(viewport: UVec2) -> LookAtResolver {
 /// filter and biases wash out near the pole's foot: contact shadows'
 /// test and accuracy stage, seen by [`thin_pole_camera`].
 pub fn thin_pole_under_sun() -> Scene {
-    let mut scene = Scene::new();
-    let grey = scene.add_material(Material::opaque("grey", Vec4::new(0.7, 0.7, 0.7, 1.0)));
-    let floor = scene.add_geometry(Geometry::plane(16.0));
-    let node = scene.add_node("floor", Transform::IDENTITY);
-    scene.set_renderable(node, Renderable { geometry: floor, materials: vec![grey] }).expect("valid handles");
-    let cube = scene.add_geometry(Geometry::cube(1.0));
-    let pole = Transform::from_translation(Vec3::new(0.0, 0.75, 0.0)).with_scale(Vec3::new(0.04, 1.5, 0.04));
-    let node = scene.add_node("pole", pole);
-    scene.set_renderable(node, Renderable { geometry: cube, materials: vec![grey] }).expect("valid handles");
+    let mut scene = grey_pole_on_floor(Vec3::new(0.04, 1.5, 0.04));
     let elevation = 40f32.to_radians();
     let travel = Vec3::new(0.9 * elevation.cos(), -elevation.sin(), 0.44 * elevation.cos()).normalize();
     let sun = scene.add_node("sun", Transform::IDENTITY.with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, travel)));

@@ -21,6 +21,53 @@ use oxygen::gpu::HdrImage;
 use oxygen::prelude::*;
 use oxygen::views::ResolvedView;
 
+/// RMSE of two HDR images' linear radiance, as the accuracy atlas measures
+/// it (`oxygen_demo::radiance_rmse`: each channel clamped to 4).
+pub fn radiance_rmse(a: &HdrImage, b: &HdrImage) -> f64 {
+    oxygen_demo::radiance_rmse(&a.pixels, &b.pixels)
+}
+
+/// The path-traced reference of `scene` seen through `desc` with
+/// `settings`: a reference view registered, rendered until it has
+/// `settings.max_samples` samples a pixel, read and unregistered (other
+/// views registered meanwhile render along).
+pub fn reference_hdr(
+    renderer: &mut Renderer,
+    scene: &Scene,
+    desc: ViewDesc,
+    settings: oxygen::passes::ReferenceSettings,
+) -> HdrImage {
+    let traced =
+        renderer.register_view(desc.path_traced(), oxygen::graph::ReferenceGraph { settings, exposure: 1.0 }).unwrap();
+    while renderer.reference_samples(traced) < settings.max_samples {
+        renderer.render_frame(scene).unwrap();
+    }
+    let image = renderer.read_hdr(traced).unwrap();
+    renderer.unregister_view(traced).unwrap();
+    image
+}
+
+/// A view of `desc` recording `graph` registered, `frames` frames rendered,
+/// its HDR image read (checked finite, named `what`) and the view
+/// unregistered.
+pub fn view_hdr(
+    renderer: &mut Renderer,
+    scene: &Scene,
+    desc: ViewDesc,
+    graph: impl oxygen::graph::RenderGraph,
+    frames: u32,
+    what: &str,
+) -> HdrImage {
+    let view = renderer.register_view(desc, graph).unwrap();
+    for _ in 0..frames {
+        renderer.render_frame(scene).unwrap();
+    }
+    let image = renderer.read_hdr(view).unwrap();
+    assert_hdr_image_finite(&image, what);
+    renderer.unregister_view(view).unwrap();
+    image
+}
+
 /// A pixel's colour.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Rgb {

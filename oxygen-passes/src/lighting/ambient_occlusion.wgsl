@@ -24,6 +24,7 @@
 // (ambient, environment, probes) by it.
 
 #include "lighting/AoParams"
+#include "shaders/noise.wgsl"
 
 @group(0) @binding(0) var<uniform> params: AoParams;
 // The depth through plain unfilterable float bindings: GL's shading
@@ -103,11 +104,9 @@ fn depth_at(p: vec2<i32>) -> f32 {
     return view_depth[index_of(clamp(p, vec2<i32>(0), size() - 1))];
 }
 
-// Interleaved gradient noise: a value in [0, 1) that varies over a few
-// pixels with no visible pattern; `frame` shifts it for the temporal step.
+// The noise of pixel `p`; `frame` shifts it for the temporal step.
 fn noise(p: vec2<i32>, frame: u32) -> f32 {
-    let q = vec2<f32>(p) + 5.588238 * f32(frame % 64u);
-    return fract(52.9829189 * fract(dot(q, vec2<f32>(0.06711056, 0.00583715))));
+    return interleaved_gradient_noise(vec2<f32>(p) + 5.588238 * f32(frame % 64u));
 }
 
 // The surface normal at `p` from the depth: of the two neighbours along

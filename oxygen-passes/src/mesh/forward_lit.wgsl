@@ -16,6 +16,7 @@
 #include "mesh/label_values.wgsl"
 #include "post/tonemap_operator.wgsl"
 #include "shaders/brdf.wgsl"
+#include "shaders/noise.wgsl"
 #include "lighting/ibl/environment.wgsl"
 
 // Pipeline-overridable constants (pipelines/features.rs `ShaderFeatures`, set when
@@ -128,7 +129,7 @@ fn contact_visibility(position: vec3<f32>, normal: vec3<f32>, to_light: vec3<f32
     let depth = max(-(scene.camera.view * vec4<f32>(position, 1.0)).z, 0.0);
     let slack = CONTACT_DEPTH_SLACK * depth;
     let start = position + normal * slack;
-    let jitter = fract(52.9829189 * fract(dot(frag.xy, vec2<f32>(0.06711056, 0.00583715))));
+    let jitter = interleaved_gradient_noise(frag.xy);
     for (var i = 0u; i < steps; i++) {
         let p = start + to_light * (length * (f32(i) + jitter) / f32(steps));
         let clip = scene.camera.view_projection * vec4<f32>(p, 1.0);

@@ -372,15 +372,43 @@ fn render_pipeline(
     })
 }
 
-/// One view's effect buffers.
+/// One view's effect buffers, kept across frames (the parameter blocks
+/// too: each frame writes them, none is made per frame).
 struct ViewEffects {
     size: (u32, u32),
     /// The bloom chain and a view of each level.
     bloom: Option<(wgpu::Texture, Vec<wgpu::TextureView>)>,
-    /// The histogram and the exposure.
-    exposure: Option<(wgpu::Buffer, wgpu::Buffer)>,
+    /// One parameter block per bloom step (down the chain, then up).
+    bloom_params: Vec<wgpu::Buffer>,
+    /// The histogram, the exposure and the exposure steps' parameters.
+    exposure: Option<(wgpu::Buffer, wgpu::Buffer, wgpu::Buffer)>,
     /// The frame time of the view's last automatic exposure.
     last_time: Option<f32>,
+    /// The tone map's parameters.
+    tonemap_params: wgpu::Buffer,
+}
+
+impl ViewEffects {
+    fn new(device: &wgpu::Device, size: (u32, u32)) -> Self {
+        ViewEffects {
+            size,
+            bloom: None,
+            bloom_params: Vec::new(),
+            exposure: None,
+            last_time: None,
+            tonemap_params: uniform_buffer::<EffectsParams>(device, "tone map effects params"),
+        }
+    }
+}
+
+/// A uniform block of `T`, written before each use.
+fn uniform_buffer<T>(device: &wgpu::Device, label: &str) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: size_of::<T>() as u64,
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
 }
 
 /// The effects' pipelines (made on first use) and every view's buffers.
@@ -440,25 +468,11 @@ impl EffectsState {
         });
         let (width, height) = (hdr.width(), hdr.height());
         let mut views = self.views.lock().map_err(|_| PassError::Graph("tone map effects state poisoned".into()))?;
-        let state = views.entry(ctx.view.view_id).or_insert_with(|| ViewEffects {
-            size: (width, height),
-            bloom: None,
-            exposure: None,
-            last_time: None,
-        });
+        let state = views.entry(ctx.view.view_id).or_insert_with(|| ViewEffects::new(device, (width, height)));
         if state.size != (width, height) {
-            *state = ViewEffects { size: (width, height), bloom: None, exposure: None, last_time: None };
+            *state = ViewEffects::new(device, (width, height));
         }
-        let uniform = |label: &str, bytes: &[u8]| {
-            let buffer = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: bytes.len() as u64,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            ctx.gpu.queue.write_buffer(&buffer, 0, bytes);
-            buffer
-        };
+        let queue = &ctx.gpu.queue;
 
         // Bloom: down the chain from the HDR image, then back up.
         let mut levels_used = 1;
@@ -486,19 +500,24 @@ impl EffectsState {
                     .collect();
                 state.bloom = Some((texture, views));
             }
+            let steps = 2 * levels as usize - 1;
+            while state.bloom_params.len() < steps {
+                state.bloom_params.push(uniform_buffer::<BloomParams>(device, "bloom params"));
+            }
             let Some((texture, level_views)) = state.bloom.as_ref() else {
                 return Err(PassError::Graph("bloom chain lost".into()));
             };
+            let mut step_params = state.bloom_params.iter();
             levels_used = texture.mip_level_count();
             let size_of_level = |level: u32| ((half.0 >> level).max(1), (half.1 >> level).max(1));
             let texel = |(w, h): (u32, u32)| [1.0 / w as f32, 1.0 / h as f32];
-            let step = |encoder: &mut wgpu::CommandEncoder,
-                        pipeline: &wgpu::RenderPipeline,
-                        source: &wgpu::TextureView,
-                        source_size: (u32, u32),
-                        target: u32,
-                        first: bool,
-                        load: wgpu::LoadOp<wgpu::Color>| {
+            let mut step = |encoder: &mut wgpu::CommandEncoder,
+                            pipeline: &wgpu::RenderPipeline,
+                            source: &wgpu::TextureView,
+                            source_size: (u32, u32),
+                            target: u32,
+                            first: bool,
+                            load: wgpu::LoadOp<wgpu::Color>| {
                 let params = BloomParams {
                     source_texel: texel(source_size),
                     target_texel: texel(size_of_level(target)),
@@ -507,7 +526,10 @@ impl EffectsState {
                     pad0: 0,
                     pad1: 0,
                 };
-                let params = uniform("bloom params", bytemuck::bytes_of(&params));
+                // One block per step: `steps` were made above.
+                let Some(buffer) = step_params.next() else { return };
+                queue.write_buffer(buffer, 0, bytemuck::bytes_of(&params));
+                let params = buffer;
                 let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                     label: Some("bloom"),
                     layout: &pipelines.bloom_layout,
@@ -564,7 +586,8 @@ impl EffectsState {
                     usage: wgpu::BufferUsages::STORAGE,
                     mapped_at_creation: false,
                 });
-                state.exposure = Some((histogram, exposure));
+                state.exposure =
+                    Some((histogram, exposure, uniform_buffer::<ExposureParams>(device, "exposure params")));
                 state.last_time = None;
             }
             let dt = state.last_time.map_or(0.0, |last| (ctx.time_seconds - last).max(0.0));
@@ -583,10 +606,11 @@ impl EffectsState {
                 speed_darker: auto.speed_darker,
                 pad0: 0.0,
             };
-            let params = uniform("exposure params", bytemuck::bytes_of(&params));
-            let Some((histogram, exposure)) = state.exposure.as_ref() else {
+            let Some((histogram, exposure, exposure_params)) = state.exposure.as_ref() else {
                 return Err(PassError::Graph("exposure buffers lost".into()));
             };
+            queue.write_buffer(exposure_params, 0, bytemuck::bytes_of(&params));
+            let params = exposure_params;
             let histogram_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("luminance histogram"),
                 layout: &pipelines.histogram_layout,
@@ -624,13 +648,14 @@ impl EffectsState {
             pad0: 0,
             pad1: 0,
         };
-        let params = uniform("tone map effects params", bytemuck::bytes_of(&params));
+        queue.write_buffer(&state.tonemap_params, 0, bytemuck::bytes_of(&params));
+        let params = &state.tonemap_params;
         let bloom_view = match (&state.bloom, bloom) {
             (Some((_, views)), Some(_)) => &views[0],
             _ => placeholder_texture,
         };
         let exposure_buffer = match (&state.exposure, auto_exposure) {
-            (Some((_, exposure)), Some(_)) => exposure,
+            (Some((_, exposure, _)), Some(_)) => exposure,
             _ => placeholder_buffer,
         };
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {

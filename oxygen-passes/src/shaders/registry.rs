@@ -18,6 +18,7 @@ use super::compose::{ComposeError, Composer, Source};
 pub(crate) static SOURCES: &[Source] = &[
     // Shared by several folders.
     Source::wgsl("shaders/brdf.wgsl", include_str!("brdf.wgsl")),
+    Source::wgsl("shaders/noise.wgsl", include_str!("noise.wgsl")),
     // Mesh passes.
     Source::wgsl("mesh/mesh_vertex.wgsl", include_str!("../mesh/mesh_vertex.wgsl")),
     Source::wgsl("mesh/depth_only.wgsl", include_str!("../mesh/depth_only.wgsl")),
