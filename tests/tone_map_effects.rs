@@ -64,12 +64,15 @@ fn bloom_spreads_a_bright_patch_and_leaves_the_far_image() {
     let ring: Vec<(u32, u32)> = [(cx + 12, cy), (cx - 12, cy), (cx, cy + 12), (cx, cy - 12)].into();
     for (x, y) in ring {
         let (before, after) = (luma(a.get_pixel(x, y)), luma(b.get_pixel(x, y)));
-        assert!(after > before + 3.0, "({x}, {y}): {before} without bloom, {after} with");
+        eprintln!("ring ({x}, {y}): {before:.2} → {after:.2}");
+        // Measured on lavapipe: 14 to 16 levels brighter.
+        assert!(after > before + 10.0, "({x}, {y}): {before} without bloom, {after} with");
     }
-    // The corners, far from the lamp, stay within a few levels.
+    // The corners, far from the lamp, stay within two levels (measured: 1).
     for (x, y) in [(2, 2), (SIZE.x - 3, 2), (2, SIZE.y - 3), (SIZE.x - 3, SIZE.y - 3)] {
         let (before, after) = (luma(a.get_pixel(x, y)), luma(b.get_pixel(x, y)));
-        assert!((after - before).abs() <= 4.0, "({x}, {y}): {before} without bloom, {after} with");
+        eprintln!("corner ({x}, {y}): {before:.2} → {after:.2}");
+        assert!((after - before).abs() <= 2.0, "({x}, {y}): {before} without bloom, {after} with");
     }
     // The lamp itself gives some of its light away.
     assert!(luma(b.get_pixel(cx, cy)) <= luma(a.get_pixel(cx, cy)));
@@ -106,10 +109,10 @@ fn automatic_exposure_evens_out_light_levels_and_adapts_over_time() {
         "fixed: {dim_fixed:.1} → {bright_fixed:.1}; automatic: {dim_auto:.1}, then {steps:.1?}, settled {bright_auto:.1}"
     );
     assert!(bright_fixed > dim_fixed + 40.0, "the fixed exposure shows the change: {dim_fixed} → {bright_fixed}");
-    // Measured on lavapipe: 105.1 and 104.9.
-    assert!((bright_auto - dim_auto).abs() < 5.0, "settled within 5 levels: {dim_auto} and {bright_auto}");
-    assert!(steps.windows(2).all(|w| w[1] < w[0] - 1.0), "coming down frame by frame: {steps:?}");
-    assert!(steps[2] > bright_auto + 10.0, "still on its way after 0.3 s: {steps:?}, settled {bright_auto}");
+    // Measured on lavapipe: 105.1 and 104.9; then 233.1, 194.7 and 167.9.
+    assert!((bright_auto - dim_auto).abs() < 1.0, "settled within a level: {dim_auto} and {bright_auto}");
+    assert!(steps.windows(2).all(|w| w[1] < w[0] - 15.0), "coming down frame by frame: {steps:?}");
+    assert!(steps[2] > bright_auto + 40.0, "still on its way after 0.3 s: {steps:?}, settled {bright_auto}");
 }
 
 #[test]
