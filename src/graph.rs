@@ -23,7 +23,8 @@ use std::pin::Pin;
 
 use oxygen_passes::{
     AmbientOcclusionPass, AutoExposure, Bloom, CommandRecorder, DepthBias, DrawList, ForwardLitConfig, LinearDepthPass,
-    MeshPass, PassError, PrePassEstimate, ReferencePass, ReferenceSettings, RenderContext, RenderPass, TonemapPass,
+    MeshPass, PassError, PrePassEstimate, ReferencePass, ReferenceSettings, ReflectionHistoryPass, RenderContext,
+    RenderPass, TonemapPass,
 };
 
 /// What a view records each frame: a future that awaits its passes.
@@ -51,11 +52,12 @@ pub trait RenderGraph: Send + Sync + 'static {
     }
 
     /// Whether the graph's passes read the view's depth in a shader
-    /// (ambient occlusion, contact shadows: [`oxygen_passes::LinearDepthPass`]).
+    /// (ambient occlusion, contact shadows, screen-space reflections:
+    /// [`oxygen_passes::LinearDepthPass`]).
     /// A multisampled view's depth is then made readable where the backend
     /// allows it (not on GL); otherwise it stays a render attachment only,
     /// and those passes refuse the view. [`StandardGraph`] says so when its
-    /// forward configuration asks for either.
+    /// forward configuration asks for one of them.
     fn reads_screen_depth(&self) -> bool {
         false
     }
@@ -97,12 +99,15 @@ impl<G: RenderGraph> ErasedGraph for G {
 }
 
 /// The standard graph: a depth pre-pass when it pays ([`PrePass`]) or when
-/// the view has ambient occlusion or contact shadows (which read that
-/// depth, [`ForwardLitConfig::ambient_occlusion`],
-/// [`ForwardLitConfig::contact_shadows`]), forward
+/// the view has ambient occlusion, contact shadows or screen-space
+/// reflections (which read that depth, [`ForwardLitConfig::ambient_occlusion`],
+/// [`ForwardLitConfig::contact_shadows`],
+/// [`ForwardLitConfig::screen_space_reflections`]), forward
 /// lit shading of the opaque and masked partitions into HDR (with the view's
 /// sun cascades, the frame's local shadows and the probes it is linked to),
-/// blended partitions back-to-front, then the tone map to the view's sRGB
+/// blended partitions back-to-front, the HDR image kept for next frame's
+/// screen-space reflections when the view has them
+/// ([`ReflectionHistoryPass`]), then the tone map to the view's sRGB
 /// target (with a bloom chain and automatic exposure when asked for). A
 /// view with nothing blended whose HDR image no other view reads
 /// ([`RenderContext::hdr_read_after_shading`]) and without those effects
@@ -235,7 +240,7 @@ impl RenderGraph for StandardGraph {
         // Occlusion culling builds its pyramid from the pre-pass's depth,
         // and ambient occlusion is computed from it before shading.
         let occlusion = ctx.occlusion_culling();
-        let screen_space = lit.ambient_occlusion.is_some() || lit.contact_shadows.is_some();
+        let screen_space = self.reads_screen_depth();
         lit.depth_from_pre_pass = occlusion || screen_space || self.pre_pass.resolved(ctx);
         if lit.depth_from_pre_pass {
             MeshPass::depth_pre_pass().drawing(DrawList::Early).run(ctx, rec).await?;
@@ -248,7 +253,7 @@ impl RenderGraph for StandardGraph {
             AmbientOcclusionPass::new(settings).run(ctx, rec).await?;
         }
         // Records nothing when the occlusion pass wrote the depth already.
-        if lit.contact_shadows.is_some() {
+        if lit.contact_shadows.is_some() || lit.screen_space_reflections.is_some() {
             LinearDepthPass.run(ctx, rec).await?;
         }
         let exposure = tone_map_exposure(self.exposure);
@@ -256,7 +261,9 @@ impl RenderGraph for StandardGraph {
         // tone map has no effect that reads it whole: shading tone-maps in
         // place and the frame skips the HDR write and the full-screen
         // tone-map pass.
-        let effects = self.bloom.is_some() || self.auto_exposure.is_some();
+        // Screen-space reflections keep the HDR image for the next frame.
+        let reflections = lit.screen_space_reflections.is_some();
+        let effects = self.bloom.is_some() || self.auto_exposure.is_some() || reflections;
         if !ctx.hdr_read_after_shading() && !effects {
             return MeshPass::forward_lit(lit).with_labels().tone_mapped(exposure).run(ctx, rec).await;
         }
@@ -270,6 +277,9 @@ impl RenderGraph for StandardGraph {
         shading.run(ctx, rec).await?;
         // Records nothing on a frame without blended draws.
         transparent.run(ctx, rec).await?;
+        if reflections {
+            ReflectionHistoryPass.run(ctx, rec).await?;
+        }
         TonemapPass::new(exposure).with_bloom(self.bloom).with_auto_exposure(self.auto_exposure).run(ctx, rec).await
     }
 
@@ -278,7 +288,9 @@ impl RenderGraph for StandardGraph {
     }
 
     fn reads_screen_depth(&self) -> bool {
-        self.lit.ambient_occlusion.is_some() || self.lit.contact_shadows.is_some()
+        self.lit.ambient_occlusion.is_some()
+            || self.lit.contact_shadows.is_some()
+            || self.lit.screen_space_reflections.is_some()
     }
 }
 

@@ -89,7 +89,7 @@ pub mod lighting {
     };
     pub use oxygen_passes::{
         AmbientOcclusion, AmbientOcclusionPass, AoQuality, AutoExposure, Bloom, ClusterGrid, ContactShadows,
-        LightCulling, LinearDepthPass,
+        LightCulling, LinearDepthPass, ReflectionHistoryPass, ScreenSpaceReflections,
     };
 }
 

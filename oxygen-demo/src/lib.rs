@@ -296,6 +296,56 @@ pub fn corner_camera(viewport: UVec2) -> LookAtResolver {
     .expect("a valid camera")
 }
 
+/// Where the sunlight of [`glossy_floor_with_objects`] travels: from above
+/// and behind its camera, so the sun's own highlight on the floor lies out
+/// of the picture and its reflections show the lit faces.
+pub const GLOSSY_FLOOR_SUN: Vec3 = Vec3::new(0.35, -0.75, -0.55);
+
+/// A polished metal floor (`roughness`; 30 m across) with objects standing
+/// on it: a red box, a tall green box and a wide blue slab, under a sun
+/// ([`GLOSSY_FLOOR_SUN`]). Light it with the sky matched to that sun
+/// (`Environment::sky_for_sun(GLOSSY_FLOOR_SUN)`): the floor then reflects
+/// the objects where a probe or the environment would show the sky. The
+/// scene of screen-space reflections' test and accuracy stage, seen by
+/// [`glossy_floor_camera`].
+pub fn glossy_floor_with_objects(roughness: f32) -> Scene {
+    let mut scene = Scene::new();
+    let metal = scene.add_material(Material {
+        metallic: 1.0,
+        roughness,
+        ..Material::opaque("polished floor", Vec4::new(0.9, 0.9, 0.9, 1.0))
+    });
+    let floor = scene.add_geometry(Geometry::plane(30.0));
+    let node = scene.add_node("floor", Transform::IDENTITY);
+    scene.set_renderable(node, Renderable { geometry: floor, materials: vec![metal] }).expect("valid handles");
+    let cube = scene.add_geometry(Geometry::cube(1.0));
+    let mut block = |name: &str, color: Vec4, at: Vec3, size: Vec3| {
+        let material = scene.add_material(Material { roughness: 0.6, ..Material::opaque(name, color) });
+        let transform = Transform::from_translation(at + Vec3::Y * size.y * 0.5).with_scale(size);
+        let node = scene.add_node(name, transform);
+        scene.set_renderable(node, Renderable { geometry: cube, materials: vec![material] }).expect("valid handles");
+    };
+    block("red box", Vec4::new(0.8, 0.15, 0.1, 1.0), Vec3::new(-1.3, 0.0, -1.5), Vec3::splat(1.0));
+    block("green tower", Vec4::new(0.15, 0.7, 0.2, 1.0), Vec3::new(0.6, 0.0, -3.0), Vec3::new(0.8, 2.4, 0.8));
+    block("blue slab", Vec4::new(0.15, 0.3, 0.8, 1.0), Vec3::new(2.2, 0.0, -1.0), Vec3::new(1.6, 0.5, 1.0));
+    let rotation = Quat::from_rotation_arc(Vec3::NEG_Z, GLOSSY_FLOOR_SUN.normalize());
+    let sun = scene.add_node("sun", Transform::IDENTITY.with_rotation(rotation));
+    scene.set_light(sun, Some(Light::directional(3.0))).expect("a node");
+    scene
+}
+
+/// The camera of [`glossy_floor_with_objects`]: low in front of the
+/// objects, looking across the floor at them and their reflections.
+pub fn glossy_floor_camera(viewport: UVec2) -> LookAtResolver {
+    LookAtResolver::new(
+        Camera::perspective(1.0, 0.1, None),
+        Vec3::new(0.3, 1.3, 3.5),
+        Vec3::new(0.4, 0.3, -1.8),
+        viewport,
+    )
+    .expect("a valid camera")
+}
+
 /// A street of `lamps` lights: a 200 m road along −Z (12 m wide) between
 /// two rows of buildings (boxes of varied heights every 8 m), its lamps in
 /// two rows 4.5 m up, alternating point lights and downward spots, each of

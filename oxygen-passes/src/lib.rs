@@ -48,7 +48,7 @@ pub use context::{
     CommandRecorder, DrawPath, FrameProgress, LinkedImage, LinkedView, LocalShadowsInput, OutputKind, PassError,
     PrePassEstimate, ProbeCubeInput, RecordStats, RenderContext, RenderPass, Shading, ShadowMapInput, ViewInputs,
 };
-pub use lighting::LightingResources;
+pub use lighting::{LightingResources, ScreenBuffers};
 pub use lighting::ambient_occlusion::{AmbientOcclusion, AmbientOcclusionPass, AoQuality, LinearDepthPass};
 pub use lighting::clusters::{ClusterGrid, LightCulling};
 pub use lighting::contact_shadows::ContactShadows;
@@ -58,6 +58,7 @@ pub use lighting::ibl::cube_filter::{
 };
 pub use lighting::inputs::PROBE_FACE_AXES;
 pub use lighting::params::{MAX_CASCADES, PROBE_FACES};
+pub use lighting::reflections::{ReflectionHistoryPass, ScreenSpaceReflections};
 pub use lighting::shadow_atlas::array_layer_count;
 pub use lighting::split_sum::SPLIT_SUM_LUT_SIZE;
 pub use mesh::{ColorOps, DrawList, ForwardLitConfig, MeshPass, ShadowFilter};

@@ -14,7 +14,8 @@ use oxygen_gpu::bindings::{self, LayoutEntries};
 use super::params::{
     AMBIENT_OCCLUSION_BINDING, CLUSTER_LIGHTS_BINDING, COMPARISON_SAMPLER_BINDING, ENVIRONMENT_BINDING,
     ENVIRONMENT_SAMPLER_BINDING, FIRST_PROBE_BINDING, LightingInputs, MAX_CASCADES, MAX_PROBES, PROBE_FACES,
-    PROBE_SAMPLER_BINDING, SHADOW_ATLAS_BINDING, SPLIT_SUM_BINDING, UNIFORM_BINDING, VIEW_DEPTH_BINDING,
+    PROBE_SAMPLER_BINDING, REFLECTION_HISTORY_BINDING, SHADOW_ATLAS_BINDING, SPLIT_SUM_BINDING, UNIFORM_BINDING,
+    VIEW_DEPTH_BINDING,
 };
 
 /// (forward, up) of each probe face camera, in layer order; the shader's
@@ -90,6 +91,8 @@ impl LightingInputResources {
             .at(AMBIENT_OCCLUSION_BINDING)
             .push(bindings::storage_read_only())
             .at(VIEW_DEPTH_BINDING)
+            .push(bindings::storage_read_only())
+            .at(REFLECTION_HISTORY_BINDING)
             .push(bindings::storage_read_only())
             .create_layout(device, "lighting inputs");
         // Reverse-Z: a fragment is lit when it is at least as close to the
@@ -168,7 +171,7 @@ impl LightingInputResources {
             shared,
             ([&dummy_view; MAX_CASCADES], &placeholder_atlas),
             ([&dummy_probe_view; MAX_PROBES], &dummy_probe_view),
-            (&uniform, None, None, None),
+            (&uniform, ScreenBuffers::default()),
         );
         LightingInputResources {
             layout,
@@ -207,19 +210,29 @@ pub(crate) fn uniform_buffer(device: &wgpu::Device, uniform: &LightingInputs) ->
     buffer
 }
 
+/// A view's own buffers in group 1, each `None` for a view without it (a
+/// zero word is bound in its place, which the shader never reads then).
+#[derive(Clone, Copy, Default)]
+pub struct ScreenBuffers<'a> {
+    /// Its light clusters' bits ([`crate::LightCulling::Clustered`]).
+    pub clusters: Option<&'a wgpu::Buffer>,
+    /// Its ambient occlusion, one float a pixel.
+    pub ambient_occlusion: Option<&'a wgpu::Buffer>,
+    /// Its depth in metres, one float a pixel.
+    pub depth: Option<&'a wgpu::Buffer>,
+    /// Its reflection history (screen-space reflections).
+    pub reflection_history: Option<&'a wgpu::Buffer>,
+}
+
 pub(crate) fn bind_group(
     device: &wgpu::Device,
     layout: &wgpu::BindGroupLayout,
     shared: SharedInputs<'_>,
     (maps, shadow_atlas): ([&wgpu::TextureView; MAX_CASCADES], &wgpu::TextureView),
     (probes, environment): ([&wgpu::TextureView; MAX_PROBES], &wgpu::TextureView),
-    (uniform, clusters, ambient_occlusion, depth): (
-        &wgpu::Buffer,
-        Option<&wgpu::Buffer>,
-        Option<&wgpu::Buffer>,
-        Option<&wgpu::Buffer>,
-    ),
+    (uniform, screen): (&wgpu::Buffer, ScreenBuffers<'_>),
 ) -> wgpu::BindGroup {
+    let ScreenBuffers { clusters, ambient_occlusion, depth, reflection_history } = screen;
     let mut entries: Vec<wgpu::BindGroupEntry<'_>> = maps
         .iter()
         .enumerate()
@@ -267,6 +280,10 @@ pub(crate) fn bind_group(
     entries.push(wgpu::BindGroupEntry {
         binding: VIEW_DEPTH_BINDING,
         resource: depth.unwrap_or(shared.no_clusters).as_entire_binding(),
+    });
+    entries.push(wgpu::BindGroupEntry {
+        binding: REFLECTION_HISTORY_BINDING,
+        resource: reflection_history.unwrap_or(shared.no_clusters).as_entire_binding(),
     });
     device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("lighting inputs"), layout, entries: &entries })
 }

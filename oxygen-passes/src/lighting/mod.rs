@@ -15,8 +15,10 @@ pub(crate) mod contact_shadows;
 pub(crate) mod ibl;
 pub(crate) mod inputs;
 pub(crate) mod params;
+pub(crate) mod reflections;
 mod resources;
 pub(crate) mod shadow_atlas;
 pub(crate) mod split_sum;
 
+pub use inputs::ScreenBuffers;
 pub use resources::LightingResources;

@@ -12,7 +12,7 @@ oxygen_gpu::gpu_struct! {
     /// declaration ([`oxygen_gpu::GpuStruct::wgsl`]) and included by
     /// `forward_lit.wgsl`.
     #[derive(Debug, PartialEq)]
-    pub struct LightingInputs: 1792 bytes {
+    pub struct LightingInputs: 1904 bytes {
         /// World → light clip space, per cascade.
         pub light_view_projection: [[[f32; 4]; 4]; MAX_CASCADES] => "array<mat4x4<f32>, MAX_CASCADES>",
         /// World size of one map texel, per cascade.
@@ -75,6 +75,20 @@ oxygen_gpu::gpu_struct! {
         /// axis is a + b / z: (a, b) of two tiles a `vec4` (soft shadows of
         /// spot lights with a radius).
         pub tile_depth: [[f32; 4]; MAX_SHADOW_TILES / 2] => "array<vec4<f32>, MAX_SHADOW_TILES / 2u>",
+        /// Screen-space reflections (`HAS_SCREEN_REFLECTIONS`): this
+        /// frame's world (relative to the render origin) → the clip space
+        /// of the frame the reflection history holds.
+        pub reflection_reprojection: [[f32; 4]; 4] => "mat4x4<f32>",
+        /// Screen-space reflections' settings (`ScreenSpaceReflections`):
+        /// max roughness, thickness (m), max distance (m), steps.
+        pub screen_reflections: [f32; 4] => "vec4<f32>",
+        /// The reflection history at `REFLECTION_HISTORY_BINDING`: width,
+        /// height, levels, and 1 when it holds a frame (0: reflections fall
+        /// back to the probe or environment everywhere).
+        pub reflection_history: [u32; 4] => "vec4<u32>",
+        /// The view's near plane (metres), which a reflected ray heading
+        /// for the camera stops before, and three zeroes.
+        pub reflection_view: [f32; 4] => "vec4<f32>",
     }
 }
 
@@ -95,7 +109,7 @@ const _: () = assert!(MAX_SHADOW_TILES.is_multiple_of(4));
 
 /// The numbers of group 1 that the shading pass's WGSL reads, by their
 /// Rust names: [`wgsl_constants`] emits exactly these.
-fn shared_numbers() -> [(&'static str, u32); 16] {
+fn shared_numbers() -> [(&'static str, u32); 17] {
     [
         ("MAX_CASCADES", MAX_CASCADES as u32),
         ("MAX_SHADOW_TILES", MAX_SHADOW_TILES as u32),
@@ -112,6 +126,7 @@ fn shared_numbers() -> [(&'static str, u32); 16] {
         ("CLUSTER_LIGHTS_BINDING", CLUSTER_LIGHTS_BINDING),
         ("AMBIENT_OCCLUSION_BINDING", AMBIENT_OCCLUSION_BINDING),
         ("VIEW_DEPTH_BINDING", VIEW_DEPTH_BINDING),
+        ("REFLECTION_HISTORY_BINDING", REFLECTION_HISTORY_BINDING),
         ("SPLIT_SUM_LUT_SIZE", SPLIT_SUM_LUT_SIZE),
     ]
 }
@@ -143,6 +158,10 @@ pub(crate) const AMBIENT_OCCLUSION_BINDING: u32 = CLUSTER_LIGHTS_BINDING + 1;
 /// The view's depth in metres (a storage buffer of one float a pixel, for
 /// contact shadows; one zero word when the view has none).
 pub(crate) const VIEW_DEPTH_BINDING: u32 = AMBIENT_OCCLUSION_BINDING + 1;
+/// The view's reflection history (a storage buffer of four half floats a
+/// pixel over a chain of levels, for screen-space reflections; one zero
+/// word when the view has none).
+pub(crate) const REFLECTION_HISTORY_BINDING: u32 = VIEW_DEPTH_BINDING + 1;
 
 /// Layers of a probe texture: +X, −X, +Y, −Y, +Z, −Z.
 pub const PROBE_FACES: usize = 6;
@@ -182,6 +201,7 @@ mod tests {
             ("CLUSTER_LIGHTS_BINDING", CLUSTER_LIGHTS_BINDING),
             ("AMBIENT_OCCLUSION_BINDING", AMBIENT_OCCLUSION_BINDING),
             ("VIEW_DEPTH_BINDING", VIEW_DEPTH_BINDING),
+            ("REFLECTION_HISTORY_BINDING", REFLECTION_HISTORY_BINDING),
         ] {
             let line = format!("const {name}: u32 = {binding:#x}u;");
             assert!(wgsl.lines().any(|l| l == line), "{line} missing from\n{wgsl}");

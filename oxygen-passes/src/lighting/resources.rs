@@ -6,7 +6,7 @@
 //! pipeline state.
 
 use crate::lighting::ibl::cube_filter::{CubeFilter, EnvironmentQuality, HARMONICS_LAYER};
-use crate::lighting::inputs::LightingInputResources;
+use crate::lighting::inputs::{LightingInputResources, ScreenBuffers};
 use crate::{LightingInputs, MAX_CASCADES, MAX_PROBES};
 
 /// Group 1's layout and placeholders, the local shadow atlas, the
@@ -22,6 +22,8 @@ pub struct LightingResources {
     clusters: crate::lighting::clusters::LightClusters,
     /// Ambient occlusion's pipelines and per-view buffers.
     ambient_occlusion: crate::lighting::ambient_occlusion::AmbientOcclusionState,
+    /// Screen-space reflections' pipelines and per-view histories.
+    reflection_history: crate::lighting::reflections::ReflectionHistoryState,
     /// The tone map's effects (bloom, automatic exposure): pipelines and
     /// per-view buffers. Here with the other per-view lighting state:
     /// exposure is the last step of what light a picture shows.
@@ -49,6 +51,7 @@ impl LightingResources {
             environment_generation: 0,
             clusters: Default::default(),
             ambient_occlusion: Default::default(),
+            reflection_history: Default::default(),
             effects: Default::default(),
         }
     }
@@ -158,7 +161,7 @@ impl LightingResources {
             inputs.shared(),
             ([&inputs.placeholder_map; MAX_CASCADES], &inputs.placeholder_atlas),
             ([&inputs.placeholder_probe; MAX_PROBES], &view),
-            (&buffer, None, None, None),
+            (&buffer, ScreenBuffers::default()),
         );
         self.environment = Some(EnvironmentTexture { texture, view, no_inputs });
     }
@@ -221,6 +224,17 @@ impl LightingResources {
         self.ambient_occlusion.occlusion_views()
     }
 
+    /// Screen-space reflections' pipelines and per-view histories.
+    pub(crate) fn reflection_history(&self) -> &crate::lighting::reflections::ReflectionHistoryState {
+        &self.reflection_history
+    }
+
+    /// Views holding a reflection history (screen-space reflections): a
+    /// view without the knob holds none.
+    pub fn reflection_history_views(&self) -> usize {
+        self.reflection_history.views()
+    }
+
     /// The tone map's effects.
     pub(crate) fn effects(&self) -> &crate::post::effects::EffectsState {
         &self.effects
@@ -245,6 +259,7 @@ impl LightingResources {
     pub fn retain_views(&self, keep: impl Fn(oxygen_core::ViewId) -> bool) {
         self.clusters.retain(&keep);
         self.ambient_occlusion.retain(&keep);
+        self.reflection_history.retain(&keep);
         self.effects.retain(keep);
     }
 
@@ -262,15 +277,15 @@ impl LightingResources {
     /// A group 1 with these cascade maps (unused slots `None`), local shadow
     /// atlas, probes (six-layer array views, or `None`), light clusters
     /// (`None` for a view that does not cull its lights), ambient
-    /// occlusion and depth in metres (`None` for a view without) and their
-    /// uniform block.
+    /// occlusion, depth in metres and reflection history (`None` for a view
+    /// without) and their uniform block.
     pub fn bind_group(
         &self,
         device: &wgpu::Device,
         maps: [Option<&wgpu::TextureView>; MAX_CASCADES],
         shadow_atlas: Option<&wgpu::TextureView>,
         probes: [Option<&wgpu::TextureView>; MAX_PROBES],
-        (clusters, ambient_occlusion, depth): (Option<&wgpu::Buffer>, Option<&wgpu::Buffer>, Option<&wgpu::Buffer>),
+        screen: ScreenBuffers<'_>,
         uniform: &LightingInputs,
     ) -> wgpu::BindGroup {
         let inputs = &self.inputs;
@@ -290,7 +305,7 @@ impl LightingResources {
             inputs.shared(),
             (maps, shadow_atlas),
             (probes, environment),
-            (&buffer, clusters, ambient_occlusion, depth),
+            (&buffer, screen),
         )
     }
 

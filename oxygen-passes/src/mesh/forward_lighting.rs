@@ -1,8 +1,10 @@
 //! What the forward lit pass reads through bind group 1: from other views,
 //! the view's own sun cascades, the frame's local-light shadow atlas and the
 //! reflection probes the view is linked to; of its own, its light clusters
-//! when it culls its lights and its ambient occlusion when it has it. Every input is awaited: the pass goes on once
-//! the views that render it have recorded.
+//! when it culls its lights, and its screen-space buffers (ambient
+//! occlusion, depth in metres, reflection history) when it has them. Every
+//! input is awaited: the pass goes on once the views that render it have
+//! recorded.
 
 use bytemuck::Zeroable;
 
@@ -26,6 +28,7 @@ pub(crate) fn reads_inputs(ctx: &RenderContext<'_>, config: &ForwardLitConfig) -
         || clusters_lights(ctx, config)
         || config.ambient_occlusion.is_some()
         || config.contact_shadows.is_some()
+        || config.screen_space_reflections.is_some()
 }
 
 /// Group 1 for this view, or `None` when it reads no shadow map, no probe
@@ -128,15 +131,32 @@ pub(crate) async fn bind_group(
         ),
         None => None,
     };
-    let depth = match config.contact_shadows {
-        Some(contact) => {
-            if let Some(problem) = contact.problem() {
-                return Err(PassError::BadInput { pass: "forward lit", what: problem });
-            }
-            uniform.contact_shadows = contact.uniform();
-            Some(screen.depth(ctx.view.view_id, frame).ok_or_else(|| missing("contact shadows", "LinearDepthPass"))?)
+    if let Some(contact) = config.contact_shadows {
+        if let Some(problem) = contact.problem() {
+            return Err(PassError::BadInput { pass: "forward lit", what: problem });
         }
-        None => None,
+        uniform.contact_shadows = contact.uniform();
+    }
+    let mut history = None;
+    if let Some(reflections) = config.screen_space_reflections {
+        if let Some(problem) = reflections.problem() {
+            return Err(PassError::BadInput { pass: "forward lit", what: problem });
+        }
+        uniform.screen_reflections = reflections.uniform();
+        uniform.reflection_view = [ctx.view.near, 0.0, 0.0, 0.0];
+        // None on the view's first frame: the probe or environment then.
+        history = ctx.lighting.reflection_history().previous(ctx);
+        if let Some(history) = &history {
+            uniform.reflection_reprojection = history.reprojection.to_cols_array_2d();
+            uniform.reflection_history = history.shape;
+        }
+    }
+    let depth = match (config.contact_shadows, config.screen_space_reflections) {
+        (None, None) => None,
+        _ => Some(screen.depth(ctx.view.view_id, frame).ok_or_else(|| {
+            let what = if config.contact_shadows.is_some() { "contact shadows" } else { "screen-space reflections" };
+            missing(what, "LinearDepthPass")
+        })?),
     };
     if ambient_occlusion.is_some() || depth.is_some() {
         uniform.screen_width = ctx.targets.width;
@@ -147,7 +167,12 @@ pub(crate) async fn bind_group(
         maps,
         local.map(|l| l.atlas),
         probe_views.each_ref().map(Option::as_ref),
-        (bits.as_ref(), ambient_occlusion.as_ref(), depth.as_ref()),
+        crate::lighting::inputs::ScreenBuffers {
+            clusters: bits.as_ref(),
+            ambient_occlusion: ambient_occlusion.as_ref(),
+            depth: depth.as_ref(),
+            reflection_history: history.as_ref().map(|h| &h.buffer),
+        },
         &uniform,
     );
     Ok((Some(group), job))

@@ -44,6 +44,10 @@ override HAS_AMBIENT_OCCLUSION: bool = true;
 // March toward each shadow-casting light through the view's depth
 // (lighting/contact_shadows.rs; `shadows.screen_width` > 0).
 override HAS_CONTACT_SHADOWS: bool = true;
+// Reflect the view's last frame where a march through its depth finds the
+// reflected surface (lighting/reflections.rs; `shadows.reflection_history.w`
+// is 1 when the history holds a frame).
+override HAS_SCREEN_REFLECTIONS: bool = true;
 // Tone-map at the end of shading and write the display colour (the view's
 // sRGB target) instead of radiance: for views whose HDR image nothing reads.
 override TONE_MAP_OUTPUT: bool = false;
@@ -154,6 +158,203 @@ fn contact_visibility(position: vec3<f32>, normal: vec3<f32>, to_light: vec3<f32
 // Share of a point's depth by which contact shadows start off its surface
 // and by which a sample must pass behind the depth to count.
 const CONTACT_DEPTH_SLACK: f32 = 0.002;
+
+// The view's last frame as screen-space reflections read it
+// (lighting/reflection_history.wgsl): three half floats a pixel in two
+// words, level after
+// level, each half the last (rounded up).
+@group(1) @binding(REFLECTION_HISTORY_BINDING) var<storage, read> reflection_history: array<vec2<u32>>;
+
+// Width, height and first pixel of the history's level `level`.
+fn history_level(level: u32) -> vec3<u32> {
+    var size = shadows.reflection_history.xy;
+    var offset = 0u;
+    for (var l = 0u; l < level; l++) {
+        offset += size.x * size.y;
+        size = (size + 1u) / 2u;
+    }
+    return vec3<u32>(size, offset);
+}
+
+fn history_texel(level: vec3<u32>, p: vec2<i32>) -> vec3<f32> {
+    let q = vec2<u32>(clamp(p, vec2<i32>(0), vec2<i32>(level.xy) - 1));
+    let i = min(level.z + q.y * level.x + q.x, arrayLength(&reflection_history) - 1u);
+    let w = reflection_history[i];
+    return vec3<f32>(half_to_f32(w.x & 0xffffu), half_to_f32(w.x >> 16u), half_to_f32(w.y & 0xffffu));
+}
+
+// The history at `uv` (0 to 1 across the last frame's image), bilinear in
+// a level and linear between two.
+fn sample_history(uv: vec2<f32>, lod: f32) -> vec3<f32> {
+    let top = f32(shadows.reflection_history.z - 1u);
+    let l = clamp(lod, 0.0, top);
+    let below = u32(floor(l));
+    let above = min(below + 1u, u32(top));
+    return mix(history_bilinear(history_level(below), uv), history_bilinear(history_level(above), uv), l - floor(l));
+}
+
+fn history_bilinear(level: vec3<u32>, uv: vec2<f32>) -> vec3<f32> {
+    let p = uv * vec2<f32>(level.xy) - 0.5;
+    let i = vec2<i32>(floor(p));
+    let f = p - floor(p);
+    let top = mix(history_texel(level, i), history_texel(level, i + vec2<i32>(1, 0)), f.x);
+    let bottom = mix(history_texel(level, i + vec2<i32>(0, 1)), history_texel(level, i + vec2<i32>(1, 1)), f.x);
+    return mix(top, bottom, f.y);
+}
+
+// The view's depth in metres at pixel `p` (0: nothing drawn there).
+fn depth_at(p: vec2<f32>, width: u32, count: u32) -> f32 {
+    let q = vec2<u32>(max(p, vec2<f32>(0.0)));
+    return view_depth[min(q.y * width + min(q.x, width - 1u), count - 1u)];
+}
+
+// What the view's last frame showed along the reflection of the view
+// direction `v` about `n` at `position`, and in `a` how much of it to take
+// (the rest: the probe or environment). A screen-space march: the ray from
+// the point to `max_distance` metres (stopped before the near plane when it
+// heads for the camera) is projected and cut to the screen, then sampled
+// `steps` times along its path in pixels (jittered from pixel to pixel),
+// its depth interpolated in perspective; the first sample behind the
+// view's depth by less than the thickness (and the depth a step covers) is
+// refined by halving, and the point found is reprojected into the last
+// frame and read there, from a level as blurred as the surface's lobe is
+// wide over the distance travelled. Weight 0 without history, on a surface
+// rougher than `max_roughness`, or for a ray that hits nothing on screen;
+// faded near the last frame's edges, toward the camera, toward the
+// roughness limit and toward the ray's end.
+fn screen_reflection(position: vec3<f32>, n: vec3<f32>, v: vec3<f32>, roughness: f32, frag: vec4<f32>) -> vec4<f32> {
+    let width = shadows.screen_width;
+    let history = shadows.reflection_history;
+    if !HAS_SCREEN_REFLECTIONS || width == 0u || history.w == 0u {
+        return vec4<f32>(0.0);
+    }
+    let settings = shadows.screen_reflections;
+    let rough_fade = 1.0 - smoothstep(0.7 * settings.x, settings.x, roughness);
+    let count = arrayLength(&view_depth);
+    let height = count / width;
+    if !(rough_fade > 0.0) || height == 0u {
+        return vec4<f32>(0.0);
+    }
+    let r = reflect(-v, n);
+    let view_start = (scene.camera.view * vec4<f32>(position, 1.0)).xyz;
+    let view_dir = (scene.camera.view * vec4<f32>(r, 0.0)).xyz;
+    // Off the surface by a fraction of its depth, as contact shadows.
+    let slack = CONTACT_DEPTH_SLACK * max(-view_start.z, 0.0);
+    let a = position + n * slack;
+    let view_a = (scene.camera.view * vec4<f32>(a, 1.0)).xyz;
+    var ray_length = settings.z;
+    if view_dir.z > 1e-6 {
+        // View z grows toward the camera: stop 1 % short of the near plane.
+        ray_length = min(ray_length, 0.99 * (-shadows.reflection_view.x - view_a.z) / view_dir.z);
+    }
+    if !(ray_length > 0.0) {
+        return vec4<f32>(0.0);
+    }
+    let b = a + r * ray_length;
+    let ca = scene.camera.view_projection * vec4<f32>(a, 1.0);
+    let cb = scene.camera.view_projection * vec4<f32>(b, 1.0);
+    if ca.w <= 0.0 || cb.w <= 0.0 {
+        return vec4<f32>(0.0);
+    }
+    let screen = vec2<f32>(f32(width), f32(height));
+    let ka = 1.0 / ca.w;
+    let kb = 1.0 / cb.w;
+    let sa = vec2<f32>(ca.x * ka + 1.0, 1.0 - ca.y * ka) * 0.5 * screen;
+    let sb = vec2<f32>(cb.x * kb + 1.0, 1.0 - cb.y * kb) * 0.5 * screen;
+    // Depth in metres along the ray, interpolated in perspective: depth · k
+    // and k = 1 / w are linear across the screen.
+    let da = -view_a.z;
+    let db = -(scene.camera.view * vec4<f32>(b, 1.0)).z;
+    // Where the path leaves the screen.
+    let delta = sb - sa;
+    var t_end = 1.0;
+    for (var axis = 0u; axis < 2u; axis++) {
+        if delta[axis] > 1e-6 {
+            t_end = min(t_end, (screen[axis] - 0.5 - sa[axis]) / delta[axis]);
+        } else if delta[axis] < -1e-6 {
+            t_end = min(t_end, (0.5 - sa[axis]) / delta[axis]);
+        }
+    }
+    let pixels = length(delta) * max(t_end, 0.0);
+    if !(t_end > 0.0) || pixels < 1.0 {
+        return vec4<f32>(0.0);
+    }
+    // The first pixels are skipped: the depth holds one value a pixel,
+    // which the surface the ray leaves would otherwise hit itself through.
+    let t_start = SKIPPED_PIXELS / length(delta);
+    if t_start >= t_end {
+        return vec4<f32>(0.0);
+    }
+    let steps = clamp(u32(pixels - SKIPPED_PIXELS), 1u, u32(settings.w));
+    let dt = (t_end - t_start) / f32(steps);
+    let jitter = interleaved_gradient_noise(frag.xy);
+    var previous_t = t_start;
+    var hit_t = -1.0;
+    for (var i = 0u; i < steps; i++) {
+        let t = t_start + (f32(i) + jitter) * dt;
+        let k = mix(ka, kb, t);
+        let ray = mix(da * ka, db * kb, t) / k;
+        let surface = depth_at(mix(sa, sb, t), width, count);
+        // The depth one step covers, so a steep ray does not slip between
+        // two samples of a thin surface.
+        let covered = abs(ray - mix(da * ka, db * kb, previous_t) / mix(ka, kb, previous_t));
+        let behind = ray - surface;
+        if surface > 0.0 && behind > CONTACT_DEPTH_SLACK * ray && behind < settings.y + covered {
+            hit_t = t;
+            break;
+        }
+        previous_t = t;
+    }
+    if hit_t < 0.0 {
+        return vec4<f32>(0.0);
+    }
+    // Halve between the last sample in front and the first behind.
+    var front = previous_t;
+    var back = hit_t;
+    for (var i = 0u; i < 4u; i++) {
+        let t = 0.5 * (front + back);
+        let ray = mix(da * ka, db * kb, t) / mix(ka, kb, t);
+        let surface = depth_at(mix(sa, sb, t), width, count);
+        if surface > 0.0 && ray > surface {
+            back = t;
+        } else {
+            front = t;
+        }
+    }
+    let t = back;
+    let k = mix(ka, kb, t);
+    // The hit point in the world, interpolated in perspective as the depth.
+    let hit = (a * ka * (1.0 - t) + b * kb * t) / k;
+    let last = shadows.reflection_reprojection * vec4<f32>(hit, 1.0);
+    if last.w <= 0.0 {
+        return vec4<f32>(0.0);
+    }
+    let uv = vec2<f32>(last.x / last.w + 1.0, 1.0 - last.y / last.w) * 0.5;
+    let edge = min(min(uv.x, 1.0 - uv.x), min(uv.y, 1.0 - uv.y));
+    let edge_fade = clamp(edge / EDGE_FADE, 0.0, 1.0);
+    // Rays toward the camera see the backs of what the depth holds the
+    // fronts of: faded out by the time they turn 30° toward it.
+    let toward_fade = 1.0 - clamp(normalize(view_dir).z * 2.0, 0.0, 1.0);
+    let travelled = length(hit - a);
+    let end_fade = 1.0 - smoothstep(0.8 * settings.z, settings.z, travelled);
+    let weight = rough_fade * edge_fade * toward_fade * end_fade;
+    if !(weight > 0.0) {
+        return vec4<f32>(0.0);
+    }
+    // The lobe's width (GGX alpha, about the tangent of its half-angle)
+    // across the pixels travelled: the level of that blur.
+    let alpha = roughness * roughness;
+    let spread = CONE_SPREAD * alpha * length(mix(sa, sb, t) - sa);
+    let lod = log2(max(spread, 1.0));
+    return vec4<f32>(sample_history(uv, lod), weight);
+}
+
+// Share of the screen's width and height over which a reflection fades
+// out toward the last frame's edges.
+const EDGE_FADE: f32 = 0.05;
+const CONE_SPREAD: f32 = 4.0;
+// Pixels of a reflected ray's path before its march starts.
+const SKIPPED_PIXELS: f32 = 2.0;
 
 // The screen-space ambient occlusion at fragment position `frag` (1 when
 // the view has none).
@@ -767,15 +968,23 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Der
     // surfaces, from blurrier mip levels on rough ones, weighted by the
     // split-sum BRDF (strong on metals, a few percent on dielectrics
     // except at grazing angles).
+    // Where the screen shows what is reflected (screen-space reflections),
+    // that replaces the probe's or environment's guess, and ambient
+    // occlusion no longer dims it: the screen saw the occluders.
+    let screen = screen_reflection(mesh.world_position, n, v, roughness, mesh.clip_position);
+    let f0 = mix(vec3<f32>(0.04), albedo, metallic);
+    let specular = split_sum_brdf(f0, roughness, max(dot(n, v), 0.0));
     if HAS_PROBES && shadows.probe_count > 0u {
         let probe = nearest_probe(mesh.world_position);
         let reflected = sample_probe(probe, probe_lookup(probe, mesh.world_position, reflect(-v, n)), roughness);
-        let f0 = mix(vec3<f32>(0.04), albedo, metallic);
-        color += reflected * split_sum_brdf(f0, roughness, max(dot(n, v), 0.0)) * occlusion;
+        color += mix(reflected * occlusion, screen.rgb, screen.a) * specular;
     } else if has_environment {
         let reflected = sample_environment(reflect(-v, n), roughness);
-        let f0 = mix(vec3<f32>(0.04), albedo, metallic);
-        color += reflected * split_sum_brdf(f0, roughness, max(dot(n, v), 0.0)) * occlusion;
+        color += mix(reflected * occlusion, screen.rgb, screen.a) * specular;
+    } else if HAS_SCREEN_REFLECTIONS && screen.a > 0.0 {
+        // The constant ambient's specular share (in `color` above) gives
+        // way to what the screen shows.
+        color += (screen.rgb * specular - f0 * AMBIENT * occlusion) * screen.a;
     }
     color += material.emissive * material_texture(material.emissive_texture, tex_coord(mesh, material, material.uv_transforms[3], d.uv)).rgb;
     return vec4<f32>(color, base.a);

@@ -65,6 +65,15 @@ pub struct ForwardLitConfig {
     /// before this pass (the standard graph records it, with a depth
     /// pre-pass); `None`, the default, leaves it out.
     pub contact_shadows: Option<crate::ContactShadows>,
+    /// Screen-space reflections: glossy surfaces reflect what the view
+    /// showed last frame where a march through its depth finds it, the
+    /// probe or environment elsewhere ([`crate::ScreenSpaceReflections`]).
+    /// Reads the depth in metres a [`crate::LinearDepthPass`] records
+    /// before this pass and the history a [`crate::ReflectionHistoryPass`]
+    /// kept after last frame's (the standard graph records both, and
+    /// shades into the HDR target for it); `None`, the default, leaves it
+    /// out.
+    pub screen_space_reflections: Option<crate::ScreenSpaceReflections>,
 }
 
 impl ForwardLitConfig {
@@ -81,6 +90,7 @@ impl ForwardLitConfig {
         light_culling: crate::LightCulling::EveryLight,
         ambient_occlusion: None,
         contact_shadows: None,
+        screen_space_reflections: None,
     };
 }
 
@@ -465,6 +475,7 @@ impl MeshPass {
             vertex_attributes: ctx.shading.vertex_attributes,
             ambient_occlusion: config.is_some_and(|c| c.ambient_occlusion.is_some()),
             contact_shadows: config.is_some_and(|c| c.contact_shadows.is_some()),
+            screen_reflections: config.is_some_and(|c| c.screen_space_reflections.is_some()),
         }
     }
 

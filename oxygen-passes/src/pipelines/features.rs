@@ -56,6 +56,10 @@ pub struct ShaderFeatures {
     /// March toward each shadow-casting light through the view's depth
     /// (`HAS_CONTACT_SHADOWS`, [`crate::ContactShadows`]).
     pub contact_shadows: bool,
+    /// Reflect the view's last frame where a march through its depth finds
+    /// the reflected surface (`HAS_SCREEN_REFLECTIONS`,
+    /// [`crate::ScreenSpaceReflections`]).
+    pub screen_reflections: bool,
 }
 
 impl ShaderFeatures {
@@ -73,6 +77,7 @@ impl ShaderFeatures {
         vertex_attributes: true,
         ambient_occlusion: true,
         contact_shadows: true,
+        screen_reflections: true,
     };
     /// No optional part: sun and ambient light on untextured materials.
     pub const NONE: ShaderFeatures = ShaderFeatures {
@@ -88,6 +93,7 @@ impl ShaderFeatures {
         vertex_attributes: false,
         ambient_occlusion: false,
         contact_shadows: false,
+        screen_reflections: false,
     };
 
     /// Every optional part but the vertex outputs, which stay as they are:
@@ -100,7 +106,7 @@ impl ShaderFeatures {
 
     /// The override constants, by their WGSL names (bools as 0 or 1);
     /// [`ShaderFeatures::vertex_attributes`] is not one.
-    pub fn override_constants(&self) -> [(&'static str, f64); 11] {
+    pub fn override_constants(&self) -> [(&'static str, f64); 12] {
         let flag = |on: bool| f64::from(u8::from(on));
         [
             ("HAS_SUN_SHADOWS", flag(self.sun_shadows)),
@@ -114,6 +120,7 @@ impl ShaderFeatures {
             ("HAS_UV_TRANSFORMS", flag(self.uv_transforms)),
             ("HAS_AMBIENT_OCCLUSION", flag(self.ambient_occlusion)),
             ("HAS_CONTACT_SHADOWS", flag(self.contact_shadows)),
+            ("HAS_SCREEN_REFLECTIONS", flag(self.screen_reflections)),
         ]
     }
 }

@@ -13,7 +13,7 @@ pub(crate) mod registry;
 pub(crate) use registry::HIZ_VISIBLE_BOXES;
 pub(crate) use registry::{
     AMBIENT_OCCLUSION, COMPOSE_WINDOW, COMPOSITE, CUBE_FILTER, CULL, DEPTH_COPY, DEPTH_ONLY, EFFECTS, FORWARD_LIT, HIZ,
-    LABELS, LIGHT_CLUSTERS, MeshVaryings, REFERENCE, SPLIT_SUM, ShaderModule, TONEMAP,
+    LABELS, LIGHT_CLUSTERS, MeshVaryings, REFERENCE, REFLECTION_HISTORY, SPLIT_SUM, ShaderModule, TONEMAP,
 };
 
 #[cfg(test)]

@@ -19,6 +19,7 @@ pub(crate) static SOURCES: &[Source] = &[
     // Shared by several folders.
     Source::wgsl("shaders/brdf.wgsl", include_str!("brdf.wgsl")),
     Source::wgsl("shaders/noise.wgsl", include_str!("noise.wgsl")),
+    Source::wgsl("shaders/half.wgsl", include_str!("half.wgsl")),
     // Mesh passes.
     Source::wgsl("mesh/mesh_vertex.wgsl", include_str!("../mesh/mesh_vertex.wgsl")),
     Source::wgsl("mesh/depth_only.wgsl", include_str!("../mesh/depth_only.wgsl")),
@@ -39,6 +40,8 @@ pub(crate) static SOURCES: &[Source] = &[
     Source::wgsl("lighting/clusters.wgsl", include_str!("../lighting/clusters.wgsl")),
     Source::gpu_struct::<crate::lighting::ambient_occlusion::AoParams>("lighting/AoParams"),
     Source::wgsl("lighting/ambient_occlusion.wgsl", include_str!("../lighting/ambient_occlusion.wgsl")),
+    Source::gpu_struct::<crate::lighting::reflections::HistoryStep>("lighting/HistoryStep"),
+    Source::wgsl("lighting/reflection_history.wgsl", include_str!("../lighting/reflection_history.wgsl")),
     // GPU visibility and the depth pyramid.
     Source::generated("visibility/constants", crate::visibility::params::wgsl_constants),
     Source::gpu_struct::<crate::visibility::params::CullParams>("visibility/CullParams"),
@@ -230,6 +233,8 @@ pub(crate) const CUBE_FILTER: ShaderModule = ShaderModule::plain("lighting/ibl/c
 pub(crate) const LIGHT_CLUSTERS: ShaderModule = ShaderModule::plain("lighting/clusters.wgsl");
 /// Screen-space ambient occlusion's steps.
 pub(crate) const AMBIENT_OCCLUSION: ShaderModule = ShaderModule::plain("lighting/ambient_occlusion.wgsl");
+/// Screen-space reflections' history (the HDR image kept, its levels).
+pub(crate) const REFLECTION_HISTORY: ShaderModule = ShaderModule::plain("lighting/reflection_history.wgsl");
 /// The split-sum table.
 pub(crate) const SPLIT_SUM: ShaderModule = ShaderModule::plain("lighting/split_sum.wgsl");
 /// GPU visibility's cull and command passes.
@@ -295,6 +300,8 @@ pub(crate) const ENTRY_POINTS: &[EntryPoint] = &[
     entry(AMBIENT_OCCLUSION, "gtao", Stage::Compute),
     entry(AMBIENT_OCCLUSION, "denoise", Stage::Compute),
     entry(AMBIENT_OCCLUSION, "temporal", Stage::Compute),
+    entry(REFLECTION_HISTORY, "copy_hdr", Stage::Compute),
+    entry(REFLECTION_HISTORY, "halve", Stage::Compute),
     entry(TONEMAP, "vs_fullscreen", Stage::Vertex),
     entry(TONEMAP, "fs_tonemap", Stage::Fragment),
     entry(EFFECTS, "vs_fullscreen", Stage::Vertex),

@@ -6,6 +6,7 @@
 
 #include "lighting/constants"
 #include "lighting/ibl/cube_faces.wgsl"
+#include "shaders/half.wgsl"
 
 // Coefficient `i` of the environment's irradiance harmonics: the 3 x 3
 // corner of the layer after the faces, stored divided by 16
@@ -38,17 +39,6 @@ fn sample_environment(direction: vec3<f32>, roughness: f32) -> vec3<f32> {
     let at = cube_face_uv(direction);
     let lod = clamp(roughness, 0.0, 1.0) * f32(textureNumLevels(environment_faces) - 1u);
     return textureSampleLevel(environment_faces, environment_sampler, at.xy, u32(at.z), lod).rgb;
-}
-
-// A non-negative finite half float's value, decoded by hand:
-// unpack2x16float needs a capability some adapters lack.
-fn half_to_f32(bits: u32) -> f32 {
-    let exponent = (bits >> 10u) & 0x1fu;
-    let mantissa = bits & 0x3ffu;
-    if exponent == 0u {
-        return f32(mantissa) * 5.9604645e-8;
-    }
-    return bitcast<f32>(((exponent + 112u) << 23u) | (mantissa << 13u));
 }
 
 // Texel (x, y) of the split-sum table: (A, B), red in the low half of the
