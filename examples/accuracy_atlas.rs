@@ -48,6 +48,9 @@
 //! contact shadows (off, three lengths, more steps, the default thickness:
 //! a pole 4 cm across under a sun, one coarse cascade), the spot shadow
 //! filter (PCF or PCSS, a pole under a spot of 0.5 m and of 0.1 m radius),
+//! screen-space reflections (off, 16 to 128 steps, a thinner surface: a
+//! polished metal floor of roughness 0.05 and 0.25 with objects on it,
+//! under a sun and its sky),
 //! the LOD bias (spheres with two
 //! coarser levels; the reference traces the full meshes), visibility (CPU,
 //! GPU frustum, GPU occlusion: each must cost no accuracy), and the render
@@ -69,8 +72,8 @@ use oxygen::core::NodeKey;
 use oxygen::glam::{Quat, Vec4};
 use oxygen::graph::{ReferenceGraph, lit_render_graph};
 use oxygen::lighting::{
-    AmbientOcclusion, AoQuality, CascadeSettings, ClusterGrid, ContactShadows, LightCulling, ProbeUpdate,
-    ReflectionProbe,
+    AmbientOcclusion, AoQuality, CascadeSettings, ClusterGrid, ContactShadows, Environment, LightCulling, ProbeUpdate,
+    ReflectionProbe, ScreenSpaceReflections,
 };
 use oxygen::passes::{ReferenceSettings, ShadowFilter};
 use oxygen::prelude::*;
@@ -93,6 +96,8 @@ struct Stage {
     moving: Option<NodeKey>,
     /// How its reference is traced.
     reference: ReferenceSettings,
+    /// The renderer's environment (its raster views' and reference's).
+    environment: Option<Environment>,
 }
 
 /// Frames each raster run renders: warm-up, two frames for the GPU times to
@@ -129,6 +134,8 @@ struct Setting {
     ambient_occlusion: Option<AmbientOcclusion>,
     /// Contact shadows.
     contact_shadows: Option<ContactShadows>,
+    /// Screen-space reflections.
+    screen_space_reflections: Option<ScreenSpaceReflections>,
 }
 
 struct Row {
@@ -319,6 +326,7 @@ fn stages(viewport: UVec2) -> Result<Vec<Stage>, Box<dyn std::error::Error>> {
         .unwrap(),
         cascades: CascadeSettings { count: 1, resolution: 1024, ..Default::default() },
         moving: None,
+        environment: None,
         reference: ReferenceSettings::RASTER_MODEL,
     };
     // The shipped textured box, at the origin and 30 000 units out.
@@ -350,6 +358,7 @@ fn stages(viewport: UVec2) -> Result<Vec<Stage>, Box<dyn std::error::Error>> {
             .unwrap(),
             cascades: CascadeSettings { count: 1, resolution: 2048, ..Default::default() },
             moving: None,
+            environment: None,
             reference: ReferenceSettings::RASTER_MODEL,
         })
     };
@@ -379,6 +388,7 @@ fn stages(viewport: UVec2) -> Result<Vec<Stage>, Box<dyn std::error::Error>> {
             .unwrap(),
             cascades: CascadeSettings { count: 1, resolution: 1024, ..Default::default() },
             moving: Some(box_node),
+            environment: None,
             // The raster model with exact reflections: what a perfect
             // probe would show.
             reference: ReferenceSettings::RASTER_MODEL_WITH_REFLECTIONS,
@@ -418,6 +428,7 @@ fn stages(viewport: UVec2) -> Result<Vec<Stage>, Box<dyn std::error::Error>> {
             .unwrap(),
             cascades: CascadeSettings { count: 2, resolution: 1024, ..Default::default() },
             moving: None,
+            environment: None,
             reference: ReferenceSettings::RASTER_MODEL,
         }
     };
@@ -456,6 +467,7 @@ fn stages(viewport: UVec2) -> Result<Vec<Stage>, Box<dyn std::error::Error>> {
             .unwrap(),
             cascades: CascadeSettings { count: 4, resolution: 2048, ..Default::default() },
             moving: None,
+            environment: None,
             reference: ReferenceSettings::RASTER_MODEL,
         }
     };
@@ -483,6 +495,7 @@ fn stages(viewport: UVec2) -> Result<Vec<Stage>, Box<dyn std::error::Error>> {
             .unwrap(),
             cascades: CascadeSettings { count: 1, resolution: 1024, ..Default::default() },
             moving: None,
+            environment: None,
             reference: ReferenceSettings::RASTER_MODEL_WITH_REFLECTIONS,
         }
     };
@@ -494,6 +507,7 @@ fn stages(viewport: UVec2) -> Result<Vec<Stage>, Box<dyn std::error::Error>> {
         camera: oxygen_demo::lamp_street_camera(viewport),
         cascades: CascadeSettings { count: 1, resolution: 1024, ..Default::default() },
         moving: None,
+        environment: None,
         reference: ReferenceSettings::RASTER_MODEL,
     };
     // A pole under a sun of 5° and of 0.5° (its angular radius): the sun
@@ -504,7 +518,17 @@ fn stages(viewport: UVec2) -> Result<Vec<Stage>, Box<dyn std::error::Error>> {
         camera: oxygen_demo::pole_camera(viewport),
         cascades: CascadeSettings { count: 1, resolution: 1024, max_distance: 20.0, ..Default::default() },
         moving: None,
+        environment: None,
         reference: ReferenceSettings::RASTER_MODEL,
+    };
+    let glossy = |roughness: f32, name: &'static str| Stage {
+        name,
+        scene: oxygen_demo::glossy_floor_with_objects(roughness),
+        camera: oxygen_demo::glossy_floor_camera(viewport),
+        cascades: CascadeSettings::default(),
+        moving: None,
+        environment: Some(Environment::sky_for_sun(oxygen_demo::GLOSSY_FLOOR_SUN)),
+        reference: ReferenceSettings::RASTER_MODEL_WITH_REFLECTIONS,
     };
     Ok(vec![
         shadows,
@@ -526,6 +550,7 @@ fn stages(viewport: UVec2) -> Result<Vec<Stage>, Box<dyn std::error::Error>> {
             camera: oxygen_demo::corner_camera(viewport),
             cascades: CascadeSettings::default(),
             moving: None,
+            environment: None,
             reference: ReferenceSettings { max_bounces: 1, environment: [0.03; 3], ..ReferenceSettings::DEFAULT },
         },
         // A pole 4 cm across under a sun, one coarse cascade (4 cm texels):
@@ -536,6 +561,7 @@ fn stages(viewport: UVec2) -> Result<Vec<Stage>, Box<dyn std::error::Error>> {
             camera: oxygen_demo::thin_pole_camera(viewport),
             cascades: CascadeSettings { count: 1, resolution: 256, max_distance: 10.0, ..Default::default() },
             moving: None,
+            environment: None,
             reference: ReferenceSettings::RASTER_MODEL,
         },
         // A pole under a spot light of 0.5 m and of 0.1 m radius: the spot
@@ -546,6 +572,7 @@ fn stages(viewport: UVec2) -> Result<Vec<Stage>, Box<dyn std::error::Error>> {
             camera: oxygen_demo::pole_spot_camera(viewport),
             cascades: CascadeSettings::default(),
             moving: None,
+            environment: None,
             reference: ReferenceSettings::RASTER_MODEL,
         },
         Stage {
@@ -554,8 +581,14 @@ fn stages(viewport: UVec2) -> Result<Vec<Stage>, Box<dyn std::error::Error>> {
             camera: oxygen_demo::pole_spot_camera(viewport),
             cascades: CascadeSettings::default(),
             moving: None,
+            environment: None,
             reference: ReferenceSettings::RASTER_MODEL,
         },
+        // A polished metal floor with objects on it, under a sun and its
+        // sky, mirror-like and glossy: screen-space reflections' scenes.
+        // The reference is the raster model with perfect reflections.
+        glossy(0.05, "a polished floor of roughness 0.05"),
+        glossy(0.25, "a polished floor of roughness 0.25"),
     ])
 }
 
@@ -578,6 +611,7 @@ fn settings() -> Vec<Setting> {
         shadow_filter: ShadowFilter::Pcf,
         ambient_occlusion: None,
         contact_shadows: None,
+        screen_space_reflections: None,
     };
     let mut all = Vec::new();
     for resolution in [256, 512, 1024, 2048, 4096] {
@@ -688,6 +722,22 @@ fn settings() -> Vec<Setting> {
             all.push(s);
         }
     }
+    // Screen-space reflections: off, three march lengths, a thinner
+    // surface, on a mirror-like and a glossy floor.
+    for (stage, floor) in [(14, "floor 0.05"), (15, "floor 0.25")] {
+        let reflections = |steps, thickness| Some(ScreenSpaceReflections { steps, thickness, ..Default::default() });
+        for (name, settings) in [
+            ("none", None),
+            ("16 steps", reflections(16, 0.3)),
+            ("48 steps (the default)", reflections(48, 0.3)),
+            ("128 steps", reflections(128, 0.3)),
+            ("48 steps, 0.1 m thick", reflections(48, 0.1)),
+        ] {
+            let mut s = base("screen-space reflections", format!("{name}, {floor}"), stage);
+            s.screen_space_reflections = settings;
+            all.push(s);
+        }
+    }
     for bias in [0.25f32, 0.5, 1.0, 2.0, 4.0] {
         let mut s = base("LOD bias", bias.to_string(), 4);
         s.lod_bias = bias;
@@ -724,6 +774,7 @@ fn reference(
         origin: RenderOrigin::FollowFirstView { grid: 1.0 },
         ..Default::default()
     })?;
+    renderer.set_environment(stage.environment.as_ref());
     let settings = ReferenceSettings { samples_per_frame: 16, max_samples: samples, seed, ..stage.reference };
     let view = renderer
         .register_view(ViewDesc::new(stage.camera).path_traced(), ReferenceGraph { settings, exposure: 1.0 })?;
@@ -747,6 +798,7 @@ fn raster(
     setting: &Setting,
 ) -> Result<(HdrPixels, image::RgbaImage, f64, bool), Box<dyn std::error::Error>> {
     let mut renderer = Renderer::new_headless_with(setting.options)?;
+    renderer.set_environment(stage.environment.as_ref());
     let mut probe = match setting.probe {
         Some((resolution, update)) => {
             Some(ReflectionProbe::register(&mut renderer, Vec3::ZERO, resolution, (0.05, 50.0), update)?)
@@ -769,6 +821,7 @@ fn raster(
         shadow_filter: setting.shadow_filter,
         ambient_occlusion: setting.ambient_occlusion,
         contact_shadows: setting.contact_shadows,
+        screen_space_reflections: setting.screen_space_reflections,
         ..ForwardLitConfig::default()
     };
     let view = renderer.register_view(desc, lit_render_graph(config))?;

@@ -48,7 +48,6 @@ pub use context::{
     CommandRecorder, DrawPath, FrameProgress, LinkedImage, LinkedView, LocalShadowsInput, OutputKind, PassError,
     PrePassEstimate, ProbeCubeInput, RecordStats, RenderContext, RenderPass, Shading, ShadowMapInput, ViewInputs,
 };
-pub use lighting::{LightingResources, ScreenBuffers};
 pub use lighting::ambient_occlusion::{AmbientOcclusion, AmbientOcclusionPass, AoQuality, LinearDepthPass};
 pub use lighting::clusters::{ClusterGrid, LightCulling};
 pub use lighting::contact_shadows::ContactShadows;
@@ -61,6 +60,7 @@ pub use lighting::params::{MAX_CASCADES, PROBE_FACES};
 pub use lighting::reflections::{ReflectionHistoryPass, ScreenSpaceReflections};
 pub use lighting::shadow_atlas::array_layer_count;
 pub use lighting::split_sum::SPLIT_SUM_LUT_SIZE;
+pub use lighting::{LightingResources, ScreenBuffers};
 pub use mesh::{ColorOps, DrawList, ForwardLitConfig, MeshPass, ShadowFilter};
 pub use oxygen_core::{
     Color, Depth, HdrColor, InstanceIds, LinearDepth, Normals, Output, OutputSource, ProbeCube, ProbeId,
