@@ -352,6 +352,10 @@ fn screen_reflection(position: vec3<f32>, n: vec3<f32>, v: vec3<f32>, roughness:
 // Share of the screen's width and height over which a reflection fades
 // out toward the last frame's edges.
 const EDGE_FADE: f32 = 0.05;
+// The blur a reflection is read with: this many times the lobe's GGX
+// alpha times the pixels travelled (4 fitted the glossy floor of
+// tests/screen_space_reflections.rs best: 2 and 8 were further from the
+// reference).
 const CONE_SPREAD: f32 = 4.0;
 // Pixels of a reflected ray's path before its march starts.
 const SKIPPED_PIXELS: f32 = 2.0;
@@ -885,6 +889,26 @@ fn positional_light(
     return brdf_cosine(n, v, l, albedo, metallic, roughness) * light.color * light.intensity * attenuation;
 }
 
+// The split-sum weight of the reflected light (strong on metals, a few
+// percent on dielectrics except at grazing angles).
+fn specular_weight(albedo: vec3<f32>, metallic: f32, roughness: f32, n: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
+    let f0 = mix(vec3<f32>(0.04), albedo, metallic);
+    return split_sum_brdf(f0, roughness, max(dot(n, v), 0.0));
+}
+
+// The reflected light: where the screen shows what is reflected
+// (screen-space reflections), that replaces `fallback`, the probe's or
+// environment's guess (ambient occlusion no longer dims it: the screen saw
+// the occluders). Without the feature, `fallback` as it is, and no other
+// code: the pipelines without it shade exactly as before it existed.
+fn screen_or(fallback: vec3<f32>, mesh: MeshVarying, n: vec3<f32>, v: vec3<f32>, roughness: f32) -> vec3<f32> {
+    if !HAS_SCREEN_REFLECTIONS {
+        return fallback;
+    }
+    let screen = screen_reflection(mesh.world_position, n, v, roughness, mesh.clip_position);
+    return mix(fallback, screen.rgb, screen.a);
+}
+
 // What a fragment writes: radiance for the HDR target, or, with
 // TONE_MAP_OUTPUT, the tone-mapped colour for the sRGB target (the same
 // operator as the tone-map pass).
@@ -968,23 +992,21 @@ fn shade(mesh: MeshVarying, front_facing: bool, material: MaterialRecord, d: Der
     // surfaces, from blurrier mip levels on rough ones, weighted by the
     // split-sum BRDF (strong on metals, a few percent on dielectrics
     // except at grazing angles).
-    // Where the screen shows what is reflected (screen-space reflections),
-    // that replaces the probe's or environment's guess, and ambient
-    // occlusion no longer dims it: the screen saw the occluders.
-    let screen = screen_reflection(mesh.world_position, n, v, roughness, mesh.clip_position);
-    let f0 = mix(vec3<f32>(0.04), albedo, metallic);
-    let specular = split_sum_brdf(f0, roughness, max(dot(n, v), 0.0));
     if HAS_PROBES && shadows.probe_count > 0u {
         let probe = nearest_probe(mesh.world_position);
         let reflected = sample_probe(probe, probe_lookup(probe, mesh.world_position, reflect(-v, n)), roughness);
-        color += mix(reflected * occlusion, screen.rgb, screen.a) * specular;
+        color += screen_or(reflected * occlusion, mesh, n, v, roughness) * specular_weight(albedo, metallic, roughness, n, v);
     } else if has_environment {
         let reflected = sample_environment(reflect(-v, n), roughness);
-        color += mix(reflected * occlusion, screen.rgb, screen.a) * specular;
-    } else if HAS_SCREEN_REFLECTIONS && screen.a > 0.0 {
-        // The constant ambient's specular share (in `color` above) gives
-        // way to what the screen shows.
-        color += (screen.rgb * specular - f0 * AMBIENT * occlusion) * screen.a;
+        color += screen_or(reflected * occlusion, mesh, n, v, roughness) * specular_weight(albedo, metallic, roughness, n, v);
+    } else if HAS_SCREEN_REFLECTIONS {
+        let screen = screen_reflection(mesh.world_position, n, v, roughness, mesh.clip_position);
+        if screen.a > 0.0 {
+            // The constant ambient's specular share (in `color` above)
+            // gives way to what the screen shows.
+            let f0 = mix(vec3<f32>(0.04), albedo, metallic);
+            color += (screen.rgb * specular_weight(albedo, metallic, roughness, n, v) - f0 * AMBIENT * occlusion) * screen.a;
+        }
     }
     color += material.emissive * material_texture(material.emissive_texture, tex_coord(mesh, material, material.uv_transforms[3], d.uv)).rgb;
     return vec4<f32>(color, base.a);
