@@ -210,8 +210,11 @@ impl AoPipelines {
 #[derive(Clone, Copy, Debug)]
 struct LastFrame {
     frame: u64,
+    /// World relative to `origin` → view, as the frame's camera had it.
     world_to_view: DMat4,
     projection: Mat4,
+    /// The frame's render origin.
+    origin: glam::DVec3,
 }
 
 /// A view's occlusion buffers, made the first frame it asks for occlusion.
@@ -365,8 +368,12 @@ impl AmbientOcclusionState {
             // frame's and had the temporal step too.
             state.previous = state.last.filter(|last| state.last_occlusion == Some(true) && last.frame + 1 == frame);
             state.current = 1 - state.current;
-            state.last =
-                Some(LastFrame { frame, world_to_view: ctx.view.world_to_view, projection: ctx.view.projection });
+            state.last = Some(LastFrame {
+                frame,
+                world_to_view: ctx.view.world_to_view,
+                projection: ctx.view.projection,
+                origin: ctx.origin,
+            });
             state.last_occlusion = None;
         }
         let previous = state.previous.filter(|_| settings.is_some_and(|s| s.temporal));
@@ -530,7 +537,7 @@ fn params(
     let (slices, steps) = settings.quality.samples();
     let (reproject, previous_projection) = match previous {
         Some(last) => {
-            let reproject = reprojection(last.world_to_view, ctx.view.world_to_view);
+            let reproject = reprojection((last.world_to_view, last.origin), (ctx.view.world_to_view, ctx.origin));
             (finite(reproject), finite(last.projection))
         }
         None => (Mat4::IDENTITY, projection),
@@ -553,10 +560,11 @@ fn params(
 }
 
 /// This frame's view space → last frame's, from the two frames'
-/// world → view transforms (in f64: the world may be far from its origin,
-/// and the product is near the identity for a camera that barely moved).
-fn reprojection(last_world_to_view: DMat4, world_to_view: DMat4) -> Mat4 {
-    (last_world_to_view * world_to_view.inverse()).as_mat4()
+/// world → view transforms, each for the world relative to its frame's
+/// render origin (in f64: the world may be far from its origin, and the
+/// product is near the identity for a camera that barely moved).
+fn reprojection((last, last_origin): (DMat4, glam::DVec3), (now, origin): (DMat4, glam::DVec3)) -> Mat4 {
+    (last * DMat4::from_translation(origin - last_origin) * now.inverse()).as_mat4()
 }
 
 /// Records its view's ambient occlusion ([`AmbientOcclusion`]) for the
@@ -610,7 +618,9 @@ mod tests {
     use super::*;
 
     /// A point seen by this frame's camera lands where last frame's camera
-    /// saw it, far from the world's origin too.
+    /// saw it, far from the world's origin too, and when the render origin
+    /// moved between the frames (each frame's transform is relative to its
+    /// own origin, as `ResolvedView::relative_to` makes it).
     #[test]
     fn reprojection_takes_this_frames_view_space_to_last_frames() {
         use glam::DVec3;
@@ -620,10 +630,16 @@ mod tests {
         let world = at + DVec3::new(0.5, 0.25, -1.0);
         let seen_now = now.transform_point3(world).as_vec3();
         let seen_last = last.transform_point3(world).as_vec3();
-        let moved = reprojection(last, now).transform_point3(seen_now);
-        assert!((moved - seen_last).length() < 1.0e-4, "{moved} against {seen_last}");
+        for (last_origin, origin) in [(DVec3::ZERO, DVec3::ZERO), (at, at), (at, at + DVec3::new(1024.0, 0.0, -1024.0))]
+        {
+            let relative = |m: DMat4, o: DVec3| m * DMat4::from_translation(o);
+            let moved = reprojection((relative(last, last_origin), last_origin), (relative(now, origin), origin))
+                .transform_point3(seen_now);
+            assert!((moved - seen_last).length() < 1.0e-4, "{moved} against {seen_last} ({last_origin}, {origin})");
+        }
         // A camera that did not move: the identity.
-        assert!(reprojection(now, now).abs_diff_eq(Mat4::IDENTITY, 1.0e-6));
+        let still = (now * DMat4::from_translation(at), at);
+        assert!(reprojection(still, still).abs_diff_eq(Mat4::IDENTITY, 1.0e-6));
     }
 
     #[test]

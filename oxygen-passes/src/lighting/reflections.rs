@@ -211,9 +211,10 @@ struct ViewHistory {
     /// The steps' parameters, one per level at the uniform offset alignment.
     steps: wgpu::Buffer,
     step_stride: u64,
-    /// The frame the history holds and its camera (world → view, and the
-    /// projection), once a frame was kept.
-    kept: Option<(u64, DMat4, Mat4)>,
+    /// The frame the history holds and its camera (world relative to the
+    /// frame's render origin → view, the projection, that origin), once a
+    /// frame was kept.
+    kept: Option<(u64, DMat4, Mat4, DVec3)>,
 }
 
 impl ViewHistory {
@@ -269,13 +270,13 @@ impl ReflectionHistoryState {
     pub(crate) fn previous(&self, ctx: &RenderContext<'_>) -> Option<History> {
         let views = self.views.lock().ok()?;
         let history = views.get(&ctx.view.view_id)?;
-        let (frame, world_to_view, projection) = history.kept?;
+        let (frame, world_to_view, projection, kept_origin) = history.kept?;
         if frame >= ctx.prepared.frame_index()
             || (history.width, history.height) != (ctx.targets.width, ctx.targets.height)
         {
             return None;
         }
-        let reprojection = reprojection(projection, world_to_view, ctx.origin);
+        let reprojection = reprojection(projection, world_to_view, ctx.origin - kept_origin);
         reprojection.is_finite().then(|| History {
             buffer: history.buffer.clone(),
             shape: [history.width, history.height, history.levels.len() as u32, 1],
@@ -363,7 +364,7 @@ impl ReflectionHistoryState {
             pass.set_bind_group(0, group, &[]);
             pass.dispatch_workgroups(level.width.div_ceil(8), level.height.div_ceil(8), 1);
         }
-        history.kept = Some((ctx.prepared.frame_index(), ctx.view.world_to_view, ctx.view.projection));
+        history.kept = Some((ctx.prepared.frame_index(), ctx.view.world_to_view, ctx.view.projection, ctx.origin));
         Ok(())
     }
 
@@ -380,11 +381,12 @@ impl ReflectionHistoryState {
     }
 }
 
-/// This frame's world, relative to its render origin `origin`, → the clip
-/// space of the frame kept with `world_to_view` and `projection` (in f64:
-/// the world may be far from its origin).
-fn reprojection(projection: Mat4, world_to_view: DMat4, origin: DVec3) -> Mat4 {
-    (projection.as_dmat4() * world_to_view * DMat4::from_translation(origin)).as_mat4()
+/// This frame's world, relative to its render origin, → the clip space of
+/// the frame kept with `world_to_view` (for the world relative to that
+/// frame's origin) and `projection`; `moved` is this frame's origin less
+/// the kept frame's (in f64: the world may be far from its origin).
+fn reprojection(projection: Mat4, world_to_view: DMat4, moved: DVec3) -> Mat4 {
+    (projection.as_dmat4() * world_to_view * DMat4::from_translation(moved)).as_mat4()
 }
 
 /// Records its view's HDR image as the history the next frame's
@@ -440,18 +442,23 @@ mod tests {
 
     /// A point seen by this frame's camera, relative to this frame's
     /// origin, lands where the kept frame's camera saw it, far from the
-    /// world's origin too.
+    /// world's origin too, and when the origin moved between the frames.
     #[test]
     fn reprojection_takes_this_frames_points_to_the_kept_frames_clip_space() {
         let at = DVec3::new(1.0e6, 20.0, -3.0e5);
         let kept = DMat4::look_at_rh(at + DVec3::new(0.0, 2.0, 5.0), at, DVec3::Y);
         let projection = Mat4::perspective_rh(0.9, 1.5, 0.1, 100.0);
-        let origin = at + DVec3::new(0.3, 0.0, 0.1);
         let world = at + DVec3::new(0.5, 0.25, -1.0);
-        let relative = (world - origin).as_vec3();
-        let clip = reprojection(projection, kept, origin) * relative.extend(1.0);
         let expected = projection * kept.transform_point3(world).as_vec3().extend(1.0);
-        let (ndc, want) = (clip.truncate() / clip.w, expected.truncate() / expected.w);
-        assert!((ndc - want).length() < 1.0e-4, "{ndc} against {want}");
+        let kept_origin = at + DVec3::new(0.3, 0.0, 0.1);
+        // Each frame's world → view is relative to its own origin
+        // (`ResolvedView::relative_to`).
+        let kept_relative = kept * DMat4::from_translation(kept_origin);
+        for origin in [kept_origin, kept_origin + DVec3::new(1024.0, 0.0, 0.0)] {
+            let relative = (world - origin).as_vec3();
+            let clip = reprojection(projection, kept_relative, origin - kept_origin) * relative.extend(1.0);
+            let (ndc, want) = (clip.truncate() / clip.w, expected.truncate() / expected.w);
+            assert!((ndc - want).length() < 1.0e-4, "{ndc} against {want} ({origin})");
+        }
     }
 }
