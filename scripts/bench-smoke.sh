@@ -55,6 +55,7 @@ runs=(
   "record_bench|example|gpu|4 direct 1,2"
   "shadow_bench|example|gpu|16"
   "tone_map_effects_bench|example|gpu|64 1"
+  "overlay_bench|example|gpu|200 64 1"
   "schedule_bench|example|gpu|4 1 1"
   "visibility_bench|example|gpu|field 16 1 1"
   "visibility_bench|example|gpu|city 16 1 1"

@@ -23,8 +23,8 @@ use std::pin::Pin;
 
 use oxygen_passes::{
     AmbientOcclusionPass, AutoExposure, Bloom, CommandRecorder, DepthBias, DrawList, ForwardLitConfig, LinearDepthPass,
-    MeshPass, PassError, PrePassEstimate, ReferencePass, ReferenceSettings, ReflectionHistoryPass, RenderContext,
-    RenderPass, TonemapPass,
+    MeshPass, OverlayPass, PassError, PrePassEstimate, ReferencePass, ReferenceSettings, ReflectionHistoryPass,
+    RenderContext, RenderPass, TonemapPass,
 };
 
 /// What a view records each frame: a future that awaits its passes.
@@ -112,7 +112,8 @@ impl<G: RenderGraph> ErasedGraph for G {
 /// view with nothing blended whose HDR image no other view reads
 /// ([`RenderContext::hdr_read_after_shading`]) and without those effects
 /// tone-maps at the end of shading straight into its sRGB target: one
-/// full-screen pass fewer.
+/// full-screen pass fewer. Last, the view's overlay, when it has one
+/// ([`crate::Renderer::overlay`], [`OverlayPass`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct StandardGraph {
     /// The forward lit pass's configuration; its `depth_from_pre_pass` is
@@ -265,7 +266,9 @@ impl RenderGraph for StandardGraph {
         let reflections = lit.screen_space_reflections.is_some();
         let effects = self.bloom.is_some() || self.auto_exposure.is_some() || reflections;
         if !ctx.hdr_read_after_shading() && !effects {
-            return MeshPass::forward_lit(lit).with_labels().tone_mapped(exposure).run(ctx, rec).await;
+            MeshPass::forward_lit(lit).with_labels().tone_mapped(exposure).run(ctx, rec).await?;
+            // Records nothing for a view without an overlay.
+            return OverlayPass.run(ctx, rec).await;
         }
         let mut transparent = MeshPass::transparent();
         let mut shading = MeshPass::forward_lit(lit).with_labels();
@@ -280,7 +283,8 @@ impl RenderGraph for StandardGraph {
         if reflections {
             ReflectionHistoryPass.run(ctx, rec).await?;
         }
-        TonemapPass::new(exposure).with_bloom(self.bloom).with_auto_exposure(self.auto_exposure).run(ctx, rec).await
+        TonemapPass::new(exposure).with_bloom(self.bloom).with_auto_exposure(self.auto_exposure).run(ctx, rec).await?;
+        OverlayPass.run(ctx, rec).await
     }
 
     fn runs_occlusion_phases(&self) -> bool {

@@ -99,6 +99,9 @@ pub use oxygen_bindless as bindless;
 pub use oxygen_core as core;
 /// The GPU device, view targets and readback.
 pub use oxygen_gpu as gpu;
+/// The overlay layer, CPU side: shapes, text, debug lines and the grid
+/// drawn over a view ([`Renderer::overlay`]).
+pub use oxygen_overlay as overlay;
 /// The render passes.
 pub use oxygen_passes as passes;
 /// ScenePrep.

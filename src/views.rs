@@ -533,6 +533,11 @@ impl Views {
         Ok(())
     }
 
+    /// Whether `id` is a registered view (a batch's cameras included).
+    pub(crate) fn contains(&self, id: ViewId) -> bool {
+        self.entries.contains_key(&id)
+    }
+
     /// Pauses (`false`) or resumes a view.
     pub fn set_active(&mut self, id: impl Into<ViewId>, active: bool) -> Result<(), RenderError> {
         let id = id.into();

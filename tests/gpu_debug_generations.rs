@@ -88,6 +88,7 @@ fn a_stale_draw_range_is_painted_magenta() {
         hdr_read_by_others: false,
         shading: Shading::ALL,
         time_seconds: 0.0,
+        overlay: None,
     };
     let mut recorder = CommandRecorder::new(&gpu.device, "stale view");
     // Driven by hand under `block_on`: with no recording thread attached,

@@ -70,7 +70,7 @@ pub use pipelines::{
     AlphaClass, CompilerGuard, DepthBias, Exposure, PassKind, PipelineFuture, PipelineKey, PipelineVariant, Pipelines,
     ShaderFeatures, fullscreen_pass, fullscreen_pipeline,
 };
-pub use post::{AutoExposure, Bloom, CompositePass, DepthCopy, TonemapPass};
+pub use post::{AutoExposure, Bloom, CompositePass, DepthCopy, OverlayPass, TonemapPass};
 pub use present::compose_window_wgsl;
 pub use reference::{ReferencePass, ReferenceSettings, ReferenceTracer};
 pub use visibility::{GPU_VISIBILITY_FEATURES, GpuViewRequest, GpuVisibility};

@@ -98,6 +98,8 @@ pub struct Renderer {
     windows: Windows,
     streams: streams::Streams,
     schedules: schedules::Schedules,
+    /// What the application draws over each view ([`Renderer::overlay`]).
+    overlays: std::collections::HashMap<ViewId, std::sync::Mutex<oxygen_overlay::Overlay>>,
     settings: FrameSettings,
     frames: Frames,
 }
@@ -234,6 +236,7 @@ impl Renderer {
             windows: Windows::new(&gpu.device),
             streams: streams::Streams::new(&downlevel),
             schedules: schedules::Schedules::default(),
+            overlays: Default::default(),
             settings: FrameSettings {
                 draw_path,
                 origin: options.origin,
@@ -296,6 +299,12 @@ impl Renderer {
         }
         self.stream(&recorded, clock)?;
         self.targets.hold(&recorded.rendered);
+        // The immediate shapes of the views that drew them are done.
+        for view in &recorded.rendered {
+            if let Some(overlay) = self.overlays.get_mut(&view.id) {
+                overlay.get_mut().unwrap_or_else(std::sync::PoisonError::into_inner).end_frame();
+            }
+        }
         for view in &prepared.views {
             // An every-frame view has no schedule state to keep.
             if prepared.why.get(&view.id).is_some_and(|why| *why != crate::schedule::RenderReason::EveryFrame) {

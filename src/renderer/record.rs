@@ -355,6 +355,7 @@ impl Renderer {
                         specialize: self.settings.specialize_shaders,
                     },
                     time_seconds: plan.clock.time_seconds,
+                    overlay: self.overlays.get(&view.id),
                 },
             ));
         }

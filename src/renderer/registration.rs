@@ -98,8 +98,25 @@ impl Renderer {
     pub(crate) fn release_view(&mut self, id: ViewId) -> Result<(), RenderError> {
         self.targets.release(id);
         self.schedules.forget(id);
+        self.overlays.remove(&id);
         self.prep.forget_view(id, &mut self.heap.slots)?;
         Ok(())
+    }
+
+    /// What the application draws over view `id`'s final image: screen
+    /// shapes and text, world debug shapes, an editor grid
+    /// ([`oxygen_overlay::Overlay`]; its immediate canvas is cleared after
+    /// each frame the view renders, its retained one kept). Made empty the
+    /// first time it is asked for; a view whose overlay is empty records no
+    /// overlay pass. The standard graph draws it last
+    /// ([`oxygen_passes::OverlayPass`]); a graph of one's own records that
+    /// pass where it wants it.
+    pub fn overlay(&mut self, id: impl Into<ViewId>) -> Result<&mut oxygen_overlay::Overlay, RenderError> {
+        let id = id.into();
+        if !self.views.contains(id) {
+            return Err(RenderError::NoSuchView(id));
+        }
+        Ok(self.overlays.entry(id).or_default().get_mut().unwrap_or_else(std::sync::PoisonError::into_inner))
     }
 
     /// Changes when `id` renders ([`crate::ViewDesc::with_schedule`]), from

@@ -19,6 +19,8 @@ pub struct RecordStats {
     /// Light-cluster jobs recorded (one per clustered view a frame, however
     /// many of its passes shade).
     pub light_cluster_jobs: u32,
+    /// Vertices the overlay pass drew (0 without an overlay).
+    pub overlay_vertices: u64,
 }
 
 /// The command encoder of one view plus counters.

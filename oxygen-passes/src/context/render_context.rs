@@ -53,6 +53,9 @@ pub struct RenderContext<'a> {
     /// frame was rendered at): for passes that change over time
     /// (automatic exposure's adaptation).
     pub time_seconds: f32,
+    /// What the application draws over this view's final image
+    /// ([`crate::OverlayPass`]); `None` for a view without an overlay.
+    pub overlay: Option<&'a std::sync::Mutex<oxygen_overlay::Overlay>>,
 }
 
 /// What the frame's shading pipelines carry, the same for every view of the

@@ -28,6 +28,9 @@ pub struct LightingResources {
     /// per-view buffers. Here with the other per-view lighting state:
     /// exposure is the last step of what light a picture shows.
     effects: crate::post::effects::EffectsState,
+    /// The overlay pass's pipelines and per-view buffers (kept here with
+    /// the other per-view state the renderer frees with its views).
+    overlay: crate::post::overlay::OverlayState,
 }
 
 /// The prefiltered environment on the GPU (faces and levels, the
@@ -53,6 +56,7 @@ impl LightingResources {
             ambient_occlusion: Default::default(),
             reflection_history: Default::default(),
             effects: Default::default(),
+            overlay: Default::default(),
         }
     }
 
@@ -235,6 +239,17 @@ impl LightingResources {
         self.reflection_history.views()
     }
 
+    /// The overlay pass's pipelines and per-view buffers.
+    pub(crate) fn overlay(&self) -> &crate::post::overlay::OverlayState {
+        &self.overlay
+    }
+
+    /// Views holding overlay buffers (a view that never drew an overlay
+    /// holds none).
+    pub fn overlay_views(&self) -> usize {
+        self.overlay.views()
+    }
+
     /// The tone map's effects.
     pub(crate) fn effects(&self) -> &crate::post::effects::EffectsState {
         &self.effects
@@ -260,6 +275,7 @@ impl LightingResources {
         self.clusters.retain(&keep);
         self.ambient_occlusion.retain(&keep);
         self.reflection_history.retain(&keep);
+        self.overlay.retain(&keep);
         self.effects.retain(keep);
     }
 

@@ -65,6 +65,7 @@ pub(crate) static SOURCES: &[Source] = &[
     Source::wgsl("post/depth_copy.wgsl", include_str!("../post/depth_copy.wgsl")),
     Source::gpu_struct::<crate::post::params::CompositeParams>("post/CompositeParams"),
     Source::wgsl("post/composite.wgsl", include_str!("../post/composite.wgsl")),
+    Source::wgsl("post/overlay.wgsl", include_str!("../post/overlay.wgsl")),
     // Presenting: the renderer's window composition.
     Source::wgsl("present/compose_window.wgsl", include_str!("../present/compose_window.wgsl")),
     // oxygen-bindless: the heap's declarations.
@@ -225,6 +226,8 @@ pub(crate) const TONEMAP: ShaderModule = ShaderModule::plain("post/tonemap.wgsl"
 pub(crate) const EFFECTS: ShaderModule = ShaderModule::plain("post/effects.wgsl");
 /// Another view's image drawn into a rectangle (insets).
 pub(crate) const COMPOSITE: ShaderModule = ShaderModule::plain("post/composite.wgsl");
+/// The overlay over a view's final image.
+pub(crate) const OVERLAY: ShaderModule = ShaderModule::plain("post/overlay.wgsl");
 /// Depth into a float texture, for depth readback on GL.
 pub(crate) const DEPTH_COPY: ShaderModule = ShaderModule::plain("post/depth_copy.wgsl");
 /// The cube filter (environment and probe prefiltering).
@@ -312,6 +315,8 @@ pub(crate) const ENTRY_POINTS: &[EntryPoint] = &[
     entry(EFFECTS, "fs_tonemap_effects", Stage::Fragment),
     entry(COMPOSITE, "vs", Stage::Vertex),
     entry(COMPOSITE, "fs", Stage::Fragment),
+    entry(OVERLAY, "vs", Stage::Vertex),
+    entry(OVERLAY, "fs", Stage::Fragment),
     entry(DEPTH_COPY, "vs", Stage::Vertex),
     entry(DEPTH_COPY, "fs", Stage::Fragment),
     entry(CUBE_FILTER, "vs", Stage::Vertex),

@@ -1,0 +1,138 @@
+//! What the overlay costs: COUNT mixed primitives drawn anew every frame
+//! over one view, timed in one run on whatever adapter is found
+//! (docs/performance.md says which):
+//!
+//! ```text
+//! cargo run --release --example overlay_bench [COUNT] [SIZE] [FRAMES]   # default 10000, 1280 and 20
+//! ```
+//!
+//! One SIZE × SIZE/16·9 view of a lit floor with a box
+//! (`oxygen_demo::floor_with_box`), rendered twice: without an overlay,
+//! then with COUNT primitives on its immediate canvas each frame, in equal
+//! shares rectangles, lines 2 px wide, circles, ring arcs, 8-letter labels
+//! and depth-tested world lines (an editor's mix). Each renders 3 warm-up
+//! frames and FRAMES measured ones, waiting for the GPU after each. Per
+//! frame: the CPU time of the canvas calls, the CPU time of the whole
+//! `render_frame` (which tessellates and uploads), the GPU time from
+//! timestamps where the adapter writes them (else the wall clock); medians,
+//! and the vertices drawn.
+//!
+//! With `OXYGEN_RECORD_DIR` set, the run's figures are appended to
+//! `$OXYGEN_RECORD_DIR/overlay_bench.jsonl` (`oxygen_demo::record`).
+
+use std::time::Instant;
+
+use oxygen::glam::{DVec3, Vec2};
+use oxygen::overlay::{Canvas, DepthMode, Rgba};
+use oxygen::prelude::*;
+use oxygen_demo::record::{Record, Row};
+
+const WARM_UP: usize = 3;
+
+/// Primitive `i` of `count` over a `width × height` view.
+fn draw(canvas: &mut Canvas<'_>, i: usize, count: usize, (width, height): (f32, f32)) {
+    // A deterministic scatter over the view.
+    let t = i as f32 / count.max(1) as f32;
+    let x = (i as f32 * 37.77).rem_euclid(width);
+    let y = (i as f32 * 19.31 + t * 7.0).rem_euclid(height);
+    let color = Rgba::new(t, 1.0 - t, 0.5, 0.8);
+    let at = Vec2::new(x, y);
+    match i % 6 {
+        0 => {
+            canvas.rect(at, at + Vec2::new(12.0, 8.0), color);
+        }
+        1 => {
+            canvas.line(at, at + Vec2::new(20.0, 9.0), 2.0, color);
+        }
+        2 => {
+            canvas.circle(at, 5.0, color);
+        }
+        3 => {
+            canvas.arc(at, 7.0, 2.0, t * 6.0, 4.0, color);
+        }
+        4 => {
+            canvas.text(at, 12.0, color, "label 42");
+        }
+        _ => {
+            let p = DVec3::new(f64::from(x / width) * 8.0 - 4.0, 0.05, -f64::from(y / height) * 8.0);
+            canvas.world_line(p, p + DVec3::new(0.3, 0.2, 0.0), 1.5, color, DepthMode::Tested);
+        }
+    }
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let mut args = std::env::args().skip(1);
+    let count: usize = args.next().map(|a| a.parse()).transpose()?.unwrap_or(10_000);
+    let width: u32 = args.next().map(|a| a.parse()).transpose()?.unwrap_or(1280);
+    let frames: usize = args.next().map(|a| a.parse()).transpose()?.unwrap_or(20);
+    let height = (width * 9 / 16).max(1);
+    let scene = oxygen_demo::floor_with_box(0.6);
+    let camera = LookAtResolver::new(
+        Camera::perspective(60f32.to_radians(), 0.1, None),
+        Vec3::new(0.0, 3.0, 5.0),
+        Vec3::new(0.0, 0.0, -1.0),
+        UVec2::new(width, height),
+    )?;
+    let mut record = Record::new("overlay_bench")
+        .value("primitives", count)
+        .value("viewport_px", [width, height])
+        .value("warm_up_frames", WARM_UP)
+        .value("measured_frames", frames);
+    println!("{count} primitives over {width}x{height}, {frames} frames each");
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+    };
+    let mut first = None;
+    for (name, with_overlay) in [("no overlay", false), ("overlay", true)] {
+        let mut renderer = Renderer::new_headless()?;
+        record.set_adapter(&renderer.gpu().adapter_info);
+        let view = renderer.register_view(camera, standard_render_graph)?;
+        let (mut gpu, mut wall, mut drawing, mut cpu) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let mut vertices = 0u64;
+        for frame in 0..WARM_UP + 2 + frames {
+            let started = Instant::now();
+            if with_overlay {
+                let overlay = renderer.overlay(view)?;
+                let mut canvas = overlay.immediate();
+                for i in 0..count {
+                    draw(&mut canvas, i, count, (width as f32, height as f32));
+                }
+            }
+            let drawn = started.elapsed().as_secs_f64() * 1e3;
+            let report = renderer.render_frame(&scene)?;
+            let recorded = started.elapsed().as_secs_f64() * 1e3;
+            renderer.gpu().device.poll(wgpu::PollType::wait_indefinitely())?;
+            // A report carries an earlier frame's GPU time: skip two more.
+            if frame >= WARM_UP + 2 {
+                wall.push(started.elapsed().as_secs_f64() * 1e3);
+                drawing.push(drawn);
+                cpu.push(recorded - drawn);
+                gpu.extend(report.gpu_seconds.map(|s| s * 1e3));
+                vertices = report.views.iter().map(|v| v.recorded.overlay_vertices).sum();
+            }
+        }
+        let timed_on_gpu = gpu.len() == wall.len();
+        let ms = median(if timed_on_gpu { gpu.clone() } else { wall.clone() });
+        let (drawing_ms, frame_cpu_ms) = (median(drawing), median(cpu));
+        let base = *first.get_or_insert(ms);
+        println!(
+            "{name:<12} GPU {ms:7.3} ms ({}) +{:.3}; canvas calls {drawing_ms:.3} ms; render_frame CPU {frame_cpu_ms:.3} ms; {vertices} vertices",
+            if timed_on_gpu { "timestamps" } else { "wall clock" },
+            ms - base
+        );
+        record.push_row(
+            Row::new()
+                .value("case", name)
+                .value("gpu_ms_median", ms)
+                .value("timed_on_gpu", timed_on_gpu)
+                .value("gpu_ms_over_no_overlay", ms - base)
+                .value("canvas_calls_ms_median", drawing_ms)
+                .value("render_frame_cpu_ms_median", frame_cpu_ms)
+                .value("overlay_vertices", vertices)
+                .value("samples_ms", &if timed_on_gpu { gpu } else { wall }),
+        );
+    }
+    record.write()?;
+    Ok(())
+}

@@ -1,0 +1,208 @@
+//! The overlay layer (`Renderer::overlay`, `OverlayPass`): screen shapes
+//! and text drawn where they were asked for, world lines hidden behind the
+//! scene's surfaces unless on top, a view's frustum meeting the corners of
+//! that view's picture in an overview, and a view without an overlay
+//! recording nothing of it. Each kind of shape and the text also against
+//! a golden image.
+
+mod support;
+
+use image::RgbaImage;
+use oxygen::glam::{DVec3, Vec2};
+use oxygen::overlay::{DepthMode, Rgba};
+use oxygen::prelude::*;
+use oxygen::views::{ResolvedView, ViewContext, ViewResolver};
+use support::golden::{Tolerance, assert_golden};
+
+const SIZE: UVec2 = UVec2::new(192, 128);
+
+fn camera() -> LookAtResolver {
+    LookAtResolver::new(Camera::perspective(1.0, 0.1, None), Vec3::new(0.0, 2.5, 6.0), Vec3::new(0.5, 0.3, -1.0), SIZE)
+        .unwrap()
+}
+
+fn resolved(camera: &LookAtResolver, view: ViewId, scene: &Scene) -> ResolvedView {
+    camera.resolve(&ViewContext { view_id: view, frame_index: 1, time_seconds: 0.0 }, scene).unwrap()
+}
+
+fn rgb(image: &RgbaImage, x: u32, y: u32) -> [u8; 3] {
+    let p = image.get_pixel(x, y).0;
+    [p[0], p[1], p[2]]
+}
+
+/// Whether `p` is `want` within `tolerance` levels a channel.
+fn near(p: [u8; 3], want: [u8; 3], tolerance: u8) -> bool {
+    p.iter().zip(want).all(|(a, b)| a.abs_diff(b) <= tolerance)
+}
+
+#[test]
+fn screen_shapes_and_text_are_drawn_where_asked() {
+    let mut renderer = support::gpu_renderer();
+    let scene = oxygen_demo::floor_with_box(0.6);
+    let view = renderer.register_view(ViewDesc::new(camera()), standard_render_graph).unwrap();
+    let image = renderer
+        .overlay(view)
+        .unwrap()
+        .add_image(2, 2, [255, 0, 0, 255, 0, 255, 0, 255, 0, 0, 255, 255, 255, 255, 255, 255].to_vec())
+        .unwrap();
+    {
+        let overlay = renderer.overlay(view).unwrap();
+        let mut canvas = overlay.immediate();
+        canvas
+            .rect(Vec2::new(8.0, 8.0), Vec2::new(40.0, 30.0), Rgba::rgb(1.0, 0.0, 0.0))
+            .line(Vec2::new(50.0, 10.0), Vec2::new(90.0, 30.0), 4.0, Rgba::rgb(0.0, 1.0, 0.0))
+            .circle(Vec2::new(120.0, 20.0), 12.0, Rgba::rgb(0.0, 0.0, 1.0))
+            .circle_outline(Vec2::new(160.0, 20.0), 12.0, 3.0, Rgba::rgb(1.0, 1.0, 0.0))
+            .arc(Vec2::new(30.0, 60.0), 14.0, 4.0, 0.0, std::f32::consts::PI, Rgba::rgb(1.0, 0.0, 1.0))
+            .image(Vec2::new(60.0, 46.0), Vec2::new(92.0, 78.0), image, Rgba::WHITE)
+            .rect(Vec2::new(100.0, 50.0), Vec2::new(140.0, 70.0), Rgba::new(1.0, 1.0, 1.0, 0.5));
+        canvas.text(Vec2::new(8.0, 90.0), 18.0, Rgba::WHITE, "Oxygen λЖé");
+    }
+    renderer.render_frame(&scene).unwrap();
+    let lit = support::read_lit_color(&renderer, view);
+    assert_golden("overlay_shapes", &lit, Tolerance::default());
+    // The shapes themselves, pixel by pixel.
+    assert!(near(rgb(&lit, 24, 19), [255, 0, 0], 2), "rect {:?}", rgb(&lit, 24, 19));
+    assert!(near(rgb(&lit, 70, 20), [0, 255, 0], 2), "line {:?}", rgb(&lit, 70, 20));
+    assert!(near(rgb(&lit, 120, 20), [0, 0, 255], 2), "disc {:?}", rgb(&lit, 120, 20));
+    assert!(near(rgb(&lit, 172, 20), [255, 255, 0], 2), "ring {:?}", rgb(&lit, 172, 20));
+    assert!(!near(rgb(&lit, 160, 20), [255, 255, 0], 60), "the ring's middle is empty");
+    // The arc sweeps half a turn clockwise from +x: below its centre on
+    // screen, not above.
+    assert!(near(rgb(&lit, 30, 74), [255, 0, 255], 2), "arc {:?}", rgb(&lit, 30, 74));
+    assert!(!near(rgb(&lit, 30, 46), [255, 0, 255], 60), "the arc's other half is drawn");
+    // The image's texels, stretched bilinearly: its corners show its corner
+    // texels (red top-left, white bottom-right), its middle their blend.
+    let red = rgb(&lit, 60, 46);
+    assert!(red[0] > 230 && red[1] < 40 && red[2] < 40, "the image's top-left {red:?}");
+    assert!(near(rgb(&lit, 91, 77), [255, 255, 255], 12), "the image's bottom-right {:?}", rgb(&lit, 91, 77));
+    // Half-transparent white over the scene: halfway in linear light.
+    let under = rgb(&support::read_lit_color(&renderer, view), 120, 60);
+    assert!(under.iter().all(|c| *c > 150), "half white {under:?}");
+    // Text: some pixels of the line are white, the rest of its box is not.
+    let white = (8..180)
+        .flat_map(|x| (90..112).map(move |y| (x, y)))
+        .filter(|(x, y)| near(rgb(&lit, *x, *y), [255, 255, 255], 8))
+        .count();
+    assert!(white > 60, "{white} white pixels of text");
+
+    // The immediate canvas is gone after the frame.
+    renderer.render_frame(&scene).unwrap();
+    let next = support::read_lit_color(&renderer, view);
+    assert!(!near(rgb(&next, 24, 19), [255, 0, 0], 30), "the immediate rectangle stayed");
+}
+
+#[test]
+fn world_lines_hide_behind_surfaces_unless_on_top() {
+    let mut renderer = support::gpu_renderer();
+    let scene = oxygen_demo::floor_with_box(0.6);
+    let cam = camera();
+    let view = renderer.register_view(ViewDesc::new(cam), standard_render_graph).unwrap();
+    let view_on_top = renderer.register_view(ViewDesc::new(cam), standard_render_graph).unwrap();
+    // A red line through the box's centre, from one side of it to the other
+    // (the box is 1 m, at (1.5, 0.5, −1)), and past it.
+    let (a, b) = (DVec3::new(-0.5, 0.5, -1.0), DVec3::new(3.5, 0.5, -1.0));
+    let red = Rgba::rgb(1.0, 0.0, 0.0);
+    renderer.overlay(view).unwrap().retained().world_line(a, b, 3.0, red, DepthMode::Tested);
+    renderer.overlay(view_on_top).unwrap().retained().world_line(a, b, 3.0, red, DepthMode::OnTop);
+    renderer.render_frame(&scene).unwrap();
+    let tested = support::read_lit_color(&renderer, view);
+    let on_top = support::read_lit_color(&renderer, view_on_top);
+    let at = |x: f32| support::pixel_of(&resolved(&cam, view, &scene), Vec3::new(x, 0.5, -1.0));
+    let red_at = |image: &RgbaImage, (x, y): (u32, u32)| {
+        (0..3).any(|d| {
+            let p = rgb(image, x, (y + d).saturating_sub(1));
+            p[0] > 200 && p[1] < 60 && p[2] < 60
+        })
+    };
+    // Inside the box: hidden when tested, drawn on top otherwise.
+    assert!(!red_at(&tested, at(1.5)), "a tested line shows through the box");
+    assert!(red_at(&on_top, at(1.5)), "an on-top line is hidden");
+    // Off the box, over the floor behind it: drawn both ways.
+    assert!(red_at(&tested, at(-0.2)) && red_at(&on_top, at(-0.2)), "the line off the box is missing");
+    assert_eq!(renderer.overlay(view).unwrap().dropped(), 0);
+}
+
+/// The frustum of one view, drawn into an overview, meets the corners of
+/// its far rectangle where the overview sees them: the lines come from the
+/// view's own camera.
+#[test]
+fn a_frustum_drawn_from_a_views_camera_meets_its_corners_in_an_overview() {
+    let mut renderer = support::gpu_renderer();
+    let scene = oxygen_demo::floor_with_box(0.6);
+    let small = LookAtResolver::new(
+        Camera::perspective(0.6, 0.5, None),
+        Vec3::new(-1.0, 1.0, 1.0),
+        Vec3::new(1.5, 0.5, -1.0),
+        UVec2::new(64, 48),
+    )
+    .unwrap();
+    let overview = LookAtResolver::new(
+        Camera::perspective(1.2, 0.1, None),
+        Vec3::new(-2.0, 9.0, 7.0),
+        Vec3::new(0.5, 0.0, -1.0),
+        SIZE,
+    )
+    .unwrap();
+    let seen = renderer.register_view(ViewDesc::new(small), standard_render_graph).unwrap();
+    let top = renderer.register_view(ViewDesc::new(overview), standard_render_graph).unwrap();
+    let frustum_view = resolved(&small, seen, &scene);
+    let green = Rgba::rgb(0.0, 1.0, 0.0);
+    renderer.overlay(top).unwrap().retained().view_frustum(&frustum_view, 4.0, 3.0, green, DepthMode::OnTop);
+    renderer.render_frame(&scene).unwrap();
+    let image = support::read_lit_color(&renderer, top);
+    // The far corners from the small camera itself: its image's corners
+    // unprojected to rays from its eye, 4 m along its axis.
+    let (eye, forward) =
+        (Vec3::new(-1.0, 1.0, 1.0), (Vec3::new(1.5, 0.5, -1.0) - Vec3::new(-1.0, 1.0, 1.0)).normalize());
+    let corners = [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)].map(|(x, y)| {
+        let ray = frustum_view.inverse_view_projection.project_point3(Vec3::new(x, y, 1.0)) - eye;
+        eye + ray * (4.0 / ray.dot(forward))
+    });
+    let top_view = resolved(&overview, top, &scene);
+    for corner in &corners {
+        let (x, y) = support::pixel_of(&top_view, *corner);
+        let green_near = (x.saturating_sub(2)..=x + 2)
+            .flat_map(|x| (y.saturating_sub(2)..=y + 2).map(move |y| (x, y)))
+            .any(|(x, y)| {
+                let p = rgb(&image, x.min(SIZE.x - 1), y.min(SIZE.y - 1));
+                p[1] > 200 && p[0] < 80 && p[2] < 80
+            });
+        assert!(green_near, "no frustum line at the far corner {corner} (pixel {x}, {y})");
+    }
+}
+
+#[test]
+fn a_view_without_an_overlay_records_nothing_of_it() {
+    let mut renderer = support::gpu_renderer();
+    let scene = oxygen_demo::floor_with_box(0.6);
+    let view = renderer.register_view(ViewDesc::new(camera()), standard_render_graph).unwrap();
+    let plain = renderer.render_frame(&scene).unwrap();
+    let passes = |report: &oxygen::FrameReport| report.views.iter().map(|v| v.recorded.render_passes).sum::<u32>();
+    // Asked for but empty: still nothing.
+    let _ = renderer.overlay(view).unwrap();
+    let empty = renderer.render_frame(&scene).unwrap();
+    assert_eq!(passes(&empty), passes(&plain));
+    assert_eq!(renderer.internals().lighting.overlay_views(), 0, "buffers for an empty overlay");
+    renderer.overlay(view).unwrap().immediate().rect(Vec2::ZERO, Vec2::ONE * 10.0, Rgba::WHITE);
+    let drawn = renderer.render_frame(&scene).unwrap();
+    assert_eq!(passes(&drawn), passes(&plain) + 1, "one render pass for the overlay");
+    assert_eq!(renderer.internals().lighting.overlay_views(), 1);
+    renderer.unregister_view(view).unwrap();
+    assert!(renderer.overlay(view).is_err(), "an unregistered view has no overlay");
+}
+
+/// A multisampled view draws its overlay too (on top: its depth does not
+/// match the resolved image).
+#[test]
+fn a_multisampled_view_draws_its_overlay() {
+    let mut renderer = support::gpu_renderer();
+    let scene = oxygen_demo::floor_with_box(0.6);
+    let view = renderer
+        .register_view(ViewDesc::new(camera()).with_msaa(oxygen::gpu::Msaa::X4), standard_render_graph)
+        .unwrap();
+    renderer.overlay(view).unwrap().retained().circle(Vec2::new(96.0, 64.0), 10.0, Rgba::rgb(0.0, 0.0, 1.0));
+    renderer.render_frame(&scene).unwrap();
+    let image = support::read_lit_color(&renderer, view);
+    assert!(near(rgb(&image, 96, 64), [0, 0, 255], 2), "{:?}", rgb(&image, 96, 64));
+}
