@@ -4,6 +4,9 @@
 //! glyph at a whole pixel so that its rasterised image is the same wherever
 //! it is drawn and the atlas keeps one per glyph and size.
 
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+
 use ab_glyph::{Font as _, FontArc, PxScale, ScaleFont as _};
 use glam::Vec2;
 
@@ -17,6 +20,10 @@ static DEJAVU_SANS: &[u8] = include_bytes!("../fonts/DejaVuSans.ttf");
 #[derive(Clone)]
 pub struct Font {
     font: FontArc,
+    /// Each glyph's inked pixels at each size, from a whole-pixel origin
+    /// (top-left offset, size; `None`: nothing inked): outlining a glyph
+    /// to find them is most of laying text out, and they never change.
+    bounds: Arc<Mutex<HashMap<(u16, u32), Option<(Vec2, Vec2)>>>>,
 }
 
 impl std::fmt::Debug for Font {
@@ -29,12 +36,27 @@ impl Font {
     /// DejaVu Sans, shipped with the crate.
     pub fn default_sans() -> Font {
         // The bundled file is a valid font (the crate's tests load it).
-        Font { font: FontArc::try_from_slice(DEJAVU_SANS).expect("the bundled DejaVu Sans parses") }
+        let font = FontArc::try_from_slice(DEJAVU_SANS).expect("the bundled DejaVu Sans parses");
+        Font { font, bounds: Default::default() }
     }
 
     /// A TrueType or OpenType font from its file's bytes.
     pub fn from_bytes(bytes: Vec<u8>) -> Result<Font, crate::OverlayError> {
-        FontArc::try_from_vec(bytes).map(|font| Font { font }).map_err(|_| crate::OverlayError::BadFont)
+        FontArc::try_from_vec(bytes)
+            .map(|font| Font { font, bounds: Default::default() })
+            .map_err(|_| crate::OverlayError::BadFont)
+    }
+
+    /// Glyph `id`'s inked pixels at `size` from a whole-pixel origin.
+    fn ink(&self, id: ab_glyph::GlyphId, size: u32) -> Option<(Vec2, Vec2)> {
+        let mut cache = self.bounds.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        *cache.entry((id.0, size)).or_insert_with(|| {
+            let glyph = id.with_scale_and_position(size as f32, ab_glyph::point(0.0, 0.0));
+            self.font.outline_glyph(glyph).map(|outlined| {
+                let b = outlined.px_bounds();
+                (Vec2::new(b.min.x, b.min.y), Vec2::new(b.width(), b.height()))
+            })
+        })
     }
 }
 
@@ -76,14 +98,14 @@ pub(crate) fn layout(font: &Font, slot: u32, size: f32, text: &str) -> (Vec<Plac
         if let Some(p) = previous {
             x += scaled.kern(p, id);
         }
-        let origin = ab_glyph::point(x.round(), ascent + line as f32 * line_height);
-        let glyph = id.with_scale_and_position(size, origin);
-        if let Some(outlined) = font.font.outline_glyph(glyph) {
-            let bounds = outlined.px_bounds();
+        // At a whole-pixel origin the inked pixels are the origin's
+        // bounds moved by it.
+        let origin = Vec2::new(x.round(), ascent + line as f32 * line_height);
+        if let Some((min, extent)) = font.ink(id, size as u32) {
             glyphs.push(PlacedGlyph {
                 key: AtlasKey::Glyph { font: slot, glyph: id.0, size: size as u32 },
-                offset: Vec2::new(bounds.min.x, bounds.min.y),
-                size: Vec2::new(bounds.width(), bounds.height()),
+                offset: origin + min,
+                size: extent,
             });
         }
         x += scaled.h_advance(id);
