@@ -23,8 +23,11 @@ pub struct Font {
     /// Each glyph's inked pixels at each size, from a whole-pixel origin
     /// (top-left offset, size; `None`: nothing inked): outlining a glyph
     /// to find them is most of laying text out, and they never change.
-    bounds: Arc<Mutex<HashMap<(u16, u32), Option<(Vec2, Vec2)>>>>,
+    bounds: Arc<Mutex<InkCache>>,
 }
+
+/// Inked pixels by (glyph, size): top-left offset and size.
+type InkCache = HashMap<(u16, u32), Option<(Vec2, Vec2)>>;
 
 impl std::fmt::Debug for Font {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
