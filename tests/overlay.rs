@@ -206,3 +206,50 @@ fn a_multisampled_view_draws_its_overlay() {
     let image = support::read_lit_color(&renderer, view);
     assert!(near(rgb(&image, 96, 64), [0, 0, 255], 2), "{:?}", rgb(&image, 96, 64));
 }
+
+/// Picking reads the node the view's instance labels show at a pixel; the
+/// outline of a picked node is a band of its width around what it covers.
+#[test]
+fn picking_finds_the_node_at_a_pixel_and_its_outline_is_as_wide_as_asked() {
+    let mut renderer = support::gpu_renderer();
+    let scene = oxygen_demo::floor_with_box(0.6);
+    let cam = camera();
+    let view = renderer.register_view(ViewDesc::new(cam).with_labels(), standard_render_graph).unwrap();
+    renderer.render_frame(&scene).unwrap();
+    let labels = renderer.read_labels(view).unwrap();
+    let box_node =
+        scene.nodes().find(|(_, n)| n.name == "box").map(|(k, _)| oxygen::core::scene::node_index(k)).unwrap();
+    let (bx, by) = support::pixel_of(&resolved(&cam, view, &scene), Vec3::new(1.5, 0.5, -1.0));
+    assert_eq!(renderer.pick(view, bx, by).unwrap(), Some(box_node));
+    // Every pixel picks what the label image shows there.
+    for (x, y) in [(0, 0), (bx, by), (SIZE.x - 1, SIZE.y - 1), (10, 100)] {
+        let shown = labels.instances[(y * SIZE.x + x) as usize].checked_sub(1);
+        assert_eq!(renderer.pick(view, x, y).unwrap(), shown, "pixel ({x}, {y})");
+    }
+    assert!(renderer.pick(view, SIZE.x, 0).is_err(), "a pixel outside the view");
+
+    // Outline the box 3 pixels wide in pure green.
+    let outline = oxygen::overlay::Outline { nodes: vec![box_node], width: 3.0, color: Rgba::rgb(0.0, 1.0, 0.0) };
+    renderer.overlay(view).unwrap().set_outline(Some(outline));
+    renderer.render_frame(&scene).unwrap();
+    let image = support::read_lit_color(&renderer, view);
+    let is_box = |x: u32, y: u32| labels.instances[(y * SIZE.x + x) as usize] == box_node + 1;
+    let green = |x: u32, y: u32| {
+        let p = rgb(&image, x, y);
+        p[1] > 200 && p[0] < 60 && p[2] < 60
+    };
+    // Along the box's middle row: from its right edge outward, three green
+    // pixels, then the scene again; the box itself keeps its colour.
+    let right = (bx..SIZE.x).take_while(|x| is_box(*x, by)).last().unwrap();
+    let band: Vec<bool> = (right + 1..right + 8).map(|x| green(x, by)).collect();
+    eprintln!("outline band right of the box: {band:?}");
+    assert_eq!(band, [true, true, true, false, false, false, false], "a 3-pixel outline");
+    assert!(!green(bx, by), "the outlined node is covered");
+    // Without labels, the outline is refused with a reason.
+    let plain = renderer.register_view(ViewDesc::new(cam), standard_render_graph).unwrap();
+    let outline = oxygen::overlay::Outline { nodes: vec![box_node], width: 3.0, color: Rgba::WHITE };
+    renderer.overlay(plain).unwrap().set_outline(Some(outline));
+    let frame = renderer.render_frame(&scene).err().map(|e| e.to_string()).unwrap_or_default();
+    let read = renderer.read_color(plain).err().map(|e| e.to_string()).unwrap_or_default();
+    assert!(frame.contains("labels") || read.contains("labels"), "frame: {frame:?}, read: {read:?}");
+}

@@ -42,7 +42,7 @@ impl Rgba {
     }
 
     /// Eight bits a channel, as the vertices carry it.
-    pub(crate) fn unorm8(self) -> [u8; 4] {
+    pub fn unorm8(self) -> [u8; 4] {
         // NaN stays NaN through the clamp and casts to 0.
         let q = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
         [q(self.r), q(self.g), q(self.b), q(self.a)]
@@ -165,6 +165,45 @@ pub struct Overlay {
     pub(crate) atlas: Atlas,
     /// Shapes refused for a coordinate or size that is not finite.
     dropped: u64,
+    /// The selection outline, when one is asked for.
+    outline: Option<Outline>,
+}
+
+/// A selection outline ([`Overlay::set_outline`]): a line `width` pixels
+/// wide around what the chosen nodes cover in the view, outside them,
+/// found by jump flooding the view's instance labels.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Outline {
+    /// The nodes outlined, by stable id (`oxygen_core::scene::node_index`,
+    /// what picking returns).
+    pub nodes: Vec<u32>,
+    /// Width in pixels, 0.5 to 64.
+    pub width: f32,
+    /// Its colour.
+    pub color: Rgba,
+}
+
+impl Outline {
+    /// Most pixels an outline is wide.
+    pub const MAX_WIDTH: f32 = 64.0;
+
+    /// Why it cannot be drawn, if it cannot: a width that is not between
+    /// 0.5 and [`Outline::MAX_WIDTH`].
+    pub fn problem(&self) -> Option<String> {
+        (!(0.5..=Self::MAX_WIDTH).contains(&self.width))
+            .then(|| format!("an outline {} pixels wide (0.5 to {} are drawn)", self.width, Self::MAX_WIDTH))
+    }
+
+    /// The chosen nodes as a bit set over their ids (bit `id` of word
+    /// `id / 32`), as the outline's shader tests them.
+    pub fn node_bits(&self) -> Vec<u32> {
+        let words = self.nodes.iter().map(|n| *n as usize / 32 + 1).max().unwrap_or(1);
+        let mut bits = vec![0u32; words];
+        for n in &self.nodes {
+            bits[*n as usize / 32] |= 1 << (n % 32);
+        }
+        bits
+    }
 }
 
 impl std::fmt::Debug for Overlay {
@@ -174,6 +213,7 @@ impl std::fmt::Debug for Overlay {
             .field("retained", &self.retained.len())
             .field("images", &self.images.len())
             .field("dropped", &self.dropped)
+            .field("outline", &self.outline)
             .finish()
     }
 }
@@ -209,7 +249,19 @@ impl Overlay {
     /// Whether there is nothing to draw (the overlay pass then records
     /// nothing).
     pub fn is_empty(&self) -> bool {
-        self.immediate.is_empty() && self.retained.is_empty()
+        self.immediate.is_empty() && self.retained.is_empty() && self.outline.is_none()
+    }
+
+    /// Outlines the nodes `outline` names from the next frame on (`None`:
+    /// no outline). Kept until changed. The view must draw instance labels
+    /// (`ViewDesc::with_labels`): the outline is found in them.
+    pub fn set_outline(&mut self, outline: Option<Outline>) {
+        self.outline = outline.filter(|o| !o.nodes.is_empty());
+    }
+
+    /// The selection outline, if any.
+    pub fn outline(&self) -> Option<&Outline> {
+        self.outline.as_ref()
     }
 
     /// Shapes on both canvases (a box or a sphere counts its lines).

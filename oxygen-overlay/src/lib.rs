@@ -18,6 +18,9 @@
 //! place in one RGBA atlas ([`Overlay::atlas`]). One vertex buffer, one
 //! texture, one draw: whatever the number of shapes.
 //!
+//! A selection outline ([`Outline`]) is drawn around chosen nodes, found in
+//! the view's instance labels by jump flooding on the GPU.
+//!
 //! Data flows one way: canvas calls → shapes → vertices (and atlas texels)
 //! → the GPU. Nothing here touches the GPU.
 
@@ -27,6 +30,6 @@ mod tessellate;
 mod text;
 
 pub use atlas::{ATLAS_SIZE, Atlas};
-pub use canvas::{Canvas, DepthMode, ImageId, Overlay, OverlayError, Rgba, frustum_corners};
+pub use canvas::{Canvas, DepthMode, ImageId, Outline, Overlay, OverlayError, Rgba, frustum_corners};
 pub use tessellate::{OverlayVertex, OverlayView, VertexKind};
 pub use text::Font;

@@ -100,6 +100,32 @@ impl Renderer {
         })
     }
 
+    /// The node whose opaque or masked surface the view showed at pixel
+    /// (`x`, `y`) (from its top-left corner) in the frame it last rendered:
+    /// its stable id ([`oxygen_core::scene::node_index`]), `None` where no
+    /// node drew (the background, or only blended surfaces). Reads one
+    /// texel of the view's instance labels (waits for the GPU), so the view
+    /// must draw them ([`crate::ViewDesc::with_labels`]); fails for a pixel
+    /// outside the view.
+    pub fn pick(&self, id: impl Into<ViewId>, x: u32, y: u32) -> Result<Option<u32>, RenderError> {
+        let id = id.into();
+        let targets = self.view_targets(id)?;
+        if x >= targets.width || y >= targets.height {
+            return Err(RenderError::Unsupported(format!(
+                "pixel ({x}, {y}) lies outside {id}'s {} × {} image",
+                targets.width, targets.height
+            )));
+        }
+        let plane = targets.labels.as_ref().and_then(|l| l.plane(Label::Instance)).ok_or_else(|| {
+            RenderError::Unsupported(format!(
+                "{id} draws no instance labels to pick from (register it with ViewDesc::with_labels)"
+            ))
+        })?;
+        let (ox, oy) = targets.tile.map_or((0, 0), |t| (t.x, t.y));
+        let word = self.gpu.read_u32_region(&plane.texture, 0, (ox + x, oy + y), (1, 1))?;
+        Ok(word.first().and_then(|w| w.checked_sub(1)))
+    }
+
     /// The view's depth as the GPU wrote it (reverse-Z device depth, and
     /// the pose it was rendered with, for [`DepthImage::linear`]); waits
     /// for the GPU. A multisampled view has no single-sampled depth to

@@ -6,19 +6,23 @@
 //! number of shapes. World shapes are depth-tested against the view's
 //! depth where it is single-sampled; a multisampled view's depth is not
 //! (its samples do not match the display image), so there every world
-//! shape is drawn on top. A view without an overlay, or with an empty one,
-//! records nothing.
+//! shape is drawn on top. A selection outline ([`Outline`]) is found in the
+//! view's instance labels by jump flooding (`post/outline.wgsl`: a seeding
+//! step and one step a halving stride, in compute) and drawn first. A view
+//! without an overlay, or with an empty one, records nothing.
 
 use std::collections::HashMap;
 use std::sync::{Mutex, OnceLock};
 
 use glam::{DMat4, UVec2};
 use oxygen_core::ViewId;
+use oxygen_gpu::Label;
 use oxygen_gpu::ViewTargets;
 use oxygen_gpu::bindings::{self, LayoutEntries};
-use oxygen_overlay::{ATLAS_SIZE, OverlayVertex, OverlayView};
+use oxygen_overlay::{ATLAS_SIZE, Outline, OverlayVertex, OverlayView};
 use tracing::info_span;
 
+use super::params::OutlineParams;
 use crate::{CommandRecorder, PassError, RenderContext, RenderPass};
 
 /// Draws the view's overlay ([`RenderContext::overlay`]) over its display
@@ -49,7 +53,223 @@ struct ViewOverlay {
 #[derive(Default)]
 pub(crate) struct OverlayState {
     made: OnceLock<Made>,
+    outline: OnceLock<OutlineMade>,
     views: Mutex<HashMap<ViewId, ViewOverlay>>,
+    outlines: Mutex<HashMap<ViewId, ViewOutline>>,
+}
+
+/// The selection outline's pipelines: the flood's two steps and the
+/// drawing, with and without the view's depth attached (a pass's pipelines
+/// must match its attachments; the outline ignores the depth).
+struct OutlineMade {
+    compute_layout: wgpu::BindGroupLayout,
+    draw_layout: wgpu::BindGroupLayout,
+    seed: wgpu::ComputePipeline,
+    flood: wgpu::ComputePipeline,
+    draw_with_depth: wgpu::RenderPipeline,
+    draw_without_depth: wgpu::RenderPipeline,
+}
+
+/// A view's flood buffers (two, read and written in turn) and the steps'
+/// parameters, for its size.
+struct ViewOutline {
+    size: (u32, u32),
+    seeds: [wgpu::Buffer; 2],
+    params: wgpu::Buffer,
+    stride: u64,
+}
+
+/// Most flood steps: a stride of 2^13 pixels covers any view wgpu allows.
+const MAX_FLOOD_STEPS: u64 = 14;
+
+impl OutlineMade {
+    fn new(device: &wgpu::Device) -> OutlineMade {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("outline"),
+            source: wgpu::ShaderSource::Wgsl(crate::shaders::OUTLINE.source().into()),
+        });
+        let uint = wgpu::TextureSampleType::Uint;
+        let entries = |stages| {
+            LayoutEntries::new(stages)
+                .push(bindings::uniform_of::<OutlineParams>())
+                .push(bindings::texture_2d(uint))
+                .push(bindings::storage_read_only())
+                .push(bindings::storage_read_only())
+        };
+        let compute_layout = entries(wgpu::ShaderStages::COMPUTE)
+            .push(bindings::storage_read_write())
+            .create_layout(device, "outline flood");
+        let draw_layout = entries(wgpu::ShaderStages::FRAGMENT).create_layout(device, "outline");
+        let layout = |bind: &wgpu::BindGroupLayout| {
+            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("outline"),
+                bind_group_layouts: &[Some(bind)],
+                immediate_size: 0,
+            })
+        };
+        let compute_pipeline_layout = layout(&compute_layout);
+        let compute = |entry: &str| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&compute_pipeline_layout),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        let draw_pipeline_layout = layout(&draw_layout);
+        let draw = |depth: bool| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("outline"),
+                layout: Some(&draw_pipeline_layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: Default::default(),
+                depth_stencil: depth.then(|| wgpu::DepthStencilState {
+                    format: ViewTargets::DEPTH_FORMAT,
+                    depth_write_enabled: Some(false),
+                    depth_compare: Some(wgpu::CompareFunction::Always),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format: ViewTargets::COLOR_FORMAT,
+                        blend: Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING),
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        OutlineMade {
+            seed: compute("seed"),
+            flood: compute("flood"),
+            draw_with_depth: draw(true),
+            draw_without_depth: draw(false),
+            compute_layout,
+            draw_layout,
+        }
+    }
+}
+
+/// Records the outline's flood for `ctx`'s view into `encoder`; returns
+/// the bind group its drawing reads.
+fn flood_outline(
+    ctx: &RenderContext<'_>,
+    state: &OverlayState,
+    outline: &Outline,
+    encoder: &mut wgpu::CommandEncoder,
+) -> Result<wgpu::BindGroup, PassError> {
+    const PASS: &str = "overlay";
+    if let Some(problem) = outline.problem() {
+        return Err(PassError::BadInput { pass: PASS, what: problem });
+    }
+    let instances =
+        ctx.targets.labels.as_ref().and_then(|l| l.plane(Label::Instance)).ok_or_else(|| PassError::BadInput {
+            pass: PASS,
+            what: "a selection outline is found in the view's instance labels, which it does not draw (register it \
+                   with ViewDesc::with_labels)"
+                .into(),
+        })?;
+    let device = &ctx.gpu.device;
+    let made = state.outline.get_or_init(|| OutlineMade::new(device));
+    let (width, height) = (ctx.targets.width, ctx.targets.height);
+    let mut views = state.outlines.lock().map_err(|_| PassError::Graph("outline state poisoned".into()))?;
+    if views.get(&ctx.view.view_id).is_none_or(|v| v.size != (width, height)) {
+        let pixels = u64::from(width) * u64::from(height);
+        let seeds = || {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("outline seeds"),
+                size: (pixels * 4).max(16),
+                usage: wgpu::BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            })
+        };
+        let stride = (size_of::<OutlineParams>() as u64)
+            .next_multiple_of(u64::from(device.limits().min_uniform_buffer_offset_alignment));
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("outline steps"),
+            size: stride * (MAX_FLOOD_STEPS + 1),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        views
+            .insert(ctx.view.view_id, ViewOutline { size: (width, height), seeds: [seeds(), seeds()], params, stride });
+    }
+    let view = views.get(&ctx.view.view_id).ok_or_else(|| PassError::Graph("outline state lost".into()))?;
+    // Strides from half the larger side down to 1; entry 0 is the seeding
+    // and the drawing (stride unused).
+    let mut strides = Vec::new();
+    let mut stride = width.max(height).next_power_of_two() / 2;
+    while stride >= 1 && (strides.len() as u64) < MAX_FLOOD_STEPS {
+        strides.push(stride);
+        stride /= 2;
+    }
+    let origin = ctx.targets.tile.map_or([0, 0, 0, 0], |t| [t.x, t.y, 0, 0]);
+    let [r, g, b, a] = outline.color.unorm8().map(|c| f32::from(c) / 255.0);
+    for (i, stride) in std::iter::once(0).chain(strides.iter().copied()).enumerate() {
+        let params = OutlineParams {
+            size: [width, height, stride, 0],
+            origin,
+            color: [r, g, b, a],
+            shape: [outline.width, 0.0, 0.0, 0.0],
+        };
+        ctx.gpu.queue.write_buffer(&view.params, view.stride * i as u64, bytemuck::bytes_of(&params));
+    }
+    let chosen = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("outlined nodes"),
+        size: (outline.node_bits().len() as u64 * 4).max(16),
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    ctx.gpu.queue.write_buffer(&chosen, 0, bytemuck::cast_slice(&outline.node_bits()));
+    let step = |i: usize| {
+        wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer: &view.params,
+            offset: view.stride * i as u64,
+            size: wgpu::BufferSize::new(size_of::<OutlineParams>() as u64),
+        })
+    };
+    let group = |layout: &wgpu::BindGroupLayout, i: usize, read: usize, write: Option<usize>| {
+        let mut entries = vec![
+            wgpu::BindGroupEntry { binding: 0, resource: step(i) },
+            wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&instances.view) },
+            wgpu::BindGroupEntry { binding: 2, resource: chosen.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 3, resource: view.seeds[read].as_entire_binding() },
+        ];
+        if let Some(write) = write {
+            entries.push(wgpu::BindGroupEntry { binding: 4, resource: view.seeds[write].as_entire_binding() });
+        }
+        device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("outline"), layout, entries: &entries })
+    };
+    let _span = info_span!("outline_flood", view = %ctx.view.view_id, steps = strides.len()).entered();
+    let groups = (width.div_ceil(8), height.div_ceil(8));
+    let mut pass =
+        encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("outline"), timestamp_writes: None });
+    // Seed into buffer 0 (binding 3 unread), then flood back and forth.
+    pass.set_pipeline(&made.seed);
+    pass.set_bind_group(0, &group(&made.compute_layout, 0, 1, Some(0)), &[]);
+    pass.dispatch_workgroups(groups.0, groups.1, 1);
+    let mut current = 0;
+    pass.set_pipeline(&made.flood);
+    for i in 0..strides.len() {
+        pass.set_bind_group(0, &group(&made.compute_layout, i + 1, current, Some(1 - current)), &[]);
+        pass.dispatch_workgroups(groups.0, groups.1, 1);
+        current = 1 - current;
+    }
+    drop(pass);
+    Ok(group(&made.draw_layout, 0, current, None))
 }
 
 const ATTRIBUTES: [wgpu::VertexAttribute; 5] = wgpu::vertex_attr_array![
@@ -132,6 +352,9 @@ impl OverlayState {
         if let Ok(mut views) = self.views.lock() {
             views.retain(|view, _| keep(*view));
         }
+        if let Ok(mut outlines) = self.outlines.lock() {
+            outlines.retain(|view, _| keep(*view));
+        }
     }
 
     /// Views holding overlay buffers.
@@ -162,11 +385,16 @@ impl RenderPass for OverlayPass {
         let camera =
             OverlayView::new(ctx.view.projection, world_to_view, UVec2::new(ctx.targets.width, ctx.targets.height));
         let vertices = overlay.tessellate(&camera);
-        if vertices.is_empty() {
+        let outline = overlay.outline().cloned();
+        if vertices.is_empty() && outline.is_none() {
             return Ok(());
         }
         let device = &ctx.gpu.device;
         let state = ctx.lighting.overlay();
+        let outline = match &outline {
+            Some(outline) => Some(flood_outline(ctx, state, outline, rec.encoder())?),
+            None => None,
+        };
         let made = state.made.get_or_init(|| Made::new(device));
         let mut views = state.views.lock().map_err(|_| PassError::Graph("overlay state poisoned".into()))?;
         let bytes: &[u8] = bytemuck::cast_slice(&vertices);
@@ -198,7 +426,9 @@ impl RenderPass for OverlayPass {
             views.insert(ctx.view.view_id, ViewOverlay { vertices, atlas, bind_group, generation: None });
         }
         let view = views.get_mut(&ctx.view.view_id).ok_or_else(|| PassError::Graph("overlay state lost".into()))?;
-        ctx.gpu.queue.write_buffer(&view.vertices, 0, bytes);
+        if !bytes.is_empty() {
+            ctx.gpu.queue.write_buffer(&view.vertices, 0, bytes);
+        }
         // The atlas rows that changed, or all of it when the texture holds
         // another generation (or nothing yet).
         let atlas = overlay.atlas();
@@ -225,6 +455,7 @@ impl RenderPass for OverlayPass {
 
         // A multisampled view's depth does not match the display image.
         let depth = ctx.targets.msaa.is_none().then_some(&ctx.targets.depth_view);
+        let mut rec_draws = 0;
         let mut pass = rec.encoder().begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("overlay"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
@@ -248,13 +479,23 @@ impl RenderPass for OverlayPass {
             pass.set_viewport(tile.x as f32, tile.y as f32, w as f32, h as f32, 0.0, 1.0);
             pass.set_scissor_rect(tile.x, tile.y, w, h);
         }
-        pass.set_pipeline(if depth.is_some() { &made.with_depth } else { &made.without_depth });
-        pass.set_bind_group(0, &view.bind_group, &[]);
-        pass.set_vertex_buffer(0, view.vertices.slice(..bytes.len() as u64));
-        pass.draw(0..vertices.len() as u32, 0..1);
+        // The outline first: shapes are drawn over it.
+        if let (Some(group), Some(made)) = (&outline, state.outline.get()) {
+            pass.set_pipeline(if depth.is_some() { &made.draw_with_depth } else { &made.draw_without_depth });
+            pass.set_bind_group(0, group, &[]);
+            pass.draw(0..3, 0..1);
+            rec_draws += 1;
+        }
+        if !vertices.is_empty() {
+            pass.set_pipeline(if depth.is_some() { &made.with_depth } else { &made.without_depth });
+            pass.set_bind_group(0, &view.bind_group, &[]);
+            pass.set_vertex_buffer(0, view.vertices.slice(..bytes.len() as u64));
+            pass.draw(0..vertices.len() as u32, 0..1);
+            rec_draws += 1;
+        }
         drop(pass);
         rec.stats.render_passes += 1;
-        rec.stats.draw_calls += 1;
+        rec.stats.draw_calls += rec_draws;
         rec.stats.overlay_vertices += vertices.len() as u64;
         Ok(())
     }

@@ -23,3 +23,20 @@ oxygen_gpu::gpu_struct! {
         pub(crate) uv_scale: [f32; 2] => "vec2<f32>",
     }
 }
+
+oxygen_gpu::gpu_struct! {
+    /// One step of the selection outline's jump flood, or its drawing
+    /// (`post/outline.wgsl`; its WGSL twin is generated).
+    #[derive(Debug, PartialEq)]
+    pub(crate) struct OutlineParams: 64 bytes {
+        /// The view's width and height, the step's stride in pixels, a zero.
+        pub(crate) size: [u32; 4] => "vec4<u32>",
+        /// Where the view lies in its textures (a batch camera's tile), two
+        /// zeroes.
+        pub(crate) origin: [u32; 4] => "vec4<u32>",
+        /// The outline's colour: sRGB, straight alpha.
+        pub(crate) color: [f32; 4] => "vec4<f32>",
+        /// Its width in pixels, three zeroes.
+        pub(crate) shape: [f32; 4] => "vec4<f32>",
+    }
+}

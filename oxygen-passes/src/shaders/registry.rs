@@ -66,6 +66,8 @@ pub(crate) static SOURCES: &[Source] = &[
     Source::gpu_struct::<crate::post::params::CompositeParams>("post/CompositeParams"),
     Source::wgsl("post/composite.wgsl", include_str!("../post/composite.wgsl")),
     Source::wgsl("post/overlay.wgsl", include_str!("../post/overlay.wgsl")),
+    Source::gpu_struct::<crate::post::params::OutlineParams>("post/OutlineParams"),
+    Source::wgsl("post/outline.wgsl", include_str!("../post/outline.wgsl")),
     // Presenting: the renderer's window composition.
     Source::wgsl("present/compose_window.wgsl", include_str!("../present/compose_window.wgsl")),
     // oxygen-bindless: the heap's declarations.
@@ -228,6 +230,8 @@ pub(crate) const EFFECTS: ShaderModule = ShaderModule::plain("post/effects.wgsl"
 pub(crate) const COMPOSITE: ShaderModule = ShaderModule::plain("post/composite.wgsl");
 /// The overlay over a view's final image.
 pub(crate) const OVERLAY: ShaderModule = ShaderModule::plain("post/overlay.wgsl");
+/// The selection outline: its jump flood and its drawing.
+pub(crate) const OUTLINE: ShaderModule = ShaderModule::plain("post/outline.wgsl");
 /// Depth into a float texture, for depth readback on GL.
 pub(crate) const DEPTH_COPY: ShaderModule = ShaderModule::plain("post/depth_copy.wgsl");
 /// The cube filter (environment and probe prefiltering).
@@ -317,6 +321,10 @@ pub(crate) const ENTRY_POINTS: &[EntryPoint] = &[
     entry(COMPOSITE, "fs", Stage::Fragment),
     entry(OVERLAY, "vs", Stage::Vertex),
     entry(OVERLAY, "fs", Stage::Fragment),
+    entry(OUTLINE, "seed", Stage::Compute),
+    entry(OUTLINE, "flood", Stage::Compute),
+    entry(OUTLINE, "vs", Stage::Vertex),
+    entry(OUTLINE, "fs", Stage::Fragment),
     entry(DEPTH_COPY, "vs", Stage::Vertex),
     entry(DEPTH_COPY, "fs", Stage::Fragment),
     entry(CUBE_FILTER, "vs", Stage::Vertex),
