@@ -253,3 +253,40 @@ fn picking_finds_the_node_at_a_pixel_and_its_outline_is_as_wide_as_asked() {
     let read = renderer.read_color(plain).err().map(|e| e.to_string()).unwrap_or_default();
     assert!(frame.contains("labels") || read.contains("labels"), "frame: {frame:?}, read: {read:?}");
 }
+
+/// One call draws every other view's frustum, its shadow cascades
+/// included, into an overview.
+#[test]
+fn one_call_draws_every_views_frustum_shadow_cascades_included() {
+    let mut renderer = support::gpu_renderer();
+    let scene = oxygen_demo::floor_with_box(0.6);
+    let cascades = oxygen::lighting::CascadeSettings { count: 2, resolution: 256, ..Default::default() };
+    let small = LookAtResolver::new(
+        Camera::perspective(0.6, 0.5, None),
+        Vec3::new(-1.0, 1.0, 1.0),
+        Vec3::new(1.5, 0.5, -1.0),
+        UVec2::new(64, 48),
+    )
+    .unwrap();
+    renderer
+        .register_view(ViewDesc::new(small).with_sun_shadows(cascades).named("small"), standard_render_graph)
+        .unwrap();
+    let overview = LookAtResolver::new(
+        Camera::perspective(1.2, 0.1, None),
+        Vec3::new(-2.0, 9.0, 7.0),
+        Vec3::new(0.5, 0.0, -1.0),
+        SIZE,
+    )
+    .unwrap();
+    let top = renderer.register_view(ViewDesc::new(overview), standard_render_graph).unwrap();
+    let first = renderer.render_frame(&scene).unwrap();
+    let drawn = renderer.draw_view_frusta(top, 6.0, 2.0, Rgba::rgb(0.0, 1.0, 0.0)).unwrap();
+    // The small camera and its two cascades: every view the frame rendered
+    // but the overview.
+    assert_eq!(drawn, first.views.len() - 1);
+    assert_eq!(drawn, 3, "{:?}", first.views.iter().map(|v| v.role).collect::<Vec<_>>());
+    renderer.render_frame(&scene).unwrap();
+    let image = support::read_lit_color(&renderer, top);
+    let green = image.pixels().filter(|p| p.0[1] > 200 && p.0[0] < 60 && p.0[2] < 60).count();
+    assert!(green > 200, "{green} green pixels of frusta");
+}

@@ -480,6 +480,30 @@ mod tests {
         // Faded: no vertex brighter than the colour, some fully faded out.
         assert!(v.iter().any(|v| v.color[3] == 255) && v.iter().any(|v| v.color[3] < 128));
         assert!(v.iter().all(|v| v.clip.iter().all(|c| c.is_finite())));
+
+        // Orthographic, straight down from 50 m (reverse-Z: near and far
+        // swapped): the lines under the eye land a whole number of metres
+        // apart, 8 pixels a metre, and keep a depth inside the range.
+        let projection = Mat4::orthographic_rh(-10.0, 10.0, -5.625, 5.625, 100.0, 0.1);
+        let eye = DVec3::new(1.0e6 + 0.37, 50.0, -2.0e6);
+        let world_to_view = DMat4::look_at_rh(eye, eye - DVec3::Y, DVec3::NEG_Z);
+        let view = OverlayView::new(projection, world_to_view, viewport);
+        let v = overlay.tessellate(&view);
+        assert!(!v.is_empty());
+        assert!(v.iter().all(|v| v.clip[2] > 0.0 && v.clip[2] <= 1.0), "depths outside the range");
+        // A vertical grid line's centre (the mean of its quad's x) lies on
+        // whole metres: 8 pixels each from the centre (the eye is 0.37 m
+        // off a line in x).
+        let xs: Vec<f32> = v
+            .chunks(6)
+            .filter(|q| (pixel(&q[0], viewport.as_vec2()).x - pixel(&q[2], viewport.as_vec2()).x).abs() < 4.0)
+            .map(|q| q.iter().map(|v| pixel(v, viewport.as_vec2()).x).sum::<f32>() / 6.0)
+            .collect();
+        assert!(!xs.is_empty());
+        for x in xs {
+            let metres = (x - 80.0) / 8.0 + 0.37;
+            assert!((metres - metres.round()).abs() < 0.02, "a line at {x} px, {metres} m");
+        }
     }
 
     #[test]

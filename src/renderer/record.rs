@@ -38,6 +38,8 @@ pub(crate) struct RenderedView {
     pub(crate) id: ViewId,
     /// The view it was rendered as (relative to that frame's origin).
     pub(crate) view: ResolvedView,
+    /// The same in world space.
+    pub(crate) world: ResolvedView,
     /// Whether its HDR target holds the image (false when shading
     /// tone-mapped in place and wrote only the display colour).
     pub(crate) hdr_written: bool,
@@ -405,6 +407,7 @@ impl Renderer {
                 rendered.push(RenderedView {
                     id: view.id,
                     view: view.gpu,
+                    world: view.world,
                     hdr_written: !recorded.stats.tone_mapped_in_pass,
                 });
                 // A batch's recording is counted once, at its first camera.

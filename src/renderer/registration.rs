@@ -119,6 +119,46 @@ impl Renderer {
         Ok(self.overlays.entry(id).or_default().get_mut().unwrap_or_else(std::sync::PoisonError::into_inner))
     }
 
+    /// Draws the frustum of every other view the renderer last rendered
+    /// (cameras, batch cameras, shadow cascades, probe faces, reference
+    /// views) into `overview`'s immediate overlay, as it was rendered (its
+    /// far side at most `max_distance` in front of its eye), each labelled
+    /// with its name (or id) at its far centre: a tool's view of its own
+    /// views. Call it before the frame that is to show them; returns how
+    /// many it drew.
+    pub fn draw_view_frusta(
+        &mut self,
+        overview: impl Into<ViewId>,
+        max_distance: f64,
+        width: f32,
+        color: oxygen_overlay::Rgba,
+    ) -> Result<usize, RenderError> {
+        let overview = overview.into();
+        let mut views: Vec<(ViewId, oxygen_core::ResolvedView)> =
+            self.targets.last_world_views().filter(|(id, _)| *id != overview).map(|(id, v)| (id, *v)).collect();
+        views.sort_by_key(|(id, _)| *id);
+        let names: Vec<String> =
+            views.iter().map(|(id, _)| self.views.name(*id).map_or_else(|| id.to_string(), str::to_string)).collect();
+        let overlay = self.overlay(overview)?;
+        let mut canvas = overlay.immediate();
+        let mut drawn = 0;
+        for ((_, view), name) in views.iter().zip(&names) {
+            let Some(corners) = oxygen_overlay::frustum_corners(view, max_distance) else { continue };
+            canvas.view_frustum(view, max_distance, width, color, oxygen_overlay::DepthMode::OnTop);
+            let far_centre = corners[4..].iter().copied().sum::<glam::DVec3>() / 4.0;
+            canvas.world_text(
+                far_centre,
+                glam::Vec2::new(2.0, 2.0),
+                12.0,
+                color,
+                name,
+                oxygen_overlay::DepthMode::OnTop,
+            );
+            drawn += 1;
+        }
+        Ok(drawn)
+    }
+
     /// Changes when `id` renders ([`crate::ViewDesc::with_schedule`]), from
     /// the next frame on. Refuses what registration would refuse.
     pub fn set_schedule(

@@ -365,6 +365,12 @@ impl Targets {
         }
     }
 
+    /// Every view whose targets hold an image, with the pose it was last
+    /// rendered with, in world space.
+    pub(crate) fn last_world_views(&self) -> impl Iterator<Item = (ViewId, &ResolvedView)> {
+        self.views.iter().filter_map(|(id, gpu)| gpu.holds.as_ref().map(|h| (*id, &h.world)))
+    }
+
     /// The pose `view`'s targets were last rendered with (relative to that
     /// frame's origin).
     pub(crate) fn last_view(&self, view: ViewId) -> Option<&ResolvedView> {
