@@ -29,8 +29,18 @@
 //!   `R` the shadow maps' resolution (512, 1024, 2048), `K` the shadow
 //!   filter's radius (PCF 0, 1, 2), `M` the main view's anti-aliasing
 //!   (MSAA 1, 2, 4 samples; `--msaa N` starts with N).
-//! * The title bar shows the frame's timings (prepare, record, GPU, each
-//!   view's own GPU time, whole frame) and the knobs. `--costs` also prints
+//! * On screen (the overlay): the frame's timings (prepare, record, GPU,
+//!   whole frame) in the main view's top-left corner and each other view's
+//!   own GPU time in its corner; the title bar shows the knobs. `--hud off`
+//!   puts the timings back in the title and draws nothing over the views.
+//!   In the editor layout the perspective cell shows the other views'
+//!   frusta (and its shadow cascades'), each named.
+//! * Click (press and release without dragging) on the main view selects
+//!   the node under the cursor and outlines it (`Renderer::pick`,
+//!   `Overlay::set_outline`; the main view draws instance labels for it
+//!   unless it is multisampled); a click on nothing clears the selection.
+//!   `--select X,Y` clicks at window pixel (X, Y) after the first frame
+//!   (for tests). `--costs` also prints
 //!   every view's costs from the frame report (why it rendered, CPU
 //!   prepare and record time, GPU time, draws, triangles, bytes uploaded
 //!   and streamed back, target memory) as a table, every 60th frame and at
@@ -52,10 +62,12 @@ use std::time::Instant;
 
 use oxygen::core::DAabb;
 use oxygen::glam::DVec3;
+use oxygen::glam::Vec2;
 use oxygen::gpu::Msaa;
 use oxygen::graph::PrePass;
 use oxygen::import::GltfCamera;
 use oxygen::lighting::CascadeSettings;
+use oxygen::overlay::{Outline, Rgba};
 use oxygen::prelude::*;
 use oxygen::sceneprep::Visibility;
 use oxygen::views::{DLookAtResolver, ResolvedView, ViewContext, ViewError};
@@ -68,7 +80,7 @@ use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowAttributes};
 
 const USAGE: &str = "\
-usage: viewer [FILE] [--size WxH] [--present fifo|mailbox|immediate] [--layout 1|2|3|4|5] [--frames N --screenshot PATH [--resize WxH]] [--time T] [--animation N|NAME] [--fps F] [--msaa 1|2|4] [--environment sky|none|FILE.hdr] [--costs]";
+usage: viewer [FILE] [--size WxH] [--present fifo|mailbox|immediate] [--layout 1|2|3|4|5] [--frames N --screenshot PATH [--resize WxH]] [--time T] [--animation N|NAME] [--fps F] [--msaa 1|2|4] [--environment sky|none|FILE.hdr] [--costs] [--hud on|off] [--select X,Y]";
 
 /// The parsed command line.
 struct Args {
@@ -92,6 +104,10 @@ struct Args {
     environment: String,
     /// Print each view's costs (`--costs`).
     costs: bool,
+    /// Timings drawn over the views (`--hud on`, the default) or in the title.
+    hud: bool,
+    /// A click at this window pixel after the first frame (`--select X,Y`).
+    select: Option<(f64, f64)>,
 }
 
 /// Every view's costs in `report` as a table (`--costs`): one line a view,
@@ -152,6 +168,8 @@ fn parse_args(mut args: impl Iterator<Item = String>) -> Result<Args, String> {
         msaa: Msaa::Off,
         environment: "sky".to_owned(),
         costs: false,
+        hud: true,
+        select: None,
     };
     while let Some(arg) = args.next() {
         let mut value = |name: &str| args.next().ok_or(format!("{name} needs a value"));
@@ -190,6 +208,23 @@ fn parse_args(mut args: impl Iterator<Item = String>) -> Result<Args, String> {
                 parsed.fps = Some(fps.ok_or(format!("--fps needs a positive number (got '{v}')"))?);
             }
             "--costs" => parsed.costs = true,
+            "--hud" => {
+                parsed.hud = match value("--hud")?.as_str() {
+                    "on" => true,
+                    "off" => false,
+                    other => return Err(format!("--hud needs on or off (got '{other}')")),
+                }
+            }
+            "--select" => {
+                let v = value("--select")?;
+                let (x, y) = v.split_once(',').ok_or(format!("--select needs X,Y (got '{v}')"))?;
+                let coordinate = |c: &str| c.parse::<f64>().ok().filter(|c| c.is_finite() && *c >= 0.0);
+                parsed.select = Some(
+                    coordinate(x)
+                        .zip(coordinate(y))
+                        .ok_or(format!("--select needs two pixel coordinates (got '{v}')"))?,
+                );
+            }
             "--frames" => parsed.frames = Some(value("--frames")?.parse().map_err(|_| "--frames needs a number")?),
             "--screenshot" => parsed.screenshot = Some(PathBuf::from(value("--screenshot")?)),
             "--layout" => {
@@ -282,7 +317,15 @@ struct Viewer {
     /// Frames rendered while waiting for `--resize` to take effect.
     frames_before_resize: u64,
     dragging: bool,
+    /// Whether the mouse moved while pressed (a drag, not a click).
+    dragged: bool,
     last_cursor: Option<(f64, f64)>,
+    /// A click waiting to be picked after the next frame.
+    click: Option<(f64, f64)>,
+    /// The selected node (its stable id), outlined.
+    selected: Option<u32>,
+    /// The last frame's timings, drawn over the next.
+    hud_text: Vec<(ViewId, String)>,
     error: Option<String>,
     /// The animation that poses the scene, if the file has one.
     animation: Option<oxygen::core::Animation>,
@@ -307,11 +350,18 @@ impl Viewer {
         graph.lit.shadow_pcf_radius = self.pcf_radius;
         let cascades = self.cascades;
         let msaa = self.msaa;
+        // Instance labels for picking, where the view can draw them.
         let main = |rect| {
-            ViewDesc::new(SharedCamera(Arc::clone(&self.camera)))
+            let desc = ViewDesc::new(SharedCamera(Arc::clone(&self.camera)))
                 .shown_in(window, rect)
                 .with_sun_shadows(cascades)
                 .with_msaa(msaa)
+                .named("main");
+            if msaa == Msaa::Off {
+                desc.with_label_planes(oxygen::gpu::LabelSet::of(&[oxygen::gpu::Label::Instance]))
+            } else {
+                desc
+            }
         };
         let center = self.bounds.center();
         let radius = (self.bounds.half_extents().length() as f32).max(1e-3);
@@ -400,6 +450,7 @@ impl Viewer {
             return Ok(());
         }
         self.pose()?;
+        self.draw_overlays_before_frame()?;
         let Some(renderer) = self.renderer.as_mut() else { return Ok(()) };
         let started = Instant::now();
         let report = renderer.render_frame(&self.scene)?;
@@ -432,7 +483,21 @@ impl Viewer {
         for warning in &report.warnings {
             eprintln!("warning: {warning}");
         }
-        if let Some(window) = &self.window {
+        let frame_ms = started.elapsed().as_secs_f64() * 1e3;
+        self.after_frame(&report, frame_ms)?;
+        let Some(renderer) = self.renderer.as_mut() else { return Ok(()) };
+        if let (Some(window), true) = (&self.window, self.args.hud) {
+            let pose = self.pose_time.map_or(String::new(), |t| format!(", t = {t:.2} s"));
+            window.set_title(&format!(
+                "Oxygen — {:?}, pre-pass {:?}, {} cascades of {}, PCF {}, MSAA {}{pose} [1-5 layout, V P C R K M knobs, F fly, click selects]",
+                self.visibility,
+                self.pre_pass,
+                self.cascades.count,
+                self.cascades.resolution,
+                self.pcf_radius,
+                renderer.msaa_samples(self.msaa),
+            ));
+        } else if let Some(window) = &self.window {
             let pose = self.pose_time.map_or(String::new(), |t| format!(", t = {t:.2} s"));
             // Each registered view's own GPU time (the report's per-view costs).
             let per_view: Vec<String> = report
@@ -447,7 +512,7 @@ impl Viewer {
                 report.prepare_seconds * 1e3,
                 report.record_seconds * 1e3,
                 report.gpu_seconds.map_or("n/a".to_owned(), |s| format!("{:.2} ms", s * 1e3)),
-                started.elapsed().as_secs_f64() * 1e3,
+                frame_ms,
                 self.visibility,
                 self.pre_pass,
                 self.cascades.count,
@@ -475,10 +540,92 @@ impl Viewer {
         Ok(())
     }
 
+    /// The main view's rectangle in the window, as fractions.
+    fn main_rect(&self) -> WindowRect {
+        match self.layout {
+            Layout::Grid | Layout::Editor => WindowRect::grid(2, 2, 0, 0),
+            _ => WindowRect::FULL,
+        }
+    }
+
+    /// What the overlays show this frame: the last frame's timings, the
+    /// other views' frusta in the editor layout, the selection's outline.
+    fn draw_overlays_before_frame(&mut self) -> Result<(), RenderError> {
+        let radius = (self.bounds.half_extents().length()).max(1e-3);
+        let Some(renderer) = self.renderer.as_mut() else { return Ok(()) };
+        let Some(&main) = self.views.first() else { return Ok(()) };
+        if self.args.hud {
+            for (view, text) in &self.hud_text {
+                let Ok(overlay) = renderer.overlay(*view) else { continue };
+                let mut canvas = overlay.immediate();
+                let lines = text.lines().count().max(1) as f32;
+                canvas.rect(
+                    Vec2::new(HUD_AT, HUD_AT),
+                    Vec2::new(HUD_AT + HUD_WIDTH, HUD_AT + 6.0 + lines * HUD_LINE),
+                    Rgba::new(0.0, 0.0, 0.0, 0.55),
+                );
+                canvas.text(Vec2::new(HUD_AT + 4.0, HUD_AT + 3.0), HUD_TEXT_SIZE, Rgba::WHITE, text);
+            }
+        }
+        if self.layout == Layout::Editor {
+            renderer.draw_view_frusta(main, radius * 3.0, 1.5, Rgba::rgb(1.0, 0.75, 0.2))?;
+        }
+        let outline =
+            self.selected.map(|node| Outline { nodes: vec![node], width: OUTLINE_WIDTH, color: OUTLINE_COLOR });
+        renderer.overlay(main)?.set_outline(outline);
+        Ok(())
+    }
+
+    /// After a frame: the timings for the next one, and the click picked.
+    fn after_frame(&mut self, report: &oxygen::FrameReport, frame_ms: f64) -> Result<(), Box<dyn std::error::Error>> {
+        let ms = |s: Option<f64>| s.map_or("n/a".to_owned(), |s| format!("{:.2} ms", s * 1e3));
+        let Some(&main) = self.views.first() else { return Ok(()) };
+        self.hud_text.clear();
+        self.hud_text.push((
+            main,
+            format!(
+                "frame {frame_ms:.2} ms, GPU {}\nprepare {:.2} ms, record {:.2} ms\n{}",
+                ms(report.gpu_seconds),
+                report.prepare_seconds * 1e3,
+                report.record_seconds * 1e3,
+                self.selected.map_or("click to select".to_owned(), |n| format!("selected node {n}")),
+            ),
+        ));
+        for v in report.views.iter().filter(|v| v.why.is_some() && v.view != main) {
+            self.hud_text.push((v.view, format!("GPU {}", ms(v.gpu_seconds))));
+        }
+        if self.frames == 1 && self.args.select.is_some() {
+            self.click = self.args.select;
+        }
+        if let (Some((x, y)), Some(renderer)) = (self.click.take(), self.renderer.as_ref()) {
+            let rect = self.main_rect();
+            let (w, h) = (f64::from(self.window_size.x), f64::from(self.window_size.y));
+            let (px, py) = (x - f64::from(rect.x) * w, y - f64::from(rect.y) * h);
+            if px >= 0.0 && py >= 0.0 && px < f64::from(rect.width) * w && py < f64::from(rect.height) * h {
+                match renderer.pick(main, px as u32, py as u32) {
+                    Ok(node) => self.selected = node,
+                    Err(e) => eprintln!("cannot pick: {e}"),
+                }
+            }
+        }
+        Ok(())
+    }
+
     fn done(&self) -> bool {
         self.error.is_some() || self.args.frames.is_some_and(|total| self.frames >= total)
     }
 }
+
+/// Where the timings are drawn: this many pixels from the view's corner.
+const HUD_AT: f32 = 4.0;
+/// The timings' box width in pixels.
+const HUD_WIDTH: f32 = 250.0;
+/// The timings' text size and line height in pixels.
+const HUD_TEXT_SIZE: f32 = 12.0;
+const HUD_LINE: f32 = 15.0;
+/// The selection outline.
+const OUTLINE_WIDTH: f32 = 2.0;
+const OUTLINE_COLOR: Rgba = Rgba::rgb(1.0, 0.55, 0.0);
 
 /// `path` with `_NNNN` (frame `i`) before its extension.
 fn numbered_path(path: &std::path::Path, i: u64) -> PathBuf {
@@ -551,10 +698,17 @@ impl ApplicationHandler for Viewer {
                     }
                 }
                 WindowEvent::MouseInput { state, button: MouseButton::Left, .. } => {
-                    self.dragging = state == ElementState::Pressed;
+                    let pressed = state == ElementState::Pressed;
+                    // Released without moving: a click, picked after the next frame.
+                    if self.dragging && !pressed && !self.dragged {
+                        self.click = self.last_cursor;
+                    }
+                    self.dragging = pressed;
+                    self.dragged = false;
                 }
                 WindowEvent::CursorMoved { position, .. } => {
                     if let (true, Some((x, y))) = (self.dragging, self.last_cursor) {
+                        self.dragged |= (position.x - x).abs() + (position.y - y).abs() > 0.0;
                         let mut camera = self.camera.lock().unwrap_or_else(|e| e.into_inner());
                         camera.orbit.yaw += (position.x - x) as f32 * 0.005;
                         camera.orbit.pitch = (camera.orbit.pitch - (position.y - y) as f32 * 0.005).clamp(-1.5, 1.5);
@@ -716,6 +870,10 @@ fn run(args: Args) -> Result<(), Box<dyn std::error::Error>> {
         window_size: UVec2::ZERO,
         frames_before_resize: 0,
         dragging: false,
+        dragged: false,
+        click: None,
+        selected: None,
+        hud_text: Vec::new(),
         last_cursor: None,
         error: None,
         animation,

@@ -80,6 +80,8 @@ fn run_viewer_sized(name: &str, size: UVec2, presented_size: UVec2, extra: &[&st
         } else {
             &["--environment", "none"][..]
         })
+        // Nothing drawn over the views, unless a test asks for the timings.
+        .args(if extra.contains(&"--hud") { &[][..] } else { &["--hud", "off"][..] })
         .args(extra.iter().filter(|a| **a != DEFAULT_SKY))
         .output()
         .expect("xvfb-run runs");
@@ -225,7 +227,20 @@ fn the_viewer_writes_a_numbered_sequence_of_an_animation() {
         .args(["-a", "-s", "-screen 0 1024x768x24"])
         .arg(viewer_binary())
         .arg(&file)
-        .args(["--environment", "none", "--size", "160x120", "--time", "0.25", "--fps", "4", "--frames", "2"])
+        .args([
+            "--environment",
+            "none",
+            "--hud",
+            "off",
+            "--size",
+            "160x120",
+            "--time",
+            "0.25",
+            "--fps",
+            "4",
+            "--frames",
+            "2",
+        ])
         .arg("--screenshot")
         .arg(&screenshot)
         .output()
@@ -361,4 +376,54 @@ fn the_viewer_prints_each_views_costs() {
         assert!(number(10) > 0.0, "{row:?}: its targets");
     }
     assert!(rows.last().is_some_and(|r| r[0] == "frame"), "the frame's line closes the table:\n{table}");
+}
+
+/// The viewer's overlay: its timings in the main view's corner, and a
+/// click (`--select X,Y`) outlining the node under it. Outside the
+/// timings' box the window equals the headless render of the same view
+/// with that node picked and outlined as the viewer outlines it; inside
+/// the box it does not (the box and its text are there).
+#[test]
+fn the_viewer_draws_its_timings_and_outlines_the_clicked_node() {
+    if let Some(reason) = cannot_run() {
+        support::skip::skip(reason);
+        return;
+    }
+    let size = UVec2::new(320, 200);
+    let (x, y) = (160, 100);
+    let presented = run_viewer("viewer_hud", size, &["--hud", "on", "--select", "160,100"]);
+
+    let (scene, bounds) = viewer_scene();
+    let camera = OrbitCamera::framing(&bounds).resolver(size);
+    let mut renderer = gpu_renderer_with(RendererOptions::default());
+    let instances = oxygen::gpu::LabelSet::of(&[oxygen::gpu::Label::Instance]);
+    let desc = ViewDesc::new(camera).with_sun_shadows(oxygen_demo::viewer_cascades()).with_label_planes(instances);
+    let view = renderer.register_view(desc, standard_render_graph).unwrap();
+    renderer.render_frame(&scene).unwrap();
+    let node = renderer.pick(view, x, y).unwrap().expect("a node at the window's centre");
+    let orange = oxygen::overlay::Rgba::rgb(1.0, 0.55, 0.0);
+    let outline = oxygen::overlay::Outline { nodes: vec![node], width: 2.0, color: orange };
+    renderer.overlay(view).unwrap().set_outline(Some(outline));
+    renderer.render_frame(&scene).unwrap();
+    let expected = renderer.read_color(view).unwrap();
+
+    // The timings' box: 4 px from the corner, 250 wide, three lines of 15.
+    let in_box = |x: u32, y: u32| x <= 255 && y <= 56;
+    let differs =
+        |a: &oxygen::image::Rgba<u8>, b: &oxygen::image::Rgba<u8>| (0..3).any(|c| a.0[c].abs_diff(b.0[c]) > 3);
+    let (mut outside, mut inside, mut total) = (0, 0, 0);
+    for (x, y, p) in presented.enumerate_pixels() {
+        let q = expected.get_pixel(x, y);
+        if in_box(x, y) {
+            inside += usize::from(differs(p, q));
+        } else {
+            total += 1;
+            outside += usize::from(differs(p, q));
+        }
+    }
+    let outlined = presented.pixels().filter(|p| p.0[0] > 230 && (120..170).contains(&p.0[1]) && p.0[2] < 40).count();
+    eprintln!("outside the box {outside} of {total} pixels differ; inside, {inside}; {outlined} outline pixels");
+    assert!(outside <= total / 1000, "{outside} of {total} pixels outside the timings differ from the headless render");
+    assert!(inside > 500, "the timings' box is not drawn ({inside} pixels differ in it)");
+    assert!(outlined > 20, "no outline around the clicked node ({outlined} pixels)");
 }
