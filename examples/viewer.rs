@@ -570,8 +570,13 @@ impl Viewer {
         if self.layout == Layout::Editor {
             renderer.draw_view_frusta(main, radius * 3.0, 1.5, Rgba::rgb(1.0, 0.75, 0.2))?;
         }
-        let outline =
-            self.selected.map(|node| Outline { nodes: vec![node], width: OUTLINE_WIDTH, color: OUTLINE_COLOR });
+        // Outlines are found in the instance labels, which a multisampled
+        // main view does not draw.
+        let outline = self.selected.filter(|_| self.msaa == Msaa::Off).map(|node| Outline {
+            nodes: vec![node],
+            width: OUTLINE_WIDTH,
+            color: OUTLINE_COLOR,
+        });
         renderer.overlay(main)?.set_outline(outline);
         Ok(())
     }

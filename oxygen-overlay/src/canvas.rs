@@ -187,19 +187,31 @@ impl Outline {
     /// Most pixels an outline is wide.
     pub const MAX_WIDTH: f32 = 64.0;
 
+    /// Node ids an outline takes: below 2^24 (a scene's stable ids are
+    /// slot indices; the set is a bit per id up to the largest).
+    pub const MAX_NODE_ID: u32 = 1 << 24;
+
     /// Why it cannot be drawn, if it cannot: a width that is not between
-    /// 0.5 and [`Outline::MAX_WIDTH`].
+    /// 0.5 and [`Outline::MAX_WIDTH`], or a node id of
+    /// [`Outline::MAX_NODE_ID`] or more.
     pub fn problem(&self) -> Option<String> {
-        (!(0.5..=Self::MAX_WIDTH).contains(&self.width))
-            .then(|| format!("an outline {} pixels wide (0.5 to {} are drawn)", self.width, Self::MAX_WIDTH))
+        if !(0.5..=Self::MAX_WIDTH).contains(&self.width) {
+            return Some(format!("an outline {} pixels wide (0.5 to {} are drawn)", self.width, Self::MAX_WIDTH));
+        }
+        self.nodes
+            .iter()
+            .find(|n| **n >= Self::MAX_NODE_ID)
+            .map(|n| format!("an outline of node id {n} (ids below {} are outlined)", Self::MAX_NODE_ID))
     }
 
     /// The chosen nodes as a bit set over their ids (bit `id` of word
     /// `id / 32`), as the outline's shader tests them.
+    /// Ids of [`Outline::MAX_NODE_ID`] or more are left out.
     pub fn node_bits(&self) -> Vec<u32> {
-        let words = self.nodes.iter().map(|n| *n as usize / 32 + 1).max().unwrap_or(1);
+        let kept = || self.nodes.iter().filter(|n| **n < Self::MAX_NODE_ID);
+        let words = kept().map(|n| *n as usize / 32 + 1).max().unwrap_or(1);
         let mut bits = vec![0u32; words];
-        for n in &self.nodes {
+        for n in kept() {
             bits[*n as usize / 32] |= 1 << (n % 32);
         }
         bits
@@ -305,6 +317,11 @@ impl Overlay {
     /// The atlas, to mark it uploaded.
     pub fn atlas_mut(&mut self) -> &mut Atlas {
         &mut self.atlas
+    }
+
+    /// Whether `image` is one of this overlay's images.
+    pub(crate) fn has_image(&self, image: u32) -> bool {
+        (image as usize) < self.images.len()
     }
 
     /// Places image `image` in the atlas if it is not there.

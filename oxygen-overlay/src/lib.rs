@@ -6,8 +6,10 @@
 //! with a width, circles, rings and arcs, text) and **world-space** debug
 //! shapes (lines, boxes, spheres, arrows, a view's frustum, labels, an
 //! editor grid), each depth-tested against the view's surfaces or drawn on
-//! top ([`DepthMode`]). The immediate canvas is cleared after every frame,
-//! the retained one keeps its shapes until told.
+//! top ([`DepthMode`]). The immediate canvas is cleared after each frame
+//! its view renders (a view that does not render keeps it, and what is
+//! drawn on it again adds up), the retained one keeps its shapes until
+//! told.
 //!
 //! Each frame the overlay pass (`oxygen_passes::OverlayPass`) asks for
 //! [`Overlay::tessellate`] with the view's camera ([`OverlayView`]): every

@@ -173,18 +173,22 @@ fn to_pixels(c: DVec4, size: Vec2) -> Vec2 {
 }
 
 /// The part of a world segment in front of the near plane, then inside the
-/// guard band, as pixel positions and depths at its ends.
-fn project_segment(view: &OverlayView, size: Vec2, a: DVec3, b: DVec3) -> Option<[(Vec2, f64); 2]> {
+/// guard band, as pixel positions, depths and how far along the segment
+/// (0 at `a`, 1 at `b`, for its colours) at its ends.
+fn project_segment(view: &OverlayView, size: Vec2, a: DVec3, b: DVec3) -> Option<[(Vec2, f64, f64); 2]> {
     let (mut ca, mut cb) = (view.world_to_clip * a.extend(1.0), view.world_to_clip * b.extend(1.0));
     // Reverse-Z: in front of the near plane where w − z ≥ 0.
     let (da, db) = (ca.w - ca.z, cb.w - cb.z);
     if !(da >= 0.0 || db >= 0.0) {
         return None;
     }
+    let (mut ta, mut tb) = (0.0, 1.0);
     if da < 0.0 {
-        ca = ca + (cb - ca) * (da / (da - db));
+        ta = da / (da - db);
+        ca = ca + (cb - ca) * ta;
     } else if db < 0.0 {
-        cb = ca + (cb - ca) * (da / (da - db));
+        tb = da / (da - db);
+        cb = ca + (cb - ca) * tb;
     }
     if !(ca.w > 0.0 && cb.w > 0.0) {
         return None;
@@ -214,7 +218,9 @@ fn project_segment(view: &OverlayView, size: Vec2, a: DVec3, b: DVec3) -> Option
     if t0.is_nan() || t1.is_nan() || t0 > t1 {
         return None;
     }
-    let at = |t: f64| ((pa + d * t).as_vec2(), za + (zb - za) * t);
+    // Colours are interpolated across the screen: linear in `t` here, and
+    // in the world between the near-plane cut's ends.
+    let at = |t: f64| ((pa + d * t).as_vec2(), za + (zb - za) * t, ta + (tb - ta) * t);
     Some([at(t0), at(t1)])
 }
 
@@ -259,6 +265,9 @@ impl Overlay {
         for shape in shapes {
             match shape {
                 Shape::Rect { min, max, color } => Out { vertices, size }.rect(*min, *max, None, *color),
+                Shape::Image { image, .. } if !self.has_image(*image) => {
+                    tracing::warn!(image, "an image id of another overlay: left out");
+                }
                 Shape::Image { min, max, image, tint } => match self.image_rect(*image) {
                     Some(rect) => Out { vertices, size }.rect(*min, *max, Some(rect.uv_inset()), *tint),
                     None if last_try => tracing::warn!(image, "an overlay image has no room in the atlas: left out"),
@@ -275,7 +284,7 @@ impl Overlay {
                     Out { vertices, size }.glyphs(*at, 1.0, &glyph_uvs, *color);
                 }
                 Shape::WorldLine { a, b, width, color, depth } => {
-                    if let Some([(pa, za), (pb, zb)]) = project_segment(view, size, *a, *b) {
+                    if let Some([(pa, za, _), (pb, zb, _)]) = project_segment(view, size, *a, *b) {
                         let (za, zb) = (shape_depth(za, *depth), shape_depth(zb, *depth));
                         Out { vertices, size }.line((pa, za, *color), (pb, zb, *color), *width);
                     }
@@ -345,9 +354,15 @@ fn grid_lines(view: &OverlayView, size: Vec2, grid: &Grid, out: &mut Out<'_>) {
                 if ca[3] == 0 && cb[3] == 0 {
                     continue;
                 }
-                if let Some([(pa, za), (pb, zb)]) = project_segment(view, size, a, b) {
+                if let Some([(pa, za, ta), (pb, zb, tb)]) = project_segment(view, size, a, b) {
                     let (za, zb) = (shape_depth(za, DepthMode::Tested), shape_depth(zb, DepthMode::Tested));
-                    out.line((pa, za, ca), (pb, zb, cb), grid.width);
+                    // The colours where the segment was cut.
+                    let mix = |t: f64| {
+                        let mut c = ca;
+                        c[3] = (f64::from(ca[3]) + (f64::from(cb[3]) - f64::from(ca[3])) * t).round() as u8;
+                        c
+                    };
+                    out.line((pa, za, mix(ta)), (pb, zb, mix(tb)), grid.width);
                 }
             }
         }

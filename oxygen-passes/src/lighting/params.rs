@@ -87,8 +87,11 @@ oxygen_gpu::gpu_struct! {
         /// back to the probe or environment everywhere).
         pub reflection_history: [u32; 4] => "vec4<u32>",
         /// The view's near plane (metres), which a reflected ray heading
-        /// for the camera stops before, and three zeroes.
-        pub reflection_view: [f32; 4] => "vec4<f32>",
+        /// for the camera stops before; 1 when the view's ambient occlusion
+        /// is bound at `AMBIENT_OCCLUSION_BINDING` (0: the binding holds a
+        /// placeholder, even where `screen_width` is set for the depth, and
+        /// a shader with the code compiled in must not read it); two zeroes.
+        pub screen_view: [f32; 4] => "vec4<f32>",
     }
 }
 
@@ -158,9 +161,9 @@ pub(crate) const AMBIENT_OCCLUSION_BINDING: u32 = CLUSTER_LIGHTS_BINDING + 1;
 /// The view's depth in metres (a storage buffer of one float a pixel, for
 /// contact shadows; one zero word when the view has none).
 pub(crate) const VIEW_DEPTH_BINDING: u32 = AMBIENT_OCCLUSION_BINDING + 1;
-/// The view's reflection history (a storage buffer of four half floats a
-/// pixel over a chain of levels, for screen-space reflections; one zero
-/// word when the view has none).
+/// The view's reflection history (a storage buffer of three half floats a
+/// pixel in two words, over a chain of levels, for screen-space
+/// reflections; a zeroed placeholder of 16 bytes when the view has none).
 pub(crate) const REFLECTION_HISTORY_BINDING: u32 = VIEW_DEPTH_BINDING + 1;
 
 /// Layers of a probe texture: +X, −X, +Y, −Y, +Z, −Z.

@@ -206,7 +206,7 @@ struct ViewHistory {
     width: u32,
     height: u32,
     levels: Vec<HistoryLevel>,
-    /// Every level's pixels, as four half floats (two words) each.
+    /// Every level's pixels, as three half floats in two words each.
     buffer: wgpu::Buffer,
     /// The steps' parameters, one per level at the uniform offset alignment.
     steps: wgpu::Buffer,

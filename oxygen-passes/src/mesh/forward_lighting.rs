@@ -143,7 +143,7 @@ pub(crate) async fn bind_group(
             return Err(PassError::BadInput { pass: "forward lit", what: problem });
         }
         uniform.screen_reflections = reflections.uniform();
-        uniform.reflection_view = [ctx.view.near, 0.0, 0.0, 0.0];
+        uniform.screen_view[0] = ctx.view.near;
         // None on the view's first frame: the probe or environment then.
         history = ctx.lighting.reflection_history().previous(ctx);
         if let Some(history) = &history {
@@ -161,6 +161,7 @@ pub(crate) async fn bind_group(
     if ambient_occlusion.is_some() || depth.is_some() {
         uniform.screen_width = ctx.targets.width;
     }
+    uniform.screen_view[1] = if ambient_occlusion.is_some() { 1.0 } else { 0.0 };
 
     let group = ctx.lighting.bind_group(
         &ctx.gpu.device,

@@ -229,6 +229,9 @@ fn screen_reflection(position: vec3<f32>, n: vec3<f32>, v: vec3<f32>, roughness:
         return vec4<f32>(0.0);
     }
     let settings = shadows.screen_reflections;
+    if !(settings.x > 0.0) {
+        return vec4<f32>(0.0);
+    }
     let rough_fade = 1.0 - smoothstep(0.7 * settings.x, settings.x, roughness);
     let count = arrayLength(&view_depth);
     let height = count / width;
@@ -245,7 +248,7 @@ fn screen_reflection(position: vec3<f32>, n: vec3<f32>, v: vec3<f32>, roughness:
     var ray_length = settings.z;
     if view_dir.z > 1e-6 {
         // View z grows toward the camera: stop 1 % short of the near plane.
-        ray_length = min(ray_length, 0.99 * (-shadows.reflection_view.x - view_a.z) / view_dir.z);
+        ray_length = min(ray_length, 0.99 * (-shadows.screen_view.x - view_a.z) / view_dir.z);
     }
     if !(ray_length > 0.0) {
         return vec4<f32>(0.0);
@@ -364,7 +367,9 @@ const SKIPPED_PIXELS: f32 = 2.0;
 // the view has none).
 fn screen_ambient_occlusion(frag: vec4<f32>) -> f32 {
     let width = shadows.screen_width;
-    if !HAS_AMBIENT_OCCLUSION || width == 0u {
+    // The width may be set for the depth alone (contact shadows,
+    // reflections): the occlusion is there only when said so.
+    if !HAS_AMBIENT_OCCLUSION || width == 0u || shadows.screen_view.y == 0.0 {
         return 1.0;
     }
     let p = vec2<u32>(max(frag.xy, vec2<f32>(0.0)));

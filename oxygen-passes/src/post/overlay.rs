@@ -79,8 +79,10 @@ struct ViewOutline {
     stride: u64,
 }
 
-/// Most flood steps: a stride of 2^13 pixels covers any view wgpu allows.
-const MAX_FLOOD_STEPS: u64 = 14;
+/// Most flood steps: the first stride is the outline's width rounded up to
+/// a power of two (the flood need only find chosen pixels that near), at
+/// most [`oxygen_overlay::Outline::MAX_WIDTH`] + 1 → 128, so 8 steps.
+const MAX_FLOOD_STEPS: u64 = 8;
 
 impl OutlineMade {
     fn new(device: &wgpu::Device) -> OutlineMade {
@@ -185,9 +187,19 @@ fn flood_outline(
     let device = &ctx.gpu.device;
     let made = state.outline.get_or_init(|| OutlineMade::new(device));
     let (width, height) = (ctx.targets.width, ctx.targets.height);
+    let pixels = u64::from(width) * u64::from(height);
+    let limit = device.limits().max_storage_buffer_binding_size;
+    if pixels * 4 > limit {
+        return Err(PassError::BadInput {
+            pass: PASS,
+            what: format!(
+                "an outline over {width} × {height} pixels needs more than the device's storage binding limit of \
+                 {limit} bytes"
+            ),
+        });
+    }
     let mut views = state.outlines.lock().map_err(|_| PassError::Graph("outline state poisoned".into()))?;
     if views.get(&ctx.view.view_id).is_none_or(|v| v.size != (width, height)) {
-        let pixels = u64::from(width) * u64::from(height);
         let seeds = || {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("outline seeds"),
@@ -208,10 +220,11 @@ fn flood_outline(
             .insert(ctx.view.view_id, ViewOutline { size: (width, height), seeds: [seeds(), seeds()], params, stride });
     }
     let view = views.get(&ctx.view.view_id).ok_or_else(|| PassError::Graph("outline state lost".into()))?;
-    // Strides from half the larger side down to 1; entry 0 is the seeding
-    // and the drawing (stride unused).
+    // Strides from the width (rounded up to a power of two) down to 1:
+    // chosen pixels farther than the outline is wide need not be found.
+    // Entry 0 of the parameters is the seeding and the drawing.
     let mut strides = Vec::new();
-    let mut stride = width.max(height).next_power_of_two() / 2;
+    let mut stride = (outline.width.ceil() as u32 + 1).next_power_of_two();
     while stride >= 1 && (strides.len() as u64) < MAX_FLOOD_STEPS {
         strides.push(stride);
         stride /= 2;
@@ -227,13 +240,14 @@ fn flood_outline(
         };
         ctx.gpu.queue.write_buffer(&view.params, view.stride * i as u64, bytemuck::bytes_of(&params));
     }
+    let bits = outline.node_bits();
     let chosen = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("outlined nodes"),
-        size: (outline.node_bits().len() as u64 * 4).max(16),
+        size: (bits.len() as u64 * 4).max(16),
         usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
-    ctx.gpu.queue.write_buffer(&chosen, 0, bytemuck::cast_slice(&outline.node_bits()));
+    ctx.gpu.queue.write_buffer(&chosen, 0, bytemuck::cast_slice(&bits));
     let step = |i: usize| {
         wgpu::BindingResource::Buffer(wgpu::BufferBinding {
             buffer: &view.params,
@@ -398,6 +412,18 @@ impl RenderPass for OverlayPass {
         let made = state.made.get_or_init(|| Made::new(device));
         let mut views = state.views.lock().map_err(|_| PassError::Graph("overlay state poisoned".into()))?;
         let bytes: &[u8] = bytemuck::cast_slice(&vertices);
+        let most = device.limits().max_buffer_size;
+        if bytes.len() as u64 > most {
+            return Err(PassError::BadInput {
+                pass: self.name(),
+                what: format!(
+                    "{} overlay vertices need {} bytes, more than the device's largest buffer ({most} bytes): draw \
+                     fewer shapes",
+                    vertices.len(),
+                    bytes.len()
+                ),
+            });
+        }
         let fits = views.get(&ctx.view.view_id).is_some_and(|v| v.vertices.size() >= bytes.len() as u64);
         if !fits {
             let atlas = oxygen_gpu::texture_2d(
@@ -419,7 +445,7 @@ impl RenderPass for OverlayPass {
             });
             let vertices = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("overlay vertices"),
-                size: (bytes.len() as u64).next_power_of_two().max(4096),
+                size: (bytes.len() as u64).next_power_of_two().clamp(4096, most.max(4096)),
                 usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             });
