@@ -486,40 +486,36 @@ impl Viewer {
         let frame_ms = started.elapsed().as_secs_f64() * 1e3;
         self.after_frame(&report, frame_ms)?;
         let Some(renderer) = self.renderer.as_mut() else { return Ok(()) };
-        if let (Some(window), true) = (&self.window, self.args.hud) {
+        if let Some(window) = &self.window {
             let pose = self.pose_time.map_or(String::new(), |t| format!(", t = {t:.2} s"));
-            window.set_title(&format!(
-                "Oxygen — {:?}, pre-pass {:?}, {} cascades of {}, PCF {}, MSAA {}{pose} [1-5 layout, V P C R K M knobs, F fly, click selects]",
+            let knobs = format!(
+                "{:?}, pre-pass {:?}, {} cascades of {}, PCF {}, MSAA {}{pose}",
                 self.visibility,
                 self.pre_pass,
                 self.cascades.count,
                 self.cascades.resolution,
                 self.pcf_radius,
                 renderer.msaa_samples(self.msaa),
-            ));
-        } else if let Some(window) = &self.window {
-            let pose = self.pose_time.map_or(String::new(), |t| format!(", t = {t:.2} s"));
-            // Each registered view's own GPU time (the report's per-view costs).
-            let per_view: Vec<String> = report
-                .views
-                .iter()
-                .filter(|v| v.why.is_some())
-                .filter_map(|v| Some(format!("{:.2}", v.gpu_seconds? * 1e3)))
-                .collect();
-            let per_view = if per_view.is_empty() { "n/a".to_owned() } else { per_view.join("/") };
-            window.set_title(&format!(
-                "Oxygen — prepare {:.2} ms, record {:.2} ms, GPU {} (views {per_view} ms), frame {:.2} ms — {:?}, pre-pass {:?}, {} cascades of {}, PCF {}, MSAA {}{pose} [1-5 layout, V P C R K M knobs, F fly]",
-                report.prepare_seconds * 1e3,
-                report.record_seconds * 1e3,
-                report.gpu_seconds.map_or("n/a".to_owned(), |s| format!("{:.2} ms", s * 1e3)),
-                frame_ms,
-                self.visibility,
-                self.pre_pass,
-                self.cascades.count,
-                self.cascades.resolution,
-                self.pcf_radius,
-                renderer.msaa_samples(self.msaa),
-            ));
+            );
+            let title = if self.args.hud {
+                format!("Oxygen — {knobs} [1-5 layout, V P C R K M knobs, F fly, click selects]")
+            } else {
+                // Each registered view's own GPU time (the report's per-view costs).
+                let per_view: Vec<String> = report
+                    .views
+                    .iter()
+                    .filter(|v| v.why.is_some())
+                    .filter_map(|v| Some(format!("{:.2}", v.gpu_seconds? * 1e3)))
+                    .collect();
+                let per_view = if per_view.is_empty() { "n/a".to_owned() } else { per_view.join("/") };
+                format!(
+                    "Oxygen — prepare {:.2} ms, record {:.2} ms, GPU {} (views {per_view} ms), frame {frame_ms:.2} ms — {knobs} [1-5 layout, V P C R K M knobs, F fly]",
+                    report.prepare_seconds * 1e3,
+                    report.record_seconds * 1e3,
+                    report.gpu_seconds.map_or("n/a".to_owned(), |s| format!("{:.2} ms", s * 1e3)),
+                )
+            };
+            window.set_title(&title);
         }
         if self.args.costs && (self.frames % 60 == 1 || self.args.frames == Some(self.frames)) {
             print_costs(self.frames, &report);

@@ -145,23 +145,8 @@ impl AoPipelines {
             label: Some("ambient occlusion"),
             source: wgpu::ShaderSource::Wgsl(crate::shaders::AMBIENT_OCCLUSION.source().into()),
         });
-        let pipeline = |entry: &str, layout: LayoutEntries| {
-            let layout = layout.create_layout(device, entry);
-            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some(entry),
-                bind_group_layouts: &[Some(&layout)],
-                immediate_size: 0,
-            });
-            let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&pipeline_layout),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            });
-            (layout, pipeline)
-        };
+        let pipeline =
+            |entry: &str, entries: LayoutEntries| crate::pipelines::compute_step(device, &module, entry, entries);
         let entries = || LayoutEntries::new(wgpu::ShaderStages::COMPUTE).push(bindings::uniform_of::<AoParams>());
         AoPipelines {
             linearize: pipeline(

@@ -547,28 +547,14 @@ fn soft_tile_visibility(slot: u32, uv: vec2<f32>, z: f32, light_radius: f32, tan
     // From a texel's depth up to the height whose penumbra is the widest.
     let lowest = texel_metres;
     let highest = widest * texel_metres * z / (light_radius + widest * texel_metres);
-    let ratio = pow(max(highest / lowest, 1.0), 1.0 / f32(BLOCKER_LEVELS));
-    var blockers = 0.0;
-    var integral = 0.0;
-    var height = lowest;
-    var previous = 0.0;
-    for (var k = 0u; k <= BLOCKER_LEVELS; k++) {
-        let count = tile_blocked_above(slot, uv, z, search_taps, widest, height, slope);
-        if k == 0u {
-            blockers = count;
-        } else {
-            integral += (height - height / ratio) * 0.5 * (count + previous);
-        }
-        if count == 0.0 {
-            break;
-        }
-        previous = count;
-        height *= ratio;
+    var ladder = blocker_ladder(lowest, highest);
+    for (var k = 0u; k <= BLOCKER_LEVELS && !ladder.done; k++) {
+        ladder = ladder_step(ladder, k, tile_blocked_above(slot, uv, z, search_taps, widest, ladder.height, slope));
     }
-    if blockers == 0.0 {
+    if ladder.blockers == 0.0 {
         return 1.0;
     }
-    let mean_height = lowest + integral / blockers;
+    let mean_height = lowest + ladder.integral / ladder.blockers;
     let blocker_distance = max(z - mean_height, 1e-3);
     // As the sun's: no narrower than a texel and a half.
     let radius = clamp(light_radius * mean_height / blocker_distance / texel_metres, 1.5, widest);
@@ -630,6 +616,41 @@ fn plane_depth(p: ShadowPoint, offset: vec2<f32>) -> f32 {
 // the blockers' mean height is measured to within the ladder's ratio.
 const BLOCKER_LEVELS: u32 = 6u;
 
+// A blocker search climbing the ladder (the sun's and the spots' soft
+// shadows): blockers counted above each height in turn, integrated over
+// the heights, which gives the sum of their heights.
+struct BlockerLadder {
+    ratio: f32,
+    // The height the next count is taken at.
+    height: f32,
+    // The count above the lowest height (0: no blocker).
+    blockers: f32,
+    integral: f32,
+    previous: f32,
+    // A count of 0 was taken: no blocker stands higher.
+    done: bool,
+}
+
+// The ladder from `lowest` to `highest` in BLOCKER_LEVELS steps.
+fn blocker_ladder(lowest: f32, highest: f32) -> BlockerLadder {
+    let ratio = pow(max(highest / lowest, 1.0), 1.0 / f32(BLOCKER_LEVELS));
+    return BlockerLadder(ratio, lowest, 0.0, 0.0, 0.0, false);
+}
+
+// `ladder` with `count`, the blockers above its height at step `k` (from 0).
+fn ladder_step(ladder: BlockerLadder, k: u32, count: f32) -> BlockerLadder {
+    var next = ladder;
+    if k == 0u {
+        next.blockers = count;
+    } else {
+        next.integral += (ladder.height - ladder.height / ladder.ratio) * 0.5 * (count + ladder.previous);
+    }
+    next.done = count == 0.0;
+    next.previous = count;
+    next.height = ladder.height * ladder.ratio;
+    return next;
+}
+
 // Tap (x, y) of a `taps` × `taps` grid spread evenly over [-1, 1]².
 fn grid_tap(x: u32, y: u32, taps: u32) -> vec2<f32> {
     return (vec2<f32>(f32(x), f32(y)) + 0.5) * (2.0 / f32(taps)) - 1.0;
@@ -689,29 +710,14 @@ fn soft_shadow(i: u32, uv: vec2<f32>, depth: f32, angle: f32, normal: vec3<f32>)
     let lowest = depth_per_metre * texel_metres;
     let tangent = tan(angle);
     let highest = widest * texel_metres / max(tangent, 1e-6) * depth_per_metre;
-    let levels = BLOCKER_LEVELS;
-    let ratio = pow(max(highest / lowest, 1.0), 1.0 / f32(levels));
-    var blockers = 0.0;
-    var integral = 0.0;
-    var height = lowest;
-    var previous = 0.0;
-    for (var k = 0u; k <= levels; k++) {
-        let count = blocked_above(p, search_taps, widest, height);
-        if k == 0u {
-            blockers = count;
-        } else {
-            integral += (height - height / ratio) * 0.5 * (count + previous);
-        }
-        if count == 0.0 {
-            break;
-        }
-        previous = count;
-        height *= ratio;
+    var ladder = blocker_ladder(lowest, highest);
+    for (var k = 0u; k <= BLOCKER_LEVELS && !ladder.done; k++) {
+        ladder = ladder_step(ladder, k, blocked_above(p, search_taps, widest, ladder.height));
     }
-    if blockers == 0.0 {
+    if ladder.blockers == 0.0 {
         return 1.0;
     }
-    let mean_height = (lowest + integral / blockers) / depth_per_metre;
+    let mean_height = (lowest + ladder.integral / ladder.blockers) / depth_per_metre;
     // No narrower than a texel and a half: the map's bilinear comparisons
     // cannot draw a sharper edge than that without stair steps (a sun of
     // 0.5° in tests/soft_shadows.rs: 1.5 is where PCSS stops being worse

@@ -8,6 +8,7 @@
 //! other folders build their screen-space pipelines with.
 
 mod cache;
+mod compute;
 mod features;
 mod fullscreen;
 mod key;
@@ -15,6 +16,7 @@ mod mesh_shader;
 mod screen;
 
 pub use cache::{CompilerGuard, PipelineFuture, Pipelines};
+pub(crate) use compute::{compute_pipeline, compute_step};
 pub use features::{Exposure, ShaderFeatures};
 pub use fullscreen::{fullscreen_pass, fullscreen_pipeline};
 pub use key::{AlphaClass, DepthBias, PassKind, PipelineKey, PipelineVariant};

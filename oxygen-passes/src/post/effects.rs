@@ -269,20 +269,8 @@ impl EffectsPipelines {
             .push(bindings::storage_read_write())
             .push(bindings::storage_read_write())
             .create_layout(device, "adapt exposure");
-        let compute_pipeline = |label: &str, layout: &wgpu::BindGroupLayout| {
-            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some(label),
-                bind_group_layouts: &[Some(layout)],
-                immediate_size: 0,
-            });
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(label),
-                layout: Some(&pipeline_layout),
-                module: &module,
-                entry_point: Some(label),
-                compilation_options: Default::default(),
-                cache: None,
-            })
+        let compute_pipeline = |entry: &str, layout: &wgpu::BindGroupLayout| {
+            crate::pipelines::compute_pipeline(device, &module, entry, layout)
         };
         let histogram = compute_pipeline("luminance_histogram", &histogram_layout);
         let adapt = compute_pipeline("adapt_exposure", &adapt_layout);

@@ -3,11 +3,13 @@
 // marks each such pixel as its own nearest chosen pixel, then `flood`
 // passes at halving strides each give every pixel the nearest chosen
 // pixel any of its nine neighbours at that stride knows (Rong and Tan's
-// jump flooding: exact but for rare ties); `vs`/`fs` draw the pixels
+// jump flooding: exact but for rare ties); `vs_fullscreen`/`fs` draw the pixels
 // outside the chosen nodes within `width` of one, fading over the last
 // pixel, over the view's final image.
 
 #include "post/OutlineParams"
+#include "shaders/color.wgsl"
+#include "shaders/fullscreen.wgsl"
 
 @group(0) @binding(0) var<uniform> params: OutlineParams;
 // The instance labels: a node's stable id + 1 per pixel, 0 for none.
@@ -76,25 +78,10 @@ fn flood(@builtin(global_invocation_id) id: vec3<u32>) {
     seeds_out[id.y * size.x + id.x] = best;
 }
 
-struct OutlineOut {
-    @builtin(position) position: vec4<f32>,
-}
 
-// One triangle over the view (its viewport set by the pass).
-@vertex
-fn vs(@builtin(vertex_index) i: u32) -> OutlineOut {
-    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
-    return OutlineOut(vec4<f32>(uv * 2.0 - 1.0, 1.0, 1.0));
-}
-
-fn srgb_to_linear(c: vec3<f32>) -> vec3<f32> {
-    let low = c / 12.92;
-    let high = pow((c + 0.055) / 1.055, vec3<f32>(2.4));
-    return select(high, low, c <= vec3<f32>(0.04045));
-}
 
 @fragment
-fn fs(v: OutlineOut) -> @location(0) vec4<f32> {
+fn fs(v: FullscreenVarying) -> @location(0) vec4<f32> {
     // The fragment's pixel in the view (its viewport may be a tile's).
     let pixel = vec2<u32>(max(v.position.xy - vec2<f32>(params.origin.xy), vec2<f32>(0.0)));
     let size = params.size.xy;

@@ -77,6 +77,8 @@ struct ViewOutline {
     seeds: [wgpu::Buffer; 2],
     params: wgpu::Buffer,
     stride: u64,
+    /// The chosen nodes' bit set, regrown when a larger one comes.
+    chosen: wgpu::Buffer,
 }
 
 /// Most flood steps: the first stride is the outline's width rounded up to
@@ -102,57 +104,17 @@ impl OutlineMade {
             .push(bindings::storage_read_write())
             .create_layout(device, "outline flood");
         let draw_layout = entries(wgpu::ShaderStages::FRAGMENT).create_layout(device, "outline");
-        let layout = |bind: &wgpu::BindGroupLayout| {
-            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("outline"),
-                bind_group_layouts: &[Some(bind)],
-                immediate_size: 0,
-            })
-        };
-        let compute_pipeline_layout = layout(&compute_layout);
-        let compute = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&compute_pipeline_layout),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
-        let draw_pipeline_layout = layout(&draw_layout);
+        let compute = |entry: &str| crate::pipelines::compute_pipeline(device, &module, entry, &compute_layout);
+        // Over everything: the depth, attached for the pass's shapes, is
+        // not tested.
         let draw = |depth: bool| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("outline"),
-                layout: Some(&draw_pipeline_layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: Default::default(),
-                depth_stencil: depth.then(|| wgpu::DepthStencilState {
-                    format: ViewTargets::DEPTH_FORMAT,
-                    depth_write_enabled: Some(false),
-                    depth_compare: Some(wgpu::CompareFunction::Always),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs"),
-                    compilation_options: Default::default(),
-                    targets: &[Some(wgpu::ColorTargetState {
-                        format: ViewTargets::COLOR_FORMAT,
-                        blend: Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING),
-                        write_mask: wgpu::ColorWrites::ALL,
-                    })],
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
+            over_image_pipeline(
+                device,
+                "outline",
+                (&module, &draw_layout),
+                ("vs_fullscreen", &[]),
+                depth.then_some(wgpu::CompareFunction::Always),
+            )
         };
         OutlineMade {
             seed: compute("seed"),
@@ -163,6 +125,16 @@ impl OutlineMade {
             draw_layout,
         }
     }
+}
+
+/// A buffer for the chosen nodes' bit set of at least `bytes`.
+fn chosen_buffer(device: &wgpu::Device, bytes: u64) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("outlined nodes"),
+        size: bytes.max(16).next_multiple_of(4),
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
 }
 
 /// Records the outline's flood for `ctx`'s view into `encoder`; returns
@@ -216,10 +188,18 @@ fn flood_outline(
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        views
-            .insert(ctx.view.view_id, ViewOutline { size: (width, height), seeds: [seeds(), seeds()], params, stride });
+        let chosen = chosen_buffer(device, 16);
+        let view = ViewOutline { size: (width, height), seeds: [seeds(), seeds()], params, stride, chosen };
+        views.insert(ctx.view.view_id, view);
     }
-    let view = views.get(&ctx.view.view_id).ok_or_else(|| PassError::Graph("outline state lost".into()))?;
+    let view = views.get_mut(&ctx.view.view_id).ok_or_else(|| PassError::Graph("outline state lost".into()))?;
+    let bits = outline.node_bits();
+    let bytes: &[u8] = bytemuck::cast_slice(&bits);
+    if view.chosen.size() < bytes.len() as u64 {
+        view.chosen = chosen_buffer(device, bytes.len() as u64);
+    }
+    ctx.gpu.queue.write_buffer(&view.chosen, 0, bytes);
+    let view = &*view;
     // Strides from the width (rounded up to a power of two) down to 1:
     // chosen pixels farther than the outline is wide need not be found.
     // Entry 0 of the parameters is the seeding and the drawing.
@@ -240,14 +220,6 @@ fn flood_outline(
         };
         ctx.gpu.queue.write_buffer(&view.params, view.stride * i as u64, bytemuck::bytes_of(&params));
     }
-    let bits = outline.node_bits();
-    let chosen = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("outlined nodes"),
-        size: (bits.len() as u64 * 4).max(16),
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    ctx.gpu.queue.write_buffer(&chosen, 0, bytemuck::cast_slice(&bits));
     let step = |i: usize| {
         wgpu::BindingResource::Buffer(wgpu::BufferBinding {
             buffer: &view.params,
@@ -259,7 +231,7 @@ fn flood_outline(
         let mut entries = vec![
             wgpu::BindGroupEntry { binding: 0, resource: step(i) },
             wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&instances.view) },
-            wgpu::BindGroupEntry { binding: 2, resource: chosen.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 2, resource: view.chosen.as_entire_binding() },
             wgpu::BindGroupEntry { binding: 3, resource: view.seeds[read].as_entire_binding() },
         ];
         if let Some(write) = write {
@@ -296,59 +268,81 @@ const ATTRIBUTES: [wgpu::VertexAttribute; 5] = wgpu::vertex_attr_array![
 
 const _: () = assert!(size_of::<OverlayVertex>() == 48);
 
+/// A pipeline drawing over a view's display image with premultiplied
+/// alpha (the overlay's shapes, the outline): vertex entry point and
+/// buffers `vertex`, fragment `fs`, one bind group of `layout`; with
+/// `depth`, the view's depth attached read-only and compared so.
+fn over_image_pipeline(
+    device: &wgpu::Device,
+    label: &str,
+    (module, layout): (&wgpu::ShaderModule, &wgpu::BindGroupLayout),
+    (vertex, buffers): (&str, &[Option<wgpu::VertexBufferLayout<'_>>]),
+    depth: Option<wgpu::CompareFunction>,
+) -> wgpu::RenderPipeline {
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(label),
+        bind_group_layouts: &[Some(layout)],
+        immediate_size: 0,
+    });
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(label),
+        layout: Some(&pipeline_layout),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some(vertex),
+            compilation_options: Default::default(),
+            buffers,
+        },
+        primitive: Default::default(),
+        depth_stencil: depth.map(|compare| wgpu::DepthStencilState {
+            format: ViewTargets::DEPTH_FORMAT,
+            depth_write_enabled: Some(false),
+            depth_compare: Some(compare),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module,
+            entry_point: Some("fs"),
+            compilation_options: Default::default(),
+            targets: &[Some(wgpu::ColorTargetState {
+                format: ViewTargets::COLOR_FORMAT,
+                blend: Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING),
+                write_mask: wgpu::ColorWrites::ALL,
+            })],
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
 impl Made {
     fn new(device: &wgpu::Device) -> Made {
         let layout = LayoutEntries::new(wgpu::ShaderStages::FRAGMENT)
             .push(bindings::texture_2d(bindings::FILTERABLE_FLOAT))
             .push(bindings::sampler_filtering())
             .create_layout(device, "overlay");
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("overlay"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("overlay"),
             source: wgpu::ShaderSource::Wgsl(crate::shaders::OVERLAY.source().into()),
         });
+        let vertices = [Some(wgpu::VertexBufferLayout {
+            array_stride: size_of::<OverlayVertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &ATTRIBUTES,
+        })];
+        // Reverse-Z: a shape at least as near as the surface shows; screen
+        // shapes lie on the near plane (1) and always do.
         let pipeline = |depth: bool| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(if depth { "overlay, depth-tested" } else { "overlay" }),
-                layout: Some(&pipeline_layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs"),
-                    compilation_options: Default::default(),
-                    buffers: &[Some(wgpu::VertexBufferLayout {
-                        array_stride: size_of::<OverlayVertex>() as u64,
-                        step_mode: wgpu::VertexStepMode::Vertex,
-                        attributes: &ATTRIBUTES,
-                    })],
-                },
-                primitive: Default::default(),
-                // Reverse-Z: a shape at least as near as the surface shows;
-                // screen shapes lie on the near plane (1) and always do.
-                depth_stencil: depth.then(|| wgpu::DepthStencilState {
-                    format: ViewTargets::DEPTH_FORMAT,
-                    depth_write_enabled: Some(false),
-                    depth_compare: Some(wgpu::CompareFunction::GreaterEqual),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs"),
-                    compilation_options: Default::default(),
-                    targets: &[Some(wgpu::ColorTargetState {
-                        format: ViewTargets::COLOR_FORMAT,
-                        blend: Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING),
-                        write_mask: wgpu::ColorWrites::ALL,
-                    })],
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
+            let label = if depth { "overlay, depth-tested" } else { "overlay" };
+            over_image_pipeline(
+                device,
+                label,
+                (&module, &layout),
+                ("vs", &vertices),
+                depth.then_some(wgpu::CompareFunction::GreaterEqual),
+            )
         };
         let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("overlay atlas"),

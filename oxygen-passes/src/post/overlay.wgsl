@@ -32,6 +32,8 @@ struct VertexOut {
     @location(3) @interpolate(flat) kind: u32,
 }
 
+#include "shaders/color.wgsl"
+
 @group(0) @binding(0) var atlas: texture_2d<f32>;
 @group(0) @binding(1) var atlas_sampler: sampler;
 
@@ -42,11 +44,6 @@ fn vs(v: VertexIn) -> VertexOut {
     return VertexOut(v.clip, v.local, v.params, v.color, v.kind);
 }
 
-fn srgb_to_linear(c: vec3<f32>) -> vec3<f32> {
-    let low = c / 12.92;
-    let high = pow((c + 0.055) / 1.055, vec3<f32>(2.4));
-    return select(high, low, c <= vec3<f32>(0.04045));
-}
 
 @fragment
 fn fs(v: VertexOut) -> @location(0) vec4<f32> {

@@ -73,10 +73,10 @@ impl RenderPass for TonemapPass {
         let _span = info_span!("tonemap", view = %ctx.view.view_id).entered();
         let device = &ctx.gpu.device;
         let color = ctx.color_targets(self.name())?;
-        if self.bloom.is_some() || self.auto_exposure.is_some() {
-            let Some(color_view) = color.color_view.as_ref() else {
-                return Err(PassError::NoColorTarget { pass: self.name() });
-            };
+        let Some(color_view) = color.color_view.as_ref() else {
+            return Err(PassError::NoColorTarget { pass: self.name() });
+        };
+        let (pipeline, bind_group, label) = if self.bloom.is_some() || self.auto_exposure.is_some() {
             let effects = ctx.lighting.effects().record(
                 ctx,
                 rec.encoder(),
@@ -87,41 +87,31 @@ impl RenderPass for TonemapPass {
                 self.bloom.as_ref(),
                 self.auto_exposure.as_ref(),
             )?;
-            let mut pass = crate::pipelines::fullscreen_pass(rec.encoder(), color_view, "tonemap with effects");
-            pass.set_pipeline(&effects.pipeline);
-            pass.set_bind_group(0, &effects.bind_group, &[]);
-            pass.draw(0..3, 0..1);
-            drop(pass);
-            rec.stats.render_passes += 1;
-            rec.stats.pipeline_binds += 1;
-            rec.stats.draw_calls += 1;
-            rec.stats.draw_commands += 1;
-            return Ok(());
-        }
-        let (pipeline, layout) = ctx.pipelines.tonemap(device, ViewTargets::COLOR_FORMAT);
-        let params = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("tonemap params"),
-            size: std::mem::size_of::<TonemapParams>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        ctx.gpu.queue.write_buffer(
-            &params,
-            0,
-            bytemuck::bytes_of(&TonemapParams { exposure: self.exposure, pad0: 0.0, pad1: 0.0, pad2: 0.0 }),
-        );
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("tonemap"),
-            layout: &layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&color.hdr_view) },
-                wgpu::BindGroupEntry { binding: 1, resource: params.as_entire_binding() },
-            ],
-        });
-        let Some(color_view) = color.color_view.as_ref() else {
-            return Err(PassError::NoColorTarget { pass: self.name() });
+            (effects.pipeline, effects.bind_group, "tonemap with effects")
+        } else {
+            let (pipeline, layout) = ctx.pipelines.tonemap(device, ViewTargets::COLOR_FORMAT);
+            let params = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("tonemap params"),
+                size: std::mem::size_of::<TonemapParams>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            ctx.gpu.queue.write_buffer(
+                &params,
+                0,
+                bytemuck::bytes_of(&TonemapParams { exposure: self.exposure, pad0: 0.0, pad1: 0.0, pad2: 0.0 }),
+            );
+            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("tonemap"),
+                layout: &layout,
+                entries: &[
+                    wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&color.hdr_view) },
+                    wgpu::BindGroupEntry { binding: 1, resource: params.as_entire_binding() },
+                ],
+            });
+            (pipeline, bind_group, "tonemap")
         };
-        let mut pass = crate::pipelines::fullscreen_pass(rec.encoder(), color_view, "tonemap");
+        let mut pass = crate::pipelines::fullscreen_pass(rec.encoder(), color_view, label);
         pass.set_pipeline(&pipeline);
         pass.set_bind_group(0, &bind_group, &[]);
         pass.draw(0..3, 0..1);

@@ -20,6 +20,8 @@ pub(crate) static SOURCES: &[Source] = &[
     Source::wgsl("shaders/brdf.wgsl", include_str!("brdf.wgsl")),
     Source::wgsl("shaders/noise.wgsl", include_str!("noise.wgsl")),
     Source::wgsl("shaders/half.wgsl", include_str!("half.wgsl")),
+    Source::wgsl("shaders/fullscreen.wgsl", include_str!("fullscreen.wgsl")),
+    Source::wgsl("shaders/color.wgsl", include_str!("color.wgsl")),
     // Mesh passes.
     Source::wgsl("mesh/mesh_vertex.wgsl", include_str!("../mesh/mesh_vertex.wgsl")),
     Source::wgsl("mesh/depth_only.wgsl", include_str!("../mesh/depth_only.wgsl")),
@@ -323,7 +325,7 @@ pub(crate) const ENTRY_POINTS: &[EntryPoint] = &[
     entry(OVERLAY, "fs", Stage::Fragment),
     entry(OUTLINE, "seed", Stage::Compute),
     entry(OUTLINE, "flood", Stage::Compute),
-    entry(OUTLINE, "vs", Stage::Vertex),
+    entry(OUTLINE, "vs_fullscreen", Stage::Vertex),
     entry(OUTLINE, "fs", Stage::Fragment),
     entry(DEPTH_COPY, "vs", Stage::Vertex),
     entry(DEPTH_COPY, "fs", Stage::Fragment),
