@@ -84,7 +84,8 @@ fn screen_shapes_and_text_are_drawn_where_asked() {
         .flat_map(|x| (90..112).map(move |y| (x, y)))
         .filter(|(x, y)| near(rgb(&lit, *x, *y), [255, 255, 255], 8))
         .count();
-    assert!(white > 60, "{white} white pixels of text");
+    // Measured on lavapipe and llvmpipe: 136.
+    assert!(white > 110, "{white} white pixels of text");
 
     // The immediate canvas is gone after the frame.
     renderer.render_frame(&scene).unwrap();
@@ -288,5 +289,8 @@ fn one_call_draws_every_views_frustum_shadow_cascades_included() {
     renderer.render_frame(&scene).unwrap();
     let image = support::read_lit_color(&renderer, top);
     let green = image.pixels().filter(|p| p.0[1] > 200 && p.0[0] < 60 && p.0[2] < 60).count();
-    assert!(green > 200, "{green} green pixels of frusta");
+    // Measured on lavapipe and llvmpipe: 499 (the frusta's count is the
+    // assertion above that fails with one frustum drawn; this one says they
+    // show).
+    assert!(green > 400, "{green} green pixels of frusta");
 }

@@ -424,6 +424,8 @@ fn the_viewer_draws_its_timings_and_outlines_the_clicked_node() {
     let outlined = presented.pixels().filter(|p| p.0[0] > 230 && (120..170).contains(&p.0[1]) && p.0[2] < 40).count();
     eprintln!("outside the box {outside} of {total} pixels differ; inside, {inside}; {outlined} outline pixels");
     assert!(outside <= total / 1000, "{outside} of {total} pixels outside the timings differ from the headless render");
-    assert!(inside > 500, "the timings' box is not drawn ({inside} pixels differ in it)");
-    assert!(outlined > 20, "no outline around the clicked node ({outlined} pixels)");
+    // Measured under Xvfb on lavapipe: 12 750 pixels of the box differ, 290
+    // outline pixels.
+    assert!(inside > 10_000, "the timings' box is not drawn ({inside} pixels differ in it)");
+    assert!(outlined > 230, "no outline around the clicked node ({outlined} pixels)");
 }
