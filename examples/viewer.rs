@@ -37,8 +37,9 @@
 //!   frusta (and its shadow cascades'), each named.
 //! * Click (press and release without dragging) on the main view selects
 //!   the node under the cursor and outlines it (`Renderer::pick`,
-//!   `Overlay::set_outline`; the main view draws instance labels for it
-//!   unless it is multisampled); a click on nothing clears the selection.
+//!   `Overlay::set_outline`; the main view draws instance labels for it,
+//!   and when it is multisampled, where labels are refused, both come from
+//!   an ID render); a click on nothing clears the selection.
 //!   `--select X,Y` clicks at window pixel (X, Y) after the first frame
 //!   (for tests). `--costs` also prints
 //!   every view's costs from the frame report (why it rendered, CPU
@@ -350,7 +351,8 @@ impl Viewer {
         graph.lit.shadow_pcf_radius = self.pcf_radius;
         let cascades = self.cascades;
         let msaa = self.msaa;
-        // Instance labels for picking, where the view can draw them.
+        // Instance labels for picking and the outline, where the view can
+        // draw them (a multisampled one uses ID renders instead).
         let main = |rect| {
             let desc = ViewDesc::new(SharedCamera(Arc::clone(&self.camera)))
                 .shown_in(window, rect)
@@ -566,13 +568,8 @@ impl Viewer {
         if self.layout == Layout::Editor {
             renderer.draw_view_frusta(main, radius * 3.0, 1.5, Rgba::rgb(1.0, 0.75, 0.2))?;
         }
-        // Outlines are found in the instance labels, which a multisampled
-        // main view does not draw.
-        let outline = self.selected.filter(|_| self.msaa == Msaa::Off).map(|node| Outline {
-            nodes: vec![node],
-            width: OUTLINE_WIDTH,
-            color: OUTLINE_COLOR,
-        });
+        let outline =
+            self.selected.map(|node| Outline { nodes: vec![node], width: OUTLINE_WIDTH, color: OUTLINE_COLOR });
         renderer.overlay(main)?.set_outline(outline);
         Ok(())
     }

@@ -1,8 +1,9 @@
 //! The overlay layer (`Renderer::overlay`, `OverlayPass`): screen shapes
 //! and text drawn where they were asked for, world lines hidden behind the
-//! scene's surfaces unless on top, a view's frustum meeting the corners of
-//! that view's picture in an overview, and a view without an overlay
-//! recording nothing of it. Each kind of shape and the text also against
+//! scene's surfaces unless on top (multisampled views too), a view's
+//! frustum meeting the corners of that view's picture in an overview, a
+//! view without an overlay recording nothing of it, picking and outlines
+//! with and without instance labels. Each kind of shape and the text also against
 //! a golden image.
 
 mod support;
@@ -193,19 +194,40 @@ fn a_view_without_an_overlay_records_nothing_of_it() {
     assert!(renderer.overlay(view).is_err(), "an unregistered view has no overlay");
 }
 
-/// A multisampled view draws its overlay too (on top: its depth does not
-/// match the resolved image).
+/// A multisampled view draws its overlay too, its world shapes tested
+/// against a single-sampled depth drawn for them (its own does not match
+/// the resolved image): a tested line through the box is hidden inside it,
+/// as on a single-sampled view; with nothing tested, no depth is drawn.
 #[test]
-fn a_multisampled_view_draws_its_overlay() {
+fn a_multisampled_view_draws_its_overlay_and_tests_world_shapes() {
     let mut renderer = support::gpu_renderer();
     let scene = oxygen_demo::floor_with_box(0.6);
-    let view = renderer
-        .register_view(ViewDesc::new(camera()).with_msaa(oxygen::gpu::Msaa::X4), standard_render_graph)
-        .unwrap();
+    let cam = camera();
+    let view =
+        renderer.register_view(ViewDesc::new(cam).with_msaa(oxygen::gpu::Msaa::X4), standard_render_graph).unwrap();
     renderer.overlay(view).unwrap().retained().circle(Vec2::new(96.0, 64.0), 10.0, Rgba::rgb(0.0, 0.0, 1.0));
-    renderer.render_frame(&scene).unwrap();
+    let untested = renderer.render_frame(&scene).unwrap();
     let image = support::read_lit_color(&renderer, view);
     assert!(near(rgb(&image, 96, 64), [0, 0, 255], 2), "{:?}", rgb(&image, 96, 64));
+
+    let red = Rgba::rgb(1.0, 0.0, 0.0);
+    let (a, b) = (DVec3::new(-0.5, 0.5, -1.0), DVec3::new(3.5, 0.5, -1.0));
+    renderer.overlay(view).unwrap().retained().world_line(a, b, 3.0, red, DepthMode::Tested);
+    let tested = renderer.render_frame(&scene).unwrap();
+    let image = support::read_lit_color(&renderer, view);
+    let at = |x: f32| support::pixel_of(&resolved(&cam, view, &scene), Vec3::new(x, 0.5, -1.0));
+    let red_at = |(x, y): (u32, u32)| {
+        (0..3).any(|d| {
+            let p = rgb(&image, x, (y + d).saturating_sub(1));
+            p[0] > 200 && p[1] < 60 && p[2] < 60
+        })
+    };
+    assert!(!red_at(at(1.5)), "a tested line shows through the box on a multisampled view");
+    assert!(red_at(at(-0.2)), "the line off the box is missing");
+    // The depth drawn for the test: two render passes (the depth, the
+    // overlay) where the untested overlay had one.
+    let passes = |report: &oxygen::FrameReport| report.views.iter().map(|v| v.recorded.render_passes).sum::<u32>();
+    assert_eq!(passes(&tested), passes(&untested) + 1);
 }
 
 /// Picking reads the node the view's instance labels show at a pixel; the
@@ -246,13 +268,103 @@ fn picking_finds_the_node_at_a_pixel_and_its_outline_is_as_wide_as_asked() {
     eprintln!("outline band right of the box: {band:?}");
     assert_eq!(band, [true, true, true, false, false, false, false], "a 3-pixel outline");
     assert!(!green(bx, by), "the outlined node is covered");
-    // Without labels, the outline is refused with a reason.
+}
+
+/// Views without instance labels — one that did not ask, one
+/// multisampled (where labels are refused) — pick by a one-pixel ID render
+/// of their last frame and outline from an ID render of the whole view:
+/// the same nodes and the same outline as a view with labels.
+#[test]
+fn views_without_labels_pick_and_outline_through_an_id_render() {
+    let mut renderer = support::gpu_renderer();
+    let scene = oxygen_demo::floor_with_box(0.6);
+    let cam = camera();
+    let labelled = renderer.register_view(ViewDesc::new(cam).with_labels(), standard_render_graph).unwrap();
     let plain = renderer.register_view(ViewDesc::new(cam), standard_render_graph).unwrap();
-    let outline = oxygen::overlay::Outline { nodes: vec![box_node], width: 3.0, color: Rgba::WHITE };
-    renderer.overlay(plain).unwrap().set_outline(Some(outline));
-    let frame = renderer.render_frame(&scene).err().map(|e| e.to_string()).unwrap_or_default();
-    let read = renderer.read_color(plain).err().map(|e| e.to_string()).unwrap_or_default();
-    assert!(frame.contains("labels") || read.contains("labels"), "frame: {frame:?}, read: {read:?}");
+    let msaa =
+        renderer.register_view(ViewDesc::new(cam).with_msaa(oxygen::gpu::Msaa::X4), standard_render_graph).unwrap();
+    renderer.render_frame(&scene).unwrap();
+    let labels = renderer.read_labels(labelled).unwrap();
+    let box_node =
+        scene.nodes().find(|(_, n)| n.name == "box").map(|(k, _)| oxygen::core::scene::node_index(k)).unwrap();
+    let (bx, by) = support::pixel_of(&resolved(&cam, plain, &scene), Vec3::new(1.5, 0.5, -1.0));
+    assert_eq!(renderer.pick(plain, bx, by).unwrap(), Some(box_node));
+    assert_eq!(renderer.pick(msaa, bx, by).unwrap(), Some(box_node));
+    // A grid of pixels over the whole image, edges of the box included:
+    // each picks what the label image shows there.
+    let mut differ = [0; 2];
+    let mut picked = 0;
+    for y in (0..SIZE.y).step_by(6) {
+        for x in (0..SIZE.x).step_by(6) {
+            let shown = labels.instances[(y * SIZE.x + x) as usize].checked_sub(1);
+            for (i, view) in [plain, msaa].into_iter().enumerate() {
+                differ[i] += usize::from(renderer.pick(view, x, y).unwrap() != shown);
+            }
+            picked += 1;
+        }
+    }
+    eprintln!("picks differing from the labels: {differ:?} of {picked}");
+    assert_eq!(differ, [0, 0], "picks by an ID render differ from the labels");
+
+    // The same 3-pixel outline on all three: the same band of green.
+    let outline = oxygen::overlay::Outline { nodes: vec![box_node], width: 3.0, color: Rgba::rgb(0.0, 1.0, 0.0) };
+    for view in [labelled, plain, msaa] {
+        renderer.overlay(view).unwrap().set_outline(Some(outline.clone()));
+    }
+    renderer.render_frame(&scene).unwrap();
+    let green_of = |view: ViewId| {
+        let image = support::read_lit_color(&renderer, view);
+        image.pixels().map(|p| p.0[1] > 200 && p.0[0] < 60 && p.0[2] < 60).collect::<Vec<bool>>()
+    };
+    let want = green_of(labelled);
+    let band = want.iter().filter(|g| **g).count();
+    for view in [plain, msaa] {
+        let got = green_of(view);
+        let differing = want.iter().zip(&got).filter(|(a, b)| a != b).count();
+        eprintln!("{view}: {differing} of {band} outline pixels differ");
+        assert_eq!(differing, 0, "{view}'s outline differs from the labelled view's");
+    }
+    assert!(band > 100, "{band} pixels of outline");
+
+    // A view the last frame did not render has nothing to pick from.
+    let later = renderer.register_view(ViewDesc::new(cam), standard_render_graph).unwrap();
+    let error = renderer.pick(later, 1, 1).unwrap_err().to_string();
+    assert!(error.contains("not been rendered") || error.contains("skipped"), "{error}");
+}
+
+/// Picking by an ID render draws what GPU culling kept: views culled on
+/// the GPU (by frustum, and by occlusion with its two phases) pick over a
+/// field of boxes the nodes a CPU-culled view's labels show.
+#[test]
+fn picking_by_an_id_render_follows_gpu_culling() {
+    use oxygen::sceneprep::Visibility;
+    let Some(mut renderer) = support::gpu_visibility_renderer(RendererOptions::default()) else { return };
+    let (scene, side) = oxygen_demo::field_of_boxes(100, &[oxygen::glam::Vec4::new(0.8, 0.3, 0.2, 1.0)]);
+    let eye = Vec3::new(-3.0, 4.0, -3.0);
+    let cam =
+        LookAtResolver::new(Camera::perspective(1.0, 0.1, None), eye, Vec3::new(side, 0.0, side) * 0.5, SIZE).unwrap();
+    let labelled = renderer.register_view(ViewDesc::new(cam).with_labels(), standard_render_graph).unwrap();
+    let culled = [Visibility::GpuFrustum, Visibility::GpuOcclusion].map(|visibility| {
+        renderer.register_view(ViewDesc::new(cam).with_visibility(visibility), standard_render_graph).unwrap()
+    });
+    // Two frames: occlusion culling's second draws what the first saw.
+    renderer.render_frame(&scene).unwrap();
+    renderer.render_frame(&scene).unwrap();
+    let labels = renderer.read_labels(labelled).unwrap();
+    let mut differ = [0; 2];
+    let mut nodes = std::collections::HashSet::new();
+    for y in (0..SIZE.y).step_by(8) {
+        for x in (0..SIZE.x).step_by(8) {
+            let shown = labels.instances[(y * SIZE.x + x) as usize].checked_sub(1);
+            nodes.insert(shown);
+            for (i, view) in culled.into_iter().enumerate() {
+                differ[i] += usize::from(renderer.pick(view, x, y).unwrap() != shown);
+            }
+        }
+    }
+    eprintln!("picks differing from the labels: {differ:?}; {} nodes seen", nodes.len());
+    assert!(nodes.len() > 20, "{} nodes in view: the field is not in sight", nodes.len());
+    assert_eq!(differ, [0, 0], "GPU-culled views pick other nodes than their labels show");
 }
 
 /// One call draws every other view's frustum, its shadow cascades

@@ -171,7 +171,8 @@ pub struct Overlay {
 
 /// A selection outline ([`Overlay::set_outline`]): a line `width` pixels
 /// wide around what the chosen nodes cover in the view, outside them,
-/// found by jump flooding the view's instance labels.
+/// found by jump flooding the view's instance ids (its labels, or an ID
+/// render).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Outline {
     /// The nodes outlined, by stable id (`oxygen_core::scene::node_index`,
@@ -265,8 +266,10 @@ impl Overlay {
     }
 
     /// Outlines the nodes `outline` names from the next frame on (`None`:
-    /// no outline). Kept until changed. The view must draw instance labels
-    /// (`ViewDesc::with_labels`): the outline is found in them.
+    /// no outline). Kept until changed. The outline is found in the view's
+    /// instance labels when it draws them (`ViewDesc::with_labels`),
+    /// otherwise in an ID render of the view made for it each frame (its
+    /// opaque draws drawn once more: the cost of a depth pre-pass).
     pub fn set_outline(&mut self, outline: Option<Outline>) {
         self.outline = outline.filter(|o| !o.nodes.is_empty());
     }
@@ -279,6 +282,17 @@ impl Overlay {
     /// Shapes on both canvases (a box or a sphere counts its lines).
     pub fn shape_count(&self) -> usize {
         self.immediate.len() + self.retained.len()
+    }
+
+    /// Whether a shape is tested against the view's depth (a world shape
+    /// with [`DepthMode::Tested`], a grid): a multisampled view then draws
+    /// its depth once more, single-sampled, for them.
+    pub fn depth_tested(&self) -> bool {
+        self.immediate.iter().chain(&self.retained).any(|shape| match shape {
+            Shape::WorldLine { depth, .. } | Shape::WorldText { depth, .. } => *depth == DepthMode::Tested,
+            Shape::Grid(_) => true,
+            _ => false,
+        })
     }
 
     /// Shapes refused so far for a coordinate or size that is not finite.

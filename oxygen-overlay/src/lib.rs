@@ -21,7 +21,8 @@
 //! texture, one draw: whatever the number of shapes.
 //!
 //! A selection outline ([`Outline`]) is drawn around chosen nodes, found in
-//! the view's instance labels by jump flooding on the GPU.
+//! the view's instance ids (its labels, or an ID render where it draws
+//! none) by jump flooding on the GPU.
 //!
 //! Data flows one way: canvas calls → shapes → vertices (and atlas texels)
 //! → the GPU. Nothing here touches the GPU.

@@ -61,7 +61,10 @@ pub use lighting::reflections::{ReflectionHistoryPass, ScreenSpaceReflections};
 pub use lighting::shadow_atlas::array_layer_count;
 pub use lighting::split_sum::SPLIT_SUM_LUT_SIZE;
 pub use lighting::{LightingResources, ScreenBuffers};
-pub use mesh::{ColorOps, DrawList, ForwardLitConfig, MeshPass, ShadowFilter};
+pub use mesh::{
+    ColorOps, DrawList, ForwardLitConfig, ID_LABELS, MeshPass, ShadowFilter, id_targets, record_id_render,
+    region_camera,
+};
 pub use oxygen_core::{
     Color, Depth, HdrColor, InstanceIds, LinearDepth, Normals, Output, OutputSource, ProbeCube, ProbeId,
     SemanticClasses, ShadowMap,

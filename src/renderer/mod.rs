@@ -117,6 +117,10 @@ struct Frames {
     /// Why each view the last frame skipped was skipped, kept until it
     /// renders again: a readback of it says so.
     skipped: std::collections::HashMap<ViewId, String>,
+    /// How the last frame drew (its render origin, what its pipelines
+    /// carry): what an ID render between frames draws the last frame's
+    /// draws with ([`Renderer::pick`]).
+    drawing: Option<(glam::DVec3, oxygen_passes::Shading)>,
 }
 
 impl Frames {
@@ -249,6 +253,7 @@ impl Renderer {
                 gpu_timer,
                 last: Vec::new(),
                 skipped: Default::default(),
+                drawing: None,
             },
             gpu,
         })
@@ -312,6 +317,12 @@ impl Renderer {
             }
         }
         let presented = self.present(&recorded);
+        let shading = oxygen_passes::Shading {
+            materials: prepared.materials,
+            vertex_attributes: prepared.vertex_attributes,
+            specialize: self.settings.specialize_shaders,
+        };
+        self.frames.drawing = Some((prepared.origin, shading));
         let mut report = FrameReport::new(prepared, recorded, presented, gpu_seconds);
         if let Some(timer) = &self.frames.gpu_timer {
             for view in &mut report.views {

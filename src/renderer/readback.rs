@@ -2,9 +2,12 @@
 //! images and prepared frame (window, probe and environment readbacks sit
 //! with their subsystems).
 
+use oxygen_bindless::SceneConstantsBuffer;
 use oxygen_core::ViewId;
 use oxygen_gpu::Label;
+use oxygen_passes::{CommandRecorder, FrameProgress, RenderContext, ViewInputs};
 use oxygen_sceneprep::{DrawMetadata, PassMask, PreparedSceneFrame};
+use tracing::info_span;
 
 use super::{RenderError, Renderer};
 #[cfg(doc)]
@@ -100,13 +103,14 @@ impl Renderer {
         })
     }
 
-    /// The node whose opaque or masked surface the view showed at pixel
-    /// (`x`, `y`) (from its top-left corner) in the frame it last rendered:
-    /// its stable id ([`oxygen_core::scene::node_index`]), `None` where no
-    /// node drew (the background, or only blended surfaces). Reads one
-    /// texel of the view's instance labels (waits for the GPU), so the view
-    /// must draw them ([`crate::ViewDesc::with_labels`]); fails for a pixel
-    /// outside the view.
+    /// The node `id` showed at pixel (`x`, `y`) of its last frame (its
+    /// stable id, [`oxygen_core::scene::node_index`]; `None` where no
+    /// opaque or masked surface was drawn): read from the view's instance
+    /// labels when it draws them ([`crate::ViewDesc::with_labels`]),
+    /// otherwise from a one-pixel ID render of its last frame's draws (the
+    /// camera narrowed to that pixel: [`oxygen_passes::region_camera`]),
+    /// which works for any view the last frame rendered, multisampled ones
+    /// included. Waits for the GPU either way.
     pub fn pick(&self, id: impl Into<ViewId>, x: u32, y: u32) -> Result<Option<u32>, RenderError> {
         let id = id.into();
         let targets = self.view_targets(id)?;
@@ -116,13 +120,66 @@ impl Renderer {
                 targets.width, targets.height
             )));
         }
-        let plane = targets.labels.as_ref().and_then(|l| l.plane(Label::Instance)).ok_or_else(|| {
-            RenderError::Unsupported(format!(
-                "{id} draws no instance labels to pick from (register it with ViewDesc::with_labels)"
-            ))
-        })?;
+        let _span = info_span!("pick", view = %id, x, y).entered();
+        let Some(plane) = targets.labels.as_ref().and_then(|l| l.plane(Label::Instance)) else {
+            return self.pick_by_id_render(id, x, y);
+        };
         let (ox, oy) = targets.tile.map_or((0, 0), |t| (t.x, t.y));
         let word = self.gpu.read_u32_region(&plane.texture, 0, (ox + x, oy + y), (1, 1))?;
+        Ok(word.first().and_then(|w| w.checked_sub(1)))
+    }
+
+    /// [`Renderer::pick`] for a view without instance labels: its last
+    /// frame's opaque and masked draws drawn again into one pixel, through
+    /// its camera narrowed to that pixel.
+    fn pick_by_id_render(&self, id: ViewId, x: u32, y: u32) -> Result<Option<u32>, RenderError> {
+        let unavailable = |why: &str| {
+            RenderError::Unsupported(format!(
+                "{id} draws no instance labels, and picking without them draws its last frame again: {why}"
+            ))
+        };
+        let rendered_last = self.frames.last.iter().any(|(view, _)| *view == id);
+        let prepared = self
+            .prepared_frame(id)
+            .filter(|_| rendered_last)
+            .ok_or_else(|| unavailable("the last frame skipped it"))?;
+        let view = self.targets.last_view(id).ok_or_else(|| self.not_rendered(id))?;
+        let own = self.targets.get(id).ok_or_else(|| self.not_rendered(id))?;
+        let targets = own.targets.as_ref().ok_or_else(|| self.not_rendered(id))?;
+        let (origin, shading) = self.frames.drawing.ok_or_else(|| self.not_rendered(id))?;
+        let camera = oxygen_passes::region_camera(view, [x, y, 1, 1])
+            .ok_or_else(|| unavailable("its camera cannot be narrowed to that pixel"))?;
+        let device = &self.gpu.device;
+        let mut constants = SceneConstantsBuffer::new(device, self.heap.scene_constants_layout(), "pick");
+        constants.set_camera(&self.gpu.queue, &camera);
+        constants.set_renderer(&self.gpu.queue, &own.constants.constants().renderer);
+        let pixel = oxygen_passes::id_targets(device, 1, 1, true, "pick");
+        let progress = FrameProgress::new([]);
+        let ctx = RenderContext {
+            gpu: &self.gpu,
+            view,
+            prepared,
+            scene_constants: &own.constants,
+            heap: &self.heap,
+            targets,
+            pipelines: &self.pipelines,
+            lighting: &self.lighting,
+            draw_path: self.settings.draw_path,
+            inputs: ViewInputs { visibility: self.visibility.gpu.as_ref(), ..Default::default() },
+            progress: &progress,
+            origin,
+            hdr_read_by_others: false,
+            shading,
+            time_seconds: 0.0,
+            overlay: None,
+        };
+        let mut rec = CommandRecorder::new(device, "pick");
+        futures::executor::block_on(oxygen_passes::record_id_render(&ctx, &pixel, &constants, &mut rec))
+            .map_err(|source| RenderError::Pass { view: id, name: self.views.name(id).map(str::to_owned), source })?;
+        self.gpu.queue.submit([rec.finish().0]);
+        let plane =
+            pixel.labels.as_ref().and_then(|l| l.plane(Label::Instance)).ok_or_else(|| unavailable("no ids"))?;
+        let word = self.gpu.read_u32_region(&plane.texture, 0, (0, 0), (1, 1))?;
         Ok(word.first().and_then(|w| w.checked_sub(1)))
     }
 

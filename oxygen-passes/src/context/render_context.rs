@@ -171,6 +171,26 @@ impl<'a> RenderContext<'a> {
             || self.prepared.partitions_matching(PassMask::TRANSPARENT, PassMask::empty()).next().is_some()
     }
 
+    /// The same view's draws aimed at other targets through other scene
+    /// constants (an ID render: [`crate::record_id_render`]). It reads
+    /// nothing from other views (no inputs but GPU visibility's counts,
+    /// which say how many of the view's commands the GPU kept) and has no
+    /// overlay.
+    pub fn drawing_into<'b>(
+        &'b self,
+        targets: &'b ViewTargets,
+        scene_constants: &'b SceneConstantsBuffer,
+    ) -> RenderContext<'b> {
+        RenderContext {
+            targets,
+            scene_constants,
+            inputs: ViewInputs { visibility: self.inputs.visibility, ..Default::default() },
+            overlay: None,
+            hdr_read_by_others: false,
+            ..*self
+        }
+    }
+
     /// Another view's output this view is linked to, once the views that
     /// produce it have recorded their commands (their command buffers are
     /// submitted before this view's). Fails with

@@ -4,15 +4,19 @@
 //! pass uploads the vertices and the atlas rows that changed and draws
 //! them all at once: one render pass and one draw a view, whatever the
 //! number of shapes. World shapes are depth-tested against the view's
-//! depth where it is single-sampled; a multisampled view's depth is not
-//! (its samples do not match the display image), so there every world
-//! shape is drawn on top. A selection outline ([`Outline`]) is found in the
-//! view's instance labels by jump flooding (`post/outline.wgsl`: a seeding
-//! step and one step a halving stride, in compute) and drawn first. A view
-//! without an overlay, or with an empty one, records nothing.
+//! depth; a multisampled view's depth does not match the display image
+//! (and depth does not resolve), so there, when a shape asks for the test,
+//! the view's depth is drawn again single-sampled (an ID render,
+//! [`crate::record_id_render`]: the cost of a depth pre-pass) and tested
+//! against. A selection outline ([`Outline`]) is found in the view's
+//! instance ids by jump flooding (`post/outline.wgsl`: a seeding step and
+//! one step a halving stride, in compute) and drawn first: the ids are the
+//! view's instance labels when it draws them, otherwise an ID render made
+//! for the outline. A view without an overlay, or with an empty one,
+//! records nothing.
 
 use std::collections::HashMap;
-use std::sync::{Mutex, OnceLock};
+use std::sync::{Arc, Mutex, OnceLock};
 
 use glam::{DMat4, UVec2};
 use oxygen_core::ViewId;
@@ -56,6 +60,9 @@ pub(crate) struct OverlayState {
     outline: OnceLock<OutlineMade>,
     views: Mutex<HashMap<ViewId, ViewOverlay>>,
     outlines: Mutex<HashMap<ViewId, ViewOutline>>,
+    /// The targets of the ID renders of views that need one (an outline
+    /// without instance labels, depth-tested shapes on a multisampled view).
+    ids: Mutex<HashMap<ViewId, Arc<ViewTargets>>>,
 }
 
 /// The selection outline's pipelines: the flood's two steps and the
@@ -137,25 +144,23 @@ fn chosen_buffer(device: &wgpu::Device, bytes: u64) -> wgpu::Buffer {
     })
 }
 
+/// Where a view's instance ids are: a texture and the view's corner in it
+/// (a batch camera's tile of its page's labels; 0 for an ID render).
+struct Instances<'a> {
+    view: &'a wgpu::TextureView,
+    origin: [u32; 2],
+}
+
 /// Records the outline's flood for `ctx`'s view into `encoder`; returns
 /// the bind group its drawing reads.
 fn flood_outline(
     ctx: &RenderContext<'_>,
     state: &OverlayState,
     outline: &Outline,
+    instances: Instances<'_>,
     encoder: &mut wgpu::CommandEncoder,
 ) -> Result<wgpu::BindGroup, PassError> {
     const PASS: &str = "overlay";
-    if let Some(problem) = outline.problem() {
-        return Err(PassError::BadInput { pass: PASS, what: problem });
-    }
-    let instances =
-        ctx.targets.labels.as_ref().and_then(|l| l.plane(Label::Instance)).ok_or_else(|| PassError::BadInput {
-            pass: PASS,
-            what: "a selection outline is found in the view's instance labels, which it does not draw (register it \
-                   with ViewDesc::with_labels)"
-                .into(),
-        })?;
     let device = &ctx.gpu.device;
     let made = state.outline.get_or_init(|| OutlineMade::new(device));
     let (width, height) = (ctx.targets.width, ctx.targets.height);
@@ -209,7 +214,9 @@ fn flood_outline(
         strides.push(stride);
         stride /= 2;
     }
-    let origin = ctx.targets.tile.map_or([0, 0, 0, 0], |t| [t.x, t.y, 0, 0]);
+    // Where the view is drawn (its tile), then where its ids are read.
+    let [lx, ly] = instances.origin;
+    let origin = ctx.targets.tile.map_or([0, 0, lx, ly], |t| [t.x, t.y, lx, ly]);
     let [r, g, b, a] = outline.color.unorm8().map(|c| f32::from(c) / 255.0);
     for (i, stride) in std::iter::once(0).chain(strides.iter().copied()).enumerate() {
         let params = OutlineParams {
@@ -230,7 +237,7 @@ fn flood_outline(
     let group = |layout: &wgpu::BindGroupLayout, i: usize, read: usize, write: Option<usize>| {
         let mut entries = vec![
             wgpu::BindGroupEntry { binding: 0, resource: step(i) },
-            wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&instances.view) },
+            wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(instances.view) },
             wgpu::BindGroupEntry { binding: 2, resource: view.chosen.as_entire_binding() },
             wgpu::BindGroupEntry { binding: 3, resource: view.seeds[read].as_entire_binding() },
         ];
@@ -363,6 +370,24 @@ impl OverlayState {
         if let Ok(mut outlines) = self.outlines.lock() {
             outlines.retain(|view, _| keep(*view));
         }
+        if let Ok(mut ids) = self.ids.lock() {
+            ids.retain(|view, _| keep(*view));
+        }
+    }
+
+    /// `ctx`'s ID-render targets at its size, with an instance plane when
+    /// `ids` (made or remade when they do not fit).
+    fn id_targets(&self, ctx: &RenderContext<'_>, ids: bool) -> Result<Arc<ViewTargets>, PassError> {
+        let mut all = self.ids.lock().map_err(|_| PassError::Graph("overlay state poisoned".into()))?;
+        let (width, height) = (ctx.targets.width, ctx.targets.height);
+        let fits = |t: &ViewTargets| t.width == width && t.height == height && t.labels.is_some() == ids;
+        if let Some(targets) = all.get(&ctx.view.view_id).filter(|t| fits(t)) {
+            return Ok(Arc::clone(targets));
+        }
+        let label = format!("{} id render", ctx.view.view_id);
+        let targets = Arc::new(crate::id_targets(&ctx.gpu.device, width, height, ids, &label));
+        all.insert(ctx.view.view_id, Arc::clone(&targets));
+        Ok(targets)
     }
 
     /// Views holding overlay buffers.
@@ -380,11 +405,7 @@ impl RenderPass for OverlayPass {
         let Some(overlay) = ctx.overlay else {
             return Ok(());
         };
-        let mut overlay = overlay.lock().map_err(|_| PassError::Graph("the view's overlay is poisoned".into()))?;
-        if overlay.is_empty() {
-            return Ok(());
-        }
-        let _span = info_span!("overlay", view = %ctx.view.view_id, shapes = overlay.shape_count()).entered();
+        let lock = || overlay.lock().map_err(|_| PassError::Graph("the view's overlay is poisoned".into()));
         let color = ctx.color_targets(self.name())?;
         let target = color.color_view.as_ref().ok_or(PassError::NoColorTarget { pass: self.name() })?;
         // The view's matrices are relative to the render origin; the
@@ -392,17 +413,53 @@ impl RenderPass for OverlayPass {
         let world_to_view = ctx.view.world_to_view * DMat4::from_translation(-ctx.origin);
         let camera =
             OverlayView::new(ctx.view.projection, world_to_view, UVec2::new(ctx.targets.width, ctx.targets.height));
-        let vertices = overlay.tessellate(&camera);
-        let outline = overlay.outline().cloned();
+        let (vertices, outline, tested) = {
+            let mut overlay = lock()?;
+            if overlay.is_empty() {
+                return Ok(());
+            }
+            (overlay.tessellate(&camera), overlay.outline().cloned(), overlay.depth_tested())
+        };
         if vertices.is_empty() && outline.is_none() {
             return Ok(());
         }
+        let _span = info_span!("overlay", view = %ctx.view.view_id, vertices = vertices.len()).entered();
+        if let Some(problem) = outline.as_ref().and_then(Outline::problem) {
+            return Err(PassError::BadInput { pass: self.name(), what: problem });
+        }
         let device = &ctx.gpu.device;
         let state = ctx.lighting.overlay();
-        let outline = match &outline {
-            Some(outline) => Some(flood_outline(ctx, state, outline, rec.encoder())?),
-            None => None,
+        // What the view itself cannot give: instance ids for the outline
+        // (no labels drawn, or multisampled), a single-sampled depth for
+        // tested shapes on a multisampled view (not a batch's camera: its
+        // tile lies in a page the depth would not match; on top there).
+        let labels = ctx.targets.labels.as_ref().and_then(|l| l.plane(Label::Instance));
+        let own_ids = outline.is_some() && labels.is_none();
+        let own_depth = ctx.targets.msaa.is_some() && ctx.targets.tile.is_none() && tested && !vertices.is_empty();
+        let id_render = match own_ids || own_depth {
+            true => {
+                let targets = state.id_targets(ctx, own_ids)?;
+                crate::record_id_render(ctx, &targets, ctx.scene_constants, rec).await?;
+                Some(targets)
+            }
+            false => None,
         };
+        let outline = match (&outline, labels, &id_render) {
+            (None, ..) => None,
+            (Some(outline), Some(plane), _) => {
+                let origin = ctx.targets.tile.map_or([0, 0], |t| [t.x, t.y]);
+                let instances = Instances { view: &plane.view, origin };
+                Some(flood_outline(ctx, state, outline, instances, rec.encoder())?)
+            }
+            (Some(outline), None, Some(ids)) => {
+                let plane = ids.labels.as_ref().and_then(|l| l.plane(Label::Instance));
+                let plane = plane.ok_or_else(|| PassError::Graph("the ID render drew no ids".into()))?;
+                let instances = Instances { view: &plane.view, origin: [0, 0] };
+                Some(flood_outline(ctx, state, outline, instances, rec.encoder())?)
+            }
+            (Some(_), None, None) => return Err(PassError::Graph("an outline without instance ids".into())),
+        };
+        let mut overlay = lock()?;
         let made = state.made.get_or_init(|| Made::new(device));
         let mut views = state.views.lock().map_err(|_| PassError::Graph("overlay state poisoned".into()))?;
         let bytes: &[u8] = bytemuck::cast_slice(&vertices);
@@ -473,8 +530,13 @@ impl RenderPass for OverlayPass {
         view.generation = Some(atlas.generation());
         overlay.atlas_mut().mark_uploaded();
 
-        // A multisampled view's depth does not match the display image.
-        let depth = ctx.targets.msaa.is_none().then_some(&ctx.targets.depth_view);
+        // The view's depth, or the ID render's for a multisampled view
+        // (none: everything on top).
+        let depth = match (&ctx.targets.msaa, &id_render) {
+            (None, _) => Some(&ctx.targets.depth_view),
+            (Some(_), Some(ids)) if own_depth => Some(&ids.depth_view),
+            (Some(_), _) => None,
+        };
         let mut rec_draws = 0;
         let mut pass = rec.encoder().begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("overlay"),
