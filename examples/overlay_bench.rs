@@ -16,6 +16,8 @@
 //! * `overlay`: COUNT primitives on its immediate canvas each frame, in
 //!   equal shares rectangles, lines 2 px wide, circles, ring arcs, 8-letter
 //!   labels and depth-tested world lines (an editor's mix);
+//! * `instance labels`: the view draws instance labels, no overlay (what
+//!   the next case is compared with);
 //! * `outline from labels`: the view draws instance labels; the box is
 //!   outlined 3 px wide (a jump flood of the labels), and 20 pixels are
 //!   picked after the frames (one texel of the labels read each);
@@ -124,7 +126,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let cases = [
         case("no overlay", Shapes::None, "no overlay"),
         case("overlay", Shapes::Mix, "no overlay"),
-        Case { labels: true, outline: true, ..case("outline from labels", Shapes::None, "no overlay") },
+        Case { labels: true, ..case("instance labels", Shapes::None, "no overlay") },
+        Case { labels: true, outline: true, ..case("outline from labels", Shapes::None, "instance labels") },
         Case { outline: true, ..case("outline from an ID render", Shapes::None, "no overlay") },
         Case {
             msaa: Msaa::X4,
