@@ -62,7 +62,9 @@
 //! `BATCH_BENCH_TURN_DEGREES=D` turns the ring about the grid by D degrees
 //! a frame, so that every camera has a new pose every frame (a rig on a
 //! moving robot); by default the cameras stand still.
-//! `BATCH_BENCH_MAX_PAGE_SIDE=S` caps the atlas' pages at S pixels
+//! `BATCH_BENCH_PRE_PASS=1` gives the batch a depth pre-pass
+//! (`BatchGraph`'s `lit.depth_from_pre_pass`; lone views keep the standard
+//! graph's). `BATCH_BENCH_MAX_PAGE_SIDE=S` caps the atlas' pages at S pixels
 //! (`BatchDesc::with_max_page_side`): at the cameras' size, one camera a
 //! page and a render pass per camera, which is what array layers cost
 //! without multiview.
@@ -179,6 +181,7 @@ fn run(
     in_flight: u32,
     planes: StreamOptions,
     max_page_side: Option<u32>,
+    pre_pass: bool,
     turn: f32,
 ) -> Result<Run, Box<dyn std::error::Error>> {
     let mut renderer = Renderer::new_headless_with(*options)?;
@@ -196,7 +199,9 @@ fn run(
                 Some(side) => desc.with_max_page_side(side),
                 None => desc,
             };
-            Some(renderer.register_batch(desc)?)
+            let mut graph = oxygen::batch::standard_batch_graph;
+            graph.lit.depth_from_pre_pass = pre_pass;
+            Some(renderer.register_batch(desc.with_graph(graph))?)
         }
         Mode::Views => None,
     };
@@ -391,6 +396,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Ok(side) => Some(side.parse::<u32>().map_err(|_| format!("BATCH_BENCH_MAX_PAGE_SIDE={side}: pixels"))?),
         Err(_) => None,
     };
+    // A depth pre-pass before the batch's shading (`BatchGraph::lit`'s
+    // `depth_from_pre_pass`): each pixel shaded once, the vertices drawn twice.
+    let pre_pass = match std::env::var("BATCH_BENCH_PRE_PASS").as_deref() {
+        Ok("1") => true,
+        Ok("0") | Err(_) => false,
+        Ok(other) => return Err(format!("BATCH_BENCH_PRE_PASS={other}: use 0 or 1").into()),
+    };
     // Cameras turning about the grid by this many degrees a frame: a new
     // pose for every camera every frame (0: standing still).
     let turn = match std::env::var("BATCH_BENCH_TURN_DEGREES") {
@@ -446,6 +458,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .value("floor_record", floor.as_ref().map(|f| &f.1))
         .value("target_budget_bytes", options.target_budget_bytes)
         .value("max_page_side", max_page_side)
+        .value("pre_pass", pre_pass)
         .value("frames_in_flight", in_flight)
         .value(
             "streamed_planes",
@@ -477,6 +490,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 in_flight,
                 planes,
                 max_page_side,
+                pre_pass,
                 turn,
             )?;
             let (cpu, whole, gpu) = (median(&r.cpu_ms), median(&r.frame_ms), median(&r.gpu_ms));
