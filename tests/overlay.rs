@@ -94,6 +94,176 @@ fn screen_shapes_and_text_are_drawn_where_asked() {
     assert!(!near(rgb(&next, 24, 19), [255, 0, 0], 30), "the immediate rectangle stayed");
 }
 
+/// Each kind of shape alone, and text, against a golden of its own: the
+/// screen kinds over an empty scene, the world kinds over the floor with
+/// its box (the tested ones hidden where the box is nearer).
+#[test]
+fn each_kind_of_shape_matches_its_golden() {
+    use oxygen::glam::DMat4;
+    use oxygen::overlay::Canvas;
+    const SMALL: UVec2 = UVec2::new(96, 64);
+    let mut renderer = support::gpu_renderer();
+    let floor = oxygen_demo::floor_with_box(0.6);
+    let empty = Scene::new();
+    let cam = LookAtResolver::new(
+        Camera::perspective(1.0, 0.1, None),
+        Vec3::new(-0.5, 1.8, 3.0),
+        Vec3::new(0.4, 0.4, -1.0),
+        SMALL,
+    )
+    .unwrap();
+    let view = renderer.register_view(ViewDesc::new(cam), standard_render_graph).unwrap();
+    let checker = [[255, 0, 0, 255], [0, 255, 0, 255], [0, 0, 255, 255], [255, 255, 255, 255]].concat();
+    let image = renderer.overlay(view).unwrap().add_image(2, 2, checker).unwrap();
+    let seen = LookAtResolver::new(
+        Camera::perspective(0.6, 0.5, Some(3.0)),
+        Vec3::new(-1.0, 1.0, 1.0),
+        Vec3::new(1.5, 0.5, -1.0),
+        UVec2::new(64, 48),
+    )
+    .unwrap();
+    let seen_view = resolved(&seen, view, &floor);
+    let (yellow, cyan, magenta) = (Rgba::rgb(1.0, 0.9, 0.1), Rgba::rgb(0.1, 0.9, 1.0), Rgba::rgb(1.0, 0.2, 0.9));
+    let tested = DepthMode::Tested;
+    type Draw = Box<dyn Fn(&mut Canvas<'_>)>;
+    let kinds: Vec<(&str, bool, Draw)> = vec![
+        (
+            "rect",
+            false,
+            Box::new(move |c| {
+                c.rect(Vec2::new(10.0, 10.0), Vec2::new(60.0, 40.0), yellow);
+            }),
+        ),
+        (
+            "rect_outline",
+            false,
+            Box::new(move |c| {
+                c.rect_outline(Vec2::new(10.5, 10.5), Vec2::new(60.5, 40.5), 3.0, cyan);
+            }),
+        ),
+        (
+            "image",
+            false,
+            Box::new(move |c| {
+                c.image(Vec2::new(20.0, 8.0), Vec2::new(68.0, 56.0), image, Rgba::WHITE);
+            }),
+        ),
+        (
+            "line",
+            false,
+            Box::new(move |c| {
+                c.line(Vec2::new(8.0, 56.0), Vec2::new(88.0, 9.0), 3.0, yellow);
+            }),
+        ),
+        (
+            "polyline",
+            false,
+            Box::new(move |c| {
+                c.polyline(
+                    &[Vec2::new(8.0, 50.0), Vec2::new(30.0, 12.0), Vec2::new(60.0, 52.0), Vec2::new(88.0, 20.0)],
+                    2.0,
+                    cyan,
+                );
+            }),
+        ),
+        (
+            "circle",
+            false,
+            Box::new(move |c| {
+                c.circle(Vec2::new(48.0, 32.0), 20.5, magenta);
+            }),
+        ),
+        (
+            "ring",
+            false,
+            Box::new(move |c| {
+                c.circle_outline(Vec2::new(48.0, 32.0), 22.0, 4.0, yellow);
+            }),
+        ),
+        (
+            "arc",
+            false,
+            Box::new(move |c| {
+                c.arc(Vec2::new(48.0, 32.0), 22.0, 5.0, 0.5, 4.0, cyan);
+            }),
+        ),
+        (
+            "text",
+            false,
+            Box::new(move |c| {
+                c.text(Vec2::new(4.0, 6.0), 16.0, Rgba::WHITE, "Oxygen");
+                c.text(Vec2::new(4.0, 30.0), 16.0, yellow, "λЖé 42");
+            }),
+        ),
+        (
+            "world_line",
+            true,
+            Box::new(move |c| {
+                c.world_line(DVec3::new(-0.5, 0.5, -1.0), DVec3::new(3.5, 0.5, -1.0), 2.0, yellow, tested);
+            }),
+        ),
+        (
+            "world_box",
+            true,
+            Box::new(move |c| {
+                c.world_box(DVec3::new(0.8, 0.0, -1.7), DVec3::new(2.2, 1.4, -0.3), 2.0, cyan, tested);
+            }),
+        ),
+        (
+            "world_cube",
+            true,
+            Box::new(move |c| {
+                let turned = DMat4::from_translation(DVec3::new(-1.0, 0.6, -0.5))
+                    * DMat4::from_rotation_y(0.6)
+                    * DMat4::from_scale(DVec3::splat(1.2));
+                c.world_cube(turned, 2.0, magenta, tested);
+            }),
+        ),
+        (
+            "world_sphere",
+            true,
+            Box::new(move |c| {
+                c.world_sphere(DVec3::new(-1.0, 0.8, -1.0), 0.8, 1.5, yellow, tested);
+            }),
+        ),
+        (
+            "world_arrow",
+            true,
+            Box::new(move |c| {
+                c.world_arrow(DVec3::new(-2.0, 0.2, 0.0), DVec3::new(1.0, 1.8, -1.0), 2.0, cyan, DepthMode::OnTop);
+            }),
+        ),
+        (
+            "world_text",
+            true,
+            Box::new(move |c| {
+                c.world_text(DVec3::new(1.5, 1.0, -1.0), Vec2::new(-10.0, -20.0), 14.0, Rgba::WHITE, "box", tested);
+            }),
+        ),
+        (
+            "view_frustum",
+            true,
+            Box::new(move |c| {
+                c.view_frustum(&seen_view, 3.0, 1.5, magenta, DepthMode::OnTop);
+            }),
+        ),
+        (
+            "grid",
+            true,
+            Box::new(move |c| {
+                c.grid(0.0, 1.0, 12, 1.0, Rgba::rgb(0.8, 0.8, 0.8), 20.0);
+            }),
+        ),
+    ];
+    for (name, world, draw) in &kinds {
+        draw(&mut renderer.overlay(view).unwrap().immediate());
+        renderer.render_frame(if *world { &floor } else { &empty }).unwrap();
+        let image = support::read_lit_color(&renderer, view);
+        assert_golden(&format!("overlay_kind_{name}"), &image, Tolerance::default());
+    }
+    assert_eq!(renderer.overlay(view).unwrap().dropped(), 0);
+}
+
 #[test]
 fn world_lines_hide_behind_surfaces_unless_on_top() {
     let mut renderer = support::gpu_renderer();
