@@ -346,7 +346,9 @@ pub const reference_render_graph: ReferenceGraph =
 /// draws). Forward lit shading of the opaque and masked partitions,
 /// tone-mapped while shading into the display atlas when nothing blends
 /// and nobody reads the HDR image; otherwise into the HDR atlas, then the
-/// blended partitions, then one tone map per page.
+/// blended partitions, then one tone map per page. Last, each camera's
+/// overlay over its tile ([`OverlayPass`]: a render pass for each camera
+/// that has one, none for the others).
 #[derive(Clone, Debug, PartialEq)]
 pub struct BatchGraph {
     /// The forward lit pass's configuration; `depth_from_pre_pass` lays
@@ -383,21 +385,27 @@ impl BatchGraph {
             MeshPass::depth_pre_pass().run_batch(views, rec).await?;
         }
         if !views.iter().any(|ctx| ctx.hdr_read_after_shading()) {
-            return MeshPass::forward_lit(lit).with_labels().tone_mapped(exposure).run_batch(views, rec).await;
-        }
-        MeshPass::forward_lit(lit).with_labels().run_batch(views, rec).await?;
-        MeshPass::transparent().run_batch(views, rec).await?;
-        // The tone map covers its whole target: once per page of the
-        // batch's atlas (per view for a view with targets of its own).
-        let mut toned_pages: Vec<u32> = Vec::new();
-        for ctx in views {
-            if let Some(tile) = ctx.targets.tile {
-                if toned_pages.contains(&tile.page) {
-                    continue;
+            MeshPass::forward_lit(lit).with_labels().tone_mapped(exposure).run_batch(views, rec).await?;
+        } else {
+            MeshPass::forward_lit(lit).with_labels().run_batch(views, rec).await?;
+            MeshPass::transparent().run_batch(views, rec).await?;
+            // The tone map covers its whole target: once per page of the
+            // batch's atlas (per view for a view with targets of its own).
+            let mut toned_pages: Vec<u32> = Vec::new();
+            for ctx in views {
+                if let Some(tile) = ctx.targets.tile {
+                    if toned_pages.contains(&tile.page) {
+                        continue;
+                    }
+                    toned_pages.push(tile.page);
                 }
-                toned_pages.push(tile.page);
+                TonemapPass::new(exposure).run(ctx, rec).await?;
             }
-            TonemapPass::new(exposure).run(ctx, rec).await?;
+        }
+        // Each camera's overlay over its tile (nothing for a camera
+        // without one).
+        for ctx in views {
+            OverlayPass.run(ctx, rec).await?;
         }
         Ok(())
     }

@@ -537,6 +537,65 @@ fn picking_by_an_id_render_follows_gpu_culling() {
     assert_eq!(differ, [0, 0], "GPU-culled views pick other nodes than their labels show");
 }
 
+/// A camera of a batch draws its own overlay over its tile, as the same
+/// camera registered alone draws it: shapes, a tested world line and an
+/// outline (from the batch's instance labels, or from an ID render where
+/// the batch draws none); its neighbour's tile is left alone, and picking
+/// works both ways.
+#[test]
+fn a_batch_camera_draws_its_overlay_over_its_tile() {
+    use oxygen::batch::{BatchDesc, standard_batch_graph};
+    let mut renderer = support::gpu_renderer();
+    let scene = oxygen_demo::floor_with_box(0.6);
+    let cam = camera();
+    let other =
+        LookAtResolver::new(Camera::perspective(1.0, 0.1, None), Vec3::new(3.0, 2.0, 4.0), Vec3::ZERO, SIZE).unwrap();
+    let ids = oxygen::gpu::LabelSet::of(&[oxygen::gpu::Label::Instance]);
+    let plain = renderer.register_batch(BatchDesc::new("pair", SIZE)).unwrap();
+    let labelled = renderer.register_batch(BatchDesc::new("labelled pair", SIZE).with_label_planes(ids)).unwrap();
+    let mut cameras = Vec::new();
+    for batch in [plain, labelled] {
+        let first = renderer.add_camera(batch, ViewDesc::new(other)).unwrap();
+        cameras.push((first, renderer.add_camera(batch, ViewDesc::new(cam)).unwrap()));
+    }
+    let alone = renderer.register_view(ViewDesc::new(cam), standard_batch_graph).unwrap();
+    renderer.render_frame(&scene).unwrap();
+    let untouched: Vec<RgbaImage> =
+        cameras.iter().map(|(first, _)| support::read_lit_color(&renderer, *first)).collect();
+    let box_node =
+        scene.nodes().find(|(_, n)| n.name == "box").map(|(k, _)| oxygen::core::scene::node_index(k)).unwrap();
+    let (bx, by) = support::pixel_of(&resolved(&cam, alone, &scene), Vec3::new(1.5, 0.5, -1.0));
+    for &(_, drawn) in &cameras {
+        assert_eq!(renderer.pick(drawn, bx, by).unwrap(), Some(box_node), "{drawn}'s pick");
+        assert_eq!(renderer.pick(drawn, 3, 3).unwrap(), renderer.pick(alone, 3, 3).unwrap());
+    }
+    for view in cameras.iter().map(|(_, drawn)| *drawn).chain([alone]) {
+        let overlay = renderer.overlay(view).unwrap();
+        let outline = oxygen::overlay::Outline { nodes: vec![box_node], width: 3.0, color: Rgba::rgb(0.0, 1.0, 0.0) };
+        overlay.set_outline(Some(outline));
+        let mut canvas = overlay.retained();
+        canvas.rect(Vec2::new(4.0, 4.0), Vec2::new(40.0, 24.0), Rgba::rgb(1.0, 0.0, 0.0));
+        let (a, b) = (DVec3::new(-0.5, 0.5, -1.0), DVec3::new(3.5, 0.5, -1.0));
+        canvas.world_line(a, b, 3.0, Rgba::rgb(1.0, 1.0, 0.0), DepthMode::Tested);
+    }
+    renderer.render_frame(&scene).unwrap();
+    let by_itself = support::read_lit_color(&renderer, alone);
+    let green = by_itself.pixels().filter(|p| p.0[1] > 200 && p.0[0] < 60 && p.0[2] < 60).count();
+    assert!(green > 100, "{green} pixels of outline");
+    assert!(near(rgb(&by_itself, 20, 14), [255, 0, 0], 2), "the rectangle {:?}", rgb(&by_itself, 20, 14));
+    for (&(first, drawn), before) in cameras.iter().zip(&untouched) {
+        let in_batch = support::read_lit_color(&renderer, drawn);
+        let differ = in_batch
+            .pixels()
+            .zip(by_itself.pixels())
+            .filter(|(a, b)| a.0.iter().zip(b.0.iter()).any(|(x, y)| x.abs_diff(*y) > 10))
+            .count();
+        eprintln!("{drawn}: {differ} of {} pixels differ from the lone view", SIZE.x * SIZE.y);
+        assert_eq!(differ, 0, "{drawn}'s overlay differs from the lone view's");
+        assert_eq!(&support::read_lit_color(&renderer, first), before, "the neighbour's tile changed");
+    }
+}
+
 /// One call draws every other view's frustum, its shadow cascades
 /// included, into an overview.
 #[test]

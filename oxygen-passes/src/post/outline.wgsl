@@ -22,7 +22,7 @@
 const NONE: u32 = 0xffffffffu;
 
 fn is_chosen(pixel: vec2<u32>) -> bool {
-    let label = textureLoad(instances, vec2<i32>(pixel + params.origin.xy), 0).r;
+    let label = textureLoad(instances, vec2<i32>(pixel + params.origin.zw), 0).r;
     if label == 0u {
         return false;
     }

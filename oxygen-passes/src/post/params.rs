@@ -31,8 +31,9 @@ oxygen_gpu::gpu_struct! {
     pub(crate) struct OutlineParams: 64 bytes {
         /// The view's width and height, the step's stride in pixels, a zero.
         pub(crate) size: [u32; 4] => "vec4<u32>",
-        /// Where the view lies in its textures (a batch camera's tile), two
-        /// zeroes.
+        /// Where the view is drawn in its target (a batch camera's tile:
+        /// `xy`) and where its instance ids lie in theirs (`zw`: the same
+        /// tile in the page's labels, 0 in an ID render of its own).
         pub(crate) origin: [u32; 4] => "vec4<u32>",
         /// The outline's colour: sRGB, straight alpha.
         pub(crate) color: [f32; 4] => "vec4<f32>",
