@@ -496,6 +496,16 @@ fn views_without_labels_pick_and_outline_through_an_id_render() {
     }
     assert!(band > 100, "{band} pixels of outline");
 
+    // After a frame that failed (an outline too thin to draw), nothing is
+    // drawn again from its half-made draws.
+    let thin = oxygen::overlay::Outline { nodes: vec![box_node], width: 0.1, color: Rgba::WHITE };
+    renderer.overlay(plain).unwrap().set_outline(Some(thin));
+    assert!(renderer.render_frame(&scene).is_err(), "an outline 0.1 px wide was drawn");
+    let error = renderer.pick(msaa, bx, by).unwrap_err().to_string();
+    assert!(error.contains("did not finish"), "{error}");
+    renderer.overlay(plain).unwrap().set_outline(None);
+    renderer.render_frame(&scene).unwrap();
+    assert_eq!(renderer.pick(msaa, bx, by).unwrap(), Some(box_node));
     // A view the last frame did not render has nothing to pick from.
     let later = renderer.register_view(ViewDesc::new(cam), standard_render_graph).unwrap();
     let error = renderer.pick(later, 1, 1).unwrap_err().to_string();

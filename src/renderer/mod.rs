@@ -283,6 +283,8 @@ impl Renderer {
 
     fn render_frame_timed(&mut self, scene: &Scene, time: Option<f64>) -> Result<FrameReport, RenderError> {
         let clock = self.frames.next(time);
+        // Set again when this frame's draws are all recorded and submitted.
+        self.frames.drawing = None;
         let _span = info_span!("render_frame", frame = clock.index).entered();
         let started = Instant::now();
         // Lets finished readbacks (frame times, GPU overdraw estimates)

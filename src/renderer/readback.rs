@@ -146,7 +146,7 @@ impl Renderer {
         let view = self.targets.last_view(id).ok_or_else(|| self.not_rendered(id))?;
         let own = self.targets.get(id).ok_or_else(|| self.not_rendered(id))?;
         let targets = own.targets.as_ref().ok_or_else(|| self.not_rendered(id))?;
-        let (origin, shading) = self.frames.drawing.ok_or_else(|| self.not_rendered(id))?;
+        let (origin, shading) = self.frames.drawing.ok_or_else(|| unavailable("the last frame did not finish"))?;
         let camera = oxygen_passes::region_camera(view, [x, y, 1, 1])
             .ok_or_else(|| unavailable("its camera cannot be narrowed to that pixel"))?;
         let device = &self.gpu.device;
