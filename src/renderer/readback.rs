@@ -138,15 +138,19 @@ impl Renderer {
                 "{id} draws no instance labels, and picking without them draws its last frame again: {why}"
             ))
         };
+        let (origin, shading) = self.frames.drawing.ok_or_else(|| unavailable("the last frame did not finish"))?;
+        if let Some(reason) = self.frames.skipped.get(&id) {
+            return Err(RenderError::Skipped { view: id, reason: reason.clone() });
+        }
+        // A view on a schedule keeps its image between renders, but its
+        // draws are gone.
         let rendered_last = self.frames.last.iter().any(|(view, _)| *view == id);
-        let prepared = self
-            .prepared_frame(id)
-            .filter(|_| rendered_last)
-            .ok_or_else(|| unavailable("the last frame skipped it"))?;
+        let prepared = self.prepared_frame(id).filter(|_| rendered_last).ok_or_else(|| {
+            unavailable("the last frame did not render it (render it again, or give it instance labels to pick from)")
+        })?;
         let view = self.targets.last_view(id).ok_or_else(|| self.not_rendered(id))?;
         let own = self.targets.get(id).ok_or_else(|| self.not_rendered(id))?;
         let targets = own.targets.as_ref().ok_or_else(|| self.not_rendered(id))?;
-        let (origin, shading) = self.frames.drawing.ok_or_else(|| unavailable("the last frame did not finish"))?;
         let camera = oxygen_passes::region_camera(view, [x, y, 1, 1])
             .ok_or_else(|| unavailable("its camera cannot be narrowed to that pixel"))?;
         let device = &self.gpu.device;

@@ -109,8 +109,9 @@ impl Renderer {
     /// each frame the view renders, its retained one kept). Made empty the
     /// first time it is asked for; a view whose overlay is empty records no
     /// overlay pass. The standard graph draws it last
-    /// ([`oxygen_passes::OverlayPass`]); a graph of one's own records that
-    /// pass where it wants it.
+    /// ([`oxygen_passes::OverlayPass`]), the batch graph last for each
+    /// camera of a batch; a graph of one's own records that pass where it
+    /// wants it.
     pub fn overlay(&mut self, id: impl Into<ViewId>) -> Result<&mut oxygen_overlay::Overlay, RenderError> {
         let id = id.into();
         if !self.views.contains(id) {

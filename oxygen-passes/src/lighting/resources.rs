@@ -250,6 +250,13 @@ impl LightingResources {
         self.overlay.views()
     }
 
+    /// Views holding ids or a depth drawn for their overlay (an outline
+    /// without instance labels, tested shapes on a multisampled view):
+    /// dropped the first frame they are no longer needed.
+    pub fn overlay_id_views(&self) -> usize {
+        self.overlay.id_views()
+    }
+
     /// The tone map's effects.
     pub(crate) fn effects(&self) -> &crate::post::effects::EffectsState {
         &self.effects

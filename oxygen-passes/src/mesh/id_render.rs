@@ -6,6 +6,9 @@
 //! pixel, so the render is one pixel), has its selection outlined, and
 //! gives the overlay a single-sampled depth to test world shapes against.
 //!
+//! A single-sampled view of its own targets needs no second depth: its
+//! ids are drawn over the depth its passes left ([`ids_over_depth`]).
+//!
 //! The draws are the view's own from its last prepared frame: the same
 //! partitions, the same GPU-culled commands. A rectangle of the image sees
 //! a part of the view's frustum, so nothing the view drew there is
@@ -17,10 +20,11 @@
 use glam::{Mat4, Vec4};
 use oxygen_bindless::{CameraConstants, SceneConstantsBuffer};
 use oxygen_core::ResolvedView;
-use oxygen_gpu::{Label, LabelSet, ViewTargets};
+use oxygen_gpu::{Label, LabelSet, LabelTargets, ViewTargets};
+use tracing::Instrument;
 
 use super::MeshPass;
-use crate::{CommandRecorder, PassError, RenderContext};
+use crate::{CommandRecorder, PassError, RenderContext, RenderPass};
 
 /// The label planes an ID render draws.
 pub const ID_LABELS: LabelSet = LabelSet::NONE.with(Label::Instance);
@@ -64,6 +68,30 @@ pub fn region_camera(view: &ResolvedView, [x, y, width, height]: [u32; 4]) -> Op
         .then(|| CameraConstants::new(view.view, projection, view_projection, inverse, view.camera_position))
 }
 
+/// Targets for the ids of a single-sampled view of its own targets (not
+/// a batch's camera), drawn over the depth it already has: its depth
+/// shared, `ids` (of its size, [`ID_LABELS`]) as the label planes. `None`
+/// for a multisampled view or a camera of a batch, whose depth does not
+/// match an image of the view's size; those need an ID render of their own.
+pub fn ids_over_depth(view: &ViewTargets, ids: &LabelTargets) -> Option<ViewTargets> {
+    if view.msaa.is_some() || view.tile.is_some() {
+        return None;
+    }
+    Some(ViewTargets {
+        color: None,
+        depth: view.depth.clone(),
+        depth_view: view.depth_view.clone(),
+        depth_layer: view.depth_layer,
+        owns_depth: false,
+        width: view.width,
+        height: view.height,
+        msaa: None,
+        tile: None,
+        labels: Some(ids.clone()),
+        page_kept: false,
+    })
+}
+
 /// Records an ID render of `ctx`'s view into `targets` (from
 /// [`id_targets`]) with the camera in `constants` (the view's own, or
 /// [`region_camera`] for a part of it): the depth of the opaque and masked
@@ -75,16 +103,32 @@ pub async fn record_id_render(
     constants: &SceneConstantsBuffer,
     rec: &mut CommandRecorder,
 ) -> Result<(), PassError> {
+    let span =
+        tracing::info_span!("id_render", view = %ctx.view.view_id, width = targets.width, height = targets.height);
     let ctx = ctx.drawing_into(targets, constants);
-    let _span =
-        tracing::info_span!("id_render", view = %ctx.view.view_id, width = targets.width, height = targets.height)
-            .entered();
-    use crate::RenderPass;
-    MeshPass::depth_pre_pass().named("id render (depth)").run(&ctx, rec).await?;
-    if targets.labels.is_some() {
-        MeshPass::labels().named("id render").run(&ctx, rec).await?;
+    async {
+        MeshPass::depth_pre_pass().named("id render (depth)").run(&ctx, rec).await?;
+        if targets.labels.is_some() {
+            MeshPass::labels().named("id render").run(&ctx, rec).await?;
+        }
+        Ok(())
     }
-    Ok(())
+    .instrument(span)
+    .await
+}
+
+/// Records the ids of `ctx`'s view over the depth its passes left (into
+/// `targets` from [`ids_over_depth`]): only the labels pass, each pixel's
+/// id that of the surface the view shows there (as labels drawn with the
+/// shading would be). Half an ID render's work.
+pub async fn record_ids_over_depth(
+    ctx: &RenderContext<'_>,
+    targets: &ViewTargets,
+    rec: &mut CommandRecorder,
+) -> Result<(), PassError> {
+    let span = tracing::info_span!("ids_over_depth", view = %ctx.view.view_id);
+    let ctx = ctx.drawing_into(targets, ctx.scene_constants);
+    MeshPass::labels().named("ids over depth").run(&ctx, rec).instrument(span).await
 }
 
 #[cfg(test)]

@@ -8,5 +8,5 @@ mod forward_lighting;
 mod id_render;
 mod pass;
 
-pub use id_render::{ID_LABELS, id_targets, record_id_render, region_camera};
+pub use id_render::{ID_LABELS, id_targets, ids_over_depth, record_id_render, record_ids_over_depth, region_camera};
 pub use pass::{ColorOps, DrawList, ForwardLitConfig, MeshPass, ShadowFilter};

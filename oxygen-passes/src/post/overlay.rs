@@ -20,17 +20,17 @@ use std::sync::{Arc, Mutex, OnceLock};
 
 use glam::{DMat4, UVec2};
 use oxygen_core::ViewId;
-use oxygen_gpu::Label;
-use oxygen_gpu::ViewTargets;
 use oxygen_gpu::bindings::{self, LayoutEntries};
+use oxygen_gpu::{Label, LabelTargets, ViewTargets};
 use oxygen_overlay::{ATLAS_SIZE, Outline, OverlayVertex, OverlayView};
-use tracing::info_span;
+use tracing::{Instrument, info_span};
 
 use super::params::OutlineParams;
 use crate::{CommandRecorder, PassError, RenderContext, RenderPass};
 
 /// Draws the view's overlay ([`RenderContext::overlay`]) over its display
-/// image. The standard graph records it last.
+/// image. The standard graph records it last, the batch graph last for
+/// each camera (over its tile).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct OverlayPass;
 
@@ -39,7 +39,7 @@ struct Made {
     layout: wgpu::BindGroupLayout,
     /// World shapes tested against the view's depth.
     with_depth: wgpu::RenderPipeline,
-    /// Everything on top (multisampled views).
+    /// Everything on top (a multisampled view with no tested shape).
     without_depth: wgpu::RenderPipeline,
     sampler: wgpu::Sampler,
 }
@@ -60,9 +60,22 @@ pub(crate) struct OverlayState {
     outline: OnceLock<OutlineMade>,
     views: Mutex<HashMap<ViewId, ViewOverlay>>,
     outlines: Mutex<HashMap<ViewId, ViewOutline>>,
-    /// The targets of the ID renders of views that need one (an outline
-    /// without instance labels, depth-tested shapes on a multisampled view).
-    ids: Mutex<HashMap<ViewId, Arc<ViewTargets>>>,
+    /// The ids (and depth) of the views that need them and cannot give
+    /// them (an outline without instance labels, depth-tested shapes on a
+    /// multisampled view), dropped when no longer needed.
+    ids: Mutex<HashMap<ViewId, IdTargets>>,
+}
+
+/// Where a view's overlay finds the ids (and depth) the view itself does
+/// not give.
+#[derive(Clone)]
+enum IdTargets {
+    /// An ID render of its own: depth and, when asked, ids (a multisampled
+    /// view, a camera of a batch).
+    Own(Arc<ViewTargets>),
+    /// An instance plane drawn over the view's own depth (a single-sampled
+    /// view of its own targets): half the work.
+    OverDepth(Arc<LabelTargets>),
 }
 
 /// The selection outline's pipelines: the flood's two steps and the
@@ -375,24 +388,50 @@ impl OverlayState {
         }
     }
 
-    /// `ctx`'s ID-render targets at its size, with an instance plane when
-    /// `ids` (made or remade when they do not fit).
-    fn id_targets(&self, ctx: &RenderContext<'_>, ids: bool) -> Result<Arc<ViewTargets>, PassError> {
+    /// Where `ctx`'s overlay finds its ids and depth: an instance plane
+    /// over the view's own depth when that will do (`ids` and nothing
+    /// else asked of a single-sampled view of its own targets), else an ID
+    /// render of its own, with ids when `ids`; made or remade when what is
+    /// kept does not fit.
+    fn id_targets(&self, ctx: &RenderContext<'_>, ids: bool) -> Result<IdTargets, PassError> {
         let mut all = self.ids.lock().map_err(|_| PassError::Graph("overlay state poisoned".into()))?;
         let (width, height) = (ctx.targets.width, ctx.targets.height);
-        let fits = |t: &ViewTargets| t.width == width && t.height == height && t.labels.is_some() == ids;
-        if let Some(targets) = all.get(&ctx.view.view_id).filter(|t| fits(t)) {
-            return Ok(Arc::clone(targets));
+        let over_depth = ids && ctx.targets.msaa.is_none() && ctx.targets.tile.is_none();
+        let fits = |kept: &IdTargets| match kept {
+            IdTargets::OverDepth(planes) => {
+                let plane = planes.plane(Label::Instance);
+                over_depth && plane.is_some_and(|p| (p.texture.width(), p.texture.height()) == (width, height))
+            }
+            IdTargets::Own(t) => !over_depth && t.width == width && t.height == height && t.labels.is_some() == ids,
+        };
+        if let Some(kept) = all.get(&ctx.view.view_id).filter(|kept| fits(kept)) {
+            return Ok(kept.clone());
         }
-        let label = format!("{} id render", ctx.view.view_id);
-        let targets = Arc::new(crate::id_targets(&ctx.gpu.device, width, height, ids, &label));
-        all.insert(ctx.view.view_id, Arc::clone(&targets));
-        Ok(targets)
+        let label = format!("{} ids", ctx.view.view_id);
+        let device = &ctx.gpu.device;
+        let made = match over_depth {
+            true => IdTargets::OverDepth(Arc::new(LabelTargets::new(device, width, height, crate::ID_LABELS, &label))),
+            false => IdTargets::Own(Arc::new(crate::id_targets(device, width, height, ids, &label))),
+        };
+        all.insert(ctx.view.view_id, made.clone());
+        Ok(made)
+    }
+
+    /// Drops `view`'s ids and depth, when it holds any.
+    fn forget_ids(&self, view: ViewId) {
+        if let Ok(mut all) = self.ids.lock() {
+            all.remove(&view);
+        }
     }
 
     /// Views holding overlay buffers.
     pub(crate) fn views(&self) -> usize {
         self.views.lock().map_or(0, |views| views.len())
+    }
+
+    /// Views holding ids or a depth for their overlay.
+    pub(crate) fn id_views(&self) -> usize {
+        self.ids.lock().map_or(0, |ids| ids.len())
     }
 }
 
@@ -402,10 +441,22 @@ impl RenderPass for OverlayPass {
     }
 
     async fn run(&mut self, ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError> {
+        let span = info_span!("overlay", view = %ctx.view.view_id);
+        self.record(ctx, rec).instrument(span).await
+    }
+}
+
+impl OverlayPass {
+    async fn record(&self, ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError> {
         let Some(overlay) = ctx.overlay else {
             return Ok(());
         };
+        let state = ctx.lighting.overlay();
         let lock = || overlay.lock().map_err(|_| PassError::Graph("the view's overlay is poisoned".into()));
+        if lock()?.is_empty() {
+            state.forget_ids(ctx.view.view_id);
+            return Ok(());
+        }
         let color = ctx.color_targets(self.name())?;
         let target = color.color_view.as_ref().ok_or(PassError::NoColorTarget { pass: self.name() })?;
         // The view's matrices are relative to the render origin; the
@@ -415,49 +466,59 @@ impl RenderPass for OverlayPass {
             OverlayView::new(ctx.view.projection, world_to_view, UVec2::new(ctx.targets.width, ctx.targets.height));
         let (vertices, outline, tested) = {
             let mut overlay = lock()?;
-            if overlay.is_empty() {
-                return Ok(());
-            }
             (overlay.tessellate(&camera), overlay.outline().cloned(), overlay.depth_tested())
         };
-        if vertices.is_empty() && outline.is_none() {
-            return Ok(());
-        }
-        let _span = info_span!("overlay", view = %ctx.view.view_id, vertices = vertices.len()).entered();
         if let Some(problem) = outline.as_ref().and_then(Outline::problem) {
             return Err(PassError::BadInput { pass: self.name(), what: problem });
         }
-        let device = &ctx.gpu.device;
-        let state = ctx.lighting.overlay();
         // What the view itself cannot give: instance ids for the outline
-        // (no labels drawn, or multisampled), a single-sampled depth for
-        // tested shapes on a multisampled view (not a batch's camera: its
-        // tile lies in a page the depth would not match; on top there).
+        // (no labels drawn: not asked for, or multisampled), a
+        // single-sampled depth for tested shapes on a multisampled view
+        // (batch cameras are never multisampled).
         let labels = ctx.targets.labels.as_ref().and_then(|l| l.plane(Label::Instance));
-        let own_ids = outline.is_some() && labels.is_none();
-        let own_depth = ctx.targets.msaa.is_some() && ctx.targets.tile.is_none() && tested && !vertices.is_empty();
-        let id_render = match own_ids || own_depth {
-            true => {
-                let targets = state.id_targets(ctx, own_ids)?;
-                crate::record_id_render(ctx, &targets, ctx.scene_constants, rec).await?;
-                Some(targets)
-            }
+        let need_ids = outline.is_some() && labels.is_none();
+        let need_depth = ctx.targets.msaa.is_some() && tested && !vertices.is_empty();
+        if vertices.is_empty() && outline.is_none() || !(need_ids || need_depth) {
+            state.forget_ids(ctx.view.view_id);
+        }
+        if vertices.is_empty() && outline.is_none() {
+            return Ok(());
+        }
+        let device = &ctx.gpu.device;
+        let made_ids = match need_ids || need_depth {
+            true => Some(state.id_targets(ctx, need_ids)?),
             false => None,
         };
-        let outline = match (&outline, labels, &id_render) {
-            (None, ..) => None,
-            (Some(outline), Some(plane), _) => {
-                let origin = ctx.targets.tile.map_or([0, 0], |t| [t.x, t.y]);
-                let instances = Instances { view: &plane.view, origin };
+        // The ID render's targets (kept) or the view's depth with an
+        // instance plane (made for this frame).
+        let id_targets = match &made_ids {
+            Some(IdTargets::Own(targets)) => {
+                crate::record_id_render(ctx, targets, ctx.scene_constants, rec).await?;
+                Some(Arc::clone(targets))
+            }
+            Some(IdTargets::OverDepth(planes)) => {
+                let targets = crate::ids_over_depth(ctx.targets, planes)
+                    .ok_or_else(|| PassError::Graph("ids over the depth of a view that cannot share it".into()))?;
+                crate::record_ids_over_depth(ctx, &targets, rec).await?;
+                Some(Arc::new(targets))
+            }
+            None => None,
+        };
+        let outline = match &outline {
+            Some(outline) => {
+                // The view's own labels (at its tile of a batch's page), or
+                // the ids drawn above (at their origin).
+                let own = id_targets.as_ref().and_then(|t| t.labels.as_ref()).and_then(|l| l.plane(Label::Instance));
+                let instances = match (labels, own) {
+                    (Some(plane), _) => {
+                        Instances { view: &plane.view, origin: ctx.targets.tile.map_or([0, 0], |t| [t.x, t.y]) }
+                    }
+                    (None, Some(plane)) => Instances { view: &plane.view, origin: [0, 0] },
+                    (None, None) => return Err(PassError::Graph("an outline without instance ids".into())),
+                };
                 Some(flood_outline(ctx, state, outline, instances, rec.encoder())?)
             }
-            (Some(outline), None, Some(ids)) => {
-                let plane = ids.labels.as_ref().and_then(|l| l.plane(Label::Instance));
-                let plane = plane.ok_or_else(|| PassError::Graph("the ID render drew no ids".into()))?;
-                let instances = Instances { view: &plane.view, origin: [0, 0] };
-                Some(flood_outline(ctx, state, outline, instances, rec.encoder())?)
-            }
-            (Some(_), None, None) => return Err(PassError::Graph("an outline without instance ids".into())),
+            None => None,
         };
         let mut overlay = lock()?;
         let made = state.made.get_or_init(|| Made::new(device));
@@ -531,10 +592,10 @@ impl RenderPass for OverlayPass {
         overlay.atlas_mut().mark_uploaded();
 
         // The view's depth, or the ID render's for a multisampled view
-        // (none: everything on top).
-        let depth = match (&ctx.targets.msaa, &id_render) {
+        // (none when no shape is tested: everything on top).
+        let depth = match (&ctx.targets.msaa, &id_targets) {
             (None, _) => Some(&ctx.targets.depth_view),
-            (Some(_), Some(ids)) if own_depth => Some(&ids.depth_view),
+            (Some(_), Some(ids)) if need_depth => Some(&ids.depth_view),
             (Some(_), _) => None,
         };
         let mut rec_draws = 0;
