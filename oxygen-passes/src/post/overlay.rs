@@ -441,6 +441,11 @@ impl RenderPass for OverlayPass {
     }
 
     async fn run(&mut self, ctx: &RenderContext<'_>, rec: &mut CommandRecorder) -> Result<(), PassError> {
+        // Most views have no overlay (a batch's cameras, a thousand a
+        // frame): not even a span for them.
+        if ctx.overlay.is_none() {
+            return Ok(());
+        }
         let span = info_span!("overlay", view = %ctx.view.view_id);
         self.record(ctx, rec).instrument(span).await
     }
