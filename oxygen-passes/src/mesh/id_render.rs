@@ -139,7 +139,10 @@ mod tests {
     use super::*;
 
     fn view() -> ResolvedView {
-        let camera = Camera::perspective(1.0, 0.1, Some(100.0));
+        view_of(Camera::perspective(1.0, 0.1, Some(100.0)))
+    }
+
+    fn view_of(camera: Camera) -> ResolvedView {
         let eye = Vec3::new(0.0, 1.0, 5.0);
         let world_to_view = Mat4::look_at_rh(eye, Vec3::ZERO, Vec3::Y);
         let viewport = UVec2::new(64, 48);
@@ -151,14 +154,19 @@ mod tests {
     /// of the one-pixel camera of that pixel, and at the same depth.
     #[test]
     fn a_pixels_camera_centres_what_the_view_shows_there() {
-        let view = view();
+        for view in [view(), view_of(Camera::orthographic(3.0, 0.1, 50.0))] {
+            centres_each_pixel(&view);
+        }
+    }
+
+    fn centres_each_pixel(view: &ResolvedView) {
         for (px, py) in [(0u32, 0u32), (10, 20), (63, 47), (31, 24)] {
             // The ray through the pixel's centre, 7 m deep.
             let ndc = glam::Vec2::new((px as f32 + 0.5) / 64.0 * 2.0 - 1.0, 1.0 - (py as f32 + 0.5) / 48.0 * 2.0);
             let near = view.inverse_view_projection.project_point3(ndc.extend(1.0));
             let far = view.inverse_view_projection.project_point3(ndc.extend(0.01));
             let point = near + (far - near).normalize() * 7.0;
-            let camera = region_camera(&view, [px, py, 1, 1]).unwrap();
+            let camera = region_camera(view, [px, py, 1, 1]).unwrap();
             let narrow = Mat4::from_cols_array_2d(&camera.view_projection);
             let seen = narrow.project_point3(point);
             let full = view.view_projection.project_point3(point);
@@ -169,7 +177,7 @@ mod tests {
             assert!((back - point).length() < 1e-3 * point.length(), "{back} against {point}");
         }
         // The whole image is the view itself.
-        let whole = region_camera(&view, [0, 0, 64, 48]).unwrap();
+        let whole = region_camera(view, [0, 0, 64, 48]).unwrap();
         let vp = Mat4::from_cols_array_2d(&whole.view_projection);
         assert!(vp.abs_diff_eq(view.view_projection, 1e-6));
     }
