@@ -1,0 +1,307 @@
+//! How fast can this adapter bring a batch's pages to the CPU? Plain wgpu,
+//! no Oxygen: the copy a streamed batch makes each frame, three ways, timed
+//! in one run.
+//!
+//! ```text
+//! cargo run --release --example readback_probe [WxH] [iterations]   # default 16384x1024 and 30
+//! ```
+//!
+//! Three planes of W × H texels, as a batch of 1 024 cameras of 128 × 128
+//! streams them (colour `Rgba8Unorm`, depth `Depth32Float`, instance ids
+//! `R32Uint`: 4 bytes a texel each), into one buffer the CPU maps:
+//!
+//! * `copy`: `copy_texture_to_buffer` into a mapped buffer (what
+//!   `Renderer::stream_batch` does);
+//! * `compute into mapped`: a compute pass reads each texel and writes it
+//!   into the mapped buffer itself (a storage binding of host memory,
+//!   `Features::MAPPABLE_PRIMARY_BUFFERS`; skipped without it);
+//! * `compute, then buffer copy`: the compute pass writes into a device
+//!   buffer, then one `copy_buffer_to_buffer` into the mapped one.
+//!
+//! Each way runs its iterations (a submission and a wait each; the first
+//! two not counted) and the median is reported, with the bytes a second;
+//! the ways take turns, iteration by iteration. The bytes the three ways
+//! bring back are compared once: they must be equal.
+//!
+//! With `OXYGEN_RECORD_DIR` set, the run's figures are appended to
+//! `$OXYGEN_RECORD_DIR/readback_probe.jsonl` (`oxygen_demo::record`).
+
+use std::time::Instant;
+
+use oxygen_demo::record::{Record, Row};
+use oxygen_gpu::bindings::{self, LayoutEntries};
+
+const SHADER: &str = r#"
+struct Plane { width: u32, height: u32, base: u32, kind: u32 }
+@group(0) @binding(0) var<uniform> plane: Plane;
+@group(0) @binding(1) var color: texture_2d<f32>;
+@group(0) @binding(2) var depth: texture_depth_2d;
+@group(0) @binding(3) var ids: texture_2d<u32>;
+@group(0) @binding(4) var<storage, read_write> out: array<u32>;
+
+@compute @workgroup_size(64, 4)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= plane.width || id.y >= plane.height {
+        return;
+    }
+    let p = vec2<i32>(id.xy);
+    var word: u32;
+    switch plane.kind {
+        case 0u: { word = pack4x8unorm(textureLoad(color, p, 0)); }
+        case 1u: { word = bitcast<u32>(textureLoad(depth, p, 0)); }
+        default: { word = textureLoad(ids, p, 0).r; }
+    }
+    out[plane.base + id.y * plane.width + id.x] = word;
+}
+"#;
+
+const WARM_UP: usize = 2;
+
+fn texture(device: &wgpu::Device, (w, h): (u32, u32), format: wgpu::TextureFormat) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("plane"),
+        size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    })
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let mut args = std::env::args().skip(1);
+    let size = args.next().unwrap_or_else(|| "16384x1024".into());
+    let (w, h) = size
+        .split_once('x')
+        .and_then(|(w, h)| Some((w.parse::<u32>().ok()?, h.parse::<u32>().ok()?)))
+        .filter(|(w, h)| *w > 0 && *h > 0 && (w * 4) % 256 == 0)
+        .ok_or("the size is WxH, W a multiple of 64")?;
+    let iterations: usize = args.next().map(|a| a.parse()).transpose()?.unwrap_or(30);
+    let options =
+        oxygen_gpu::GpuOptions { optional_features: wgpu::Features::MAPPABLE_PRIMARY_BUFFERS, ..Default::default() };
+    let gpu = oxygen_gpu::GpuContext::new_headless(&options)?;
+    let device = &gpu.device;
+    let mapped_storage = gpu.features.contains(wgpu::Features::MAPPABLE_PRIMARY_BUFFERS);
+    println!(
+        "adapter: {} ({:?}); mapped storage buffers: {mapped_storage}",
+        gpu.adapter_info.name, gpu.adapter_info.backend
+    );
+    let plane_bytes = u64::from(w) * u64::from(h) * 4;
+    let total = plane_bytes * 3;
+    let limit = u64::from(device.limits().max_storage_buffer_binding_size);
+    if total > limit || total > device.limits().max_buffer_size {
+        return Err(format!("{total} bytes exceed the device's storage binding ({limit}) or buffer limit").into());
+    }
+
+    let planes = [
+        texture(device, (w, h), wgpu::TextureFormat::Rgba8Unorm),
+        texture(device, (w, h), wgpu::TextureFormat::Depth32Float),
+        texture(device, (w, h), wgpu::TextureFormat::R32Uint),
+    ];
+    let views: Vec<wgpu::TextureView> = planes.iter().map(|t| t.create_view(&Default::default())).collect();
+    // Something other than zero in every plane.
+    {
+        let mut encoder = device.create_command_encoder(&Default::default());
+        let clear = |view| wgpu::RenderPassColorAttachment {
+            view,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Clear(wgpu::Color { r: 0.25, g: 0.5, b: 0.75, a: 1.0 }),
+                store: wgpu::StoreOp::Store,
+            },
+        };
+        drop(encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("fill"),
+            color_attachments: &[Some(clear(&views[0])), Some(clear(&views[2]))],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &views[1],
+                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(0.375), store: wgpu::StoreOp::Store }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        }));
+        gpu.queue.submit([encoder.finish()]);
+    }
+
+    let buffer = |label, usage| {
+        device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: total,
+            usage,
+            mapped_at_creation: false,
+        })
+    };
+    let mapped_copy = buffer("copied", wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
+    let mapped_written =
+        mapped_storage.then(|| buffer("written", wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::STORAGE));
+    let device_written = buffer("device", wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC);
+    let mapped_from_device = buffer("from device", wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
+
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("readback probe"),
+        source: wgpu::ShaderSource::Wgsl(SHADER.into()),
+    });
+    let layout = LayoutEntries::new(wgpu::ShaderStages::COMPUTE)
+        .push(bindings::uniform_of::<[u32; 4]>())
+        .push(bindings::texture_2d(bindings::FILTERABLE_FLOAT))
+        .push(bindings::depth_2d())
+        .push(bindings::texture_2d(wgpu::TextureSampleType::Uint))
+        .push(bindings::storage_read_write())
+        .create_layout(device, "readback probe");
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("readback probe"),
+        bind_group_layouts: &[Some(&layout)],
+        immediate_size: 0,
+    });
+    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some("readback probe"),
+        layout: Some(&pipeline_layout),
+        module: &module,
+        entry_point: Some("main"),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    let params: Vec<wgpu::Buffer> = (0..3u32)
+        .map(|kind| {
+            let words = [w, h, kind * w * h, kind];
+            let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("plane"),
+                size: 16,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            gpu.queue.write_buffer(&buffer, 0, bytemuck::cast_slice(&words));
+            buffer
+        })
+        .collect();
+    let groups = |out: &wgpu::Buffer| -> Vec<wgpu::BindGroup> {
+        params
+            .iter()
+            .map(|p| {
+                device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("readback probe"),
+                    layout: &layout,
+                    entries: &[
+                        wgpu::BindGroupEntry { binding: 0, resource: p.as_entire_binding() },
+                        wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&views[0]) },
+                        wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(&views[1]) },
+                        wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(&views[2]) },
+                        wgpu::BindGroupEntry { binding: 4, resource: out.as_entire_binding() },
+                    ],
+                })
+            })
+            .collect()
+    };
+    let into_mapped = mapped_written.as_ref().map(groups);
+    let into_device = groups(&device_written);
+
+    let compute = |encoder: &mut wgpu::CommandEncoder, groups: &[wgpu::BindGroup]| {
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&pipeline);
+        for group in groups {
+            pass.set_bind_group(0, group, &[]);
+            pass.dispatch_workgroups(w.div_ceil(64), h.div_ceil(4), 1);
+        }
+    };
+    // Records way `way` into a fresh encoder; the buffer it fills.
+    let record = |way: usize| -> (wgpu::CommandBuffer, &wgpu::Buffer) {
+        let mut encoder = device.create_command_encoder(&Default::default());
+        let filled = match way {
+            0 => {
+                for (i, plane) in planes.iter().enumerate() {
+                    encoder.copy_texture_to_buffer(
+                        plane.as_image_copy(),
+                        wgpu::TexelCopyBufferInfo {
+                            buffer: &mapped_copy,
+                            layout: wgpu::TexelCopyBufferLayout {
+                                offset: i as u64 * plane_bytes,
+                                bytes_per_row: Some(w * 4),
+                                rows_per_image: Some(h),
+                            },
+                        },
+                        plane.size(),
+                    );
+                }
+                &mapped_copy
+            }
+            1 => {
+                let (Some(groups), Some(out)) = (&into_mapped, &mapped_written) else { unreachable!() };
+                compute(&mut encoder, groups);
+                out
+            }
+            _ => {
+                compute(&mut encoder, &into_device);
+                encoder.copy_buffer_to_buffer(&device_written, 0, &mapped_from_device, 0, total);
+                &mapped_from_device
+            }
+        };
+        (encoder.finish(), filled)
+    };
+    let read = |buffer: &wgpu::Buffer| -> Result<Vec<u8>, Box<dyn std::error::Error>> {
+        buffer.slice(..).map_async(wgpu::MapMode::Read, |_| {});
+        device.poll(wgpu::PollType::wait_indefinitely())?;
+        let bytes = buffer.slice(..).get_mapped_range()?.to_vec();
+        buffer.unmap();
+        Ok(bytes)
+    };
+
+    let ways: Vec<(usize, &str)> = [(0, "copy"), (1, "compute into mapped"), (2, "compute, then buffer copy")]
+        .into_iter()
+        .filter(|(way, _)| *way != 1 || mapped_storage)
+        .collect();
+    let mut samples = vec![Vec::new(); 3];
+    for iteration in 0..WARM_UP + iterations {
+        for &(way, _) in &ways {
+            let (commands, _) = record(way);
+            let started = Instant::now();
+            gpu.queue.submit([commands]);
+            device.poll(wgpu::PollType::wait_indefinitely())?;
+            if iteration >= WARM_UP {
+                samples[way].push(started.elapsed().as_secs_f64() * 1e3);
+            }
+        }
+    }
+    // The same bytes every way.
+    let mut first: Option<Vec<u8>> = None;
+    for &(way, name) in &ways {
+        let (commands, filled) = record(way);
+        gpu.queue.submit([commands]);
+        let bytes = read(filled)?;
+        match &first {
+            None => first = Some(bytes),
+            Some(expected) if *expected != bytes => return Err(format!("`{name}` brought back other bytes").into()),
+            Some(_) => {}
+        }
+    }
+
+    let mut record = Record::new("readback_probe")
+        .value("size", [w, h])
+        .value("bytes", total)
+        .value("iterations", iterations)
+        .value("mapped_storage", mapped_storage);
+    record.set_adapter(&gpu.adapter_info);
+    println!("{w} x {h} x 3 planes: {:.1} MiB a copy", total as f64 / (1 << 20) as f64);
+    for &(way, name) in &ways {
+        let mut sorted = samples[way].clone();
+        sorted.sort_by(f64::total_cmp);
+        let ms = sorted[sorted.len() / 2];
+        let gb_s = total as f64 / (ms / 1e3) / 1e9;
+        println!("{name:<26} {ms:8.3} ms  {gb_s:6.1} GB/s");
+        record.push_row(
+            Row::new()
+                .value("way", name)
+                .value("ms_median", ms)
+                .value("gb_per_s", gb_s)
+                .value("samples_ms", &samples[way]),
+        );
+    }
+    record.write()?;
+    Ok(())
+}
