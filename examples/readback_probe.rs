@@ -92,7 +92,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     let plane_bytes = u64::from(w) * u64::from(h) * 4;
     let total = plane_bytes * 3;
-    let limit = u64::from(device.limits().max_storage_buffer_binding_size);
+    let limit = device.limits().max_storage_buffer_binding_size;
     if total > limit || total > device.limits().max_buffer_size {
         return Err(format!("{total} bytes exceed the device's storage binding ({limit}) or buffer limit").into());
     }
