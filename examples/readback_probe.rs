@@ -8,7 +8,10 @@
 //!
 //! Three planes of W × H texels, as a batch of 1 024 cameras of 128 × 128
 //! streams them (colour `Rgba8Unorm`, depth `Depth32Float`, instance ids
-//! `R32Uint`: 4 bytes a texel each), into one buffer the CPU maps:
+//! `R32Uint`: 4 bytes a texel each), filled by drawing 400 000 small
+//! triangles of random colours, ids and depths over them (content that
+//! compresses about as little as a rendered frame's), into one buffer the
+//! CPU maps:
 //!
 //! * `copy`: `copy_texture_to_buffer` into a mapped buffer (what
 //!   `Renderer::stream_batch` does);
@@ -54,6 +57,51 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     out[plane.base + id.y * plane.width + id.x] = word;
 }
 "#;
+
+// Random triangles over the planes, each its own colour, depth and id:
+// content that compresses as little as a rendered frame's (the planes'
+// compression, which copies may have to undo, depends on it).
+const FILL: &str = r#"
+struct Varying {
+    @builtin(position) position: vec4<f32>,
+    @location(0) @interpolate(flat) triangle: u32,
+}
+
+fn hash(x: u32) -> u32 {
+    var h = x * 747796405u + 2891336453u;
+    h = ((h >> ((h >> 28u) + 4u)) ^ h) * 277803737u;
+    return (h >> 22u) ^ h;
+}
+
+fn unit(x: u32) -> f32 {
+    return f32(hash(x) & 0xffffu) / 65535.0;
+}
+
+@vertex
+fn vs(@builtin(vertex_index) index: u32) -> Varying {
+    let triangle = index / 3u;
+    // A small triangle somewhere on the page at one random depth.
+    let centre = vec2<f32>(unit(triangle * 7u), unit(triangle * 7u + 1u)) * 2.0 - 1.0;
+    let corner = vec2<f32>(unit(index * 13u + 2u), unit(index * 13u + 3u)) - 0.5;
+    let depth = unit(triangle * 7u + 4u);
+    return Varying(vec4<f32>(centre + corner * 0.02, depth, 1.0), triangle);
+}
+
+struct Out {
+    @location(0) color: vec4<f32>,
+    @location(1) id: u32,
+}
+
+@fragment
+fn fs(v: Varying) -> Out {
+    let h = hash(v.triangle ^ (u32(v.position.x) * 31u + u32(v.position.y)));
+    let color = vec4<f32>(f32(h & 255u), f32((h >> 8u) & 255u), f32((h >> 16u) & 255u), 255.0) / 255.0;
+    return Out(color, v.triangle + 1u);
+}
+"#;
+
+/// Triangles drawn over the planes before the copies.
+const TRIANGLES: u32 = 400_000;
 
 const WARM_UP: usize = 2;
 
@@ -103,30 +151,61 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         texture(device, (w, h), wgpu::TextureFormat::R32Uint),
     ];
     let views: Vec<wgpu::TextureView> = planes.iter().map(|t| t.create_view(&Default::default())).collect();
-    // Something other than zero in every plane.
+    // Every plane filled with triangles of their own colour, id and depth.
     {
+        let fill = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("fill"),
+            source: wgpu::ShaderSource::Wgsl(FILL.into()),
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("fill"),
+            layout: None,
+            vertex: wgpu::VertexState {
+                module: &fill,
+                entry_point: Some("vs"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: wgpu::TextureFormat::Depth32Float,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Greater),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &fill,
+                entry_point: Some("fs"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::TextureFormat::Rgba8Unorm.into()), Some(wgpu::TextureFormat::R32Uint.into())],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
         let mut encoder = device.create_command_encoder(&Default::default());
         let clear = |view| wgpu::RenderPassColorAttachment {
             view,
             depth_slice: None,
             resolve_target: None,
-            ops: wgpu::Operations {
-                load: wgpu::LoadOp::Clear(wgpu::Color { r: 0.25, g: 0.5, b: 0.75, a: 1.0 }),
-                store: wgpu::StoreOp::Store,
-            },
+            ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
         };
-        drop(encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("fill"),
             color_attachments: &[Some(clear(&views[0])), Some(clear(&views[2]))],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: &views[1],
-                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(0.375), store: wgpu::StoreOp::Store }),
+                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(0.0), store: wgpu::StoreOp::Store }),
                 stencil_ops: None,
             }),
             timestamp_writes: None,
             occlusion_query_set: None,
             multiview_mask: None,
-        }));
+        });
+        pass.set_pipeline(&pipeline);
+        pass.draw(0..TRIANGLES * 3, 0..1);
+        drop(pass);
         gpu.queue.submit([encoder.finish()]);
     }
 
