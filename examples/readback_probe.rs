@@ -26,8 +26,10 @@
 //! the ways take turns, iteration by iteration. The bytes the three ways
 //! bring back are compared once: they must be equal.
 //!
-//! With `OXYGEN_RECORD_DIR` set, the run's figures are appended to
-//! `$OXYGEN_RECORD_DIR/readback_probe.jsonl` (`oxygen_demo::record`).
+//! GL adapters are refused (no depth copies into buffers, no depth loads
+//! in compute). With `OXYGEN_RECORD_DIR` set, the run's figures are
+//! appended to `$OXYGEN_RECORD_DIR/readback_probe.jsonl`
+//! (`oxygen_demo::record`).
 
 use std::time::Instant;
 
@@ -133,6 +135,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         oxygen_gpu::GpuOptions { optional_features: wgpu::Features::MAPPABLE_PRIMARY_BUFFERS, ..Default::default() };
     let gpu = oxygen_gpu::GpuContext::new_headless(&options)?;
     let device = &gpu.device;
+    // GL copies no depth into buffers and loads no depth texels in compute.
+    if gpu.adapter_info.backend == wgpu::Backend::Gl {
+        return Err(format!(
+            "{} is a GL adapter: the probe needs depth copies and loads (use Vulkan)",
+            gpu.adapter_info.name
+        )
+        .into());
+    }
     let mapped_storage = gpu.features.contains(wgpu::Features::MAPPABLE_PRIMARY_BUFFERS);
     println!(
         "adapter: {} ({:?}); mapped storage buffers: {mapped_storage}",

@@ -52,6 +52,7 @@ runs=(
   "msaa_bench|example|gpu|64 4 1"
   "prepass_bench|example|gpu|16 1"
   "raster_floor|example|gpu|16 1"
+  "readback_probe|example|gpu|256x64 2"
   "record_bench|example|gpu|4 direct 1,2"
   "shadow_bench|example|gpu|16"
   "tone_map_effects_bench|example|gpu|64 1"
@@ -69,7 +70,7 @@ failed=()
 # Every bench in the tree must be run above.
 listed=" "
 for run in "${runs[@]}"; do listed+="${run%%|*} "; done
-for file in examples/*_bench.rs oxygen-node/examples/*_bench.rs examples/*_cost.rs examples/*_floor.rs examples/accuracy_atlas.rs */benches/*.rs; do
+for file in examples/*_bench.rs oxygen-node/examples/*_bench.rs examples/*_cost.rs examples/*_floor.rs examples/*_probe.rs examples/accuracy_atlas.rs */benches/*.rs; do
   [ -e "$file" ] || continue
   name="$(basename "$file" .rs)"
   case "$listed" in
