@@ -252,7 +252,9 @@ impl LightingResources {
 
     /// Views holding ids or a depth drawn for their overlay (an outline
     /// without instance labels, tested shapes on a multisampled view):
-    /// dropped the first frame they are no longer needed.
+    /// dropped the first frame they are no longer needed. Like the
+    /// overlay's own buffers they are not counted against the renderer's
+    /// target budget (at most 8 bytes a pixel of the view).
     pub fn overlay_id_views(&self) -> usize {
         self.overlay.id_views()
     }
