@@ -7,7 +7,6 @@
 
 use glam::{DMat4, DVec3, DVec4, Mat4, UVec2, Vec2};
 
-use crate::atlas::AtlasKey;
 use crate::canvas::{DepthMode, Grid, Overlay, Shape};
 use crate::text::{PlacedGlyph, glyph_rect};
 
@@ -232,109 +231,48 @@ fn shape_depth(z: f64, depth: DepthMode) -> f32 {
     }
 }
 
-/// Shapes one thread tessellates at the least: a large overlay is cut in
-/// runs of at least this many, one thread each (a thread costs tens of
-/// microseconds to start; a shape about a quarter of one to tessellate).
-const SHAPES_PER_THREAD: usize = 4096;
-
 impl Overlay {
     /// Every shape of both canvases as triangles for `view`: one vertex
     /// list, whatever the number of shapes. Places the glyphs and images
     /// the shapes show in the atlas first (emptying it once, when it is
     /// full, and placing this frame's again; what still does not fit is
-    /// left out with a warning), then turns the shapes into vertices, a
-    /// large overlay in runs on several threads, the runs joined in the
-    /// shapes' order (the same vertices either way).
+    /// left out with a warning).
     pub fn tessellate(&mut self, view: &OverlayView) -> Vec<OverlayVertex> {
         let _span = tracing::info_span!("overlay_tessellate", shapes = self.shape_count()).entered();
         let shapes = self.split_for_tessellation();
-        let all: Vec<&Shape> = shapes.0.iter().chain(&shapes.1).collect();
+        let mut vertices = Vec::new();
         for attempt in 0..2 {
-            match self.place_in_atlas(&all, attempt == 1) {
+            vertices.clear();
+            match self.tessellate_shapes(view, shapes.0.iter().chain(&shapes.1), &mut vertices, attempt == 1) {
                 Ok(()) => break,
                 Err(()) => self.atlas.clear(),
             }
         }
-        let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-        let vertices = self.vertices_of_runs(view, &all, threads);
-        drop(all);
         self.restore_after_tessellation(shapes);
         vertices
     }
 
-    /// Places every glyph and image `shapes` show in the atlas (the one
-    /// thing tessellation changes). `Err` when the atlas ran out of room
-    /// and `last_try` is false; on the last try what does not fit is left
-    /// out with a warning.
-    fn place_in_atlas(&mut self, shapes: &[&Shape], last_try: bool) -> Result<(), ()> {
-        for shape in shapes {
-            match shape {
-                Shape::Image { image, .. } if !self.has_image(*image) => {
-                    tracing::warn!(image, "an image id of another overlay: left out");
-                }
-                Shape::Image { image, .. } => match self.image_rect(*image) {
-                    Some(_) => {}
-                    None if last_try => tracing::warn!(image, "an overlay image has no room in the atlas: left out"),
-                    None => return Err(()),
-                },
-                Shape::Text { glyphs, .. } | Shape::WorldText { glyphs, .. } => {
-                    for glyph in glyphs {
-                        match glyph_rect(&mut self.atlas, &self.fonts, glyph) {
-                            Some(_) => {}
-                            None if last_try => tracing::warn!("a glyph has no room in the overlay's atlas: left out"),
-                            None => return Err(()),
-                        }
-                    }
-                }
-                _ => {}
-            }
-        }
-        Ok(())
-    }
-
-    /// The vertices of `shapes`, cut in runs of at least
-    /// [`SHAPES_PER_THREAD`] on up to `threads` threads, joined in order.
-    fn vertices_of_runs(&self, view: &OverlayView, shapes: &[&Shape], threads: usize) -> Vec<OverlayVertex> {
-        let threads = (shapes.len() / SHAPES_PER_THREAD).clamp(1, threads.max(1));
-        if threads == 1 {
-            let mut vertices = Vec::new();
-            self.vertices_of(view, shapes, &mut vertices);
-            return vertices;
-        }
-        let run = shapes.len().div_ceil(threads);
-        let parts: Vec<Vec<OverlayVertex>> = std::thread::scope(|scope| {
-            let handles: Vec<_> = shapes
-                .chunks(run)
-                .map(|run| {
-                    scope.spawn(move || {
-                        let mut vertices = Vec::new();
-                        self.vertices_of(view, run, &mut vertices);
-                        vertices
-                    })
-                })
-                .collect();
-            handles.into_iter().map(|h| h.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic))).collect()
-        });
-        let mut vertices = Vec::with_capacity(parts.iter().map(Vec::len).sum());
-        for part in parts {
-            vertices.extend(part);
-        }
-        vertices
-    }
-
-    /// The vertices of `shapes` (their glyphs and images already placed:
-    /// one that is not was left out with a warning) appended to `vertices`.
-    fn vertices_of(&self, view: &OverlayView, shapes: &[&Shape], vertices: &mut Vec<OverlayVertex>) {
+    /// `Err` when the atlas ran out of room and `last_try` is false.
+    fn tessellate_shapes<'s>(
+        &mut self,
+        view: &OverlayView,
+        shapes: impl Iterator<Item = &'s Shape>,
+        vertices: &mut Vec<OverlayVertex>,
+        last_try: bool,
+    ) -> Result<(), ()> {
         let size = view.viewport.max(UVec2::ONE).as_vec2();
         let mut glyph_uvs = Vec::new();
         for shape in shapes {
             match shape {
                 Shape::Rect { min, max, color } => Out { vertices, size }.rect(*min, *max, None, *color),
-                Shape::Image { min, max, image, tint } => {
-                    if let Some(rect) = self.atlas.get(&AtlasKey::Image(*image)) {
-                        Out { vertices, size }.rect(*min, *max, Some(rect.uv_inset()), *tint);
-                    }
+                Shape::Image { image, .. } if !self.has_image(*image) => {
+                    tracing::warn!(image, "an image id of another overlay: left out");
                 }
+                Shape::Image { min, max, image, tint } => match self.image_rect(*image) {
+                    Some(rect) => Out { vertices, size }.rect(*min, *max, Some(rect.uv_inset()), *tint),
+                    None if last_try => tracing::warn!(image, "an overlay image has no room in the atlas: left out"),
+                    None => return Err(()),
+                },
                 Shape::Line { a, b, width, color } => {
                     Out { vertices, size }.line((*a, 1.0, *color), (*b, 1.0, *color), *width)
                 }
@@ -342,7 +280,7 @@ impl Overlay {
                     Out { vertices, size }.arc(*center, *radius, *width, *start, *sweep, *color)
                 }
                 Shape::Text { at, glyphs, color } => {
-                    self.glyph_uvs(glyphs, &mut glyph_uvs);
+                    self.glyph_uvs(glyphs, &mut glyph_uvs, last_try)?;
                     Out { vertices, size }.glyphs(*at, 1.0, &glyph_uvs, *color);
                 }
                 Shape::WorldLine { a, b, width, color, depth } => {
@@ -353,7 +291,7 @@ impl Overlay {
                 }
                 Shape::WorldText { anchor, offset, glyphs, color, depth } => {
                     if let Some((at, z)) = project(view, size, *anchor) {
-                        self.glyph_uvs(glyphs, &mut glyph_uvs);
+                        self.glyph_uvs(glyphs, &mut glyph_uvs, last_try)?;
                         let at = (at + *offset).round();
                         Out { vertices, size }.glyphs(at, shape_depth(f64::from(z), *depth), &glyph_uvs, *color);
                     }
@@ -361,12 +299,20 @@ impl Overlay {
                 Shape::Grid(grid) => grid_lines(view, size, grid, &mut Out { vertices, size }),
             }
         }
+        Ok(())
     }
 
-    /// The atlas rectangles of `glyphs` into `out` (those placed).
-    fn glyph_uvs(&self, glyphs: &[PlacedGlyph], out: &mut Vec<GlyphUv>) {
+    /// The atlas rectangles of `glyphs` into `out`.
+    fn glyph_uvs(&mut self, glyphs: &[PlacedGlyph], out: &mut Vec<GlyphUv>, last_try: bool) -> Result<(), ()> {
         out.clear();
-        out.extend(glyphs.iter().filter_map(|glyph| Some((*glyph, self.atlas.get(&glyph.key)?.uv()))));
+        for glyph in glyphs {
+            match glyph_rect(&mut self.atlas, &self.fonts, glyph) {
+                Some(rect) => out.push((*glyph, rect.uv())),
+                None if last_try => tracing::warn!("a glyph has no room in the overlay's atlas: left out"),
+                None => return Err(()),
+            }
+        }
+        Ok(())
     }
 }
 
@@ -436,44 +382,6 @@ mod tests {
 
     fn pixel(v: &OverlayVertex, size: Vec2) -> Vec2 {
         Vec2::new((v.clip[0] + 1.0) * 0.5 * size.x, (1.0 - v.clip[1]) * 0.5 * size.y)
-    }
-
-    /// A large overlay tessellated on several threads gives the vertices
-    /// one thread gives, in the same order.
-    #[test]
-    fn runs_on_several_threads_give_the_same_vertices() {
-        let mut overlay = Overlay::new();
-        let image = overlay.add_image(2, 1, vec![255, 0, 0, 255, 0, 0, 255, 255]).unwrap();
-        {
-            let mut canvas = overlay.immediate();
-            for i in 0..12_000 {
-                let at = Vec2::new((i % 97) as f32 * 3.0, (i / 97) as f32 * 0.7);
-                let color = Rgba::new((i % 7) as f32 / 7.0, 0.5, 0.2, 1.0);
-                match i % 6 {
-                    0 => drop(canvas.rect(at, at + Vec2::new(4.0, 3.0), color)),
-                    1 => drop(canvas.line(at, at + Vec2::new(9.0, 2.0), 2.0, color)),
-                    2 => drop(canvas.arc(at, 5.0, 1.5, 0.3, 2.0, color)),
-                    3 => drop(canvas.text(at, 11.0, color, "ab 7")),
-                    4 => drop(canvas.image(at, at + Vec2::new(6.0, 6.0), image, color)),
-                    _ => {
-                        let p = DVec3::new(f64::from(at.x) * 0.05 - 4.0, 0.1, -f64::from(at.y) * 0.05);
-                        canvas.world_line(p, p + DVec3::X, 1.5, color, DepthMode::Tested);
-                    }
-                }
-            }
-            canvas.grid(0.0, 1.0, 20, 1.0, Rgba::WHITE, 30.0);
-        }
-        let view = view_at(DVec3::new(0.0, 3.0, 5.0), DVec3::new(0.0, 0.0, -2.0), UVec2::new(320, 200));
-        let whole = overlay.tessellate(&view);
-        let shapes = overlay.split_for_tessellation();
-        let all: Vec<&Shape> = shapes.0.iter().chain(&shapes.1).collect();
-        let one = overlay.vertices_of_runs(&view, &all, 1);
-        let four = overlay.vertices_of_runs(&view, &all, 4);
-        drop(all);
-        overlay.restore_after_tessellation(shapes);
-        assert!(one.len() > 50_000, "{} vertices", one.len());
-        assert_eq!(bytemuck::cast_slice::<_, u8>(&one), bytemuck::cast_slice::<_, u8>(&four));
-        assert_eq!(bytemuck::cast_slice::<_, u8>(&one), bytemuck::cast_slice::<_, u8>(&whole));
     }
 
     #[test]
