@@ -238,18 +238,25 @@ impl Overlay {
     /// full, and placing this frame's again; what still does not fit is
     /// left out with a warning).
     pub fn tessellate(&mut self, view: &OverlayView) -> Vec<OverlayVertex> {
+        let mut vertices = Vec::new();
+        self.tessellate_into(view, &mut vertices);
+        vertices
+    }
+
+    /// [`Overlay::tessellate`] into `vertices` (emptied first): a list kept
+    /// from frame to frame keeps its memory, so a large overlay does not
+    /// allocate, and fault in, megabytes of fresh pages every frame.
+    pub fn tessellate_into(&mut self, view: &OverlayView, vertices: &mut Vec<OverlayVertex>) {
         let _span = tracing::info_span!("overlay_tessellate", shapes = self.shape_count()).entered();
         let shapes = self.split_for_tessellation();
-        let mut vertices = Vec::new();
         for attempt in 0..2 {
             vertices.clear();
-            match self.tessellate_shapes(view, shapes.0.iter().chain(&shapes.1), &mut vertices, attempt == 1) {
+            match self.tessellate_shapes(view, shapes.0.iter().chain(&shapes.1), vertices, attempt == 1) {
                 Ok(()) => break,
                 Err(()) => self.atlas.clear(),
             }
         }
         self.restore_after_tessellation(shapes);
-        vertices
     }
 
     /// `Err` when the atlas ran out of room and `last_try` is false.
@@ -382,6 +389,20 @@ mod tests {
 
     fn pixel(v: &OverlayVertex, size: Vec2) -> Vec2 {
         Vec2::new((v.clip[0] + 1.0) * 0.5 * size.x, (1.0 - v.clip[1]) * 0.5 * size.y)
+    }
+
+    /// A kept vertex list is emptied, then filled as a fresh one would be.
+    #[test]
+    fn a_kept_list_gives_what_a_fresh_one_gives() {
+        let mut overlay = Overlay::new();
+        overlay.immediate().rect(Vec2::new(1.0, 2.0), Vec2::new(9.0, 8.0), Rgba::WHITE);
+        overlay.retained().line(Vec2::ZERO, Vec2::new(30.0, 10.0), 2.0, Rgba::BLACK);
+        let view = view_at(DVec3::new(0.0, 0.0, 5.0), DVec3::ZERO, UVec2::new(100, 80));
+        let fresh = overlay.tessellate(&view);
+        let mut kept = vec![fresh[0]; 1000];
+        overlay.tessellate_into(&view, &mut kept);
+        assert_eq!(bytemuck::cast_slice::<_, u8>(&kept), bytemuck::cast_slice::<_, u8>(&fresh));
+        assert!(kept.capacity() >= 1000, "the list's memory was not kept");
     }
 
     #[test]

@@ -64,6 +64,38 @@ pub(crate) struct OverlayState {
     /// them (an outline without instance labels, depth-tested shapes on a
     /// multisampled view), dropped when no longer needed.
     ids: Mutex<HashMap<ViewId, IdTargets>>,
+    /// Each view's vertex list, kept from frame to frame: a large overlay
+    /// is tessellated into memory it already has (fresh pages cost more
+    /// than the tessellation, 4 times over for 10 000 shapes).
+    vertex_lists: Mutex<HashMap<ViewId, Vec<OverlayVertex>>>,
+}
+
+/// A view's kept vertex list, lent for one frame and given back however
+/// the pass ends.
+struct VertexList<'a> {
+    state: &'a OverlayState,
+    view: ViewId,
+    vertices: Vec<OverlayVertex>,
+}
+
+impl<'a> VertexList<'a> {
+    fn lend(state: &'a OverlayState, view: ViewId) -> Self {
+        let vertices = state.vertex_lists.lock().ok().and_then(|mut all| all.remove(&view)).unwrap_or_default();
+        VertexList { state, view, vertices }
+    }
+}
+
+impl Drop for VertexList<'_> {
+    fn drop(&mut self) {
+        let mut vertices = std::mem::take(&mut self.vertices);
+        // Much more room than this frame used: give most of it back.
+        if vertices.capacity() > 4 * vertices.len().max(1024) {
+            vertices.shrink_to(2 * vertices.len());
+        }
+        if let Ok(mut all) = self.state.vertex_lists.lock() {
+            all.insert(self.view, vertices);
+        }
+    }
 }
 
 /// Where a view's overlay finds the ids (and depth) the view itself does
@@ -386,6 +418,9 @@ impl OverlayState {
         if let Ok(mut ids) = self.ids.lock() {
             ids.retain(|view, _| keep(*view));
         }
+        if let Ok(mut lists) = self.vertex_lists.lock() {
+            lists.retain(|view, _| keep(*view));
+        }
     }
 
     /// Where `ctx`'s overlay finds its ids and depth: an instance plane
@@ -469,10 +504,13 @@ impl OverlayPass {
         let world_to_view = ctx.view.world_to_view * DMat4::from_translation(-ctx.origin);
         let camera =
             OverlayView::new(ctx.view.projection, world_to_view, UVec2::new(ctx.targets.width, ctx.targets.height));
-        let (vertices, outline, tested) = {
+        let mut list = VertexList::lend(state, ctx.view.view_id);
+        let (outline, tested) = {
             let mut overlay = lock()?;
-            (overlay.tessellate(&camera), overlay.outline().cloned(), overlay.depth_tested())
+            overlay.tessellate_into(&camera, &mut list.vertices);
+            (overlay.outline().cloned(), overlay.depth_tested())
         };
+        let vertices = &list.vertices;
         if let Some(problem) = outline.as_ref().and_then(Outline::problem) {
             return Err(PassError::BadInput { pass: self.name(), what: problem });
         }
@@ -528,7 +566,7 @@ impl OverlayPass {
         let mut overlay = lock()?;
         let made = state.made.get_or_init(|| Made::new(device));
         let mut views = state.views.lock().map_err(|_| PassError::Graph("overlay state poisoned".into()))?;
-        let bytes: &[u8] = bytemuck::cast_slice(&vertices);
+        let bytes: &[u8] = bytemuck::cast_slice(vertices);
         let most = device.limits().max_buffer_size;
         if bytes.len() as u64 > most {
             return Err(PassError::BadInput {
