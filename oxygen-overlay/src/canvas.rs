@@ -1,5 +1,8 @@
 //! The overlay of one view and the canvases shapes are drawn on.
 
+use std::collections::HashMap;
+use std::sync::Arc;
+
 use glam::{DMat4, DVec3, Vec2};
 use oxygen_core::ResolvedView;
 
@@ -118,7 +121,7 @@ pub(crate) enum Shape {
     },
     Text {
         at: Vec2,
-        glyphs: Vec<PlacedGlyph>,
+        glyphs: Arc<[PlacedGlyph]>,
         color: [u8; 4],
     },
     WorldLine {
@@ -131,7 +134,7 @@ pub(crate) enum Shape {
     WorldText {
         anchor: DVec3,
         offset: Vec2,
-        glyphs: Vec<PlacedGlyph>,
+        glyphs: Arc<[PlacedGlyph]>,
         color: [u8; 4],
         depth: DepthMode,
     },
@@ -167,6 +170,43 @@ pub struct Overlay {
     dropped: u64,
     /// The selection outline, when one is asked for.
     outline: Option<Outline>,
+    /// Text laid out so far, by font slot, size and string: a label drawn
+    /// again every frame is laid out once.
+    layouts: Layouts,
+}
+
+/// A string's glyphs and the size of the block they fill.
+type LaidOut = (Arc<[PlacedGlyph]>, Vec2);
+
+/// Laid-out text by font slot and pixel size, then string; emptied when
+/// it holds [`Layouts::MOST`] strings.
+#[derive(Clone, Default)]
+pub(crate) struct Layouts {
+    laid_out: HashMap<(u32, u32), HashMap<Box<str>, LaidOut>>,
+    strings: usize,
+}
+
+impl Layouts {
+    /// Strings kept at most (a tool drawing ever new strings, a counter
+    /// say, empties the cache now and then instead of growing it).
+    const MOST: usize = 4096;
+
+    /// `text`'s glyphs and block size at `size` in font `slot`.
+    fn get(&mut self, font: &Font, slot: u32, size: f32, text: &str) -> LaidOut {
+        let key = (slot, size.to_bits());
+        if let Some((glyphs, extent)) = self.laid_out.get(&key).and_then(|strings| strings.get(text)) {
+            return (Arc::clone(glyphs), *extent);
+        }
+        if self.strings >= Self::MOST {
+            self.laid_out.clear();
+            self.strings = 0;
+        }
+        let (glyphs, extent) = layout(font, slot, size, text);
+        let glyphs: Arc<[PlacedGlyph]> = glyphs.into();
+        self.laid_out.entry(key).or_default().insert(text.into(), (Arc::clone(&glyphs), extent));
+        self.strings += 1;
+        (glyphs, extent)
+    }
 }
 
 /// A selection outline ([`Overlay::set_outline`]): a line `width` pixels
@@ -240,12 +280,22 @@ impl Overlay {
     /// The canvas whose shapes last one frame: the renderer clears it
     /// after each frame it renders ([`Overlay::end_frame`]).
     pub fn immediate(&mut self) -> Canvas<'_> {
-        Canvas { shapes: &mut self.immediate, fonts: &mut self.fonts, dropped: &mut self.dropped }
+        Canvas {
+            shapes: &mut self.immediate,
+            fonts: &mut self.fonts,
+            layouts: &mut self.layouts,
+            dropped: &mut self.dropped,
+        }
     }
 
     /// The canvas whose shapes stay until [`Overlay::clear_retained`].
     pub fn retained(&mut self) -> Canvas<'_> {
-        Canvas { shapes: &mut self.retained, fonts: &mut self.fonts, dropped: &mut self.dropped }
+        Canvas {
+            shapes: &mut self.retained,
+            fonts: &mut self.fonts,
+            layouts: &mut self.layouts,
+            dropped: &mut self.dropped,
+        }
     }
 
     /// Removes the retained shapes.
@@ -366,6 +416,7 @@ impl Overlay {
 pub struct Canvas<'a> {
     shapes: &'a mut Vec<Shape>,
     fonts: &'a mut Vec<Font>,
+    layouts: &'a mut Layouts,
     dropped: &'a mut u64,
 }
 
@@ -456,17 +507,20 @@ impl Canvas<'_> {
         (slot as u32, &self.fonts[slot])
     }
 
+    /// `text` laid out at `size` in the current font (once per string and
+    /// size: [`Layouts`]).
+    fn laid_out(&mut self, size: f32, text: &str) -> (Arc<[PlacedGlyph]>, Vec2) {
+        self.font();
+        let slot = self.fonts.len() - 1;
+        self.layouts.get(&self.fonts[slot], slot as u32, size, text)
+    }
+
     /// `text` with the top-left corner of its first line at `at`, its em
     /// `size` pixels tall (1 to 256); `\n` starts a line. Returns the size
     /// of the block it fills, in pixels.
     pub fn text(&mut self, at: Vec2, size: f32, color: Rgba, text: &str) -> Vec2 {
         let finite = at.is_finite() && size.is_finite();
-        let (glyphs, extent) = if finite {
-            let (slot, font) = self.font();
-            layout(font, slot, size, text)
-        } else {
-            (Vec::new(), Vec2::ZERO)
-        };
+        let (glyphs, extent) = if finite { self.laid_out(size, text) } else { (Arc::from([]), Vec2::ZERO) };
         self.keep(finite, Shape::Text { at: at.round(), glyphs, color: color.unorm8() });
         extent
     }
@@ -578,12 +632,7 @@ impl Canvas<'_> {
         depth: DepthMode,
     ) -> &mut Self {
         let finite = anchor.is_finite() && offset.is_finite() && size.is_finite();
-        let glyphs = if finite {
-            let (slot, font) = self.font();
-            layout(font, slot, size, text).0
-        } else {
-            Vec::new()
-        };
+        let glyphs = if finite { self.laid_out(size, text).0 } else { Arc::from([]) };
         self.keep(finite, Shape::WorldText { anchor, offset: offset.round(), glyphs, color: color.unorm8(), depth })
     }
 
@@ -646,4 +695,42 @@ pub fn frustum_corners(view: &ResolvedView, max_distance: f64) -> Option<[DVec3;
         *corner = view_to_world.transform_point3(point);
     }
     corners.iter().all(|c| c.is_finite()).then_some(corners)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn glyphs_of(shape: &Shape) -> &Arc<[PlacedGlyph]> {
+        match shape {
+            Shape::Text { glyphs, .. } | Shape::WorldText { glyphs, .. } => glyphs,
+            _ => panic!("not text"),
+        }
+    }
+
+    /// A label drawn again is laid out once (the same glyphs, shared); at
+    /// another size, or after another font is set, it is laid out anew.
+    #[test]
+    fn text_drawn_again_is_laid_out_once() {
+        let mut overlay = Overlay::new();
+        let first = overlay.immediate().text(Vec2::ZERO, 14.0, Rgba::WHITE, "label 42");
+        let again = overlay.immediate().text(Vec2::new(5.0, 5.0), 14.0, Rgba::WHITE, "label 42");
+        overlay.immediate().text(Vec2::ZERO, 20.0, Rgba::WHITE, "label 42");
+        overlay.immediate().world_text(DVec3::ZERO, Vec2::ZERO, 14.0, Rgba::WHITE, "label 42", DepthMode::OnTop);
+        assert_eq!(first, again);
+        let shapes = &overlay.immediate;
+        assert!(Arc::ptr_eq(glyphs_of(&shapes[0]), glyphs_of(&shapes[1])), "laid out twice");
+        assert!(Arc::ptr_eq(glyphs_of(&shapes[0]), glyphs_of(&shapes[3])), "world text laid out again");
+        assert!(!Arc::ptr_eq(glyphs_of(&shapes[0]), glyphs_of(&shapes[2])), "another size shares a layout");
+        assert_eq!(glyphs_of(&shapes[0]).len(), 7, "seven letters and a space");
+        overlay.set_font(Font::default_sans());
+        overlay.immediate().text(Vec2::ZERO, 14.0, Rgba::WHITE, "label 42");
+        let shapes = &overlay.immediate;
+        assert!(!Arc::ptr_eq(glyphs_of(&shapes[0]), glyphs_of(&shapes[4])), "another font shares a layout");
+        // Ever new strings: the cache is emptied rather than grown.
+        for i in 0..2 * Layouts::MOST {
+            overlay.immediate().text(Vec2::ZERO, 14.0, Rgba::WHITE, &i.to_string());
+        }
+        assert!(overlay.layouts.strings <= Layouts::MOST, "{} strings kept", overlay.layouts.strings);
+    }
 }
