@@ -31,12 +31,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let frames: usize = args.next().map(|a| a.parse()).transpose()?.unwrap_or(20);
     let height = (width * 9 / 16).max(1);
     let scene = oxygen_demo::floor_with_box(0.6);
-    let camera = LookAtResolver::new(
-        Camera::perspective(60f32.to_radians(), 0.1, None),
-        Vec3::new(0.0, 3.0, 5.0),
-        Vec3::new(0.0, 0.0, -1.0),
-        UVec2::new(width, height),
-    )?;
+    let camera = oxygen_demo::floor_with_box_camera(UVec2::new(width, height))?;
     let bloom = |levels| Some(Bloom { levels, ..Bloom::DEFAULT });
     let auto = Some(AutoExposure::DEFAULT);
     let cases = [

@@ -31,6 +31,11 @@ fn rgb(image: &RgbaImage, x: u32, y: u32) -> [u8; 3] {
     [p[0], p[1], p[2]]
 }
 
+/// The stable id of the scene's node named "box" (what picking returns).
+fn box_node(scene: &Scene) -> u32 {
+    scene.nodes().find(|(_, n)| n.name == "box").map(|(k, _)| oxygen::core::scene::node_index(k)).unwrap()
+}
+
 /// Whether `p` is `want` within `tolerance` levels a channel.
 fn near(p: [u8; 3], want: [u8; 3], tolerance: u8) -> bool {
     p.iter().zip(want).all(|(a, b)| a.abs_diff(b) <= tolerance)
@@ -430,8 +435,7 @@ fn picking_finds_the_node_at_a_pixel_and_its_outline_is_as_wide_as_asked() {
     let view = renderer.register_view(ViewDesc::new(cam).with_labels(), standard_render_graph).unwrap();
     renderer.render_frame(&scene).unwrap();
     let labels = renderer.read_labels(view).unwrap();
-    let box_node =
-        scene.nodes().find(|(_, n)| n.name == "box").map(|(k, _)| oxygen::core::scene::node_index(k)).unwrap();
+    let box_node = box_node(&scene);
     let (bx, by) = support::pixel_of(&resolved(&cam, view, &scene), Vec3::new(1.5, 0.5, -1.0));
     assert_eq!(renderer.pick(view, bx, by).unwrap(), Some(box_node));
     // Every pixel picks what the label image shows there.
@@ -475,8 +479,7 @@ fn views_without_labels_pick_and_outline_through_an_id_render() {
         renderer.register_view(ViewDesc::new(cam).with_msaa(oxygen::gpu::Msaa::X4), standard_render_graph).unwrap();
     renderer.render_frame(&scene).unwrap();
     let labels = renderer.read_labels(labelled).unwrap();
-    let box_node =
-        scene.nodes().find(|(_, n)| n.name == "box").map(|(k, _)| oxygen::core::scene::node_index(k)).unwrap();
+    let box_node = box_node(&scene);
     let (bx, by) = support::pixel_of(&resolved(&cam, plain, &scene), Vec3::new(1.5, 0.5, -1.0));
     assert_eq!(renderer.pick(plain, bx, by).unwrap(), Some(box_node));
     assert_eq!(renderer.pick(msaa, bx, by).unwrap(), Some(box_node));
@@ -616,8 +619,7 @@ fn a_batch_camera_draws_its_overlay_over_its_tile() {
     renderer.render_frame(&scene).unwrap();
     let untouched: Vec<RgbaImage> =
         cameras.iter().map(|(first, _)| support::read_lit_color(&renderer, *first)).collect();
-    let box_node =
-        scene.nodes().find(|(_, n)| n.name == "box").map(|(k, _)| oxygen::core::scene::node_index(k)).unwrap();
+    let box_node = box_node(&scene);
     let (bx, by) = support::pixel_of(&resolved(&cam, alone, &scene), Vec3::new(1.5, 0.5, -1.0));
     // The box at its centre, and over a grid of pixels (the box's edges
     // among them) what the lone camera's ID render picks.

@@ -151,6 +151,18 @@ pub fn floor_with_box(roughness: f32) -> Scene {
     scene
 }
 
+/// The benches' camera of [`floor_with_box`]: 3 m up, 5 m back, looking
+/// down past the box at 60° vertical field of view; refuses a viewport
+/// the camera cannot use (an empty one).
+pub fn floor_with_box_camera(viewport: UVec2) -> Result<LookAtResolver, oxygen_core::CameraError> {
+    LookAtResolver::new(
+        Camera::perspective(60f32.to_radians(), 0.1, None),
+        Vec3::new(0.0, 3.0, 5.0),
+        Vec3::new(0.0, 0.0, -1.0),
+        viewport,
+    )
+}
+
 /// A grey box of `size` standing on the origin of a 16 m grey floor, no
 /// light: the pole of the shadow scenes below.
 fn grey_pole_on_floor(size: Vec3) -> Scene {

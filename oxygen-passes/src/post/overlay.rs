@@ -521,7 +521,7 @@ impl OverlayPass {
         let labels = ctx.targets.labels.as_ref().and_then(|l| l.plane(Label::Instance));
         let need_ids = outline.is_some() && labels.is_none();
         let need_depth = ctx.targets.msaa.is_some() && tested && !vertices.is_empty();
-        if vertices.is_empty() && outline.is_none() || !(need_ids || need_depth) {
+        if !(need_ids || need_depth) {
             state.forget_ids(ctx.view.view_id);
         }
         if vertices.is_empty() && outline.is_none() {
@@ -533,17 +533,18 @@ impl OverlayPass {
             false => None,
         };
         // The ID render's targets (kept) or the view's depth with an
-        // instance plane (made for this frame).
-        let id_targets = match &made_ids {
+        // instance plane (put together for this frame).
+        let over_depth;
+        let id_targets: Option<&ViewTargets> = match &made_ids {
             Some(IdTargets::Own(targets)) => {
                 crate::record_id_render(ctx, targets, ctx.scene_constants, rec).await?;
-                Some(Arc::clone(targets))
+                Some(targets)
             }
             Some(IdTargets::OverDepth(planes)) => {
-                let targets = crate::ids_over_depth(ctx.targets, planes)
+                over_depth = crate::ids_over_depth(ctx.targets, planes)
                     .ok_or_else(|| PassError::Graph("ids over the depth of a view that cannot share it".into()))?;
-                crate::record_ids_over_depth(ctx, &targets, rec).await?;
-                Some(Arc::new(targets))
+                crate::record_ids_over_depth(ctx, &over_depth, rec).await?;
+                Some(&over_depth)
             }
             None => None,
         };
