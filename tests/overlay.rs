@@ -415,7 +415,8 @@ fn a_multisampled_view_draws_its_overlay_and_tests_world_shapes() {
     let differ =
         image.pixels().zip(twin.pixels()).filter(|(a, b)| (full(a) && !some(b)) || (full(b) && !some(a))).count();
     eprintln!("{differ} of {reds} red pixels differ from the single-sampled view's");
-    assert!(reds > 50, "{reds} red pixels");
+    // Measured on lavapipe and llvmpipe: 103.
+    assert!(reds > 85, "{reds} red pixels");
     assert_eq!(differ, 0, "the line's pixels differ from the single-sampled view's");
     // The depth drawn for the test: two render passes (the depth, the
     // overlay) where the untested overlay had one.
@@ -517,7 +518,8 @@ fn views_without_labels_pick_and_outline_through_an_id_render() {
         eprintln!("{view}: {differing} of {band} outline pixels differ");
         assert_eq!(differing, 0, "{view}'s outline differs from the labelled view's");
     }
-    assert!(band > 100, "{band} pixels of outline");
+    // Measured on lavapipe and llvmpipe: 250.
+    assert!(band > 210, "{band} pixels of outline");
     // Ids drawn for the two views without labels (over the plain view's
     // depth, by an ID render of its own for the multisampled one).
     assert_eq!(renderer.internals().lighting.overlay_id_views(), 2, "ids for the plain and multisampled views");
@@ -590,7 +592,8 @@ fn picking_by_an_id_render_follows_gpu_culling() {
         }
     }
     eprintln!("picks differing from the labels: {differ:?}; {} nodes seen", nodes.len());
-    assert!(nodes.len() > 20, "{} nodes in view: the field is not in sight", nodes.len());
+    // Measured on lavapipe: 68.
+    assert!(nodes.len() > 55, "{} nodes in view: the field is not in sight", nodes.len());
     assert_eq!(differ, [0, 0], "GPU-culled views pick other nodes than their labels show");
 }
 
@@ -645,7 +648,9 @@ fn a_batch_camera_draws_its_overlay_over_its_tile() {
     renderer.render_frame(&scene).unwrap();
     let by_itself = support::read_lit_color(&renderer, alone);
     let green = by_itself.pixels().filter(|p| p.0[1] > 200 && p.0[0] < 60 && p.0[2] < 60).count();
-    assert!(green > 100, "{green} pixels of outline");
+    eprintln!("{green} pixels of outline");
+    // Measured on lavapipe and llvmpipe: 226.
+    assert!(green > 190, "{green} pixels of outline");
     assert!(near(rgb(&by_itself, 20, 14), [255, 0, 0], 2), "the rectangle {:?}", rgb(&by_itself, 20, 14));
     for (&(first, drawn), before) in cameras.iter().zip(&untouched) {
         let in_batch = support::read_lit_color(&renderer, drawn);
