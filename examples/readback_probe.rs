@@ -3,7 +3,8 @@
 //! in one run.
 //!
 //! ```text
-//! cargo run --release --example readback_probe [WxH] [iterations]   # default 16384x1024 and 30
+//! cargo run --release --example readback_probe [WxH] [iterations] [triangles]
+//! cargo run --release --example readback_probe 16384x1024 30 8000000
 //! ```
 //!
 //! Three planes of W × H texels, as a batch of 1 024 cameras of 128 × 128
@@ -25,6 +26,11 @@
 //! two not counted) and the median is reported, with the bytes a second;
 //! the ways take turns, iteration by iteration. The bytes the three ways
 //! bring back are compared once: they must be equal.
+//!
+//! With a third argument, the overlap ways follow ([`Overlap`]): frames of
+//! that many tiny triangles each, rendered and copied back to back, in the
+//! orders that decide whether one frame's copy runs beside the next
+//! frame's render on wgpu's one queue (default 0: not run).
 //!
 //! GL adapters are refused (no depth copies into buffers, no depth loads
 //! in compute). With `OXYGEN_RECORD_DIR` set, the run's figures are
@@ -89,6 +95,22 @@ fn vs(@builtin(vertex_index) index: u32) -> Varying {
     return Varying(vec4<f32>(centre + corner * 0.02, depth, 1.0), triangle);
 }
 
+// The overlap ways' render: `triangles` tiny triangles (a few pixels
+// each, so the vertices bound it, as a batch's small cameras are bound),
+// moved each frame by an offset written just before the submission (the
+// upload every frame makes).
+struct Frame { offset: vec2<f32>, pad: vec2<f32> }
+@group(0) @binding(0) var<uniform> frame: Frame;
+
+@vertex
+fn vs_small(@builtin(vertex_index) index: u32) -> Varying {
+    let triangle = index / 3u;
+    let centre = vec2<f32>(unit(triangle * 7u), unit(triangle * 7u + 1u)) * 2.0 - 1.0;
+    let corner = vec2<f32>(unit(index * 13u + 2u), unit(index * 13u + 3u)) - 0.5;
+    let depth = unit(triangle * 7u + 4u);
+    return Varying(vec4<f32>(fract(centre + frame.offset + 1.0) * 2.0 - 1.0 + corner * 0.0005, depth, 1.0), triangle);
+}
+
 struct Out {
     @location(0) color: vec4<f32>,
     @location(1) id: u32,
@@ -131,6 +153,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .filter(|(w, h)| *w > 0 && *h > 0 && (w * 4) % 256 == 0)
         .ok_or("the size is WxH, W a multiple of 64")?;
     let iterations: usize = args.next().map(|a| a.parse()).transpose()?.unwrap_or(30);
+    let overlap_triangles: u32 = args.next().map(|a| a.parse()).transpose()?.unwrap_or(0);
     let options =
         oxygen_gpu::GpuOptions { optional_features: wgpu::Features::MAPPABLE_PRIMARY_BUFFERS, ..Default::default() };
     let gpu = oxygen_gpu::GpuContext::new_headless(&options)?;
@@ -161,18 +184,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         texture(device, (w, h), wgpu::TextureFormat::R32Uint),
     ];
     let views: Vec<wgpu::TextureView> = planes.iter().map(|t| t.create_view(&Default::default())).collect();
-    // Every plane filled with triangles of their own colour, id and depth.
-    {
-        let fill = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("fill"),
-            source: wgpu::ShaderSource::Wgsl(FILL.into()),
-        });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("fill"),
+    let fill = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("fill"),
+        source: wgpu::ShaderSource::Wgsl(FILL.into()),
+    });
+    let fill_pipeline = |entry: &str| {
+        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(entry),
             layout: None,
             vertex: wgpu::VertexState {
                 module: &fill,
-                entry_point: Some("vs"),
+                entry_point: Some(entry),
                 compilation_options: Default::default(),
                 buffers: &[],
             },
@@ -193,26 +215,43 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }),
             multiview_mask: None,
             cache: None,
-        });
-        let mut encoder = device.create_command_encoder(&Default::default());
-        let clear = |view| wgpu::RenderPassColorAttachment {
+        })
+    };
+    // A render pass over one set of planes (colour, depth, ids), cleared
+    // first or loaded.
+    let planes_pass = |encoder: &'_ mut wgpu::CommandEncoder, views: &[wgpu::TextureView], clear: bool| {
+        let color = |view| wgpu::RenderPassColorAttachment {
             view,
             depth_slice: None,
             resolve_target: None,
-            ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
+            ops: wgpu::Operations {
+                load: if clear { wgpu::LoadOp::Clear(wgpu::Color::BLACK) } else { wgpu::LoadOp::Load },
+                store: wgpu::StoreOp::Store,
+            },
         };
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("fill"),
-            color_attachments: &[Some(clear(&views[0])), Some(clear(&views[2]))],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &views[1],
-                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(0.0), store: wgpu::StoreOp::Store }),
-                stencil_ops: None,
-            }),
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        encoder
+            .begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("planes"),
+                color_attachments: &[Some(color(&views[0])), Some(color(&views[2]))],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &views[1],
+                    depth_ops: Some(wgpu::Operations {
+                        load: if clear { wgpu::LoadOp::Clear(0.0) } else { wgpu::LoadOp::Load },
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            })
+            .forget_lifetime()
+    };
+    // Every plane filled with triangles of their own colour, id and depth.
+    {
+        let pipeline = fill_pipeline("vs");
+        let mut encoder = device.create_command_encoder(&Default::default());
+        let mut pass = planes_pass(&mut encoder, &views, true);
         pass.set_pipeline(&pipeline);
         pass.draw(0..TRIANGLES * 3, 0..1);
         drop(pass);
@@ -270,7 +309,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             buffer
         })
         .collect();
-    let groups = |out: &wgpu::Buffer| -> Vec<wgpu::BindGroup> {
+    let groups_of = |out: &wgpu::Buffer, views: &[wgpu::TextureView]| -> Vec<wgpu::BindGroup> {
         params
             .iter()
             .map(|p| {
@@ -288,6 +327,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             })
             .collect()
     };
+    let groups = |out: &wgpu::Buffer| groups_of(out, &views);
     let into_mapped = mapped_written.as_ref().map(groups);
     let into_device = groups(&device_written);
 
@@ -391,6 +431,181 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .value("samples_ms", &samples[way]),
         );
     }
+    if overlap_triangles > 0 {
+        let overlap = Overlap {
+            gpu: &gpu,
+            size: (w, h),
+            triangles: overlap_triangles,
+            iterations,
+            copy_into: &mapped_copy,
+            drain_into: mapped_written.as_ref(),
+            plane_bytes,
+        };
+        for row in overlap.run(
+            &fill_pipeline("vs_small"),
+            &planes_pass,
+            &|views| mapped_written.as_ref().map(|out| groups_of(out, views)),
+            &compute,
+        )? {
+            record.push_row(row);
+        }
+    }
     record.write()?;
     Ok(())
+}
+
+/// Frames submitted back to back for one sample of an overlap way.
+const FRAMES_PER_SAMPLE: usize = 8;
+
+/// The overlap ways: does a frame's copy run beside the next frame's
+/// render on wgpu's one queue? Two sets of planes take turns as frames
+/// of a stream do (frame `i` renders into set `i % 2` while the copy of
+/// frame `i - 1`'s set may still run), each frame an upload (a uniform
+/// the render reads, written just before its submission, as every frame
+/// writes its constants), then:
+///
+/// * `render`: the render alone;
+/// * `render, then its copy`: the render, then its own planes' copy
+///   (today's stream: serial by construction);
+/// * `last frame's copy, then render`: the copy of the other set, then the
+///   render, which clears its planes in its own pass;
+/// * `clear, last frame's copy, then render`: the planes cleared in a pass
+///   of their own first, so that the render's barriers come before the
+///   copy (a barrier after a copy waits for every copy before it);
+/// * `clear, last frame's drain, then render`: as above with a compute pass
+///   writing the mapped buffer instead of the copy.
+struct Overlap<'a> {
+    gpu: &'a oxygen_gpu::GpuContext,
+    size: (u32, u32),
+    triangles: u32,
+    iterations: usize,
+    copy_into: &'a wgpu::Buffer,
+    drain_into: Option<&'a wgpu::Buffer>,
+    plane_bytes: u64,
+}
+
+type PlanesPass<'p> = dyn Fn(&mut wgpu::CommandEncoder, &[wgpu::TextureView], bool) -> wgpu::RenderPass<'static> + 'p;
+type DrainGroups<'p> = dyn Fn(&[wgpu::TextureView]) -> Option<Vec<wgpu::BindGroup>> + 'p;
+type Drain<'p> = dyn Fn(&mut wgpu::CommandEncoder, &[wgpu::BindGroup]) + 'p;
+
+impl Overlap<'_> {
+    fn run(
+        &self,
+        pipeline: &wgpu::RenderPipeline,
+        planes_pass: &PlanesPass<'_>,
+        drain_groups: &DrainGroups<'_>,
+        drain: &Drain<'_>,
+    ) -> Result<Vec<Row>, Box<dyn std::error::Error>> {
+        let device = &self.gpu.device;
+        let sets: Vec<Vec<wgpu::Texture>> = (0..2)
+            .map(|_| {
+                [wgpu::TextureFormat::Rgba8Unorm, wgpu::TextureFormat::Depth32Float, wgpu::TextureFormat::R32Uint]
+                    .map(|format| texture(device, self.size, format))
+                    .to_vec()
+            })
+            .collect();
+        let views: Vec<Vec<wgpu::TextureView>> =
+            sets.iter().map(|set| set.iter().map(|t| t.create_view(&Default::default())).collect()).collect();
+        let drains: Vec<Option<Vec<wgpu::BindGroup>>> = views.iter().map(|v| drain_groups(v)).collect();
+        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("frame"),
+            size: 16,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("frame"),
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &[wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() }],
+        });
+        let render = |encoder: &mut wgpu::CommandEncoder, set: usize, clear: bool| {
+            let mut pass = planes_pass(encoder, &views[set], clear);
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, &group, &[]);
+            pass.draw(0..self.triangles * 3, 0..1);
+        };
+        let copy = |encoder: &mut wgpu::CommandEncoder, set: usize| {
+            for (i, plane) in sets[set].iter().enumerate() {
+                encoder.copy_texture_to_buffer(
+                    plane.as_image_copy(),
+                    wgpu::TexelCopyBufferInfo {
+                        buffer: self.copy_into,
+                        layout: wgpu::TexelCopyBufferLayout {
+                            offset: i as u64 * self.plane_bytes,
+                            bytes_per_row: Some(self.size.0 * 4),
+                            rows_per_image: Some(self.size.1),
+                        },
+                    },
+                    plane.size(),
+                );
+            }
+        };
+        let mut ways: Vec<&str> = vec![
+            "render",
+            "render, then its copy",
+            "last frame's copy, then render",
+            "clear, last frame's copy, then render",
+        ];
+        if self.drain_into.is_some() {
+            ways.push("clear, last frame's drain, then render");
+        }
+        let mut samples = vec![Vec::new(); ways.len()];
+        let mut frame = 0usize;
+        for iteration in 0..WARM_UP + self.iterations {
+            for (way, way_samples) in samples.iter_mut().enumerate() {
+                let started = Instant::now();
+                for _ in 0..FRAMES_PER_SAMPLE {
+                    frame += 1;
+                    let (this, last) = (frame % 2, (frame + 1) % 2);
+                    let offset = [frame as f32 * 0.001, 0.0, 0.0, 0.0];
+                    self.gpu.queue.write_buffer(&uniform, 0, bytemuck::cast_slice(&offset));
+                    let mut encoder = device.create_command_encoder(&Default::default());
+                    match way {
+                        0 => render(&mut encoder, this, true),
+                        1 => {
+                            render(&mut encoder, this, true);
+                            copy(&mut encoder, this);
+                        }
+                        2 => {
+                            copy(&mut encoder, last);
+                            render(&mut encoder, this, true);
+                        }
+                        3 => {
+                            drop(planes_pass(&mut encoder, &views[this], true));
+                            copy(&mut encoder, last);
+                            render(&mut encoder, this, false);
+                        }
+                        _ => {
+                            drop(planes_pass(&mut encoder, &views[this], true));
+                            let Some(groups) = &drains[last] else { unreachable!() };
+                            drain(&mut encoder, groups);
+                            render(&mut encoder, this, false);
+                        }
+                    }
+                    self.gpu.queue.submit([encoder.finish()]);
+                }
+                device.poll(wgpu::PollType::wait_indefinitely())?;
+                if iteration >= WARM_UP {
+                    way_samples.push(started.elapsed().as_secs_f64() * 1e3 / FRAMES_PER_SAMPLE as f64);
+                }
+            }
+        }
+        println!("{} triangles a frame, {FRAMES_PER_SAMPLE} frames back to back a sample:", self.triangles);
+        let mut rows = Vec::new();
+        for (way, name) in ways.iter().enumerate() {
+            let mut sorted = samples[way].clone();
+            sorted.sort_by(f64::total_cmp);
+            let ms = sorted[sorted.len() / 2];
+            println!("{name:<42} {ms:8.3} ms a frame");
+            rows.push(
+                Row::new()
+                    .value("way", *name)
+                    .value("triangles", self.triangles)
+                    .value("frames_per_sample", FRAMES_PER_SAMPLE)
+                    .value("ms_per_frame_median", ms)
+                    .value("samples_ms_per_frame", &samples[way]),
+            );
+        }
+        Ok(rows)
+    }
 }
