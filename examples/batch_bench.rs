@@ -41,7 +41,12 @@
 //! they arrive, the rest waited for after the last frame; lone views with
 //! readback wait as before, their reads block), so the CPU of one frame
 //! overlaps the GPU of the last. Its view-frames per second (V × frames ÷
-//! the whole stretch) is the throughput column.
+//! the whole stretch) is the throughput column: it includes the first
+//! frame's latency and the last one's drain, a large share of a short run.
+//! A streamed batch's line adds the rate at which its frames arrived
+//! between the first arrival and the last (the stream's steady rate) and
+//! the median time from a frame's `render_frame` call to its images in
+//! hand (its latency).
 //! `BATCH_BENCH_SPANS=1` also adds up the time inside each of Oxygen's
 //! `tracing` spans over the measured frames (`oxygen_demo::span_times`)
 //! and prints the largest per frame: where the CPU time goes, on any
@@ -131,6 +136,14 @@ struct Run {
     draws: Vec<f64>,
     /// View-frames per second of the frames run back to back.
     pipelined_per_second: f64,
+    /// View-frames per second at which the streamed frames arrived while
+    /// running back to back, between the first arrival and the last (the
+    /// stream's steady rate, without the first frame's latency and the
+    /// last one's drain); NaN without streaming.
+    steady_per_second: f64,
+    /// Milliseconds from a streamed frame's `render_frame` call to its
+    /// images in hand, back to back (median); NaN without streaming.
+    latency_ms: f64,
     /// Milliseconds per measured frame inside each span, largest first
     /// (`BATCH_BENCH_SPANS=1`).
     spans: Vec<(&'static str, f64)>,
@@ -226,6 +239,8 @@ fn run(
         read_bytes: 0,
         draws: Vec::new(),
         pipelined_per_second: f64::NAN,
+        steady_per_second: f64::NAN,
+        latency_ms: f64::NAN,
         spans: Vec::new(),
         back_to_back_spans: Vec::new(),
     };
@@ -278,19 +293,45 @@ fn run(
     // no readback) runs without waiting between frames.
     if !readback || batch.is_some() {
         let start = Instant::now();
+        // When each frame was asked for, and when its images were in hand.
+        let mut asked: Vec<(u64, Instant)> = Vec::with_capacity(frames);
+        let mut arrived: Vec<(u64, Instant)> = Vec::with_capacity(frames);
+        let mut note = |frames: &[StreamedFrame]| {
+            let now = Instant::now();
+            arrived.extend(frames.iter().map(|f| (f.frame, now)));
+        };
         for _ in 0..frames {
-            renderer.render_frame(scene)?;
+            let called = Instant::now();
+            let report = renderer.render_frame(scene)?;
+            asked.push((report.frame_index, called));
             if readback {
                 let frames = renderer.take_streamed()?;
+                note(&frames);
                 streamed_bytes(&mut renderer, frames);
             }
         }
         if readback {
             let frames = renderer.wait_streamed()?;
+            note(&frames);
             streamed_bytes(&mut renderer, frames);
         }
         renderer.gpu().device.poll(wgpu::PollType::wait_indefinitely())?;
         result.pipelined_per_second = (views * frames) as f64 / start.elapsed().as_secs_f64();
+        if let (Some(first), Some(last)) = (arrived.first(), arrived.last())
+            && arrived.len() > 1
+            && last.1 > first.1
+        {
+            result.steady_per_second =
+                (views * (arrived.len() - 1)) as f64 / last.1.duration_since(first.1).as_secs_f64();
+            let latencies: Vec<f64> = arrived
+                .iter()
+                .filter_map(|(frame, at)| {
+                    let called = asked.iter().find(|(f, _)| f == frame)?.1;
+                    Some(at.duration_since(called).as_secs_f64() * 1e3)
+                })
+                .collect();
+            result.latency_ms = median(&latencies);
+        }
         if let Some(spans) = spans {
             result.back_to_back_spans = span_ms_per_frame(spans, frames);
         }
@@ -508,6 +549,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             println!(
                 "| {mode:?} | {views} | {cpu:.3} | {prepare:.3} | {recording:.3} | {whole:.3} | {gpu:.3} | {per_second:.0} | {pipelined:.0} | {read_mb_s:.1} |"
             );
+            if r.steady_per_second.is_finite() {
+                println!(
+                    "    streamed back to back: {:.0} view-frames/s steady (first arrival to last), {:.1} ms from render_frame to images in hand",
+                    r.steady_per_second, r.latency_ms
+                );
+            }
             for (name, ms) in r.spans.iter().take(SPANS_SHOWN) {
                 println!("    span {name}: {ms:.3} ms a frame");
             }
@@ -529,6 +576,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     .value("vertex_floor_ms", floor_ms)
                     .value("gpu_over_vertex_floor", over_floor)
                     .value("back_to_back_view_frames_per_second", pipelined.is_finite().then_some(pipelined))
+                    .value(
+                        "streamed_steady_view_frames_per_second",
+                        r.steady_per_second.is_finite().then_some(r.steady_per_second),
+                    )
+                    .value("streamed_latency_ms_median", r.latency_ms.is_finite().then_some(r.latency_ms))
                     .value("span_ms_per_frame", r.spans.iter().fold(Row::new(), |row, (name, ms)| row.value(name, *ms)))
                     .value(
                         "back_to_back_span_ms_per_frame",
