@@ -43,8 +43,8 @@
 //! overlaps the GPU of the last. Its view-frames per second (V × frames ÷
 //! the whole stretch) is the throughput column: it includes the first
 //! frame's latency and the last one's drain, a large share of a short run.
-//! A streamed batch's line adds the rate at which its frames arrived
-//! between the first arrival and the last (the stream's steady rate) and
+//! A streamed batch's line adds the rate at which its frames arrived (the
+//! stream's steady rate: the slope of a line through the arrival times) and
 //! the median time from a frame's `render_frame` call to its images in
 //! hand (its latency).
 //! `BATCH_BENCH_SPANS=1` also adds up the time inside each of Oxygen's
@@ -137,9 +137,9 @@ struct Run {
     /// View-frames per second of the frames run back to back.
     pipelined_per_second: f64,
     /// View-frames per second at which the streamed frames arrived while
-    /// running back to back, between the first arrival and the last (the
-    /// stream's steady rate, without the first frame's latency and the
-    /// last one's drain); NaN without streaming.
+    /// running back to back ([`arrival_period`]: the stream's steady rate,
+    /// without the first frame's latency and the last one's drain); NaN
+    /// without streaming.
     steady_per_second: f64,
     /// Milliseconds from a streamed frame's `render_frame` call to its
     /// images in hand, back to back (median); NaN without streaming.
@@ -167,6 +167,29 @@ fn streamed_bytes(renderer: &mut Renderer, frames: Vec<StreamedFrame>) -> u64 {
         renderer.recycle_streamed(frame);
     }
     bytes
+}
+
+/// Seconds between a stream's frames in its steady state: the slope of a
+/// least-squares line through the arrival times, frame after frame (frames
+/// are seen arriving only between `render_frame` calls, some late, a few
+/// at once; the line spreads that over all of them). `None` for fewer than
+/// three arrivals or no time between them.
+fn arrival_period(arrived: &[(u64, Instant)], start: Instant) -> Option<f64> {
+    if arrived.len() < 3 {
+        return None;
+    }
+    let n = arrived.len() as f64;
+    let times: Vec<f64> = arrived.iter().map(|(_, at)| at.duration_since(start).as_secs_f64()).collect();
+    let mean_i = (n - 1.0) / 2.0;
+    let mean_t = times.iter().sum::<f64>() / n;
+    let (mut covariance, mut variance) = (0.0, 0.0);
+    for (i, t) in times.iter().enumerate() {
+        let di = i as f64 - mean_i;
+        covariance += di * (t - mean_t);
+        variance += di * di;
+    }
+    let slope = covariance / variance;
+    (slope > 0.0).then_some(slope)
 }
 
 fn median(values: &[f64]) -> f64 {
@@ -317,12 +340,8 @@ fn run(
         }
         renderer.gpu().device.poll(wgpu::PollType::wait_indefinitely())?;
         result.pipelined_per_second = (views * frames) as f64 / start.elapsed().as_secs_f64();
-        if let (Some(first), Some(last)) = (arrived.first(), arrived.last())
-            && arrived.len() > 1
-            && last.1 > first.1
-        {
-            result.steady_per_second =
-                (views * (arrived.len() - 1)) as f64 / last.1.duration_since(first.1).as_secs_f64();
+        if let Some(seconds_per_frame) = arrival_period(&arrived, start) {
+            result.steady_per_second = views as f64 / seconds_per_frame;
             let latencies: Vec<f64> = arrived
                 .iter()
                 .filter_map(|(frame, at)| {
@@ -551,7 +570,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             );
             if r.steady_per_second.is_finite() {
                 println!(
-                    "    streamed back to back: {:.0} view-frames/s steady (first arrival to last), {:.1} ms from render_frame to images in hand",
+                    "    streamed back to back: {:.0} view-frames/s steady (arrivals' slope), {:.1} ms from render_frame to images in hand",
                     r.steady_per_second, r.latency_ms
                 );
             }
