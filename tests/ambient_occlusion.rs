@@ -24,7 +24,7 @@ const SAMPLES: u32 = 256;
 /// 8 m 53 %, Ultra quality, on lavapipe).
 const RADIUS: f32 = 4.0;
 
-/// The raster's constant ambient level (`AMBIENT` in forward_lit.wgsl),
+/// The raster's constant ambient level (`AMBIENT` in mesh/shading.wgsl),
 /// as the reference's sky.
 const AMBIENT: f32 = 0.03;
 

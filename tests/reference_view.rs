@@ -907,7 +907,7 @@ fn trace_once(
     (renderer.read_hdr(view).unwrap(), resolved)
 }
 
-/// `forward_lit.wgsl`'s constant ambient term (no environment, no probe),
+/// `mesh/shading.wgsl`'s constant ambient term (no environment, no probe),
 /// which the raster model's reference adds too: `AMBIENT` times the
 /// diffuse albedo plus F0.
 fn constant_ambient(albedo: f64, metallic: f64) -> f64 {

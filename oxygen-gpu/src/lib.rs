@@ -27,4 +27,6 @@ pub use context::{GpuContext, GpuError, GpuOptions};
 pub use gpu_struct::{FieldLayout, GpuStruct, StructLayout, WgslType, check_layout, check_overlay};
 pub use labels::{Label, LabelPlane, LabelSet, LabelTargets};
 pub use readback::{HdrImage, f16_to_f32, unpack_rg11b10_ufloat};
-pub use target::{AtlasPage, ColorTargets, HdrFormat, Msaa, MsaaTargets, Tile, TileAtlas, ViewTargets, texture_2d};
+pub use target::{
+    AtlasPage, ColorTargets, DeferredTargets, HdrFormat, Msaa, MsaaTargets, Tile, TileAtlas, ViewTargets, texture_2d,
+};

@@ -42,6 +42,61 @@ pub struct ViewTargets {
     /// camera of its batch that does not render): the page's passes load
     /// it and clear this view's tile alone. Set by the renderer each frame.
     pub page_kept: bool,
+    /// Deferred shading's textures, when the view is a tile of an atlas
+    /// made for it ([`TileAtlas::new`]).
+    pub deferred: Option<DeferredTargets>,
+}
+
+/// What deferred shading adds to a page of a [`TileAtlas`]: the
+/// visibility pass's target and the image the shading pass writes before
+/// it is copied into the page's display colour.
+#[derive(Clone)]
+pub struct DeferredTargets {
+    /// Each pixel's draw (its index in the view's draws plus one; 0 for
+    /// none) and triangle ([`DeferredTargets::VISIBILITY_FORMAT`]).
+    pub visibility: wgpu::Texture,
+    /// Its default view.
+    pub visibility_view: wgpu::TextureView,
+    /// The shaded display colour as sRGB bytes (`Rgba8Unorm`: a storage
+    /// texture cannot have an sRGB format), the page's size.
+    pub shaded: wgpu::Texture,
+    /// Its default view.
+    pub shaded_view: wgpu::TextureView,
+}
+
+impl DeferredTargets {
+    /// The visibility target's format.
+    pub const VISIBILITY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Uint;
+    /// The shaded image's format.
+    pub const SHADED_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+    /// Bytes a pixel of both takes.
+    pub const BYTES_PER_PIXEL: u64 = 12;
+
+    /// The textures for a page of `size`.
+    pub fn new(device: &wgpu::Device, size: wgpu::Extent3d, label: &str) -> Self {
+        let visibility = texture_2d(
+            device,
+            &format!("{label} visibility"),
+            size,
+            1,
+            Self::VISIBILITY_FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+        );
+        let shaded = texture_2d(
+            device,
+            &format!("{label} shaded"),
+            size,
+            1,
+            Self::SHADED_FORMAT,
+            wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
+        );
+        DeferredTargets {
+            visibility_view: visibility.create_view(&Default::default()),
+            shaded_view: shaded.create_view(&Default::default()),
+            visibility,
+            shaded,
+        }
+    }
 }
 
 /// A view's rectangle in a [`TileAtlas`]: `width × height` pixels of
@@ -89,6 +144,8 @@ pub struct AtlasPage {
     pub depth: wgpu::Texture,
     /// Instance ids and normals, when asked for.
     pub labels: Option<LabelTargets>,
+    /// Deferred shading's textures, when asked for.
+    pub deferred: Option<DeferredTargets>,
     color_view: wgpu::TextureView,
     hdr_view: Option<wgpu::TextureView>,
     depth_view: wgpu::TextureView,
@@ -114,8 +171,9 @@ impl TileAtlas {
     }
 
     /// Bytes the atlas of [`TileAtlas::layout`] takes: 4 (depth) + 4
-    /// (colour) bytes a pixel, plus `hdr_bytes_per_pixel` with HDR and
-    /// the label planes' bytes ([`LabelSet::bytes_per_pixel`]). Known before anything
+    /// (colour) bytes a pixel, plus `hdr_bytes_per_pixel` with HDR,
+    /// the label planes' bytes ([`LabelSet::bytes_per_pixel`]) and
+    /// deferred shading's ([`DeferredTargets::BYTES_PER_PIXEL`]). Known before anything
     /// is allocated, so a renderer can refuse a batch that does not fit its
     /// target budget.
     pub fn bytes_for(
@@ -123,23 +181,27 @@ impl TileAtlas {
         layout: (u32, u32, u32),
         hdr_bytes_per_pixel: Option<u64>,
         labels: LabelSet,
+        deferred: bool,
     ) -> u64 {
         let (columns, rows, pages) = layout;
         let pixels = u64::from(columns * tile_size.0) * u64::from(rows * tile_size.1) * u64::from(pages);
-        pixels * (8 + hdr_bytes_per_pixel.unwrap_or(0) + labels.bytes_per_pixel())
+        let deferred = if deferred { DeferredTargets::BYTES_PER_PIXEL } else { 0 };
+        pixels * (8 + hdr_bytes_per_pixel.unwrap_or(0) + labels.bytes_per_pixel() + deferred)
     }
 
     /// Allocates the atlas for `tiles` tiles of `tile_size` on pages no
     /// larger than `max_side` (and the device's limit; see
     /// [`TileAtlas::layout`]), with an HDR colour texture of `hdr_format`
-    /// when given and the label planes of `labels`. `None` when the tiles
-    /// do not fit the device.
+    /// when given, the label planes of `labels` and deferred shading's
+    /// textures when `deferred`. `None` when the tiles do not fit the device.
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         device: &wgpu::Device,
         tile_size: (u32, u32),
         tiles: u32,
         hdr_format: Option<HdrFormat>,
         labels: LabelSet,
+        deferred: bool,
         max_side: Option<u32>,
         label: &str,
     ) -> Option<Self> {
@@ -159,7 +221,9 @@ impl TileAtlas {
                 let depth = texture_2d(device, &name("depth"), size, 1, ViewTargets::DEPTH_FORMAT, usage);
                 let labels = (!labels.is_empty())
                     .then(|| LabelTargets::new(device, size.width, size.height, labels, &name("labels")));
+                let deferred = deferred.then(|| DeferredTargets::new(device, size, &name("deferred")));
                 AtlasPage {
+                    deferred,
                     color_view: color.create_view(&Default::default()),
                     hdr_view: hdr.as_ref().map(|t| t.create_view(&Default::default())),
                     depth_view: depth.create_view(&Default::default()),
@@ -183,6 +247,11 @@ impl TileAtlas {
         self.pages.first().is_some_and(|p| p.hdr.is_some())
     }
 
+    /// Whether the pages have deferred shading's textures.
+    pub fn has_deferred(&self) -> bool {
+        self.pages.first().is_some_and(|p| p.deferred.is_some())
+    }
+
     /// The label planes the pages have.
     pub fn labels(&self) -> LabelSet {
         self.pages.first().and_then(|p| p.labels.as_ref()).map_or(LabelSet::NONE, LabelTargets::set)
@@ -201,7 +270,7 @@ impl TileAtlas {
             .and_then(|p| p.hdr.as_ref())
             .map(|t| u64::from(t.format().block_copy_size(None).unwrap_or(8)));
         let layout = (self.columns, self.rows, self.pages.len() as u32);
-        Self::bytes_for(self.tile_size, layout, hdr, self.labels())
+        Self::bytes_for(self.tile_size, layout, hdr, self.labels(), self.has_deferred())
     }
 
     /// Where tile `index` lies, or `None` past the capacity.
@@ -250,6 +319,7 @@ impl TileAtlas {
             tile: Some(tile),
             labels: page.labels.clone(),
             page_kept: false,
+            deferred: page.deferred.clone(),
         })
     }
 }
@@ -537,6 +607,7 @@ impl ViewTargets {
             tile: None,
             labels: None,
             page_kept: false,
+            deferred: None,
         }
     }
 
@@ -604,6 +675,7 @@ impl ViewTargets {
             tile: None,
             labels: None,
             page_kept: false,
+            deferred: None,
         }
     }
 }

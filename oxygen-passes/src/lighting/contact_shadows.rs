@@ -2,7 +2,7 @@
 //! shaded point toward each light that casts shadows, for the contact a
 //! shadow map misses (thin casters, the foot of an object on the ground,
 //! where the map's texels and its biases wash the shadow out). The march
-//! runs in the forward shader (`contact_shadow` in `forward_lit.wgsl`)
+//! runs in the forward shader (`contact_shadow` in `mesh/shading.wgsl`)
 //! over the view's depth in metres, which a [`crate::LinearDepthPass`] (or
 //! the ambient-occlusion pass) wrote after the depth pre-pass; a point is
 //! in contact shadow when the ray passes behind a surface the depth holds

@@ -10,7 +10,7 @@ pub const MAX_CASCADES: usize = 4;
 oxygen_gpu::gpu_struct! {
     /// The uniform block of group 1; its WGSL twin is generated from this
     /// declaration ([`oxygen_gpu::GpuStruct::wgsl`]) and included by
-    /// `forward_lit.wgsl`.
+    /// `mesh/shading.wgsl`.
     #[derive(Debug, PartialEq)]
     pub struct LightingInputs: 1904 bytes {
         /// World → light clip space, per cascade.

@@ -4,7 +4,7 @@
 //! leaves the screen, passes behind everything or the surface is too rough.
 //!
 //! The march runs in the forward shader (`screen_reflection` in
-//! `forward_lit.wgsl`) over the depth in metres a [`crate::LinearDepthPass`]
+//! `mesh/shading.wgsl`) over the depth in metres a [`crate::LinearDepthPass`]
 //! wrote after the depth pre-pass. What a hit reflects is the view's HDR
 //! colour of the **last frame it rendered** (the surfaces this frame are
 //! being shaded as the ray needs them): a [`ReflectionHistoryPass`] keeps
@@ -122,7 +122,7 @@ pub(crate) const HISTORY_LEVELS: u32 = 6;
 
 /// Each level's size and where it starts in the history buffer (in pixels):
 /// level 0 is `width × height`, each next one half of the last, rounded up
-/// (the shader walks the same chain: `history_level` in `forward_lit.wgsl`).
+/// (the shader walks the same chain: `history_level` in `mesh/shading.wgsl`).
 pub(crate) fn history_levels(width: u32, height: u32) -> Vec<HistoryLevel> {
     let mut levels = Vec::new();
     let (mut w, mut h, mut offset) = (width.max(1), height.max(1), 0u64);

@@ -89,6 +89,7 @@ pub fn ids_over_depth(view: &ViewTargets, ids: &LabelTargets) -> Option<ViewTarg
         tile: None,
         labels: Some(ids.clone()),
         page_kept: false,
+        deferred: None,
     })
 }
 

@@ -31,6 +31,14 @@ struct MeshVarying {
 
 @vertex
 fn vs_main(@builtin(vertex_index) vertex_index: u32, @builtin(instance_index) draw_index: u32) -> MeshIo {
+    return pack_varying(mesh_vertex(draw_index, vertex_index));
+}
+
+// Vertex `vertex_index` (base vertex included) of the view's draw
+// `draw_index`, morphed, skinned and placed in the world and on the camera:
+// what the vertex stage passes on, and what deferred shading
+// (mesh/deferred.wgsl) rebuilds for each corner of a pixel's triangle.
+fn mesh_vertex(draw_index: u32, vertex_index: u32) -> MeshVarying {
     let draw = draw_metadata_domain[scene.renderer.draw_metadata_slot + draw_index];
     let v = vertex_domain[vertex_index];
     // Morph targets first (glTF: morph, then skin): the weighted sum of the
@@ -97,7 +105,7 @@ fn vs_main(@builtin(vertex_index) vertex_index: u32, @builtin(instance_index) dr
         out.color = vec4<f32>(a.px, a.py, a.pz, a.nx);
         out.uv1 = vec2<f32>(a.ny, a.nz);
     }
-    return pack_varying(out);
+    return out;
 }
 
 // The draw a fragment belongs to.

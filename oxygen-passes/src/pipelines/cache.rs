@@ -16,6 +16,7 @@ use oxygen_bindless::{BindlessHeap, TexturePath};
 use tracing::debug;
 
 use super::{AlphaClass, PassKind, PipelineKey, mesh_entry_points, pipeline_source};
+use oxygen_gpu::DeferredTargets;
 
 /// A tile clear pipeline's key: the shading pass's key and the clear colour
 /// (its `f32` bits; `None` leaves the colour as it is).
@@ -179,8 +180,12 @@ impl Pipelines {
         let labels = !key.labels.is_empty() && matches!(key.pass, PassKind::Shading | PassKind::ShadingAfterPrePass);
         let (vertex_entry, fragment_entry) = mesh_entry_points(key.pass, masked, labels);
         let (depth_write, depth_compare) = match key.pass {
-            PassKind::Shading if key.last_tie_wins => (true, wgpu::CompareFunction::GreaterEqual),
-            PassKind::DepthPrePass | PassKind::Shadow | PassKind::Shading => (true, wgpu::CompareFunction::Greater),
+            PassKind::Shading | PassKind::Visibility if key.last_tie_wins => {
+                (true, wgpu::CompareFunction::GreaterEqual)
+            }
+            PassKind::DepthPrePass | PassKind::Shadow | PassKind::Shading | PassKind::Visibility => {
+                (true, wgpu::CompareFunction::Greater)
+            }
             PassKind::ShadingAfterPrePass | PassKind::Transparent | PassKind::Labels => {
                 (false, wgpu::CompareFunction::GreaterEqual)
             }
@@ -190,6 +195,12 @@ impl Pipelines {
         let target = |format| Some(wgpu::ColorTargetState { format, blend, write_mask: wgpu::ColorWrites::ALL });
         let targets: Vec<Option<wgpu::ColorTargetState>> = match key.pass {
             PassKind::Labels => label_targets(key.labels, wgpu::ColorWrites::ALL),
+            // The surface's draw and triangle, then the labels.
+            PassKind::Visibility => {
+                let mut targets = vec![target(DeferredTargets::VISIBILITY_FORMAT)];
+                targets.extend(label_targets(key.labels, wgpu::ColorWrites::ALL));
+                targets
+            }
             _ if labels => {
                 let mut targets = vec![key.color_format.and_then(target)];
                 targets.extend(label_targets(key.labels, wgpu::ColorWrites::ALL));
@@ -205,7 +216,14 @@ impl Pipelines {
             module,
             entry_point: Some(entry),
             compilation_options: compilation_options(),
-            targets: if key.color_format.is_some() || key.pass == PassKind::Labels || labels { &targets } else { &[] },
+            targets: if key.color_format.is_some()
+                || matches!(key.pass, PassKind::Labels | PassKind::Visibility)
+                || labels
+            {
+                &targets
+            } else {
+                &[]
+            },
         });
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(&format!("{:?} {:?}", key.pass, key.variant)),

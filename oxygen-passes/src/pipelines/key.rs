@@ -26,6 +26,11 @@ pub enum PassKind {
     /// (`Rgba16Float`) of each opaque or masked fragment on the shaded
     /// depth (`GreaterEqual`, no depth writes).
     Labels,
+    /// Deferred shading's visibility pass: each opaque or masked
+    /// fragment's draw and triangle (`Rg32Uint`, colour target 0) and the
+    /// view's label planes after it; writes its own depth as
+    /// [`PassKind::Shading`] does. A compute pass shades from it.
+    Visibility,
 }
 
 /// The rasterizer's depth bias of a shadow map: stored depth is pushed away
@@ -154,6 +159,9 @@ impl PipelineKey {
                 last_tie_wins: false,
                 ..self
             },
+            PassKind::Visibility => {
+                PipelineKey { features: self.features.vertex_outputs_only(), tone_map: None, ..self }
+            }
             PassKind::Transparent => PipelineKey { labels: LabelSet::NONE, last_tie_wins: false, ..self },
             PassKind::ShadingAfterPrePass => PipelineKey { last_tie_wins: false, ..self },
             PassKind::Shading => self,
@@ -175,7 +183,7 @@ impl PipelineKey {
         ];
         match self.pass {
             PassKind::DepthPrePass | PassKind::Shadow => Vec::new(),
-            PassKind::Labels => labels.to_vec(),
+            PassKind::Labels | PassKind::Visibility => labels.to_vec(),
             PassKind::ShadingAfterPrePass | PassKind::Shading | PassKind::Transparent => {
                 let mut constants = self.features.override_constants().to_vec();
                 constants.push(("TONE_MAP_OUTPUT", f64::from(u8::from(self.tone_map.is_some()))));

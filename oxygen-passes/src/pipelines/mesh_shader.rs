@@ -6,7 +6,7 @@
 use oxygen_bindless::TexturePath;
 
 use super::PassKind;
-use crate::shaders::{DEPTH_ONLY, FORWARD_LIT, LABELS, MeshVaryings, ShaderModule};
+use crate::shaders::{DEPTH_ONLY, FORWARD_LIT, LABELS, MeshVaryings, ShaderModule, VISIBILITY};
 
 /// The registry's module a pass's pipelines are made from.
 pub(crate) fn mesh_module(pass: PassKind) -> ShaderModule {
@@ -14,6 +14,7 @@ pub(crate) fn mesh_module(pass: PassKind) -> ShaderModule {
         PassKind::DepthPrePass | PassKind::Shadow => DEPTH_ONLY,
         PassKind::Shading | PassKind::ShadingAfterPrePass | PassKind::Transparent => FORWARD_LIT,
         PassKind::Labels => LABELS,
+        PassKind::Visibility => VISIBILITY,
     }
 }
 
@@ -33,6 +34,7 @@ pub(crate) fn mesh_entry_points(pass: PassKind, masked: bool, labels: bool) -> (
         // Blended surfaces have their own stage whatever their alpha class.
         PassKind::Transparent => Some("fs_blend"),
         PassKind::Labels => Some(if masked { "fs_labels_masked" } else { "fs_labels" }),
+        PassKind::Visibility => Some(if masked { "fs_visibility_masked" } else { "fs_visibility" }),
     };
     ("vs_main", fragment)
 }

@@ -39,7 +39,7 @@
 // ENVIRONMENT_MAP, the renderer has an environment: bindings 7-9 hold it.
 const STACK_SIZE: u32 = 48u;
 const NO_HIT: u32 = 0xFFFFFFFFu;
-// The raster pass's constant ambient (forward_lit.wgsl's AMBIENT).
+// The raster pass's constant ambient (mesh/shading.wgsl's AMBIENT).
 const RASTER_AMBIENT: f32 = 0.03;
 
 @group(1) @binding(0) var<uniform> params: TraceParams;
@@ -592,7 +592,7 @@ fn radiance(first: Ray, rng: ptr<function, Rng>) -> vec3<f32> {
         }
         color += throughput * (s.emissive + direct_light(s, v, salt));
         if raster_model {
-            // forward_lit.wgsl's ambient term, unoccluded, as the raster has
+            // mesh/shading.wgsl's ambient term, unoccluded, as the raster has
             // it: the environment's irradiance and (without the probe term)
             // its prefiltered reflection, or the constant.
             let f0 = mix(vec3<f32>(0.04), s.albedo, s.metallic);

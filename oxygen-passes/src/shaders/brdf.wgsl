@@ -1,5 +1,5 @@
 // The reflectance model and light falloff shared by the raster shading
-// pass (forward_lit.wgsl) and the path-traced reference (reference/trace.wgsl),
+// pass (mesh/shading.wgsl) and the path-traced reference (reference/trace.wgsl),
 // so that both model the same surfaces and lights with the same numbers.
 
 #include "sceneprep/gpu_records.wgsl"

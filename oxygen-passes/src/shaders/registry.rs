@@ -25,9 +25,13 @@ pub(crate) static SOURCES: &[Source] = &[
     // Mesh passes.
     Source::wgsl("mesh/mesh_vertex.wgsl", include_str!("../mesh/mesh_vertex.wgsl")),
     Source::wgsl("mesh/depth_only.wgsl", include_str!("../mesh/depth_only.wgsl")),
+    Source::wgsl("mesh/shading.wgsl", include_str!("../mesh/shading.wgsl")),
     Source::wgsl("mesh/forward_lit.wgsl", include_str!("../mesh/forward_lit.wgsl")),
     Source::wgsl("mesh/labels.wgsl", include_str!("../mesh/labels.wgsl")),
     Source::wgsl("mesh/label_values.wgsl", include_str!("../mesh/label_values.wgsl")),
+    Source::wgsl("mesh/visibility.wgsl", include_str!("../mesh/visibility.wgsl")),
+    Source::wgsl("mesh/deferred.wgsl", include_str!("../mesh/deferred.wgsl")),
+    Source::wgsl(DEFERRED_SCENE, include_str!("../mesh/deferred_scene.wgsl")),
     Source::wgsl(VARYINGS_PLAIN, include_str!("../mesh/varyings_plain.wgsl")),
     Source::wgsl(VARYINGS_WITH_ATTRIBUTES, include_str!("../mesh/varyings_attributes.wgsl")),
     // Lighting: group 1, the split-sum table, image-based lighting.
@@ -123,6 +127,11 @@ const VARYINGS: &str = "mesh/varyings";
 const VARYINGS_PLAIN: &str = "mesh/varyings_plain.wgsl";
 const VARYINGS_WITH_ATTRIBUTES: &str = "mesh/varyings_attributes.wgsl";
 
+/// The per-view constants' declaration, which deferred shading composes
+/// as a private copy per invocation instead of a uniform per camera.
+const SCENE_CONSTANTS: &str = "bindless/scene_constants.wgsl";
+const DEFERRED_SCENE: &str = "mesh/deferred_scene.wgsl";
+
 /// Which outputs a mesh module's vertex stage writes: the module is
 /// composed once for each ([`crate::ShaderFeatures::vertex_attributes`]
 /// picks one), since a location cannot be left out by an override constant.
@@ -166,19 +175,22 @@ pub(crate) struct ShaderModule {
     /// Whether it includes the mesh vertex stage (and so is composed once
     /// per [`MeshVaryings`]).
     pub(crate) mesh: bool,
+    /// Whether its per-view constants are a private copy each invocation
+    /// loads (deferred shading's compute pass) rather than a uniform.
+    pub(crate) private_scene: bool,
 }
 
 impl ShaderModule {
     const fn plain(root: &'static str) -> Self {
-        ShaderModule { root, textured: false, mesh: false }
+        ShaderModule { root, textured: false, mesh: false, private_scene: false }
     }
 
     const fn textured(root: &'static str) -> Self {
-        ShaderModule { root, textured: true, mesh: false }
+        ShaderModule { root, textured: true, mesh: false, private_scene: false }
     }
 
     const fn mesh(root: &'static str) -> Self {
-        ShaderModule { root, textured: true, mesh: true }
+        ShaderModule { root, textured: true, mesh: true, private_scene: false }
     }
 
     /// The module's WGSL, with the bindings of `textures` (`None` for a
@@ -190,7 +202,9 @@ impl ShaderModule {
             Some(TexturePath::GroupedArrays) => Some((TEXTURES, GROUPED_ARRAYS)),
             None => None,
         };
-        let aliases: Vec<(&str, &str)> = texture_alias.into_iter().chain([(VARYINGS, varyings.source())]).collect();
+        let scene_alias = self.private_scene.then_some((SCENE_CONSTANTS, DEFERRED_SCENE));
+        let aliases: Vec<(&str, &str)> =
+            texture_alias.into_iter().chain([(VARYINGS, varyings.source())]).chain(scene_alias).collect();
         Composer::new(SOURCES).with_aliases(&aliases).compose(self.root)
     }
 
@@ -220,6 +234,12 @@ impl ShaderModule {
 pub(crate) const DEPTH_ONLY: ShaderModule = ShaderModule::mesh("mesh/depth_only.wgsl");
 /// Forward lit and transparent shading, and the sky behind them.
 pub(crate) const FORWARD_LIT: ShaderModule = ShaderModule::mesh("mesh/forward_lit.wgsl");
+/// Deferred shading's visibility pass (each pixel's draw and triangle,
+/// and its labels); needs `Features::PRIMITIVE_INDEX`.
+pub(crate) const VISIBILITY: ShaderModule = ShaderModule::mesh("mesh/visibility.wgsl");
+/// Deferred shading's compute pass, over the visibility pass's pixels.
+pub(crate) const DEFERRED: ShaderModule =
+    ShaderModule { root: "mesh/deferred.wgsl", textured: true, mesh: true, private_scene: true };
 /// The labels pass (instance ids and normals).
 pub(crate) const LABELS: ShaderModule = ShaderModule::mesh("mesh/labels.wgsl");
 /// The path-traced reference.
@@ -300,6 +320,13 @@ pub(crate) const ENTRY_POINTS: &[EntryPoint] = &[
     entry(FORWARD_LIT, "fs_sky", Stage::Fragment),
     entry(FORWARD_LIT, "vs_tile_clear", Stage::Vertex),
     entry(FORWARD_LIT, "fs_tile_clear", Stage::Fragment),
+    entry(VISIBILITY, "vs_main", Stage::Vertex),
+    entry(VISIBILITY, "fs_visibility", Stage::Fragment),
+    entry(VISIBILITY, "fs_visibility_masked", Stage::Fragment),
+    entry(DEFERRED, "cs_deferred", Stage::Compute),
+    // Included with `mesh_vertex`, which the compute pass calls per corner;
+    // no pipeline uses this copy.
+    entry(DEFERRED, "vs_main", Stage::Vertex),
     entry(LABELS, "vs_main", Stage::Vertex),
     entry(LABELS, "fs_labels", Stage::Fragment),
     entry(LABELS, "fs_labels_masked", Stage::Fragment),

@@ -44,13 +44,16 @@ pub(super) type ModuleKey = (&'static str, Option<TexturePath>, MeshVaryings);
 /// What a device on `path` grants: the binding-array path needs exactly
 /// what its device features enable, the others nothing.
 fn capabilities(path: Option<TexturePath>) -> naga::valid::Capabilities {
-    match path {
-        Some(TexturePath::BindingArray) => {
-            naga::valid::Capabilities::TEXTURE_AND_SAMPLER_BINDING_ARRAY
-                | naga::valid::Capabilities::TEXTURE_AND_SAMPLER_BINDING_ARRAY_NON_UNIFORM_INDEXING
+    // The visibility pass reads the primitive index (deferred shading is
+    // offered only where the device has it).
+    naga::valid::Capabilities::PRIMITIVE_INDEX
+        | match path {
+            Some(TexturePath::BindingArray) => {
+                naga::valid::Capabilities::TEXTURE_AND_SAMPLER_BINDING_ARRAY
+                    | naga::valid::Capabilities::TEXTURE_AND_SAMPLER_BINDING_ARRAY_NON_UNIFORM_INDEXING
+            }
+            Some(TexturePath::GroupedArrays) | None => naga::valid::Capabilities::default(),
         }
-        Some(TexturePath::GroupedArrays) | None => naga::valid::Capabilities::default(),
-    }
 }
 
 /// `source` parsed and validated with what a device on `path` grants;
@@ -188,7 +191,7 @@ fn composing_outside_the_registry_is_an_error() {
 
 /// Every pass kind. The match has no wildcard: a new kind does not compile
 /// until it is listed here, and so is checked below.
-fn pass_kinds() -> [PassKind; 6] {
+fn pass_kinds() -> [PassKind; 7] {
     let kinds = [
         PassKind::DepthPrePass,
         PassKind::Shadow,
@@ -196,6 +199,7 @@ fn pass_kinds() -> [PassKind; 6] {
         PassKind::Shading,
         PassKind::Transparent,
         PassKind::Labels,
+        PassKind::Visibility,
     ];
     for kind in kinds {
         match kind {
@@ -204,7 +208,8 @@ fn pass_kinds() -> [PassKind; 6] {
             | PassKind::ShadingAfterPrePass
             | PassKind::Shading
             | PassKind::Transparent
-            | PassKind::Labels => {}
+            | PassKind::Labels
+            | PassKind::Visibility => {}
         }
     }
     kinds

@@ -194,7 +194,7 @@ pub struct FrameCollection {
     /// the first gated directional light, in node order, that casts shadows
     /// (the light and its node both say so). That is the first record of
     /// [`Self::directional_lights`] with its shadow flag set, the one
-    /// `forward_lit.wgsl` gives the cascades to; `None` when no directional
+    /// `mesh/shading.wgsl` gives the cascades to; `None` when no directional
     /// light casts shadows this frame.
     pub shadow_sun: Option<NodeKey>,
     /// Nodes skipped this frame because of a degenerate transform or bounds.

@@ -1,0 +1,152 @@
+// Deferred shading of a batch's cameras: one compute pass per atlas page
+// shades each pixel the visibility pass (mesh/visibility.wgsl) saw a
+// surface at, with the forward pass's own shading code (`shade`, through
+// `opaque_color_at`), and writes the display colour of every pixel of the
+// cameras' tiles (the clear colour or the environment where nothing was
+// drawn). The surface point is rebuilt from the pixel's draw and triangle:
+// the triangle's three corners come through the vertex stage's function
+// (`mesh_vertex`: morphs, skins and all), and the pixel centre's
+// perspective-correct barycentrics weight them; the screen derivatives
+// shading needs (texture level of detail, normal mapping) come from the
+// same weights one pixel to the right and one down, where the fragment
+// stage takes differences across its 2 × 2 quad.
+//
+// Why: on GPUs where only part of the chip runs fragment shaders (two
+// TPCs of an H100 or H200), a compute pass shades the same pixels about
+// 30 times faster (examples/shading_probe.rs, docs/performance.md), and a
+// small camera's tiny triangles waste most of each fragment quad besides.
+
+#include "mesh/shading.wgsl"
+
+// One camera's tile on the page and the slot of its constants.
+struct DeferredTile {
+    origin: vec2<u32>,
+    camera: u32,
+    pad: u32,
+}
+
+struct DeferredParams {
+    // Pixels of every tile.
+    size: vec2<u32>,
+    // Tiles dispatched (the third dispatch dimension).
+    tiles: u32,
+    // 1 when the environment is drawn behind the scene.
+    sky: u32,
+    // Display colour of a pixel without a surface (already tone-mapped, linear).
+    clear: vec4<f32>,
+}
+
+@group(3) @binding(0) var<uniform> deferred: DeferredParams;
+@group(3) @binding(1) var<storage, read> deferred_cameras: array<SceneConstants>;
+@group(3) @binding(2) var<storage, read> deferred_tiles: array<DeferredTile>;
+// The shared index buffer (the heap's `Indices` domain).
+@group(3) @binding(3) var<storage, read> deferred_indices: array<u32>;
+@group(3) @binding(4) var deferred_visibility: texture_2d<u32>;
+// The page's colour in sRGB bytes (a storage texture cannot be sRGB: the
+// encoding is done here, then the page is copied into the sRGB atlas).
+@group(3) @binding(5) var deferred_output: texture_storage_2d<rgba8unorm, write>;
+
+// The sRGB encoding the hardware applies when a fragment writes an sRGB
+// target (IEC 61966-2-1).
+fn encode_srgb(c: vec3<f32>) -> vec3<f32> {
+    let x = clamp(c, vec3<f32>(0.0), vec3<f32>(1.0));
+    return select(1.055 * pow(x, vec3<f32>(1.0 / 2.4)) - 0.055, x * 12.92, x <= vec3<f32>(0.0031308));
+}
+
+// A point of the tile (pixels from its top-left corner) in normalised
+// device coordinates (y up).
+fn tile_ndc(p: vec2<f32>) -> vec2<f32> {
+    let size = vec2<f32>(deferred.size);
+    return vec2<f32>(p.x / size.x * 2.0 - 1.0, 1.0 - p.y / size.y * 2.0);
+}
+
+// Perspective-correct barycentrics of the point at `ndc` in the triangle of
+// clip-space corners a, b, c: the weights w (summing to 1) whose clip-space
+// point Σ w_i c_i projects to `ndc`. With columns v_i = (x, y, w) of the
+// corners, M w is proportional to (ndc, 1), so w is M⁻¹ (ndc, 1)
+// normalised: no division by a corner's w, right for corners behind the
+// camera too.
+fn barycentrics(a: vec4<f32>, b: vec4<f32>, c: vec4<f32>, ndc: vec2<f32>) -> vec3<f32> {
+    let q = vec3<f32>(ndc, 1.0);
+    let e = vec3<f32>(dot(cross(b.xyw, c.xyw), q), dot(cross(c.xyw, a.xyw), q), dot(cross(a.xyw, b.xyw), q));
+    let sum = e.x + e.y + e.z;
+    // Only a triangle seen exactly edge-on sums to nothing, and the
+    // rasterizer gave such a triangle no pixel.
+    if !(abs(sum) > 1e-30) {
+        return vec3<f32>(1.0, 0.0, 0.0);
+    }
+    return e / sum;
+}
+
+// The surface point weighted by `w` from the corners a, b, c.
+fn weighted(a: MeshVarying, b: MeshVarying, c: MeshVarying, w: vec3<f32>) -> MeshVarying {
+    var m = a;
+    m.clip_position = a.clip_position * w.x + b.clip_position * w.y + c.clip_position * w.z;
+    m.world_position = a.world_position * w.x + b.world_position * w.y + c.world_position * w.z;
+    m.world_normal = a.world_normal * w.x + b.world_normal * w.y + c.world_normal * w.z;
+    m.uv = a.uv * w.x + b.uv * w.y + c.uv * w.z;
+    m.color = a.color * w.x + b.color * w.y + c.color * w.z;
+    m.uv1 = a.uv1 * w.x + b.uv1 * w.y + c.uv1 * w.z;
+    return m;
+}
+
+// The colour of tile pixel `local` (page pixel `page`), where triangle
+// `triangle` of the camera's draw `draw_index` was seen.
+fn surface_color(draw_index: u32, triangle: u32, local: vec2<u32>, page: vec2<u32>) -> vec4<f32> {
+    let draw = draw_metadata_domain[scene.renderer.draw_metadata_slot + draw_index];
+    let first = draw.index_slot + draw.first_index + triangle * 3u;
+    let base = i32(draw.vertex_slot) + draw.base_vertex;
+    let a = mesh_vertex(draw_index, u32(i32(deferred_indices[first]) + base));
+    let b = mesh_vertex(draw_index, u32(i32(deferred_indices[first + 1u]) + base));
+    let c = mesh_vertex(draw_index, u32(i32(deferred_indices[first + 2u]) + base));
+    let centre = vec2<f32>(local) + 0.5;
+    let ca = a.clip_position;
+    let cb = b.clip_position;
+    let cc = c.clip_position;
+    var mesh = weighted(a, b, c, barycentrics(ca, cb, cc, tile_ndc(centre)));
+    let right = weighted(a, b, c, barycentrics(ca, cb, cc, tile_ndc(centre + vec2<f32>(1.0, 0.0))));
+    let below = weighted(a, b, c, barycentrics(ca, cb, cc, tile_ndc(centre + vec2<f32>(0.0, 1.0))));
+    let d = Derivatives(
+        right.world_position - mesh.world_position,
+        below.world_position - mesh.world_position,
+        UvDerivatives(right.uv - mesh.uv, below.uv - mesh.uv, right.uv1 - mesh.uv1, below.uv1 - mesh.uv1),
+    );
+    // What the fragment stage's position builtin holds: the framebuffer
+    // pixel centre (the page's), depth, 1 / w.
+    let clip = mesh.clip_position;
+    mesh.clip_position = vec4<f32>(vec2<f32>(page) + 0.5, clip.z / clip.w, 1.0 / clip.w);
+    // Counter-clockwise on screen is the front (clockwise for a mirrored
+    // draw, as its pipeline's front face): the sign of M's determinant,
+    // which is the screen winding times the corners' w.
+    let counter_clockwise = dot(ca.xyw, cross(cb.xyw, cc.xyw)) > 0.0;
+    let mirrored = (draw.pass_mask & PASS_MIRRORED) != 0u;
+    return opaque_color_at(mesh, counter_clockwise != mirrored, d);
+}
+
+// Behind the scene: the environment along the pixel's ray, or the clear colour.
+fn background_color(local: vec2<u32>) -> vec4<f32> {
+    if deferred.sky == 0u {
+        return deferred.clear;
+    }
+    let ndc = tile_ndc(vec2<f32>(local) + 0.5);
+    let direction = normalize(unproject(ndc, 0.5) - unproject(ndc, 1.0));
+    return output_color(fit_hdr(sample_environment(direction, 0.0)));
+}
+
+@compute @workgroup_size(8, 8)
+fn cs_deferred(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= deferred.size.x || id.y >= deferred.size.y || id.z >= deferred.tiles {
+        return;
+    }
+    let tile = deferred_tiles[id.z];
+    scene = deferred_cameras[tile.camera];
+    let page = tile.origin + id.xy;
+    let surface = textureLoad(deferred_visibility, page, 0).xy;
+    var color: vec4<f32>;
+    if surface.x == 0u {
+        color = background_color(id.xy);
+    } else {
+        color = surface_color(surface.x - 1u, surface.y, id.xy, page);
+    }
+    textureStore(deferred_output, page, vec4<f32>(encode_srgb(color.rgb), color.a));
+}
