@@ -27,7 +27,7 @@ use glam::UVec2;
 use oxygen_core::ViewId;
 use oxygen_gpu::LabelSet;
 
-pub use crate::graph::{BatchGraph, standard_batch_graph};
+pub use crate::graph::{BatchGraph, BatchShading, standard_batch_graph};
 pub use crate::renderer::{StreamOptions, StreamedCamera, StreamedFrame};
 
 /// Names a registered batch; handed out by [`crate::views::Views::register_batch`],

@@ -22,9 +22,9 @@ use std::future::Future;
 use std::pin::Pin;
 
 use oxygen_passes::{
-    AmbientOcclusionPass, AutoExposure, Bloom, CommandRecorder, DepthBias, DrawList, ForwardLitConfig, LinearDepthPass,
-    MeshPass, OverlayPass, PassError, PrePassEstimate, ReferencePass, ReferenceSettings, ReflectionHistoryPass,
-    RenderContext, RenderPass, TonemapPass,
+    AmbientOcclusionPass, AutoExposure, Bloom, CommandRecorder, DeferredShading, DepthBias, DrawList, ForwardLitConfig,
+    LinearDepthPass, MeshPass, OverlayPass, PassError, PrePassEstimate, ReferencePass, ReferenceSettings,
+    ReflectionHistoryPass, RenderContext, RenderPass, TonemapPass,
 };
 
 /// What a view records each frame: a future that awaits its passes.
@@ -348,7 +348,10 @@ pub const reference_render_graph: ReferenceGraph =
 /// and nobody reads the HDR image; otherwise into the HDR atlas, then the
 /// blended partitions, then one tone map per page. Last, each camera's
 /// overlay over its tile ([`OverlayPass`]: a render pass for each camera
-/// that has one, none for the others).
+/// that has one, none for the others). With [`BatchShading::Deferred`]
+/// a frame that allows it (see [`oxygen_passes::DeferredShading::applies`])
+/// draws a visibility pass instead of the forward pass and shades in one
+/// compute dispatch per page.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BatchGraph {
     /// The forward lit pass's configuration; `depth_from_pre_pass` lays
@@ -357,6 +360,29 @@ pub struct BatchGraph {
     pub lit: ForwardLitConfig,
     /// Exposure of the tone map.
     pub exposure: f32,
+    /// Where the cameras' pixels are shaded.
+    pub shading: BatchShading,
+}
+
+/// Where a batch's pixels are shaded: a speed knob, its time in
+/// `examples/batch_bench.rs` (`BATCH_BENCH_SHADING`) and its difference
+/// from forward shading in `tests/deferred_batch.rs` (docs/performance.md).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BatchShading {
+    /// In the forward pass's fragment shader, as every view is.
+    #[default]
+    Forward,
+    /// In a compute pass after a visibility pass
+    /// ([`oxygen_passes::DeferredShading`]): the atlas gets a visibility
+    /// target and a shaded image (12 bytes a pixel, counted in the target
+    /// budget), and the adapter must have `Features::PRIMITIVE_INDEX`
+    /// (registering the batch fails otherwise). A frame deferred shading
+    /// cannot take (an HDR image read after shading, blended surfaces,
+    /// shadow maps, probes, clustered lights, screen-space effects, a page
+    /// that keeps cameras not rendered) is shaded forward, with a logged
+    /// warning saying why; the frame report's `recorded.deferred_views`
+    /// counts the cameras shaded deferred.
+    Deferred,
 }
 
 /// The default batch graph: no depth pre-pass, no sun cascades (batch
@@ -365,6 +391,7 @@ pub struct BatchGraph {
 pub const standard_batch_graph: BatchGraph = BatchGraph {
     lit: ForwardLitConfig { depth_from_pre_pass: false, sun_shadows: false, ..ForwardLitConfig::DEFAULT },
     exposure: 1.0,
+    shading: BatchShading::Forward,
 };
 
 impl Default for BatchGraph {
@@ -381,12 +408,29 @@ impl BatchGraph {
         }
         let exposure = tone_map_exposure(self.exposure);
         let lit = self.lit.clone();
-        if lit.depth_from_pre_pass {
-            MeshPass::depth_pre_pass().run_batch(views, rec).await?;
-        }
-        if !views.iter().any(|ctx| ctx.hdr_read_after_shading()) {
+        let deferred = DeferredShading::new(lit.clone(), exposure);
+        let deferred = match self.shading {
+            BatchShading::Deferred => match deferred.applies(views) {
+                Ok(()) => Some(deferred),
+                Err(why) => {
+                    tracing::warn!(first = %views[0].view.view_id, "batch shaded forward this frame: {why}");
+                    None
+                }
+            },
+            BatchShading::Forward => None,
+        };
+        if let Some(deferred) = deferred {
+            MeshPass::visibility().run_batch(views, rec).await?;
+            deferred.run_batch(views, rec).await?;
+        } else if !views.iter().any(|ctx| ctx.hdr_read_after_shading()) {
+            if lit.depth_from_pre_pass {
+                MeshPass::depth_pre_pass().run_batch(views, rec).await?;
+            }
             MeshPass::forward_lit(lit).with_labels().tone_mapped(exposure).run_batch(views, rec).await?;
         } else {
+            if lit.depth_from_pre_pass {
+                MeshPass::depth_pre_pass().run_batch(views, rec).await?;
+            }
             MeshPass::forward_lit(lit).with_labels().run_batch(views, rec).await?;
             MeshPass::transparent().run_batch(views, rec).await?;
             // The tone map covers its whole target: once per page of the

@@ -216,7 +216,9 @@ impl TileAtlas {
         let pages = (0..pages)
             .map(|page| {
                 let name = |what: &str| format!("{label} {what} page {page}");
-                let color = texture_2d(device, &name("colour"), size, 1, ViewTargets::COLOR_FORMAT, usage);
+                // Deferred shading copies its shaded image into the colour.
+                let color_usage = if deferred { usage | wgpu::TextureUsages::COPY_DST } else { usage };
+                let color = texture_2d(device, &name("colour"), size, 1, ViewTargets::COLOR_FORMAT, color_usage);
                 let hdr = hdr_format.map(|f| texture_2d(device, &name("hdr"), size, 1, f.texture_format(), usage));
                 let depth = texture_2d(device, &name("depth"), size, 1, ViewTargets::DEPTH_FORMAT, usage);
                 let labels = (!labels.is_empty())

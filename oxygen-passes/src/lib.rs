@@ -62,8 +62,8 @@ pub use lighting::shadow_atlas::array_layer_count;
 pub use lighting::split_sum::SPLIT_SUM_LUT_SIZE;
 pub use lighting::{LightingResources, ScreenBuffers};
 pub use mesh::{
-    ColorOps, DrawList, ForwardLitConfig, ID_LABELS, MeshPass, ShadowFilter, id_targets, ids_over_depth,
-    record_id_render, record_ids_over_depth, region_camera,
+    ColorOps, DeferredShading, DrawList, ForwardLitConfig, ID_LABELS, MeshPass, ShadowFilter, id_targets,
+    ids_over_depth, record_id_render, record_ids_over_depth, region_camera,
 };
 pub use oxygen_core::{
     Color, Depth, HdrColor, InstanceIds, LinearDepth, Normals, Output, OutputSource, ProbeCube, ProbeId,

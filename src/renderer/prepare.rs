@@ -127,6 +127,7 @@ impl Renderer {
                 hdr: self.settings.keep_hdr,
                 labels: entry.labels,
                 max_page_side: entry.max_page_side,
+                deferred: entry.graph.shading == crate::batch::BatchShading::Deferred,
             });
             if let Some(e) = self.views.entries.get(&view.id) {
                 plan.labels = plan.labels.union(e.labels);

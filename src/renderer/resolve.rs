@@ -169,7 +169,8 @@ impl Renderer {
                 .cameras()
                 .filter_map(|c| self.views.entries.get(&c))
                 .fold(entry.labels, |set, camera| set.union(camera.labels));
-            let bytes = oxygen_gpu::TileAtlas::bytes_for(size, layout, hdr, labels);
+            let deferred = entry.graph.shading == crate::batch::BatchShading::Deferred;
+            let bytes = oxygen_gpu::TileAtlas::bytes_for(size, layout, hdr, labels, deferred);
             if taken.saturating_add(bytes) > self.targets.budget {
                 refused.push((
                     *batch,

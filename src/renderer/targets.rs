@@ -65,6 +65,8 @@ pub(crate) struct BatchPlan {
     pub(crate) max_page_side: Option<u32>,
     /// The label planes the cameras draw.
     pub(crate) labels: LabelSet,
+    /// Whether the batch shades deferred (its atlas has the textures).
+    pub(crate) deferred: bool,
 }
 
 /// Every view's targets and constants, and the budget they share.
@@ -139,6 +141,7 @@ impl Targets {
                     && (a.has_hdr() || !plan.hdr)
                     && a.max_side == plan.max_page_side
                     && a.labels() == plan.labels
+                    && a.has_deferred() == plan.deferred
             });
             if fits {
                 continue;
@@ -146,9 +149,16 @@ impl Targets {
             let hdr = plan.hdr.then_some(self.hdr_format);
             let _span = tracing::info_span!("batch_atlas", batch = %batch, tiles = plan.tiles).entered();
             // The resolve step refused batches whose atlas the device cannot hold.
-            if let Some(atlas) =
-                TileAtlas::new(device, size, plan.tiles, hdr, plan.labels, plan.max_page_side, &name(*batch))
-            {
+            if let Some(atlas) = TileAtlas::new(
+                device,
+                size,
+                plan.tiles,
+                hdr,
+                plan.labels,
+                plan.deferred,
+                plan.max_page_side,
+                &name(*batch),
+            ) {
                 tracing::info!(batch = %batch, pages = atlas.pages.len(), columns = atlas.columns, rows = atlas.rows, "batch atlas allocated");
                 self.atlases.insert(*batch, atlas);
             }

@@ -21,6 +21,9 @@ pub struct RecordStats {
     pub light_cluster_jobs: u32,
     /// Vertices the overlay pass drew (0 without an overlay).
     pub overlay_vertices: u64,
+    /// Cameras shaded by deferred shading's compute pass
+    /// ([`crate::DeferredShading`]; 0 when the job shaded forward).
+    pub deferred_views: u32,
 }
 
 /// The command encoder of one view plus counters.

@@ -66,7 +66,9 @@ impl LightingInputResources {
     }
 
     pub(crate) fn new(device: &wgpu::Device, queue: &wgpu::Queue) -> Self {
-        let layout = LayoutEntries::new(wgpu::ShaderStages::FRAGMENT)
+        // Fragment shading reads them, and deferred shading's compute pass
+        // (mesh/deferred.wgsl) runs the same code.
+        let layout = LayoutEntries::new(wgpu::ShaderStages::FRAGMENT.union(wgpu::ShaderStages::COMPUTE))
             .repeat(MAX_CASCADES as u32, bindings::depth_2d())
             .at(COMPARISON_SAMPLER_BINDING)
             .push(bindings::sampler_comparison())

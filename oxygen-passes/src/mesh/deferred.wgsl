@@ -18,23 +18,8 @@
 
 #include "mesh/shading.wgsl"
 
-// One camera's tile on the page and the slot of its constants.
-struct DeferredTile {
-    origin: vec2<u32>,
-    camera: u32,
-    pad: u32,
-}
-
-struct DeferredParams {
-    // Pixels of every tile.
-    size: vec2<u32>,
-    // Tiles dispatched (the third dispatch dimension).
-    tiles: u32,
-    // 1 when the environment is drawn behind the scene.
-    sky: u32,
-    // Display colour of a pixel without a surface (already tone-mapped, linear).
-    clear: vec4<f32>,
-}
+#include "mesh/DeferredParams"
+#include "mesh/DeferredTile"
 
 @group(3) @binding(0) var<uniform> deferred: DeferredParams;
 @group(3) @binding(1) var<storage, read> deferred_cameras: array<SceneConstants>;

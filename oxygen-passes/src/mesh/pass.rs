@@ -170,7 +170,7 @@ impl ColorOps {
     /// The load operation of the colour attachment. A tone-mapped clear
     /// goes through the shader's operator on the CPU ([`crate::pbr_neutral`]),
     /// so the background matches the two-pass path.
-    fn load(self) -> wgpu::LoadOp<wgpu::Color> {
+    pub(crate) fn load(self) -> wgpu::LoadOp<wgpu::Color> {
         match self {
             ColorOps::Clear(c) => wgpu::LoadOp::Clear(c),
             ColorOps::ClearToneMapped(c, exposure) => {
@@ -327,6 +327,20 @@ impl MeshPass {
         }
     }
 
+    /// Deferred shading's visibility pass ([`crate::DeferredShading`]):
+    /// the opaque and masked partitions, writing depth (cleared) and, in
+    /// the view's deferred visibility target, each pixel's draw and
+    /// triangle, with the view's label planes beside them; no colour.
+    pub fn visibility() -> Self {
+        MeshPass {
+            name: "visibility",
+            kind: PassKind::Visibility,
+            color: ColorOps::Clear(wgpu::Color::TRANSPARENT),
+            write_labels: true,
+            ..Self::depth_pre_pass()
+        }
+    }
+
     /// The same pass, on a multisampled view, dropping the multisampled
     /// colour once it is resolved into the view's HDR target: for the last
     /// pass that draws colour (no later pass may load the samples). A tiled
@@ -363,7 +377,10 @@ impl MeshPass {
     /// that has them and is single-sampled: one geometry pass for colour
     /// and labels. Other passes and views are unchanged.
     pub fn with_labels(self) -> Self {
-        MeshPass { write_labels: matches!(self.kind, PassKind::Shading | PassKind::ShadingAfterPrePass), ..self }
+        MeshPass {
+            write_labels: matches!(self.kind, PassKind::Shading | PassKind::ShadingAfterPrePass | PassKind::Visibility),
+            ..self
+        }
     }
 
     /// The labels this pass writes with `ctx`'s colour: the view's label
@@ -428,6 +445,13 @@ impl MeshPass {
     /// The colour attachment: the HDR target (whatever format the view's
     /// HDR has), or the display target when tone-mapping in the pass.
     fn color_view<'a>(&self, ctx: &RenderContext<'a>) -> Result<Option<&'a wgpu::TextureView>, PassError> {
+        if self.kind == PassKind::Visibility {
+            let targets = ctx.targets.deferred.as_ref().ok_or_else(|| PassError::BadInput {
+                pass: self.name,
+                what: format!("{} has no deferred targets (a batch made for deferred shading has)", ctx.view.view_id),
+            })?;
+            return Ok(Some(&targets.visibility_view));
+        }
         Ok(match self.color {
             ColorOps::None => None,
             ColorOps::ClearToneMapped(..) => Some(
@@ -441,6 +465,9 @@ impl MeshPass {
     }
 
     fn color_format(&self, ctx: &RenderContext<'_>) -> Option<wgpu::TextureFormat> {
+        if self.kind == PassKind::Visibility {
+            return Some(oxygen_gpu::DeferredTargets::VISIBILITY_FORMAT);
+        }
         match self.color {
             ColorOps::None => None,
             ColorOps::ClearToneMapped(..) => Some(ViewTargets::COLOR_FORMAT),
@@ -451,7 +478,7 @@ impl MeshPass {
     /// The optional shader code this pass needs for this view this frame:
     /// only what it will bind (the same choices as
     /// `forward_lighting::bind_group`) and what the frame holds.
-    fn shader_features(&self, ctx: &RenderContext<'_>) -> crate::ShaderFeatures {
+    pub(crate) fn shader_features(&self, ctx: &RenderContext<'_>) -> crate::ShaderFeatures {
         if !ctx.shading.specialize {
             return crate::ShaderFeatures::ALL;
         }
@@ -655,6 +682,13 @@ impl MeshPass {
             // clear: the colour when it clears it, depth and labels).
             let clears = self.clear_depth || matches!(self.color, ColorOps::Clear(_) | ColorOps::ClearToneMapped(..));
             let tile_clears = clears && lead.targets.tile.is_some() && lead.targets.page_kept;
+            if tile_clears && self.kind == PassKind::Visibility {
+                return Err(PassError::BadInput {
+                    pass: self.name,
+                    what: "a page that keeps other cameras' images is shaded forward (its tiles are cleared alone)"
+                        .into(),
+                });
+            }
             let color_ops =
                 if tile_clears && !matches!(self.color, ColorOps::None) { ColorOps::Load } else { self.color };
             let tile_clear_color = match self.color.load() {

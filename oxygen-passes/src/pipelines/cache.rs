@@ -44,6 +44,15 @@ pub struct Pipelines {
     pub(super) sky: Mutex<HashMap<PipelineKey, wgpu::RenderPipeline>>,
     /// Tile clears by shading key and clear colour.
     pub(super) tile_clear: Mutex<HashMap<TileClearKey, wgpu::RenderPipeline>>,
+    /// Groups 0 to 2 (the heap's domains, the lighting inputs, the heap's
+    /// textures), for deferred shading's compute pipeline layout.
+    group_layouts: [wgpu::BindGroupLayout; 3],
+    /// Deferred shading's page group (3) and its pipeline layout, made the
+    /// first time they are asked for; why not, where the device's
+    /// per-stage limits cannot bind them to a compute stage.
+    deferred_layouts: Mutex<Option<Result<(wgpu::BindGroupLayout, wgpu::PipelineLayout), String>>>,
+    /// Deferred shading's compute pipelines, by shading features and exposure.
+    deferred: Mutex<HashMap<(crate::ShaderFeatures, crate::Exposure), wgpu::ComputePipeline>>,
     pub(super) created: AtomicU64,
     compilers: AtomicUsize,
     /// Keys requested since [`Pipelines::begin_frame`].
@@ -81,6 +90,9 @@ impl Pipelines {
         });
         Pipelines {
             layout,
+            group_layouts: [heap.domain_layout().clone(), lighting.layout().clone(), heap.texture_layout().clone()],
+            deferred_layouts: Mutex::new(None),
+            deferred: Mutex::new(HashMap::new()),
             texture_path: heap.texture_path(),
             modules: Mutex::new(HashMap::new()),
             state: Mutex::new(CompileState::default()),
@@ -91,6 +103,78 @@ impl Pipelines {
             compilers: AtomicUsize::new(0),
             used: Mutex::new(HashSet::new()),
         }
+    }
+
+    /// Deferred shading's page group layout and pipeline layout, made the
+    /// first time they are asked for; `Err` says why the device cannot
+    /// have them (its per-stage limits: a GL device's 16 sampled textures
+    /// a stage, say), which it also answers every later time.
+    pub fn deferred_layouts(
+        &self,
+        device: &wgpu::Device,
+    ) -> Result<(wgpu::BindGroupLayout, wgpu::PipelineLayout), String> {
+        let mut layouts = self.deferred_layouts.lock().unwrap_or_else(|e| e.into_inner());
+        layouts
+            .get_or_insert_with(|| {
+                // Validation errors inside the scope are returned, not raised.
+                let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+                let group = crate::mesh::deferred_layout(device);
+                let [domains, lighting, textures] = &self.group_layouts;
+                let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                    label: Some("deferred shading"),
+                    bind_group_layouts: &[Some(domains), Some(lighting), Some(textures), Some(&group)],
+                    immediate_size: 0,
+                });
+                match futures::executor::block_on(scope.pop()) {
+                    None => Ok((group, layout)),
+                    Some(error) => {
+                        Err(format!("the device cannot bind deferred shading's inputs to a compute stage: {error}"))
+                    }
+                }
+            })
+            .clone()
+    }
+
+    /// Deferred shading's compute pipeline for `features`, tone-mapping
+    /// with `exposure` (created the first time it is asked for, on this
+    /// thread), with its page group's layout; `Err` as
+    /// [`Pipelines::deferred_layouts`].
+    pub(crate) fn deferred(
+        &self,
+        device: &wgpu::Device,
+        features: crate::ShaderFeatures,
+        exposure: crate::Exposure,
+    ) -> Result<(wgpu::ComputePipeline, wgpu::BindGroupLayout), String> {
+        let (group, layout) = self.deferred_layouts(device)?;
+        let mut pipelines = self.deferred.lock().unwrap_or_else(|e| e.into_inner());
+        let pipeline = pipelines
+            .entry((features, exposure))
+            .or_insert_with(|| {
+                let _span = tracing::info_span!("compile_pipeline", pass = "deferred", features = ?features).entered();
+                let source = crate::shaders::DEFERRED
+                    .mesh_source(self.texture_path, crate::shaders::MeshVaryings::of(features.vertex_attributes));
+                let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                    label: Some("deferred shading"),
+                    source: wgpu::ShaderSource::Wgsl(source.into()),
+                });
+                let mut constants = features.override_constants().to_vec();
+                constants.push(("TONE_MAP_OUTPUT", 1.0));
+                constants.push(("EXPOSURE", f64::from(exposure.get())));
+                self.created.fetch_add(1, Ordering::Relaxed);
+                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some("deferred shading"),
+                    layout: Some(&layout),
+                    module: &module,
+                    entry_point: Some("cs_deferred"),
+                    compilation_options: wgpu::PipelineCompilationOptions {
+                        constants: &constants,
+                        ..Default::default()
+                    },
+                    cache: None,
+                })
+            })
+            .clone();
+        Ok((pipeline, group))
     }
 
     /// Pipelines created since this cache was made.

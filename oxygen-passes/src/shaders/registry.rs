@@ -31,6 +31,8 @@ pub(crate) static SOURCES: &[Source] = &[
     Source::wgsl("mesh/label_values.wgsl", include_str!("../mesh/label_values.wgsl")),
     Source::wgsl("mesh/visibility.wgsl", include_str!("../mesh/visibility.wgsl")),
     Source::wgsl("mesh/deferred.wgsl", include_str!("../mesh/deferred.wgsl")),
+    Source::gpu_struct::<crate::mesh::DeferredParams>("mesh/DeferredParams"),
+    Source::gpu_struct::<crate::mesh::DeferredTile>("mesh/DeferredTile"),
     Source::wgsl(DEFERRED_SCENE, include_str!("../mesh/deferred_scene.wgsl")),
     Source::wgsl(VARYINGS_PLAIN, include_str!("../mesh/varyings_plain.wgsl")),
     Source::wgsl(VARYINGS_WITH_ATTRIBUTES, include_str!("../mesh/varyings_attributes.wgsl")),

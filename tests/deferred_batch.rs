@@ -1,0 +1,198 @@
+//! Deferred shading of a batch (`BatchShading::Deferred`): every camera's
+//! image is the forward-shaded batch's within a few levels (the same
+//! shading code, fed from a rebuilt surface point instead of the
+//! rasterizer's varyings), the label planes are the forward pass's, the
+//! frames it cannot take are shaded forward, and an adapter without the
+//! primitive index refuses it with a reason.
+
+mod support;
+
+use std::path::PathBuf;
+
+use oxygen::LabelImage;
+use oxygen::batch::{BatchDesc, BatchGraph, BatchShading, standard_batch_graph};
+use oxygen::glam::Quat;
+use oxygen::image::RgbaImage;
+use oxygen::import::{SceneChoice, import_gltf};
+use oxygen::prelude::*;
+use support::golden::compare;
+
+fn asset(relative: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets").join(relative)
+}
+
+/// A shipped file with a sun, and a ring of `n` cameras of `size` around
+/// its bounds, each at its own angle and height.
+fn shipped(file: &str, n: usize, size: UVec2) -> (Scene, Vec<LookAtResolver>) {
+    let mut scene = Scene::new();
+    let import = import_gltf(&mut scene, asset(file), &SceneChoice::Default).unwrap();
+    let bounds = import.bounds.expect("something to draw");
+    let sun = scene.add_node(
+        "sun",
+        Transform::IDENTITY
+            .with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, Vec3::new(-0.2, -0.3, -1.0).normalize())),
+    );
+    scene.set_light(sun, Some(Light::directional(2.5))).unwrap();
+    let radius = bounds.half_extents().length().max(1e-3);
+    (scene, ring(n, size, bounds.center(), radius * 2.4))
+}
+
+fn ring(n: usize, size: UVec2, target: Vec3, distance: f32) -> Vec<LookAtResolver> {
+    (0..n)
+        .map(|i| {
+            let angle = i as f32 / n as f32 * std::f32::consts::TAU + 0.3;
+            let height = (i as f32 / n as f32 - 0.4) * distance;
+            let eye = target + Vec3::new(distance * angle.cos(), height, distance * angle.sin());
+            LookAtResolver::new(Camera::perspective(50f32.to_radians(), distance * 0.01, None), eye, target, size)
+                .expect("ring cameras are valid")
+        })
+        .collect()
+}
+
+/// Each camera's colour and labels, and the cameras the frame shaded
+/// deferred, rendered as one batch shaded `shading`.
+fn render(scene: &Scene, cameras: &[LookAtResolver], size: UVec2, shading: BatchShading) -> Batch {
+    // Not `support::gpu_renderer_with`, which keeps every HDR image: a
+    // batch whose HDR image is read after shading is shaded forward.
+    let mut renderer = Renderer::new_headless().expect("GPU tests need an adapter");
+    let graph = BatchGraph { shading, ..standard_batch_graph };
+    let desc = BatchDesc::new("ring", size).with_graph(graph).with_labels();
+    let batch = renderer.register_batch(desc).unwrap();
+    let ids: Vec<ViewId> = cameras.iter().map(|c| renderer.add_camera(batch, *c).unwrap()).collect();
+    let report = renderer.render_frame(scene).unwrap();
+    let deferred = report.views.iter().map(|v| v.recorded.deferred_views).sum();
+    Batch {
+        colors: ids.iter().map(|id| renderer.read_color(*id).unwrap()).collect(),
+        labels: ids.iter().map(|id| renderer.read_labels(*id).unwrap()).collect(),
+        deferred,
+    }
+}
+
+struct Batch {
+    colors: Vec<RgbaImage>,
+    labels: Vec<LabelImage>,
+    deferred: u32,
+}
+
+/// Whether this adapter can shade deferred (a deferred batch registers);
+/// records the skip when not, with the renderer's reason.
+fn deferred_here() -> bool {
+    let mut renderer = Renderer::new_headless().expect("GPU tests need an adapter");
+    let graph = BatchGraph { shading: BatchShading::Deferred, ..standard_batch_graph };
+    match renderer.register_batch(BatchDesc::new("probe", UVec2::new(8, 8)).with_graph(graph)) {
+        Ok(_) => true,
+        Err(e) => {
+            support::skip::skip(format!("{}: {e}", renderer.gpu().adapter_info.name));
+            false
+        }
+    }
+}
+
+/// Deferred against forward for `scene`: (worst channel error, pixels
+/// differing by more than 2 levels, pixels in all), with the label planes
+/// checked on the way.
+fn deferred_against_forward(scene: &Scene, cameras: &[LookAtResolver], size: UVec2, what: &str) -> (u8, usize, usize) {
+    let forward = render(scene, cameras, size, BatchShading::Forward);
+    let deferred = render(scene, cameras, size, BatchShading::Deferred);
+    assert_eq!(forward.deferred, 0, "{what}: the forward batch shades forward");
+    assert_eq!(deferred.deferred as usize, cameras.len(), "{what}: every camera is shaded deferred");
+    let (mut worst, mut differing, mut total) = (0u8, 0usize, 0usize);
+    for (i, (d, f)) in deferred.colors.iter().zip(&forward.colors).enumerate() {
+        let c = compare(d, f, 2);
+        worst = worst.max(c.worst);
+        differing += c.differing;
+        total += c.total;
+        // The picture is not empty: something covers the camera.
+        let (dl, fl) = (&deferred.labels[i], &forward.labels[i]);
+        // The same rasterizer decided which surface each pixel shows.
+        assert_eq!(dl.instances, fl.instances, "{what}: camera {i}'s instance labels");
+        assert_eq!(dl.classes, fl.classes, "{what}: camera {i}'s semantic classes");
+        assert_eq!(dl.linear_depth, fl.linear_depth, "{what}: camera {i}'s linear depth");
+        assert_eq!(dl.normals, fl.normals, "{what}: camera {i}'s normals");
+    }
+    assert!(forward.labels.iter().any(|l| l.instances.iter().any(|n| *n != 0)), "{what}: no camera sees anything");
+    eprintln!("{what}: deferred against forward: worst {worst}, {differing} of {total} pixels over 2 levels");
+    (worst, differing, total)
+}
+
+#[test]
+fn deferred_cameras_render_what_forward_cameras_render() {
+    if !deferred_here() {
+        return;
+    }
+    let size = UVec2::new(96, 72);
+    // Untextured boxes under a sun: the bench's scene. Measured on
+    // lavapipe: worst 1 level, no pixel over 2.
+    let grid = oxygen_demo::box_grid(36);
+    let cameras = ring(6, size, Vec3::ZERO, grid.side * 1.2);
+    let (worst, differing, total) = deferred_against_forward(&grid.scene, &cameras, size, "box grid");
+    assert!(worst <= 2 && differing == 0, "box grid: worst {worst}, {differing} of {total}");
+    // Base colour and normal textures (their level of detail from the
+    // rebuilt derivatives: one pixel over, where the fragment stage takes
+    // its 2 × 2 quad's differences, so a texel at a mip level's edge can
+    // blend otherwise), skins, morphs, a double-sided plane seen from both
+    // sides. The bounds: measured on lavapipe (worst level, pixels over 2
+    // levels of 27 648) with a quarter more.
+    let mut results = Vec::new();
+    for (file, most_worst, most_differing) in [
+        ("NormalTangentTest/NormalTangentTest.glb", 13, 13), // measured 10 and 10
+        ("BoxTextured/BoxTextured.glb", 35, 200),            // 28 and 158, on the texture's border lines
+        ("RiggedSimple/RiggedSimple.glb", 2, 0),             // 1 and 0
+        ("SimpleMorph/SimpleMorph.gltf", 2, 0),              // 1 and 0
+        ("TwoSidedPlane/TwoSidedPlane.gltf", 9, 7),          // 7 and 5
+    ] {
+        let (scene, cameras) = shipped(file, 4, size);
+        results.push((file, most_worst, most_differing, deferred_against_forward(&scene, &cameras, size, file)));
+    }
+    for (file, most_worst, most_differing, (worst, differing, total)) in results {
+        assert!(
+            worst <= most_worst && differing <= most_differing,
+            "{file}: worst {worst} (at most {most_worst}), {differing} of {total} over 2 levels (at most {most_differing})"
+        );
+    }
+}
+
+#[test]
+fn a_frame_deferred_shading_cannot_take_is_shaded_forward() {
+    if !deferred_here() {
+        return;
+    }
+    // Blended surfaces need the HDR image after shading: forward, the
+    // same pixels as a forward batch.
+    let size = UVec2::new(64, 48);
+    let (scene, cameras) = shipped("AlphaBlendModeTest/AlphaBlendModeTest.glb", 3, size);
+    let forward = render(&scene, &cameras, size, BatchShading::Forward);
+    let deferred = render(&scene, &cameras, size, BatchShading::Deferred);
+    assert_eq!(deferred.deferred, 0, "blended surfaces are shaded forward");
+    for (i, (d, f)) in deferred.colors.iter().zip(&forward.colors).enumerate() {
+        assert!(d == f, "camera {i}: the fallback is the forward pass");
+    }
+}
+
+#[test]
+fn an_adapter_that_cannot_shade_deferred_refuses_the_batch_with_a_reason() {
+    let deferred = BatchGraph { shading: BatchShading::Deferred, ..standard_batch_graph };
+    let desc = || BatchDesc::new("rig", UVec2::new(8, 8)).with_graph(deferred.clone());
+    // A device made without the primitive index.
+    let options = oxygen::gpu::GpuOptions {
+        optional_features: Renderer::OPTIONAL_FEATURES - oxygen::wgpu::Features::PRIMITIVE_INDEX,
+        ..Default::default()
+    };
+    let gpu = oxygen::gpu::GpuContext::new_headless(&options).expect("GPU tests need an adapter");
+    let mut renderer = Renderer::with_options(gpu, RendererOptions::default()).unwrap();
+    let error = renderer.register_batch(desc()).expect_err("refused without the primitive index").to_string();
+    assert!(error.contains("PRIMITIVE_INDEX") && error.contains("rig"), "{error}");
+    // The same batch shaded forward registers there.
+    assert!(renderer.register_batch(BatchDesc::new("rig", UVec2::new(8, 8))).is_ok());
+    // With every feature: registered where the device's per-stage limits
+    // bind the compute pass's inputs (Vulkan on lavapipe), refused with
+    // the limit named where not (GL's 16 sampled textures a stage).
+    let mut renderer = Renderer::new_headless().expect("GPU tests need an adapter");
+    match renderer.register_batch(desc()) {
+        Ok(_) => assert!(renderer.gpu().features.contains(oxygen::wgpu::Features::PRIMITIVE_INDEX)),
+        Err(e) => {
+            let error = e.to_string();
+            assert!(error.contains("rig") && (error.contains("PRIMITIVE_INDEX") || error.contains("limit")), "{error}");
+        }
+    }
+}
