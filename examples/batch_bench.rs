@@ -67,6 +67,9 @@
 //! `BATCH_BENCH_TURN_DEGREES=D` turns the ring about the grid by D degrees
 //! a frame, so that every camera has a new pose every frame (a rig on a
 //! moving robot); by default the cameras stand still.
+//! `BATCH_BENCH_SHADING=deferred` shades the batch in a compute pass after
+//! a visibility pass (`BatchShading::Deferred`; the bench fails if a frame
+//! falls back to forward shading); lone views shade forward.
 //! `BATCH_BENCH_PRE_PASS=1` gives the batch a depth pre-pass
 //! (`BatchGraph`'s `lit.depth_from_pre_pass`; lone views keep the standard
 //! graph's). `BATCH_BENCH_MAX_PAGE_SIDE=S` caps the atlas' pages at S pixels
@@ -81,7 +84,7 @@
 
 use std::time::Instant;
 
-use oxygen::batch::{BatchDesc, StreamOptions, StreamedFrame};
+use oxygen::batch::{BatchDesc, BatchShading, StreamOptions, StreamedFrame};
 use oxygen::core::ViewContext;
 
 use oxygen::gpu::{Label, LabelSet};
@@ -217,7 +220,7 @@ fn run(
     in_flight: u32,
     planes: StreamOptions,
     max_page_side: Option<u32>,
-    pre_pass: bool,
+    graph: &oxygen::batch::BatchGraph,
     turn: f32,
 ) -> Result<Run, Box<dyn std::error::Error>> {
     let mut renderer = Renderer::new_headless_with(*options)?;
@@ -235,9 +238,7 @@ fn run(
                 Some(side) => desc.with_max_page_side(side),
                 None => desc,
             };
-            let mut graph = oxygen::batch::standard_batch_graph;
-            graph.lit.depth_from_pre_pass = pre_pass;
-            Some(renderer.register_batch(desc.with_graph(graph))?)
+            Some(renderer.register_batch(desc.with_graph(graph.clone()))?)
         }
         Mode::Views => None,
     };
@@ -278,6 +279,10 @@ fn run(
         let cpu = start.elapsed().as_secs_f64() * 1e3;
         if let Some(warning) = report.warnings.first() {
             return Err(format!("frame {frame}: {warning}").into());
+        }
+        let deferred: u32 = report.views.iter().map(|v| v.recorded.deferred_views).sum();
+        if mode == Mode::Batch && graph.shading == BatchShading::Deferred && deferred as usize != views {
+            return Err(format!("frame {frame}: {deferred} of {views} cameras shaded deferred (see the log)").into());
         }
         let mut bytes = 0u64;
         if readback {
@@ -463,6 +468,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Ok("0") | Err(_) => false,
         Ok(other) => return Err(format!("BATCH_BENCH_PRE_PASS={other}: use 0 or 1").into()),
     };
+    // Where the batch's pixels are shaded (`BatchGraph::shading`).
+    let shading = match std::env::var("BATCH_BENCH_SHADING").as_deref() {
+        Ok("forward") | Err(_) => BatchShading::Forward,
+        Ok("deferred") => BatchShading::Deferred,
+        Ok(other) => return Err(format!("BATCH_BENCH_SHADING={other}: use forward or deferred").into()),
+    };
+    let mut graph = oxygen::batch::standard_batch_graph;
+    graph.lit.depth_from_pre_pass = pre_pass;
+    graph.shading = shading;
     // Cameras turning about the grid by this many degrees a frame: a new
     // pose for every camera every frame (0: standing still).
     let turn = match std::env::var("BATCH_BENCH_TURN_DEGREES") {
@@ -519,6 +533,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .value("target_budget_bytes", options.target_budget_bytes)
         .value("max_page_side", max_page_side)
         .value("pre_pass", pre_pass)
+        .value("shading", format!("{shading:?}"))
         .value("frames_in_flight", in_flight)
         .value(
             "streamed_planes",
@@ -550,7 +565,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 in_flight,
                 planes,
                 max_page_side,
-                pre_pass,
+                &graph,
                 turn,
             )?;
             let (cpu, whole, gpu) = (median(&r.cpu_ms), median(&r.frame_ms), median(&r.gpu_ms));
