@@ -89,13 +89,19 @@ fn surface_color(draw_index: u32, triangle: u32, local: vec2<u32>, page: vec2<u3
     let cb = b.clip_position;
     let cc = c.clip_position;
     var mesh = weighted(a, b, c, barycentrics(ca, cb, cc, tile_ndc(centre)));
-    let right = weighted(a, b, c, barycentrics(ca, cb, cc, tile_ndc(centre + vec2<f32>(1.0, 0.0))));
-    let below = weighted(a, b, c, barycentrics(ca, cb, cc, tile_ndc(centre + vec2<f32>(0.0, 1.0))));
-    let d = Derivatives(
-        right.world_position - mesh.world_position,
-        below.world_position - mesh.world_position,
-        UvDerivatives(right.uv - mesh.uv, below.uv - mesh.uv, right.uv1 - mesh.uv1, below.uv1 - mesh.uv1),
-    );
+    // Without textures the derivatives only give the facet's direction
+    // (shading's stand-in for a normal without one): the triangle's edges
+    // give it exactly, for no more reconstruction.
+    var d = Derivatives(b.world_position - a.world_position, c.world_position - a.world_position, UvDerivatives());
+    if HAS_TEXTURES {
+        let right = weighted(a, b, c, barycentrics(ca, cb, cc, tile_ndc(centre + vec2<f32>(1.0, 0.0))));
+        let below = weighted(a, b, c, barycentrics(ca, cb, cc, tile_ndc(centre + vec2<f32>(0.0, 1.0))));
+        d = Derivatives(
+            right.world_position - mesh.world_position,
+            below.world_position - mesh.world_position,
+            UvDerivatives(right.uv - mesh.uv, below.uv - mesh.uv, right.uv1 - mesh.uv1, below.uv1 - mesh.uv1),
+        );
+    }
     // What the fragment stage's position builtin holds: the framebuffer
     // pixel centre (the page's), depth, 1 / w.
     let clip = mesh.clip_position;
@@ -119,12 +125,19 @@ fn background_color(local: vec2<u32>) -> vec4<f32> {
 }
 
 @compute @workgroup_size(8, 8)
-fn cs_deferred(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= deferred.size.x || id.y >= deferred.size.y || id.z >= deferred.tiles {
+fn cs_deferred(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    // The workgroup's tile (uniform: the third dispatch dimension).
+    if id.z >= deferred.tiles {
         return;
     }
     let tile = deferred_tiles[id.z];
-    scene = deferred_cameras[tile.camera];
+    if lane == 0u {
+        scene = deferred_cameras[tile.camera];
+    }
+    workgroupBarrier();
+    if id.x >= deferred.size.x || id.y >= deferred.size.y {
+        return;
+    }
     let page = tile.origin + id.xy;
     let surface = textureLoad(deferred_visibility, page, 0).xy;
     var color: vec4<f32>;

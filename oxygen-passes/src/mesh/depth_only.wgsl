@@ -1,7 +1,7 @@
 // Depth pre-pass. The opaque variants have no fragment stage; the masked
 // variants discard fragments whose alpha is below the material's cutoff.
 
-#include "mesh/mesh_vertex.wgsl"
+#include "mesh/vertex_stage.wgsl"
 
 @fragment
 fn fs_alpha_test(io: MeshIo) {

@@ -4,6 +4,7 @@
 // the scene and a batch camera's tile cleared alone.
 
 #include "mesh/shading.wgsl"
+#include "mesh/vertex_stage.wgsl"
 
 @fragment
 fn fs_opaque(io: MeshIo, @builtin(front_facing) front_facing: bool) -> @location(0) vec4<f32> {

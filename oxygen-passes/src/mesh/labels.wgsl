@@ -4,7 +4,7 @@
 // that passes the depth test; masked ones first cut out what their alpha
 // cuts out, as shading did.
 
-#include "mesh/mesh_vertex.wgsl"
+#include "mesh/vertex_stage.wgsl"
 #include "mesh/label_values.wgsl"
 
 @fragment

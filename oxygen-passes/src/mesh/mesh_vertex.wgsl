@@ -29,11 +29,6 @@ struct MeshVarying {
     uv1: vec2<f32>,
 }
 
-@vertex
-fn vs_main(@builtin(vertex_index) vertex_index: u32, @builtin(instance_index) draw_index: u32) -> MeshIo {
-    return pack_varying(mesh_vertex(draw_index, vertex_index));
-}
-
 // Vertex `vertex_index` (base vertex included) of the view's draw
 // `draw_index`, morphed, skinned and placed in the world and on the camera:
 // what the vertex stage passes on, and what deferred shading

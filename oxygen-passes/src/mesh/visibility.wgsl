@@ -8,7 +8,7 @@
 
 enable primitive_index;
 
-#include "mesh/mesh_vertex.wgsl"
+#include "mesh/vertex_stage.wgsl"
 #include "mesh/label_values.wgsl"
 
 struct Visible {

@@ -24,6 +24,7 @@ pub(crate) static SOURCES: &[Source] = &[
     Source::wgsl("shaders/color.wgsl", include_str!("color.wgsl")),
     // Mesh passes.
     Source::wgsl("mesh/mesh_vertex.wgsl", include_str!("../mesh/mesh_vertex.wgsl")),
+    Source::wgsl("mesh/vertex_stage.wgsl", include_str!("../mesh/vertex_stage.wgsl")),
     Source::wgsl("mesh/depth_only.wgsl", include_str!("../mesh/depth_only.wgsl")),
     Source::wgsl("mesh/shading.wgsl", include_str!("../mesh/shading.wgsl")),
     Source::wgsl("mesh/forward_lit.wgsl", include_str!("../mesh/forward_lit.wgsl")),
@@ -326,9 +327,6 @@ pub(crate) const ENTRY_POINTS: &[EntryPoint] = &[
     entry(VISIBILITY, "fs_visibility", Stage::Fragment),
     entry(VISIBILITY, "fs_visibility_masked", Stage::Fragment),
     entry(DEFERRED, "cs_deferred", Stage::Compute),
-    // Included with `mesh_vertex`, which the compute pass calls per corner;
-    // no pipeline uses this copy.
-    entry(DEFERRED, "vs_main", Stage::Vertex),
     entry(LABELS, "vs_main", Stage::Vertex),
     entry(LABELS, "fs_labels", Stage::Fragment),
     entry(LABELS, "fs_labels_masked", Stage::Fragment),
