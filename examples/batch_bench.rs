@@ -70,6 +70,8 @@
 //! `BATCH_BENCH_SHADING=deferred` shades the batch in a compute pass after
 //! a visibility pass (`BatchShading::Deferred`; the bench fails if a frame
 //! falls back to forward shading); lone views shade forward.
+//! `BATCH_BENCH_LIGHTS=N` adds N point lights without shadows over the
+//! grid (each reaching every pixel: shading work per pixel).
 //! `BATCH_BENCH_PRE_PASS=1` gives the batch a depth pre-pass
 //! (`BatchGraph`'s `lit.depth_from_pre_pass`; lone views keep the standard
 //! graph's). `BATCH_BENCH_MAX_PAGE_SIDE=S` caps the atlas' pages at S pixels
@@ -98,10 +100,19 @@ const DEFAULT_MEASURED: usize = 10;
 /// Spans printed per line with `BATCH_BENCH_SPANS=1` (all are recorded).
 const SPANS_SHOWN: usize = 24;
 
-/// The grid of `count` boxes and its side length.
-fn box_grid(count: usize) -> (Scene, f32) {
-    let grid = oxygen_demo::box_grid(count);
-    (grid.scene, grid.side)
+/// The grid of `count` boxes and its side length, with `lights` point
+/// lights without shadows (every one reaching every pixel: no range) on a
+/// ring over it.
+fn box_grid(count: usize, lights: usize) -> Result<(Scene, f32), String> {
+    let mut grid = oxygen_demo::box_grid(count);
+    for i in 0..lights {
+        let angle = i as f32 / lights as f32 * std::f32::consts::TAU;
+        let at = Vec3::new(angle.cos() * grid.side * 0.3, 3.0, angle.sin() * grid.side * 0.3);
+        let node = grid.scene.add_node("lamp", Transform::from_translation(at));
+        let light = Light { casts_shadows: false, ..Light::point(20.0, None) };
+        grid.scene.set_light(node, Some(light)).map_err(|e| format!("a lamp: {e}"))?;
+    }
+    Ok((grid.scene, grid.side))
 }
 
 /// Camera `i` of `n` on the ring, turning about the vertical axis by
@@ -509,7 +520,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         Err(_) => StreamOptions { instances: true, ..StreamOptions::default() },
     };
-    let (scene, side) = box_grid(boxes);
+    // Point lights over the grid (shading work per pixel; none by default).
+    let lights: usize = match std::env::var("BATCH_BENCH_LIGHTS") {
+        Ok(n) => n.parse().map_err(|_| format!("BATCH_BENCH_LIGHTS={n}: a count"))?,
+        Err(_) => 0,
+    };
+    let (scene, side) = box_grid(boxes, lights)?;
     let adapter = Renderer::new_headless()?.gpu().adapter_info.clone();
     // The vertex floor of the same work, from a raster_floor run of this
     // adapter: the GPU time is compared with draws × the floor per cube.
@@ -534,6 +550,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .value("max_page_side", max_page_side)
         .value("pre_pass", pre_pass)
         .value("shading", format!("{shading:?}"))
+        .value("lights", lights)
         .value("frames_in_flight", in_flight)
         .value(
             "streamed_planes",
