@@ -749,8 +749,10 @@ mod tile_tests {
     #[test]
     fn bytes_count_depth_colour_and_hdr() {
         // 2 × 1 tiles of 4 × 4 on one page: 32 pixels.
-        assert_eq!(TileAtlas::bytes_for((4, 4), (2, 1, 1), None, LabelSet::NONE), 32 * 8);
-        assert_eq!(TileAtlas::bytes_for((4, 4), (2, 1, 3), Some(8), LabelSet::NONE), 3 * 32 * 16);
-        assert_eq!(TileAtlas::bytes_for((4, 4), (2, 1, 1), None, LabelSet::ALL), 32 * 28);
+        assert_eq!(TileAtlas::bytes_for((4, 4), (2, 1, 1), None, LabelSet::NONE, false), 32 * 8);
+        assert_eq!(TileAtlas::bytes_for((4, 4), (2, 1, 3), Some(8), LabelSet::NONE, false), 3 * 32 * 16);
+        assert_eq!(TileAtlas::bytes_for((4, 4), (2, 1, 1), None, LabelSet::ALL, false), 32 * 28);
+        // Deferred shading's visibility target (8 bytes) and shaded image (4).
+        assert_eq!(TileAtlas::bytes_for((4, 4), (2, 1, 1), None, LabelSet::NONE, true), 32 * 20);
     }
 }

@@ -67,9 +67,9 @@ fn an_atlas_lays_out_its_tiles_on_as_few_pages_as_fit() {
         assert_eq!(TileAtlas::layout(size, tiles, 16), None, "{size:?} × {tiles}");
     }
     let labels = LabelSet::ALL;
-    let bytes = TileAtlas::bytes_for((8, 4), (2, 4, 2), Some(8), labels);
+    let bytes = TileAtlas::bytes_for((8, 4), (2, 4, 2), Some(8), labels, false);
     assert_eq!(bytes, 16 * 16 * 2 * (8 + 8 + labels.bytes_per_pixel()));
-    assert_eq!(TileAtlas::bytes_for((8, 4), (2, 4, 2), None, LabelSet::NONE), 16 * 16 * 2 * 8);
+    assert_eq!(TileAtlas::bytes_for((8, 4), (2, 4, 2), None, LabelSet::NONE, false), 16 * 16 * 2 * 8);
 }
 
 /// Tiles run row by row across a page, then on to the next page; the
@@ -78,14 +78,14 @@ fn an_atlas_lays_out_its_tiles_on_as_few_pages_as_fit() {
 fn an_allocated_atlas_places_its_tiles_page_by_page_row_by_row() {
     let gpu = device();
     let labels = LabelSet::ALL;
-    let atlas = TileAtlas::new(&gpu.device, (8, 4), 12, Some(HdrFormat::Rgba16Float), labels, Some(16), "test")
+    let atlas = TileAtlas::new(&gpu.device, (8, 4), 12, Some(HdrFormat::Rgba16Float), labels, false, Some(16), "test")
         .expect("an atlas");
     assert_eq!((atlas.columns, atlas.rows, atlas.pages.len()), (2, 4, 2));
     assert_eq!(atlas.page_size(), (16, 16));
     assert_eq!(atlas.capacity(), 16);
     assert!(atlas.has_hdr());
     assert_eq!(atlas.labels(), labels);
-    assert_eq!(atlas.bytes(), TileAtlas::bytes_for((8, 4), (2, 4, 2), Some(8), labels));
+    assert_eq!(atlas.bytes(), TileAtlas::bytes_for((8, 4), (2, 4, 2), Some(8), labels, false));
     let place = |i| atlas.tile(i).map(|t| (t.x, t.y, t.page, t.index));
     assert_eq!(place(0), Some((0, 0, 0, 0)));
     assert_eq!(place(3), Some((8, 4, 0, 3)));
@@ -93,10 +93,10 @@ fn an_allocated_atlas_places_its_tiles_page_by_page_row_by_row() {
     assert_eq!(place(9), Some((8, 0, 1, 9)));
     assert_eq!(place(15), Some((8, 12, 1, 15)));
     assert_eq!(place(16), None, "past the capacity");
-    let plain = TileAtlas::new(&gpu.device, (8, 4), 2, None, LabelSet::NONE, None, "plain").expect("an atlas");
+    let plain = TileAtlas::new(&gpu.device, (8, 4), 2, None, LabelSet::NONE, false, None, "plain").expect("an atlas");
     assert!(!plain.has_hdr());
     assert_eq!(plain.labels(), LabelSet::NONE);
-    assert_eq!(plain.bytes(), TileAtlas::bytes_for((8, 4), (2, 1, 1), None, LabelSet::NONE));
+    assert_eq!(plain.bytes(), TileAtlas::bytes_for((8, 4), (2, 1, 1), None, LabelSet::NONE, false));
 }
 
 /// Allocated targets count the bytes `bytes_for_msaa` predicted, labels on
@@ -120,7 +120,7 @@ fn allocated_targets_count_what_was_predicted() {
     assert_eq!(labelled.bytes(), lit.bytes() + pixels * LabelSet::ALL.bytes_per_pixel());
     let unlabelled = ViewTargets::new(&gpu.device, w, h, "none").with_labels(&gpu.device, LabelSet::NONE, "none");
     assert!(unlabelled.labels.is_none());
-    let atlas = TileAtlas::new(&gpu.device, (8, 4), 2, None, LabelSet::NONE, None, "tiles").expect("an atlas");
+    let atlas = TileAtlas::new(&gpu.device, (8, 4), 2, None, LabelSet::NONE, false, None, "tiles").expect("an atlas");
     assert_eq!(atlas.view_targets(1).expect("a tile").bytes(), 0);
     let layers = square_array(&gpu, 8, 2, ViewTargets::DEPTH_FORMAT);
     assert_eq!(ViewTargets::atlas_layer(&layers, 1).bytes(), 0);

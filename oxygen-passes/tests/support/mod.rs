@@ -5,7 +5,7 @@ use oxygen_passes::PassKind;
 
 /// Every pass kind. The match has no wildcard: a new kind is a compile
 /// error here until it is added to the array.
-pub fn all_kinds() -> [PassKind; 6] {
+pub fn all_kinds() -> [PassKind; 7] {
     let kinds = [
         PassKind::DepthPrePass,
         PassKind::Shadow,
@@ -13,6 +13,7 @@ pub fn all_kinds() -> [PassKind; 6] {
         PassKind::Shading,
         PassKind::Transparent,
         PassKind::Labels,
+        PassKind::Visibility,
     ];
     for kind in kinds {
         match kind {
@@ -21,7 +22,8 @@ pub fn all_kinds() -> [PassKind; 6] {
             | PassKind::ShadingAfterPrePass
             | PassKind::Shading
             | PassKind::Transparent
-            | PassKind::Labels => {}
+            | PassKind::Labels
+            | PassKind::Visibility => {}
         }
     }
     kinds
