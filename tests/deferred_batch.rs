@@ -15,6 +15,7 @@ use oxygen::glam::Quat;
 use oxygen::image::RgbaImage;
 use oxygen::import::{SceneChoice, import_gltf};
 use oxygen::prelude::*;
+use oxygen::sceneprep::Visibility;
 use support::golden::compare;
 
 fn asset(relative: &str) -> PathBuf {
@@ -52,13 +53,34 @@ fn ring(n: usize, size: UVec2, target: Vec3, distance: f32) -> Vec<LookAtResolve
 /// Each camera's colour and labels, and the cameras the frame shaded
 /// deferred, rendered as one batch shaded `shading`.
 fn render(scene: &Scene, cameras: &[LookAtResolver], size: UVec2, shading: BatchShading) -> Batch {
+    render_with(scene, cameras, size, shading, None)
+}
+
+/// [`render`] with the cameras' visibility path chosen.
+fn render_with(
+    scene: &Scene,
+    cameras: &[LookAtResolver],
+    size: UVec2,
+    shading: BatchShading,
+    visibility: Option<Visibility>,
+) -> Batch {
     // Not `support::gpu_renderer_with`, which keeps every HDR image: a
     // batch whose HDR image is read after shading is shaded forward.
     let mut renderer = Renderer::new_headless().expect("GPU tests need an adapter");
     let graph = BatchGraph { shading, ..standard_batch_graph };
     let desc = BatchDesc::new("ring", size).with_graph(graph).with_labels();
     let batch = renderer.register_batch(desc).unwrap();
-    let ids: Vec<ViewId> = cameras.iter().map(|c| renderer.add_camera(batch, *c).unwrap()).collect();
+    let ids: Vec<ViewId> = cameras
+        .iter()
+        .map(|c| {
+            let desc = ViewDesc::new(*c);
+            let desc = match visibility {
+                Some(v) => desc.with_visibility(v),
+                None => desc,
+            };
+            renderer.add_camera(batch, desc).unwrap()
+        })
+        .collect();
     let report = renderer.render_frame(scene).unwrap();
     let deferred = report.views.iter().map(|v| v.recorded.deferred_views).sum();
     Batch {
@@ -127,6 +149,16 @@ fn deferred_cameras_render_what_forward_cameras_render() {
     let cameras = ring(6, size, Vec3::ZERO, grid.side * 1.2);
     let (worst, differing, total) = deferred_against_forward(&grid.scene, &cameras, size, "box grid");
     assert!(worst <= 2 && differing == 0, "box grid: worst {worst}, {differing} of {total}");
+    // Culled on the GPU (each camera's draws and their count written by a
+    // compute pass): the same pictures as the CPU path's deferred batch.
+    let cpu = render(&grid.scene, &cameras, size, BatchShading::Deferred);
+    let gpu = render_with(&grid.scene, &cameras, size, BatchShading::Deferred, Some(Visibility::GpuFrustum));
+    assert_eq!(gpu.deferred as usize, cameras.len(), "GPU-culled cameras are shaded deferred");
+    for (i, (g, c)) in gpu.colors.iter().zip(&cpu.colors).enumerate() {
+        let c = compare(g, c, 2);
+        // Measured: 0 pixels over 2 levels.
+        assert!(c.differing == 0, "GPU-culled camera {i}: {} pixels differ, worst {}", c.differing, c.worst);
+    }
     // Base colour and normal textures (their level of detail from the
     // rebuilt derivatives: one pixel over, where the fragment stage takes
     // its 2 × 2 quad's differences, so a texel at a mip level's edge can
