@@ -12,7 +12,10 @@
 //! of one atlas ([`oxygen_gpu::TileAtlas`], one layer a page), with one
 //! render pass per page for each pass of the batch's graph ([`BatchGraph`])
 //! and one command buffer for the whole batch, instead of targets, passes
-//! and a command buffer per view.
+//! and a command buffer per view. Where the cameras' pixels have lighting
+//! to do, [`BatchShading::Deferred`] shades them in one compute dispatch
+//! per page after a visibility pass (on GPUs that run fragments on a part
+//! of the chip, several times faster: docs/performance.md).
 //!
 //! [`Renderer::register_batch`]: crate::Renderer::register_batch
 //! [`Renderer::add_camera`]: crate::Renderer::add_camera
