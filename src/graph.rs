@@ -379,9 +379,9 @@ pub enum BatchShading {
     /// (registering the batch fails otherwise). A frame deferred shading
     /// cannot take (an HDR image read after shading, blended surfaces,
     /// shadow maps, probes, clustered lights, screen-space effects, a page
-    /// that keeps cameras not rendered) is shaded forward, with a logged
-    /// warning saying why; the frame report's `recorded.deferred_views`
-    /// counts the cameras shaded deferred.
+    /// that keeps cameras not rendered) is shaded forward, with the reason
+    /// logged (debug); the frame report's `recorded.deferred_views` counts
+    /// the cameras shaded deferred.
     Deferred,
 }
 
@@ -413,7 +413,8 @@ impl BatchGraph {
             BatchShading::Deferred => match deferred.applies(views) {
                 Ok(()) => Some(deferred),
                 Err(why) => {
-                    tracing::warn!(first = %views[0].view.view_id, "batch shaded forward this frame: {why}");
+                    // Every frame the condition lasts: debug, not warn.
+                    tracing::debug!(first = %views[0].view.view_id, "batch shaded forward this frame: {why}");
                     None
                 }
             },

@@ -136,7 +136,12 @@ impl DeferredShading {
                 None => pages.push((page, vec![i])),
             }
         }
-        for (_, members) in &pages {
+        // A dispatch's third dimension is the chunk's tiles: at most the
+        // device's workgroups a dimension (65 535 on most), which a page of
+        // tiny cameras on a large page can exceed.
+        let per_dispatch = device.limits().max_compute_workgroups_per_dimension.max(1) as usize;
+        let chunks = pages.iter().flat_map(|(_, members)| members.chunks(per_dispatch));
+        for members in chunks {
             let lead = views[members[0]];
             let Some(targets) = lead.targets.deferred.as_ref() else { continue };
             let cameras: Vec<oxygen_bindless::SceneConstants> =
@@ -169,7 +174,14 @@ impl DeferredShading {
                 pass.set_bind_group(3, &group, &[]);
                 pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), params.tiles);
             }
-            // Into the page's display colour (same bytes, an sRGB format).
+        }
+        // Into each page's display colour (same bytes, an sRGB format), the
+        // whole page in one copy: what no tile of this frame covers (empty
+        // slots, the margins) is read by nobody (a page that keeps other
+        // cameras' images is shaded forward).
+        for (_, members) in &pages {
+            let lead = views[members[0]];
+            let Some(targets) = lead.targets.deferred.as_ref() else { continue };
             let color = lead
                 .color_targets("deferred shading")?
                 .color
@@ -178,6 +190,9 @@ impl DeferredShading {
             rec.encoder().copy_texture_to_texture(targets.shaded.as_image_copy(), color.as_image_copy(), color.size());
         }
         rec.stats.deferred_views += u32::try_from(views.len()).unwrap_or(u32::MAX);
+        // The display colour is written and the HDR image is not, as when
+        // the forward pass tone-maps in place.
+        rec.stats.tone_mapped_in_pass = true;
         Ok(())
     }
 

@@ -125,12 +125,17 @@ fn background_color(local: vec2<u32>) -> vec4<f32> {
 }
 
 @compute @workgroup_size(8, 8)
-fn cs_deferred(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
-    // The workgroup's tile (uniform: the third dispatch dimension).
-    if id.z >= deferred.tiles {
+fn cs_deferred(
+    @builtin(global_invocation_id) id: vec3<u32>,
+    @builtin(workgroup_id) group: vec3<u32>,
+    @builtin(local_invocation_index) lane: u32,
+) {
+    // The workgroup's tile: the third dispatch dimension, uniform across
+    // the workgroup (so is the barrier below).
+    if group.z >= deferred.tiles {
         return;
     }
-    let tile = deferred_tiles[id.z];
+    let tile = deferred_tiles[group.z];
     if lane == 0u {
         scene = deferred_cameras[tile.camera];
     }

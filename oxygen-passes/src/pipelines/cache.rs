@@ -147,33 +147,36 @@ impl Pipelines {
     ) -> Result<(wgpu::ComputePipeline, wgpu::BindGroupLayout), String> {
         let (group, layout) = self.deferred_layouts(device)?;
         let mut pipelines = self.deferred.lock().unwrap_or_else(|e| e.into_inner());
-        let pipeline = pipelines
-            .entry((features, exposure))
-            .or_insert_with(|| {
-                let _span = tracing::info_span!("compile_pipeline", pass = "deferred", features = ?features).entered();
-                let source = crate::shaders::DEFERRED
-                    .mesh_source(self.texture_path, crate::shaders::MeshVaryings::of(features.vertex_attributes));
-                let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                    label: Some("deferred shading"),
-                    source: wgpu::ShaderSource::Wgsl(source.into()),
-                });
-                let mut constants = features.override_constants().to_vec();
-                constants.push(("TONE_MAP_OUTPUT", 1.0));
-                constants.push(("EXPOSURE", f64::from(exposure.get())));
-                self.created.fetch_add(1, Ordering::Relaxed);
-                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some("deferred shading"),
-                    layout: Some(&layout),
-                    module: &module,
-                    entry_point: Some("cs_deferred"),
-                    compilation_options: wgpu::PipelineCompilationOptions {
-                        constants: &constants,
-                        ..Default::default()
-                    },
-                    cache: None,
-                })
-            })
-            .clone();
+        if let Some(pipeline) = pipelines.get(&(features, exposure)) {
+            return Ok((pipeline.clone(), group));
+        }
+        // Made on this recording thread the first time (a batch's first
+        // deferred frame waits for it); a device that rejects it says why
+        // instead of raising an uncaptured error.
+        let _span = tracing::info_span!("compile_pipeline", pass = "deferred", features = ?features).entered();
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let source = crate::shaders::DEFERRED
+            .mesh_source(self.texture_path, crate::shaders::MeshVaryings::of(features.vertex_attributes));
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("deferred shading"),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        });
+        let mut constants = features.override_constants().to_vec();
+        constants.push(("TONE_MAP_OUTPUT", 1.0));
+        constants.push(("EXPOSURE", f64::from(exposure.get())));
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("deferred shading"),
+            layout: Some(&layout),
+            module: &module,
+            entry_point: Some("cs_deferred"),
+            compilation_options: wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() },
+            cache: None,
+        });
+        if let Some(error) = futures::executor::block_on(scope.pop()) {
+            return Err(format!("deferred shading's pipeline: {error}"));
+        }
+        self.created.fetch_add(1, Ordering::Relaxed);
+        pipelines.insert((features, exposure), pipeline.clone());
         Ok((pipeline, group))
     }
 

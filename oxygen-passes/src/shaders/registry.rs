@@ -131,7 +131,7 @@ const VARYINGS_PLAIN: &str = "mesh/varyings_plain.wgsl";
 const VARYINGS_WITH_ATTRIBUTES: &str = "mesh/varyings_attributes.wgsl";
 
 /// The per-view constants' declaration, which deferred shading composes
-/// as a private copy per invocation instead of a uniform per camera.
+/// as a copy in workgroup memory instead of a uniform per camera.
 const SCENE_CONSTANTS: &str = "bindless/scene_constants.wgsl";
 const DEFERRED_SCENE: &str = "mesh/deferred_scene.wgsl";
 
@@ -178,8 +178,8 @@ pub(crate) struct ShaderModule {
     /// Whether it includes the mesh vertex stage (and so is composed once
     /// per [`MeshVaryings`]).
     pub(crate) mesh: bool,
-    /// Whether its per-view constants are a private copy each invocation
-    /// loads (deferred shading's compute pass) rather than a uniform.
+    /// Whether its per-view constants are a copy in workgroup memory each
+    /// workgroup loads (deferred shading's compute pass), not a uniform.
     pub(crate) private_scene: bool,
 }
 
