@@ -147,11 +147,7 @@ fn texture(device: &wgpu::Device, (w, h): (u32, u32), format: wgpu::TextureForma
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let size = args.next().unwrap_or_else(|| "16384x1024".into());
-    let (w, h) = size
-        .split_once('x')
-        .and_then(|(w, h)| Some((w.parse::<u32>().ok()?, h.parse::<u32>().ok()?)))
-        .filter(|(w, h)| *w > 0 && *h > 0 && (w * 4) % 256 == 0)
-        .ok_or("the size is WxH, W a multiple of 64")?;
+    let (w, h) = oxygen_demo::probe_page_size(&size)?;
     let iterations: usize = args.next().map(|a| a.parse()).transpose()?.unwrap_or(30);
     let overlap_triangles: u32 = args.next().map(|a| a.parse()).transpose()?.unwrap_or(0);
     let options =

@@ -71,11 +71,7 @@ const WARM_UP: usize = 2;
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let size = args.next().unwrap_or_else(|| "16384x1024".into());
-    let (w, h) = size
-        .split_once('x')
-        .and_then(|(w, h)| Some((w.parse::<u32>().ok()?, h.parse::<u32>().ok()?)))
-        .filter(|(w, h)| *w > 0 && *h > 0 && (w * 4) % 256 == 0)
-        .ok_or("the size is WxH, W a multiple of 64")?;
+    let (w, h) = oxygen_demo::probe_page_size(&size)?;
     let loops: u32 = args.next().map(|a| a.parse()).transpose()?.unwrap_or(64);
     let iterations: usize = args.next().map(|a| a.parse()).transpose()?.unwrap_or(20);
     if iterations == 0 {

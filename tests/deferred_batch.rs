@@ -7,34 +7,18 @@
 
 mod support;
 
-use std::path::PathBuf;
-
 use oxygen::batch::{BatchDesc, BatchGraph, BatchShading, standard_batch_graph};
 use oxygen::core::Environment;
-use oxygen::glam::Quat;
 use oxygen::image::RgbaImage;
-use oxygen::import::{SceneChoice, import_gltf};
 use oxygen::prelude::*;
 use oxygen::sceneprep::Visibility;
 use oxygen::{LabelImage, RenderError};
 use support::golden::compare;
 
-fn asset(relative: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets").join(relative)
-}
-
 /// A shipped file with a sun, and a ring of `n` cameras of `size` around
 /// its bounds, each at its own angle and height.
 fn shipped(file: &str, n: usize, size: UVec2) -> (Scene, Vec<LookAtResolver>) {
-    let mut scene = Scene::new();
-    let import = import_gltf(&mut scene, asset(file), &SceneChoice::Default).unwrap();
-    let bounds = import.bounds.expect("something to draw");
-    let sun = scene.add_node(
-        "sun",
-        Transform::IDENTITY
-            .with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, Vec3::new(-0.2, -0.3, -1.0).normalize())),
-    );
-    scene.set_light(sun, Some(Light::directional(2.5))).unwrap();
+    let (scene, bounds) = support::shipped_with_sun(file);
     let radius = bounds.half_extents().length().max(1e-3);
     (scene, ring(n, size, bounds.center(), radius * 2.4))
 }

@@ -12,8 +12,6 @@
 
 mod support;
 
-use std::path::PathBuf;
-
 use oxygen::bindless::TexturePath;
 use oxygen::core::{Material, UvTransform};
 use oxygen::glam::{Quat, Vec2};
@@ -400,22 +398,10 @@ fn golden_vertex_colours_unlit_and_quantized() {
     assert_golden("vertex_colours", &image, Tolerance::default());
 }
 
-fn asset(relative: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets").join(relative)
-}
-
 /// A shipped file with a sun, seen from the front by a perspective camera
 /// framing its bounds.
 fn shipped(file: &str) -> (Scene, LookAtResolver) {
-    let mut scene = Scene::new();
-    let import = import_gltf(&mut scene, asset(file), &SceneChoice::Default).unwrap();
-    let bounds = import.bounds.expect("something to draw");
-    let sun = scene.add_node(
-        "sun",
-        Transform::IDENTITY
-            .with_rotation(Quat::from_rotation_arc(Vec3::NEG_Z, Vec3::new(-0.2, -0.3, -1.0).normalize())),
-    );
-    scene.set_light(sun, Some(Light::directional(2.5))).unwrap();
+    let (scene, bounds) = support::shipped_with_sun(file);
     let radius = bounds.half_extents().length();
     let resolver = LookAtResolver::new(
         Camera::perspective(45f32.to_radians(), radius * 0.01, None),

@@ -636,3 +636,12 @@ pub fn ring_eye(i: usize, n: usize, side: f32) -> Vec3 {
     let angle = i as f32 / n.max(1) as f32 * std::f32::consts::TAU;
     Vec3::new(angle.cos() * 0.65 * side, 0.35 * side, angle.sin() * 0.65 * side)
 }
+
+/// The probes' page size argument `WxH`: both positive, `W` a multiple of
+/// 64 (a row of 4-byte texels is then whole 256-byte copy rows).
+pub fn probe_page_size(arg: &str) -> Result<(u32, u32), String> {
+    arg.split_once('x')
+        .and_then(|(w, h)| Some((w.parse::<u32>().ok()?, h.parse::<u32>().ok()?)))
+        .filter(|(w, h)| *w > 0 && *h > 0 && w % 64 == 0)
+        .ok_or_else(|| format!("{arg}: the size is WxH, W a multiple of 64"))
+}

@@ -244,3 +244,20 @@ pub fn gpu_visibility_renderer(options: oxygen::RendererOptions) -> Option<oxyge
     ));
     None
 }
+
+/// A shipped file (`assets/` relative path) in a scene of its own, with a
+/// sun shining down and into it, and the bounds of what it draws.
+pub fn shipped_with_sun(relative: &str) -> (Scene, oxygen::core::Aabb) {
+    let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets").join(relative);
+    let mut scene = Scene::new();
+    let import = oxygen::import::import_gltf(&mut scene, path, &oxygen::import::SceneChoice::Default)
+        .unwrap_or_else(|e| panic!("{relative}: {e}"));
+    let bounds = import.bounds.unwrap_or_else(|| panic!("{relative}: nothing to draw"));
+    let direction = Vec3::new(-0.2, -0.3, -1.0).normalize();
+    let sun = scene.add_node(
+        "sun",
+        Transform::IDENTITY.with_rotation(oxygen::glam::Quat::from_rotation_arc(Vec3::NEG_Z, direction)),
+    );
+    scene.set_light(sun, Some(Light::directional(2.5))).expect("a sun");
+    (scene, bounds)
+}
