@@ -63,6 +63,7 @@ runs=(
   "visibility_bench|example|gpu|city 16 1 1"
   "accuracy_atlas|example|gpu|@OUT@ 8 4"
   "sensor_rig|example|gpu|assets/AlphaBlendModeTest/AlphaBlendModeTest.glb @OUT@ --cameras 2 --size 32x32 --frames 1"
+  "sensor_rig|example|gpu|assets/BoxTextured/BoxTextured.glb @OUT@ --cameras 2 --size 32x32 --frames 1 --deferred"
   "prep|sceneprep|cpu|--smoke"
 )
 
