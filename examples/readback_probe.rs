@@ -85,14 +85,21 @@ fn unit(x: u32) -> f32 {
     return f32(hash(x) & 0xffffu) / 65535.0;
 }
 
-@vertex
-fn vs(@builtin(vertex_index) index: u32) -> Varying {
+// Corner `index` of a small triangle around `centre + offset` (wrapped
+// onto the page) of half-size `size`, at the triangle's random depth.
+fn random_triangle(index: u32, offset: vec2<f32>, size: f32) -> Varying {
     let triangle = index / 3u;
-    // A small triangle somewhere on the page at one random depth.
     let centre = vec2<f32>(unit(triangle * 7u), unit(triangle * 7u + 1u)) * 2.0 - 1.0;
     let corner = vec2<f32>(unit(index * 13u + 2u), unit(index * 13u + 3u)) - 0.5;
     let depth = unit(triangle * 7u + 4u);
-    return Varying(vec4<f32>(centre + corner * 0.02, depth, 1.0), triangle);
+    let at = fract((centre + offset + 1.0) * 0.5) * 2.0 - 1.0;
+    return Varying(vec4<f32>(at + corner * size, depth, 1.0), triangle);
+}
+
+// A small triangle somewhere on the page at one random depth.
+@vertex
+fn vs(@builtin(vertex_index) index: u32) -> Varying {
+    return random_triangle(index, vec2<f32>(0.0), 0.02);
 }
 
 // The overlap ways' render: `triangles` tiny triangles (a few pixels
@@ -104,11 +111,7 @@ struct Frame { offset: vec2<f32>, pad: vec2<f32> }
 
 @vertex
 fn vs_small(@builtin(vertex_index) index: u32) -> Varying {
-    let triangle = index / 3u;
-    let centre = vec2<f32>(unit(triangle * 7u), unit(triangle * 7u + 1u)) * 2.0 - 1.0;
-    let corner = vec2<f32>(unit(index * 13u + 2u), unit(index * 13u + 3u)) - 0.5;
-    let depth = unit(triangle * 7u + 4u);
-    return Varying(vec4<f32>(fract(centre + frame.offset + 1.0) * 2.0 - 1.0 + corner * 0.0005, depth, 1.0), triangle);
+    return random_triangle(index, frame.offset, 0.0005);
 }
 
 struct Out {

@@ -420,37 +420,51 @@ impl BatchGraph {
             },
             BatchShading::Forward => None,
         };
-        if let Some(deferred) = deferred {
-            MeshPass::visibility().run_batch(views, rec).await?;
-            deferred.run_batch(views, rec).await?;
-        } else if !views.iter().any(|ctx| ctx.hdr_read_after_shading()) {
-            if lit.depth_from_pre_pass {
-                MeshPass::depth_pre_pass().run_batch(views, rec).await?;
+        match deferred {
+            Some(deferred) => {
+                MeshPass::visibility().run_batch(views, rec).await?;
+                deferred.run_batch(views, rec).await?;
             }
-            MeshPass::forward_lit(lit).with_labels().tone_mapped(exposure).run_batch(views, rec).await?;
-        } else {
-            if lit.depth_from_pre_pass {
-                MeshPass::depth_pre_pass().run_batch(views, rec).await?;
-            }
-            MeshPass::forward_lit(lit).with_labels().run_batch(views, rec).await?;
-            MeshPass::transparent().run_batch(views, rec).await?;
-            // The tone map covers its whole target: once per page of the
-            // batch's atlas (per view for a view with targets of its own).
-            let mut toned_pages: Vec<u32> = Vec::new();
-            for ctx in views {
-                if let Some(tile) = ctx.targets.tile {
-                    if toned_pages.contains(&tile.page) {
-                        continue;
-                    }
-                    toned_pages.push(tile.page);
-                }
-                TonemapPass::new(exposure).run(ctx, rec).await?;
-            }
+            None => self.shade_forward(views, rec, lit, exposure).await?,
         }
         // Each camera's overlay over its tile (nothing for a camera
         // without one).
         for ctx in views {
             OverlayPass.run(ctx, rec).await?;
+        }
+        Ok(())
+    }
+
+    /// The cameras shaded forward: the depth pre-pass when asked for, then
+    /// the forward pass tone-mapping in place when nothing reads the HDR
+    /// image; otherwise into the HDR atlas, the blended partitions and one
+    /// tone map per page.
+    async fn shade_forward(
+        &self,
+        views: &[&RenderContext<'_>],
+        rec: &mut CommandRecorder,
+        lit: ForwardLitConfig,
+        exposure: f32,
+    ) -> Result<(), PassError> {
+        if lit.depth_from_pre_pass {
+            MeshPass::depth_pre_pass().run_batch(views, rec).await?;
+        }
+        if !views.iter().any(|ctx| ctx.hdr_read_after_shading()) {
+            return MeshPass::forward_lit(lit).with_labels().tone_mapped(exposure).run_batch(views, rec).await;
+        }
+        MeshPass::forward_lit(lit).with_labels().run_batch(views, rec).await?;
+        MeshPass::transparent().run_batch(views, rec).await?;
+        // The tone map covers its whole target: once per page of the
+        // batch's atlas (per view for a view with targets of its own).
+        let mut toned_pages: Vec<u32> = Vec::new();
+        for ctx in views {
+            if let Some(tile) = ctx.targets.tile {
+                if toned_pages.contains(&tile.page) {
+                    continue;
+                }
+                toned_pages.push(tile.page);
+            }
+            TonemapPass::new(exposure).run(ctx, rec).await?;
         }
         Ok(())
     }

@@ -121,7 +121,8 @@ impl DeferredShading {
         // One pipeline for the batch: a feature any camera needs is kept
         // (code for an absent input computes what leaving it out does).
         let forward = MeshPass::forward_lit(self.lit.clone());
-        let features = views.iter().map(|ctx| forward.shader_features(ctx)).fold(ShaderFeatures::NONE, union);
+        let features =
+            views.iter().map(|ctx| forward.shader_features(ctx)).fold(ShaderFeatures::NONE, ShaderFeatures::union);
         let (pipeline, layout) = lead
             .pipelines
             .deferred(device, features, self.exposure)
@@ -238,25 +239,6 @@ impl DeferredShading {
                 wgpu::BindGroupEntry { binding: 5, resource: wgpu::BindingResource::TextureView(&targets.shaded_view) },
             ],
         })
-    }
-}
-
-/// The features either needs.
-fn union(a: ShaderFeatures, b: ShaderFeatures) -> ShaderFeatures {
-    ShaderFeatures {
-        sun_shadows: a.sun_shadows || b.sun_shadows,
-        local_lights: a.local_lights || b.local_lights,
-        local_shadows: a.local_shadows || b.local_shadows,
-        soft_shadows: a.soft_shadows || b.soft_shadows,
-        clustered_lights: a.clustered_lights || b.clustered_lights,
-        probes: a.probes || b.probes,
-        probe_parallax: a.probe_parallax || b.probe_parallax,
-        textures: a.textures || b.textures,
-        uv_transforms: a.uv_transforms || b.uv_transforms,
-        vertex_attributes: a.vertex_attributes || b.vertex_attributes,
-        ambient_occlusion: a.ambient_occlusion || b.ambient_occlusion,
-        contact_shadows: a.contact_shadows || b.contact_shadows,
-        screen_reflections: a.screen_reflections || b.screen_reflections,
     }
 }
 

@@ -116,21 +116,16 @@ impl Pipelines {
         let mut layouts = self.deferred_layouts.lock().unwrap_or_else(|e| e.into_inner());
         layouts
             .get_or_insert_with(|| {
-                // Validation errors inside the scope are returned, not raised.
-                let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-                let group = crate::mesh::deferred_layout(device);
-                let [domains, lighting, textures] = &self.group_layouts;
-                let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                    label: Some("deferred shading"),
-                    bind_group_layouts: &[Some(domains), Some(lighting), Some(textures), Some(&group)],
-                    immediate_size: 0,
-                });
-                match futures::executor::block_on(scope.pop()) {
-                    None => Ok((group, layout)),
-                    Some(error) => {
-                        Err(format!("the device cannot bind deferred shading's inputs to a compute stage: {error}"))
-                    }
-                }
+                validated(device, "the device cannot bind deferred shading's inputs to a compute stage", || {
+                    let group = crate::mesh::deferred_layout(device);
+                    let [domains, lighting, textures] = &self.group_layouts;
+                    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                        label: Some("deferred shading"),
+                        bind_group_layouts: &[Some(domains), Some(lighting), Some(textures), Some(&group)],
+                        immediate_size: 0,
+                    });
+                    (group, layout)
+                })
             })
             .clone()
     }
@@ -154,27 +149,25 @@ impl Pipelines {
         // deferred frame waits for it); a device that rejects it says why
         // instead of raising an uncaptured error.
         let _span = tracing::info_span!("compile_pipeline", pass = "deferred", features = ?features).entered();
-        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let source = crate::shaders::DEFERRED
-            .mesh_source(self.texture_path, crate::shaders::MeshVaryings::of(features.vertex_attributes));
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("deferred shading"),
-            source: wgpu::ShaderSource::Wgsl(source.into()),
-        });
-        let mut constants = features.override_constants().to_vec();
-        constants.push(("TONE_MAP_OUTPUT", 1.0));
-        constants.push(("EXPOSURE", f64::from(exposure.get())));
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("deferred shading"),
-            layout: Some(&layout),
-            module: &module,
-            entry_point: Some("cs_deferred"),
-            compilation_options: wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() },
-            cache: None,
-        });
-        if let Some(error) = futures::executor::block_on(scope.pop()) {
-            return Err(format!("deferred shading's pipeline: {error}"));
-        }
+        let pipeline = validated(device, "deferred shading's pipeline", || {
+            let source = crate::shaders::DEFERRED
+                .mesh_source(self.texture_path, crate::shaders::MeshVaryings::of(features.vertex_attributes));
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("deferred shading"),
+                source: wgpu::ShaderSource::Wgsl(source.into()),
+            });
+            let mut constants = features.override_constants().to_vec();
+            constants.push(("TONE_MAP_OUTPUT", 1.0));
+            constants.push(("EXPOSURE", f64::from(exposure.get())));
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("deferred shading"),
+                layout: Some(&layout),
+                module: &module,
+                entry_point: Some("cs_deferred"),
+                compilation_options: wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() },
+                cache: None,
+            })
+        })?;
         self.created.fetch_add(1, Ordering::Relaxed);
         pipelines.insert((features, exposure), pipeline.clone());
         Ok((pipeline, group))
@@ -347,6 +340,18 @@ impl Pipelines {
             multiview_mask: None,
             cache: None,
         })
+    }
+}
+
+/// What `make` creates, or why the device rejected it (`what`: the
+/// error's opening words): its validation errors are caught in an error
+/// scope instead of reaching the device's uncaptured-error handler.
+fn validated<T>(device: &wgpu::Device, what: &str, make: impl FnOnce() -> T) -> Result<T, String> {
+    let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let made = make();
+    match futures::executor::block_on(scope.pop()) {
+        None => Ok(made),
+        Some(error) => Err(format!("{what}: {error}")),
     }
 }
 

@@ -104,6 +104,26 @@ impl ShaderFeatures {
         ShaderFeatures { vertex_attributes: self.vertex_attributes, ..ShaderFeatures::ALL }
     }
 
+    /// The parts either keeps: one pipeline right for the views of both
+    /// (code for an absent input computes what leaving it out does).
+    pub fn union(self, other: ShaderFeatures) -> ShaderFeatures {
+        ShaderFeatures {
+            sun_shadows: self.sun_shadows || other.sun_shadows,
+            local_lights: self.local_lights || other.local_lights,
+            local_shadows: self.local_shadows || other.local_shadows,
+            soft_shadows: self.soft_shadows || other.soft_shadows,
+            clustered_lights: self.clustered_lights || other.clustered_lights,
+            probes: self.probes || other.probes,
+            probe_parallax: self.probe_parallax || other.probe_parallax,
+            textures: self.textures || other.textures,
+            uv_transforms: self.uv_transforms || other.uv_transforms,
+            vertex_attributes: self.vertex_attributes || other.vertex_attributes,
+            ambient_occlusion: self.ambient_occlusion || other.ambient_occlusion,
+            contact_shadows: self.contact_shadows || other.contact_shadows,
+            screen_reflections: self.screen_reflections || other.screen_reflections,
+        }
+    }
+
     /// The override constants, by their WGSL names (bools as 0 or 1);
     /// [`ShaderFeatures::vertex_attributes`] is not one.
     pub fn override_constants(&self) -> [(&'static str, f64); 12] {
