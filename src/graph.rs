@@ -374,12 +374,14 @@ pub enum BatchShading {
     Forward,
     /// In a compute pass after a visibility pass
     /// ([`oxygen_passes::DeferredShading`]): the atlas gets a visibility
-    /// target and a shaded image (12 bytes a pixel, counted in the target
-    /// budget), and the adapter must have `Features::PRIMITIVE_INDEX`
-    /// (registering the batch fails otherwise). A frame deferred shading
-    /// cannot take (an HDR image read after shading, blended surfaces,
-    /// shadow maps, probes, clustered lights, screen-space effects, a page
-    /// that keeps cameras not rendered) is shaded forward, with the reason
+    /// target and a shaded image (8 bytes a pixel, counted in the target
+    /// budget), and the adapter's compute stage must bind the shading
+    /// inputs (registering the batch fails otherwise: GL cannot). A frame
+    /// deferred shading cannot take (an HDR image read after shading,
+    /// blended surfaces, shadow maps, probes, clustered lights,
+    /// screen-space effects, a page that keeps cameras not rendered, more
+    /// draws than a 32-bit surface id can name beside the largest mesh's
+    /// vertices) is shaded forward, with the reason
     /// logged (debug); the frame report's `recorded.deferred_views` counts
     /// the cameras shaded deferred.
     Deferred,

@@ -77,12 +77,14 @@ oxygen_gpu::gpu_struct! {
         pub debug_flags: u32,
         /// Generation of this view's draw-metadata range (debug mode).
         pub draw_metadata_generation: u32,
+        /// How many low bits of a deferred visibility pass's 32-bit surface
+        /// id hold the vertex that starts the pixel's triangle; the bits
+        /// above hold the draw's index plus one (0: nothing drawn).
+        pub surface_vertex_bits: u32,
         /// Zero: explicit padding to 64 bytes. WGSL's uniform layout rounds the
         /// block up to a multiple of 16 (336 bytes) whatever the Rust size, so
-        /// the padding is spelled out to keep the two layouts equal, as three
+        /// the padding is spelled out to keep the two layouts equal, as
         /// `u32`s (a uniform array's stride is 16 bytes).
-        pub reserved0: u32,
-        /// Zero.
         pub reserved1: u32,
         /// Zero.
         pub reserved2: u32,
@@ -110,7 +112,7 @@ impl Default for RendererConstants {
             positional_light_count: 0,
             debug_flags: 0,
             draw_metadata_generation: 0,
-            reserved0: 0,
+            surface_vertex_bits: 1,
             reserved1: 0,
             reserved2: 0,
         }
@@ -134,7 +136,7 @@ const _: () = {
     assert!(offset_of!(RendererConstants, draw_metadata_slot) == 8);
     assert!(offset_of!(RendererConstants, debug_flags) == 44);
     assert!(offset_of!(RendererConstants, draw_metadata_generation) == 48);
-    assert!(offset_of!(RendererConstants, reserved0) == 52);
+    assert!(offset_of!(RendererConstants, surface_vertex_bits) == 52);
 };
 
 /// The binding of [`SceneConstants`] (group 3, binding 0), including the

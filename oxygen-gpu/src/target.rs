@@ -52,8 +52,10 @@ pub struct ViewTargets {
 /// it is copied into the page's display colour.
 #[derive(Clone)]
 pub struct DeferredTargets {
-    /// Each pixel's draw (its index in the view's draws plus one; 0 for
-    /// none) and triangle ([`DeferredTargets::VISIBILITY_FORMAT`]).
+    /// Each pixel's surface id ([`DeferredTargets::VISIBILITY_FORMAT`]):
+    /// the draw's index in the view's draws plus one (0 for none) in the
+    /// high bits, the vertex that starts its triangle in the low
+    /// `surface_vertex_bits` (`RendererConstants`).
     pub visibility: wgpu::Texture,
     /// Its default view.
     pub visibility_view: wgpu::TextureView,
@@ -66,11 +68,11 @@ pub struct DeferredTargets {
 
 impl DeferredTargets {
     /// The visibility target's format.
-    pub const VISIBILITY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Uint;
+    pub const VISIBILITY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
     /// The shaded image's format.
     pub const SHADED_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
     /// Bytes a pixel of both takes.
-    pub const BYTES_PER_PIXEL: u64 = 12;
+    pub const BYTES_PER_PIXEL: u64 = 8;
 
     /// The textures for a page of `size`.
     pub fn new(device: &wgpu::Device, size: wgpu::Extent3d, label: &str) -> Self {

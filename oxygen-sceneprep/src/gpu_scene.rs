@@ -353,7 +353,7 @@ impl GpuScene {
                 let order = |geometry_id, first_index, index_count| -> GroupOrder {
                     (rank, cached.material, mask, geometry_id, first_index, index_count)
                 };
-                let base_key = key(base.vertices.start, base.indices.start, cached.first_index, cached.index_count);
+                let base_key = key(base.vertices.start, base.index_slot, cached.first_index, cached.index_count);
                 let base_order = order(entry.geometry_id, cached.first_index, cached.index_count);
                 let (group, base_rank) = group_of(base_key, base_order, &mut keys);
                 self.instance_of_submesh[start as usize + submesh] = instances.len() as u32;
@@ -368,7 +368,7 @@ impl GpuScene {
                         attributes_of.insert(slots.vertices.start, slots.attributes);
                         let id = oxygen_core::scene::geometry_index(level.geometry);
                         Some((
-                            key(slots.vertices.start, slots.indices.start, range.first_index, range.index_count),
+                            key(slots.vertices.start, slots.index_slot, range.first_index, range.index_count),
                             order(id, range.first_index, range.index_count),
                         ))
                     });

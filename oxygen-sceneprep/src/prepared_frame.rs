@@ -129,6 +129,7 @@ pub struct PreparedSceneFrame {
     pub(crate) depth_pass_indices: u64,
     pub(crate) gpu: Option<GpuViewPlan>,
     pub(crate) deterministic: bool,
+    pub(crate) surface_vertex_bits: u32,
 }
 
 fn slot(a: &Allocation) -> String {
@@ -153,6 +154,7 @@ impl PreparedSceneFrame {
             depth_pass_indices: 0,
             gpu: None,
             deterministic: false,
+            surface_vertex_bits: 1,
             slots: PreparedSlots::unallocated(),
         }
     }
@@ -259,6 +261,33 @@ impl PreparedSceneFrame {
         &self.slots
     }
 
+    /// How many low bits of the 32-bit surface id a deferred visibility
+    /// pass writes name the vertex that starts the pixel's triangle (the
+    /// high bits holding the draw's index plus one): enough for the index
+    /// values of every mesh resident this frame.
+    pub fn surface_vertex_bits(&self) -> u32 {
+        self.surface_vertex_bits
+    }
+
+    /// Whether each pixel of this view can be named in the 32 bits of a
+    /// deferred visibility pass's surface id: the draw's index plus one in
+    /// the bits above [`Self::surface_vertex_bits`]; `Err` says why not
+    /// (the view is then shaded forward). Counted on the view's draw range,
+    /// which a GPU-culled view fills up to.
+    pub fn surface_ids_fit(&self) -> Result<(), String> {
+        let bits = self.surface_vertex_bits;
+        let draws = u64::from(self.slots.draw_metadata.count);
+        let room = if bits >= 32 { 0 } else { (1u64 << (32 - bits)) - 1 };
+        if bits >= 32 || draws > room {
+            return Err(format!(
+                "{}'s {draws} draws and meshes of up to 2^{bits} vertices do not fit a 32-bit surface id \
+                 ({room} draws at most with such meshes)",
+                self.view_id
+            ));
+        }
+        Ok(())
+    }
+
     /// The renderer-owned half of `SceneConstants` for this view.
     pub fn renderer_constants(&self, time_seconds: f32) -> RendererConstants {
         let s = &self.slots;
@@ -276,7 +305,7 @@ impl PreparedSceneFrame {
             positional_light_count: s.positional_lights.count,
             debug_flags: if self.debug_generations { RendererConstants::DEBUG_GENERATIONS } else { 0 },
             draw_metadata_generation: s.draw_metadata.generation(),
-            reserved0: 0,
+            surface_vertex_bits: self.surface_vertex_bits,
             reserved1: 0,
             reserved2: 0,
         }
@@ -387,4 +416,37 @@ pub fn canonical_dump(partitions: &[(PassMask, Vec<DrawMetadata>)]) -> String {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use oxygen_bindless::{DomainKind, SlotAllocators};
+    use oxygen_core::{ViewIdRange, ViewIds};
+
+    use super::*;
+
+    /// A frame of `draws` draw slots whose largest mesh needs `bits`.
+    fn frame(draws: u32, bits: u32, slots: &mut SlotAllocators) -> PreparedSceneFrame {
+        let view = ViewIds::new(ViewIdRange::Application).allocate();
+        let mut frame = PreparedSceneFrame::empty(view, Arc::default());
+        frame.surface_vertex_bits = bits;
+        if draws > 0 {
+            frame.slots.draw_metadata = slots.allocate(DomainKind::DrawMetadata, draws).expect("a draw range");
+        }
+        frame
+    }
+
+    /// A surface id holds the draw's index plus one above the vertex bits:
+    /// with 20 of them, 4 095 draws fit and 4 096 do not (the error names
+    /// the view and both counts), and the constants carry the bits.
+    #[test]
+    fn surface_ids_fit_up_to_the_bits_left_for_draws() {
+        let mut slots = SlotAllocators::default();
+        assert!(frame(4095, 20, &mut slots).surface_ids_fit().is_ok());
+        let error = frame(4096, 20, &mut slots).surface_ids_fit().expect_err("one draw too many");
+        assert!(error.contains("view#") && error.contains("4096") && error.contains("4095"), "{error}");
+        assert!(frame(0, 31, &mut slots).surface_ids_fit().is_ok(), "one bit left: one draw");
+        assert!(frame(0, 32, &mut slots).surface_ids_fit().is_err(), "no bit left for the draw");
+        assert_eq!(frame(1, 5, &mut slots).renderer_constants(0.0).surface_vertex_bits, 5);
+    }
 }

@@ -39,6 +39,7 @@ use crate::finalize::materials::MaterialTable;
 use crate::finalize::radix_sort::radix_sort_by_key;
 use crate::finalize::sort_key::{sort_key, sort_key_grouped};
 use crate::finalize::texture_cache::TextureCache;
+use crate::finalize::triangle_table::TriangleLayout;
 use crate::gpu_scene::GpuScene;
 use crate::prepared_frame::FrameTransforms;
 use crate::worker_pool::WorkerPool;
@@ -825,7 +826,10 @@ impl ScenePrep {
             if let Some(skin) = geometry.skin_weights() {
                 heap.write(queue, &slots.vertices, slots.skin - slots.vertices.start, skin)?;
             }
-            heap.write(queue, &slots.indices, 0, geometry.indices())?;
+            // The triangle table, its length and the turned indices
+            // (finalize/triangle_table.rs), `index_slot` past the first two.
+            let layout = TriangleLayout::new(geometry.indices(), slots.vertex_count);
+            heap.write(queue, &slots.indices, 0, &layout.words)?;
             self.stats.geometry_uploads += 1;
         }
         // Every view's draws, then every view's commands, as few writes as

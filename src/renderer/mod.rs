@@ -155,8 +155,6 @@ impl Renderer {
         .union(gpu_timer::GpuTimer::FEATURES)
         .union(TexturePath::BINDING_ARRAY_FEATURES)
         .union(wgpu::Features::RG11B10UFLOAT_RENDERABLE)
-        // Deferred shading's visibility pass (`BatchShading::Deferred`).
-        .union(wgpu::Features::PRIMITIVE_INDEX)
         // MSAA counts beyond WebGPU's guaranteed 1 and 4 (2× on most GPUs).
         .union(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES);
 

@@ -48,16 +48,6 @@ impl Renderer {
     /// [`Renderer::add_camera`].
     pub fn register_batch(&mut self, desc: BatchDesc) -> Result<BatchId, RenderError> {
         let deferred = desc.graph.shading == crate::batch::BatchShading::Deferred;
-        if deferred && !self.gpu.features.contains(wgpu::Features::PRIMITIVE_INDEX) {
-            return Err(RenderError::InvalidBatch {
-                name: desc.name,
-                reason: format!(
-                    "deferred shading reads each pixel's triangle (Features::PRIMITIVE_INDEX), which {} ({:?}) lacks; \
-                     shade it forward (BatchShading::Forward)",
-                    self.gpu.adapter_info.name, self.gpu.adapter_info.backend
-                ),
-            });
-        }
         if deferred && let Err(reason) = self.pipelines.deferred_layouts(&self.gpu.device) {
             return Err(RenderError::InvalidBatch { name: desc.name, reason });
         }

@@ -1,6 +1,7 @@
 //! Deferred shading of a batch's cameras ([`DeferredShading`]): after the
 //! visibility pass ([`crate::MeshPass::visibility`]) has written each
-//! pixel's draw and triangle into the page's visibility target, one compute
+//! pixel's surface id (its draw and the vertex that starts its triangle)
+//! into the page's visibility target, one compute
 //! dispatch per atlas page shades every camera's pixels with the forward
 //! pass's own shading code (`mesh/deferred.wgsl`) into the page's shaded
 //! image, which is then copied into the page's display colour.
@@ -69,16 +70,14 @@ impl DeferredShading {
     /// Whether these cameras can be shaded deferred this frame; `Err` says
     /// why not (the batch graph then shades them forward). They must be
     /// tiles of an atlas made with deferred shading's textures, on an
-    /// adapter with `Features::PRIMITIVE_INDEX`, single-sampled, their HDR
-    /// image read by nothing after shading, on pages that keep no other
-    /// camera's image, and need none of the inputs the compute pass does
-    /// not bind (shadow maps, probes, clustered lights, screen-space
-    /// effects).
+    /// adapter whose compute stage binds the shading inputs, single-sampled,
+    /// their HDR image read by nothing after shading, on pages that keep no
+    /// other camera's image, with draws a 32-bit surface id can name
+    /// ([`oxygen_sceneprep::PreparedSceneFrame::surface_ids_fit`]), and need
+    /// none of the inputs the compute pass does not bind (shadow maps,
+    /// probes, clustered lights, screen-space effects).
     pub fn applies(&self, views: &[&RenderContext<'_>]) -> Result<(), String> {
         let Some(first) = views.first() else { return Ok(()) };
-        if !first.gpu.features.contains(wgpu::Features::PRIMITIVE_INDEX) {
-            return Err(format!("{} has no primitive index (Features::PRIMITIVE_INDEX)", first.gpu.adapter_info.name));
-        }
         first.pipelines.deferred_layouts(&first.gpu.device)?;
         let lit = &self.lit;
         if lit.ambient_occlusion.is_some() || lit.contact_shadows.is_some() || lit.screen_space_reflections.is_some() {
@@ -95,6 +94,7 @@ impl DeferredShading {
             if ctx.targets.page_kept {
                 return Err(format!("{id}'s page keeps other cameras' images this frame"));
             }
+            ctx.prepared.surface_ids_fit()?;
             if ctx.hdr_read_after_shading() {
                 return Err(format!("{id}'s HDR image is read after shading"));
             }

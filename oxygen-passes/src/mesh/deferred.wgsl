@@ -3,8 +3,10 @@
 // surface at, with the forward pass's own shading code (`shade`, through
 // `opaque_color_at`), and writes the display colour of every pixel of the
 // cameras' tiles (the clear colour or the environment where nothing was
-// drawn). The surface point is rebuilt from the pixel's draw and triangle:
-// the triangle's three corners come through the vertex stage's function
+// drawn). The surface point is rebuilt from the pixel's surface id (its
+// draw and the vertex that starts its triangle, mesh/visibility.wgsl): the
+// triangle is found among those starting at that vertex (the geometry's
+// triangle table, before its indices), its three corners come through the vertex stage's function
 // (`mesh_vertex`: morphs, skins and all), and the pixel centre's
 // perspective-correct barycentrics weight them; the screen derivatives
 // shading needs (texture level of detail, normal mapping) come from the
@@ -24,7 +26,8 @@
 @group(3) @binding(0) var<uniform> deferred: DeferredParams;
 @group(3) @binding(1) var<storage, read> deferred_cameras: array<SceneConstants>;
 @group(3) @binding(2) var<storage, read> deferred_tiles: array<DeferredTile>;
-// The shared index buffer (the heap's `Indices` domain).
+// The shared index buffer (the heap's `Indices` domain): each geometry's
+// triangle table, the table's length, then its indices.
 @group(3) @binding(3) var<storage, read> deferred_indices: array<u32>;
 @group(3) @binding(4) var deferred_visibility: texture_2d<u32>;
 // The page's colour in sRGB bytes (a storage texture cannot be sRGB: the
@@ -75,16 +78,82 @@ fn weighted(a: MeshVarying, b: MeshVarying, c: MeshVarying, w: vec3<f32>) -> Mes
     return m;
 }
 
-// The colour of tile pixel `local` (page pixel `page`), where triangle
-// `triangle` of the camera's draw `draw_index` was seen.
-fn surface_color(draw_index: u32, triangle: u32, local: vec2<u32>, page: vec2<u32>) -> vec4<f32> {
+// How far outside a triangle (in its barycentrics) the pixel centre may
+// seem and still be taken as inside: the rasterizer's fixed-point edges
+// and this rebuild's float ones disagree by rounding at the edges.
+const INSIDE_SLACK: f32 = 1e-3;
+
+// The clip-space corners of triangle `t` (indices 3t..3t + 3 from the
+// draw's index slot) of draw `draw_index`.
+struct Corners {
+    a: vec4<f32>,
+    b: vec4<f32>,
+    c: vec4<f32>,
+}
+
+fn corner_index(draw: DrawMetadata, t: u32, k: u32) -> u32 {
+    return u32(i32(deferred_indices[draw.index_slot + 3u * t + k]) + i32(draw.vertex_slot) + draw.base_vertex);
+}
+
+fn clip_corners(draw: DrawMetadata, draw_index: u32, t: u32) -> Corners {
+    return Corners(
+        mesh_vertex(draw_index, corner_index(draw, t, 0u)).clip_position,
+        mesh_vertex(draw_index, corner_index(draw, t, 1u)).clip_position,
+        mesh_vertex(draw_index, corner_index(draw, t, 2u)).clip_position,
+    );
+}
+
+// The triangle (its number in the geometry) of draw `draw_index` that
+// starts at index value `corner` and covers the point at `ndc`: the only
+// one when one triangle starts there (a box's every corner), else the
+// candidate of the draw's own index range that contains the point, the
+// nearest where several do (a surface folded over itself), the least
+// outside where rounding leaves none inside.
+fn triangle_at(draw: DrawMetadata, draw_index: u32, corner: u32, ndc: vec2<f32>) -> u32 {
+    let table = draw.index_slot - 1u - deferred_indices[draw.index_slot - 1u];
+    let begin = deferred_indices[table + corner];
+    let end = deferred_indices[table + corner + 1u];
+    if end - begin <= 1u {
+        return deferred_indices[table + begin];
+    }
+    let first = draw.first_index / 3u;
+    let last = (draw.first_index + draw.index_count) / 3u;
+    var best = deferred_indices[table + begin];
+    var best_inside = false;
+    var best_score = -3.4e38;
+    var best_depth = -3.4e38;
+    for (var k = begin; k < end; k++) {
+        let t = deferred_indices[table + k];
+        if t < first || t >= last {
+            continue;
+        }
+        let c = clip_corners(draw, draw_index, t);
+        let w = barycentrics(c.a, c.b, c.c, ndc);
+        let score = min(w.x, min(w.y, w.z));
+        // Reverse-Z: the nearer surface has the larger depth.
+        let depth = dot(w, vec3<f32>(c.a.z, c.b.z, c.c.z)) / dot(w, vec3<f32>(c.a.w, c.b.w, c.c.w));
+        let inside = score >= -INSIDE_SLACK;
+        let better = select(!best_inside && score > best_score, !best_inside || depth > best_depth, inside);
+        if better {
+            best = t;
+            best_inside = inside;
+            best_score = score;
+            best_depth = depth;
+        }
+    }
+    return best;
+}
+
+// The colour of tile pixel `local` (page pixel `page`), where the surface
+// starting at index value `corner` of the camera's draw `draw_index` was
+// seen.
+fn surface_color(draw_index: u32, corner: u32, local: vec2<u32>, page: vec2<u32>) -> vec4<f32> {
     let draw = draw_metadata_domain[scene.renderer.draw_metadata_slot + draw_index];
-    let first = draw.index_slot + draw.first_index + triangle * 3u;
-    let base = i32(draw.vertex_slot) + draw.base_vertex;
-    let a = mesh_vertex(draw_index, u32(i32(deferred_indices[first]) + base));
-    let b = mesh_vertex(draw_index, u32(i32(deferred_indices[first + 1u]) + base));
-    let c = mesh_vertex(draw_index, u32(i32(deferred_indices[first + 2u]) + base));
     let centre = vec2<f32>(local) + 0.5;
+    let t = triangle_at(draw, draw_index, corner, tile_ndc(centre));
+    let a = mesh_vertex(draw_index, corner_index(draw, t, 0u));
+    let b = mesh_vertex(draw_index, corner_index(draw, t, 1u));
+    let c = mesh_vertex(draw_index, corner_index(draw, t, 2u));
     let ca = a.clip_position;
     let cb = b.clip_position;
     let cc = c.clip_position;
@@ -144,12 +213,14 @@ fn cs_deferred(
         return;
     }
     let page = tile.origin + id.xy;
-    let surface = textureLoad(deferred_visibility, page, 0).xy;
+    let surface = textureLoad(deferred_visibility, page, 0).x;
     var color: vec4<f32>;
-    if surface.x == 0u {
+    if surface == 0u {
         color = background_color(id.xy);
     } else {
-        color = surface_color(surface.x - 1u, surface.y, id.xy, page);
+        let bits = scene.renderer.surface_vertex_bits;
+        let corner = surface & ((1u << bits) - 1u);
+        color = surface_color((surface >> bits) - 1u, corner, id.xy, page);
     }
     textureStore(deferred_output, page, vec4<f32>(encode_srgb(color.rgb), color.a));
 }

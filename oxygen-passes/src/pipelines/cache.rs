@@ -257,7 +257,8 @@ impl Pipelines {
 
     fn create(&self, device: &wgpu::Device, module: &wgpu::ShaderModule, key: PipelineKey) -> wgpu::RenderPipeline {
         let masked = key.variant.alpha == AlphaClass::Masked;
-        let labels = !key.labels.is_empty() && matches!(key.pass, PassKind::Shading | PassKind::ShadingAfterPrePass);
+        let labels = !key.labels.is_empty()
+            && matches!(key.pass, PassKind::Shading | PassKind::ShadingAfterPrePass | PassKind::Visibility);
         let (vertex_entry, fragment_entry) = mesh_entry_points(key.pass, masked, labels);
         let (depth_write, depth_compare) = match key.pass {
             PassKind::Shading | PassKind::Visibility if key.last_tie_wins => {
@@ -275,7 +276,7 @@ impl Pipelines {
         let target = |format| Some(wgpu::ColorTargetState { format, blend, write_mask: wgpu::ColorWrites::ALL });
         let targets: Vec<Option<wgpu::ColorTargetState>> = match key.pass {
             PassKind::Labels => label_targets(key.labels, wgpu::ColorWrites::ALL),
-            // The surface's draw and triangle, then the labels.
+            // The surface id, then the labels.
             PassKind::Visibility => {
                 let mut targets = vec![target(DeferredTargets::VISIBILITY_FORMAT)];
                 targets.extend(label_targets(key.labels, wgpu::ColorWrites::ALL));

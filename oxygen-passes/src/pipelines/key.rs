@@ -27,7 +27,8 @@ pub enum PassKind {
     /// depth (`GreaterEqual`, no depth writes).
     Labels,
     /// Deferred shading's visibility pass: each opaque or masked
-    /// fragment's draw and triangle (`Rg32Uint`, colour target 0) and the
+    /// fragment's surface id, its draw and the vertex that starts its
+    /// triangle (`R32Uint`, colour target 0), and the
     /// view's label planes after it; writes its own depth as
     /// [`PassKind::Shading`] does. A compute pass shades from it.
     Visibility,

@@ -20,8 +20,10 @@ pub(crate) fn mesh_module(pass: PassKind) -> ShaderModule {
 
 /// The vertex and fragment entry points of a pipeline of `pass`, for an
 /// alpha-tested (`masked`) variant or not; no fragment stage for an opaque
-/// depth-only variant, which only writes depth. A shading pass with
-/// `labels` writes the pixel labels with its colour.
+/// depth-only variant, which only writes depth. A shading or visibility
+/// pass with `labels` writes the pixel labels beside its colour or surface
+/// id; an opaque visibility variant without them has a vertex stage of its
+/// own that writes nothing but the position and the surface id.
 pub(crate) fn mesh_entry_points(pass: PassKind, masked: bool, labels: bool) -> (&'static str, Option<&'static str>) {
     let fragment = match pass {
         PassKind::DepthPrePass | PassKind::Shadow => masked.then_some("fs_alpha_test"),
@@ -34,7 +36,13 @@ pub(crate) fn mesh_entry_points(pass: PassKind, masked: bool, labels: bool) -> (
         // Blended surfaces have their own stage whatever their alpha class.
         PassKind::Transparent => Some("fs_blend"),
         PassKind::Labels => Some(if masked { "fs_labels_masked" } else { "fs_labels" }),
-        PassKind::Visibility => Some(if masked { "fs_visibility_masked" } else { "fs_visibility" }),
+        PassKind::Visibility => {
+            return match (masked, labels) {
+                (false, false) => ("vs_visibility", Some("fs_visibility")),
+                (false, true) => ("vs_visibility_labelled", Some("fs_visibility_labelled")),
+                (true, _) => ("vs_visibility_labelled", Some("fs_visibility_masked")),
+            };
+        }
     };
     ("vs_main", fragment)
 }

@@ -237,8 +237,8 @@ impl ShaderModule {
 pub(crate) const DEPTH_ONLY: ShaderModule = ShaderModule::mesh("mesh/depth_only.wgsl");
 /// Forward lit and transparent shading, and the sky behind them.
 pub(crate) const FORWARD_LIT: ShaderModule = ShaderModule::mesh("mesh/forward_lit.wgsl");
-/// Deferred shading's visibility pass (each pixel's draw and triangle,
-/// and its labels); needs `Features::PRIMITIVE_INDEX`.
+/// Deferred shading's visibility pass (each pixel's surface id: its draw
+/// and the vertex that starts its triangle, and its labels).
 pub(crate) const VISIBILITY: ShaderModule = ShaderModule::mesh("mesh/visibility.wgsl");
 /// Deferred shading's compute pass, over the visibility pass's pixels.
 pub(crate) const DEFERRED: ShaderModule =
@@ -323,8 +323,10 @@ pub(crate) const ENTRY_POINTS: &[EntryPoint] = &[
     entry(FORWARD_LIT, "fs_sky", Stage::Fragment),
     entry(FORWARD_LIT, "vs_tile_clear", Stage::Vertex),
     entry(FORWARD_LIT, "fs_tile_clear", Stage::Fragment),
-    entry(VISIBILITY, "vs_main", Stage::Vertex),
+    entry(VISIBILITY, "vs_visibility", Stage::Vertex),
     entry(VISIBILITY, "fs_visibility", Stage::Fragment),
+    entry(VISIBILITY, "vs_visibility_labelled", Stage::Vertex),
+    entry(VISIBILITY, "fs_visibility_labelled", Stage::Fragment),
     entry(VISIBILITY, "fs_visibility_masked", Stage::Fragment),
     entry(DEFERRED, "cs_deferred", Stage::Compute),
     entry(LABELS, "vs_main", Stage::Vertex),

@@ -44,16 +44,13 @@ pub(super) type ModuleKey = (&'static str, Option<TexturePath>, MeshVaryings);
 /// What a device on `path` grants: the binding-array path needs exactly
 /// what its device features enable, the others nothing.
 fn capabilities(path: Option<TexturePath>) -> naga::valid::Capabilities {
-    // The visibility pass reads the primitive index (deferred shading is
-    // offered only where the device has it).
-    naga::valid::Capabilities::PRIMITIVE_INDEX
-        | match path {
-            Some(TexturePath::BindingArray) => {
-                naga::valid::Capabilities::TEXTURE_AND_SAMPLER_BINDING_ARRAY
-                    | naga::valid::Capabilities::TEXTURE_AND_SAMPLER_BINDING_ARRAY_NON_UNIFORM_INDEXING
-            }
-            Some(TexturePath::GroupedArrays) | None => naga::valid::Capabilities::default(),
+    match path {
+        Some(TexturePath::BindingArray) => {
+            naga::valid::Capabilities::TEXTURE_AND_SAMPLER_BINDING_ARRAY
+                | naga::valid::Capabilities::TEXTURE_AND_SAMPLER_BINDING_ARRAY_NON_UNIFORM_INDEXING
         }
+        Some(TexturePath::GroupedArrays) | None => naga::valid::Capabilities::default(),
+    }
 }
 
 /// `source` parsed and validated with what a device on `path` grants;

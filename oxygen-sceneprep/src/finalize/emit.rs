@@ -78,7 +78,7 @@ pub(crate) fn emit_view(frame: &FrameEmit<'_>, view: &ViewEmit<'_>, out: &mut Pr
         }
         out.draws.push(DrawMetadata {
             vertex_slot: g.vertices.start,
-            index_slot: g.indices.start,
+            index_slot: g.index_slot,
             first_index: item.first_index,
             index_count: item.index_count,
             base_vertex: 0,
@@ -107,6 +107,7 @@ pub(crate) fn emit_view(frame: &FrameEmit<'_>, view: &ViewEmit<'_>, out: &mut Pr
     out.frame_index = frame.frame_index;
     out.debug_generations = frame.debug_generations;
     out.deterministic = view.deterministic;
+    out.surface_vertex_bits = frame.geometry.surface_vertex_bits();
     out.transforms = Arc::clone(frame.transforms);
     out.slots = PreparedSlots {
         draw_metadata: view.draw_allocation,

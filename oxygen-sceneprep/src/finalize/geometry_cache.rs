@@ -11,14 +11,23 @@ use oxygen_bindless::{Allocation, DomainKind, SlotAllocators, SlotError};
 use oxygen_core::scene::geometry_index;
 use oxygen_core::{Geometry, GeometryHandle};
 
+use super::triangle_table;
+
 /// Where a mesh lives in the vertex and index domains.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct GeometrySlots {
     /// Vertex range: the vertices, then the attribute records when the
     /// mesh has them.
     pub vertices: Allocation,
-    /// Index range.
+    /// Index-domain range: the geometry's triangle table, its length, then
+    /// its indices (see `triangle_table`).
     pub indices: Allocation,
+    /// First index of the geometry in the index domain (past its triangle
+    /// table): a draw's `index_slot`.
+    pub index_slot: u32,
+    /// Vertices of the geometry (its vertex range holds more records:
+    /// morph blocks, attributes, skin).
+    pub vertex_count: u32,
     /// First attribute record, [`oxygen_bindless::INVALID_SLOT`] when none.
     pub attributes: u32,
     /// First skin record, [`oxygen_bindless::INVALID_SLOT`] when none.
@@ -33,6 +42,8 @@ pub struct GeometryCache {
     resident: usize,
     /// Resident meshes with attribute records.
     with_attributes: usize,
+    /// The most vertices a resident mesh has.
+    most_vertices: u32,
 }
 
 impl GeometryCache {
@@ -61,7 +72,14 @@ impl GeometryCache {
         }
         // Fits in u32: `Geometry` refuses more records than that.
         let vertices = slots.allocate(DomainKind::Vertices, geometry.vertex_domain_records() as u32)?;
-        let indices = match slots.allocate(DomainKind::Indices, geometry.indices().len() as u32) {
+        // The indices fit in u32 (`Geometry` refuses more records); with
+        // the table beside them they may not, and asking for u32::MAX
+        // records is refused as any range too large for the domain is.
+        let n = geometry.vertices().len() as u32;
+        let index_count = geometry.indices().len() as u32;
+        let words = triangle_table::index_domain_words(n, index_count).unwrap_or(u32::MAX);
+        let before = triangle_table::words_before_indices(n, index_count).unwrap_or(u32::MAX);
+        let indices = match slots.allocate(DomainKind::Indices, words) {
             Ok(i) => i,
             Err(e) => {
                 slots.free(vertices)?;
@@ -70,7 +88,6 @@ impl GeometryCache {
         };
         // Vertices, then one block per morph target, then attribute
         // records, then skin records.
-        let n = geometry.vertices().len() as u32;
         let after_morphs = vertices.start + n * (1 + geometry.morph_targets().len() as u32);
         let attributes = match geometry.attributes() {
             Some(_) => after_morphs,
@@ -80,13 +97,21 @@ impl GeometryCache {
             Some(_) => after_morphs + n * u32::from(geometry.attributes().is_some()),
             None => oxygen_bindless::INVALID_SLOT,
         };
-        let s = GeometrySlots { vertices, indices, attributes, skin };
+        let s = GeometrySlots {
+            vertices,
+            indices,
+            index_slot: indices.start.saturating_add(before),
+            vertex_count: n,
+            attributes,
+            skin,
+        };
         if self.entries.len() <= index {
             self.entries.resize(index + 1, None);
         }
         self.entries[index] = Some((handle, s));
         self.resident += 1;
         self.with_attributes += usize::from(attributes != oxygen_bindless::INVALID_SLOT);
+        self.most_vertices = self.most_vertices.max(n);
         self.pending.push((s, Arc::clone(geometry)));
         Ok(s)
     }
@@ -108,12 +133,26 @@ impl GeometryCache {
         self.with_attributes > 0
     }
 
+    /// How many low bits of a visibility pass's surface id name the vertex
+    /// (`RendererConstants::surface_vertex_bits`): enough for every index
+    /// value of every resident mesh, at least one.
+    pub fn surface_vertex_bits(&self) -> u32 {
+        (32 - self.most_vertices.saturating_sub(1).leading_zeros()).max(1)
+    }
+
     fn free_slots(&mut self, s: GeometrySlots, slots: &mut SlotAllocators) -> Result<(), SlotError> {
         self.pending.retain(|(p, _)| *p != s);
         self.resident -= 1;
         self.with_attributes -= usize::from(s.attributes != oxygen_bindless::INVALID_SLOT);
         slots.free(s.vertices)?;
-        slots.free(s.indices)
+        slots.free(s.indices)?;
+        if s.vertex_count == self.most_vertices {
+            // The caller replaces or drops the entry; the largest of the
+            // others is recounted from the entries still holding other slots.
+            self.most_vertices =
+                self.entries.iter().flatten().filter(|(_, e)| *e != s).map(|(_, e)| e.vertex_count).max().unwrap_or(0);
+        }
+        Ok(())
     }
 
     /// Frees every mesh's slots: the handles of another scene name other
@@ -126,6 +165,7 @@ impl GeometryCache {
         self.pending.clear();
         self.resident = 0;
         self.with_attributes = 0;
+        self.most_vertices = 0;
         Ok(())
     }
 }
@@ -218,6 +258,31 @@ mod tests {
         cache.resolve(handle(4, 1), &coloured, &mut slots)?;
         cache.clear(&mut slots)?;
         assert!(!cache.any_attributes(), "a cleared cache holds none");
+        Ok(())
+    }
+
+    /// The surface id's vertex bits name every index value of the largest
+    /// resident mesh: they grow with a larger mesh, shrink when it is
+    /// replaced by a smaller one or the cache is cleared, and the index
+    /// slot sits past the mesh's triangle table.
+    #[test]
+    fn surface_vertex_bits_follow_the_largest_resident_mesh() -> Result<(), SlotError> {
+        let mut slots = SlotAllocators::default();
+        let mut cache = GeometryCache::default();
+        assert_eq!(cache.surface_vertex_bits(), 1, "at least one bit");
+        let cube = mesh("cube", 1.0);
+        let s = cache.resolve(handle(1, 1), &cube, &mut slots)?;
+        assert_eq!(cache.surface_vertex_bits(), 5, "24 vertices: values 0..=23");
+        assert_eq!((s.vertex_count, s.index_slot), (24, s.indices.start + 24 + 1 + 12 + 1));
+        assert_eq!(s.indices.count, 24 + 1 + 12 + 1 + 36, "the table, its length, the indices");
+        let sphere = Arc::new(Geometry::uv_sphere(1.0, 32, 16));
+        let n = sphere.vertices().len() as u32;
+        cache.resolve(handle(2, 1), &sphere, &mut slots)?;
+        assert_eq!(cache.surface_vertex_bits(), 32 - (n - 1).leading_zeros());
+        cache.resolve(handle(2, 3), &mesh("small again", 1.0), &mut slots)?;
+        assert_eq!(cache.surface_vertex_bits(), 5, "the sphere's slot taken by a cube");
+        cache.clear(&mut slots)?;
+        assert_eq!(cache.surface_vertex_bits(), 1);
         Ok(())
     }
 

@@ -10,7 +10,9 @@
 //! * `partition`: contiguous `[begin, end)` ranges with one [`PassMask`](crate::PassMask);
 //! * `geometry_cache`: lazy, cached geometry slots (only meshes some view draws);
 //! * [`materials`]: the material table, re-uploaded only when it changed;
-//! * `texture_cache`: texture slots for the textures materials use.
+//! * `texture_cache`: texture slots for the textures materials use;
+//! * `triangle_table`: each geometry's indices as uploaded, with the
+//!   table that finds a triangle from its first corner (deferred shading).
 
 pub(crate) mod emit;
 pub(crate) mod geometry_cache;
@@ -19,3 +21,4 @@ pub(crate) mod partition;
 pub(crate) mod radix_sort;
 pub(crate) mod sort_key;
 pub(crate) mod texture_cache;
+pub(crate) mod triangle_table;

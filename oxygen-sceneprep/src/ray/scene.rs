@@ -194,7 +194,7 @@ impl RayScene {
                 transform_index: entry.transform_index,
                 blas_root: tree, // resolved below
                 vertex_slot,
-                index_slot: slots.indices.start,
+                index_slot: slots.index_slot,
                 submesh_first,
                 submesh_count: submeshes.len() as u32,
                 attributes_slot: slots.attributes,
