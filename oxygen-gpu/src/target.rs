@@ -48,8 +48,12 @@ pub struct ViewTargets {
 }
 
 /// What deferred shading adds to a page of a [`TileAtlas`]: the
-/// visibility pass's target and the image the shading pass writes before
-/// it is copied into the page's display colour.
+/// visibility pass's target, and a view of the page's display colour the
+/// shading pass stores into. Such a page's colour texture is `Rgba8Unorm`
+/// (a storage texture cannot be sRGB), viewed as sRGB
+/// ([`ViewTargets::COLOR_FORMAT`]) by everything else, so the compute pass
+/// writes the sRGB bytes itself and no copy follows (a copy from a separate
+/// image cost an H200 4.2 ms of a 256-view field's 56, docs/performance.md).
 #[derive(Clone)]
 pub struct DeferredTargets {
     /// Each pixel's surface id ([`DeferredTargets::VISIBILITY_FORMAT`]):
@@ -59,23 +63,24 @@ pub struct DeferredTargets {
     pub visibility: wgpu::Texture,
     /// Its default view.
     pub visibility_view: wgpu::TextureView,
-    /// The shaded display colour as sRGB bytes (`Rgba8Unorm`: a storage
-    /// texture cannot have an sRGB format), the page's size.
-    pub shaded: wgpu::Texture,
-    /// Its default view.
-    pub shaded_view: wgpu::TextureView,
+    /// The page's display colour as [`DeferredTargets::SHADED_FORMAT`],
+    /// for the shading pass to store sRGB-encoded bytes into.
+    pub color_storage_view: wgpu::TextureView,
 }
 
 impl DeferredTargets {
     /// The visibility target's format.
     pub const VISIBILITY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
-    /// The shaded image's format.
+    /// The format of the page's colour texture and of the shading pass's
+    /// view of it.
     pub const SHADED_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
-    /// Bytes a pixel of both takes.
-    pub const BYTES_PER_PIXEL: u64 = 8;
+    /// Bytes a pixel of the visibility target takes (the colour is the
+    /// page's own).
+    pub const BYTES_PER_PIXEL: u64 = 4;
 
-    /// The textures for a page of `size`.
-    pub fn new(device: &wgpu::Device, size: wgpu::Extent3d, label: &str) -> Self {
+    /// The textures for a page of `size` whose display colour is `color`
+    /// (made by [`DeferredTargets::color_texture`]).
+    pub fn new(device: &wgpu::Device, size: wgpu::Extent3d, color: &wgpu::Texture, label: &str) -> Self {
         let visibility = texture_2d(
             device,
             &format!("{label} visibility"),
@@ -84,20 +89,32 @@ impl DeferredTargets {
             Self::VISIBILITY_FORMAT,
             wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
         );
-        let shaded = texture_2d(
-            device,
-            &format!("{label} shaded"),
-            size,
-            1,
-            Self::SHADED_FORMAT,
-            wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
-        );
         DeferredTargets {
             visibility_view: visibility.create_view(&Default::default()),
-            shaded_view: shaded.create_view(&Default::default()),
+            color_storage_view: color
+                .create_view(&wgpu::TextureViewDescriptor { format: Some(Self::SHADED_FORMAT), ..Default::default() }),
             visibility,
-            shaded,
         }
+    }
+
+    /// A page's display colour that deferred shading can store into:
+    /// `Rgba8Unorm` with `usage` and storage, viewable as sRGB.
+    pub fn color_texture(
+        device: &wgpu::Device,
+        size: wgpu::Extent3d,
+        usage: wgpu::TextureUsages,
+        label: &str,
+    ) -> wgpu::Texture {
+        device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size,
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: Self::SHADED_FORMAT,
+            usage: usage | wgpu::TextureUsages::STORAGE_BINDING,
+            view_formats: &[ViewTargets::COLOR_FORMAT],
+        })
     }
 }
 
@@ -218,17 +235,25 @@ impl TileAtlas {
         let pages = (0..pages)
             .map(|page| {
                 let name = |what: &str| format!("{label} {what} page {page}");
-                // Deferred shading copies its shaded image into the colour.
-                let color_usage = if deferred { usage | wgpu::TextureUsages::COPY_DST } else { usage };
-                let color = texture_2d(device, &name("colour"), size, 1, ViewTargets::COLOR_FORMAT, color_usage);
+                // Deferred shading stores into the colour: unorm, viewed as sRGB.
+                let color = if deferred {
+                    DeferredTargets::color_texture(device, size, usage, &name("colour"))
+                } else {
+                    texture_2d(device, &name("colour"), size, 1, ViewTargets::COLOR_FORMAT, usage)
+                };
                 let hdr = hdr_format.map(|f| texture_2d(device, &name("hdr"), size, 1, f.texture_format(), usage));
                 let depth = texture_2d(device, &name("depth"), size, 1, ViewTargets::DEPTH_FORMAT, usage);
                 let labels = (!labels.is_empty())
                     .then(|| LabelTargets::new(device, size.width, size.height, labels, &name("labels")));
-                let deferred = deferred.then(|| DeferredTargets::new(device, size, &name("deferred")));
+                let deferred = deferred.then(|| DeferredTargets::new(device, size, &color, &name("deferred")));
                 AtlasPage {
                     deferred,
-                    color_view: color.create_view(&Default::default()),
+                    // sRGB cannot be stored into: the view leaves storage out.
+                    color_view: color.create_view(&wgpu::TextureViewDescriptor {
+                        format: Some(ViewTargets::COLOR_FORMAT),
+                        usage: Some(color.usage() - wgpu::TextureUsages::STORAGE_BINDING),
+                        ..Default::default()
+                    }),
                     hdr_view: hdr.as_ref().map(|t| t.create_view(&Default::default())),
                     depth_view: depth.create_view(&Default::default()),
                     color,
@@ -393,6 +418,19 @@ pub struct ColorTargets {
     pub color: Option<wgpu::Texture>,
     /// Default view of `color`.
     pub color_view: Option<wgpu::TextureView>,
+}
+
+impl ColorTargets {
+    /// The format passes render `hdr_view` in: the HDR texture's, or
+    /// [`ViewTargets::COLOR_FORMAT`] where the display colour stands in
+    /// for it (no HDR formats are 8-bit unorm; a deferred atlas page's
+    /// colour texture is `Rgba8Unorm`, viewed as sRGB).
+    pub fn hdr_format(&self) -> wgpu::TextureFormat {
+        match self.hdr.format() {
+            wgpu::TextureFormat::Rgba8Unorm => ViewTargets::COLOR_FORMAT,
+            format => format,
+        }
+    }
 }
 
 /// The format of a view's HDR target: a speed/memory knob with a measured
@@ -754,7 +792,8 @@ mod tile_tests {
         assert_eq!(TileAtlas::bytes_for((4, 4), (2, 1, 1), None, LabelSet::NONE, false), 32 * 8);
         assert_eq!(TileAtlas::bytes_for((4, 4), (2, 1, 3), Some(8), LabelSet::NONE, false), 3 * 32 * 16);
         assert_eq!(TileAtlas::bytes_for((4, 4), (2, 1, 1), None, LabelSet::ALL, false), 32 * 28);
-        // Deferred shading's visibility target (8 bytes) and shaded image (4).
-        assert_eq!(TileAtlas::bytes_for((4, 4), (2, 1, 1), None, LabelSet::NONE, true), 32 * 20);
+        // Deferred shading's visibility target (4 bytes; it shades into the
+        // page's own colour).
+        assert_eq!(TileAtlas::bytes_for((4, 4), (2, 1, 1), None, LabelSet::NONE, true), 32 * 12);
     }
 }

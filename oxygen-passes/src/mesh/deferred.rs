@@ -3,8 +3,9 @@
 //! pixel's surface id (its draw and the vertex that starts its triangle)
 //! into the page's visibility target, one compute
 //! dispatch per atlas page shades every camera's pixels with the forward
-//! pass's own shading code (`mesh/deferred.wgsl`) into the page's shaded
-//! image, which is then copied into the page's display colour.
+//! pass's own shading code (`mesh/deferred.wgsl`) straight into the page's
+//! display colour (stored through a unorm view of it, sRGB-encoded by the
+//! shader).
 //!
 //! Why a compute pass: on GPUs that run fragment shaders on a part of the
 //! chip only (the H100 and H200 have two graphics-capable TPCs), the same
@@ -106,7 +107,7 @@ impl DeferredShading {
     }
 
     /// Shades `views` (cameras of one batch, their visibility pass
-    /// recorded): one dispatch and one copy per page.
+    /// recorded): one dispatch per page.
     pub async fn run_batch(&self, views: &[&RenderContext<'_>], rec: &mut CommandRecorder) -> Result<(), PassError> {
         let first = views.first().map(|ctx| ctx.view.view_id);
         async { self.record(views, rec) }
@@ -176,20 +177,6 @@ impl DeferredShading {
                 pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), params.tiles);
             }
         }
-        // Into each page's display colour (same bytes, an sRGB format), the
-        // whole page in one copy: what no tile of this frame covers (empty
-        // slots, the margins) is read by nobody (a page that keeps other
-        // cameras' images is shaded forward).
-        for (_, members) in &pages {
-            let lead = views[members[0]];
-            let Some(targets) = lead.targets.deferred.as_ref() else { continue };
-            let color = lead
-                .color_targets("deferred shading")?
-                .color
-                .as_ref()
-                .ok_or(PassError::NoColorTarget { pass: "deferred shading" })?;
-            rec.encoder().copy_texture_to_texture(targets.shaded.as_image_copy(), color.as_image_copy(), color.size());
-        }
         rec.stats.deferred_views += u32::try_from(views.len()).unwrap_or(u32::MAX);
         // The display colour is written and the HDR image is not, as when
         // the forward pass tone-maps in place.
@@ -207,7 +194,7 @@ impl DeferredShading {
     }
 
     /// Group 3 of one page: its parameters, cameras, tiles, the index
-    /// buffer, the visibility target and the shaded image.
+    /// buffer, the visibility target and the page's display colour.
     fn page_group(
         &self,
         ctx: &RenderContext<'_>,
@@ -236,7 +223,10 @@ impl DeferredShading {
                     binding: 4,
                     resource: wgpu::BindingResource::TextureView(&targets.visibility_view),
                 },
-                wgpu::BindGroupEntry { binding: 5, resource: wgpu::BindingResource::TextureView(&targets.shaded_view) },
+                wgpu::BindGroupEntry {
+                    binding: 5,
+                    resource: wgpu::BindingResource::TextureView(&targets.color_storage_view),
+                },
             ],
         })
     }

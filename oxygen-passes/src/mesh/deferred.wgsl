@@ -30,8 +30,9 @@
 // triangle table, the table's length, then its indices.
 @group(3) @binding(3) var<storage, read> deferred_indices: array<u32>;
 @group(3) @binding(4) var deferred_visibility: texture_2d<u32>;
-// The page's colour in sRGB bytes (a storage texture cannot be sRGB: the
-// encoding is done here, then the page is copied into the sRGB atlas).
+// The page's display colour, through a unorm view of it: a storage texture
+// cannot be sRGB, so the encoding is done here and the other passes view
+// the same bytes as sRGB.
 @group(3) @binding(5) var deferred_output: texture_storage_2d<rgba8unorm, write>;
 
 // The sRGB encoding the hardware applies when a fragment writes an sRGB
@@ -197,18 +198,13 @@ fn background_color(local: vec2<u32>) -> vec4<f32> {
 fn cs_deferred(
     @builtin(global_invocation_id) id: vec3<u32>,
     @builtin(workgroup_id) group: vec3<u32>,
-    @builtin(local_invocation_index) lane: u32,
 ) {
-    // The workgroup's tile: the third dispatch dimension, uniform across
-    // the workgroup (so is the barrier below).
+    // The workgroup's tile: the third dispatch dimension.
     if group.z >= deferred.tiles {
         return;
     }
     let tile = deferred_tiles[group.z];
-    if lane == 0u {
-        scene = deferred_cameras[tile.camera];
-    }
-    workgroupBarrier();
+    scene = deferred_cameras[tile.camera];
     if id.x >= deferred.size.x || id.y >= deferred.size.y {
         return;
     }

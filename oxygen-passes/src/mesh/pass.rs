@@ -471,7 +471,7 @@ impl MeshPass {
         match self.color {
             ColorOps::None => None,
             ColorOps::ClearToneMapped(..) => Some(ViewTargets::COLOR_FORMAT),
-            ColorOps::Clear(_) | ColorOps::Load => Some(ctx.targets.color.as_ref()?.hdr.format()),
+            ColorOps::Clear(_) | ColorOps::Load => Some(ctx.targets.color.as_ref()?.hdr_format()),
         }
     }
 
