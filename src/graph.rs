@@ -374,7 +374,7 @@ pub enum BatchShading {
     Forward,
     /// In a compute pass after a visibility pass
     /// ([`oxygen_passes::DeferredShading`]): the atlas gets a visibility
-    /// target and a shaded image (8 bytes a pixel, counted in the target
+    /// target (4 bytes a pixel, counted in the target
     /// budget), and the adapter's compute stage must bind the shading
     /// inputs (registering the batch fails otherwise: GL cannot). A frame
     /// deferred shading cannot take (an HDR image read after shading,
