@@ -175,6 +175,14 @@ pub enum GeometryError {
         /// Length of the index array.
         index_count: usize,
     },
+    /// The indices are not a whole number of triangles.
+    #[error("geometry '{name}' has {index_count} indices, not a whole number of triangles")]
+    NotTriangles {
+        /// Geometry name.
+        name: String,
+        /// Length of the index array.
+        index_count: usize,
+    },
     /// There is nothing to draw.
     #[error("geometry '{name}' has no vertices, indices or submeshes")]
     Empty {
@@ -253,6 +261,9 @@ impl Geometry {
         if u32::try_from(vertices.len()).is_err() || u32::try_from(indices.len()).is_err() {
             return Err(GeometryError::TooLarge { name });
         }
+        if indices.len() % 3 != 0 {
+            return Err(GeometryError::NotTriangles { name, index_count: indices.len() });
+        }
         for (i, v) in vertices.iter_mut().enumerate() {
             if !Vec3::from(v.position).is_finite() {
                 return Err(GeometryError::NonFinitePosition { name, vertex: i });
@@ -274,7 +285,11 @@ impl Geometry {
         }
         for (i, s) in submeshes.iter().enumerate() {
             let end = s.first_index as u64 + s.index_count as u64;
-            if s.index_count == 0 || s.index_count % 3 != 0 || end > indices.len() as u64 {
+            // Whole triangles from a triangle's start: each geometry's
+            // triangles are uploaded corner-rotated three indices at a
+            // time (deferred shading's triangle table), so a range
+            // starting mid-triangle would draw other triangles.
+            if s.index_count == 0 || s.index_count % 3 != 0 || s.first_index % 3 != 0 || end > indices.len() as u64 {
                 return Err(GeometryError::BadSubmesh {
                     name,
                     submesh: i,
@@ -600,6 +615,23 @@ mod tests {
         let err = Geometry::new("bad", v, vec![0, 1, 7], vec![Submesh { first_index: 0, index_count: 3 }]);
         assert!(matches!(err, Err(GeometryError::IndexOutOfRange { value: 7, .. })));
         assert!(err.unwrap_err().to_string().contains("'bad'"));
+    }
+
+    /// Submeshes are whole triangles from a triangle's start, and the
+    /// indices whole triangles: a range starting mid-triangle, or a
+    /// leftover index, is refused naming the geometry.
+    #[test]
+    fn submeshes_and_indices_are_whole_triangles() {
+        let v = || vec![Vertex::default(); 3];
+        let six = || vec![0, 1, 2, 0, 1, 2];
+        let mid = Geometry::new("mid", v(), six(), vec![Submesh { first_index: 1, index_count: 3 }]);
+        assert!(matches!(mid, Err(GeometryError::BadSubmesh { first: 1, count: 3, .. })), "{mid:?}");
+        let ok = Geometry::new("ok", v(), six(), vec![Submesh { first_index: 3, index_count: 3 }]);
+        assert!(ok.is_ok(), "{ok:?}");
+        let leftover =
+            Geometry::new("leftover", v(), vec![0, 1, 2, 0], vec![Submesh { first_index: 0, index_count: 3 }]);
+        let error = leftover.expect_err("four indices").to_string();
+        assert!(error.contains("'leftover'") && error.contains("4 indices"), "{error}");
     }
 
     #[test]

@@ -137,9 +137,10 @@ pub struct Tile {
 /// pass per page instead of targets of its own. Each page is a set of 2D
 /// textures of its own (not a layer of an array: GL can sample and render
 /// a 2D texture, not a single layer of an array as one): display colour
-/// (`Rgba8UnormSrgb`) and depth (`Depth32Float`, reverse-Z) always, the
-/// HDR colour and the labels only when [`TileAtlas::new`] is asked for
-/// them.
+/// (`Rgba8UnormSrgb`, or `Rgba8Unorm` viewed as sRGB with deferred
+/// shading's targets) and depth (`Depth32Float`, reverse-Z) always, the
+/// HDR colour, the labels and deferred shading's visibility target only
+/// when [`TileAtlas::new`] is asked for them.
 pub struct TileAtlas {
     /// Pixels of one tile.
     pub tile_size: (u32, u32),
@@ -414,9 +415,13 @@ pub struct ColorTargets {
     /// The layer of `hdr` the view renders (0 unless it is a probe face).
     pub hdr_layer: u32,
     /// Displayable colour (render attachment, copy source, sampled); `None`
-    /// for views that are never tone-mapped (probe faces).
+    /// for views that are never tone-mapped (probe faces). Its texture
+    /// format is [`ViewTargets::COLOR_FORMAT`], or `Rgba8Unorm` on a
+    /// deferred atlas page ([`DeferredTargets`]): render and sample it
+    /// through `color_view`, whose format is always `COLOR_FORMAT`.
     pub color: Option<wgpu::Texture>,
-    /// Default view of `color`.
+    /// The view of `color` passes render into and readers sample, in
+    /// [`ViewTargets::COLOR_FORMAT`].
     pub color_view: Option<wgpu::TextureView>,
 }
 

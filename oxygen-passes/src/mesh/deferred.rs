@@ -28,7 +28,7 @@ use crate::{CommandRecorder, Exposure, MeshPass, PassError, RenderContext, Shade
 oxygen_gpu::gpu_struct! {
     /// The deferred pass's uniform block (`mesh/deferred.wgsl`).
     #[derive(Debug, PartialEq)]
-    pub(crate) struct DeferredParams: 32 bytes {
+    pub(crate) struct DeferredParams: 48 bytes {
         /// Pixels of every tile.
         pub(crate) size: [u32; 2] => "vec2<u32>",
         /// Tiles dispatched.
@@ -37,6 +37,13 @@ oxygen_gpu::gpu_struct! {
         pub(crate) sky: u32,
         /// Display colour where nothing was drawn (tone-mapped, linear).
         pub(crate) clear: [f32; 4] => "vec4<f32>",
+        /// 1 when the visibility pass's depth test let the later of two
+        /// equally deep triangles win (`GreaterEqual`, the deterministic
+        /// mode), 0 when the earlier kept the pixel (`Greater`).
+        pub(crate) last_tie_wins: u32,
+        pub(crate) pad0: u32,
+        pub(crate) pad1: u32,
+        pub(crate) pad2: u32,
     }
 }
 
@@ -62,6 +69,13 @@ pub struct DeferredShading {
 }
 
 impl DeferredShading {
+    /// Why GL cannot shade deferred: what registering a deferred batch on
+    /// it answers.
+    pub const GL_REFUSAL: &'static str = "deferred shading is not offered on GL: its flat varyings take a \
+         triangle's last vertex (WGSL's `first` sampling, which the visibility pass needs, is missing), and \
+         its compute stage would bind 17 sampled textures, past GL's limit of 16; shade the batch forward \
+         (BatchShading::Forward)";
+
     /// The shading of `lit` (its clear colour and lighting switches),
     /// tone-mapped with `exposure` into the display colour.
     pub fn new(lit: ForwardLitConfig, exposure: f32) -> Self {
@@ -79,6 +93,9 @@ impl DeferredShading {
     /// probes, clustered lights, screen-space effects).
     pub fn applies(&self, views: &[&RenderContext<'_>]) -> Result<(), String> {
         let Some(first) = views.first() else { return Ok(()) };
+        if first.gpu.adapter_info.backend == wgpu::Backend::Gl {
+            return Err(Self::GL_REFUSAL.into());
+        }
         first.pipelines.deferred_layouts(&first.gpu.device)?;
         let lit = &self.lit;
         if lit.ambient_occlusion.is_some() || lit.contact_shadows.is_some() || lit.screen_space_reflections.is_some() {
@@ -162,6 +179,11 @@ impl DeferredShading {
                 tiles: tiles.len() as u32,
                 sky: u32::from(lead.lighting.has_environment()),
                 clear,
+                // As the pipeline key's `last_tie_wins` (mesh pass).
+                last_tie_wins: u32::from(lead.deterministic()),
+                pad0: 0,
+                pad1: 0,
+                pad2: 0,
             };
             let group = self.page_group(lead, &layout, targets, &params, &cameras, &tiles);
             {

@@ -80,36 +80,68 @@ fn weighted(a: MeshVarying, b: MeshVarying, c: MeshVarying, w: vec3<f32>) -> Mes
 }
 
 // How far outside a triangle (in its barycentrics) the pixel centre may
-// seem and still be taken as inside: the rasterizer's fixed-point edges
-// and this rebuild's float ones disagree by rounding at the edges.
+// seem and still be taken as the rasterizer's: its fixed-point edges and
+// this rebuild's float ones disagree by rounding at the edges.
 const INSIDE_SLACK: f32 = 1e-3;
 
-// The clip-space corners of triangle `t` (indices 3t..3t + 3 from the
-// draw's index slot) of draw `draw_index`.
-struct Corners {
-    a: vec4<f32>,
-    b: vec4<f32>,
-    c: vec4<f32>,
-}
-
+// Triangle `t` (indices 3t..3t + 3 from the draw's index slot) of draw
+// `draw_index`: the vertex index of its corner k.
 fn corner_index(draw: DrawMetadata, t: u32, k: u32) -> u32 {
     return u32(i32(deferred_indices[draw.index_slot + 3u * t + k]) + i32(draw.vertex_slot) + draw.base_vertex);
 }
 
-fn clip_corners(draw: DrawMetadata, draw_index: u32, t: u32) -> Corners {
-    return Corners(
-        mesh_vertex(draw_index, corner_index(draw, t, 0u)).clip_position,
-        mesh_vertex(draw_index, corner_index(draw, t, 1u)).clip_position,
-        mesh_vertex(draw_index, corner_index(draw, t, 2u)).clip_position,
-    );
+// Whether the triangle of clip-space corners a, b, c faces the camera as
+// the draw's pipeline sees it: counter-clockwise on screen (clockwise for a
+// mirrored draw), the sign of the determinant of the corners' (x, y, w),
+// which is the screen winding times their w.
+fn faces_front(draw: DrawMetadata, a: vec4<f32>, b: vec4<f32>, c: vec4<f32>) -> bool {
+    let counter_clockwise = dot(a.xyw, cross(b.xyw, c.xyw)) > 0.0;
+    return counter_clockwise != ((draw.pass_mask & PASS_MIRRORED) != 0u);
+}
+
+// How surely the rasterizer drew candidate `t` at the point at `ndc`, with
+// its depth there; the greater rank wins, then (within ranks 1 and 2) the
+// nearer depth: 2 the point is inside, 1 inside within rounding, 0
+// outside (then the less outside wins), -1 the candidate cannot have been
+// drawn there (a culled back face, or cut out by its alpha).
+struct Candidate {
+    rank: i32,
+    score: f32,
+    depth: f32,
+}
+
+fn candidate(draw: DrawMetadata, draw_index: u32, t: u32, ndc: vec2<f32>) -> Candidate {
+    let a = mesh_vertex(draw_index, corner_index(draw, t, 0u));
+    let b = mesh_vertex(draw_index, corner_index(draw, t, 1u));
+    let c = mesh_vertex(draw_index, corner_index(draw, t, 2u));
+    let ca = a.clip_position;
+    let cb = b.clip_position;
+    let cc = c.clip_position;
+    let w = barycentrics(ca, cb, cc, ndc);
+    let score = min(w.x, min(w.y, w.z));
+    // Reverse-Z: the nearer surface has the larger depth.
+    let depth = dot(w, vec3<f32>(ca.z, cb.z, cc.z)) / dot(w, vec3<f32>(ca.w, cb.w, cc.w));
+    var rank = select(select(0, 1, score >= -INSIDE_SLACK), 2, score >= 0.0);
+    if (draw.pass_mask & PASS_DOUBLE_SIDED) == 0u && !faces_front(draw, ca, cb, cc) {
+        rank = -1;
+    } else if rank > 0 && (draw.pass_mask & PASS_MASKED) != 0u {
+        // The visibility pass cut out what the alpha cuts out; its mip
+        // level is not known here, so the alpha is read at the finest.
+        let mesh = weighted(a, b, c, w);
+        let material = material_at(material_handle_of(mesh));
+        if base_color_of(mesh, material, UvDerivatives()).a < material.alpha_cutoff {
+            rank = -1;
+        }
+    }
+    return Candidate(rank, score, depth);
 }
 
 // The triangle (its number in the geometry) of draw `draw_index` that
-// starts at index value `corner` and covers the point at `ndc`: the only
-// one when one triangle starts there (a box's every corner), else the
-// candidate of the draw's own index range that contains the point, the
-// nearest where several do (a surface folded over itself), the least
-// outside where rounding leaves none inside.
+// starts at index value `corner` and that the rasterizer drew at the point
+// at `ndc`: the only one when one triangle starts there (a box's every
+// corner), else the best candidate of the draw's own index range
+// (`candidate`), exact depth ties going as the visibility pass's depth
+// test sent them (`last_tie_wins`: the later triangle, else the earlier).
 fn triangle_at(draw: DrawMetadata, draw_index: u32, corner: u32, ndc: vec2<f32>) -> u32 {
     let table = draw.index_slot - 1u - deferred_indices[draw.index_slot - 1u];
     let begin = deferred_indices[table + corner];
@@ -119,27 +151,26 @@ fn triangle_at(draw: DrawMetadata, draw_index: u32, corner: u32, ndc: vec2<f32>)
     }
     let first = draw.first_index / 3u;
     let last = (draw.first_index + draw.index_count) / 3u;
+    let later_wins_ties = deferred.last_tie_wins != 0u;
     var best = deferred_indices[table + begin];
-    var best_inside = false;
-    var best_score = -3.4e38;
-    var best_depth = -3.4e38;
+    var best_c = Candidate(-2, 0.0, 0.0);
     for (var k = begin; k < end; k++) {
         let t = deferred_indices[table + k];
         if t < first || t >= last {
             continue;
         }
-        let c = clip_corners(draw, draw_index, t);
-        let w = barycentrics(c.a, c.b, c.c, ndc);
-        let score = min(w.x, min(w.y, w.z));
-        // Reverse-Z: the nearer surface has the larger depth.
-        let depth = dot(w, vec3<f32>(c.a.z, c.b.z, c.c.z)) / dot(w, vec3<f32>(c.a.w, c.b.w, c.c.w));
-        let inside = score >= -INSIDE_SLACK;
-        let better = select(!best_inside && score > best_score, !best_inside || depth > best_depth, inside);
+        let c = candidate(draw, draw_index, t, ndc);
+        var better = c.rank > best_c.rank;
+        if c.rank == best_c.rank {
+            if c.rank > 0 {
+                better = c.depth > best_c.depth || (later_wins_ties && c.depth == best_c.depth);
+            } else {
+                better = c.score > best_c.score;
+            }
+        }
         if better {
             best = t;
-            best_inside = inside;
-            best_score = score;
-            best_depth = depth;
+            best_c = c;
         }
     }
     return best;
@@ -176,12 +207,7 @@ fn surface_color(draw_index: u32, corner: u32, local: vec2<u32>, page: vec2<u32>
     // pixel centre (the page's), depth, 1 / w.
     let clip = mesh.clip_position;
     mesh.clip_position = vec4<f32>(vec2<f32>(page) + 0.5, clip.z / clip.w, 1.0 / clip.w);
-    // Counter-clockwise on screen is the front (clockwise for a mirrored
-    // draw, as its pipeline's front face): the sign of M's determinant,
-    // which is the screen winding times the corners' w.
-    let counter_clockwise = dot(ca.xyw, cross(cb.xyw, cc.xyw)) > 0.0;
-    let mirrored = (draw.pass_mask & PASS_MIRRORED) != 0u;
-    return opaque_color_at(mesh, counter_clockwise != mirrored, d);
+    return opaque_color_at(mesh, faces_front(draw, ca, cb, cc), d);
 }
 
 // Behind the scene: the environment along the pixel's ray, or the clear colour.

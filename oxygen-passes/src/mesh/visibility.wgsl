@@ -17,8 +17,9 @@
 #include "mesh/mesh_vertex.wgsl"
 #include "mesh/label_values.wgsl"
 
-// Draw `draw_index`'s vertex `vertex_index` (base vertex included) as the
-// low half of a surface id, its draw as the high half.
+// The surface id of draw `draw_index`'s vertex `vertex_index` (base
+// vertex included): its index value in the low `surface_vertex_bits`, the
+// draw's index plus one above them.
 fn surface_id(draw_index: u32, vertex_index: u32) -> u32 {
     let draw = draw_metadata_domain[scene.renderer.draw_metadata_slot + draw_index];
     let corner = u32(i32(vertex_index) - i32(draw.vertex_slot) - draw.base_vertex);
