@@ -261,7 +261,7 @@ impl Geometry {
         if u32::try_from(vertices.len()).is_err() || u32::try_from(indices.len()).is_err() {
             return Err(GeometryError::TooLarge { name });
         }
-        if indices.len() % 3 != 0 {
+        if !indices.len().is_multiple_of(3) {
             return Err(GeometryError::NotTriangles { name, index_count: indices.len() });
         }
         for (i, v) in vertices.iter_mut().enumerate() {
