@@ -123,7 +123,7 @@ fn print_costs(frame: u64, report: &oxygen::FrameReport) {
     for v in &report.views {
         println!(
             "| {} | {:?} | {} | {:.3} | {:.3} | {} | {} | {} | {} | {} | {:.2} |",
-            v.name.clone().unwrap_or_else(|| v.view.to_string()),
+            v.name.as_deref().map_or_else(|| v.view.to_string(), str::to_owned),
             v.role,
             v.why.map_or("follows its owner".to_owned(), |w| format!("{w:?}")),
             v.prep_seconds * 1e3,

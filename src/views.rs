@@ -218,7 +218,7 @@ pub(crate) struct ViewEntry {
     pub(crate) visibility: Option<Visibility>,
     pub(crate) shown: Option<(crate::WindowId, crate::WindowRect)>,
     pub(crate) msaa: oxygen_gpu::Msaa,
-    pub(crate) name: Option<String>,
+    pub(crate) name: Option<Arc<str>>,
     pub(crate) labels: LabelSet,
     pub(crate) schedule: Schedule,
     pub(crate) priority: u32,
@@ -312,7 +312,7 @@ impl Views {
                 visibility: desc.visibility,
                 shown: desc.shown,
                 msaa: desc.msaa,
-                name: desc.name,
+                name: desc.name.map(Arc::from),
                 labels: desc.labels,
                 schedule: desc.schedule,
                 priority: desc.priority,
@@ -493,6 +493,13 @@ impl Views {
     /// The name a view was registered with ([`ViewDesc::named`]), if any.
     pub fn name(&self, view: ViewId) -> Option<&str> {
         self.entries.get(&view)?.name.as_deref()
+    }
+
+    /// [`Views::name`] shared, for the frame's reports: a count goes up,
+    /// no string is copied (a 1 024-camera batch named every camera's
+    /// report anew each frame).
+    pub(crate) fn shared_name(&self, view: ViewId) -> Option<Arc<str>> {
+        self.entries.get(&view)?.name.clone()
     }
 
     /// The view called `name`, if one is (the first registered, when

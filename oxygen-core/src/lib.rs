@@ -53,7 +53,8 @@ pub use scene::{
 pub use shadow::{Cascade, CascadeResolver, CascadeSettings, cascade_splits, fit_cascade};
 pub use texture::{ColorSpace, Filter, Sampling, TextureError, TextureImage, Wrap};
 pub use view::{
-    DLookAtResolver, LookAtResolver, ResolvedView, ViewContext, ViewError, ViewId, ViewIdRange, ViewIds, ViewResolver,
+    DLookAtResolver, LookAtResolver, ResolvedView, ViewContext, ViewError, ViewId, ViewIdHasher, ViewIdHashing,
+    ViewIdMap, ViewIdRange, ViewIdSet, ViewIds, ViewResolver,
 };
 
 /// Re-exported so that users name the same `glam` types Oxygen uses.

@@ -28,6 +28,58 @@ pub struct ViewId {
     index: u32,
 }
 
+/// The hasher of maps and sets keyed by [`ViewId`] ([`ViewIdMap`],
+/// [`ViewIdSet`]): a multiply-and-rotate mix of the id's two words, where
+/// the standard library's SipHash costs a 1 024-camera batch more than a
+/// microsecond a camera a frame in lookups. Ids come from this crate's
+/// allocators, never from outside, so nothing can choose keys that collide.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ViewIdHasher(u64);
+
+impl ViewIdHasher {
+    fn mix(&mut self, word: u64) {
+        // A large odd constant (2^64 / φ): the multiply carries every bit
+        // of the word into the high bits, where hash tables read their tags.
+        self.0 = (self.0.rotate_left(5) ^ word).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+    }
+}
+
+impl std::hash::Hasher for ViewIdHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for chunk in bytes.chunks(8) {
+            let mut word = [0u8; 8];
+            word[..chunk.len()].copy_from_slice(chunk);
+            self.mix(u64::from_le_bytes(word));
+        }
+    }
+    fn write_u8(&mut self, n: u8) {
+        self.mix(u64::from(n));
+    }
+    fn write_u32(&mut self, n: u32) {
+        self.mix(u64::from(n));
+    }
+    fn write_u64(&mut self, n: u64) {
+        self.mix(n);
+    }
+    fn write_isize(&mut self, n: isize) {
+        self.mix(n as u64);
+    }
+    fn write_usize(&mut self, n: usize) {
+        self.mix(n as u64);
+    }
+}
+
+/// Builds [`ViewIdHasher`]s.
+pub type ViewIdHashing = std::hash::BuildHasherDefault<ViewIdHasher>;
+/// A hash map keyed by [`ViewId`] with the cheap [`ViewIdHasher`]
+/// (`ViewIdMap::default()` makes one).
+pub type ViewIdMap<V> = std::collections::HashMap<ViewId, V, ViewIdHashing>;
+/// A hash set of [`ViewId`]s with the cheap [`ViewIdHasher`].
+pub type ViewIdSet = std::collections::HashSet<ViewId, ViewIdHashing>;
+
 /// Who hands out a [`ViewId`]: each range has its own allocator, so ids of
 /// different ranges never collide.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -466,6 +518,41 @@ mod tests {
     use glam::Vec4;
 
     use super::*;
+
+    /// The cheap hasher tells ids apart: 4 096 ids of three ranges hash to
+    /// 12 288 different values, and a run of 1 024 cameras' ids spreads
+    /// over the top seven bits (the tags a hash table probes by) and the
+    /// low ones (its buckets), none of them used much more than its share.
+    #[test]
+    fn view_ids_hash_apart() {
+        use std::hash::BuildHasher;
+        let hashing = ViewIdHashing::default();
+        let mut all = std::collections::HashSet::new();
+        for range in [ViewIdRange::Application, ViewIdRange::Shadow, ViewIdRange::ProbeFace] {
+            let mut ids = ViewIds::new(range);
+            for _ in 0..4096 {
+                assert!(all.insert(hashing.hash_one(ids.allocate())));
+            }
+        }
+        let mut ids = ViewIds::new(ViewIdRange::Application);
+        let hashes: Vec<u64> = (0..1024).map(|_| hashing.hash_one(ids.allocate())).collect();
+        for (what, bucket) in [("top 7 bits", 57u32), ("low 7 bits", 0)] {
+            let mut counts = [0u32; 128];
+            for h in &hashes {
+                counts[((h >> bucket) & 127) as usize] += 1;
+            }
+            let most = counts.iter().max().copied().unwrap_or(0);
+            // 8 a value on average.
+            assert!(most <= 24, "{what}: {most} of 1 024 ids share a value");
+        }
+        let mut map: ViewIdMap<u32> = ViewIdMap::default();
+        let mut ids = ViewIds::new(ViewIdRange::Shadow);
+        let keys: Vec<ViewId> = (0..100).map(|_| ids.allocate()).collect();
+        for (i, k) in keys.iter().enumerate() {
+            map.insert(*k, i as u32);
+        }
+        assert!(keys.iter().enumerate().all(|(i, k)| map.get(k) == Some(&(i as u32))));
+    }
 
     #[test]
     fn an_f64_look_at_thirty_million_units_out_sees_what_it_sees_at_the_origin() {

@@ -5,8 +5,6 @@
 //! cameras together), read back without waiting, so a report carries the
 //! times of a frame one or two before it.
 
-use std::collections::HashMap;
-
 use oxygen_core::ViewId;
 
 use std::sync::Arc;
@@ -31,7 +29,7 @@ pub(crate) struct GpuTimer {
     /// The first view of each job of the frame in flight, in job order.
     timed_jobs: Vec<ViewId>,
     /// The latest GPU time of each job, under its first view.
-    last_jobs: HashMap<ViewId, f64>,
+    last_jobs: oxygen_core::ViewIdMap<f64>,
 }
 
 /// The jobs' timestamps: a query set with room for `capacity` jobs and the
@@ -101,7 +99,7 @@ impl GpuTimer {
             last_seconds: None,
             jobs: None,
             timed_jobs: Vec::new(),
-            last_jobs: HashMap::new(),
+            last_jobs: oxygen_core::ViewIdMap::default(),
         })
     }
 

@@ -99,7 +99,7 @@ pub struct Renderer {
     streams: streams::Streams,
     schedules: schedules::Schedules,
     /// What the application draws over each view ([`Renderer::overlay`]).
-    overlays: std::collections::HashMap<ViewId, std::sync::Mutex<oxygen_overlay::Overlay>>,
+    overlays: oxygen_core::ViewIdMap<std::sync::Mutex<oxygen_overlay::Overlay>>,
     settings: FrameSettings,
     frames: Frames,
 }
@@ -116,7 +116,7 @@ struct Frames {
     last: Vec<(ViewId, ViewRole)>,
     /// Why each view the last frame skipped was skipped, kept until it
     /// renders again: a readback of it says so.
-    skipped: std::collections::HashMap<ViewId, String>,
+    skipped: oxygen_core::ViewIdMap<String>,
     /// How the last frame drew (its render origin, what its pipelines
     /// carry): what an ID render between frames draws the last frame's
     /// draws with ([`Renderer::pick`]).

@@ -82,7 +82,7 @@ pub(crate) struct PreparedFrame {
     /// Bytes written into GPU buffers.
     pub(crate) uploaded_bytes: u64,
     /// Why each registered view of the frame renders (its schedule).
-    pub(crate) why: HashMap<ViewId, RenderReason>,
+    pub(crate) why: oxygen_core::ViewIdMap<RenderReason>,
     /// The registered views the schedules left idle, and why.
     pub(crate) idle: Vec<IdleView>,
 }
@@ -158,7 +158,7 @@ impl Renderer {
         let frame = self.prep.begin_frame(scene, &mut self.heap.slots)?;
         // Which views render (their schedules), before any is culled.
         let (kept, idle) = self.schedules.decide(clock, scene, frame, registered, &self.views);
-        let why: HashMap<ViewId, RenderReason> = kept.iter().map(|(v, reason)| (v.id, *reason)).collect();
+        let why: oxygen_core::ViewIdMap<RenderReason> = kept.iter().map(|(v, reason)| (v.id, *reason)).collect();
         let registered: Vec<ResolvedFrameView> = kept.into_iter().map(|(v, _)| v).collect();
 
         let owners: Vec<_> = registered
@@ -273,7 +273,7 @@ impl Renderer {
         self.reference.prepare(&self.gpu, &mut self.heap, &self.prep, &views)?;
         // A set: a scan of the frame's views per clustered view is quadratic
         // in a batch of a thousand cameras.
-        let rendered: std::collections::HashSet<ViewId> = views.iter().map(|v| v.id).collect();
+        let rendered: oxygen_core::ViewIdSet = views.iter().map(|v| v.id).collect();
         self.lighting.retain_views(|id| rendered.contains(&id));
         let uploaded_bytes =
             self.heap.bytes_written() - heap_bytes_before + constants_bytes + self.visibility.uploaded_last_frame();

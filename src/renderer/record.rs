@@ -173,7 +173,7 @@ impl Renderer {
     /// the local shadow views), ties broken by id. Links were checked for
     /// cycles at registration.
     fn link_order(&self, plan: &PreparedFrame) -> (Vec<usize>, Vec<Vec<ViewId>>) {
-        let index: BTreeMap<ViewId, usize> = plan.views.iter().enumerate().map(|(i, v)| (v.id, i)).collect();
+        let index: oxygen_core::ViewIdMap<usize> = plan.views.iter().enumerate().map(|(i, v)| (v.id, i)).collect();
         let local: Vec<usize> =
             (0..plan.views.len()).filter(|i| matches!(plan.views[*i].target, TargetPlan::AtlasLayer { .. })).collect();
         let dependencies = |view: &FrameView| -> BTreeSet<usize> {
@@ -414,7 +414,7 @@ impl Renderer {
                 let (stats, busy) = if k == 0 { (recorded.stats, recorded.busy) } else { Default::default() };
                 reports.push(ViewReport {
                     view: view.id,
-                    name: self.views.name(view.id).map(str::to_owned),
+                    name: self.views.shared_name(view.id),
                     role: view.role,
                     draws: frames[i].draws().len()
                         + match (frames[i].gpu_plan(), &self.visibility.gpu) {

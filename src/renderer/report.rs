@@ -55,7 +55,7 @@ pub struct ViewReport {
     pub view: ViewId,
     /// Its name ([`crate::ViewDesc::named`]; a batch camera's defaults to
     /// its batch's name and tile), if it has one.
-    pub name: Option<String>,
+    pub name: Option<std::sync::Arc<str>>,
     /// What it is for.
     pub role: ViewRole,
     /// Draws after culling. On a GPU visibility path the GPU counts the

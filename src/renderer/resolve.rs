@@ -132,7 +132,7 @@ impl Renderer {
                 }),
                 Err(e) => {
                     warn!(view = %id, "view skipped this frame: {e}");
-                    let name = entry.name.clone();
+                    let name = entry.name.as_deref().map(str::to_owned);
                     warnings.push(FrameWarning::ViewSkipped { view: *id, name, reason: e.to_string() });
                 }
             }

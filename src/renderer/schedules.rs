@@ -72,7 +72,7 @@ struct ViewState {
 /// last frame.
 #[derive(Default)]
 pub(crate) struct Schedules {
-    views: HashMap<ViewId, ViewState>,
+    views: oxygen_core::ViewIdMap<ViewState>,
     seen: HashMap<NodeKey, Seen>,
     /// (scene id, assets revision) of the last frame that looked.
     scene: Option<(u64, u64)>,

@@ -74,7 +74,7 @@ pub(crate) struct Targets {
     /// Boxed: a `ViewGpu` is kilobytes (its constants' CPU copy), and a
     /// frame of a thousand cameras looks each up several times; probing
     /// the map then stays within small entries.
-    views: HashMap<ViewId, Box<ViewGpu>>,
+    views: oxygen_core::ViewIdMap<Box<ViewGpu>>,
     /// Each batch's atlas, kept between frames (its cameras' images stay
     /// readable) and reallocated when the batch outgrows it.
     atlases: HashMap<BatchId, TileAtlas>,
@@ -90,7 +90,7 @@ pub(crate) struct Targets {
 impl Targets {
     pub(crate) fn new(hdr_format: HdrFormat, budget: u64) -> Self {
         Targets {
-            views: HashMap::new(),
+            views: oxygen_core::ViewIdMap::default(),
             atlases: HashMap::new(),
             blocks: HashMap::new(),
             blocks_made: 0,

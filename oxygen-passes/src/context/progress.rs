@@ -12,7 +12,7 @@ pub struct FrameProgress {
 struct ProgressState {
     /// A set, not a list: a batch of a thousand cameras completes a
     /// thousand views a frame.
-    pending: std::collections::HashSet<ViewId>,
+    pending: oxygen_core::ViewIdSet,
     wakers: Vec<std::task::Waker>,
 }
 

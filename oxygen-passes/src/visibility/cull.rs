@@ -177,13 +177,13 @@ pub struct GpuVisibility {
     /// Bound in place of a pyramid by views without occlusion culling.
     no_hiz: wgpu::Buffer,
     hiz: HizPipelines,
-    views: HashMap<ViewId, ViewCull>,
+    views: oxygen_core::ViewIdMap<ViewCull>,
     /// Batches whose cameras are culled in one dispatch, by the key their
     /// requests carry.
     batches: HashMap<u64, BatchCull>,
     /// Each batch camera's batch and first counter this frame (a lookup a
     /// camera, not a search through its batch: a thousand cameras ask).
-    batch_members: HashMap<ViewId, (u64, u32)>,
+    batch_members: oxygen_core::ViewIdMap<(u64, u32)>,
     uploaded_last_frame: u64,
     /// The GPU scene rebuild the buffers hold.
     uploaded_rebuild: Option<u64>,
@@ -255,9 +255,9 @@ impl GpuVisibility {
             layout,
             no_hiz,
             hiz: HizPipelines::new(device),
-            views: HashMap::new(),
+            views: oxygen_core::ViewIdMap::default(),
             batches: HashMap::new(),
-            batch_members: HashMap::new(),
+            batch_members: oxygen_core::ViewIdMap::default(),
             uploaded_last_frame: 0,
             uploaded_rebuild: None,
         }
