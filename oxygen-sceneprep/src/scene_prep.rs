@@ -66,6 +66,10 @@ pub enum PrepError {
 }
 
 /// Rejects a request list that names one view twice.
+/// A view's draw-metadata and indirect-argument ranges before it has any.
+const UNALLOCATED_VIEW: [Allocation; 2] =
+    [Allocation::empty(DomainKind::DrawMetadata), Allocation::empty(DomainKind::IndirectArgs)];
+
 /// `Err` naming a view requested twice. Sorts the ids into `scratch`
 /// (kept by the caller, so a steady frame allocates nothing): a scan of
 /// the earlier requests for each one cost a 1 024-camera batch half a
@@ -674,10 +678,11 @@ impl ScenePrep {
                     self.geometry.resolve(*handle, geometry, slots)?;
                 }
             }
-            let view_id = request.view.view_id;
-            if let Some(old) = self.view_allocations.remove(&view_id) {
-                old.into_iter().try_for_each(|a| slots.free(a))?;
-            }
+            // One lookup a view, its ranges replaced in place: a removal and
+            // an insertion a view a frame left the table to probe past
+            // deleted entries.
+            let held = self.view_allocations.entry(request.view.view_id).or_insert(UNALLOCATED_VIEW);
+            std::mem::replace(held, UNALLOCATED_VIEW).into_iter().try_for_each(|a| slots.free(a))?;
             // A GPU path's room comes first (see `gpu_scene`'s layout).
             let (gpu_draws, gpu_commands) = match request.options.visibility {
                 Visibility::Cpu => (0, 0),
@@ -688,8 +693,15 @@ impl ScenePrep {
                 ),
             };
             w.draw_allocation = slots.allocate(DomainKind::DrawMetadata, gpu_draws + w.keyed.len() as u32)?;
-            w.indirect_allocation = slots.allocate(DomainKind::IndirectArgs, gpu_commands + w.keyed.len() as u32)?;
-            self.view_allocations.insert(view_id, [w.draw_allocation, w.indirect_allocation]);
+            w.indirect_allocation = match slots.allocate(DomainKind::IndirectArgs, gpu_commands + w.keyed.len() as u32)
+            {
+                Ok(a) => a,
+                Err(e) => {
+                    slots.free(std::mem::replace(&mut w.draw_allocation, UNALLOCATED_VIEW[0]))?;
+                    return Err(e.into());
+                }
+            };
+            *held = [w.draw_allocation, w.indirect_allocation];
             total_draws += w.keyed.len() as u64;
         }
         self.stats.draws_last_frame = total_draws;
