@@ -90,6 +90,21 @@ fn corner_index(draw: DrawMetadata, t: u32, k: u32) -> u32 {
     return u32(i32(deferred_indices[draw.index_slot + 3u * t + k]) + i32(draw.vertex_slot) + draw.base_vertex);
 }
 
+// Triangle `t`'s three corners through the vertex stage's function.
+struct Triangle {
+    a: MeshVarying,
+    b: MeshVarying,
+    c: MeshVarying,
+}
+
+fn triangle_of(draw: DrawMetadata, draw_index: u32, t: u32) -> Triangle {
+    return Triangle(
+        mesh_vertex(draw_index, corner_index(draw, t, 0u)),
+        mesh_vertex(draw_index, corner_index(draw, t, 1u)),
+        mesh_vertex(draw_index, corner_index(draw, t, 2u)),
+    );
+}
+
 // Whether the triangle of clip-space corners a, b, c faces the camera as
 // the draw's pipeline sees it: counter-clockwise on screen (clockwise for a
 // mirrored draw), the sign of the determinant of the corners' (x, y, w),
@@ -111,12 +126,10 @@ struct Candidate {
 }
 
 fn candidate(draw: DrawMetadata, draw_index: u32, t: u32, ndc: vec2<f32>) -> Candidate {
-    let a = mesh_vertex(draw_index, corner_index(draw, t, 0u));
-    let b = mesh_vertex(draw_index, corner_index(draw, t, 1u));
-    let c = mesh_vertex(draw_index, corner_index(draw, t, 2u));
-    let ca = a.clip_position;
-    let cb = b.clip_position;
-    let cc = c.clip_position;
+    let corners = triangle_of(draw, draw_index, t);
+    let ca = corners.a.clip_position;
+    let cb = corners.b.clip_position;
+    let cc = corners.c.clip_position;
     let w = barycentrics(ca, cb, cc, ndc);
     let score = min(w.x, min(w.y, w.z));
     // Reverse-Z: the nearer surface has the larger depth.
@@ -127,7 +140,7 @@ fn candidate(draw: DrawMetadata, draw_index: u32, t: u32, ndc: vec2<f32>) -> Can
     } else if rank > 0 && (draw.pass_mask & PASS_MASKED) != 0u {
         // The visibility pass cut out what the alpha cuts out; its mip
         // level is not known here, so the alpha is read at the finest.
-        let mesh = weighted(a, b, c, w);
+        let mesh = weighted(corners.a, corners.b, corners.c, w);
         let material = material_at(material_handle_of(mesh));
         if base_color_of(mesh, material, UvDerivatives()).a < material.alpha_cutoff {
             rank = -1;
@@ -182,10 +195,10 @@ fn triangle_at(draw: DrawMetadata, draw_index: u32, corner: u32, ndc: vec2<f32>)
 fn surface_color(draw_index: u32, corner: u32, local: vec2<u32>, page: vec2<u32>) -> vec4<f32> {
     let draw = draw_metadata_domain[scene.renderer.draw_metadata_slot + draw_index];
     let centre = vec2<f32>(local) + 0.5;
-    let t = triangle_at(draw, draw_index, corner, tile_ndc(centre));
-    let a = mesh_vertex(draw_index, corner_index(draw, t, 0u));
-    let b = mesh_vertex(draw_index, corner_index(draw, t, 1u));
-    let c = mesh_vertex(draw_index, corner_index(draw, t, 2u));
+    let corners = triangle_of(draw, draw_index, triangle_at(draw, draw_index, corner, tile_ndc(centre)));
+    let a = corners.a;
+    let b = corners.b;
+    let c = corners.c;
     let ca = a.clip_position;
     let cb = b.clip_position;
     let cc = c.clip_position;
