@@ -326,6 +326,43 @@ fn each_pixel_shades_the_triangle_the_rasterizer_kept_among_those_sharing_its_fi
     }
 }
 
+/// Meshes get their triangle tables only once a batch shades deferred: a
+/// renderer that drew frames without one uploads its meshes anew when a
+/// deferred batch arrives, whose cameras then render what a renderer
+/// that had tables from its first frame renders.
+#[test]
+fn a_deferred_batch_registered_after_frames_without_one_gets_its_triangle_tables() {
+    if !deferred_here() {
+        return;
+    }
+    let size = UVec2::new(64, 64);
+    let camera = LookAtResolver::new(
+        Camera::perspective(40f32.to_radians(), 0.05, None),
+        Vec3::new(0.4, 0.4, 3.0),
+        Vec3::new(0.4, 0.4, 0.2),
+        size,
+    )
+    .expect("a valid camera");
+    let scene = fan_sharing_a_first_corner(false);
+    let setup = Setup { no_labels: true, ..Setup::default() };
+    let reference = render_with(&scene, &[camera], size, BatchShading::Deferred, &setup);
+    let mut renderer = Renderer::new_headless().expect("GPU tests need an adapter");
+    let early = renderer.register_batch(BatchDesc::new("forward", size)).unwrap();
+    renderer.add_camera(early, ViewDesc::new(camera)).unwrap();
+    for _ in 0..2 {
+        renderer.render_frame(&scene).unwrap();
+    }
+    let graph = BatchGraph { shading: BatchShading::Deferred, ..standard_batch_graph };
+    let late = renderer.register_batch(BatchDesc::new("late", size).with_graph(graph)).unwrap();
+    let id = renderer.add_camera(late, ViewDesc::new(camera)).unwrap();
+    let report = renderer.render_frame(&scene).unwrap();
+    let deferred: u32 = report.views.iter().map(|v| v.recorded.deferred_views).sum();
+    assert_eq!(deferred, 1, "the late batch's camera is shaded deferred");
+    let c = compare(&renderer.read_color(id).unwrap(), &reference.colors[0], 0);
+    // Measured: the same bytes.
+    assert!(c.differing == 0, "{} of {} pixels differ, worst {}", c.differing, c.total, c.worst);
+}
+
 #[test]
 fn an_adapter_that_cannot_shade_deferred_refuses_the_batch_with_a_reason() {
     let deferred = BatchGraph { shading: BatchShading::Deferred, ..standard_batch_graph };

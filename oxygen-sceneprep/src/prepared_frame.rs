@@ -130,6 +130,7 @@ pub struct PreparedSceneFrame {
     pub(crate) gpu: Option<GpuViewPlan>,
     pub(crate) deterministic: bool,
     pub(crate) surface_vertex_bits: u32,
+    pub(crate) triangle_tables: bool,
 }
 
 fn slot(a: &Allocation) -> String {
@@ -155,6 +156,7 @@ impl PreparedSceneFrame {
             gpu: None,
             deterministic: false,
             surface_vertex_bits: 1,
+            triangle_tables: false,
             slots: PreparedSlots::unallocated(),
         }
     }
@@ -270,11 +272,18 @@ impl PreparedSceneFrame {
     }
 
     /// Whether each pixel of this view can be named in the 32 bits of a
-    /// deferred visibility pass's surface id: the draw's index plus one in
-    /// the bits above [`Self::surface_vertex_bits`]; `Err` says why not
+    /// deferred visibility pass's surface id, and its triangle found from
+    /// the id: the meshes have their triangle tables, and the draw's index
+    /// plus one fits in the bits above [`Self::surface_vertex_bits`]; `Err` says why not
     /// (the view is then shaded forward). Counted on the view's draw range,
     /// which a GPU-culled view fills up to.
     pub fn surface_ids_fit(&self) -> Result<(), String> {
+        if !self.triangle_tables {
+            return Err(format!(
+                "{}: the meshes were uploaded without triangle tables (ScenePrep::set_triangle_tables)",
+                self.view_id
+            ));
+        }
         let bits = self.surface_vertex_bits;
         let draws = u64::from(self.slots.draw_metadata.count);
         let room = if bits >= 32 { 0 } else { (1u64 << (32 - bits)) - 1 };
@@ -430,6 +439,7 @@ mod tests {
         let view = ViewIds::new(ViewIdRange::Application).allocate();
         let mut frame = PreparedSceneFrame::empty(view, Arc::default());
         frame.surface_vertex_bits = bits;
+        frame.triangle_tables = true;
         if draws > 0 {
             frame.slots.draw_metadata = slots.allocate(DomainKind::DrawMetadata, draws).expect("a draw range");
         }
@@ -448,5 +458,9 @@ mod tests {
         assert!(frame(0, 31, &mut slots).surface_ids_fit().is_ok(), "one bit left: one draw");
         assert!(frame(0, 32, &mut slots).surface_ids_fit().is_err(), "no bit left for the draw");
         assert_eq!(frame(1, 5, &mut slots).renderer_constants(0.0).surface_vertex_bits, 5);
+        let mut untabled = frame(1, 5, &mut slots);
+        untabled.triangle_tables = false;
+        let error = untabled.surface_ids_fit().expect_err("no triangle tables");
+        assert!(error.contains("triangle tables"), "{error}");
     }
 }

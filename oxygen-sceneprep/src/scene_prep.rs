@@ -174,6 +174,9 @@ pub struct ScenePrep {
     debug_generations: bool,
     /// The deterministic mode ([`ScenePrep::set_deterministic`]).
     deterministic: bool,
+    /// Meshes get triangle tables from the next frame on
+    /// ([`ScenePrep::set_triangle_tables`]).
+    triangle_tables: bool,
     render_origin: DVec3,
     /// Frame-global slots of the frame begun (materials filled in at emit).
     frame_slots: PreparedSlots,
@@ -293,6 +296,7 @@ impl ScenePrep {
             stats: PrepStats::default(),
             debug_generations: false,
             deterministic: false,
+            triangle_tables: false,
             render_origin: DVec3::ZERO,
             frame_slots: PreparedSlots::unallocated(),
             frame_begun: false,
@@ -348,6 +352,21 @@ impl ScenePrep {
     /// Whether the deterministic mode is on.
     pub fn deterministic(&self) -> bool {
         self.deterministic
+    }
+
+    /// Whether meshes are uploaded with their triangle tables, which
+    /// deferred shading reads to find a pixel's triangle from its first
+    /// corner (`finalize/triangle_table.rs`): about half as much again of
+    /// index memory and the table's build at upload, so off until asked
+    /// for (the renderer asks when a batch shades deferred). A change
+    /// takes effect at the next frame, which uploads every mesh anew.
+    pub fn set_triangle_tables(&mut self, enabled: bool) {
+        self.triangle_tables = enabled;
+    }
+
+    /// Whether meshes are uploaded with their triangle tables.
+    pub fn triangle_tables(&self) -> bool {
+        self.triangle_tables
     }
 
     /// Threads views are prepared on.
@@ -498,6 +517,14 @@ impl ScenePrep {
                 self.ray_scene.forget_meshes();
             }
             self.cached_scene = Some(scene.id());
+        }
+        if self.geometry.triangle_tables() != self.triangle_tables {
+            // Every mesh is allocated and uploaded anew, in the other
+            // layout: what holds their slots forgets them.
+            let _span = info_span!("triangle_tables", enabled = self.triangle_tables).entered();
+            self.geometry.set_triangle_tables(self.triangle_tables, slots)?;
+            self.ray_scene.forget_meshes();
+            self.gpu_scene_generation = None;
         }
         self.frame.collect(scene, self.render_origin);
         if !self.frame.reused_last() {
@@ -847,8 +874,13 @@ impl ScenePrep {
             }
             // The triangle table, its length and the turned indices
             // (finalize/triangle_table.rs), `index_slot` past the first two.
-            let layout = TriangleLayout::new(geometry.indices(), slots.vertex_count);
-            heap.write(queue, &slots.indices, 0, &layout.words)?;
+            if slots.triangle_table {
+                let layout = TriangleLayout::new(geometry.indices(), slots.vertex_count);
+                heap.write(queue, &slots.indices, 0, &layout.words)?;
+            } else {
+                let (turned, _) = crate::finalize::triangle_table::turn(geometry.indices(), slots.vertex_count);
+                heap.write(queue, &slots.indices, 0, &turned)?;
+            }
             self.stats.geometry_uploads += 1;
         }
         // Every view's draws, then every view's commands, as few writes as

@@ -57,7 +57,14 @@ impl Renderer {
         if deferred && let Err(reason) = self.pipelines.deferred_layouts(&self.gpu.device) {
             return Err(RenderError::InvalidBatch { name: desc.name, reason });
         }
-        self.views.register_batch(desc)
+        let id = self.views.register_batch(desc)?;
+        if deferred {
+            // Deferred shading finds a pixel's triangle in its mesh's
+            // table: meshes are uploaded with them from the next frame on
+            // (and keep them after the batch is gone).
+            self.prep.set_triangle_tables(true);
+        }
+        Ok(id)
     }
 
     /// Adds a camera to `batch` ([`Views::add_camera`](crate::views::Views::add_camera)):

@@ -108,6 +108,7 @@ pub(crate) fn emit_view(frame: &FrameEmit<'_>, view: &ViewEmit<'_>, out: &mut Pr
     out.debug_generations = frame.debug_generations;
     out.deterministic = view.deterministic;
     out.surface_vertex_bits = frame.geometry.surface_vertex_bits();
+    out.triangle_tables = frame.geometry.triangle_tables();
     out.transforms = Arc::clone(frame.transforms);
     out.slots = PreparedSlots {
         draw_metadata: view.draw_allocation,

@@ -19,12 +19,16 @@ pub struct GeometrySlots {
     /// Vertex range: the vertices, then the attribute records when the
     /// mesh has them.
     pub vertices: Allocation,
-    /// Index-domain range: the geometry's triangle table, its length, then
-    /// its indices (see `triangle_table`).
+    /// Index-domain range: with triangle tables
+    /// ([`GeometryCache::set_triangle_tables`]), the geometry's table, its
+    /// length, then its indices turned (see `triangle_table`); without,
+    /// its indices as given.
     pub indices: Allocation,
     /// First index of the geometry in the index domain (past its triangle
-    /// table): a draw's `index_slot`.
+    /// table when it has one): a draw's `index_slot`.
     pub index_slot: u32,
+    /// Whether the range holds a triangle table before the indices.
+    pub triangle_table: bool,
     /// Vertices of the geometry (its vertex range holds more records:
     /// morph blocks, attributes, skin).
     pub vertex_count: u32,
@@ -44,6 +48,8 @@ pub struct GeometryCache {
     with_attributes: usize,
     /// The most vertices a resident mesh has.
     most_vertices: u32,
+    /// Meshes are allocated and uploaded with their triangle tables.
+    triangle_tables: bool,
 }
 
 impl GeometryCache {
@@ -77,8 +83,14 @@ impl GeometryCache {
         // records is refused as any range too large for the domain is.
         let n = geometry.vertices().len() as u32;
         let index_count = geometry.indices().len() as u32;
-        let words = triangle_table::index_domain_words(n, index_count).unwrap_or(u32::MAX);
-        let before = triangle_table::words_before_indices(n, index_count).unwrap_or(u32::MAX);
+        let (words, before) = if self.triangle_tables {
+            (
+                triangle_table::index_domain_words(n, index_count).unwrap_or(u32::MAX),
+                triangle_table::words_before_indices(n, index_count).unwrap_or(u32::MAX),
+            )
+        } else {
+            (index_count, 0)
+        };
         let indices = match slots.allocate(DomainKind::Indices, words) {
             Ok(i) => i,
             Err(e) => {
@@ -101,6 +113,7 @@ impl GeometryCache {
             vertices,
             indices,
             index_slot: indices.start.saturating_add(before),
+            triangle_table: self.triangle_tables,
             vertex_count: n,
             attributes,
             skin,
@@ -131,6 +144,23 @@ impl GeometryCache {
     /// a second UV set), which the mesh shaders then pass on.
     pub fn any_attributes(&self) -> bool {
         self.with_attributes > 0
+    }
+
+    /// Whether meshes get their triangle tables (deferred shading's: about
+    /// half as much again of index memory, and the table's build at
+    /// upload), off until some view needs them. Changing it frees every
+    /// mesh's slots, which the next frame allocates and uploads anew.
+    pub fn set_triangle_tables(&mut self, enabled: bool, slots: &mut SlotAllocators) -> Result<(), SlotError> {
+        if self.triangle_tables != enabled {
+            self.clear(slots)?;
+            self.triangle_tables = enabled;
+        }
+        Ok(())
+    }
+
+    /// Whether meshes get their triangle tables.
+    pub fn triangle_tables(&self) -> bool {
+        self.triangle_tables
     }
 
     /// How many low bits of a visibility pass's surface id name the vertex
@@ -271,7 +301,15 @@ mod tests {
         let mut cache = GeometryCache::default();
         assert_eq!(cache.surface_vertex_bits(), 1, "at least one bit");
         let cube = mesh("cube", 1.0);
+        // Without triangle tables (the default) the range is the indices.
         let s = cache.resolve(handle(1, 1), &cube, &mut slots)?;
+        assert_eq!((s.index_slot, s.indices.count, s.triangle_table), (s.indices.start, 36, false));
+        // Turning them on frees every mesh; it comes back with its table.
+        cache.set_triangle_tables(true, &mut slots)?;
+        assert_eq!((cache.resident(), cache.get(handle(1, 1))), (0, None));
+        assert_eq!(slots.get(DomainKind::Indices).live_allocations(), 0);
+        let s = cache.resolve(handle(1, 1), &cube, &mut slots)?;
+        assert!(s.triangle_table);
         assert_eq!(cache.surface_vertex_bits(), 5, "24 vertices: values 0..=23");
         assert_eq!((s.vertex_count, s.index_slot), (24, s.indices.start + 24 + 1 + 12 + 1));
         assert_eq!(s.indices.count, 24 + 1 + 12 + 1 + 36, "the table, its length, the indices");

@@ -16,7 +16,11 @@
 //!   two triangles a vertex;
 //! * the triangle table: for each vertex, the triangles starting at it.
 //!
-//! Both go into the geometry's range of the index domain, table first:
+//! Every mesh is uploaded turned; the table only while ScenePrep is asked
+//! for tables (`ScenePrep::set_triangle_tables`, which the renderer turns
+//! on when a batch shades deferred: it costs about half as much again of
+//! index memory). Both then go into the geometry's range of the index
+//! domain, table first:
 //!
 //! ```text
 //! [ starts: V + 1 words ][ triangles: T words ][ L ][ indices: 3T words ]
@@ -54,6 +58,27 @@ pub(crate) struct TriangleLayout {
     pub(crate) words: Vec<u32>,
 }
 
+/// `indices` with each triangle turned to start at whichever of its
+/// corners the fewest earlier triangles start at (its own first corner on a
+/// tie), its corners rotated, never swapped; and how many triangles start
+/// at each vertex. Meshes are uploaded turned whether or not they get a
+/// table, so that a mesh rasterizes the same way (to the last bit of its
+/// interpolated values) with triangle tables on or off.
+pub(crate) fn turn(indices: &[u32], vertex_count: u32) -> (Vec<u32>, Vec<u32>) {
+    let mut turned: Vec<u32> = Vec::with_capacity(indices.len());
+    let mut starting = vec![0u32; vertex_count as usize];
+    for corners in indices.chunks_exact(3) {
+        let count = |k: usize| starting.get(corners[k] as usize).copied().unwrap_or(u32::MAX);
+        let first = (0..3).min_by_key(|&k| (count(k), k)).unwrap_or(0);
+        let [a, b, c] = [corners[first], corners[(first + 1) % 3], corners[(first + 2) % 3]];
+        if let Some(n) = starting.get_mut(a as usize) {
+            *n += 1;
+        }
+        turned.extend_from_slice(&[a, b, c]);
+    }
+    (turned, starting)
+}
+
 impl TriangleLayout {
     /// The layout of `indices` (triangles, each index below
     /// `vertex_count`, as `Geometry` guarantees) over `vertex_count`
@@ -63,17 +88,7 @@ impl TriangleLayout {
     pub(crate) fn new(indices: &[u32], vertex_count: u32) -> Self {
         let triangles = indices.len() / 3;
         let v = vertex_count as usize;
-        let mut turned: Vec<u32> = Vec::with_capacity(triangles * 3);
-        let mut starting = vec![0u32; v];
-        for corners in indices.chunks_exact(3) {
-            let count = |k: usize| starting.get(corners[k] as usize).copied().unwrap_or(u32::MAX);
-            let first = (0..3).min_by_key(|&k| (count(k), k)).unwrap_or(0);
-            let [a, b, c] = [corners[first], corners[(first + 1) % 3], corners[(first + 2) % 3]];
-            if let Some(n) = starting.get_mut(a as usize) {
-                *n += 1;
-            }
-            turned.extend_from_slice(&[a, b, c]);
-        }
+        let (turned, starting) = turn(indices, vertex_count);
         // Counting sort of the triangles by first corner: `starts` are
         // positions in the table, which begins with the V + 1 starts.
         let header = v + 1;
