@@ -874,7 +874,7 @@ impl ScenePrep {
             }
             // The triangle table, its length and the turned indices
             // (finalize/triangle_table.rs), `index_slot` past the first two.
-            if slots.triangle_table {
+            if slots.triangle_table() {
                 let layout = TriangleLayout::new(geometry.indices(), slots.vertex_count);
                 heap.write(queue, &slots.indices, 0, &layout.words)?;
             } else {

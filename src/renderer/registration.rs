@@ -48,13 +48,7 @@ impl Renderer {
     /// [`Renderer::add_camera`].
     pub fn register_batch(&mut self, desc: BatchDesc) -> Result<BatchId, RenderError> {
         let deferred = desc.graph.shading == crate::batch::BatchShading::Deferred;
-        if deferred && self.gpu.adapter_info.backend == wgpu::Backend::Gl {
-            return Err(RenderError::InvalidBatch {
-                name: desc.name,
-                reason: oxygen_passes::DeferredShading::GL_REFUSAL.into(),
-            });
-        }
-        if deferred && let Err(reason) = self.pipelines.deferred_layouts(&self.gpu.device) {
+        if deferred && let Err(reason) = oxygen_passes::DeferredShading::adapter_can(&self.gpu, &self.pipelines) {
             return Err(RenderError::InvalidBatch { name: desc.name, reason });
         }
         let id = self.views.register_batch(desc)?;

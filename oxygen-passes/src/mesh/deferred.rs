@@ -25,25 +25,34 @@ use wgpu::util::DeviceExt;
 use super::ForwardLitConfig;
 use crate::{CommandRecorder, Exposure, MeshPass, PassError, RenderContext, ShaderFeatures};
 
+/// [`DeferredParams::flags`] bit: the environment is drawn behind the scene.
+const DEFERRED_SKY: u32 = 1;
+/// [`DeferredParams::flags`] bit: exact depth ties went to the later triangle.
+const DEFERRED_LAST_TIE_WINS: u32 = 2;
+
+/// The flag bits as WGSL constants (`mesh/deferred_constants`).
+pub(crate) fn wgsl_constants() -> String {
+    crate::shaders::compose::u32_constants(&[
+        ("DEFERRED_SKY", DEFERRED_SKY),
+        ("DEFERRED_LAST_TIE_WINS", DEFERRED_LAST_TIE_WINS),
+    ])
+}
+
 oxygen_gpu::gpu_struct! {
     /// The deferred pass's uniform block (`mesh/deferred.wgsl`).
     #[derive(Debug, PartialEq)]
-    pub(crate) struct DeferredParams: 48 bytes {
+    pub(crate) struct DeferredParams: 32 bytes {
         /// Pixels of every tile.
         pub(crate) size: [u32; 2] => "vec2<u32>",
         /// Tiles dispatched.
         pub(crate) tiles: u32,
-        /// 1 when the environment is drawn behind the scene.
-        pub(crate) sky: u32,
+        /// `DEFERRED_SKY`: the environment is drawn behind the scene;
+        /// `DEFERRED_LAST_TIE_WINS`: the visibility pass's depth test let
+        /// the later of two equally deep triangles win (`GreaterEqual`, the
+        /// deterministic mode; else the earlier kept the pixel).
+        pub(crate) flags: u32,
         /// Display colour where nothing was drawn (tone-mapped, linear).
         pub(crate) clear: [f32; 4] => "vec4<f32>",
-        /// 1 when the visibility pass's depth test let the later of two
-        /// equally deep triangles win (`GreaterEqual`, the deterministic
-        /// mode), 0 when the earlier kept the pixel (`Greater`).
-        pub(crate) last_tie_wins: u32,
-        pub(crate) pad0: u32,
-        pub(crate) pad1: u32,
-        pub(crate) pad2: u32,
     }
 }
 
@@ -69,12 +78,20 @@ pub struct DeferredShading {
 }
 
 impl DeferredShading {
-    /// Why GL cannot shade deferred: what registering a deferred batch on
-    /// it answers.
-    pub const GL_REFUSAL: &'static str = "deferred shading is not offered on GL: its flat varyings take a \
-         triangle's last vertex (WGSL's `first` sampling, which the visibility pass needs, is missing), and \
-         its compute stage would bind 17 sampled textures, past GL's limit of 16; shade the batch forward \
-         (BatchShading::Forward)";
+    /// Whether the adapter of `gpu` can shade deferred at all; `Err` says
+    /// why not (what registering a deferred batch answers, and why a frame
+    /// is shaded forward). GL cannot: its flat varyings take a triangle's
+    /// last vertex, and its compute stage binds 16 sampled textures.
+    pub fn adapter_can(gpu: &oxygen_gpu::GpuContext, pipelines: &crate::Pipelines) -> Result<(), String> {
+        if gpu.adapter_info.backend == wgpu::Backend::Gl {
+            return Err("deferred shading is not offered on GL: its flat varyings take a triangle's last vertex \
+                 (WGSL's `first` sampling, which the visibility pass needs, is missing), and its compute stage \
+                 would bind 17 sampled textures, past GL's limit of 16; shade the batch forward \
+                 (BatchShading::Forward)"
+                .into());
+        }
+        pipelines.deferred_layouts(&gpu.device).map(|_| ())
+    }
 
     /// The shading of `lit` (its clear colour and lighting switches),
     /// tone-mapped with `exposure` into the display colour.
@@ -93,10 +110,7 @@ impl DeferredShading {
     /// probes, clustered lights, screen-space effects).
     pub fn applies(&self, views: &[&RenderContext<'_>]) -> Result<(), String> {
         let Some(first) = views.first() else { return Ok(()) };
-        if first.gpu.adapter_info.backend == wgpu::Backend::Gl {
-            return Err(Self::GL_REFUSAL.into());
-        }
-        first.pipelines.deferred_layouts(&first.gpu.device)?;
+        Self::adapter_can(first.gpu, first.pipelines)?;
         let lit = &self.lit;
         if lit.ambient_occlusion.is_some() || lit.contact_shadows.is_some() || lit.screen_space_reflections.is_some() {
             return Err("screen-space effects are shaded forward".into());
@@ -177,13 +191,10 @@ impl DeferredShading {
             let params = DeferredParams {
                 size: [width, height],
                 tiles: tiles.len() as u32,
-                sky: u32::from(lead.lighting.has_environment()),
+                // The last tie wins as in the pipeline key (mesh pass).
+                flags: if lead.lighting.has_environment() { DEFERRED_SKY } else { 0 }
+                    | if lead.deterministic() { DEFERRED_LAST_TIE_WINS } else { 0 },
                 clear,
-                // As the pipeline key's `last_tie_wins` (mesh pass).
-                last_tie_wins: u32::from(lead.deterministic()),
-                pad0: 0,
-                pad1: 0,
-                pad2: 0,
             };
             let group = self.page_group(lead, &layout, targets, &params, &cameras, &tiles);
             {

@@ -20,6 +20,7 @@
 
 #include "mesh/shading.wgsl"
 
+#include "mesh/deferred_constants"
 #include "mesh/DeferredParams"
 #include "mesh/DeferredTile"
 
@@ -164,7 +165,7 @@ fn triangle_at(draw: DrawMetadata, draw_index: u32, corner: u32, ndc: vec2<f32>)
     }
     let first = draw.first_index / 3u;
     let last = (draw.first_index + draw.index_count) / 3u;
-    let later_wins_ties = deferred.last_tie_wins != 0u;
+    let later_wins_ties = (deferred.flags & DEFERRED_LAST_TIE_WINS) != 0u;
     var best = deferred_indices[table + begin];
     var best_c = Candidate(-2, 0.0, 0.0);
     for (var k = begin; k < end; k++) {
@@ -225,7 +226,7 @@ fn surface_color(draw_index: u32, corner: u32, local: vec2<u32>, page: vec2<u32>
 
 // Behind the scene: the environment along the pixel's ray, or the clear colour.
 fn background_color(local: vec2<u32>) -> vec4<f32> {
-    if deferred.sky == 0u {
+    if (deferred.flags & DEFERRED_SKY) == 0u {
         return deferred.clear;
     }
     let ndc = tile_ndc(vec2<f32>(local) + 0.5);

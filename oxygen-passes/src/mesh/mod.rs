@@ -10,6 +10,6 @@ mod id_render;
 mod pass;
 
 pub use deferred::DeferredShading;
-pub(crate) use deferred::{DeferredParams, DeferredTile, deferred_layout};
+pub(crate) use deferred::{DeferredParams, DeferredTile, deferred_layout, wgsl_constants as deferred_constants};
 pub use id_render::{ID_LABELS, id_targets, ids_over_depth, record_id_render, record_ids_over_depth, region_camera};
 pub use pass::{ColorOps, DrawList, ForwardLitConfig, MeshPass, ShadowFilter};

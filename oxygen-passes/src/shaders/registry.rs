@@ -32,6 +32,7 @@ pub(crate) static SOURCES: &[Source] = &[
     Source::wgsl("mesh/label_values.wgsl", include_str!("../mesh/label_values.wgsl")),
     Source::wgsl("mesh/visibility.wgsl", include_str!("../mesh/visibility.wgsl")),
     Source::wgsl("mesh/deferred.wgsl", include_str!("../mesh/deferred.wgsl")),
+    Source::generated("mesh/deferred_constants", crate::mesh::deferred_constants),
     Source::gpu_struct::<crate::mesh::DeferredParams>("mesh/DeferredParams"),
     Source::gpu_struct::<crate::mesh::DeferredTile>("mesh/DeferredTile"),
     Source::wgsl(DEFERRED_SCENE, include_str!("../mesh/deferred_scene.wgsl")),

@@ -27,8 +27,6 @@ pub struct GeometrySlots {
     /// First index of the geometry in the index domain (past its triangle
     /// table when it has one): a draw's `index_slot`.
     pub index_slot: u32,
-    /// Whether the range holds a triangle table before the indices.
-    pub triangle_table: bool,
     /// Vertices of the geometry (its vertex range holds more records:
     /// morph blocks, attributes, skin).
     pub vertex_count: u32,
@@ -36,6 +34,13 @@ pub struct GeometrySlots {
     pub attributes: u32,
     /// First skin record, [`oxygen_bindless::INVALID_SLOT`] when none.
     pub skin: u32,
+}
+
+impl GeometrySlots {
+    /// Whether the index range holds a triangle table before the indices.
+    pub fn triangle_table(&self) -> bool {
+        self.index_slot != self.indices.start
+    }
 }
 
 /// Lazily allocated geometry slots plus the uploads still owed.
@@ -83,14 +88,11 @@ impl GeometryCache {
         // records is refused as any range too large for the domain is.
         let n = geometry.vertices().len() as u32;
         let index_count = geometry.indices().len() as u32;
-        let (words, before) = if self.triangle_tables {
-            (
-                triangle_table::index_domain_words(n, index_count).unwrap_or(u32::MAX),
-                triangle_table::words_before_indices(n, index_count).unwrap_or(u32::MAX),
-            )
-        } else {
-            (index_count, 0)
+        let before = match self.triangle_tables {
+            true => triangle_table::words_before_indices(n, index_count).unwrap_or(u32::MAX),
+            false => 0,
         };
+        let words = before.saturating_add(index_count);
         let indices = match slots.allocate(DomainKind::Indices, words) {
             Ok(i) => i,
             Err(e) => {
@@ -113,7 +115,6 @@ impl GeometryCache {
             vertices,
             indices,
             index_slot: indices.start.saturating_add(before),
-            triangle_table: self.triangle_tables,
             vertex_count: n,
             attributes,
             skin,
@@ -303,13 +304,13 @@ mod tests {
         let cube = mesh("cube", 1.0);
         // Without triangle tables (the default) the range is the indices.
         let s = cache.resolve(handle(1, 1), &cube, &mut slots)?;
-        assert_eq!((s.index_slot, s.indices.count, s.triangle_table), (s.indices.start, 36, false));
+        assert_eq!((s.index_slot, s.indices.count, s.triangle_table()), (s.indices.start, 36, false));
         // Turning them on frees every mesh; it comes back with its table.
         cache.set_triangle_tables(true, &mut slots)?;
         assert_eq!((cache.resident(), cache.get(handle(1, 1))), (0, None));
         assert_eq!(slots.get(DomainKind::Indices).live_allocations(), 0);
         let s = cache.resolve(handle(1, 1), &cube, &mut slots)?;
-        assert!(s.triangle_table);
+        assert!(s.triangle_table());
         assert_eq!(cache.surface_vertex_bits(), 5, "24 vertices: values 0..=23");
         assert_eq!((s.vertex_count, s.index_slot), (24, s.indices.start + 24 + 1 + 12 + 1));
         assert_eq!(s.indices.count, 24 + 1 + 12 + 1 + 36, "the table, its length, the indices");

@@ -34,20 +34,10 @@
 //! starting at vertex `v`, each stored as its number in the geometry
 //! (indices `3t..3t + 3` from `index_slot`).
 
-/// Words a geometry of `vertex_count` vertices and `index_count` indices
-/// takes in the index domain: the table, its length and the indices.
-/// `None` past `u32`.
-pub(crate) fn index_domain_words(vertex_count: u32, index_count: u32) -> Option<u32> {
-    table_words(vertex_count, index_count)?.checked_add(1)?.checked_add(index_count)
-}
-
-/// Words before a geometry's first index: the table and its length.
+/// Words before a geometry's first index: the table (V + 1 starts and a
+/// word per triangle) and its length. `None` past `u32`.
 pub(crate) fn words_before_indices(vertex_count: u32, index_count: u32) -> Option<u32> {
-    table_words(vertex_count, index_count)?.checked_add(1)
-}
-
-fn table_words(vertex_count: u32, index_count: u32) -> Option<u32> {
-    vertex_count.checked_add(1)?.checked_add(index_count / 3)
+    vertex_count.checked_add(2)?.checked_add(index_count / 3)
 }
 
 /// A geometry's index-domain range as uploaded (see the module's
@@ -172,8 +162,8 @@ mod tests {
             let indices: Vec<u32> = (0..triangles * 3).map(|_| rng.next() % vertex_count).collect();
             let layout = TriangleLayout::new(&indices, vertex_count);
             let n = indices.len();
-            assert_eq!(layout.words.len() as u32, index_domain_words(vertex_count, n as u32).unwrap_or(0), "{case}");
             let before = words_before_indices(vertex_count, n as u32).unwrap_or(0) as usize;
+            assert_eq!(layout.words.len(), before + n, "{case}");
             assert_eq!(layout.words[before - 1] as usize, before - 1, "{case}: the length word");
             let turned = layout.indices(n);
             for (t, (a, b)) in indices.chunks_exact(3).zip(turned.chunks_exact(3)).enumerate() {
