@@ -305,7 +305,7 @@ impl Renderer {
             timer.time_jobs(jobs);
         }
         self.stream(&recorded, clock)?;
-        self.targets.hold(&recorded.rendered);
+        self.targets.hold(&recorded.rendered, &prepared.views);
         // The immediate shapes of the views that drew them are done.
         for view in &recorded.rendered {
             if let Some(overlay) = self.overlays.get_mut(&view.id) {

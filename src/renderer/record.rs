@@ -35,13 +35,24 @@ use super::{RenderError, Renderer, ViewReport, ViewRole};
 /// submitted.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct RenderedView {
-    pub(crate) id: ViewId,
     /// The view it was rendered as (relative to that frame's origin).
     pub(crate) view: ResolvedView,
     /// The same in world space.
     pub(crate) world: ResolvedView,
     /// Whether its HDR target holds the image (false when shading
     /// tone-mapped in place and wrote only the display colour).
+    pub(crate) hdr_written: bool,
+}
+
+/// A view the frame recorded. Its poses stay in the prepared frame (a
+/// camera's two are a kilobyte, copied once, into what its targets hold:
+/// [`RenderedView`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct RecordedView {
+    pub(crate) id: ViewId,
+    /// Its index in the prepared frame's views.
+    pub(crate) index: usize,
+    /// Whether its HDR target holds the image (see [`RenderedView`]).
     pub(crate) hdr_written: bool,
 }
 
@@ -53,8 +64,8 @@ pub(crate) struct RecordedFrame {
     pub(crate) timed_jobs: Option<Vec<ViewId>>,
     /// Per view, in submission order.
     pub(crate) reports: Vec<ViewReport>,
-    /// What each view recorded left in its targets, in submission order.
-    pub(crate) rendered: Vec<RenderedView>,
+    /// The views recorded, in submission order.
+    pub(crate) rendered: Vec<RecordedView>,
     /// Threads the views were recorded on.
     pub(crate) threads: usize,
     /// Seconds spent recording (wall clock).
@@ -404,12 +415,7 @@ impl Renderer {
                 if let ViewRole::ProbeFace { probe, .. } = view.role {
                     probe_filters.insert(probe, buffers.len());
                 }
-                rendered.push(RenderedView {
-                    id: view.id,
-                    view: view.gpu,
-                    world: view.world,
-                    hdr_written: !recorded.stats.tone_mapped_in_pass,
-                });
+                rendered.push(RecordedView { id: view.id, index: i, hdr_written: !recorded.stats.tone_mapped_in_pass });
                 // A batch's recording is counted once, at its first camera.
                 let (stats, busy) = if k == 0 { (recorded.stats, recorded.busy) } else { Default::default() };
                 reports.push(ViewReport {

@@ -7,7 +7,7 @@
 
 use std::sync::Arc;
 
-use oxygen_core::{ResolvedView, Scene, ViewContext, ViewId};
+use oxygen_core::{ResolvedView, Scene, ViewContext, ViewError, ViewId, ViewResolver};
 use oxygen_gpu::LabelSet;
 use oxygen_passes::OutputSource;
 use oxygen_sceneprep::ViewPrepOptions;
@@ -67,7 +67,8 @@ impl Renderer {
         let mut taken = self.targets.paused_bytes(&self.views);
         let mut views = Vec::with_capacity(self.views.entries.len());
         let mut warnings = Vec::new();
-        for (id, entry) in self.views.entries.iter().filter(|(_, entry)| entry.active) {
+        let poses = self.resolve_poses(scene, clock);
+        for ((id, entry), pose) in self.views.entries.iter().filter(|(_, entry)| entry.active).zip(poses) {
             let (role, target) = match entry.target {
                 TargetKind::Own => {
                     let with_color = !entry.options.depth_only;
@@ -90,8 +91,10 @@ impl Renderer {
             if shown_size == Some(None) {
                 continue;
             }
-            let attempt =
-                entry.resolver.resolve(&clock.context(*id), scene).map_err(RenderError::from).and_then(|mut view| {
+            let attempt = pose
+                .ok_or_else(|| RenderError::Unsupported("the view's resolver was not called (a worker stopped)".into()))
+                .and_then(|pose| pose.map_err(RenderError::from))
+                .and_then(|mut view| {
                     // The id is the renderer's, whatever the resolver wrote.
                     view.view_id = *id;
                     // A view shown in a window takes its rectangle's size.
@@ -139,6 +142,35 @@ impl Renderer {
         }
         self.admit_batches(&mut views, &mut warnings, &mut taken);
         ResolvedFrame { clock, views, warnings, taken }
+    }
+
+    /// Every active view's resolver called, in the order of the active
+    /// views. Resolvers are `Sync` and independent, so many views (a batch
+    /// of cameras) are resolved on ScenePrep's worker threads: a camera's
+    /// look-at matrices and their `f64` inverse are most of what resolving
+    /// it costs. A handful of views is resolved here, where waking the
+    /// workers would cost more than it saves. `None` only for a view no
+    /// worker reached, which `WorkerPool::run` rules out.
+    fn resolve_poses(&self, scene: &Scene, clock: FrameClock) -> Vec<Option<Result<ResolvedView, ViewError>>> {
+        /// Fewer active views than this are resolved on the calling thread.
+        const PARALLEL_FROM: usize = 64;
+        let active: Vec<(ViewId, &dyn ViewResolver)> = self
+            .views
+            .entries
+            .iter()
+            .filter(|(_, entry)| entry.active)
+            .map(|(id, entry)| (*id, entry.resolver.as_ref()))
+            .collect();
+        let resolve = |(id, resolver): &(ViewId, &dyn ViewResolver)| resolver.resolve(&clock.context(*id), scene);
+        if active.len() < PARALLEL_FROM {
+            return active.iter().map(|view| Some(resolve(view))).collect();
+        }
+        let poses: Vec<std::sync::OnceLock<Result<ResolvedView, ViewError>>> =
+            active.iter().map(|_| std::sync::OnceLock::new()).collect();
+        self.prep.worker_pool().run(active.len(), &|i| {
+            let _ = poses[i].set(resolve(&active[i]));
+        });
+        poses.into_iter().map(std::sync::OnceLock::into_inner).collect()
     }
 
     /// Admits each batch's atlas (counted with an HDR layer, the most it

@@ -13,7 +13,7 @@ use oxygen_sceneprep::PreparedSceneFrame;
 
 use super::prepare::{FrameView, TargetPlan};
 use super::probes::Probes;
-use super::record::RenderedView;
+use super::record::{RecordedView, RenderedView};
 use super::{RenderError, Renderer};
 use crate::batch::BatchId;
 use crate::views::Views;
@@ -367,10 +367,11 @@ impl Targets {
     }
 
     /// Records what the targets of the views a frame rendered hold now.
-    pub(crate) fn hold(&mut self, rendered: &[RenderedView]) {
-        for view in rendered {
-            if let Some(gpu) = self.views.get_mut(&view.id) {
-                gpu.holds = Some(*view);
+    /// (`rendered` indexes `views`, the frame's.)
+    pub(crate) fn hold(&mut self, rendered: &[RecordedView], views: &[FrameView]) {
+        for recorded in rendered {
+            if let (Some(gpu), Some(view)) = (self.views.get_mut(&recorded.id), views.get(recorded.index)) {
+                gpu.holds = Some(RenderedView { view: view.gpu, world: view.world, hdr_written: recorded.hdr_written });
             }
         }
     }
