@@ -495,13 +495,6 @@ impl Views {
         self.entries.get(&view)?.name.as_deref()
     }
 
-    /// [`Views::name`] shared, for the frame's reports: a count goes up,
-    /// no string is copied (a 1 024-camera batch named every camera's
-    /// report anew each frame).
-    pub(crate) fn shared_name(&self, view: ViewId) -> Option<Arc<str>> {
-        self.entries.get(&view)?.name.clone()
-    }
-
     /// The view called `name`, if one is (the first registered, when
     /// several share it).
     pub fn find(&self, name: &str) -> Option<ViewId> {

@@ -337,7 +337,7 @@ impl Renderer {
             let targets = self.targets.get(view.view).and_then(|g| g.targets.as_ref());
             view.target_bytes = targets.map_or(0, oxygen_gpu::ViewTargets::bytes);
             view.uploaded_bytes += self.targets.get(view.view).map_or(0, |g| g.constants_written);
-            if let Some(batch) = self.views.batch_of(view.view) {
+            if let ViewRole::BatchCamera { batch } = view.role {
                 if atlases_counted.insert(batch) {
                     view.target_bytes += self.targets.atlas(batch).map_or(0, oxygen_gpu::TileAtlas::bytes);
                 }
@@ -396,7 +396,7 @@ impl Renderer {
     fn stream(&mut self, recorded: &record::RecordedFrame, clock: FrameClock) -> Result<(), RenderError> {
         let mut rendered = streams::RenderedBatches::default();
         for view in &recorded.rendered {
-            let Some(batch) = self.views.batch_of(view.id) else { continue };
+            let Some(batch) = view.batch else { continue };
             let (Some(atlas), Some(tile)) = (
                 self.targets.atlas(batch),
                 self.targets.get(view.id).and_then(|g| g.targets.as_ref()).and_then(|t| t.tile),

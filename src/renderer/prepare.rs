@@ -42,6 +42,8 @@ pub(crate) enum TargetPlan {
 /// One view of this frame, registered or the renderer's own.
 pub(crate) struct FrameView {
     pub(crate) id: ViewId,
+    /// Its registered name, shared with the registry (for its report).
+    pub(crate) name: Option<Arc<str>>,
     pub(crate) role: ViewRole,
     /// The view in world space (what ScenePrep culls against).
     pub(crate) world: ResolvedView,
@@ -91,8 +93,8 @@ impl FrameView {
     /// `view` as the frame renders it: the passes see every view relative
     /// to the render origin, as the world matrices and lights are uploaded.
     fn at_origin(view: ResolvedFrameView, origin: glam::DVec3) -> Self {
-        let ResolvedFrameView { id, role, world, options, graph, links, target } = view;
-        FrameView { id, role, world, gpu: world.relative_to(origin), options, graph, links, target }
+        let ResolvedFrameView { id, name, role, world, options, graph, links, target } = view;
+        FrameView { id, name, role, world, gpu: world.relative_to(origin), options, graph, links, target }
     }
 }
 
@@ -220,7 +222,8 @@ impl Renderer {
             };
             let options = ViewPrepOptions { visibility, ..shadow_view_options() };
             let graph = Arc::clone(&self.shadows.graph);
-            let view = ResolvedFrameView { id: shadow.id, role, world, options, graph, links: Vec::new(), target };
+            let view =
+                ResolvedFrameView { id: shadow.id, name: None, role, world, options, graph, links: Vec::new(), target };
             views.push(FrameView::at_origin(view, origin));
         }
 

@@ -37,6 +37,8 @@ impl FrameClock {
 /// A registered view resolved for this frame, in world space.
 pub(crate) struct ResolvedFrameView {
     pub(crate) id: ViewId,
+    /// Its registered name, if any.
+    pub(crate) name: Option<Arc<str>>,
     pub(crate) role: ViewRole,
     pub(crate) world: ResolvedView,
     pub(crate) options: ViewPrepOptions,
@@ -117,6 +119,7 @@ impl Renderer {
             match attempt {
                 Ok(view) => views.push(ResolvedFrameView {
                     id: *id,
+                    name: entry.name.clone(),
                     role,
                     world: view,
                     options: ViewPrepOptions {
@@ -165,12 +168,21 @@ impl Renderer {
         if active.len() < PARALLEL_FROM {
             return active.iter().map(|view| Some(resolve(view))).collect();
         }
-        let poses: Vec<std::sync::OnceLock<Result<ResolvedView, ViewError>>> =
-            active.iter().map(|_| std::sync::OnceLock::new()).collect();
-        self.prep.worker_pool().run(active.len(), &|i| {
-            let _ = poses[i].set(resolve(&active[i]));
-        });
-        poses.into_iter().map(std::sync::OnceLock::into_inner).collect()
+        // Runs of cameras, each written by one call: few locks, and each
+        // pose written once, where it stays.
+        const RUN: usize = 32;
+        let mut poses: Vec<Option<Result<ResolvedView, ViewError>>> = (0..active.len()).map(|_| None).collect();
+        {
+            let runs: Vec<std::sync::Mutex<&mut [Option<Result<ResolvedView, ViewError>>]>> =
+                poses.chunks_mut(RUN).map(std::sync::Mutex::new).collect();
+            self.prep.worker_pool().run(runs.len(), &|r| {
+                let mut run = runs[r].lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+                for (k, pose) in run.iter_mut().enumerate() {
+                    *pose = active.get(r * RUN + k).map(resolve);
+                }
+            });
+        }
+        poses
     }
 
     /// Admits each batch's atlas (counted with an HDR layer, the most it

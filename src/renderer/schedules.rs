@@ -500,6 +500,7 @@ mod tests {
                     world.view_id = *id;
                     ResolvedFrameView {
                         id: *id,
+                        name: entry.name.clone(),
                         role: ViewRole::Registered,
                         world,
                         options: entry.options,
