@@ -369,11 +369,6 @@ impl ResolvedView {
 ///
 /// Any `Fn(&ViewContext, &Scene) -> Result<ResolvedView, ViewError>` closure
 /// is a resolver; [`LookAtResolver`] covers the common fixed camera.
-///
-/// The renderer may call the resolvers of one frame from several threads
-/// at once (it does for many views, such as a batch's cameras), in no set
-/// order: a resolver that keeps state behind a lock must not expect the
-/// other views of its frame to have resolved before it.
 pub trait ViewResolver: Send + Sync {
     /// Resolves the view for this frame.
     fn resolve(&self, ctx: &ViewContext, scene: &Scene) -> Result<ResolvedView, ViewError>;

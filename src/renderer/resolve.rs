@@ -7,7 +7,7 @@
 
 use std::sync::Arc;
 
-use oxygen_core::{ResolvedView, Scene, ViewContext, ViewError, ViewId, ViewResolver};
+use oxygen_core::{ResolvedView, Scene, ViewContext, ViewId};
 use oxygen_gpu::LabelSet;
 use oxygen_passes::OutputSource;
 use oxygen_sceneprep::ViewPrepOptions;
@@ -69,8 +69,7 @@ impl Renderer {
         let mut taken = self.targets.paused_bytes(&self.views);
         let mut views = Vec::with_capacity(self.views.entries.len());
         let mut warnings = Vec::new();
-        let poses = self.resolve_poses(scene, clock);
-        for ((id, entry), pose) in self.views.entries.iter().filter(|(_, entry)| entry.active).zip(poses) {
+        for (id, entry) in self.views.entries.iter().filter(|(_, entry)| entry.active) {
             let (role, target) = match entry.target {
                 TargetKind::Own => {
                     let with_color = !entry.options.depth_only;
@@ -93,10 +92,8 @@ impl Renderer {
             if shown_size == Some(None) {
                 continue;
             }
-            let attempt = pose
-                .ok_or_else(|| RenderError::Unsupported("the view's resolver was not called (a worker stopped)".into()))
-                .and_then(|pose| pose.map_err(RenderError::from))
-                .and_then(|mut view| {
+            let attempt =
+                entry.resolver.resolve(&clock.context(*id), scene).map_err(RenderError::from).and_then(|mut view| {
                     // The id is the renderer's, whatever the resolver wrote.
                     view.view_id = *id;
                     // A view shown in a window takes its rectangle's size.
@@ -145,44 +142,6 @@ impl Renderer {
         }
         self.admit_batches(&mut views, &mut warnings, &mut taken);
         ResolvedFrame { clock, views, warnings, taken }
-    }
-
-    /// Every active view's resolver called, in the order of the active
-    /// views. Resolvers are `Sync` and independent, so many views (a batch
-    /// of cameras) are resolved on ScenePrep's worker threads: a camera's
-    /// look-at matrices and their `f64` inverse are most of what resolving
-    /// it costs. A handful of views is resolved here, where waking the
-    /// workers would cost more than it saves. `None` only for a view no
-    /// worker reached, which `WorkerPool::run` rules out.
-    fn resolve_poses(&self, scene: &Scene, clock: FrameClock) -> Vec<Option<Result<ResolvedView, ViewError>>> {
-        /// Fewer active views than this are resolved on the calling thread.
-        const PARALLEL_FROM: usize = 64;
-        let active: Vec<(ViewId, &dyn ViewResolver)> = self
-            .views
-            .entries
-            .iter()
-            .filter(|(_, entry)| entry.active)
-            .map(|(id, entry)| (*id, entry.resolver.as_ref()))
-            .collect();
-        let resolve = |(id, resolver): &(ViewId, &dyn ViewResolver)| resolver.resolve(&clock.context(*id), scene);
-        if active.len() < PARALLEL_FROM {
-            return active.iter().map(|view| Some(resolve(view))).collect();
-        }
-        // Runs of cameras, each written by one call: few locks, and each
-        // pose written once, where it stays.
-        const RUN: usize = 32;
-        let mut poses: Vec<Option<Result<ResolvedView, ViewError>>> = (0..active.len()).map(|_| None).collect();
-        {
-            let runs: Vec<std::sync::Mutex<&mut [Option<Result<ResolvedView, ViewError>>]>> =
-                poses.chunks_mut(RUN).map(std::sync::Mutex::new).collect();
-            self.prep.worker_pool().run(runs.len(), &|r| {
-                let mut run = runs[r].lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-                for (k, pose) in run.iter_mut().enumerate() {
-                    *pose = active.get(r * RUN + k).map(resolve);
-                }
-            });
-        }
-        poses
     }
 
     /// Admits each batch's atlas (counted with an HDR layer, the most it
