@@ -589,61 +589,68 @@ impl ScenePrep {
             let (frame, geometry, work) = (&self.frame, &self.geometry, &self.work);
             let transparent = self.gpu_scene.transparent_renderables();
             let canonical = self.deterministic.then_some(&self.gpu_scene);
-            self.pool.run(views.len(), &|i| {
-                let started = std::time::Instant::now();
-                let mut w = lock(&work[i]);
-                let w = &mut *w;
-                // On a GPU path the CPU handles the transparent draws only,
-                // so it visits only the renderables that have some.
-                let on_gpu = views[i].options.visibility.on_gpu();
-                let subset = on_gpu.then_some(transparent);
-                collect_view_subset(scene, frame, views[i].view, &views[i].options, subset, &mut w.items);
-                w.keyed.clear();
-                w.missing_geometry.clear();
-                let depth_only = views[i].options.depth_only;
-                let grouped = views[i].options.instancing == Instancing::ByGeometry;
-                let view = views[i].view;
-                // Disc area per unit of projected diameter², as a fraction of
-                // the viewport (the diameter is in viewport heights).
-                let disc = std::f32::consts::FRAC_PI_4 / view.aspect().max(f32::MIN_POSITIVE);
-                w.coverage.clear();
-                for (index, item) in w.items.iter().enumerate() {
-                    let coverage = match frame.renderables.get(item.renderable as usize) {
-                        Some(r) if !item.pass_mask.contains(PassMask::TRANSPARENT) => {
-                            let diameter =
-                                2.0 * projected_screen_fraction(view, r.world_sphere.radius, item.view_depth);
-                            // One draw covers the viewport at most once.
-                            (disc * diameter * diameter).min(1.0)
+            // In runs of views: a camera of a batch culled on the GPU has
+            // next to nothing to do here, and one clock read between views
+            // times each.
+            self.pool.run_ranges(views.len(), &|run| {
+                let mut started = std::time::Instant::now();
+                for i in run {
+                    let mut w = lock(&work[i]);
+                    let w = &mut *w;
+                    // On a GPU path the CPU handles the transparent draws only,
+                    // so it visits only the renderables that have some.
+                    let on_gpu = views[i].options.visibility.on_gpu();
+                    let subset = on_gpu.then_some(transparent);
+                    collect_view_subset(scene, frame, views[i].view, &views[i].options, subset, &mut w.items);
+                    w.keyed.clear();
+                    w.missing_geometry.clear();
+                    let depth_only = views[i].options.depth_only;
+                    let grouped = views[i].options.instancing == Instancing::ByGeometry;
+                    let view = views[i].view;
+                    // Disc area per unit of projected diameter², as a fraction of
+                    // the viewport (the diameter is in viewport heights).
+                    let disc = std::f32::consts::FRAC_PI_4 / view.aspect().max(f32::MIN_POSITIVE);
+                    w.coverage.clear();
+                    for (index, item) in w.items.iter().enumerate() {
+                        let coverage = match frame.renderables.get(item.renderable as usize) {
+                            Some(r) if !item.pass_mask.contains(PassMask::TRANSPARENT) => {
+                                let diameter =
+                                    2.0 * projected_screen_fraction(view, r.world_sphere.radius, item.view_depth);
+                                // One draw covers the viewport at most once.
+                                (disc * diameter * diameter).min(1.0)
+                            }
+                            _ => 0.0,
+                        };
+                        w.coverage.push(if coverage.is_finite() { coverage } else { 0.0 });
+                        let material_key = if depth_only { 0 } else { item.material };
+                        let key = if let Some(scene) = canonical
+                            && !item.pass_mask.contains(PassMask::TRANSPARENT)
+                        {
+                            canonical_key(scene, frame, item)
+                        } else if grouped {
+                            let geometry = frame.renderables.get(item.renderable as usize).map_or(0, |r| r.geometry_id);
+                            sort_key_grouped(item.pass_mask, material_key, geometry, item.view_depth)
+                        } else {
+                            sort_key(item.pass_mask, material_key, item.view_depth)
+                        };
+                        w.keyed.push((key, index as u32));
+                        let handle = item.geometry;
+                        if geometry.get(handle).is_none() && !w.missing_geometry.contains(&handle) {
+                            w.missing_geometry.push(handle);
                         }
-                        _ => 0.0,
-                    };
-                    w.coverage.push(if coverage.is_finite() { coverage } else { 0.0 });
-                    let material_key = if depth_only { 0 } else { item.material };
-                    let key = if let Some(scene) = canonical
-                        && !item.pass_mask.contains(PassMask::TRANSPARENT)
-                    {
-                        canonical_key(scene, frame, item)
-                    } else if grouped {
-                        let geometry = frame.renderables.get(item.renderable as usize).map_or(0, |r| r.geometry_id);
-                        sort_key_grouped(item.pass_mask, material_key, geometry, item.view_depth)
-                    } else {
-                        sort_key(item.pass_mask, material_key, item.view_depth)
-                    };
-                    w.keyed.push((key, index as u32));
-                    let handle = item.geometry;
-                    if geometry.get(handle).is_none() && !w.missing_geometry.contains(&handle) {
-                        w.missing_geometry.push(handle);
                     }
+                    // Items are in (node id, submesh) order, so a stable sort by
+                    // key alone gives the deterministic tie-break.
+                    radix_sort_by_key(&mut w.keyed, &mut w.scratch);
+                    // The GPU's draws are neither known here nor front to back:
+                    // the estimate says "unknown", which turns an automatic
+                    // pre-pass on.
+                    w.frame.estimated_overdraw =
+                        if on_gpu { f32::INFINITY } else { overdraw_in_draw_order(&w.keyed, &w.items, &w.coverage) };
+                    let now = std::time::Instant::now();
+                    w.seconds = (now - started).as_secs_f32();
+                    started = now;
                 }
-                // Items are in (node id, submesh) order, so a stable sort by
-                // key alone gives the deterministic tie-break.
-                radix_sort_by_key(&mut w.keyed, &mut w.scratch);
-                // The GPU's draws are neither known here nor front to back:
-                // the estimate says "unknown", which turns an automatic
-                // pre-pass on.
-                w.frame.estimated_overdraw =
-                    if on_gpu { f32::INFINITY } else { overdraw_in_draw_order(&w.keyed, &w.items, &w.coverage) };
-                w.seconds = started.elapsed().as_secs_f32();
             });
         }
         self.stats.views_prepared += views.len() as u64;
@@ -661,22 +668,26 @@ impl ScenePrep {
                 debug_generations: self.debug_generations,
             };
             let (work, gpu_scene, deterministic) = (&self.work, &self.gpu_scene, self.deterministic);
-            self.pool.run(views.len(), &|i| {
-                let started = std::time::Instant::now();
-                let mut w = lock(&work[i]);
-                let w = &mut *w;
-                let view = ViewEmit {
-                    view_id: views[i].view.view_id,
-                    items: &w.items,
-                    keyed: &w.keyed,
-                    draw_allocation: w.draw_allocation,
-                    indirect_allocation: w.indirect_allocation,
-                    instancing: views[i].options.instancing,
-                    gpu: Some((gpu_scene, views[i].options.visibility)).filter(|(_, v)| v.on_gpu()),
-                    deterministic,
-                };
-                emit_view(&frame, &view, &mut w.frame);
-                w.frame.prep_seconds = w.seconds + started.elapsed().as_secs_f32();
+            self.pool.run_ranges(views.len(), &|run| {
+                let mut started = std::time::Instant::now();
+                for i in run {
+                    let mut w = lock(&work[i]);
+                    let w = &mut *w;
+                    let view = ViewEmit {
+                        view_id: views[i].view.view_id,
+                        items: &w.items,
+                        keyed: &w.keyed,
+                        draw_allocation: w.draw_allocation,
+                        indirect_allocation: w.indirect_allocation,
+                        instancing: views[i].options.instancing,
+                        gpu: Some((gpu_scene, views[i].options.visibility)).filter(|(_, v)| v.on_gpu()),
+                        deterministic,
+                    };
+                    emit_view(&frame, &view, &mut w.frame);
+                    let now = std::time::Instant::now();
+                    w.frame.prep_seconds = w.seconds + (now - started).as_secs_f32();
+                    started = now;
+                }
             });
         }
 

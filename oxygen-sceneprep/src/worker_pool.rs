@@ -125,6 +125,28 @@ impl WorkerPool {
     }
 }
 
+impl WorkerPool {
+    /// Calls `job` once for each run of consecutive indices covering
+    /// `0..count` (every index in exactly one run, runs in no set order),
+    /// spread over the pool like [`WorkerPool::run`]. Runs are sized so that
+    /// each thread gets about [`WorkerPool::RUNS_PER_THREAD`] of them: enough
+    /// to even out uneven items, few enough that a thousand small items (a
+    /// batch's cameras) do not each pay for a turn of the shared counter
+    /// and a clock read.
+    pub fn run_ranges(&self, count: usize, job: &(dyn Fn(std::ops::Range<usize>) + Sync)) {
+        let length = Self::run_length(count, self.threads());
+        self.run(count.div_ceil(length), &|r| job(r * length..((r + 1) * length).min(count)));
+    }
+
+    /// Runs per thread that [`WorkerPool::run_ranges`] aims for.
+    pub const RUNS_PER_THREAD: usize = 8;
+
+    /// The length of [`WorkerPool::run_ranges`]'s runs (at least 1).
+    fn run_length(count: usize, threads: usize) -> usize {
+        (count / (threads.max(1) * Self::RUNS_PER_THREAD)).max(1)
+    }
+}
+
 fn drain(shared: &Shared, job: &(dyn Fn(usize) + Sync), count: usize) {
     loop {
         let i = shared.next.fetch_add(1, Ordering::Relaxed);
@@ -193,6 +215,32 @@ mod tests {
             }
             assert!(hits.iter().all(|h| h.load(Ordering::Relaxed) == 50), "count {count}");
         }
+    }
+
+    /// Runs cover every index once, each run consecutive and non-empty;
+    /// few items get a run each (nothing heavy is serialised behind
+    /// another), many get about `RUNS_PER_THREAD` runs a thread.
+    #[test]
+    fn ranges_cover_every_index_once_in_runs_sized_by_the_threads() {
+        let pool = WorkerPool::new(4);
+        for count in [0usize, 1, 2, 5, 31, 32, 33, 100, 1024, 1031] {
+            let hits: Vec<AtomicU64> = (0..count).map(|_| AtomicU64::new(0)).collect();
+            let runs = AtomicU64::new(0);
+            pool.run_ranges(count, &|range| {
+                assert!(!range.is_empty() && range.end <= count, "count {count}: run {range:?}");
+                runs.fetch_add(1, Ordering::Relaxed);
+                for i in range {
+                    hits[i].fetch_add(1, Ordering::Relaxed);
+                }
+            });
+            assert!(hits.iter().all(|h| h.load(Ordering::Relaxed) == 1), "count {count}");
+            let expected = count.div_ceil(WorkerPool::run_length(count, 4));
+            assert_eq!(runs.load(Ordering::Relaxed), expected as u64, "count {count}");
+        }
+        assert_eq!(WorkerPool::run_length(5, 4), 1, "few items: one a run");
+        assert_eq!(WorkerPool::run_length(1024, 4), 32, "1 024 items on 4 threads: 8 runs a thread");
+        assert_eq!(WorkerPool::run_length(1024, 16), 8);
+        assert_eq!(WorkerPool::run_length(1024, 0), 128, "no threads counts as one");
     }
 
     #[test]

@@ -155,7 +155,9 @@ impl Schedules {
         let _span = tracing::info_span!("schedules", views = views.len()).entered();
         // Every view every frame and no budget: nothing to decide or keep
         // (a thousand-camera batch pays nothing for schedules it lacks).
-        if self.budget.is_none() && views.iter().all(|v| schedule_of(v.id).schedule == Schedule::EveryFrame) {
+        // (One walk of the registry, not a lookup per view: a thousand
+        // lookups a frame were a thousand walks down its tree.)
+        if self.budget.is_none() && registry.entries.values().all(|e| e.schedule == Schedule::EveryFrame) {
             self.seen.clear();
             self.scene = None;
             self.looked_at = None;
