@@ -78,6 +78,12 @@
 //! (`BatchDesc::with_max_page_side`): at the cameras' size, one camera a
 //! page and a render pass per camera, which is what array layers cost
 //! without multiview.
+//! `BATCH_BENCH_INTERLEAVE=1` sets up one renderer per V and renders
+//! them in turn, five frames each (the last three measured), V = 1, then
+//! 256, then 1 024, then 1 again, …, so that a host whose speed drifts or
+//! jumps while the bench runs slows every V alike instead of skewing the
+//! slope below; it skips the back-to-back frames and cannot be combined
+//! with spans.
 //! Each line gives view-frames per second (V ÷ the median frame time); at
 //! the end the slope of the median times against V (least squares over the
 //! V list) is the per-view cost, CPU and whole frame, per path. With
@@ -215,46 +221,93 @@ fn median(values: &[f64]) -> f64 {
     sorted[sorted.len() / 2]
 }
 
-/// Renders `frames` measured frames of V cameras in `mode`.
-#[allow(clippy::too_many_arguments)]
-fn run(
-    scene: &Scene,
+/// What every measured configuration of a run shares.
+struct Setup<'a> {
     side: f32,
     size: UVec2,
-    views: usize,
     mode: Mode,
     readback: bool,
     visibility: Visibility,
-    frames: usize,
-    spans: Option<&SpanTimes>,
-    options: &RendererOptions,
+    options: &'a RendererOptions,
     in_flight: u32,
     planes: StreamOptions,
     max_page_side: Option<u32>,
-    graph: &oxygen::batch::BatchGraph,
+    graph: &'a oxygen::batch::BatchGraph,
     turn: f32,
-) -> Result<Run, Box<dyn std::error::Error>> {
-    let mut renderer = Renderer::new_headless_with(*options)?;
-    if visibility.on_gpu() && !renderer.gpu_visibility_supported() {
+}
+
+/// A renderer with V cameras registered, as `setup` says.
+struct Rig {
+    renderer: Renderer,
+    ids: Vec<ViewId>,
+    batch: Option<oxygen::batch::BatchId>,
+    views: usize,
+}
+
+/// What one measured frame took.
+struct Sample {
+    cpu_ms: f64,
+    prepare_ms: f64,
+    record_ms: f64,
+    frame_ms: f64,
+    gpu_ms: Option<f64>,
+    read_bytes: u64,
+    draws: f64,
+}
+
+impl Run {
+    fn new() -> Self {
+        Run {
+            cpu_ms: Vec::new(),
+            prepare_ms: Vec::new(),
+            record_ms: Vec::new(),
+            frame_ms: Vec::new(),
+            gpu_ms: Vec::new(),
+            read_bytes: 0,
+            draws: Vec::new(),
+            pipelined_per_second: f64::NAN,
+            steady_per_second: f64::NAN,
+            latency_ms: f64::NAN,
+            spans: Vec::new(),
+            back_to_back_spans: Vec::new(),
+        }
+    }
+
+    fn push(&mut self, sample: Sample) {
+        self.cpu_ms.push(sample.cpu_ms);
+        self.prepare_ms.push(sample.prepare_ms);
+        self.record_ms.push(sample.record_ms);
+        self.frame_ms.push(sample.frame_ms);
+        self.gpu_ms.extend(sample.gpu_ms);
+        self.read_bytes += sample.read_bytes;
+        self.draws.push(sample.draws);
+    }
+}
+
+/// A renderer with `views` cameras on the ring, as `setup` says.
+fn rig(setup: &Setup<'_>, views: usize) -> Result<Rig, Box<dyn std::error::Error>> {
+    let mut renderer = Renderer::new_headless_with(*setup.options)?;
+    if setup.visibility.on_gpu() && !renderer.gpu_visibility_supported() {
         return Err(format!("{} cannot run GPU visibility", renderer.gpu().describe()).into());
     }
+    let readback = setup.readback;
     let mut ids = Vec::with_capacity(views);
     // With readback every camera also draws the label planes streamed
     // (the lone views: instance ids), read back with its colour and depth.
-    let batch = match mode {
+    let batch = match setup.mode {
         Mode::Batch => {
-            let desc = BatchDesc::new("ring", size);
-            let desc = if readback { desc.with_label_planes(streamed_labels(&planes)) } else { desc };
-            let desc = match max_page_side {
+            let desc = BatchDesc::new("ring", setup.size);
+            let desc = if readback { desc.with_label_planes(streamed_labels(&setup.planes)) } else { desc };
+            let desc = match setup.max_page_side {
                 Some(side) => desc.with_max_page_side(side),
                 None => desc,
             };
-            Some(renderer.register_batch(desc.with_graph(graph.clone()))?)
+            Some(renderer.register_batch(desc.with_graph(setup.graph.clone()))?)
         }
         Mode::Views => None,
     };
     for i in 0..views {
-        let desc = ring_camera(i, views, side, size, turn)?.with_visibility(visibility);
+        let desc = ring_camera(i, views, setup.side, setup.size, setup.turn)?.with_visibility(setup.visibility);
         let desc =
             if readback && batch.is_none() { desc.with_label_planes(LabelSet::of(&[Label::Instance])) } else { desc };
         ids.push(match batch {
@@ -263,71 +316,128 @@ fn run(
         });
     }
     if let (Some(batch), true) = (batch, readback) {
-        renderer.stream_batch(batch, Some(StreamOptions { frames_in_flight: in_flight, ..planes }))?;
+        let planes = StreamOptions { frames_in_flight: setup.in_flight, ..setup.planes };
+        renderer.stream_batch(batch, Some(planes))?;
     }
-    let mut result = Run {
-        cpu_ms: Vec::new(),
-        prepare_ms: Vec::new(),
-        record_ms: Vec::new(),
-        frame_ms: Vec::new(),
-        gpu_ms: Vec::new(),
-        read_bytes: 0,
-        draws: Vec::new(),
-        pipelined_per_second: f64::NAN,
-        steady_per_second: f64::NAN,
-        latency_ms: f64::NAN,
-        spans: Vec::new(),
-        back_to_back_spans: Vec::new(),
-    };
+    Ok(Rig { renderer, ids, batch, views })
+}
+
+/// Renders frame `frame` of `rig` and waits for the GPU: `render_frame`'s
+/// wall-clock time is the CPU figure, to the end of the wait the whole
+/// frame's.
+fn measure_frame(
+    rig: &mut Rig,
+    setup: &Setup<'_>,
+    scene: &Scene,
+    frame: usize,
+) -> Result<Sample, Box<dyn std::error::Error>> {
+    let renderer = &mut rig.renderer;
+    let start = Instant::now();
+    let report = renderer.render_frame(scene)?;
+    let cpu = start.elapsed().as_secs_f64() * 1e3;
+    if let Some(warning) = report.warnings.first() {
+        return Err(format!("frame {frame}: {warning}").into());
+    }
+    let deferred: u32 = report.views.iter().map(|v| v.recorded.deferred_views).sum();
+    if setup.mode == Mode::Batch && setup.graph.shading == BatchShading::Deferred && deferred as usize != rig.views {
+        return Err(format!("frame {frame}: {deferred} of {} cameras shaded deferred (see the log)", rig.views).into());
+    }
+    let mut bytes = 0u64;
+    if setup.readback {
+        match rig.batch {
+            Some(_) => {
+                let frames = renderer.wait_streamed()?;
+                bytes += streamed_bytes(renderer, frames);
+            }
+            None => {
+                for id in &rig.ids {
+                    bytes += renderer.read_color(*id)?.len() as u64;
+                    bytes += 4 * renderer.read_depth(*id)?.depth.len() as u64;
+                    bytes += 4 * renderer.read_labels(*id)?.instances.len() as u64;
+                }
+            }
+        }
+    }
+    renderer.gpu().device.poll(wgpu::PollType::wait_indefinitely())?;
+    Ok(Sample {
+        cpu_ms: cpu,
+        prepare_ms: report.prepare_seconds * 1e3,
+        record_ms: report.record_seconds * 1e3,
+        frame_ms: start.elapsed().as_secs_f64() * 1e3,
+        gpu_ms: report.gpu_seconds.map(|s| s * 1e3),
+        read_bytes: bytes,
+        draws: report.views.iter().map(|v| v.draws as f64).sum(),
+    })
+}
+
+/// The configurations `counts` measured in turn (`BATCH_BENCH_INTERLEAVE=1`):
+/// one rig per V, then short blocks of frames of each V after the other
+/// (V = counts[0], counts[1], …, counts[0] again) until each has `frames`
+/// measured. A machine whose speed drifts or jumps while the bench runs (a
+/// shared host's) then slows every V alike, instead of whichever V was
+/// running, which skews a slope of time against V measured one V after the
+/// other. The first frames of a block are not measured: they would pay
+/// for the caches the other rigs' frames took (a V = 1 frame after a
+/// thousand cameras' runs twice as long), which would bend the slope the
+/// other way. No back-to-back frames in this mode.
+fn run_interleaved(
+    scene: &Scene,
+    setup: &Setup<'_>,
+    counts: &[usize],
+    frames: usize,
+) -> Result<Vec<Run>, Box<dyn std::error::Error>> {
+    /// Frames of one rig in a row, and how many of them warm up again.
+    const BLOCK: usize = 5;
+    const REWARM: usize = 2;
+    let mut rigs: Vec<Rig> = counts.iter().map(|v| rig(setup, *v)).collect::<Result<_, _>>()?;
+    for rig in &mut rigs {
+        for frame in 0..WARM_UP {
+            measure_frame(rig, setup, scene, frame)?;
+        }
+    }
+    let mut runs: Vec<Run> = counts.iter().map(|_| Run::new()).collect();
+    let mut frame = WARM_UP;
+    while runs.iter().any(|r| r.cpu_ms.len() < frames) {
+        for (rig, run) in rigs.iter_mut().zip(&mut runs) {
+            for k in 0..BLOCK {
+                let sample = measure_frame(rig, setup, scene, frame)?;
+                frame += 1;
+                if k >= REWARM && run.cpu_ms.len() < frames {
+                    run.push(sample);
+                }
+            }
+        }
+    }
+    Ok(runs)
+}
+
+/// Renders `frames` measured frames of `views` cameras as `setup` says,
+/// then as many back to back.
+fn run(
+    scene: &Scene,
+    setup: &Setup<'_>,
+    views: usize,
+    frames: usize,
+    spans: Option<&SpanTimes>,
+) -> Result<Run, Box<dyn std::error::Error>> {
+    let mut rig = rig(setup, views)?;
+    let mut result = Run::new();
     for frame in 0..WARM_UP + frames {
         if frame == WARM_UP
             && let Some(spans) = spans
         {
             spans.take();
         }
-        let start = Instant::now();
-        let report = renderer.render_frame(scene)?;
-        let cpu = start.elapsed().as_secs_f64() * 1e3;
-        if let Some(warning) = report.warnings.first() {
-            return Err(format!("frame {frame}: {warning}").into());
-        }
-        let deferred: u32 = report.views.iter().map(|v| v.recorded.deferred_views).sum();
-        if mode == Mode::Batch && graph.shading == BatchShading::Deferred && deferred as usize != views {
-            return Err(format!("frame {frame}: {deferred} of {views} cameras shaded deferred (see the log)").into());
-        }
-        let mut bytes = 0u64;
-        if readback {
-            match batch {
-                Some(_) => {
-                    let frames = renderer.wait_streamed()?;
-                    bytes += streamed_bytes(&mut renderer, frames);
-                }
-                None => {
-                    for id in &ids {
-                        bytes += renderer.read_color(*id)?.len() as u64;
-                        bytes += 4 * renderer.read_depth(*id)?.depth.len() as u64;
-                        bytes += 4 * renderer.read_labels(*id)?.instances.len() as u64;
-                    }
-                }
-            }
-        }
-        renderer.gpu().device.poll(wgpu::PollType::wait_indefinitely())?;
-        let whole = start.elapsed().as_secs_f64() * 1e3;
+        let sample = measure_frame(&mut rig, setup, scene, frame)?;
         if frame >= WARM_UP {
-            result.cpu_ms.push(cpu);
-            result.prepare_ms.push(report.prepare_seconds * 1e3);
-            result.record_ms.push(report.record_seconds * 1e3);
-            result.frame_ms.push(whole);
-            if let Some(gpu) = report.gpu_seconds {
-                result.gpu_ms.push(gpu * 1e3);
-            }
-            result.read_bytes += bytes;
-            result.draws.push(report.views.iter().map(|v| v.draws as f64).sum());
+            result.push(sample);
         }
     }
     if let Some(spans) = spans {
         result.spans = span_ms_per_frame(spans, frames);
     }
+    let (readback, batch) = (setup.readback, rig.batch);
+    let renderer = &mut rig.renderer;
     // Back to back: the lone views' reads block, so only the batch (or
     // no readback) runs without waiting between frames.
     if !readback || batch.is_some() {
@@ -346,13 +456,13 @@ fn run(
             if readback {
                 let frames = renderer.take_streamed()?;
                 note(&frames);
-                streamed_bytes(&mut renderer, frames);
+                streamed_bytes(renderer, frames);
             }
         }
         if readback {
             let frames = renderer.wait_streamed()?;
             note(&frames);
-            streamed_bytes(&mut renderer, frames);
+            streamed_bytes(renderer, frames);
         }
         renderer.gpu().device.poll(wgpu::PollType::wait_indefinitely())?;
         result.pipelined_per_second = (views * frames) as f64 / start.elapsed().as_secs_f64();
@@ -443,11 +553,22 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Ok(other) => return Err(format!("BATCH_BENCH_MODES={other}: use views, batch or both").into()),
     };
 
+    // Every V's frames in turn, one rig per V (see `run_interleaved`).
+    let interleave = match std::env::var("BATCH_BENCH_INTERLEAVE").as_deref() {
+        Ok("1") => true,
+        Ok("0") | Err(_) => false,
+        Ok(other) => return Err(format!("BATCH_BENCH_INTERLEAVE={other}: use 0 or 1").into()),
+    };
     let spans = match std::env::var("BATCH_BENCH_SPANS").as_deref() {
         Ok("1") => Some(SpanTimes::install().ok_or("BATCH_BENCH_SPANS=1: a tracing subscriber is already set")?),
         Ok("0") | Err(_) => None,
         Ok(other) => return Err(format!("BATCH_BENCH_SPANS={other}: use 0 or 1").into()),
     };
+    if interleave && spans.is_some() {
+        return Err("BATCH_BENCH_INTERLEAVE=1 with BATCH_BENCH_SPANS=1: spans add up every rig's frames together; \
+                    use one or the other"
+            .into());
+    }
     // wgpu's check of every indirect draw's arguments (a compute pass of
     // its own, recorded per indirect draw), on by default.
     let trust_indirect_args = match std::env::var("BATCH_BENCH_TRUST_INDIRECT").as_deref() {
@@ -542,6 +663,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .value("readback", readback)
         .value("visibility", format!("{visibility:?}"))
         .value("spans", spans.is_some())
+        .value("interleaved", interleave)
         .value("trust_indirect_args", trust_indirect_args)
         .value("deterministic", deterministic)
         .value("floor_ms_per_cube", floor.as_ref().map(|f| f.0))
@@ -562,31 +684,41 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     let mut points: Vec<(Mode, f64, f64, f64)> = Vec::new();
-    for (k, views) in counts.iter().enumerate() {
-        let mut order = modes.clone();
-        if k % 2 == 1 {
-            order.reverse();
+    let setup_of = |mode| Setup {
+        side,
+        size,
+        mode,
+        readback,
+        visibility,
+        options: &options,
+        in_flight,
+        planes,
+        max_page_side,
+        graph: &graph,
+        turn,
+    };
+    // Every configuration's measured frames, in the order they are printed.
+    let mut measured: Vec<(usize, Mode, Run)> = Vec::new();
+    if interleave {
+        for mode in &modes {
+            let runs = run_interleaved(&scene, &setup_of(*mode), &counts, frames)?;
+            measured.extend(counts.iter().zip(runs).map(|(views, run)| (*views, *mode, run)));
         }
-        for mode in order {
-            let r = run(
-                &scene,
-                side,
-                size,
-                *views,
-                mode,
-                readback,
-                visibility,
-                frames,
-                spans.as_ref(),
-                &options,
-                in_flight,
-                planes,
-                max_page_side,
-                &graph,
-                turn,
-            )?;
+    } else {
+        for (k, views) in counts.iter().enumerate() {
+            let mut order = modes.clone();
+            if k % 2 == 1 {
+                order.reverse();
+            }
+            for mode in order {
+                measured.push((*views, mode, run(&scene, &setup_of(mode), *views, frames, spans.as_ref())?));
+            }
+        }
+    }
+    {
+        for (views, mode, r) in measured {
             let (cpu, whole, gpu) = (median(&r.cpu_ms), median(&r.frame_ms), median(&r.gpu_ms));
-            let per_second = *views as f64 / (whole / 1e3);
+            let per_second = views as f64 / (whole / 1e3);
             let seconds: f64 = r.frame_ms.iter().sum::<f64>() / 1e3;
             let read_mb_s = r.read_bytes as f64 / 1e6 / seconds;
             let (prepare, recording) = (median(&r.prepare_ms), median(&r.record_ms));
@@ -612,11 +744,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             for (name, ms) in r.back_to_back_spans.iter().take(SPANS_SHOWN) {
                 println!("    back to back, span {name}: {ms:.3} ms a frame");
             }
-            points.push((mode, *views as f64, cpu, whole));
+            points.push((mode, views as f64, cpu, whole));
             record.push_row(
                 Row::new()
                     .value("path", format!("{mode:?}"))
-                    .value("views", *views)
+                    .value("views", views)
                     .value("cpu_ms_median", cpu)
                     .value("prepare_ms_median", prepare)
                     .value("record_ms_median", recording)
