@@ -38,9 +38,11 @@ fi
 # Every run: bench name (its record is <name>.jsonl), how it runs
 # (example: its binary from the workspace build; sceneprep: the oxygen-sceneprep bench
 # through `cargo test`, unoptimised), cpu or gpu (a GPU bench's record must
-# name its adapter), and its arguments (@OUT@: a directory of its own).
+# name its adapter), its arguments (@OUT@: a directory of its own) and,
+# optionally, VAR=value words it runs with.
 runs=(
   "batch_bench|example|gpu|16 32x32 1,2 1"
+  "batch_bench|example|gpu|16 32x32 1,2 1|BATCH_BENCH_INTERLEAVE=1 BATCH_BENCH_MODES=batch"
   "cubes_bench|example|gpu|16 2 2"
   "group_bench|example|gpu|16 32x32 2 1,2 1"
   "node_bench|example|gpu|16 32x32 4 1,2 1"
@@ -98,7 +100,7 @@ say "build: $((SECONDS - started)) s"
 total_start=$(date +%s.%N)
 summary=()
 for i in "${!runs[@]}"; do
-  IFS='|' read -r name kind device args <<<"${runs[$i]}"
+  IFS='|' read -r name kind device args vars <<<"${runs[$i]}"
   dir="$work/run$i-$name"
   # Afresh: with BENCH_SMOKE_KEEP reused, an old run's records would
   # otherwise pass for this run's (a bench that stopped writing included).
@@ -106,16 +108,17 @@ for i in "${!runs[@]}"; do
   mkdir -p "$dir/out"
   args="${args//@OUT@/$dir/out}"
   read -r -a argv <<<"$args"
+  read -r -a env_words <<<"${vars:-}"
   case "$kind" in
-    example) command=("target/debug/examples/$name" "${argv[@]}") ;;
-    sceneprep) command=(cargo test --locked --quiet --workspace --bench "$name" -- "${argv[@]}") ;;
+    example) command=(env "${env_words[@]}" "target/debug/examples/$name" "${argv[@]}") ;;
+    sceneprep) command=(env "${env_words[@]}" cargo test --locked --quiet --workspace --bench "$name" -- "${argv[@]}") ;;
     *) say "unknown kind $kind"; exit 2 ;;
   esac
   start=$(date +%s.%N)
   status=0
   OXYGEN_RECORD_DIR="$dir/records" timeout "$timeout_s" "${command[@]}" >"$dir/log" 2>&1 || status=$?
   seconds=$(python3 -c "import sys; print(f'{float(sys.argv[2]) - float(sys.argv[1]):.1f}')" "$start" "$(date +%s.%N)")
-  line="$name $args: ${seconds} s"
+  line="${vars:+$vars }$name $args: ${seconds} s"
   problem=""
   if [ "$status" -eq 124 ]; then
     problem="timed out after $timeout_s s"
