@@ -715,69 +715,67 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
         }
     }
-    {
-        for (views, mode, r) in measured {
-            let (cpu, whole, gpu) = (median(&r.cpu_ms), median(&r.frame_ms), median(&r.gpu_ms));
-            let per_second = views as f64 / (whole / 1e3);
-            let seconds: f64 = r.frame_ms.iter().sum::<f64>() / 1e3;
-            let read_mb_s = r.read_bytes as f64 / 1e6 / seconds;
-            let (prepare, recording) = (median(&r.prepare_ms), median(&r.record_ms));
-            let draws = median(&r.draws);
-            let floor_ms = floor.as_ref().map(|(per_cube, _)| per_cube * draws);
-            let over_floor = floor_ms.filter(|f| *f > 0.0 && gpu.is_finite()).map(|f| gpu / f);
-            if let (Some(floor_ms), Some(over)) = (floor_ms, over_floor) {
-                println!("    vertex floor of its {draws:.0} draws: {floor_ms:.3} ms; GPU time {over:.2}× it");
-            }
-            let pipelined = r.pipelined_per_second;
+    for (views, mode, r) in measured {
+        let (cpu, whole, gpu) = (median(&r.cpu_ms), median(&r.frame_ms), median(&r.gpu_ms));
+        let per_second = views as f64 / (whole / 1e3);
+        let seconds: f64 = r.frame_ms.iter().sum::<f64>() / 1e3;
+        let read_mb_s = r.read_bytes as f64 / 1e6 / seconds;
+        let (prepare, recording) = (median(&r.prepare_ms), median(&r.record_ms));
+        let draws = median(&r.draws);
+        let floor_ms = floor.as_ref().map(|(per_cube, _)| per_cube * draws);
+        let over_floor = floor_ms.filter(|f| *f > 0.0 && gpu.is_finite()).map(|f| gpu / f);
+        if let (Some(floor_ms), Some(over)) = (floor_ms, over_floor) {
+            println!("    vertex floor of its {draws:.0} draws: {floor_ms:.3} ms; GPU time {over:.2}× it");
+        }
+        let pipelined = r.pipelined_per_second;
+        println!(
+            "| {mode:?} | {views} | {cpu:.3} | {prepare:.3} | {recording:.3} | {whole:.3} | {gpu:.3} | {per_second:.0} | {pipelined:.0} | {read_mb_s:.1} |"
+        );
+        if r.steady_per_second.is_finite() {
             println!(
-                "| {mode:?} | {views} | {cpu:.3} | {prepare:.3} | {recording:.3} | {whole:.3} | {gpu:.3} | {per_second:.0} | {pipelined:.0} | {read_mb_s:.1} |"
-            );
-            if r.steady_per_second.is_finite() {
-                println!(
-                    "    streamed back to back: {:.0} view-frames/s steady (arrivals' slope), {:.1} ms from render_frame to images in hand",
-                    r.steady_per_second, r.latency_ms
-                );
-            }
-            for (name, ms) in r.spans.iter().take(SPANS_SHOWN) {
-                println!("    span {name}: {ms:.3} ms a frame");
-            }
-            for (name, ms) in r.back_to_back_spans.iter().take(SPANS_SHOWN) {
-                println!("    back to back, span {name}: {ms:.3} ms a frame");
-            }
-            points.push((mode, views as f64, cpu, whole));
-            record.push_row(
-                Row::new()
-                    .value("path", format!("{mode:?}"))
-                    .value("views", views)
-                    .value("cpu_ms_median", cpu)
-                    .value("prepare_ms_median", prepare)
-                    .value("record_ms_median", recording)
-                    .value("frame_ms_median", whole)
-                    .value("gpu_ms_median", gpu.is_finite().then_some(gpu))
-                    .value("view_frames_per_second", per_second)
-                    .value("draws_per_frame_median", draws)
-                    .value("vertex_floor_ms", floor_ms)
-                    .value("gpu_over_vertex_floor", over_floor)
-                    .value("back_to_back_view_frames_per_second", pipelined.is_finite().then_some(pipelined))
-                    .value(
-                        "streamed_steady_view_frames_per_second",
-                        r.steady_per_second.is_finite().then_some(r.steady_per_second),
-                    )
-                    .value("streamed_latency_ms_median", r.latency_ms.is_finite().then_some(r.latency_ms))
-                    .value("span_ms_per_frame", r.spans.iter().fold(Row::new(), |row, (name, ms)| row.value(name, *ms)))
-                    .value(
-                        "back_to_back_span_ms_per_frame",
-                        r.back_to_back_spans.iter().fold(Row::new(), |row, (name, ms)| row.value(name, *ms)),
-                    )
-                    .value("read_bytes", r.read_bytes)
-                    .value("read_mb_per_second", read_mb_s)
-                    .value("cpu_ms_samples", r.cpu_ms)
-                    .value("prepare_ms_samples", r.prepare_ms)
-                    .value("record_ms_samples", r.record_ms)
-                    .value("frame_ms_samples", r.frame_ms)
-                    .value("gpu_ms_samples", r.gpu_ms),
+                "    streamed back to back: {:.0} view-frames/s steady (arrivals' slope), {:.1} ms from render_frame to images in hand",
+                r.steady_per_second, r.latency_ms
             );
         }
+        for (name, ms) in r.spans.iter().take(SPANS_SHOWN) {
+            println!("    span {name}: {ms:.3} ms a frame");
+        }
+        for (name, ms) in r.back_to_back_spans.iter().take(SPANS_SHOWN) {
+            println!("    back to back, span {name}: {ms:.3} ms a frame");
+        }
+        points.push((mode, views as f64, cpu, whole));
+        record.push_row(
+            Row::new()
+                .value("path", format!("{mode:?}"))
+                .value("views", views)
+                .value("cpu_ms_median", cpu)
+                .value("prepare_ms_median", prepare)
+                .value("record_ms_median", recording)
+                .value("frame_ms_median", whole)
+                .value("gpu_ms_median", gpu.is_finite().then_some(gpu))
+                .value("view_frames_per_second", per_second)
+                .value("draws_per_frame_median", draws)
+                .value("vertex_floor_ms", floor_ms)
+                .value("gpu_over_vertex_floor", over_floor)
+                .value("back_to_back_view_frames_per_second", pipelined.is_finite().then_some(pipelined))
+                .value(
+                    "streamed_steady_view_frames_per_second",
+                    r.steady_per_second.is_finite().then_some(r.steady_per_second),
+                )
+                .value("streamed_latency_ms_median", r.latency_ms.is_finite().then_some(r.latency_ms))
+                .value("span_ms_per_frame", r.spans.iter().fold(Row::new(), |row, (name, ms)| row.value(name, *ms)))
+                .value(
+                    "back_to_back_span_ms_per_frame",
+                    r.back_to_back_spans.iter().fold(Row::new(), |row, (name, ms)| row.value(name, *ms)),
+                )
+                .value("read_bytes", r.read_bytes)
+                .value("read_mb_per_second", read_mb_s)
+                .value("cpu_ms_samples", r.cpu_ms)
+                .value("prepare_ms_samples", r.prepare_ms)
+                .value("record_ms_samples", r.record_ms)
+                .value("frame_ms_samples", r.frame_ms)
+                .value("gpu_ms_samples", r.gpu_ms),
+        );
     }
     if counts.len() > 1 {
         for mode in &modes {

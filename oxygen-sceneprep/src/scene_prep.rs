@@ -65,12 +65,11 @@ pub enum PrepError {
     FrameNotBegun,
 }
 
-/// Rejects a request list that names one view twice.
 /// A view's draw-metadata and indirect-argument ranges before it has any.
 const UNALLOCATED_VIEW: [Allocation; 2] =
     [Allocation::empty(DomainKind::DrawMetadata), Allocation::empty(DomainKind::IndirectArgs)];
 
-/// `Err` naming a view requested twice. Sorts the ids into `scratch`
+/// Rejects a request list that names one view twice: `Err` naming it. Sorts the ids into `scratch`
 /// (kept by the caller, so a steady frame allocates nothing): a scan of
 /// the earlier requests for each one cost a 1 024-camera batch half a
 /// million comparisons a frame.
@@ -883,8 +882,9 @@ impl ScenePrep {
             if let Some(skin) = geometry.skin_weights() {
                 heap.write(queue, &slots.vertices, slots.skin - slots.vertices.start, skin)?;
             }
-            // The triangle table, its length and the turned indices
-            // (finalize/triangle_table.rs), `index_slot` past the first two.
+            // With a table: the table, its length and the turned indices
+            // (finalize/triangle_table.rs), `index_slot` past the first
+            // two; without, the turned indices alone.
             if slots.triangle_table() {
                 let layout = TriangleLayout::new(geometry.indices(), slots.vertex_count);
                 heap.write(queue, &slots.indices, 0, &layout.words)?;

@@ -304,7 +304,7 @@ impl Renderer {
         if let (Some(timer), Some(jobs)) = (&mut self.frames.gpu_timer, recorded.timed_jobs.clone()) {
             timer.time_jobs(jobs);
         }
-        self.stream(&recorded, clock)?;
+        self.stream(&recorded, &prepared.views, clock)?;
         self.targets.hold(&recorded.rendered, &prepared.views);
         // The immediate shapes of the views that drew them are done.
         for view in &recorded.rendered {
@@ -392,11 +392,17 @@ impl Renderer {
     }
 
     /// Starts copying the streaming batches' images of the frame just
-    /// submitted (see `streams.rs`).
-    fn stream(&mut self, recorded: &record::RecordedFrame, clock: FrameClock) -> Result<(), RenderError> {
+    /// submitted (see `streams.rs`); `views` are the frame's, which the
+    /// recorded views index.
+    fn stream(
+        &mut self,
+        recorded: &record::RecordedFrame,
+        views: &[prepare::FrameView],
+        clock: FrameClock,
+    ) -> Result<(), RenderError> {
         let mut rendered = streams::RenderedBatches::default();
         for view in &recorded.rendered {
-            let Some(batch) = view.batch else { continue };
+            let Some(ViewRole::BatchCamera { batch }) = views.get(view.index).map(|v| v.role) else { continue };
             let (Some(atlas), Some(tile)) = (
                 self.targets.atlas(batch),
                 self.targets.get(view.id).and_then(|g| g.targets.as_ref()).and_then(|t| t.tile),

@@ -54,8 +54,6 @@ pub(crate) struct RecordedView {
     pub(crate) index: usize,
     /// Whether its HDR target holds the image (see [`RenderedView`]).
     pub(crate) hdr_written: bool,
-    /// The batch it is a camera of, if any.
-    pub(crate) batch: Option<crate::batch::BatchId>,
 }
 
 /// The output of the record step: the frame's command buffers are
@@ -417,15 +415,7 @@ impl Renderer {
                 if let ViewRole::ProbeFace { probe, .. } = view.role {
                     probe_filters.insert(probe, buffers.len());
                 }
-                rendered.push(RecordedView {
-                    id: view.id,
-                    index: i,
-                    hdr_written: !recorded.stats.tone_mapped_in_pass,
-                    batch: match view.role {
-                        ViewRole::BatchCamera { batch } => Some(batch),
-                        _ => None,
-                    },
-                });
+                rendered.push(RecordedView { id: view.id, index: i, hdr_written: !recorded.stats.tone_mapped_in_pass });
                 // A batch's recording is counted once, at its first camera.
                 let (stats, busy) = if k == 0 { (recorded.stats, recorded.busy) } else { Default::default() };
                 reports.push(ViewReport {
